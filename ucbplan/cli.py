@@ -1,0 +1,83 @@
+"""The ``ucbplan`` command line: a thin shell over the library (STYLE.md §12).
+
+Each command family lives in its own ``cli_*`` module exposing ``register(app)``; this module only
+builds the app, configures astropy for offline use and turns ``UcbplanError`` into one line on
+stderr with exit code 2 (no traceback).
+"""
+
+from __future__ import annotations
+
+import sys
+
+import typer
+
+from ucbplan import __version__
+from ucbplan.cliutil import configure_offline, err_console
+from ucbplan.errors import UcbplanError
+
+__all__ = ["app", "main"]
+
+app = typer.Typer(
+    name="ucbplan",
+    help="Phase-targeted spectroscopy of ultracompact binaries from LISA ephemerides.",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+)
+
+
+def _version(value: bool) -> None:
+    if value:
+        typer.echo(f"ucbplan {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _root(
+    version: bool = typer.Option(
+        False, "--version", callback=_version, is_eager=True, help="Print the version and exit."
+    ),
+) -> None:
+    """Configure offline astropy once, before any command runs."""
+    configure_offline()
+
+
+def _register_all() -> None:
+    import importlib
+
+    for name in ("cli_core", "cli_plan", "cli_reduce", "cli_lisa"):
+        try:
+            module = importlib.import_module(f"ucbplan.{name}")
+        except ModuleNotFoundError as exc:
+            if exc.name == f"ucbplan.{name}":
+                continue
+            raise
+        module.register(app)
+
+
+_register_all()
+
+
+def main() -> None:
+    """Console-script entry point: run the app, one-line errors, exit code 2 on user errors."""
+    try:
+        app(standalone_mode=False)
+    except UcbplanError as exc:
+        err_console.print(f"[bold red]error:[/] {exc}", soft_wrap=True)
+        sys.exit(2)
+    except (typer.Exit, SystemExit) as exc:
+        code = getattr(exc, "exit_code", getattr(exc, "code", 0))
+        sys.exit(code if isinstance(code, int) else 1)
+    except typer.Abort:
+        err_console.print("aborted")
+        sys.exit(130)
+    except KeyboardInterrupt:
+        err_console.print("interrupted")
+        sys.exit(130)
+    except Exception as exc:  # click usage errors arrive here in non-standalone mode
+        import click
+
+        if isinstance(exc, click.exceptions.ClickException):
+            exc.show()
+            sys.exit(exc.exit_code)
+        raise
