@@ -1,0 +1,141 @@
+"""Master blocks table: columns, ISO precision, provenance and round trips through every format."""
+
+from __future__ import annotations
+
+import io
+import json
+from pathlib import Path
+
+import astropy.units as u
+import numpy as np
+import pytest
+from astropy.time import Time
+
+from ucbplan.cliutil import configure_offline
+from ucbplan.errors import InputFileError
+from ucbplan.observing.blocks import Block
+from ucbplan.observing.table import (
+    REQUIRED_COLUMNS,
+    blocks_to_table,
+    make_meta,
+    read_blocks,
+    write_table,
+)
+from ucbplan.observing.timeconv import quiet_erfa
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _offline() -> None:
+    configure_offline()
+
+
+def _block(i: int, alt: bool = True) -> Block:
+    with quiet_erfa():
+        return _make_block(i, alt)
+
+
+def _make_block(i: int, alt: bool) -> Block:
+    mid = Time("2040-02-16T02:00:00", scale="utc") + i * 300.0 * u.s
+    half = 150.0 * u.s
+    return Block(
+        target="HM Cnc",
+        block_id=f"HM_Cnc-{i:03d}",
+        anchor="quadrature",
+        u_star_rad=0.0 if i % 2 == 0 else np.pi,
+        t_mid_utc=mid,
+        t_start_utc=mid - half,
+        t_end_utc=mid + half,
+        t_mid_tdb_bary=Time("2040-02-16T02:03:12.123456", scale="tdb"),
+        sigma_t_s=1.5,
+        t_alt_utc=(mid + 80.0 * u.s) if alt else None,
+        exptime_s=60.0,
+        n_exp=4,
+        readout_s=15.0,
+        lambda_k=0.97,
+        lambda_kappa=0.9,
+        smear_kms=float("nan"),
+        alt_start_deg=50.0,
+        altitude_deg=51.0,
+        alt_end_deg=52.0,
+        airmass_start=1.3,
+        airmass=1.28,
+        airmass_end=1.26,
+        moon_sep_deg=80.0,
+        moon_illum=0.4,
+        ra_deg=121.5967,
+        dec_deg=15.4583,
+        night="2040-02-15",
+        timezone="America/Santiago",
+        period_s=321.5,
+    )
+
+
+def _meta() -> dict:
+    return make_meta(
+        site={"name": "Paranal", "lon_deg": -70.4, "lat_deg": -24.6, "height_m": 2635.0},
+        targets=[{"name": "HM Cnc", "file": "catalogs/hm-cnc.yaml", "sha256": "0" * 64}],
+        constraints=["airmass <= 2"],
+        mode="quadrature",
+    )
+
+
+def test_required_columns_first_and_iso_precision() -> None:
+    table = blocks_to_table([_block(0), _block(1, alt=False)], _meta())
+    assert tuple(table.colnames[: len(REQUIRED_COLUMNS)]) == REQUIRED_COLUMNS
+    # ms precision for UTC (23 chars), us for TDB (26 chars).
+    assert table["t_mid_utc"][0] == "2040-02-16T02:00:00.000"
+    assert table["t_mid_tdb_bary"][0] == "2040-02-16T02:03:12.123456"
+    assert table["t_alt_utc"][1] == ""
+    assert table["block_width_s"][0] == pytest.approx(300.0, abs=1e-6)
+    # Santiago in February: UTC-3 (summer time).
+    assert table["t_mid_local"][0] == "2040-02-15T23:00:00-03:00"
+    assert table["ra_hms"][0].startswith("08:06:23.2")
+    assert table["dec_dms"][0].startswith("+15:27:29")
+    assert table.meta["site"]["name"] == "Paranal"
+
+
+def test_ecsv_round_trip(tmp_path: Path) -> None:
+    table = blocks_to_table([_block(0), _block(1, alt=False)], _meta())
+    path = tmp_path / "blocks.ecsv"
+    with path.open("w") as handle:
+        write_table(table, handle, "ecsv")
+    back = read_blocks(path)
+    for name in table.colnames:
+        if table[name].dtype.kind == "f":
+            np.testing.assert_array_equal(np.asarray(back[name]), np.asarray(table[name]))
+        else:
+            assert [str(v) for v in back[name]] == [str(v) for v in table[name]], name
+    assert back.meta["targets"][0]["sha256"] == "0" * 64
+    assert back["u_star_rad"].unit == "rad"
+
+
+def test_empty_table_has_all_columns(tmp_path: Path) -> None:
+    table = blocks_to_table([], _meta())
+    assert tuple(table.colnames[: len(REQUIRED_COLUMNS)]) == REQUIRED_COLUMNS
+    path = tmp_path / "empty.ecsv"
+    with path.open("w") as handle:
+        write_table(table, handle, "ecsv")
+    assert len(read_blocks(path)) == 0
+
+
+def test_json_rows_and_csv() -> None:
+    table = blocks_to_table([_block(0)], _meta())
+    buf = io.StringIO()
+    write_table(table, buf, "json")
+    rows = json.loads(buf.getvalue())
+    assert isinstance(rows, list) and rows[0]["target"] == "HM Cnc"
+    assert rows[0]["smear_kms"] is None  # NaN -> null, valid JSON
+    assert rows[0]["n_exp"] == 4
+    buf = io.StringIO()
+    write_table(table, buf, "csv")
+    header = buf.getvalue().splitlines()[0].split(",")
+    assert tuple(header[: len(REQUIRED_COLUMNS)]) == REQUIRED_COLUMNS
+
+
+def test_read_blocks_errors(tmp_path: Path) -> None:
+    with pytest.raises(InputFileError, match="not found"):
+        read_blocks(tmp_path / "nope.ecsv")
+    bad = tmp_path / "bad.ecsv"
+    bad.write_text("# %ECSV 1.0\n# ---\n# datatype:\n# - {name: a, datatype: int64}\na\n1\n")
+    with pytest.raises(InputFileError, match="required columns"):
+        read_blocks(bad)
