@@ -23,6 +23,9 @@ from ucbplan.observing.table import (
 )
 from ucbplan.observing.timeconv import quiet_erfa
 
+# Dates past the leap-second table are intended (2040 nights); the planner warns once itself.
+pytestmark = pytest.mark.filterwarnings("ignore::erfa.ErfaWarning")
+
 
 @pytest.fixture(autouse=True, scope="module")
 def _offline() -> None:

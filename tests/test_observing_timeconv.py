@@ -1,0 +1,94 @@
+"""Barycentric TDB <-> site UTC: fixed-point inversion, fast path, round trip, table coverage."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from astropy import units as u
+from astropy.coordinates import SkyCoord
+from astropy.time import Time, TimeDelta
+
+from ucbplan.cliutil import configure_offline
+from ucbplan.observing.sites import get_site
+from ucbplan.observing.timeconv import (
+    DelayInterpolator,
+    bary_tdb_to_site_utc,
+    coverage_warnings,
+    light_time_s,
+    quiet_erfa,
+    site_utc_to_bary_tdb,
+)
+
+HM_CNC = SkyCoord(121.5967 * u.deg, 15.4583 * u.deg)
+
+# Dates past the leap-second table are intended (2040 nights); the planner warns once itself.
+pytestmark = pytest.mark.filterwarnings("ignore::erfa.ErfaWarning")
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _offline() -> None:
+    configure_offline()
+
+
+def _epochs(n: int, start: str, span_d: float, seed: int) -> Time:
+    rng = np.random.default_rng(seed)
+    return Time(start, scale="tdb") + TimeDelta(np.sort(rng.uniform(0, span_d, n)) * u.d)
+
+
+def test_exact_round_trip_below_1us() -> None:
+    site = get_site("paranal")
+    with quiet_erfa():
+        t_star = _epochs(50, "2040-01-01", 365.0, seed=1)
+    t_utc = bary_tdb_to_site_utc(t_star, HM_CNC, site.location, fast=False)
+    back = site_utc_to_bary_tdb(t_utc, HM_CNC, site.location)
+    err_s = np.abs((back - t_star).to_value(u.s))
+    # Requirement: < 1 us; three fixed-point iterations leave < 1 ns (dDelta/dt <= 1e-4).
+    assert err_s.max() < 1e-6
+    # Independent magnitude check: |Delta| <= 1.017 AU/c + R_earth/c = 507.5 s (astropy's Time
+    # difference is elapsed time, so the 69.184 s UTC-TDB label offset does not enter).
+    delay = (t_star - t_utc).to_value(u.s)
+    assert np.abs(delay).max() < 507.6
+    assert np.abs(delay).max() > 100.0  # HM Cnc is 5 deg from the ecliptic: large annual swing
+
+
+def test_fast_path_interpolation_error_below_1us() -> None:
+    # 60 days of epochs off the spline nodes, compared with the exact inversion at the same epochs.
+    site = get_site("mauna kea")
+    t_star = _epochs(400, "2040-02-01", 60.0, seed=2)
+    t0 = t_star[0]
+    tau = (t_star - t0).to_value(u.s)
+    interp = DelayInterpolator.build(t0, (tau.min(), tau.max()), HM_CNC, site.location)
+    with quiet_erfa():
+        exact = t_star - bary_tdb_to_site_utc(t_star, HM_CNC, site.location, fast=False).tdb
+    exact_delay = exact.to_value(u.s)
+    err_s = np.abs(interp.delay_s(tau) - exact_delay)
+    # Requirement: < 1 us. Expected ~5/384 (omega h)^4 * 21 ms ~ 0.1 us at h = 30 min.
+    assert err_s.max() < 1e-6
+    fast = bary_tdb_to_site_utc(t_star, HM_CNC, site.location, fast=True)
+    back = site_utc_to_bary_tdb(fast, HM_CNC, site.location)
+    assert np.abs((back - t_star).to_value(u.s)).max() < 1e-6
+
+
+def test_light_time_sign_convention() -> None:
+    # astropy: t_bary = t.tdb + Delta. At the March equinox the Sun is at RA 0h, so the Earth
+    # lies towards RA 12h, 60 deg from HM Cnc (RA 8h, ~0 ecliptic latitude): photons reach the
+    # Earth first, Delta = +cos(60 deg) * 499 s ~ 250 s (ecliptic vs equator geometry: +-10 s).
+    site = get_site("paranal")
+    with quiet_erfa():
+        t = Time("2040-03-20T00:00:00", scale="utc", location=site.location)
+    assert 235.0 < light_time_s(t, HM_CNC, site.location) < 265.0
+
+
+def test_rejects_non_tdb() -> None:
+    with pytest.raises(ValueError, match="must be TDB"):
+        bary_tdb_to_site_utc(Time("2040-01-01", scale="utc"), HM_CNC, get_site("paranal").location)
+
+
+def test_coverage_warnings_for_2040_and_none_for_2026() -> None:
+    with quiet_erfa():
+        first, last = Time("2040-02-15", scale="utc"), Time("2040-02-16", scale="utc")
+    warns = coverage_warnings(first, last)
+    assert len(warns) == 2
+    assert "IERS-A" in warns[0] and "arcsec" in warns[0]
+    assert "leap-second" in warns[1] and "1 s" in warns[1]
+    assert coverage_warnings(Time("2026-01-01"), Time("2026-01-02")) == []
