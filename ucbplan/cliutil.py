@@ -15,6 +15,8 @@ from pathlib import Path
 from typing import IO, Any
 
 from rich.console import Console
+from rich.markup import escape
+from rich.table import Table as RichTable
 
 from ucbplan.errors import OutputExistsError, UcbplanError
 
@@ -24,11 +26,31 @@ __all__ = [
     "configure_offline",
     "err_console",
     "json_default",
+    "rich_table",
     "write_output",
 ]
 
+
+def _make_console() -> Console:
+    console = Console(stderr=True, highlight=False)
+    if not console.is_terminal and "COLUMNS" not in os.environ:
+        # pipes and CI logs: wide enough that ISO times with microseconds are never cut
+        console = Console(stderr=True, highlight=False, width=180)
+    return console
+
+
 #: Console for humans: rich tables and warnings go to stderr so stdout stays machine-readable.
-err_console = Console(stderr=True, highlight=False)
+#: Unit brackets like "[s]" in table headers must go through :func:`rich_table` (no markup).
+err_console = _make_console()
+
+
+def rich_table(title: str, columns: list[str], **kwargs: Any) -> RichTable:
+    """A rich table whose title and headers are literal text (``[s]`` is a unit, not markup)."""
+    table = RichTable(title=escape(title), **kwargs)
+    for name in columns:
+        table.add_column(escape(name), justify="right")
+    return table
+
 
 OUTPUT_FORMATS = ("table", "json", "ecsv", "csv")
 

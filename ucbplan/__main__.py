@@ -1,0 +1,5 @@
+"""``python -m ucbplan`` runs the CLI."""
+
+from ucbplan.cli import main
+
+main()

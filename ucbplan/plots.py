@@ -1,0 +1,76 @@
+"""Figures of the core forecast (the paper's horizon figure)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from pathlib import Path
+from typing import IO, TYPE_CHECKING, Any
+
+import numpy as np
+
+from ucbplan.cliutil import write_output
+
+if TYPE_CHECKING:
+    from ucbplan.forecast import HorizonRow
+    from ucbplan.target import Target
+
+__all__ = ["horizon_plot"]
+
+DAY_S = 86400.0
+
+
+def horizon_plot(
+    target: Target, rows: Sequence[HorizonRow], path: Path, overwrite: bool = False
+) -> None:
+    """σ_u(t) after the LISA observation with the tolerance lines α·δu_tol (paper Fig. horizon).
+
+    The curve is the quadrature-anchor σ_u (max over u★ = 0, π) and, dashed, the conjunction one.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from ucbplan.forecast import anchor_sigma_u
+
+    p, cov = target.params, target.covariance
+    t_end = target.t_obs_s / 2
+    longest = max([r.t_valid_days for r in rows] + [365.0])
+    days = np.linspace(-target.t_obs_s / DAY_S, 1.3 * longest, 4000)
+    tau = t_end + days * DAY_S
+    quad = np.maximum(anchor_sigma_u(p, cov, tau, 0.0), anchor_sigma_u(p, cov, tau, math.pi))
+    conj = np.maximum(
+        anchor_sigma_u(p, cov, tau, math.pi / 2), anchor_sigma_u(p, cov, tau, 3 * math.pi / 2)
+    )
+    fig, ax = plt.subplots(figsize=(8, 4.5), constrained_layout=True)
+    ax.semilogy(days, 1e3 * quad, color="k", lw=1.5, label="σ_u, quadrature anchor")
+    ax.semilogy(days, 1e3 * conj, color="0.5", lw=1.0, ls="--", label="σ_u, conjunction anchor")
+    colors = {"conjunction": "tab:red", "quadrature": "tab:blue"}
+    for r in rows:
+        c = colors.get(r.anchor, "tab:green")
+        ls = "-" if r.alpha >= 1 else ":"
+        ax.axhline(1e3 * r.tolerance_rad, color=c, ls=ls, lw=1)
+        ax.text(
+            days[0],
+            1e3 * r.tolerance_rad,
+            f" {r.anchor}, α={r.alpha:g}: T_valid = {r.t_valid_days:.0f} d",
+            color=c,
+            va="bottom",
+            fontsize=8,
+        )
+        if r.t_valid_days > 0:
+            ax.axvline(r.t_valid_days, color=c, ls=ls, lw=0.6, alpha=0.6)
+    ax.axvline(0.0, color="k", ls="--", lw=0.8)
+    ax.set_xlabel("time after the end of the LISA observation [days]")
+    ax.set_ylabel("σ_u [mrad]")
+    ax.set_title(f"{target.name}: phase-coherence forecast")
+    ax.legend(loc="lower right", fontsize=8)
+
+    def _w(handle: IO[Any]) -> None:
+        fig.savefig(handle, format="png", dpi=120)
+
+    try:
+        write_output(path, _w, overwrite=overwrite, binary=True)
+    finally:
+        plt.close(fig)
