@@ -1,0 +1,448 @@
+"""Inter-session fixed-u differences: Δκ_spec vs Δκ_LISA, Δv_CM, a_los (paper Secs. 3.1.4, 3.2).
+
+Spectra are grouped by (session, u★). Each group's velocities are first moved to the exact u★ with
+the fitted semi-amplitude (v − s K Λ_K (cos u − cos u★), a first-order phase-mismatch correction of
+at most K|Δu sin u★|), then averaged with inverse-variance weights. Consecutive groups of the same
+u★ in different sessions form a pair (α, β); pairs give
+
+* Δv_j = v̄_j(β) − v̄_j(α) with σ² = σ_α² + σ_β² (Eq. app:unc_of_Delta_v);
+* SB2: Δκ_spec (Eq. delta_kappa_spec_binned, generalised below) vs Δκ_LISA (Eq. delta_kappa_LISA),
+  Δv_CM = (K2 Δv1 + K1 Δv2)/(K1 + K2) (the WIL41-on-differences intercept/(1 + q) of one pair,
+  Eq. intercept_Deltav_cm), and the Δv1–Δv2 line with slope −q (Eq. SB2_fixedu_diff_WIL41);
+* circular: Δv_CM = Δv_j (Eq. cir_deltaVcm, inverse-variance mean of the two stars for SB2);
+* SB1 eccentric: Δv_CM from the difference of zero-crossing averages (Eq. rvzero_average), else
+  Δv − K Δκ_LISA;
+* a_los = −Δv_CM/ΔT, ḟ_acc = (f/c) a_los (Eq. fdot_acc_spectroscopy).
+
+Finite windows at a general anchor u★ (from Eq. vbar_master with Eq. Phi_c): the fixed-u velocity is
+γ ± K[Λ_K cos u★ + A κ + B η] + O(e²) with A = 2Λ_K sin²u★ + Λ_κ cos 2u★ and
+B = (Λ_κ − Λ_K) sin 2u★,
+so Δκ_spec = (Δv1 − Δv2)/((K1 + K2)A) − (B/A) Δη_LISA. At a quadrature A = Λ_κ, B = 0: exactly
+Eq. delta_kappa_spec_binned; for Λ = 1, A = 1, B = 0: Eq. delta_kappa_spec.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from itertools import pairwise
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ucbplan.reduce.regression import LineFit, weighted_line
+
+__all__ = [
+    "ANCHOR_U",
+    "MATCH_TOL_RAD",
+    "UPPER_LIMIT_NSIGMA",
+    "DriftResult",
+    "Group",
+    "LLPredictor",
+    "Pair",
+    "assign_anchors",
+    "combine",
+    "group_spectra",
+    "make_pairs",
+]
+
+F64 = NDArray[np.float64]
+
+#: Standard anchors (star-1 argument of latitude, rad) used when the table has no u_star column.
+ANCHOR_U: tuple[float, ...] = (0.0, 0.5 * math.pi, math.pi, 1.5 * math.pi)
+#: A spectrum belongs to the nearest anchor if within this phase distance [rad] (P_b/16).
+MATCH_TOL_RAD = math.pi / 8.0
+#: Non-detections (|x| < 2σ) are reported as upper limits |x| < |x̂| + 2σ.
+UPPER_LIMIT_NSIGMA = 2.0
+
+
+def _wrap(x: ArrayLike) -> F64:
+    return np.asarray((np.asarray(x, float) + math.pi) % (2.0 * math.pi) - math.pi, dtype=float)
+
+
+def assign_anchors(u_rad: ArrayLike, u_star: ArrayLike | None = None) -> F64:
+    """u★ of each spectrum: the given column, else the nearest standard anchor within tolerance.
+
+    Returns
+    -------
+    ndarray
+        u★ in [0, 2π) [rad], NaN for spectra that match no anchor (not used in differences).
+    """
+    u = np.asarray(u_rad, float) % (2.0 * math.pi)
+    if u_star is not None:
+        us = np.asarray(u_star, float)
+        return np.asarray(np.where(np.isfinite(us), us % (2.0 * math.pi), np.nan), dtype=float)
+    anchors = np.asarray(ANCHOR_U)
+    d = np.abs(_wrap(u[:, None] - anchors[None, :]))
+    k = np.argmin(d, axis=1)
+    ok = d[np.arange(u.size), k] <= MATCH_TOL_RAD
+    return np.asarray(np.where(ok, anchors[k], np.nan), dtype=float)
+
+
+@dataclass(frozen=True, slots=True)
+class Group:
+    """Inverse-variance mean of the spectra of one session at one u★.
+
+    ``v``/``sigma`` have one entry per component (1 for SB1, 2 for SB2) [km/s]; ``tau_s`` is the
+    mean mid-exposure time [s since t_ref]; ``lam_k``/``lam_kappa`` the mean window factors.
+    """
+
+    session: str
+    u_star: float
+    tau_s: float
+    n: int
+    v: tuple[float, ...]
+    sigma: tuple[float, ...]
+    gamma_est: tuple[float, ...]
+    gamma_sigma: tuple[float, ...]
+    lam_k: float
+    lam_kappa: float
+
+
+def group_spectra(
+    *,
+    sessions: Sequence[str],
+    tau_s: ArrayLike,
+    u_rad: ArrayLike,
+    u_star: ArrayLike,
+    velocities: Sequence[ArrayLike],
+    sigmas: Sequence[ArrayLike],
+    K: Sequence[float],
+    design: ArrayLike,
+    lam_k: ArrayLike,
+    lam_kappa: ArrayLike,
+) -> list[Group]:
+    """Group spectra by (session, u★) and average them after the mismatch correction.
+
+    Parameters
+    ----------
+    sessions : sequence of str
+        Session label of each spectrum.
+    tau_s, u_rad, u_star : array_like
+        Mid-exposure time [s since t_ref], star-1 argument of latitude and assigned u★ [rad]
+        (NaN: unassigned).
+    velocities, sigmas : sequence of array_like
+        Per component (v1[, v2]) velocities and errors [km/s].
+    K : sequence of float
+        Fitted semi-amplitude per component [km/s].
+    design : array_like
+        Window-averaged orbital factor G (for the zero-crossing γ estimates) [1].
+    lam_k, lam_kappa : array_like
+        Window factors per spectrum.
+
+    Returns
+    -------
+    list of Group
+        Sorted by time.
+    """
+    sess = np.asarray(list(sessions), dtype=object)
+    tau = np.asarray(tau_s, float)
+    u = np.asarray(u_rad, float)
+    us = np.asarray(u_star, float)
+    lk = np.broadcast_to(np.asarray(lam_k, float), tau.shape)
+    lkap = np.broadcast_to(np.asarray(lam_kappa, float), tau.shape)
+    G = np.asarray(design, float)
+    groups: list[Group] = []
+    keys = {(str(s), float(a)) for s, a in zip(sess, us, strict=True) if np.isfinite(a)}
+    for s, a in sorted(keys, key=lambda k: (k[0], k[1])):
+        m = (sess == s) & (us == a)
+        vs, ss, gs, gss = [], [], [], []
+        for j, (v, sg) in enumerate(zip(velocities, sigmas, strict=True)):
+            sign = 1.0 if j == 0 else -1.0
+            va, sa = np.asarray(v, float)[m], np.asarray(sg, float)[m]
+            w = 1.0 / sa**2
+            vc = va - sign * K[j] * lk[m] * (np.cos(u[m]) - math.cos(a))
+            gam = va - sign * K[j] * G[m]
+            vs.append(float((w * vc).sum() / w.sum()))
+            gs.append(float((w * gam).sum() / w.sum()))
+            ss.append(float(1.0 / math.sqrt(w.sum())))
+            gss.append(ss[-1])
+        groups.append(
+            Group(
+                session=s,
+                u_star=a,
+                tau_s=float(tau[m].mean()),
+                n=int(m.sum()),
+                v=tuple(vs),
+                sigma=tuple(ss),
+                gamma_est=tuple(gs),
+                gamma_sigma=tuple(gss),
+                lam_k=float(lk[m].mean()),
+                lam_kappa=float(lkap[m].mean()),
+            )
+        )
+    groups.sort(key=lambda g: g.tau_s)
+    return groups
+
+
+@dataclass(frozen=True, slots=True)
+class Pair:
+    """One fixed-u pair of groups (α earlier than β) at the same u★.
+
+    All velocities in km/s, ΔT in s; ``dkappa_*`` dimensionless; ``z_kappa`` is
+    (Δκ_spec − Δκ_LISA)/√(σ_spec² + σ_LISA²). Fields not applicable are NaN.
+    """
+
+    alpha: str
+    beta: str
+    u_star: float
+    dT_s: float
+    dv: tuple[float, ...]
+    sigma_dv: tuple[float, ...]
+    dkappa_spec: float
+    sigma_dkappa_spec: float
+    dkappa_lisa: float
+    sigma_dkappa_lisa: float
+    z_kappa: float
+    dv_cm: float
+    sigma_dv_cm: float
+
+
+def _ab(u_star: float, lam_k: float, lam_kap: float) -> tuple[float, float]:
+    A = 2.0 * lam_k * math.sin(u_star) ** 2 + lam_kap * math.cos(2.0 * u_star)
+    B = (lam_kap - lam_k) * math.sin(2.0 * u_star)
+    return A, B
+
+
+def make_pairs(
+    groups: Sequence[Group],
+    *,
+    K: Sequence[float],
+    eccentric: bool,
+    ll_at: LLPredictor,
+) -> list[Pair]:
+    """Form consecutive same-u★ pairs from different sessions and evaluate each.
+
+    Parameters
+    ----------
+    groups : sequence of Group
+        From :func:`group_spectra`.
+    K : sequence of float
+        Semi-amplitudes per component [km/s].
+    eccentric : bool
+        Whether the target has e > 0 or ω̇ ≠ 0 (decides the Δv_CM estimator).
+    ll_at : LLPredictor
+        Predicts Δη_LISA, Δκ_LISA and their σ between two epochs.
+
+    Returns
+    -------
+    list of Pair
+    """
+    pairs: list[Pair] = []
+    nan = float("nan")
+    by_anchor: dict[float, list[Group]] = {}
+    for g in groups:
+        by_anchor.setdefault(g.u_star, []).append(g)
+    for a, gs in by_anchor.items():
+        gs = sorted(gs, key=lambda g: g.tau_s)
+        for ga, gb in pairwise(gs):
+            if ga.session == gb.session:
+                continue
+            dv = tuple(b - c for b, c in zip(gb.v, ga.v, strict=True))
+            sdv = tuple(math.hypot(b, c) for b, c in zip(gb.sigma, ga.sigma, strict=True))
+            dk_l, sdk_l, de_l = ll_at.delta(ga.tau_s, gb.tau_s)
+            lk = 0.5 * (ga.lam_k + gb.lam_k)
+            lkap = 0.5 * (ga.lam_kappa + gb.lam_kappa)
+            A, B = _ab(a, lk, lkap)
+            dk_s = sdk_s = z = nan
+            if len(dv) == 2:
+                k1, k2 = K
+                dk_s = (dv[0] - dv[1]) / ((k1 + k2) * A) - (B / A) * de_l
+                sdk_s = math.hypot(*sdv) / ((k1 + k2) * abs(A))
+                z = (dk_s - dk_l) / math.hypot(sdk_s, sdk_l)
+                if eccentric:
+                    dcm = (k2 * dv[0] + k1 * dv[1]) / (k1 + k2)
+                    sdcm = math.hypot(k2 * sdv[0], k1 * sdv[1]) / (k1 + k2)
+                else:
+                    w = np.array([1.0 / sdv[0] ** 2, 1.0 / sdv[1] ** 2])
+                    dcm = float((w * np.array(dv)).sum() / w.sum())
+                    sdcm = float(1.0 / math.sqrt(w.sum()))
+            else:
+                dcm = dv[0] - (K[0] * (A * dk_l + B * de_l) if eccentric else 0.0)
+                sdcm = math.hypot(sdv[0], K[0] * abs(A) * sdk_l) if eccentric else sdv[0]
+            pairs.append(
+                Pair(
+                    ga.session,
+                    gb.session,
+                    a,
+                    gb.tau_s - ga.tau_s,
+                    dv,
+                    sdv,
+                    dk_s,
+                    sdk_s,
+                    dk_l,
+                    sdk_l,
+                    z,
+                    dcm,
+                    sdcm,
+                )
+            )
+    pairs.sort(key=lambda p: (p.u_star, p.dT_s))
+    return pairs
+
+
+class LLPredictor:
+    """Δκ_LISA, Δη_LISA between epochs with σ from the LISA covariance (Eq. kappa_lisa_prediction).
+
+    Parameters
+    ----------
+    eta_ref, kappa_ref, omega_dot : float
+        Laplace–Lagrange pair at t_ref and ω̇ [1, 1, rad/s].
+    cov3 : ndarray, shape (3, 3)
+        Covariance of (η_ref, κ_ref, ω̇).
+    """
+
+    def __init__(self, eta_ref: float, kappa_ref: float, omega_dot: float, cov3: ArrayLike):
+        self.eta = eta_ref
+        self.kappa = kappa_ref
+        self.omega_dot = omega_dot
+        self.cov = np.asarray(cov3, float)
+
+    def _kap_grad(self, tau: float) -> tuple[float, float, F64, F64]:
+        c, s = math.cos(self.omega_dot * tau), math.sin(self.omega_dot * tau)
+        kap = self.kappa * c - self.eta * s
+        eta = self.eta * c + self.kappa * s
+        gk = np.array([-s, c, -tau * eta])
+        ge = np.array([c, s, tau * kap])
+        return kap, eta, gk, ge
+
+    def delta(self, tau_a: float, tau_b: float) -> tuple[float, float, float]:
+        """(Δκ_LISA, σ(Δκ_LISA), Δη_LISA) from τ_a to τ_b [s since t_ref] (Eq. delta_kappa_LISA)."""
+        ka, ea, gka, _ = self._kap_grad(tau_a)
+        kb, eb, gkb, _ = self._kap_grad(tau_b)
+        g = gkb - gka
+        var = float(g @ self.cov @ g)
+        return kb - ka, math.sqrt(max(var, 0.0)), eb - ea
+
+
+@dataclass(frozen=True, slots=True)
+class DriftResult:
+    """Combined inter-session results (NaN where not applicable).
+
+    ``dkappa_line``: WIL41-on-differences line (Δv1 vs Δv2) if ≥ 2 disjoint SB2 pairs;
+    ``a_los`` [m/s²] and ``fdot_acc`` [Hz/s] are inverse-variance combinations over pairs;
+    ``*_upper`` are the 2σ upper limits |x̂| + 2σ when |x̂| < 2σ, else NaN.
+    """
+
+    pairs: tuple[Pair, ...]
+    zero_crossing: tuple[tuple[str, str, float, float, float], ...]
+    wil41_line: LineFit | None
+    q_line: float
+    sigma_q_line: float
+    dv_cm_line: float
+    sigma_dv_cm_line: float
+    a_los: float
+    sigma_a_los: float
+    a_los_upper: float
+    fdot_acc: float
+    sigma_fdot_acc: float
+    chi2_kappa: float
+    n_kappa: int
+
+
+def _zero_crossing_pairs(
+    groups: Sequence[Group],
+) -> list[tuple[str, str, float, float, float]]:
+    """SB1: per session the mean of the two zero-crossing γ estimates (Eq. rvzero_average)."""
+    per_session: dict[str, dict[float, Group]] = {}
+    for g in groups:
+        if abs(math.cos(g.u_star)) < math.sin(MATCH_TOL_RAD):
+            per_session.setdefault(g.session, {})[round(math.sin(g.u_star))] = g
+    means: list[tuple[str, float, float, float]] = []
+    for s, d in per_session.items():
+        if 1 in d and -1 in d:
+            gp, gm = d[1], d[-1]
+            means.append(
+                (
+                    s,
+                    0.5 * (gp.tau_s + gm.tau_s),
+                    0.5 * (gp.gamma_est[0] + gm.gamma_est[0]),
+                    0.5 * math.hypot(gp.gamma_sigma[0], gm.gamma_sigma[0]),
+                )
+            )
+    means.sort(key=lambda m: m[1])
+    out = []
+    for (sa, ta, va, sga), (sb, tb, vb, sgb) in pairwise(means):
+        out.append((sa, sb, tb - ta, vb - va, math.hypot(sga, sgb)))
+    return out
+
+
+def combine(
+    pairs: Sequence[Pair],
+    groups: Sequence[Group],
+    *,
+    f_hz: float,
+    n_components: int,
+    eccentric: bool,
+) -> DriftResult:
+    """Combine pairs into a_los, ḟ_acc, the Δv1–Δv2 line and the Δκ consistency χ².
+
+    Notes
+    -----
+    a_los = −Δv_CM/ΔT per pair (Eq. fdot_acc_spectroscopy), combined with inverse-variance weights;
+    ḟ_acc = (f/c) a_los (Eq. fdot_acc). For SB1 eccentric targets with both zero crossings in ≥ 2
+    sessions, Δv_CM comes from Eq. rvzero_average instead of the fixed-u pairs.
+    """
+    nan = float("nan")
+    zc = _zero_crossing_pairs(groups) if (n_components == 1 and eccentric) else []
+    est: list[tuple[float, float]] = []  # (a_los, sigma) in m/s²
+    if zc:
+        for _, _, dT, dv, sdv in zc:
+            est.append((-dv * 1e3 / dT, sdv * 1e3 / dT))
+    else:
+        for p in pairs:
+            if p.dT_s > 0 and math.isfinite(p.dv_cm):
+                est.append((-p.dv_cm * 1e3 / p.dT_s, p.sigma_dv_cm * 1e3 / p.dT_s))
+    a = sa = up = nan
+    if est:
+        w = np.array([1.0 / s**2 for _, s in est])
+        a = float((w * np.array([x for x, _ in est])).sum() / w.sum())
+        sa = float(1.0 / math.sqrt(w.sum()))
+        if abs(a) < UPPER_LIMIT_NSIGMA * sa:
+            up = abs(a) + UPPER_LIMIT_NSIGMA * sa
+    line = None
+    ql = sql = dcm = sdcm = nan
+    sb2 = [p for p in pairs if len(p.dv) == 2]
+    disjoint: list[Pair] = []
+    used: set[tuple[float, str]] = set()
+    for p in sorted(sb2, key=lambda p: p.dT_s):
+        if (p.u_star, p.alpha) in used or (p.u_star, p.beta) in used:
+            continue
+        used.update({(p.u_star, p.alpha), (p.u_star, p.beta)})
+        disjoint.append(p)
+    if len(disjoint) >= 3 and np.ptp([p.dv[1] for p in disjoint]) > 0:
+        x = np.array([p.dv[1] for p in disjoint])
+        y = np.array([p.dv[0] for p in disjoint])
+        sx = np.array([p.sigma_dv[1] for p in disjoint])
+        sy = np.array([p.sigma_dv[0] for p in disjoint])
+        q = 1.0
+        for _ in range(30):
+            line = weighted_line(x, y, np.sqrt(sy**2 + q * q * sx**2), scale=False)
+            q = -line.slope
+        assert line is not None
+        ql, sql = q, line.sigma_slope
+        dcm = line.intercept / (1.0 + q)
+        sdcm = math.sqrt(
+            line.cov[0, 0] / (1 + q) ** 2
+            + line.intercept**2 * line.cov[1, 1] / (1 + q) ** 4
+            + 2 * line.intercept * line.cov[0, 1] / (1 + q) ** 3
+        )
+    zs = [p.z_kappa for p in pairs if math.isfinite(p.z_kappa)]
+    c = 299792458.0
+    return DriftResult(
+        pairs=tuple(pairs),
+        zero_crossing=tuple(zc),
+        wil41_line=line,
+        q_line=ql,
+        sigma_q_line=sql,
+        dv_cm_line=dcm,
+        sigma_dv_cm_line=sdcm,
+        a_los=a,
+        sigma_a_los=sa,
+        a_los_upper=up,
+        fdot_acc=f_hz / c * a if math.isfinite(a) else nan,
+        sigma_fdot_acc=f_hz / c * sa if math.isfinite(sa) else nan,
+        chi2_kappa=float(np.sum(np.square(zs))) if zs else nan,
+        n_kappa=len(zs),
+    )

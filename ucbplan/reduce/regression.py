@@ -1,0 +1,471 @@
+"""Intra-session velocity regressions (paper Sec. 3.1): v_j = γ_j ± K_j F, finite-bin corrected.
+
+All numbers here are plain float64 arrays in km/s (velocities) and radians (phases); the
+ephemeris evaluation that produces the design variable lives in :mod:`ucbplan.reduce`.
+
+Design variable
+---------------
+For a uniformly weighted exposure (or co-add window) of width Δt centred on the spectrum's
+mid-time, the phase-averaged velocity is (Eq. vbar_master)
+
+    v̄_j = γ_j ± K_j [Λ_K cos Φ_c + Λ_κ (κ cos 2Φ_c + η sin 2Φ_c)],
+
+with Φ_c = Φ_asc at mid-exposure, Λ_K = sin x / x, Λ_κ = sin 2x / 2x, x = n̄_b Δt / 2
+(Eqs. Lambda_K, Lambda_kappa). For Λ = 1 the bracket equals F = cos u + κ (Eq. F_definition) to
+O(e²), so regressing on the bracket ``G`` gives slope K_j and intercept γ_j directly. For a common
+window this is the paper's recipe (slope on F divided by Λ_K, intercept with the Λ_κ κ_s K_j
+term, Eq. sb2_half_sum_ecc) plus the O(e(1−Λ)) term ∝ (Λ_K − Λ_κ) sin u that the F regression
+leaves in the residuals; see :func:`paper_recipe` for the literal form used as a cross-check.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = [
+    "OUTLIER_NSIGMA",
+    "ComponentFit",
+    "LineFit",
+    "WilsonFit",
+    "binned_design",
+    "fit_component",
+    "lambda_k",
+    "lambda_k_to_x",
+    "lambda_kappa",
+    "paper_recipe",
+    "phase_sensitivity",
+    "two_spectrum_solution",
+    "weighted_line",
+    "wilson_fit",
+]
+
+#: Residuals beyond this many σ are flagged (reported, never dropped).
+OUTLIER_NSIGMA = 4.0
+
+F64 = NDArray[np.float64]
+
+
+def lambda_k(nbar_rad_s: ArrayLike, dt_s: ArrayLike) -> F64:
+    """Finite-window attenuation of the fundamental, Λ_K = sin x / x with x = n̄_b Δt / 2.
+
+    Parameters
+    ----------
+    nbar_rad_s : array_like
+        Mean orbital angular frequency n̄_b = π f_GW [rad/s].
+    dt_s : array_like
+        Window width Δt_bin [s] (0 → 1).
+
+    Returns
+    -------
+    ndarray
+        Λ_K [1].
+
+    Notes
+    -----
+    Eq. Lambda_K. ``numpy.sinc`` is sin(πx)/(πx), hence the 1/π. Λ_K(P/8) = sinc(π/8) = 0.97450.
+    """
+    x = 0.5 * np.asarray(nbar_rad_s, dtype=np.float64) * np.asarray(dt_s, dtype=np.float64)
+    return np.asarray(np.sinc(x / np.pi), dtype=np.float64)
+
+
+def lambda_kappa(nbar_rad_s: ArrayLike, dt_s: ArrayLike) -> F64:
+    """Attenuation of the eccentricity (2Φ) terms, Λ_κ = sin 2x / 2x (Eq. Lambda_kappa)."""
+    x = np.asarray(nbar_rad_s, dtype=np.float64) * np.asarray(dt_s, dtype=np.float64)
+    return np.asarray(np.sinc(x / np.pi), dtype=np.float64)
+
+
+def lambda_k_to_x(lam: ArrayLike) -> F64:
+    """Invert Λ_K = sin x / x for x ∈ [0, π) (used when only Λ_K is given, e.g. by a plan).
+
+    Raises
+    ------
+    ValueError
+        If any Λ_K is outside (0, 1].
+    """
+    lam_a = np.atleast_1d(np.asarray(lam, dtype=np.float64))
+    if np.any(~np.isfinite(lam_a)) or np.any(lam_a <= 0.0) or np.any(lam_a > 1.0):
+        raise ValueError("lambda_k must lie in (0, 1]")
+    x = np.sqrt(6.0 * (1.0 - lam_a))  # small-x start: sin x/x ≈ 1 − x²/6
+    x = np.minimum(x, 3.0)
+    for _ in range(60):
+        s, c = np.sin(x), np.cos(x)
+        safe = np.where(x > 1e-8, x, 1.0)
+        f = np.where(x > 1e-8, s / safe, 1.0 - x * x / 6.0) - lam_a
+        df = np.where(x > 1e-8, (c * safe - s) / safe**2, -x / 3.0)
+        df = np.where(np.abs(df) < 1e-12, -1e-12, df)
+        step = f / df
+        x = np.clip(x - step, 0.0, math.pi - 1e-9)
+        if np.all(np.abs(step) < 1e-14):
+            break
+    return np.asarray(x, dtype=np.float64)
+
+
+def binned_design(
+    phase_asc_rad: ArrayLike,
+    eta: ArrayLike,
+    kappa: ArrayLike,
+    lam_k: ArrayLike = 1.0,
+    lam_kappa: ArrayLike = 1.0,
+) -> F64:
+    """Window-averaged orbital factor G = Λ_K cos Φ_c + Λ_κ(κ cos 2Φ_c + η sin 2Φ_c).
+
+    Parameters
+    ----------
+    phase_asc_rad : array_like
+        Φ_asc = Φ_GW/2 at mid-exposure [rad].
+    eta, kappa : array_like
+        Laplace–Lagrange pair η_LISA(t), κ_LISA(t) at mid-exposure [1].
+    lam_k, lam_kappa : array_like
+        Λ_K and Λ_κ of each spectrum's window [1].
+
+    Returns
+    -------
+    ndarray
+        G [1]; v̄_1 = γ_1 + K_1 G, v̄_2 = γ_2 − K_2 G.
+
+    Notes
+    -----
+    Eq. vbar_master. With Λ = 1, G = cos u + κ = F (Eq. F_definition) to first order in e.
+    """
+    phi = np.asarray(phase_asc_rad, dtype=np.float64)
+    return np.asarray(
+        np.asarray(lam_k) * np.cos(phi)
+        + np.asarray(lam_kappa)
+        * (np.asarray(kappa) * np.cos(2.0 * phi) + np.asarray(eta) * np.sin(2.0 * phi)),
+        dtype=np.float64,
+    )
+
+
+@dataclass(frozen=True, slots=True)
+class LineFit:
+    """Weighted least-squares straight line y = intercept + slope·x.
+
+    Attributes
+    ----------
+    slope, intercept : float
+        Best-fit coefficients (units of y per x, units of y).
+    cov : ndarray
+        2×2 covariance of (intercept, slope), scaled by max(1, χ²/dof) (Birge ratio) when
+        ``scaled`` is true.
+    chi2 : float
+        χ² of the fit with the input σ.
+    dof : int
+        Degrees of freedom, n − 2.
+    rms : float
+        Unweighted rms of the residuals (units of y).
+    residuals : ndarray
+        y − model.
+    normalized : ndarray
+        residuals / σ.
+    outliers : ndarray
+        Boolean mask |normalized| > :data:`OUTLIER_NSIGMA` (flagged, not dropped).
+    scaled : bool
+        Whether ``cov`` was inflated by χ²/dof > 1.
+    """
+
+    slope: float
+    intercept: float
+    cov: F64
+    chi2: float
+    dof: int
+    rms: float
+    residuals: F64
+    normalized: F64
+    outliers: NDArray[np.bool_]
+    scaled: bool
+
+    @property
+    def sigma_slope(self) -> float:
+        """1σ uncertainty of the slope."""
+        return float(math.sqrt(self.cov[1, 1]))
+
+    @property
+    def sigma_intercept(self) -> float:
+        """1σ uncertainty of the intercept."""
+        return float(math.sqrt(self.cov[0, 0]))
+
+
+def weighted_line(x: ArrayLike, y: ArrayLike, sigma: ArrayLike, *, scale: bool = True) -> LineFit:
+    """Weighted linear regression y = a + b x with Gaussian errors σ on y.
+
+    Parameters
+    ----------
+    x, y, sigma : array_like
+        Abscissa, ordinate and 1σ ordinate errors (σ > 0), same length ≥ 2.
+    scale : bool
+        Inflate the covariance by χ²/dof when that exceeds 1 (honest errors under extra scatter).
+
+    Returns
+    -------
+    LineFit
+
+    Raises
+    ------
+    ValueError
+        Fewer than two points, non-positive σ, or all x equal.
+    """
+    xa = np.asarray(x, dtype=np.float64)
+    ya = np.asarray(y, dtype=np.float64)
+    sa = np.asarray(sigma, dtype=np.float64)
+    if xa.size < 2:
+        raise ValueError("need at least two points for a line fit")
+    if np.any(sa <= 0) or not np.all(np.isfinite(sa)):
+        raise ValueError("sigma must be positive and finite")
+    w = 1.0 / sa**2
+    sw = w.sum()
+    xm = float((w * xa).sum() / sw)
+    ym = float((w * ya).sum() / sw)
+    dx = xa - xm
+    sxx = float((w * dx * dx).sum())
+    if sxx <= 0.0 or not math.isfinite(sxx):
+        raise ValueError("all abscissae are equal: the slope is undetermined")
+    b = float((w * dx * (ya - ym)).sum() / sxx)
+    a = ym - b * xm
+    var_b = 1.0 / sxx
+    var_a = 1.0 / sw + xm * xm / sxx
+    cov_ab = -xm / sxx
+    cov = np.array([[var_a, cov_ab], [cov_ab, var_b]])
+    res = ya - (a + b * xa)
+    norm = res / sa
+    chi2 = float((norm * norm).sum())
+    dof = xa.size - 2
+    scaled = False
+    if scale and dof > 0 and chi2 / dof > 1.0:
+        cov = cov * (chi2 / dof)
+        scaled = True
+    return LineFit(
+        slope=b,
+        intercept=a,
+        cov=cov,
+        chi2=chi2,
+        dof=dof,
+        rms=float(np.sqrt(np.mean(res * res))),
+        residuals=res,
+        normalized=norm,
+        outliers=np.abs(norm) > OUTLIER_NSIGMA,
+        scaled=scaled,
+    )
+
+
+@dataclass(frozen=True, slots=True)
+class ComponentFit:
+    """One component's semi-amplitude and intercept from the v–G regression.
+
+    Attributes
+    ----------
+    star : int
+        1 or 2 (sign +1 / −1 in v = γ ± K G).
+    K, gamma : float
+        Semi-amplitude and systemic intercept [km/s], finite-window corrected.
+    cov : ndarray
+        2×2 statistical covariance of (γ, K) [km²/s²].
+    line : LineFit
+        The raw regression (slope = ±K).
+    """
+
+    star: int
+    K: float
+    gamma: float
+    cov: F64
+    line: LineFit
+
+    @property
+    def sigma_K(self) -> float:
+        """Statistical 1σ of K [km/s]."""
+        return float(math.sqrt(self.cov[1, 1]))
+
+    @property
+    def sigma_gamma(self) -> float:
+        """Statistical 1σ of γ [km/s]."""
+        return float(math.sqrt(self.cov[0, 0]))
+
+
+def fit_component(design: ArrayLike, v: ArrayLike, sigma: ArrayLike, star: int) -> ComponentFit:
+    """Fit v = γ + s K G (s = +1 for star 1, −1 for star 2) by weighted least squares.
+
+    Parameters
+    ----------
+    design : array_like
+        G from :func:`binned_design` [1].
+    v, sigma : array_like
+        Velocities and 1σ errors [km/s].
+    star : int
+        1 or 2.
+
+    Returns
+    -------
+    ComponentFit
+
+    Notes
+    -----
+    Eqs. v1v2_ecc_rv (v1v2_circular_rv for e = 0) with the finite-window design of Eq. vbar_master;
+    K_j is the slope divided by Λ_K (Appendix B), which the design already contains.
+    """
+    if star not in (1, 2):
+        raise ValueError("star must be 1 or 2")
+    sign = 1.0 if star == 1 else -1.0
+    line = weighted_line(design, v, sigma)
+    jac = np.diag([1.0, sign])
+    return ComponentFit(
+        star=star,
+        K=sign * line.slope,
+        gamma=line.intercept,
+        cov=jac @ line.cov @ jac.T,
+        line=line,
+    )
+
+
+def paper_recipe(
+    F: ArrayLike,
+    v: ArrayLike,
+    sigma: ArrayLike,
+    star: int,
+    lam_k: float,
+    lam_kappa: float,
+    kappa_s: float,
+) -> tuple[float, float]:
+    """The paper's literal recipe for a common window: regress on F, K = |slope|/Λ_K, then γ.
+
+    Returns
+    -------
+    (K, gamma) : tuple of float
+        [km/s]. γ_j = intercept ± K_j κ_s (Λ_K − Λ_κ), i.e. Eq. sb2_half_sum_ecc with the
+        κ_s K_j term replaced by Λ_κ κ_s K_j (Sec. 3.1.3) after the intercept absorbed Λ_K κ_s K_j.
+    """
+    sign = 1.0 if star == 1 else -1.0
+    line = weighted_line(F, v, sigma, scale=False)
+    K = sign * line.slope / lam_k
+    gamma = line.intercept + sign * K * kappa_s * (lam_k - lam_kappa)
+    return float(K), float(gamma)
+
+
+def two_spectrum_solution(
+    v_u0: float, v_upi: float, star: int, kappa_s: float = 0.0, lam_kappa: float = 1.0
+) -> tuple[float, float]:
+    """K_j and γ_j from one spectrum at each quadrature (u = 0, π).
+
+    Returns
+    -------
+    (K, gamma) : tuple of float
+        Eq. sb2_half_diff and Eq. sb2_half_sum_ecc (κ_s K_j → Λ_κ κ_s K_j for co-added spectra;
+        the velocities must already be divided by nothing: K here is the *observed* half
+        difference, i.e. Λ_K K for finite windows).
+    """
+    if star == 1:
+        K = 0.5 * (v_u0 - v_upi)
+        gamma = 0.5 * (v_u0 + v_upi - 2.0 * lam_kappa * kappa_s * K)
+    else:
+        K = 0.5 * (v_upi - v_u0)
+        gamma = 0.5 * (v_upi + v_u0 + 2.0 * lam_kappa * kappa_s * K)
+    return float(K), float(gamma)
+
+
+@dataclass(frozen=True, slots=True)
+class WilsonFit:
+    """WIL41 velocity–velocity line v1 = (γ1 + qγ2) − q v2 (Eq. wilson_line_general).
+
+    Attributes
+    ----------
+    q, sigma_q : float
+        Mass ratio M2/M1 = −slope and its 1σ.
+    intercept, sigma_intercept : float
+        γ1 + qγ2 [km/s] and 1σ.
+    chi2 : float
+        χ² with effective variance σ1² + q²σ2².
+    dof : int
+        n − 2.
+    """
+
+    q: float
+    sigma_q: float
+    intercept: float
+    sigma_intercept: float
+    chi2: float
+    dof: int
+
+
+def wilson_fit(
+    v1: ArrayLike, s1: ArrayLike, v2: ArrayLike, s2: ArrayLike, q0: float = 1.0
+) -> WilsonFit:
+    """Fit the WIL41 line with errors on both velocities (effective-variance iteration).
+
+    Parameters
+    ----------
+    v1, s1, v2, s2 : array_like
+        Simultaneous velocities of the two stars and their 1σ [km/s].
+    q0 : float
+        Starting mass ratio.
+
+    Returns
+    -------
+    WilsonFit
+
+    Notes
+    -----
+    Eq. wilson_line_general; the weight of each point is 1/(σ1² + q²σ2²), iterated to convergence
+    (the maximum-likelihood line for Gaussian errors in both coordinates).
+    """
+    v1a, v2a = np.asarray(v1, float), np.asarray(v2, float)
+    s1a, s2a = np.asarray(s1, float), np.asarray(s2, float)
+    q = q0
+    line = weighted_line(v2a, v1a, np.sqrt(s1a**2 + q * q * s2a**2), scale=False)
+    for _ in range(50):
+        q_new = -line.slope
+        line = weighted_line(v2a, v1a, np.sqrt(s1a**2 + q_new * q_new * s2a**2), scale=False)
+        if abs(-line.slope - q) < 1e-12 * max(1.0, abs(q)):
+            q = -line.slope
+            break
+        q = -line.slope
+    return WilsonFit(
+        q=q,
+        sigma_q=line.sigma_slope,
+        intercept=line.intercept,
+        sigma_intercept=line.sigma_intercept,
+        chi2=line.chi2,
+        dof=line.dof,
+    )
+
+
+def phase_sensitivity(
+    design: ArrayLike, sigma: ArrayLike, d_design: ArrayLike, K: float, sign: float
+) -> tuple[F64, F64]:
+    """Linear response of (K, γ) of one component to the ephemeris parameters.
+
+    Parameters
+    ----------
+    design : array_like, shape (n,)
+        G of each spectrum [1].
+    sigma : array_like, shape (n,)
+        Velocity errors (weights) [km/s].
+    d_design : array_like, shape (n, p)
+        ∂G_i/∂θ_k for the p ephemeris parameters.
+    K : float
+        Fitted semi-amplitude [km/s].
+    sign : float
+        +1 (star 1) or −1 (star 2).
+
+    Returns
+    -------
+    (dK, dgamma) : tuple of ndarray, each shape (p,)
+        ∂K/∂θ and ∂γ/∂θ [km/s per parameter unit] at fixed velocities.
+
+    Notes
+    -----
+    If the true orbital factors are G + δG, the data are v = γ ± K(G + δG); regressing on G
+    returns slope b + δb with δb = Σ w (x − x̄)(±K δG)/S_xx and intercept shift
+    δa = ±K Σw δG/Σw − x̄ δb. Contracting with the LISA covariance gives the ephemeris
+    (σ_u, σ_κ) contribution to σ_K and σ_γ (Appendix C1).
+    """
+    x = np.asarray(design, float)
+    w = 1.0 / np.asarray(sigma, float) ** 2
+    dG = np.asarray(d_design, float)
+    sw = w.sum()
+    xm = (w * x).sum() / sw
+    sxx = (w * (x - xm) ** 2).sum()
+    d_slope = sign * K * ((w * (x - xm))[:, None] * dG).sum(axis=0) / sxx
+    d_int = sign * K * (w[:, None] * dG).sum(axis=0) / sw - xm * d_slope
+    return np.asarray(sign * d_slope, dtype=np.float64), np.asarray(d_int, dtype=np.float64)

@@ -1,0 +1,364 @@
+"""Read measured radial velocities (CSV or ECSV) into a validated :class:`VelocityTable`.
+
+Accepted columns (one time column, one window column, SB1 or SB2 velocities):
+
+=====================  =========================================================================
+column                 meaning
+=====================  =========================================================================
+``bjd_tdb``            mid-exposure barycentric Julian date, TDB  (or ``bmjd_tdb`` / ``mjd_tdb``:
+                       barycentric MJD in TDB)
+``exptime_s``          exposure or co-add window Δt_bin [s] (alias ``window_s``), ≥ 0
+``lambda_k``           Λ_K of the window as written by ``ucbplan plan`` (instead of exptime_s)
+``v1, sigma_v1``       star 1 velocity and 1σ [km/s]; with ``v2, sigma_v2`` for SB2
+``v, sigma_v``         SB1 velocity and 1σ [km/s]
+``session``            optional session label (default: spectra separated by > 0.5 d split)
+``u_star``             optional targeted argument of latitude of star 1 [rad] (plan anchor)
+=====================  =========================================================================
+
+Velocities are positive when receding. ECSV columns may carry units (velocity → km/s, window →
+s). UTC site times are not accepted here: convert them first (``ucbplan`` exports carry BJD_TDB).
+
+Validity (:func:`check_validity`): every time must lie between the start of the LISA observation
+and :data:`HORIZON_S` (20 Julian years) after its end; beyond that the u(t) extrapolation is not
+something ucbplan will stand behind.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+from astropy.time import Time
+from numpy.typing import NDArray
+
+from ucbplan.errors import VelocityFileError
+
+if TYPE_CHECKING:
+    from ucbplan.target import Target
+
+__all__ = [
+    "HORIZON_S",
+    "KNOWN_COLUMNS",
+    "SESSION_GAP_S",
+    "VelocityTable",
+    "check_validity",
+    "read_velocities",
+]
+
+F64 = NDArray[np.float64]
+
+#: Latest accepted epoch after the end of the LISA observation [s] (20 Julian years).
+HORIZON_S = 20.0 * 365.25 * 86400.0
+#: Without a session column, consecutive spectra further apart than this start a new session [s].
+SESSION_GAP_S = 0.5 * 86400.0
+
+_TIME_COLS = {"bjd_tdb": 0.0, "bmjd_tdb": 2400000.5, "mjd_tdb": 2400000.5}
+_NUM_COLS = (
+    "exptime_s",
+    "window_s",
+    "lambda_k",
+    "v1",
+    "sigma_v1",
+    "v2",
+    "sigma_v2",
+    "v",
+    "sigma_v",
+    "u_star",
+)
+KNOWN_COLUMNS: tuple[str, ...] = (*_TIME_COLS, *_NUM_COLS, "session")
+_VEL_UNIT = {
+    "v1": "km/s",
+    "sigma_v1": "km/s",
+    "v2": "km/s",
+    "sigma_v2": "km/s",
+    "v": "km/s",
+    "sigma_v": "km/s",
+    "exptime_s": "s",
+    "window_s": "s",
+    "u_star": "rad",
+}
+
+
+@dataclass(frozen=True, slots=True)
+class VelocityTable:
+    """Validated velocities, one entry per spectrum, in input order.
+
+    Attributes
+    ----------
+    source : Path or None
+        File read.
+    time : astropy.time.Time
+        Mid-exposure epochs, TDB at the barycentre.
+    window_s : ndarray
+        Exposure/co-add window Δt_bin [s]; NaN where only ``lambda_k`` was given.
+    lambda_k : ndarray
+        Λ_K given in the file; NaN where ``window_s`` was given.
+    v, sigma : tuple of ndarray
+        (v1,) for SB1 or (v1, v2) for SB2 and their 1σ [km/s].
+    session : tuple of str
+        Session label of each spectrum.
+    u_star : ndarray or None
+        Targeted u★ per spectrum [rad] if the file has it.
+    """
+
+    source: Path | None
+    time: Time
+    window_s: F64
+    lambda_k: F64
+    v: tuple[F64, ...]
+    sigma: tuple[F64, ...]
+    session: tuple[str, ...]
+    u_star: F64 | None
+
+    @property
+    def lines(self) -> str:
+        """ "SB1" or "SB2"."""
+        return "SB2" if len(self.v) == 2 else "SB1"
+
+    @property
+    def n(self) -> int:
+        """Number of spectra."""
+        return int(self.v[0].size)
+
+
+def _fail(path: Path, where: str, msg: str) -> VelocityFileError:
+    return VelocityFileError(f"{path}: {where}: {msg}")
+
+
+def _read_csv(path: Path) -> tuple[list[str], list[tuple[int, list[str]]]]:
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise VelocityFileError(f"{path}: cannot read velocity file ({exc.strerror})") from exc
+    lines = [
+        (i + 1, ln)
+        for i, ln in enumerate(text.splitlines())
+        if ln.strip() and not ln.lstrip().startswith("#")
+    ]
+    if not lines:
+        raise VelocityFileError(
+            f"{path}: empty velocity file; expected a header line like "
+            "bjd_tdb,exptime_s,v1,sigma_v1,v2,sigma_v2"
+        )
+    rows = list(csv.reader([ln for _, ln in lines]))
+    header = [h.strip().lower() for h in rows[0]]
+    body = [(lines[k][0], [c.strip() for c in r]) for k, r in enumerate(rows[1:], start=1)]
+    return header, body
+
+
+def _read_ecsv(path: Path) -> tuple[list[str], dict[str, list[object]], list[int]]:
+    from astropy.table import Table
+
+    try:
+        tab = Table.read(path, format="ascii.ecsv")
+    except Exception as exc:  # astropy raises many types for malformed ECSV
+        raise VelocityFileError(f"{path}: not a readable ECSV table ({exc})") from exc
+    cols: dict[str, list[object]] = {}
+    for name in tab.colnames:
+        col = tab[name]
+        key = name.strip().lower()
+        unit = getattr(col, "unit", None)
+        if key in _VEL_UNIT and unit is not None:
+            try:
+                vals = col.quantity.to_value(_VEL_UNIT[key])
+            except Exception as exc:
+                raise _fail(
+                    path, f"column {name!r}", f"unit {unit} is not convertible to {_VEL_UNIT[key]}"
+                ) from exc
+            cols[key] = list(vals)
+        elif isinstance(col, Time):
+            raise _fail(
+                path,
+                f"column {name!r}",
+                "Time columns are not accepted; write "
+                "bjd_tdb as a plain number (barycentric JD, TDB)",
+            )
+        else:
+            cols[key] = list(col)
+    return list(cols), cols, list(range(1, len(tab) + 1))
+
+
+def _parse_float(path: Path, row: int, col: str, raw: object) -> float:
+    try:
+        val = float(raw)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        raise _fail(path, f"row {row}, column {col!r}", f"got {raw!r}, expected a number") from None
+    if not math.isfinite(val):
+        raise _fail(path, f"row {row}, column {col!r}", f"got {raw!r}, expected a finite number")
+    return val
+
+
+def _check_header(path: Path, header: list[str]) -> tuple[str, tuple[str, ...]]:
+    unknown = [h for h in header if h not in KNOWN_COLUMNS]
+    if unknown:
+        raise _fail(
+            path,
+            f"column {unknown[0]!r}",
+            f"unknown column; expected some of {', '.join(KNOWN_COLUMNS)}",
+        )
+    if len(set(header)) != len(header):
+        dup = next(h for h in header if header.count(h) > 1)
+        raise _fail(path, f"column {dup!r}", "appears twice")
+    times = [h for h in header if h in _TIME_COLS]
+    if len(times) != 1:
+        raise _fail(
+            path,
+            "header",
+            f"expected exactly one time column of {', '.join(_TIME_COLS)}, got {times or 'none'}",
+        )
+    if {"v1", "v2"} <= set(header):
+        comps: tuple[str, ...] = ("v1", "v2")
+    elif "v" in header and "v1" not in header and "v2" not in header:
+        comps = ("v",)
+    elif "v1" in header and "v2" not in header and "v" not in header:
+        comps = ("v1",)
+    else:
+        raise _fail(path, "header", "expected v1,sigma_v1,v2,sigma_v2 (SB2) or v,sigma_v (SB1)")
+    for c in comps:
+        if f"sigma_{c}" not in header:
+            raise _fail(path, "header", f"column sigma_{c} is missing (1σ of {c} in km/s)")
+    windows = [h for h in header if h in ("exptime_s", "window_s", "lambda_k")]
+    if len(windows) != 1:
+        raise _fail(
+            path,
+            "header",
+            "expected exactly one of exptime_s, window_s, lambda_k "
+            f"(exposure window in s, or Λ_K from the plan), got {windows or 'none'}",
+        )
+    return times[0], comps
+
+
+def read_velocities(path: Path | str) -> VelocityTable:
+    """Read and validate a velocity table (format from the suffix: ``.ecsv`` or CSV otherwise).
+
+    Parameters
+    ----------
+    path : Path or str
+        The table.
+
+    Returns
+    -------
+    VelocityTable
+
+    Raises
+    ------
+    VelocityFileError
+        Unreadable file, unknown/missing/duplicate columns, malformed, non-finite or non-positive
+        values; the message names the row and column.
+    """
+    path = Path(path)
+    if path.suffix.lower() == ".ecsv":
+        header, colmap, rownums = _read_ecsv(path)
+    else:
+        header, body = _read_csv(path)
+        colmap = {h: [] for h in header}
+        rownums = []
+        for k, (line_no, cells) in enumerate(body, start=1):
+            if len(cells) != len(header):
+                raise _fail(
+                    path,
+                    f"row {k} (line {line_no})",
+                    f"has {len(cells)} fields, expected {len(header)} like the header",
+                )
+            for h, c in zip(header, cells, strict=True):
+                colmap[h].append(c)
+            rownums.append(k)
+    tcol, comps = _check_header(path, header)
+    if not rownums:
+        raise VelocityFileError(f"{path}: no data rows; add one line per spectrum")
+    num: dict[str, F64] = {}
+    for h in header:
+        if h == "session":
+            continue
+        num[h] = np.array(
+            [_parse_float(path, r, h, x) for r, x in zip(rownums, colmap[h], strict=True)]
+        )
+    for c in comps:
+        bad = np.flatnonzero(num[f"sigma_{c}"] <= 0)
+        if bad.size:
+            r = rownums[int(bad[0])]
+            raise _fail(
+                path,
+                f"row {r}, column 'sigma_{c}'",
+                f"got {num[f'sigma_{c}'][bad[0]]}, expected a positive 1σ in km/s",
+            )
+    for h, lo, hi, what in (
+        ("exptime_s", 0.0, math.inf, "a window ≥ 0 s"),
+        ("window_s", 0.0, math.inf, "a window ≥ 0 s"),
+        ("lambda_k", 1e-6, 1.0, "Λ_K in (0, 1]"),
+    ):
+        if h in num:
+            bad = np.flatnonzero((num[h] < lo) | (num[h] > hi))
+            if bad.size:
+                raise _fail(
+                    path,
+                    f"row {rownums[int(bad[0])]}, column {h!r}",
+                    f"got {num[h][bad[0]]}, expected {what}",
+                )
+    jd = num[tcol] + _TIME_COLS[tcol]
+    time = Time(np.floor(jd), jd - np.floor(jd), format="jd", scale="tdb")
+    nan = np.full(jd.shape, np.nan)
+    window = num.get("exptime_s", num.get("window_s", nan))
+    lam = num.get("lambda_k", nan)
+    if "session" in colmap:
+        sess = tuple(str(s).strip() for s in colmap["session"])
+        empty = [r for r, s in zip(rownums, sess, strict=True) if not s]
+        if empty:
+            raise _fail(path, f"row {empty[0]}, column 'session'", "empty label")
+    else:
+        sess = _auto_sessions(jd)
+    return VelocityTable(
+        source=path,
+        time=time,
+        window_s=window,
+        lambda_k=lam,
+        v=tuple(num[c] for c in comps),
+        sigma=tuple(num[f"sigma_{c}"] for c in comps),
+        session=sess,
+        u_star=num.get("u_star"),
+    )
+
+
+def _auto_sessions(jd: F64) -> tuple[str, ...]:
+    """Label spectra by gaps > :data:`SESSION_GAP_S` in time order ("S1", "S2", …)."""
+    order = np.argsort(jd, kind="stable")
+    labels = np.empty(jd.size, dtype=object)
+    k = 1
+    prev = None
+    for i in order:
+        if prev is not None and (jd[i] - prev) * 86400.0 > SESSION_GAP_S:
+            k += 1
+        labels[i] = f"S{k}"
+        prev = jd[i]
+    return tuple(str(s) for s in labels)
+
+
+def check_validity(table: VelocityTable, target: Target) -> F64:
+    """Seconds since ``target.t_ref`` of each spectrum, after checking the validity window.
+
+    Raises
+    ------
+    VelocityFileError
+        A time before the LISA observation start or more than :data:`HORIZON_S` after its end
+        (names the first offending row).
+    """
+    tau = np.asarray((table.time - target.t_ref).to_value("s"), dtype=np.float64)
+    lo = -0.5 * target.t_obs_s
+    hi = 0.5 * target.t_obs_s + HORIZON_S
+    bad = np.flatnonzero((tau < lo) | (tau > hi))
+    if bad.size:
+        i = int(bad[0])
+        when = (
+            "before the LISA observation start"
+            if tau[i] < lo
+            else ("more than 20 yr after the LISA observation end")
+        )
+        raise VelocityFileError(
+            f"{table.source}: row {i + 1}: time {table.time[i].tdb.isot} TDB is {when} "
+            f"({target.t_start.isot} – {target.t_end.isot} TDB); check the time column and scale"
+        )
+    return tau
