@@ -1,0 +1,331 @@
+"""``ucbplan export`` (observatory and proposal files) and ``ucbplan feasibility`` (paper Sec. 3).
+
+A thin shell: parse options, build records, call :mod:`ucbplan.observing.exports` or
+:mod:`ucbplan.feasibility`, format the output (rich on stderr, machine formats on stdout or -o).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import IO, Annotated, Any
+
+import typer
+from rich.table import Table as RichTable
+
+from ucbplan.cliutil import dump_json, err_console, write_output
+from ucbplan.errors import InputFileError, UcbplanError
+
+__all__ = ["export_command", "feasibility_command", "register"]
+
+_EXPORT_HELP = "eso-p2 | keck-starlist | ics | proposal | ing-cat | lco"
+
+
+def export_command(
+    blocks: Annotated[
+        Path, typer.Argument(help="Master blocks table (ECSV) from `ucbplan plan -o`.")
+    ],
+    to: Annotated[str, typer.Option("--to", help=f"Export format: {_EXPORT_HELP}.")],
+    output: Annotated[
+        Path | None, typer.Option("-o", "--output", help="Output file (default stdout).")
+    ] = None,
+    overwrite: Annotated[
+        bool, typer.Option("--overwrite", help="Replace an existing output file.")
+    ] = False,
+    fmt: Annotated[
+        str, typer.Option("--format", help="Proposal table format: ecsv | csv | latex.")
+    ] = "ecsv",
+    acquisition: Annotated[
+        float | None,
+        typer.Option(
+            "--acquisition", help="Acquisition overhead [s] (default: acq_s column, else 600 s)."
+        ),
+    ] = None,
+    tolerance_sigma: Annotated[
+        float,
+        typer.Option(
+            "--tolerance-sigma", help="Window half-width in units of the block's 1σ timing error."
+        ),
+    ] = 3.0,
+    tolerance_floor: Annotated[
+        float, typer.Option("--tolerance-floor", help="Smallest window half-width [s].")
+    ] = 10.0,
+    merge_overlaps: Annotated[
+        bool,
+        typer.Option(
+            "--merge-overlaps", help="ESO p2: merge overlapping OBs of one target into one OB."
+        ),
+    ] = False,
+    rotmode: Annotated[
+        str, typer.Option("--rotmode", help="Keck starlist rotmode= value.")
+    ] = "vertical",
+) -> None:
+    """Export a blocks table for an observatory (ESO p2, Keck, ING, LCO), a calendar or a proposal.
+
+    All times are UTC at the site with their 1σ uncertainty. Notes about defaults and rounding go
+    to stderr.
+    """
+    from ucbplan.observing.exports import ExportOptions, export_blocks
+    from ucbplan.observing.table import read_blocks
+
+    if tolerance_sigma < 0 or tolerance_floor < 0 or (acquisition is not None and acquisition < 0):
+        raise UcbplanError(
+            "--tolerance-sigma, --tolerance-floor and --acquisition must be >= 0; "
+            f"got {tolerance_sigma}, {tolerance_floor}, {acquisition}"
+        )
+    if fmt not in ("ecsv", "csv", "latex"):
+        raise UcbplanError(f"--format: got {fmt!r}, expected ecsv, csv or latex (proposal table)")
+    options = ExportOptions(
+        acquisition_s=acquisition,
+        tolerance_sigma=tolerance_sigma,
+        tolerance_floor_s=tolerance_floor,
+        merge_overlaps=merge_overlaps,
+        proposal_format=fmt,
+        keck_rotmode=rotmode,
+    )
+    table = read_blocks(blocks)
+    result = export_blocks(table, to, options)
+    for note in result.notes:
+        err_console.print(f"[yellow]note:[/] {note}", soft_wrap=True)
+
+    def writer(handle: IO[bytes]) -> None:
+        handle.write(result.content)
+
+    write_output(output, writer, overwrite=overwrite, binary=True)
+    if output is not None:
+        err_console.print(f"wrote {to} export of {len(table)} blocks to {output}")
+
+
+def _parse_baseline(text: str) -> float:
+    """Baseline as an astropy quantity string (``"30 d"``, ``"1 yr"``) or bare days → seconds."""
+    import astropy.units as u
+
+    try:
+        return float(text) * 86400.0
+    except ValueError:
+        pass
+    try:
+        return float(u.Quantity(text).to_value(u.s))
+    except (ValueError, TypeError, u.UnitsError) as exc:
+        raise UcbplanError(
+            f"--baseline: got {text!r}, expected a time like '30 d', '1 yr' or bare days"
+        ) from exc
+
+
+def _optical(
+    period_s: float,
+    phase: float | None,
+    f_rel: float | None,
+    fdot_rel: float | None,
+    sig_p: float | None,
+    sig_pdot: float | None,
+    sig_t0: float | None,
+) -> Any:
+    from ucbplan.feasibility import OpticalEphemeris
+
+    freq_style = any(v is not None for v in (phase, f_rel, fdot_rel))
+    period_style = any(v is not None for v in (sig_p, sig_pdot, sig_t0))
+    if freq_style and period_style:
+        raise UcbplanError(
+            "optical ephemeris: give either --optical-sigma-phase/-f-rel/-fdot-rel or "
+            "--optical-sigma-p/-pdot/-t0, not both"
+        )
+    if period_style:
+        return OpticalEphemeris.from_period(period_s, sig_p or 0.0, sig_pdot or 0.0, sig_t0 or 0.0)
+    if freq_style:
+        return OpticalEphemeris(phase or 0.0, f_rel or 0.0, fdot_rel or 0.0, 1.0 / period_s)
+    return None
+
+
+def _fmt(value: float | None, fmt: str) -> str:
+    if value is None or not math.isfinite(value):
+        return "—"
+    return format(value, fmt)
+
+
+def _print_report(rep: Any) -> None:
+    from ucbplan.feasibility import MONTH_S, YEAR_S
+
+    t = RichTable(title=f"Feasibility: {rep.name} (paper Sec. 3)")
+    for col in ("quantity", "value", "unit", "Eq."):
+        t.add_column(col)
+    kms = 1e-3
+
+    def row(q: str, v: float | None, fmt: str, unit: str, eq: str, scale: float = 1.0) -> None:
+        t.add_row(q, _fmt(None if v is None else v * scale, fmt), unit, eq)
+
+    row("P_b", rep.period_s / 60.0, ".4f", "min", "")
+    row("e", rep.e, ".4g", "", "")
+    row("K1", rep.k1_m_s, ".1f", "km/s", "semiamp_est", kms)
+    row("K2", rep.k2_m_s, ".1f", "km/s", "semiamp_est", kms)
+    row("ω̇_GR", rep.omega_dot_gr, ".4g", "rad/s", "omega_dot_GR")
+    row("Δω_GR per month", rep.omega_dot_gr, ".3g", "rad", "omega_dot_GR", MONTH_S)
+    row("ω̇_tide", rep.omega_dot_tide, ".4g", "rad/s", "del_om_tide")
+    row("Δω_tide per month", rep.omega_dot_tide, ".3g", "rad", "del_om_tide", MONTH_S)
+    row(f"ω̇ used ({rep.omega_dot_source})", rep.omega_dot_used, ".4g", "rad/s", "")
+    row("apsidal period", rep.apsidal_period_s / 86400.0, ".3g", "d", "")
+    row(f"τ_chirp ({rep.tau_chirp_source})", rep.tau_chirp_s, ".3g", "yr", "tau_chirp", 1 / YEAR_S)
+    base = f"over ΔT = {rep.baseline_s / 86400.0:.4g} d"
+    row(f"|ΔK cos u★| {base}", rep.delta_k_m_s, ".3g", "km/s", "DeltaK_bound", kms)
+    row("max |Δv_aps| = 2K1e", rep.delta_v_aps_max_m_s, ".3g", "km/s", "apsidal_drift_est0", kms)
+    row(f"Δv_aps(ω0) {base}", rep.delta_v_aps_m_s, ".3g", "km/s", "apsidal_drift_est0", kms)
+    row(
+        f"e floor (σ_v = {rep.sigma_v_m_s * kms:.3g} km/s, N = {rep.n_spectra})",
+        rep.e_floor,
+        ".3g",
+        "",
+        "apsidal_drift_est0",
+    )
+    row(f"Δv_CM Galactic {base}", rep.delta_v_cm_galactic_m_s, ".3g", "m/s", "DeltaVcm_est")
+    row(
+        f"Δv_CM tertiary {rep.m3_msun:g} M☉ at {rep.a_out_au:g} AU {base}",
+        rep.delta_v_cm_tertiary_m_s,
+        ".3g",
+        "km/s",
+        "DeltaVcm_est",
+        kms,
+    )
+    err_console.print(t)
+    if rep.gw_timing_s is not None or rep.optical_timing_s is not None:
+        tt = RichTable(title="Timing error after the LISA midpoint (1σ)")
+        tt.add_column("ΔT [yr]")
+        tt.add_column("GW δt_u [s]")
+        tt.add_column("optical δt [s] (Eq. optical_timing_prec)")
+        for i, y in enumerate(rep.timing_years):
+            gw = rep.gw_timing_s[i] if rep.gw_timing_s is not None else None
+            op = rep.optical_timing_s[i] if rep.optical_timing_s is not None else None
+            tt.add_row(f"{y:g}", _fmt(gw, ".3g"), _fmt(op, ".3g"))
+        err_console.print(tt)
+    for note in rep.notes:
+        err_console.print(f"[yellow]note:[/] {note}", soft_wrap=True)
+
+
+def feasibility_command(
+    target: Annotated[Path, typer.Argument(help="Target YAML file.")],
+    m1: Annotated[
+        float | None, typer.Option("--m1", help="Mass of star 1 [M_sun] (else file).")
+    ] = None,
+    m2: Annotated[
+        float | None, typer.Option("--m2", help="Mass of star 2 [M_sun] (else file).")
+    ] = None,
+    sigma_v: Annotated[
+        float | None,
+        typer.Option(
+            "--sigma-v", help="Velocity precision per spectrum [km/s] (else file, else 15)."
+        ),
+    ] = None,
+    n_spectra: Annotated[int, typer.Option("--n-spectra", help="Spectra co-added per epoch.")] = 1,
+    baseline: Annotated[
+        str, typer.Option("--baseline", help="Baseline ΔT ('30 d', '1 yr', days).")
+    ] = "1 yr",
+    m3: Annotated[float, typer.Option("--m3", help="Tertiary mass [M_sun] for Δv_CM.")] = 1.0,
+    a_out: Annotated[
+        float, typer.Option("--a-out", help="Tertiary separation [AU] for Δv_CM.")
+    ] = 5.0,
+    opt_phase: Annotated[
+        float | None,
+        typer.Option("--optical-sigma-phase", help="Optical ephemeris σ(φ0) [cycles]."),
+    ] = None,
+    opt_f_rel: Annotated[
+        float | None, typer.Option("--optical-sigma-f-rel", help="σ_f/f [1].")
+    ] = None,
+    opt_fdot_rel: Annotated[
+        float | None, typer.Option("--optical-sigma-fdot-rel", help="σ_ḟ/f [1/s].")
+    ] = None,
+    opt_p: Annotated[float | None, typer.Option("--optical-sigma-p", help="σ(P_orb) [s].")] = None,
+    opt_pdot: Annotated[
+        float | None, typer.Option("--optical-sigma-pdot", help="σ(Ṗ_orb) [s/s].")
+    ] = None,
+    opt_t0: Annotated[float | None, typer.Option("--optical-sigma-t0", help="σ(T0) [s].")] = None,
+    opt_epoch: Annotated[
+        str | None,
+        typer.Option(
+            "--optical-epoch",
+            help="Optical ephemeris reference epoch, ISO TDB or BJD_TDB (default: LISA midpoint).",
+        ),
+    ] = None,
+    plot: Annotated[
+        Path | None, typer.Option("--plot", help="Write Δv_aps vs baseline PNG here.")
+    ] = None,
+    fmt: Annotated[
+        str, typer.Option("--format", help="table (stderr) | json (stdout or -o).")
+    ] = "table",
+    output: Annotated[Path | None, typer.Option("-o", "--output", help="JSON output file.")] = None,
+    overwrite: Annotated[
+        bool, typer.Option("--overwrite", help="Replace existing output files.")
+    ] = False,
+) -> None:
+    """Expected signal magnitudes (paper Sec. 3): K_j, apsidal rates, ΔK, Δv_aps, e floor, Δv_CM,
+    and GW vs optical timing errors."""
+    from ucbplan.cliutil import check_output_path
+    from ucbplan.feasibility import plot_apsidal_signal, report_for_target
+    from ucbplan.target import load_target
+
+    if fmt not in ("table", "json"):
+        raise UcbplanError(f"--format: got {fmt!r}, expected table or json")
+    if n_spectra < 1:
+        raise UcbplanError(f"--n-spectra: got {n_spectra}, expected an integer >= 1")
+    for name, value in (("--m1", m1), ("--m2", m2), ("--sigma-v", sigma_v), ("--m3", m3)):
+        if value is not None and not value > 0:
+            raise UcbplanError(f"{name}: got {value}, expected a positive number")
+    if not a_out > 0:
+        raise UcbplanError(f"--a-out: got {a_out}, expected a positive number [AU]")
+    tgt = load_target(target)
+    optical = _optical(tgt.period_s, opt_phase, opt_f_rel, opt_fdot_rel, opt_p, opt_pdot, opt_t0)
+    offset = _optical_offset(opt_epoch, tgt.t_ref) if opt_epoch else 0.0
+    report = report_for_target(
+        tgt,
+        m1_msun=m1,
+        m2_msun=m2,
+        sigma_v_m_s=sigma_v * 1e3 if sigma_v is not None else None,
+        n_spectra=n_spectra,
+        baseline_s=_parse_baseline(baseline),
+        m3_msun=m3,
+        a_out_au=a_out,
+        optical=optical,
+        optical_offset_s=offset,
+    )
+    if plot is not None:
+        if report.k1_m_s is None or report.omega_dot_used == 0.0:
+            raise UcbplanError(
+                f"--plot: {tgt.name} has no K1 or no apsidal rate; give --m1/--m2 (and "
+                "cos_inclination in the target file) or K1 under spectroscopy"
+            )
+        check_output_path(plot, overwrite)
+        plot_apsidal_signal(
+            plot,
+            k1_m_s=report.k1_m_s,
+            omega_dot_rad_s=report.omega_dot_used,
+            target_e=report.e if report.e > 0 else None,
+            target_omega1=report.omega0_rad,
+            title=f"{tgt.name}: apsidal signal (Eq. apsidal_drift_est0)",
+        )
+        err_console.print(f"wrote {plot}")
+    if fmt == "json":
+        doc = {"units": "SI (m/s, s, rad, rad/s); masses M_sun", **report.to_dict()}
+        write_output(output, lambda h: dump_json(doc, h), overwrite=overwrite)
+    else:
+        _print_report(report)
+
+
+def _optical_offset(text: str, t_ref: Any) -> float:
+    """Seconds from the optical reference epoch to the LISA midpoint ``t_ref``."""
+    from astropy.time import Time
+
+    try:
+        epoch = Time(float(text), format="jd", scale="tdb")
+    except ValueError:
+        try:
+            epoch = Time(text, scale="tdb")
+        except ValueError as exc:
+            raise InputFileError(
+                f"--optical-epoch: got {text!r}, expected ISO (TDB) like 2023-01-01T00:00:00 "
+                "or a BJD_TDB number"
+            ) from exc
+    return float((t_ref - epoch).to_value("s"))
+
+
+def register(app: typer.Typer) -> None:
+    """Add ``export`` and ``feasibility`` to the ucbplan app."""
+    app.command("export")(export_command)
+    app.command("feasibility")(feasibility_command)

@@ -1,0 +1,379 @@
+"""Proposal technical-section table, ING catalogue and LCO request JSON from a blocks table.
+
+One row per target: coordinates, magnitude, P_orb, the ephemeris file, σ_T at the semester
+midpoint, the anchor phases and their tolerance, usable windows per month, exposure and overheads
+per visit, visits, hours (total = integration + overheads), the time-critical flag and the
+constraints (EXPORTS.md "Proposal technical section").
+
+Decisions where the issue is silent: the "semester" is the span of the blocks table (first block
+start to last block end) and σ_T at its midpoint is linearly interpolated in time between the
+target's blocks; windows per month = visits divided by the calendar months the table spans; every
+phase-targeted target is time critical.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import math
+from collections import Counter
+from datetime import UTC, datetime
+from typing import Any
+
+import numpy as np
+from astropy.table import Table
+
+from ucbplan.errors import InputFileError
+from ucbplan.observing.exports import (
+    ExportOptions,
+    acquisition_s,
+    coordinates,
+    floats,
+    fmt_sigma,
+    iso_ms,
+    period_s,
+    readout_total_s,
+    required_times,
+    safe_name,
+    sexagesimal,
+    strings,
+    vmags,
+)
+
+__all__ = [
+    "PROPOSAL_FORMATS",
+    "ing_catalogue",
+    "lco_requests",
+    "proposal_table",
+    "write_proposal",
+]
+
+PROPOSAL_FORMATS = ("ecsv", "csv", "latex")
+
+#: LaTeX display names (astropy's LaTeX writer does not escape column names).
+_LATEX_COLUMNS = {
+    "target": "Target",
+    "ra_hms": r"RA (J2000)",
+    "dec_dms": r"Dec (J2000)",
+    "vmag": r"$V$ [mag]",
+    "p_orb_min": r"$P_\mathrm{orb}$ [min]",
+    "sigma_t_mid_s": r"$\sigma_T$ [s]",
+    "anchors": r"Phases $u_\star$ [rad]",
+    "n_visits": "Visits",
+    "windows_per_month": "Windows/month",
+    "exposure_per_visit_s": r"$t_\mathrm{exp}$/visit [s]",
+    "overhead_per_visit_s": "Overheads/visit [s]",
+    "total_h": "Total [h]",
+}
+
+_UNITS = {
+    "p_orb_min": "min",
+    "sigma_t_mid_s": "s",
+    "tolerance_rad": "rad",
+    "window_half_width_s": "s",
+    "exposure_per_visit_s": "s",
+    "overhead_per_visit_s": "s",
+    "integration_h": "h",
+    "overhead_h": "h",
+    "total_h": "h",
+    "vmag": "mag",
+}
+
+
+def _seconds(ts: list[datetime]) -> np.ndarray:
+    epoch = datetime(2000, 1, 1, tzinfo=UTC)
+    return np.array([(t - epoch).total_seconds() for t in ts])
+
+
+def _meta_targets(table: Table) -> dict[str, dict[str, Any]]:
+    items = table.meta.get("targets", []) if table.meta else []
+    return {str(t.get("name")): dict(t) for t in items if isinstance(t, dict)}
+
+
+def _months(ts: list[datetime]) -> int:
+    first, last = min(ts), max(ts)
+    return (last.year - first.year) * 12 + last.month - first.month + 1
+
+
+def _nanmedian(values: np.ndarray) -> float:
+    finite = values[np.isfinite(values)]
+    return float(np.median(finite)) if finite.size else math.nan
+
+
+def _anchor_text(anchors: list[str], u_star: np.ndarray) -> str:
+    groups: dict[str, list[float]] = {}
+    for a, u in zip(anchors, u_star, strict=True):
+        values = groups.setdefault(a, [])
+        if not any(abs(u - v) < 1e-9 for v in values):
+            values.append(float(u))
+    return "; ".join(f"{a} {','.join(f'{v:.4g}' for v in sorted(vs))}" for a, vs in groups.items())
+
+
+def proposal_table(table: Table, options: ExportOptions, notes: list[str]) -> Table:
+    """Summarise a blocks table per target for a proposal's technical section.
+
+    Parameters
+    ----------
+    table : astropy.table.Table
+        Master blocks table (``ucbplan plan -o``).
+    options : ExportOptions
+        Acquisition overhead and tolerance rule (k·σ_t) used for the timing tolerance column.
+    notes : list of str
+        Receives one note per default taken.
+
+    Returns
+    -------
+    astropy.table.Table
+        One row per target in order of first appearance; totals and rules in ``meta``.
+    """
+    names = strings(table, "target")
+    anchors = strings(table, "anchor")
+    u_star = floats(table, "u_star_rad", unit="rad")
+    sigma = floats(table, "sigma_t_s", unit="s")
+    exposure = floats(table, "n_exp") * floats(table, "exptime_s", unit="s")
+    overhead = acquisition_s(table, options, notes) + readout_total_s(table, notes)
+    per = period_s(table, notes)
+    ra, dec = coordinates(table)
+    starts = required_times(table, "t_start_utc")
+    ends = required_times(table, "t_end_utc")
+    mids = _seconds(required_times(table, "t_mid_utc"))
+    sem_start, sem_end = min(starts), max(ends)
+    sem_mid = sem_start + (sem_end - sem_start) / 2
+    t_mid_sem = _seconds([sem_mid])[0]
+    months = _months(starts)
+    vmag_col = vmags(table)
+    tol_col = floats(table, "tol_rad", default=math.nan)
+    meta_t = _meta_targets(table)
+    constraints = "; ".join(str(c) for c in (table.meta or {}).get("constraints", []))
+    order = list(dict.fromkeys(names))
+    rows: list[dict[str, Any]] = []
+    for name in order:
+        idx = np.array([i for i, n in enumerate(names) if n == name])
+        srt = idx[np.argsort(mids[idx], kind="stable")]
+        vmag = float(vmag_col[idx[0]])
+        by_month = Counter(starts[i].strftime("%Y-%m") for i in srt)
+        rows.append(
+            {
+                "target": name,
+                "ra_hms": sexagesimal(ra[idx[0]] / 15.0, 2, ":", False),
+                "dec_dms": sexagesimal(dec[idx[0]], 1, ":", True),
+                "vmag": vmag,
+                "p_orb_min": _nanmedian(per[idx]) / 60.0,
+                "ephemeris": str(meta_t.get(name, {}).get("file") or ""),
+                "sigma_t_mid_s": float(np.interp(t_mid_sem, mids[srt], sigma[srt])),
+                "anchors": _anchor_text([anchors[i] for i in srt], u_star[srt]),
+                "tolerance_rad": _nanmedian(tol_col[idx]),
+                "window_half_width_s": max(
+                    options.tolerance_sigma * float(np.interp(t_mid_sem, mids[srt], sigma[srt])),
+                    options.tolerance_floor_s,
+                ),
+                "n_visits": len(idx),
+                "windows_per_month": len(idx) / months,
+                "windows_by_month": " ".join(f"{k}:{v}" for k, v in sorted(by_month.items())),
+                "exposure_per_visit_s": float(np.mean(exposure[idx])),
+                "overhead_per_visit_s": float(np.mean(overhead[idx])),
+                "integration_h": float(np.sum(exposure[idx])) / 3600.0,
+                "overhead_h": float(np.sum(overhead[idx])) / 3600.0,
+                "total_h": float(np.sum(exposure[idx] + overhead[idx])) / 3600.0,
+                "time_critical": True,
+                "constraints": constraints,
+            }
+        )
+    if any(not math.isfinite(r["vmag"]) for r in rows):
+        notes.append("no vmag for some targets: magnitude left blank (add vmag to the target file)")
+    out = Table(rows=rows, names=list(rows[0]))
+    for col, unit in _UNITS.items():
+        out[col].unit = unit
+    out.meta = {
+        "ucbplan_version": _version(),
+        "source_created_utc": str((table.meta or {}).get("created_utc", "")),
+        "site": (table.meta or {}).get("site", ""),
+        "semester_start_utc": iso_ms(sem_start, 0),
+        "semester_end_utc": iso_ms(sem_end, 0),
+        "semester_mid_utc": iso_ms(sem_mid, 0),
+        "sigma_t_mid_rule": "sigma_T linearly interpolated between the target's blocks at mid",
+        "overheads_rule": "overhead per visit = acquisition + readout inside the block",
+        "window_rule": (
+            f"window_half_width_s = max({options.tolerance_sigma:g} sigma_T, "
+            f"{options.tolerance_floor_s:g} s) at the semester midpoint; tolerance_rad from "
+            "a tol_rad column when the planner writes one"
+        ),
+        "total_integration_h": float(np.sum(out["integration_h"])),
+        "total_overhead_h": float(np.sum(out["overhead_h"])),
+        "total_h": float(np.sum(out["total_h"])),
+        "time_scale": "UTC at the site",
+    }
+    return out
+
+
+def _version() -> str:
+    from ucbplan import __version__
+
+    return __version__
+
+
+def _latex_escape(text: str) -> str:
+    for char, repl in (("\\", r"\textbackslash{}"), ("_", r"\_"), ("&", r"\&"), ("%", r"\%")):
+        text = text.replace(char, repl)
+    return text.replace("#", r"\#").replace("$", r"\$")
+
+
+def _latex(summary: Table) -> str:
+    def num(v: float, fmt: str) -> str:
+        return "--" if not math.isfinite(v) else format(v, fmt)
+
+    cols: dict[str, list[str]] = {k: [] for k in _LATEX_COLUMNS}
+    for r in summary:
+        cols["target"].append(_latex_escape(str(r["target"])))
+        cols["ra_hms"].append(str(r["ra_hms"]))
+        cols["dec_dms"].append(str(r["dec_dms"]).replace("-", "$-$"))
+        cols["vmag"].append(num(float(r["vmag"]), ".1f"))
+        cols["p_orb_min"].append(num(float(r["p_orb_min"]), ".3f"))
+        cols["sigma_t_mid_s"].append(fmt_sigma(float(r["sigma_t_mid_s"])))
+        cols["anchors"].append(_latex_escape(str(r["anchors"])))
+        cols["n_visits"].append(str(int(r["n_visits"])))
+        cols["windows_per_month"].append(num(float(r["windows_per_month"]), ".1f"))
+        cols["exposure_per_visit_s"].append(num(float(r["exposure_per_visit_s"]), ".0f"))
+        cols["overhead_per_visit_s"].append(num(float(r["overhead_per_visit_s"]), ".0f"))
+        cols["total_h"].append(num(float(r["total_h"]), ".2f"))
+    for key in cols:
+        cols[key].append("")
+    cols["target"][-1] = "Total"
+    cols["n_visits"][-1] = str(int(np.sum(summary["n_visits"])))
+    cols["total_h"][-1] = format(float(summary.meta["total_h"]), ".2f")
+    latex = Table([cols[k] for k in _LATEX_COLUMNS], names=list(_LATEX_COLUMNS.values()))
+    buf = io.StringIO()
+    caption = (
+        r"Phase-targeted visits (times UTC at the site; $\sigma_T$ at the semester midpoint "
+        + summary.meta["semester_mid_utc"].replace("T", " ")
+        + r" UTC; total = integration + overheads)."
+    )
+    latex.write(buf, format="ascii.latex", latexdict={"caption": caption, "tabletype": "table*"})
+    return buf.getvalue()
+
+
+def write_proposal(summary: Table, fmt: str) -> str:
+    """Serialise the proposal table as ``ecsv``, ``csv`` or ``latex``.
+
+    Raises
+    ------
+    InputFileError
+        For an unknown format.
+    """
+    if fmt not in PROPOSAL_FORMATS:
+        raise InputFileError(
+            f"--format: got {fmt!r}, expected one of {', '.join(PROPOSAL_FORMATS)}"
+        )
+    if fmt == "latex":
+        return _latex(summary)
+    buf = io.StringIO()
+    if fmt == "ecsv":
+        summary.write(buf, format="ascii.ecsv")
+    else:
+        plain = summary.copy()
+        plain.meta = {}
+        plain.write(buf, format="ascii.csv")
+    return buf.getvalue()
+
+
+def ing_catalogue(table: Table) -> str:
+    """ING (WHT/ISIS) catalogue: ``NAME hh mm ss.ss ±dd mm ss.s J2000 ! comment`` per target.
+
+    Names are ≤ 20 characters without spaces, colons or tabs; the comment gives the first
+    block's UTC mid-time and σ. Save under a lower-case name ending ``.cat``.
+    """
+    names = strings(table, "target")
+    ra, dec = coordinates(table)
+    sigma = floats(table, "sigma_t_s", unit="s")
+    mids = required_times(table, "t_mid_utc")
+    lines: list[str] = []
+    seen: set[str] = set()
+    for i in sorted(range(len(table)), key=lambda j: mids[j]):
+        short = safe_name(names[i], 20).replace(":", "_")
+        if short in seen:
+            continue
+        seen.add(short)
+        lines.append(
+            f"{short:<20} {sexagesimal(ra[i] / 15.0, 2, ' ', False)} "
+            f"{sexagesimal(dec[i], 1, ' ', True)} J2000 ! first UTC-mid {iso_ms(mids[i], 1)} "
+            f"+/-{fmt_sigma(float(sigma[i]))} s"
+        )
+    return "\n".join(lines) + "\n"
+
+
+def lco_requests(
+    table: Table,
+    options: ExportOptions,
+    *,
+    proposal: str = "FILL-ME",
+    instrument_type: str = "SOAR_GHTS_REDCAM",
+    telescope_class: str = "4m0",
+    max_airmass: float = 2.0,
+    min_lunar_distance: float = 30.0,
+) -> dict[str, Any]:
+    """LCO/SOAR OCS request group: one TIME_CRITICAL request per block, window on its start.
+
+    The window is the block start minus the acquisition overhead ± max(k·σ_t, floor), like the
+    ESO p2 export but with second resolution.
+    """
+    from datetime import timedelta
+
+    notes: list[str] = []
+    acq = acquisition_s(table, options, notes)
+    names = strings(table, "target")
+    ra, dec = coordinates(table)
+    sigma = floats(table, "sigma_t_s", unit="s")
+    exptime, n_exp = floats(table, "exptime_s", unit="s"), floats(table, "n_exp")
+    starts = required_times(table, "t_start_utc")
+    requests = []
+    for i in sorted(range(len(table)), key=lambda j: starts[j]):
+        half = max(options.tolerance_sigma * float(sigma[i]), options.tolerance_floor_s)
+        ob = starts[i] - timedelta(seconds=float(acq[i]))
+        window = {
+            "start": iso_ms(ob - timedelta(seconds=half), 0),
+            "end": iso_ms(ob + timedelta(seconds=half), 0),
+        }
+        requests.append(
+            {
+                "location": {"telescope_class": telescope_class},
+                "windows": [window],
+                "configurations": [
+                    {
+                        "type": "SPECTRUM",
+                        "instrument_type": instrument_type,
+                        "target": {
+                            "name": names[i],
+                            "type": "ICRS",
+                            "ra": float(ra[i]),
+                            "dec": float(dec[i]),
+                            "epoch": 2000,
+                        },
+                        "constraints": {
+                            "max_airmass": max_airmass,
+                            "min_lunar_distance": min_lunar_distance,
+                        },
+                        "instrument_configs": [
+                            {"exposure_time": float(exptime[i]), "exposure_count": int(n_exp[i])}
+                        ],
+                        "acquisition_config": {"mode": "WCS"},
+                        "guiding_config": {"mode": "ON", "optional": True},
+                    }
+                ],
+            }
+        )
+    if not requests:
+        raise InputFileError("blocks table has no rows: nothing to export")
+    return {
+        "name": safe_name(f"ucbplan {names[0]}", 50),
+        "proposal": proposal,
+        "ipp_value": 1.0,
+        "operator": "MANY",
+        "observation_type": "TIME_CRITICAL",
+        "requests": requests,
+        "_ucbplan": {"time_scale": "UTC at the site", "notes": notes},
+    }
+
+
+def lco_json(table: Table, options: ExportOptions) -> str:
+    """:func:`lco_requests` as indented JSON text."""
+    return json.dumps(lco_requests(table, options), indent=2, allow_nan=False) + "\n"
