@@ -1,0 +1,188 @@
+"""Regression kernels of ``ucbplan reduce`` against independent values (paper, numpy, brute force)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from ucbplan.reduce.regression import (
+    OUTLIER_NSIGMA,
+    binned_design,
+    fit_component,
+    lambda_k,
+    lambda_k_to_x,
+    lambda_kappa,
+    paper_recipe,
+    phase_sensitivity,
+    two_spectrum_solution,
+    weighted_line,
+    wilson_fit,
+)
+
+NBAR = math.pi * 8.4062899940e-3  # fiducial n̄_b [rad/s]
+P_MEAN = 2.0 * math.pi / NBAR
+
+
+def test_lambda_factors_match_science_md() -> None:
+    """SCIENCE.md checked numbers: Λ_K(P/8) = 0.97450, 1/Λ_K(P/3) = 1.2092, Λ_κ(P/3) = 0.4135.
+
+    Tolerance 5e-5: the printed precision of the reference values.
+    """
+    assert float(lambda_k(NBAR, P_MEAN / 8)) == pytest.approx(0.97450, abs=5e-5)
+    assert 1.0 / float(lambda_k(NBAR, P_MEAN / 3)) == pytest.approx(1.2092, abs=5e-5)
+    assert float(lambda_kappa(NBAR, P_MEAN / 3)) == pytest.approx(0.4135, abs=5e-5)
+    # the paper's "Λ_K = sinc(π/8) = 0.974" (Sec. 5) and "Λ_K ≃ 0.83" at P/3 (Appendix B)
+    assert float(lambda_k(NBAR, P_MEAN / 8)) == pytest.approx(0.974, abs=5e-4)
+    assert float(lambda_k(NBAR, P_MEAN / 3)) == pytest.approx(0.83, abs=5e-3)
+    assert float(lambda_k(NBAR, 0.0)) == 1.0
+
+
+def test_lambda_k_matches_brute_force_average() -> None:
+    """Λ_K equals the numerical window average of cos(n̄t) centred on a maximum (1e-10)."""
+    dt = P_MEAN / 5
+    t = np.linspace(-dt / 2, dt / 2, 200001)
+    brute = np.trapezoid(np.cos(NBAR * t), t) / dt
+    assert float(lambda_k(NBAR, dt)) == pytest.approx(brute, abs=1e-10)
+    brute2 = np.trapezoid(np.cos(2 * NBAR * t), t) / dt
+    assert float(lambda_kappa(NBAR, dt)) == pytest.approx(brute2, abs=1e-10)
+
+
+@settings(max_examples=50, deadline=None)
+@given(st.floats(min_value=0.0, max_value=3.0))
+def test_lambda_k_inversion_round_trip(x: float) -> None:
+    """x → Λ_K = sin x/x → x recovers x to 1e-7 rad (Newton on a smooth monotone function)."""
+    lam = math.sin(x) / x if x > 0 else 1.0
+    assert float(lambda_k_to_x(lam)[0]) == pytest.approx(x, abs=1e-7)
+
+
+def test_weighted_line_matches_numpy_polyfit() -> None:
+    """Slope/intercept and formal covariance equal numpy.polyfit(w=1/σ, cov='unscaled') (1e-10)."""
+    rng = np.random.default_rng(3)
+    x = rng.uniform(-1, 1, 60)
+    s = rng.uniform(5, 20, 60)
+    y = 12.0 + 600.0 * x + rng.normal(0, s)
+    fit = weighted_line(x, y, s, scale=False)
+    coef, cov = np.polyfit(x, y, 1, w=1.0 / s, cov="unscaled")
+    assert fit.slope == pytest.approx(coef[0], rel=1e-10)
+    assert fit.intercept == pytest.approx(coef[1], rel=1e-10)
+    assert fit.cov[1, 1] == pytest.approx(cov[0, 0], rel=1e-8)
+    assert fit.cov[0, 0] == pytest.approx(cov[1, 1], rel=1e-8)
+    assert fit.cov[0, 1] == pytest.approx(cov[0, 1], rel=1e-8)
+
+
+def test_outliers_are_flagged_not_dropped() -> None:
+    """A 10σ point is flagged; the slope still includes it (differs from the fit without it)."""
+    x = np.linspace(-1, 1, 41)
+    y = 3.0 + 100.0 * x
+    y[7] += 10 * 15.0
+    s = np.full(x.size, 15.0)
+    fit = weighted_line(x, y, s)
+    assert fit.outliers[7] and fit.outliers.sum() == 1
+    assert abs(fit.normalized[7]) > OUTLIER_NSIGMA
+    clean = weighted_line(np.delete(x, 7), np.delete(y, 7), np.delete(s, 7))
+    assert fit.slope != pytest.approx(clean.slope, abs=1e-9)
+    assert fit.scaled  # χ²/dof > 1 → errors inflated
+
+
+def test_paper_sigma_k_480_spectra() -> None:
+    """Sec. 5: N = 480, σ_v = 15 km/s, 8 exposures/orbit → σ_slope = σ_v√(2/N) ≈ 0.97 km/s.
+
+    With u spread uniformly (8 phases) Σcos²u = N/2 exactly, so σ_slope = 15·√(2/480) = 0.968;
+    dividing by Λ_K(P/8) gives σ_K = 0.993. At the two quadratures only, σ = σ_v/√N = 0.685
+    (Appendix C, "a factor of √2 better").
+    """
+    u = (np.arange(480) % 8 + 0.5) * math.pi / 4
+    G = binned_design(u, 0.0, 0.0, lambda_k(NBAR, P_MEAN / 8), 1.0)
+    fit = fit_component(G, 100.0 + 585.3 * G, np.full(480, 15.0), star=1)
+    assert fit.line.sigma_slope * float(lambda_k(NBAR, P_MEAN / 8)) == pytest.approx(
+        15 * math.sqrt(2 / 480), rel=1e-12
+    )
+    assert 15 * math.sqrt(2 / 480) == pytest.approx(0.97, abs=0.005)
+    assert fit.sigma_K == pytest.approx(0.968 / 0.9745, abs=1e-3)
+    uq = (np.arange(480) % 2) * math.pi
+    fq = fit_component(np.cos(uq), 585.3 * np.cos(uq), np.full(480, 15.0), star=1)
+    assert fq.sigma_K == pytest.approx(15 / math.sqrt(480), rel=1e-12)
+
+
+@pytest.mark.parametrize("eta,kappa", [(0.0, 0.0), (0.0068, 0.0068), (-0.008, 0.0045)])
+def test_two_spectrum_quadrature_limit_agrees_with_fit(eta: float, kappa: float) -> None:
+    """Two spectra at u = 0, π: the regression equals Eqs. sb2_half_diff / sb2_half_sum_ecc.
+
+    Data from the first-order model with u★ = 0, π mapped to Φ_c by Eq. Phi_c. The two agree to
+    O(e²K): tolerance 3e²K + 1e-9 km/s (0.0 for circular).
+    """
+    phi = np.array([2 * eta, math.pi - 2 * eta])  # Eq. Phi_c at u★ = 0, π
+    G = binned_design(phi, eta, kappa)
+    K1, K2, g1, g2 = 585.3, 712.6, 30.0, 10.0
+    v1, v2 = g1 + K1 * G, g2 - K2 * G
+    s = np.ones(2)
+    f1, f2 = fit_component(G, v1, s, 1), fit_component(G, v2, s, 2)
+    k1, gg1 = two_spectrum_solution(v1[0], v1[1], 1, kappa_s=kappa)
+    k2, gg2 = two_spectrum_solution(v2[0], v2[1], 2, kappa_s=kappa)
+    e2 = eta**2 + kappa**2
+    for a, b, K in ((f1.K, k1, K1), (f1.gamma, gg1, K1), (f2.K, k2, K2), (f2.gamma, gg2, K2)):
+        assert a == pytest.approx(b, abs=3 * e2 * K + 1e-9)
+    assert f1.K == pytest.approx(K1, abs=1e-9) and f2.gamma == pytest.approx(g2, abs=1e-9)
+
+
+def test_paper_recipe_equals_design_fit_for_common_window() -> None:
+    """Regressing on F then K = slope/Λ_K, γ with the Λ_κ κ_s K term equals the design fit.
+
+    Common window P/3, quadrature sampling (where Eq. vbar_quad is exact to O(e²)), e = 0.0096:
+    the two estimators agree to 2e²K (≈ 0.1 km/s ≪ σ).
+    """
+    eta, kappa = 0.0068, 0.0068
+    lk, lkap = float(lambda_k(NBAR, P_MEAN / 3)), float(lambda_kappa(NBAR, P_MEAN / 3))
+    u = (np.arange(200) % 2) * math.pi
+    phi = u - 2 * kappa * np.sin(u) + 2 * eta * np.cos(u)
+    G = binned_design(phi, eta, kappa, lk, lkap)
+    F = np.cos(u) + kappa
+    v = 30.0 + 585.3 * G
+    s = np.full(u.size, 15.0)
+    fit = fit_component(G, v, s, 1)
+    K, gamma = paper_recipe(F, v, s, 1, lk, lkap, kappa)
+    tol = 2 * (eta**2 + kappa**2) * 585.3
+    assert K == pytest.approx(fit.K, abs=tol)
+    assert gamma == pytest.approx(fit.gamma, abs=tol)
+    # and the uncorrected intercept is biased by K κ (Λ_κ − Λ_K) ≈ −1.7 km/s: the correction matters
+    raw = weighted_line(F, v, s).intercept
+    assert abs(raw - 30.0) > 1.5
+
+
+def test_wilson_fit_recovers_q_and_intercept() -> None:
+    """WIL41 line on noise-free pairs: q = K1/K2 and γ1 + qγ2 exactly (1e-9)."""
+    u = np.linspace(0, 2 * math.pi, 37)
+    v1, v2 = 30 + 585.3 * np.cos(u), 10 - 712.6 * np.cos(u)
+    w = wilson_fit(v1, np.full(37, 15.0), v2, np.full(37, 15.0))
+    q = 585.3 / 712.6
+    assert w.q == pytest.approx(q, rel=1e-9)
+    assert w.intercept == pytest.approx(30 + q * 10, abs=1e-7)
+
+
+def test_phase_sensitivity_matches_brute_force_refit() -> None:
+    """∂K/∂θ and ∂γ/∂θ agree with refitting on the design of a perturbed θ.
+
+    θ here is a generic phase offset δ = 1e-3 rad added to Φ (∂G/∂δ = −Λ_K sin Φ − …); the
+    re-regression shift is −(∂K/∂θ)δ (docstring of phase_sensitivity). Noise-free data (the
+    linearisation drops noise×δ terms); tolerance 3 %: the O(δ²K) term is 1 % of the linear one.
+    """
+    rng = np.random.default_rng(5)
+    phi = rng.uniform(0, 2 * math.pi, 300)
+    eta, kappa, lk, lkap = 0.0068, 0.0068, 0.97, 0.9
+    G = binned_design(phi, eta, kappa, lk, lkap)
+    s = rng.uniform(10, 20, 300)
+    v1 = 30 + 585.3 * G
+    f = fit_component(G, v1, s, 1)
+    d = 1e-4
+    dG = (
+        binned_design(phi + d, eta, kappa, lk, lkap) - binned_design(phi - d, eta, kappa, lk, lkap)
+    ) / (2 * d)
+    dK, dg = phase_sensitivity(G, s, dG[:, None], f.K, 1.0)
+    delta = 1e-3
+    f2 = fit_component(binned_design(phi + delta, eta, kappa, lk, lkap), v1, s, 1)
+    assert f2.K - f.K == pytest.approx(-dK[0] * delta, rel=3e-2)
+    assert f2.gamma - f.gamma == pytest.approx(-dg[0] * delta, rel=3e-2)

@@ -1,0 +1,365 @@
+"""Turn a :class:`~ucbplan.reduce.Reduction` into a report dict, JSON/YAML, rich text, an EM prior.
+
+Every quantity is ``{"value", "sigma", "unit"}``; Monte-Carlo quantities add ``lo``/``hi`` (16/84 %
+percentiles, value = median). Upper limits add ``upper_limit`` (|x̂| + 2σ) when |x̂| < 2σ.
+The keys are documented in the README ("ucbplan reduce" → "Report keys").
+"""
+
+from __future__ import annotations
+
+import math
+from typing import IO, TYPE_CHECKING, Any
+
+import numpy as np
+
+from ucbplan import __version__
+
+if TYPE_CHECKING:
+    from ucbplan.reduce import Reduction
+    from ucbplan.reduce.masses import Summary
+
+__all__ = [
+    "MC_UNITS",
+    "build_report",
+    "em_prior",
+    "print_report",
+    "write_json",
+    "write_yaml",
+]
+
+#: Units of the Monte-Carlo quantities (astropy unit strings), after conversion in :func:`_mc`.
+MC_UNITS: dict[str, tuple[str, float]] = {
+    "K1": ("km / s", 1.0),
+    "K2": ("km / s", 1.0),
+    "gamma1": ("km / s", 1.0),
+    "gamma2": ("km / s", 1.0),
+    "q": ("", 1.0),
+    "M1": ("solMass", 1.0),
+    "M2": ("solMass", 1.0),
+    "M_tot": ("solMass", 1.0),
+    "M_c": ("solMass", 1.0),
+    "a": ("solRad", 1.0 / 6.957e8),
+    "P_b": ("s", 1.0),
+    "n_b": ("rad / s", 1.0),
+    "e": ("", 1.0),
+    "sin_i": ("", 1.0),
+    "omega_dot_GR": ("rad / s", 1.0),
+    "omega_dot_remainder": ("rad / s", 1.0),
+    "M_tot_omega_dot": ("solMass", 1.0),
+    "M_c_fdot": ("solMass", 1.0),
+    "fdot_GW_only": ("Hz / s", 1.0),
+    "fdot_minus_GW_only": ("Hz / s", 1.0),
+    "distance": ("kpc", 1.0),
+    "gamma_diff": ("km / s", 1.0),
+    "redshift_orbital": ("km / s", 1.0),
+    "redshift_grav": ("km / s", 1.0),
+    "redshift_grav_model": ("km / s", 1.0),
+    "R1": ("solRad", 1.0),
+    "R2": ("solRad", 1.0),
+    "mass_function": ("solMass", 1.0),
+}
+
+
+def _num(x: float | np.floating[Any]) -> float | None:
+    """JSON-safe float (None for NaN/inf)."""
+    x = float(x)
+    return x if math.isfinite(x) else None
+
+
+def _q(value: float, sigma: float, unit: str, **extra: Any) -> dict[str, Any]:
+    out: dict[str, Any] = {"value": _num(value), "sigma": _num(sigma), "unit": unit}
+    for k, v in extra.items():
+        out[k] = _num(v) if isinstance(v, float | int | np.floating) else v
+    return out
+
+
+def _mc(name: str, s: Summary) -> dict[str, Any]:
+    unit, scale = MC_UNITS.get(name, ("", 1.0))
+    return _q(s.value * scale, s.sigma * scale, unit, lo=s.lo * scale, hi=s.hi * scale)
+
+
+def _upper(value: float, sigma: float) -> float | None:
+    if not (math.isfinite(value) and math.isfinite(sigma)):
+        return None
+    return abs(value) + 2.0 * sigma if abs(value) < 2.0 * sigma else None
+
+
+def build_report(red: Reduction) -> dict[str, Any]:
+    """The machine-readable report (JSON/YAML-ready: plain floats, lists, dicts).
+
+    Parameters
+    ----------
+    red : Reduction
+
+    Returns
+    -------
+    dict
+        Top-level keys: metadata, ``K1``, ``K2``, ``gamma1``, ``gamma2``, ``q``, ``M1``, ``M2``,
+        ``M_tot`` (None if not measurable, e.g. SB1) plus every Monte-Carlo quantity, ``fits``,
+        ``wil41``, ``phase``, ``light_time``, ``drifts``, ``warnings``.
+    """
+    t, tab = red.target, red.table
+    doc: dict[str, Any] = {
+        "ucbplan_version": __version__,
+        "target": t.name,
+        "target_file": str(t.source) if t.source else None,
+        "velocity_file": str(tab.source) if tab.source else None,
+        "lines": tab.lines,
+        "n_spectra": tab.n,
+        "sessions": sorted(set(tab.session)),
+        "time_scale": "TDB (barycentric)",
+        "seed": red.seed,
+        "n_samples": red.options.n_samples,
+        "light_time_applied": red.options.light_time,
+        "mass_radius_model": red.options.mass_radius,
+    }
+    for key in ("K1", "K2", "gamma1", "gamma2", "q", "M1", "M2", "M_tot"):
+        doc[key] = None
+    fits_doc: dict[str, Any] = {}
+    for j, f in enumerate(red.fits):
+        star = j + 1
+        w = 1.0 / tab.sigma[j] ** 2
+        lam = float((w * red.lam_k).sum() / w.sum())
+        s_k = math.sqrt(f.sigma_K**2 + red.sigma_K_phase[j] ** 2 + red.attenuation[j] ** 2)
+        s_g = math.sqrt(f.sigma_gamma**2 + red.sigma_gamma_phase[j] ** 2)
+        sk, sg = red.summaries[f"K{star}"], red.summaries[f"gamma{star}"]
+        doc[f"K{star}"] = _q(
+            f.K,
+            s_k,
+            "km / s",
+            lo=sk.lo,
+            hi=sk.hi,
+            sigma_stat=f.sigma_K,
+            sigma_phase=red.sigma_K_phase[j],
+            attenuation=red.attenuation[j],
+        )
+        doc[f"gamma{star}"] = _q(
+            f.gamma,
+            s_g,
+            "km / s",
+            lo=sg.lo,
+            hi=sg.hi,
+            sigma_stat=f.sigma_gamma,
+            sigma_phase=red.sigma_gamma_phase[j],
+        )
+        rows = (np.flatnonzero(f.line.outliers) + 1).tolist()
+        fits_doc[f"star{star}"] = {
+            "slope": _num(f.line.slope),
+            "intercept": _num(f.line.intercept),
+            "cov_intercept_slope": [[_num(x) for x in r] for r in f.line.cov],
+            "chi2": _num(f.line.chi2),
+            "dof": f.line.dof,
+            "rms_km_s": _num(f.line.rms),
+            "errors_scaled_by_chi2": f.line.scaled,
+            "outlier_rows": rows,
+            "lambda_k_mean": _num(lam),
+        }
+    doc["fits"] = fits_doc
+    for name, s in red.summaries.items():
+        if name in ("K1", "K2", "gamma1", "gamma2"):
+            continue
+        doc[name] = _mc(name, s)
+    if red.wilson is not None:
+        w41 = red.wilson
+        doc["wil41"] = {
+            "q": _q(w41.q, w41.sigma_q, ""),
+            "gamma1_plus_q_gamma2": _q(w41.intercept, w41.sigma_intercept, "km / s"),
+            "chi2": _num(w41.chi2),
+            "dof": w41.dof,
+        }
+        if "q" in red.summaries:
+            s = red.summaries["q"]
+            doc["wil41"]["q_difference_sigma"] = _num(
+                (w41.q - s.value) / math.hypot(w41.sigma_q, s.sigma)
+            )
+    doc["phase"] = {
+        "sigma_u_mean": _q(float(np.mean(red.sigma_u)), 0.0, "rad"),
+        "sigma_u_max": _q(float(np.max(red.sigma_u)), 0.0, "rad"),
+    }
+    lt = red.light_time
+    doc["light_time"] = {
+        "applied": red.options.light_time,
+        "max_delay": _q(lt["max_delay_s"], 0.0, "s"),
+        **{k: _q(v, 0.0, "km / s") for k, v in lt.items() if k.startswith("d")},
+    }
+    doc["drifts"] = _drift_doc(red)
+    doc["warnings"] = list(red.warnings)
+    return doc
+
+
+def _drift_doc(red: Reduction) -> dict[str, Any]:
+    d = red.drift
+    pairs = []
+    for p in d.pairs:
+        pairs.append(
+            {
+                "alpha": p.alpha,
+                "beta": p.beta,
+                "u_star_rad": _num(p.u_star),
+                "dT": _q(p.dT_s / 86400.0, 0.0, "d"),
+                "dv": [_q(v, s, "km / s") for v, s in zip(p.dv, p.sigma_dv, strict=True)],
+                "dkappa_spec": _q(p.dkappa_spec, p.sigma_dkappa_spec, ""),
+                "dkappa_lisa": _q(p.dkappa_lisa, p.sigma_dkappa_lisa, ""),
+                "dkappa_significance": _num(p.z_kappa),
+                "dv_cm": _q(
+                    p.dv_cm, p.sigma_dv_cm, "km / s", upper_limit=_upper(p.dv_cm, p.sigma_dv_cm)
+                ),
+            }
+        )
+    out: dict[str, Any] = {"n_groups": len(red.groups), "pairs": pairs}
+    if d.zero_crossing:
+        out["zero_crossing"] = [
+            {
+                "alpha": a,
+                "beta": b,
+                "dT": _q(dT / 86400.0, 0.0, "d"),
+                "dv_cm": _q(dv, s, "km / s", upper_limit=_upper(dv, s)),
+            }
+            for a, b, dT, dv, s in d.zero_crossing
+        ]
+    if math.isfinite(d.a_los):
+        out["a_los"] = _q(
+            d.a_los, d.sigma_a_los, "m / s2", upper_limit=_upper(d.a_los, d.sigma_a_los)
+        )
+        out["fdot_acc"] = _q(d.fdot_acc, d.sigma_fdot_acc, "Hz / s")
+        s = red.summaries.get("fdot_minus_GW_only")
+        if s is not None:
+            rem = s.value - d.fdot_acc
+            out["fdot_remainder"] = _q(rem, math.hypot(s.sigma, d.sigma_fdot_acc), "Hz / s")
+    if d.n_kappa:
+        out["dkappa_chi2"] = _num(d.chi2_kappa)
+        out["dkappa_n"] = d.n_kappa
+    if d.wil41_line is not None:
+        out["wil41_differences"] = {
+            "q": _q(d.q_line, d.sigma_q_line, ""),
+            "dv_cm": _q(d.dv_cm_line, d.sigma_dv_cm_line, "km / s"),
+        }
+    return out
+
+
+def em_prior(red: Reduction) -> dict[str, Any]:
+    """EM prior for a later LISA analysis or ``ucbplan simulate`` (Gaussian summaries).
+
+    Returns
+    -------
+    dict
+        ``{"em_prior": {"target", "source", <name>: {value, sigma, unit}}}`` for q, M_tot, M1,
+        M2, M_c, K1, K2 (when measured) and a_los (value/σ, or an upper limit).
+    """
+    rep = build_report(red)
+    prior: dict[str, Any] = {"target": red.target.name, "source": f"ucbplan {__version__} reduce"}
+    for key in ("q", "M_tot", "M1", "M2", "M_c", "K1", "K2"):
+        q = rep.get(key)
+        if q is not None:
+            prior[key] = {k: q[k] for k in ("value", "sigma", "unit")}
+    a = rep["drifts"].get("a_los")
+    if a is not None:
+        prior["a_los"] = {k: a[k] for k in ("value", "sigma", "unit", "upper_limit")}
+    return {"em_prior": prior}
+
+
+def write_json(doc: dict[str, Any], handle: IO[str]) -> None:
+    """Write ``doc`` as indented JSON (NaN-free)."""
+    from ucbplan.cliutil import dump_json
+
+    dump_json(doc, handle)
+
+
+def write_yaml(doc: dict[str, Any], handle: IO[str]) -> None:
+    """Write ``doc`` as block-style YAML."""
+    import yaml
+
+    yaml.safe_dump(doc, handle, sort_keys=False, allow_unicode=True)
+
+
+def _fmt(q: dict[str, Any] | None, digits: int = 4) -> str:
+    if q is None or q.get("value") is None:
+        return "—"
+    v, s = q["value"], q.get("sigma")
+    unit = q.get("unit", "")
+    txt = f"{v:.{digits}g} ± {s:.2g}" if s else f"{v:.{digits}g}"
+    if q.get("upper_limit") is not None:
+        txt += f" (|x| < {q['upper_limit']:.2g})"
+    return f"{txt} {unit}".strip()
+
+
+def print_report(doc: dict[str, Any], console: Any) -> None:
+    """Rich terminal report (to the given console, normally stderr)."""
+    from rich.markup import escape
+    from rich.table import Table
+
+    console.print(
+        f"[bold]{doc['target']}[/] — {doc['n_spectra']} spectra ({doc['lines']}), "
+        f"sessions {', '.join(doc['sessions'])}; times TDB (barycentric)"
+    )
+    tab = Table(title="Intra-session fits and masses (value ± 1σ; MC 16–84 % in brackets)")
+    tab.add_column("quantity")
+    tab.add_column("value")
+    tab.add_column("16–84 %")
+    keys = (
+        "K1",
+        "K2",
+        "gamma1",
+        "gamma2",
+        "q",
+        "M1",
+        "M2",
+        "M_tot",
+        "M_c",
+        "a",
+        "P_b",
+        "e",
+        "omega_dot_GR",
+        "omega_dot_remainder",
+        "M_tot_omega_dot",
+        "M_c_fdot",
+        "fdot_GW_only",
+        "fdot_minus_GW_only",
+        "distance",
+        "gamma_diff",
+        "redshift_orbital",
+        "redshift_grav",
+        "redshift_grav_model",
+        "mass_function",
+    )
+    for k in keys:
+        q = doc.get(k)
+        if q is None:
+            continue
+        rng = f"[{q['lo']:.5g}, {q['hi']:.5g}]" if q.get("lo") is not None else ""
+        tab.add_row(k, _fmt(q, 6), rng)
+    console.print(tab)
+    if "wil41" in doc:
+        w = doc["wil41"]
+        console.print(
+            f"WIL41 v1–v2 line: q = {_fmt(w['q'])}, γ1+qγ2 = "
+            f"{_fmt(w['gamma1_plus_q_gamma2'])} (χ²/dof {w['chi2']:.1f}/{w['dof']})"
+        )
+    lt = doc["light_time"]
+    console.print(
+        f"Light travel time across the orbit: ≤ {lt['max_delay']['value']:.3f} s; "
+        f"{'applied' if lt['applied'] else 'not applied (--light-time)'}: "
+        + ", ".join(f"{k} {v['value']:+.3f} km/s" for k, v in lt.items() if k.startswith("d"))
+    )
+    dr = doc["drifts"]
+    if dr["pairs"]:
+        pt = Table(title="Fixed-u pairs (Δκ_spec vs Δκ_LISA, Δv_CM)")
+        for c in ("α → β", "u★ [rad]", "ΔT [d]", "Δκ_spec", "Δκ_LISA", "z [σ]", "Δv_CM"):
+            pt.add_column(escape(c))
+        for p in dr["pairs"]:
+            z = p["dkappa_significance"]
+            pt.add_row(
+                f"{p['alpha']} → {p['beta']}",
+                f"{p['u_star_rad']:.3f}",
+                f"{p['dT']['value']:.2f}",
+                _fmt(p["dkappa_spec"], 3),
+                _fmt(p["dkappa_lisa"], 3),
+                "—" if z is None else f"{z:+.2f}",
+                _fmt(p["dv_cm"], 3),
+            )
+        console.print(pt)
+    for k in ("a_los", "fdot_acc", "fdot_remainder"):
+        if k in dr:
+            console.print(f"{k}: {_fmt(dr[k])}")
+    for w in doc["warnings"]:
+        console.print(f"[yellow]warning:[/] {w}")
