@@ -156,6 +156,7 @@ def _print_report(rep: Any) -> None:
 
     row("P_b", rep.period_s / 60.0, ".4f", "min", "")
     row("e", rep.e, ".4g", "", "")
+    row("ω0 at the LISA midpoint", rep.omega0_rad, ".4g", "rad", "")
     row("K1", rep.k1_m_s, ".1f", "km/s", "semiamp_est", kms)
     row("K2", rep.k2_m_s, ".1f", "km/s", "semiamp_est", kms)
     row("ω̇_GR", rep.omega_dot_gr, ".4g", "rad/s", "omega_dot_GR")
@@ -188,9 +189,9 @@ def _print_report(rep: Any) -> None:
     err_console.print(t)
     if rep.gw_timing_s is not None or rep.optical_timing_s is not None:
         tt = RichTable(title="Timing error after the LISA midpoint (1σ)")
-        tt.add_column("ΔT [yr]")
-        tt.add_column("GW δt_u [s]")
-        tt.add_column("optical δt [s] (Eq. optical_timing_prec)")
+        tt.add_column("ΔT (yr)")
+        tt.add_column("GW δt_u (s)")
+        tt.add_column("optical δt (s), Eq. optical_timing_prec")
         for i, y in enumerate(rep.timing_years):
             gw = rep.gw_timing_s[i] if rep.gw_timing_s is not None else None
             op = rep.optical_timing_s[i] if rep.optical_timing_s is not None else None

@@ -626,8 +626,9 @@ def plot_apsidal_signal(
         ax.plot([], [], color="grey", ls=styles[i % len(styles)], label=f"e={e:g}")
     if target_e is not None and target_omega1 is not None:
         dv = delta_v_aps(k1_m_s, target_e, target_omega1, omega_dot_rad_s, baseline) / 1e3
-        ax.plot(days, dv, color="k", lw=2.2, label=f"target e={target_e:.3g}")
-    ax.axvline(t_aps / 86400.0, color="k", ls="--", lw=0.8)
+        label = f"target e={target_e:.3g}, ω₁={target_omega1:.2f} rad"
+        ax.plot(days, dv, color="k", lw=2.2, label=label)
+    ax.axvline(t_aps / 86400.0, color="k", ls="--", lw=0.8, label="apsidal period 2π/ω̇")
     ax.set_xlabel("baseline ΔT = t_β − t_α [days]")
     ax.set_ylabel("Δv_aps [km/s]")
     ax.set_title(title or f"apsidal signal, K₁ = {k1_m_s / 1e3:.0f} km/s")

@@ -325,6 +325,7 @@ def lco_requests(
     sigma = floats(table, "sigma_t_s", unit="s")
     exptime, n_exp = floats(table, "exptime_s", unit="s"), floats(table, "n_exp")
     starts = required_times(table, "t_start_utc")
+    mids = required_times(table, "t_mid_utc")
     requests = []
     for i in sorted(range(len(table)), key=lambda j: starts[j]):
         half = max(options.tolerance_sigma * float(sigma[i]), options.tolerance_floor_s)
@@ -370,7 +371,14 @@ def lco_requests(
         "operator": "MANY",
         "observation_type": "TIME_CRITICAL",
         "requests": requests,
-        "_ucbplan": {"time_scale": "UTC at the site", "notes": notes},
+        "ucbplan": {
+            "note": "ignored by the OCS API; block mid-times are UTC at the site with 1-sigma",
+            "blocks": [
+                {"t_mid_utc": iso_ms(mids[i]), "sigma_t_s": float(sigma[i])}
+                for i in sorted(range(len(table)), key=lambda j: starts[j])
+            ],
+            "notes": notes,
+        },
     }
 
 
