@@ -300,7 +300,17 @@ def _parse_time(ctx: _Ctx, path: str, value: Any, scale_field: Any) -> tuple[Tim
         raise ctx.fail(
             path, f'expected an ISO epoch like "2039-01-01T00:00:00" (TDB), got {value!r}'
         ) from None
-    return t.tdb, (None if scale == "tdb" else scale)
+    if scale == "tdb":
+        return t, None
+    import warnings
+
+    from erfa import ErfaWarning
+
+    with warnings.catch_warnings():
+        # future UTC: leap seconds after the bundled table are unknown (TDB − UTC kept at the
+        # last value); the user stated the scale, so convert with that caveat
+        warnings.simplefilter("ignore", ErfaWarning)
+        return t.tdb, scale
 
 
 def _parse_angle(ctx: _Ctx, path: str, value: Any, is_ra: bool, check_range: bool = True) -> float:

@@ -1,0 +1,161 @@
+"""The core commands end to end: JSON contract, one-line errors, no partial or clobbered files."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from ucbplan.cli import app
+
+runner = CliRunner()
+
+
+def _run(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "ucbplan", *args], capture_output=True, text=True, timeout=120
+    )
+
+
+def test_horizon_json_contract(hm_cnc_path: Path) -> None:
+    res = runner.invoke(app, ["horizon", str(hm_cnc_path), "--format", "json"])
+    assert res.exit_code == 0, res.output
+    rows = json.loads(res.stdout)
+    assert {"anchor", "alpha", "tolerance_rad", "t_valid_days", "dt_u_s"} <= set(rows[0])
+    quad1 = next(r for r in rows if r["anchor"] == "quadrature" and r["alpha"] == 1.0)
+    assert quad1["t_valid_days"] == pytest.approx(6036, rel=0.03)
+    assert quad1["tolerance_rad"] == pytest.approx(0.452911, rel=1e-4)
+
+
+def test_horizon_options_and_plot(tmp_path: Path, eccentric_path: Path) -> None:
+    png = tmp_path / "h.png"
+    res = runner.invoke(
+        app,
+        [
+            "horizon",
+            str(eccentric_path),
+            "--alpha",
+            "1",
+            "--epochs",
+            "1",
+            "--sigma-v",
+            "10",
+            "--k-eff",
+            "1000",
+            "--plot",
+            str(png),
+            "--format",
+            "csv",
+        ],
+    )
+    assert res.exit_code == 0, res.output
+    assert png.stat().st_size > 10_000
+    assert res.stdout.splitlines()[0].startswith("anchor,alpha,tolerance_rad")
+
+
+def test_ephemeris_round_trip_from_json(eccentric_path: Path) -> None:
+    """Printed epochs (TDB ISO, µs) converted back give u = u★ to the µs time grid (~3e-8 rad)."""
+    from astropy.time import Time
+
+    from ucbplan.ephemeris import arg_latitude
+    from ucbplan.target import load_target
+
+    res = runner.invoke(
+        app,
+        [
+            "ephemeris",
+            str(eccentric_path),
+            "--start",
+            "2040-03-01T00:00:00",
+            "--end",
+            "2040-03-01T01:00:00",
+            "--anchor",
+            "conjunction",
+            "--format",
+            "json",
+        ],
+    )
+    assert res.exit_code == 0, res.output
+    doc = json.loads(res.stdout)
+    assert doc["meta"]["time_scale"].startswith("TDB")
+    t = load_target(eccentric_path)
+    times = Time([r["t_star_tdb"] for r in doc["rows"]], scale="tdb")
+    u = arg_latitude(t.params, t.tau(times))
+    import numpy as np
+
+    us = np.array([r["u_star_rad"] for r in doc["rows"]])
+    err = np.angle(np.exp(1j * (u - us)))
+    assert np.max(np.abs(err)) < 0.0264 * 1e-6  # u̇ × 1 µs rounding
+    assert len(doc["rows"]) == pytest.approx(3600 / 238 * 2, abs=2)
+
+
+def test_validate_summary(hm_cnc_path: Path, eccentric_path: Path) -> None:
+    res = runner.invoke(
+        app, ["validate", str(hm_cnc_path), str(eccentric_path), "--format", "json"]
+    )
+    assert res.exit_code == 0, res.output
+    s = json.loads(res.stdout)
+    assert s[0]["period_s"] == pytest.approx(2 / 6.2204944286e-3)
+    assert s[1]["eccentricity"] == pytest.approx(9.41e-3, rel=1e-3)
+
+
+def test_error_is_one_line_without_traceback(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(
+        'name: X\nsky: {ra: 1, dec: 2}\nlisa: {t_ref: "2037-01-01T00:00:00", t_obs: "1 yr", '
+        'phase: 1, f_gw: "6e-3 Hz", fdot: "7.07e-16 Hz"}\n'
+    )
+    proc = _run("validate", str(bad))
+    assert proc.returncode == 2
+    assert "Traceback" not in proc.stderr
+    lines = [ln for ln in proc.stderr.splitlines() if ln.strip()]
+    assert len(lines) == 1
+    assert 'bad.yaml: lisa.fdot: expected a frequency derivative like "7.07e-16 Hz / s"' in lines[0]
+
+
+def test_no_overwrite_and_no_partial_file(tmp_path: Path, hm_cnc_path: Path) -> None:
+    out = tmp_path / "h.json"
+    out.write_text("keep me")
+    proc = _run("horizon", str(hm_cnc_path), "--format", "json", "-o", str(out))
+    assert proc.returncode == 2 and "--overwrite" in proc.stderr
+    assert out.read_text() == "keep me"
+    proc = _run("horizon", str(hm_cnc_path), "--format", "json", "-o", str(out), "--overwrite")
+    assert proc.returncode == 0
+    assert json.loads(out.read_text())[0]["anchor"] == "conjunction"
+    # a failing run leaves no file behind
+    out2 = tmp_path / "never.json"
+    proc = _run("horizon", str(hm_cnc_path), "--sigma-v", "-1", "--format", "json", "-o", str(out2))
+    assert proc.returncode == 2
+    assert not out2.exists()
+    assert not list(tmp_path.glob(".never.json*"))
+
+
+def test_missing_sigma_tells_what_to_pass(tmp_path: Path) -> None:
+    t = tmp_path / "t.yaml"
+    t.write_text(
+        'name: X\nsky: {ra: 1, dec: 2}\nlisa: {t_ref: "2037-01-01T00:00:00", t_obs: "1 yr", '
+        'phase: 1, f_gw: "6e-3 Hz", fdot: "7e-16 Hz / s"}\n'
+    )
+    proc = _run("horizon", str(t))
+    assert proc.returncode == 2
+    assert "--sigma-v" in proc.stderr
+
+
+def test_bad_anchor_and_window(hm_cnc_path: Path) -> None:
+    proc = _run(
+        "ephemeris",
+        str(hm_cnc_path),
+        "--start",
+        "2040-01-01",
+        "--end",
+        "2040-01-02",
+        "--anchor",
+        "periastron",
+    )
+    assert proc.returncode == 2 and "unknown anchor" in proc.stderr
+    proc = _run("ephemeris", str(hm_cnc_path), "--start", "2040-01-02", "--end", "2040-01-01")
+    assert proc.returncode == 2 and "must be after" in proc.stderr

@@ -1,0 +1,207 @@
+"""Phase model and t★ inversion against independent references.
+
+References: exact round trips u(t★) = u★; Appendix A closed-form epochs (node, zero crossing,
+conjunction) to O(e²); an exact Kepler-equation orbit; the ELL1 Roemer-delay velocity
+(Eq. roemer-ell1 differentiated); finite differences for the analytic rate.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.optimize import brentq
+
+from ucbplan.ephemeris import (
+    _u_cycles,
+    arg_latitude,
+    arg_latitude_rate,
+    ll_pair,
+    phase_asc,
+    radial_velocity,
+    solve_u,
+)
+from ucbplan.params import PhaseParams
+
+YEAR = 365.25 * 86400.0
+FID = PhaseParams(
+    2.410235, 8.4062899940e-3, 1.640367e-15, 0.0, 8.249643e-3, 4.524585e-3, 1.496836e-6
+)
+
+
+def _resid(p: PhaseParams, k, dt, us, origin, star=1):
+    m, g = _u_cycles(p, dt, origin, star)
+    return 2 * math.pi * ((m - k) + (g - us / (2 * math.pi)))
+
+
+params_st = st.builds(
+    lambda f, fdot, fddot, e, w, wdot, phase: PhaseParams(
+        phase, f, fdot, fddot, e * math.sin(w), e * math.cos(w), wdot
+    ),
+    f=st.floats(1e-3, 2e-2),
+    fdot=st.floats(-1e-15, 1e-14),
+    fddot=st.floats(-1e-25, 1e-25),
+    e=st.floats(0.0, 0.09),
+    w=st.floats(0.0, 2 * math.pi),
+    wdot=st.floats(0.0, 1e-5),
+    phase=st.floats(0.0, 2 * math.pi),
+)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    p=params_st,
+    start_yr=st.floats(-3.0, 12.0),
+    u_star=st.floats(0.0, 2 * math.pi),
+    star=st.sampled_from([1, 2]),
+)
+def test_round_trip_u_of_t_star(p: PhaseParams, start_yr: float, u_star: float, star: int) -> None:
+    """u(t★) = u★ to 1e-10 rad (SCIENCE.md target), over e, ω, ω̇, ḟ, f̈ and epochs ±12 yr."""
+    start = start_yr * YEAR
+    k, dt, us, origin = solve_u(p, start, start + 6 * 3600.0, u_star, star)
+    assert k.size > 0
+    res = _resid(p, k, dt, us, origin, star)
+    # 1e-10 rad: the issue's bound; float64 offsets < 6 h keep the time grid at 1e-12 s
+    assert np.max(np.abs(res)) < 1e-10
+    # completeness: consecutive solutions are one orbit apart (no passage missed or doubled)
+    period = 2 / p.f_gw
+    gaps = np.diff(origin + dt)
+    assert np.all(np.abs(gaps / period - 1) < 0.25)
+    assert np.all(np.diff(k) == 1)
+
+
+@settings(max_examples=30, deadline=None)
+@given(p=params_st, start_yr=st.floats(-2.0, 10.0), branch=st.sampled_from(["+", "-"]))
+def test_zero_crossing_solves_exact_condition(p: PhaseParams, start_yr: float, branch: str) -> None:
+    """Zero crossing solves cos u = −κ(t) exactly (not its first-order form), to 1e-10."""
+    start = start_yr * YEAR
+    k, dt, us, origin = solve_u(p, start, start + 3600.0, f"zero-crossing{branch}")
+    _, kap = ll_pair(p, origin + dt)
+    assert np.max(np.abs(np.cos(us) + kap)) < 1e-12
+    assert np.max(np.abs(_resid(p, k, dt, us, origin))) < 1e-10
+    # first-order placement: π/2 + κ (branch +) and 3π/2 − κ (branch −), error O(κ³)
+    approx = math.pi / 2 + kap if branch == "+" else 3 * math.pi / 2 - kap
+    assert np.max(np.abs(us - approx)) < np.max(np.abs(kap)) ** 3 + 1e-12
+
+
+def _t_asc(p: PhaseParams) -> float:
+    """T_asc nearest the reference: Φ_asc = 0 (Appendix A1)."""
+    return -p.phase / (2 * math.pi * p.f_gw)
+
+
+@pytest.mark.parametrize("scale", [1.0, 0.5])
+def test_appendix_a_epoch_formulas(scale: float) -> None:
+    """Node, zero crossing and conjunction epochs of Appendix A1 agree with Newton to O(e²).
+
+    Reference: T_asc + 2η/n̄ (u = 0), T_asc + π/(2n̄) − κ/n̄ (zero crossing),
+    T_asc + π/(2n̄) − 2κ/n̄ (u = π/2). SCIENCE.md: ≤ 6 ms at e = 0.0096; we require ≤ 2 e²/n̄
+    and check the error falls ∝ e² when e is halved.
+    """
+    # Table 3 midpoint (η, κ) of the fiducial source, e = 0.0094 (the SCIENCE.md check)
+    p = PhaseParams(0.3, 8.4062899940e-3, 0.0, 0.0, 8.249643e-3 * scale, 4.524585e-3 * scale, 0.0)
+    nbar = math.pi * p.f_gw
+    e2 = p.eccentricity**2
+    t_asc = _t_asc(p)
+    w0 = t_asc - 30.0
+    _, node, _, o = solve_u(p, w0, w0 + 200.0, 0.0)
+    _, zc, _, _ = solve_u(p, w0, w0 + 200.0, "zero-crossing+")
+    _, conj, _, _ = solve_u(p, w0, w0 + 200.0, math.pi / 2)
+    err_node = abs(o + node[0] - (t_asc + 2 * p.eta / nbar))
+    err_zc = abs(o + zc[0] - (t_asc + math.pi / (2 * nbar) - p.kappa / nbar))
+    err_conj = abs(o + conj[0] - (t_asc + math.pi / (2 * nbar) - 2 * p.kappa / nbar))
+    for err in (err_node, err_zc, err_conj):
+        assert err < 2 * e2 / nbar
+    if scale == 1.0:
+        assert max(err_node, err_zc, err_conj) < 6e-3  # SCIENCE.md checked number
+
+
+def _kepler_u(p: PhaseParams, tau: np.ndarray) -> np.ndarray:
+    """Exact u = ω + ν from Kepler's equation with mean anomaly M = Φ_asc − ω (ω̇ = 0)."""
+    e, w = p.eccentricity, p.omega_rad
+    mean = phase_asc(p, tau) - w
+    ecc_anom = mean.copy()
+    for _ in range(50):
+        ecc_anom = ecc_anom - (ecc_anom - e * np.sin(ecc_anom) - mean) / (1 - e * np.cos(ecc_anom))
+    nu = 2 * np.arctan2(
+        np.sqrt(1 + e) * np.sin(ecc_anom / 2), np.sqrt(1 - e) * np.cos(ecc_anom / 2)
+    )
+    return w + nu
+
+
+@pytest.mark.parametrize("e", [0.0096, 0.03, 0.08])
+def test_first_order_u_vs_exact_kepler(e: float) -> None:
+    """First-order u differs from the exact Kepler ω + ν by ≤ 2e² rad (SCIENCE.md: ≈ 1.25e²)."""
+    p = PhaseParams(1.0, 8.4e-3, 0.0, 0.0, e * math.sin(0.7), e * math.cos(0.7), 0.0)
+    tau = np.linspace(0.0, 2 * 238.0, 2001)
+    diff = np.angle(np.exp(1j * (arg_latitude(p, tau) - _kepler_u(p, tau))))
+    assert np.max(np.abs(diff)) <= 2 * e**2
+    assert np.max(np.abs(diff)) > 0.5 * e**2  # the residual really is the O(e²) term
+
+
+def test_rate_matches_finite_difference() -> None:
+    """Analytic du/dt vs a central difference (h = 1e-3 s; truncation ~u‴h²/6 ≪ 1e-9 rad/s)."""
+    tau = np.linspace(-5e7, 2e8, 37)
+    h = 1e-3
+    fd = np.array(
+        [
+            2
+            * math.pi
+            * (
+                (lambda a, b: (a[0] - b[0]) + (a[1] - b[1]))(
+                    _u_cycles(FID, np.array([h]), t), _u_cycles(FID, np.array([-h]), t)
+                )[0]
+            )
+            / (2 * h)
+            for t in tau
+        ]
+    )
+    rate = arg_latitude_rate(FID, tau)
+    assert np.max(np.abs(rate - fd)) < 1e-9
+
+
+def test_velocity_equals_ell1_roemer_derivative() -> None:
+    """v1 = K(cos u + κ) equals the ELL1 velocity (d/dt of Eq. roemer-ell1) to O(e²K)."""
+    p = PhaseParams(0.4, 8.4e-3, 0.0, 0.0, 0.0085, 0.0045, 0.0)
+    tau = np.linspace(0, 500, 1001)
+    phi = phase_asc(p, tau)
+    k = 585.3
+    ell1 = k * (np.cos(phi) + p.kappa * np.cos(2 * phi) + p.eta * np.sin(2 * phi))
+    ours = radial_velocity(p, tau, k, gamma=0.0, star=1)
+    assert np.max(np.abs(ours - ell1)) < 3 * p.eccentricity**2 * k
+    v2 = radial_velocity(p, tau, 712.6, gamma=5.0, star=2)
+    assert np.allclose(v2 - 5.0, -712.6 / k * ours)
+
+
+def test_star_two_is_half_an_orbit_away() -> None:
+    """ε_2 = π: u_2 = u_1 + π exactly."""
+    tau = np.linspace(0, 1e6, 11)
+    assert np.allclose(arg_latitude(FID, tau, star=2) - arg_latitude(FID, tau, star=1), math.pi)
+
+
+def test_ll_rotation_preserves_e_and_advances_omega() -> None:
+    """(η, κ) rotate rigidly: e constant, ω(τ) = ω_ref + ω̇τ (Eq. kappa_lisa_prediction)."""
+    tau = np.linspace(-1e8, 1e8, 9)
+    eta, kap = ll_pair(FID, tau)
+    assert np.allclose(np.hypot(eta, kap), FID.eccentricity, rtol=1e-14)
+    w = np.arctan2(eta, kap)
+    assert np.allclose(
+        np.angle(np.exp(1j * (w - FID.omega_rad - FID.omega_dot * tau))), 0, atol=1e-12
+    )
+
+
+def test_quadrature_epoch_is_velocity_extremum() -> None:
+    """At u★ = 0 the predicted v1 is maximal: brute-force maximum of v1(t) agrees with t★."""
+    p = FID
+    _k, dt, _us, o = solve_u(p, 1e7, 1e7 + 300.0, 0.0)
+    t_star = o + dt[0]
+
+    def dv(t: float) -> float:
+        h = 1e-3
+        return float(radial_velocity(p, t + h, 1.0)[()] - radial_velocity(p, t - h, 1.0)[()])
+
+    t_max = brentq(dv, t_star - 20, t_star + 20, xtol=1e-9)
+    # v ∝ cos u + κ(t): the extremum is at u = 0 up to κ̇ ~ ω̇e terms (≪ 1 ms)
+    assert abs(t_max - t_star) < 1e-3
