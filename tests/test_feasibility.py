@@ -325,3 +325,22 @@ def test_cli_feasibility_bad_baseline() -> None:
     res = CliRunner().invoke(_app(), ["feasibility", str(HM_CNC), "--baseline", "soon"])
     assert isinstance(res.exception, UcbplanError)
     assert "--baseline: got 'soon'" in str(res.exception)
+
+
+def test_cli_optical_epoch_shifts_the_optical_baseline(tmp_path: Path) -> None:
+    # An optical ephemeris referenced 4 Julian years before the LISA midpoint (2037-01-01 TDB)
+    # has, at the midpoint, the error the same ephemeris has 4 yr after its own epoch.
+    out = tmp_path / "f.json"
+    args = [
+        "feasibility", str(HM_CNC), "--format", "json", "-o", str(out),
+        "--optical-sigma-phase", "0.004", "--optical-sigma-f-rel", "9.6e-9",
+        "--optical-sigma-fdot-rel", "3.2e-17", "--optical-epoch", "2033-01-01T00:00:00",
+    ]  # fmt: skip
+    res = CliRunner().invoke(_app(), args)
+    assert res.exit_code == 0, res.output
+    doc = json.loads(out.read_text())
+    # 2033-01-01 → 2037-01-01 is 1461 days = 4 Julian years exactly: 1.79 s (SCIENCE.md).
+    assert doc["timing_years"][0] == 0.0
+    assert doc["optical_timing_s"][0] == pytest.approx(1.79, abs=0.005)
+    res = CliRunner().invoke(_app(), [*args[:-1], "someday", "--overwrite"])
+    assert isinstance(res.exception, UcbplanError) and "--optical-epoch" in str(res.exception)

@@ -14,7 +14,7 @@ import typer
 from rich.table import Table as RichTable
 
 from ucbplan.cliutil import dump_json, err_console, write_output
-from ucbplan.errors import InputFileError, UcbplanError
+from ucbplan.errors import UcbplanError
 
 __all__ = ["export_command", "feasibility_command", "register"]
 
@@ -242,7 +242,10 @@ def feasibility_command(
         str | None,
         typer.Option(
             "--optical-epoch",
-            help="Optical ephemeris reference epoch, ISO TDB or BJD_TDB (default: LISA midpoint).",
+            help=(
+                "Optical ephemeris reference epoch: ISO (TDB unless labelled UTC) or BJD_TDB; "
+                "default: the LISA midpoint."
+            ),
         ),
     ] = None,
     plot: Annotated[
@@ -310,19 +313,15 @@ def feasibility_command(
 
 
 def _optical_offset(text: str, t_ref: Any) -> float:
-    """Seconds from the optical reference epoch to the LISA midpoint ``t_ref``."""
+    """Seconds from the optical reference epoch (bare number = BJD_TDB) to the LISA midpoint."""
     from astropy.time import Time
+
+    from ucbplan.timescale import parse_tdb
 
     try:
         epoch = Time(float(text), format="jd", scale="tdb")
     except ValueError:
-        try:
-            epoch = Time(text, scale="tdb")
-        except ValueError as exc:
-            raise InputFileError(
-                f"--optical-epoch: got {text!r}, expected ISO (TDB) like 2023-01-01T00:00:00 "
-                "or a BJD_TDB number"
-            ) from exc
+        epoch = parse_tdb(text, "--optical-epoch")
     return float((t_ref - epoch).to_value("s"))
 
 
