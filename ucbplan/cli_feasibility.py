@@ -38,7 +38,7 @@ def export_command(
     acquisition: Annotated[
         float | None,
         typer.Option(
-            "--acquisition", help="Acquisition overhead [s] (default: acq_s column, else 600 s)."
+            "--acquisition", help="Acquisition overhead (s) (default: acq_s column, else 600 s)."
         ),
     ] = None,
     tolerance_sigma: Annotated[
@@ -48,7 +48,7 @@ def export_command(
         ),
     ] = 3.0,
     tolerance_floor: Annotated[
-        float, typer.Option("--tolerance-floor", help="Smallest window half-width [s].")
+        float, typer.Option("--tolerance-floor", help="Smallest window half-width (s).")
     ] = 10.0,
     merge_overlaps: Annotated[
         bool,
@@ -62,8 +62,7 @@ def export_command(
 ) -> None:
     """Export a blocks table for an observatory (ESO p2, Keck, ING, LCO), a calendar or a proposal.
 
-    All times are UTC at the site with their 1σ uncertainty. Notes about defaults and rounding go
-    to stderr.
+    All times are UTC at the site with their 1σ uncertainty; notes go to stderr.
     """
     from ucbplan.observing.exports import ExportOptions, export_blocks
     from ucbplan.observing.table import read_blocks
@@ -204,40 +203,40 @@ def _print_report(rep: Any) -> None:
 def feasibility_command(
     target: Annotated[Path, typer.Argument(help="Target YAML file.")],
     m1: Annotated[
-        float | None, typer.Option("--m1", help="Mass of star 1 [M_sun] (else file).")
+        float | None, typer.Option("--m1", help="Mass of star 1 (M_sun) (else file).")
     ] = None,
     m2: Annotated[
-        float | None, typer.Option("--m2", help="Mass of star 2 [M_sun] (else file).")
+        float | None, typer.Option("--m2", help="Mass of star 2 (M_sun) (else file).")
     ] = None,
     sigma_v: Annotated[
         float | None,
         typer.Option(
-            "--sigma-v", help="Velocity precision per spectrum [km/s] (else file, else 15)."
+            "--sigma-v", help="Velocity precision per spectrum (km/s) (else file, else 15)."
         ),
     ] = None,
     n_spectra: Annotated[int, typer.Option("--n-spectra", help="Spectra co-added per epoch.")] = 1,
     baseline: Annotated[
         str, typer.Option("--baseline", help="Baseline ΔT ('30 d', '1 yr', days).")
     ] = "1 yr",
-    m3: Annotated[float, typer.Option("--m3", help="Tertiary mass [M_sun] for Δv_CM.")] = 1.0,
+    m3: Annotated[float, typer.Option("--m3", help="Tertiary mass (M_sun) for Δv_CM.")] = 1.0,
     a_out: Annotated[
-        float, typer.Option("--a-out", help="Tertiary separation [AU] for Δv_CM.")
+        float, typer.Option("--a-out", help="Tertiary separation (AU) for Δv_CM.")
     ] = 5.0,
     opt_phase: Annotated[
         float | None,
-        typer.Option("--optical-sigma-phase", help="Optical ephemeris σ(φ0) [cycles]."),
+        typer.Option("--optical-sigma-phase", help="Optical ephemeris σ(φ0) (cycles)."),
     ] = None,
     opt_f_rel: Annotated[
-        float | None, typer.Option("--optical-sigma-f-rel", help="σ_f/f [1].")
+        float | None, typer.Option("--optical-sigma-f-rel", help="σ_f/f (1).")
     ] = None,
     opt_fdot_rel: Annotated[
-        float | None, typer.Option("--optical-sigma-fdot-rel", help="σ_ḟ/f [1/s].")
+        float | None, typer.Option("--optical-sigma-fdot-rel", help="σ_ḟ/f (1/s).")
     ] = None,
-    opt_p: Annotated[float | None, typer.Option("--optical-sigma-p", help="σ(P_orb) [s].")] = None,
+    opt_p: Annotated[float | None, typer.Option("--optical-sigma-p", help="σ(P_orb) (s).")] = None,
     opt_pdot: Annotated[
-        float | None, typer.Option("--optical-sigma-pdot", help="σ(Ṗ_orb) [s/s].")
+        float | None, typer.Option("--optical-sigma-pdot", help="σ(Ṗ_orb) (s/s).")
     ] = None,
-    opt_t0: Annotated[float | None, typer.Option("--optical-sigma-t0", help="σ(T0) [s].")] = None,
+    opt_t0: Annotated[float | None, typer.Option("--optical-sigma-t0", help="σ(T0) (s).")] = None,
     opt_epoch: Annotated[
         str | None,
         typer.Option(
