@@ -1,0 +1,198 @@
+"""Post-processing: start -> midpoint transform, pi-mode folding, target YAML + samples ECSV.
+
+The paper's chain is referenced to the start t_0; planning needs the midpoint (Sec. 4.1 and its
+footnote). Per sample (SCIENCE.md "Reference epoch"):
+phi_mid = phi_0 + 2 pi (f_0 T/2 + fdot (T/2)^2 / 2), f_mid = f_0 + fdot T/2,
+(eta, kappa) rotated by omega_dot T/2; fdot and omega_dot are epoch-independent.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ucbplan.lisa.likelihood import physical_from_theta
+from ucbplan.params import PhaseParams, shift_jacobian
+from ucbplan.target import Target
+
+__all__ = [
+    "EXTRA_NAMES",
+    "fold_phase_mode",
+    "gaussian_target",
+    "midpoint_samples",
+    "posterior_target",
+    "sampled_to_physical_jacobian",
+    "write_samples",
+]
+
+EXTRA_NAMES = ("cos_inclination", "amplitude", "psi")
+_ECC_NAMES = ("phase", "f_gw", "fdot", "eta", "kappa", "omega_dot")
+_CIRC_NAMES = ("phase", "f_gw", "fdot")
+
+
+def midpoint_samples(theta: NDArray[np.float64], t_obs_s: float) -> dict[str, NDArray]:
+    """Physical samples referenced to the midpoint, keyed like PARAM_NAMES + EXTRA_NAMES.
+
+    Parameters
+    ----------
+    theta : numpy.ndarray
+        Sampled-coordinate rows (S, D), start epoch.
+    t_obs_s : float
+        Observation length T [s].
+    """
+    p = physical_from_theta(theta, t_obs_s)
+    half = 0.5 * t_obs_s
+    cycles = np.mod(p["f_gw"] * half, 1.0) + np.mod(0.5 * p["fdot"] * half * half, 1.0)
+    out = {
+        "phase": np.mod(p["phase"] + 2.0 * np.pi * cycles, 2.0 * np.pi),
+        "f_gw": p["f_gw"] + p["fdot"] * half,
+        "fdot": p["fdot"],
+    }
+    if theta.shape[1] > 6:
+        w = p["omega_dot"] * half
+        c, s = np.cos(w), np.sin(w)
+        out |= {
+            "eta": p["eta"] * c + p["kappa"] * s,
+            "kappa": p["kappa"] * c - p["eta"] * s,
+            "omega_dot": p["omega_dot"],
+        }
+    out |= {k: p[k] for k in EXTRA_NAMES}
+    return out
+
+
+def fold_phase_mode(cols: dict[str, NDArray], phase_ref: float) -> tuple[dict[str, NDArray], int]:
+    """Fold the phi pi-mode onto the branch of ``phase_ref`` (paper Sec. 4.1).
+
+    Samples with phi within pi/2 of phase_ref + pi are the psi -> psi + pi/2, phi -> phi + pi
+    mode; they are mapped back with phi -= pi, psi -= pi/2 (mod pi) and
+    (kappa, eta) -> (-eta, kappa) (the map under which the n=3 and n=1(+) lines are invariant; the
+    b1 line breaks it at O(e), SCIENCE.md errata, so the fold is approximate for eta, kappa).
+
+    Returns
+    -------
+    dict, int
+        Folded columns and the number of folded samples.
+    """
+    out = dict(cols)
+    d = np.mod(cols["phase"] - phase_ref + np.pi, 2.0 * np.pi) - np.pi  # in [-pi, pi)
+    alt = np.abs(d) > 0.5 * np.pi
+    d = np.where(d > 0.5 * np.pi, d - np.pi, np.where(d < -0.5 * np.pi, d + np.pi, d))
+    out["phase"] = np.mod(phase_ref + d, 2.0 * np.pi)
+    out["psi"] = np.where(alt, np.mod(cols["psi"] - 0.5 * np.pi, np.pi), cols["psi"])
+    if "eta" in cols:
+        out["kappa"] = np.where(alt, -cols["eta"], cols["kappa"])
+        out["eta"] = np.where(alt, cols["kappa"], cols["eta"])
+    return out, int(np.count_nonzero(alt))
+
+
+def write_samples(cols: dict[str, NDArray], path: Path, overwrite: bool, meta: dict) -> None:
+    """Write posterior samples as ECSV (columns named like PARAM_NAMES, SI units)."""
+    from astropy.table import Table
+
+    from ucbplan.cliutil import write_output
+
+    tab = Table({k: np.asarray(v, dtype=float) for k, v in cols.items()})
+    tab.meta.update(meta)
+    write_output(path, lambda h: tab.write(h, format="ascii.ecsv"), overwrite=overwrite)
+
+
+def _with_moments(
+    base: Target, names: tuple[str, ...], mean: dict[str, float], cov: NDArray, **kw: object
+) -> Target:
+    p = base.params
+    vals = {f.name: getattr(p, f.name) for f in dataclasses.fields(PhaseParams)}
+    vals |= {k: float(v) for k, v in mean.items() if k in vals}
+    if "eta" not in names:
+        vals |= {"eta": 0.0, "kappa": 0.0, "omega_dot": 0.0}
+    return dataclasses.replace(
+        base,
+        params=PhaseParams(**vals),
+        cov_names=names,
+        cov_matrix=np.asarray(cov, dtype=float),
+        cos_inclination=float(mean["cos_inclination"]),
+        amplitude=float(mean["amplitude"]),
+        psi=float(mean["psi"]),
+        ref_shift_s=0.0,
+        **kw,  # type: ignore[arg-type]
+    )
+
+
+def posterior_target(
+    base: Target, cols: dict[str, NDArray], samples_path: Path, name: str | None = None
+) -> Target:
+    """Target (midpoint) with posterior means and the full sample covariance.
+
+    Parameters
+    ----------
+    base : Target
+        The injection/search target (sky, t_ref = midpoint, spectroscopy are kept).
+    cols : dict
+        Midpoint samples (after folding).
+    samples_path : pathlib.Path
+        Where the samples ECSV is written (recorded in the YAML).
+    """
+    names = (_ECC_NAMES if "eta" in cols else _CIRC_NAMES) + EXTRA_NAMES
+    mat = np.stack([cols[n] for n in names])
+    mean = {n: float(np.mean(cols[n])) for n in names}
+    cov = np.atleast_2d(np.cov(mat))
+    return _with_moments(
+        base, names, mean, cov, samples=samples_path.resolve(), name=name or base.name
+    )
+
+
+def sampled_to_physical_jacobian(
+    theta0: NDArray[np.float64], t_obs_s: float
+) -> tuple[tuple[str, ...], NDArray[np.float64]]:
+    """Jacobian d(physical, start epoch)/d(sampled) at ``theta0``; names of the physical rows."""
+    ecc = theta0.size > 6
+    names = (_ECC_NAMES if ecc else _CIRC_NAMES) + EXTRA_NAMES
+    j = np.zeros((len(names), theta0.size))
+    ln10 = np.log(10.0)
+    col = {"log10_amplitude": 0, "f_gw": 1, "log10_fdot": 2, "cos_inclination": 3, "psi": 4}
+    col |= {"phase": 5, "eta": 6, "kappa": 7, "z_omega": 8}
+    for i, n in enumerate(names):
+        if n == "amplitude":
+            j[i, col["log10_amplitude"]] = ln10 * 10.0 ** theta0[0]
+        elif n == "fdot":
+            j[i, col["log10_fdot"]] = ln10 * 10.0 ** theta0[2]
+        elif n == "omega_dot":
+            j[i, col["z_omega"]] = 2.0 * np.pi / t_obs_s
+        else:
+            j[i, col[n]] = 1.0
+    return names, j
+
+
+def gaussian_target(
+    base: Target, theta0: NDArray[np.float64], cov_theta: NDArray[np.float64], t_obs_s: float
+) -> Target:
+    """Target (midpoint) from a Gaussian in sampled coordinates at the start (Fisher forecast).
+
+    Means are ``theta0`` moved to the midpoint; the covariance is propagated through the
+    sampled -> physical Jacobian and :func:`ucbplan.params.shift_jacobian` (T/2).
+    """
+    names, j = sampled_to_physical_jacobian(theta0, t_obs_s)
+    cov_start = j @ cov_theta @ j.T
+    cols = midpoint_samples(theta0[None, :], t_obs_s)
+    mean = {k: float(v[0]) for k, v in cols.items()}
+    p = physical_from_theta(theta0[None, :], t_obs_s)
+    p_start = PhaseParams(
+        phase=float(p["phase"][0]),
+        f_gw=float(p["f_gw"][0]),
+        fdot=float(p["fdot"][0]),
+        eta=float(p["eta"][0]),
+        kappa=float(p["kappa"][0]),
+        omega_dot=float(p["omega_dot"][0]),
+    )
+    from ucbplan.params import PARAM_NAMES
+
+    j7 = shift_jacobian(p_start, 0.5 * t_obs_s)
+    shift = np.eye(len(names))
+    for a, na in enumerate(names):
+        for b, nb in enumerate(names):
+            if na in PARAM_NAMES and nb in PARAM_NAMES:
+                shift[a, b] = j7[PARAM_NAMES.index(na), PARAM_NAMES.index(nb)]
+    cov_mid = shift @ cov_start @ shift.T
+    return _with_moments(base, names, mean, 0.5 * (cov_mid + cov_mid.T), samples=None)

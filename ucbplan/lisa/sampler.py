@@ -1,0 +1,177 @@
+"""emcee sampling of the targeted-search posterior in Fisher-whitened coordinates.
+
+Walkers move in x with theta = theta0 + L x, where L is the correlation-scaled Cholesky factor of
+the Fisher covariance (:func:`ucbplan.lisa.fisher.whitening`); the Jacobian is constant, so the
+posterior density is unchanged. The ensemble starts in the Fisher ball x ~ N(0, s^2 I). The
+chain is accepted as converged when its length is at least 50 integrated autocorrelation times
+(emcee's estimator, the largest over parameters).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ucbplan.lisa.likelihood import Likelihood
+
+__all__ = ["CONVERGENCE_FACTOR", "SamplerResult", "run_sampler", "save_chain"]
+
+#: Required chain length in units of the integrated autocorrelation time.
+CONVERGENCE_FACTOR = 50.0
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class SamplerResult:
+    """Chain and diagnostics.
+
+    Attributes
+    ----------
+    theta : numpy.ndarray
+        Chain in sampled coordinates (steps, walkers, D).
+    log_prob : numpy.ndarray
+        ln posterior (steps, walkers).
+    tau : numpy.ndarray
+        Integrated autocorrelation time per parameter [steps].
+    converged : bool
+        steps >= CONVERGENCE_FACTOR * max(tau).
+    acceptance : float
+        Mean acceptance fraction.
+    seed : int
+        Seed of the run.
+    names : tuple of str
+        Parameter names.
+    """
+
+    theta: NDArray[np.float64]
+    log_prob: NDArray[np.float64]
+    tau: NDArray[np.float64]
+    converged: bool
+    acceptance: float
+    seed: int
+    names: tuple[str, ...]
+
+    def flat_samples(self) -> NDArray[np.float64]:
+        """Samples after discarding 2 max(tau) steps, thinned by max(tau)/2: (S, D)."""
+        tau = float(np.max(self.tau)) if np.all(np.isfinite(self.tau)) else 1.0
+        burn = min(int(2 * tau), self.theta.shape[0] // 2)
+        thin = max(1, int(tau / 2))
+        return self.theta[burn::thin].reshape(-1, self.theta.shape[-1])
+
+
+def _start(
+    like: Likelihood,
+    theta0: NDArray[np.float64],
+    chol: NDArray[np.float64],
+    n_walkers: int,
+    scale: float,
+    rng: np.random.Generator,
+) -> NDArray[np.float64]:
+    x = np.empty((n_walkers, theta0.size))
+    filled = 0
+    for _ in range(100):
+        trial = scale * rng.standard_normal((n_walkers, theta0.size))
+        ok = like.prior.contains(theta0 + trial @ chol.T)
+        take = trial[ok][: n_walkers - filled]
+        x[filled : filled + len(take)] = take
+        filled += len(take)
+        if filled == n_walkers:
+            return x
+    raise ValueError("could not place walkers inside the prior; the start point is at its edge")
+
+
+def run_sampler(
+    like: Likelihood,
+    theta0: NDArray[np.float64],
+    cov: NDArray[np.float64],
+    *,
+    n_walkers: int = 32,
+    n_steps: int = 2000,
+    until_converged: bool = False,
+    max_steps: int = 50000,
+    check_every: int = 500,
+    seed: int = 0,
+    start_scale: float = 1.0,
+    progress: Callable[[int, int, float], None] | None = None,
+) -> SamplerResult:
+    """Run emcee (vectorised log-probability over walkers).
+
+    Parameters
+    ----------
+    like : Likelihood
+        Posterior (prior inside ``log_prob``).
+    theta0, cov : numpy.ndarray
+        Centre (D,) and covariance (D, D) of the Fisher ball, sampled coordinates.
+    n_walkers, n_steps : int
+        Ensemble size and steps (a fixed run); with ``until_converged`` ``n_steps`` is the minimum.
+    until_converged : bool
+        Extend in chunks of ``check_every`` steps until 50 tau or ``max_steps``.
+    seed : int
+        Seed of the numpy Generator for the start and of emcee's moves.
+    start_scale : float
+        Radius of the start ball in Fisher sigmas.
+    progress : callable, optional
+        ``progress(step, total, tau_max)`` called every few steps (for a progress bar).
+    """
+    import emcee
+
+    from ucbplan.lisa.fisher import whitening
+
+    rng = np.random.default_rng(seed)
+    chol = whitening(cov)
+    d = theta0.size
+
+    def log_prob(x: NDArray[np.float64]) -> NDArray[np.float64]:
+        return like.log_prob(theta0 + np.atleast_2d(x) @ chol.T)
+
+    x0 = _start(like, theta0, chol, n_walkers, start_scale, rng)
+    sampler = emcee.EnsembleSampler(n_walkers, d, log_prob, vectorize=True)
+    # emcee draws its moves from a legacy RandomState; seed it explicitly for reproducibility.
+    sampler.random_state = np.random.RandomState(seed).get_state()
+    total = max(n_steps, 1)
+    done = 0
+    tau = np.full(d, np.inf)
+    state: object = x0
+    while True:
+        target = total if not until_converged else max(total, done + check_every)
+        for _ in sampler.sample(state, iterations=target - done, progress=False):
+            done += 1
+            if progress is not None and done % 10 == 0:
+                progress(done, max(target, total), float(np.max(tau)))
+        state = sampler.get_last_sample()
+        tau = np.asarray(sampler.get_autocorr_time(tol=0, quiet=True), dtype=float)
+        converged = bool(np.all(np.isfinite(tau)) and done >= CONVERGENCE_FACTOR * np.max(tau))
+        if not until_converged or converged or done >= max_steps:
+            break
+        total = done
+    chain_x = sampler.get_chain()
+    theta = theta0 + chain_x @ chol.T
+    return SamplerResult(
+        theta=np.asarray(theta),
+        log_prob=np.asarray(sampler.get_log_prob()),
+        tau=tau,
+        converged=converged,
+        acceptance=float(np.mean(sampler.acceptance_fraction)),
+        seed=seed,
+        names=like.prior.names,
+    )
+
+
+def save_chain(result: SamplerResult, path: Path, extra: dict[str, object] | None = None) -> None:
+    """Save the chain and diagnostics to ``path`` (.npz) for inspection or restarts."""
+    arrays: dict[str, Any] = {str(k): np.asarray(v) for k, v in (extra or {}).items()}
+    arrays |= {
+        "theta": result.theta,
+        "log_prob": result.log_prob,
+        "tau": result.tau,
+        "converged": np.asarray(result.converged),
+        "acceptance": np.asarray(result.acceptance),
+        "seed": np.asarray(result.seed),
+        "names": np.asarray(result.names),
+    }
+    with path.open("wb") as handle:
+        np.savez_compressed(handle, **arrays)
