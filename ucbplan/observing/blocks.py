@@ -7,11 +7,15 @@ site UTC by :mod:`ucbplan.observing.timeconv`).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from astropy.time import Time
 
-__all__ = ["Block"]
+from ucbplan.errors import UcbplanError
+from ucbplan.observing.smearing import comb_attenuation, smear_velocity
+
+__all__ = ["Block", "ExposurePlan", "Smearing", "block_smearing", "check_smear_budget"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -55,3 +59,106 @@ class Block:
     priority: float = 1.0
     session_id: str = ""
     pair_id: str = ""
+    delta_kappa: float = float("nan")
+
+
+@dataclass(frozen=True, slots=True)
+class ExposurePlan:
+    """Exposures of one block: ``n_exp`` × ``exptime_s`` with ``readout_s`` dead time between.
+
+    The block runs from the start of the first exposure to the end of the last; its centre (the
+    anchor epoch) is the mid-exposure time of the co-add.
+    """
+
+    exptime_s: float = 60.0
+    n_exp: int = 1
+    readout_s: float = 0.0
+
+    def __post_init__(self) -> None:
+        if not (self.exptime_s > 0 and math.isfinite(self.exptime_s)):
+            raise UcbplanError(f"--exptime must be positive, got {self.exptime_s}")
+        if self.n_exp < 1:
+            raise UcbplanError(f"--n-exp must be >= 1, got {self.n_exp}")
+        if not self.readout_s >= 0:
+            raise UcbplanError(f"--readout must be >= 0, got {self.readout_s}")
+
+    @property
+    def span_s(self) -> float:
+        """Block length: first exposure start to last exposure end [s] (the phase window)."""
+        return self.n_exp * self.exptime_s + (self.n_exp - 1) * self.readout_s
+
+
+@dataclass(frozen=True, slots=True)
+class Smearing:
+    """Smearing of one exposure plan for one target (Appendix B)."""
+
+    lambda_k: float
+    lambda_kappa: float
+    smear_kms: float
+    bin_fraction: float
+
+
+def block_smearing(plan: ExposurePlan, n_bar: float, k_kms: float | None) -> Smearing:
+    """Λ_K, Λ_κ, Δv_smear = K(1 − Λ_K) and the block span as a fraction of the orbit.
+
+    Parameters
+    ----------
+    plan : ExposurePlan
+        Exposures of the block.
+    n_bar : float
+        Mean orbital rate n̄_b = π f_GW [rad/s].
+    k_kms : float or None
+        Semi-amplitude for the smear [km/s] (NaN smear if unknown).
+
+    Notes
+    -----
+    Eqs. Lambda_K, Lambda_kappa, Deltav_smear; exact for a comb of equal exposures
+    (:func:`ucbplan.observing.smearing.comb_attenuation`).
+    """
+    lam_k = comb_attenuation(plan.exptime_s, plan.readout_s, plan.n_exp, n_bar, 1)
+    lam_kappa = comb_attenuation(plan.exptime_s, plan.readout_s, plan.n_exp, n_bar, 2)
+    smear = float("nan") if k_kms is None else float(smear_velocity(k_kms, lam_k))
+    return Smearing(lam_k, lam_kappa, smear, plan.span_s * n_bar / (2 * math.pi))
+
+
+def check_smear_budget(
+    name: str,
+    sm: Smearing,
+    max_smear_kms: float | None,
+    max_bin_fraction: float | None,
+    sigma_v_kms: float | None,
+) -> list[str]:
+    """Enforce ``--max-smear`` / ``--max-bin-fraction``; return warnings otherwise.
+
+    Raises
+    ------
+    UcbplanError
+        When an explicit budget is exceeded (the message says how to shorten the block).
+
+    Returns
+    -------
+    list of str
+        A warning when no budget was given and the smear exceeds σ_v/2.
+    """
+    if max_bin_fraction is not None and sm.bin_fraction > max_bin_fraction:
+        raise UcbplanError(
+            f"{name}: the block spans {sm.bin_fraction:.3f} of the orbit > --max-bin-fraction "
+            f"{max_bin_fraction:g}; use fewer or shorter exposures (--n-exp/--exptime)"
+        )
+    if max_smear_kms is not None and math.isfinite(sm.smear_kms) and sm.smear_kms > max_smear_kms:
+        raise UcbplanError(
+            f"{name}: smearing K(1-Lambda_K) = {sm.smear_kms:.2f} km/s exceeds --max-smear "
+            f"{max_smear_kms:.2f} km/s (Lambda_K = {sm.lambda_k:.4f}); shorten --exptime or --n-exp"
+        )
+    if (
+        max_smear_kms is None
+        and sigma_v_kms is not None
+        and math.isfinite(sm.smear_kms)
+        and sm.smear_kms > 0.5 * sigma_v_kms
+    ):
+        return [
+            f"{name}: the block smears K by {sm.smear_kms:.1f} km/s (Lambda_K = "
+            f"{sm.lambda_k:.4f}) > sigma_v/2; `reduce` divides it out using lambda_k, or set "
+            "--max-smear / shorten the exposures"
+        ]
+    return []

@@ -81,6 +81,7 @@ EXTRA_COLUMNS = (
     "priority",
     "session_id",
     "pair_id",
+    "delta_kappa",
 )
 
 TABLE_FORMATS = ("ecsv", "csv", "json")
@@ -124,6 +125,7 @@ _DESCRIPTIONS = {
     "moon_illum": "illuminated fraction of the Moon at block centre",
     "session_id": "blocks sharing a session (e.g. a quadrature pair)",
     "pair_id": "fixed-u pair identifier (same u at two epochs)",
+    "delta_kappa": "predicted kappa change over the pair baseline (Eq. delta_kappa_rewrite)",
 }
 
 
@@ -273,7 +275,7 @@ def _blocks_to_table(b: list[Block], meta: Mapping[str, Any]) -> Table:
         "airmass_start": col("airmass_start", float),
         "airmass_end": col("airmass_end", float),
         "readout_s": col("readout_s", float),
-        "block_width_s": np.asarray(width, dtype=float),
+        "block_width_s": np.round(np.asarray(width, dtype=float), 6),
         "lambda_kappa": col("lambda_kappa", float),
         "smear_kms": col("smear_kms", float),
         "period_s": col("period_s", float),
@@ -281,6 +283,7 @@ def _blocks_to_table(b: list[Block], meta: Mapping[str, Any]) -> Table:
         "priority": col("priority", float),
         "session_id": col("session_id", str) if b else np.array([], dtype="U1"),
         "pair_id": col("pair_id", str) if b else np.array([], dtype="U1"),
+        "delta_kappa": col("delta_kappa", float),
     }
     table = Table(data, meta=dict(meta))
     for name, unit in _UNITS.items():

@@ -265,7 +265,7 @@ def _table_ends() -> tuple[Time, Time]:
         eop = iers.earth_orientation_table.get()
         iers_end = Time(float(np.max(eop["MJD"].to_value(u.d))), format="mjd", scale="utc")
         leap = iers.LeapSeconds.auto_open()
-        expires = Time(leap.expires, scale="utc")
+        expires = Time(leap.expires.iso[:10], scale="utc")  # a date; stored as TAI
     return iers_end, expires
 
 
