@@ -1,4 +1,4 @@
-"""Regression kernels of ``ucbplan reduce`` against independent values (paper, numpy, brute force)."""
+"""Regression kernels of ``ucbplan reduce`` vs independent values (paper, numpy, brute force)."""
 
 from __future__ import annotations
 

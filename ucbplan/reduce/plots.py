@@ -104,9 +104,9 @@ def fig_dv1_dv2(red: Reduction) -> Figure | None:
             "k-",
             label=f"fit: q = {red.drift.q_line:.3f} ± {red.drift.sigma_q_line:.3f}",
         )
-    elif len(red.fits) == 2:
+    if len(red.fits) == 2:
         q = red.fits[0].K / red.fits[1].K
-        ax.plot(xx, -q * xx, "k--", label=f"slope −q (q = {q:.3f} from K1/K2), Δv_CM = 0")
+        ax.plot(xx, -q * xx, "k:", label=f"expected: slope −q (q = {q:.4f} from K1/K2), Δv_CM = 0")
     ax.set_xlabel("Δv2 [km/s]")
     ax.set_ylabel("Δv1 [km/s]")
     ax.legend(fontsize=8)

@@ -1,0 +1,104 @@
+"""``ucbplan reduce`` command: JSON/YAML reports, EM prior, plots, overwrite rules, error format."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+from typer.testing import CliRunner
+
+from ucbplan.cli import app
+from ucbplan.cliutil import configure_offline
+
+ROOT = Path(__file__).resolve().parents[1]
+TARGET = ROOT / "catalogs" / "fiducial-eccentric.yaml"
+VELS = ROOT / "catalogs" / "fiducial-eccentric-velocities.csv"
+TRUTH = {"K1": 585.293, "K2": 712.620, "gamma1": 41.640, "gamma2": 39.197}
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _offline() -> None:
+    configure_offline()
+
+
+def _run(*args: str) -> object:
+    return CliRunner().invoke(app, ["reduce", str(TARGET), str(VELS), *args])
+
+
+def test_json_report_keys_and_truth(tmp_path: Path) -> None:
+    """JSON on stdout: required top-level keys as {value, sigma, unit} (+lo/hi for MC); the
+    example file (exact Kepler, seed 20370101) recovers its header truth within 3σ."""
+    res = _run("--format", "json", "--seed", "1", "--samples", "2000")
+    assert res.exit_code == 0, res.output  # type: ignore[attr-defined]
+    doc = json.loads(res.stdout)  # type: ignore[attr-defined]
+    for key in ("K1", "K2", "gamma1", "gamma2", "q", "M1", "M2", "M_tot"):
+        q = doc[key]
+        assert set(q) >= {"value", "sigma", "unit"}, key
+        assert q["sigma"] > 0
+    for key in ("q", "M1", "M2", "M_tot", "M_c"):
+        assert doc[key]["lo"] < doc[key]["value"] < doc[key]["hi"]
+    assert doc["K1"]["unit"] == "km / s" and doc["M1"]["unit"] == "solMass"
+    for key, val in TRUTH.items():
+        assert abs(doc[key]["value"] - val) < 3 * doc[key]["sigma"], key
+    assert abs(doc["M1"]["value"] - 0.347) < 3 * doc["M1"]["sigma"]
+    assert doc["drifts"]["pairs"] and "a_los" in doc["drifts"]
+    assert doc["seed"] == 1
+
+
+def test_yaml_output_em_prior_plots_and_overwrite(tmp_path: Path) -> None:
+    """-o YAML, --em-prior and --plots write files; a second run without --overwrite fails and
+    leaves them untouched; with --overwrite it succeeds."""
+    out, prior, plots = tmp_path / "r.yaml", tmp_path / "prior.yaml", tmp_path / "figs"
+    plots.mkdir()
+    args = (
+        "-o",
+        str(out),
+        "--em-prior",
+        str(prior),
+        "--plots",
+        str(plots),
+        "--seed",
+        "2",
+        "--samples",
+        "500",
+        "--mass-radius",
+        "eggleton",
+    )
+    res = _run(*args)
+    assert res.exit_code == 0, res.output  # type: ignore[attr-defined]
+    doc = yaml.safe_load(out.read_text())
+    assert doc["redshift_grav_model"]["unit"] == "km / s"
+    pr = yaml.safe_load(prior.read_text())["em_prior"]
+    assert {"q", "M_tot", "a_los"} <= set(pr)
+    assert sorted(p.name for p in plots.iterdir()) == [
+        "dv1_vs_dv2.png",
+        "mass_mass.png",
+        "rv_vs_F.png",
+    ]
+    before = out.read_bytes()
+    res2 = _run(*args)
+    assert res2.exit_code != 0
+    assert "overwrite" in str(res2.exception)  # type: ignore[attr-defined]
+    assert out.read_bytes() == before
+    assert _run(*args, "--overwrite").exit_code == 0
+
+
+def test_bad_options_and_files_exit_2_with_one_line(tmp_path: Path) -> None:
+    """End to end (python -m ucbplan): a malformed velocity row → exit 2, one line naming it."""
+    bad = tmp_path / "bad.csv"
+    bad.write_text("bjd_tdb,exptime_s,v,sigma_v\n2465800.1,30,oops,15\n")
+    proc = subprocess.run(
+        [sys.executable, "-m", "ucbplan", "reduce", str(TARGET), str(bad)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert proc.returncode == 2
+    err = proc.stderr.strip()
+    assert "row 1, column 'v'" in err and len(err.splitlines()) == 1
+    res = _run("--mass-radius", "unknown")
+    assert res.exit_code != 0 and "eggleton" in str(res.exception)  # type: ignore[attr-defined]
