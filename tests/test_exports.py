@@ -590,3 +590,21 @@ def test_iso_rounding_is_half_up() -> None:
     t = datetime(2037, 1, 16, 3, 10, 11, 250000, tzinfo=UTC)
     assert iso_ms(t, 1) == "2037-01-16T03:10:11.3"
     assert iso_ms(t.replace(second=59, microsecond=960000), 1) == "2037-01-16T03:11:00.0"
+
+
+def test_sessions_are_one_visit(table: Table) -> None:
+    # A planner session (u = 0 then u = pi, P_b/2 apart) is one acquisition: one ESO OB listing
+    # both blocks, one visit in the proposal with one acquisition overhead.
+    pair = _pair_table(table, HM_P_S / 2)
+    pair["session_id"] = ["HM_Cnc-S01", "HM_Cnc-S01"]
+    opts = ExportOptions(acquisition_s=600.0)
+    doc = json.loads(export_blocks(pair, "eso-p2", opts).content)
+    (ob,) = doc["obs"]
+    assert ob["block_ids"] == ["HM_Cnc-001", "HM_Cnc-001b"]
+    offsets = [v["mid_offset_from_ob_start_s"] for v in ob["merged_visits"]]
+    assert offsets == pytest.approx([625.0, 625.0 + HM_P_S / 2], abs=1e-3)  # ms ISO times
+    (row,) = proposal_table(pair, opts, [])
+    assert row["n_blocks"] == 2 and row["n_visits"] == 1
+    # Exposure 2 x 40 s; overheads 600 s acquisition once + 2 x 2 x 10 s readout.
+    assert row["exposure_per_visit_s"] == 80.0 and row["overhead_per_visit_s"] == 640.0
+    assert row["total_h"] == pytest.approx(720.0 / 3600.0, rel=1e-12)

@@ -322,6 +322,7 @@ def _eso_obs(table: Table, options: ExportOptions, notes: list[str]) -> list[dic
     anchors = strings(table, "anchor")
     u_star = floats(table, "u_star_rad", unit="rad")
     exptime, n_exp = floats(table, "exptime_s", unit="s"), floats(table, "n_exp")
+    sessions = strings(table, "session_id")
     obs: list[dict[str, Any]] = []
     for i in _order(table):
         mid, start = mids[i], starts[i]
@@ -331,12 +332,6 @@ def _eso_obs(table: Table, options: ExportOptions, notes: list[str]) -> list[dic
         hi = ob_start + timedelta(seconds=half)
         lo_min, hi_min = _floor_minute(lo), _ceil_minute(hi)
         widening = (lo - lo_min).total_seconds() + (hi_min - hi).total_seconds()
-        if math.isfinite(per[i]) and widening > options.rounding_warn_fraction * per[i]:
-            notes.append(
-                f"ESO p2 {blocks[i]}: minute rounding widens the OB start window by "
-                f"{widening:.0f} s = {widening / per[i]:.2f} P_b; the OB start no longer fixes "
-                "the orbital phase: plan exposures covering the window and select in `reduce`"
-            )
         obs.append(
             {
                 "name": safe_name(blocks[i], 32),
@@ -357,9 +352,48 @@ def _eso_obs(table: Table, options: ExportOptions, notes: list[str]) -> list[dic
                 "_hi": hi_min,
                 "_ob_start": ob_start,
                 "_mid": mid,
+                "_period_s": float(per[i]),
+                "_members": [
+                    {
+                        "block_id": blocks[i],
+                        "t_mid_utc": iso_ms(mid),
+                        "sigma_t_s": float(sigma[i]),
+                        "_mid": mid,
+                    }
+                ],
+                "_session": sessions[i],
             }
         )
+    obs = _group_sessions(obs)
+    for ob in obs:
+        per_s, widening = ob.pop("_period_s"), ob["rounding_widening_s"]
+        if math.isfinite(per_s) and widening > options.rounding_warn_fraction * per_s:
+            notes.append(
+                f"ESO p2 {ob['name']}: minute rounding widens the OB start window by "
+                f"{widening:.0f} s = {widening / per_s:.2f} P_b; the OB start no longer fixes "
+                "the orbital phase: plan exposures covering the window and select in `reduce`"
+            )
     return _resolve_overlaps(obs, options)
+
+
+def _group_sessions(obs: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """One OB per planner session (one acquisition, e.g. a u = 0 / π pair); blank = own OB."""
+    out: list[dict[str, Any]] = []
+    first: dict[tuple[str, str], dict[str, Any]] = {}
+    for ob in obs:  # time-ordered
+        key = (ob["target"], ob.pop("_session"))
+        lead = first.get(key) if key[1] else None
+        if lead is None:
+            first[key] = ob
+            out.append(ob)
+        else:
+            _merge(lead, ob)
+    return out
+
+
+def _merge(lead: dict[str, Any], ob: dict[str, Any]) -> None:
+    lead["block_ids"] = [*lead["block_ids"], *ob["block_ids"]]
+    lead["_members"] = [*lead["_members"], *ob["_members"]]
 
 
 def _resolve_overlaps(obs: list[dict[str, Any]], options: ExportOptions) -> list[dict[str, Any]]:
@@ -383,24 +417,29 @@ def _resolve_overlaps(obs: list[dict[str, Any]], options: ExportOptions) -> list
                 f"{iso_minute(ob['_lo'])}-{iso_minute(ob['_hi'])} UTC); {how}, "
                 "or lower --tolerance-sigma"
             )
-        prev["block_ids"] = prev["block_ids"] + ob["block_ids"]
-        visits = prev.get("merged_visits", [_visit(prev, prev)])
-        prev["merged_visits"] = [*visits, _visit(prev, ob)]
+        _merge(prev, ob)
     return out
 
 
-def _visit(first: dict[str, Any], ob: dict[str, Any]) -> dict[str, Any]:
-    offset = (ob["_mid"] - first["_ob_start"]).total_seconds()
-    return {
-        "block_id": ob["block_ids"][0],
-        "t_mid_utc": ob["t_mid_utc"],
-        "sigma_t_s": ob["sigma_t_s"],
-        "mid_offset_from_ob_start_s": round(offset, 3),
-    }
+def _visits(ob: dict[str, Any]) -> list[dict[str, Any]]:
+    """Every block of a merged OB with its mid-exposure offset from the nominal OB start."""
+    return [
+        {
+            "block_id": m["block_id"],
+            "t_mid_utc": m["t_mid_utc"],
+            "sigma_t_s": m["sigma_t_s"],
+            "mid_offset_from_ob_start_s": round((m["_mid"] - ob["_ob_start"]).total_seconds(), 3),
+        }
+        for m in ob["_members"]
+    ]
 
 
 def export_eso_p2(table: Table, options: ExportOptions) -> ExportResult:
     """ESO p2 absolute-time-window JSON: one OB per visit, windows on the OB start.
+
+    A visit is a planner session (blocks sharing ``session_id``, e.g. a u = 0 / π pair observed
+    after one acquisition) or a single block; a merged OB lists each block's mid-exposure offset
+    from the nominal OB start in ``merged_visits``.
 
     The window is t_mid − (acquisition + exposure/2) ± max(k·σ_t, floor), i.e. the block start
     minus the acquisition overhead, rounded outward to whole minutes (p2 drops seconds). Each OB
@@ -424,7 +463,9 @@ def export_eso_p2(table: Table, options: ExportOptions) -> ExportResult:
         )
     for ob in obs:
         lo, hi = ob.pop("_lo"), ob.pop("_hi")
-        for key in ("_ob_start", "_mid"):
+        if len(ob["_members"]) > 1:
+            ob["merged_visits"] = _visits(ob)
+        for key in ("_ob_start", "_mid", "_members"):
             ob.pop(key)
         ob["absoluteTimeConstraints"] = [{"from": iso_minute(lo), "to": iso_minute(hi)}]
         ob["obx_absolute_times_list"] = (

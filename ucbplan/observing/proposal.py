@@ -17,6 +17,7 @@ import io
 import json
 import math
 from collections import Counter
+from dataclasses import dataclass
 from datetime import UTC, datetime
 from typing import Any
 
@@ -109,6 +110,84 @@ def _anchor_text(anchors: list[str], u_star: np.ndarray) -> str:
     return "; ".join(f"{a} {','.join(f'{v:.4g}' for v in sorted(vs))}" for a, vs in groups.items())
 
 
+@dataclass(frozen=True, slots=True)
+class _Columns:
+    """Per-block arrays the proposal summary needs (defaults already applied)."""
+
+    names: list[str]
+    anchors: list[str]
+    visit: list[str]
+    u_star: np.ndarray
+    sigma: np.ndarray
+    exposure: np.ndarray
+    acquisition: np.ndarray
+    readout: np.ndarray
+    period: np.ndarray
+    ra: np.ndarray
+    dec: np.ndarray
+    vmag: np.ndarray
+    tol: np.ndarray
+    starts: list[datetime]
+    mids: np.ndarray
+
+
+def _columns(table: Table, options: ExportOptions, notes: list[str]) -> _Columns:
+    sessions, blocks = strings(table, "session_id"), strings(table, "block_id")
+    ra, dec = coordinates(table)
+    return _Columns(
+        names=strings(table, "target"),
+        anchors=strings(table, "anchor"),
+        visit=[s or f"block {b}" for s, b in zip(sessions, blocks, strict=True)],
+        u_star=floats(table, "u_star_rad", unit="rad"),
+        sigma=floats(table, "sigma_t_s", unit="s"),
+        exposure=floats(table, "n_exp") * floats(table, "exptime_s", unit="s"),
+        acquisition=acquisition_s(table, options, notes),
+        readout=readout_total_s(table, notes),
+        period=period_s(table, notes),
+        ra=ra,
+        dec=dec,
+        vmag=vmags(table),
+        tol=floats(table, "tol_rad", default=math.nan),
+        starts=required_times(table, "t_start_utc"),
+        mids=_seconds(required_times(table, "t_mid_utc")),
+    )
+
+
+def _target_row(
+    c: _Columns, idx: np.ndarray, t_mid_sem: float, months: int, options: ExportOptions
+) -> dict[str, Any]:
+    """One proposal row; a visit is a planner session (one acquisition) or a lone block."""
+    srt = idx[np.argsort(c.mids[idx], kind="stable")]
+    first_of_visit = {c.visit[i]: int(i) for i in srt[::-1]}  # earliest block of each visit
+    visits = sorted(first_of_visit.values(), key=lambda i: c.mids[i])
+    n_visits = len(visits)
+    by_month = Counter(c.starts[i].strftime("%Y-%m") for i in visits)
+    overhead = float(np.sum(c.acquisition[visits])) + float(np.sum(c.readout[idx]))
+    exposure = float(np.sum(c.exposure[idx]))
+    sigma_mid = float(np.interp(t_mid_sem, c.mids[srt], c.sigma[srt]))
+    return {
+        "target": c.names[idx[0]],
+        "ra_hms": sexagesimal(c.ra[idx[0]] / 15.0, 2, ":", False),
+        "dec_dms": sexagesimal(c.dec[idx[0]], 1, ":", True),
+        "vmag": float(c.vmag[idx[0]]),
+        "p_orb_min": _nanmedian(c.period[idx]) / 60.0,
+        "sigma_t_mid_s": sigma_mid,
+        "anchors": _anchor_text([c.anchors[i] for i in srt], c.u_star[srt]),
+        "tolerance_rad": _nanmedian(c.tol[idx]),
+        "window_half_width_s": max(options.tolerance_sigma * sigma_mid, options.tolerance_floor_s),
+        "n_blocks": len(idx),
+        "n_visits": n_visits,
+        "windows_per_month": n_visits / months,
+        "windows_by_month": " ".join(f"{k}:{v}" for k, v in sorted(by_month.items())),
+        "exposure_per_visit_s": exposure / n_visits,
+        "overhead_per_visit_s": overhead / n_visits,
+        "integration_h": exposure / 3600.0,
+        "overhead_h": overhead / 3600.0,
+        "total_h": (exposure + overhead) / 3600.0,
+        "time_critical": True,
+    }
+
+
 def proposal_table(table: Table, options: ExportOptions, notes: list[str]) -> Table:
     """Summarise a blocks table per target for a proposal's technical section.
 
@@ -124,61 +203,25 @@ def proposal_table(table: Table, options: ExportOptions, notes: list[str]) -> Ta
     Returns
     -------
     astropy.table.Table
-        One row per target in order of first appearance; totals and rules in ``meta``.
+        One row per target in order of first appearance; totals and rules in ``meta``. A visit
+        is a planner session (blocks sharing ``session_id``: one acquisition) or a lone block;
+        overheads = one acquisition per visit + the readout inside every block.
     """
-    names = strings(table, "target")
-    anchors = strings(table, "anchor")
-    u_star = floats(table, "u_star_rad", unit="rad")
-    sigma = floats(table, "sigma_t_s", unit="s")
-    exposure = floats(table, "n_exp") * floats(table, "exptime_s", unit="s")
-    overhead = acquisition_s(table, options, notes) + readout_total_s(table, notes)
-    per = period_s(table, notes)
-    ra, dec = coordinates(table)
-    starts = required_times(table, "t_start_utc")
+    c = _columns(table, options, notes)
     ends = required_times(table, "t_end_utc")
-    mids = _seconds(required_times(table, "t_mid_utc"))
-    sem_start, sem_end = min(starts), max(ends)
+    sem_start, sem_end = min(c.starts), max(ends)
     sem_mid = sem_start + (sem_end - sem_start) / 2
-    t_mid_sem = _seconds([sem_mid])[0]
-    months = _months(starts)
-    vmag_col = vmags(table)
-    tol_col = floats(table, "tol_rad", default=math.nan)
+    t_mid_sem = float(_seconds([sem_mid])[0])
+    months = _months(c.starts)
     meta_t = _meta_targets(table)
-    constraints = "; ".join(str(c) for c in (table.meta or {}).get("constraints", []))
-    order = list(dict.fromkeys(names))
+    constraints = "; ".join(str(x) for x in (table.meta or {}).get("constraints", []))
     rows: list[dict[str, Any]] = []
-    for name in order:
-        idx = np.array([i for i, n in enumerate(names) if n == name])
-        srt = idx[np.argsort(mids[idx], kind="stable")]
-        vmag = float(vmag_col[idx[0]])
-        by_month = Counter(starts[i].strftime("%Y-%m") for i in srt)
-        rows.append(
-            {
-                "target": name,
-                "ra_hms": sexagesimal(ra[idx[0]] / 15.0, 2, ":", False),
-                "dec_dms": sexagesimal(dec[idx[0]], 1, ":", True),
-                "vmag": vmag,
-                "p_orb_min": _nanmedian(per[idx]) / 60.0,
-                "ephemeris": str(meta_t.get(name, {}).get("file") or ""),
-                "sigma_t_mid_s": float(np.interp(t_mid_sem, mids[srt], sigma[srt])),
-                "anchors": _anchor_text([anchors[i] for i in srt], u_star[srt]),
-                "tolerance_rad": _nanmedian(tol_col[idx]),
-                "window_half_width_s": max(
-                    options.tolerance_sigma * float(np.interp(t_mid_sem, mids[srt], sigma[srt])),
-                    options.tolerance_floor_s,
-                ),
-                "n_visits": len(idx),
-                "windows_per_month": len(idx) / months,
-                "windows_by_month": " ".join(f"{k}:{v}" for k, v in sorted(by_month.items())),
-                "exposure_per_visit_s": float(np.mean(exposure[idx])),
-                "overhead_per_visit_s": float(np.mean(overhead[idx])),
-                "integration_h": float(np.sum(exposure[idx])) / 3600.0,
-                "overhead_h": float(np.sum(overhead[idx])) / 3600.0,
-                "total_h": float(np.sum(exposure[idx] + overhead[idx])) / 3600.0,
-                "time_critical": True,
-                "constraints": constraints,
-            }
-        )
+    for name in dict.fromkeys(c.names):
+        idx = np.array([i for i, n in enumerate(c.names) if n == name])
+        row = _target_row(c, idx, t_mid_sem, months, options)
+        row["ephemeris"] = str(meta_t.get(name, {}).get("file") or "")
+        row["constraints"] = constraints
+        rows.append(row)
     if any(not math.isfinite(r["vmag"]) for r in rows):
         notes.append("no vmag for some targets: magnitude left blank (add vmag to the target file)")
     out = Table(rows=rows, names=list(rows[0]))
@@ -192,7 +235,10 @@ def proposal_table(table: Table, options: ExportOptions, notes: list[str]) -> Ta
         "semester_end_utc": iso_ms(sem_end, 0),
         "semester_mid_utc": iso_ms(sem_mid, 0),
         "sigma_t_mid_rule": "sigma_T linearly interpolated between the target's blocks at mid",
-        "overheads_rule": "overhead per visit = acquisition + readout inside the block",
+        "overheads_rule": (
+            "a visit is a planner session (one acquisition) or a lone block; overheads = one "
+            "acquisition per visit + readout inside every block"
+        ),
         "window_rule": (
             f"window_half_width_s = max({options.tolerance_sigma:g} sigma_T, "
             f"{options.tolerance_floor_s:g} s) at the semester midpoint; tolerance_rad from "
