@@ -67,9 +67,10 @@ def fold_phase_mode(cols: dict[str, NDArray], phase_ref: float) -> tuple[dict[st
     """Fold the phi pi-mode onto the branch of ``phase_ref`` (paper Sec. 4.1).
 
     Samples with phi within pi/2 of phase_ref + pi are the psi -> psi + pi/2, phi -> phi + pi
-    mode; they are mapped back with phi -= pi, psi -= pi/2 (mod pi) and
-    (kappa, eta) -> (-eta, kappa) (the map under which the n=3 and n=1(+) lines are invariant; the
-    b1 line breaks it at O(e), SCIENCE.md errata, so the fold is approximate for eta, kappa).
+    mode, reached from the injected branch by (kappa, eta) -> (-eta, kappa) (the map under
+    which the n=3 and n=1(+) lines are invariant; the b1 line breaks it at O(e), SCIENCE.md
+    errata, so the fold is approximate for eta, kappa). They are mapped back with phi -= pi,
+    psi -= pi/2 (mod pi) and the inverse rotation.
 
     Returns
     -------
@@ -83,8 +84,9 @@ def fold_phase_mode(cols: dict[str, NDArray], phase_ref: float) -> tuple[dict[st
     out["phase"] = np.mod(phase_ref + d, 2.0 * np.pi)
     out["psi"] = np.where(alt, np.mod(cols["psi"] - 0.5 * np.pi, np.pi), cols["psi"])
     if "eta" in cols:
-        out["kappa"] = np.where(alt, -cols["eta"], cols["kappa"])
-        out["eta"] = np.where(alt, cols["kappa"], cols["eta"])
+        # inverse of (kappa, eta) -> (-eta, kappa): kappa = eta', eta = -kappa'
+        out["kappa"] = np.where(alt, cols["eta"], cols["kappa"])
+        out["eta"] = np.where(alt, -cols["kappa"], cols["eta"])
     return out, int(np.count_nonzero(alt))
 
 
