@@ -294,7 +294,11 @@ def _latex(summary: Table) -> str:
         + summary.meta["semester_mid_utc"].replace("T", " ")
         + r" UTC; total = integration + overheads)."
     )
-    latex.write(buf, format="ascii.latex", latexdict={"caption": caption, "tabletype": "table*"})
+    latex.write(
+        buf,
+        format="ascii.latex",
+        latexdict={"caption": caption, "tabletype": "table*", "col_align": "lllrrrlrrrrr"},
+    )
     return buf.getvalue()
 
 
