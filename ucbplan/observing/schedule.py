@@ -584,6 +584,13 @@ def plan_nights(
     if not nights:
         raise UcbplanError("--nights must be >= 1")
     mode = parse_mode(settings.mode)
+    if mode.label == "fixed-u-pairs":
+        for t in targets:
+            if t.params.omega_dot == 0.0 or t.params.eccentricity == 0.0:
+                raise UcbplanError(
+                    f"{t.name}: Delta-kappa_LISA is 0 (circular orbit or no apsidal motion); "
+                    "fixed-u pairs would only measure Delta-v_CM: use --mode quadrature or u=VALUE"
+                )
     windows = night_windows(site, nights)
     origin, sky, runs, warns, constraints = _prepare(targets, site, windows, settings)
     with quiet_erfa():
@@ -643,12 +650,8 @@ def _pair_blocks(
         t, p = run.target, run.target.params
         with quiet_erfa():
             tau_a = float((first.t_mid_tdb_bary - t.t_ref).to_value(u.s))
-        eta_a, kappa_a = (float(v) for v in ll_pair(p, np.array([tau_a])))
-        if p.omega_dot == 0.0 or math.hypot(eta_a, kappa_a) == 0.0:
-            raise UcbplanError(
-                f"{t.name}: Delta-kappa_LISA is 0 (circular orbit or no apsidal motion); fixed-u "
-                "pairs would only measure Delta-v_CM: use --mode quadrature or u=VALUE"
-            )
+        eta_arr, kappa_arr = ll_pair(p, np.array([tau_a]))
+        eta_a, kappa_a = float(eta_arr[0]), float(kappa_arr[0])
         night0 = date.fromisoformat(first.night)
         with quiet_erfa():
             days_valid = (run.until - first.t_mid_tdb_bary).to_value(u.d)

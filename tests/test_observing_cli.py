@@ -1,0 +1,80 @@
+"""`ucbplan plan` end to end: files, formats, overwrite protection, one-line errors."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+from typer.testing import CliRunner
+
+from ucbplan.cli import app
+from ucbplan.cliutil import configure_offline
+from ucbplan.errors import OutputExistsError
+from ucbplan.observing.table import REQUIRED_COLUMNS, file_sha256, read_blocks
+
+pytestmark = [
+    pytest.mark.filterwarnings("ignore::erfa.ErfaWarning"),
+    pytest.mark.filterwarnings("ignore::astropy.utils.exceptions.AstropyWarning"),
+]
+
+REPO = Path(__file__).resolve().parents[1]
+HM = str(REPO / "catalogs" / "hm-cnc.yaml")
+BASE = ["plan", HM, "--site", "paranal", "--night", "2040-02-15"]
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _offline() -> None:
+    configure_offline()
+
+
+def test_plan_writes_ecsv_and_plot(tmp_path: Path) -> None:
+    out, png = tmp_path / "blocks.ecsv", tmp_path / "night.png"
+    res = CliRunner().invoke(app, [*BASE, "-o", str(out), "--plot", str(png)])
+    assert res.exit_code == 0, res.output
+    table = read_blocks(out)
+    assert tuple(table.colnames[: len(REQUIRED_COLUMNS)]) == REQUIRED_COLUMNS
+    assert len(table) == 2 and set(table["anchor"]) == {"quadrature"}
+    assert table.meta["site"]["name"] == "Paranal"
+    assert table.meta["targets"][0]["sha256"] == file_sha256(Path(HM))
+    assert "nautical night (Sun altitude <= -12 deg)" in table.meta["constraints"]
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    # Overwrite protection (the CLI's one-line error path is exercised below by subprocess).
+    again = CliRunner().invoke(app, [*BASE, "-o", str(out)])
+    assert isinstance(again.exception, OutputExistsError)
+    ok = CliRunner().invoke(app, [*BASE, "-o", str(out), "--overwrite", "--mode", "conjunction"])
+    assert ok.exit_code == 0, ok.output
+
+
+def test_plan_json_to_stdout() -> None:
+    res = CliRunner().invoke(app, [*BASE, "--format", "json", "--exptime", "20", "--n-exp", "3"])
+    assert res.exit_code == 0
+    rows = json.loads(res.stdout)
+    assert [r["n_exp"] for r in rows] == [3, 3]
+    assert rows[0]["t_mid_utc"].startswith("2040-02-16T")
+
+
+def _run(args: list[str]) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "ucbplan", *args], capture_output=True, text=True, timeout=120
+    )
+
+
+def test_errors_are_one_line_without_traceback(tmp_path: Path) -> None:
+    doc = yaml.safe_load(Path(HM).read_text())
+    doc["sky"]["dec"] = "+80d00m00s"
+    doc["name"] = "Far North"
+    north = tmp_path / "north.yaml"
+    north.write_text(yaml.safe_dump(doc))
+    proc = _run(["plan", str(north), "--site", "paranal", "--night", "2040-02-15"])
+    assert proc.returncode == 2
+    assert "Traceback" not in proc.stderr
+    assert "error: no block could be planned at Paranal: Far North 2040-02-15: never at" in (
+        " ".join(proc.stderr.split())
+    )
+    proc = _run(["plan", HM, "--site", "atlantis", "--night", "2040-02-15"])
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    assert "known sites: Paranal" in " ".join(proc.stderr.split())
