@@ -608,3 +608,25 @@ def test_sessions_are_one_visit(table: Table) -> None:
     # Exposure 2 x 40 s; overheads 600 s acquisition once + 2 x 2 x 10 s readout.
     assert row["exposure_per_visit_s"] == 80.0 and row["overhead_per_visit_s"] == 640.0
     assert row["total_h"] == pytest.approx(720.0 / 3600.0, rel=1e-12)
+
+
+def test_acquisition_from_plan_meta_and_vmag_from_target_file(table: Table) -> None:
+    import hashlib
+
+    hm_file = Path(__file__).resolve().parents[1] / "catalogs" / "hm-cnc.yaml"
+    t = _minimal(table)
+    digest = hashlib.sha256(hm_file.read_bytes()).hexdigest()
+    t.meta = {
+        "overhead_s": 300.0,
+        "targets": [{"name": "HM Cnc", "file": str(hm_file), "sha256": digest}],
+    }
+    res = export_blocks(t, "keck-starlist", ExportOptions())
+    # vmag 21.1 is in catalogs/hm-cnc.yaml; the table itself has no vmag.
+    assert "HM_Cnc          08 06 23.20 +15 27 30.0 2000 vmag=21.1 rotmode=vertical" in (
+        res.content.decode().splitlines()
+    )
+    doc = json.loads(export_blocks(t, "eso-p2", ExportOptions()).content)
+    assert {ob["acquisition_s"] for ob in doc["obs"]} == {300.0}
+    # A file that changed since planning (sha256 mismatch) is not trusted: no vmag.
+    t.meta["targets"][0]["sha256"] = "0" * 64
+    assert "vmag=" not in export_blocks(t, "keck-starlist", ExportOptions()).content.decode()

@@ -6,7 +6,8 @@ Formats follow ``EXPORTS.md``. Every time written is UTC at the site (from the `
 columns) and carries its 1σ uncertainty ``sigma_t_s``.
 
 Missing optional columns get documented defaults, each reported once in ``ExportResult.notes``:
-no ``acq_s`` column → :data:`DEFAULT_ACQUISITION_S` (or ``--acquisition``); no ``period_s`` →
+no ``acq_s`` column → the plan's ``meta['overhead_s']``, else :data:`DEFAULT_ACQUISITION_S` (or
+``--acquisition``); no ``vmag`` → the target file named in ``meta['targets']``; no ``period_s`` →
 P_b ≈ 4 |t_alt − t_mid| (the φ_ref π-mode alternative epoch lies a quarter orbit away); no
 ``readout_s`` → the dead time inside the block, (t_end − t_start) − n_exp·exptime.
 """
@@ -51,7 +52,8 @@ class ExportOptions:
     Attributes
     ----------
     acquisition_s : float or None
-        Acquisition overhead before the first exposure [s]; None → ``acq_s`` column or default.
+        Acquisition overhead before the first exposure [s]; None → ``acq_s`` column, else the
+        plan's ``meta['overhead_s']``, else :data:`DEFAULT_ACQUISITION_S`.
     tolerance_sigma : float
         ESO window half-width in units of σ_t (k in k·σ_t).
     tolerance_floor_s : float
@@ -228,6 +230,13 @@ def acquisition_s(table: Table, options: ExportOptions, notes: list[str]) -> np.
         return np.full(len(table), float(options.acquisition_s))
     if "acq_s" in table.colnames:
         return floats(table, "acq_s", unit="s")
+    planned = (table.meta or {}).get("overhead_s")
+    if isinstance(planned, int | float) and math.isfinite(planned) and planned >= 0:
+        notes.append(
+            f"acquisition overhead {float(planned):.0f} s from the plan's overhead_s (the time "
+            "`ucbplan plan` reserved before each session); pass --acquisition S to change it"
+        )
+        return np.full(len(table), float(planned))
     notes.append(
         f"no acq_s column: assuming {DEFAULT_ACQUISITION_S:.0f} s acquisition overhead; "
         "pass --acquisition S with your instrument's value"
@@ -247,11 +256,37 @@ def readout_total_s(table: Table, notes: list[str]) -> np.ndarray:
     return np.maximum(width - n_exp * floats(table, "exptime_s", unit="s"), 0.0)
 
 
+def _file_vmag(entry: dict[str, Any]) -> float | None:
+    """``vmag`` of the target file named in the table's provenance, if it is still readable."""
+    path = entry.get("file")
+    if not path:
+        return None
+    import hashlib
+    from pathlib import Path
+
+    from ucbplan.target import load_target
+
+    try:
+        digest = hashlib.sha256(Path(str(path)).read_bytes()).hexdigest()
+        if entry.get("sha256") and digest != entry["sha256"]:
+            return None  # the file changed since planning: do not trust it
+        return load_target(str(path)).vmag
+    except (UcbplanError, OSError):
+        return None
+
+
 def vmags(table: Table) -> np.ndarray:
-    """V magnitude per row: ``vmag`` column, else ``meta['targets'][*]['vmag']``, else NaN."""
+    """V magnitude per row: ``vmag`` column, else ``meta['targets'][*]`` (its ``vmag`` or the
+    ``vmag`` of the target file it names), else NaN."""
     out = floats(table, "vmag", default=math.nan)
+    if np.all(np.isfinite(out)):
+        return out
     items = table.meta.get("targets", []) if table.meta else []
-    by_name = {str(t.get("name")): t.get("vmag") for t in items if isinstance(t, dict)}
+    by_name = {
+        str(t.get("name")): t.get("vmag") if t.get("vmag") is not None else _file_vmag(t)
+        for t in items
+        if isinstance(t, dict)
+    }
     for i, name in enumerate(strings(table, "target")):
         value = by_name.get(name)
         if not math.isfinite(out[i]) and value is not None:
