@@ -112,8 +112,8 @@ def test_validity_window(tmp_path: Path) -> None:
     early = _write(
         tmp_path, HEADER + f"{JD},30,1,15,1,15,A\n{start_jd - 1},30,1,15,1,15,A\n", "early.csv"
     )
-    with pytest.raises(VelocityFileError, match="row 2: .*before the LISA observation start"):
+    with pytest.raises(VelocityFileError, match=r"row 2: .*before the LISA observation start"):
         check_validity(read_velocities(early), t)
     late = _write(tmp_path, HEADER + f"{JD + 365.25 * 25},30,1,15,1,15,A\n", "late.csv")
-    with pytest.raises(VelocityFileError, match="row 1: .*more than 20 yr"):
+    with pytest.raises(VelocityFileError, match=r"row 1: .*more than 20 yr"):
         check_validity(read_velocities(late), t)

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -38,6 +39,7 @@ __all__ = [
     "ReduceOptions",
     "Reduction",
     "design_jacobian",
+    "read_samples",
     "read_velocities",
     "reduce",
     "window_factors",
@@ -220,22 +222,54 @@ def _posterior_samples(
     L = vecs * np.sqrt(np.clip(vals, 0.0, None))
     out = mean + rng.standard_normal((n, 9)) @ L.T
     if target.samples is not None:
-        from astropy.table import Table
-
-        from ucbplan.errors import InputFileError
-
-        try:
-            tab = Table.read(target.samples, format="ascii.ecsv")
-        except Exception as exc:
-            raise InputFileError(
-                f"{target.samples}: cannot read posterior samples ({exc})"
-            ) from exc
-        idx = rng.choice(len(tab), size=n, replace=len(tab) < n)
+        cols = read_samples(target.samples)
+        size = len(next(iter(cols.values())))
+        idx = rng.choice(size, size=n, replace=size < n)
         for k, name in enumerate((*PARAM_NAMES, *EXTRA_NAMES)):
-            if name in tab.colnames:
-                out[:, k] = np.asarray(tab[name], float)[idx]
+            if name in cols:
+                out[:, k] = cols[name][idx]
     out[:, 7] = np.clip(out[:, 7], -1.0, 1.0)
     return out
+
+
+def read_samples(path: Path) -> dict[str, F64]:
+    """Numeric columns of a posterior-samples ECSV (bare SI values, PARAM_NAMES column names).
+
+    Fast path: the ECSV data block parsed with ``numpy.loadtxt`` (10⁵ rows in ~0.1 s); anything
+    it cannot parse falls back to astropy's ECSV reader.
+
+    Raises
+    ------
+    InputFileError
+        Unreadable file or no rows.
+    """
+    from ucbplan.errors import InputFileError
+
+    try:
+        lines = path.read_text(encoding="utf-8").splitlines()
+        delim = " "
+        for ln in lines:
+            if ln.startswith("# delimiter:"):
+                delim = ln.split(":", 1)[1].strip().strip("'\"") or " "
+        body = [ln for ln in lines if ln.strip() and not ln.startswith("#")]
+        names = body[0].split(None if delim == " " else delim)
+        data = np.loadtxt(body[1:], delimiter=None if delim == " " else delim, ndmin=2)
+        cols = {nm.strip().strip('"'): data[:, k] for k, nm in enumerate(names)}
+    except (OSError, ValueError, IndexError):
+        from astropy.table import Table
+
+        try:
+            tab = Table.read(path, format="ascii.ecsv")
+        except Exception as exc:
+            raise InputFileError(f"{path}: cannot read posterior samples ({exc})") from exc
+        cols = {
+            nm: np.asarray(tab[nm], float)
+            for nm in tab.colnames
+            if np.issubdtype(np.asarray(tab[nm]).dtype, np.number)
+        }
+    if not cols or len(next(iter(cols.values()))) == 0:
+        raise InputFileError(f"{path}: posterior samples file has no rows")
+    return cols
 
 
 def reduce(target: Target, table: VelocityTable, options: ReduceOptions | None = None) -> Reduction:
