@@ -221,12 +221,32 @@ def u_jacobian(p: PhaseParams, tau_s: ArrayLike, star: int = 1) -> FloatArray:
 
 def _jacobian_at(p: PhaseParams, tau: FloatArray, s: FloatArray, c: FloatArray) -> FloatArray:
     """Jacobian given sin/cos of Φ_asc (lets the forecast place Φ_asc at an anchor)."""
-    w = p.omega_dot * tau
-    cw, sw = np.cos(w), np.sin(w)
-    eta = p.eta * cw + p.kappa * sw
-    kap = p.kappa * cw - p.eta * sw
+    return jacobian_kernel(p.eta, p.kappa, p.omega_dot, tau, s, c)
+
+
+def jacobian_kernel(
+    eta0: FloatArray | float,
+    kap0: FloatArray | float,
+    wdot: FloatArray | float,
+    tau: FloatArray,
+    s: FloatArray,
+    c: FloatArray,
+    cos_sin_w: tuple[FloatArray, FloatArray] | None = None,
+) -> FloatArray:
+    """∂u/∂(φ, f, ḟ, f̈, η_ref, κ_ref, ω̇) from (η_ref, κ_ref, ω̇), τ and sin/cos Φ_asc.
+
+    Broadcasts: parameters may be arrays shaped like ``tau`` (batches of targets).
+    ``cos_sin_w``: cos and sin of ω̇τ if the caller has them already.
+    """
+    if cos_sin_w is None:
+        w = wdot * tau
+        cw, sw = np.cos(w), np.sin(w)
+    else:
+        cw, sw = cos_sin_w
+    eta = eta0 * cw + kap0 * sw
+    kap = kap0 * cw - eta0 * sw
     d = 1.0 + 2.0 * kap * c + 2.0 * eta * s  # ∂u/∂Φ_asc
-    jac = np.empty((*tau.shape, len(PARAM_NAMES)), dtype=np.float64)
+    jac = np.empty((*np.shape(tau), len(PARAM_NAMES)), dtype=np.float64)
     jac[..., 0] = 0.5 * d
     jac[..., 1] = math.pi * tau * d
     jac[..., 2] = math.pi * tau**2 / 2.0 * d

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ucbplan.ephemeris import ANCHORS, _jacobian_at, resolve_anchor, u_jacobian
+from ucbplan.ephemeris import ANCHORS, jacobian_kernel, resolve_anchor, u_jacobian
 from ucbplan.errors import UcbplanError
 from ucbplan.params import PhaseParams
 
@@ -28,6 +28,7 @@ __all__ = [
     "sigma_u",
     "sigma_u_from_jacobian",
     "t_valid",
+    "t_valid_batch",
     "tolerance",
     "u_jacobian",
 ]
@@ -41,7 +42,7 @@ HORIZON_CAP_S = 300.0 * YEAR_S
 
 def sigma_u_from_jacobian(jac: FloatArray, cov: FloatArray) -> FloatArray:
     """σ_u = √(J C Jᵀ) for a stack of Jacobians ``jac`` (..., 7) [rad]."""
-    var = np.einsum("...i,ij,...j->...", jac, cov, jac)
+    var = np.sum((jac @ cov) * jac, axis=-1)
     out: FloatArray = np.sqrt(np.maximum(var, 0.0))
     return out
 
@@ -66,14 +67,28 @@ def anchor_sigma_u(
     them at the anchor, so the result varies only on the apsidal period (smooth in τ).
     """
     tau = np.asarray(tau_s, dtype=np.float64)
+    out = _anchor_sigma_batch(p.as_array()[None, :], np.asarray(cov)[None], tau[None], u_star, star)
+    return out[0]
+
+
+def _anchor_sigma_batch(
+    pars: FloatArray, covs: FloatArray, tau: FloatArray, u_star: float, star: int = 1
+) -> FloatArray:
+    """Batched :func:`anchor_sigma_u`: pars (n, 7), covs (n, 7, 7), tau (n, G) → (n, G)."""
+    eta0, kap0, wdot = pars[:, 4:5], pars[:, 5:6], pars[:, 6:7]
     eps = 0.0 if star == 1 else math.pi
-    w = p.omega_dot * tau
-    eta = p.eta * np.cos(w) + p.kappa * np.sin(w)
-    kap = p.kappa * np.cos(w) - p.eta * np.sin(w)
+    w = wdot * tau
+    cw, sw = np.cos(w), np.sin(w)
     phi_a = np.full_like(tau, u_star - eps)
-    for _ in range(3):  # Φ_asc = u★ − ε − δ(Φ_asc): fixed point, contraction factor 2e
-        phi_a = u_star - eps - (2 * kap * np.sin(phi_a) - 2 * eta * np.cos(phi_a))
-    return sigma_u_from_jacobian(_jacobian_at(p, tau, np.sin(phi_a), np.cos(phi_a)), cov)
+    if np.any(eta0 != 0.0) or np.any(kap0 != 0.0):
+        eta = eta0 * cw + kap0 * sw
+        kap = kap0 * cw - eta0 * sw
+        for _ in range(2):  # Φ_asc = u★ − ε − δ(Φ_asc): contraction 2e, two steps leave O(e³)
+            phi_a = u_star - eps - (2 * kap * np.sin(phi_a) - 2 * eta * np.cos(phi_a))
+    jac = jacobian_kernel(eta0, kap0, wdot, tau, np.sin(phi_a), np.cos(phi_a), (cw, sw))
+    var = np.sum(np.matmul(jac, covs) * jac, axis=-1)
+    out: FloatArray = np.sqrt(np.maximum(var, 0.0))
+    return out
 
 
 ToleranceKind = Literal["conjunction", "quadrature", "generic"]
@@ -151,57 +166,131 @@ def _anchor_u_values(anchor: str | float) -> tuple[str, list[float]]:
     return label, [float(t) for t in targets]
 
 
-def _oscillates(p: PhaseParams, cov: FloatArray) -> bool:
-    """σ_u at a fixed anchor oscillates (apsidal period) only when ω̇ ≠ 0 and e matters."""
-    if p.omega_dot == 0.0:
-        return False
-    return bool(np.any(cov[4:7, :] != 0.0)) or p.eccentricity > 0
+_OFFSETS = np.concatenate([[0.0], np.geomspace(60.0, HORIZON_CAP_S, 320)])
+_REFINE = np.linspace(0.0, 1.0, 65)
 
 
-def _refine(fn: Callable[[FloatArray], FloatArray], a: float, b: float, thr: float) -> float:
-    """Crossing of fn = thr inside [a, b] (one sign change), by two 64-point subdivisions."""
-    for _ in range(3):
-        grid = np.linspace(a, b, 65)
-        above = fn(grid) > thr
-        idx = int(np.argmax(above != above[0]))
-        if idx == 0:
-            return b
-        a, b = float(grid[idx - 1]), float(grid[idx])
-    return 0.5 * (a + b)
+def _oscillating(pars: FloatArray, covs: FloatArray) -> NDArray[np.bool_]:
+    """Rows whose anchor σ_u oscillates (apsidal period): ω̇ ≠ 0 and e or its σ non-zero."""
+    ecc = (pars[:, 4] != 0) | (pars[:, 5] != 0) | np.any(covs[:, 4:7, :] != 0, axis=(1, 2))
+    out: NDArray[np.bool_] = (pars[:, 6] != 0) & ecc
+    return out
 
 
-def _close_time(
-    fn: Callable[[FloatArray], FloatArray], tau_end: float, thr: float, period: float | None
-) -> float:
-    """Closing τ of the first admissible window (fn ≤ thr) open at/after ``tau_end`` (nan: none).
+def t_valid_batch(
+    pars: FloatArray,
+    covs: FloatArray,
+    t_obs_s: FloatArray,
+    thr_rad: FloatArray | float,
+    anchor_u_star: Sequence[float],
+    star: int = 1,
+) -> FloatArray:
+    """Vectorised horizons: closing τ − T/2 of the first window σ_u ≤ thr [s] (0 if none).
 
-    ``period``: apsidal period when fn oscillates; the grid is then refined to resolve it.
+    Parameters
+    ----------
+    pars : (n, 7) parameters at the midpoint; covs : (n, 7, 7); t_obs_s : (n,);
+    thr_rad : (n,) thresholds α·δu_tol; anchor_u_star : the anchor's u★ values (max σ_u used).
     """
-    offsets = np.concatenate([[0.0], np.geomspace(60.0, HORIZON_CAP_S, 900)])
-    grid = tau_end + offsets
+    pars = np.atleast_2d(np.asarray(pars, dtype=np.float64))
+    covs = np.asarray(covs, dtype=np.float64).reshape(-1, 7, 7)
+    t_obs = np.broadcast_to(np.asarray(t_obs_s, dtype=np.float64), (pars.shape[0],))
+    thr = np.broadcast_to(np.asarray(thr_rad, dtype=np.float64), (pars.shape[0],))
+    out = np.zeros(pars.shape[0])
+    osc = _oscillating(pars, covs)
+    for mask, size in ((~osc, 256), (osc, 32)):  # small chunks: fine grids differ per row
+        idx = np.nonzero(mask)[0]
+        for start in range(0, idx.size, size):
+            sel = idx[start : start + size]
+            out[sel] = _t_valid_chunk(
+                pars[sel], covs[sel], t_obs[sel], thr[sel], anchor_u_star, star, bool(osc[sel[0]])
+            )
+    return out
+
+
+def _t_valid_chunk(
+    pars: FloatArray,
+    covs: FloatArray,
+    t_obs: FloatArray,
+    thr: FloatArray,
+    us: Sequence[float],
+    star: int,
+    oscillating: bool,
+) -> FloatArray:
+    def fn(tau: FloatArray) -> FloatArray:
+        vals = [_anchor_sigma_batch(pars, covs, tau, u, star) for u in us]
+        return np.max(vals, axis=0)
+
+    tau_end = t_obs / 2.0
+    grid = tau_end[:, None] + _OFFSETS[None, :]
     vals = fn(grid)
-    ok = vals <= thr
-    if period is not None:
-        # resolve the apsidal oscillation wherever the coarse grid is near the threshold
-        near = np.abs(vals - thr) < 0.5 * thr
-        if np.any(near):
-            first = int(np.argmax(near))
-            lo = grid[max(first - 1, 0)]
-            hi_idx = int(np.argmax(~ok[first:])) + first if np.any(~ok[first:]) else grid.size - 1
-            hi = grid[min(hi_idx + 1, grid.size - 1)]
-            n = int(min(max((hi - lo) / (period / 32.0), 2), 400_000))
-            fine = np.linspace(lo, hi, n + 1)
-            grid = np.union1d(grid, fine)
-            vals = fn(grid)
-            ok = vals <= thr
-    if not np.any(ok):
-        return math.nan
-    start = int(np.argmax(ok))
-    rest = ~ok[start:]
-    if not np.any(rest):
-        return float(grid[-1])
-    close = start + int(np.argmax(rest))
-    return _refine(fn, float(grid[close - 1]), float(grid[close]), thr)
+    if oscillating:
+        grid, vals = _resolve_oscillation(fn, grid, vals, thr, pars[:, 6])
+        vals = _with_peaks(grid, vals)
+    ok = vals <= thr[:, None]
+    has = ok.any(axis=1)
+    first = np.argmax(ok, axis=1)
+    cols = np.arange(grid.shape[1])[None, :]
+    rest = (~ok) & (cols >= first[:, None])
+    closes = rest.any(axis=1)
+    close = np.argmax(rest, axis=1)
+    rows = np.arange(grid.shape[0])
+    a = grid[rows, np.maximum(close - 1, 0)]
+    # an interpolated peak at ``close`` may lie up to one step beyond it
+    b = grid[rows, np.minimum(close + 1, grid.shape[1] - 1) if oscillating else close]
+    for _ in range(3):  # three 64-fold subdivisions: 6 % grid step → 2e-7 relative
+        g = a[:, None] + (b - a)[:, None] * _REFINE[None, :]
+        above = fn(g) > thr[:, None]
+        j = np.argmax(above, axis=1)
+        j = np.where(above.any(axis=1), j, _REFINE.size - 1)
+        j = np.maximum(j, 1)
+        a, b = g[rows, j - 1], g[rows, j]
+    tau_close = np.where(closes, 0.5 * (a + b), grid[:, -1])
+    res: FloatArray = np.where(has, np.maximum(tau_close - tau_end, 0.0), 0.0)
+    return res
+
+
+def _with_peaks(grid: FloatArray, vals: FloatArray) -> FloatArray:
+    """Replace sampled local maxima by their parabolic peak value (sampling-independent peaks).
+
+    At P_aps/24 sampling a sinusoid's maximum can be under-sampled by up to 1 %; a peak that
+    touches the threshold between samples still closes the window.
+    """
+    x0, x1, x2 = grid[:, :-2], grid[:, 1:-1], grid[:, 2:]
+    v0, v1, v2 = vals[:, :-2], vals[:, 1:-1], vals[:, 2:]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        d1 = (v1 - v0) / (x1 - x0)
+        d2 = (v2 - v1) / (x2 - x1)
+        a = (d2 - d1) / (x2 - x0)
+        b = (d1 * (x2 - x1) + d2 * (x1 - x0)) / (x2 - x0)
+        peak = np.where((v1 >= v0) & (v1 >= v2) & (a < 0), v1 - b * b / (4 * a), v1)
+    out = vals.copy()
+    out[:, 1:-1] = np.maximum(v1, np.nan_to_num(peak, nan=0.0, posinf=0.0, neginf=0.0))
+    return out
+
+
+def _resolve_oscillation(
+    fn: Callable[[FloatArray], FloatArray],
+    grid: FloatArray,
+    vals: FloatArray,
+    thr: FloatArray,
+    wdot: FloatArray,
+) -> tuple[FloatArray, FloatArray]:
+    """Add a P_aps/24 grid wherever the coarse σ_u is within 30 % of the threshold."""
+    ok = vals <= thr[:, None]
+    near = np.abs(vals - thr[:, None]) < 0.3 * thr[:, None]
+    first = np.where(near.any(axis=1), np.argmax(near, axis=1), 0)
+    cols = np.arange(grid.shape[1])[None, :]
+    beyond = (~ok) & (cols >= first[:, None])
+    last = np.where(beyond.any(axis=1), np.argmax(beyond, axis=1), grid.shape[1] - 1)
+    rows = np.arange(grid.shape[0])
+    lo = grid[rows, np.maximum(first - 1, 0)]
+    hi = grid[rows, np.minimum(last + 1, grid.shape[1] - 1)]
+    period = 2 * math.pi / np.abs(wdot)
+    n_fine = int(np.clip(np.max(np.ceil((hi - lo) / (period / 24.0))), 2, 20_000))
+    fine = lo[:, None] + (hi - lo)[:, None] * np.linspace(0.0, 1.0, n_fine + 1)[None, :]
+    merged = np.sort(np.concatenate([grid, fine], axis=1), axis=1)
+    return merged, fn(merged)
 
 
 def t_valid(
@@ -235,17 +324,12 @@ def t_valid(
     Notes
     -----
     Eq. T_valid_alpha and the text around Table 4. When ω̇ ≠ 0, σ_u oscillates on the apsidal
-    period; the grid is refined to P_aps/32 around the threshold so the first closing is found.
+    period; the grid is refined to P_aps/24 around the threshold so the first closing is found.
     """
     p, cov, t_obs = _unpack(target)
     us = [float(anchor_u_star)] if np.isscalar(anchor_u_star) else list(anchor_u_star)  # type: ignore[arg-type]
-
-    def fn(tau: FloatArray) -> FloatArray:
-        return np.max([anchor_sigma_u(p, cov, tau, u, star) for u in us], axis=0)
-
-    period = 2 * math.pi / abs(p.omega_dot) if _oscillates(p, cov) else None
-    close = _close_time(fn, t_obs / 2.0, alpha * tol_rad, period)
-    return 0.0 if math.isnan(close) else max(close - t_obs / 2.0, 0.0)
+    res = t_valid_batch(p.as_array()[None], cov[None], np.array([t_obs]), alpha * tol_rad, us, star)
+    return float(res[0])
 
 
 def _unpack(
