@@ -45,7 +45,7 @@ def _root(
 def _register_all() -> None:
     import importlib
 
-    for name in ("cli_core", "cli_plan", "cli_reduce", "cli_lisa"):
+    for name in ("cli_core", "cli_plan", "cli_feasibility", "cli_reduce", "cli_lisa"):
         try:
             module = importlib.import_module(f"ucbplan.{name}")
         except ModuleNotFoundError as exc:
