@@ -345,3 +345,18 @@ def test_posterior_samples_file_drives_the_monte_carlo(tmp_path) -> None:  # typ
     assert abs(s1.value - s0.value) < 3 * s1.sigma / math.sqrt(n) * 1.25 + 3 * s0.sigma / math.sqrt(
         n
     )
+
+
+def test_sb1_mass_function() -> None:
+    """SB1 (star-1 velocities only, noise-free exact Kepler): f(M) = P_b K³(1−e²)^{3/2}/(2πG)
+    equals the independent M2³ sin³ι/(M1+M2)² of the fiducial masses (1e-3 relative: K1 = 585.3
+    is quoted to 4 digits)."""
+    t = make_target()
+    p = t.params
+    tau, dt = session_times(p, 0.5 * t.t_obs_s + 30 * DAY, n_orbits=10)
+    Fx = exposure_factor(p, tau, dt)
+    red = reduce(t, _table(t, tau, dt, (G1 + K1 * Fx,), (15.0,)), ReduceOptions(200, seed=1))
+    sin3 = (1 - t.cos_inclination**2) ** 1.5
+    expect = 0.285**3 * sin3 / (0.347 + 0.285) ** 2
+    assert red.summaries["mass_function"].value == pytest.approx(expect, rel=1e-3)
+    assert "M1" not in red.summaries

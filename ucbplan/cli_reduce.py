@@ -43,6 +43,9 @@ def reduce_cmd(
     em_prior: Path | None = typer.Option(
         None, "--em-prior", help="Also write an EM prior YAML (q, M_tot, a_los …)."
     ),
+    site: str | None = typer.Option(
+        None, "--site", help="Observatory (bundled site table) for jd_utc/mjd_utc time columns."
+    ),
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace existing output files."),
 ) -> None:
     """Reduce measured velocities against a target: K_j, γ_j, masses, Δκ, Δv_CM (Secs. 3–5)."""
@@ -73,6 +76,15 @@ def reduce_cmd(
         raise UcbplanError(f"--plots: folder {plots} does not exist; create it first")
     tgt = load_target(target)
     table = read_velocities(velocities)
+    if table.site_utc:
+        if site is None:
+            raise UcbplanError(
+                f"{velocities}: times are UTC at the telescope; pass --site NAME to convert them"
+            )
+        from ucbplan.observing.sites import get_site
+        from ucbplan.reduce.velocities import to_barycentric
+
+        table = to_barycentric(table, tgt.coord, get_site(site).location)
     red = reduce(
         tgt,
         table,

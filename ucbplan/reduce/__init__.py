@@ -356,6 +356,11 @@ def reduce(target: Target, table: VelocityTable, options: ReduceOptions | None =
                 f"star {j + 1}: χ²/dof = {f.line.chi2 / f.line.dof:.2f}; errors were "
                 "inflated by √(χ²/dof) — check σ_v or outliers"
             )
+    if len(fits) == 1 and fits[0].K < 0:
+        warn.append(
+            "SB1: K < 0, i.e. the visible star moves like star 2 of the LISA convention "
+            "(u_2 = u_1 + π); |K| is its semi-amplitude"
+        )
     wil = None
     if len(fits) == 2:
         wil = wilson_fit(
@@ -438,6 +443,7 @@ def _monte_carlo(
         e = np.hypot(theta[:, 4], theta[:, 5])
         k = Ks[0] * 1e3
         out["mass_function"] = (k**3 * (1 - e**2) ** 1.5 / (nb * _masses.G_SI)) / _masses.MSUN_KG
+        warn[:] = [w for w in warn if not w.startswith("cos ι")]  # f(M) does not use ι
         warn.append(
             "SB1: only the mass function f(M) = P K³(1−e²)^{3/2}/(2πG) is reported; "
             "component masses need both stars' velocities"

@@ -233,7 +233,8 @@ def derive(
         Keys (units): n_b (rad/s), P_b (s), e (1), sin_i (1), a (m), M_tot, M1, M2, M_c (Msun),
         q (1), omega_dot_GR, omega_dot_remainder (rad/s), M_tot_omega_dot, M_c_fdot (Msun),
         fdot_GW_only, fdot_minus_GW_only (Hz/s), distance (kpc, if amplitude), gamma_diff,
-        redshift_orbital, redshift_grav (km/s, if γ), redshift_grav_model (km/s, if model).
+        redshift_orbital, redshift_grav (km/s, if γ), R1, R2 (R_sun), redshift_grav_model and
+        redshift_grav_minus_model (km/s, if model).
 
     Notes
     -----
@@ -284,6 +285,8 @@ def derive(
         out["R1"] = r1 / RSUN_M
         out["R2"] = r2 / RSUN_M
         out["redshift_grav_model"] = G_SI * (m1 / r1 - m2 / r2) / C_M_S / 1e3
+        if "redshift_grav" in out:
+            out["redshift_grav_minus_model"] = out["redshift_grav"] - out["redshift_grav_model"]
     return out
 
 

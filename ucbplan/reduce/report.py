@@ -54,6 +54,7 @@ MC_UNITS: dict[str, tuple[str, float]] = {
     "redshift_orbital": ("km / s", 1.0),
     "redshift_grav": ("km / s", 1.0),
     "redshift_grav_model": ("km / s", 1.0),
+    "redshift_grav_minus_model": ("km / s", 1.0),
     "R1": ("solRad", 1.0),
     "R2": ("solRad", 1.0),
     "mass_function": ("solMass", 1.0),
@@ -320,6 +321,7 @@ def print_report(doc: dict[str, Any], console: Any) -> None:
         "redshift_orbital",
         "redshift_grav",
         "redshift_grav_model",
+        "redshift_grav_minus_model",
         "mass_function",
     )
     for k in keys:

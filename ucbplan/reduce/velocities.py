@@ -7,6 +7,8 @@ column                 meaning
 =====================  =========================================================================
 ``bjd_tdb``            mid-exposure barycentric Julian date, TDB  (or ``bmjd_tdb`` / ``mjd_tdb``:
                        barycentric MJD in TDB)
+``jd_utc``/``mjd_utc`` mid-exposure UTC at the telescope (needs ``--site``; converted with
+                       :func:`ucbplan.observing.timeconv.site_utc_to_bary_tdb`)
 ``exptime_s``          exposure or co-add window Δt_bin [s] (alias ``window_s``), ≥ 0
 ``lambda_k``           Λ_K of the window as written by ``ucbplan plan`` (instead of exptime_s)
 ``v1, sigma_v1``       star 1 velocity and 1σ [km/s]; with ``v2, sigma_v2`` for SB2
@@ -16,7 +18,7 @@ column                 meaning
 =====================  =========================================================================
 
 Velocities are positive when receding. ECSV columns may carry units (velocity → km/s, window →
-s). UTC site times are not accepted here: convert them first (``ucbplan`` exports carry BJD_TDB).
+s). Times are mid-exposure (ESO's MJD-OBS is the exposure *start*: add half the exposure).
 
 Validity (:func:`check_validity`): every time must lie between the start of the LISA observation
 and :data:`HORIZON_S` (20 Julian years) after its end; beyond that the u(t) extrapolation is not
@@ -26,6 +28,7 @@ something ucbplan will stand behind.
 from __future__ import annotations
 
 import csv
+import dataclasses
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -38,6 +41,8 @@ from numpy.typing import NDArray
 from ucbplan.errors import VelocityFileError
 
 if TYPE_CHECKING:
+    from astropy.coordinates import EarthLocation, SkyCoord
+
     from ucbplan.target import Target
 
 __all__ = [
@@ -47,6 +52,7 @@ __all__ = [
     "VelocityTable",
     "check_validity",
     "read_velocities",
+    "to_barycentric",
 ]
 
 F64 = NDArray[np.float64]
@@ -56,7 +62,13 @@ HORIZON_S = 20.0 * 365.25 * 86400.0
 #: Without a session column, consecutive spectra further apart than this start a new session [s].
 SESSION_GAP_S = 0.5 * 86400.0
 
-_TIME_COLS = {"bjd_tdb": 0.0, "bmjd_tdb": 2400000.5, "mjd_tdb": 2400000.5}
+_TIME_COLS = {
+    "bjd_tdb": 0.0,
+    "bmjd_tdb": 2400000.5,
+    "mjd_tdb": 2400000.5,
+    "jd_utc": 0.0,
+    "mjd_utc": 2400000.5,
+}
 _NUM_COLS = (
     "exptime_s",
     "window_s",
@@ -103,6 +115,9 @@ class VelocityTable:
         Session label of each spectrum.
     u_star : ndarray or None
         Targeted u★ per spectrum [rad] if the file has it.
+    site_utc : bool
+        True while ``time`` is UTC at the (not yet known) telescope; :func:`to_barycentric`
+        converts it.
     """
 
     source: Path | None
@@ -113,6 +128,7 @@ class VelocityTable:
     sigma: tuple[F64, ...]
     session: tuple[str, ...]
     u_star: F64 | None
+    site_utc: bool = False
 
     @property
     def lines(self) -> str:
@@ -300,7 +316,8 @@ def read_velocities(path: Path | str) -> VelocityTable:
                     f"got {num[h][bad[0]]}, expected {what}",
                 )
     jd = num[tcol] + _TIME_COLS[tcol]
-    time = Time(np.floor(jd), jd - np.floor(jd), format="jd", scale="tdb")
+    scale = "utc" if tcol.endswith("_utc") else "tdb"
+    time = Time(np.floor(jd), jd - np.floor(jd), format="jd", scale=scale)
     nan = np.full(jd.shape, np.nan)
     window = num.get("exptime_s", num.get("window_s", nan))
     lam = num.get("lambda_k", nan)
@@ -320,6 +337,7 @@ def read_velocities(path: Path | str) -> VelocityTable:
         sigma=tuple(num[f"sigma_{c}"] for c in comps),
         session=sess,
         u_star=num.get("u_star"),
+        site_utc=scale == "utc",
     )
 
 
@@ -337,15 +355,36 @@ def _auto_sessions(jd: F64) -> tuple[str, ...]:
     return tuple(str(s) for s in labels)
 
 
+def to_barycentric(table: VelocityTable, coord: SkyCoord, location: EarthLocation) -> VelocityTable:
+    """Convert site-UTC mid-exposure times to barycentric TDB (no-op for barycentric tables).
+
+    Notes
+    -----
+    t_bary = t.tdb + Δ(t), Δ the barycentric light travel time (astropy builtin ephemeris, within
+    ~12 µs of DE421; SCIENCE.md "Barycentric ↔ site time").
+    """
+    if not table.site_utc:
+        return table
+    from ucbplan.observing.timeconv import site_utc_to_bary_tdb
+
+    bary = site_utc_to_bary_tdb(table.time, coord, location)
+    return dataclasses.replace(table, time=Time(bary, scale="tdb"), site_utc=False)
+
+
 def check_validity(table: VelocityTable, target: Target) -> F64:
     """Seconds since ``target.t_ref`` of each spectrum, after checking the validity window.
 
     Raises
     ------
     VelocityFileError
-        A time before the LISA observation start or more than :data:`HORIZON_S` after its end
-        (names the first offending row).
+        UTC site times that were not converted (give ``--site``); a time before the LISA start
+        or more than :data:`HORIZON_S` after its end (names the first offending row).
     """
+    if table.site_utc:
+        raise VelocityFileError(
+            f"{table.source}: times are UTC at the telescope (jd_utc/mjd_utc); give the site with "
+            "--site NAME so they can be converted to barycentric TDB"
+        )
     tau = np.asarray((table.time - target.t_ref).to_value("s"), dtype=np.float64)
     lo = -0.5 * target.t_obs_s
     hi = 0.5 * target.t_obs_s + HORIZON_S
