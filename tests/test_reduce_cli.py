@@ -72,6 +72,11 @@ def test_yaml_output_em_prior_plots_and_overwrite(tmp_path: Path) -> None:
     assert res.exit_code == 0, res.output  # type: ignore[attr-defined]
     doc = yaml.safe_load(out.read_text())
     assert doc["redshift_grav_model"]["unit"] == "km / s"
+    # the example's γ_j contain the Eggleton surface redshifts + 3G(M2−M1)/(2ac) split: the
+    # measured G(M1/R1 − M2/R2)/c must agree with the model within 3σ (truth 3.26 km/s)
+    diff = doc["redshift_grav_minus_model"]
+    assert abs(diff["value"]) < 3 * diff["sigma"]
+    assert abs(doc["redshift_grav"]["value"] - 3.265) < 3 * doc["redshift_grav"]["sigma"]
     pr = yaml.safe_load(prior.read_text())["em_prior"]
     assert {"q", "M_tot", "a_los"} <= set(pr)
     assert sorted(p.name for p in plots.iterdir()) == [
