@@ -289,28 +289,27 @@ def _parse_time(ctx: _Ctx, path: str, value: Any, scale_field: Any) -> tuple[Tim
     if label is not None and scale_given is not None and label != scale_given:
         raise ctx.fail(path, f"label {label.upper()} contradicts t_ref_scale: {scale_given}")
     scale = scale_given or label or "tdb"
-    try:
-        if text.upper().startswith("MJD"):
-            t = Time(float(text[3:]), format="mjd", scale=scale)
-        elif text.upper().startswith("JD"):
-            t = Time(float(text[2:]), format="jd", scale=scale)
-        else:
-            t = Time(text, scale=scale, format="isot" if "T" in text else None)
-    except (ValueError, TypeError):
-        raise ctx.fail(
-            path, f'expected an ISO epoch like "2039-01-01T00:00:00" (TDB), got {value!r}'
-        ) from None
-    if scale == "tdb":
-        return t, None
     import warnings
 
     from erfa import ErfaWarning
 
-    with warnings.catch_warnings():
-        # future UTC: leap seconds after the bundled table are unknown (TDB − UTC kept at the
-        # last value); the user stated the scale, so convert with that caveat
-        warnings.simplefilter("ignore", ErfaWarning)
-        return t.tdb, scale
+    try:
+        with warnings.catch_warnings():
+            # future UTC: leap seconds after the bundled table are unknown (TDB − UTC kept at
+            # the last value); the user stated the scale, so convert with that caveat
+            warnings.simplefilter("ignore", ErfaWarning)
+            if text.upper().startswith("MJD"):
+                t = Time(float(text[3:]), format="mjd", scale=scale)
+            elif text.upper().startswith("JD"):
+                t = Time(float(text[2:]), format="jd", scale=scale)
+            else:
+                t = Time(text, scale=scale, format="isot" if "T" in text else None)
+            tdb = t.tdb
+    except (ValueError, TypeError):
+        raise ctx.fail(
+            path, f'expected an ISO epoch like "2039-01-01T00:00:00" (TDB), got {value!r}'
+        ) from None
+    return tdb, (None if scale == "tdb" else scale)
 
 
 def _parse_angle(ctx: _Ctx, path: str, value: Any, is_ra: bool, check_range: bool = True) -> float:
