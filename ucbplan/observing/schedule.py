@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 from astropy import units as u
+from astropy.coordinates import EarthLocation
 from astropy.time import Time, TimeDelta
 from numpy.typing import NDArray
 
@@ -270,23 +271,24 @@ class _Session:
     score: float
 
 
-def _sessions(c: Candidates, paired: bool) -> tuple[list[tuple[int, ...]], FloatArray, FloatArray]:
-    """Group blocks into sessions; return index tuples, session ok mask and score."""
+def _sessions(c: Candidates, paired: bool) -> tuple[NDArray[np.int64], FloatArray, FloatArray]:
+    """Group blocks into sessions: partner index (−1 for single blocks), ok mask and score.
+
+    A paired session starts with block j and continues with the first later block at the other
+    anchor that starts after block j ends (u = 0 then π half an orbit later, or the next orbit if
+    the blocks are longer than half an orbit).
+    """
     n = c.x_mid.size
-    if not paired:
-        return [(j,) for j in range(n)], c.ok.astype(np.float64), c.airmass_mid
-    nxt = np.searchsorted(c.x_start, c.x_end, side="left")
-    nxt = np.minimum(nxt, n - 1) if n else nxt
+    if not paired or n == 0:
+        return np.full(n, -1, dtype=np.int64), c.ok.astype(np.float64), c.airmass_mid
+    nxt = np.minimum(np.searchsorted(c.x_start, c.x_end, side="left"), n - 1)
     same = np.isclose(np.mod(c.u_star[nxt] - c.u_star, 2 * math.pi), 0.0, atol=1e-6)
     nxt = np.where(same, nxt + 1, nxt)
     valid = (nxt < n) & (nxt > np.arange(n))
-    nxt_c = np.minimum(nxt, n - 1) if n else nxt
-    ok = valid & c.ok & c.ok[nxt_c]
-    idx: list[tuple[int, ...]] = [(j, int(nxt_c[j])) for j in range(n)]
-    score = np.asarray(
-        np.maximum(c.airmass_mid, c.airmass_mid[nxt_c]) if n else c.airmass_mid, dtype=np.float64
-    )
-    return idx, ok.astype(np.float64), score
+    nxt = np.minimum(nxt, n - 1).astype(np.int64)
+    ok = valid & c.ok & c.ok[nxt]
+    score = np.asarray(np.maximum(c.airmass_mid, c.airmass_mid[nxt]), dtype=np.float64)
+    return nxt, ok.astype(np.float64), score
 
 
 def _slug(name: str) -> str:
@@ -359,7 +361,7 @@ def _conflicts(s: _Session, taken: list[tuple[float, float]], overhead_s: float)
 class _TargetRun:
     target: Target
     cand: Candidates
-    sessions: list[tuple[int, ...]]
+    partner: NDArray[np.int64]
     ok: FloatArray
     score: FloatArray
     valid: NDArray[np.bool_]
@@ -368,65 +370,74 @@ class _TargetRun:
     k_kms: float | None
 
 
-def _make_block(
+def _make_blocks(
     run: _TargetRun,
-    j: int,
+    js: NDArray[np.int64],
+    labels: list[tuple[str, str, str]],
     *,
     site: Site,
+    location: EarthLocation,
     sky: SkyModel,
     i: int,
     origin: Time,
-    night: str,
-    block_id: str,
-    session_id: str,
     settings: PlanSettings,
-    constraints: list[Constraint],
-) -> Block:
-    """One :class:`Block` from candidate ``j`` of a target (exact UTC via astropy)."""
+) -> list[Block]:
+    """:class:`Block` records for candidates ``js`` of one target (UTC exact via astropy, in one
+    vectorised conversion); ``labels`` = (night, block_id, session_id) per block."""
+    if js.size == 0:
+        return []
     c, t, sm = run.cand, run.target, run.smearing
-    xs = np.array([c.x_start[j], c.x_mid[j], c.x_end[j]])
+    xs = np.stack([c.x_start[js], c.x_mid[js], c.x_end[js]], axis=1)
     alt = sky.target_alt_deg(i, xs)
     am = airmass_from_alt(alt)
-    n_s = max(3, math.ceil((c.x_end[j] - c.x_start[j]) / 300.0) + 1)
-    sep = float(np.min(sky.moon_sep_deg(i, np.linspace(c.x_start[j], c.x_end[j], n_s))))
+    n_s = max(3, math.ceil(settings.exposure.span_s / 300.0) + 1)
+    fine = c.x_start[js][:, None] + np.linspace(0, 1, n_s)[None, :] * settings.exposure.span_s
+    sep = np.min(sky.moon_sep_deg(i, fine), axis=1)
+    illum = sky.moon_illum(c.x_mid[js])
     with quiet_erfa():
-        loc_origin = Time(origin, location=site.location)
-        times = (loc_origin + TimeDelta(np.array([*xs, c.x_alt[j]]) * u.s)).utc
-        tdb = t.t_ref + TimeDelta(c.tau_origin_s * u.s) + TimeDelta(c.dt_s[j] * u.s)
-    del constraints
-    return Block(
-        target=t.name,
-        block_id=block_id,
-        anchor=parse_mode(settings.mode).label,
-        u_star_rad=float(np.mod(c.u_star[j], 2 * math.pi)),
-        t_mid_utc=times[1],
-        t_start_utc=times[0],
-        t_end_utc=times[2],
-        t_mid_tdb_bary=tdb,
-        sigma_t_s=float(c.sigma_t_s[j]),
-        t_alt_utc=times[3],
-        exptime_s=settings.exposure.exptime_s,
-        n_exp=settings.exposure.n_exp,
-        readout_s=settings.exposure.readout_s,
-        lambda_k=sm.lambda_k,
-        lambda_kappa=sm.lambda_kappa,
-        smear_kms=sm.smear_kms,
-        alt_start_deg=float(alt[0]),
-        altitude_deg=float(alt[1]),
-        alt_end_deg=float(alt[2]),
-        airmass_start=float(am[0]),
-        airmass=float(am[1]),
-        airmass_end=float(am[2]),
-        moon_sep_deg=sep,
-        moon_illum=float(sky.moon_illum(np.array([c.x_mid[j]]))[0]),
-        ra_deg=t.ra_deg,
-        dec_deg=t.dec_deg,
-        night=night,
-        timezone=site.timezone,
-        period_s=t.period_s,
-        priority=t.priority,
-        session_id=session_id,
-    )
+        x_all = np.concatenate([xs, c.x_alt[js][:, None]], axis=1)
+        utc = (Time(origin, location=location) + TimeDelta(x_all * u.s)).utc
+        tdb = t.t_ref + TimeDelta(c.tau_origin_s * u.s) + TimeDelta(c.dt_s[js] * u.s)
+    anchor = parse_mode(settings.mode).label
+    out = []
+    for k, j in enumerate(js):
+        night, block_id, session_id = labels[k]
+        out.append(
+            Block(
+                target=t.name,
+                block_id=block_id,
+                anchor=anchor,
+                u_star_rad=float(np.mod(c.u_star[j], 2 * math.pi)),
+                t_mid_utc=utc[k, 1],
+                t_start_utc=utc[k, 0],
+                t_end_utc=utc[k, 2],
+                t_mid_tdb_bary=tdb[k],
+                sigma_t_s=float(c.sigma_t_s[j]),
+                t_alt_utc=utc[k, 3],
+                exptime_s=settings.exposure.exptime_s,
+                n_exp=settings.exposure.n_exp,
+                readout_s=settings.exposure.readout_s,
+                lambda_k=sm.lambda_k,
+                lambda_kappa=sm.lambda_kappa,
+                smear_kms=sm.smear_kms,
+                alt_start_deg=float(alt[k, 0]),
+                altitude_deg=float(alt[k, 1]),
+                alt_end_deg=float(alt[k, 2]),
+                airmass_start=float(am[k, 0]),
+                airmass=float(am[k, 1]),
+                airmass_end=float(am[k, 2]),
+                moon_sep_deg=float(sep[k]),
+                moon_illum=float(illum[k]),
+                ra_deg=t.ra_deg,
+                dec_deg=t.dec_deg,
+                night=night,
+                timezone=site.timezone,
+                period_s=t.period_s,
+                priority=t.priority,
+                session_id=session_id,
+            )
+        )
+    return out
 
 
 def _prepare(
@@ -474,8 +485,9 @@ def _prepare(
         with quiet_erfa():
             until_tau = float((until - t.t_ref).to_value(u.s))
         valid = (cand.tau_origin_s + cand.dt_s) <= until_tau
-        sessions, ok, score = _sessions(cand, mode.paired)
-        runs.append(_TargetRun(t, cand, sessions, ok, score, valid, until, sm, k))
+        partner, ok, score = _sessions(cand, mode.paired)
+        valid = valid & ((partner < 0) | valid[np.maximum(partner, 0)])
+        runs.append(_TargetRun(t, cand, partner, ok, score, valid, until, sm, k))
     return origin, sky, runs, budget_warn, constraints
 
 
@@ -501,8 +513,7 @@ def _place(
                 unplaced.append(Unplaced(name, label, "no anchor epoch in the night window"))
                 continue
             js = np.arange(j0, j1)
-            both_valid = np.array([all(run.valid[k] for k in run.sessions[j]) for j in js])
-            usable = js[(run.ok[js] > 0) & both_valid]
+            usable = js[(run.ok[js] > 0) & run.valid[js]]
             if usable.size == 0:
                 if not np.any(run.valid[js]):
                     reason = (
@@ -517,7 +528,7 @@ def _place(
             usable = usable[np.argsort(run.score[usable], kind="stable")]
             count = 0
             for j in usable:
-                idx = run.sessions[int(j)]
+                idx = (int(j),) if run.partner[j] < 0 else (int(j), int(run.partner[j]))
                 sess = _Session(i, n, idx, float(c.x_start[idx[0]]), float(c.x_end[idx[-1]]), 0.0)
                 if _conflicts(sess, taken[n], settings.overhead_s):
                     continue
@@ -601,27 +612,33 @@ def plan_nights(
     placed, unplaced = _place(runs, win_x, settings, sky, constraints)
     blocks: list[Block] = []
     counters: Counter[tuple[int, int]] = Counter()
-    for s_no, sess in enumerate(sorted(placed, key=lambda s: (s.target_i, s.x0))):
+    sessions_seen: Counter[tuple[int, int]] = Counter()
+    per_target: dict[int, tuple[list[int], list[tuple[str, str, str]]]] = {}
+    for sess in sorted(placed, key=lambda s: (s.target_i, s.x0)):
         run = runs[sess.target_i]
         label = win_x[sess.night_i][0]
         slug = f"{_slug(run.target.name)}-{label.replace('-', '')}"
+        js, labels = per_target.setdefault(sess.target_i, ([], []))
+        sessions_seen[(sess.target_i, sess.night_i)] += 1
+        session_id = f"{slug}-S{sessions_seen[(sess.target_i, sess.night_i)]:02d}"
         for j in sess.idx:
             counters[(sess.target_i, sess.night_i)] += 1
-            blocks.append(
-                _make_block(
-                    run,
-                    j,
-                    site=site,
-                    sky=sky,
-                    i=sess.target_i,
-                    origin=origin,
-                    night=label,
-                    block_id=f"{slug}-{counters[(sess.target_i, sess.night_i)]:02d}",
-                    session_id=f"{slug}-S{s_no + 1:02d}",
-                    settings=settings,
-                    constraints=constraints,
-                )
-            )
+            js.append(j)
+            block_id = f"{slug}-{counters[(sess.target_i, sess.night_i)]:02d}"
+            labels.append((label, block_id, session_id))
+    location = site.location
+    for i, (js, labels) in per_target.items():
+        blocks += _make_blocks(
+            runs[i],
+            np.asarray(js, dtype=np.int64),
+            labels,
+            site=site,
+            location=location,
+            sky=sky,
+            i=i,
+            origin=origin,
+            settings=settings,
+        )
     if mode.label == "fixed-u-pairs":
         blocks, more = _pair_blocks(blocks, runs, site, settings)
         unplaced += more
