@@ -78,3 +78,58 @@ def test_errors_are_one_line_without_traceback(tmp_path: Path) -> None:
     proc = _run(["plan", HM, "--site", "atlantis", "--night", "2040-02-15"])
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
     assert "known sites: Paranal" in " ".join(proc.stderr.split())
+
+
+def test_site_lonlat_and_sites_file(tmp_path: Path) -> None:
+    # Paranal by coordinates gives the same blocks as by name (zone only changes local times).
+    by_name = CliRunner().invoke(app, [*BASE, "--format", "json"])
+    lonlat = [
+        "plan",
+        HM,
+        "--site-lonlat",
+        "-70.4042,-24.6272,2635",
+        "--night",
+        "2040-02-15",
+        "--format",
+        "json",
+    ]
+    by_coords = CliRunner().invoke(app, lonlat)
+    assert by_coords.exit_code == 0, by_coords.output
+    a, b = json.loads(by_name.stdout), json.loads(by_coords.stdout)
+    assert [r["t_mid_utc"] for r in a] == [r["t_mid_utc"] for r in b]
+    sites = tmp_path / "sites.yaml"
+    sites.write_text(
+        "sites:\n  - name: My Dome\n    lon_deg: -70.4042\n    lat_deg: -24.6272\n"
+        "    height_m: 2635\n    timezone: America/Santiago\n"
+    )
+    mine = CliRunner().invoke(
+        app,
+        [
+            "plan",
+            HM,
+            "--site",
+            "my dome",
+            "--sites-file",
+            str(sites),
+            "--night",
+            "2040-02-15",
+            "--format",
+            "json",
+        ],
+    )
+    assert mine.exit_code == 0, mine.output
+    assert [r["t_mid_utc"] for r in json.loads(mine.stdout)] == [r["t_mid_utc"] for r in a]
+
+
+def test_night_chart_axes() -> None:
+    from datetime import date
+
+    from ucbplan.observing.nightplot import plot_night
+    from ucbplan.observing.sites import get_site
+    from ucbplan.target import load_target
+
+    fig = plot_night([load_target(Path(HM))], get_site("paranal"), date(2040, 2, 15), [], 2.0)
+    ax = fig.axes[0]
+    assert ax.get_ylabel() == "altitude [deg]"
+    assert ax.get_xlabel().startswith("UTC [hh:mm]")
+    assert {t.get_text() for t in ax.get_legend().get_texts()} >= {"HM Cnc", "Moon", "airmass 2"}

@@ -66,8 +66,10 @@ def _print_night(blocks: list[Any], night: str, site: Any) -> None:
             "Moon [deg]",
             "Λ_K",
             "π-mode alt. UTC",
+            *(["pair: Δκ_LISA"] if any(b.pair_id for b in blocks) else []),
         ],
     )
+    paired = any(b.pair_id for b in blocks)
     for b in blocks:
         table.add_row(
             escape(b.target),
@@ -81,6 +83,7 @@ def _print_night(blocks: list[Any], night: str, site: Any) -> None:
             f"{b.moon_sep_deg:.0f}",
             f"{b.lambda_k:.4f}",
             b.t_alt_utc.iso[11:21] if b.t_alt_utc is not None else "",
+            *([f"{escape(b.pair_id)}: {b.delta_kappa:+.2e}"] if paired else []),
         )
     err_console.print(table)
 
@@ -210,11 +213,13 @@ def _plan(
     result = plan_nights(loaded, the_site, dates, settings)
     for w in result.warnings:
         err_console.print(f"[yellow]warning:[/] {escape(w)}", soft_wrap=True)
+    grouped: dict[tuple[str, str], list[str]] = {}
     for miss in result.unplaced:
+        grouped.setdefault((miss.target, miss.reason), []).append(miss.night)
+    for (name, reason), when in grouped.items():
+        span = when[0] if len(when) == 1 else f"{len(when)} nights {when[0]}..{when[-1]}"
         err_console.print(
-            f"[yellow]not placed:[/] {escape(miss.target)} night {miss.night}: "
-            f"{escape(miss.reason)}",
-            soft_wrap=True,
+            f"[yellow]not placed:[/] {escape(name)} ({span}): {escape(reason)}", soft_wrap=True
         )
     if not result.blocks:
         reasons = "; ".join(f"{m.target} {m.night}: {m.reason}" for m in result.unplaced)
