@@ -133,3 +133,35 @@ def test_night_chart_axes() -> None:
     assert ax.get_ylabel() == "altitude [deg]"
     assert ax.get_xlabel().startswith("UTC [hh:mm]")
     assert {t.get_text() for t in ax.get_legend().get_texts()} >= {"HM Cnc", "Moon", "airmass 2"}
+
+
+def test_priority_option_orders_the_schedule() -> None:
+    fid = str(REPO / "catalogs" / "fiducial-eccentric.yaml")
+    args = [
+        "plan",
+        HM,
+        fid,
+        "--site",
+        "paranal",
+        "--night",
+        "2040-02-15",
+        "--format",
+        "json",
+        "--overhead",
+        "7200",
+    ]
+    # With a 2-h overhead the two transits (~02:13 and ~03:06 UTC) cannot both be used: HM Cnc
+    # (listed first) gets its transit at equal priority, the fiducial source when boosted.
+    base = json.loads(CliRunner().invoke(app, args).stdout)
+    boosted = json.loads(
+        CliRunner().invoke(app, [*args, "--priority", "Fiducial eccentric dWD=5"]).stdout
+    )
+
+    def best(rows: list[dict], name: str) -> float:
+        return min(r["airmass"] for r in rows if r["target"] == name)
+
+    # Measured: fiducial 1.203 -> 1.168 (its transit), HM Cnc 1.305 (transit) -> 1.379.
+    assert best(boosted, "Fiducial eccentric dWD") < best(base, "Fiducial eccentric dWD") - 0.02
+    assert best(boosted, "HM Cnc") > best(base, "HM Cnc") + 0.05
+    bad = CliRunner().invoke(app, [*args, "--priority", "nobody=3"])
+    assert "no target named 'nobody'" in str(bad.exception)

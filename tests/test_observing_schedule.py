@@ -168,6 +168,15 @@ def test_polar_day_site(hm: Target) -> None:
     assert res.unplaced[0].reason.startswith("no nautical night: the Sun stays above -12 deg")
 
 
+def test_polar_night_site_plans_around_the_clock(hm: Target) -> None:
+    # June at the pole: the Sun never rises, so the night constraint never binds.
+    pole = Site("South Pole", 0.0, -89.99, 2835.0, "Antarctica/McMurdo")
+    res = plan_nights([replace(hm, dec_deg=-60.0)], pole, [date(2040, 6, 20)], PlanSettings())
+    assert len(res.blocks) == 2 and res.unplaced == []
+    # At the pole the altitude is the declination: airmass = 1/sin(60 deg) = 1.1547.
+    assert res.blocks[0].airmass == pytest.approx(1.1547, abs=2e-3)
+
+
 def test_outside_t_valid(hm: Target) -> None:
     res = plan_nights([hm], get_site("paranal"), [date(2070, 2, 15)], PlanSettings())
     assert res.blocks == []

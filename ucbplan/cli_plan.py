@@ -40,6 +40,28 @@ def _night(text: str, n: int) -> list[date]:
     return [first + timedelta(days=k) for k in range(n)]
 
 
+def _with_priorities(targets: list[Any], items: list[str]) -> list[Any]:
+    from dataclasses import replace
+
+    values: dict[str, float] = {}
+    for item in items:
+        name, sep, value = item.rpartition("=")
+        try:
+            values[name.strip().lower()] = float(value)
+        except ValueError:
+            name = ""
+        if not sep or not name:
+            raise UcbplanError(f"--priority: expected NAME=NUMBER, got {item!r}")
+    known = {t.name.lower() for t in targets}
+    unknown = sorted(set(values) - known)
+    if unknown:
+        raise UcbplanError(
+            f"--priority: no target named {unknown[0]!r}; targets: "
+            + ", ".join(t.name for t in targets)
+        )
+    return [replace(t, priority=values.get(t.name.lower(), t.priority)) for t in targets]
+
+
 def _format(fmt: str, output: Path | None) -> str:
     fmt = fmt.lower()
     if fmt not in ("table", *_MACHINE):
@@ -137,6 +159,9 @@ def plan(
         300.0, "--overhead", help="Slew + acquisition before each session [s]."
     ),
     sessions: int = typer.Option(1, "--sessions", help="Sessions per target and night."),
+    priority: list[str] = typer.Option(
+        [], "--priority", help="NAME=P overrides a target file's priority (higher first)."
+    ),
     output: Path | None = typer.Option(None, "-o", "--output", help="Write the blocks table."),
     fmt: str = typer.Option("table", "--format", help="table | ecsv | csv | json"),
     plot: Path | None = typer.Option(None, "--plot", help="Night chart PNG (first night)."),
@@ -173,6 +198,7 @@ def _plan(
     max_bin_fraction: float | None,
     overhead: float,
     sessions: int,
+    priority: list[str],
     output: Path | None,
     fmt: str,
     plot: Path | None,
@@ -193,7 +219,7 @@ def _plan(
         raise UcbplanError(f"--sessions must be >= 1, got {sessions}")
     the_site = _site(site, site_lonlat, sites_file)
     dates = _night(night, nights)
-    loaded = [load_target(p) for p in targets]
+    loaded = _with_priorities([load_target(p) for p in targets], priority)
     settings = PlanSettings(
         mode=mode,
         twilight=twilight,
