@@ -21,6 +21,7 @@ All lines share one orbital phase: theta_p = (n/2) theta_2 + s wdot t with s = 0
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -137,6 +138,32 @@ def line_amplitudes(
     return h
 
 
+#: Most Taylor terms of the walker-dependent link phase (enough for |beta delay| <= 1.5 rad).
+_K_MAX = 24
+
+
+def _taylor_terms(x: float) -> int:
+    """Smallest K >= 2 with x^K / K! < 1e-10 (relative truncation error of the link phase)."""
+    term, k = 1.0, 0
+    while term >= 1e-10 or k < 2:
+        k += 1
+        term *= x / k
+        if k >= _K_MAX:
+            raise ValueError(
+                f"link phase correction {x:.3g} rad too large for the Taylor expansion; "
+                "the source is outside the targeted prior (|f - f_c| or fdot too large)"
+            )
+    return k
+
+
+def _cis(x: NDArray[np.float64]) -> NDArray[np.complex128]:
+    """exp(i x) for real x (cos/sin written into a complex buffer; faster than np.exp(1j x))."""
+    out = np.empty(x.shape, dtype=complex)
+    np.cos(x, out=out.real)
+    np.sin(x, out=out.imag)
+    return out
+
+
 class FourLineModel:
     """TDI A, E of the four-line source in fixed heterodyned bands (one per harmonic).
 
@@ -153,8 +180,12 @@ class FourLineModel:
     Notes
     -----
     Injection and templates must use the same N and band centres (SCIENCE.md "Waveform").
-    The link delay factors inside the slow envelopes use the band-centre frequency (phase error
-    <= 2 pi (N/2T) 3L/c ~ 3e-4 rad at the band edge); the (1 - D^2) factor is applied per bin.
+    Approximations (all verified against the brute-force time-domain TDI in the tests):
+    theta(t - delay) = theta(t) - 2 pi f_p(t) delay (neglects pi fdot delay^2 < 1e-8 rad);
+    the TDI link delays inside the slow envelopes use the band-centre frequency (phase error
+    <= 2 pi (N/2T) 3L/c ~ 3e-4 rad at the band edge; the (1 - D^2) factor is exact per bin);
+    the walker-dependent part of the link phases, exp(-i beta (d_j + L)), is summed as a Taylor
+    series with source-independent spacecraft moments (truncation < 1e-10 relative).
     """
 
     def __init__(
@@ -183,8 +214,39 @@ class FourLineModel:
                     for pol, proj in enumerate((grid.proj_plus, grid.proj_cross)):
                         emit[b, 2 * ch + pol, s] += w[ch, li] * proj[li]
                         recv[b, 2 * ch + pol, r] += w[ch, li] * proj[li]
+        # Every link factor exp(-2 pi i f_p(t) delay) is split into a fixed part at the reference
+        # frequency (f = n f_c / 2) and a walker-dependent part exp(-i beta_p(t) delay) with
+        # beta_p = n pi (f(t) - f_c) + s wdot, the same for all spacecraft. Its Taylor series in
+        # beta has moments sum_j delay_j^k (weights)_j that do not depend on the source, so the
+        # sum over spacecraft is done once here: MOM[b, k] = (-i)^k / k! sum_j
+        # [(d_j + L)^k emit_j - d_j^k recv_j] (emitters carry the arm delay L).
+        self.f_center_hz = float(f_center_hz)
+        self._f_het = round(f_center_hz * t_obs) / (2.0 * t_obs)  # c1 heterodyne [Hz]
+        d = grid.delay_s  # (3, M)
+        moments = np.empty((len(self.harmonics), _K_MAX, 4, grid.t_s.size), dtype=complex)
+        for b, h in enumerate(self.harmonics):
+            dop0 = np.exp(-1j * np.pi * h * f_center_hz * d)  # (3, M)
+            arm0 = np.exp(-1j * np.pi * h * f_center_hz * grid.arm_s)
+            e_w = emit[b] * (dop0 * arm0)[None]
+            r_w = recv[b] * dop0[None]
+            for order in range(_K_MAX):
+                fac = (-1j) ** order / math.factorial(order)
+                moments[b, order] = fac * (
+                    np.einsum("cjm,jm->cm", e_w, (d + grid.arm_s) ** order)
+                    - np.einsum("cjm,jm->cm", r_w, d**order)
+                )
+        # (band, pol, K * channel * M) for one matmul with the (W, pol) amplitudes
+        self._moments = np.ascontiguousarray(
+            moments.reshape(len(self.harmonics), _K_MAX, 2, 2, -1).transpose(0, 3, 1, 2, 4)
+        )
+        self._delay_max = float(np.max(np.abs(d)) + grid.arm_s)
         self._emit = emit
         self._recv = recv
+        offs = [
+            h * round(f_center_hz * t_obs) / 2.0 - q
+            for h, q in zip(self.harmonics, self.band_bins, strict=True)
+        ]
+        self._band_rot = np.exp(2j * np.pi * np.outer(offs, grid.t_s) / t_obs)  # (n_bands, M)
 
     @property
     def n_bands(self) -> int:
@@ -235,43 +297,48 @@ class FourLineModel:
         amp, f0, fd, ci, ps, ph, et, ka, wd, fdd = (a.ravel() for a in arrs)
         g = self.grid
         t = g.t_s[None, :]
-        t_obs = g.t_obs_s
         n_walk = f0.size
         h = line_amplitudes(amp, ci, et, ka)  # (4, 2, W)
         c2, s2 = np.cos(2.0 * ps), np.sin(2.0 * ps)
         hp = h[:, 0] * c2 - h[:, 1] * s2  # (4, W)
         hx = h[:, 0] * s2 + h[:, 1] * c2
-        f_t = f0[:, None] + fd[:, None] * t + 0.5 * fdd[:, None] * t * t  # (W, M)
-        dop = np.exp(-1j * np.pi * f_t[:, None, :] * g.delay_s[None])  # (W, 3, M)
-        arm = np.exp(-1j * np.pi * f_t * g.arm_s)  # (W, M)
-        chirp = np.pi * (fd[:, None] * t * t + fdd[:, None] * t**3 / 3.0)  # (W, M)
-        out = np.zeros((n_walk, self.n_bands, 2, g.n), dtype=complex)
+        # Orbital-phase carrier c1 = exp(i theta_2 / 2) heterodyned at f_het; line n is c1^n
+        # times fixed band rotations and exp(i s wdot t) (all lines share one orbital phase).
+        df_t = (f0 - self.f_center_hz)[:, None] + fd[:, None] * t + 0.5 * fdd[:, None] * t * t
+        chirp = np.pi * (fd[:, None] * t * t + fdd[:, None] * t**3 / 3.0)
+        c1 = _cis(
+            0.5 * ph[:, None] + 2.0 * np.pi * (0.5 * f0 - self._f_het)[:, None] * t + 0.5 * chirp
+        )
+        powers = {1: c1}
+        if max(self.harmonics) >= 2:
+            powers[2] = c1 * c1
+        if max(self.harmonics) >= 3:
+            powers[3] = powers[2] * c1
+        shifted = any(LINES[li].shift for li, _ in self.lines)
+        apsis = _cis(wd[:, None] * t) if shifted else np.ones((1, 1), dtype=complex)
+        # Taylor order for exp(-i beta delay): error (beta delay)^K / K! < 1e-10.
+        beta_max = np.pi * 3.0 * float(np.max(np.abs(df_t))) + float(np.max(np.abs(wd)))
+        n_terms = _taylor_terms(beta_max * self._delay_max)
         slow = np.zeros((n_walk, self.n_bands, 2, t.size), dtype=complex)
         for li, b in self.lines:
             line = LINES[li]
             n_h, s = line.harmonic, line.shift
-            fb = self.band_bins[b] / t_obs
-            f_off = 0.5 * n_h * f0 + s * wd / (2.0 * np.pi) - fb  # (W,)
-            het = 0.5 * n_h * ph[:, None] + 2.0 * np.pi * f_off[:, None] * t + 0.5 * n_h * chirp
-            carrier = np.exp(1j * het)  # (W, M)
-            if n_h == 2:
-                dop_p, arm_p = dop * dop, arm * arm
-            elif n_h == 1:
-                dop_p, arm_p = dop, arm
-            else:
-                dop_p, arm_p = dop * dop * dop, arm * arm * arm
-            if s != 0:
-                dop_p = dop_p * np.exp(-1j * s * wd[:, None, None] * g.delay_s[None])
-                arm_p = arm_p * np.exp(-1j * s * wd * g.arm_s)[:, None]
-            # K[w, (ch,pol), m] = sum_j dop_p[w,j,m] (arm_p emit - recv)[ (ch,pol), j, m]
-            k_e = np.einsum("wjm,cjm->wcm", dop_p, self._emit[b])
-            k_r = np.einsum("wjm,cjm->wcm", dop_p, self._recv[b])
-            kk = arm_p[:, None, :] * k_e - k_r  # (W, 4, M)
-            kk *= carrier[:, None, :]
-            slow[:, b, 0] += hp[li][:, None] * kk[:, 0] + hx[li][:, None] * kk[:, 1]
-            slow[:, b, 1] += hp[li][:, None] * kk[:, 2] + hx[li][:, None] * kk[:, 3]
+            carrier = powers[n_h] * self._band_rot[b][None, :]
+            if s == 1:
+                carrier = carrier * apsis
+            elif s == -1:
+                carrier = carrier * np.conj(apsis)
+            mom = self._moments[b]  # (pol, K, ch, M)
+            beta = ((n_h * np.pi) * df_t + (s * wd)[:, None])[:, None, None, :]  # (W,1,1,M)
+            acc = mom[:, n_terms - 1] * beta + mom[:, n_terms - 2]  # (W, pol, ch, M)
+            for k in range(n_terms - 3, -1, -1):
+                acc *= beta
+                acc += mom[:, k]
+            acc = hp[li][:, None, None] * acc[:, 0] + hx[li][:, None, None] * acc[:, 1]
+            slow[:, b] += acc * carrier[:, None, :]
+        out = np.empty((n_walk, self.n_bands, 2, g.n), dtype=complex)
         for b in range(self.n_bands):
-            out[:, b] = band_transform(slow[:, b], t_obs, self.freqs_hz[b], g.arm_s)
+            out[:, b] = band_transform(slow[:, b], g.t_obs_s, self.freqs_hz[b], g.arm_s)
         return out
 
     def bands_for(self, p: SourceParams) -> NDArray[np.complex128]:
