@@ -7,6 +7,8 @@ import pytest
 from astropy import units as u
 from astropy.coordinates import SkyCoord
 from astropy.time import Time, TimeDelta
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from ucbplan.cliutil import configure_offline
 from ucbplan.observing.sites import get_site
@@ -92,3 +94,21 @@ def test_coverage_warnings_for_2040_and_none_for_2026() -> None:
     assert "IERS-A" in warns[0] and "arcsec" in warns[0]
     assert "leap-second" in warns[1] and "1 s" in warns[1]
     assert coverage_warnings(Time("2026-01-01"), Time("2026-01-02")) == []
+
+
+@settings(max_examples=12, deadline=None)
+@given(
+    day=st.floats(0.0, 15 * 365.25),
+    ra=st.floats(0.0, 360.0),
+    dec=st.floats(-89.0, 89.0),
+    site_name=st.sampled_from(["paranal", "mauna kea", "sutherland", "calar alto"]),
+)
+def test_round_trip_property(day: float, ra: float, dec: float, site_name: str) -> None:
+    # Any epoch 2030-2045, any sky position, several sites: TDB -> site UTC -> TDB within 1 us.
+    configure_offline()
+    loc = get_site(site_name).location
+    coord = SkyCoord(ra * u.deg, dec * u.deg)
+    with quiet_erfa():
+        t_star = Time("2030-01-01", scale="tdb") + TimeDelta(day * u.d)
+    back = site_utc_to_bary_tdb(bary_tdb_to_site_utc(t_star, coord, loc), coord, loc)
+    assert abs((back - t_star).to_value(u.s)) < 1e-6
