@@ -138,6 +138,9 @@ def line_amplitudes(
     return h
 
 
+#: Walkers per internal block of :meth:`FourLineModel.bands` (cache blocking).
+_CHUNK = 16
+
 #: Most Taylor terms of the walker-dependent link phase (enough for |beta delay| <= 1.5 rad).
 _K_MAX = 24
 
@@ -294,7 +297,16 @@ class FourLineModel:
                 )
             )
         )
-        amp, f0, fd, ci, ps, ph, et, ka, wd, fdd = (a.ravel() for a in arrs)
+        flat = [a.ravel() for a in arrs]
+        n_walk = flat[0].size
+        if n_walk > _CHUNK:  # cache blocking: working set of ~16 walkers stays in L2
+            return np.concatenate(
+                [self._bands([a[i : i + _CHUNK] for a in flat]) for i in range(0, n_walk, _CHUNK)]
+            )
+        return self._bands(flat)
+
+    def _bands(self, flat: list[NDArray[np.float64]]) -> NDArray[np.complex128]:
+        amp, f0, fd, ci, ps, ph, et, ka, wd, fdd = flat
         g = self.grid
         t = g.t_s[None, :]
         n_walk = f0.size
