@@ -159,3 +159,28 @@ def test_bad_anchor_and_window(hm_cnc_path: Path) -> None:
     assert proc.returncode == 2 and "unknown anchor" in proc.stderr
     proc = _run("ephemeris", str(hm_cnc_path), "--start", "2040-01-02", "--end", "2040-01-01")
     assert proc.returncode == 2 and "must be after" in proc.stderr
+
+
+def test_usage_error_has_no_traceback(hm_cnc_path: Path) -> None:
+    """A missing required option is a usage message (exit 2), never a traceback."""
+    proc = _run("plan", str(hm_cnc_path), "--site", "paranal")
+    assert proc.returncode == 2
+    assert "Traceback" not in proc.stderr
+    assert "--night" in proc.stderr
+
+
+def test_all_commands_registered() -> None:
+    res = runner.invoke(app, ["--help"])
+    for cmd in (
+        "validate",
+        "ephemeris",
+        "horizon",
+        "plan",
+        "export",
+        "feasibility",
+        "reduce",
+        "simulate",
+        "fisher",
+        "waveform",
+    ):
+        assert cmd in res.stdout
