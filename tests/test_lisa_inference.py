@@ -205,3 +205,17 @@ def test_cli_waveform_fisher_and_short_simulate(tmp_path: Path) -> None:
     assert (tmp_path / "post.chain.npz").exists()
     r = runner.invoke(app, [*args, "--seed", "3", "--walkers", "18"])
     assert r.exception is not None  # refuses to overwrite without --overwrite
+
+
+def test_fisher_forecast_horizons_near_table4(problem: tuple) -> None:
+    """Closed loop: the Fisher target through ucbplan.forecast gives quadrature horizons within
+    10 % of Table 4 (3194 d, 4844 d; we get +2 %), conjunction alpha = 0.5 within 15 % (390 d;
+    the conjunction horizon is the most sensitive to the eta/kappa sigma's, 5 % below Table 3's)."""
+    from ucbplan.forecast import horizon_table
+
+    target, _, model, _like, theta0, cov = problem
+    fis = post.gaussian_target(target, theta0, cov, model.grid.t_obs_s)
+    rows = {(r.anchor, r.alpha): r.t_valid_days for r in horizon_table(fis, 15.0, 1297.9)}
+    assert rows[("quadrature", 0.5)] == pytest.approx(3194, rel=0.10)
+    assert rows[("quadrature", 1.0)] == pytest.approx(4844, rel=0.10)
+    assert rows[("conjunction", 0.5)] == pytest.approx(390, rel=0.15)
