@@ -182,13 +182,17 @@ def test_cli_waveform_fisher_and_short_simulate(tmp_path: Path) -> None:
 
     runner = CliRunner()
     lines = tmp_path / "lines.ecsv"
-    r = runner.invoke(app, ["waveform", str(INJECTION), "-o", str(lines), "--n-bins", "64"])
+    asd = tmp_path / "asd.png"
+    r = runner.invoke(
+        app, ["waveform", str(INJECTION), "-o", str(lines), "--n-bins", "64", "--plot", str(asd)]
+    )
     assert r.exit_code == 0, r.output
     tab = Table.read(lines, format="ascii.ecsv")
     for col in ("band", "freq_hz", "A_re", "A_im", "E_re", "E_im"):
         assert col in tab.colnames
     assert "exp(-2 pi i f t)" in tab.meta["convention"]
     assert sorted(set(tab["band"])) == [1, 2, 3]
+    assert asd.stat().st_size > 10_000
 
     fis = tmp_path / "fisher.yaml"
     r = runner.invoke(app, ["fisher", str(INJECTION), "-o", str(fis)])
@@ -198,8 +202,12 @@ def test_cli_waveform_fisher_and_short_simulate(tmp_path: Path) -> None:
 
     out = tmp_path / "post.yaml"
     args = ["simulate", str(INJECTION), "-o", str(out), "--n-bins", "64", "--steps", "20"]
-    r = runner.invoke(app, [*args, "--seed", "3", "--walkers", "18", "--no-noise"])
+    r = runner.invoke(
+        app, [*args, "--seed", "3", "--walkers", "18", "--no-noise", "--plots", str(tmp_path)]
+    )
     assert r.exit_code == 0, r.output
+    for name in ("corner_start.png", "corner_midpoint.png", "corner_e_omega.png"):
+        assert (tmp_path / name).exists()
     t = load_target(out)
     assert t.samples is not None and t.samples.exists()
     assert (tmp_path / "post.chain.npz").exists()

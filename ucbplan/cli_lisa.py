@@ -228,7 +228,7 @@ def simulate(
     mean = {n: float(np.mean(cols[n])) for n in names}
     _summary(f"{out_target.name}: posterior vs injection", names, inj, mean, sig, fsig)
     if plots is not None:
-        _corner_plots(plots, flat, theta0, cols, inj, res.names, overwrite)
+        _corner_plots(plots, flat, theta0, cols, inj, res.names, t_obs_s, overwrite)
     err_console.print(f"wrote {output}, {samples_path.name}, {chain_path.name}")
 
 
@@ -239,6 +239,7 @@ def _corner_plots(
     cols: dict,
     inj: dict,
     names: tuple[str, ...],
+    t_obs_s: float,
     overwrite: bool,
 ) -> None:
     from ucbplan.lisa.plots import corner_plot
@@ -248,12 +249,16 @@ def _corner_plots(
         check_output_path(p, overwrite)
     corner_plot(flat, [_LABELS[n] for n in names], list(theta0), paths[0], "start epoch t_0")
     mid = ["fdot", "f_gw", "phase"] + (["eta", "kappa", "omega_dot"] if "eta" in cols else [])
-    t_obs_bins = 1.0
-    data = np.stack([cols[n] - (inj[n] if n == "f_gw" else 0.0) for n in mid], axis=1)
-    labels = [r"$\dot f$ [Hz/s]", r"$\Delta f_{\rm mid}$ [Hz]", r"$\phi_{\rm mid}$ [rad]"]
+    # as the paper's midpoint figure: the frequency offset in Fourier bins, Delta f_mid T_obs
+    data = np.stack([(cols[n] - inj[n]) * t_obs_s if n == "f_gw" else cols[n] for n in mid], axis=1)
+    labels = [
+        r"$\dot f$ [Hz/s]",
+        r"$\Delta f_{\rm mid} T_{\rm obs}$ [bins]",
+        r"$\phi_{\rm mid}$ [rad]",
+    ]
     labels += [r"$\eta_{\rm mid}$", r"$\kappa_{\rm mid}$", r"$\dot\omega$ [rad/s]"][: len(mid) - 3]
     truths = [inj[n] if n != "f_gw" else 0.0 for n in mid]
-    corner_plot(data * t_obs_bins, labels, truths, paths[1], "midpoint t_mid")
+    corner_plot(data, labels, truths, paths[1], "midpoint t_mid")
     if "eta" in names:
         i_e, i_k, i_z = names.index("eta"), names.index("kappa"), names.index("z_omega")
         e = np.hypot(flat[:, i_e], flat[:, i_k])

@@ -87,15 +87,16 @@ def asd_plot(
                 ax.axvline(fl * 1e3, color="r", ls="--", lw=0.7)
                 ax.annotate(
                     name,
-                    (fl * 1e3, 1.0),
+                    (fl * 1e3, 0.97),
                     xycoords=("data", "axes fraction"),
                     fontsize=7,
-                    ha="center",
-                    va="bottom",
+                    ha="left",
+                    va="top",
+                    color="r",
                 )
         ax.set_ylabel("ASD [1/√Hz]")
         ax.set_title(f"n = {harmonics[b]} band ({freqs_hz.shape[1]} bins)", fontsize=9)
-        ax.legend(fontsize=7, loc="upper right")
+        ax.legend(fontsize=7, loc="lower right")
     axes[-1, 0].set_xlabel("frequency [mHz]")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
