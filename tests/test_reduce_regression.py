@@ -9,13 +9,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from ucbplan.observing.smearing import lambda_k, lambda_kappa
 from ucbplan.reduce.regression import (
     OUTLIER_NSIGMA,
     binned_design,
     fit_component,
-    lambda_k,
     lambda_k_to_x,
-    lambda_kappa,
     paper_recipe,
     phase_sensitivity,
     two_spectrum_solution,
@@ -32,13 +31,13 @@ def test_lambda_factors_match_science_md() -> None:
 
     Tolerance 5e-5: the printed precision of the reference values.
     """
-    assert float(lambda_k(NBAR, P_MEAN / 8)) == pytest.approx(0.97450, abs=5e-5)
-    assert 1.0 / float(lambda_k(NBAR, P_MEAN / 3)) == pytest.approx(1.2092, abs=5e-5)
-    assert float(lambda_kappa(NBAR, P_MEAN / 3)) == pytest.approx(0.4135, abs=5e-5)
+    assert float(lambda_k(P_MEAN / 8, NBAR)) == pytest.approx(0.97450, abs=5e-5)
+    assert 1.0 / float(lambda_k(P_MEAN / 3, NBAR)) == pytest.approx(1.2092, abs=5e-5)
+    assert float(lambda_kappa(P_MEAN / 3, NBAR)) == pytest.approx(0.4135, abs=5e-5)
     # the paper's "Λ_K = sinc(π/8) = 0.974" (Sec. 5) and "Λ_K ≃ 0.83" at P/3 (Appendix B)
-    assert float(lambda_k(NBAR, P_MEAN / 8)) == pytest.approx(0.974, abs=5e-4)
-    assert float(lambda_k(NBAR, P_MEAN / 3)) == pytest.approx(0.83, abs=5e-3)
-    assert float(lambda_k(NBAR, 0.0)) == 1.0
+    assert float(lambda_k(P_MEAN / 8, NBAR)) == pytest.approx(0.974, abs=5e-4)
+    assert float(lambda_k(P_MEAN / 3, NBAR)) == pytest.approx(0.83, abs=5e-3)
+    assert float(lambda_k(0.0, NBAR)) == 1.0
 
 
 def test_lambda_k_matches_brute_force_average() -> None:
@@ -46,9 +45,9 @@ def test_lambda_k_matches_brute_force_average() -> None:
     dt = P_MEAN / 5
     t = np.linspace(-dt / 2, dt / 2, 200001)
     brute = np.trapezoid(np.cos(NBAR * t), t) / dt
-    assert float(lambda_k(NBAR, dt)) == pytest.approx(brute, abs=1e-10)
+    assert float(lambda_k(dt, NBAR)) == pytest.approx(brute, abs=1e-10)
     brute2 = np.trapezoid(np.cos(2 * NBAR * t), t) / dt
-    assert float(lambda_kappa(NBAR, dt)) == pytest.approx(brute2, abs=1e-10)
+    assert float(lambda_kappa(dt, NBAR)) == pytest.approx(brute2, abs=1e-10)
 
 
 @settings(max_examples=50, deadline=None)
@@ -96,9 +95,9 @@ def test_paper_sigma_k_480_spectra() -> None:
     (Appendix C, "a factor of √2 better").
     """
     u = (np.arange(480) % 8 + 0.5) * math.pi / 4
-    G = binned_design(u, 0.0, 0.0, lambda_k(NBAR, P_MEAN / 8), 1.0)
+    G = binned_design(u, 0.0, 0.0, lambda_k(P_MEAN / 8, NBAR), 1.0)
     fit = fit_component(G, 100.0 + 585.3 * G, np.full(480, 15.0), star=1)
-    assert fit.line.sigma_slope * float(lambda_k(NBAR, P_MEAN / 8)) == pytest.approx(
+    assert fit.line.sigma_slope * float(lambda_k(P_MEAN / 8, NBAR)) == pytest.approx(
         15 * math.sqrt(2 / 480), rel=1e-12
     )
     assert 15 * math.sqrt(2 / 480) == pytest.approx(0.97, abs=0.005)
@@ -136,7 +135,7 @@ def test_paper_recipe_equals_design_fit_for_common_window() -> None:
     the two estimators agree to 2e²K (≈ 0.1 km/s ≪ σ).
     """
     eta, kappa = 0.0068, 0.0068
-    lk, lkap = float(lambda_k(NBAR, P_MEAN / 3)), float(lambda_kappa(NBAR, P_MEAN / 3))
+    lk, lkap = float(lambda_k(P_MEAN / 3, NBAR)), float(lambda_kappa(P_MEAN / 3, NBAR))
     u = (np.arange(200) % 2) * math.pi
     phi = u - 2 * kappa * np.sin(u) + 2 * eta * np.cos(u)
     G = binned_design(phi, eta, kappa, lk, lkap)

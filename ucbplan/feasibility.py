@@ -134,10 +134,11 @@ def omega_dot_gr(m_tot_msun: float, period_s: float, e: float = 0.0) -> float:
     -----
     Eq. omega_dot_GR.
     """
+    from ucbplan.reduce.masses import omega_dot_gr as _omega_dot_gr
+
     _check_positive(m_tot_msun=m_tot_msun, period_s=period_s)
     _check_ecc(e)
-    gm_c3 = _G * m_tot_msun * _MSUN / _C**3
-    return 3.0 / (1.0 - e * e) * (2.0 * math.pi / period_s) ** (5.0 / 3.0) * gm_c3 ** (2.0 / 3.0)
+    return float(_omega_dot_gr(m_tot_msun * _MSUN, period_s, e))
 
 
 def tidal_deformability(m_msun: float) -> float:

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
+from ucbplan.observing.smearing import lambda_k, lambda_kappa
 from ucbplan.params import PARAM_NAMES, PhaseParams
 from ucbplan.reduce import drifts as _drifts
 from ucbplan.reduce import masses as _masses
@@ -24,9 +25,7 @@ from ucbplan.reduce.regression import (
     WilsonFit,
     binned_design,
     fit_component,
-    lambda_k,
     lambda_k_to_x,
-    lambda_kappa,
     phase_sensitivity,
     wilson_fit,
 )
@@ -120,12 +119,12 @@ def window_factors(table: VelocityTable, f_hz: float) -> tuple[F64, F64]:
     """
     nbar = math.pi * f_hz
     w = table.window_s
-    lk = np.where(np.isfinite(w), lambda_k(nbar, np.nan_to_num(w)), table.lambda_k)
+    lk = np.where(np.isfinite(w), lambda_k(np.nan_to_num(w), nbar), table.lambda_k)
     x = np.zeros_like(lk)
     given = ~np.isfinite(w)
     if np.any(given):
         x[given] = lambda_k_to_x(table.lambda_k[given])
-    lkap = np.where(given, np.sinc(2.0 * x / np.pi), lambda_kappa(nbar, np.nan_to_num(w)))
+    lkap = np.where(given, np.sinc(2.0 * x / np.pi), lambda_kappa(np.nan_to_num(w), nbar))
     return np.asarray(lk, float), np.asarray(lkap, float)
 
 

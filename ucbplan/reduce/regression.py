@@ -33,9 +33,7 @@ __all__ = [
     "WilsonFit",
     "binned_design",
     "fit_component",
-    "lambda_k",
     "lambda_k_to_x",
-    "lambda_kappa",
     "paper_recipe",
     "phase_sensitivity",
     "two_spectrum_solution",
@@ -47,35 +45,6 @@ __all__ = [
 OUTLIER_NSIGMA = 4.0
 
 F64 = NDArray[np.float64]
-
-
-def lambda_k(nbar_rad_s: ArrayLike, dt_s: ArrayLike) -> F64:
-    """Finite-window attenuation of the fundamental, Λ_K = sin x / x with x = n̄_b Δt / 2.
-
-    Parameters
-    ----------
-    nbar_rad_s : array_like
-        Mean orbital angular frequency n̄_b = π f_GW [rad/s].
-    dt_s : array_like
-        Window width Δt_bin [s] (0 → 1).
-
-    Returns
-    -------
-    ndarray
-        Λ_K [1].
-
-    Notes
-    -----
-    Eq. Lambda_K. ``numpy.sinc`` is sin(πx)/(πx), hence the 1/π. Λ_K(P/8) = sinc(π/8) = 0.97450.
-    """
-    x = 0.5 * np.asarray(nbar_rad_s, dtype=np.float64) * np.asarray(dt_s, dtype=np.float64)
-    return np.asarray(np.sinc(x / np.pi), dtype=np.float64)
-
-
-def lambda_kappa(nbar_rad_s: ArrayLike, dt_s: ArrayLike) -> F64:
-    """Attenuation of the eccentricity (2Φ) terms, Λ_κ = sin 2x / 2x (Eq. Lambda_kappa)."""
-    x = np.asarray(nbar_rad_s, dtype=np.float64) * np.asarray(dt_s, dtype=np.float64)
-    return np.asarray(np.sinc(x / np.pi), dtype=np.float64)
 
 
 def lambda_k_to_x(lam: ArrayLike) -> F64:
