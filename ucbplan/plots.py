@@ -20,6 +20,22 @@ __all__ = ["horizon_plot"]
 DAY_S = 86400.0
 
 
+def _envelope(
+    days: np.ndarray, values: np.ndarray, omega_dot: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """Upper/lower envelope over one apsidal half-period (σ_u oscillates at 2ω̇ at an anchor)."""
+    if omega_dot == 0.0:
+        return days, values, None
+    width = math.pi / abs(omega_dot) / DAY_S
+    edges = np.arange(days[0], days[-1] + width, width)
+    idx = np.digitize(days, edges)
+    keep = np.unique(idx)
+    centres = np.array([days[idx == i].mean() for i in keep])
+    upper = np.array([values[idx == i].max() for i in keep])
+    lower = np.array([values[idx == i].min() for i in keep])
+    return centres, upper, lower
+
+
 def horizon_plot(
     target: Target, rows: Sequence[HorizonRow], path: Path, overwrite: bool = False
 ) -> None:
@@ -37,15 +53,26 @@ def horizon_plot(
     p, cov = target.params, target.covariance
     t_end = target.t_obs_s / 2
     longest = max([r.t_valid_days for r in rows] + [365.0])
-    days = np.linspace(-target.t_obs_s / DAY_S, 1.3 * longest, 4000)
+    days = np.linspace(-target.t_obs_s / DAY_S, 1.3 * longest, 20000)
     tau = t_end + days * DAY_S
     quad = np.maximum(anchor_sigma_u(p, cov, tau, 0.0), anchor_sigma_u(p, cov, tau, math.pi))
     conj = np.maximum(
         anchor_sigma_u(p, cov, tau, math.pi / 2), anchor_sigma_u(p, cov, tau, 3 * math.pi / 2)
     )
     fig, ax = plt.subplots(figsize=(8, 4.5), constrained_layout=True)
-    ax.semilogy(days, 1e3 * quad, color="k", lw=1.5, label="σ_u, quadrature anchor")
-    ax.semilogy(days, 1e3 * conj, color="0.5", lw=1.0, ls="--", label="σ_u, conjunction anchor")
+    for curve, color, ls, name in (
+        (quad, "k", "-", "quadrature"),
+        (conj, "0.5", "--", "conjunction"),
+    ):
+        days_c, upper, lower = _envelope(days, 1e3 * curve, p.omega_dot)
+        if lower is not None:
+            ax.fill_between(days_c, lower, upper, color=color, alpha=0.15, lw=0)
+        label = f"σ_u, {name} anchor" + (
+            " (upper envelope; band: apsidal oscillation)" if lower is not None else ""
+        )
+        ax.semilogy(
+            days_c, upper, color=color, ls=ls, lw=1.5 if name == "quadrature" else 1.0, label=label
+        )
     colors = {"conjunction": "tab:red", "quadrature": "tab:blue"}
     for r in rows:
         c = colors.get(r.anchor, "tab:green")

@@ -101,8 +101,9 @@ def plot_night(
     ax.set_ylabel("altitude [deg]")
     lim = ", ".join(f"{k} {v:g}°" for k, v in TWILIGHT_SUN_ALT_DEG.items())
     ax.set_title(
-        f"{site.name}, night of {label}: shading darkens as the Sun sets below 0°, {lim}; "
-        "coloured spans = blocks"
+        f"{site.name}, night of {label}\nshading darkens as the Sun sets below 0°, {lim}; "
+        "coloured spans = blocks",
+        fontsize="medium",
     )
     ax.legend(loc="upper right", fontsize="small")
     return fig
