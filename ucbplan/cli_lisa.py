@@ -84,32 +84,29 @@ _UNITS = {"phase": "rad", "f_gw": "Hz", "fdot": "Hz/s", "omega_dot": "rad/s", "p
 
 
 def _summary(
-    title: str, names: tuple[str, ...], inj: dict, mean: dict, sig: dict, fis: dict
+    title: str,
+    names: tuple[str, ...],
+    inj: dict,
+    sig: dict,
+    mean: dict | None = None,
+    fis: dict | None = None,
 ) -> None:
+    """Rich table on stderr: value (and posterior mean, Fisher σ when given) per parameter."""
     from rich.table import Table
 
+    cols = ["parameter (midpoint)", "unit", "injected" if mean is not None else "value"]
+    cols += ["estimate"] if mean is not None else []
+    cols += ["σ"] + (["Fisher σ", "σ/Fisher"] if fis is not None else [])
     tab = Table(title=title, title_justify="left")
-    for col in (
-        "parameter (midpoint)",
-        "unit",
-        "injected",
-        "estimate",
-        "σ",
-        "Fisher σ",
-        "σ/Fisher",
-    ):
-        tab.add_column(col, justify="right" if col != "parameter (midpoint)" else "left")
+    for col in cols:
+        tab.add_column(col, justify="left" if col == cols[0] else "right")
     for n in names:
-        ratio = sig[n] / fis[n] if fis.get(n) else float("nan")
-        tab.add_row(
-            n,
-            _UNITS.get(n, "1"),
-            f"{inj[n]:.10g}",
-            f"{mean[n]:.10g}",
-            f"{sig[n]:.4g}",
-            f"{fis.get(n, float('nan')):.4g}",
-            f"{ratio:.3f}",
-        )
+        row = [n, _UNITS.get(n, "1"), f"{inj[n]:.10g}"]
+        row += [f"{mean[n]:.10g}"] if mean is not None else []
+        row += [f"{sig[n]:.4g}"]
+        if fis is not None:
+            row += [f"{fis[n]:.4g}", f"{sig[n] / fis[n]:.3f}"]
+        tab.add_row(*row)
     err_console.print(tab)
 
 
@@ -226,7 +223,7 @@ def simulate(
     sig = {n: float(np.std(cols[n])) for n in names}
     fsig = {n: float(np.sqrt(fis.cov_matrix[i, i])) for i, n in enumerate(fis.cov_names)}
     mean = {n: float(np.mean(cols[n])) for n in names}
-    _summary(f"{out_target.name}: posterior vs injection", names, inj, mean, sig, fsig)
+    _summary(f"{out_target.name}: posterior vs injection", names, inj, sig, mean, fsig)
     if plots is not None:
         _corner_plots(plots, flat, theta0, cols, inj, res.names, t_obs_s, overwrite)
     err_console.print(f"wrote {output}, {samples_path.name}, {chain_path.name}")
@@ -305,7 +302,7 @@ def fisher(
     fis = dataclasses.replace(fis, name=f"{base.name} (Fisher forecast)")
     sig = {n: float(np.sqrt(fis.cov_matrix[i, i])) for i, n in enumerate(fis.cov_names)}
     mean = {n: float(getattr(fis.params, n, getattr(fis, n, np.nan))) for n in fis.cov_names}
-    _summary(f"{fis.name}: SNR {snr:.1f}", fis.cov_names, mean, mean, sig, sig)
+    _summary(f"{fis.name}: SNR {snr:.1f}", fis.cov_names, mean, sig)
     if output is not None:
         write_target(
             fis, output, overwrite=overwrite, header=f"ucbplan fisher: SNR {snr:.1f}, N={n_bins}"
