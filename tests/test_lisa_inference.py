@@ -213,6 +213,14 @@ def test_cli_waveform_fisher_and_short_simulate(tmp_path: Path) -> None:
     assert (tmp_path / "post.chain.npz").exists()
     r = runner.invoke(app, [*args, "--seed", "3", "--walkers", "18"])
     assert r.exception is not None  # refuses to overwrite without --overwrite
+    chain = tmp_path / "post.chain.npz"
+    resume = [*args[:-1], "10", "--walkers", "18", "--no-noise", "--resume", str(chain)]
+    r = runner.invoke(app, [*resume, "--seed", "3", "--overwrite"])
+    assert r.exit_code == 0, r.output
+    with np.load(chain) as z:
+        assert z["theta"].shape == (30, 18, 9)  # 20 saved + 10 new steps
+    r = runner.invoke(app, [*resume, "--seed", "4", "--overwrite"])
+    assert r.exception is not None and "seed" in str(r.exception)  # different data: refused
 
 
 def test_fisher_forecast_horizons_near_table4(problem: tuple) -> None:

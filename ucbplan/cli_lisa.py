@@ -128,6 +128,9 @@ def simulate(
     circular: bool = typer.Option(False, "--circular", help="Fit the 6-parameter circular model."),
     chain: Path | None = typer.Option(None, "--chain", help="Chain .npz (default: next to -o)."),
     plots: Path | None = typer.Option(None, "--plots", help="Folder for corner plots."),
+    resume: Path | None = typer.Option(
+        None, "--resume", help="Continue a saved chain (.npz) of a run with the same options."
+    ),
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace existing output files."),
 ) -> None:
     """Simulate a LISA observation and sample the targeted-search posterior → target YAML."""
@@ -156,6 +159,9 @@ def simulate(
     like = Likelihood(model, data, Prior.paper(truth, t_obs_s, ecc), SANGRIA)
     snr = float(like.snr(theta0[None])[0])
     cov = np.asarray(np.linalg.inv(fisher_matrix(like, theta0)), dtype=np.float64)
+    previous = None
+    if resume is not None:
+        previous, cov = _load_resume(resume, theta0, seed, noise, n_bins, t_obs_s, walkers)
     err_console.print(
         f"{base.name}: optimal SNR {snr:.1f}, T_obs = {t_obs_s:.6f} s, N = {n_bins} bins, "
         f"{theta0.size} parameters, noise {'on' if noise else 'off'}, seed {seed}"
@@ -183,6 +189,7 @@ def simulate(
             max_steps=max_steps,
             seed=seed,
             progress=_progress,
+            previous=previous,
         )
     n_done, tau_max = res.theta.shape[0], float(np.max(res.tau))
     if not res.converged:
@@ -217,7 +224,11 @@ def simulate(
             f"converged={res.converged}), SNR {snr:.1f}"
         ),
     )
-    save_chain(res, chain_path, {"theta0": theta0, "fisher_cov": cov, "t_obs_s": t_obs_s})
+    save_chain(
+        res,
+        chain_path,
+        {"theta0": theta0, "fisher_cov": cov, "t_obs_s": t_obs_s, "noise": noise, "n_bins": n_bins},
+    )
     fis = post.gaussian_target(base, theta0, cov, t_obs_s)
     names = out_target.cov_names
     sig = {n: float(np.std(cols[n])) for n in names}
@@ -227,6 +238,41 @@ def simulate(
     if plots is not None:
         _corner_plots(plots, flat, theta0, cols, inj, res.names, t_obs_s, overwrite)
     err_console.print(f"wrote {output}, {samples_path.name}, {chain_path.name}")
+
+
+def _load_resume(
+    path: Path,
+    theta0: np.ndarray,
+    seed: int,
+    noise: bool,
+    n_bins: int,
+    t_obs_s: float,
+    walkers: int,
+) -> tuple[tuple[np.ndarray, np.ndarray], np.ndarray]:
+    """Chain and whitening covariance of a saved run, checked against the current options."""
+    from ucbplan.errors import InputFileError
+
+    try:
+        with np.load(path) as z:
+            saved = {k: z[k] for k in z.files}
+    except (OSError, ValueError) as exc:
+        raise InputFileError(
+            f"{path}: cannot read the chain ({exc}); give a simulate .npz"
+        ) from None
+    want = {"seed": seed, "noise": noise, "n_bins": n_bins, "t_obs_s": t_obs_s}
+    for key, val in want.items():
+        if key not in saved or not np.isclose(float(saved[key]), float(val), rtol=1e-12):
+            got = saved[key].item() if key in saved else "missing"
+            raise InputFileError(
+                f"{path}: {key} = {got}, this run has {val}; resume with the same "
+                "--seed/--noise/--n-bins/--t-obs (the data must be identical)"
+            )
+    if saved["theta"].shape[1] != walkers or not np.allclose(saved["theta0"], theta0, rtol=0):
+        raise InputFileError(
+            f"{path}: chain has {saved['theta'].shape[1]} walkers for another target; resume "
+            f"with --walkers {saved['theta'].shape[1]} and the same target file"
+        )
+    return (saved["theta"], saved["log_prob"]), saved["fisher_cov"]
 
 
 def _corner_plots(

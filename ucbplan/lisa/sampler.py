@@ -97,6 +97,7 @@ def run_sampler(
     seed: int = 0,
     start_scale: float = 1.0,
     progress: Callable[[int, int, float], None] | None = None,
+    previous: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
 ) -> SamplerResult:
     """Run emcee (vectorised log-probability over walkers).
 
@@ -116,6 +117,11 @@ def run_sampler(
         Radius of the start ball in Fisher sigmas.
     progress : callable, optional
         ``progress(step, total, tau_max)`` called every few steps (for a progress bar).
+    previous : tuple of numpy.ndarray, optional
+        (theta chain (S, W, D), log_prob (S, W)) of an earlier run with the same ``theta0``,
+        ``cov`` and ``n_walkers`` to resume: the walkers continue from its last state, the
+        returned chain includes it and tau / convergence refer to the whole chain; ``n_steps``
+        counts new steps.
     """
     import emcee
 
@@ -128,14 +134,26 @@ def run_sampler(
     def log_prob(x: NDArray[np.float64]) -> NDArray[np.float64]:
         return like.log_prob(theta0 + np.atleast_2d(x) @ chol.T)
 
-    x0 = _start(like, theta0, chol, n_walkers, start_scale, rng)
     sampler = emcee.EnsembleSampler(n_walkers, d, log_prob, vectorize=True)
     # emcee draws its moves from a legacy RandomState; seed it explicitly for reproducibility.
-    sampler.random_state = np.random.RandomState(seed).get_state()
+    n_before = 0 if previous is None else int(previous[0].shape[0])
+    stream = int(np.random.SeedSequence([seed, n_before]).generate_state(1)[0])
+    sampler.random_state = np.random.RandomState(stream).get_state()
+    if previous is not None:
+        shape: tuple[int, ...] = tuple(previous[0].shape)
+        if len(shape) != 3 or shape[1] != n_walkers or shape[2] != d:
+            raise ValueError(f"resume: chain shape {shape} != (steps, {n_walkers}, {d})")
+        x_prev = np.linalg.solve(chol, (previous[0] - theta0).reshape(-1, d).T).T.reshape(shape)
+        state: object = emcee.State(x_prev[-1], log_prob=previous[1][-1])
+        lp_prev = previous[1]
+    else:
+        x_prev = np.empty((0, n_walkers, d))
+        lp_prev = np.empty((0, n_walkers))
+        state = _start(like, theta0, chol, n_walkers, start_scale, rng)
+    n_prev = x_prev.shape[0]
     total = max(n_steps, 1)
     done = 0
     tau = np.full(d, np.inf)
-    state: object = x0
     while True:
         target = total if not until_converged else max(total, done + check_every)
         for _ in sampler.sample(state, iterations=target - done, progress=False):
@@ -143,16 +161,17 @@ def run_sampler(
             if progress is not None and done % 10 == 0:
                 progress(done, max(target, total), float(np.max(tau)))
         state = sampler.get_last_sample()
-        tau = np.asarray(sampler.get_autocorr_time(tol=0, quiet=True), dtype=float)
-        converged = bool(np.all(np.isfinite(tau)) and done >= CONVERGENCE_FACTOR * np.max(tau))
-        if not until_converged or converged or done >= max_steps:
+        chain_x = np.concatenate([x_prev, sampler.get_chain()])
+        tau = np.asarray(emcee.autocorr.integrated_time(chain_x, tol=0, quiet=True), dtype=float)
+        n_all = n_prev + done
+        converged = bool(np.all(np.isfinite(tau)) and n_all >= CONVERGENCE_FACTOR * np.max(tau))
+        if not until_converged or converged or n_all >= max_steps:
             break
         total = done
-    chain_x = sampler.get_chain()
     theta = theta0 + chain_x @ chol.T
     return SamplerResult(
         theta=np.asarray(theta),
-        log_prob=np.asarray(sampler.get_log_prob()),
+        log_prob=np.concatenate([lp_prev, sampler.get_log_prob()]),
         tau=tau,
         converged=converged,
         acceptance=float(np.mean(sampler.acceptance_fraction)),
