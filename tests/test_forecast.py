@@ -233,3 +233,22 @@ def test_shift_covariance_matches_monte_carlo() -> None:
     an = np.sqrt(np.diag(new_cov))
     for i in (0, 1, 2, 4, 5):
         assert mc[i] == pytest.approx(an[i], rel=0.05)  # 4000 draws: σ of σ ≈ 1.1 %
+
+
+def test_shift_columns_equals_scalar_shift() -> None:
+    """Sample-wise shift (with f̈ and a fixed, unsampled ω̇) equals shift_reference per row (1e-9)."""
+    from ucbplan.params import shift_columns
+
+    rng = np.random.default_rng(3)
+    base = FID.as_array()
+    rows = base + rng.normal(size=(50, 7)) * np.array([1e-3, 5e-12, 3e-19, 1e-28, 5e-4, 5e-4, 0])
+    cols = {n: rows[:, i] for i, n in enumerate(PARAM_NAMES) if n != "omega_dot"}
+    cols["cos_inclination"] = np.full(50, 0.09)
+    out = shift_columns(cols, -T4 / 2, defaults={"omega_dot": FID.omega_dot})
+    assert "omega_dot" not in out and np.all(out["cos_inclination"] == 0.09)
+    for i, row in enumerate(rows):
+        ref, _ = shift_reference(PhaseParams.from_array(row), np.zeros((7, 7)), -T4 / 2)
+        for n in ("f_gw", "fdot", "eta", "kappa"):
+            assert out[n][i] == pytest.approx(getattr(ref, n), rel=1e-12)
+        dphi = np.angle(np.exp(1j * (out["phase"][i] - ref.phase)))
+        assert abs(dphi) < 1e-9  # float64 f·T/2 ≈ 5e5 cycles: ~1e-10 cycle rounding

@@ -313,9 +313,7 @@ def _newton(
     return dt, np.broadcast_to(ustar, dt.shape).astype(np.float64)
 
 
-def _mean_seeds(
-    p: PhaseParams, origin_s: float, span_s: float, target_cycles: FloatArray
-) -> FloatArray:
+def _mean_seeds(p: PhaseParams, origin_s: float, target_cycles: FloatArray) -> FloatArray:
     """Seed offsets from the mean phase: Newton on the polynomial Φ_asc(origin+dt)/2π = target.
 
     ``target_cycles`` are orbit cycles counted from the origin's own mean phase.
@@ -329,7 +327,6 @@ def _mean_seeds(
         val = nu0 * dt + nu1 * dt**2 / 2 + nu2 * dt**3 / 6 - target_cycles
         der = nu0 + nu1 * dt + nu2 * dt**2 / 2
         dt = dt - val / der
-    del span_s
     return dt
 
 
@@ -387,7 +384,7 @@ def solve_u(
     k_hi = math.floor(c1) + 1
     ks = np.arange(k_lo, k_hi + 1, dtype=np.float64)
     # mean-phase seeds: orbit cycles from the origin's u
-    seeds = _mean_seeds(p, origin, span, ks - c0)
+    seeds = _mean_seeds(p, origin, ks - c0)
     branch = None if zero_branch is None else np.full(ks.shape, zero_branch, dtype=np.float64)
     dt, ustar_arr = _newton(p, origin, seeds, ks, np.full(ks.shape, ustar_nominal), star, branch)
     keep = (dt >= 0.0) & (dt <= span)

@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -89,9 +89,6 @@ def _anchor_sigma_batch(
     var = np.sum(np.matmul(jac, covs) * jac, axis=-1)
     out: FloatArray = np.sqrt(np.maximum(var, 0.0))
     return out
-
-
-ToleranceKind = Literal["conjunction", "quadrature", "generic"]
 
 
 def tolerance(

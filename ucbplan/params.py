@@ -6,10 +6,11 @@ Kept apart from :mod:`ucbplan.target` (YAML parsing) so the numerical core impor
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 __all__ = ["PARAM_NAMES", "PARAM_UNITS", "PhaseParams", "shift_jacobian", "shift_reference"]
 
@@ -156,6 +157,54 @@ def shift_reference(
     j = shift_jacobian(p, dt)
     new_cov = j @ np.asarray(cov, dtype=np.float64) @ j.T
     return new, 0.5 * (new_cov + new_cov.T)
+
+
+def shift_columns(
+    cols: Mapping[str, ArrayLike], dt_s: float, defaults: Mapping[str, float] | None = None
+) -> dict[str, NDArray[np.float64]]:
+    """:func:`shift_reference` applied to posterior samples (arrays per parameter).
+
+    Parameters
+    ----------
+    cols : mapping of name → array
+        Samples keyed like :data:`PARAM_NAMES`; other keys (cos ι, …) pass through unchanged.
+    dt_s : float
+        New reference minus old reference [s].
+    defaults : mapping, optional
+        Fixed values of phase-model parameters that were not sampled (else 0).
+
+    Returns
+    -------
+    dict
+        The same keys, phase-model columns moved to the new epoch (φ wrapped to [0, 2π)).
+
+    Notes
+    -----
+    Same Taylor shift and (η, κ) rotation as :func:`shift_reference`; each cycle term is reduced
+    modulo 1 separately so the phase keeps float64 precision at large f·dt.
+    """
+    n = np.shape(next(iter(cols.values())))[0]
+    fixed = dict(defaults or {})
+    arr = {
+        k: np.asarray(cols[k], dtype=np.float64) if k in cols else np.full(n, fixed.get(k, 0.0))
+        for k in PARAM_NAMES
+    }
+    dt = float(dt_s)
+    cycles = (
+        np.mod(arr["f_gw"] * dt, 1.0)
+        + np.mod(arr["fdot"] * dt * dt / 2.0, 1.0)
+        + np.mod(arr["fddot"] * dt**3 / 6.0, 1.0)
+    )
+    w = arr["omega_dot"] * dt
+    c, s = np.cos(w), np.sin(w)
+    shifted = {
+        "phase": np.mod(arr["phase"] + 2.0 * math.pi * cycles, 2.0 * math.pi),
+        "f_gw": arr["f_gw"] + arr["fdot"] * dt + arr["fddot"] * dt * dt / 2.0,
+        "fdot": arr["fdot"] + arr["fddot"] * dt,
+        "eta": arr["eta"] * c + arr["kappa"] * s,
+        "kappa": arr["kappa"] * c - arr["eta"] * s,
+    }
+    return {k: shifted.get(k, np.asarray(v, dtype=np.float64)) for k, v in cols.items()}
 
 
 def _exact_cycles(f: float, fdot: float, fddot: float, dt: float) -> float:

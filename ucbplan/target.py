@@ -24,7 +24,7 @@ from astropy.time import Time, TimeDelta
 from numpy.typing import NDArray
 
 from ucbplan.errors import TargetFileError
-from ucbplan.params import PARAM_NAMES, PARAM_UNITS, PhaseParams, shift_reference
+from ucbplan.params import PARAM_NAMES, PARAM_UNITS, PhaseParams, shift_columns, shift_reference
 
 __all__ = [
     "PARAM_NAMES",
@@ -685,15 +685,6 @@ def _parse_spectroscopy(ctx: _Ctx, spec: Any) -> Spectroscopy | None:
     return Spectroscopy(lines, vals["K1"], vals["K2"], vals["K_eff"], vals["sigma_v"])
 
 
-def _embed(names: tuple[str, ...], mat: FloatArray) -> FloatArray:
-    full = np.zeros((7, 7))
-    for i, a in enumerate(names):
-        for j, b in enumerate(names):
-            if a in PARAM_NAMES and b in PARAM_NAMES:
-                full[PARAM_NAMES.index(a), PARAM_NAMES.index(b)] = mat[i, j]
-    return full
-
-
 def _shift_named(
     p: PhaseParams, names: tuple[str, ...], mat: FloatArray, dt: float
 ) -> tuple[PhaseParams, FloatArray]:
@@ -839,24 +830,6 @@ def load_samples(t: Target) -> dict[str, FloatArray]:
             f"{', '.join(PARAM_NAMES)}"
         )
     if t.ref_shift_s:
-        cols = _shift_sample_columns(t, cols, t.ref_shift_s)
+        base = {n: getattr(t.params, n) for n in PARAM_NAMES}
+        cols = shift_columns(cols, t.ref_shift_s, defaults=base)
     return cols
-
-
-def _shift_sample_columns(
-    t: Target, cols: dict[str, FloatArray], dt: float
-) -> dict[str, FloatArray]:
-    base = {n: getattr(t.params, n) for n in PARAM_NAMES}
-    n = len(next(iter(cols.values())))
-    arr = {k: cols.get(k, np.full(n, base[k])) for k in PARAM_NAMES}
-    w = arr["omega_dot"] * dt
-    c, s = np.cos(w), np.sin(w)
-    out = dict(cols)
-    two_pi = 2 * math.pi
-    cyc = arr["f_gw"] * dt + arr["fdot"] * dt**2 / 2 + arr["fddot"] * dt**3 / 6
-    out["phase"] = np.mod(arr["phase"] + two_pi * np.mod(cyc, 1.0), two_pi)
-    out["f_gw"] = arr["f_gw"] + arr["fdot"] * dt + arr["fddot"] * dt**2 / 2
-    out["fdot"] = arr["fdot"] + arr["fddot"] * dt
-    out["eta"] = arr["eta"] * c + arr["kappa"] * s
-    out["kappa"] = arr["kappa"] * c - arr["eta"] * s
-    return {k: v for k, v in out.items() if k in cols}

@@ -15,7 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ucbplan.lisa.likelihood import physical_from_theta
-from ucbplan.params import PhaseParams, shift_jacobian
+from ucbplan.params import PhaseParams, shift_columns, shift_jacobian
 from ucbplan.target import Target
 
 __all__ = [
@@ -44,23 +44,8 @@ def midpoint_samples(theta: NDArray[np.float64], t_obs_s: float) -> dict[str, ND
         Observation length T [s].
     """
     p = physical_from_theta(theta, t_obs_s)
-    half = 0.5 * t_obs_s
-    cycles = np.mod(p["f_gw"] * half, 1.0) + np.mod(0.5 * p["fdot"] * half * half, 1.0)
-    out = {
-        "phase": np.mod(p["phase"] + 2.0 * np.pi * cycles, 2.0 * np.pi),
-        "f_gw": p["f_gw"] + p["fdot"] * half,
-        "fdot": p["fdot"],
-    }
-    if theta.shape[1] > 6:
-        w = p["omega_dot"] * half
-        c, s = np.cos(w), np.sin(w)
-        out |= {
-            "eta": p["eta"] * c + p["kappa"] * s,
-            "kappa": p["kappa"] * c - p["eta"] * s,
-            "omega_dot": p["omega_dot"],
-        }
-    out |= {k: p[k] for k in EXTRA_NAMES}
-    return out
+    names = _ECC_NAMES if theta.shape[1] > 6 else _CIRC_NAMES
+    return shift_columns({k: p[k] for k in (*names, *EXTRA_NAMES)}, 0.5 * t_obs_s)
 
 
 def fold_phase_mode(cols: dict[str, NDArray], phase_ref: float) -> tuple[dict[str, NDArray], int]:
