@@ -20,9 +20,9 @@ from concurrent.futures import ProcessPoolExecutor
 import numpy as np
 from scipy.optimize import brentq
 
-from ucbplan.ephemeris import _u_cycles, solve_u
-from ucbplan.forecast import anchor_sigma_u, t_valid, t_valid_batch, tolerance
-from ucbplan.params import PhaseParams
+from ucbplan.core.ephemeris import _u_cycles, solve_u
+from ucbplan.core.forecast import anchor_sigma_u, t_valid, t_valid_batch, tolerance
+from ucbplan.core.params import PhaseParams
 
 T4 = 4 * 31558149.7635
 ECC = PhaseParams(

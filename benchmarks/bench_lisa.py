@@ -23,7 +23,6 @@ from pathlib import Path
 
 import numpy as np
 
-from ucbplan.cliutil import configure_offline
 from ucbplan.lisa.fisher import fisher_matrix
 from ucbplan.lisa.likelihood import (
     Likelihood,
@@ -34,6 +33,7 @@ from ucbplan.lisa.likelihood import (
     theta_from_source,
 )
 from ucbplan.lisa.noise import SANGRIA
+from ucbplan.offline import configure_offline
 from ucbplan.target import load_target
 
 INJECTION = Path(__file__).resolve().parents[1] / "catalogs" / "fiducial-injection.yaml"
@@ -149,7 +149,7 @@ def main() -> None:
 
 
 def _full(like, theta0, truth, model, target, seed):  # type: ignore[no-untyped-def]
-    from ucbplan.forecast import horizon_table
+    from ucbplan.core.forecast import horizon_table
     from ucbplan.lisa import posterior as post
     from ucbplan.lisa.sampler import run_sampler
 

@@ -27,10 +27,9 @@ from astropy import units as u
 from astropy.coordinates import SkyCoord
 from astropy.time import Time, TimeDelta
 
-from ucbplan.cliutil import configure_offline
 from ucbplan.observing.blocks import ExposurePlan
 from ucbplan.observing.constraints import SkyModel
-from ucbplan.observing.schedule import (
+from ucbplan.observing.schedule.plan import (
     PlanSettings,
     candidate_blocks,
     night_windows,
@@ -39,6 +38,7 @@ from ucbplan.observing.schedule import (
 )
 from ucbplan.observing.sites import get_site
 from ucbplan.observing.timeconv import SiteTrack, quiet_erfa
+from ucbplan.offline import configure_offline
 from ucbplan.target import Target, load_target
 
 REPO = Path(__file__).resolve().parents[1]

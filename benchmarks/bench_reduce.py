@@ -29,11 +29,11 @@ sys.path.insert(0, str(ROOT / "tests"))
 
 from test_reduce_synth import exposure_factor, session_times  # noqa: E402
 
-from ucbplan import ephemeris  # noqa: E402
-from ucbplan.cliutil import configure_offline  # noqa: E402
-from ucbplan.params import PARAM_NAMES  # noqa: E402
-from ucbplan.reduce import ReduceOptions, reduce  # noqa: E402
+from ucbplan.core import ephemeris  # noqa: E402
+from ucbplan.core.params import PARAM_NAMES  # noqa: E402
+from ucbplan.offline import configure_offline  # noqa: E402
 from ucbplan.reduce import masses as m  # noqa: E402
+from ucbplan.reduce.pipeline import ReduceOptions, reduce  # noqa: E402
 from ucbplan.reduce.velocities import VelocityTable  # noqa: E402
 from ucbplan.target import Target, load_target  # noqa: E402
 

@@ -24,7 +24,7 @@ sys.path.insert(0, str(ROOT / "tests"))
 
 from test_reduce_synth import exposure_factor  # noqa: E402
 
-from ucbplan import ephemeris  # noqa: E402
+from ucbplan.core import ephemeris  # noqa: E402
 from ucbplan.reduce import masses  # noqa: E402
 from ucbplan.target import Target, load_target  # noqa: E402
 

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from ucbplan.cliutil import configure_offline
+from ucbplan.offline import configure_offline
 
 ROOT = Path(__file__).resolve().parents[1]
 CATALOGS = ROOT / "catalogs"

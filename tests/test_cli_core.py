@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
-from ucbplan.cli import app
+from ucbplan.cli.app import app
 
 runner = CliRunner()
 
@@ -61,7 +61,7 @@ def test_ephemeris_round_trip_from_json(eccentric_path: Path) -> None:
     """Printed epochs (TDB ISO, µs) converted back give u = u★ to the µs time grid (~3e-8 rad)."""
     from astropy.time import Time
 
-    from ucbplan.ephemeris import arg_latitude
+    from ucbplan.core.ephemeris import arg_latitude
     from ucbplan.target import load_target
 
     res = runner.invoke(

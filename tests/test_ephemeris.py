@@ -15,7 +15,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.optimize import brentq
 
-from ucbplan.ephemeris import (
+from ucbplan.core.ephemeris import (
     _u_cycles,
     arg_latitude,
     arg_latitude_rate,
@@ -24,7 +24,7 @@ from ucbplan.ephemeris import (
     radial_velocity,
     solve_u,
 )
-from ucbplan.params import PhaseParams
+from ucbplan.core.params import PhaseParams
 
 YEAR = 365.25 * 86400.0
 FID = PhaseParams(

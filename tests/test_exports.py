@@ -24,10 +24,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from typer.testing import CliRunner
 
-from ucbplan.cliutil import configure_offline
 from ucbplan.errors import InputFileError, OutputExistsError, UcbplanError
 from ucbplan.observing.blocks import Block
-from ucbplan.observing.exports import (
+from ucbplan.observing.blocktable import blocks_to_table, make_meta, read_blocks
+from ucbplan.observing.exports.common import (
     EXPORTERS,
     ExportOptions,
     export_blocks,
@@ -35,9 +35,9 @@ from ucbplan.observing.exports import (
     ics_fold,
     sexagesimal,
 )
-from ucbplan.observing.proposal import proposal_table, write_proposal
-from ucbplan.observing.table import blocks_to_table, make_meta, read_blocks
+from ucbplan.observing.exports.proposal import proposal_table, write_proposal
 from ucbplan.observing.timeconv import quiet_erfa
+from ucbplan.offline import configure_offline
 
 GOLDEN = Path(__file__).parent / "golden"
 REGEN = os.environ.get("UCBPLAN_REGEN_GOLDEN") == "1"
@@ -185,7 +185,7 @@ def table(blocks_path: Path) -> Table:
 
 def _minimal(table: Table) -> Table:
     """Only the required columns (+ coordinates), as a table from an older planner would be."""
-    from ucbplan.observing.table import REQUIRED_COLUMNS
+    from ucbplan.observing.blocktable import REQUIRED_COLUMNS
 
     out = Table({c: table[c] for c in (*REQUIRED_COLUMNS, "ra_deg", "dec_deg")})
     out.meta = {}
@@ -524,7 +524,7 @@ def test_empty_table(table: Table) -> None:
 
 
 def _app() -> typer.Typer:
-    from ucbplan.cli_feasibility import register
+    from ucbplan.cli.export import register
 
     app = typer.Typer()
 
@@ -585,7 +585,7 @@ def test_time_columns_give_the_same_export(table: Table) -> None:
 
 
 def test_iso_rounding_is_half_up() -> None:
-    from ucbplan.observing.exports import iso_ms
+    from ucbplan.observing.exports.common import iso_ms
 
     t = datetime(2037, 1, 16, 3, 10, 11, 250000, tzinfo=UTC)
     assert iso_ms(t, 1) == "2037-01-16T03:10:11.3"

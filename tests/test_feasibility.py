@@ -17,9 +17,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from typer.testing import CliRunner
 
-from ucbplan.cliutil import configure_offline
 from ucbplan.errors import UcbplanError
-from ucbplan.feasibility import (
+from ucbplan.feasibility.signals import (
     MONTH_S,
     YEAR_S,
     OpticalEphemeris,
@@ -38,6 +37,7 @@ from ucbplan.feasibility import (
     tau_chirp_gr_s,
     tertiary_acceleration,
 )
+from ucbplan.offline import configure_offline
 
 ROOT = Path(__file__).resolve().parents[1]
 HM_CNC = ROOT / "catalogs" / "hm-cnc.yaml"
@@ -279,7 +279,7 @@ def test_plot_apsidal_signal(tmp_path: Path) -> None:
 
 
 def _app() -> typer.Typer:
-    from ucbplan.cli_feasibility import register
+    from ucbplan.cli.feasibility import register
 
     app = typer.Typer()
 

@@ -8,9 +8,9 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from ucbplan.ephemeris import _u_cycles, u_jacobian
-from ucbplan.forecast import anchor_sigma_u, horizon_table, sigma_u, t_valid, tolerance
-from ucbplan.params import PARAM_NAMES, PhaseParams, shift_reference
+from ucbplan.core.ephemeris import _u_cycles, u_jacobian
+from ucbplan.core.forecast import anchor_sigma_u, horizon_table, sigma_u, t_valid, tolerance
+from ucbplan.core.params import PARAM_NAMES, PhaseParams, shift_reference
 from ucbplan.target import load_target
 
 DAY = 86400.0
@@ -128,7 +128,7 @@ def test_t_valid_oscillating_closed_form() -> None:
 
 def test_anchor_sigma_matches_sigma_at_true_epochs() -> None:
     """σ_u at virtual anchor epochs equals σ_u at the solved t★ (same anchor) to 1e-6 relative."""
-    from ucbplan.ephemeris import solve_u
+    from ucbplan.core.ephemeris import solve_u
 
     t = load_target_fid()
     _k, dt, _us, o = solve_u(t.params, 9e7, 9e7 + 600, 0.0)
@@ -237,7 +237,7 @@ def test_shift_covariance_matches_monte_carlo() -> None:
 
 def test_shift_columns_equals_scalar_shift() -> None:
     """Sample-wise shift (with f̈ and a fixed, unsampled ω̇) equals shift_reference per row (1e-9)."""
-    from ucbplan.params import shift_columns
+    from ucbplan.core.params import shift_columns
 
     rng = np.random.default_rng(3)
     base = FID.as_array()

@@ -8,7 +8,6 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from ucbplan.cliutil import configure_offline
 from ucbplan.lisa import posterior as post
 from ucbplan.lisa.fisher import fisher_matrix
 from ucbplan.lisa.likelihood import (
@@ -21,6 +20,7 @@ from ucbplan.lisa.likelihood import (
 )
 from ucbplan.lisa.noise import SANGRIA, NoiseModel, psd_a
 from ucbplan.lisa.sampler import run_sampler
+from ucbplan.offline import configure_offline
 from ucbplan.target import load_target
 
 INJECTION = Path(__file__).resolve().parents[1] / "catalogs" / "fiducial-injection.yaml"
@@ -144,7 +144,7 @@ def test_short_chain_statistics(problem: tuple) -> None:
 
 
 def test_midpoint_transform_matches_target_shift(problem: tuple) -> None:
-    """Per-sample start -> midpoint transform equals ucbplan.params.shift_reference (used by
+    """Per-sample start -> midpoint transform equals ucbplan.core.params.shift_reference (used by
     load_target for t_ref_is: start) to 1e-9 rad / 1e-12 relative."""
     target, _, model, _, theta0, _ = problem
     cols = post.midpoint_samples(theta0[None], model.grid.t_obs_s)
@@ -178,7 +178,7 @@ def test_cli_waveform_fisher_and_short_simulate(tmp_path: Path) -> None:
     tiny simulate run (N = 64, 20 steps) that writes YAML + samples + chain and warns."""
     from astropy.table import Table
 
-    from ucbplan.cli import app
+    from ucbplan.cli.app import app
 
     runner = CliRunner()
     lines = tmp_path / "lines.ecsv"
@@ -224,10 +224,10 @@ def test_cli_waveform_fisher_and_short_simulate(tmp_path: Path) -> None:
 
 
 def test_fisher_forecast_horizons_near_table4(problem: tuple) -> None:
-    """Closed loop: the Fisher target through ucbplan.forecast gives quadrature horizons within
+    """Closed loop: the Fisher target through ucbplan.core.forecast gives quadrature horizons within
     10 % of Table 4 (3194 d, 4844 d; we get +2 %), conjunction alpha = 0.5 within 15 % (390 d;
     the conjunction horizon is the most sensitive to the eta/kappa sigma's, 5 % below Table 3's)."""
-    from ucbplan.forecast import horizon_table
+    from ucbplan.core.forecast import horizon_table
 
     target, _, model, _like, theta0, cov = problem
     fis = post.gaussian_target(target, theta0, cov, model.grid.t_obs_s)

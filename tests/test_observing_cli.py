@@ -11,10 +11,10 @@ import pytest
 import yaml
 from typer.testing import CliRunner
 
-from ucbplan.cli import app
-from ucbplan.cliutil import configure_offline
+from ucbplan.cli.app import app
 from ucbplan.errors import OutputExistsError
-from ucbplan.observing.table import REQUIRED_COLUMNS, file_sha256, read_blocks
+from ucbplan.observing.blocktable import REQUIRED_COLUMNS, file_sha256, read_blocks
+from ucbplan.offline import configure_offline
 
 pytestmark = [
     pytest.mark.filterwarnings("ignore::erfa.ErfaWarning"),

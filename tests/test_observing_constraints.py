@@ -8,7 +8,6 @@ from astropy import units as u
 from astropy.coordinates import AltAz, SkyCoord, get_body, get_sun
 from astropy.time import Time, TimeDelta
 
-from ucbplan.cliutil import configure_offline
 from ucbplan.errors import UcbplanError
 from ucbplan.observing.constraints import (
     CONSTRAINTS,
@@ -24,6 +23,7 @@ from ucbplan.observing.constraints import (
 )
 from ucbplan.observing.sites import get_site
 from ucbplan.observing.timeconv import quiet_erfa
+from ucbplan.offline import configure_offline
 
 pytestmark = [
     pytest.mark.filterwarnings("ignore::erfa.ErfaWarning"),

@@ -14,13 +14,13 @@ from astropy import units as u
 from astropy.coordinates import AltAz, get_body, get_sun
 from astropy.time import Time
 
-from ucbplan.cliutil import configure_offline
-from ucbplan.ephemeris import arg_latitude, ll_pair
+from ucbplan.core.ephemeris import arg_latitude, ll_pair
 from ucbplan.errors import UcbplanError
 from ucbplan.observing.blocks import ExposurePlan
-from ucbplan.observing.schedule import PlanSettings, delta_kappa, parse_mode, plan_nights
+from ucbplan.observing.schedule.plan import PlanSettings, delta_kappa, parse_mode, plan_nights
 from ucbplan.observing.sites import Site, get_site
 from ucbplan.observing.timeconv import quiet_erfa, site_utc_to_bary_tdb
+from ucbplan.offline import configure_offline
 from ucbplan.target import Target, load_target
 
 pytestmark = [

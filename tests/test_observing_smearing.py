@@ -7,14 +7,14 @@ import math
 import numpy as np
 import pytest
 
-from ucbplan.errors import UcbplanError
-from ucbplan.observing.smearing import (
+from ucbplan.core.smearing import (
     comb_attenuation,
     lambda_k,
     lambda_kappa,
     parse_smear_budget,
     smear_velocity,
 )
+from ucbplan.errors import UcbplanError
 
 P_B = 300.0  # any period: the factors depend on dt/P only
 N_BAR = 2 * math.pi / P_B  # n̄_b = π f_GW = 2π / P_orb

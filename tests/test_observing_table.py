@@ -11,10 +11,9 @@ import numpy as np
 import pytest
 from astropy.time import Time
 
-from ucbplan.cliutil import configure_offline
 from ucbplan.errors import InputFileError
 from ucbplan.observing.blocks import Block
-from ucbplan.observing.table import (
+from ucbplan.observing.blocktable import (
     REQUIRED_COLUMNS,
     blocks_to_table,
     make_meta,
@@ -22,6 +21,7 @@ from ucbplan.observing.table import (
     write_table,
 )
 from ucbplan.observing.timeconv import quiet_erfa
+from ucbplan.offline import configure_offline
 
 # Dates past the leap-second table are intended (2040 nights); the planner warns once itself.
 pytestmark = pytest.mark.filterwarnings("ignore::erfa.ErfaWarning")

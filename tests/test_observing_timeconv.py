@@ -10,7 +10,6 @@ from astropy.time import Time, TimeDelta
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from ucbplan.cliutil import configure_offline
 from ucbplan.observing.sites import get_site
 from ucbplan.observing.timeconv import (
     DelayInterpolator,
@@ -20,6 +19,7 @@ from ucbplan.observing.timeconv import (
     quiet_erfa,
     site_utc_to_bary_tdb,
 )
+from ucbplan.offline import configure_offline
 
 HM_CNC = SkyCoord(121.5967 * u.deg, 15.4583 * u.deg)
 

@@ -11,8 +11,8 @@ import pytest
 import yaml
 from typer.testing import CliRunner
 
-from ucbplan.cli import app
-from ucbplan.cliutil import configure_offline
+from ucbplan.cli.app import app
+from ucbplan.offline import configure_offline
 
 ROOT = Path(__file__).resolve().parents[1]
 TARGET = ROOT / "catalogs" / "fiducial-eccentric.yaml"

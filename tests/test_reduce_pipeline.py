@@ -11,11 +11,11 @@ import pytest
 from astropy.time import TimeDelta
 from test_reduce_synth import exact_factor, exposure_factor, make_target, session_times
 
-from ucbplan import ephemeris
-from ucbplan.cliutil import configure_offline
-from ucbplan.params import PhaseParams
-from ucbplan.reduce import ReduceOptions, reduce
+from ucbplan.core import ephemeris
+from ucbplan.core.params import PhaseParams
+from ucbplan.offline import configure_offline
 from ucbplan.reduce import masses as m
+from ucbplan.reduce.pipeline import ReduceOptions, reduce
 from ucbplan.reduce.report import build_report
 from ucbplan.reduce.velocities import VelocityTable
 
@@ -313,7 +313,7 @@ def test_posterior_samples_file_drives_the_monte_carlo(tmp_path) -> None:  # typ
     stays within 3 MC standard errors of the fixed-cos ι run."""
     from astropy.table import Table
 
-    from ucbplan.reduce import read_samples
+    from ucbplan.reduce.pipeline import read_samples
 
     t = make_target()
     p = t.params

@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from ucbplan.observing.smearing import lambda_k, lambda_kappa
+from ucbplan.core.smearing import lambda_k, lambda_kappa
 from ucbplan.reduce.regression import (
     OUTLIER_NSIGMA,
     binned_design,

@@ -15,8 +15,8 @@ import math
 import numpy as np
 import pytest
 
-from ucbplan import ephemeris
-from ucbplan.params import PhaseParams
+from ucbplan.core import ephemeris
+from ucbplan.core.params import PhaseParams
 
 FIDUCIAL = {
     "name": "synthetic fiducial",

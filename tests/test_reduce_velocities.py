@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from test_reduce_synth import make_target
 
-from ucbplan.cliutil import configure_offline
 from ucbplan.errors import VelocityFileError
+from ucbplan.offline import configure_offline
 from ucbplan.reduce.velocities import check_validity, read_velocities
 
 HEADER = "bjd_tdb,exptime_s,v1,sigma_v1,v2,sigma_v2,session\n"

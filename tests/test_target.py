@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 import yaml
 
+from ucbplan.core.constants import L_B
 from ucbplan.errors import TargetFileError
-from ucbplan.target import L_B, load_target, target_to_dict, write_target
+from ucbplan.target import load_target, target_to_dict, write_target
 
 BASE = {
     "name": "Test",

@@ -1,5 +1,5 @@
 """``python -m ucbplan`` runs the CLI."""
 
-from ucbplan.cli import main
+from ucbplan.cli.app import main
 
 main()

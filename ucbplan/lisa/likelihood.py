@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
+from ucbplan.core.constants import E_MAX
 from ucbplan.lisa.noise import NoiseModel, psd_a
 from ucbplan.lisa.waveform import FourLineModel, SourceParams
 
@@ -57,7 +58,6 @@ ECCENTRIC_NAMES: tuple[str, ...] = (
     "z_omega",
 )
 CIRCULAR_NAMES: tuple[str, ...] = ECCENTRIC_NAMES[:6]
-E_MAX = 0.1
 
 
 @dataclass(frozen=True, slots=True)
@@ -241,8 +241,8 @@ def source_from_target(target: Target) -> SourceParams:
         If the target lacks the GW-only fields the waveform needs (amplitude, cos_inclination,
         psi) or has fdot <= 0 (the sampler uses log10 fdot).
     """
+    from ucbplan.core.params import shift_reference
     from ucbplan.errors import TargetFileError
-    from ucbplan.params import shift_reference
 
     where = target.source.name if target.source is not None else target.name
     for key in ("amplitude", "cos_inclination", "psi"):

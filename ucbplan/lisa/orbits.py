@@ -13,6 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ucbplan.core.constants import AU_M, C_M_S, SIDEREAL_YEAR_S
+
 __all__ = [
     "AU_M",
     "C_M_S",
@@ -21,11 +23,7 @@ __all__ = [
     "EqualArmOrbits",
 ]
 
-AU_M = 1.495978707e11
-C_M_S = 299792458.0
 LISA_ARM_M = 2.5e9
-#: Sidereal year [s]; the paper's T_obs = 4 sidereal years (SCIENCE.md "Time").
-SIDEREAL_YEAR_S = 31558149.7635
 
 
 @dataclass(frozen=True, slots=True)

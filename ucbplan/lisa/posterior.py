@@ -14,8 +14,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from ucbplan.core.params import PhaseParams, shift_columns, shift_jacobian
 from ucbplan.lisa.likelihood import physical_from_theta
-from ucbplan.params import PhaseParams, shift_columns, shift_jacobian
 from ucbplan.target import Target
 
 __all__ = [
@@ -79,7 +79,7 @@ def write_samples(cols: dict[str, NDArray], path: Path, overwrite: bool, meta: d
     """Write posterior samples as ECSV (columns named like PARAM_NAMES, SI units)."""
     from astropy.table import Table
 
-    from ucbplan.cliutil import write_output
+    from ucbplan.io import write_output
 
     tab = Table({k: np.asarray(v, dtype=float) for k, v in cols.items()})
     tab.meta.update(meta)
@@ -158,7 +158,7 @@ def gaussian_target(
     """Target (midpoint) from a Gaussian in sampled coordinates at the start (Fisher forecast).
 
     Means are ``theta0`` moved to the midpoint; the covariance is propagated through the
-    sampled -> physical Jacobian and :func:`ucbplan.params.shift_jacobian` (T/2).
+    sampled -> physical Jacobian and :func:`ucbplan.core.params.shift_jacobian` (T/2).
     """
     names, j = sampled_to_physical_jacobian(theta0, t_obs_s)
     cov_start = j @ cov_theta @ j.T
@@ -173,7 +173,7 @@ def gaussian_target(
         kappa=float(p["kappa"][0]),
         omega_dot=float(p["omega_dot"][0]),
     )
-    from ucbplan.params import PARAM_NAMES
+    from ucbplan.core.params import PARAM_NAMES
 
     j7 = shift_jacobian(p_start, 0.5 * t_obs_s)
     shift = np.eye(len(names))

@@ -12,8 +12,8 @@ from dataclasses import dataclass
 
 from astropy.time import Time
 
+from ucbplan.core.smearing import comb_attenuation, smear_velocity
 from ucbplan.errors import UcbplanError
-from ucbplan.observing.smearing import comb_attenuation, smear_velocity
 
 __all__ = ["Block", "ExposurePlan", "Smearing", "block_smearing", "check_smear_budget"]
 
@@ -113,7 +113,7 @@ def block_smearing(plan: ExposurePlan, n_bar: float, k_kms: float | None) -> Sme
     Notes
     -----
     Eqs. Lambda_K, Lambda_kappa, Deltav_smear; exact for a comb of equal exposures
-    (:func:`ucbplan.observing.smearing.comb_attenuation`).
+    (:func:`ucbplan.core.smearing.comb_attenuation`).
     """
     lam_k = comb_attenuation(plan.exptime_s, plan.readout_s, plan.n_exp, n_bar, 1)
     lam_kappa = comb_attenuation(plan.exptime_s, plan.readout_s, plan.n_exp, n_bar, 2)

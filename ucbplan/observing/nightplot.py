@@ -13,7 +13,7 @@ from astropy.time import Time, TimeDelta
 
 from ucbplan.observing.blocks import Block
 from ucbplan.observing.constraints import TWILIGHT_SUN_ALT_DEG, SkyModel
-from ucbplan.observing.schedule import night_windows
+from ucbplan.observing.schedule.plan import night_windows
 from ucbplan.observing.sites import Site
 from ucbplan.observing.timeconv import quiet_erfa
 

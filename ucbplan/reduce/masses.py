@@ -14,6 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ucbplan.core.constants import C_M_S, G_SI, MSUN_KG, RSUN_M
+
 __all__ = [
     "C_M_S",
     "G_SI",
@@ -40,10 +42,6 @@ __all__ = [
 
 # CODATA 2018 / IAU 2015 nominal values (identical to astropy.constants; hard-coded so the core
 # imports nothing heavy).
-G_SI = 6.67430e-11
-C_M_S = 299792458.0
-MSUN_KG = 1.988409870698051e30
-RSUN_M = 6.957e8
 
 F64 = NDArray[np.float64]
 

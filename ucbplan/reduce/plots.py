@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-    from ucbplan.reduce import Reduction
+    from ucbplan.reduce.pipeline import Reduction
 
 __all__ = ["PLOT_NAMES", "fig_dv1_dv2", "fig_mass_mass", "fig_rv", "plot_all"]
 
@@ -201,7 +201,7 @@ def plot_all(red: Reduction, folder: Path, *, overwrite: bool = False) -> list[P
     OutputExistsError
         A figure exists and ``overwrite`` is false (checked for all before writing any).
     """
-    from ucbplan.cliutil import check_output_path, write_output
+    from ucbplan.io import check_output_path, write_output
 
     plt = _pyplot()
     for name in PLOT_NAMES:

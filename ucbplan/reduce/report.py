@@ -15,8 +15,8 @@ import numpy as np
 from ucbplan import __version__
 
 if TYPE_CHECKING:
-    from ucbplan.reduce import Reduction
     from ucbplan.reduce.masses import Summary
+    from ucbplan.reduce.pipeline import Reduction
 
 __all__ = [
     "MC_UNITS",
@@ -261,7 +261,7 @@ def em_prior(red: Reduction) -> dict[str, Any]:
 
 def write_json(doc: dict[str, Any], handle: IO[str]) -> None:
     """Write ``doc`` as indented JSON (NaN-free)."""
-    from ucbplan.cliutil import dump_json
+    from ucbplan.io import dump_json
 
     dump_json(doc, handle)
 

@@ -14,7 +14,7 @@ import numpy as np
 import typer
 from astropy.time import TimeDelta
 
-from ucbplan.cliutil import check_output_path, configure_offline, err_console, write_output
+from ucbplan.cli._console import check_output_path, configure_offline, err_console, write_output
 from ucbplan.errors import UcbplanError
 
 __all__ = ["register"]

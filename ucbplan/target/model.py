@@ -23,8 +23,15 @@ from astropy.coordinates import Angle, SkyCoord
 from astropy.time import Time, TimeDelta
 from numpy.typing import NDArray
 
+from ucbplan.core.constants import E_MAX, L_B
+from ucbplan.core.params import (
+    PARAM_NAMES,
+    PARAM_UNITS,
+    PhaseParams,
+    shift_columns,
+    shift_reference,
+)
 from ucbplan.errors import TargetFileError
-from ucbplan.params import PARAM_NAMES, PARAM_UNITS, PhaseParams, shift_columns, shift_reference
 
 __all__ = [
     "PARAM_NAMES",
@@ -40,10 +47,6 @@ __all__ = [
 
 FloatArray = NDArray[np.float64]
 
-#: Largest eccentricity the first-order (small-e) model accepts.
-E_MAX = 0.1
-#: IAU 2006 Resolution B3: d(TDB)/d(TCB) = 1 − L_B.
-L_B = 1.550519768e-8
 
 _EXAMPLES = {
     "phase": '5.500397 (rad) or "5.5 rad"',
@@ -689,7 +692,7 @@ def _shift_named(
     p: PhaseParams, names: tuple[str, ...], mat: FloatArray, dt: float
 ) -> tuple[PhaseParams, FloatArray]:
     """Shift parameters and the named covariance (extras like cos ι are unchanged)."""
-    from ucbplan.params import shift_jacobian
+    from ucbplan.core.params import shift_jacobian
 
     new_p, _ = shift_reference(p, np.zeros((7, 7)), dt)
     if not names:
@@ -786,7 +789,7 @@ def target_to_dict(t: Target) -> dict[str, Any]:
 
 def write_target(t: Target, path: Path, overwrite: bool = False, header: str = "") -> None:
     """Write ``t`` as YAML atomically (refuses to overwrite unless ``overwrite``)."""
-    from ucbplan.cliutil import write_output
+    from ucbplan.io import write_output
 
     doc = target_to_dict(t)
     if t.samples is not None:

@@ -21,8 +21,13 @@ from dataclasses import asdict, dataclass, field, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from astropy import constants as const
 from numpy.typing import ArrayLike, NDArray
+
+from ucbplan.core.constants import AU_M, MONTH_S, YEAR_S
+from ucbplan.core.constants import C_M_S as _C
+from ucbplan.core.constants import G_SI as _G
+from ucbplan.core.constants import MSUN_KG as _MSUN
+from ucbplan.core.constants import RSUN_M as _RSUN
 
 if TYPE_CHECKING:
     from ucbplan.target import Target
@@ -50,16 +55,6 @@ __all__ = [
     "tertiary_acceleration",
     "tidal_deformability",
 ]
-
-_G = float(const.G.value)
-_C = float(const.c.value)
-_MSUN = float(const.M_sun.value)
-_RSUN = float(const.R_sun.value)
-AU_M = float(const.au.value)
-#: Julian year [s] (astropy's ``yr``); ``ΔT`` in years means Julian years throughout.
-YEAR_S = 365.25 * 86400.0
-#: Mean month (Julian year / 12) [s], the "1 mo" of Eqs. del_om_tide and DeltaVcm_est.
-MONTH_S = YEAR_S / 12.0
 
 
 def _check_positive(**values: float) -> None:
@@ -366,8 +361,8 @@ def gw_timing_s(target: Target, baseline_s: ArrayLike) -> NDArray[np.float64]:
     Sec. 4 (Eq. sigma_tstar with σ_u from the full covariance, SCIENCE.md "Forecast"); the paper
     quotes δt_u ≈ 0.9 s for the HM Cnc-like system four years after the midpoint.
     """
-    from ucbplan.ephemeris import arg_latitude_rate
-    from ucbplan.forecast import sigma_u
+    from ucbplan.core.ephemeris import arg_latitude_rate
+    from ucbplan.core.forecast import sigma_u
 
     tau = np.asarray(baseline_s, dtype=float)
     sig = sigma_u(target.params, target.covariance, tau)

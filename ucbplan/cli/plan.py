@@ -10,7 +10,7 @@ from typing import IO, Any
 import typer
 from rich.markup import escape
 
-from ucbplan.cliutil import check_output_path, err_console, rich_table, write_output
+from ucbplan.cli._console import check_output_path, err_console, rich_table, write_output
 from ucbplan.errors import UcbplanError
 
 __all__ = ["register"]
@@ -205,8 +205,8 @@ def _plan(
     overwrite: bool,
 ) -> None:
     from ucbplan.observing.blocks import ExposurePlan
-    from ucbplan.observing.schedule import PlanSettings, plan_nights
-    from ucbplan.observing.table import blocks_to_table, make_meta, write_table
+    from ucbplan.observing.blocktable import blocks_to_table, make_meta, write_table
+    from ucbplan.observing.schedule.plan import PlanSettings, plan_nights
     from ucbplan.target import load_target
 
     fmt = _format(fmt, output)

@@ -711,8 +711,8 @@ def _ceil_second(t: datetime) -> datetime:
 
 
 def export_proposal(table: Table, options: ExportOptions) -> ExportResult:
-    """Proposal technical-section table per target (see :mod:`ucbplan.observing.proposal`)."""
-    from ucbplan.observing.proposal import proposal_table, write_proposal
+    """Proposal technical-section table per target (:mod:`~ucbplan.observing.exports.proposal`)."""
+    from ucbplan.observing.exports.proposal import proposal_table, write_proposal
 
     notes: list[str] = []
     summary = proposal_table(table, options, notes)
@@ -723,14 +723,14 @@ def export_proposal(table: Table, options: ExportOptions) -> ExportResult:
 
 def export_ing_cat(table: Table, options: ExportOptions) -> ExportResult:
     """ING (WHT/ISIS) ``.cat`` catalogue, one line per target (see ``proposal.ing_catalogue``)."""
-    from ucbplan.observing.proposal import ing_catalogue
+    from ucbplan.observing.exports.proposal import ing_catalogue
 
     return ExportResult(ing_catalogue(table).encode("ascii"), ".cat")
 
 
 def export_lco(table: Table, options: ExportOptions) -> ExportResult:
     """LCO/SOAR OCS request-group JSON, TIME_CRITICAL (see ``proposal.lco_requests``)."""
-    from ucbplan.observing.proposal import lco_json
+    from ucbplan.observing.exports.proposal import lco_json
 
     notes: list[str] = []
     acquisition_s(table, options, notes)

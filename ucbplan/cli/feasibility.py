@@ -1,98 +1,22 @@
-"""``ucbplan export`` (observatory and proposal files) and ``ucbplan feasibility`` (paper Sec. 3).
+"""``ucbplan feasibility``: expected signal sizes (paper Sec. 3).
 
-A thin shell: parse options, build records, call :mod:`ucbplan.observing.exports` or
-:mod:`ucbplan.feasibility`, format the output (rich on stderr, machine formats on stdout or -o).
+A thin shell: parse options, call :mod:`ucbplan.feasibility.signals`, format the output (rich on
+stderr, machine formats on stdout or -o).
 """
 
 from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import IO, Annotated, Any
+from typing import Annotated, Any
 
 import typer
 from rich.table import Table as RichTable
 
-from ucbplan.cliutil import dump_json, err_console, write_output
+from ucbplan.cli._console import dump_json, err_console, write_output
 from ucbplan.errors import UcbplanError
 
-__all__ = ["export_command", "feasibility_command", "register"]
-
-_EXPORT_HELP = "eso-p2 | keck-starlist | ics | proposal | ing-cat | lco"
-
-
-def export_command(
-    blocks: Annotated[
-        Path, typer.Argument(help="Master blocks table (ECSV) from `ucbplan plan -o`.")
-    ],
-    to: Annotated[str, typer.Option("--to", help=f"Export format: {_EXPORT_HELP}.")],
-    output: Annotated[
-        Path | None, typer.Option("-o", "--output", help="Output file (default stdout).")
-    ] = None,
-    overwrite: Annotated[
-        bool, typer.Option("--overwrite", help="Replace an existing output file.")
-    ] = False,
-    fmt: Annotated[
-        str, typer.Option("--format", help="Proposal table format: ecsv | csv | latex.")
-    ] = "ecsv",
-    acquisition: Annotated[
-        float | None,
-        typer.Option(
-            "--acquisition", help="Acquisition overhead (s) (default: acq_s column, else 600 s)."
-        ),
-    ] = None,
-    tolerance_sigma: Annotated[
-        float,
-        typer.Option(
-            "--tolerance-sigma", help="Window half-width in units of the block's 1σ timing error."
-        ),
-    ] = 3.0,
-    tolerance_floor: Annotated[
-        float, typer.Option("--tolerance-floor", help="Smallest window half-width (s).")
-    ] = 10.0,
-    merge_overlaps: Annotated[
-        bool,
-        typer.Option(
-            "--merge-overlaps", help="ESO p2: merge overlapping OBs of one target into one OB."
-        ),
-    ] = False,
-    rotmode: Annotated[
-        str, typer.Option("--rotmode", help="Keck starlist rotmode= value.")
-    ] = "vertical",
-) -> None:
-    """Export a blocks table for an observatory (ESO p2, Keck, ING, LCO), a calendar or a proposal.
-
-    All times are UTC at the site with their 1σ uncertainty; notes go to stderr.
-    """
-    from ucbplan.observing.exports import ExportOptions, export_blocks
-    from ucbplan.observing.table import read_blocks
-
-    if tolerance_sigma < 0 or tolerance_floor < 0 or (acquisition is not None and acquisition < 0):
-        raise UcbplanError(
-            "--tolerance-sigma, --tolerance-floor and --acquisition must be >= 0; "
-            f"got {tolerance_sigma}, {tolerance_floor}, {acquisition}"
-        )
-    if fmt not in ("ecsv", "csv", "latex"):
-        raise UcbplanError(f"--format: got {fmt!r}, expected ecsv, csv or latex (proposal table)")
-    options = ExportOptions(
-        acquisition_s=acquisition,
-        tolerance_sigma=tolerance_sigma,
-        tolerance_floor_s=tolerance_floor,
-        merge_overlaps=merge_overlaps,
-        proposal_format=fmt,
-        keck_rotmode=rotmode,
-    )
-    table = read_blocks(blocks)
-    result = export_blocks(table, to, options)
-    for note in result.notes:
-        err_console.print(f"[yellow]note:[/] {note}", soft_wrap=True)
-
-    def writer(handle: IO[bytes]) -> None:
-        handle.write(result.content)
-
-    write_output(output, writer, overwrite=overwrite, binary=True)
-    if output is not None:
-        err_console.print(f"wrote {to} export of {len(table)} blocks to {output}")
+__all__ = ["feasibility_command", "register"]
 
 
 def _parse_baseline(text: str) -> float:
@@ -120,7 +44,7 @@ def _optical(
     sig_pdot: float | None,
     sig_t0: float | None,
 ) -> Any:
-    from ucbplan.feasibility import OpticalEphemeris
+    from ucbplan.feasibility.signals import OpticalEphemeris
 
     freq_style = any(v is not None for v in (phase, f_rel, fdot_rel))
     period_style = any(v is not None for v in (sig_p, sig_pdot, sig_t0))
@@ -143,7 +67,7 @@ def _fmt(value: float | None, fmt: str) -> str:
 
 
 def _print_report(rep: Any) -> None:
-    from ucbplan.feasibility import MONTH_S, YEAR_S
+    from ucbplan.feasibility.signals import MONTH_S, YEAR_S
 
     t = RichTable(title=f"Feasibility: {rep.name} (paper Sec. 3)")
     for col in ("quantity", "value", "unit", "Eq."):
@@ -260,8 +184,8 @@ def feasibility_command(
 ) -> None:
     """Expected signal magnitudes (paper Sec. 3): K_j, apsidal rates, ΔK, Δv_aps, e floor, Δv_CM,
     and GW vs optical timing errors."""
-    from ucbplan.cliutil import check_output_path
-    from ucbplan.feasibility import plot_apsidal_signal, report_for_target
+    from ucbplan.cli._console import check_output_path
+    from ucbplan.feasibility.signals import plot_apsidal_signal, report_for_target
     from ucbplan.target import load_target
 
     if fmt not in ("table", "json"):
@@ -315,7 +239,7 @@ def _optical_offset(text: str, t_ref: Any) -> float:
     """Seconds from the optical reference epoch (bare number = BJD_TDB) to the LISA midpoint."""
     from astropy.time import Time
 
-    from ucbplan.timescale import parse_tdb
+    from ucbplan.core.timescale import parse_tdb
 
     try:
         epoch = Time(float(text), format="jd", scale="tdb")
@@ -325,6 +249,5 @@ def _optical_offset(text: str, t_ref: Any) -> float:
 
 
 def register(app: typer.Typer) -> None:
-    """Add ``export`` and ``feasibility`` to the ucbplan app."""
-    app.command("export")(export_command)
+    """Add ``feasibility`` to the ucbplan app."""
     app.command("feasibility")(feasibility_command)

@@ -1,8 +1,8 @@
 """Night schedules: anchor epochs → site UTC → constraint-checked blocks → sessions per night.
 
 Pipeline for every target (all vectorised over epochs): the planning modes name the anchors
-(Appendix A2); :func:`ucbplan.ephemeris.find_epochs` gives the barycentric epochs t★ with σ_t and
-the φ_ref π-mode alternative; the light time is removed with one shared site track
+(Appendix A2); :func:`~ucbplan.core.ephemeris.find_epochs` gives the barycentric epochs t★
+with σ_t and the φ_ref π-mode alternative; the light time is removed with one shared site track
 (:mod:`ucbplan.observing.timeconv`); blocks are checked against every constraint over their whole
 length (:mod:`ucbplan.observing.constraints`); sessions (a u = 0 / π pair, both RV zero crossings,
 or single blocks) are then placed night by night in priority order without overlaps, with a
@@ -217,10 +217,10 @@ def candidate_blocks(
 
     Notes
     -----
-    Epochs from Eq. u_precessing_app (Newton, :func:`ucbplan.ephemeris.find_epochs`); site time
+    Epochs from Eq. u_precessing_app (Newton, :func:`ucbplan.core.ephemeris.find_epochs`); site time
     t = t★ − Δ(t★) from the light-time spline; constraints over the whole block.
     """
-    from ucbplan.ephemeris import find_epochs
+    from ucbplan.core.ephemeris import find_epochs
 
     with quiet_erfa():
         offset = float((origin - target.t_ref).to_value(u.s))  # x = tau - offset
@@ -299,7 +299,7 @@ def _tolerance_and_validity(
     target: Target, mode: ModeSpec, settings: PlanSettings
 ) -> tuple[float, Time, float | None, float | None]:
     """(δu_tol, valid-until TDB, σ_v, K) for a target; errors say which number is missing."""
-    from ucbplan.forecast import t_valid, tolerance
+    from ucbplan.core.forecast import t_valid, tolerance
 
     spec = target.spectroscopy
     sigma_v = settings.sigma_v_kms or (spec.sigma_v_kms if spec else None)
@@ -465,7 +465,7 @@ def _prepare(
         spec = t.spectroscopy
         k_smear = (spec.K1_kms if spec and spec.K1_kms else None) or k
         sm = block_smearing(settings.exposure, t.params.n_bar, k_smear)
-        from ucbplan.observing.smearing import parse_smear_budget
+        from ucbplan.core.smearing import parse_smear_budget
 
         max_smear = parse_smear_budget(settings.max_smear, sigma_v) if settings.max_smear else None
         budget_warn += check_smear_budget(t.name, sm, max_smear, settings.max_bin_fraction, sigma_v)
@@ -657,7 +657,7 @@ def _pair_blocks(
     firsts: list[Block], runs: list[_TargetRun], site: Site, settings: PlanSettings
 ) -> tuple[list[Block], list[Unplaced]]:
     """For each first epoch, the second epoch maximising |Δκ_LISA| inside T_valid."""
-    from ucbplan.ephemeris import ll_pair
+    from ucbplan.core.ephemeris import ll_pair
 
     out: list[Block] = []
     unplaced: list[Unplaced] = []

@@ -9,15 +9,14 @@ from typing import IO, TYPE_CHECKING, Any
 
 import numpy as np
 
-from ucbplan.cliutil import write_output
+from ucbplan.core.constants import DAY_S
+from ucbplan.io import write_output
 
 if TYPE_CHECKING:
-    from ucbplan.forecast import HorizonRow
+    from ucbplan.core.forecast import HorizonRow
     from ucbplan.target import Target
 
 __all__ = ["horizon_plot"]
-
-DAY_S = 86400.0
 
 
 def _envelope(
@@ -48,7 +47,7 @@ def horizon_plot(
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from ucbplan.forecast import anchor_sigma_u
+    from ucbplan.core.forecast import anchor_sigma_u
 
     p, cov = target.params, target.covariance
     t_end = target.t_obs_s / 2

@@ -1,6 +1,7 @@
-"""Shared helpers for the command-line shell: offline astropy, safe outputs, output formats.
+"""Output files: one atomic writer, the ``-o`` rule, JSON encoding.
 
-Every command module uses these so that errors, overwrites and machine output behave the same way.
+Every file ucbplan writes goes through :func:`write_output`, so a failed run never leaves a partial
+or changed file and nothing is overwritten without ``overwrite=True`` (``--overwrite``).
 """
 
 from __future__ import annotations
@@ -14,64 +15,11 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import IO, Any
 
-from rich.console import Console
-from rich.markup import escape
-from rich.table import Table as RichTable
-
 from ucbplan.errors import OutputExistsError, UcbplanError
 
-__all__ = [
-    "OUTPUT_FORMATS",
-    "check_output_path",
-    "configure_offline",
-    "err_console",
-    "json_default",
-    "rich_table",
-    "write_output",
-]
-
-
-def _make_console() -> Console:
-    console = Console(stderr=True, highlight=False)
-    if not console.is_terminal and "COLUMNS" not in os.environ:
-        # pipes and CI logs: wide enough that ISO times with microseconds are never cut
-        console = Console(stderr=True, highlight=False, width=180)
-    return console
-
-
-#: Console for humans: rich tables and warnings go to stderr so stdout stays machine-readable.
-#: Unit brackets like "[s]" in table headers must go through :func:`rich_table` (no markup).
-err_console = _make_console()
-
-
-def rich_table(title: str, columns: list[str], **kwargs: Any) -> RichTable:
-    """A rich table whose title and headers are literal text (``[s]`` is a unit, not markup)."""
-    table = RichTable(title=escape(title), **kwargs)
-    for name in columns:
-        table.add_column(escape(name), justify="right")
-    return table
-
+__all__ = ["OUTPUT_FORMATS", "check_output_path", "dump_json", "json_default", "write_output"]
 
 OUTPUT_FORMATS = ("table", "json", "ecsv", "csv")
-
-_OFFLINE_DONE = False
-
-
-def configure_offline() -> None:
-    """Configure astropy so that nothing ever touches the network (SCIENCE.md recipe).
-
-    Called once at CLI start, never on import. Uses the IERS-A/B tables and leap seconds bundled
-    with ``astropy-iers-data``; nights past their coverage are warned about by the planner.
-    """
-    global _OFFLINE_DONE
-    if _OFFLINE_DONE:
-        return
-    from astropy.utils import data, iers
-
-    iers.conf.auto_download = False
-    iers.conf.auto_max_age = None
-    data.conf.allow_internet = False
-    _OFFLINE_DONE = True
 
 
 def check_output_path(path: Path, overwrite: bool) -> None:

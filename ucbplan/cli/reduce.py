@@ -7,7 +7,7 @@ from typing import IO, Any
 
 import typer
 
-from ucbplan.cliutil import check_output_path, err_console, write_output
+from ucbplan.cli._console import check_output_path, err_console, write_output
 from ucbplan.errors import UcbplanError
 
 __all__ = ["reduce_cmd", "register"]
@@ -49,9 +49,9 @@ def reduce_cmd(
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace existing output files."),
 ) -> None:
     """Reduce measured velocities against a target: K_j, γ_j, masses, Δκ, Δv_CM (Secs. 3–5)."""
-    from ucbplan.reduce import ReduceOptions, read_velocities, reduce
     from ucbplan.reduce import report as rep
     from ucbplan.reduce.masses import MASS_RADIUS_MODELS
+    from ucbplan.reduce.pipeline import ReduceOptions, read_velocities, reduce
     from ucbplan.target import load_target
 
     fmt = fmt.lower()

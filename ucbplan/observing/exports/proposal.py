@@ -25,7 +25,7 @@ import numpy as np
 from astropy.table import Table
 
 from ucbplan.errors import InputFileError
-from ucbplan.observing.exports import (
+from ucbplan.observing.exports.common import (
     ExportOptions,
     acquisition_s,
     coordinates,

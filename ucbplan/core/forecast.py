@@ -14,9 +14,10 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ucbplan.ephemeris import ANCHORS, jacobian_kernel, resolve_anchor, u_jacobian
+from ucbplan.core.constants import DAY_S, YEAR_S
+from ucbplan.core.ephemeris import ANCHORS, jacobian_kernel, resolve_anchor, u_jacobian
+from ucbplan.core.params import PhaseParams
 from ucbplan.errors import UcbplanError
-from ucbplan.params import PhaseParams
 
 if TYPE_CHECKING:
     from ucbplan.target import Target
@@ -34,8 +35,6 @@ __all__ = [
 ]
 
 FloatArray = NDArray[np.float64]
-DAY_S = 86400.0
-YEAR_S = 365.25 * DAY_S
 #: Horizons are searched up to this long after the LISA observation [s].
 HORIZON_CAP_S = 300.0 * YEAR_S
 

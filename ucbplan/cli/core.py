@@ -11,13 +11,12 @@ import typer
 from rich.markup import escape
 
 from ucbplan import __version__
-from ucbplan.cliutil import dump_json, err_console, rich_table, write_output
+from ucbplan.cli._console import dump_json, err_console, rich_table, write_output
+from ucbplan.core.constants import DAY_S
 from ucbplan.errors import UcbplanError
 from ucbplan.target import Target, load_target
 
 __all__ = ["register"]
-
-DAY_S = 86400.0
 
 
 def _check_format(fmt: str, allowed: tuple[str, ...]) -> str:
@@ -92,7 +91,7 @@ def _fmt(v: Any) -> str:
 def _summary(t: Target) -> dict[str, Any]:
     from astropy.time import TimeDelta
 
-    from ucbplan.forecast import anchor_sigma_u
+    from ucbplan.core.forecast import anchor_sigma_u
 
     p = t.params
     # T_asc nearest t_ref: Φ_asc = 0 mod 2π (Appendix A1: T_asc = t_ref − φ_ref/(2πf))
@@ -136,8 +135,8 @@ def ephemeris(
     ),
 ) -> None:
     """Barycentric epochs t★ (TDB) where u = u★, with σ_t and the φ_ref π-mode alternative."""
-    from ucbplan.ephemeris import find_epochs
-    from ucbplan.timescale import parse_tdb
+    from ucbplan.core.ephemeris import find_epochs
+    from ucbplan.core.timescale import parse_tdb
 
     fmt = _check_format(fmt, ("table", "json", "ecsv", "csv"))
     if star not in (1, 2):
@@ -170,7 +169,7 @@ def _warn_horizon(t: Target, tau_end: float) -> None:
     spec = t.spectroscopy
     if spec is None or spec.sigma_v_kms is None or spec.k_for_tolerance is None:
         return
-    from ucbplan.forecast import t_valid, tolerance
+    from ucbplan.core.forecast import t_valid, tolerance
 
     tol = tolerance("quadrature", spec.sigma_v_kms, spec.k_for_tolerance, 2)
     tv = t_valid(t, tol, (0.0, math.pi), 1.0)
@@ -294,7 +293,7 @@ def horizon(
     overwrite: bool = typer.Option(False, "--overwrite", help="Replace existing output files."),
 ) -> None:
     """Phase-coherence horizons T_valid (paper Tables 4 and 7) and σ_u at the end of LISA."""
-    from ucbplan.forecast import horizon_table
+    from ucbplan.core.forecast import horizon_table
 
     fmt = _check_format(fmt, ("table", "json", "ecsv", "csv"))
     t = load_target(target)
@@ -304,7 +303,7 @@ def horizon(
             raise UcbplanError(f"--alpha must be positive, got {a}")
     rows = horizon_table(t, sv, k, alphas=alpha, anchors=anchor, n_epochs=epochs)
     if plot is not None:
-        from ucbplan.plots import horizon_plot
+        from ucbplan.plotting.horizon import horizon_plot
 
         horizon_plot(t, rows, plot, overwrite=overwrite)
     if fmt == "table" and output is None:

@@ -1,7 +1,7 @@
-"""The ``ucbplan`` command line: a thin shell over the library (STYLE.md §12).
+"""The ``ucbplan`` command line: a thin shell over the library.
 
-Each command family lives in its own ``cli_*`` module exposing ``register(app)``; this module only
-builds the app, configures astropy for offline use and turns ``UcbplanError`` into one line on
+Each command family lives in its own ``ucbplan.cli`` module exposing ``register(app)``; this
+module only builds the app, configures astropy for offline use and turns ``UcbplanError`` into one line on
 stderr with exit code 2 (no traceback).
 """
 
@@ -12,7 +12,7 @@ import sys
 import typer
 
 from ucbplan import __version__
-from ucbplan.cliutil import configure_offline, err_console
+from ucbplan.cli._console import configure_offline, err_console
 from ucbplan.errors import UcbplanError
 
 __all__ = ["app", "main"]
@@ -43,15 +43,9 @@ def _root(
 
 
 def _register_all() -> None:
-    import importlib
+    from ucbplan.cli import core, export, feasibility, lisa, plan, reduce
 
-    for name in ("cli_core", "cli_plan", "cli_feasibility", "cli_reduce", "cli_lisa"):
-        try:
-            module = importlib.import_module(f"ucbplan.{name}")
-        except ModuleNotFoundError as exc:
-            if exc.name == f"ucbplan.{name}":
-                continue
-            raise
+    for module in (core, plan, export, feasibility, reduce, lisa):
         module.register(app)
 
 

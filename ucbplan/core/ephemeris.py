@@ -19,8 +19,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ucbplan.core.constants import TWO_PI
+from ucbplan.core.params import PARAM_NAMES, PhaseParams
 from ucbplan.errors import ConvergenceError, UcbplanError
-from ucbplan.params import PARAM_NAMES, PhaseParams
 
 if TYPE_CHECKING:
     from ucbplan.target import Target
@@ -41,7 +42,6 @@ __all__ = [
 ]
 
 FloatArray = NDArray[np.float64]
-TWO_PI = 2.0 * math.pi
 
 #: Named anchors → the u★ values they stand for [rad]; "zero-crossing" is solved from cos u = −κ(t).
 ANCHORS: dict[str, tuple[float, ...]] = {
@@ -478,7 +478,7 @@ def find_epochs(
     σ_t = σ_u(t★)/|u̇(t★)| (Eq. sigma_tstar, all terms of u̇ kept). The alternative epoch solves the
     same u★ with φ_ref + π (Appendix A1: the GW phase posterior's second mode), ≈ P_b/4 earlier.
     """
-    from ucbplan.forecast import sigma_u_from_jacobian
+    from ucbplan.core.forecast import sigma_u_from_jacobian
 
     label, targets = resolve_anchor(anchor)
     p = target.params

@@ -1,0 +1,45 @@
+"""The terminal side of the CLI: one stderr console and literal-text rich tables."""
+
+from __future__ import annotations
+
+import os
+from typing import Any
+
+from rich.console import Console
+from rich.markup import escape
+from rich.table import Table as RichTable
+
+from ucbplan.io import OUTPUT_FORMATS, check_output_path, dump_json, json_default, write_output
+from ucbplan.offline import configure_offline
+
+__all__ = [
+    "OUTPUT_FORMATS",
+    "check_output_path",
+    "configure_offline",
+    "dump_json",
+    "err_console",
+    "json_default",
+    "rich_table",
+    "write_output",
+]
+
+
+def _make_console() -> Console:
+    console = Console(stderr=True, highlight=False)
+    if not console.is_terminal and "COLUMNS" not in os.environ:
+        # pipes and CI logs: wide enough that ISO times with microseconds are never cut
+        console = Console(stderr=True, highlight=False, width=180)
+    return console
+
+
+#: Console for humans: rich tables and warnings go to stderr so stdout stays machine-readable.
+#: Unit brackets like "[s]" in table headers must go through :func:`rich_table` (no markup).
+err_console = _make_console()
+
+
+def rich_table(title: str, columns: list[str], **kwargs: Any) -> RichTable:
+    """A rich table whose title and headers are literal text (``[s]`` is a unit, not markup)."""
+    table = RichTable(title=escape(title), **kwargs)
+    for name in columns:
+        table.add_column(escape(name), justify="right")
+    return table

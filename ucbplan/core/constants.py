@@ -1,0 +1,54 @@
+"""Physical constants and time units, declared once for the whole package (SI).
+
+The values are astropy's (CODATA 2018, IAU 2015 nominal solar values), written out so the numerical
+core does not import ``astropy.constants``; ``tests/test_constants.py`` checks them against astropy.
+"""
+
+from __future__ import annotations
+
+import math
+
+__all__ = [
+    "AU_M",
+    "C_KM_S",
+    "C_M_S",
+    "DAY_S",
+    "E_MAX",
+    "G_SI",
+    "L_B",
+    "MONTH_S",
+    "MSUN_KG",
+    "RSUN_M",
+    "SIDEREAL_YEAR_S",
+    "TWO_PI",
+    "YEAR_S",
+]
+
+#: Speed of light [m/s] (exact).
+C_M_S = 299792458.0
+#: Speed of light [km/s].
+C_KM_S = 299792.458
+#: Newtonian constant of gravitation [m^3 kg^-1 s^-2] (CODATA 2018).
+G_SI = 6.67430e-11
+#: Solar mass [kg] (IAU 2015 nominal GM_sun / CODATA 2018 G, as astropy.constants.M_sun).
+MSUN_KG = 1.988409870698051e30
+#: Nominal solar radius [m] (IAU 2015).
+RSUN_M = 6.957e8
+#: Astronomical unit [m] (IAU 2012, exact).
+AU_M = 1.495978707e11
+#: IAU 2006 Resolution B3: d(TDB)/d(TCB) = 1 − L_B.
+L_B = 1.550519768e-8
+
+#: One day [s].
+DAY_S = 86400.0
+#: Julian year [s] (what astropy's bare "yr" means).
+YEAR_S = 365.25 * DAY_S
+#: One twelfth of a Julian year [s].
+MONTH_S = YEAR_S / 12.0
+#: Sidereal year [s]; the paper's T_obs = 4 sidereal years.
+SIDEREAL_YEAR_S = 31558149.7635
+#: 2π.
+TWO_PI = 2.0 * math.pi
+
+#: Largest eccentricity the first-order (small-e) phase model accepts.
+E_MAX = 0.1

@@ -1,0 +1,1 @@
+"""Observatory and proposal exports of the blocks table, one function per format."""

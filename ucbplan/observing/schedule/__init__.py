@@ -1,0 +1,1 @@
+"""Night schedules: candidate epochs → blocks → sessions placed by priority."""
