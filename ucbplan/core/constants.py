@@ -15,6 +15,7 @@ __all__ = [
     "DAY_S",
     "E_MAX",
     "G_SI",
+    "KPC_M",
     "L_B",
     "MONTH_S",
     "MSUN_KG",
@@ -36,6 +37,8 @@ MSUN_KG = 1.988409870698051e30
 RSUN_M = 6.957e8
 #: Astronomical unit [m] (IAU 2012, exact).
 AU_M = 1.495978707e11
+#: Kiloparsec [m] (IAU 2015 parsec).
+KPC_M = 3.0856775814913673e19
 #: IAU 2006 Resolution B3: d(TDB)/d(TCB) = 1 − L_B.
 L_B = 1.550519768e-8
 

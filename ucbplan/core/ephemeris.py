@@ -37,6 +37,7 @@ __all__ = [
     "phase_asc",
     "radial_velocity",
     "resolve_anchor",
+    "sigma_u_from_jacobian",
     "solve_u",
     "u_jacobian",
 ]
@@ -222,6 +223,13 @@ def u_jacobian(p: PhaseParams, tau_s: ArrayLike, star: int = 1) -> FloatArray:
 def _jacobian_at(p: PhaseParams, tau: FloatArray, s: FloatArray, c: FloatArray) -> FloatArray:
     """Jacobian given sin/cos of Φ_asc (lets the forecast place Φ_asc at an anchor)."""
     return jacobian_kernel(p.eta, p.kappa, p.omega_dot, tau, s, c)
+
+
+def sigma_u_from_jacobian(jac: FloatArray, cov: FloatArray) -> FloatArray:
+    """σ_u = √(J C Jᵀ) for a stack of Jacobians ``jac`` (..., 7) [rad]."""
+    var = np.sum((jac @ cov) * jac, axis=-1)
+    out: FloatArray = np.sqrt(np.maximum(var, 0.0))
+    return out
 
 
 def jacobian_kernel(
@@ -478,7 +486,6 @@ def find_epochs(
     σ_t = σ_u(t★)/|u̇(t★)| (Eq. sigma_tstar, all terms of u̇ kept). The alternative epoch solves the
     same u★ with φ_ref + π (Appendix A1: the GW phase posterior's second mode), ≈ P_b/4 earlier.
     """
-    from ucbplan.core.forecast import sigma_u_from_jacobian
 
     label, targets = resolve_anchor(anchor)
     p = target.params

@@ -15,7 +15,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ucbplan.core.constants import DAY_S, YEAR_S
-from ucbplan.core.ephemeris import ANCHORS, jacobian_kernel, resolve_anchor, u_jacobian
+from ucbplan.core.ephemeris import (
+    ANCHORS,
+    jacobian_kernel,
+    resolve_anchor,
+    sigma_u_from_jacobian,
+    u_jacobian,
+)
 from ucbplan.core.params import PhaseParams
 from ucbplan.errors import UcbplanError
 
@@ -37,13 +43,6 @@ __all__ = [
 FloatArray = NDArray[np.float64]
 #: Horizons are searched up to this long after the LISA observation [s].
 HORIZON_CAP_S = 300.0 * YEAR_S
-
-
-def sigma_u_from_jacobian(jac: FloatArray, cov: FloatArray) -> FloatArray:
-    """σ_u = √(J C Jᵀ) for a stack of Jacobians ``jac`` (..., 7) [rad]."""
-    var = np.sum((jac @ cov) * jac, axis=-1)
-    out: FloatArray = np.sqrt(np.maximum(var, 0.0))
-    return out
 
 
 def sigma_u(p: PhaseParams, cov: FloatArray, tau_s: ArrayLike, star: int = 1) -> FloatArray:

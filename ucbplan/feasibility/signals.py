@@ -129,7 +129,7 @@ def omega_dot_gr(m_tot_msun: float, period_s: float, e: float = 0.0) -> float:
     -----
     Eq. omega_dot_GR.
     """
-    from ucbplan.reduce.masses import omega_dot_gr as _omega_dot_gr
+    from ucbplan.core.binary import omega_dot_gr as _omega_dot_gr
 
     _check_positive(m_tot_msun=m_tot_msun, period_s=period_s)
     _check_ecc(e)
