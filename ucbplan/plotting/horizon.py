@@ -5,12 +5,12 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from pathlib import Path
-from typing import IO, TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ucbplan.core.constants import DAY_S
-from ucbplan.io import write_output
+from ucbplan.plotting import pyplot, save_figure
 
 if TYPE_CHECKING:
     from ucbplan.core.forecast import HorizonRow
@@ -42,12 +42,9 @@ def horizon_plot(
 
     The curve is the quadrature-anchor σ_u (max over u★ = 0, π) and, dashed, the conjunction one.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     from ucbplan.core.forecast import anchor_sigma_u
+
+    plt = pyplot()
 
     p, cov = target.params, target.covariance
     t_end = target.t_obs_s / 2
@@ -92,11 +89,4 @@ def horizon_plot(
     ax.set_ylabel("σ_u [mrad]")
     ax.set_title(f"{target.name}: phase-coherence forecast")
     ax.legend(loc="lower right", fontsize=8)
-
-    def _w(handle: IO[Any]) -> None:
-        fig.savefig(handle, format="png", dpi=120)
-
-    try:
-        write_output(path, _w, overwrite=overwrite, binary=True)
-    finally:
-        plt.close(fig)
+    save_figure(fig, path, overwrite=overwrite, dpi=120)
