@@ -3,7 +3,7 @@
 Layers, bottom to top (a module may import its own package and any lower layer):
 
 0. ``ucbplan`` (version), ``ucbplan.errors``
-1. ``ucbplan.core`` (physics), ``ucbplan.io`` (files), ``ucbplan.offline`` (astropy set-up)
+1. ``ucbplan.core`` (physics), ``ucbplan.io``/``ucbplan.inputs`` (files), ``ucbplan.offline``
 2. ``ucbplan.target`` (target files)
 3. ``ucbplan.plotting`` (backend, atomic figures, horizon plot)
 4. ``ucbplan.observing``, ``ucbplan.reduce``, ``ucbplan.lisa``, ``ucbplan.feasibility``,
@@ -27,6 +27,7 @@ LAYER = {
     "core": 1,
     "io": 1,
     "offline": 1,
+    "inputs": 1,
     "target": 2,
     "plotting": 3,
     "observing": 4,

@@ -1,0 +1,144 @@
+"""Reading input files defensively: size limits, UTF-8 (with or without BOM), strict YAML.
+
+Every YAML file ucbplan reads (target files, site tables, instrument tables, EM priors) goes
+through :func:`load_yaml`, which
+
+- reads only YAML's safe subset and refuses files larger than :data:`MAX_YAML_BYTES`;
+- refuses duplicate keys (YAML would silently keep the last one);
+- refuses more than :data:`MAX_ALIASES` aliases, so a few hundred bytes of nested anchors cannot
+  expand into gigabytes ("billion laughs");
+- reads numbers written without a decimal point, such as ``5e-14``, as numbers (plain YAML 1.1
+  reads them as strings).
+
+Text tables go through :func:`read_text`, which accepts UTF-8 with or without a byte-order mark
+and refuses other encodings with a message saying how to convert.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from ucbplan.errors import SchemaError
+
+__all__ = ["MAX_ALIASES", "MAX_TEXT_BYTES", "MAX_YAML_BYTES", "load_yaml", "read_text"]
+
+#: Largest YAML input [bytes]; target and configuration files are a few kB.
+MAX_YAML_BYTES = 2_000_000
+#: Largest text table [bytes] (10⁷ spectra of ~60 bytes).
+MAX_TEXT_BYTES = 2_000_000_000
+#: Most aliases (``*name``) one YAML file may use.
+MAX_ALIASES = 50
+
+_FLOAT = re.compile(r"^[-+]?(?:[0-9][0-9_]*)(?:\.[0-9_]*)?[eE][-+]?[0-9]+$")
+
+
+class _StrictLoader(yaml.SafeLoader):
+    """SafeLoader with an alias budget, duplicate-key check and exponent-only floats."""
+
+    def __init__(self, stream: str) -> None:
+        super().__init__(stream)
+        self.aliases_seen = 0
+
+    def compose_node(self, parent: Any, index: Any) -> Any:
+        if self.check_event(yaml.AliasEvent):
+            self.aliases_seen += 1
+            if self.aliases_seen > MAX_ALIASES:
+                mark = self.peek_event().start_mark
+                raise yaml.YAMLError(
+                    f"more than {MAX_ALIASES} aliases (line {mark.line + 1}); write the values "
+                    "out instead of using anchors"
+                )
+        return super().compose_node(parent, index)
+
+    def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict[Any, Any]:
+        seen: dict[Any, int] = {}
+        for key_node, _ in node.value:
+            key = self.construct_object(key_node, deep=True)
+            try:
+                hash(key)
+            except TypeError:
+                continue  # let the base class report an unhashable key
+            if key in seen:
+                line = key_node.start_mark.line + 1
+                raise yaml.YAMLError(
+                    f"duplicate key {key!r} (lines {seen[key]} and {line}); keep one"
+                )
+            seen[key] = key_node.start_mark.line + 1
+        return super().construct_mapping(node, deep=deep)
+
+
+_StrictLoader.add_implicit_resolver("tag:yaml.org,2002:float", _FLOAT, list("-+0123456789"))
+
+
+def _read_bytes(path: Path, limit: int, what: str) -> bytes:
+    try:
+        size = path.stat().st_size
+        if not path.is_file():
+            raise SchemaError(f"{path}: not a regular file; give the path of a {what}")
+        if size > limit:
+            raise SchemaError(
+                f"{path}: {size} bytes is larger than any {what} ({limit} bytes at most); "
+                "check the path"
+            )
+        return path.read_bytes()
+    except FileNotFoundError:
+        raise SchemaError(f"{path}: file not found; check the path") from None
+    except IsADirectoryError:
+        raise SchemaError(f"{path}: is a folder; give the path of a {what}") from None
+    except OSError as exc:
+        raise SchemaError(f"{path}: cannot read ({exc.strerror}); check the path") from None
+
+
+def _decode(data: bytes, path: Path) -> str:
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise SchemaError(
+            f"{path}: not UTF-8 text (byte 0x{data[exc.start]:02x} at offset {exc.start}); "
+            "save the file as UTF-8 (e.g. iconv -f latin1 -t utf-8)"
+        ) from None
+
+
+def read_text(path: Path, what: str = "text table", limit: int = MAX_TEXT_BYTES) -> str:
+    """The file's text, UTF-8 with an optional byte-order mark.
+
+    Raises
+    ------
+    SchemaError
+        Missing, not a regular file, too large, or not UTF-8.
+    """
+    return _decode(_read_bytes(path, limit, what), path)
+
+
+def load_yaml(path: Path, what: str = "YAML file", text: str | None = None) -> Any:
+    """Parse a YAML file (or ``text`` read from it) strictly; see the module notes.
+
+    Raises
+    ------
+    SchemaError
+        Unreadable file, YAML syntax error, duplicate key or alias bomb; one line with the
+        position.
+    """
+    if text is None:
+        text = _decode(_read_bytes(path, MAX_YAML_BYTES, what), path)
+    elif len(text) > MAX_YAML_BYTES:
+        raise SchemaError(f"{path}: larger than any {what} ({MAX_YAML_BYTES} bytes at most)")
+    try:
+        loader = _StrictLoader(text)
+    except yaml.YAMLError as exc:  # the reader checks characters on construction
+        raise SchemaError(f"{path}: not valid YAML: {' '.join(str(exc).split())}") from None
+    try:
+        return loader.get_single_data()
+    except yaml.MarkedYAMLError as exc:
+        mark = exc.problem_mark
+        where = f"line {mark.line + 1}, column {mark.column + 1}: " if mark else ""
+        problem = " ".join(str(exc.problem or exc.context or "syntax error").split())
+        raise SchemaError(f"{path}: not valid YAML: {where}{problem}") from None
+    except yaml.YAMLError as exc:
+        raise SchemaError(f"{path}: not valid YAML: {' '.join(str(exc).split())}") from None
+    finally:
+        loader.dispose()
