@@ -205,3 +205,35 @@ def test_quadrature_epoch_is_velocity_extremum() -> None:
     t_max = brentq(dv, t_star - 20, t_star + 20, xtol=1e-9)
     # v ∝ cos u + κ(t): the extremum is at u = 0 up to κ̇ ~ ω̇e terms (≪ 1 ms)
     assert abs(t_max - t_star) < 1e-3
+
+
+def test_ascending_node_is_u_zero() -> None:
+    """At T_asc (Appendix A1) a circular orbit has u = 0 mod 2π; σ(T_asc) = σ_φ/(2πf)."""
+    from ucbplan.core.phase import ascending_node_s, sigma_ascending_node_s
+
+    p = PhaseParams(2.3, 8.4e-3, 0.0, 0.0, 0.0, 0.0, 0.0)
+    u = arg_latitude(p, np.array([ascending_node_s(p)]))[0]
+    assert abs(np.angle(np.exp(1j * u))) < 1e-12
+    cov = np.zeros((7, 7))
+    cov[0, 0] = 0.03**2
+    assert sigma_ascending_node_s(p, cov) == pytest.approx(0.03 / (2 * math.pi * 8.4e-3))
+
+
+def test_find_epochs_takes_any_ephemeris_source() -> None:
+    """The core asks only for params, covariance and t_obs_s: a plain record works (no Target)."""
+    from types import SimpleNamespace
+
+    from ucbplan.core.ephemeris import find_epochs
+
+    cov = np.zeros((7, 7))
+    cov[0, 0] = 1e-4  # σ_φ = 0.01 rad → σ_u ≈ 5e-3 rad at every epoch
+    src = SimpleNamespace(params=FID, covariance=cov, t_obs_s=1e8)
+    es = find_epochs(src, 1e6, 1e6 + 600.0, "quadrature")
+    assert len(es) == pytest.approx(600 / 238 * 2, abs=2)
+    u = arg_latitude(FID, es.tau_s)
+    assert np.max(np.abs(np.angle(np.exp(1j * (u - es.u_star_rad))))) < 1e-9
+    # σ_u = ½σ_φ(1 + O(e)) through the e-dependent ∂u/∂φ; σ_t = σ_u/|u̇| with |u̇| ≈ πf
+    assert np.all(np.abs(es.sigma_u_rad - 5e-3) < 5e-3 * 3 * FID.eccentricity)
+    assert np.allclose(es.sigma_t_s, 5e-3 / (math.pi * FID.f_gw), rtol=4 * FID.eccentricity)
+    # π-mode alternative a quarter orbit (≈ P_b/4 ≈ 59.5 s) earlier
+    assert np.allclose(es.tau_s - es.tau_alt_s, 0.25 * 2 / FID.f_gw, rtol=0.1)

@@ -244,3 +244,29 @@ def test_shift_columns_equals_scalar_shift() -> None:
             assert out[n][i] == pytest.approx(getattr(ref, n), rel=1e-12)
         dphi = np.angle(np.exp(1j * (out["phase"][i] - ref.phase)))
         assert abs(dphi) < 1e-9  # float64 f·T/2 ≈ 5e5 cycles: ~1e-10 cycle rounding
+
+
+def test_horizon_s_closed_form_fdot_only() -> None:
+    """horizon_s = √(2α δu_tol/(πσ_ḟ)) − T/2 with the N = 2 quadrature tolerance (√2σ_v/K)^½."""
+    from ucbplan.core.forecast import horizon_s
+
+    cov = np.zeros((7, 7))
+    sig = 3.41e-19
+    cov[2, 2] = sig**2
+    p = replace(FID, eta=0.0, kappa=0.0, omega_dot=0.0)
+    tol = math.sqrt(math.sqrt(2) * 15.0 / 1298.0)
+    expect = math.sqrt(2 * 0.5 * tol / (math.pi * sig)) - T4 / 2
+    assert horizon_s((p, cov, T4), 15.0, 1298.0, "quadrature", alpha=0.5) == pytest.approx(
+        expect, rel=1e-6
+    )
+
+
+def test_sigma_u_end_phase_only() -> None:
+    """Only σ(φ_ref): σ_u = σ_φ/2 at every epoch and anchor (∂u/∂φ_ref = 1/2 for e = 0)."""
+    from ucbplan.core.forecast import sigma_u_end
+
+    cov = np.zeros((7, 7))
+    cov[0, 0] = 0.02**2
+    p = replace(FID, eta=0.0, kappa=0.0, omega_dot=0.0)
+    for anchor in ("quadrature", "conjunction", 0.7):
+        assert sigma_u_end((p, cov, T4), anchor) == pytest.approx(0.01, rel=1e-12)
