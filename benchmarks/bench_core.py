@@ -20,9 +20,10 @@ from concurrent.futures import ProcessPoolExecutor
 import numpy as np
 from scipy.optimize import brentq
 
-from ucbplan.core.ephemeris import _u_cycles, solve_u
+from ucbplan.core.ephemeris import solve_u
 from ucbplan.core.forecast import anchor_sigma_u, t_valid, t_valid_batch, tolerance
 from ucbplan.core.params import PhaseParams
+from ucbplan.core.phase import u_cycles
 
 T4 = 4 * 31558149.7635
 ECC = PhaseParams(
@@ -51,7 +52,7 @@ def bench_inversion(n_epochs: int) -> None:
             guess = d + 1e-3 * period  # the peer gets a good guess and a quarter-orbit bracket
 
             def f(x: float, kk: int = int(kk), p: PhaseParams = p, o: float = origin) -> float:
-                mm, g = _u_cycles(p, np.array([x]), o)
+                mm, g = u_cycles(p, np.array([x]), o)
                 return float((mm[0] - kk) + g[0])
 
             brentq(f, guess - period / 4, guess + period / 4, xtol=1e-12)

@@ -15,16 +15,16 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.optimize import brentq
 
-from ucbplan.core.ephemeris import (
-    _u_cycles,
+from ucbplan.core.ephemeris import solve_u
+from ucbplan.core.params import PhaseParams
+from ucbplan.core.phase import (
     arg_latitude,
     arg_latitude_rate,
     ll_pair,
     phase_asc,
     radial_velocity,
-    solve_u,
+    u_cycles,
 )
-from ucbplan.core.params import PhaseParams
 
 YEAR = 365.25 * 86400.0
 FID = PhaseParams(
@@ -33,7 +33,7 @@ FID = PhaseParams(
 
 
 def _resid(p: PhaseParams, k, dt, us, origin, star=1):
-    m, g = _u_cycles(p, dt, origin, star)
+    m, g = u_cycles(p, dt, origin, star)
     return 2 * math.pi * ((m - k) + (g - us / (2 * math.pi)))
 
 
@@ -59,7 +59,7 @@ params_st = st.builds(
     star=st.sampled_from([1, 2]),
 )
 def test_round_trip_u_of_t_star(p: PhaseParams, start_yr: float, u_star: float, star: int) -> None:
-    """u(t★) = u★ to 1e-10 rad (SCIENCE.md target), over e, ω, ω̇, ḟ, f̈ and epochs ±12 yr."""
+    """u(t★) = u★ to 1e-10 rad (docs/method.md), over e, ω, ω̇, ḟ, f̈ and epochs ±12 yr."""
     start = start_yr * YEAR
     k, dt, us, origin = solve_u(p, start, start + 6 * 3600.0, u_star, star)
     assert k.size > 0
@@ -97,10 +97,10 @@ def test_appendix_a_epoch_formulas(scale: float) -> None:
     """Node, zero crossing and conjunction epochs of Appendix A1 agree with Newton to O(e²).
 
     Reference: T_asc + 2η/n̄ (u = 0), T_asc + π/(2n̄) − κ/n̄ (zero crossing),
-    T_asc + π/(2n̄) − 2κ/n̄ (u = π/2). SCIENCE.md: ≤ 6 ms at e = 0.0096; we require ≤ 2 e²/n̄
+    T_asc + π/(2n̄) − 2κ/n̄ (u = π/2). docs/method.md: ≤ 6 ms at e = 0.0096; we require ≤ 2 e²/n̄
     and check the error falls ∝ e² when e is halved.
     """
-    # Table 3 midpoint (η, κ) of the fiducial source, e = 0.0094 (the SCIENCE.md check)
+    # Table 3 midpoint (η, κ) of the fiducial source, e = 0.0094 (the docs/method.md check)
     p = PhaseParams(0.3, 8.4062899940e-3, 0.0, 0.0, 8.249643e-3 * scale, 4.524585e-3 * scale, 0.0)
     nbar = math.pi * p.f_gw
     e2 = p.eccentricity**2
@@ -115,7 +115,7 @@ def test_appendix_a_epoch_formulas(scale: float) -> None:
     for err in (err_node, err_zc, err_conj):
         assert err < 2 * e2 / nbar
     if scale == 1.0:
-        assert max(err_node, err_zc, err_conj) < 6e-3  # SCIENCE.md checked number
+        assert max(err_node, err_zc, err_conj) < 6e-3  # docs/method.md, "Phase model"
 
 
 def _kepler_u(p: PhaseParams, tau: np.ndarray) -> np.ndarray:
@@ -133,7 +133,7 @@ def _kepler_u(p: PhaseParams, tau: np.ndarray) -> np.ndarray:
 
 @pytest.mark.parametrize("e", [0.0096, 0.03, 0.08])
 def test_first_order_u_vs_exact_kepler(e: float) -> None:
-    """First-order u differs from the exact Kepler ω + ν by ≤ 2e² rad (SCIENCE.md: ≈ 1.25e²)."""
+    """First-order u differs from the exact Kepler ω + ν by ≤ 2e² rad (docs/method.md: ≈ 1.25e²)."""
     p = PhaseParams(1.0, 8.4e-3, 0.0, 0.0, e * math.sin(0.7), e * math.cos(0.7), 0.0)
     tau = np.linspace(0.0, 2 * 238.0, 2001)
     diff = np.angle(np.exp(1j * (arg_latitude(p, tau) - _kepler_u(p, tau))))
@@ -151,7 +151,7 @@ def test_rate_matches_finite_difference() -> None:
             * math.pi
             * (
                 (lambda a, b: (a[0] - b[0]) + (a[1] - b[1]))(
-                    _u_cycles(FID, np.array([h]), t), _u_cycles(FID, np.array([-h]), t)
+                    u_cycles(FID, np.array([h]), t), u_cycles(FID, np.array([-h]), t)
                 )[0]
             )
             / (2 * h)
@@ -205,3 +205,35 @@ def test_quadrature_epoch_is_velocity_extremum() -> None:
     t_max = brentq(dv, t_star - 20, t_star + 20, xtol=1e-9)
     # v ∝ cos u + κ(t): the extremum is at u = 0 up to κ̇ ~ ω̇e terms (≪ 1 ms)
     assert abs(t_max - t_star) < 1e-3
+
+
+def test_ascending_node_is_u_zero() -> None:
+    """At T_asc (Appendix A1) a circular orbit has u = 0 mod 2π; σ(T_asc) = σ_φ/(2πf)."""
+    from ucbplan.core.phase import ascending_node_s, sigma_ascending_node_s
+
+    p = PhaseParams(2.3, 8.4e-3, 0.0, 0.0, 0.0, 0.0, 0.0)
+    u = arg_latitude(p, np.array([ascending_node_s(p)]))[0]
+    assert abs(np.angle(np.exp(1j * u))) < 1e-12
+    cov = np.zeros((7, 7))
+    cov[0, 0] = 0.03**2
+    assert sigma_ascending_node_s(p, cov) == pytest.approx(0.03 / (2 * math.pi * 8.4e-3))
+
+
+def test_find_epochs_takes_any_ephemeris_source() -> None:
+    """The core asks only for params, covariance and t_obs_s: a plain record works (no Target)."""
+    from types import SimpleNamespace
+
+    from ucbplan.core.ephemeris import find_epochs
+
+    cov = np.zeros((7, 7))
+    cov[0, 0] = 1e-4  # σ_φ = 0.01 rad → σ_u ≈ 5e-3 rad at every epoch
+    src = SimpleNamespace(params=FID, covariance=cov, t_obs_s=1e8)
+    es = find_epochs(src, 1e6, 1e6 + 600.0, "quadrature")
+    assert len(es) == pytest.approx(600 / 238 * 2, abs=2)
+    u = arg_latitude(FID, es.tau_s)
+    assert np.max(np.abs(np.angle(np.exp(1j * (u - es.u_star_rad))))) < 1e-9
+    # σ_u = ½σ_φ(1 + O(e)) through the e-dependent ∂u/∂φ; σ_t = σ_u/|u̇| with |u̇| ≈ πf
+    assert np.all(np.abs(es.sigma_u_rad - 5e-3) < 5e-3 * 3 * FID.eccentricity)
+    assert np.allclose(es.sigma_t_s, 5e-3 / (math.pi * FID.f_gw), rtol=4 * FID.eccentricity)
+    # π-mode alternative a quarter orbit (≈ P_b/4 ≈ 59.5 s) earlier
+    assert np.allclose(es.tau_s - es.tau_alt_s, 0.25 * 2 / FID.f_gw, rtol=0.1)

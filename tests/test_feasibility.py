@@ -1,4 +1,4 @@
-"""Expected signal magnitudes (paper Sec. 3) against the numbers the paper and SCIENCE.md print.
+"""Expected signal magnitudes (paper Sec. 3) against the numbers the paper and docs/method.md print.
 
 Tolerances: the paper prints most coefficients to 2–4 significant figures, so each test allows
 half a unit of the last printed digit unless a different reason is stated next to it.
@@ -17,10 +17,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from typer.testing import CliRunner
 
-from ucbplan.errors import UcbplanError
-from ucbplan.feasibility.signals import (
-    MONTH_S,
-    YEAR_S,
+from ucbplan.core.constants import MONTH_S, YEAR_S
+from ucbplan.errors import OutputExistsError, UcbplanError
+from ucbplan.feasibility import (
     OpticalEphemeris,
     delta_k_bound,
     delta_v_aps,
@@ -30,35 +29,31 @@ from ucbplan.feasibility.signals import (
     gw_timing_s,
     omega_dot_gr,
     omega_dot_tide,
+    optical_ephemeris,
     optical_timing_s,
     plot_apsidal_signal,
+    plot_report,
     report_for_target,
     semi_amplitudes,
     tau_chirp_gr_s,
     tertiary_acceleration,
 )
-from ucbplan.offline import configure_offline
 
 ROOT = Path(__file__).resolve().parents[1]
 HM_CNC = ROOT / "catalogs" / "hm-cnc.yaml"
 FIDUCIAL = ROOT / "catalogs" / "fiducial-eccentric.yaml"
 P_FID = 0.00275386 * 86400.0  # paper Sec. 4.1 [s]
 I_FID = 1.4775  # rad
-T_OBS = 4 * 31558149.7635  # 4 sidereal years (SCIENCE.md)
+T_OBS = 4 * 31558149.7635  # 4 sidereal years (docs/method.md, "Time scales")
 HM_F_ORB = 6.2204944297e-3 / 2  # orbital frequency of HM Cnc (Sec. 4.2 f_GW,0 / 2) [Hz]
 KMS = 1e3
-
-
-@pytest.fixture(autouse=True, scope="module")
-def _offline() -> None:
-    configure_offline()
 
 
 # ---------------------------------------------------------------------------- Eq. semiamp_est
 
 
 def test_semi_amplitudes_fiducial() -> None:
-    # Paper Sec. 4.1 / SCIENCE.md errata: K1 = 585.3, K2 = 712.6 km/s (printed to 0.1 km/s).
+    # Paper Sec. 4.1 / docs/method.md errata: K1 = 585.3, K2 = 712.6 km/s (printed to 0.1 km/s).
     k1, k2 = semi_amplitudes(0.347, 0.285, P_FID, math.sin(I_FID), e=0.0096)
     assert k1 / KMS == pytest.approx(585.3, abs=0.05)
     assert k2 / KMS == pytest.approx(712.6, abs=0.05)
@@ -128,7 +123,7 @@ def test_omega_dot_gr_coefficient() -> None:
 def test_omega_dot_tide_coefficient_and_errata() -> None:
     # Eq. del_om_tide: 3.7 rad per month at 0.6 + 0.6 M_sun, P_b = 5 min (printed to 0.1).
     assert omega_dot_tide(0.6, 0.6, 300.0) * MONTH_S == pytest.approx(3.7, abs=0.05)
-    # SCIENCE.md erratum: 0.347 + 0.285 M_sun gives "≈100 rad/month" at 5 min (93.7; the paper's
+    # docs/method.md erratum: 0.347 + 0.285 M_sun gives "≈100 rad/month" at 5 min (93.7; the paper's
     # "≃" is one significant figure → 10 %) and ≈256 at the paper's P_b = 3.97 min (0.5 %).
     assert omega_dot_tide(0.347, 0.285, 300.0) * MONTH_S == pytest.approx(100.0, rel=0.10)
     assert omega_dot_tide(0.347, 0.285, P_FID) * MONTH_S == pytest.approx(256.0, rel=0.005)
@@ -188,8 +183,14 @@ def test_delta_v_aps_bound_and_floor() -> None:
     # e floor: σ_v = 15 km/s → e ≳ 0.01 for one pair; N spectra lower it by N^{-1/2}.
     assert eccentricity_floor(15e3, 747e3) == pytest.approx(0.01, abs=0.0005)
     assert eccentricity_floor(15e3, 747e3, 4) == pytest.approx(eccentricity_floor(15e3, 747e3) / 2)
-    # Fig. apsidal_signal caption: 2 K1 e ≈ 12 km/s at e ~ 0.01 for the fiducial K1 = 585 km/s.
-    assert 2 * 585.3e3 * 0.01 / KMS == pytest.approx(12.0, abs=0.5)
+    # Fig. apsidal_signal caption: 2 K1 e ≈ 12 km/s at e ~ 0.01 for the fiducial binary (its K1
+    # from the masses, period and inclination of Sec. 4.1; "≈ 12" is two figures → ±0.5).
+    rep = feasibility_report(
+        name="fid", period_s=P_FID, f_gw_hz=2 / P_FID, sin_i=math.sin(I_FID), e=0.01,
+        m1_msun=0.347, m2_msun=0.285,
+    )  # fmt: skip
+    assert rep.delta_v_aps_max_m_s is not None
+    assert rep.delta_v_aps_max_m_s / KMS == pytest.approx(12.0, abs=0.5)
 
 
 def test_delta_v_cm() -> None:
@@ -216,7 +217,7 @@ def test_delta_v_cm() -> None:
 def test_optical_timing_errata(
     phase: float, f_rel: float, fdot_rel: float, f_orb: float, expected: float
 ) -> None:
-    # SCIENCE.md errata (orbital frequency), values printed to 0.01 s, ΔT = 4 Julian years.
+    # docs/method.md errata (orbital frequency), values printed to 0.01 s, ΔT = 4 Julian years.
     eph = OpticalEphemeris(phase, f_rel, fdot_rel, f_orb)
     assert float(optical_timing_s(eph, 4 * YEAR_S)) == pytest.approx(expected, abs=0.005)
 
@@ -273,6 +274,25 @@ def test_plot_apsidal_signal(tmp_path: Path) -> None:
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     with pytest.raises(ValueError, match="omega_dot is 0"):
         plot_apsidal_signal(out, k1_m_s=585.3e3, omega_dot_rad_s=0.0)
+    with pytest.raises(OutputExistsError):  # figures are never clobbered silently
+        plot_apsidal_signal(out, k1_m_s=585.3e3, omega_dot_rad_s=1.498e-6)
+
+
+def test_plot_report_needs_k1_and_rate(tmp_path: Path) -> None:
+    rep = feasibility_report(name="x", period_s=300.0, f_gw_hz=2 / 300.0)
+    with pytest.raises(UcbplanError, match="no K1 or no apsidal rate"):
+        plot_report(rep, tmp_path / "aps.png")
+    assert not (tmp_path / "aps.png").exists()
+
+
+def test_optical_ephemeris_styles() -> None:
+    assert optical_ephemeris(300.0) is None
+    eph = optical_ephemeris(300.0, sigma_f_rel=1e-8)
+    assert eph == OpticalEphemeris(0.0, 1e-8, 0.0, 1 / 300.0)
+    eph = optical_ephemeris(300.0, sigma_t0_s=3.0)
+    assert eph is not None and eph.sigma_phase_cycles == pytest.approx(0.01, rel=1e-15)
+    with pytest.raises(UcbplanError, match="not both"):
+        optical_ephemeris(300.0, sigma_p_s=1e-6, sigma_fdot_rel_s=1e-17)
 
 
 # ------------------------------------------------------------------------------------- CLI
@@ -339,7 +359,7 @@ def test_cli_optical_epoch_shifts_the_optical_baseline(tmp_path: Path) -> None:
     res = CliRunner().invoke(_app(), args)
     assert res.exit_code == 0, res.output
     doc = json.loads(out.read_text())
-    # 2033-01-01 → 2037-01-01 is 1461 days = 4 Julian years exactly: 1.79 s (SCIENCE.md).
+    # 2033-01-01 → 2037-01-01 is 1461 days = 4 Julian years exactly: 1.79 s (docs/method.md errata).
     assert doc["timing_years"][0] == 0.0
     assert doc["optical_timing_s"][0] == pytest.approx(1.79, abs=0.005)
     res = CliRunner().invoke(_app(), [*args[:-1], "someday", "--overwrite"])

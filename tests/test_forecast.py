@@ -8,21 +8,21 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from ucbplan.core.ephemeris import _u_cycles, u_jacobian
 from ucbplan.core.forecast import anchor_sigma_u, horizon_table, sigma_u, t_valid, tolerance
 from ucbplan.core.params import PARAM_NAMES, PhaseParams, shift_reference
+from ucbplan.core.phase import u_cycles, u_jacobian
 from ucbplan.target import load_target
 
 DAY = 86400.0
 YEAR = 365.25 * DAY
-T4 = 4 * 31558149.7635  # 4 sidereal years (SCIENCE.md)
+T4 = 4 * 31558149.7635  # 4 sidereal years (docs/method.md, "Time scales")
 FID = PhaseParams(
     2.410235, 8.4062899940e-3, 1.640367e-15, 2e-27, 8.249643e-3, 4.524585e-3, 1.496836e-6
 )
 
 
 def test_tolerances_match_paper_to_four_digits() -> None:
-    """Tables 4 and 7 (SCIENCE.md): conj σ_v/K_eff, quad (√2σ_v/K_eff)^½ (N = 2)."""
+    """Tables 4 and 7 (docs/method.md, "Forecast"): conj σ_v/K_eff, quad (√2σ_v/K_eff)^½ (N = 2)."""
     assert tolerance("conjunction", 15.0, 1298.0, 2) == pytest.approx(0.0115562, rel=1e-4)
     assert tolerance("quadrature", 15.0, 1298.0, 2) == pytest.approx(0.127840, rel=1e-4)
     sv = math.sqrt(2) * 40.0  # σ_v = √2 σ_K (Table 7)
@@ -57,8 +57,8 @@ def test_jacobian_matches_finite_differences(name: str) -> None:
     }[name]
 
     def u_at(v: np.ndarray) -> np.ndarray:
-        m, g = _u_cycles(PhaseParams.from_array(v), tau)
-        m0, _ = _u_cycles(FID, tau)
+        m, g = u_cycles(PhaseParams.from_array(v), tau)
+        m0, _ = u_cycles(FID, tau)
         return 2 * math.pi * ((m - m0) + g)
 
     plus, minus = base.copy(), base.copy()
@@ -113,7 +113,6 @@ def test_t_valid_oscillating_closed_form() -> None:
     cov[5, 5] = sk**2
     tol = 1.2 * sk  # admissible while |cos ω̇τ| ≤ 0.6
     t_end = T4 / 2
-    phase_end = (p.omega_dot * t_end) % math.pi
     # first τ ≥ t_end where |cos(ω̇τ)| rises through 0.6, or where it is ≤ 0.6 then rises
     grid = t_end + np.linspace(0, 2 * math.pi / p.omega_dot, 2_000_001)
     c = np.abs(np.cos(p.omega_dot * grid))
@@ -123,25 +122,18 @@ def test_t_valid_oscillating_closed_form() -> None:
     expect = grid[close] - t_end
     got = t_valid((p, cov, T4), tol, math.pi / 2, 1.0)
     assert got == pytest.approx(expect, abs=60.0)  # grid refined to P_aps/32 then bisected
-    del phase_end
 
 
-def test_anchor_sigma_matches_sigma_at_true_epochs() -> None:
+def test_anchor_sigma_matches_sigma_at_true_epochs(eccentric_path) -> None:
     """σ_u at virtual anchor epochs equals σ_u at the solved t★ (same anchor) to 1e-6 relative."""
     from ucbplan.core.ephemeris import solve_u
 
-    t = load_target_fid()
+    t = load_target(eccentric_path)
     _k, dt, _us, o = solve_u(t.params, 9e7, 9e7 + 600, 0.0)
     tau = o + dt
     direct = sigma_u(t.params, t.covariance, tau)
     virt = anchor_sigma_u(t.params, t.covariance, tau, 0.0)
     assert np.allclose(direct, virt, rtol=1e-6)
-
-
-def load_target_fid():
-    from pathlib import Path
-
-    return load_target(Path(__file__).resolve().parents[1] / "catalogs" / "fiducial-eccentric.yaml")
 
 
 TABLE7 = {  # anchor, α → (T_valid [d], δt_u [s])
@@ -200,10 +192,10 @@ def test_midpoint_transform_reproduces_table2() -> None:
     """Eq. ecc_mcmc_inj (start epoch) → Table 2 (midpoint) with T = 4 sidereal years."""
     z = 30.097462
     wdot = 2 * math.pi * z / T4
-    # ḟ from Table 2 (1.6404897e-15). The printed inputs limit the check: the 8-digit log10 ḟ
-    # of Eq. ecc_mcmc_inj alone moves φ_mid by ~5e-6 rad through 2π ḟ (T/2)²/2 ≈ 20 rad, so we
-    # require 1e-5 rad (0.5 % of Table 3's σ_φ = 2e-3 rad); f, η, κ are checked to 1e-12/1e-6.
-    assert 10**-14.7850265 == pytest.approx(1.6404897e-15, rel=3e-7)
+    # ḟ from Table 2 (1.6404897e-15; Eq. ecc_mcmc_inj's log10 ḟ = −14.7850265 agrees to 3e-7).
+    # The printed inputs limit the check: the 8-digit log10 ḟ alone moves φ_mid by ~5e-6 rad
+    # through 2π ḟ (T/2)²/2 ≈ 20 rad, so we require 1e-5 rad (0.5 % of Table 3's σ_φ = 2e-3 rad);
+    # f, η, κ are checked to 1e-12/1e-6.
     p0 = PhaseParams(4.6100488, 8.406186457145e-3, 1.6404897e-15, 0.0, 0.0068, 0.0068, wdot)
     pm, _ = shift_reference(p0, np.zeros((7, 7)), T4 / 2)
     assert pm.phase == pytest.approx(2.4102573, abs=1e-5)
@@ -212,7 +204,7 @@ def test_midpoint_transform_reproduces_table2() -> None:
     # z_ω has 8 digits: ω̇T/2 = 94.6 rad known to ~1.6e-6 rad → (η, κ) to ~3e-6 relative
     assert pm.eta == pytest.approx(8.5334116e-3, rel=5e-6)
     assert pm.kappa == pytest.approx(4.4340597e-3, rel=5e-6)
-    assert wdot == pytest.approx(1.49809106e-6, rel=1e-8)
+    assert pm.omega_dot == pytest.approx(1.49809106e-6, rel=1e-8)  # Table 2's ω̇, unchanged
 
 
 def test_shift_covariance_matches_monte_carlo() -> None:
@@ -252,3 +244,29 @@ def test_shift_columns_equals_scalar_shift() -> None:
             assert out[n][i] == pytest.approx(getattr(ref, n), rel=1e-12)
         dphi = np.angle(np.exp(1j * (out["phase"][i] - ref.phase)))
         assert abs(dphi) < 1e-9  # float64 f·T/2 ≈ 5e5 cycles: ~1e-10 cycle rounding
+
+
+def test_horizon_s_closed_form_fdot_only() -> None:
+    """horizon_s = √(2α δu_tol/(πσ_ḟ)) − T/2 with the N = 2 quadrature tolerance (√2σ_v/K)^½."""
+    from ucbplan.core.forecast import horizon_s
+
+    cov = np.zeros((7, 7))
+    sig = 3.41e-19
+    cov[2, 2] = sig**2
+    p = replace(FID, eta=0.0, kappa=0.0, omega_dot=0.0)
+    tol = math.sqrt(math.sqrt(2) * 15.0 / 1298.0)
+    expect = math.sqrt(2 * 0.5 * tol / (math.pi * sig)) - T4 / 2
+    assert horizon_s((p, cov, T4), 15.0, 1298.0, "quadrature", alpha=0.5) == pytest.approx(
+        expect, rel=1e-6
+    )
+
+
+def test_sigma_u_end_phase_only() -> None:
+    """Only σ(φ_ref): σ_u = σ_φ/2 at every epoch and anchor (∂u/∂φ_ref = 1/2 for e = 0)."""
+    from ucbplan.core.forecast import sigma_u_end
+
+    cov = np.zeros((7, 7))
+    cov[0, 0] = 0.02**2
+    p = replace(FID, eta=0.0, kappa=0.0, omega_dot=0.0)
+    for anchor in ("quadrature", "conjunction", 0.7):
+        assert sigma_u_end((p, cov, T4), anchor) == pytest.approx(0.01, rel=1e-12)

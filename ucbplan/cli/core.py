@@ -1,10 +1,16 @@
-"""Core commands: ``validate``, ``ephemeris`` and ``horizon`` (thin shell over the library)."""
+"""Core commands: ``validate``, ``ephemeris`` and ``horizon`` (thin shell over the library).
+
+Each command parses its options, calls :mod:`ucbplan.core` (:func:`~ucbplan.core.ephemeris.
+find_epochs`, :func:`~ucbplan.core.forecast.horizon_table`, the validate summary numbers) and
+prints or writes the result. The option types are module-level aliases so each command reads as
+its parameter list.
+"""
 
 from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, Annotated, Any
 
 import numpy as np
 import typer
@@ -17,6 +23,45 @@ from ucbplan.errors import UcbplanError
 from ucbplan.target import Target, load_target
 
 __all__ = ["register"]
+
+TargetArg = Annotated[Path, typer.Argument(help="Target YAML file.")]
+TargetsArg = Annotated[list[Path], typer.Argument(help="Target YAML files to check.")]
+ValidateFormatOpt = Annotated[str, typer.Option("--format", help="table | json")]
+TableFormatOpt = Annotated[str, typer.Option("--format", help="table | json | ecsv | csv")]
+OutputOpt = Annotated[Path | None, typer.Option("-o", "--output", help="Write here (else stdout).")]
+OverwriteOutputOpt = Annotated[
+    bool, typer.Option("--overwrite", help="Replace an existing -o file.")
+]
+OverwriteAllOpt = Annotated[
+    bool, typer.Option("--overwrite", help="Replace existing output files.")
+]
+StartOpt = Annotated[str, typer.Option("--start", help="Window start, ISO, TDB at the barycentre.")]
+EndOpt = Annotated[str, typer.Option("--end", help="Window end, ISO, TDB at the barycentre.")]
+AnchorOpt = Annotated[
+    str, typer.Option("--anchor", help="quadrature | conjunction | zero-crossing | U_RAD")
+]
+StarOpt = Annotated[
+    int, typer.Option("--star", help="Component whose argument of latitude (1 or 2).")
+]
+MaxEpochsOpt = Annotated[
+    int, typer.Option("--max-epochs", help="Refuse windows with more epochs than this.")
+]
+SigmaVOpt = Annotated[
+    float | None,
+    typer.Option("--sigma-v", help="RV precision per epoch σ_v [km/s] (default: target file)."),
+]
+KEffOpt = Annotated[
+    float | None,
+    typer.Option(
+        "--k-eff", help="Semi-amplitude of the observable [km/s] (default: K_eff or K1+K2)."
+    ),
+]
+AlphaOpt = Annotated[list[float], typer.Option("--alpha", help="Margin α (repeatable).")]
+EpochsOpt = Annotated[
+    int, typer.Option("--epochs", help="1: single epoch, 2: two-epoch difference.")
+]
+AnchorsOpt = Annotated[list[str], typer.Option("--anchor", help="Anchors (repeatable).")]
+PlotOpt = Annotated[Path | None, typer.Option("--plot", help="Write the σ_u(t) horizon figure.")]
 
 
 def _check_format(fmt: str, allowed: tuple[str, ...]) -> str:
@@ -47,10 +92,7 @@ def _resolve_k_sigma(
     return sv, k
 
 
-def validate(
-    targets: list[Path] = typer.Argument(..., help="Target YAML files to check."),
-    fmt: str = typer.Option("table", "--format", help="table | json"),
-) -> None:
+def validate(targets: TargetsArg, fmt: ValidateFormatOpt = "table") -> None:
     """Check target files and print a summary (period, e, ω, T_asc, σ's)."""
     _check_format(fmt, ("table", "json"))
     summaries = [_summary(load_target(path)) for path in targets]
@@ -89,18 +131,14 @@ def _fmt(v: Any) -> str:
 
 
 def _summary(t: Target) -> dict[str, Any]:
+    """The validate row of one target: times as TDB ISO strings, the rest SI floats."""
     from astropy.time import TimeDelta
 
-    from ucbplan.core.forecast import anchor_sigma_u
+    from ucbplan.core.forecast import sigma_u_end
+    from ucbplan.core.phase import ascending_node_s, sigma_ascending_node_s
 
     p = t.params
-    # T_asc nearest t_ref: Φ_asc = 0 mod 2π (Appendix A1: T_asc = t_ref − φ_ref/(2πf))
-    t_asc = -p.phase / (2 * math.pi * p.f_gw)
-    jac_scale = 1.0 / (math.pi * p.f_gw)
-    var_phase = t.covariance[0, 0]
-    sig_end = float(
-        max(anchor_sigma_u(p, t.covariance, np.array([t.t_obs_s / 2]), u)[0] for u in (0, math.pi))
-    )
+    t_asc = t.t_ref + TimeDelta(ascending_node_s(p), format="sec")
     sigmas = {n: float(math.sqrt(t.cov_matrix[i, i])) for i, n in enumerate(t.cov_names)}
     return {
         "name": t.name,
@@ -112,36 +150,46 @@ def _summary(t: Target) -> dict[str, Any]:
         "eccentricity": p.eccentricity,
         "omega_deg": math.degrees(p.omega_rad),
         "omega_dot_rad_s": p.omega_dot,
-        "t_asc_tdb": (t.t_ref + TimeDelta(t_asc, format="sec")).tdb.isot,
-        "sigma_t_asc_s": 0.5 * math.sqrt(var_phase) * jac_scale,
-        "sigma_u_end_mrad": 1e3 * sig_end,
+        "t_asc_tdb": t_asc.tdb.isot,
+        "sigma_t_asc_s": sigma_ascending_node_s(p, t.covariance),
+        "sigma_u_end_mrad": 1e3 * sigma_u_end(t, "quadrature"),
         "sigmas": sigmas,
     }
 
 
 def ephemeris(
-    target: Path = typer.Argument(..., help="Target YAML file."),
-    start: str = typer.Option(..., "--start", help="Window start, ISO, TDB at the barycentre."),
-    end: str = typer.Option(..., "--end", help="Window end, ISO, TDB at the barycentre."),
-    anchor: str = typer.Option(
-        "quadrature", "--anchor", help="quadrature | conjunction | zero-crossing | U_RAD"
-    ),
-    star: int = typer.Option(1, "--star", help="Component whose argument of latitude (1 or 2)."),
-    fmt: str = typer.Option("table", "--format", help="table | json | ecsv | csv"),
-    output: Path | None = typer.Option(None, "-o", "--output", help="Write here (else stdout)."),
-    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing -o file."),
-    max_epochs: int = typer.Option(
-        2_000_000, "--max-epochs", help="Refuse windows with more epochs than this."
-    ),
+    target: TargetArg,
+    start: StartOpt,
+    end: EndOpt,
+    anchor: AnchorOpt = "quadrature",
+    star: StarOpt = 1,
+    fmt: TableFormatOpt = "table",
+    output: OutputOpt = None,
+    overwrite: OverwriteOutputOpt = False,
+    max_epochs: MaxEpochsOpt = 2_000_000,
 ) -> None:
     """Barycentric epochs t★ (TDB) where u = u★, with σ_t and the φ_ref π-mode alternative."""
     from ucbplan.core.ephemeris import find_epochs
-    from ucbplan.core.timescale import parse_tdb
 
     fmt = _check_format(fmt, ("table", "json", "ecsv", "csv"))
     if star not in (1, 2):
         raise UcbplanError(f"--star must be 1 or 2, got {star}")
     t = load_target(target)
+    tau0, tau1 = _window(t, start, end, anchor, max_epochs)
+    es = find_epochs(t, tau0, tau1, anchor, star)
+    if tau1 > t.t_obs_s / 2:
+        _warn_horizon(t, tau1)
+    table = _epoch_table(t, es)
+    if fmt == "table" and output is None:
+        _print_epochs(t, table)
+        return
+    _write_table(table, "ecsv" if fmt == "table" else fmt, output, overwrite)
+
+
+def _window(t: Target, start: str, end: str, anchor: str, max_epochs: int) -> tuple[float, float]:
+    """--start/--end as TDB seconds since the target's t_ref; refuse empty or huge windows."""
+    from ucbplan.core.timescale import parse_tdb
+
     t0 = parse_tdb(start, "--start")
     t1 = parse_tdb(end, "--end")
     tau0, tau1 = float(t.tau(t0)), float(t.tau(t1))
@@ -152,27 +200,17 @@ def ephemeris(
         raise UcbplanError(
             f"window holds ~{expected:.3g} epochs (> --max-epochs {max_epochs}); shorten it"
         )
-    anchor_value: str | float = anchor
-    es = find_epochs(t, tau0, tau1, anchor_value, star)
-    if tau1 > t.t_obs_s / 2:
-        _warn_horizon(t, tau1)
-    table = _epoch_table(t, es)
-    if fmt == "table" and output is None:
-        _print_epochs(t, table)
-        return
-    if fmt == "table":
-        fmt = "ecsv"
-    _write_table(table, fmt, output, overwrite)
+    return tau0, tau1
 
 
 def _warn_horizon(t: Target, tau_end: float) -> None:
+    """Warn when the window reaches past T_valid(quadrature, α = 1) of the target file's σ_v, K."""
     spec = t.spectroscopy
     if spec is None or spec.sigma_v_kms is None or spec.k_for_tolerance is None:
         return
-    from ucbplan.core.forecast import t_valid, tolerance
+    from ucbplan.core.forecast import horizon_s
 
-    tol = tolerance("quadrature", spec.sigma_v_kms, spec.k_for_tolerance, 2)
-    tv = t_valid(t, tol, (0.0, math.pi), 1.0)
+    tv = horizon_s(t, spec.sigma_v_kms, spec.k_for_tolerance, "quadrature")
     if tau_end > t.t_obs_s / 2 + tv:
         err_console.print(
             f"[yellow]warning:[/] epochs after T_valid(quadrature, α=1) = {tv / DAY_S:.0f} d past "
@@ -275,22 +313,16 @@ def _write_table(tab: Any, fmt: str, output: Path | None, overwrite: bool) -> No
 
 
 def horizon(
-    target: Path = typer.Argument(..., help="Target YAML file."),
-    sigma_v: float | None = typer.Option(
-        None, "--sigma-v", help="RV precision per epoch σ_v [km/s] (default: target file)."
-    ),
-    k_eff: float | None = typer.Option(
-        None, "--k-eff", help="Semi-amplitude of the observable [km/s] (default: K_eff or K1+K2)."
-    ),
-    alpha: list[float] = typer.Option([0.5, 1.0], "--alpha", help="Margin α (repeatable)."),
-    epochs: int = typer.Option(2, "--epochs", help="1: single epoch, 2: two-epoch difference."),
-    anchor: list[str] = typer.Option(
-        ["conjunction", "quadrature"], "--anchor", help="Anchors (repeatable)."
-    ),
-    fmt: str = typer.Option("table", "--format", help="table | json | ecsv | csv"),
-    output: Path | None = typer.Option(None, "-o", "--output", help="Write here (else stdout)."),
-    plot: Path | None = typer.Option(None, "--plot", help="Write the σ_u(t) horizon figure."),
-    overwrite: bool = typer.Option(False, "--overwrite", help="Replace existing output files."),
+    target: TargetArg,
+    sigma_v: SigmaVOpt = None,
+    k_eff: KEffOpt = None,
+    alpha: AlphaOpt = [0.5, 1.0],  # noqa: B006 (typer reads the default, never mutates it)
+    epochs: EpochsOpt = 2,
+    anchor: AnchorsOpt = ["conjunction", "quadrature"],  # noqa: B006
+    fmt: TableFormatOpt = "table",
+    output: OutputOpt = None,
+    plot: PlotOpt = None,
+    overwrite: OverwriteAllOpt = False,
 ) -> None:
     """Phase-coherence horizons T_valid (paper Tables 4 and 7) and σ_u at the end of LISA."""
     from ucbplan.core.forecast import horizon_table
@@ -308,16 +340,21 @@ def horizon(
         horizon_plot(t, rows, plot, overwrite=overwrite)
     if fmt == "table" and output is None:
         _print_horizon(t, rows, sv, k, epochs)
-        return
-    if fmt == "json":
+    elif fmt == "json":
         doc = [r.as_dict() | {"target": t.name} for r in rows]
         write_output(output, lambda h: dump_json(doc, h), overwrite=overwrite)
-        return
+    else:
+        tab = _horizon_table(t, rows, sv, k, epochs)
+        _write_table(tab, "ecsv" if fmt == "table" else fmt, output, overwrite)
+
+
+def _horizon_table(t: Target, rows: list[Any], sv: float, k: float, epochs: int) -> Any:
+    """The horizon rows as an astropy table with the inputs in its metadata."""
     from astropy.table import Table
 
     tab = Table(rows=[r.as_dict() for r in rows])
     tab.meta.update({"target": t.name, "sigma_v_kms": sv, "k_eff_kms": k, "n_epochs": epochs})
-    _write_table(tab, "ecsv" if fmt == "table" else fmt, output, overwrite)
+    return tab
 
 
 def _print_horizon(t: Target, rows: list[Any], sv: float, k: float, epochs: int) -> None:

@@ -1,7 +1,8 @@
 """``ucbplan feasibility``: expected signal sizes (paper Sec. 3).
 
-A thin shell: parse options, call :mod:`ucbplan.feasibility.signals`, format the output (rich on
-stderr, machine formats on stdout or -o).
+A thin shell: parse options, call :func:`ucbplan.feasibility.report_for_target`, print the report
+(rich on stderr, JSON on stdout or -o) and draw it with :func:`ucbplan.feasibility.plot_report`.
+The option types are module-level aliases so the command reads as its parameter list.
 """
 
 from __future__ import annotations
@@ -14,9 +15,126 @@ import typer
 from rich.table import Table as RichTable
 
 from ucbplan.cli._console import dump_json, err_console, write_output
+from ucbplan.core.constants import DAY_S, MONTH_S, YEAR_S
 from ucbplan.errors import UcbplanError
 
 __all__ = ["feasibility_command", "register"]
+
+_OptFloat = float | None
+TargetArg = Annotated[Path, typer.Argument(help="Target YAML file.")]
+M1Opt = Annotated[_OptFloat, typer.Option("--m1", help="Mass of star 1 (M_sun) (else file).")]
+M2Opt = Annotated[_OptFloat, typer.Option("--m2", help="Mass of star 2 (M_sun) (else file).")]
+SigmaVOpt = Annotated[
+    _OptFloat,
+    typer.Option("--sigma-v", help="Velocity precision per spectrum (km/s) (else file, else 15)."),
+]
+NSpectraOpt = Annotated[int, typer.Option("--n-spectra", help="Spectra co-added per epoch.")]
+BaselineOpt = Annotated[str, typer.Option("--baseline", help="Baseline ΔT ('30 d', '1 yr', days).")]
+M3Opt = Annotated[float, typer.Option("--m3", help="Tertiary mass (M_sun) for Δv_CM.")]
+AOutOpt = Annotated[float, typer.Option("--a-out", help="Tertiary separation (AU) for Δv_CM.")]
+OptPhaseOpt = Annotated[
+    _OptFloat, typer.Option("--optical-sigma-phase", help="Optical ephemeris σ(φ0) (cycles).")
+]
+OptFRelOpt = Annotated[_OptFloat, typer.Option("--optical-sigma-f-rel", help="σ_f/f (1).")]
+OptFdotRelOpt = Annotated[_OptFloat, typer.Option("--optical-sigma-fdot-rel", help="σ_ḟ/f (1/s).")]
+OptPOpt = Annotated[_OptFloat, typer.Option("--optical-sigma-p", help="σ(P_orb) (s).")]
+OptPdotOpt = Annotated[_OptFloat, typer.Option("--optical-sigma-pdot", help="σ(Ṗ_orb) (s/s).")]
+OptT0Opt = Annotated[_OptFloat, typer.Option("--optical-sigma-t0", help="σ(T0) (s).")]
+OptEpochOpt = Annotated[
+    str | None,
+    typer.Option(
+        "--optical-epoch",
+        help=(
+            "Optical ephemeris reference epoch: ISO (TDB unless labelled UTC) or BJD_TDB; "
+            "default: the LISA midpoint."
+        ),
+    ),
+]
+PlotOpt = Annotated[Path | None, typer.Option("--plot", help="Write Δv_aps vs baseline PNG here.")]
+FormatOpt = Annotated[str, typer.Option("--format", help="table (stderr) | json (stdout or -o).")]
+OutputOpt = Annotated[Path | None, typer.Option("-o", "--output", help="JSON output file.")]
+OverwriteOpt = Annotated[bool, typer.Option("--overwrite", help="Replace existing output files.")]
+
+
+def feasibility_command(
+    target: TargetArg,
+    m1: M1Opt = None,
+    m2: M2Opt = None,
+    sigma_v: SigmaVOpt = None,
+    n_spectra: NSpectraOpt = 1,
+    baseline: BaselineOpt = "1 yr",
+    m3: M3Opt = 1.0,
+    a_out: AOutOpt = 5.0,
+    opt_phase: OptPhaseOpt = None,
+    opt_f_rel: OptFRelOpt = None,
+    opt_fdot_rel: OptFdotRelOpt = None,
+    opt_p: OptPOpt = None,
+    opt_pdot: OptPdotOpt = None,
+    opt_t0: OptT0Opt = None,
+    opt_epoch: OptEpochOpt = None,
+    plot: PlotOpt = None,
+    fmt: FormatOpt = "table",
+    output: OutputOpt = None,
+    overwrite: OverwriteOpt = False,
+) -> None:
+    """Expected signal magnitudes (paper Sec. 3): K_j, apsidal rates, ΔK, Δv_aps, e floor, Δv_CM,
+    and GW vs optical timing errors."""
+    from ucbplan.feasibility import optical_ephemeris, plot_report, report_for_target
+    from ucbplan.target import load_target
+
+    _check_options(fmt, n_spectra, m1, m2, sigma_v, m3, a_out)
+    tgt = load_target(target)
+    optical = optical_ephemeris(
+        tgt.period_s,
+        sigma_phase_cycles=opt_phase,
+        sigma_f_rel=opt_f_rel,
+        sigma_fdot_rel_s=opt_fdot_rel,
+        sigma_p_s=opt_p,
+        sigma_pdot=opt_pdot,
+        sigma_t0_s=opt_t0,
+    )
+    offset = _optical_offset(opt_epoch, tgt.t_ref) if opt_epoch else 0.0
+    report = report_for_target(
+        tgt,
+        m1_msun=m1,
+        m2_msun=m2,
+        sigma_v_m_s=sigma_v * 1e3 if sigma_v is not None else None,
+        n_spectra=n_spectra,
+        baseline_s=_parse_baseline(baseline),
+        m3_msun=m3,
+        a_out_au=a_out,
+        optical=optical,
+        optical_offset_s=offset,
+    )
+    if plot is not None:
+        plot_report(report, plot, overwrite=overwrite)
+        err_console.print(f"wrote {plot}")
+    if fmt == "json":
+        doc = {"units": "SI (m/s, s, rad, rad/s); masses M_sun", **report.to_dict()}
+        write_output(output, lambda h: dump_json(doc, h), overwrite=overwrite)
+    else:
+        _print_report(report)
+
+
+def _check_options(
+    fmt: str,
+    n_spectra: int,
+    m1: float | None,
+    m2: float | None,
+    sigma_v: float | None,
+    m3: float,
+    a_out: float,
+) -> None:
+    """Reject bad option values with the option's name (before any file is read)."""
+    if fmt not in ("table", "json"):
+        raise UcbplanError(f"--format: got {fmt!r}, expected table or json")
+    if n_spectra < 1:
+        raise UcbplanError(f"--n-spectra: got {n_spectra}, expected an integer >= 1")
+    for name, value in (("--m1", m1), ("--m2", m2), ("--sigma-v", sigma_v), ("--m3", m3)):
+        if value is not None and not value > 0:
+            raise UcbplanError(f"{name}: got {value}, expected a positive number")
+    if not a_out > 0:
+        raise UcbplanError(f"--a-out: got {a_out}, expected a positive number [AU]")
 
 
 def _parse_baseline(text: str) -> float:
@@ -24,7 +142,7 @@ def _parse_baseline(text: str) -> float:
     import astropy.units as u
 
     try:
-        return float(text) * 86400.0
+        return float(text) * DAY_S
     except ValueError:
         pass
     try:
@@ -35,29 +153,17 @@ def _parse_baseline(text: str) -> float:
         ) from exc
 
 
-def _optical(
-    period_s: float,
-    phase: float | None,
-    f_rel: float | None,
-    fdot_rel: float | None,
-    sig_p: float | None,
-    sig_pdot: float | None,
-    sig_t0: float | None,
-) -> Any:
-    from ucbplan.feasibility.signals import OpticalEphemeris
+def _optical_offset(text: str, t_ref: Any) -> float:
+    """Seconds from the optical reference epoch (bare number = BJD_TDB) to the LISA midpoint."""
+    from astropy.time import Time
 
-    freq_style = any(v is not None for v in (phase, f_rel, fdot_rel))
-    period_style = any(v is not None for v in (sig_p, sig_pdot, sig_t0))
-    if freq_style and period_style:
-        raise UcbplanError(
-            "optical ephemeris: give either --optical-sigma-phase/-f-rel/-fdot-rel or "
-            "--optical-sigma-p/-pdot/-t0, not both"
-        )
-    if period_style:
-        return OpticalEphemeris.from_period(period_s, sig_p or 0.0, sig_pdot or 0.0, sig_t0 or 0.0)
-    if freq_style:
-        return OpticalEphemeris(phase or 0.0, f_rel or 0.0, fdot_rel or 0.0, 1.0 / period_s)
-    return None
+    from ucbplan.core.timescale import parse_tdb
+
+    try:
+        epoch = Time(float(text), format="jd", scale="tdb")
+    except ValueError:
+        epoch = parse_tdb(text, "--optical-epoch")
+    return float((t_ref - epoch).to_value("s"))
 
 
 def _fmt(value: float | None, fmt: str) -> str:
@@ -67,8 +173,16 @@ def _fmt(value: float | None, fmt: str) -> str:
 
 
 def _print_report(rep: Any) -> None:
-    from ucbplan.feasibility.signals import MONTH_S, YEAR_S
+    """The quantity table, the timing table (when there is one) and the notes, on stderr."""
+    err_console.print(_quantity_table(rep))
+    if rep.gw_timing_s is not None or rep.optical_timing_s is not None:
+        err_console.print(_timing_table(rep))
+    for note in rep.notes:
+        err_console.print(f"[yellow]note:[/] {note}", soft_wrap=True)
 
+
+def _quantity_table(rep: Any) -> RichTable:
+    """One row per Sec. 3 magnitude: quantity, value, unit, the paper's equation label."""
     t = RichTable(title=f"Feasibility: {rep.name} (paper Sec. 3)")
     for col in ("quantity", "value", "unit", "Eq."):
         t.add_column(col)
@@ -87,165 +201,31 @@ def _print_report(rep: Any) -> None:
     row("ω̇_tide", rep.omega_dot_tide, ".4g", "rad/s", "del_om_tide")
     row("Δω_tide per month", rep.omega_dot_tide, ".3g", "rad", "del_om_tide", MONTH_S)
     row(f"ω̇ used ({rep.omega_dot_source})", rep.omega_dot_used, ".4g", "rad/s", "")
-    row("apsidal period", rep.apsidal_period_s / 86400.0, ".3g", "d", "")
+    row("apsidal period", rep.apsidal_period_s / DAY_S, ".3g", "d", "")
     row(f"τ_chirp ({rep.tau_chirp_source})", rep.tau_chirp_s, ".3g", "yr", "tau_chirp", 1 / YEAR_S)
-    base = f"over ΔT = {rep.baseline_s / 86400.0:.4g} d"
+    base = f"over ΔT = {rep.baseline_s / DAY_S:.4g} d"
     row(f"|ΔK cos u★| {base}", rep.delta_k_m_s, ".3g", "km/s", "DeltaK_bound", kms)
     row("max |Δv_aps| = 2K1e", rep.delta_v_aps_max_m_s, ".3g", "km/s", "apsidal_drift_est0", kms)
     row(f"Δv_aps(ω0) {base}", rep.delta_v_aps_m_s, ".3g", "km/s", "apsidal_drift_est0", kms)
-    row(
-        f"e floor (σ_v = {rep.sigma_v_m_s * kms:.3g} km/s, N = {rep.n_spectra})",
-        rep.e_floor,
-        ".3g",
-        "",
-        "apsidal_drift_est0",
-    )
+    floor_label = f"e floor (σ_v = {rep.sigma_v_m_s * kms:.3g} km/s, N = {rep.n_spectra})"
+    row(floor_label, rep.e_floor, ".3g", "", "apsidal_drift_est0")
     row(f"Δv_CM Galactic {base}", rep.delta_v_cm_galactic_m_s, ".3g", "m/s", "DeltaVcm_est")
-    row(
-        f"Δv_CM tertiary {rep.m3_msun:g} M☉ at {rep.a_out_au:g} AU {base}",
-        rep.delta_v_cm_tertiary_m_s,
-        ".3g",
-        "km/s",
-        "DeltaVcm_est",
-        kms,
-    )
-    err_console.print(t)
-    if rep.gw_timing_s is not None or rep.optical_timing_s is not None:
-        tt = RichTable(title="Timing error after the LISA midpoint (1σ)")
-        tt.add_column("ΔT (yr)")
-        tt.add_column("GW δt_u (s)")
-        tt.add_column("optical δt (s), Eq. optical_timing_prec")
-        for i, y in enumerate(rep.timing_years):
-            gw = rep.gw_timing_s[i] if rep.gw_timing_s is not None else None
-            op = rep.optical_timing_s[i] if rep.optical_timing_s is not None else None
-            tt.add_row(f"{y:g}", _fmt(gw, ".3g"), _fmt(op, ".3g"))
-        err_console.print(tt)
-    for note in rep.notes:
-        err_console.print(f"[yellow]note:[/] {note}", soft_wrap=True)
+    tertiary = f"Δv_CM tertiary {rep.m3_msun:g} M☉ at {rep.a_out_au:g} AU {base}"
+    row(tertiary, rep.delta_v_cm_tertiary_m_s, ".3g", "km/s", "DeltaVcm_est", kms)
+    return t
 
 
-def feasibility_command(
-    target: Annotated[Path, typer.Argument(help="Target YAML file.")],
-    m1: Annotated[
-        float | None, typer.Option("--m1", help="Mass of star 1 (M_sun) (else file).")
-    ] = None,
-    m2: Annotated[
-        float | None, typer.Option("--m2", help="Mass of star 2 (M_sun) (else file).")
-    ] = None,
-    sigma_v: Annotated[
-        float | None,
-        typer.Option(
-            "--sigma-v", help="Velocity precision per spectrum (km/s) (else file, else 15)."
-        ),
-    ] = None,
-    n_spectra: Annotated[int, typer.Option("--n-spectra", help="Spectra co-added per epoch.")] = 1,
-    baseline: Annotated[
-        str, typer.Option("--baseline", help="Baseline ΔT ('30 d', '1 yr', days).")
-    ] = "1 yr",
-    m3: Annotated[float, typer.Option("--m3", help="Tertiary mass (M_sun) for Δv_CM.")] = 1.0,
-    a_out: Annotated[
-        float, typer.Option("--a-out", help="Tertiary separation (AU) for Δv_CM.")
-    ] = 5.0,
-    opt_phase: Annotated[
-        float | None,
-        typer.Option("--optical-sigma-phase", help="Optical ephemeris σ(φ0) (cycles)."),
-    ] = None,
-    opt_f_rel: Annotated[
-        float | None, typer.Option("--optical-sigma-f-rel", help="σ_f/f (1).")
-    ] = None,
-    opt_fdot_rel: Annotated[
-        float | None, typer.Option("--optical-sigma-fdot-rel", help="σ_ḟ/f (1/s).")
-    ] = None,
-    opt_p: Annotated[float | None, typer.Option("--optical-sigma-p", help="σ(P_orb) (s).")] = None,
-    opt_pdot: Annotated[
-        float | None, typer.Option("--optical-sigma-pdot", help="σ(Ṗ_orb) (s/s).")
-    ] = None,
-    opt_t0: Annotated[float | None, typer.Option("--optical-sigma-t0", help="σ(T0) (s).")] = None,
-    opt_epoch: Annotated[
-        str | None,
-        typer.Option(
-            "--optical-epoch",
-            help=(
-                "Optical ephemeris reference epoch: ISO (TDB unless labelled UTC) or BJD_TDB; "
-                "default: the LISA midpoint."
-            ),
-        ),
-    ] = None,
-    plot: Annotated[
-        Path | None, typer.Option("--plot", help="Write Δv_aps vs baseline PNG here.")
-    ] = None,
-    fmt: Annotated[
-        str, typer.Option("--format", help="table (stderr) | json (stdout or -o).")
-    ] = "table",
-    output: Annotated[Path | None, typer.Option("-o", "--output", help="JSON output file.")] = None,
-    overwrite: Annotated[
-        bool, typer.Option("--overwrite", help="Replace existing output files.")
-    ] = False,
-) -> None:
-    """Expected signal magnitudes (paper Sec. 3): K_j, apsidal rates, ΔK, Δv_aps, e floor, Δv_CM,
-    and GW vs optical timing errors."""
-    from ucbplan.cli._console import check_output_path
-    from ucbplan.feasibility.signals import plot_apsidal_signal, report_for_target
-    from ucbplan.target import load_target
-
-    if fmt not in ("table", "json"):
-        raise UcbplanError(f"--format: got {fmt!r}, expected table or json")
-    if n_spectra < 1:
-        raise UcbplanError(f"--n-spectra: got {n_spectra}, expected an integer >= 1")
-    for name, value in (("--m1", m1), ("--m2", m2), ("--sigma-v", sigma_v), ("--m3", m3)):
-        if value is not None and not value > 0:
-            raise UcbplanError(f"{name}: got {value}, expected a positive number")
-    if not a_out > 0:
-        raise UcbplanError(f"--a-out: got {a_out}, expected a positive number [AU]")
-    tgt = load_target(target)
-    optical = _optical(tgt.period_s, opt_phase, opt_f_rel, opt_fdot_rel, opt_p, opt_pdot, opt_t0)
-    offset = _optical_offset(opt_epoch, tgt.t_ref) if opt_epoch else 0.0
-    report = report_for_target(
-        tgt,
-        m1_msun=m1,
-        m2_msun=m2,
-        sigma_v_m_s=sigma_v * 1e3 if sigma_v is not None else None,
-        n_spectra=n_spectra,
-        baseline_s=_parse_baseline(baseline),
-        m3_msun=m3,
-        a_out_au=a_out,
-        optical=optical,
-        optical_offset_s=offset,
-    )
-    if plot is not None:
-        if report.k1_m_s is None or report.omega_dot_used == 0.0:
-            raise UcbplanError(
-                f"--plot: {tgt.name} has no K1 or no apsidal rate; give --m1/--m2 (and "
-                "cos_inclination in the target file) or K1 under spectroscopy"
-            )
-        check_output_path(plot, overwrite)
-        plot_apsidal_signal(
-            plot,
-            k1_m_s=report.k1_m_s,
-            omega_dot_rad_s=report.omega_dot_used,
-            target_e=report.e if report.e > 0 else None,
-            target_omega1=report.omega0_rad,
-            title=f"{tgt.name}: apsidal signal (Eq. apsidal_drift_est0)",
-        )
-        err_console.print(f"wrote {plot}")
-    if fmt == "json":
-        doc = {"units": "SI (m/s, s, rad, rad/s); masses M_sun", **report.to_dict()}
-        write_output(output, lambda h: dump_json(doc, h), overwrite=overwrite)
-    else:
-        _print_report(report)
-
-
-def _optical_offset(text: str, t_ref: Any) -> float:
-    """Seconds from the optical reference epoch (bare number = BJD_TDB) to the LISA midpoint."""
-    from astropy.time import Time
-
-    from ucbplan.core.timescale import parse_tdb
-
-    try:
-        epoch = Time(float(text), format="jd", scale="tdb")
-    except ValueError:
-        epoch = parse_tdb(text, "--optical-epoch")
-    return float((t_ref - epoch).to_value("s"))
+def _timing_table(rep: Any) -> RichTable:
+    """GW δt_u and optical δt per row of ΔT after the LISA midpoint."""
+    tt = RichTable(title="Timing error after the LISA midpoint (1σ)")
+    tt.add_column("ΔT (yr)")
+    tt.add_column("GW δt_u (s)")
+    tt.add_column("optical δt (s), Eq. optical_timing_prec")
+    for i, y in enumerate(rep.timing_years):
+        gw = rep.gw_timing_s[i] if rep.gw_timing_s is not None else None
+        op = rep.optical_timing_s[i] if rep.optical_timing_s is not None else None
+        tt.add_row(f"{y:g}", _fmt(gw, ".3g"), _fmt(op, ".3g"))
+    return tt
 
 
 def register(app: typer.Typer) -> None:

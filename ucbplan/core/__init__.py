@@ -1,4 +1,11 @@
 """The physics core: parameter sets, the phase model u(t), t★ inversion, σ_u/T_valid, smearing.
 
-Pure functions over SI floats; nothing here reads files, prints or imports a higher layer.
+Pure functions over SI floats; nothing here reads files, prints or imports a higher layer (a
+target is anything shaped like :class:`~ucbplan.core.params.EphemerisSource`).
+
+- :mod:`.params`: :class:`~.params.PhaseParams`, reference-epoch shifts, ``EphemerisSource``;
+- :mod:`.phase`: GW phase, u(t), u̇, velocities, ∂u/∂θ (compensated arithmetic);
+- :mod:`.ephemeris`: the inversion u(t★) = u★ and :func:`~.ephemeris.find_epochs`;
+- :mod:`.forecast`: σ_u(t), tolerances, horizons T_valid;
+- :mod:`.smearing`, :mod:`.binary`, :mod:`.timescale`, :mod:`.constants`.
 """

@@ -9,30 +9,23 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ucbplan.core.constants import DAY_S, YEAR_S
-from ucbplan.core.ephemeris import (
-    ANCHORS,
-    jacobian_kernel,
-    resolve_anchor,
-    sigma_u_from_jacobian,
-    u_jacobian,
-)
-from ucbplan.core.params import PhaseParams
+from ucbplan.core.ephemeris import ANCHORS, resolve_anchor
+from ucbplan.core.params import EphemerisSource, PhaseParams
+from ucbplan.core.phase import jacobian_kernel, sigma_u_from_jacobian, u_jacobian
 from ucbplan.errors import UcbplanError
-
-if TYPE_CHECKING:
-    from ucbplan.target import Target
 
 __all__ = [
     "HorizonRow",
     "anchor_sigma_u",
+    "horizon_s",
     "horizon_table",
     "sigma_u",
+    "sigma_u_end",
     "sigma_u_from_jacobian",
     "t_valid",
     "t_valid_batch",
@@ -41,6 +34,8 @@ __all__ = [
 ]
 
 FloatArray = NDArray[np.float64]
+#: A target, or its (parameters, covariance, T_obs [s]) directly.
+SourceLike = EphemerisSource | tuple[PhaseParams, FloatArray, float]
 #: Horizons are searched up to this long after the LISA observation [s].
 HORIZON_CAP_S = 300.0 * YEAR_S
 
@@ -289,7 +284,7 @@ def _resolve_oscillation(
 
 
 def t_valid(
-    target: Target | tuple[PhaseParams, FloatArray, float],
+    target: SourceLike,
     tol_rad: float,
     anchor_u_star: Sequence[float] | float,
     alpha: float = 1.0,
@@ -299,7 +294,7 @@ def t_valid(
 
     Parameters
     ----------
-    target : Target or (PhaseParams, covariance, t_obs_s)
+    target : EphemerisSource or (PhaseParams, covariance, t_obs_s)
         Parameters referenced to the observation midpoint.
     tol_rad : float
         δu_tol [rad].
@@ -328,7 +323,7 @@ def t_valid(
 
 
 def _unpack(
-    target: Target | tuple[PhaseParams, FloatArray, float],
+    target: SourceLike,
 ) -> tuple[PhaseParams, FloatArray, float]:
     if isinstance(target, tuple):
         p, cov, t_obs = target
@@ -364,7 +359,7 @@ class HorizonRow:
 
 
 def horizon_table(
-    target: Target | tuple[PhaseParams, FloatArray, float],
+    target: SourceLike,
     sigma_v: float,
     k_eff: float,
     alphas: Sequence[float] = (0.5, 1.0),
@@ -383,15 +378,10 @@ def horizon_table(
     rows: list[HorizonRow] = []
     for anchor in anchors:
         label, us = _anchor_u_values(anchor)
-        kind = _anchor_kind(label, us)
-        tol = tolerance(kind, sigma_v, k_eff, n_epochs, us[0])
-        tau_end = np.array([t_obs / 2.0])
-        sig_end = max(float(anchor_sigma_u(p, cov, tau_end, u, star)[0]) for u in us)
+        tol = tolerance(_anchor_kind(label, us), sigma_v, k_eff, n_epochs, us[0])
+        sig_end = _max_anchor_sigma(p, cov, t_obs / 2.0, us, star)
         for alpha in alphas:
             tv = t_valid((p, cov, t_obs), tol, us, alpha, star)
-            tau = np.array([t_obs / 2.0 + tv])
-            sig = max(float(anchor_sigma_u(p, cov, tau, u, star)[0]) for u in us)
-            rate = math.pi * (p.f_gw + p.fdot * tau[0] + p.fddot * tau[0] ** 2 / 2)
             rows.append(
                 HorizonRow(
                     anchor=label,
@@ -399,9 +389,61 @@ def horizon_table(
                     delta_u_tol_rad=tol,
                     tolerance_rad=alpha * tol,
                     t_valid_days=tv / DAY_S,
-                    dt_u_s=sig / rate,
+                    dt_u_s=_timing_error(p, cov, t_obs / 2.0 + tv, us, star),
                     sigma_u_end_rad=sig_end,
                     n_epochs=n_epochs,
                 )
             )
     return rows
+
+
+def horizon_s(
+    target: SourceLike,
+    sigma_v: float,
+    k_eff: float,
+    anchor: str | float = "quadrature",
+    alpha: float = 1.0,
+    n_epochs: int = 2,
+    star: int = 1,
+) -> float:
+    """T_valid for one anchor and margin α [s after the end of the LISA observation].
+
+    The tolerance is :func:`tolerance` of the anchor's kind for σ_v and K (same units);
+    see :func:`t_valid` for the horizon itself and :func:`horizon_table` for all rows at once.
+    """
+    label, us = _anchor_u_values(anchor)
+    tol = tolerance(_anchor_kind(label, us), sigma_v, k_eff, n_epochs, us[0])
+    return t_valid(target, tol, us, alpha, star)
+
+
+def sigma_u_end(target: SourceLike, anchor: str | float = "quadrature", star: int = 1) -> float:
+    """σ_u at the end of the LISA observation for an anchor (the larger over its u★) [rad].
+
+    Parameters
+    ----------
+    target : EphemerisSource or (PhaseParams, covariance, t_obs_s)
+        Parameters referenced to the observation midpoint.
+    anchor : str or float
+        ``quadrature``, ``conjunction``, ``zero-crossing`` or a numeric u★ [rad].
+    star : {1, 2}
+        Component.
+    """
+    p, cov, t_obs = _unpack(target)
+    _, us = _anchor_u_values(anchor)
+    return _max_anchor_sigma(p, cov, t_obs / 2.0, us, star)
+
+
+def _max_anchor_sigma(
+    p: PhaseParams, cov: FloatArray, tau_s: float, us: Sequence[float], star: int
+) -> float:
+    """Largest :func:`anchor_sigma_u` over the anchor's u★ values at one epoch [rad]."""
+    tau = np.array([tau_s])
+    return max(float(anchor_sigma_u(p, cov, tau, u, star)[0]) for u in us)
+
+
+def _timing_error(
+    p: PhaseParams, cov: FloatArray, tau_s: float, us: Sequence[float], star: int
+) -> float:
+    """δt_u = σ_u/Φ̇_asc at ``tau_s`` (Eq. timing_unc), σ_u the larger over the anchor's u★ [s]."""
+    rate = math.pi * (p.f_gw + p.fdot * tau_s + p.fddot * tau_s**2 / 2)
+    return _max_anchor_sigma(p, cov, tau_s, us, star) / rate

@@ -1,6 +1,7 @@
 """The phase-model parameter record and reference-epoch transforms (SI floats, no astropy).
 
-Kept apart from :mod:`ucbplan.target` (YAML parsing) so the numerical core imports nothing heavy.
+Kept apart from :mod:`ucbplan.target` (YAML parsing) so the numerical core imports nothing heavy;
+:class:`EphemerisSource` is the little the core asks of a target (duck-typed, no import of it).
 """
 
 from __future__ import annotations
@@ -8,11 +9,20 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["PARAM_NAMES", "PARAM_UNITS", "PhaseParams", "shift_jacobian", "shift_reference"]
+__all__ = [
+    "PARAM_NAMES",
+    "PARAM_UNITS",
+    "EphemerisSource",
+    "PhaseParams",
+    "shift_columns",
+    "shift_jacobian",
+    "shift_reference",
+]
 
 #: Order of the phase-model parameters everywhere (covariance rows, Jacobian columns).
 PARAM_NAMES: tuple[str, ...] = ("phase", "f_gw", "fdot", "fddot", "eta", "kappa", "omega_dot")
@@ -95,6 +105,29 @@ class PhaseParams:
         return 2 * math.pi / self.n_b
 
 
+class EphemerisSource(Protocol):
+    """What the core needs of a target: its phase model, covariance and observation length.
+
+    :class:`ucbplan.target.Target` satisfies it; so does any object with these attributes (a
+    notebook record, a row of a catalogue), which keeps the core free of the target layer.
+    """
+
+    @property
+    def params(self) -> PhaseParams:
+        """Phase-model parameters at the reference epoch (the LISA midpoint)."""
+        ...
+
+    @property
+    def covariance(self) -> NDArray[np.float64]:
+        """Their covariance (7, 7) in :data:`PARAM_NAMES` order (SI units)."""
+        ...
+
+    @property
+    def t_obs_s(self) -> float:
+        """Length of the LISA observation T_obs [s]; it ends T_obs/2 after the reference."""
+        ...
+
+
 def shift_jacobian(p: PhaseParams, dt_s: float) -> NDArray[np.float64]:
     """Jacobian ∂p(t_ref + dt)/∂p(t_ref) of :func:`shift_reference` (7×7, PARAM_NAMES order)."""
     dt = dt_s
@@ -137,7 +170,7 @@ def shift_reference(
 
     Notes
     -----
-    SCIENCE.md "Reference epoch" and paper Sec. 4.1: φ_mid = φ_0 + 2π(f_0 T/2 + ḟ(T/2)²/2 +
+    ``docs/method.md`` ("Time scales") and paper Sec. 4.1: φ_mid = φ_0 + 2π(f_0 T/2 + ḟ(T/2)²/2 +
     f̈(T/2)³/6), f_mid = f_0 + ḟT/2 + f̈(T/2)²/2, ḟ_mid = ḟ + f̈T/2, (η, κ) rotated by ω̇T/2
     (Eq. kappa_lisa_prediction).
     """

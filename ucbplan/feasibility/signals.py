@@ -1,55 +1,50 @@
-"""Expected signal magnitudes (paper Sec. 3): is a targeted-u programme feasible for this binary?
+"""Expected signal magnitudes (paper Sec. 3): the physics behind ``ucbplan feasibility``.
 
 Pure functions over SI floats (velocities in m/s, times in s, angles in rad); masses are taken in
-solar masses (``*_msun``) because that is how every user states them. :func:`feasibility_report`
-collects everything the ``ucbplan feasibility`` command prints.
+solar masses (``*_msun``) because that is how every user states them. :mod:`.report` collects them
+for one binary, :mod:`.plots` draws the apsidal signal.
 
 Notes
 -----
 Equation labels are the paper's: ``Eq. semiamp_est`` (exact Kepler form), ``Eq. omega_dot_GR``,
 ``Eq. del_om_tide`` (physical form of the tidal apsidal rate, which reproduces the paper's 3.7 rad
 per month coefficient), ``Eq. tau_chirp``, ``Eq. DeltaK_bound``, ``Eq. apsidal_drift_est0``,
-``Eq. DeltaVcm_est`` and ``Eq. optical_timing_prec``. SCIENCE.md errata apply: the tidal estimate
-gives ≈100 rad per month at P_b = 5 min (≈256 at 3.97 min) and optical timing uses the orbital
-frequency.
+``Eq. DeltaVcm_est`` and ``Eq. optical_timing_prec``. The errata of ``docs/method.md`` ("Errata of
+the paper") apply: the tidal estimate gives ≈100 rad per month at P_b = 5 min (≈256 at 3.97 min)
+and optical timing uses the orbital frequency.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field, replace
-from typing import TYPE_CHECKING, Any
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ucbplan.core.constants import AU_M, MONTH_S, YEAR_S
+from ucbplan.core import binary
+from ucbplan.core.constants import AU_M
 from ucbplan.core.constants import C_M_S as _C
 from ucbplan.core.constants import G_SI as _G
 from ucbplan.core.constants import MSUN_KG as _MSUN
 from ucbplan.core.constants import RSUN_M as _RSUN
-
-if TYPE_CHECKING:
-    from ucbplan.target import Target
+from ucbplan.core.forecast import sigma_u
+from ucbplan.core.params import EphemerisSource
+from ucbplan.core.phase import arg_latitude_rate
+from ucbplan.errors import UcbplanError
 
 __all__ = [
-    "AU_M",
-    "MONTH_S",
-    "YEAR_S",
-    "FeasibilityReport",
     "OpticalEphemeris",
     "apsidal_period_s",
     "delta_k_bound",
     "delta_v_aps",
     "delta_v_cm",
     "eccentricity_floor",
-    "feasibility_report",
     "gw_timing_s",
     "omega_dot_gr",
     "omega_dot_tide",
+    "optical_ephemeris",
     "optical_timing_s",
-    "plot_apsidal_signal",
-    "report_for_target",
     "semi_amplitudes",
     "tau_chirp_gr_s",
     "tertiary_acceleration",
@@ -129,11 +124,9 @@ def omega_dot_gr(m_tot_msun: float, period_s: float, e: float = 0.0) -> float:
     -----
     Eq. omega_dot_GR.
     """
-    from ucbplan.core.binary import omega_dot_gr as _omega_dot_gr
-
     _check_positive(m_tot_msun=m_tot_msun, period_s=period_s)
     _check_ecc(e)
-    return float(_omega_dot_gr(m_tot_msun * _MSUN, period_s, e))
+    return float(binary.omega_dot_gr(m_tot_msun * _MSUN, period_s, e))
 
 
 def tidal_deformability(m_msun: float) -> float:
@@ -168,8 +161,9 @@ def omega_dot_tide(m1_msun: float, m2_msun: float, period_s: float, e: float = 0
     Notes
     -----
     Physical form of Eq. del_om_tide: at 0.6 + 0.6 M_sun and P_b = 5 min it gives the paper's
-    3.7 rad per month and carries the same (M_tot^{−5/3}, P_b^{−13/3}) scaling. SCIENCE.md erratum:
-    the ≈100 rad/month quoted for 0.347 + 0.285 M_sun holds at P_b = 5 min; at 3.97 min it is ≈256.
+    3.7 rad per month and carries the same (M_tot^{−5/3}, P_b^{−13/3}) scaling. Erratum
+    (``docs/method.md``, "Errata of the paper"): the ≈100 rad/month quoted for
+    0.347 + 0.285 M_sun holds at P_b = 5 min; at 3.97 min it is ≈256.
     """
     _check_positive(m1_msun=m1_msun, m2_msun=m2_msun, period_s=period_s)
     _check_ecc(e)
@@ -308,7 +302,8 @@ class OpticalEphemeris:
     sigma_fdot_rel_s : float
         σ_ḟ/f [1/s].
     f_orb_hz : float
-        Orbital frequency f = 1/P_orb [Hz] (SCIENCE.md: the orbital, not the GW, frequency).
+        Orbital frequency f = 1/P_orb [Hz] (the orbital, not the GW, frequency;
+        ``docs/method.md``, "Errata of the paper").
     """
 
     sigma_phase_cycles: float
@@ -328,6 +323,56 @@ class OpticalEphemeris:
         return cls(sigma_t0_s / period_s, sigma_p_s / period_s, sigma_pdot / period_s, 1 / period_s)
 
 
+def optical_ephemeris(
+    period_s: float,
+    *,
+    sigma_phase_cycles: float | None = None,
+    sigma_f_rel: float | None = None,
+    sigma_fdot_rel_s: float | None = None,
+    sigma_p_s: float | None = None,
+    sigma_pdot: float | None = None,
+    sigma_t0_s: float | None = None,
+) -> OpticalEphemeris | None:
+    """An optical ephemeris from either frequency-style or period-style uncertainties.
+
+    Parameters
+    ----------
+    period_s : float
+        Orbital period P_orb [s] (sets f = 1/P_orb).
+    sigma_phase_cycles, sigma_f_rel, sigma_fdot_rel_s : float, optional
+        Frequency style: σ_φ0 [cycles], σ_f/f [1], σ_ḟ/f [1/s]; missing ones are 0.
+    sigma_p_s, sigma_pdot, sigma_t0_s : float, optional
+        Period style: σ_P [s], σ_Ṗ [s/s], σ_T0 [s] (:meth:`OpticalEphemeris.from_period`).
+
+    Returns
+    -------
+    OpticalEphemeris or None
+        None when no uncertainty is given at all.
+
+    Raises
+    ------
+    UcbplanError
+        If both styles are given.
+    """
+    freq = (sigma_phase_cycles, sigma_f_rel, sigma_fdot_rel_s)
+    period = (sigma_p_s, sigma_pdot, sigma_t0_s)
+    freq_style = any(v is not None for v in freq)
+    period_style = any(v is not None for v in period)
+    if freq_style and period_style:
+        raise UcbplanError(
+            "optical ephemeris: give either --optical-sigma-phase/-f-rel/-fdot-rel or "
+            "--optical-sigma-p/-pdot/-t0, not both"
+        )
+    if period_style:
+        return OpticalEphemeris.from_period(
+            period_s, sigma_p_s or 0.0, sigma_pdot or 0.0, sigma_t0_s or 0.0
+        )
+    if freq_style:
+        phase, f_rel, fdot_rel = (v or 0.0 for v in freq)
+        return OpticalEphemeris(phase, f_rel, fdot_rel, 1.0 / period_s)
+    return None
+
+
 def optical_timing_s(eph: OpticalEphemeris, baseline_s: ArrayLike) -> NDArray[np.float64]:
     """Timing error of an optical ephemeris propagated over ΔT (independent errors).
 
@@ -338,8 +383,8 @@ def optical_timing_s(eph: OpticalEphemeris, baseline_s: ArrayLike) -> NDArray[np
 
     Notes
     -----
-    Eq. optical_timing_prec with f the orbital frequency (SCIENCE.md erratum): HM Cnc 1.24 s from
-    the frequency terms and 1.79 s with the phase term after 4 yr.
+    Eq. optical_timing_prec with f the orbital frequency (``docs/method.md``, "Errata of the
+    paper"): HM Cnc 1.24 s from the frequency terms and 1.79 s with the phase term after 4 yr.
     """
     dt = np.asarray(baseline_s, dtype=float)
     phase = eph.sigma_phase_cycles / eph.f_orb_hz
@@ -348,7 +393,7 @@ def optical_timing_s(eph: OpticalEphemeris, baseline_s: ArrayLike) -> NDArray[np
     return np.sqrt(phase**2 + freq**2 + fdot**2)
 
 
-def gw_timing_s(target: Target, baseline_s: ArrayLike) -> NDArray[np.float64]:
+def gw_timing_s(target: EphemerisSource, baseline_s: ArrayLike) -> NDArray[np.float64]:
     """Timing error of the LISA ephemeris ΔT after its reference epoch (the LISA midpoint).
 
     Returns
@@ -358,277 +403,10 @@ def gw_timing_s(target: Target, baseline_s: ArrayLike) -> NDArray[np.float64]:
 
     Notes
     -----
-    Sec. 4 (Eq. sigma_tstar with σ_u from the full covariance, SCIENCE.md "Forecast"); the paper
-    quotes δt_u ≈ 0.9 s for the HM Cnc-like system four years after the midpoint.
+    Sec. 4 (Eq. sigma_tstar with σ_u from the full covariance; ``docs/method.md``, "Forecast"):
+    the paper quotes δt_u ≈ 0.9 s for the HM Cnc-like system four years after the midpoint.
     """
-    from ucbplan.core.ephemeris import arg_latitude_rate
-    from ucbplan.core.forecast import sigma_u
-
     tau = np.asarray(baseline_s, dtype=float)
     sig = sigma_u(target.params, target.covariance, tau)
     rate = arg_latitude_rate(target.params, tau)
     return np.asarray(sig / np.abs(rate), dtype=float)
-
-
-@dataclass(frozen=True, slots=True)
-class FeasibilityReport:
-    """Every Sec. 3 magnitude for one binary (SI units; see :func:`feasibility_report`)."""
-
-    name: str
-    period_s: float
-    f_gw_hz: float
-    sin_i: float | None
-    e: float
-    omega0_rad: float
-    m1_msun: float | None
-    m2_msun: float | None
-    k1_m_s: float | None
-    k2_m_s: float | None
-    omega_dot_gr: float | None
-    omega_dot_tide: float | None
-    omega_dot_used: float
-    omega_dot_source: str
-    apsidal_period_s: float
-    tau_chirp_s: float | None
-    tau_chirp_source: str
-    baseline_s: float
-    delta_k_m_s: float | None
-    delta_v_aps_max_m_s: float | None
-    delta_v_aps_m_s: float | None
-    sigma_v_m_s: float
-    n_spectra: int
-    e_floor: float | None
-    a_cm_galactic: float
-    delta_v_cm_galactic_m_s: float
-    m3_msun: float
-    a_out_au: float
-    delta_v_cm_tertiary_m_s: float
-    timing_years: list[float] = field(default_factory=list)
-    gw_timing_s: list[float] | None = None
-    optical_timing_s: list[float] | None = None
-    notes: list[str] = field(default_factory=list)
-
-    def to_dict(self) -> dict[str, Any]:
-        """Plain dict with unit-suffixed keys for ``--format json`` (inf/NaN → None)."""
-
-        def clean(v: Any) -> Any:
-            if isinstance(v, float) and not math.isfinite(v):
-                return None
-            if isinstance(v, list):
-                return [clean(x) for x in v]
-            return v
-
-        return {k: clean(v) for k, v in asdict(self).items()}
-
-
-def feasibility_report(
-    *,
-    name: str,
-    period_s: float,
-    f_gw_hz: float,
-    sin_i: float | None = None,
-    e: float = 0.0,
-    omega0_rad: float = 0.0,
-    omega_dot_target: float = 0.0,
-    fdot_hz_s: float | None = None,
-    m1_msun: float | None = None,
-    m2_msun: float | None = None,
-    k1_m_s: float | None = None,
-    sigma_v_m_s: float = 15e3,
-    n_spectra: int = 1,
-    baseline_s: float = YEAR_S,
-    m3_msun: float = 1.0,
-    a_out_au: float = 5.0,
-    a_cm_galactic: float = 1e-10,
-) -> FeasibilityReport:
-    """Evaluate the Sec. 3 magnitudes for one binary.
-
-    Masses give K_j (Eq. semiamp_est), ω̇_GR, ω̇_tide and the GR chirp time; a measured ``fdot``
-    overrides the GR chirp time and a nonzero ``omega_dot_target`` (LISA's total ω̇) overrides
-    ω̇_GR + ω̇_tide for the apsidal signal. ``k1_m_s`` is used when masses are missing.
-    """
-    notes: list[str] = []
-    k1 = k2 = w_gr = w_tide = None
-    if m1_msun is not None and m2_msun is not None:
-        w_gr = omega_dot_gr(m1_msun + m2_msun, period_s, e)
-        w_tide = omega_dot_tide(m1_msun, m2_msun, period_s, e)
-        if sin_i is not None:
-            k1, k2 = semi_amplitudes(m1_msun, m2_msun, period_s, sin_i, e)
-        else:
-            notes.append("no inclination: K_j not computed; give cos_inclination in the target")
-    else:
-        notes.append("no masses: pass --m1/--m2 for K_j, omega_dot_GR/tide and tau_chirp")
-    if k1 is None and k1_m_s is not None:
-        k1 = k1_m_s
-    if omega_dot_target != 0.0:
-        w_used, w_src = omega_dot_target, "target (LISA)"
-    elif w_gr is not None and w_tide is not None:
-        w_used, w_src = w_gr + w_tide, "GR + tide from masses"
-    else:
-        w_used, w_src = 0.0, "none"
-    if fdot_hz_s is not None and fdot_hz_s != 0.0:
-        tau: float | None = f_gw_hz / abs(fdot_hz_s)
-        tau_src = "f/fdot of the target"
-    elif m1_msun is not None and m2_msun is not None:
-        tau, tau_src = tau_chirp_gr_s(m1_msun, m2_msun, f_gw_hz), "GR from masses"
-    else:
-        tau, tau_src = None, "none"
-    dk = delta_k_bound(k1, baseline_s, tau) if (k1 is not None and tau is not None) else None
-    dv_max = 2.0 * k1 * e if k1 is not None else None
-    dv = None
-    if k1 is not None:
-        dv = float(delta_v_aps(k1, e, omega0_rad, w_used, baseline_s))
-    floor = eccentricity_floor(sigma_v_m_s, k1, n_spectra) if k1 is not None else None
-    a_t = tertiary_acceleration(m3_msun, a_out_au)
-    return FeasibilityReport(
-        name=name,
-        period_s=period_s,
-        f_gw_hz=f_gw_hz,
-        sin_i=sin_i,
-        e=e,
-        omega0_rad=omega0_rad,
-        m1_msun=m1_msun,
-        m2_msun=m2_msun,
-        k1_m_s=k1,
-        k2_m_s=k2,
-        omega_dot_gr=w_gr,
-        omega_dot_tide=w_tide,
-        omega_dot_used=w_used,
-        omega_dot_source=w_src,
-        apsidal_period_s=apsidal_period_s(w_used),
-        tau_chirp_s=tau,
-        tau_chirp_source=tau_src,
-        baseline_s=baseline_s,
-        delta_k_m_s=dk,
-        delta_v_aps_max_m_s=dv_max,
-        delta_v_aps_m_s=dv,
-        sigma_v_m_s=sigma_v_m_s,
-        n_spectra=n_spectra,
-        e_floor=floor,
-        a_cm_galactic=a_cm_galactic,
-        delta_v_cm_galactic_m_s=float(delta_v_cm(a_cm_galactic, baseline_s)),
-        m3_msun=m3_msun,
-        a_out_au=a_out_au,
-        delta_v_cm_tertiary_m_s=float(delta_v_cm(a_t, baseline_s)),
-        notes=notes,
-    )
-
-
-def report_for_target(
-    target: Target,
-    *,
-    m1_msun: float | None = None,
-    m2_msun: float | None = None,
-    sigma_v_m_s: float | None = None,
-    n_spectra: int = 1,
-    baseline_s: float = YEAR_S,
-    m3_msun: float = 1.0,
-    a_out_au: float = 5.0,
-    optical: OpticalEphemeris | None = None,
-    optical_offset_s: float = 0.0,
-    timing_years: tuple[float, ...] = (0.0, 1.0, 2.0, 4.0, 6.0, 8.0, 10.0),
-) -> FeasibilityReport:
-    """:func:`feasibility_report` for a loaded target; CLI values override the target file.
-
-    ``optical_offset_s`` is the LISA midpoint minus the optical ephemeris reference epoch, so the
-    optical ΔT at a given date is ΔT_LISA + offset (0: both referenced to the LISA midpoint).
-    Timing rows are ΔT after the LISA midpoint in Julian years.
-    """
-    spec = target.spectroscopy
-    m1 = m1_msun if m1_msun is not None else target.m1_msun
-    m2 = m2_msun if m2_msun is not None else target.m2_msun
-    if sigma_v_m_s is None:
-        sv = spec.sigma_v_kms if spec is not None else None
-        sigma_v_m_s = sv * 1e3 if sv is not None else 15e3
-    k1_file = spec.K1_kms * 1e3 if (spec is not None and spec.K1_kms is not None) else None
-    cos_i = target.cos_inclination
-    p = target.params
-    report = feasibility_report(
-        name=target.name,
-        period_s=target.period_s,
-        f_gw_hz=p.f_gw,
-        sin_i=math.sqrt(1.0 - cos_i**2) if cos_i is not None else None,
-        e=p.eccentricity,
-        omega0_rad=p.omega_rad,
-        omega_dot_target=p.omega_dot,
-        fdot_hz_s=p.fdot,
-        m1_msun=m1,
-        m2_msun=m2,
-        k1_m_s=k1_file,
-        sigma_v_m_s=sigma_v_m_s,
-        n_spectra=n_spectra,
-        baseline_s=baseline_s,
-        m3_msun=m3_msun,
-        a_out_au=a_out_au,
-    )
-    years = np.asarray(timing_years, dtype=float)
-    dt = years * YEAR_S
-    gw = gw_timing_s(target, dt) if np.any(target.covariance) else None
-    opt = optical_timing_s(optical, dt + optical_offset_s) if optical is not None else None
-    notes = list(report.notes)
-    if gw is None:
-        notes.append("target has no covariance: GW timing delta t_u not computed")
-    return replace(
-        report,
-        timing_years=[float(y) for y in years],
-        gw_timing_s=[float(x) for x in gw] if gw is not None else None,
-        optical_timing_s=[float(x) for x in opt] if opt is not None else None,
-        notes=notes,
-    )
-
-
-def plot_apsidal_signal(
-    path: Any,
-    *,
-    k1_m_s: float,
-    omega_dot_rad_s: float,
-    e_values: tuple[float, ...] = (0.005, 0.01, 0.03),
-    omega1_values: tuple[float, ...] = (0.0, math.pi / 4, math.pi / 2, 3 * math.pi / 4),
-    target_e: float | None = None,
-    target_omega1: float | None = None,
-    title: str = "",
-) -> None:
-    """Plot Δv_aps against the baseline, like Fig. apsidal_signal_omega1_dependence.
-
-    Colours are ω_1, line styles the eccentricities; the dashed vertical line marks the apsidal
-    period 2π/ω̇; the target's own (e, ω_1) is drawn in black when given. Writes a PNG to ``path``.
-
-    Raises
-    ------
-    ValueError
-        If ω̇ = 0 (no apsidal signal to plot).
-    """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    if omega_dot_rad_s == 0:
-        raise ValueError(
-            "omega_dot is 0: no apsidal signal; give masses or a target with omega_dot"
-        )
-    t_aps = apsidal_period_s(omega_dot_rad_s)
-    baseline = np.linspace(0.0, 2.5 * t_aps, 600)
-    days = baseline / 86400.0
-    fig, ax = plt.subplots(figsize=(8, 4.5))
-    styles = ("-", "--", ":", "-.")
-    colours = plt.get_cmap("viridis")(np.linspace(0, 0.9, len(omega1_values)))
-    for j, w1 in enumerate(omega1_values):
-        for i, e in enumerate(e_values):
-            dv = delta_v_aps(k1_m_s, e, w1, omega_dot_rad_s, baseline) / 1e3
-            label = f"ω₁={w1:.2f} rad" if i == 0 else None
-            ax.plot(days, dv, color=colours[j], ls=styles[i % len(styles)], lw=1.2, label=label)
-    for i, e in enumerate(e_values):
-        ax.plot([], [], color="grey", ls=styles[i % len(styles)], label=f"e={e:g}")
-    if target_e is not None and target_omega1 is not None:
-        dv = delta_v_aps(k1_m_s, target_e, target_omega1, omega_dot_rad_s, baseline) / 1e3
-        label = f"target e={target_e:.3g}, ω₁={target_omega1:.2f} rad"
-        ax.plot(days, dv, color="k", lw=2.2, label=label)
-    ax.axvline(t_aps / 86400.0, color="k", ls="--", lw=0.8, label="apsidal period 2π/ω̇")
-    ax.set_xlabel("baseline ΔT = t_β − t_α [days]")
-    ax.set_ylabel("Δv_aps [km/s]")
-    ax.set_title(title or f"apsidal signal, K₁ = {k1_m_s / 1e3:.0f} km/s")
-    ax.legend(fontsize=7, ncol=2, loc="upper right")
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)

@@ -5,18 +5,25 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import Any, Protocol
 
 import numpy as np
 
 from ucbplan.core.constants import DAY_S
+from ucbplan.core.forecast import HorizonRow, anchor_sigma_u
+from ucbplan.core.params import EphemerisSource
 from ucbplan.plotting import pyplot, save_figure
 
-if TYPE_CHECKING:
-    from ucbplan.core.forecast import HorizonRow
-    from ucbplan.target import Target
-
 __all__ = ["horizon_plot"]
+
+
+class NamedSource(EphemerisSource, Protocol):
+    """An :class:`~ucbplan.core.params.EphemerisSource` with a name for the title (a Target)."""
+
+    @property
+    def name(self) -> str:
+        """Target name."""
+        ...
 
 
 def _envelope(
@@ -36,31 +43,28 @@ def _envelope(
 
 
 def horizon_plot(
-    target: Target, rows: Sequence[HorizonRow], path: Path, overwrite: bool = False
+    target: NamedSource, rows: Sequence[HorizonRow], path: Path, overwrite: bool = False
 ) -> None:
     """σ_u(t) after the LISA observation with the tolerance lines α·δu_tol (paper Fig. horizon).
 
     The curve is the quadrature-anchor σ_u (max over u★ = 0, π) and, dashed, the conjunction one.
+    Written atomically to ``path`` (PNG, PDF or SVG by suffix).
+
+    Raises
+    ------
+    OutputExistsError
+        If ``path`` exists and ``overwrite`` is false.
     """
-    from ucbplan.core.forecast import anchor_sigma_u
-
     plt = pyplot()
-
-    p, cov = target.params, target.covariance
-    t_end = target.t_obs_s / 2
     longest = max([r.t_valid_days for r in rows] + [365.0])
     days = np.linspace(-target.t_obs_s / DAY_S, 1.3 * longest, 20000)
-    tau = t_end + days * DAY_S
-    quad = np.maximum(anchor_sigma_u(p, cov, tau, 0.0), anchor_sigma_u(p, cov, tau, math.pi))
-    conj = np.maximum(
-        anchor_sigma_u(p, cov, tau, math.pi / 2), anchor_sigma_u(p, cov, tau, 3 * math.pi / 2)
-    )
+    quad, conj = _anchor_curves(target, days)
     fig, ax = plt.subplots(figsize=(8, 4.5), constrained_layout=True)
     for curve, color, ls, name in (
         (quad, "k", "-", "quadrature"),
         (conj, "0.5", "--", "conjunction"),
     ):
-        days_c, upper, lower = _envelope(days, 1e3 * curve, p.omega_dot)
+        days_c, upper, lower = _envelope(days, 1e3 * curve, target.params.omega_dot)
         if lower is not None:
             ax.fill_between(days_c, lower, upper, color=color, alpha=0.15, lw=0)
         label = f"σ_u, {name} anchor" + (
@@ -69,13 +73,36 @@ def horizon_plot(
         ax.semilogy(
             days_c, upper, color=color, ls=ls, lw=1.5 if name == "quadrature" else 1.0, label=label
         )
+    _tolerance_lines(ax, rows, days[0])
+    ax.axvline(0.0, color="k", ls="--", lw=0.8)
+    ax.set_xlabel("time after the end of the LISA observation [days]")
+    ax.set_ylabel("σ_u [mrad]")
+    ax.set_title(f"{target.name}: phase-coherence forecast")
+    ax.legend(loc="lower right", fontsize=8)
+    save_figure(fig, path, overwrite=overwrite, dpi=120)
+
+
+def _anchor_curves(target: EphemerisSource, days: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Quadrature (max over u★ = 0, π) and conjunction (π/2, 3π/2) σ_u [rad] at ``days``
+    after the end of the LISA observation."""
+    p, cov = target.params, target.covariance
+    tau = target.t_obs_s / 2 + days * DAY_S
+    quad = np.maximum(anchor_sigma_u(p, cov, tau, 0.0), anchor_sigma_u(p, cov, tau, math.pi))
+    conj = np.maximum(
+        anchor_sigma_u(p, cov, tau, math.pi / 2), anchor_sigma_u(p, cov, tau, 3 * math.pi / 2)
+    )
+    return quad, conj
+
+
+def _tolerance_lines(ax: Any, rows: Sequence[HorizonRow], x_text: float) -> None:
+    """One horizontal line α·δu_tol per row, labelled, and a vertical line at its T_valid."""
     colors = {"conjunction": "tab:red", "quadrature": "tab:blue"}
     for r in rows:
         c = colors.get(r.anchor, "tab:green")
         ls = "-" if r.alpha >= 1 else ":"
         ax.axhline(1e3 * r.tolerance_rad, color=c, ls=ls, lw=1)
         ax.text(
-            days[0],
+            x_text,
             1e3 * r.tolerance_rad,
             f" {r.anchor}, α={r.alpha:g}: T_valid = {r.t_valid_days:.0f} d",
             color=c,
@@ -84,9 +111,3 @@ def horizon_plot(
         )
         if r.t_valid_days > 0:
             ax.axvline(r.t_valid_days, color=c, ls=ls, lw=0.6, alpha=0.6)
-    ax.axvline(0.0, color="k", ls="--", lw=0.8)
-    ax.set_xlabel("time after the end of the LISA observation [days]")
-    ax.set_ylabel("σ_u [mrad]")
-    ax.set_title(f"{target.name}: phase-coherence forecast")
-    ax.legend(loc="lower right", fontsize=8)
-    save_figure(fig, path, overwrite=overwrite, dpi=120)
