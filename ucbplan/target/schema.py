@@ -65,9 +65,9 @@ class Range:
         return above and below
 
     def __str__(self) -> str:
-        """Interval notation, e.g. ``(0, inf)`` or ``[-1, 1]``."""
-        left = "(" if self.low_open else "["
-        right = ")" if self.high_open else "]"
+        """Interval notation, e.g. ``(0, inf)`` or ``[-1, 1]`` (infinite ends are open)."""
+        left = "(" if self.low_open or math.isinf(self.low) else "["
+        right = ")" if self.high_open or math.isinf(self.high) else "]"
         return f"{left}{self.low:g}, {self.high:g}{right}"
 
 
