@@ -2,7 +2,7 @@
 
 ``load_target`` validates once, section by section, against the schema
 (:mod:`ucbplan.target.schema`), and returns parameters always referenced to the *midpoint* of
-the LISA observation (paper Sec. 4.1; ``docs/method.md``, "Barycentric and site time"). Every
+the LISA observation (paper Sec. 4.1; ``docs/method.md``, "Phase model"). Every
 validation failure is a one-line :class:`~ucbplan.errors.TargetFileError`:
 ``file: field: expected …, got …``.
 """

@@ -130,57 +130,40 @@ _TIME_SCALES = ("tdb", "tcb", "tt", "utc", "tai")
 _ECC_NOTE = f"e = |η + iκ| < {E_MAX} (the paper's first-order small-e model)"
 
 
-def _phase_model_fields() -> tuple[Field, ...]:
-    """``lisa.phase`` … ``lisa.omega_dot``: the phase model at t_ref (core/params.py units)."""
-    spec: dict[str, tuple[str, str, bool, Range | None, str]] = {
-        "phase": (
-            "a phase",
-            '5.500397 (rad) or "5.5 rad"',
-            True,
-            None,
-            "φ_ref, GW phase of the n=2 mode at t_ref",
-        ),
-        "f_gw": (
-            "a frequency",
-            '"6.2204944286e-3 Hz"',
-            True,
-            _positive("a GW frequency (twice the orbital frequency) is positive"),
-            "GW frequency at t_ref",
-        ),
-        "fdot": ("a frequency derivative", '"7.07e-16 Hz / s"', True, None, "df/dt at t_ref"),
-        "fddot": (
-            "a second frequency derivative",
-            '"-1.07e-26 Hz / s2"',
-            False,
-            None,
-            "d²f/dt² at t_ref",
-        ),
-        "eta": ("a dimensionless number", "0.0068 (dimensionless)", False, None, "η = e sin ω"),
-        "kappa": ("a dimensionless number", "0.0068 (dimensionless)", False, None, "κ = e cos ω"),
-        "omega_dot": ("an angular rate", '"1.498e-6 rad / s"', False, None, "apsidal advance ω̇"),
-    }
-    out = []
-    for name in PARAM_NAMES:
-        what, example, required, bounds, doc = spec[name]
-        if name in ("eta", "kappa"):
-            doc = f"{doc} of star 1 at t_ref; {_ECC_NOTE}"
-        out.append(
-            Field(
-                f"lisa.{name}",
-                "quantity",
-                what,
-                example,
-                unit=PARAM_UNITS[name],
-                required=required,
-                default=None if required else 0.0,
-                bounds=bounds,
-                doc=doc,
-            )
-        )
-    return tuple(out)
+def _phase(
+    name: str,
+    what: str,
+    example: str,
+    doc: str,
+    required: bool = False,
+    bounds: Range | None = None,
+) -> Field:
+    """A phase-model parameter ``lisa.<name>`` in its core unit; optional ones default to 0."""
+    return Field(
+        f"lisa.{name}",
+        "quantity",
+        what,
+        example,
+        unit=PARAM_UNITS[name],
+        required=required,
+        default=None if required else 0.0,
+        bounds=bounds,
+        doc=doc,
+    )
 
 
-_VELOCITY = "a velocity"
+def _velocity(name: str, example: str, doc: str, reason: str) -> Field:
+    """A spectroscopy velocity ``spectroscopy.<name>`` in km/s, positive."""
+    return Field(
+        f"spectroscopy.{name}",
+        "quantity",
+        "a velocity",
+        example,
+        unit="km / s",
+        bounds=_positive(reason),
+        doc=doc,
+    )
+
 
 #: Every field of a target file, in document order (the order :func:`write_target` writes).
 FIELDS: tuple[Field, ...] = (
@@ -206,7 +189,7 @@ FIELDS: tuple[Field, ...] = (
             reason="right ascension wraps at 24h",
             error="right ascension must be in [0h, 24h), got {raw!r}",
         ),
-        doc="ICRS right ascension (sexagesimal hours, or degrees)",
+        doc="ICRS right ascension (sexagesimal hours, or degrees); required unless l, b are given",
     ),
     Field(
         "sky.dec",
@@ -220,7 +203,7 @@ FIELDS: tuple[Field, ...] = (
             reason="a latitude on the sky",
             error="declination must be in [-90, +90] deg, got {raw!r}",
         ),
-        doc="ICRS declination",
+        doc="ICRS declination; required unless l, b are given",
     ),
     Field(
         "sky.frame",
@@ -296,7 +279,36 @@ FIELDS: tuple[Field, ...] = (
         choices=("midpoint", "start"),
         doc="where t_ref lies in the observation; start-referenced inputs move to the midpoint",
     ),
-    *_phase_model_fields(),
+    _phase(
+        "phase",
+        "a phase",
+        '5.500397 (rad) or "5.5 rad"',
+        "φ_ref, GW phase of the n=2 mode at t_ref",
+        required=True,
+    ),
+    _phase(
+        "f_gw",
+        "a frequency",
+        '"6.2204944286e-3 Hz"',
+        "GW frequency at t_ref",
+        required=True,
+        bounds=_positive("a GW frequency (twice the orbital frequency) is positive"),
+    ),
+    _phase("fdot", "a frequency derivative", '"7.07e-16 Hz / s"', "df/dt at t_ref", required=True),
+    _phase("fddot", "a second frequency derivative", '"-1.07e-26 Hz / s2"', "d²f/dt² at t_ref"),
+    _phase(
+        "eta",
+        "a dimensionless number",
+        "0.0068 (dimensionless)",
+        f"η = e sin ω of star 1 at t_ref; {_ECC_NOTE}",
+    ),
+    _phase(
+        "kappa",
+        "a dimensionless number",
+        "0.0068 (dimensionless)",
+        f"κ = e cos ω of star 1 at t_ref; {_ECC_NOTE}",
+    ),
+    _phase("omega_dot", "an angular rate", '"1.498e-6 rad / s"', "apsidal advance rate ω̇"),
     Field(
         "lisa.cos_inclination",
         "quantity",
@@ -425,41 +437,20 @@ FIELDS: tuple[Field, ...] = (
         choices=("SB1", "SB2"),
         doc="one (SB1) or both (SB2) stars' lines are measured",
     ),
-    Field(
-        "spectroscopy.K1",
-        "quantity",
-        _VELOCITY,
-        '"585 km/s"',
-        unit="km / s",
-        bounds=_positive("a semi-amplitude is positive"),
-        doc="velocity semi-amplitude of star 1",
+    _velocity(
+        "K1", '"585 km/s"', "velocity semi-amplitude of star 1", "a semi-amplitude is positive"
     ),
-    Field(
-        "spectroscopy.K2",
-        "quantity",
-        _VELOCITY,
-        '"713 km/s"',
-        unit="km / s",
-        bounds=_positive("a semi-amplitude is positive"),
-        doc="velocity semi-amplitude of star 2",
+    _velocity(
+        "K2", '"713 km/s"', "velocity semi-amplitude of star 2", "a semi-amplitude is positive"
     ),
-    Field(
-        "spectroscopy.K_eff",
-        "quantity",
-        _VELOCITY,
+    _velocity(
+        "K_eff",
         '"390 km/s"',
-        unit="km / s",
-        bounds=_positive("a semi-amplitude is positive"),
-        doc="K for tolerances; default K1 + K2 (SB2) or K1 (SB1)",
+        "K for tolerances; default K1 + K2 (SB2) or K1 (SB1)",
+        "a semi-amplitude is positive",
     ),
-    Field(
-        "spectroscopy.sigma_v",
-        "quantity",
-        _VELOCITY,
-        '"15 km/s"',
-        unit="km / s",
-        bounds=_positive("a velocity error is positive"),
-        doc="velocity error of one spectrum",
+    _velocity(
+        "sigma_v", '"15 km/s"', "velocity error of one spectrum", "a velocity error is positive"
     ),
     Field("notes", "any", "anything", '"free text"', doc="free-form notes; ucbplan ignores them"),
 )
