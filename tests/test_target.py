@@ -8,10 +8,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
+from astropy import units as u
+from astropy.time import Time
 
 from ucbplan.core.constants import L_B
 from ucbplan.errors import TargetFileError
 from ucbplan.target import load_target, target_to_dict, write_target
+
+CATALOGS = Path(__file__).resolve().parents[1] / "catalogs"
 
 BASE = {
     "name": "Test",
@@ -179,19 +183,42 @@ def test_explicit_scales_are_converted(tmp_path: Path) -> None:
     assert t_tcb.notes["t_ref_converted_from"] == "tcb"
 
 
-def test_round_trip_write_and_load(tmp_path: Path, eccentric_path: Path) -> None:
-    t = load_target(eccentric_path)
+@pytest.mark.parametrize("catalog", ["fiducial-eccentric.yaml", "fiducial-injection.yaml"])
+def test_round_trip_write_and_load(tmp_path: Path, catalog: str) -> None:
+    """What write_target writes, load_target reads back to the same target (both catalogs: one
+    midpoint-, one start-referenced)."""
+    t = load_target(CATALOGS / catalog)
     out = tmp_path / "copy.yaml"
     write_target(t, out)
     t2 = load_target(out)
+    # written at the midpoint: read back without a second shift
+    assert t2.ref_shift_s == 0.0
     assert np.allclose(t2.params.as_array(), t.params.as_array(), rtol=1e-15, atol=0)
     assert np.allclose(t2.covariance, t.covariance, rtol=1e-12, atol=0)
     assert abs((t2.t_ref - t.t_ref).to_value("s")) < 1e-6
-    assert target_to_dict(t2)["lisa"]["t_ref_is"] == "midpoint"
+    assert t2.t_obs_s == t.t_obs_s
+    assert (t2.name, t2.ra_deg, t2.dec_deg) == (t.name, t.ra_deg, t.dec_deg)
+    assert (t2.cos_inclination, t2.amplitude, t2.psi) == (t.cos_inclination, t.amplitude, t.psi)
+    assert (t2.distance_kpc, t2.m1_msun, t2.m2_msun) == (t.distance_kpc, t.m1_msun, t.m2_msun)
+    assert (t2.priority, t2.vmag, t2.spectroscopy) == (t.priority, t.vmag, t.spectroscopy)
     from ucbplan.errors import OutputExistsError
 
     with pytest.raises(OutputExistsError):
         write_target(t, out)
+
+
+def test_start_referenced_target_is_written_at_its_midpoint(tmp_path: Path) -> None:
+    """The injection is referenced to 2035-01-01 (start) with T = 126232599.054 s: the written
+    file holds t_ref = start + T/2 and the Taylor-shifted f (Sec. 4.1)."""
+    t = load_target(CATALOGS / "fiducial-injection.yaml")
+    doc = target_to_dict(t)
+    half = 126232599.054 / 2
+    mid = Time("2035-01-01T00:00:00", scale="tdb") + half * u.s
+    assert abs((Time(doc["lisa"]["t_ref"], scale="tdb") - mid).to_value("s")) < 1e-3
+    assert doc["lisa"]["t_ref_is"] == "midpoint"
+    f_mid = 8.406186457145e-3 + 1.6404896699184233e-15 * half
+    assert float(doc["lisa"]["f_gw"].split()[0]) == pytest.approx(f_mid, rel=1e-14)
+    assert doc["lisa"]["f_gw"].endswith(" Hz")
 
 
 def test_correlation_list_form(tmp_path: Path) -> None:

@@ -1,23 +1,22 @@
 """Target files: the YAML contract, its validation, and the :class:`Target` record.
 
-Public API: :func:`load_target`, :func:`write_target`, :class:`Target`, :class:`Spectroscopy`.
+Modules: ``model`` (the :class:`Target` / :class:`Spectroscopy` records), ``schema`` (every field
+of a target file declared once: unit, range, example, default), ``values`` (scalar readers),
+``parse`` (:func:`load_target`), ``covariance`` (``lisa.covariance``), ``samples`` (posterior
+samples files), ``write`` (:func:`write_target`).
 """
 
-from ucbplan.target.model import (
-    Spectroscopy,
-    Target,
-    load_samples,
-    load_target,
-    target_from_dict,
-    target_to_dict,
-    write_target,
-)
+from ucbplan.target.model import Spectroscopy, Target
+from ucbplan.target.parse import load_target, target_from_dict
+from ucbplan.target.samples import load_samples, read_samples_file
+from ucbplan.target.write import target_to_dict, write_target
 
 __all__ = [
     "Spectroscopy",
     "Target",
     "load_samples",
     "load_target",
+    "read_samples_file",
     "target_from_dict",
     "target_to_dict",
     "write_target",

@@ -1,0 +1,350 @@
+"""Read and validate a target file into a :class:`~ucbplan.target.model.Target`.
+
+``load_target`` validates once, section by section, against the schema
+(:mod:`ucbplan.target.schema`), and returns parameters always referenced to the *midpoint* of
+the LISA observation (paper Sec. 4.1; ``docs/method.md``, "Phase model"). Every
+validation failure is a one-line :class:`~ucbplan.errors.TargetFileError`:
+``file: field: expected …, got …``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+from astropy import units as u
+from astropy.coordinates import SkyCoord
+from astropy.time import Time, TimeDelta
+from numpy.typing import NDArray
+
+from ucbplan.core.constants import E_MAX, L_B
+from ucbplan.core.params import PARAM_NAMES, PhaseParams, shift_jacobian, shift_reference
+from ucbplan.errors import TargetFileError
+from ucbplan.target.covariance import parse_covariance
+from ucbplan.target.model import Spectroscopy, Target
+from ucbplan.target.schema import Field, field, section_fields
+from ucbplan.target.values import (
+    Ctx,
+    check_range,
+    parse_angle,
+    parse_epoch,
+    parse_number,
+    parse_quantity,
+)
+
+__all__ = ["load_target", "target_from_dict"]
+
+FloatArray = NDArray[np.float64]
+
+_PHASE_MODEL = tuple(field(f"lisa.{n}") for n in PARAM_NAMES)
+_LISA_EXTRAS = tuple(
+    field(f"lisa.{n}") for n in ("cos_inclination", "amplitude", "psi", "distance")
+)
+#: Powers of 1/s in the unit of each rate that a TCB → TDB conversion rescales.
+_TCB_POWER = {"f_gw": 1, "fdot": 2, "fddot": 3, "omega_dot": 1}
+
+
+def load_target(path: Path | str) -> Target:
+    """Read and validate a target YAML file (``yaml.safe_load`` only).
+
+    Raises
+    ------
+    TargetFileError
+        One line naming the file, the field path, what was expected and how to fix it.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise TargetFileError(f"{path}: file not found; check the path") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise TargetFileError(f"{path}: cannot read target file ({exc})") from None
+    try:
+        doc = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f" at line {mark.line + 1}" if mark is not None else ""
+        raise TargetFileError(f"{Ctx(path).label}: not valid YAML{where}; fix the syntax") from None
+    return target_from_dict(doc, path)
+
+
+def target_from_dict(doc: Any, path: Path | None = None) -> Target:
+    """Validate a parsed target document (see :func:`load_target`).
+
+    ``path`` names the file in messages and anchors a relative ``lisa.samples``.
+    """
+    ctx = Ctx(path)
+    if not isinstance(doc, Mapping):
+        raise ctx.fail("<top>", "expected a YAML mapping with name, sky and lisa")
+    _no_unknown_fields(ctx, "", doc)
+    name = _parse_name(ctx, doc.get("name"))
+    ra, dec = _parse_sky(ctx, doc)
+    lisa = _parse_lisa(ctx, doc.get("lisa"), path)
+    spectroscopy = _parse_spectroscopy(ctx, doc.get("spectroscopy"))
+    priority = _number(ctx, doc, field("priority"))
+    vmag = _number(ctx, doc, field("vmag"))
+    masses = _parse_masses(ctx, doc)
+    return Target(
+        name=name,
+        source=path.resolve() if path is not None else None,
+        ra_deg=ra,
+        dec_deg=dec,
+        t_ref=lisa.t_ref,
+        t_obs_s=lisa.t_obs_s,
+        params=lisa.params,
+        cov_names=lisa.cov_names,
+        cov_matrix=lisa.cov_matrix,
+        cos_inclination=lisa.extras["cos_inclination"],
+        amplitude=lisa.extras["amplitude"],
+        psi=lisa.extras["psi"],
+        distance_kpc=lisa.extras["distance"],
+        spectroscopy=spectroscopy,
+        samples=lisa.samples,
+        priority=priority,
+        vmag=vmag,
+        m1_msun=masses.get("m1"),
+        m2_msun=masses.get("m2"),
+        ref_shift_s=lisa.ref_shift_s,
+        notes={"t_ref_converted_from": lisa.converted} if lisa.converted else {},
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# fields and sections
+# ---------------------------------------------------------------------------------------------
+
+
+def _no_unknown_fields(ctx: Ctx, section: str, mapping: Mapping[Any, Any]) -> None:
+    """Fail on the first (sorted) key of ``mapping`` that the schema's ``section`` lacks."""
+    allowed = sorted(f.name for f in section_fields(section))
+    unknown = set(mapping) - set(allowed)
+    if unknown:
+        first = sorted(unknown)[0]
+        raise ctx.fail(
+            f"{section}.{first}" if section else first,
+            f"unknown field; expected some of {', '.join(allowed)}",
+        )
+
+
+def _quantities(ctx: Ctx, mapping: Mapping[str, Any], fields: Iterable[Field]) -> dict[str, Any]:
+    """Fields of ``mapping`` as floats (absent: the schema default), ranges checked after all
+    of them are read."""
+    fields = tuple(fields)
+    got = {f.name: parse_quantity(ctx, f, mapping[f.name]) for f in fields if f.name in mapping}
+    for f in fields:
+        if f.name in got:
+            check_range(ctx, f, got[f.name], mapping[f.name])
+    return {f.name: got.get(f.name, f.default) for f in fields}
+
+
+def _number(ctx: Ctx, doc: Mapping[str, Any], f: Field) -> Any:
+    """A plain number at the top level (absent: the schema default), range checked."""
+    if f.name not in doc:
+        return f.default
+    x = parse_number(ctx, f, doc[f.name])
+    check_range(ctx, f, x, doc[f.name])
+    return x
+
+
+def _parse_name(ctx: Ctx, name: Any) -> str:
+    if not isinstance(name, str) or not name.strip():
+        f = field("name")
+        raise ctx.fail(f.path, f"expected {f.what} like {f.example}")
+    return name.strip()
+
+
+def _parse_sky(ctx: Ctx, doc: Mapping[str, Any]) -> tuple[float, float]:
+    """ICRS (ra, dec) in degrees from ``sky``: ICRS ra/dec, or galactic l/b converted."""
+    example = field("sky").example
+    if "sky" not in doc:
+        raise ctx.fail("sky", f"missing; add sky: {example}")
+    sky = doc["sky"]
+    if not isinstance(sky, Mapping):
+        raise ctx.fail("sky", f"expected a mapping like {example}")
+    keys = set(sky)
+    if {"l", "b"} <= keys and not ({"ra", "dec"} & keys):
+        lon = parse_angle(ctx, field("sky.l"), sky["l"])
+        lat = parse_angle(ctx, field("sky.b"), sky["b"])
+        c = SkyCoord(l=lon * u.deg, b=lat * u.deg, frame="galactic").icrs
+        return float(c.ra.deg), float(c.dec.deg)
+    unknown = keys - {"ra", "dec", "frame"}
+    if unknown:
+        raise ctx.fail(f"sky.{sorted(unknown)[0]}", "unknown field; expected ra, dec (or l, b)")
+    for k in ("ra", "dec"):
+        if k not in sky:
+            raise ctx.fail(f"sky.{k}", "missing; give ICRS ra and dec")
+    frame_field = field("sky.frame")
+    frame = str(sky.get("frame", frame_field.default)).lower()
+    if frame not in frame_field.choices:
+        raise ctx.fail(frame_field.path, f"expected icrs, got {frame!r}")
+    ra = parse_angle(ctx, field("sky.ra"), sky["ra"], hours=True)
+    return ra, parse_angle(ctx, field("sky.dec"), sky["dec"])
+
+
+def _parse_spectroscopy(ctx: Ctx, spec: Any) -> Spectroscopy | None:
+    if spec is None:
+        return None
+    if not isinstance(spec, Mapping):
+        raise ctx.fail("spectroscopy", "expected a mapping with lines, K1, K2, sigma_v")
+    _no_unknown_fields(ctx, "spectroscopy", spec)
+    lines_field = field("spectroscopy.lines")
+    lines = str(spec.get("lines", lines_field.default)).upper()
+    if lines not in lines_field.choices:
+        raise ctx.fail(
+            lines_field.path,
+            f"expected {' or '.join(lines_field.choices)}, got {spec.get('lines')!r}",
+        )
+    vals: dict[str, Any] = {}
+    for f in section_fields("spectroscopy"):
+        if f.kind == "quantity":  # each read and range-checked in turn
+            vals |= _quantities(ctx, spec, (f,))
+    return Spectroscopy(lines, vals["K1"], vals["K2"], vals["K_eff"], vals["sigma_v"])
+
+
+def _parse_masses(ctx: Ctx, doc: Mapping[str, Any]) -> dict[str, float | None]:
+    if "masses" not in doc:
+        return {}
+    masses = doc["masses"]
+    fields = section_fields("masses")
+    if not isinstance(masses, Mapping) or set(masses) - {f.name for f in fields}:
+        raise ctx.fail("masses", f"expected {field('masses').example}")
+    return _quantities(ctx, masses, fields)
+
+
+# ---------------------------------------------------------------------------------------------
+# the LISA section
+# ---------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, slots=True)
+class _Lisa:
+    """The validated ``lisa`` section, moved to the observation midpoint and to TDB."""
+
+    t_ref: Time
+    t_obs_s: float
+    params: PhaseParams
+    cov_names: tuple[str, ...]
+    cov_matrix: FloatArray
+    extras: dict[str, float | None]
+    samples: Path | None
+    ref_shift_s: float
+    converted: str | None
+
+
+def _parse_lisa(ctx: Ctx, lisa: Any, path: Path | None) -> _Lisa:
+    """The ``lisa`` section; TCB rates are rescaled and start-referenced ones moved."""
+    _check_lisa_fields(ctx, lisa)
+    t_ref, converted = parse_epoch(ctx, field("lisa.t_ref"), lisa["t_ref"], lisa.get("t_ref_scale"))
+    t_obs = float(_quantities(ctx, lisa, (field("lisa.t_obs"),))["t_obs"])
+    ref_is = _reference_point(ctx, lisa)
+    vals = _quantities(ctx, lisa, _PHASE_MODEL)
+    _check_eccentricity(ctx, vals["eta"], vals["kappa"])
+    names, mat = parse_covariance(ctx, lisa.get("covariance"))
+    if converted == "tcb":
+        vals, mat = _tcb_to_tdb(vals, names, mat)
+        t_obs *= 1.0 - L_B
+    params = PhaseParams(**vals)
+    shift = 0.0
+    if ref_is == "start":
+        shift = t_obs / 2.0
+        params, mat = _shift_named(params, names, mat, shift)
+        t_ref = t_ref + TimeDelta(shift, format="sec")
+    return _Lisa(
+        t_ref=t_ref,
+        t_obs_s=t_obs,
+        params=params,
+        cov_names=names,
+        cov_matrix=mat,
+        extras=_quantities(ctx, lisa, _LISA_EXTRAS),
+        samples=_samples_path(ctx, lisa, path),
+        ref_shift_s=shift,
+        converted=converted,
+    )
+
+
+def _check_lisa_fields(ctx: Ctx, lisa: Any) -> None:
+    """``lisa`` is a mapping of known fields with every required one present."""
+    if not isinstance(lisa, Mapping):
+        raise ctx.fail("lisa", "missing or not a mapping; see the README target-file format")
+    _no_unknown_fields(ctx, "lisa", lisa)
+    for f in section_fields("lisa"):
+        if f.required and f.name not in lisa:
+            raise ctx.fail(
+                f.path, f"missing; expected {f.example if f.kind == 'quantity' else f.what}"
+            )
+
+
+def _reference_point(ctx: Ctx, lisa: Mapping[str, Any]) -> str:
+    """``t_ref_is``: where in the observation t_ref lies (``midpoint`` or ``start``)."""
+    f = field("lisa.t_ref_is")
+    ref_is = str(lisa.get(f.name, f.default)).strip().lower()
+    if ref_is not in f.choices:
+        raise ctx.fail(f.path, f"expected {' or '.join(map(repr, f.choices))}, got {ref_is!r}")
+    return ref_is
+
+
+def _check_eccentricity(ctx: Ctx, eta: float, kappa: float) -> None:
+    """e = |η + iκ| must stay inside the first-order small-e model."""
+    ecc = math.hypot(eta, kappa)
+    if ecc >= E_MAX:
+        raise ctx.fail(
+            "lisa.eta/kappa",
+            f"e = |η + iκ| = {ecc:.4g} ≥ {E_MAX}: outside the small-e (first-order) model of the "
+            "paper; ucbplan cannot schedule such orbits",
+        )
+
+
+def _samples_path(ctx: Ctx, lisa: Mapping[str, Any], path: Path | None) -> Path | None:
+    """``lisa.samples`` resolved next to the target file (it must exist)."""
+    f = field("lisa.samples")
+    if f.name not in lisa:
+        return None
+    name = lisa[f.name]
+    if not isinstance(name, str):
+        raise ctx.fail(f.path, f"expected {f.what} like {f.example}")
+    base = path.parent if path is not None else Path(".")
+    samples = (base / name).resolve()
+    if not samples.exists():
+        raise ctx.fail(f.path, f"file {name!r} not found next to the target file")
+    return samples
+
+
+# ---------------------------------------------------------------------------------------------
+# time scale and reference epoch
+# ---------------------------------------------------------------------------------------------
+
+
+def _tcb_to_tdb(
+    vals: dict[str, float], names: tuple[str, ...], mat: FloatArray
+) -> tuple[dict[str, float], FloatArray]:
+    """Rescale rates from TCB to TDB seconds: a quantity per TCB second^n gains (1 − L_B)^−n."""
+    out = dict(vals)
+    scale = np.ones(len(names))
+    for key, n in _TCB_POWER.items():
+        out[key] = vals[key] / (1.0 - L_B) ** n
+        if key in names:
+            scale[names.index(key)] = 1.0 / (1.0 - L_B) ** n
+    return out, mat * np.outer(scale, scale)
+
+
+def _shift_named(
+    p: PhaseParams, names: tuple[str, ...], mat: FloatArray, dt: float
+) -> tuple[PhaseParams, FloatArray]:
+    """Shift parameters and the named covariance by ``dt`` [s] (extras like cos ι unchanged)."""
+    new_p, _ = shift_reference(p, np.zeros((7, 7)), dt)
+    if not names:
+        return new_p, mat
+    j7 = shift_jacobian(p, dt)
+    j = np.eye(len(names))
+    for a, na in enumerate(names):
+        for b, nb in enumerate(names):
+            if na in PARAM_NAMES and nb in PARAM_NAMES:
+                j[a, b] = j7[PARAM_NAMES.index(na), PARAM_NAMES.index(nb)]
+    # parameters absent from the covariance are exact: their columns do not matter
+    new = j @ mat @ j.T
+    return new_p, 0.5 * (new + new.T)

@@ -1,0 +1,130 @@
+"""Write a :class:`~ucbplan.target.model.Target` back as a target file (schema order and units).
+
+Parameters are written at the midpoint (``t_ref_is: midpoint``), quantities with the unit the
+schema declares (:mod:`ucbplan.target.schema`), so :func:`~ucbplan.target.parse.load_target`
+reads back the same numbers.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from pathlib import Path
+from typing import IO, Any
+
+import yaml
+
+from ucbplan.core.params import PARAM_NAMES
+from ucbplan.io import write_output
+from ucbplan.target.model import Spectroscopy, Target
+from ucbplan.target.schema import field
+
+__all__ = ["target_to_dict", "write_target"]
+
+
+def _value(path: str, value: float) -> float | str:
+    """A number as the schema writes it: bare in rad or dimensionless, else ``"<repr> <unit>"``."""
+    unit = field(path).unit
+    if not unit or unit == "rad":
+        return float(value)
+    return f"{value!r} {unit}"
+
+
+def _given(section: str, pairs: Iterable[tuple[str, float | None]]) -> dict[str, float | str]:
+    """``{name: written value}`` of the fields of ``section`` whose value is not None."""
+    return {name: _value(f"{section}.{name}", v) for name, v in pairs if v is not None}
+
+
+def target_to_dict(t: Target) -> dict[str, Any]:
+    """YAML-ready dict in the documented schema (parameters at the midpoint, bare SI numbers).
+
+    A samples path is written relative to the target's source directory when it lies below it.
+    """
+    doc: dict[str, Any] = {
+        "name": t.name,
+        "sky": _given("sky", (("ra", t.ra_deg), ("dec", t.dec_deg))),
+        "lisa": _lisa_dict(t),
+    }
+    if t.priority != field("priority").default:
+        doc["priority"] = t.priority
+    if t.vmag is not None:
+        doc["vmag"] = t.vmag
+    if t.m1_msun is not None or t.m2_msun is not None:
+        doc["masses"] = _given("masses", (("m1", t.m1_msun), ("m2", t.m2_msun)))
+    if t.spectroscopy is not None:
+        doc["spectroscopy"] = _spectroscopy_dict(t.spectroscopy)
+    return doc
+
+
+def _lisa_dict(t: Target) -> dict[str, Any]:
+    lisa: dict[str, Any] = {
+        "t_ref": t.t_ref.tdb.isot,
+        "t_obs": _value("lisa.t_obs", t.t_obs_s),
+        "t_ref_is": "midpoint",
+    }
+    lisa |= _given("lisa", ((n, getattr(t.params, n)) for n in PARAM_NAMES))
+    lisa |= _given(
+        "lisa",
+        (
+            ("cos_inclination", t.cos_inclination),
+            ("amplitude", t.amplitude),
+            ("psi", t.psi),
+            ("distance", t.distance_kpc),
+        ),
+    )
+    if t.cov_names:
+        lisa["covariance"] = {
+            "parameters": list(t.cov_names),
+            "matrix": [[float(x) for x in row] for row in t.cov_matrix],
+        }
+    if t.samples is not None:
+        base = t.source.parent if t.source is not None else Path(".")
+        lisa["samples"] = _relative(t.samples, base.resolve())
+    return lisa
+
+
+def _spectroscopy_dict(s: Spectroscopy) -> dict[str, Any]:
+    spec: dict[str, Any] = {"lines": s.lines}
+    spec |= _given(
+        "spectroscopy",
+        (("K1", s.K1_kms), ("K2", s.K2_kms), ("K_eff", s.K_eff_kms), ("sigma_v", s.sigma_v_kms)),
+    )
+    return spec
+
+
+def _relative(path: Path, base: Path) -> str:
+    """``path`` relative to ``base`` if it lies below it, else as given."""
+    try:
+        return str(path.relative_to(base))
+    except ValueError:
+        return str(path)
+
+
+def write_target(t: Target, path: Path, overwrite: bool = False, header: str = "") -> None:
+    """Write ``t`` as YAML atomically.
+
+    Parameters
+    ----------
+    t : Target
+        The target to write.
+    path : Path
+        Output file; the samples path is written relative to its directory when possible.
+    overwrite : bool
+        Replace an existing file.
+    header : str
+        Comment lines written first (each prefixed with ``# ``).
+
+    Raises
+    ------
+    OutputExistsError
+        ``path`` exists and ``overwrite`` is false.
+    """
+    doc = target_to_dict(t)
+    if t.samples is not None:
+        doc["lisa"]["samples"] = _relative(t.samples.resolve(), path.parent.resolve())
+
+    def _write(handle: IO[Any]) -> None:
+        for line in header.splitlines():
+            handle.write(f"# {line}\n")
+        yaml.safe_dump(doc, handle, sort_keys=False, allow_unicode=True, width=100)
+
+    write_output(path, _write, overwrite=overwrite)
