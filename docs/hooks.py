@@ -174,22 +174,39 @@ def cli_reference() -> str:
 # ---------------------------------------------------------------------------- blocks table
 
 
-def _declared_columns(module: ModuleType) -> list[tuple[str, str, str, str]] | None:
-    """(name, unit, dtype, description) from a declarative column list, if the module has one."""
-    for attr in ("COLUMNS", "BLOCK_COLUMNS", "MASTER_COLUMNS"):
-        spec = getattr(module, attr, None)
-        items = list(spec.values()) if isinstance(spec, Mapping) else spec
-        if items and all(hasattr(c, "name") for c in items):
-            return [
-                (
-                    str(c.name),
-                    str(getattr(c, "unit", "") or ""),
-                    str(getattr(c, "dtype", "") or ""),
-                    str(getattr(c, "description", "") or getattr(c, "doc", "") or ""),
-                )
-                for c in items
-            ]
-    return None
+def _text(value: Any) -> str:
+    """A unit, dtype or description as text (``""`` for None; types by their name)."""
+    if value is None:
+        return ""
+    return str(value.__name__) if isinstance(value, type) else str(value)
+
+
+def _declared_columns(module: ModuleType, names: list[str]) -> list[tuple[str, str, str, str]]:
+    """(name, unit, dtype, description) from the module's declarative column list, if any.
+
+    Any module-level tuple, list or mapping of records with a ``name`` and a ``description`` (or
+    ``doc``) counts; the one naming most of ``names`` wins. Empty when there is none.
+    """
+    best: list[Any] = []
+    for value in vars(module).values():
+        if isinstance(value, str) or not isinstance(value, tuple | list | Mapping):
+            continue
+        items = list(value.values()) if isinstance(value, Mapping) else list(value)
+        if items and all(
+            hasattr(c, "name") and (hasattr(c, "description") or hasattr(c, "doc")) for c in items
+        ):
+            covered = len({str(c.name) for c in items} & set(names))
+            if covered > len({str(c.name) for c in best} & set(names)):
+                best = items
+    return [
+        (
+            str(c.name),
+            _text(getattr(c, "unit", None)),
+            _text(getattr(c, "dtype", None)),
+            _text(getattr(c, "description", None) or getattr(c, "doc", None)),
+        )
+        for c in best
+    ]
 
 
 def _listed_columns(module: ModuleType) -> list[tuple[str, str, str, str]]:
@@ -203,8 +220,8 @@ def _listed_columns(module: ModuleType) -> list[tuple[str, str, str, str]]:
 def blocks_table() -> str:
     """Markdown tables of the master blocks table's required and further columns."""
     module = _import("ucbplan.observing.blocktable")
-    columns = _declared_columns(module) or _listed_columns(module)
     listed = [*module.REQUIRED_COLUMNS, *getattr(module, "EXTRA_COLUMNS", ())]
+    columns = _declared_columns(module, listed) or _listed_columns(module)
     missing = sorted(set(listed) - {c[0] for c in columns})
     if missing:
         raise PluginError(f"blocks-table: columns {missing} are listed but not declared")
