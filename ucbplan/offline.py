@@ -12,7 +12,7 @@ _OFFLINE_DONE = False
 
 
 def configure_offline() -> None:
-    """Configure astropy so that nothing ever touches the network (SCIENCE.md recipe).
+    """Configure astropy so that nothing ever touches the network (docs/method.md, time scales).
 
     Called once at CLI start, never on import. Uses the IERS-A/B tables and leap seconds bundled
     with ``astropy-iers-data``; nights past their coverage are warned about by the planner.
