@@ -12,7 +12,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import IO, Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -180,8 +180,22 @@ def run_sampler(
     )
 
 
-def save_chain(result: SamplerResult, path: Path, extra: dict[str, object] | None = None) -> None:
-    """Save the chain and diagnostics to ``path`` (.npz) for inspection or restarts."""
+def save_chain(
+    result: SamplerResult,
+    path: Path,
+    extra: dict[str, object] | None = None,
+    *,
+    overwrite: bool = False,
+) -> None:
+    """Save the chain and diagnostics to ``path`` (.npz, atomically) for inspection or restarts.
+
+    Raises
+    ------
+    OutputExistsError
+        If ``path`` exists and ``overwrite`` is false.
+    """
+    from ucbplan.io import write_output
+
     arrays: dict[str, Any] = {str(k): np.asarray(v) for k, v in (extra or {}).items()}
     arrays |= {
         "theta": result.theta,
@@ -192,5 +206,8 @@ def save_chain(result: SamplerResult, path: Path, extra: dict[str, object] | Non
         "seed": np.asarray(result.seed),
         "names": np.asarray(result.names),
     }
-    with path.open("wb") as handle:
+
+    def _write(handle: IO[Any]) -> None:
         np.savez_compressed(handle, **arrays)
+
+    write_output(path, _write, overwrite=overwrite, binary=True)
