@@ -46,7 +46,8 @@ def problem() -> tuple:
 
 
 def test_sangria_asd_at_8p4_mhz() -> None:
-    """SCIENCE.md: ASD_A (Sangria instrument) at 8.4 mHz = 2.999e-21 /sqrt(Hz) (4 digits)."""
+    """ASD_A (Sangria instrument) at 8.4 mHz = 2.999e-21 /sqrt(Hz) (4 digits; docs/method.md,
+    "Waveform and noise")."""
     asd = np.sqrt(psd_a(8.4e-3, model=NoiseModel(foreground=False)))
     assert asd == pytest.approx(2.999e-21, rel=2e-4)
 
@@ -75,8 +76,9 @@ def test_target_round_trip_of_injection(problem: tuple) -> None:
 
 
 def test_fiducial_snr_about_830(problem: tuple) -> None:
-    """SCIENCE.md: optimal SNR ~ 830 with Sangria + foreground; tolerance 1 % (the paper's
-    GBGPU/orbit-file response differs from our analytic orbits at that level)."""
+    """Optimal SNR ~ 830 with Sangria + foreground (docs/method.md, "Waveform and noise");
+    tolerance 1 % (the paper's GBGPU/orbit-file response differs from our analytic orbits at
+    that level)."""
     *_, like, theta0, _ = problem
     assert like.snr(theta0[None])[0] == pytest.approx(830.0, rel=0.01)
 

@@ -53,7 +53,7 @@ N_SHORT = 64
 
 
 def _h_parts(p: SourceParams, chi: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
-    """Paper Eqs. app:final_form_h_plus/cross, psi-rotated (SCIENCE.md convention).
+    """Paper Eqs. app:final_form_h_plus/cross, psi-rotated (docs/method.md convention).
 
     Returns the (h+, hx) of the carrier (e^0 part) and of the O(e) sidebands separately; the
     waveform is their sum (it is linear in (eta, kappa) at fixed orbital phase).

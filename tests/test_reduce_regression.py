@@ -26,8 +26,8 @@ NBAR = math.pi * 8.4062899940e-3  # fiducial n̄_b [rad/s]
 P_MEAN = 2.0 * math.pi / NBAR
 
 
-def test_lambda_factors_match_science_md() -> None:
-    """SCIENCE.md checked numbers: Λ_K(P/8) = 0.97450, 1/Λ_K(P/3) = 1.2092, Λ_κ(P/3) = 0.4135.
+def test_lambda_factors_match_reference_values() -> None:
+    """Λ_K(P/8) = 0.97450, 1/Λ_K(P/3) = 1.2092, Λ_κ(P/3) = 0.4135 (docs/method.md, "Smearing").
 
     Tolerance 5e-5: the printed precision of the reference values.
     """

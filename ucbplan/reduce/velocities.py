@@ -361,7 +361,7 @@ def to_barycentric(table: VelocityTable, coord: SkyCoord, location: EarthLocatio
     Notes
     -----
     t_bary = t.tdb + Δ(t), Δ the barycentric light travel time (astropy builtin ephemeris, within
-    ~12 µs of DE421; SCIENCE.md "Barycentric ↔ site time").
+    ~12 µs of DE421; docs/method.md "Barycentric and site time").
     """
     if not table.site_utc:
         return table
