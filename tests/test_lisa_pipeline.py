@@ -8,14 +8,8 @@ import numpy as np
 import pytest
 
 from ucbplan.lisa.lines import LINE_COLUMNS, waveform_lines
-from ucbplan.lisa.pipeline import (
-    SimulateOptions,
-    build_model,
-    fisher_forecast,
-    simulate,
-    simulation_files,
-    write_simulation,
-)
+from ucbplan.lisa.outputs import simulation_files, write_simulation
+from ucbplan.lisa.pipeline import SimulateOptions, build_model, fisher_forecast, simulate
 from ucbplan.target import load_target
 
 INJECTION = Path(__file__).resolve().parents[1] / "catalogs" / "fiducial-injection.yaml"

@@ -109,10 +109,11 @@ def simulate(
     """Simulate a LISA observation and sample the targeted-search posterior → target YAML."""
     # Long only by its option declarations: parse, call ucbplan.lisa.pipeline, print.
     from ucbplan.lisa import pipeline as lp
+    from ucbplan.lisa.outputs import simulation_files, write_simulation
     from ucbplan.lisa.plots import simulation_corner_plots
 
     model = _model(target, t_obs, n_bins, circular)
-    files = lp.simulation_files(output, chain)
+    files = simulation_files(output, chain)
     for p in (files.target, files.samples, files.chain):
         check_output_path(p, overwrite)
     if plots is not None and not plots.is_dir():
@@ -135,7 +136,7 @@ def simulate(
     result = _run_with_progress(problem, steps)
     for warning in result.warnings:
         err_console.print(f"[yellow]warning: {escape(warning)}[/yellow]")
-    lp.write_simulation(result, files, overwrite=overwrite, source_name=target.name)
+    write_simulation(result, files, overwrite=overwrite, source_name=target.name)
     title = f"{model.base.name} (posterior): posterior vs injection"
     sigma, mean = result.posterior_sigma, result.posterior_mean
     _summary(title, result.names, result.injected, sigma, mean, result.fisher_sigma)

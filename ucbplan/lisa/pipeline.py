@@ -6,11 +6,12 @@ they return records and never print, so a notebook or a Dask worker can call the
     model = build_model(load_target("catalogs/fiducial-injection.yaml"))
     forecast = fisher_forecast(model)                   # Gaussian target at the midpoint
     result = simulate(model, SimulateOptions(seed=1, steps=60))
-    write_simulation(result, Path("posterior.yaml"))    # target YAML + samples ECSV + chain
+    write_simulation(result, simulation_files(Path("posterior.yaml")))  # YAML + samples + chain
 
 Data flow: :func:`build_model` (start-epoch truth, four-line model, midpoint target) →
 :func:`prepare_simulation` (noise draw, likelihood, SNR, Fisher covariance) →
-:func:`run_simulation` (emcee, midpoint transform, π-mode fold) → :func:`write_simulation`.
+:func:`run_simulation` (emcee, midpoint transform, π-mode fold) →
+:func:`ucbplan.lisa.outputs.write_simulation`.
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ import numpy as np
 from astropy.time import TimeDelta
 from numpy.typing import NDArray
 
-from ucbplan.errors import InputFileError, UcbplanError
+from ucbplan.errors import UcbplanError
 from ucbplan.lisa import posterior as post
 from ucbplan.lisa.fisher import fisher_matrix
 from ucbplan.lisa.likelihood import (
@@ -37,7 +38,8 @@ from ucbplan.lisa.likelihood import (
     theta_from_source,
 )
 from ucbplan.lisa.noise import SANGRIA
-from ucbplan.lisa.sampler import CONVERGENCE_FACTOR, SamplerResult, run_sampler, save_chain
+from ucbplan.lisa.outputs import load_resume
+from ucbplan.lisa.sampler import CONVERGENCE_FACTOR, SamplerResult, run_sampler
 
 if TYPE_CHECKING:
     from ucbplan.lisa.waveform import FourLineModel, SourceParams
@@ -47,16 +49,13 @@ __all__ = [
     "FisherForecast",
     "LisaModel",
     "SimulateOptions",
-    "SimulationFiles",
     "SimulationProblem",
     "SimulationResult",
     "build_model",
     "fisher_forecast",
-    "load_resume",
     "prepare_simulation",
     "run_simulation",
     "simulate",
-    "write_simulation",
 ]
 
 F64 = NDArray[np.float64]
@@ -252,45 +251,6 @@ class SimulationProblem:
     previous: tuple[F64, F64] | None = None
 
 
-def load_resume(
-    path: Path, model: LisaModel, theta0: F64, options: SimulateOptions
-) -> tuple[tuple[F64, F64], F64]:
-    """Chain and whitening covariance of a saved run, checked against the current options.
-
-    Raises
-    ------
-    InputFileError
-        Unreadable chain, or one of another data set (seed, noise, N, T) or target/walkers.
-    """
-    try:
-        with np.load(path) as z:
-            saved = {k: z[k] for k in z.files}
-    except (OSError, ValueError) as exc:
-        raise InputFileError(
-            f"{path}: cannot read the chain ({exc}); give a simulate .npz"
-        ) from None
-    want = {
-        "seed": options.seed,
-        "noise": options.noise,
-        "n_bins": model.n_bins,
-        "t_obs_s": model.t_obs_s,
-    }
-    for key, val in want.items():
-        if key not in saved or not np.isclose(float(saved[key]), float(val), rtol=1e-12):
-            got = saved[key].item() if key in saved else "missing"
-            raise InputFileError(
-                f"{path}: {key} = {got}, this run has {val}; resume with the same "
-                "--seed/--noise/--n-bins/--t-obs (the data must be identical)"
-            )
-    walkers = saved["theta"].shape[1]
-    if walkers != options.walkers or not np.allclose(saved["theta0"], theta0, rtol=0):
-        raise InputFileError(
-            f"{path}: chain has {walkers} walkers for another target; resume "
-            f"with --walkers {walkers} and the same target file"
-        )
-    return (saved["theta"], saved["log_prob"]), saved["fisher_cov"]
-
-
 def prepare_simulation(model: LisaModel, options: SimulateOptions) -> SimulationProblem:
     """Draw the data (seeded), build the likelihood, its SNR and the Fisher covariance.
 
@@ -299,7 +259,8 @@ def prepare_simulation(model: LisaModel, options: SimulateOptions) -> Simulation
     UcbplanError
         Fewer than 2 walkers per parameter.
     InputFileError
-        ``options.resume`` does not fit this run (:func:`load_resume`).
+        ``options.resume`` does not fit this run
+        (:func:`ucbplan.lisa.outputs.load_resume`).
     """
     theta0 = model.theta0()
     if options.walkers < 2 * theta0.size:
@@ -311,7 +272,15 @@ def prepare_simulation(model: LisaModel, options: SimulateOptions) -> Simulation
     cov = _fisher_cov(like, theta0)
     previous = None
     if options.resume is not None:
-        previous, cov = load_resume(options.resume, model, theta0, options)
+        previous, cov = load_resume(
+            options.resume,
+            theta0,
+            seed=options.seed,
+            noise=options.noise,
+            n_bins=model.n_bins,
+            t_obs_s=model.t_obs_s,
+            walkers=options.walkers,
+        )
     return SimulationProblem(model, options, theta0, like, snr, cov, previous)
 
 
@@ -458,56 +427,3 @@ def simulate(
     :func:`prepare_simulation` followed by :func:`run_simulation`.
     """
     return run_simulation(prepare_simulation(model, options), progress)
-
-
-@dataclass(frozen=True, slots=True)
-class SimulationFiles:
-    """Paths written by :func:`write_simulation`."""
-
-    target: Path
-    samples: Path
-    chain: Path
-
-
-def simulation_files(output: Path, chain: Path | None = None) -> SimulationFiles:
-    """File names of a simulation: samples ECSV and chain .npz next to ``output`` by default."""
-    chain_path = chain if chain is not None else output.with_suffix(".chain.npz")
-    return SimulationFiles(output, output.with_suffix(".samples.ecsv"), chain_path)
-
-
-def write_simulation(
-    result: SimulationResult,
-    files: SimulationFiles,
-    *,
-    overwrite: bool = False,
-    source_name: str | None = None,
-) -> None:
-    """Write the posterior target YAML, its samples ECSV and the chain .npz (each atomically).
-
-    Parameters
-    ----------
-    source_name : str, optional
-        Target file name for the YAML header (default: that of the model's target).
-    """
-    from ucbplan.target import write_target
-
-    problem, chain = result.problem, result.chain
-    model, opts = problem.model, problem.options
-    if source_name is None:
-        src = model.base.source
-        source_name = src.name if src is not None else model.base.name
-    post.write_samples(result.columns, files.samples, overwrite, result.samples_meta())
-    header = (
-        f"ucbplan simulate {source_name} seed={opts.seed} noise={opts.noise} N={model.n_bins}: "
-        f"{result.samples.shape[0]} samples, {result.n_steps} steps (tau_max "
-        f"{result.tau_max:.0f}, converged={chain.converged}), SNR {problem.snr:.1f}"
-    )
-    write_target(result.posterior(files.samples), files.target, overwrite=overwrite, header=header)
-    extra = {
-        "theta0": problem.theta0,
-        "fisher_cov": problem.fisher_cov,
-        "t_obs_s": model.t_obs_s,
-        "noise": opts.noise,
-        "n_bins": model.n_bins,
-    }
-    save_chain(chain, files.chain, extra, overwrite=overwrite)
