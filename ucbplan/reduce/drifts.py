@@ -31,6 +31,7 @@ from itertools import pairwise
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ucbplan.core.constants import C_M_S
 from ucbplan.reduce.regression import LineFit, weighted_line
 
 __all__ = [
@@ -143,37 +144,53 @@ def group_spectra(
     lk = np.broadcast_to(np.asarray(lam_k, float), tau.shape)
     lkap = np.broadcast_to(np.asarray(lam_kappa, float), tau.shape)
     G = np.asarray(design, float)
+    vel = [
+        (np.asarray(v, float), np.asarray(sg, float))
+        for v, sg in zip(velocities, sigmas, strict=True)
+    ]
     groups: list[Group] = []
     keys = {(str(s), float(a)) for s, a in zip(sess, us, strict=True) if np.isfinite(a)}
     for s, a in sorted(keys, key=lambda k: (k[0], k[1])):
         m = (sess == s) & (us == a)
-        vs, ss, gs, gss = [], [], [], []
-        for j, (v, sg) in enumerate(zip(velocities, sigmas, strict=True)):
-            sign = 1.0 if j == 0 else -1.0
-            va, sa = np.asarray(v, float)[m], np.asarray(sg, float)[m]
-            w = 1.0 / sa**2
-            vc = va - sign * K[j] * lk[m] * (np.cos(u[m]) - math.cos(a))
-            gam = va - sign * K[j] * G[m]
-            vs.append(float((w * vc).sum() / w.sum()))
-            gs.append(float((w * gam).sum() / w.sum()))
-            ss.append(float(1.0 / math.sqrt(w.sum())))
-            gss.append(ss[-1])
+        means = [
+            _component_means(v[m], sg[m], (1.0 if j == 0 else -1.0) * K[j], lk[m], u[m], a, G[m])
+            for j, (v, sg) in enumerate(vel)
+        ]
+        vs, ss, gs = (tuple(x) for x in zip(*means, strict=True))
         groups.append(
             Group(
                 session=s,
                 u_star=a,
                 tau_s=float(tau[m].mean()),
                 n=int(m.sum()),
-                v=tuple(vs),
-                sigma=tuple(ss),
-                gamma_est=tuple(gs),
-                gamma_sigma=tuple(gss),
+                v=vs,
+                sigma=ss,
+                gamma_est=gs,
+                gamma_sigma=ss,
                 lam_k=float(lk[m].mean()),
                 lam_kappa=float(lkap[m].mean()),
             )
         )
     groups.sort(key=lambda g: g.tau_s)
     return groups
+
+
+def _component_means(
+    v: F64, sigma: F64, sK: float, lam_k: F64, u: F64, u_star: float, G: F64
+) -> tuple[float, float, float]:
+    """One component of one group: (fixed-u mean, its σ, zero-crossing γ estimate).
+
+    ``sK`` is ±K_j (the star's sign); the velocities are moved to the exact u★ first and the γ
+    estimate removes the whole orbital term ±K_j G.
+    """
+    w = 1.0 / sigma**2
+    vc = v - sK * lam_k * (np.cos(u) - math.cos(u_star))
+    gam = v - sK * G
+    return (
+        float((w * vc).sum() / w.sum()),
+        float(1.0 / math.sqrt(w.sum())),
+        float((w * gam).sum() / w.sum()),
+    )
 
 
 @dataclass(frozen=True, slots=True)
@@ -229,57 +246,77 @@ def make_pairs(
     -------
     list of Pair
     """
-    pairs: list[Pair] = []
-    nan = float("nan")
     by_anchor: dict[float, list[Group]] = {}
     for g in groups:
         by_anchor.setdefault(g.u_star, []).append(g)
-    for a, gs in by_anchor.items():
-        gs = sorted(gs, key=lambda g: g.tau_s)
-        for ga, gb in pairwise(gs):
-            if ga.session == gb.session:
-                continue
-            dv = tuple(b - c for b, c in zip(gb.v, ga.v, strict=True))
-            sdv = tuple(math.hypot(b, c) for b, c in zip(gb.sigma, ga.sigma, strict=True))
-            dk_l, sdk_l, de_l = ll_at.delta(ga.tau_s, gb.tau_s)
-            lk = 0.5 * (ga.lam_k + gb.lam_k)
-            lkap = 0.5 * (ga.lam_kappa + gb.lam_kappa)
-            A, B = _ab(a, lk, lkap)
-            dk_s = sdk_s = z = nan
-            if len(dv) == 2:
-                k1, k2 = K
-                dk_s = (dv[0] - dv[1]) / ((k1 + k2) * A) - (B / A) * de_l
-                sdk_s = math.hypot(*sdv) / ((k1 + k2) * abs(A))
-                z = (dk_s - dk_l) / math.hypot(sdk_s, sdk_l)
-                if eccentric:
-                    dcm = (k2 * dv[0] + k1 * dv[1]) / (k1 + k2)
-                    sdcm = math.hypot(k2 * sdv[0], k1 * sdv[1]) / (k1 + k2)
-                else:
-                    w = np.array([1.0 / sdv[0] ** 2, 1.0 / sdv[1] ** 2])
-                    dcm = float((w * np.array(dv)).sum() / w.sum())
-                    sdcm = float(1.0 / math.sqrt(w.sum()))
-            else:
-                dcm = dv[0] - (K[0] * (A * dk_l + B * de_l) if eccentric else 0.0)
-                sdcm = math.hypot(sdv[0], K[0] * abs(A) * sdk_l) if eccentric else sdv[0]
-            pairs.append(
-                Pair(
-                    ga.session,
-                    gb.session,
-                    a,
-                    gb.tau_s - ga.tau_s,
-                    dv,
-                    sdv,
-                    dk_s,
-                    sdk_s,
-                    dk_l,
-                    sdk_l,
-                    z,
-                    dcm,
-                    sdcm,
-                )
-            )
+    pairs = [
+        _pair(ga, gb, K, eccentric, ll_at)
+        for gs in by_anchor.values()
+        for ga, gb in pairwise(sorted(gs, key=lambda g: g.tau_s))
+        if ga.session != gb.session
+    ]
     pairs.sort(key=lambda p: (p.u_star, p.dT_s))
     return pairs
+
+
+def _pair(ga: Group, gb: Group, K: Sequence[float], eccentric: bool, ll_at: LLPredictor) -> Pair:
+    """Differences β − α of two same-u★ groups and the Δκ, Δv_CM estimates they give."""
+    a = ga.u_star
+    dv = tuple(b - c for b, c in zip(gb.v, ga.v, strict=True))
+    sdv = tuple(math.hypot(b, c) for b, c in zip(gb.sigma, ga.sigma, strict=True))
+    lisa = ll_at.delta(ga.tau_s, gb.tau_s)
+    A, B = _ab(a, 0.5 * (ga.lam_k + gb.lam_k), 0.5 * (ga.lam_kappa + gb.lam_kappa))
+    if len(dv) == 2:
+        kappa, dv_cm = _sb2_terms(dv, sdv, K, A, B, lisa, eccentric)
+    else:
+        nan = float("nan")
+        kappa, dv_cm = (nan, nan, nan), _sb1_dv_cm(dv[0], sdv[0], K[0], A, B, lisa, eccentric)
+    dk_s, sdk_s, z = kappa
+    dk_l, sdk_l, _ = lisa
+    dT = gb.tau_s - ga.tau_s
+    return Pair(ga.session, gb.session, a, dT, dv, sdv, dk_s, sdk_s, dk_l, sdk_l, z, *dv_cm)
+
+
+def _sb2_terms(
+    dv: tuple[float, ...],
+    sdv: tuple[float, ...],
+    K: Sequence[float],
+    A: float,
+    B: float,
+    lisa: tuple[float, float, float],
+    eccentric: bool,
+) -> tuple[tuple[float, float, float], tuple[float, float]]:
+    """SB2: (Δκ_spec, σ, z vs Δκ_LISA) and (Δv_CM, σ) — K-weighted if eccentric, else the
+    inverse-variance mean of the two stars (Eqs. intercept_Deltav_cm, cir_deltaVcm)."""
+    dk_l, sdk_l, de_l = lisa
+    k1, k2 = K
+    dk_s = (dv[0] - dv[1]) / ((k1 + k2) * A) - (B / A) * de_l
+    sdk_s = math.hypot(*sdv) / ((k1 + k2) * abs(A))
+    z = (dk_s - dk_l) / math.hypot(sdk_s, sdk_l)
+    if eccentric:
+        dcm = (k2 * dv[0] + k1 * dv[1]) / (k1 + k2)
+        sdcm = math.hypot(k2 * sdv[0], k1 * sdv[1]) / (k1 + k2)
+    else:
+        w = np.array([1.0 / sdv[0] ** 2, 1.0 / sdv[1] ** 2])
+        dcm = float((w * np.array(dv)).sum() / w.sum())
+        sdcm = float(1.0 / math.sqrt(w.sum()))
+    return (dk_s, sdk_s, z), (dcm, sdcm)
+
+
+def _sb1_dv_cm(
+    dv: float,
+    sdv: float,
+    K: float,
+    A: float,
+    B: float,
+    lisa: tuple[float, float, float],
+    eccentric: bool,
+) -> tuple[float, float]:
+    """SB1: Δv_CM = Δv − K Δκ_LISA-term (eccentric; σ includes σ(Δκ_LISA)), else Δv."""
+    dk_l, sdk_l, de_l = lisa
+    dcm = dv - (K * (A * dk_l + B * de_l) if eccentric else 0.0)
+    sdcm = math.hypot(sdv, K * abs(A) * sdk_l) if eccentric else sdv
+    return dcm, sdcm
 
 
 class LLPredictor:
@@ -386,50 +423,9 @@ def combine(
     """
     nan = float("nan")
     zc = _zero_crossing_pairs(groups) if (n_components == 1 and eccentric) else []
-    est: list[tuple[float, float]] = []  # (a_los, sigma) in m/s²
-    if zc:
-        for _, _, dT, dv, sdv in zc:
-            est.append((-dv * 1e3 / dT, sdv * 1e3 / dT))
-    else:
-        for p in pairs:
-            if p.dT_s > 0 and math.isfinite(p.dv_cm):
-                est.append((-p.dv_cm * 1e3 / p.dT_s, p.sigma_dv_cm * 1e3 / p.dT_s))
-    a = sa = up = nan
-    if est:
-        w = np.array([1.0 / s**2 for _, s in est])
-        a = float((w * np.array([x for x, _ in est])).sum() / w.sum())
-        sa = float(1.0 / math.sqrt(w.sum()))
-        if abs(a) < UPPER_LIMIT_NSIGMA * sa:
-            up = abs(a) + UPPER_LIMIT_NSIGMA * sa
-    line = None
-    ql = sql = dcm = sdcm = nan
-    sb2 = [p for p in pairs if len(p.dv) == 2]
-    disjoint: list[Pair] = []
-    used: set[tuple[float, str]] = set()
-    for p in sorted(sb2, key=lambda p: p.dT_s):
-        if (p.u_star, p.alpha) in used or (p.u_star, p.beta) in used:
-            continue
-        used.update({(p.u_star, p.alpha), (p.u_star, p.beta)})
-        disjoint.append(p)
-    if len(disjoint) >= 3 and np.ptp([p.dv[1] for p in disjoint]) > 0:
-        x = np.array([p.dv[1] for p in disjoint])
-        y = np.array([p.dv[0] for p in disjoint])
-        sx = np.array([p.sigma_dv[1] for p in disjoint])
-        sy = np.array([p.sigma_dv[0] for p in disjoint])
-        q = 1.0
-        for _ in range(30):
-            line = weighted_line(x, y, np.sqrt(sy**2 + q * q * sx**2), scale=False)
-            q = -line.slope
-        assert line is not None
-        ql, sql = q, line.sigma_slope
-        dcm = line.intercept / (1.0 + q)
-        sdcm = math.sqrt(
-            line.cov[0, 0] / (1 + q) ** 2
-            + line.intercept**2 * line.cov[1, 1] / (1 + q) ** 4
-            + 2 * line.intercept * line.cov[0, 1] / (1 + q) ** 3
-        )
+    a, sa, up = _a_los(_a_los_estimates(pairs, zc))
+    line, ql, sql, dcm, sdcm = _difference_line(_disjoint_sb2(pairs))
     zs = [p.z_kappa for p in pairs if math.isfinite(p.z_kappa)]
-    c = 299792458.0
     return DriftResult(
         pairs=tuple(pairs),
         zero_crossing=tuple(zc),
@@ -441,8 +437,71 @@ def combine(
         a_los=a,
         sigma_a_los=sa,
         a_los_upper=up,
-        fdot_acc=f_hz / c * a if math.isfinite(a) else nan,
-        sigma_fdot_acc=f_hz / c * sa if math.isfinite(sa) else nan,
+        fdot_acc=f_hz / C_M_S * a if math.isfinite(a) else nan,
+        sigma_fdot_acc=f_hz / C_M_S * sa if math.isfinite(sa) else nan,
         chi2_kappa=float(np.sum(np.square(zs))) if zs else nan,
         n_kappa=len(zs),
     )
+
+
+def _a_los_estimates(
+    pairs: Sequence[Pair], zc: list[tuple[str, str, float, float, float]]
+) -> list[tuple[float, float]]:
+    """(a_los, σ) [m/s²] per zero-crossing difference (SB1 eccentric) or else per pair."""
+    if zc:
+        return [(-dv * 1e3 / dT, sdv * 1e3 / dT) for _, _, dT, dv, sdv in zc]
+    return [
+        (-p.dv_cm * 1e3 / p.dT_s, p.sigma_dv_cm * 1e3 / p.dT_s)
+        for p in pairs
+        if p.dT_s > 0 and math.isfinite(p.dv_cm)
+    ]
+
+
+def _a_los(est: list[tuple[float, float]]) -> tuple[float, float, float]:
+    """Inverse-variance mean, its σ and the upper limit (NaN if detected or no estimates)."""
+    nan = float("nan")
+    if not est:
+        return nan, nan, nan
+    w = np.array([1.0 / s**2 for _, s in est])
+    a = float((w * np.array([x for x, _ in est])).sum() / w.sum())
+    sa = float(1.0 / math.sqrt(w.sum()))
+    up = abs(a) + UPPER_LIMIT_NSIGMA * sa if abs(a) < UPPER_LIMIT_NSIGMA * sa else nan
+    return a, sa, up
+
+
+def _disjoint_sb2(pairs: Sequence[Pair]) -> list[Pair]:
+    """SB2 pairs sharing no (u★, session) group, shortest ΔT first (independent differences)."""
+    disjoint: list[Pair] = []
+    used: set[tuple[float, str]] = set()
+    for p in sorted((p for p in pairs if len(p.dv) == 2), key=lambda p: p.dT_s):
+        if (p.u_star, p.alpha) in used or (p.u_star, p.beta) in used:
+            continue
+        used.update({(p.u_star, p.alpha), (p.u_star, p.beta)})
+        disjoint.append(p)
+    return disjoint
+
+
+def _difference_line(
+    disjoint: list[Pair],
+) -> tuple[LineFit | None, float, float, float, float]:
+    """Δv1 vs Δv2 line (Eq. SB2_fixedu_diff_WIL41) of ≥ 3 disjoint pairs: (line, q, σ_q,
+    Δv_CM = intercept/(1 + q), σ); errors in both axes by iterating q (NaN if too few pairs)."""
+    nan = float("nan")
+    if len(disjoint) < 3 or not np.ptp([p.dv[1] for p in disjoint]) > 0:
+        return None, nan, nan, nan, nan
+    x = np.array([p.dv[1] for p in disjoint])
+    y = np.array([p.dv[0] for p in disjoint])
+    sx = np.array([p.sigma_dv[1] for p in disjoint])
+    sy = np.array([p.sigma_dv[0] for p in disjoint])
+    q = 1.0
+    for _ in range(29):  # the weights σ_y² + q²σ_x² depend on the slope −q: iterate
+        q = -weighted_line(x, y, np.sqrt(sy**2 + q * q * sx**2), scale=False).slope
+    line = weighted_line(x, y, np.sqrt(sy**2 + q * q * sx**2), scale=False)
+    q = -line.slope
+    dcm = line.intercept / (1.0 + q)
+    sdcm = math.sqrt(
+        line.cov[0, 0] / (1 + q) ** 2
+        + line.intercept**2 * line.cov[1, 1] / (1 + q) ** 4
+        + 2 * line.intercept * line.cov[0, 1] / (1 + q) ** 3
+    )
+    return line, q, line.sigma_slope, dcm, sdcm
