@@ -175,9 +175,8 @@ def test_fold_pi_mode() -> None:
     np.testing.assert_allclose(out["kappa"], [0.0044, 0.0044], atol=1e-15)
 
 
-def test_cli_waveform_fisher_and_short_simulate(tmp_path: Path) -> None:
-    """End to end: waveform table columns/meta, Fisher target readable by load_target, and a
-    tiny simulate run (N = 64, 20 steps) that writes YAML + samples + chain and warns."""
+def test_cli_waveform_and_fisher(tmp_path: Path) -> None:
+    """End to end: waveform table columns/meta and plot, Fisher target readable by load_target."""
     from astropy.table import Table
 
     from ucbplan.cli.app import app
@@ -202,6 +201,14 @@ def test_cli_waveform_fisher_and_short_simulate(tmp_path: Path) -> None:
     t = load_target(fis)
     assert t.cov_names[:6] == ("phase", "f_gw", "fdot", "eta", "kappa", "omega_dot")
 
+
+@pytest.mark.slow
+def test_cli_short_simulate_and_resume(tmp_path: Path) -> None:
+    """End to end: a tiny simulate run (N = 64, 20 steps) writes YAML + samples + chain + corner
+    plots, refuses to overwrite, resumes the chain (20 + 10 steps) and refuses other data."""
+    from ucbplan.cli.app import app
+
+    runner = CliRunner()
     out = tmp_path / "post.yaml"
     args = ["simulate", str(INJECTION), "-o", str(out), "--n-bins", "64", "--steps", "20"]
     r = runner.invoke(

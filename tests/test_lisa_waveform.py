@@ -140,6 +140,7 @@ def brute(orbits: EqualArmOrbits) -> list[list[np.ndarray]]:
     return _brute_force_ae([FIDUCIAL, FAST_APSIDES], orbits)
 
 
+@pytest.mark.slow  # the brute-force fixture integrates 2^19 samples x 12 links: ~10 s
 @pytest.mark.parametrize(("which", "n"), [(0, N_SHORT), (1, 128)])
 def test_fast_response_matches_brute_force_per_band(
     orbits: EqualArmOrbits, brute: list[list[np.ndarray]], which: int, n: int
