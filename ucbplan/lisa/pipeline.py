@@ -127,6 +127,8 @@ def build_model(
 
     Raises
     ------
+    ValueError
+        ``n_bins`` odd or below 16.
     TargetFileError
         The target lacks the GW-only fields or has fdot ≤ 0.
     UcbplanError
