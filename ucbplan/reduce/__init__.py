@@ -4,8 +4,8 @@ The pipeline lives in :mod:`ucbplan.reduce.pipeline`; this package re-exports it
 Its steps: :mod:`~ucbplan.reduce.velocities` (read, validate), :mod:`~ucbplan.reduce.design`
 (ephemeris → design variable), :mod:`~ucbplan.reduce.regression` (fits),
 :mod:`~ucbplan.reduce.montecarlo` and :mod:`~ucbplan.reduce.masses` (masses),
-:mod:`~ucbplan.reduce.drifts` (inter-session differences), :mod:`~ucbplan.reduce.report` and
-:mod:`~ucbplan.reduce.plots` (output).
+:mod:`~ucbplan.reduce.groups` and :mod:`~ucbplan.reduce.drifts` (inter-session differences),
+:mod:`~ucbplan.reduce.report` and :mod:`~ucbplan.reduce.plots` (output).
 """
 
 from ucbplan.reduce.pipeline import ReduceOptions, Reduction, read_samples, read_velocities, reduce

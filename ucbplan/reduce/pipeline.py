@@ -9,7 +9,8 @@ which runs the steps in order:
    phase sensitivity ∂(K_j, γ_j)/∂θ of the LISA ephemeris error;
 3. :mod:`~ucbplan.reduce.montecarlo` — the joint Monte Carlo to masses
    (:mod:`~ucbplan.reduce.masses`);
-4. :mod:`~ucbplan.reduce.drifts` — inter-session fixed-u pairs: Δκ, Δv_CM, a_los;
+4. :mod:`~ucbplan.reduce.groups` and :mod:`~ucbplan.reduce.drifts` — fixed-u groups per
+   session and their inter-session pairs: Δκ, Δv_CM, a_los;
 
 → :mod:`~ucbplan.reduce.report` (dict, JSON/YAML, terminal) and :mod:`~ucbplan.reduce.plots`.
 """
@@ -28,6 +29,7 @@ from ucbplan.core.constants import C_KM_S
 from ucbplan.reduce import drifts as _drifts
 from ucbplan.reduce import masses as _masses
 from ucbplan.reduce.design import design_jacobian, designs, orbit, window_factors
+from ucbplan.reduce.groups import Group, assign_anchors, group_spectra
 from ucbplan.reduce.montecarlo import monte_carlo
 from ucbplan.reduce.regression import (
     ComponentFit,
@@ -105,7 +107,7 @@ class Reduction:
     light_time: dict[str, float]
     samples: dict[str, F64]
     summaries: dict[str, _masses.Summary]
-    groups: tuple[_drifts.Group, ...]
+    groups: tuple[Group, ...]
     drift: _drifts.DriftResult
     warnings: tuple[str, ...] = field(default_factory=tuple)
 
@@ -355,15 +357,15 @@ def _inter_session(
     intra: _IntraSession,
     lam_k: F64,
     lam_kap: F64,
-) -> tuple[list[_drifts.Group], _drifts.DriftResult]:
+) -> tuple[list[Group], _drifts.DriftResult]:
     """Fixed-u groups per session, their pairs, and the combined drifts (Δκ, Δv_CM, a_los)."""
     p, fits = target.params, intra.fits
     K = tuple(f.K for f in fits)
-    groups = _drifts.group_spectra(
+    groups = group_spectra(
         sessions=table.session,
         tau_s=tau,
         u_rad=u,
-        u_star=_drifts.assign_anchors(u, table.u_star),
+        u_star=assign_anchors(u, table.u_star),
         velocities=table.v,
         sigmas=table.sigma,
         K=K,
