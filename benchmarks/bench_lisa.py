@@ -23,7 +23,6 @@ from pathlib import Path
 
 import numpy as np
 
-from ucbplan.lisa.fisher import fisher_matrix
 from ucbplan.lisa.likelihood import (
     Likelihood,
     Prior,
@@ -34,7 +33,7 @@ from ucbplan.lisa.likelihood import (
 )
 from ucbplan.lisa.noise import SANGRIA
 from ucbplan.offline import configure_offline
-from ucbplan.target import load_target
+from ucbplan.target import Target, load_target
 
 INJECTION = Path(__file__).resolve().parents[1] / "catalogs" / "fiducial-injection.yaml"
 N_BINS = 512
@@ -145,35 +144,23 @@ def main() -> None:
                 f"{rates['eccentric'][w] / rates['circular'][w]:.2f}"
             )
     if args.full:
-        _full(like, theta0, truth, ecc, target, args.seed)
+        _full(args.seed)
 
 
-def _full(like, theta0, truth, model, target, seed):  # type: ignore[no-untyped-def]
-    from ucbplan.core.forecast import horizon_table
-    from ucbplan.lisa import posterior as post
-    from ucbplan.lisa.sampler import run_sampler
+def _full(seed: int) -> None:
+    """Converged posterior through the library pipeline (as ``ucbplan simulate``)."""
+    from ucbplan.lisa.pipeline import SimulateOptions, build_model, simulate
 
-    t_obs = model.grid.t_obs_s
     t0 = time.perf_counter()
-    data = simulate_data(model, truth, SANGRIA, np.random.default_rng(seed))
-    noisy = Likelihood(model, data, like.prior, SANGRIA)
-    cov = np.linalg.inv(fisher_matrix(noisy, theta0))
-    res = run_sampler(
-        noisy, theta0, cov, n_walkers=32, n_steps=2000, until_converged=True, seed=seed
-    )
+    model = build_model(load_target(INJECTION), n_bins=N_BINS)
+    opts = SimulateOptions(seed=seed, walkers=32, steps=2000, until_converged=True)
+    res = simulate(model, opts)
     wall = time.perf_counter() - t0
-    flat = res.flat_samples()
     print(
-        f"posterior: {res.theta.shape[0]} steps x 32 walkers, tau_max {np.max(res.tau):.0f}, "
-        f"converged={res.converged}, acceptance {res.acceptance:.2f}, wall {wall:.0f} s "
-        f"(goal <= 300 s)"
+        f"posterior: {res.n_steps} steps x 32 walkers, tau_max {res.tau_max:.0f}, "
+        f"converged={res.chain.converged}, acceptance {res.chain.acceptance:.2f}, "
+        f"wall {wall:.0f} s (goal <= 300 s)"
     )
-    cols, _ = post.fold_phase_mode(
-        post.midpoint_samples(flat, t_obs),
-        float(post.midpoint_samples(theta0[None], t_obs)["phase"][0]),
-    )
-    fis = post.gaussian_target(target, theta0, cov, t_obs)
-    ptarget = post.posterior_target(target, cols, Path("unused.ecsv"))
     table3 = {
         "phase": 0.001978,
         "f_gw": 5.5e-12,
@@ -183,13 +170,19 @@ def _full(like, theta0, truth, model, target, seed):  # type: ignore[no-untyped-
         "omega_dot": 1.505e-9,
     }
     print(f"{'param':10s} {'post sigma':>11s} {'Fisher':>11s} {'ratio':>6s} {'Table 3':>10s}")
-    for i, n in enumerate(fis.cov_names):
-        s_post = float(np.std(cols[n]))
-        s_f = float(np.sqrt(fis.cov_matrix[i, i]))
+    s_post, s_fis = res.posterior_sigma, res.fisher_sigma
+    for n in res.names:
         print(
-            f"{n:10s} {s_post:11.4g} {s_f:11.4g} {s_post / s_f:6.3f} "
+            f"{n:10s} {s_post[n]:11.4g} {s_fis[n]:11.4g} {s_post[n] / s_fis[n]:6.3f} "
             f"{table3.get(n, float('nan')):10.4g}"
         )
+    _horizons(res.posterior())
+
+
+def _horizons(ptarget: Target) -> None:
+    """Horizons of the posterior target against the paper's Table 4."""
+    from ucbplan.core.forecast import horizon_table
+
     paper = {
         ("conjunction", 0.5): 390,
         ("conjunction", 1.0): 920,

@@ -46,7 +46,8 @@ def problem() -> tuple:
 
 
 def test_sangria_asd_at_8p4_mhz() -> None:
-    """SCIENCE.md: ASD_A (Sangria instrument) at 8.4 mHz = 2.999e-21 /sqrt(Hz) (4 digits)."""
+    """ASD_A (Sangria instrument) at 8.4 mHz = 2.999e-21 /sqrt(Hz) (4 digits; docs/method.md,
+    "Waveform and noise")."""
     asd = np.sqrt(psd_a(8.4e-3, model=NoiseModel(foreground=False)))
     assert asd == pytest.approx(2.999e-21, rel=2e-4)
 
@@ -75,8 +76,9 @@ def test_target_round_trip_of_injection(problem: tuple) -> None:
 
 
 def test_fiducial_snr_about_830(problem: tuple) -> None:
-    """SCIENCE.md: optimal SNR ~ 830 with Sangria + foreground; tolerance 1 % (the paper's
-    GBGPU/orbit-file response differs from our analytic orbits at that level)."""
+    """Optimal SNR ~ 830 with Sangria + foreground (docs/method.md, "Waveform and noise");
+    tolerance 1 % (the paper's GBGPU/orbit-file response differs from our analytic orbits at
+    that level)."""
     *_, like, theta0, _ = problem
     assert like.snr(theta0[None])[0] == pytest.approx(830.0, rel=0.01)
 
@@ -173,9 +175,8 @@ def test_fold_pi_mode() -> None:
     np.testing.assert_allclose(out["kappa"], [0.0044, 0.0044], atol=1e-15)
 
 
-def test_cli_waveform_fisher_and_short_simulate(tmp_path: Path) -> None:
-    """End to end: waveform table columns/meta, Fisher target readable by load_target, and a
-    tiny simulate run (N = 64, 20 steps) that writes YAML + samples + chain and warns."""
+def test_cli_waveform_and_fisher(tmp_path: Path) -> None:
+    """End to end: waveform table columns/meta and plot, Fisher target readable by load_target."""
     from astropy.table import Table
 
     from ucbplan.cli.app import app
@@ -200,6 +201,14 @@ def test_cli_waveform_fisher_and_short_simulate(tmp_path: Path) -> None:
     t = load_target(fis)
     assert t.cov_names[:6] == ("phase", "f_gw", "fdot", "eta", "kappa", "omega_dot")
 
+
+@pytest.mark.slow
+def test_cli_short_simulate_and_resume(tmp_path: Path) -> None:
+    """End to end: a tiny simulate run (N = 64, 20 steps) writes YAML + samples + chain + corner
+    plots, refuses to overwrite, resumes the chain (20 + 10 steps) and refuses other data."""
+    from ucbplan.cli.app import app
+
+    runner = CliRunner()
     out = tmp_path / "post.yaml"
     args = ["simulate", str(INJECTION), "-o", str(out), "--n-bins", "64", "--steps", "20"]
     r = runner.invoke(

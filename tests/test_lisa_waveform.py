@@ -53,7 +53,7 @@ N_SHORT = 64
 
 
 def _h_parts(p: SourceParams, chi: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
-    """Paper Eqs. app:final_form_h_plus/cross, psi-rotated (SCIENCE.md convention).
+    """Paper Eqs. app:final_form_h_plus/cross, psi-rotated (docs/method.md convention).
 
     Returns the (h+, hx) of the carrier (e^0 part) and of the O(e) sidebands separately; the
     waveform is their sum (it is linear in (eta, kappa) at fixed orbital phase).
@@ -140,6 +140,7 @@ def brute(orbits: EqualArmOrbits) -> list[list[np.ndarray]]:
     return _brute_force_ae([FIDUCIAL, FAST_APSIDES], orbits)
 
 
+@pytest.mark.slow  # the brute-force fixture integrates 2^19 samples x 12 links: ~10 s
 @pytest.mark.parametrize(("which", "n"), [(0, N_SHORT), (1, 128)])
 def test_fast_response_matches_brute_force_per_band(
     orbits: EqualArmOrbits, brute: list[list[np.ndarray]], which: int, n: int

@@ -49,8 +49,8 @@ def _derive(k1: float, k2: float, **kw: float) -> dict[str, np.ndarray]:
 
 
 def test_fiducial_semi_amplitudes() -> None:
-    """SCIENCE.md errata: K1 = 585.3, K2 = 712.6 km/s for M1 = 0.347, M2 = 0.285 (0.1 km/s: the
-    printed precision)."""
+    """K1 = 585.3, K2 = 712.6 km/s for M1 = 0.347, M2 = 0.285 (docs/method.md, "Errata of the
+    paper"; 0.1 km/s: the printed precision)."""
     k1, k2 = _k_from_masses(M1_FID, M2_FID, F_FID, OMEGA_DOT_FID, E_FID, COS_I)
     assert k1 == pytest.approx(585.3, abs=0.1)
     assert k2 == pytest.approx(712.6, abs=0.1)

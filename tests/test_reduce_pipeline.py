@@ -159,7 +159,7 @@ def test_light_time_correction() -> None:
     ΔR_1 = x1 sin u, ΔR_2 = −x2 sin u, x_j = K_j/(c n_b)); noise-free.
 
     With --light-time, γ_j is recovered to 0.02 km/s; without, γ_j is high by K_j²/2c
-    (0.571, 0.847 km/s; SCIENCE.md) to 0.03 km/s — and the report gives that size either way.
+    (0.571, 0.847 km/s; docs/method.md) to 0.03 km/s — and the report gives that size either way.
     """
     t = make_target(circular=True)
     p = t.params

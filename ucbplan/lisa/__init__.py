@@ -2,6 +2,14 @@
 
 Stands apart from the planning pipeline and only *produces* target files (paper Sec. 4.1,
 Appendices D and E). Import the submodules directly; nothing is loaded on package import.
+
+Modules: :mod:`~ucbplan.lisa.pipeline` (the library behind ``ucbplan simulate | fisher``:
+:func:`~ucbplan.lisa.pipeline.build_model`, :func:`~ucbplan.lisa.pipeline.fisher_forecast`,
+:func:`~ucbplan.lisa.pipeline.simulate`), :mod:`~ucbplan.lisa.lines` (``ucbplan waveform``),
+:mod:`~ucbplan.lisa.outputs` (the simulation's files); kernels :mod:`~ucbplan.lisa.waveform`,
+:mod:`~ucbplan.lisa.response`, :mod:`~ucbplan.lisa.orbits`, :mod:`~ucbplan.lisa.noise`,
+:mod:`~ucbplan.lisa.likelihood`, :mod:`~ucbplan.lisa.fisher`, :mod:`~ucbplan.lisa.sampler`,
+:mod:`~ucbplan.lisa.posterior` (start → midpoint, π-mode fold); figures :mod:`~ucbplan.lisa.plots`.
 """
 
 __all__: list[str] = []

@@ -1,7 +1,7 @@
 """LISA noise: LDC "Sangria" analytic instrument model plus the Galactic confusion foreground.
 
 One-sided power spectral densities of TDI A (= E) in fractional-frequency units [1/Hz]
-(SCIENCE.md "Noise"). With x = 2 pi f L / c:
+(docs/method.md, "Waveform and noise"). With x = 2 pi f L / c:
 
     S_pm = S_acc [1 + (0.4 mHz/f)^2][1 + (f/8 mHz)^4] (2 pi f)^-4 (2 pi f / c)^2
     S_op = S_oms [1 + (2 mHz/f)^4] (2 pi f / c)^2
@@ -59,7 +59,7 @@ def galactic_strain_psd(f_hz: ArrayLike, t_obs_s: float) -> NDArray[np.float64]:
 
     Notes
     -----
-    LDC Sangria fit (SCIENCE.md "Noise"); T in years of 365.25 d.
+    LDC Sangria fit (docs/method.md, "Waveform and noise"); T in years of 365.25 d.
     """
     f = np.asarray(f_hz, dtype=float)
     t_yr = t_obs_s / (365.25 * 86400.0)

@@ -1,13 +1,40 @@
-"""Figures of the LISA simulation: corner plots (``corner``) and the band ASD figure."""
+"""Figures of the LISA simulation: corner plots (``corner``) and the band ASD figure.
+
+Every figure is written atomically through :func:`ucbplan.plotting.save_figure` (110 dpi).
+"""
 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["asd_plot", "corner_plot"]
+from ucbplan.io import check_output_path
+from ucbplan.plotting import pyplot, save_figure
+
+if TYPE_CHECKING:
+    from ucbplan.lisa.lines import WaveformLines
+    from ucbplan.lisa.pipeline import SimulationResult
+
+__all__ = ["CORNER_NAMES", "asd_plot", "corner_plot", "simulation_corner_plots", "waveform_plot"]
+
+#: File names written by :func:`simulation_corner_plots`.
+CORNER_NAMES = ("corner_start.png", "corner_midpoint.png", "corner_e_omega.png")
+_DPI = 110
+#: Axis labels of the sampled parameters.
+_LABELS = {
+    "log10_amplitude": r"$\log_{10}\mathcal{A}$",
+    "f_gw": r"$f_0$ [Hz]",
+    "log10_fdot": r"$\log_{10}\dot f$",
+    "cos_inclination": r"$\cos\iota$",
+    "psi": r"$\psi$",
+    "phase": r"$\phi_0$",
+    "eta": r"$\eta_0$",
+    "kappa": r"$\kappa_0$",
+    "z_omega": r"$z_\omega$",
+}
 
 
 def corner_plot(
@@ -16,13 +43,12 @@ def corner_plot(
     truths: list[float] | None,
     path: Path,
     title: str = "",
+    *,
+    overwrite: bool = False,
 ) -> None:
     """Corner plot of (S, D) samples with dashed truth lines, written to ``path`` (PNG/PDF)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
+    pyplot()
     import corner
-    import matplotlib.pyplot as plt
 
     fig = corner.corner(
         samples,
@@ -36,8 +62,7 @@ def corner_plot(
     )
     if title:
         fig.suptitle(title)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, overwrite=overwrite, dpi=_DPI)
 
 
 def asd_plot(
@@ -50,6 +75,8 @@ def asd_plot(
     t_obs_s: float,
     path: Path,
     psd_instrument: NDArray[np.float64] | None = None,
+    *,
+    overwrite: bool = False,
 ) -> None:
     """Paper Fig. wavforms: per band, the signal ASD 2|A~|/sqrt(T) vs the noise ASD.
 
@@ -64,11 +91,7 @@ def asd_plot(
     line_freqs_hz, unshifted_hz : dict
         Line positions with and without the apsidal shift (dashed red / black).
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     fig, axes = plt.subplots(len(harmonics), 1, figsize=(7, 2.6 * len(harmonics)), squeeze=False)
     for b, ax in enumerate(axes[:, 0]):
         f = freqs_hz[b] * 1e3
@@ -99,5 +122,91 @@ def asd_plot(
         ax.legend(fontsize=7, loc="lower right")
     axes[-1, 0].set_xlabel("frequency [mHz]")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, overwrite=overwrite, dpi=_DPI)
+
+
+def waveform_plot(lines: WaveformLines, path: Path, *, overwrite: bool = False) -> None:
+    """:func:`asd_plot` of ``ucbplan waveform``: the bands with instrument-only noise and the
+    line positions with and without the apsidal shift."""
+    from ucbplan.lisa.noise import NoiseModel, psd_a
+    from ucbplan.lisa.waveform import line_frequencies
+
+    fm, t_obs_s = lines.model.model, lines.model.t_obs_s
+    inst = psd_a(fm.freqs_hz, t_obs_s, NoiseModel(foreground=False))
+    zero_shift = line_frequencies(lines.model.truth.f_gw, 0.0)
+    unshifted = {k: v for k, v in zip(lines.line_freqs_hz, zero_shift, strict=False)}
+    asd_plot(
+        fm.freqs_hz,
+        lines.bands,
+        lines.psd,
+        fm.harmonics,
+        lines.line_freqs_hz,
+        unshifted,
+        t_obs_s,
+        path,
+        inst,
+        overwrite=overwrite,
+    )
+
+
+def _midpoint_corner(result: SimulationResult, path: Path, overwrite: bool) -> None:
+    """Midpoint parameters, the frequency as an offset in Fourier bins (Δf_mid T_obs)."""
+    cols, inj, t_obs_s = result.columns, result.injected, result.model.t_obs_s
+    mid = ["fdot", "f_gw", "phase"] + (["eta", "kappa", "omega_dot"] if "eta" in cols else [])
+    # as the paper's midpoint figure: the frequency offset in Fourier bins, Delta f_mid T_obs
+    data = np.stack([(cols[n] - inj[n]) * t_obs_s if n == "f_gw" else cols[n] for n in mid], axis=1)
+    labels = [
+        r"$\dot f$ [Hz/s]",
+        r"$\Delta f_{\rm mid} T_{\rm obs}$ [bins]",
+        r"$\phi_{\rm mid}$ [rad]",
+    ]
+    labels += [r"$\eta_{\rm mid}$", r"$\kappa_{\rm mid}$", r"$\dot\omega$ [rad/s]"][: len(mid) - 3]
+    truths = [inj[n] if n != "f_gw" else 0.0 for n in mid]
+    corner_plot(data, labels, truths, path, "midpoint t_mid", overwrite=overwrite)
+
+
+def _eccentricity_corner(result: SimulationResult, path: Path, overwrite: bool) -> None:
+    """e, ω_0 and z_ω at the start epoch."""
+    flat, theta0, names = result.samples, result.problem.theta0, result.chain.names
+    i_e, i_k, i_z = names.index("eta"), names.index("kappa"), names.index("z_omega")
+    e = np.hypot(flat[:, i_e], flat[:, i_k])
+    w0 = np.arctan2(flat[:, i_e], flat[:, i_k])
+    tr = [
+        float(np.hypot(theta0[i_e], theta0[i_k])),
+        float(np.arctan2(theta0[i_e], theta0[i_k])),
+    ]
+    corner_plot(
+        np.stack([e, w0, flat[:, i_z]], axis=1),
+        [r"$e$", r"$\omega_0$ [rad]", r"$z_\omega$ [bins]"],
+        [*tr, float(theta0[i_z])],
+        path,
+        "eccentricity and apsidal advance",
+        overwrite=overwrite,
+    )
+
+
+def simulation_corner_plots(
+    result: SimulationResult, folder: Path, *, overwrite: bool = False
+) -> list[Path]:
+    """Corner plots of a simulation into ``folder`` (names :data:`CORNER_NAMES`).
+
+    Start-epoch sampled parameters, midpoint parameters, and (eccentric model) e, ω_0, z_ω.
+
+    Raises
+    ------
+    OutputExistsError
+        A figure exists and ``overwrite`` is false (checked for all before writing any).
+    """
+    paths = [folder / name for name in CORNER_NAMES]
+    for p in paths:
+        check_output_path(p, overwrite)
+    names, theta0 = result.chain.names, result.problem.theta0
+    labels = [_LABELS[n] for n in names]
+    corner_plot(
+        result.samples, labels, list(theta0), paths[0], "start epoch t_0", overwrite=overwrite
+    )
+    _midpoint_corner(result, paths[1], overwrite)
+    if "eta" not in names:
+        return paths[:2]
+    _eccentricity_corner(result, paths[2], overwrite)
+    return paths

@@ -1,7 +1,7 @@
 """Post-processing: start -> midpoint transform, pi-mode folding, target YAML + samples ECSV.
 
 The paper's chain is referenced to the start t_0; planning needs the midpoint (Sec. 4.1 and its
-footnote). Per sample (SCIENCE.md "Reference epoch"):
+footnote). Per sample (docs/method.md, "Phase model"):
 phi_mid = phi_0 + 2 pi (f_0 T/2 + fdot (T/2)^2 / 2), f_mid = f_0 + fdot T/2,
 (eta, kappa) rotated by omega_dot T/2; fdot and omega_dot are epoch-independent.
 """
@@ -53,9 +53,9 @@ def fold_phase_mode(cols: dict[str, NDArray], phase_ref: float) -> tuple[dict[st
 
     Samples with phi within pi/2 of phase_ref + pi are the psi -> psi + pi/2, phi -> phi + pi
     mode, reached from the injected branch by (kappa, eta) -> (-eta, kappa) (the map under
-    which the n=3 and n=1(+) lines are invariant; the b1 line breaks it at O(e), SCIENCE.md
-    errata, so the fold is approximate for eta, kappa). They are mapped back with phi -= pi,
-    psi -= pi/2 (mod pi) and the inverse rotation.
+    which the n=3 and n=1(+) lines are invariant; the b1 line breaks it at O(e), see
+    docs/method.md "Errata of the paper", so the fold is approximate for eta, kappa). They are
+    mapped back with phi -= pi, psi -= pi/2 (mod pi) and the inverse rotation.
 
     Returns
     -------
@@ -108,7 +108,7 @@ def _with_moments(
 
 
 def posterior_target(
-    base: Target, cols: dict[str, NDArray], samples_path: Path, name: str | None = None
+    base: Target, cols: dict[str, NDArray], samples_path: Path | None, name: str | None = None
 ) -> Target:
     """Target (midpoint) with posterior means and the full sample covariance.
 
@@ -118,16 +118,15 @@ def posterior_target(
         The injection/search target (sky, t_ref = midpoint, spectroscopy are kept).
     cols : dict
         Midpoint samples (after folding).
-    samples_path : pathlib.Path
-        Where the samples ECSV is written (recorded in the YAML).
+    samples_path : pathlib.Path or None
+        Where the samples ECSV is written (recorded in the YAML); None: not recorded.
     """
     names = (_ECC_NAMES if "eta" in cols else _CIRC_NAMES) + EXTRA_NAMES
     mat = np.stack([cols[n] for n in names])
     mean = {n: float(np.mean(cols[n])) for n in names}
     cov = np.atleast_2d(np.cov(mat))
-    return _with_moments(
-        base, names, mean, cov, samples=samples_path.resolve(), name=name or base.name
-    )
+    samples = samples_path.resolve() if samples_path is not None else None
+    return _with_moments(base, names, mean, cov, samples=samples, name=name or base.name)
 
 
 def sampled_to_physical_jacobian(

@@ -12,7 +12,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import IO, Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -123,8 +123,6 @@ def run_sampler(
         returned chain includes it and tau / convergence refer to the whole chain; ``n_steps``
         counts new steps.
     """
-    import emcee
-
     from ucbplan.lisa.fisher import whitening
 
     rng = np.random.default_rng(seed)
@@ -134,40 +132,24 @@ def run_sampler(
     def log_prob(x: NDArray[np.float64]) -> NDArray[np.float64]:
         return like.log_prob(theta0 + np.atleast_2d(x) @ chol.T)
 
-    sampler = emcee.EnsembleSampler(n_walkers, d, log_prob, vectorize=True)
-    # emcee draws its moves from a legacy RandomState; seed it explicitly for reproducibility.
     n_before = 0 if previous is None else int(previous[0].shape[0])
-    stream = int(np.random.SeedSequence([seed, n_before]).generate_state(1)[0])
-    sampler.random_state = np.random.RandomState(stream).get_state()
+    sampler = _seeded_sampler(log_prob, n_walkers, d, seed, n_before)
     if previous is not None:
-        shape: tuple[int, ...] = tuple(previous[0].shape)
-        if len(shape) != 3 or shape[1] != n_walkers or shape[2] != d:
-            raise ValueError(f"resume: chain shape {shape} != (steps, {n_walkers}, {d})")
-        x_prev = np.linalg.solve(chol, (previous[0] - theta0).reshape(-1, d).T).T.reshape(shape)
-        state: object = emcee.State(x_prev[-1], log_prob=previous[1][-1])
-        lp_prev = previous[1]
+        state, x_prev, lp_prev = _resume_state(previous, theta0, chol, n_walkers)
     else:
         x_prev = np.empty((0, n_walkers, d))
         lp_prev = np.empty((0, n_walkers))
         state = _start(like, theta0, chol, n_walkers, start_scale, rng)
-    n_prev = x_prev.shape[0]
-    total = max(n_steps, 1)
-    done = 0
-    tau = np.full(d, np.inf)
-    while True:
-        target = total if not until_converged else max(total, done + check_every)
-        for _ in sampler.sample(state, iterations=target - done, progress=False):
-            done += 1
-            if progress is not None and done % 10 == 0:
-                progress(done, max(target, total), float(np.max(tau)))
-        state = sampler.get_last_sample()
-        chain_x = np.concatenate([x_prev, sampler.get_chain()])
-        tau = np.asarray(emcee.autocorr.integrated_time(chain_x, tol=0, quiet=True), dtype=float)
-        n_all = n_prev + done
-        converged = bool(np.all(np.isfinite(tau)) and n_all >= CONVERGENCE_FACTOR * np.max(tau))
-        if not until_converged or converged or n_all >= max_steps:
-            break
-        total = done
+    chain_x, tau, converged = _advance(
+        sampler,
+        state,
+        x_prev,
+        n_steps=n_steps,
+        until_converged=until_converged,
+        max_steps=max_steps,
+        check_every=check_every,
+        progress=progress,
+    )
     theta = theta0 + chain_x @ chol.T
     return SamplerResult(
         theta=np.asarray(theta),
@@ -180,8 +162,95 @@ def run_sampler(
     )
 
 
-def save_chain(result: SamplerResult, path: Path, extra: dict[str, object] | None = None) -> None:
-    """Save the chain and diagnostics to ``path`` (.npz) for inspection or restarts."""
+def _seeded_sampler(
+    log_prob: Callable[[NDArray[np.float64]], NDArray[np.float64]],
+    n_walkers: int,
+    d: int,
+    seed: int,
+    n_before: int,
+) -> Any:
+    """Vectorised emcee sampler whose moves draw from a stream of (seed, steps before)."""
+    import emcee
+
+    sampler = emcee.EnsembleSampler(n_walkers, d, log_prob, vectorize=True)
+    # emcee draws its moves from a legacy RandomState; seed it explicitly for reproducibility.
+    stream = int(np.random.SeedSequence([seed, n_before]).generate_state(1)[0])
+    sampler.random_state = np.random.RandomState(stream).get_state()
+    return sampler
+
+
+def _resume_state(
+    previous: tuple[NDArray[np.float64], NDArray[np.float64]],
+    theta0: NDArray[np.float64],
+    chol: NDArray[np.float64],
+    n_walkers: int,
+) -> tuple[object, NDArray[np.float64], NDArray[np.float64]]:
+    """emcee state to continue from, the earlier chain in whitened x, and its log_prob."""
+    import emcee
+
+    d = theta0.size
+    shape: tuple[int, ...] = tuple(previous[0].shape)
+    if len(shape) != 3 or shape[1] != n_walkers or shape[2] != d:
+        raise ValueError(f"resume: chain shape {shape} != (steps, {n_walkers}, {d})")
+    x = np.linalg.solve(chol, (previous[0] - theta0).reshape(-1, d).T).T.reshape(shape)
+    x_prev: NDArray[np.float64] = np.asarray(x, dtype=np.float64)
+    return emcee.State(x_prev[-1], log_prob=previous[1][-1]), x_prev, previous[1]
+
+
+def _advance(
+    sampler: Any,
+    state: object,
+    x_prev: NDArray[np.float64],
+    *,
+    n_steps: int,
+    until_converged: bool,
+    max_steps: int,
+    check_every: int,
+    progress: Callable[[int, int, float], None] | None,
+) -> tuple[NDArray[np.float64], NDArray[np.float64], bool]:
+    """Run ``n_steps`` (or chunks of ``check_every`` until converged or ``max_steps``).
+
+    Returns the whole chain in whitened x (earlier part included), tau per parameter and
+    whether the chain is at least :data:`CONVERGENCE_FACTOR` tau long.
+    """
+    import emcee
+
+    n_prev = x_prev.shape[0]
+    total = max(n_steps, 1)
+    done = 0
+    tau = np.full(x_prev.shape[2], np.inf)
+    while True:
+        target = total if not until_converged else max(total, done + check_every)
+        for _ in sampler.sample(state, iterations=target - done, progress=False):
+            done += 1
+            if progress is not None and done % 10 == 0:
+                progress(done, max(target, total), float(np.max(tau)))
+        state = sampler.get_last_sample()
+        chain_x = np.concatenate([x_prev, sampler.get_chain()])
+        tau = np.asarray(emcee.autocorr.integrated_time(chain_x, tol=0, quiet=True), dtype=float)
+        n_all = n_prev + done
+        converged = bool(np.all(np.isfinite(tau)) and n_all >= CONVERGENCE_FACTOR * np.max(tau))
+        if not until_converged or converged or n_all >= max_steps:
+            return chain_x, tau, converged
+        total = done
+
+
+def save_chain(
+    result: SamplerResult,
+    path: Path,
+    extra: dict[str, object] | None = None,
+    *,
+    overwrite: bool = False,
+) -> None:
+    """Save the chain and diagnostics to ``path`` (.npz, atomically) for inspection or restarts.
+
+    Raises
+    ------
+    OutputExistsError
+        If ``path`` exists and ``overwrite`` is false.
+    """
+    from ucbplan.io import write_output
+
     arrays: dict[str, Any] = {str(k): np.asarray(v) for k, v in (extra or {}).items()}
     arrays |= {
         "theta": result.theta,
@@ -192,5 +261,8 @@ def save_chain(result: SamplerResult, path: Path, extra: dict[str, object] | Non
         "seed": np.asarray(result.seed),
         "names": np.asarray(result.names),
     }
-    with path.open("wb") as handle:
+
+    def _write(handle: IO[Any]) -> None:
         np.savez_compressed(handle, **arrays)
+
+    write_output(path, _write, overwrite=overwrite, binary=True)

@@ -1,7 +1,7 @@
 """Small-eccentricity four-line waveform through the LISA response, batched over parameter sets.
 
-Source model (SCIENCE.md "Waveform"; paper Eqs. app:final_form_h_plus, app:final_form_h_cross,
-Appendix apsidal_mcmc). With A+ = A(1 + cos^2 i), Ax = 2 A cos i,
+Source model (docs/method.md, "Waveform and noise"; paper Eqs. app:final_form_h_plus,
+app:final_form_h_cross, Appendix apsidal_mcmc). With A+ = A(1 + cos^2 i), Ax = 2 A cos i,
 b1 = sin^2 i / (2 (1 + cos^2 i)), each line is h = Re[H exp(i theta)],
 theta = phi_p + 2 pi f_p t + pi fdot_p t^2 (t = chi, the wave variable):
 
@@ -118,8 +118,9 @@ def line_amplitudes(
 
     Notes
     -----
-    SCIENCE.md four-line table, equivalent to paper Eqs. app:final_form_h_plus and
-    app:final_form_h_cross (not Appendix E's C_lm, whose conjugation convention differs).
+    The four-line table of docs/method.md ("Waveform and noise"), equivalent to paper Eqs.
+    app:final_form_h_plus and app:final_form_h_cross (not Appendix E's C_lm, whose conjugation
+    convention differs).
     """
     a = np.asarray(amplitude, dtype=float)
     c = np.asarray(cos_inclination, dtype=float)
@@ -182,7 +183,8 @@ class FourLineModel:
 
     Notes
     -----
-    Injection and templates must use the same N and band centres (SCIENCE.md "Waveform").
+    Injection and templates must use the same N and band centres (docs/method.md, "Waveform and
+    noise").
     Approximations (all verified against the brute-force time-domain TDI in the tests):
     theta(t - delay) = theta(t) - 2 pi f_p(t) delay (neglects pi fdot delay^2 < 1e-8 rad);
     the TDI link delays inside the slow envelopes use the band-centre frequency (phase error

@@ -1,9 +1,10 @@
 """Inter-session fixed-u differences: Δκ_spec vs Δκ_LISA, Δv_CM, a_los (paper Secs. 3.1.4, 3.2).
 
-Spectra are grouped by (session, u★). Each group's velocities are first moved to the exact u★ with
-the fitted semi-amplitude (v − s K Λ_K (cos u − cos u★), a first-order phase-mismatch correction of
-at most K|Δu sin u★|), then averaged with inverse-variance weights. Consecutive groups of the same
-u★ in different sessions form a pair (α, β); pairs give
+Spectra are grouped by (session, u★) in :mod:`ucbplan.reduce.groups` (re-exported here): each
+group's velocities are first moved to the exact u★ with the fitted semi-amplitude
+(v − s K Λ_K (cos u − cos u★), a first-order phase-mismatch correction of at most K|Δu sin u★|),
+then averaged with inverse-variance weights. Consecutive groups of the same u★ in different
+sessions form a pair (α, β); pairs give
 
 * Δv_j = v̄_j(β) − v̄_j(α) with σ² = σ_α² + σ_β² (Eq. app:unc_of_Delta_v);
 * SB2: Δκ_spec (Eq. delta_kappa_spec_binned, generalised below) vs Δκ_LISA (Eq. delta_kappa_LISA),
@@ -31,6 +32,8 @@ from itertools import pairwise
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ucbplan.core.constants import C_M_S
+from ucbplan.reduce.groups import ANCHOR_U, MATCH_TOL_RAD, Group, assign_anchors, group_spectra
 from ucbplan.reduce.regression import LineFit, weighted_line
 
 __all__ = [
@@ -49,131 +52,8 @@ __all__ = [
 
 F64 = NDArray[np.float64]
 
-#: Standard anchors (star-1 argument of latitude, rad) used when the table has no u_star column.
-ANCHOR_U: tuple[float, ...] = (0.0, 0.5 * math.pi, math.pi, 1.5 * math.pi)
-#: A spectrum belongs to the nearest anchor if within this phase distance [rad] (P_b/16).
-MATCH_TOL_RAD = math.pi / 8.0
 #: Non-detections (|x| < 2σ) are reported as upper limits |x| < |x̂| + 2σ.
 UPPER_LIMIT_NSIGMA = 2.0
-
-
-def _wrap(x: ArrayLike) -> F64:
-    return np.asarray((np.asarray(x, float) + math.pi) % (2.0 * math.pi) - math.pi, dtype=float)
-
-
-def assign_anchors(u_rad: ArrayLike, u_star: ArrayLike | None = None) -> F64:
-    """u★ of each spectrum: the given column, else the nearest standard anchor within tolerance.
-
-    Returns
-    -------
-    ndarray
-        u★ in [0, 2π) [rad], NaN for spectra that match no anchor (not used in differences).
-    """
-    u = np.asarray(u_rad, float) % (2.0 * math.pi)
-    if u_star is not None:
-        us = np.asarray(u_star, float)
-        return np.asarray(np.where(np.isfinite(us), us % (2.0 * math.pi), np.nan), dtype=float)
-    anchors = np.asarray(ANCHOR_U)
-    d = np.abs(_wrap(u[:, None] - anchors[None, :]))
-    k = np.argmin(d, axis=1)
-    ok = d[np.arange(u.size), k] <= MATCH_TOL_RAD
-    return np.asarray(np.where(ok, anchors[k], np.nan), dtype=float)
-
-
-@dataclass(frozen=True, slots=True)
-class Group:
-    """Inverse-variance mean of the spectra of one session at one u★.
-
-    ``v``/``sigma`` have one entry per component (1 for SB1, 2 for SB2) [km/s]; ``tau_s`` is the
-    mean mid-exposure time [s since t_ref]; ``lam_k``/``lam_kappa`` the mean window factors.
-    """
-
-    session: str
-    u_star: float
-    tau_s: float
-    n: int
-    v: tuple[float, ...]
-    sigma: tuple[float, ...]
-    gamma_est: tuple[float, ...]
-    gamma_sigma: tuple[float, ...]
-    lam_k: float
-    lam_kappa: float
-
-
-def group_spectra(
-    *,
-    sessions: Sequence[str],
-    tau_s: ArrayLike,
-    u_rad: ArrayLike,
-    u_star: ArrayLike,
-    velocities: Sequence[ArrayLike],
-    sigmas: Sequence[ArrayLike],
-    K: Sequence[float],
-    design: ArrayLike,
-    lam_k: ArrayLike,
-    lam_kappa: ArrayLike,
-) -> list[Group]:
-    """Group spectra by (session, u★) and average them after the mismatch correction.
-
-    Parameters
-    ----------
-    sessions : sequence of str
-        Session label of each spectrum.
-    tau_s, u_rad, u_star : array_like
-        Mid-exposure time [s since t_ref], star-1 argument of latitude and assigned u★ [rad]
-        (NaN: unassigned).
-    velocities, sigmas : sequence of array_like
-        Per component (v1[, v2]) velocities and errors [km/s].
-    K : sequence of float
-        Fitted semi-amplitude per component [km/s].
-    design : array_like
-        Window-averaged orbital factor G (for the zero-crossing γ estimates) [1].
-    lam_k, lam_kappa : array_like
-        Window factors per spectrum.
-
-    Returns
-    -------
-    list of Group
-        Sorted by time.
-    """
-    sess = np.asarray(list(sessions), dtype=object)
-    tau = np.asarray(tau_s, float)
-    u = np.asarray(u_rad, float)
-    us = np.asarray(u_star, float)
-    lk = np.broadcast_to(np.asarray(lam_k, float), tau.shape)
-    lkap = np.broadcast_to(np.asarray(lam_kappa, float), tau.shape)
-    G = np.asarray(design, float)
-    groups: list[Group] = []
-    keys = {(str(s), float(a)) for s, a in zip(sess, us, strict=True) if np.isfinite(a)}
-    for s, a in sorted(keys, key=lambda k: (k[0], k[1])):
-        m = (sess == s) & (us == a)
-        vs, ss, gs, gss = [], [], [], []
-        for j, (v, sg) in enumerate(zip(velocities, sigmas, strict=True)):
-            sign = 1.0 if j == 0 else -1.0
-            va, sa = np.asarray(v, float)[m], np.asarray(sg, float)[m]
-            w = 1.0 / sa**2
-            vc = va - sign * K[j] * lk[m] * (np.cos(u[m]) - math.cos(a))
-            gam = va - sign * K[j] * G[m]
-            vs.append(float((w * vc).sum() / w.sum()))
-            gs.append(float((w * gam).sum() / w.sum()))
-            ss.append(float(1.0 / math.sqrt(w.sum())))
-            gss.append(ss[-1])
-        groups.append(
-            Group(
-                session=s,
-                u_star=a,
-                tau_s=float(tau[m].mean()),
-                n=int(m.sum()),
-                v=tuple(vs),
-                sigma=tuple(ss),
-                gamma_est=tuple(gs),
-                gamma_sigma=tuple(gss),
-                lam_k=float(lk[m].mean()),
-                lam_kappa=float(lkap[m].mean()),
-            )
-        )
-    groups.sort(key=lambda g: g.tau_s)
-    return groups
 
 
 @dataclass(frozen=True, slots=True)
@@ -229,57 +109,77 @@ def make_pairs(
     -------
     list of Pair
     """
-    pairs: list[Pair] = []
-    nan = float("nan")
     by_anchor: dict[float, list[Group]] = {}
     for g in groups:
         by_anchor.setdefault(g.u_star, []).append(g)
-    for a, gs in by_anchor.items():
-        gs = sorted(gs, key=lambda g: g.tau_s)
-        for ga, gb in pairwise(gs):
-            if ga.session == gb.session:
-                continue
-            dv = tuple(b - c for b, c in zip(gb.v, ga.v, strict=True))
-            sdv = tuple(math.hypot(b, c) for b, c in zip(gb.sigma, ga.sigma, strict=True))
-            dk_l, sdk_l, de_l = ll_at.delta(ga.tau_s, gb.tau_s)
-            lk = 0.5 * (ga.lam_k + gb.lam_k)
-            lkap = 0.5 * (ga.lam_kappa + gb.lam_kappa)
-            A, B = _ab(a, lk, lkap)
-            dk_s = sdk_s = z = nan
-            if len(dv) == 2:
-                k1, k2 = K
-                dk_s = (dv[0] - dv[1]) / ((k1 + k2) * A) - (B / A) * de_l
-                sdk_s = math.hypot(*sdv) / ((k1 + k2) * abs(A))
-                z = (dk_s - dk_l) / math.hypot(sdk_s, sdk_l)
-                if eccentric:
-                    dcm = (k2 * dv[0] + k1 * dv[1]) / (k1 + k2)
-                    sdcm = math.hypot(k2 * sdv[0], k1 * sdv[1]) / (k1 + k2)
-                else:
-                    w = np.array([1.0 / sdv[0] ** 2, 1.0 / sdv[1] ** 2])
-                    dcm = float((w * np.array(dv)).sum() / w.sum())
-                    sdcm = float(1.0 / math.sqrt(w.sum()))
-            else:
-                dcm = dv[0] - (K[0] * (A * dk_l + B * de_l) if eccentric else 0.0)
-                sdcm = math.hypot(sdv[0], K[0] * abs(A) * sdk_l) if eccentric else sdv[0]
-            pairs.append(
-                Pair(
-                    ga.session,
-                    gb.session,
-                    a,
-                    gb.tau_s - ga.tau_s,
-                    dv,
-                    sdv,
-                    dk_s,
-                    sdk_s,
-                    dk_l,
-                    sdk_l,
-                    z,
-                    dcm,
-                    sdcm,
-                )
-            )
+    pairs = [
+        _pair(ga, gb, K, eccentric, ll_at)
+        for gs in by_anchor.values()
+        for ga, gb in pairwise(sorted(gs, key=lambda g: g.tau_s))
+        if ga.session != gb.session
+    ]
     pairs.sort(key=lambda p: (p.u_star, p.dT_s))
     return pairs
+
+
+def _pair(ga: Group, gb: Group, K: Sequence[float], eccentric: bool, ll_at: LLPredictor) -> Pair:
+    """Differences β − α of two same-u★ groups and the Δκ, Δv_CM estimates they give."""
+    a = ga.u_star
+    dv = tuple(b - c for b, c in zip(gb.v, ga.v, strict=True))
+    sdv = tuple(math.hypot(b, c) for b, c in zip(gb.sigma, ga.sigma, strict=True))
+    lisa = ll_at.delta(ga.tau_s, gb.tau_s)
+    A, B = _ab(a, 0.5 * (ga.lam_k + gb.lam_k), 0.5 * (ga.lam_kappa + gb.lam_kappa))
+    if len(dv) == 2:
+        kappa, dv_cm = _sb2_terms(dv, sdv, K, A, B, lisa, eccentric)
+    else:
+        nan = float("nan")
+        kappa, dv_cm = (nan, nan, nan), _sb1_dv_cm(dv[0], sdv[0], K[0], A, B, lisa, eccentric)
+    dk_s, sdk_s, z = kappa
+    dk_l, sdk_l, _ = lisa
+    dT = gb.tau_s - ga.tau_s
+    return Pair(ga.session, gb.session, a, dT, dv, sdv, dk_s, sdk_s, dk_l, sdk_l, z, *dv_cm)
+
+
+def _sb2_terms(
+    dv: tuple[float, ...],
+    sdv: tuple[float, ...],
+    K: Sequence[float],
+    A: float,
+    B: float,
+    lisa: tuple[float, float, float],
+    eccentric: bool,
+) -> tuple[tuple[float, float, float], tuple[float, float]]:
+    """SB2: (Δκ_spec, σ, z vs Δκ_LISA) and (Δv_CM, σ) — K-weighted if eccentric, else the
+    inverse-variance mean of the two stars (Eqs. intercept_Deltav_cm, cir_deltaVcm)."""
+    dk_l, sdk_l, de_l = lisa
+    k1, k2 = K
+    dk_s = (dv[0] - dv[1]) / ((k1 + k2) * A) - (B / A) * de_l
+    sdk_s = math.hypot(*sdv) / ((k1 + k2) * abs(A))
+    z = (dk_s - dk_l) / math.hypot(sdk_s, sdk_l)
+    if eccentric:
+        dcm = (k2 * dv[0] + k1 * dv[1]) / (k1 + k2)
+        sdcm = math.hypot(k2 * sdv[0], k1 * sdv[1]) / (k1 + k2)
+    else:
+        w = np.array([1.0 / sdv[0] ** 2, 1.0 / sdv[1] ** 2])
+        dcm = float((w * np.array(dv)).sum() / w.sum())
+        sdcm = float(1.0 / math.sqrt(w.sum()))
+    return (dk_s, sdk_s, z), (dcm, sdcm)
+
+
+def _sb1_dv_cm(
+    dv: float,
+    sdv: float,
+    K: float,
+    A: float,
+    B: float,
+    lisa: tuple[float, float, float],
+    eccentric: bool,
+) -> tuple[float, float]:
+    """SB1: Δv_CM = Δv − K Δκ_LISA-term (eccentric; σ includes σ(Δκ_LISA)), else Δv."""
+    dk_l, sdk_l, de_l = lisa
+    dcm = dv - (K * (A * dk_l + B * de_l) if eccentric else 0.0)
+    sdcm = math.hypot(sdv, K * abs(A) * sdk_l) if eccentric else sdv
+    return dcm, sdcm
 
 
 class LLPredictor:
@@ -386,50 +286,9 @@ def combine(
     """
     nan = float("nan")
     zc = _zero_crossing_pairs(groups) if (n_components == 1 and eccentric) else []
-    est: list[tuple[float, float]] = []  # (a_los, sigma) in m/s²
-    if zc:
-        for _, _, dT, dv, sdv in zc:
-            est.append((-dv * 1e3 / dT, sdv * 1e3 / dT))
-    else:
-        for p in pairs:
-            if p.dT_s > 0 and math.isfinite(p.dv_cm):
-                est.append((-p.dv_cm * 1e3 / p.dT_s, p.sigma_dv_cm * 1e3 / p.dT_s))
-    a = sa = up = nan
-    if est:
-        w = np.array([1.0 / s**2 for _, s in est])
-        a = float((w * np.array([x for x, _ in est])).sum() / w.sum())
-        sa = float(1.0 / math.sqrt(w.sum()))
-        if abs(a) < UPPER_LIMIT_NSIGMA * sa:
-            up = abs(a) + UPPER_LIMIT_NSIGMA * sa
-    line = None
-    ql = sql = dcm = sdcm = nan
-    sb2 = [p for p in pairs if len(p.dv) == 2]
-    disjoint: list[Pair] = []
-    used: set[tuple[float, str]] = set()
-    for p in sorted(sb2, key=lambda p: p.dT_s):
-        if (p.u_star, p.alpha) in used or (p.u_star, p.beta) in used:
-            continue
-        used.update({(p.u_star, p.alpha), (p.u_star, p.beta)})
-        disjoint.append(p)
-    if len(disjoint) >= 3 and np.ptp([p.dv[1] for p in disjoint]) > 0:
-        x = np.array([p.dv[1] for p in disjoint])
-        y = np.array([p.dv[0] for p in disjoint])
-        sx = np.array([p.sigma_dv[1] for p in disjoint])
-        sy = np.array([p.sigma_dv[0] for p in disjoint])
-        q = 1.0
-        for _ in range(30):
-            line = weighted_line(x, y, np.sqrt(sy**2 + q * q * sx**2), scale=False)
-            q = -line.slope
-        assert line is not None
-        ql, sql = q, line.sigma_slope
-        dcm = line.intercept / (1.0 + q)
-        sdcm = math.sqrt(
-            line.cov[0, 0] / (1 + q) ** 2
-            + line.intercept**2 * line.cov[1, 1] / (1 + q) ** 4
-            + 2 * line.intercept * line.cov[0, 1] / (1 + q) ** 3
-        )
+    a, sa, up = _a_los(_a_los_estimates(pairs, zc))
+    line, ql, sql, dcm, sdcm = _difference_line(_disjoint_sb2(pairs))
     zs = [p.z_kappa for p in pairs if math.isfinite(p.z_kappa)]
-    c = 299792458.0
     return DriftResult(
         pairs=tuple(pairs),
         zero_crossing=tuple(zc),
@@ -441,8 +300,71 @@ def combine(
         a_los=a,
         sigma_a_los=sa,
         a_los_upper=up,
-        fdot_acc=f_hz / c * a if math.isfinite(a) else nan,
-        sigma_fdot_acc=f_hz / c * sa if math.isfinite(sa) else nan,
+        fdot_acc=f_hz / C_M_S * a if math.isfinite(a) else nan,
+        sigma_fdot_acc=f_hz / C_M_S * sa if math.isfinite(sa) else nan,
         chi2_kappa=float(np.sum(np.square(zs))) if zs else nan,
         n_kappa=len(zs),
     )
+
+
+def _a_los_estimates(
+    pairs: Sequence[Pair], zc: list[tuple[str, str, float, float, float]]
+) -> list[tuple[float, float]]:
+    """(a_los, σ) [m/s²] per zero-crossing difference (SB1 eccentric) or else per pair."""
+    if zc:
+        return [(-dv * 1e3 / dT, sdv * 1e3 / dT) for _, _, dT, dv, sdv in zc]
+    return [
+        (-p.dv_cm * 1e3 / p.dT_s, p.sigma_dv_cm * 1e3 / p.dT_s)
+        for p in pairs
+        if p.dT_s > 0 and math.isfinite(p.dv_cm)
+    ]
+
+
+def _a_los(est: list[tuple[float, float]]) -> tuple[float, float, float]:
+    """Inverse-variance mean, its σ and the upper limit (NaN if detected or no estimates)."""
+    nan = float("nan")
+    if not est:
+        return nan, nan, nan
+    w = np.array([1.0 / s**2 for _, s in est])
+    a = float((w * np.array([x for x, _ in est])).sum() / w.sum())
+    sa = float(1.0 / math.sqrt(w.sum()))
+    up = abs(a) + UPPER_LIMIT_NSIGMA * sa if abs(a) < UPPER_LIMIT_NSIGMA * sa else nan
+    return a, sa, up
+
+
+def _disjoint_sb2(pairs: Sequence[Pair]) -> list[Pair]:
+    """SB2 pairs sharing no (u★, session) group, shortest ΔT first (independent differences)."""
+    disjoint: list[Pair] = []
+    used: set[tuple[float, str]] = set()
+    for p in sorted((p for p in pairs if len(p.dv) == 2), key=lambda p: p.dT_s):
+        if (p.u_star, p.alpha) in used or (p.u_star, p.beta) in used:
+            continue
+        used.update({(p.u_star, p.alpha), (p.u_star, p.beta)})
+        disjoint.append(p)
+    return disjoint
+
+
+def _difference_line(
+    disjoint: list[Pair],
+) -> tuple[LineFit | None, float, float, float, float]:
+    """Δv1 vs Δv2 line (Eq. SB2_fixedu_diff_WIL41) of ≥ 3 disjoint pairs: (line, q, σ_q,
+    Δv_CM = intercept/(1 + q), σ); errors in both axes by iterating q (NaN if too few pairs)."""
+    nan = float("nan")
+    if len(disjoint) < 3 or not np.ptp([p.dv[1] for p in disjoint]) > 0:
+        return None, nan, nan, nan, nan
+    x = np.array([p.dv[1] for p in disjoint])
+    y = np.array([p.dv[0] for p in disjoint])
+    sx = np.array([p.sigma_dv[1] for p in disjoint])
+    sy = np.array([p.sigma_dv[0] for p in disjoint])
+    q = 1.0
+    for _ in range(29):  # the weights σ_y² + q²σ_x² depend on the slope −q: iterate
+        q = -weighted_line(x, y, np.sqrt(sy**2 + q * q * sx**2), scale=False).slope
+    line = weighted_line(x, y, np.sqrt(sy**2 + q * q * sx**2), scale=False)
+    q = -line.slope
+    dcm = line.intercept / (1.0 + q)
+    sdcm = math.sqrt(
+        line.cov[0, 0] / (1 + q) ** 2
+        + line.intercept**2 * line.cov[1, 1] / (1 + q) ** 4
+        + 2 * line.intercept * line.cov[0, 1] / (1 + q) ** 3
+    )
+    return line, q, line.sigma_slope, dcm, sdcm

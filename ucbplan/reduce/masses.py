@@ -121,40 +121,54 @@ def derive(
     m1 = mtot / (1.0 + q)
     m2 = q * m1
     mc = chirp_mass(m1, m2)
+    out: dict[str, F64] = {"n_b": nb, "P_b": pb, "e": e, "sin_i": sin_i, "a": a}
+    out |= {"M_tot": mtot / MSUN_KG, "q": q, "M1": m1 / MSUN_KG, "M2": m2 / MSUN_KG}
+    out["M_c"] = mc / MSUN_KG
+    out |= _gr_checks(mtot, mc, pb, e, _f(omega_dot), fdot_hz_s, f_hz)
+    if amplitude is not None:
+        out["distance"] = distance_from_amplitude_m(mc, f_hz, amplitude) / KPC_M
+    if gamma1_km_s is not None and gamma2_km_s is not None:
+        out |= _redshifts(_f(gamma1_km_s) - _f(gamma2_km_s), m1, m2, a)
+    if mass_radius is not None:
+        out |= _model_redshift(mass_radius, m1, m2, out.get("redshift_grav"))
+    return out
+
+
+def _gr_checks(
+    mtot: F64, mc: F64, pb: F64, e: F64, omega_dot: F64, fdot_hz_s: F64, f_hz: F64
+) -> dict[str, F64]:
+    """ω̇_GR and the remainder, the masses implied by ω̇ and ḟ alone, the GW-only ḟ (Sec. 3.3)."""
     od_gr = omega_dot_gr(mtot, pb, e)
     out: dict[str, F64] = {
-        "n_b": nb,
-        "P_b": pb,
-        "e": e,
-        "sin_i": sin_i,
-        "a": a,
-        "M_tot": mtot / MSUN_KG,
-        "q": q,
-        "M1": m1 / MSUN_KG,
-        "M2": m2 / MSUN_KG,
-        "M_c": mc / MSUN_KG,
         "omega_dot_GR": od_gr,
-        "omega_dot_remainder": _f(omega_dot) - od_gr,
+        "omega_dot_remainder": omega_dot - od_gr,
         "M_tot_omega_dot": mass_from_omega_dot(omega_dot, pb, e) / MSUN_KG,
         "M_c_fdot": chirp_mass_from_fdot(fdot_hz_s, f_hz, e) / MSUN_KG,
         "fdot_GW_only": fdot_gw_only(mc, f_hz, e),
     }
     out["fdot_minus_GW_only"] = _f(fdot_hz_s) - out["fdot_GW_only"]
-    if amplitude is not None:
-        out["distance"] = distance_from_amplitude_m(mc, f_hz, amplitude) / KPC_M
-    if gamma1_km_s is not None and gamma2_km_s is not None:
-        out["gamma_diff"] = _f(gamma1_km_s) - _f(gamma2_km_s)
-        out["redshift_orbital"] = redshift_difference_orbital(m1, m2, a) / 1e3
-        out["redshift_grav"] = out["gamma_diff"] - out["redshift_orbital"]
-    if mass_radius is not None:
-        rfun = MASS_RADIUS_MODELS[mass_radius]
-        r1 = rfun(m1 / MSUN_KG) * RSUN_M
-        r2 = rfun(m2 / MSUN_KG) * RSUN_M
-        out["R1"] = r1 / RSUN_M
-        out["R2"] = r2 / RSUN_M
-        out["redshift_grav_model"] = G_SI * (m1 / r1 - m2 / r2) / C_M_S / 1e3
-        if "redshift_grav" in out:
-            out["redshift_grav_minus_model"] = out["redshift_grav"] - out["redshift_grav_model"]
+    return out
+
+
+def _redshifts(gamma_diff: F64, m1: F64, m2: F64, a: F64) -> dict[str, F64]:
+    """γ1 − γ2 split into the orbital term and the gravitational redshift difference [km/s]."""
+    orbital = redshift_difference_orbital(m1, m2, a) / 1e3
+    return {
+        "gamma_diff": gamma_diff,
+        "redshift_orbital": orbital,
+        "redshift_grav": gamma_diff - orbital,
+    }
+
+
+def _model_redshift(model: str, m1: F64, m2: F64, measured: F64 | None) -> dict[str, F64]:
+    """Radii of a WD mass–radius relation and the predicted G(M1/R1 − M2/R2)/c [km/s]."""
+    rfun = MASS_RADIUS_MODELS[model]
+    r1 = rfun(m1 / MSUN_KG) * RSUN_M
+    r2 = rfun(m2 / MSUN_KG) * RSUN_M
+    out = {"R1": r1 / RSUN_M, "R2": r2 / RSUN_M}
+    out["redshift_grav_model"] = G_SI * (m1 / r1 - m2 / r2) / C_M_S / 1e3
+    if measured is not None:
+        out["redshift_grav_minus_model"] = measured - out["redshift_grav_model"]
     return out
 
 

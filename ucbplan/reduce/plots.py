@@ -1,17 +1,21 @@
 """Figures of a reduction: RV vs F̄ with residuals, Δv1 vs Δv2, and the mass–mass diagram (Sec. 5).
 
-Uses the Agg backend (no display). Each ``fig_*`` function returns a matplotlib Figure (or None when
-not applicable); :func:`plot_all` writes them atomically (no partial files, no silent overwrite).
+Uses :func:`ucbplan.plotting.pyplot` (Agg, no display). Each ``fig_*`` function returns a matplotlib
+Figure (or None when not applicable); :func:`plot_all` writes them with
+:func:`ucbplan.plotting.save_figure` (atomic: no partial files, no silent overwrite).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
 from pathlib import Path
-from typing import IO, TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
+
+from ucbplan.io import check_output_path
+from ucbplan.plotting import pyplot, save_figure
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -24,15 +28,6 @@ __all__ = ["PLOT_NAMES", "fig_dv1_dv2", "fig_mass_mass", "fig_rv", "plot_all"]
 PLOT_NAMES = ("rv_vs_F.png", "dv1_vs_dv2.png", "mass_mass.png")
 
 
-def _pyplot():  # type: ignore[no-untyped-def]
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
 def fig_rv(red: Reduction) -> Figure:
     """Velocities vs the window-averaged orbital factor F̄ with the fitted lines and residuals.
 
@@ -40,7 +35,7 @@ def fig_rv(red: Reduction) -> Figure:
     -----
     Eqs. v1v2_ecc_rv / vbar_master: v1 = γ1 + K1 F̄, v2 = γ2 − K2 F̄.
     """
-    plt = _pyplot()
+    plt = pyplot()
     fig, (ax, axr) = plt.subplots(
         2, 1, figsize=(7, 6), sharex=True, gridspec_kw={"height_ratios": [3, 1]}
     )
@@ -83,7 +78,7 @@ def fig_dv1_dv2(red: Reduction) -> Figure | None:
     pairs = [p for p in red.drift.pairs if len(p.dv) == 2]
     if not pairs:
         return None
-    plt = _pyplot()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(6, 5))
     x = np.array([p.dv[1] for p in pairs])
     y = np.array([p.dv[0] for p in pairs])
@@ -147,7 +142,7 @@ def fig_mass_mass(red: Reduction) -> Figure | None:
     s = red.summaries
     if "M1" not in s:
         return None
-    plt = _pyplot()
+    plt = pyplot()
     m1c, m2c = s["M1"].value, s["M2"].value
     span = max(0.08, 12 * max(s["M1"].sigma, s["M2"].sigma))
     g1 = np.linspace(m1c - span, m1c + span, 400)
@@ -186,13 +181,6 @@ def fig_mass_mass(red: Reduction) -> Figure | None:
     return fig
 
 
-def _saver(fig: Figure) -> Callable[[IO[Any]], None]:
-    def _save(handle: IO[Any]) -> None:
-        fig.savefig(handle, format="png", dpi=120)
-
-    return _save
-
-
 def plot_all(red: Reduction, folder: Path, *, overwrite: bool = False) -> list[Path]:
     """Write every applicable figure into ``folder`` (names :data:`PLOT_NAMES`).
 
@@ -201,9 +189,6 @@ def plot_all(red: Reduction, folder: Path, *, overwrite: bool = False) -> list[P
     OutputExistsError
         A figure exists and ``overwrite`` is false (checked for all before writing any).
     """
-    from ucbplan.io import check_output_path, write_output
-
-    plt = _pyplot()
     for name in PLOT_NAMES:
         check_output_path(folder / name, overwrite)
     out = []
@@ -216,7 +201,6 @@ def plot_all(red: Reduction, folder: Path, *, overwrite: bool = False) -> list[P
         if fig is None:
             continue
         path = folder / name
-        write_output(path, _saver(fig), overwrite=overwrite, binary=True)
-        plt.close(fig)
+        save_figure(fig, path, overwrite=overwrite, dpi=120)
         out.append(path)
     return out

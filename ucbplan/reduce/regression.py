@@ -1,7 +1,7 @@
 """Intra-session velocity regressions (paper Sec. 3.1): v_j = γ_j ± K_j F, finite-bin corrected.
 
 All numbers here are plain float64 arrays in km/s (velocities) and radians (phases); the
-ephemeris evaluation that produces the design variable lives in :mod:`ucbplan.reduce.pipeline`.
+ephemeris evaluation that produces the design variable lives in :mod:`ucbplan.reduce.design`.
 
 Design variable
 ---------------

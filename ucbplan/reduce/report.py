@@ -13,8 +13,10 @@ from typing import IO, TYPE_CHECKING, Any
 import numpy as np
 
 from ucbplan import __version__
+from ucbplan.core.constants import DAY_S, RSUN_M
 
 if TYPE_CHECKING:
+    from ucbplan.reduce.drifts import Pair
     from ucbplan.reduce.masses import Summary
     from ucbplan.reduce.pipeline import Reduction
 
@@ -38,7 +40,7 @@ MC_UNITS: dict[str, tuple[str, float]] = {
     "M2": ("solMass", 1.0),
     "M_tot": ("solMass", 1.0),
     "M_c": ("solMass", 1.0),
-    "a": ("solRad", 1.0 / 6.957e8),
+    "a": ("solRad", 1.0 / RSUN_M),
     "P_b": ("s", 1.0),
     "n_b": ("rad / s", 1.0),
     "e": ("", 1.0),
@@ -99,80 +101,20 @@ def build_report(red: Reduction) -> dict[str, Any]:
         ``M_tot`` (None if not measurable, e.g. SB1) plus every Monte-Carlo quantity, ``fits``,
         ``wil41``, ``phase``, ``light_time``, ``drifts``, ``warnings``.
     """
-    t, tab = red.target, red.table
-    doc: dict[str, Any] = {
-        "ucbplan_version": __version__,
-        "target": t.name,
-        "target_file": str(t.source) if t.source else None,
-        "velocity_file": str(tab.source) if tab.source else None,
-        "lines": tab.lines,
-        "n_spectra": tab.n,
-        "sessions": sorted(set(tab.session)),
-        "time_scale": "TDB (barycentric)",
-        "seed": red.seed,
-        "n_samples": red.options.n_samples,
-        "light_time_applied": red.options.light_time,
-        "mass_radius_model": red.options.mass_radius,
-    }
+    doc = _metadata(red)
     for key in ("K1", "K2", "gamma1", "gamma2", "q", "M1", "M2", "M_tot"):
-        doc[key] = None
+        doc[key] = None  # fixes the key order; SB1 and missing masses stay None
     fits_doc: dict[str, Any] = {}
-    for j, f in enumerate(red.fits):
-        star = j + 1
-        w = 1.0 / tab.sigma[j] ** 2
-        lam = float((w * red.lam_k).sum() / w.sum())
-        s_k = math.sqrt(f.sigma_K**2 + red.sigma_K_phase[j] ** 2 + red.attenuation[j] ** 2)
-        s_g = math.sqrt(f.sigma_gamma**2 + red.sigma_gamma_phase[j] ** 2)
-        sk, sg = red.summaries[f"K{star}"], red.summaries[f"gamma{star}"]
-        doc[f"K{star}"] = _q(
-            f.K,
-            s_k,
-            "km / s",
-            lo=sk.lo,
-            hi=sk.hi,
-            sigma_stat=f.sigma_K,
-            sigma_phase=red.sigma_K_phase[j],
-            attenuation=red.attenuation[j],
-        )
-        doc[f"gamma{star}"] = _q(
-            f.gamma,
-            s_g,
-            "km / s",
-            lo=sg.lo,
-            hi=sg.hi,
-            sigma_stat=f.sigma_gamma,
-            sigma_phase=red.sigma_gamma_phase[j],
-        )
-        rows = (np.flatnonzero(f.line.outliers) + 1).tolist()
-        fits_doc[f"star{star}"] = {
-            "slope": _num(f.line.slope),
-            "intercept": _num(f.line.intercept),
-            "cov_intercept_slope": [[_num(x) for x in r] for r in f.line.cov],
-            "chi2": _num(f.line.chi2),
-            "dof": f.line.dof,
-            "rms_km_s": _num(f.line.rms),
-            "errors_scaled_by_chi2": f.line.scaled,
-            "outlier_rows": rows,
-            "lambda_k_mean": _num(lam),
-        }
+    for j in range(len(red.fits)):
+        doc[f"K{j + 1}"], doc[f"gamma{j + 1}"] = _k_gamma_docs(red, j)
+        fits_doc[f"star{j + 1}"] = _fit_doc(red, j)
     doc["fits"] = fits_doc
     for name, s in red.summaries.items():
         if name in ("K1", "K2", "gamma1", "gamma2"):
             continue
         doc[name] = _mc(name, s)
     if red.wilson is not None:
-        w41 = red.wilson
-        doc["wil41"] = {
-            "q": _q(w41.q, w41.sigma_q, ""),
-            "gamma1_plus_q_gamma2": _q(w41.intercept, w41.sigma_intercept, "km / s"),
-            "chi2": _num(w41.chi2),
-            "dof": w41.dof,
-        }
-        if "q" in red.summaries:
-            s = red.summaries["q"]
-            doc["wil41"]["q_difference_sigma"] = _num(
-                (w41.q - s.value) / math.hypot(w41.sigma_q, s.sigma)
-            )
+        doc["wil41"] = _wilson_doc(red)
     doc["phase"] = {
         "sigma_u_mean": _q(float(np.mean(red.sigma_u)), 0.0, "rad"),
         "sigma_u_max": _q(float(np.max(red.sigma_u)), 0.0, "rad"),
@@ -188,32 +130,113 @@ def build_report(red: Reduction) -> dict[str, Any]:
     return doc
 
 
+def _metadata(red: Reduction) -> dict[str, Any]:
+    """Provenance and run settings: version, files, spectra, sessions, seed, options."""
+    t, tab = red.target, red.table
+    return {
+        "ucbplan_version": __version__,
+        "target": t.name,
+        "target_file": str(t.source) if t.source else None,
+        "velocity_file": str(tab.source) if tab.source else None,
+        "lines": tab.lines,
+        "n_spectra": tab.n,
+        "sessions": sorted(set(tab.session)),
+        "time_scale": "TDB (barycentric)",
+        "seed": red.seed,
+        "n_samples": red.options.n_samples,
+        "light_time_applied": red.options.light_time,
+        "mass_radius_model": red.options.mass_radius,
+    }
+
+
+def _k_gamma_docs(red: Reduction, j: int) -> tuple[dict[str, Any], dict[str, Any]]:
+    """K_j and γ_j of the fit with σ = statistical ⊕ phase (⊕ attenuation for K), MC range."""
+    f, star = red.fits[j], j + 1
+    s_k = math.sqrt(f.sigma_K**2 + red.sigma_K_phase[j] ** 2 + red.attenuation[j] ** 2)
+    s_g = math.sqrt(f.sigma_gamma**2 + red.sigma_gamma_phase[j] ** 2)
+    sk, sg = red.summaries[f"K{star}"], red.summaries[f"gamma{star}"]
+    k_doc = _q(
+        f.K,
+        s_k,
+        "km / s",
+        lo=sk.lo,
+        hi=sk.hi,
+        sigma_stat=f.sigma_K,
+        sigma_phase=red.sigma_K_phase[j],
+        attenuation=red.attenuation[j],
+    )
+    g_doc = _q(
+        f.gamma,
+        s_g,
+        "km / s",
+        lo=sg.lo,
+        hi=sg.hi,
+        sigma_stat=f.sigma_gamma,
+        sigma_phase=red.sigma_gamma_phase[j],
+    )
+    return k_doc, g_doc
+
+
+def _fit_doc(red: Reduction, j: int) -> dict[str, Any]:
+    """The weighted line of star j + 1: coefficients, χ², outliers, mean Λ_K."""
+    line = red.fits[j].line
+    w = 1.0 / red.table.sigma[j] ** 2
+    lam = float((w * red.lam_k).sum() / w.sum())
+    return {
+        "slope": _num(line.slope),
+        "intercept": _num(line.intercept),
+        "cov_intercept_slope": [[_num(x) for x in r] for r in line.cov],
+        "chi2": _num(line.chi2),
+        "dof": line.dof,
+        "rms_km_s": _num(line.rms),
+        "errors_scaled_by_chi2": line.scaled,
+        "outlier_rows": (np.flatnonzero(line.outliers) + 1).tolist(),
+        "lambda_k_mean": _num(lam),
+    }
+
+
+def _wilson_doc(red: Reduction) -> dict[str, Any]:
+    """WIL41 q and intercept, and how far q is from the Monte-Carlo K1/K2 (in σ)."""
+    w41 = red.wilson
+    assert w41 is not None
+    out: dict[str, Any] = {
+        "q": _q(w41.q, w41.sigma_q, ""),
+        "gamma1_plus_q_gamma2": _q(w41.intercept, w41.sigma_intercept, "km / s"),
+        "chi2": _num(w41.chi2),
+        "dof": w41.dof,
+    }
+    if "q" in red.summaries:
+        s = red.summaries["q"]
+        out["q_difference_sigma"] = _num((w41.q - s.value) / math.hypot(w41.sigma_q, s.sigma))
+    return out
+
+
+def _pair_doc(p: Pair) -> dict[str, Any]:
+    """One fixed-u pair: ΔT, Δv_j, Δκ_spec vs Δκ_LISA and their significance, Δv_CM."""
+    return {
+        "alpha": p.alpha,
+        "beta": p.beta,
+        "u_star_rad": _num(p.u_star),
+        "dT": _q(p.dT_s / DAY_S, 0.0, "d"),
+        "dv": [_q(v, s, "km / s") for v, s in zip(p.dv, p.sigma_dv, strict=True)],
+        "dkappa_spec": _q(p.dkappa_spec, p.sigma_dkappa_spec, ""),
+        "dkappa_lisa": _q(p.dkappa_lisa, p.sigma_dkappa_lisa, ""),
+        "dkappa_significance": _num(p.z_kappa),
+        "dv_cm": _q(p.dv_cm, p.sigma_dv_cm, "km / s", upper_limit=_upper(p.dv_cm, p.sigma_dv_cm)),
+    }
+
+
 def _drift_doc(red: Reduction) -> dict[str, Any]:
+    """Inter-session results: pairs, zero-crossing differences, a_los, Δκ χ², WIL41 line."""
     d = red.drift
-    pairs = []
-    for p in d.pairs:
-        pairs.append(
-            {
-                "alpha": p.alpha,
-                "beta": p.beta,
-                "u_star_rad": _num(p.u_star),
-                "dT": _q(p.dT_s / 86400.0, 0.0, "d"),
-                "dv": [_q(v, s, "km / s") for v, s in zip(p.dv, p.sigma_dv, strict=True)],
-                "dkappa_spec": _q(p.dkappa_spec, p.sigma_dkappa_spec, ""),
-                "dkappa_lisa": _q(p.dkappa_lisa, p.sigma_dkappa_lisa, ""),
-                "dkappa_significance": _num(p.z_kappa),
-                "dv_cm": _q(
-                    p.dv_cm, p.sigma_dv_cm, "km / s", upper_limit=_upper(p.dv_cm, p.sigma_dv_cm)
-                ),
-            }
-        )
+    pairs = [_pair_doc(p) for p in d.pairs]
     out: dict[str, Any] = {"n_groups": len(red.groups), "pairs": pairs}
     if d.zero_crossing:
         out["zero_crossing"] = [
             {
                 "alpha": a,
                 "beta": b,
-                "dT": _q(dT / 86400.0, 0.0, "d"),
+                "dT": _q(dT / DAY_S, 0.0, "d"),
                 "dv_cm": _q(dv, s, "km / s", upper_limit=_upper(dv, s)),
             }
             for a, b, dT, dv, s in d.zero_crossing
@@ -284,82 +307,101 @@ def _fmt(q: dict[str, Any] | None, digits: int = 4) -> str:
     return f"{txt} {unit}".strip()
 
 
-def print_report(doc: dict[str, Any], console: Any) -> None:
-    """Rich terminal report (to the given console, normally stderr)."""
-    from rich.markup import escape
+#: Rows of the terminal table, in order (those in the report).
+_TABLE_KEYS = (
+    "K1",
+    "K2",
+    "gamma1",
+    "gamma2",
+    "q",
+    "M1",
+    "M2",
+    "M_tot",
+    "M_c",
+    "a",
+    "P_b",
+    "e",
+    "omega_dot_GR",
+    "omega_dot_remainder",
+    "M_tot_omega_dot",
+    "M_c_fdot",
+    "fdot_GW_only",
+    "fdot_minus_GW_only",
+    "distance",
+    "gamma_diff",
+    "redshift_orbital",
+    "redshift_grav",
+    "redshift_grav_model",
+    "redshift_grav_minus_model",
+    "mass_function",
+)
+
+
+def _quantity_table(doc: dict[str, Any]) -> Any:
+    """Rich table of the fitted and Monte-Carlo quantities (value ± σ, 16–84 % range)."""
     from rich.table import Table
 
-    console.print(
-        f"[bold]{doc['target']}[/] — {doc['n_spectra']} spectra ({doc['lines']}), "
-        f"sessions {', '.join(doc['sessions'])}; times TDB (barycentric)"
-    )
     tab = Table(title="Intra-session fits and masses (value ± 1σ; MC 16–84 % in brackets)")
     tab.add_column("quantity")
     tab.add_column("value")
     tab.add_column("16–84 %")
-    keys = (
-        "K1",
-        "K2",
-        "gamma1",
-        "gamma2",
-        "q",
-        "M1",
-        "M2",
-        "M_tot",
-        "M_c",
-        "a",
-        "P_b",
-        "e",
-        "omega_dot_GR",
-        "omega_dot_remainder",
-        "M_tot_omega_dot",
-        "M_c_fdot",
-        "fdot_GW_only",
-        "fdot_minus_GW_only",
-        "distance",
-        "gamma_diff",
-        "redshift_orbital",
-        "redshift_grav",
-        "redshift_grav_model",
-        "redshift_grav_minus_model",
-        "mass_function",
-    )
-    for k in keys:
+    for k in _TABLE_KEYS:
         q = doc.get(k)
         if q is None:
             continue
         rng = f"[{q['lo']:.5g}, {q['hi']:.5g}]" if q.get("lo") is not None else ""
         tab.add_row(k, _fmt(q, 6), rng)
-    console.print(tab)
+    return tab
+
+
+def _pairs_table(pairs: list[dict[str, Any]]) -> Any:
+    """Rich table of the fixed-u pairs (Δκ_spec vs Δκ_LISA, Δv_CM)."""
+    from rich.markup import escape
+    from rich.table import Table
+
+    pt = Table(title="Fixed-u pairs (Δκ_spec vs Δκ_LISA, Δv_CM)")
+    for c in ("α → β", "u★ [rad]", "ΔT [d]", "Δκ_spec", "Δκ_LISA", "z [σ]", "Δv_CM"):
+        pt.add_column(escape(c))
+    for p in pairs:
+        z = p["dkappa_significance"]
+        pt.add_row(
+            f"{p['alpha']} → {p['beta']}",
+            f"{p['u_star_rad']:.3f}",
+            f"{p['dT']['value']:.2f}",
+            _fmt(p["dkappa_spec"], 3),
+            _fmt(p["dkappa_lisa"], 3),
+            "—" if z is None else f"{z:+.2f}",
+            _fmt(p["dv_cm"], 3),
+        )
+    return pt
+
+
+def _light_time_line(lt: dict[str, Any]) -> str:
+    """One line: the largest light-time delay and the K, γ shifts of its correction."""
+    return (
+        f"Light travel time across the orbit: ≤ {lt['max_delay']['value']:.3f} s; "
+        f"{'applied' if lt['applied'] else 'not applied (--light-time)'}: "
+        + ", ".join(f"{k} {v['value']:+.3f} km/s" for k, v in lt.items() if k.startswith("d"))
+    )
+
+
+def print_report(doc: dict[str, Any], console: Any) -> None:
+    """Rich terminal report (to the given console, normally stderr)."""
+    console.print(
+        f"[bold]{doc['target']}[/] — {doc['n_spectra']} spectra ({doc['lines']}), "
+        f"sessions {', '.join(doc['sessions'])}; times TDB (barycentric)"
+    )
+    console.print(_quantity_table(doc))
     if "wil41" in doc:
         w = doc["wil41"]
         console.print(
             f"WIL41 v1–v2 line: q = {_fmt(w['q'])}, γ1+qγ2 = "
             f"{_fmt(w['gamma1_plus_q_gamma2'])} (χ²/dof {w['chi2']:.1f}/{w['dof']})"
         )
-    lt = doc["light_time"]
-    console.print(
-        f"Light travel time across the orbit: ≤ {lt['max_delay']['value']:.3f} s; "
-        f"{'applied' if lt['applied'] else 'not applied (--light-time)'}: "
-        + ", ".join(f"{k} {v['value']:+.3f} km/s" for k, v in lt.items() if k.startswith("d"))
-    )
+    console.print(_light_time_line(doc["light_time"]))
     dr = doc["drifts"]
     if dr["pairs"]:
-        pt = Table(title="Fixed-u pairs (Δκ_spec vs Δκ_LISA, Δv_CM)")
-        for c in ("α → β", "u★ [rad]", "ΔT [d]", "Δκ_spec", "Δκ_LISA", "z [σ]", "Δv_CM"):
-            pt.add_column(escape(c))
-        for p in dr["pairs"]:
-            z = p["dkappa_significance"]
-            pt.add_row(
-                f"{p['alpha']} → {p['beta']}",
-                f"{p['u_star_rad']:.3f}",
-                f"{p['dT']['value']:.2f}",
-                _fmt(p["dkappa_spec"], 3),
-                _fmt(p["dkappa_lisa"], 3),
-                "—" if z is None else f"{z:+.2f}",
-                _fmt(p["dv_cm"], 3),
-            )
-        console.print(pt)
+        console.print(_pairs_table(dr["pairs"]))
     for k in ("a_los", "fdot_acc", "fdot_remainder"):
         if k in dr:
             console.print(f"{k}: {_fmt(dr[k])}")

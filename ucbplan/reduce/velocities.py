@@ -270,29 +270,62 @@ def read_velocities(path: Path | str) -> VelocityTable:
     if path.suffix.lower() == ".ecsv":
         header, colmap, rownums = _read_ecsv(path)
     else:
-        header, body = _read_csv(path)
-        colmap = {h: [] for h in header}
-        rownums = []
-        for k, (line_no, cells) in enumerate(body, start=1):
-            if len(cells) != len(header):
-                raise _fail(
-                    path,
-                    f"row {k} (line {line_no})",
-                    f"has {len(cells)} fields, expected {len(header)} like the header",
-                )
-            for h, c in zip(header, cells, strict=True):
-                colmap[h].append(c)
-            rownums.append(k)
+        header, colmap, rownums = _csv_columns(path)
     tcol, comps = _check_header(path, header)
     if not rownums:
         raise VelocityFileError(f"{path}: no data rows; add one line per spectrum")
-    num: dict[str, F64] = {}
-    for h in header:
-        if h == "session":
-            continue
-        num[h] = np.array(
-            [_parse_float(path, r, h, x) for r, x in zip(rownums, colmap[h], strict=True)]
-        )
+    num = {
+        h: np.array([_parse_float(path, r, h, x) for r, x in zip(rownums, colmap[h], strict=True)])
+        for h in header
+        if h != "session"
+    }
+    _check_ranges(path, num, comps, rownums)
+    jd = num[tcol] + _TIME_COLS[tcol]
+    scale = "utc" if tcol.endswith("_utc") else "tdb"
+    nan = np.full(jd.shape, np.nan)
+    return VelocityTable(
+        source=path,
+        time=Time(np.floor(jd), jd - np.floor(jd), format="jd", scale=scale),
+        window_s=num.get("exptime_s", num.get("window_s", nan)),
+        lambda_k=num.get("lambda_k", nan),
+        v=tuple(num[c] for c in comps),
+        sigma=tuple(num[f"sigma_{c}"] for c in comps),
+        session=_sessions(path, colmap, rownums, jd),
+        u_star=num.get("u_star"),
+        site_utc=scale == "utc",
+    )
+
+
+def _csv_columns(path: Path) -> tuple[list[str], dict[str, list[object]], list[int]]:
+    """Header, cells per column and data-row numbers of a CSV (rows of the wrong width fail)."""
+    header, body = _read_csv(path)
+    colmap: dict[str, list[object]] = {h: [] for h in header}
+    rownums = []
+    for k, (line_no, cells) in enumerate(body, start=1):
+        if len(cells) != len(header):
+            raise _fail(
+                path,
+                f"row {k} (line {line_no})",
+                f"has {len(cells)} fields, expected {len(header)} like the header",
+            )
+        for h, c in zip(header, cells, strict=True):
+            colmap[h].append(c)
+        rownums.append(k)
+    return header, colmap, rownums
+
+
+#: Accepted range of the window columns: (low, high, what the message asks for).
+_WINDOW_RANGES = (
+    ("exptime_s", 0.0, math.inf, "a window ≥ 0 s"),
+    ("window_s", 0.0, math.inf, "a window ≥ 0 s"),
+    ("lambda_k", 1e-6, 1.0, "Λ_K in (0, 1]"),
+)
+
+
+def _check_ranges(
+    path: Path, num: dict[str, F64], comps: tuple[str, ...], rownums: list[int]
+) -> None:
+    """Positive σ_v and windows in range; the error names the first offending row."""
     for c in comps:
         bad = np.flatnonzero(num[f"sigma_{c}"] <= 0)
         if bad.size:
@@ -302,11 +335,7 @@ def read_velocities(path: Path | str) -> VelocityTable:
                 f"row {r}, column 'sigma_{c}'",
                 f"got {num[f'sigma_{c}'][bad[0]]}, expected a positive 1σ in km/s",
             )
-    for h, lo, hi, what in (
-        ("exptime_s", 0.0, math.inf, "a window ≥ 0 s"),
-        ("window_s", 0.0, math.inf, "a window ≥ 0 s"),
-        ("lambda_k", 1e-6, 1.0, "Λ_K in (0, 1]"),
-    ):
+    for h, lo, hi, what in _WINDOW_RANGES:
         if h in num:
             bad = np.flatnonzero((num[h] < lo) | (num[h] > hi))
             if bad.size:
@@ -315,30 +344,19 @@ def read_velocities(path: Path | str) -> VelocityTable:
                     f"row {rownums[int(bad[0])]}, column {h!r}",
                     f"got {num[h][bad[0]]}, expected {what}",
                 )
-    jd = num[tcol] + _TIME_COLS[tcol]
-    scale = "utc" if tcol.endswith("_utc") else "tdb"
-    time = Time(np.floor(jd), jd - np.floor(jd), format="jd", scale=scale)
-    nan = np.full(jd.shape, np.nan)
-    window = num.get("exptime_s", num.get("window_s", nan))
-    lam = num.get("lambda_k", nan)
-    if "session" in colmap:
-        sess = tuple(str(s).strip() for s in colmap["session"])
-        empty = [r for r, s in zip(rownums, sess, strict=True) if not s]
-        if empty:
-            raise _fail(path, f"row {empty[0]}, column 'session'", "empty label")
-    else:
-        sess = _auto_sessions(jd)
-    return VelocityTable(
-        source=path,
-        time=time,
-        window_s=window,
-        lambda_k=lam,
-        v=tuple(num[c] for c in comps),
-        sigma=tuple(num[f"sigma_{c}"] for c in comps),
-        session=sess,
-        u_star=num.get("u_star"),
-        site_utc=scale == "utc",
-    )
+
+
+def _sessions(
+    path: Path, colmap: dict[str, list[object]], rownums: list[int], jd: F64
+) -> tuple[str, ...]:
+    """Session labels from the column (non-empty) or from gaps in time (:func:`_auto_sessions`)."""
+    if "session" not in colmap:
+        return _auto_sessions(jd)
+    sess = tuple(str(s).strip() for s in colmap["session"])
+    empty = [r for r, s in zip(rownums, sess, strict=True) if not s]
+    if empty:
+        raise _fail(path, f"row {empty[0]}, column 'session'", "empty label")
+    return sess
 
 
 def _auto_sessions(jd: F64) -> tuple[str, ...]:
@@ -361,7 +379,7 @@ def to_barycentric(table: VelocityTable, coord: SkyCoord, location: EarthLocatio
     Notes
     -----
     t_bary = t.tdb + Δ(t), Δ the barycentric light travel time (astropy builtin ephemeris, within
-    ~12 µs of DE421; SCIENCE.md "Barycentric ↔ site time").
+    ~12 µs of DE421; docs/method.md "Barycentric and site time").
     """
     if not table.site_utc:
         return table

@@ -1,0 +1,431 @@
+"""The LISA simulation as library calls: injection model, Fisher forecast, posterior sampling.
+
+Each ``ucbplan simulate | fisher | waveform`` command is one of these functions plus printing;
+they return records and never print, so a notebook or a Dask worker can call them directly::
+
+    model = build_model(load_target("catalogs/fiducial-injection.yaml"))
+    forecast = fisher_forecast(model)                   # Gaussian target at the midpoint
+    result = simulate(model, SimulateOptions(seed=1, steps=60))
+    write_simulation(result, simulation_files(Path("posterior.yaml")))  # YAML + samples + chain
+
+Data flow: :func:`build_model` (start-epoch truth, four-line model, midpoint target) →
+:func:`prepare_simulation` (noise draw, likelihood, SNR, Fisher covariance) →
+:func:`run_simulation` (emcee, midpoint transform, π-mode fold) →
+:func:`ucbplan.lisa.outputs.write_simulation`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from astropy.time import TimeDelta
+from numpy.typing import NDArray
+
+from ucbplan.errors import UcbplanError
+from ucbplan.lisa import posterior as post
+from ucbplan.lisa.fisher import fisher_matrix
+from ucbplan.lisa.likelihood import (
+    Likelihood,
+    Prior,
+    model_for_target,
+    simulate_data,
+    source_from_target,
+    theta_from_source,
+)
+from ucbplan.lisa.noise import SANGRIA
+from ucbplan.lisa.outputs import load_resume
+from ucbplan.lisa.sampler import CONVERGENCE_FACTOR, SamplerResult, run_sampler
+
+if TYPE_CHECKING:
+    from ucbplan.lisa.waveform import FourLineModel, SourceParams
+    from ucbplan.target import Target
+
+__all__ = [
+    "FisherForecast",
+    "LisaModel",
+    "SimulateOptions",
+    "SimulationProblem",
+    "SimulationResult",
+    "build_model",
+    "fisher_forecast",
+    "prepare_simulation",
+    "run_simulation",
+    "simulate",
+]
+
+F64 = NDArray[np.float64]
+#: ``progress(step, total, tau_max)``, called every few sampler steps.
+Progress = Callable[[int, int, float], None]
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class LisaModel:
+    """Injection and search set-up built from a target file.
+
+    Attributes
+    ----------
+    base : Target
+        The target referenced to the midpoint of an observation of ``t_obs_s`` (t_ref moved).
+    truth : SourceParams
+        Injected waveform parameters at the start of the observation (e = 0 if circular).
+    model : FourLineModel
+        Templates on the band grid (N = ``n_bins`` per band).
+    eccentric : bool
+        Whether the 9-parameter eccentric model is used (else the 6-parameter circular one).
+    n_bins : int
+        Band width N in Fourier bins.
+    """
+
+    base: Target
+    truth: SourceParams
+    model: FourLineModel
+    eccentric: bool
+    n_bins: int
+
+    @property
+    def t_obs_s(self) -> float:
+        """Observation length T [s]."""
+        return float(self.model.grid.t_obs_s)
+
+    def theta0(self) -> F64:
+        """Injected parameters in sampled coordinates (start epoch)."""
+        return np.asarray(theta_from_source(self.truth, self.t_obs_s, self.eccentric), dtype=float)
+
+    def likelihood(self, data: NDArray[np.complex128]) -> Likelihood:
+        """Whittle likelihood of ``data`` with the paper's priors around the injection."""
+        prior = Prior.paper(self.truth, self.t_obs_s, self.eccentric)
+        return Likelihood(self.model, data, prior, SANGRIA)
+
+
+def build_model(
+    target: Target,
+    *,
+    t_obs_s: float | None = None,
+    n_bins: int = 512,
+    circular: bool = False,
+    where: str | None = None,
+) -> LisaModel:
+    """Injection model of ``target`` (needs lisa.amplitude, cos_inclination, psi).
+
+    Parameters
+    ----------
+    target : Target
+        Target or injection (midpoint-referenced parameters).
+    t_obs_s : float, optional
+        Observation length [s] (default: the target's).
+    n_bins : int
+        Band width N (even, ≥ 16); injection and templates share it.
+    circular : bool
+        Fit the 6-parameter circular model even if the target is eccentric.
+    where : str, optional
+        Prefix of error messages (default: the target's file).
+
+    Raises
+    ------
+    ValueError
+        ``n_bins`` odd or below 16.
+    TargetFileError
+        The target lacks the GW-only fields or has fdot ≤ 0.
+    UcbplanError
+        ω̇ puts z_ω = ω̇T/2π outside the prior [0, 50] bins.
+    """
+    if n_bins < 16 or n_bins % 2:
+        raise ValueError(f"n_bins: expected an even number >= 16, got {n_bins}")
+    truth = source_from_target(target)
+    t_obs = target.t_obs_s if t_obs_s is None else t_obs_s
+    eccentric = (not circular) and (truth.eta != 0.0 or truth.kappa != 0.0)
+    if not eccentric:
+        truth = dataclasses.replace(truth, eta=0.0, kappa=0.0, omega_dot=0.0)
+    if eccentric and not 0.0 <= truth.omega_dot * t_obs / (2 * np.pi) <= 50.0:
+        raise UcbplanError(
+            f"{where or target.source or target.name}: omega_dot gives z_omega outside the prior "
+            f"[0, 50] bins for T = {t_obs:.6g} s; use a shorter --t-obs or --circular"
+        )
+    base = dataclasses.replace(
+        target,
+        t_ref=target.t_start + TimeDelta(0.5 * t_obs, format="sec"),
+        t_obs_s=t_obs,
+    )
+    model = model_for_target(target, t_obs, n_bins, eccentric, truth.f_gw)
+    return LisaModel(base=base, truth=truth, model=model, eccentric=eccentric, n_bins=n_bins)
+
+
+def _fisher_cov(like: Likelihood, theta0: F64) -> F64:
+    """Inverse Fisher matrix at ``theta0`` (sampled coordinates)."""
+    return np.asarray(np.linalg.inv(fisher_matrix(like, theta0)), dtype=np.float64)
+
+
+def _sigmas(t: Target) -> dict[str, float]:
+    """1σ of each covariance entry of ``t``."""
+    return {n: float(np.sqrt(t.cov_matrix[i, i])) for i, n in enumerate(t.cov_names)}
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class FisherForecast:
+    """Fisher-matrix forecast (zero-noise data) as a Gaussian target at the midpoint.
+
+    Attributes
+    ----------
+    target : Target
+        Named "<name> (Fisher forecast)"; covariance over the physical parameters.
+    snr : float
+        Optimal SNR of the injection.
+    theta0, cov_theta : numpy.ndarray
+        Injection and inverse Fisher matrix in sampled coordinates (start epoch).
+    """
+
+    target: Target
+    snr: float
+    theta0: F64
+    cov_theta: F64
+
+    @property
+    def sigmas(self) -> dict[str, float]:
+        """Forecast 1σ per parameter (covariance order)."""
+        return _sigmas(self.target)
+
+    @property
+    def values(self) -> dict[str, float]:
+        """Injected value per parameter (midpoint; covariance order)."""
+        t = self.target
+        return {n: float(getattr(t.params, n, getattr(t, n, np.nan))) for n in t.cov_names}
+
+
+def fisher_forecast(model: LisaModel) -> FisherForecast:
+    """Fisher forecast of the targeted-search parameters (the library behind ``ucbplan fisher``)."""
+    theta0 = model.theta0()
+    like = model.likelihood(simulate_data(model.model, model.truth, SANGRIA, None))
+    snr = float(like.snr(theta0[None])[0])
+    cov = _fisher_cov(like, theta0)
+    fis = post.gaussian_target(model.base, theta0, cov, model.t_obs_s)
+    fis = dataclasses.replace(fis, name=f"{model.base.name} (Fisher forecast)")
+    return FisherForecast(target=fis, snr=snr, theta0=theta0, cov_theta=cov)
+
+
+@dataclass(frozen=True, slots=True)
+class SimulateOptions:
+    """Options of :func:`simulate` (noise draw and emcee run).
+
+    Attributes
+    ----------
+    seed : int
+        Seed of the noise draw and the sampler.
+    walkers, steps : int
+        emcee ensemble size (≥ 2 × parameters) and steps (the minimum with ``until_converged``).
+    until_converged : bool
+        Extend the chain until it is ≥ 50 τ long or ``max_steps``.
+    max_steps : int
+        Cap for ``until_converged``.
+    noise : bool
+        Add a Gaussian noise draw (else zero-noise data).
+    resume : Path, optional
+        Chain (.npz) of an earlier run with the same options to continue.
+    """
+
+    seed: int = 0
+    walkers: int = 32
+    steps: int = 2000
+    until_converged: bool = False
+    max_steps: int = 50000
+    noise: bool = True
+    resume: Path | None = None
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class SimulationProblem:
+    """Data, likelihood and start point of one simulation, before sampling.
+
+    ``fisher_cov`` whitens the sampler (the saved one when resuming); ``previous`` is the resumed
+    (theta chain, log_prob) or None.
+    """
+
+    model: LisaModel
+    options: SimulateOptions
+    theta0: F64
+    likelihood: Likelihood
+    snr: float
+    fisher_cov: F64
+    previous: tuple[F64, F64] | None = None
+
+
+def prepare_simulation(model: LisaModel, options: SimulateOptions) -> SimulationProblem:
+    """Draw the data (seeded), build the likelihood, its SNR and the Fisher covariance.
+
+    Raises
+    ------
+    UcbplanError
+        Fewer than 2 walkers per parameter.
+    InputFileError
+        ``options.resume`` does not fit this run
+        (:func:`ucbplan.lisa.outputs.load_resume`).
+    """
+    theta0 = model.theta0()
+    if options.walkers < 2 * theta0.size:
+        raise UcbplanError(f"--walkers: need >= {2 * theta0.size} for {theta0.size} parameters")
+    rng = np.random.default_rng(options.seed)
+    data = simulate_data(model.model, model.truth, SANGRIA, rng if options.noise else None)
+    like = model.likelihood(data)
+    snr = float(like.snr(theta0[None])[0])
+    cov = _fisher_cov(like, theta0)
+    previous = None
+    if options.resume is not None:
+        previous, cov = load_resume(
+            options.resume,
+            theta0,
+            seed=options.seed,
+            noise=options.noise,
+            n_bins=model.n_bins,
+            t_obs_s=model.t_obs_s,
+            walkers=options.walkers,
+        )
+    return SimulationProblem(model, options, theta0, like, snr, cov, previous)
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class SimulationResult:
+    """Posterior of one simulation, at the midpoint, with the Fisher forecast beside it.
+
+    Attributes
+    ----------
+    problem : SimulationProblem
+        Data, likelihood and start point.
+    chain : SamplerResult
+        emcee chain (sampled coordinates, start epoch) and convergence diagnostics.
+    samples : numpy.ndarray
+        Burnt-in, thinned chain (S, D) in sampled coordinates (start epoch).
+    columns : dict of numpy.ndarray
+        Physical samples at the midpoint after folding the π mode.
+    injected : dict of float
+        Injection at the midpoint (same keys as ``columns``).
+    n_folded : int
+        Samples moved from the π mode onto the injected branch.
+    fisher : Target
+        Gaussian forecast from the whitening covariance (same names as the posterior).
+    warnings : tuple of str
+        E.g. a chain shorter than 50 τ.
+    """
+
+    problem: SimulationProblem
+    chain: SamplerResult
+    samples: F64
+    columns: dict[str, F64]
+    injected: dict[str, float]
+    n_folded: int
+    fisher: Target
+    warnings: tuple[str, ...] = field(default_factory=tuple)
+
+    @property
+    def model(self) -> LisaModel:
+        """The injection model."""
+        return self.problem.model
+
+    @property
+    def n_steps(self) -> int:
+        """Chain length in steps (including a resumed part)."""
+        return int(self.chain.theta.shape[0])
+
+    @property
+    def tau_max(self) -> float:
+        """Largest integrated autocorrelation time [steps]."""
+        return float(np.max(self.chain.tau))
+
+    def posterior(self, samples_path: Path | None = None) -> Target:
+        """Posterior target (means, sample covariance); ``samples_path`` is recorded in it."""
+        base = self.model.base
+        name = f"{base.name} (posterior)"
+        return post.posterior_target(base, self.columns, samples_path, name=name)
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """Physical parameter names of the posterior (covariance order)."""
+        return self.fisher.cov_names
+
+    @property
+    def posterior_mean(self) -> dict[str, float]:
+        """Posterior mean per parameter (midpoint)."""
+        return {n: float(np.mean(self.columns[n])) for n in self.names}
+
+    @property
+    def posterior_sigma(self) -> dict[str, float]:
+        """Posterior standard deviation per parameter (midpoint)."""
+        return {n: float(np.std(self.columns[n])) for n in self.names}
+
+    @property
+    def fisher_sigma(self) -> dict[str, float]:
+        """Fisher 1σ per parameter (midpoint)."""
+        return _sigmas(self.fisher)
+
+    def samples_meta(self) -> dict[str, Any]:
+        """Metadata of the samples ECSV (reference epoch, seed, convergence, SNR)."""
+        return {
+            "reference": "midpoint of the LISA observation (t_ref of the target YAML, TDB)",
+            "t_ref_tdb": self.model.base.t_ref.tdb.isot,
+            "seed": self.problem.options.seed,
+            "n_steps": self.n_steps,
+            "tau_max_steps": self.tau_max,
+            "converged": self.chain.converged,
+            "folded_pi_mode_samples": self.n_folded,
+            "snr": self.problem.snr,
+        }
+
+
+def _convergence_warnings(chain: SamplerResult) -> tuple[str, ...]:
+    if chain.converged:
+        return ()
+    n_done, tau_max = chain.theta.shape[0], float(np.max(chain.tau))
+    return (
+        f"chain of {n_done} steps is shorter than {CONVERGENCE_FACTOR:g} τ "
+        f"(τ_max = {tau_max:.0f} steps): the posterior σ's are not reliable; rerun with "
+        f"--steps {int(CONVERGENCE_FACTOR * tau_max) + 1} or --until-converged",
+    )
+
+
+def run_simulation(
+    problem: SimulationProblem, progress: Progress | None = None
+) -> SimulationResult:
+    """Sample the posterior of ``problem`` and move it to the midpoint.
+
+    Parameters
+    ----------
+    problem : SimulationProblem
+        From :func:`prepare_simulation`.
+    progress : callable, optional
+        ``progress(step, total, tau_max)`` for a progress bar.
+    """
+    opts, theta0 = problem.options, problem.theta0
+    t_obs_s = problem.model.t_obs_s
+    chain = run_sampler(
+        problem.likelihood,
+        theta0,
+        problem.fisher_cov,
+        n_walkers=opts.walkers,
+        n_steps=opts.steps,
+        until_converged=opts.until_converged,
+        max_steps=opts.max_steps,
+        seed=opts.seed,
+        progress=progress,
+        previous=problem.previous,
+    )
+    flat = chain.flat_samples()
+    cols = post.midpoint_samples(flat, t_obs_s)
+    inj = {k: float(v[0]) for k, v in post.midpoint_samples(theta0[None], t_obs_s).items()}
+    cols, n_fold = post.fold_phase_mode(cols, inj["phase"])
+    fis = post.gaussian_target(problem.model.base, theta0, problem.fisher_cov, t_obs_s)
+    return SimulationResult(
+        problem, chain, flat, cols, inj, n_fold, fis, _convergence_warnings(chain)
+    )
+
+
+def simulate(
+    model: LisaModel, options: SimulateOptions, progress: Progress | None = None
+) -> SimulationResult:
+    """Simulate a LISA observation and sample the targeted-search posterior (``ucbplan simulate``).
+
+    :func:`prepare_simulation` followed by :func:`run_simulation`.
+    """
+    return run_simulation(prepare_simulation(model, options), progress)
