@@ -15,13 +15,12 @@ from ucbplan.observing.constraints import (
     MoonIlluminationConstraint,
     MoonSeparationConstraint,
     NightConstraint,
-    SkyModel,
     ZenithHoleConstraint,
-    airmass_from_alt,
     evaluate_window,
     make_constraint,
 )
 from ucbplan.observing.sites import get_site
+from ucbplan.observing.sky import SkyModel, airmass_from_alt
 from ucbplan.observing.timeconv import quiet_erfa
 from ucbplan.offline import configure_offline
 

@@ -1,4 +1,4 @@
-"""Appendix B smearing factors against the paper's and SCIENCE.md's checked numbers."""
+"""Appendix B smearing factors against the paper's checked numbers (docs/method.md, "Smearing")."""
 
 from __future__ import annotations
 
@@ -21,13 +21,13 @@ N_BAR = 2 * math.pi / P_B  # n̄_b = π f_GW = 2π / P_orb
 
 
 def test_paper_values() -> None:
-    # SCIENCE.md "Smearing" (4-5 significant digits printed -> tolerances at the last digit).
+    # docs/method.md "Smearing" (4-5 significant digits printed -> tolerances at the last digit).
     assert 1.0 / lambda_k(P_B / 3, N_BAR) == pytest.approx(1.2092, abs=5e-5)
     assert lambda_k(P_B / 8, N_BAR) == pytest.approx(0.97450, abs=5e-6)
     assert lambda_kappa(P_B / 3, N_BAR) == pytest.approx(0.4135, abs=5e-5)
     # Appendix B text: Lambda_K ~ 0.83 at P/3.
     assert lambda_k(P_B / 3, N_BAR) == pytest.approx(0.83, abs=5e-3)
-    # Eq. Deltav_smear_est: 10 s at P_b = 5 min, K = 750 km/s -> 1.37 km/s (SCIENCE.md).
+    # Eq. Deltav_smear_est: 10 s at P_b = 5 min, K = 750 km/s -> 1.37 km/s (docs/method.md).
     assert smear_velocity(750.0, lambda_k(10.0, N_BAR)) == pytest.approx(1.37, abs=5e-3)
 
 

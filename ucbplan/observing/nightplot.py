@@ -12,10 +12,12 @@ from astropy.coordinates import SkyCoord
 from astropy.time import Time, TimeDelta
 
 from ucbplan.observing.blocks import Block
-from ucbplan.observing.constraints import TWILIGHT_SUN_ALT_DEG, SkyModel
-from ucbplan.observing.schedule.plan import night_windows
+from ucbplan.observing.constraints import TWILIGHT_SUN_ALT_DEG
+from ucbplan.observing.schedule.nights import night_windows
 from ucbplan.observing.sites import Site
+from ucbplan.observing.sky import SkyModel
 from ucbplan.observing.timeconv import quiet_erfa
+from ucbplan.plotting import pyplot
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -51,11 +53,7 @@ def plot_night(
     -------
     matplotlib.figure.Figure
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    from matplotlib.figure import Figure
-
+    plt = pyplot()
     label, t0, t1 = night_windows(site, [night])[0]
     with quiet_erfa():
         origin = Time(t0.tdb, location=site.location)
@@ -65,13 +63,13 @@ def plot_night(
         x = np.linspace(0.0, span, 1441)
         hours = x / 3600.0
         utc0 = origin.utc
-    fig = Figure(figsize=(10, 5.5), layout="constrained")
+    fig = plt.figure(figsize=(10, 5.5), layout="constrained")
     ax: Any = fig.add_subplot()
     sun = sky.sun_alt_deg(x)
     shades = [(0.0, 0.93), (-6.0, 0.82), (-12.0, 0.68), (-18.0, 0.5)]
     for limit, grey in shades:
         ax.fill_between(hours, -5, 95, where=sun <= limit, color=str(grey), lw=0, zorder=0)
-    colours = matplotlib.colormaps["tab10"]
+    colours = plt.get_cmap("tab10")
     for i, t in enumerate(targets):
         ax.plot(hours, sky.target_alt_deg(i, x), color=colours(i % 10), label=t.name, zorder=2)
     ax.plot(hours, sky.moon_alt_deg(x), color="goldenrod", ls=":", label="Moon", zorder=2)
