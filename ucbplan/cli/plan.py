@@ -182,6 +182,7 @@ def _write(run: Any, fmt: str, output: Path | None, plot: Path | None, overwrite
         err_console.print(f"wrote night chart to {escape(str(plot))}")
 
 
+# ``plan`` is long only by its 27 options and their one-to-one mapping into PlanSettings.
 def plan(
     targets: _Targets,
     site: _SiteName = None,
