@@ -22,10 +22,11 @@ from dataclasses import dataclass
 import numpy as np
 from astropy import units as u
 from astropy.coordinates import CIRS, EarthLocation, SkyCoord, get_body, get_sun
-from astropy.time import Time, TimeDelta
+from astropy.time import Time
 from numpy.typing import NDArray
 from scipy.interpolate import CubicSpline
 
+from ucbplan.observing.timeaxis import TimeAxis
 from ucbplan.observing.timeconv import quiet_erfa
 
 __all__ = ["SLOW_STEP_S", "SkyModel", "airmass_from_alt"]
@@ -98,7 +99,7 @@ class SkyModel:
         with quiet_erfa():
             import erfa
 
-            t = origin + TimeDelta(x * u.s)
+            t = TimeAxis(origin).tdb(x)
             ut1 = t.ut1
             era = np.unwrap(erfa.era00(ut1.jd1, ut1.jd2))
             frame = CIRS(obstime=t)
@@ -127,11 +128,6 @@ class SkyModel:
     def n_targets(self) -> int:
         """Number of targets in the model."""
         return int(self.coords.shape[0])
-
-    def x_of(self, t: Time) -> FloatArray:
-        """Axis coordinate [s after ``origin``] of times ``t``."""
-        with quiet_erfa():
-            return np.asarray((t - self.origin).to_value(u.s), dtype=np.float64)
 
     def _rotate(self, v_itrs: FloatArray, x: FloatArray) -> FloatArray:
         """ITRS (≈TIRS) vector → CIRS at times x: rotation by −ERA about z. Shape x.shape+(3,)."""
