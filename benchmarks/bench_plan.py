@@ -25,11 +25,10 @@ from pathlib import Path
 import numpy as np
 from astropy import units as u
 from astropy.coordinates import SkyCoord
-from astropy.time import Time, TimeDelta
+from astropy.time import Time
 
 from ucbplan.observing.blocks import ExposurePlan
-from ucbplan.observing.constraints import SkyModel
-from ucbplan.observing.schedule.plan import (
+from ucbplan.observing.schedule import (
     PlanSettings,
     candidate_blocks,
     night_windows,
@@ -37,6 +36,8 @@ from ucbplan.observing.schedule.plan import (
     plan_nights,
 )
 from ucbplan.observing.sites import get_site
+from ucbplan.observing.sky import SkyModel
+from ucbplan.observing.timeaxis import TimeAxis
 from ucbplan.observing.timeconv import SiteTrack, quiet_erfa
 from ucbplan.offline import configure_offline
 from ucbplan.target import Target, load_target
@@ -71,22 +72,19 @@ def ours(targets: list[Target], nights: list[date]) -> tuple[float, int, list]:
     mode = parse_mode("quadrature")
     t0 = time.perf_counter()
     windows = night_windows(site, nights)
-    with quiet_erfa():
-        origin = Time(windows[0][1].tdb, location=site.location)
-        x_hi = float((windows[-1][2] - origin).to_value(u.s))
+    axis = TimeAxis.starting_at(windows[0].start, site.location)
+    span = (0.0, axis.x(windows[-1].end))
     coords = SkyCoord([t.ra_deg for t in targets] * u.deg, [t.dec_deg for t in targets] * u.deg)
-    sky = SkyModel.build(site.location, origin, (0.0, x_hi), coords)
-    track = SiteTrack.build(origin, (0.0, x_hi), site.location)
+    sky = SkyModel.build(site.location, axis.origin, span, coords)
+    track = SiteTrack.build(axis.origin, span, site.location)
     constraints = settings.constraints(site)
     n = 0
     cands = []
     for i, t in enumerate(targets):
         interp = track.delay_interpolator(t.coord)
-        c = candidate_blocks(
-            t, i, mode, origin, (0.0, x_hi), interp, sky, constraints, settings.exposure
-        )
+        c = candidate_blocks(t, i, mode, axis, span, interp, sky, constraints, settings.exposure)
         n += c.x_mid.size
-        cands.append((c, origin))
+        cands.append((c, axis))
     return time.perf_counter() - t0, n, cands
 
 
@@ -110,13 +108,12 @@ def astroplan_rate(targets: list[Target], cands: list, n_sample: int, seed: int)
     rng = np.random.default_rng(seed)
     total_s, total_n = 0.0, 0
     per_target = max(n_sample // len(targets), 1)
-    for t, (c, origin) in zip(targets, cands, strict=True):
+    for t, (c, axis) in zip(targets, cands, strict=True):
         if c.x_mid.size == 0:
             continue
         pick = np.sort(rng.choice(c.x_mid.size, size=min(per_target, c.x_mid.size), replace=False))
+        ing, egr = axis.utc(c.x_start[pick]), axis.utc(c.x_end[pick])
         with quiet_erfa():
-            ing = (origin + TimeDelta(c.x_start[pick] * u.s)).utc
-            egr = (origin + TimeDelta(c.x_end[pick] * u.s)).utc
             pairs = Time(
                 np.stack([ing.jd1, egr.jd1], axis=1),
                 np.stack([ing.jd2, egr.jd2], axis=1),

@@ -126,6 +126,7 @@ def test_night_chart_axes() -> None:
 
     from ucbplan.observing.nightplot import plot_night
     from ucbplan.observing.sites import get_site
+    from ucbplan.plotting import pyplot
     from ucbplan.target import load_target
 
     fig = plot_night([load_target(Path(HM))], get_site("paranal"), date(2040, 2, 15), [], 2.0)
@@ -133,6 +134,7 @@ def test_night_chart_axes() -> None:
     assert ax.get_ylabel() == "altitude [deg]"
     assert ax.get_xlabel().startswith("UTC [hh:mm]")
     assert {t.get_text() for t in ax.get_legend().get_texts()} >= {"HM Cnc", "Moon", "airmass 2"}
+    pyplot().close(fig)
 
 
 def test_priority_option_orders_the_schedule() -> None:

@@ -15,13 +15,12 @@ from ucbplan.observing.constraints import (
     MoonIlluminationConstraint,
     MoonSeparationConstraint,
     NightConstraint,
-    SkyModel,
     ZenithHoleConstraint,
-    airmass_from_alt,
     evaluate_window,
     make_constraint,
 )
 from ucbplan.observing.sites import get_site
+from ucbplan.observing.sky import SkyModel, airmass_from_alt
 from ucbplan.observing.timeconv import quiet_erfa
 from ucbplan.offline import configure_offline
 
@@ -143,3 +142,35 @@ def test_registry_and_errors() -> None:
         NightConstraint("dusk")
     with pytest.raises(UcbplanError, match="--airmass-max"):
         AirmassConstraint(0.5)
+
+
+def test_constraint_set_by_name_in_fixed_order() -> None:
+    from ucbplan.observing.constraints import ConstraintSet
+
+    full = ConstraintSet(
+        night=NightConstraint(twilight="astronomical"),
+        airmass=AirmassConstraint(max_airmass=1.5),
+        moon_illum=MoonIlluminationConstraint(max_fraction=0.3),
+        zenith_hole=ZenithHoleConstraint(radius_deg=5.0),
+        moon_sep=MoonSeparationConstraint(min_deg=45.0),
+    )
+    assert [c.name for c in full] == ["night", "airmass", "zenith-hole", "moon-sep", "moon-illum"]
+    assert len(full) == 5 and full.active[2] is full.zenith_hole
+    assert full.describe()[0] == "astronomical night (Sun altitude <= -18 deg)"
+    assert [c.name for c in ConstraintSet()] == ["night", "airmass"]
+
+
+def test_plan_settings_constraints_follow_site_and_options() -> None:
+    from ucbplan.observing.schedule import PlanSettings
+
+    paranal = get_site("paranal")  # alt-az mounts: 4 deg zenith hole in the site table
+    default = PlanSettings().constraints(paranal)
+    assert default.zenith_hole == ZenithHoleConstraint(radius_deg=4.0)
+    assert default.moon_sep == MoonSeparationConstraint(min_deg=30.0)
+    assert default.moon_illum is None
+    off = PlanSettings(zenith_hole_deg=0.0, moon_sep_deg=0.0, moon_illum_max=0.5)
+    got = off.constraints(paranal)
+    assert got.zenith_hole is None and got.moon_sep is None
+    assert got.moon_illum == MoonIlluminationConstraint(max_fraction=0.5)
+    with pytest.raises(UcbplanError, match="--twilight"):
+        PlanSettings(twilight="dusk").constraints(paranal)

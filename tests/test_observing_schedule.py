@@ -17,7 +17,7 @@ from astropy.time import Time
 from ucbplan.core.ephemeris import arg_latitude, ll_pair
 from ucbplan.errors import UcbplanError
 from ucbplan.observing.blocks import ExposurePlan
-from ucbplan.observing.schedule.plan import PlanSettings, delta_kappa, parse_mode, plan_nights
+from ucbplan.observing.schedule import PlanSettings, parse_mode, plan_nights
 from ucbplan.observing.sites import Site, get_site
 from ucbplan.observing.timeconv import quiet_erfa, site_utc_to_bary_tdb
 from ucbplan.offline import configure_offline
@@ -142,10 +142,6 @@ def test_fixed_u_pairs_maximise_delta_kappa(fid: Target) -> None:
     eta, kap = ll_pair(fid.params, np.array(tau))
     # Eq. delta_kappa_rewrite equals the direct difference of Eq. kappa_lisa_prediction.
     assert a.delta_kappa == pytest.approx(float(kap[1] - kap[0]), abs=1e-12)
-    dk = delta_kappa(
-        float(eta[0]), float(kap[0]), np.array([fid.params.omega_dot * (tau[1] - tau[0])])
-    )
-    assert a.delta_kappa == pytest.approx(float(dk[0]), abs=1e-12)
     # Not near an apsidal null: >= 0.8 x the largest |Δκ| reachable (2 e |sin| bound attained).
     e = math.hypot(float(eta[0]), float(kap[0]))
     assert abs(a.delta_kappa) >= 0.8 * 0.9 * 2 * e
@@ -219,3 +215,45 @@ def test_conjunction_and_zero_crossing(hm: Target) -> None:
         u_now = _u_back(hm, b.t_mid_utc, site)
         # SB1 zero crossing: cos u = -kappa(t) = 0 for the circular HM Cnc model.
         assert abs(math.cos(u_now)) < 1e-6
+
+
+def test_settings_and_inputs_fail_in_words() -> None:
+    from ucbplan.observing.schedule import night_dates
+    from ucbplan.observing.sites import resolve_site
+
+    with pytest.raises(UcbplanError, match="--alpha must be positive"):
+        PlanSettings(alpha=0.0)
+    with pytest.raises(UcbplanError, match="--sessions must be >= 1"):
+        PlanSettings(sessions_per_night=0)
+    assert night_dates("2040-02-28", 3) == [date(2040, 2, 28), date(2040, 2, 29), date(2040, 3, 1)]
+    with pytest.raises(UcbplanError, match="YYYY-MM-DD"):
+        night_dates("15/02/2040")
+    with pytest.raises(UcbplanError, match="--nights must be >= 1"):
+        night_dates(NIGHT, 0)
+    assert resolve_site("vlt").name == "Paranal"
+    assert resolve_site("vlt", lonlat="10,20,30").lat_deg == 20.0  # coordinates win
+    with pytest.raises(UcbplanError, match="no site"):
+        resolve_site()
+
+
+def test_plan_files_is_the_plan_command_as_a_call(hm: Target) -> None:
+    from ucbplan.observing.schedule import plan_files, with_priorities
+
+    run = plan_files(
+        [REPO / "catalogs" / "hm-cnc.yaml", REPO / "catalogs" / "fiducial-eccentric.yaml"],
+        first_night="2040-02-15",
+        site="paranal",
+        settings=PlanSettings(overhead_s=7200.0),
+        priorities={"fiducial eccentric dwd": 5},
+    )
+    assert [t.priority for t in run.targets] == [hm.priority, 5.0]
+    assert run.failure() is None
+    table = run.table()
+    assert len(table) == len(run.result.blocks) > 0
+    assert table.meta["nights"] == ["2040-02-15"]
+    assert table.meta["overhead_s"] == 7200.0
+    assert set(table.meta["valid_until_tdb"]) == {"HM Cnc", "Fiducial eccentric dWD"}
+    with pytest.raises(UcbplanError, match="no target named 'nobody'"):
+        with_priorities([hm], ["nobody=3"])
+    with pytest.raises(UcbplanError, match="NAME=NUMBER"):
+        with_priorities([hm], ["HM Cnc"])

@@ -142,3 +142,56 @@ def test_read_blocks_errors(tmp_path: Path) -> None:
     bad.write_text("# %ECSV 1.0\n# ---\n# datatype:\n# - {name: a, datatype: int64}\na\n1\n")
     with pytest.raises(InputFileError, match="required columns"):
         read_blocks(bad)
+
+
+def test_required_columns_are_the_exporters_contract() -> None:
+    # Spelled out here (not derived): the columns every export may rely on, in file order.
+    assert REQUIRED_COLUMNS == (
+        "target",
+        "block_id",
+        "anchor",
+        "u_star_rad",
+        "t_mid_utc",
+        "t_start_utc",
+        "t_end_utc",
+        "t_mid_tdb_bary",
+        "sigma_t_s",
+        "t_alt_utc",
+        "exptime_s",
+        "n_exp",
+        "lambda_k",
+        "altitude_deg",
+        "airmass",
+        "moon_sep_deg",
+    )
+
+
+def test_column_list_covers_every_block_field_and_reads_back_typed(tmp_path: Path) -> None:
+    from dataclasses import fields
+
+    from ucbplan.observing.blocktable import COLUMNS, EXTRA_COLUMNS
+
+    assert len({c.name for c in COLUMNS}) == len(COLUMNS)
+    assert {f.name for f in fields(Block)} <= {c.attribute for c in COLUMNS}
+    assert (*REQUIRED_COLUMNS, *EXTRA_COLUMNS) == tuple(c.name for c in COLUMNS)
+    table = blocks_to_table([_block(0)], _meta())
+    path = tmp_path / "b.ecsv"
+    with path.open("w") as handle:
+        write_table(table, handle, "ecsv")
+    back = read_blocks(path)
+    kinds = {"str": "U", "float64": "f", "int64": "i"}
+    for c in COLUMNS:
+        assert back[c.name].dtype.kind == kinds[c.dtype], c.name
+        assert (back[c.name].unit is None) == (c.unit is None), c.name
+        if c.unit is not None:
+            assert back[c.name].unit == u.Unit(c.unit), c.name
+        assert back[c.name].description == (c.description if c.in_header else None), c.name
+
+
+def test_column_reference_lists_every_column() -> None:
+    from ucbplan.observing.blocktable import COLUMNS, column_reference
+
+    text = column_reference()
+    rows = [line for line in text.splitlines() if line.startswith("| `")]
+    assert [r.split("`")[1] for r in rows] == [c.name for c in COLUMNS]
+    assert "| `smear_kms` | float64 | km / s |  | velocity smear" in text

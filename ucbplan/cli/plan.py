@@ -1,11 +1,14 @@
-"""``ucbplan plan``: phase-targeted blocks at an observatory (thin shell over ucbplan.observing)."""
+"""``ucbplan plan``: phase-targeted blocks at an observatory (thin shell over ucbplan.observing).
+
+Parse the options into :class:`~ucbplan.observing.schedule.PlanSettings`, make one library call
+(:func:`~ucbplan.observing.schedule.plan_files`), print the nights and write the blocks table and
+the night chart.
+"""
 
 from __future__ import annotations
 
-import math
-from datetime import date, timedelta
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, Annotated, Any
 
 import typer
 from rich.markup import escape
@@ -17,49 +20,67 @@ __all__ = ["register"]
 
 _MACHINE = ("ecsv", "csv", "json")
 
-
-def _site(site: str | None, site_lonlat: str | None, sites_file: Path | None) -> Any:
-    from ucbplan.observing.sites import get_site, site_from_lonlat
-
-    if site_lonlat:
-        return site_from_lonlat(site_lonlat)
-    if not site:
-        raise UcbplanError("no site: pass --site NAME (e.g. paranal) or --site-lonlat LON,LAT,H")
-    return get_site(site, sites_file)
-
-
-def _night(text: str, n: int) -> list[date]:
-    try:
-        first = date.fromisoformat(text)
-    except ValueError:
-        raise UcbplanError(
-            f"--night: expected the local evening date YYYY-MM-DD, got {text!r}"
-        ) from None
-    if n < 1:
-        raise UcbplanError(f"--nights must be >= 1, got {n}")
-    return [first + timedelta(days=k) for k in range(n)]
-
-
-def _with_priorities(targets: list[Any], items: list[str]) -> list[Any]:
-    from dataclasses import replace
-
-    values: dict[str, float] = {}
-    for item in items:
-        name, sep, value = item.rpartition("=")
-        try:
-            values[name.strip().lower()] = float(value)
-        except ValueError:
-            name = ""
-        if not sep or not name:
-            raise UcbplanError(f"--priority: expected NAME=NUMBER, got {item!r}")
-    known = {t.name.lower() for t in targets}
-    unknown = sorted(set(values) - known)
-    if unknown:
-        raise UcbplanError(
-            f"--priority: no target named {unknown[0]!r}; targets: "
-            + ", ".join(t.name for t in targets)
-        )
-    return [replace(t, priority=values.get(t.name.lower(), t.priority)) for t in targets]
+_Targets = Annotated[list[Path], typer.Argument(help="Target YAML files.")]
+_SiteName = Annotated[str | None, typer.Option("--site", help="Site name or alias (e.g. paranal).")]
+_SiteLonLat = Annotated[
+    str | None,
+    typer.Option(
+        "--site-lonlat", help="LON,LAT,HEIGHT (deg east, deg north, m) instead of --site."
+    ),
+]
+_SitesFile = Annotated[
+    Path | None,
+    typer.Option("--sites-file", help="YAML site table searched before the bundled one."),
+]
+_Night = Annotated[
+    str, typer.Option("--night", help="Local date of the first evening, YYYY-MM-DD.")
+]
+_Nights = Annotated[int, typer.Option("--nights", help="Number of consecutive nights.")]
+_Mode = Annotated[
+    str,
+    typer.Option(
+        "--mode", help="quadrature | conjunction | zero-crossing | fixed-u-pairs | u=VALUE [rad]."
+    ),
+]
+_Twilight = Annotated[str, typer.Option("--twilight", help="civil | nautical | astronomical")]
+_AirmassMax = Annotated[float, typer.Option("--airmass-max", help="Largest airmass (sec z).")]
+_MoonSep = Annotated[float, typer.Option("--moon-sep", help="Smallest Moon separation [deg].")]
+_MoonIllum = Annotated[
+    float | None,
+    typer.Option(
+        "--moon-illum", help="Largest Moon illuminated fraction (0-1) while the Moon is up."
+    ),
+]
+_ZenithHole = Annotated[
+    float | None,
+    typer.Option("--zenith-hole", help="Zenith-hole radius [deg] (default: the site's; 0 = none)."),
+]
+_Exptime = Annotated[float, typer.Option("--exptime", help="Single-exposure time [s].")]
+_NExp = Annotated[int, typer.Option("--n-exp", help="Exposures per block (co-added).")]
+_Readout = Annotated[float, typer.Option("--readout", help="Dead time between exposures [s].")]
+_Alpha = Annotated[float, typer.Option("--alpha", help="Planning margin α of T_valid.")]
+_SigmaV = Annotated[float | None, typer.Option("--sigma-v", help="RV precision σ_v [km/s].")]
+_KEff = Annotated[float | None, typer.Option("--k-eff", help="Semi-amplitude K_eff [km/s].")]
+_MaxSmear = Annotated[
+    str | None,
+    typer.Option("--max-smear", help="Smearing budget: '0.5*sigma_v' or km/s; exceeded = error."),
+]
+_MaxBinFraction = Annotated[
+    float | None,
+    typer.Option("--max-bin-fraction", help="Largest block span as a fraction of P_b."),
+]
+_Overhead = Annotated[
+    float, typer.Option("--overhead", help="Slew + acquisition before each session [s].")
+]
+_Sessions = Annotated[int, typer.Option("--sessions", help="Sessions per target and night.")]
+_Priority = Annotated[
+    list[str],
+    typer.Option("--priority", help="NAME=P overrides a target file's priority (higher first)."),
+]
+_Output = Annotated[Path | None, typer.Option("-o", "--output", help="Write the blocks table.")]
+_Format = Annotated[str, typer.Option("--format", help="table | ecsv | csv | json")]
+_Plot = Annotated[Path | None, typer.Option("--plot", help="Night chart PNG (first night).")]
+_Overwrite = Annotated[bool, typer.Option("--overwrite", help="Replace existing output files.")]
 
 
 def _format(fmt: str, output: Path | None) -> str:
@@ -72,7 +93,16 @@ def _format(fmt: str, output: Path | None) -> str:
     return fmt
 
 
+def _local(b: Any) -> str:
+    from datetime import UTC
+    from zoneinfo import ZoneInfo
+
+    dt = b.t_mid_utc.to_datetime(timezone=UTC).astimezone(ZoneInfo(b.timezone))
+    return dt.strftime("%H:%M:%S %Z")
+
+
 def _print_night(blocks: list[Any], night: str, site: Any) -> None:
+    paired = any(b.pair_id for b in blocks)
     table = rich_table(
         f"Night of {night} at {site.name} — times are UTC at the site (light time removed); "
         "±σ is the 1σ timing uncertainty",
@@ -88,10 +118,9 @@ def _print_night(blocks: list[Any], night: str, site: Any) -> None:
             "Moon [deg]",
             "Λ_K",
             "π-mode alt. UTC",
-            *(["pair: Δκ_LISA"] if any(b.pair_id for b in blocks) else []),
+            *(["pair: Δκ_LISA"] if paired else []),
         ],
     )
-    paired = any(b.pair_id for b in blocks)
     for b in blocks:
         table.add_row(
             escape(b.target),
@@ -110,180 +139,117 @@ def _print_night(blocks: list[Any], night: str, site: Any) -> None:
     err_console.print(table)
 
 
-def _local(b: Any) -> str:
-    from datetime import UTC
-    from zoneinfo import ZoneInfo
-
-    dt = b.t_mid_utc.to_datetime(timezone=UTC).astimezone(ZoneInfo(b.timezone))
-    return dt.strftime("%H:%M:%S %Z")
-
-
-def plan(
-    targets: list[Path] = typer.Argument(..., help="Target YAML files."),
-    site: str | None = typer.Option(None, "--site", help="Site name or alias (e.g. paranal)."),
-    site_lonlat: str | None = typer.Option(
-        None, "--site-lonlat", help="LON,LAT,HEIGHT (deg east, deg north, m) instead of --site."
-    ),
-    sites_file: Path | None = typer.Option(
-        None, "--sites-file", help="YAML site table searched before the bundled one."
-    ),
-    night: str = typer.Option(..., "--night", help="Local date of the first evening, YYYY-MM-DD."),
-    nights: int = typer.Option(1, "--nights", help="Number of consecutive nights."),
-    mode: str = typer.Option(
-        "quadrature",
-        "--mode",
-        help="quadrature | conjunction | zero-crossing | fixed-u-pairs | u=VALUE [rad].",
-    ),
-    twilight: str = typer.Option("nautical", "--twilight", help="civil | nautical | astronomical"),
-    airmass_max: float = typer.Option(2.0, "--airmass-max", help="Largest airmass (sec z)."),
-    moon_sep: float = typer.Option(30.0, "--moon-sep", help="Smallest Moon separation [deg]."),
-    moon_illum: float | None = typer.Option(
-        None, "--moon-illum", help="Largest Moon illuminated fraction (0-1) while the Moon is up."
-    ),
-    zenith_hole: float | None = typer.Option(
-        None, "--zenith-hole", help="Zenith-hole radius [deg] (default: the site's; 0 = none)."
-    ),
-    exptime: float = typer.Option(60.0, "--exptime", help="Single-exposure time [s]."),
-    n_exp: int = typer.Option(1, "--n-exp", help="Exposures per block (co-added)."),
-    readout: float = typer.Option(0.0, "--readout", help="Dead time between exposures [s]."),
-    alpha: float = typer.Option(1.0, "--alpha", help="Planning margin α of T_valid."),
-    sigma_v: float | None = typer.Option(None, "--sigma-v", help="RV precision σ_v [km/s]."),
-    k_eff: float | None = typer.Option(None, "--k-eff", help="Semi-amplitude K_eff [km/s]."),
-    max_smear: str | None = typer.Option(
-        None, "--max-smear", help="Smearing budget: '0.5*sigma_v' or km/s; exceeded = error."
-    ),
-    max_bin_fraction: float | None = typer.Option(
-        None, "--max-bin-fraction", help="Largest block span as a fraction of P_b."
-    ),
-    overhead: float = typer.Option(
-        300.0, "--overhead", help="Slew + acquisition before each session [s]."
-    ),
-    sessions: int = typer.Option(1, "--sessions", help="Sessions per target and night."),
-    priority: list[str] = typer.Option(
-        [], "--priority", help="NAME=P overrides a target file's priority (higher first)."
-    ),
-    output: Path | None = typer.Option(None, "-o", "--output", help="Write the blocks table."),
-    fmt: str = typer.Option("table", "--format", help="table | ecsv | csv | json"),
-    plot: Path | None = typer.Option(None, "--plot", help="Night chart PNG (first night)."),
-    overwrite: bool = typer.Option(False, "--overwrite", help="Replace existing output files."),
-) -> None:
-    """Plan phase-targeted observing blocks (UTC at the site) for one or more nights."""
-    args = dict(locals())
-    from ucbplan.observing.timeconv import quiet_erfa
-
-    with quiet_erfa():
-        _plan(**args)
-
-
-def _plan(
-    targets: list[Path],
-    site: str | None,
-    site_lonlat: str | None,
-    sites_file: Path | None,
-    night: str,
-    nights: int,
-    mode: str,
-    twilight: str,
-    airmass_max: float,
-    moon_sep: float,
-    moon_illum: float | None,
-    zenith_hole: float | None,
-    exptime: float,
-    n_exp: int,
-    readout: float,
-    alpha: float,
-    sigma_v: float | None,
-    k_eff: float | None,
-    max_smear: str | None,
-    max_bin_fraction: float | None,
-    overhead: float,
-    sessions: int,
-    priority: list[str],
-    output: Path | None,
-    fmt: str,
-    plot: Path | None,
-    overwrite: bool,
-) -> None:
-    from ucbplan.observing.blocks import ExposurePlan
-    from ucbplan.observing.blocktable import blocks_to_table, make_meta, write_table
-    from ucbplan.observing.schedule.plan import PlanSettings, plan_nights
-    from ucbplan.target import load_target
-
-    fmt = _format(fmt, output)
-    for path in (output, plot):
-        if path is not None:
-            check_output_path(path, overwrite)
-    if not (alpha > 0 and math.isfinite(alpha)):
-        raise UcbplanError(f"--alpha must be positive, got {alpha}")
-    if sessions < 1:
-        raise UcbplanError(f"--sessions must be >= 1, got {sessions}")
-    the_site = _site(site, site_lonlat, sites_file)
-    dates = _night(night, nights)
-    loaded = _with_priorities([load_target(p) for p in targets], priority)
-    settings = PlanSettings(
-        mode=mode,
-        twilight=twilight,
-        airmass_max=airmass_max,
-        moon_sep_deg=moon_sep,
-        moon_illum_max=moon_illum,
-        zenith_hole_deg=zenith_hole,
-        exposure=ExposurePlan(exptime, n_exp, readout),
-        alpha=alpha,
-        sigma_v_kms=sigma_v,
-        k_eff_kms=k_eff,
-        max_smear=max_smear,
-        max_bin_fraction=max_bin_fraction,
-        overhead_s=overhead,
-        sessions_per_night=sessions,
-    )
-    result = plan_nights(loaded, the_site, dates, settings)
-    for w in result.warnings:
+def _report(run: Any) -> None:
+    """Warnings and what was not placed (grouped over nights), then one table per night."""
+    for w in run.result.warnings:
         err_console.print(f"[yellow]warning:[/] {escape(w)}", soft_wrap=True)
     grouped: dict[tuple[str, str], list[str]] = {}
-    for miss in result.unplaced:
+    for miss in run.result.unplaced:
         grouped.setdefault((miss.target, miss.reason), []).append(miss.night)
     for (name, reason), when in grouped.items():
         span = when[0] if len(when) == 1 else f"{len(when)} nights {when[0]}..{when[-1]}"
         err_console.print(
             f"[yellow]not placed:[/] {escape(name)} ({span}): {escape(reason)}", soft_wrap=True
         )
-    if not result.blocks:
-        reasons = "; ".join(f"{m.target} {m.night}: {m.reason}" for m in result.unplaced)
-        raise UcbplanError(f"no block could be planned at {the_site.name}: {reasons}")
-    for label in dict.fromkeys(b.night for b in result.blocks):
-        _print_night([b for b in result.blocks if b.night == label], label, the_site)
-    meta = make_meta(
-        site=the_site.as_dict(),
-        targets=[{"name": t.name, "file": str(t.source), "sha256": t.sha256} for t in loaded],
-        constraints=result.constraints,
-        mode=settings.mode,
-        extra={
-            "nights": [d.isoformat() for d in dates],
-            "alpha": alpha,
-            "exposure": {"exptime_s": exptime, "n_exp": n_exp, "readout_s": readout},
-            "overhead_s": overhead,
-            "valid_until_tdb": {k: v.tdb.isot for k, v in result.valid_until.items()},
-            "warnings": result.warnings,
-            "unplaced": [f"{m.target} {m.night}: {m.reason}" for m in result.unplaced],
-        },
-    )
-    table = blocks_to_table(result.blocks, meta)
-    if fmt in _MACHINE:
+    failure = run.failure()
+    if failure is not None:
+        raise UcbplanError(failure)
+    blocks = run.result.blocks
+    for label in dict.fromkeys(b.night for b in blocks):
+        _print_night([b for b in blocks if b.night == label], label, run.site)
 
-        def _write(handle: IO[str]) -> None:
+
+def _write(run: Any, fmt: str, output: Path | None, plot: Path | None, overwrite: bool) -> None:
+    """The blocks table (stdout or ``output``) and the night chart of the first night."""
+    if fmt in _MACHINE:
+        from ucbplan.observing.blocktable import write_table
+
+        table = run.table()
+
+        def _write_table(handle: IO[str]) -> None:
             write_table(table, handle, fmt)
 
-        write_output(output, _write, overwrite=overwrite)
+        write_output(output, _write_table, overwrite=overwrite)
         if output is not None:
             err_console.print(f"wrote {len(table)} blocks to {escape(str(output))} ({fmt})")
     if plot is not None:
         from ucbplan.observing.nightplot import plot_night
+        from ucbplan.plotting import save_figure
 
-        fig = plot_night(loaded, the_site, dates[0], result.blocks, airmass_max)
-        write_output(
-            plot, lambda h: fig.savefig(h, format="png", dpi=120), overwrite=overwrite, binary=True
-        )
+        airmass_max = run.settings.airmass_max
+        fig = plot_night(run.targets, run.site, run.nights[0], run.result.blocks, airmass_max)
+        save_figure(fig, plot, overwrite=overwrite, dpi=120)
         err_console.print(f"wrote night chart to {escape(str(plot))}")
+
+
+# ``plan`` is long only by its 27 options and their one-to-one mapping into PlanSettings.
+def plan(
+    targets: _Targets,
+    site: _SiteName = None,
+    site_lonlat: _SiteLonLat = None,
+    sites_file: _SitesFile = None,
+    night: _Night = ...,  # type: ignore[assignment]  # required: typer reads ... as "no default"
+    nights: _Nights = 1,
+    mode: _Mode = "quadrature",
+    twilight: _Twilight = "nautical",
+    airmass_max: _AirmassMax = 2.0,
+    moon_sep: _MoonSep = 30.0,
+    moon_illum: _MoonIllum = None,
+    zenith_hole: _ZenithHole = None,
+    exptime: _Exptime = 60.0,
+    n_exp: _NExp = 1,
+    readout: _Readout = 0.0,
+    alpha: _Alpha = 1.0,
+    sigma_v: _SigmaV = None,
+    k_eff: _KEff = None,
+    max_smear: _MaxSmear = None,
+    max_bin_fraction: _MaxBinFraction = None,
+    overhead: _Overhead = 300.0,
+    sessions: _Sessions = 1,
+    priority: _Priority = [],  # noqa: B006  # typer copies the default; never mutated
+    output: _Output = None,
+    fmt: _Format = "table",
+    plot: _Plot = None,
+    overwrite: _Overwrite = False,
+) -> None:
+    """Plan phase-targeted observing blocks (UTC at the site) for one or more nights."""
+    from ucbplan.observing.blocks import ExposurePlan
+    from ucbplan.observing.schedule import PlanSettings, plan_files
+    from ucbplan.observing.timeconv import quiet_erfa
+
+    fmt = _format(fmt, output)
+    for path in (output, plot):
+        if path is not None:
+            check_output_path(path, overwrite)
+    with quiet_erfa():
+        settings = PlanSettings(
+            mode=mode,
+            twilight=twilight,
+            airmass_max=airmass_max,
+            moon_sep_deg=moon_sep,
+            moon_illum_max=moon_illum,
+            zenith_hole_deg=zenith_hole,
+            exposure=ExposurePlan(exptime_s=exptime, n_exp=n_exp, readout_s=readout),
+            alpha=alpha,
+            sigma_v_kms=sigma_v,
+            k_eff_kms=k_eff,
+            max_smear=max_smear,
+            max_bin_fraction=max_bin_fraction,
+            overhead_s=overhead,
+            sessions_per_night=sessions,
+        )
+        run = plan_files(
+            targets,
+            first_night=night,
+            n_nights=nights,
+            site=site,
+            site_lonlat=site_lonlat,
+            sites_file=sites_file,
+            settings=settings,
+            priorities=priority,
+        )
+        _report(run)
+        _write(run, fmt, output, plot, overwrite)
 
 
 def register(app: typer.Typer) -> None:

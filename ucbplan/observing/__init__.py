@@ -1,9 +1,11 @@
 """Observing: from barycentric epochs to blocks of UTC at a real observatory.
 
 Modules, in data-flow order: ``sites`` (bundled observatory table), ``timeconv`` (barycentric TDB
-<-> UTC at the site), ``smearing`` (Appendix B attenuation factors), ``constraints`` (night,
-altitude, Moon), ``blocks`` (exposure plan around an anchor epoch), ``schedule`` (modes and the
-night schedule), ``table`` (the master blocks table every export reads) and ``nightplot``.
+<-> UTC at the site), ``timeaxis`` (the one inner time representation: TDB seconds after one
+epoch), ``sky`` (fast Sun/Moon/target geometry), ``constraints`` (night, airmass, Moon ... by
+name), ``blocks`` (exposure plan around an anchor epoch), ``schedule`` (modes, candidates,
+placement, fixed-u pairs: the night schedule), ``blocktable`` (the master blocks table every
+export reads, its columns declared once), ``exports`` (observatory formats) and ``nightplot``.
 Nothing is imported here so that ``import ucbplan.observing`` stays cheap.
 """
 

@@ -1,5 +1,9 @@
 """The master blocks table: the single source every export (p2, starlist, ICS, proposal) reads.
 
+:data:`COLUMNS` declares the table once — name, type, unit, description, required — and the
+writer (:func:`blocks_to_table`), the reader (:func:`read_blocks`), :data:`REQUIRED_COLUMNS` /
+:data:`EXTRA_COLUMNS` and the block-table reference (:func:`column_reference`) derive from it.
+
 Times are written as ISO-8601 strings (``YYYY-MM-DDTHH:MM:SS.sss``) so that ECSV, CSV and JSON
 carry exactly the same text: ``t_*_utc`` columns are UTC at the site with millisecond precision,
 ``t_mid_tdb_bary`` is the barycentric TDB epoch with microsecond precision. Provenance (ucbplan
@@ -11,7 +15,8 @@ from __future__ import annotations
 
 import hashlib
 import json
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import IO, Any
@@ -27,9 +32,14 @@ from ucbplan.observing.blocks import Block
 from ucbplan.observing.timeconv import quiet_erfa
 
 __all__ = [
+    "COLUMNS",
+    "COLUMN_BY_NAME",
+    "EXTRA_COLUMNS",
     "REQUIRED_COLUMNS",
     "TABLE_FORMATS",
+    "Column",
     "blocks_to_table",
+    "column_reference",
     "file_sha256",
     "make_meta",
     "read_blocks",
@@ -37,96 +47,197 @@ __all__ = [
     "write_table",
 ]
 
-#: Columns every master table has, in this order (issue 3); extras follow.
-REQUIRED_COLUMNS = (
-    "target",
-    "block_id",
-    "anchor",
-    "u_star_rad",
-    "t_mid_utc",
-    "t_start_utc",
-    "t_end_utc",
-    "t_mid_tdb_bary",
-    "sigma_t_s",
-    "t_alt_utc",
-    "exptime_s",
-    "n_exp",
-    "lambda_k",
-    "altitude_deg",
-    "airmass",
-    "moon_sep_deg",
+
+@dataclass(frozen=True, slots=True)
+class Column:
+    """One column of the master blocks table: everything writers, readers and docs need.
+
+    Attributes
+    ----------
+    name : str
+        Column name.
+    dtype : str
+        Type of the values: ``str``, ``float64`` or ``int64``.
+    unit : str or None
+        Physical unit (astropy spelling); None for names, times and dimensionless numbers.
+    description : str
+        What the column holds (the block-table reference and, if ``in_header``, the ECSV header).
+    required : bool
+        Every reader needs it (:func:`read_blocks` checks); required columns come first.
+    in_header : bool
+        ``description`` is written into the file header. False for the columns whose files never
+        carried one, so that tables stay byte-identical to those written before.
+    kind : str
+        How the value is made from a :class:`Block`: ``value`` (the attribute ``source``),
+        ``utc`` / ``tdb`` (ISO time of ``source``, ms / µs), ``local`` (local civil time of
+        ``source``), ``hms`` / ``dms`` (sexagesimal RA / Dec) or ``width`` (end − start).
+    source : str
+        The :class:`Block` attribute it comes from (default: ``name``).
+    """
+
+    name: str
+    dtype: str
+    unit: str | None
+    description: str
+    required: bool = False
+    in_header: bool = True
+    kind: str = "value"
+    source: str = ""
+
+    @property
+    def attribute(self) -> str:
+        """The :class:`Block` attribute the column is made from."""
+        return self.source or self.name
+
+
+#: The master blocks table, column by column, in file order: required columns first (issue 3).
+COLUMNS: tuple[Column, ...] = (
+    Column("target", "str", None, "target name", required=True),
+    Column("block_id", "str", None, "unique block identifier", required=True),
+    Column(
+        "anchor",
+        "str",
+        None,
+        "anchor name (quadrature, conjunction, zero-crossing, u=VALUE, fixed-u-pairs)",
+        required=True,
+    ),
+    Column("u_star_rad", "float64", "rad", "target argument of latitude of star 1", required=True),
+    Column(
+        "t_mid_utc",
+        "str",
+        None,
+        "block centre, UTC at the site (light time removed), ISO ms",
+        required=True,
+        kind="utc",
+    ),
+    Column(
+        "t_start_utc",
+        "str",
+        None,
+        "block start (first exposure starts), UTC at the site, ISO ms",
+        required=True,
+        kind="utc",
+    ),
+    Column(
+        "t_end_utc",
+        "str",
+        None,
+        "block end (last exposure ends), UTC at the site, ISO ms",
+        required=True,
+        kind="utc",
+    ),
+    Column(
+        "t_mid_tdb_bary",
+        "str",
+        None,
+        "anchor epoch, TDB at the solar-system barycentre, ISO us",
+        required=True,
+        kind="tdb",
+    ),
+    Column(
+        "sigma_t_s",
+        "float64",
+        "s",
+        "1-sigma timing uncertainty of the anchor epoch (sigma_u / u_dot)",
+        required=True,
+    ),
+    Column(
+        "t_alt_utc",
+        "str",
+        None,
+        "phi_ref pi-mode alternative epoch (P_b/4 away), UTC at the site, ISO ms",
+        required=True,
+        kind="utc",
+    ),
+    Column("exptime_s", "float64", "s", "single-exposure time", required=True),
+    Column("n_exp", "int64", None, "number of exposures in the block", required=True),
+    Column(
+        "lambda_k",
+        "float64",
+        None,
+        "smearing attenuation of K over the block, sin(x)/x, x = n_b dt/2",
+        required=True,
+    ),
+    Column("altitude_deg", "float64", "deg", "target altitude at block centre", required=True),
+    Column("airmass", "float64", None, "airmass (sec z) at block centre", required=True),
+    Column(
+        "moon_sep_deg",
+        "float64",
+        "deg",
+        "smallest target-Moon separation over the block",
+        required=True,
+    ),
+    Column("ra_deg", "float64", "deg", "right ascension (ICRS)", in_header=False),
+    Column("dec_deg", "float64", "deg", "declination (ICRS)", in_header=False),
+    Column("ra_hms", "str", None, "right ascension, HH:MM:SS.sss", in_header=False, kind="hms"),
+    Column("dec_dms", "str", None, "declination, +DD:MM:SS.ss", in_header=False, kind="dms"),
+    Column("night", "str", None, "local date of the evening the night starts"),
+    Column(
+        "t_mid_local",
+        "str",
+        None,
+        "block centre, local civil time at the site with UTC offset, ISO s",
+        in_header=False,
+        kind="local",
+        source="t_mid_utc",
+    ),
+    Column(
+        "t_start_local",
+        "str",
+        None,
+        "block start, local civil time at the site with UTC offset, ISO s",
+        in_header=False,
+        kind="local",
+        source="t_start_utc",
+    ),
+    Column(
+        "t_end_local",
+        "str",
+        None,
+        "block end, local civil time at the site with UTC offset, ISO s",
+        in_header=False,
+        kind="local",
+        source="t_end_utc",
+    ),
+    Column("timezone", "str", None, "IANA time zone of the site", in_header=False),
+    Column("alt_start_deg", "float64", "deg", "target altitude at block start", in_header=False),
+    Column("alt_end_deg", "float64", "deg", "target altitude at block end", in_header=False),
+    Column("airmass_start", "float64", None, "airmass at block start", in_header=False),
+    Column("airmass_end", "float64", None, "airmass at block end", in_header=False),
+    Column("readout_s", "float64", "s", "dead time between exposures", in_header=False),
+    Column(
+        "block_width_s",
+        "float64",
+        "s",
+        "block length, first exposure start to last exposure end",
+        in_header=False,
+        kind="width",
+    ),
+    Column("lambda_kappa", "float64", None, "attenuation of the eccentricity terms, sin(2x)/(2x)"),
+    Column("smear_kms", "float64", "km / s", "velocity smear K(1 - lambda_k); NaN if K unknown"),
+    Column("period_s", "float64", "s", "orbital period P_b", in_header=False),
+    Column("moon_illum", "float64", None, "illuminated fraction of the Moon at block centre"),
+    Column("priority", "float64", None, "target priority (higher first)", in_header=False),
+    Column("session_id", "str", None, "blocks sharing a session (e.g. a quadrature pair)"),
+    Column("pair_id", "str", None, "fixed-u pair identifier (same u at two epochs)"),
+    Column(
+        "delta_kappa",
+        "float64",
+        None,
+        "predicted kappa change over the pair baseline (Eq. delta_kappa_rewrite)",
+    ),
 )
+
+#: Columns by name.
+COLUMN_BY_NAME: dict[str, Column] = {c.name: c for c in COLUMNS}
+
+#: Columns every master table has, in this order; extras follow.
+REQUIRED_COLUMNS: tuple[str, ...] = tuple(c.name for c in COLUMNS if c.required)
 
 #: Extra columns (always present, in this order after the required ones).
-EXTRA_COLUMNS = (
-    "ra_deg",
-    "dec_deg",
-    "ra_hms",
-    "dec_dms",
-    "night",
-    "t_mid_local",
-    "t_start_local",
-    "t_end_local",
-    "timezone",
-    "alt_start_deg",
-    "alt_end_deg",
-    "airmass_start",
-    "airmass_end",
-    "readout_s",
-    "block_width_s",
-    "lambda_kappa",
-    "smear_kms",
-    "period_s",
-    "moon_illum",
-    "priority",
-    "session_id",
-    "pair_id",
-    "delta_kappa",
-)
+EXTRA_COLUMNS: tuple[str, ...] = tuple(c.name for c in COLUMNS if not c.required)
 
 TABLE_FORMATS = ("ecsv", "csv", "json")
-
-_UNITS = {
-    "u_star_rad": "rad",
-    "sigma_t_s": "s",
-    "exptime_s": "s",
-    "altitude_deg": "deg",
-    "moon_sep_deg": "deg",
-    "ra_deg": "deg",
-    "dec_deg": "deg",
-    "alt_start_deg": "deg",
-    "alt_end_deg": "deg",
-    "readout_s": "s",
-    "block_width_s": "s",
-    "smear_kms": "km / s",
-    "period_s": "s",
-}
-
-_DESCRIPTIONS = {
-    "target": "target name",
-    "block_id": "unique block identifier",
-    "anchor": "anchor name (quadrature, conjunction, zero-crossing, u=VALUE, fixed-u-pairs)",
-    "u_star_rad": "target argument of latitude of star 1",
-    "t_mid_utc": "block centre, UTC at the site (light time removed), ISO ms",
-    "t_start_utc": "block start (first exposure starts), UTC at the site, ISO ms",
-    "t_end_utc": "block end (last exposure ends), UTC at the site, ISO ms",
-    "t_mid_tdb_bary": "anchor epoch, TDB at the solar-system barycentre, ISO us",
-    "sigma_t_s": "1-sigma timing uncertainty of the anchor epoch (sigma_u / u_dot)",
-    "t_alt_utc": "phi_ref pi-mode alternative epoch (P_b/4 away), UTC at the site, ISO ms",
-    "exptime_s": "single-exposure time",
-    "n_exp": "number of exposures in the block",
-    "lambda_k": "smearing attenuation of K over the block, sin(x)/x, x = n_b dt/2",
-    "altitude_deg": "target altitude at block centre",
-    "airmass": "airmass (sec z) at block centre",
-    "moon_sep_deg": "smallest target-Moon separation over the block",
-    "night": "local date of the evening the night starts",
-    "lambda_kappa": "attenuation of the eccentricity terms, sin(2x)/(2x)",
-    "smear_kms": "velocity smear K(1 - lambda_k); NaN if K unknown",
-    "moon_illum": "illuminated fraction of the Moon at block centre",
-    "session_id": "blocks sharing a session (e.g. a quadrature pair)",
-    "pair_id": "fixed-u pair identifier (same u at two epochs)",
-    "delta_kappa": "predicted kappa change over the pair baseline (Eq. delta_kappa_rewrite)",
-}
 
 
 def _iso(times: Sequence[Time | None], precision: int, scale: str) -> np.ndarray:
@@ -150,14 +261,52 @@ def _local_iso(times: Sequence[Time], zones: Sequence[str]) -> np.ndarray:
     return np.array(out, dtype=str) if out else np.array([], dtype="U1")
 
 
-def _sexagesimal(ra_deg: np.ndarray, dec_deg: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _ra_hms(ra_deg: np.ndarray) -> np.ndarray:
     if len(ra_deg) == 0:
-        return np.array([], dtype="U1"), np.array([], dtype="U1")
+        return np.array([], dtype="U1")
     ra = Angle(ra_deg, unit="deg").to_string(unit="hourangle", sep=":", precision=3, pad=True)
+    return np.atleast_1d(ra).astype(str)
+
+
+def _dec_dms(dec_deg: np.ndarray) -> np.ndarray:
+    if len(dec_deg) == 0:
+        return np.array([], dtype="U1")
     dec = Angle(dec_deg, unit="deg").to_string(
         unit="deg", sep=":", precision=2, pad=True, alwayssign=True
     )
-    return np.atleast_1d(ra).astype(str), np.atleast_1d(dec).astype(str)
+    return np.atleast_1d(dec).astype(str)
+
+
+def _attribute(column: Column, blocks: list[Block]) -> list[Any]:
+    return [getattr(b, column.attribute) for b in blocks]
+
+
+def _plain_values(column: Column, blocks: list[Block]) -> np.ndarray:
+    if column.dtype == "str" and not blocks:
+        return np.array([], dtype="U1")
+    return np.array(
+        _attribute(column, blocks), dtype=str if column.dtype == "str" else column.dtype
+    )
+
+
+def _width_s(column: Column, blocks: list[Block]) -> np.ndarray:
+    if not blocks:
+        return np.round(np.array([], dtype=float), 6)
+    start = Time([b.t_start_utc for b in blocks])
+    end = Time([b.t_end_utc for b in blocks])
+    return np.round(np.asarray((end - start).to_value("s"), dtype=float), 6)
+
+
+#: How each kind of column is made from the blocks (see :attr:`Column.kind`).
+_MAKERS: dict[str, Callable[[Column, list[Block]], np.ndarray]] = {
+    "value": _plain_values,
+    "utc": lambda c, b: _iso(_attribute(c, b), 3, "utc"),
+    "tdb": lambda c, b: _iso(_attribute(c, b), 6, "tdb"),
+    "local": lambda c, b: _local_iso(_attribute(c, b), [x.timezone for x in b]),
+    "hms": lambda c, b: _ra_hms(np.array([x.ra_deg for x in b], dtype=float)),
+    "dms": lambda c, b: _dec_dms(np.array([x.dec_deg for x in b], dtype=float)),
+    "width": _width_s,
+}
 
 
 def file_sha256(path: Path) -> str:
@@ -231,65 +380,13 @@ def blocks_to_table(blocks: Sequence[Block], meta: Mapping[str, Any]) -> Table:
         return _blocks_to_table(list(blocks), meta)
 
 
-def _blocks_to_table(b: list[Block], meta: Mapping[str, Any]) -> Table:
-    def col(name: str, dtype: Any) -> np.ndarray:
-        return np.array([getattr(x, name) for x in b], dtype=dtype)
-
-    ra = col("ra_deg", float)
-    dec = col("dec_deg", float)
-    ra_hms, dec_dms = _sexagesimal(ra, dec)
-    zones = [x.timezone for x in b]
-    starts = [x.t_start_utc for x in b]
-    ends = [x.t_end_utc for x in b]
-    t_start = Time(starts) if b else None
-    t_end = Time(ends) if b else None
-    width = (t_end - t_start).to_value("s") if b else np.array([], dtype=float)  # type: ignore[operator]
-    data: dict[str, Any] = {
-        "target": col("target", str) if b else np.array([], dtype="U1"),
-        "block_id": col("block_id", str) if b else np.array([], dtype="U1"),
-        "anchor": col("anchor", str) if b else np.array([], dtype="U1"),
-        "u_star_rad": col("u_star_rad", float),
-        "t_mid_utc": _iso([x.t_mid_utc for x in b], 3, "utc"),
-        "t_start_utc": _iso(starts, 3, "utc"),
-        "t_end_utc": _iso(ends, 3, "utc"),
-        "t_mid_tdb_bary": _iso([x.t_mid_tdb_bary for x in b], 6, "tdb"),
-        "sigma_t_s": col("sigma_t_s", float),
-        "t_alt_utc": _iso([x.t_alt_utc for x in b], 3, "utc"),
-        "exptime_s": col("exptime_s", float),
-        "n_exp": col("n_exp", np.int64),
-        "lambda_k": col("lambda_k", float),
-        "altitude_deg": col("altitude_deg", float),
-        "airmass": col("airmass", float),
-        "moon_sep_deg": col("moon_sep_deg", float),
-        "ra_deg": ra,
-        "dec_deg": dec,
-        "ra_hms": ra_hms,
-        "dec_dms": dec_dms,
-        "night": col("night", str) if b else np.array([], dtype="U1"),
-        "t_mid_local": _local_iso([x.t_mid_utc for x in b], zones),
-        "t_start_local": _local_iso(starts, zones),
-        "t_end_local": _local_iso(ends, zones),
-        "timezone": np.array(zones, dtype=str) if b else np.array([], dtype="U1"),
-        "alt_start_deg": col("alt_start_deg", float),
-        "alt_end_deg": col("alt_end_deg", float),
-        "airmass_start": col("airmass_start", float),
-        "airmass_end": col("airmass_end", float),
-        "readout_s": col("readout_s", float),
-        "block_width_s": np.round(np.asarray(width, dtype=float), 6),
-        "lambda_kappa": col("lambda_kappa", float),
-        "smear_kms": col("smear_kms", float),
-        "period_s": col("period_s", float),
-        "moon_illum": col("moon_illum", float),
-        "priority": col("priority", float),
-        "session_id": col("session_id", str) if b else np.array([], dtype="U1"),
-        "pair_id": col("pair_id", str) if b else np.array([], dtype="U1"),
-        "delta_kappa": col("delta_kappa", float),
-    }
-    table = Table(data, meta=dict(meta))
-    for name, unit in _UNITS.items():
-        table[name].unit = unit
-    for name, text in _DESCRIPTIONS.items():
-        table[name].description = text
+def _blocks_to_table(blocks: list[Block], meta: Mapping[str, Any]) -> Table:
+    table = Table({c.name: _MAKERS[c.kind](c, blocks) for c in COLUMNS}, meta=dict(meta))
+    for c in COLUMNS:
+        if c.unit is not None:
+            table[c.name].unit = c.unit
+        if c.in_header:
+            table[c.name].description = c.description
     return table
 
 
@@ -358,3 +455,15 @@ def read_blocks(path: Path | str) -> Table:
             "regenerate it with `ucbplan plan`"
         )
     return table
+
+
+def column_reference() -> str:
+    """The block-table reference as a Markdown table (one row per column, in file order)."""
+    lines = [
+        "| column | type | unit | required | description |",
+        "| --- | --- | --- | --- | --- |",
+    ]
+    for c in COLUMNS:
+        required = "yes" if c.required else ""
+        lines.append(f"| `{c.name}` | {c.dtype} | {c.unit or ''} | {required} | {c.description} |")
+    return "\n".join(lines) + "\n"

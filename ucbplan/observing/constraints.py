@@ -1,35 +1,25 @@
-"""Observability: a fast sky model (Sun, Moon, targets) and small composable constraints.
+"""Observability constraints: small classes registered by name, grouped by name for a run.
 
-:class:`SkyModel` evaluates geometric altitudes (no refraction, like astroplan with pressure 0)
-and Moon separation/illumination at arbitrary times of a run. It calls astropy once on a coarse
-grid (6 h) for the slowly moving apparent positions — targets, Sun and Moon in CIRS (which
-includes precession, nutation, aberration and light deflection) and the Earth rotation angle from
-UT1 — and then applies the Earth's rotation analytically: sin(alt) = û·ẑ_up with the site's
-geodetic vertical rotated by the ERA. The Moon's topocentric parallax (≤ 1°) is exact (vector
-difference with the site position). Polar motion (< 0.5″) and diurnal aberration (0.3″) are
-neglected; the test suite compares against astropy ``AltAz`` (errors < 2″ for targets and the
-Sun, < 10″ for the Moon).
-
-Constraints are small classes registered by name in :data:`CONSTRAINTS`; each returns a boolean
-mask and a short reason. :func:`evaluate_window` checks a block at start, middle, end and every
-≤ 5 min in between.
+Each constraint returns a boolean mask over times of a :class:`~ucbplan.observing.sky.SkyModel`
+and a short reason; they are registered by name in :data:`CONSTRAINTS` (like astroplan's
+composable constraints). A run's constraints form a :class:`ConstraintSet`, whose fields name
+them (``night``, ``airmass``, ``zenith_hole`` ...) so that no code reads a constraint by its
+position. :func:`evaluate_window` checks a block at start, middle, end and every ≤ 5 min in
+between.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 import numpy as np
-from astropy import units as u
-from astropy.coordinates import CIRS, EarthLocation, SkyCoord, get_body, get_sun
-from astropy.time import Time, TimeDelta
 from numpy.typing import NDArray
-from scipy.interpolate import CubicSpline
 
 from ucbplan.errors import UcbplanError
-from ucbplan.observing.timeconv import quiet_erfa
+from ucbplan.observing.sky import SkyModel, airmass_from_alt
 
 __all__ = [
     "CONSTRAINTS",
@@ -37,12 +27,11 @@ __all__ = [
     "AirmassConstraint",
     "AltitudeConstraint",
     "Constraint",
+    "ConstraintSet",
     "MoonIlluminationConstraint",
     "MoonSeparationConstraint",
     "NightConstraint",
-    "SkyModel",
     "ZenithHoleConstraint",
-    "airmass_from_alt",
     "evaluate_window",
     "make_constraint",
 ]
@@ -53,169 +42,8 @@ BoolArray = NDArray[np.bool_]
 #: Sun altitude [deg] that ends each twilight.
 TWILIGHT_SUN_ALT_DEG = {"civil": -6.0, "nautical": -12.0, "astronomical": -18.0}
 
-#: Node spacing of the coarse astropy grid [s] (apparent places move < 3.5 deg per node).
-SLOW_STEP_S = 6 * 3600.0
-
 #: Largest spacing between constraint samples inside a block [s].
 SAMPLE_STEP_S = 300.0
-
-
-def airmass_from_alt(alt_deg: FloatArray) -> FloatArray:
-    """Plane-parallel airmass sec z [1]; +inf at or below the horizon."""
-    alt = np.asarray(alt_deg, dtype=np.float64)
-    with np.errstate(divide="ignore"):
-        out = np.where(alt > 0.0, 1.0 / np.sin(np.radians(np.maximum(alt, 1e-9))), np.inf)
-    return np.asarray(out, dtype=np.float64)
-
-
-def _unit(v: FloatArray) -> FloatArray:
-    return np.asarray(v / np.linalg.norm(v, axis=-1, keepdims=True), dtype=np.float64)
-
-
-@dataclass(frozen=True)
-class SkyModel:
-    """Sun, Moon and target geometry at one site over a span of time.
-
-    Times are ``x`` = TDB seconds after ``origin`` (the site-arrival axis used by
-    :class:`ucbplan.observing.timeconv.DelayInterpolator`).
-    """
-
-    origin: Time
-    location: EarthLocation
-    coords: SkyCoord
-    era: CubicSpline
-    sun: CubicSpline
-    moon: CubicSpline
-    targets: tuple[CubicSpline, ...]
-    site_itrs_m: FloatArray
-    up_itrs: FloatArray
-
-    @classmethod
-    def build(
-        cls,
-        location: EarthLocation,
-        origin: Time,
-        span_s: tuple[float, float],
-        coords: SkyCoord,
-        step_s: float = SLOW_STEP_S,
-    ) -> SkyModel:
-        """Sample apparent places on a coarse grid covering ``span_s`` (s after ``origin``).
-
-        Parameters
-        ----------
-        location : EarthLocation
-            Observatory.
-        origin : Time
-            Axis origin (any scale; used as TDB).
-        span_s : (float, float)
-            Times to cover [s after ``origin``]; padded by two nodes each side.
-        coords : SkyCoord
-            Targets (ICRS), scalar or 1-d.
-        step_s : float
-            Node spacing [s].
-        """
-        lo, hi = float(span_s[0]) - 2 * step_s, float(span_s[1]) + 2 * step_s
-        n = max(math.ceil((hi - lo) / step_s) + 1, 5)
-        x = np.linspace(lo, hi, n)
-        coords = coords.reshape(-1) if not coords.isscalar else coords.reshape(1)
-        origin = Time(origin, scale="tdb", location=location)
-        with quiet_erfa():
-            import erfa
-
-            t = origin + TimeDelta(x * u.s)
-            ut1 = t.ut1
-            era = np.unwrap(erfa.era00(ut1.jd1, ut1.jd2))
-            frame = CIRS(obstime=t)
-            sun = get_sun(t).transform_to(frame).cartesian.xyz.to_value(u.m).T
-            moon = get_body("moon", t).transform_to(frame).cartesian.xyz.to_value(u.m).T
-            tgt = coords[:, None].transform_to(CIRS(obstime=t[None, :]))
-            tvec = tgt.cartesian.xyz.value  # (3, n_targets, n_nodes), unit vectors
-        tvec = np.moveaxis(tvec, 0, -1)  # (n_targets, n_nodes, 3)
-        geo = location.geodetic
-        lon, lat = float(geo.lon.to_value(u.rad)), float(geo.lat.to_value(u.rad))
-        up = np.array([math.cos(lat) * math.cos(lon), math.cos(lat) * math.sin(lon), math.sin(lat)])
-        site = np.array([c.to_value(u.m) for c in location.to_geocentric()], dtype=np.float64)
-        return cls(
-            origin=origin,
-            location=location,
-            coords=coords,
-            era=CubicSpline(x, era),
-            sun=CubicSpline(x, sun, axis=0),
-            moon=CubicSpline(x, moon, axis=0),
-            targets=tuple(CubicSpline(x, v, axis=0) for v in tvec),
-            site_itrs_m=site,
-            up_itrs=up,
-        )
-
-    @property
-    def n_targets(self) -> int:
-        """Number of targets in the model."""
-        return int(self.coords.shape[0])
-
-    def x_of(self, t: Time) -> FloatArray:
-        """Axis coordinate [s after ``origin``] of times ``t``."""
-        with quiet_erfa():
-            return np.asarray((t - self.origin).to_value(u.s), dtype=np.float64)
-
-    def _rotate(self, v_itrs: FloatArray, x: FloatArray) -> FloatArray:
-        """ITRS (≈TIRS) vector → CIRS at times x: rotation by −ERA about z. Shape x.shape+(3,)."""
-        era = self.era(x)
-        c, s = np.cos(era), np.sin(era)
-        return np.stack(
-            [
-                c * v_itrs[0] - s * v_itrs[1],
-                s * v_itrs[0] + c * v_itrs[1],
-                np.full_like(c, v_itrs[2]),
-            ],
-            axis=-1,
-        )
-
-    def up(self, x: FloatArray) -> FloatArray:
-        """Local geodetic vertical in CIRS at times x."""
-        return self._rotate(self.up_itrs, np.asarray(x, dtype=np.float64))
-
-    def _alt(self, direction: FloatArray, x: FloatArray) -> FloatArray:
-        s = np.einsum("...k,...k->...", _unit(direction), self.up(x))
-        return np.asarray(np.degrees(np.arcsin(np.clip(s, -1.0, 1.0))), dtype=np.float64)
-
-    def _topocentric(self, spline: CubicSpline, x: FloatArray) -> FloatArray:
-        return np.asarray(spline(x) - self._rotate(self.site_itrs_m, x), dtype=np.float64)
-
-    def sun_alt_deg(self, x: FloatArray) -> FloatArray:
-        """Geometric altitude of the Sun's centre [deg]."""
-        x = np.asarray(x, dtype=np.float64)
-        return self._alt(self._topocentric(self.sun, x), x)
-
-    def moon_alt_deg(self, x: FloatArray) -> FloatArray:
-        """Geometric topocentric altitude of the Moon's centre [deg]."""
-        x = np.asarray(x, dtype=np.float64)
-        return self._alt(self._topocentric(self.moon, x), x)
-
-    def target_dir(self, i: int, x: FloatArray) -> FloatArray:
-        """Apparent (CIRS) unit vector of target ``i`` at times x."""
-        return _unit(np.asarray(self.targets[i](np.asarray(x, dtype=np.float64)), dtype=np.float64))
-
-    def target_alt_deg(self, i: int, x: FloatArray) -> FloatArray:
-        """Geometric altitude of target ``i`` [deg]."""
-        x = np.asarray(x, dtype=np.float64)
-        return self._alt(self.target_dir(i, x), x)
-
-    def moon_sep_deg(self, i: int, x: FloatArray) -> FloatArray:
-        """Angle between target ``i`` and the topocentric Moon [deg]."""
-        x = np.asarray(x, dtype=np.float64)
-        m = _unit(self._topocentric(self.moon, x))
-        cosang = np.einsum("...k,...k->...", m, self.target_dir(i, x))
-        return np.asarray(np.degrees(np.arccos(np.clip(cosang, -1.0, 1.0))), dtype=np.float64)
-
-    def moon_illum(self, x: FloatArray) -> FloatArray:
-        """Illuminated fraction of the Moon (geocentric phase angle, as astroplan) [0–1]."""
-        x = np.asarray(x, dtype=np.float64)
-        s, m = self.sun(x), self.moon(x)
-        rs, rm = np.linalg.norm(s, axis=-1), np.linalg.norm(m, axis=-1)
-        cos_elong = np.einsum("...k,...k->...", s, m) / (rs * rm)
-        elong = np.arccos(np.clip(cos_elong, -1.0, 1.0))
-        phase = np.arctan2(rs * np.sin(elong), rm - rs * np.cos(elong))
-        return np.asarray((1.0 + np.cos(phase)) / 2.0, dtype=np.float64)
 
 
 class Constraint:
@@ -347,7 +175,7 @@ class MoonIlluminationConstraint(Constraint):
         return f"Moon up and more than {self.max_fraction:g} illuminated"
 
 
-#: Constraint classes by name (STYLE.md §5).
+#: Constraint classes by name; :func:`make_constraint` builds one from its name.
 CONSTRAINTS: dict[str, type[Constraint]] = {
     cls.name: cls
     for cls in (
@@ -378,8 +206,58 @@ def make_constraint(name: str, **kwargs: Any) -> Constraint:
     return cls(**kwargs)
 
 
+@dataclass(frozen=True)
+class ConstraintSet:
+    """The constraints of one run, each under its own name.
+
+    Night and airmass always apply (the planner explains failures with them); the others are
+    optional. Iterating yields the active constraints in a fixed order — night first (it explains
+    most failures), then airmass, altitude, zenith hole, Moon separation, Moon illumination — and
+    the ``first_failed`` indices of :func:`evaluate_window` refer to :attr:`active`.
+
+    Attributes
+    ----------
+    night : NightConstraint
+        Sun below the twilight limit.
+    airmass : AirmassConstraint
+        Largest airmass.
+    altitude, zenith_hole, moon_sep, moon_illum : Constraint or None
+        Optional constraints (None: not applied).
+    """
+
+    night: NightConstraint = field(default_factory=NightConstraint)
+    airmass: AirmassConstraint = field(default_factory=AirmassConstraint)
+    altitude: AltitudeConstraint | None = None
+    zenith_hole: ZenithHoleConstraint | None = None
+    moon_sep: MoonSeparationConstraint | None = None
+    moon_illum: MoonIlluminationConstraint | None = None
+
+    @property
+    def active(self) -> tuple[Constraint, ...]:
+        """The applied constraints, in evaluation order."""
+        named = (
+            self.night,
+            self.airmass,
+            self.altitude,
+            self.zenith_hole,
+            self.moon_sep,
+            self.moon_illum,
+        )
+        return tuple(c for c in named if c is not None)
+
+    def __iter__(self) -> Iterator[Constraint]:
+        return iter(self.active)
+
+    def __len__(self) -> int:
+        return len(self.active)
+
+    def describe(self) -> list[str]:
+        """One line per active constraint (the table provenance ``constraints``)."""
+        return [c.describe() for c in self.active]
+
+
 def evaluate_window(
-    constraints: list[Constraint],
+    constraints: Iterable[Constraint],
     sky: SkyModel,
     i: int,
     x_start: FloatArray,
@@ -396,7 +274,8 @@ def evaluate_window(
     ok : ndarray of bool
         True where all constraints hold at all samples.
     first_failed : ndarray of int
-        Index in ``constraints`` of the first violated constraint, −1 where ``ok``.
+        Index (in iteration order of ``constraints``) of the first violated constraint, −1
+        where ``ok``.
     """
     xs = np.asarray(x_start, dtype=np.float64)
     xe = np.asarray(x_end, dtype=np.float64)

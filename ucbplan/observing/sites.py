@@ -17,9 +17,9 @@ import yaml
 from astropy import units as u
 from astropy.coordinates import EarthLocation
 
-from ucbplan.errors import SiteError
+from ucbplan.errors import SiteError, UcbplanError
 
-__all__ = ["Site", "get_site", "load_sites", "site_from_lonlat"]
+__all__ = ["Site", "get_site", "load_sites", "resolve_site", "site_from_lonlat"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -199,3 +199,21 @@ def site_from_lonlat(text: str, timezone: str | None = None) -> Site:
         timezone = "Etc/UTC" if offset == 0 else f"Etc/GMT{-offset:+d}"
     entry["timezone"] = timezone
     return _parse_site(entry, "--site-lonlat")
+
+
+def resolve_site(
+    name: str | None = None, lonlat: str | None = None, sites_file: Path | None = None
+) -> Site:
+    """The site named by ``--site NAME`` (looked up, ``sites_file`` first) or given by
+    ``--site-lonlat LON,LAT,HEIGHT`` (which wins when both are given).
+
+    Raises
+    ------
+    UcbplanError
+        If neither is given, or the name or coordinates are not valid.
+    """
+    if lonlat:
+        return site_from_lonlat(lonlat)
+    if not name:
+        raise UcbplanError("no site: pass --site NAME (e.g. paranal) or --site-lonlat LON,LAT,H")
+    return get_site(name, sites_file)

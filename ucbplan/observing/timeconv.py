@@ -3,7 +3,7 @@
 An ephemeris epoch t★ is TDB at the solar-system barycentre. The photons of that event reach the
 site at t with t + Δ(t) = t★, Δ the barycentric light travel time (up to ±500 s; astropy
 ``Time.light_travel_time`` with the builtin ephemeris, within ~12 µs of DE421). The inversion
-iterates t ← t★ − Δ(t) three times (residual < 1 ns, SCIENCE.md "Barycentric ↔ site time").
+iterates t ← t★ − Δ(t) three times (residual < 1 ns; docs/method.md, "Barycentric and site time").
 For long spans the delay Δ is evaluated exactly on a coarse grid of t★ and interpolated with a
 cubic spline; the interpolation error is < 0.1 µs at the default 40-min node spacing (the fastest
 term is the diurnal one, amplitude R⊕/c = 21 ms: error ≈ 5/384·(ωh)⁴·21 ms). The site's
@@ -220,8 +220,8 @@ def bary_tdb_to_site_utc(
 
     Notes
     -----
-    Inverts the light time as in SCIENCE.md "Barycentric ↔ site time"; the barycentric epochs come
-    from Eq. u_precessing_app (Appendix A2).
+    Inverts the light time as in docs/method.md, "Barycentric and site time"; the barycentric
+    epochs come from Eq. u_precessing_app (Appendix A2).
     """
     if t_star.scale != "tdb":
         raise ValueError(f"barycentric epochs must be TDB, got scale {t_star.scale!r}")

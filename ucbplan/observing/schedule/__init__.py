@@ -1,1 +1,36 @@
-"""Night schedules: candidate epochs → blocks → sessions placed by priority."""
+"""Night schedules: anchor epochs → candidate blocks → sessions placed by priority → blocks.
+
+Modules, in data-flow order: :mod:`.settings` (planning modes, :class:`PlanSettings`),
+:mod:`.nights` (night windows), :mod:`.candidates` (epochs → candidate blocks and sessions on one
+time axis), :mod:`.placement` (priority placement into nights, reasons for what is not placed),
+:mod:`.records` (placed sessions → :class:`~ucbplan.observing.blocks.Block` rows),
+:mod:`.pairs` (fixed-u pairs), :mod:`.planner` (:func:`plan_nights`, the pipeline) and
+:mod:`.run` (:func:`plan_files`, the ``plan`` command as one call).
+"""
+
+from ucbplan.observing.schedule.candidates import Candidates, candidate_blocks
+from ucbplan.observing.schedule.nights import NightWindow, night_dates, night_windows
+from ucbplan.observing.schedule.pairs import delta_kappa
+from ucbplan.observing.schedule.placement import Unplaced
+from ucbplan.observing.schedule.planner import PlanResult, plan_nights
+from ucbplan.observing.schedule.run import PlanRun, plan_files, with_priorities
+from ucbplan.observing.schedule.settings import MODES, ModeSpec, PlanSettings, parse_mode
+
+__all__ = [
+    "MODES",
+    "Candidates",
+    "ModeSpec",
+    "NightWindow",
+    "PlanResult",
+    "PlanRun",
+    "PlanSettings",
+    "Unplaced",
+    "candidate_blocks",
+    "delta_kappa",
+    "night_dates",
+    "night_windows",
+    "parse_mode",
+    "plan_files",
+    "plan_nights",
+    "with_priorities",
+]

@@ -1,0 +1,269 @@
+"""Candidate blocks: every anchor epoch of a target in the run, as a block on the plan's axis.
+
+For each target (vectorised over epochs): the anchor epochs t★ with σ_t and the φ_ref π-mode
+alternative (:func:`ucbplan.core.ephemeris.find_epochs`, Appendix A2), their site arrival times
+from one shared light-time track (:mod:`ucbplan.observing.timeconv`), every constraint checked
+over the whole block (:mod:`ucbplan.observing.constraints`), the validity limit T_valid, the
+smearing of the exposure plan, and the grouping of blocks into sessions (a u = 0 / π pair, both
+RV zero crossings, or single blocks). All times are on one :class:`TimeAxis`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+from astropy import units as u
+from astropy.coordinates import SkyCoord
+from astropy.time import Time, TimeDelta
+from numpy.typing import NDArray
+
+from ucbplan.core.constants import TWO_PI
+from ucbplan.core.ephemeris import find_epochs
+from ucbplan.core.forecast import t_valid, tolerance
+from ucbplan.core.smearing import parse_smear_budget
+from ucbplan.errors import UcbplanError
+from ucbplan.observing.blocks import ExposurePlan, Smearing, block_smearing, check_smear_budget
+from ucbplan.observing.constraints import ConstraintSet, evaluate_window
+from ucbplan.observing.schedule.nights import NightWindow
+from ucbplan.observing.schedule.settings import ModeSpec, PlanSettings
+from ucbplan.observing.sites import Site
+from ucbplan.observing.sky import SkyModel, airmass_from_alt
+from ucbplan.observing.timeaxis import EpochAxis, TimeAxis
+from ucbplan.observing.timeconv import DelayInterpolator, SiteTrack, quiet_erfa
+
+if TYPE_CHECKING:
+    from ucbplan.target import Target
+
+__all__ = ["Candidates", "PlanFrame", "TargetRun", "candidate_blocks", "prepare_runs"]
+
+FloatArray = NDArray[np.float64]
+
+#: Epochs are searched this far beyond the span [s]: the light time (≤ 510 s) moves the site
+#: arrival of an epoch just outside the span into it.
+_EPOCH_PAD_S = 600.0
+
+
+@dataclass(frozen=True)
+class Candidates:
+    """All anchor epochs of one target in a span, as blocks on the plan's time axis (arrays).
+
+    ``epochs.time(tau_origin_s, dt_s)`` is the barycentric TDB epoch t★; the ``x_*`` arrays are
+    site arrival times [s on the plan's :class:`TimeAxis`].
+    """
+
+    epochs: EpochAxis
+    tau_origin_s: float
+    dt_s: FloatArray
+    u_star: FloatArray
+    sigma_t_s: FloatArray
+    x_mid: FloatArray
+    x_start: FloatArray
+    x_end: FloatArray
+    x_alt: FloatArray
+    ok: NDArray[np.bool_]
+    first_failed: NDArray[np.int64]
+    airmass_mid: FloatArray
+
+
+def candidate_blocks(
+    target: Target,
+    i: int,
+    mode: ModeSpec,
+    axis: TimeAxis,
+    span_x: tuple[float, float],
+    interp: DelayInterpolator,
+    sky: SkyModel,
+    constraints: ConstraintSet,
+    plan: ExposurePlan,
+    star: int = 1,
+) -> Candidates:
+    """Every anchor epoch whose block centre lies in ``span_x`` (s on ``axis``).
+
+    Notes
+    -----
+    Epochs from Eq. u_precessing_app (Newton, :func:`ucbplan.core.ephemeris.find_epochs`); site time
+    t = t★ − Δ(t★) from the light-time spline; constraints over the whole block.
+    """
+    epochs = axis.epoch_axis(target.t_ref)
+    lo, hi = span_x
+    tau_lo, tau_hi = epochs.from_x(lo) - _EPOCH_PAD_S, epochs.from_x(hi) + _EPOCH_PAD_S
+    es = find_epochs(target, tau_lo, tau_hi, mode.anchor, star)
+    x_mid = interp.site_x(epochs.to_x(es.origin_s, es.dt_s))
+    x_alt = interp.site_x(epochs.to_x(es.tau_alt_s))
+    keep = (x_mid >= lo) & (x_mid < hi)
+    half = plan.span_s / 2.0
+    x_mid = x_mid[keep]
+    ok, first = evaluate_window(constraints, sky, i, x_mid - half, x_mid + half)
+    return Candidates(
+        epochs=epochs,
+        tau_origin_s=es.origin_s,
+        dt_s=es.dt_s[keep],
+        u_star=es.u_star_rad[keep],
+        sigma_t_s=es.sigma_t_s[keep],
+        x_mid=x_mid,
+        x_start=x_mid - half,
+        x_end=x_mid + half,
+        x_alt=x_alt[keep],
+        ok=ok,
+        first_failed=first,
+        airmass_mid=airmass_from_alt(sky.target_alt_deg(i, x_mid)),
+    )
+
+
+def session_partners(
+    c: Candidates, paired: bool
+) -> tuple[NDArray[np.int64], FloatArray, FloatArray]:
+    """Group blocks into sessions: partner index (−1 for single blocks), ok mask and score.
+
+    A paired session starts with block j and continues with the first later block at the other
+    anchor that starts after block j ends (u = 0 then π half an orbit later, or the next orbit if
+    the blocks are longer than half an orbit). The score is the session's worst airmass.
+    """
+    n = c.x_mid.size
+    if not paired or n == 0:
+        return np.full(n, -1, dtype=np.int64), c.ok.astype(np.float64), c.airmass_mid
+    nxt = np.minimum(np.searchsorted(c.x_start, c.x_end, side="left"), n - 1)
+    same = np.isclose(np.mod(c.u_star[nxt] - c.u_star, TWO_PI), 0.0, atol=1e-6)
+    nxt = np.where(same, nxt + 1, nxt)
+    valid = (nxt < n) & (nxt > np.arange(n))
+    nxt = np.minimum(nxt, n - 1).astype(np.int64)
+    ok = valid & c.ok & c.ok[nxt]
+    score = np.asarray(np.maximum(c.airmass_mid, c.airmass_mid[nxt]), dtype=np.float64)
+    return nxt, ok.astype(np.float64), score
+
+
+@dataclass(frozen=True)
+class PlanFrame:
+    """What every target of a run shares: mode, time axis, sky model, light-time track and
+    constraints."""
+
+    mode: ModeSpec
+    axis: TimeAxis
+    span_x: tuple[float, float]
+    sky: SkyModel
+    track: SiteTrack
+    constraints: ConstraintSet
+
+
+@dataclass(frozen=True)
+class TargetRun:
+    """One target's candidates with its sessions, validity and smearing.
+
+    Attributes
+    ----------
+    index : int
+        The target's index in the sky model.
+    partner : ndarray of int
+        Second block of the session starting at each block (−1: single-block session).
+    ok, score : ndarray of float
+        Session usable (1.0) or not; its worst airmass (placement prefers low scores).
+    valid : ndarray of bool
+        Session inside T_valid.
+    until : Time
+        End of validity (TDB).
+    """
+
+    target: Target
+    index: int
+    cand: Candidates
+    partner: NDArray[np.int64]
+    ok: FloatArray
+    score: FloatArray
+    valid: NDArray[np.bool_]
+    until: Time
+    smearing: Smearing
+
+
+def _tolerance_and_validity(
+    target: Target, mode: ModeSpec, settings: PlanSettings
+) -> tuple[Time, float | None, float | None]:
+    """(valid-until TDB, σ_v, K) for a target; errors say which number is missing."""
+    spec = target.spectroscopy
+    sigma_v = settings.sigma_v_kms or (spec.sigma_v_kms if spec else None)
+    k = settings.k_eff_kms or (spec.k_for_tolerance if spec else None)
+    if sigma_v is None or k is None:
+        raise UcbplanError(
+            f"{target.name}: the tolerance needs sigma_v and K: add spectroscopy.sigma_v and "
+            "K_eff (or K1/K2) to the target file, or pass --sigma-v and --k-eff (km/s)"
+        )
+    u_star = mode.u_values[0] if mode.tol_kind == "generic" else None
+    tol = tolerance(mode.tol_kind, sigma_v, k, settings.n_epochs, u_star)
+    tv = t_valid(target, tol, mode.u_values, settings.alpha, settings.star)
+    with quiet_erfa():
+        until = target.t_end + TimeDelta(tv * u.s)
+    return until, sigma_v, k
+
+
+def _smearing(
+    target: Target, settings: PlanSettings, sigma_v: float | None, k: float | None
+) -> tuple[Smearing, list[str]]:
+    """Smearing of the exposure plan for ``target``, checked against the budget."""
+    spec = target.spectroscopy
+    k_smear = (spec.K1_kms if spec and spec.K1_kms else None) or k
+    sm = block_smearing(settings.exposure, target.params.n_bar, k_smear)
+    max_smear = parse_smear_budget(settings.max_smear, sigma_v) if settings.max_smear else None
+    warns = check_smear_budget(target.name, sm, max_smear, settings.max_bin_fraction, sigma_v)
+    return sm, warns
+
+
+def _target_run(
+    target: Target, i: int, frame: PlanFrame, settings: PlanSettings
+) -> tuple[TargetRun, list[str]]:
+    until, sigma_v, k = _tolerance_and_validity(target, frame.mode, settings)
+    sm, warns = _smearing(target, settings, sigma_v, k)
+    cand = candidate_blocks(
+        target,
+        i,
+        frame.mode,
+        frame.axis,
+        frame.span_x,
+        frame.track.delay_interpolator(target.coord),
+        frame.sky,
+        frame.constraints,
+        settings.exposure,
+        settings.star,
+    )
+    valid = (cand.tau_origin_s + cand.dt_s) <= cand.epochs.tau(until)
+    partner, ok, score = session_partners(cand, frame.mode.paired)
+    valid = valid & ((partner < 0) | valid[np.maximum(partner, 0)])
+    return TargetRun(target, i, cand, partner, ok, score, valid, until, sm), warns
+
+
+def prepare_runs(
+    targets: list[Target], site: Site, windows: list[NightWindow], settings: PlanSettings
+) -> tuple[PlanFrame, list[TargetRun], list[str]]:
+    """The shared frame (one sky model and light-time track) and every target's run.
+
+    Returns
+    -------
+    frame : PlanFrame
+    runs : list of TargetRun
+        In the order of ``targets``.
+    warnings : list of str
+        Smearing warnings.
+
+    Raises
+    ------
+    UcbplanError
+        For missing tolerance inputs or an exceeded smearing budget.
+    """
+    mode, constraints = settings.spec, settings.constraints(site)
+    axis = TimeAxis.starting_at(windows[0].start, site.location)
+    span_x = (0.0, axis.x(windows[-1].end))
+    coords = SkyCoord([t.ra_deg for t in targets] * u.deg, [t.dec_deg for t in targets] * u.deg)
+    frame = PlanFrame(
+        mode=mode,
+        axis=axis,
+        span_x=span_x,
+        sky=SkyModel.build(site.location, axis.origin, span_x, coords),
+        track=SiteTrack.build(axis.origin, span_x, site.location),
+        constraints=constraints,
+    )
+    runs, warns = [], []
+    for i, t in enumerate(targets):
+        run, more = _target_run(t, i, frame, settings)
+        runs.append(run)
+        warns += more
+    return frame, runs, warns

@@ -1,0 +1,159 @@
+"""Placement: sessions put into nights by target priority, and the reason for what does not fit.
+
+Targets are taken in priority order (highest first; ties keep the input order). In each night a
+target gets its best sessions (lowest worst-airmass first) that keep the slew/acquisition
+overhead clear of everything placed before, up to ``sessions_per_night``. A target/night that
+gets fewer is reported as :class:`Unplaced` with the reason in words a user can act on.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ucbplan.observing.schedule.candidates import Candidates, PlanFrame, TargetRun
+from ucbplan.observing.schedule.nights import NightSpan
+from ucbplan.observing.schedule.settings import PlanSettings
+from ucbplan.observing.sky import airmass_from_alt
+
+__all__ = ["Session", "Unplaced", "place_sessions"]
+
+#: Sampling step of the night when explaining why nothing fits [s].
+_REASON_STEP_S = 300.0
+
+
+@dataclass(frozen=True, slots=True)
+class Unplaced:
+    """A target/night for which nothing (or less than asked) could be placed, and why."""
+
+    target: str
+    night: str
+    reason: str
+
+
+@dataclass(frozen=True, slots=True)
+class Session:
+    """Placed blocks of one target in one night: candidate indices and span [s on the axis]."""
+
+    target_i: int
+    night_i: int
+    idx: tuple[int, ...]
+    x0: float
+    x1: float
+
+
+@dataclass
+class _Timeline:
+    """Sessions placed so far, and the taken intervals of each night."""
+
+    overhead_s: float
+    taken: dict[int, list[tuple[float, float]]] = field(default_factory=dict)
+    placed: list[Session] = field(default_factory=list)
+
+    def add(self, s: Session) -> bool:
+        """Place ``s`` unless it (with its overhead before the start) overlaps a taken interval."""
+        taken = self.taken.setdefault(s.night_i, [])
+        a0 = s.x0 - self.overhead_s
+        if any(a0 < b1 and b0 - self.overhead_s < s.x1 for b0, b1 in taken):
+            return False
+        taken.append((s.x0, s.x1))
+        self.placed.append(s)
+        return True
+
+
+def _no_session_reason(run: TargetRun, frame: PlanFrame, window: tuple[float, float]) -> str:
+    """Explain why no usable session exists in a night window (inside T_valid)."""
+    c: Candidates = run.cand
+    night, limit = frame.constraints.night, frame.constraints.airmass
+    xs = np.arange(window[0], window[1], _REASON_STEP_S)
+    sun = frame.sky.sun_alt_deg(xs)
+    if sun.min() > night.sun_alt_max_deg:
+        return (
+            f"no {night.twilight} night: the Sun stays above {night.sun_alt_max_deg:g} deg "
+            f"(lowest {sun.min():.1f} deg; polar day or summer at high latitude)"
+        )
+    dark = xs[sun <= night.sun_alt_max_deg]
+    alt = frame.sky.target_alt_deg(run.index, dark)
+    if np.all(airmass_from_alt(alt) > limit.max_airmass):
+        return (
+            f"never at airmass <= {limit.max_airmass:g} during {night.twilight} night "
+            f"(highest altitude {alt.max():.1f} deg)"
+        )
+    in_win = (c.x_mid >= window[0]) & (c.x_mid < window[1])
+    fails = Counter(int(f) for f in c.first_failed[in_win] if f >= 0)
+    if not fails:
+        return "no session fits: the second block of each pair fails the constraints"
+    worst = fails.most_common(1)[0][0]
+    return f"every block {frame.constraints.active[worst].reason()}"
+
+
+def _unusable_reason(
+    run: TargetRun, js: np.ndarray, span: NightSpan, frame: PlanFrame, settings: PlanSettings
+) -> str:
+    """Why none of the sessions ``js`` of a night can be used."""
+    if not np.any(run.valid[js]):
+        return (
+            f"past T_valid: {frame.mode.label} epochs are valid until "
+            f"{run.until.utc.iso[:16]} UTC (alpha={settings.alpha:g}); pick an "
+            "earlier night or a larger --alpha"
+        )
+    return _no_session_reason(run, frame, (span.x0, span.x1))
+
+
+def _place_night(
+    run: TargetRun,
+    n: int,
+    span: NightSpan,
+    timeline: _Timeline,
+    frame: PlanFrame,
+    settings: PlanSettings,
+) -> str | None:
+    """Place one target's best sessions in night ``n``; the reason if fewer than asked fit."""
+    c = run.cand
+    j0, j1 = np.searchsorted(c.x_mid, [span.x0, span.x1])
+    if j1 == j0:
+        return "no anchor epoch in the night window"
+    js = np.arange(j0, j1)
+    usable = js[(run.ok[js] > 0) & run.valid[js]]
+    if usable.size == 0:
+        return _unusable_reason(run, js, span, frame, settings)
+    usable = usable[np.argsort(run.score[usable], kind="stable")]
+    wanted, count = settings.sessions_per_night, 0
+    for j in usable:
+        idx = (int(j),) if run.partner[j] < 0 else (int(j), int(run.partner[j]))
+        s = Session(run.index, n, idx, float(c.x_start[idx[0]]), float(c.x_end[idx[-1]]))
+        if timeline.add(s):
+            count += 1
+            if count == wanted:
+                return None
+    if count == 0:
+        return (
+            f"all {usable.size} usable sessions overlap higher-priority blocks "
+            f"(with {settings.overhead_s:g} s slew/acquisition overhead)"
+        )
+    return f"only {count} of {wanted} sessions fit"
+
+
+def place_sessions(
+    runs: list[TargetRun], spans: list[NightSpan], frame: PlanFrame, settings: PlanSettings
+) -> tuple[list[Session], list[Unplaced]]:
+    """Greedy night schedule: targets by priority, each night's best sessions (lowest airmass)
+    that keep the overhead gap to everything already placed.
+
+    Returns
+    -------
+    placed : list of Session
+        In placement order.
+    unplaced : list of Unplaced
+        One entry per target and night that got fewer sessions than asked.
+    """
+    timeline = _Timeline(settings.overhead_s)
+    unplaced: list[Unplaced] = []
+    for run in sorted(runs, key=lambda r: -r.target.priority):
+        for n, span in enumerate(spans):
+            reason = _place_night(run, n, span, timeline, frame, settings)
+            if reason is not None:
+                unplaced.append(Unplaced(run.target.name, span.label, reason))
+    return timeline.placed, unplaced

@@ -1,0 +1,141 @@
+"""Night schedules: anchor epochs → site UTC → constraint-checked blocks → sessions per night.
+
+Pipeline for every target (all vectorised over epochs; :mod:`.candidates`): the planning modes
+name the anchors (Appendix A2); :func:`~ucbplan.core.ephemeris.find_epochs` gives the barycentric
+epochs t★ with σ_t and the φ_ref π-mode alternative; the light time is removed with one shared
+site track (:mod:`ucbplan.observing.timeconv`); blocks are checked against every constraint over
+their whole length (:mod:`ucbplan.observing.constraints`). Sessions (a u = 0 / π pair, both RV
+zero crossings, or single blocks) are then placed night by night in priority order without
+overlaps, with a slew/acquisition overhead before each session (:mod:`.placement`), and become
+block records (:mod:`.records`); fixed-u pairs get their second epoch (:mod:`.pairs`). Whatever
+could not be placed is reported with the reason.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from datetime import date
+from typing import TYPE_CHECKING
+
+from astropy.time import Time
+
+from ucbplan.errors import UcbplanError
+from ucbplan.observing.blocks import Block
+from ucbplan.observing.schedule.candidates import prepare_runs
+from ucbplan.observing.schedule.nights import night_spans, night_windows
+from ucbplan.observing.schedule.pairs import SecondEpoch, pair_blocks
+from ucbplan.observing.schedule.placement import Unplaced, place_sessions
+from ucbplan.observing.schedule.records import block_records
+from ucbplan.observing.schedule.settings import PlanSettings
+from ucbplan.observing.sites import Site
+from ucbplan.observing.timeconv import coverage_warnings
+
+if TYPE_CHECKING:
+    from ucbplan.target import Target
+
+__all__ = ["PlanResult", "plan_nights"]
+
+
+@dataclass(frozen=True)
+class PlanResult:
+    """Blocks (sorted by time), what could not be placed, warnings, provenance facts.
+
+    Attributes
+    ----------
+    blocks : list of Block
+        Planned blocks in time order.
+    unplaced : list of Unplaced
+        Target/nights with fewer sessions than asked, and why.
+    warnings : list of str
+        Smearing and time-table coverage warnings.
+    constraints : list of str
+        One line per applied constraint (provenance).
+    valid_until : dict of str to Time
+        End of each target's validity T_valid (TDB).
+    """
+
+    blocks: list[Block]
+    unplaced: list[Unplaced]
+    warnings: list[str]
+    constraints: list[str]
+    valid_until: dict[str, Time]
+
+
+def _check_inputs(targets: list[Target], nights: list[date], settings: PlanSettings) -> None:
+    """Fail early, in words, on inputs no schedule can come from."""
+    if not targets:
+        raise UcbplanError("no targets given; pass one or more target YAML files")
+    if not nights:
+        raise UcbplanError("--nights must be >= 1")
+    if settings.spec.label != "fixed-u-pairs":
+        return
+    for t in targets:
+        if t.params.omega_dot == 0.0 or t.params.eccentricity == 0.0:
+            raise UcbplanError(
+                f"{t.name}: Delta-kappa_LISA is 0 (circular orbit or no apsidal motion); "
+                "fixed-u pairs would only measure Delta-v_CM: use --mode quadrature or u=VALUE"
+            )
+
+
+def _second_epoch(site: Site, settings: PlanSettings) -> SecondEpoch:
+    """The single u★ = 0 block of a target on one night (for fixed-u pairs)."""
+    single = replace(settings, mode="u=0", sessions_per_night=1)
+
+    def plan_one(target: Target, night: date) -> Block | None:
+        res = plan_nights([target], site, [night], single)
+        return res.blocks[0] if res.blocks else None
+
+    return plan_one
+
+
+def plan_nights(
+    targets: list[Target],
+    site: Site,
+    nights: list[date],
+    settings: PlanSettings,
+) -> PlanResult:
+    """Plan blocks for ``targets`` at ``site`` on the given local evening dates.
+
+    Parameters
+    ----------
+    targets : list of Target
+        Loaded targets (priorities from the files).
+    site : Site
+        Observatory.
+    nights : list of date
+        Local dates of the evenings the nights start.
+    settings : PlanSettings
+        Mode, constraints, exposure plan, tolerance inputs, overheads.
+
+    Returns
+    -------
+    PlanResult
+
+    Raises
+    ------
+    UcbplanError
+        For missing tolerance inputs, exceeded smearing budgets or bad options.
+
+    Notes
+    -----
+    Anchor epochs: Eq. u_precessing_app (Appendix A2); σ_t: Eq. sigma_tstar; validity: Eq.
+    T_valid_alpha; smearing: Eqs. Lambda_K, Lambda_kappa; fixed-u pairs: Eq. delta_kappa_rewrite.
+    """
+    _check_inputs(targets, nights, settings)
+    windows = night_windows(site, nights)
+    frame, runs, warns = prepare_runs(targets, site, windows, settings)
+    spans = night_spans(windows, frame.axis)
+    placed, unplaced = place_sessions(runs, spans, frame, settings)
+    blocks = block_records(placed, runs, spans, frame, site, settings)
+    if frame.mode.label == "fixed-u-pairs":
+        second = _second_epoch(site, settings)
+        blocks, more = pair_blocks(blocks, runs, settings.max_pair_baseline_days, second)
+        unplaced += more
+    blocks.sort(key=lambda b: (b.t_mid_utc.jd1, b.t_mid_utc.jd2))
+    return PlanResult(
+        blocks=blocks,
+        unplaced=unplaced,
+        warnings=warns + coverage_warnings(windows[0].start, windows[-1].end),
+        constraints=frame.constraints.describe(),
+        valid_until={r.target.name: r.until for r in runs},
+    )

@@ -1,0 +1,163 @@
+"""Block records: placed sessions → named :class:`~ucbplan.observing.blocks.Block` rows.
+
+Block and session identifiers are ``<target slug>-<YYYYMMDD>-NN`` and ``...-SNN``, numbered per
+target and night in time order. UTC and TDB times come from one vectorised conversion per target
+(:class:`~ucbplan.observing.timeaxis.TimeAxis`); geometry from the run's sky model.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections import Counter
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+from astropy.time import Time
+from numpy.typing import NDArray
+
+from ucbplan.core.constants import TWO_PI
+from ucbplan.observing.blocks import Block
+from ucbplan.observing.constraints import SAMPLE_STEP_S
+from ucbplan.observing.schedule.candidates import PlanFrame, TargetRun
+from ucbplan.observing.schedule.nights import NightSpan
+from ucbplan.observing.schedule.placement import Session
+from ucbplan.observing.schedule.settings import PlanSettings
+from ucbplan.observing.sites import Site
+from ucbplan.observing.sky import airmass_from_alt
+
+__all__ = ["BlockLabel", "block_records", "slug"]
+
+FloatArray = NDArray[np.float64]
+
+
+def slug(name: str) -> str:
+    """A target name as an identifier part: runs of other characters → ``_``."""
+    return re.sub(r"[^A-Za-z0-9]+", "_", name).strip("_") or "target"
+
+
+class BlockLabel(NamedTuple):
+    """Night label, block and session identifiers of one block."""
+
+    night: str
+    block_id: str
+    session_id: str
+
+
+def _labels(
+    placed: list[Session], runs: list[TargetRun], spans: list[NightSpan]
+) -> dict[int, tuple[list[int], list[BlockLabel]]]:
+    """Candidate indices and labels of the placed blocks, per target (in target order)."""
+    blocks: Counter[tuple[int, int]] = Counter()
+    sessions: Counter[tuple[int, int]] = Counter()
+    out: dict[int, tuple[list[int], list[BlockLabel]]] = {}
+    for s in sorted(placed, key=lambda s: (s.target_i, s.x0)):
+        key = (s.target_i, s.night_i)
+        label = spans[s.night_i].label
+        prefix = f"{slug(runs[s.target_i].target.name)}-{label.replace('-', '')}"
+        js, labels = out.setdefault(s.target_i, ([], []))
+        sessions[key] += 1
+        session_id = f"{prefix}-S{sessions[key]:02d}"
+        for j in s.idx:
+            blocks[key] += 1
+            js.append(j)
+            labels.append(BlockLabel(label, f"{prefix}-{blocks[key]:02d}", session_id))
+    return out
+
+
+@dataclass(frozen=True)
+class _Geometry:
+    """Per-block arrays: altitude and airmass at start/middle/end, Moon, times."""
+
+    alt: FloatArray  # (n, 3) [deg]
+    airmass: FloatArray  # (n, 3)
+    moon_sep: FloatArray  # smallest over the block [deg]
+    moon_illum: FloatArray
+    utc: Time  # (n, 4): start, middle, end, π-mode alternative
+    tdb: Time  # (n,) barycentric anchor epochs
+
+
+def _geometry(run: TargetRun, js: NDArray[np.int64], frame: PlanFrame, span_s: float) -> _Geometry:
+    """Geometry and times of candidates ``js`` (one vectorised pass per target)."""
+    c, sky, i = run.cand, frame.sky, run.index
+    xs = np.stack([c.x_start[js], c.x_mid[js], c.x_end[js]], axis=1)
+    alt = sky.target_alt_deg(i, xs)
+    n_s = max(3, math.ceil(span_s / SAMPLE_STEP_S) + 1)
+    fine = c.x_start[js][:, None] + np.linspace(0, 1, n_s)[None, :] * span_s
+    x_all = np.concatenate([xs, c.x_alt[js][:, None]], axis=1)
+    return _Geometry(
+        alt=alt,
+        airmass=airmass_from_alt(alt),
+        moon_sep=np.min(sky.moon_sep_deg(i, fine), axis=1),
+        moon_illum=sky.moon_illum(c.x_mid[js]),
+        utc=frame.axis.utc(x_all),
+        tdb=c.epochs.time(c.tau_origin_s, c.dt_s[js]),
+    )
+
+
+def _block(
+    run: TargetRun,
+    g: _Geometry,
+    k: int,
+    j: int,
+    label: BlockLabel,
+    anchor: str,
+    site: Site,
+    settings: PlanSettings,
+) -> Block:
+    """Block ``k`` (candidate ``j``) of a target's placed blocks."""
+    t, sm, c, plan = run.target, run.smearing, run.cand, settings.exposure
+    return Block(
+        target=t.name,
+        block_id=label.block_id,
+        anchor=anchor,
+        u_star_rad=float(np.mod(c.u_star[j], TWO_PI)),
+        t_mid_utc=g.utc[k, 1],
+        t_start_utc=g.utc[k, 0],
+        t_end_utc=g.utc[k, 2],
+        t_mid_tdb_bary=g.tdb[k],
+        sigma_t_s=float(c.sigma_t_s[j]),
+        t_alt_utc=g.utc[k, 3],
+        exptime_s=plan.exptime_s,
+        n_exp=plan.n_exp,
+        readout_s=plan.readout_s,
+        lambda_k=sm.lambda_k,
+        lambda_kappa=sm.lambda_kappa,
+        smear_kms=sm.smear_kms,
+        alt_start_deg=float(g.alt[k, 0]),
+        altitude_deg=float(g.alt[k, 1]),
+        alt_end_deg=float(g.alt[k, 2]),
+        airmass_start=float(g.airmass[k, 0]),
+        airmass=float(g.airmass[k, 1]),
+        airmass_end=float(g.airmass[k, 2]),
+        moon_sep_deg=float(g.moon_sep[k]),
+        moon_illum=float(g.moon_illum[k]),
+        ra_deg=t.ra_deg,
+        dec_deg=t.dec_deg,
+        night=label.night,
+        timezone=site.timezone,
+        period_s=t.period_s,
+        priority=t.priority,
+        session_id=label.session_id,
+    )
+
+
+def block_records(
+    placed: list[Session],
+    runs: list[TargetRun],
+    spans: list[NightSpan],
+    frame: PlanFrame,
+    site: Site,
+    settings: PlanSettings,
+) -> list[Block]:
+    """:class:`Block` records of the placed sessions, grouped by target (in target order)."""
+    out: list[Block] = []
+    for i, (idx, labels) in _labels(placed, runs, spans).items():
+        js = np.asarray(idx, dtype=np.int64)
+        g = _geometry(runs[i], js, frame, settings.exposure.span_s)
+        out += [
+            _block(runs[i], g, k, int(j), labels[k], frame.mode.label, site, settings)
+            for k, j in enumerate(js)
+        ]
+    return out

@@ -1,0 +1,172 @@
+"""``ucbplan plan`` as one library call: target files, site and nights in; blocks table out.
+
+:func:`plan_files` resolves the site, the nights and the targets (with priority overrides) the
+way the ``plan`` command spells them, runs :func:`~ucbplan.observing.schedule.plan_nights`, and
+returns a :class:`PlanRun` that builds the master blocks table with its provenance.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, replace
+from datetime import date
+from pathlib import Path
+from typing import Any
+
+from astropy.table import Table
+
+from ucbplan.errors import UcbplanError
+from ucbplan.observing.blocktable import blocks_to_table, make_meta
+from ucbplan.observing.schedule.nights import night_dates
+from ucbplan.observing.schedule.planner import PlanResult, plan_nights
+from ucbplan.observing.schedule.settings import PlanSettings
+from ucbplan.observing.sites import Site, resolve_site
+from ucbplan.observing.timeconv import quiet_erfa
+from ucbplan.target import Target, load_target
+
+__all__ = ["PlanRun", "parse_priorities", "plan_files", "with_priorities"]
+
+
+def parse_priorities(items: Sequence[str]) -> dict[str, float]:
+    """``NAME=NUMBER`` overrides → {lower-case name: priority}.
+
+    Raises
+    ------
+    UcbplanError
+        For an item that is not ``NAME=NUMBER``.
+    """
+    values: dict[str, float] = {}
+    for item in items:
+        name, sep, value = item.rpartition("=")
+        try:
+            values[name.strip().lower()] = float(value)
+        except ValueError:
+            name = ""
+        if not sep or not name:
+            raise UcbplanError(f"--priority: expected NAME=NUMBER, got {item!r}")
+    return values
+
+
+def with_priorities(
+    targets: Sequence[Target], priorities: Mapping[str, float] | Sequence[str]
+) -> list[Target]:
+    """``targets`` with priorities overridden by name (case-insensitive).
+
+    Parameters
+    ----------
+    targets : sequence of Target
+        Loaded targets.
+    priorities : mapping or sequence of str
+        {name: priority}, or ``NAME=NUMBER`` strings as ``--priority`` takes them.
+
+    Raises
+    ------
+    UcbplanError
+        For a malformed override or a name that is not one of the targets.
+    """
+    if isinstance(priorities, Mapping):
+        values = {k.strip().lower(): float(v) for k, v in priorities.items()}
+    else:
+        values = parse_priorities(priorities)
+    known = {t.name.lower() for t in targets}
+    unknown = sorted(set(values) - known)
+    if unknown:
+        raise UcbplanError(
+            f"--priority: no target named {unknown[0]!r}; targets: "
+            + ", ".join(t.name for t in targets)
+        )
+    return [replace(t, priority=values.get(t.name.lower(), t.priority)) for t in targets]
+
+
+@dataclass(frozen=True)
+class PlanRun:
+    """A finished ``plan``: its inputs and :class:`PlanResult`, and the blocks table."""
+
+    targets: list[Target]
+    site: Site
+    nights: list[date]
+    settings: PlanSettings
+    result: PlanResult
+
+    def failure(self) -> str | None:
+        """Why no block at all could be planned (None if some were)."""
+        if self.result.blocks:
+            return None
+        reasons = "; ".join(f"{m.target} {m.night}: {m.reason}" for m in self.result.unplaced)
+        return f"no block could be planned at {self.site.name}: {reasons}"
+
+    def meta(self) -> dict[str, Any]:
+        """Provenance of the run for the table ``meta`` (see :func:`make_meta`)."""
+        res, plan = self.result, self.settings.exposure
+        with quiet_erfa():
+            valid_until = {k: v.tdb.isot for k, v in res.valid_until.items()}
+        return make_meta(
+            site=self.site.as_dict(),
+            targets=[
+                {"name": t.name, "file": str(t.source), "sha256": t.sha256} for t in self.targets
+            ],
+            constraints=res.constraints,
+            mode=self.settings.mode,
+            extra={
+                "nights": [d.isoformat() for d in self.nights],
+                "alpha": self.settings.alpha,
+                "exposure": {
+                    "exptime_s": plan.exptime_s,
+                    "n_exp": plan.n_exp,
+                    "readout_s": plan.readout_s,
+                },
+                "overhead_s": self.settings.overhead_s,
+                "valid_until_tdb": valid_until,
+                "warnings": res.warnings,
+                "unplaced": [f"{m.target} {m.night}: {m.reason}" for m in res.unplaced],
+            },
+        )
+
+    def table(self) -> Table:
+        """The master blocks table (:mod:`ucbplan.observing.blocktable`) with provenance."""
+        return blocks_to_table(self.result.blocks, self.meta())
+
+
+def plan_files(
+    target_files: Sequence[Path | str],
+    *,
+    first_night: date | str,
+    n_nights: int = 1,
+    site: str | None = None,
+    site_lonlat: str | None = None,
+    sites_file: Path | None = None,
+    settings: PlanSettings | None = None,
+    priorities: Mapping[str, float] | Sequence[str] = (),
+) -> PlanRun:
+    """Plan blocks for target files at a site on ``n_nights`` nights from ``first_night``.
+
+    Parameters
+    ----------
+    target_files : sequence of path
+        Target YAML files.
+    first_night : date or str
+        Local date of the first evening (``YYYY-MM-DD``).
+    n_nights : int
+        Number of consecutive nights.
+    site, site_lonlat, sites_file
+        Site by name (``sites_file`` searched first) or by ``LON,LAT,HEIGHT``.
+    settings : PlanSettings, optional
+        Mode, constraints, exposures ... (defaults: :class:`PlanSettings`).
+    priorities : mapping or sequence of str
+        Priority overrides by target name (see :func:`with_priorities`).
+
+    Returns
+    -------
+    PlanRun
+
+    Raises
+    ------
+    UcbplanError
+        For a bad site, date, target file, override or planning input (one line each).
+    """
+    the_site = resolve_site(site, site_lonlat, sites_file)
+    dates = night_dates(first_night, n_nights)
+    targets = with_priorities([load_target(p) for p in target_files], priorities)
+    settings = settings if settings is not None else PlanSettings()
+    result = plan_nights(targets, the_site, dates, settings)
+    return PlanRun(targets, the_site, dates, settings, result)

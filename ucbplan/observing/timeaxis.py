@@ -1,0 +1,122 @@
+"""The one time representation inside the observing code: float TDB seconds after one epoch.
+
+astropy ``Time`` appears only at the edges — night windows come in, block times go out. Inside,
+the sky model, the site track, candidate blocks and night windows all use ``x`` = TDB seconds
+after the origin of a :class:`TimeAxis`: the start of the first night window (local noon), as
+TDB at the site. The barycentric epochs of :func:`ucbplan.core.ephemeris.find_epochs` come on
+each target's own axis, TDB seconds after its ``t_ref`` (kept as a whole part plus a remainder
+for precision); an :class:`EpochAxis` is that axis seen from the plan's :class:`TimeAxis`. Every
+conversion between the two axes, and between either axis and ``Time``, happens in this module.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from astropy import units as u
+from astropy.coordinates import EarthLocation
+from astropy.time import Time, TimeDelta
+from numpy.typing import ArrayLike, NDArray
+
+from ucbplan.observing.timeconv import quiet_erfa
+
+__all__ = ["EpochAxis", "TimeAxis", "elapsed"]
+
+FloatArray = NDArray[np.float64]
+
+
+def elapsed(start: Time, end: Time, unit: u.UnitBase = u.s) -> float:
+    """Time from ``start`` to ``end`` in ``unit`` (negative if ``end`` is earlier)."""
+    with quiet_erfa():
+        return float((end - start).to_value(unit))
+
+
+@dataclass(frozen=True)
+class TimeAxis:
+    """A plan's time axis: ``x`` = TDB seconds after ``origin``.
+
+    Attributes
+    ----------
+    origin : Time
+        The axis epoch: TDB, with the site's location (the topocentric TDB − TT term is the
+        site's).
+    """
+
+    origin: Time
+
+    @classmethod
+    def starting_at(cls, start: Time, location: EarthLocation) -> TimeAxis:
+        """The axis whose origin is the instant ``start`` (any scale), as TDB at ``location``."""
+        with quiet_erfa():
+            at_site = Time(start, location=location)
+            return cls(Time(at_site.tdb, location=location))
+
+    @property
+    def location(self) -> EarthLocation:
+        """The site of the axis."""
+        location: EarthLocation = self.origin.location
+        return location
+
+    def x(self, t: Time) -> float:
+        """Axis coordinate [s after ``origin``] of the scalar time ``t``.
+
+        Exact for a TDB ``t``. For a UTC ``t`` astropy measures the interval in TAI seconds,
+        which run at the TDB rate to within 3.4e-10 (≤ 30 µs per day of span): used only for
+        night-window edges, where it is immaterial.
+        """
+        return elapsed(self.origin, t)
+
+    def tdb(self, x: ArrayLike) -> Time:
+        """``Time`` (TDB, with location) of axis coordinates ``x`` [s]."""
+        with quiet_erfa():
+            return self.origin + TimeDelta(np.asarray(x, dtype=np.float64) * u.s)
+
+    def utc(self, x: ArrayLike) -> Time:
+        """``Time`` (UTC, with location) of axis coordinates ``x`` [s]."""
+        with quiet_erfa():
+            return self.tdb(x).utc
+
+    def epoch_axis(self, epoch: Time) -> EpochAxis:
+        """The axis of seconds after ``epoch`` (e.g. a target's ``t_ref``), tied to this one."""
+        return EpochAxis(epoch=epoch, lag_s=elapsed(epoch, self.origin))
+
+
+@dataclass(frozen=True)
+class EpochAxis:
+    """Seconds after ``epoch`` (``tau``), the axis of the ephemeris, tied to a :class:`TimeAxis`.
+
+    ``tau = x + lag_s``: the same instant on both axes (both count TDB seconds).
+
+    Attributes
+    ----------
+    epoch : Time
+        The axis epoch (a target's ``t_ref``, TDB).
+    lag_s : float
+        Seconds from ``epoch`` to the :class:`TimeAxis` origin.
+    """
+
+    epoch: Time
+    lag_s: float
+
+    def to_x(self, tau_s: ArrayLike, dt_s: ArrayLike | None = None) -> FloatArray:
+        """Plan-axis ``x`` [s] of epochs ``tau_s`` (+ ``dt_s``: a whole part and a remainder are
+        kept apart until after the shift, which keeps the remainder's precision)."""
+        x = np.asarray(tau_s, dtype=np.float64) - self.lag_s
+        if dt_s is not None:
+            x = x + np.asarray(dt_s, dtype=np.float64)
+        return np.asarray(x, dtype=np.float64)
+
+    def from_x(self, x: float) -> float:
+        """``tau`` [s after ``epoch``] of the plan-axis coordinate ``x``."""
+        return x + self.lag_s
+
+    def tau(self, t: Time) -> float:
+        """``tau`` [s after ``epoch``] of the scalar time ``t``."""
+        return elapsed(self.epoch, t)
+
+    def time(self, whole_s: float, dt_s: ArrayLike) -> Time:
+        """``Time`` (TDB) of epochs ``whole_s + dt_s`` [s after ``epoch``]."""
+        dt = np.asarray(dt_s, dtype=np.float64)
+        with quiet_erfa():
+            return self.epoch + TimeDelta(whole_s * u.s) + TimeDelta(dt * u.s)
