@@ -218,7 +218,7 @@ def output_format(
         ``fmt`` is not in ``allowed``, or contradicts the suffix.
     """
     suffix = path.suffix.lstrip(".").lower() if path is not None else ""
-    suffix = {"yml": "yaml", "tex": "latex", "txt": "table"}.get(suffix, suffix)
+    suffix = {"yml": "yaml", "tex": "latex"}.get(suffix, suffix)
     if fmt is not None and fmt not in allowed:
         raise InputError(f"--format: expected one of {', '.join(allowed)}, got {fmt!r}")
     if fmt is None:

@@ -3,13 +3,22 @@
 from __future__ import annotations
 
 import os
+from pathlib import Path
 from typing import Any
 
 from rich.console import Console
 from rich.markup import escape
 from rich.table import Table as RichTable
 
-from ucbplan.io import OUTPUT_FORMATS, check_output_path, dump_json, json_default, write_output
+from ucbplan.errors import InputError
+from ucbplan.io import (
+    OUTPUT_FORMATS,
+    check_output_path,
+    dump_json,
+    json_default,
+    output_format,
+    write_output,
+)
 from ucbplan.offline import configure_offline
 
 __all__ = [
@@ -19,6 +28,7 @@ __all__ = [
     "dump_json",
     "err_console",
     "json_default",
+    "pick_format",
     "rich_table",
     "write_output",
 ]
@@ -43,3 +53,22 @@ def rich_table(title: str, columns: list[str], **kwargs: Any) -> RichTable:
     for name in columns:
         table.add_column(escape(name), justify="right")
     return table
+
+
+def pick_format(output: Path | None, fmt: str | None, formats: tuple[str, ...]) -> str:
+    """The ``-o``/``--format`` rule of every command (see :func:`ucbplan.io.output_format`).
+
+    ``table`` is the human table on the terminal; a file (``-o``) takes ``--format``, else its
+    suffix, else the first machine format in ``formats``. ``--format table -o FILE`` and a
+    ``--format`` that contradicts the suffix are errors.
+    """
+    fmt = fmt.lower() if fmt is not None else None
+    machine = tuple(f for f in formats if f != "table")
+    if output is None:
+        return output_format(None, fmt, formats, formats[0])
+    if fmt == "table":
+        raise InputError(
+            f"--format table prints to the terminal; for -o {output} use --format "
+            f"{' | '.join(machine)} (or leave --format out: the suffix decides)"
+        )
+    return output_format(output, fmt, machine, machine[0])

@@ -7,9 +7,12 @@ one line on stderr with exit code 2 (no traceback).
 
 from __future__ import annotations
 
+import os
 import sys
+from typing import NoReturn
 
 import typer
+from rich.markup import escape
 
 from ucbplan import __version__
 from ucbplan.cli._console import configure_offline, err_console
@@ -37,6 +40,9 @@ def _root(
     version: bool = typer.Option(
         False, "--version", callback=_version, is_eager=True, help="Print the version and exit."
     ),
+    debug: bool = typer.Option(
+        False, "--debug", help="On an internal error, show the Python traceback (for bug reports)."
+    ),
 ) -> None:
     """Configure offline astropy once, before any command runs."""
     configure_offline()
@@ -52,26 +58,69 @@ def _register_all() -> None:
 _register_all()
 
 
+#: Exit codes: 0 success, 1 internal error (a bug: please report), 2 the user's input or
+#: environment (one line says what to fix), 130 interrupted (Ctrl-C).
+EXIT_OK, EXIT_BUG, EXIT_USER, EXIT_INTERRUPTED = 0, 1, 2, 130
+
+_REPORT = "please report it with the command line and input files (run with --debug for details)"
+
+
+def _debug_requested(argv: list[str]) -> bool:
+    return "--debug" in argv or os.environ.get("UCBPLAN_DEBUG", "") not in ("", "0")
+
+
+def _one_line(text: str) -> str:
+    return " ".join(str(text).split())
+
+
+def _fail(message: str, code: int) -> NoReturn:
+    err_console.print(escape(message), soft_wrap=True, markup=False)
+    sys.exit(code)
+
+
+def _os_error(exc: OSError) -> str:
+    where = f"{exc.filename}: " if exc.filename else ""
+    return f"error: {where}{exc.strerror or exc}; check the path and its permissions"
+
+
+def _run() -> int:
+    """Run the app in non-standalone mode and return its exit code."""
+    code = app(standalone_mode=False)
+    return code if isinstance(code, int) else EXIT_OK
+
+
 def main() -> None:
-    """Console-script entry point: run the app, one-line errors, exit code 2 on user errors."""
+    """Console-script entry point: one-line errors and exit codes (see :data:`EXIT_USER`).
+
+    User errors (:class:`UcbplanError`, usage errors, unreadable files) print one line and exit 2;
+    Ctrl-C exits 130 (commands save what can be saved first); anything else is a bug: one line
+    asking for a report, exit 1, and the traceback only with ``--debug`` (or UCBPLAN_DEBUG=1).
+    """
+    debug = _debug_requested(sys.argv[1:])
+    if "--debug" in sys.argv[1:]:
+        sys.argv.remove("--debug")
     try:
-        app(standalone_mode=False)
+        code = _run()
     except UcbplanError as exc:
-        err_console.print(f"[bold red]error:[/] {exc}", soft_wrap=True)
-        sys.exit(2)
+        _fail(f"error: {_one_line(str(exc))}", EXIT_USER)
     except (typer.Exit, SystemExit) as exc:
         code = getattr(exc, "exit_code", getattr(exc, "code", 0))
-        sys.exit(code if isinstance(code, int) else 1)
-    except typer.Abort:
-        err_console.print("aborted")
-        sys.exit(130)
-    except KeyboardInterrupt:
-        err_console.print("interrupted")
-        sys.exit(130)
-    except Exception as exc:  # click/typer usage errors arrive here in non-standalone mode
-        # typer vendors click, so duck-type its ClickException (show() + exit_code)
-        show, code = getattr(exc, "show", None), getattr(exc, "exit_code", None)
-        if callable(show) and isinstance(code, int):
+        code = code if isinstance(code, int) else EXIT_BUG
+    except (typer.Abort, KeyboardInterrupt):
+        code = EXIT_INTERRUPTED
+    except OSError as exc:
+        if debug:
+            raise
+        _fail(_os_error(exc), EXIT_USER)
+    except Exception as exc:
+        # typer vendors click, so duck-type its ClickException (usage errors: show() + exit_code)
+        show, exit_code = getattr(exc, "show", None), getattr(exc, "exit_code", None)
+        if callable(show) and isinstance(exit_code, int):
             show()
-            sys.exit(code)
-        raise
+            sys.exit(exit_code)
+        if debug:
+            raise
+        _fail(f"internal error: {type(exc).__name__}: {_one_line(str(exc))[:150]}; {_REPORT}", 1)
+    if code == EXIT_INTERRUPTED:
+        err_console.print("interrupted", markup=False)
+    sys.exit(code)

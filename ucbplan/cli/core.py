@@ -17,7 +17,7 @@ import typer
 from rich.markup import escape
 
 from ucbplan import __version__
-from ucbplan.cli._console import dump_json, err_console, rich_table, write_output
+from ucbplan.cli._console import dump_json, err_console, pick_format, rich_table, write_output
 from ucbplan.core.constants import DAY_S
 from ucbplan.errors import UcbplanError
 from ucbplan.target import Target, load_target
@@ -27,7 +27,10 @@ __all__ = ["register"]
 TargetArg = Annotated[Path, typer.Argument(help="Target YAML file.")]
 TargetsArg = Annotated[list[Path], typer.Argument(help="Target YAML files to check.")]
 ValidateFormatOpt = Annotated[str, typer.Option("--format", help="table | json")]
-TableFormatOpt = Annotated[str, typer.Option("--format", help="table | json | ecsv | csv")]
+TableFormatOpt = Annotated[
+    str | None,
+    typer.Option("--format", help="table | ecsv | csv | json (default: the -o suffix, else table)"),
+]
 OutputOpt = Annotated[Path | None, typer.Option("-o", "--output", help="Write here (else stdout).")]
 OverwriteOutputOpt = Annotated[
     bool, typer.Option("--overwrite", help="Replace an existing -o file.")
@@ -62,6 +65,9 @@ EpochsOpt = Annotated[
 ]
 AnchorsOpt = Annotated[list[str], typer.Option("--anchor", help="Anchors (repeatable).")]
 PlotOpt = Annotated[Path | None, typer.Option("--plot", help="Write the σ_u(t) horizon figure.")]
+
+
+_TABLE_FORMATS = ("table", "ecsv", "csv", "json")
 
 
 def _check_format(fmt: str, allowed: tuple[str, ...]) -> str:
@@ -163,7 +169,7 @@ def ephemeris(
     end: EndOpt,
     anchor: AnchorOpt = "quadrature",
     star: StarOpt = 1,
-    fmt: TableFormatOpt = "table",
+    fmt: TableFormatOpt = None,
     output: OutputOpt = None,
     overwrite: OverwriteOutputOpt = False,
     max_epochs: MaxEpochsOpt = 2_000_000,
@@ -171,7 +177,7 @@ def ephemeris(
     """Barycentric epochs t★ (TDB) where u = u★, with σ_t and the φ_ref π-mode alternative."""
     from ucbplan.core.ephemeris import find_epochs
 
-    fmt = _check_format(fmt, ("table", "json", "ecsv", "csv"))
+    fmt = pick_format(output, fmt, _TABLE_FORMATS)
     if star not in (1, 2):
         raise UcbplanError(f"--star must be 1 or 2, got {star}")
     t = load_target(target)
@@ -180,10 +186,10 @@ def ephemeris(
     if tau1 > t.t_obs_s / 2:
         _warn_horizon(t, tau1)
     table = _epoch_table(t, es)
-    if fmt == "table" and output is None:
+    if fmt == "table":
         _print_epochs(t, table)
         return
-    _write_table(table, "ecsv" if fmt == "table" else fmt, output, overwrite)
+    _write_table(table, fmt, output, overwrite)
 
 
 def _window(t: Target, start: str, end: str, anchor: str, max_epochs: int) -> tuple[float, float]:
@@ -319,7 +325,7 @@ def horizon(
     alpha: AlphaOpt = [0.5, 1.0],  # noqa: B006 (typer reads the default, never mutates it)
     epochs: EpochsOpt = 2,
     anchor: AnchorsOpt = ["conjunction", "quadrature"],  # noqa: B006
-    fmt: TableFormatOpt = "table",
+    fmt: TableFormatOpt = None,
     output: OutputOpt = None,
     plot: PlotOpt = None,
     overwrite: OverwriteAllOpt = False,
@@ -327,7 +333,7 @@ def horizon(
     """Phase-coherence horizons T_valid (paper Tables 4 and 7) and σ_u at the end of LISA."""
     from ucbplan.core.forecast import horizon_table
 
-    fmt = _check_format(fmt, ("table", "json", "ecsv", "csv"))
+    fmt = pick_format(output, fmt, _TABLE_FORMATS)
     t = load_target(target)
     sv, k = _resolve_k_sigma(t, sigma_v, k_eff)
     for a in alpha:
@@ -338,14 +344,13 @@ def horizon(
         from ucbplan.plotting.horizon import horizon_plot
 
         horizon_plot(t, rows, plot, overwrite=overwrite)
-    if fmt == "table" and output is None:
+    if fmt == "table":
         _print_horizon(t, rows, sv, k, epochs)
     elif fmt == "json":
         doc = [r.as_dict() | {"target": t.name} for r in rows]
         write_output(output, lambda h: dump_json(doc, h), overwrite=overwrite)
     else:
-        tab = _horizon_table(t, rows, sv, k, epochs)
-        _write_table(tab, "ecsv" if fmt == "table" else fmt, output, overwrite)
+        _write_table(_horizon_table(t, rows, sv, k, epochs), fmt, output, overwrite)
 
 
 def _horizon_table(t: Target, rows: list[Any], sv: float, k: float, epochs: int) -> Any:

@@ -14,7 +14,7 @@ from typing import Annotated, Any
 import typer
 from rich.table import Table as RichTable
 
-from ucbplan.cli._console import dump_json, err_console, write_output
+from ucbplan.cli._console import dump_json, err_console, pick_format, write_output
 from ucbplan.core.constants import DAY_S, MONTH_S, YEAR_S
 from ucbplan.errors import UcbplanError
 
@@ -51,7 +51,10 @@ OptEpochOpt = Annotated[
     ),
 ]
 PlotOpt = Annotated[Path | None, typer.Option("--plot", help="Write Δv_aps vs baseline PNG here.")]
-FormatOpt = Annotated[str, typer.Option("--format", help="table (stderr) | json (stdout or -o).")]
+FormatOpt = Annotated[
+    str | None,
+    typer.Option("--format", help="table (stderr) | json (stdout or -o; default with -o)."),
+]
 OutputOpt = Annotated[Path | None, typer.Option("-o", "--output", help="JSON output file.")]
 OverwriteOpt = Annotated[bool, typer.Option("--overwrite", help="Replace existing output files.")]
 
@@ -73,7 +76,7 @@ def feasibility_command(
     opt_t0: OptT0Opt = None,
     opt_epoch: OptEpochOpt = None,
     plot: PlotOpt = None,
-    fmt: FormatOpt = "table",
+    fmt: FormatOpt = None,
     output: OutputOpt = None,
     overwrite: OverwriteOpt = False,
 ) -> None:
@@ -82,7 +85,8 @@ def feasibility_command(
     from ucbplan.feasibility import optical_ephemeris, plot_report, report_for_target
     from ucbplan.target import load_target
 
-    _check_options(fmt, n_spectra, m1, m2, sigma_v, m3, a_out)
+    fmt = pick_format(output, fmt, ("table", "json"))
+    _check_options(n_spectra, m1, m2, sigma_v, m3, a_out)
     tgt = load_target(target)
     optical = optical_ephemeris(
         tgt.period_s,
@@ -117,7 +121,6 @@ def feasibility_command(
 
 
 def _check_options(
-    fmt: str,
     n_spectra: int,
     m1: float | None,
     m2: float | None,
@@ -126,8 +129,6 @@ def _check_options(
     a_out: float,
 ) -> None:
     """Reject bad option values with the option's name (before any file is read)."""
-    if fmt not in ("table", "json"):
-        raise UcbplanError(f"--format: got {fmt!r}, expected table or json")
     if n_spectra < 1:
         raise UcbplanError(f"--n-spectra: got {n_spectra}, expected an integer >= 1")
     for name, value in (("--m1", m1), ("--m2", m2), ("--sigma-v", sigma_v), ("--m3", m3)):

@@ -13,7 +13,13 @@ from typing import IO, Annotated, Any
 import typer
 from rich.markup import escape
 
-from ucbplan.cli._console import check_output_path, err_console, rich_table, write_output
+from ucbplan.cli._console import (
+    check_output_path,
+    err_console,
+    pick_format,
+    rich_table,
+    write_output,
+)
 from ucbplan.errors import UcbplanError
 
 __all__ = ["register"]
@@ -78,19 +84,12 @@ _Priority = Annotated[
     typer.Option("--priority", help="NAME=P overrides a target file's priority (higher first)."),
 ]
 _Output = Annotated[Path | None, typer.Option("-o", "--output", help="Write the blocks table.")]
-_Format = Annotated[str, typer.Option("--format", help="table | ecsv | csv | json")]
+_Format = Annotated[
+    str | None,
+    typer.Option("--format", help="table | ecsv | csv | json (default: the -o suffix, else table)"),
+]
 _Plot = Annotated[Path | None, typer.Option("--plot", help="Night chart PNG (first night).")]
 _Overwrite = Annotated[bool, typer.Option("--overwrite", help="Replace existing output files.")]
-
-
-def _format(fmt: str, output: Path | None) -> str:
-    fmt = fmt.lower()
-    if fmt not in ("table", *_MACHINE):
-        raise UcbplanError(f"--format {fmt!r}: expected table, ecsv, csv or json")
-    if fmt == "table" and output is not None:
-        suffix = output.suffix.lower().lstrip(".")
-        return suffix if suffix in _MACHINE else "ecsv"
-    return fmt
 
 
 def _local(b: Any) -> str:
@@ -208,7 +207,7 @@ def plan(
     sessions: _Sessions = 1,
     priority: _Priority = [],  # noqa: B006  # typer copies the default; never mutated
     output: _Output = None,
-    fmt: _Format = "table",
+    fmt: _Format = None,
     plot: _Plot = None,
     overwrite: _Overwrite = False,
 ) -> None:
@@ -217,7 +216,7 @@ def plan(
     from ucbplan.observing.schedule import PlanSettings, plan_files
     from ucbplan.observing.timeconv import quiet_erfa
 
-    fmt = _format(fmt, output)
+    fmt = pick_format(output, fmt, ("table", *_MACHINE))
     for path in (output, plot):
         if path is not None:
             check_output_path(path, overwrite)

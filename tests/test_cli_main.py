@@ -1,0 +1,84 @@
+"""The entry point's contract: exit 0/1/2/130, one line, a traceback only with --debug."""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Callable
+
+import pytest
+import typer
+
+from ucbplan.cli import app as app_module
+from ucbplan.errors import TargetFileError
+
+
+def _run_main(monkeypatch: pytest.MonkeyPatch, raiser: Callable[[], object], *args: str) -> int:
+    def fake_run() -> int:
+        raiser()
+        return 0
+
+    monkeypatch.setattr(app_module, "_run", fake_run)
+    monkeypatch.setattr(sys, "argv", ["ucbplan", *args])
+    with pytest.raises(SystemExit) as exc:
+        app_module.main()
+    code = exc.value.code
+    assert isinstance(code, int)
+    return code
+
+
+def _raise(exc: BaseException) -> Callable[[], object]:
+    def f() -> object:
+        raise exc
+
+    return f
+
+
+def test_user_error_is_exit_2_one_line(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    err = TargetFileError("t.yaml: lisa.f_gw: expected a frequency [Hz]\nnext line")
+    assert _run_main(monkeypatch, _raise(err)) == 2
+    out = capsys.readouterr().err.strip()
+    assert out.count("\n") == 0 and out.startswith("error: t.yaml: lisa.f_gw")
+    assert "[Hz]" in out  # rich markup did not eat the unit
+
+
+def test_ctrl_c_is_130(monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:
+    assert _run_main(monkeypatch, _raise(KeyboardInterrupt())) == 130
+    assert "interrupted" in capsys.readouterr().err
+    assert _run_main(monkeypatch, lambda: (_ for _ in ()).throw(typer.Abort())) == 130
+
+
+def test_interrupt_inside_typer_returns_130(monkeypatch: pytest.MonkeyPatch) -> None:
+    """typer turns Ctrl-C into a returned 130 in non-standalone mode: main must not lose it."""
+    monkeypatch.setattr(app_module, "app", lambda standalone_mode: 130)
+    monkeypatch.setattr(sys, "argv", ["ucbplan", "plan"])
+    with pytest.raises(SystemExit) as exc:
+        app_module.main()
+    assert exc.value.code == 130
+
+
+def test_bug_is_exit_1_one_line_without_traceback(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert _run_main(monkeypatch, _raise(ZeroDivisionError("x" * 5000))) == 1
+    err = capsys.readouterr().err.strip()
+    assert "Traceback" not in err and err.count("\n") == 0 and len(err) < 400
+    assert err.startswith("internal error: ZeroDivisionError") and "please report" in err
+
+
+def test_debug_shows_the_traceback(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(app_module, "_run", _raise(ZeroDivisionError("boom")))
+    monkeypatch.setattr(sys, "argv", ["ucbplan", "--debug", "plan"])
+    with pytest.raises(ZeroDivisionError):
+        app_module.main()
+
+
+def test_os_error_is_a_user_error(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    exc = PermissionError(13, "Permission denied", "/data/t.yaml")
+    assert _run_main(monkeypatch, _raise(exc)) == 2
+    assert capsys.readouterr().err.strip() == (
+        "error: /data/t.yaml: Permission denied; check the path and its permissions"
+    )
