@@ -27,14 +27,9 @@ from typer.testing import CliRunner
 from ucbplan.errors import InputFileError, OutputExistsError, UcbplanError
 from ucbplan.observing.blocks import Block
 from ucbplan.observing.blocktable import blocks_to_table, make_meta, read_blocks
-from ucbplan.observing.exports.common import (
-    EXPORTERS,
-    ExportOptions,
-    export_blocks,
-    ics_escape,
-    ics_fold,
-    sexagesimal,
-)
+from ucbplan.observing.exports import EXPORTERS, ExportOptions, export_blocks
+from ucbplan.observing.exports.base import sexagesimal
+from ucbplan.observing.exports.ics import ics_escape, ics_fold
 from ucbplan.observing.exports.proposal import proposal_table, write_proposal
 from ucbplan.observing.timeconv import quiet_erfa
 from ucbplan.offline import configure_offline
@@ -585,7 +580,7 @@ def test_time_columns_give_the_same_export(table: Table) -> None:
 
 
 def test_iso_rounding_is_half_up() -> None:
-    from ucbplan.observing.exports.common import iso_ms
+    from ucbplan.observing.exports.base import iso_ms
 
     t = datetime(2037, 1, 16, 3, 10, 11, 250000, tzinfo=UTC)
     assert iso_ms(t, 1) == "2037-01-16T03:10:11.3"
