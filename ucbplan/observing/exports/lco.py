@@ -54,7 +54,9 @@ def _configuration(
     }
 
 
-def _requests(table: Table, options: ExportOptions, s: _Settings, notes: list[str]) -> list[Any]:
+def _requests(
+    table: Table, options: ExportOptions, s: _Settings, notes: list[str]
+) -> list[dict[str, Any]]:
     """One request per block in start order; its window is the OB-start window (to the second)."""
     acq = acquisition_s(table, options, notes)
     names = strings(table, "target")
@@ -119,12 +121,8 @@ def lco_requests(
     requests = _requests(table, options, s, notes)
     if not requests:
         raise InputFileError("blocks table has no rows: nothing to export")
-    names = strings(table, "target")
-    sigma = floats(table, "sigma_t_s", unit="s")
-    starts = required_times(table, "t_start_utc")
-    mids = required_times(table, "t_mid_utc")
     return {
-        "name": safe_name(f"ucbplan {names[0]}", 50),
+        "name": safe_name(f"ucbplan {strings(table, 'target')[0]}", 50),
         "proposal": s.proposal,
         "ipp_value": 1.0,
         "operator": "MANY",
@@ -132,13 +130,21 @@ def lco_requests(
         "requests": requests,
         "ucbplan": {
             "note": "ignored by the OCS API; block mid-times are UTC at the site with 1-sigma",
-            "blocks": [
-                {"t_mid_utc": iso_ms(mids[i]), "sigma_t_s": float(sigma[i])}
-                for i in sorted(range(len(table)), key=lambda j: starts[j])
-            ],
+            "blocks": _block_times(table),
             "notes": notes,
         },
     }
+
+
+def _block_times(table: Table) -> list[dict[str, Any]]:
+    """UTC mid-time and 1σ of every block, in the order of the requests (block start)."""
+    sigma = floats(table, "sigma_t_s", unit="s")
+    starts = required_times(table, "t_start_utc")
+    mids = required_times(table, "t_mid_utc")
+    return [
+        {"t_mid_utc": iso_ms(mids[i]), "sigma_t_s": float(sigma[i])}
+        for i in sorted(range(len(table)), key=lambda j: starts[j])
+    ]
 
 
 def lco_json(table: Table, options: ExportOptions) -> str:
