@@ -1,1 +1,89 @@
-"""Observatory and proposal exports of the blocks table, one function per format."""
+"""Observatory and proposal exports of the master blocks table, one module per format.
+
+Each format is a function ``(table, options) -> ExportResult`` in its own module
+(:mod:`.eso_p2`, :mod:`.keck`, :mod:`.ics`, :mod:`.ing`, :mod:`.lco`, :mod:`.proposal`), built
+on the shared helpers of :mod:`.base`, and registered here by name in :data:`EXPORTERS`;
+:func:`export_blocks` looks the name up and fails with the list of known names. Imports point one
+way: this registry → format modules → base. Formats are described in docs/exports.md.
+"""
+
+from __future__ import annotations
+
+from astropy.table import Table
+
+from ucbplan.errors import InputFileError, UcbplanError
+from ucbplan.observing.exports.base import (
+    DEFAULT_ACQUISITION_S,
+    Exporter,
+    ExportOptions,
+    ExportResult,
+)
+from ucbplan.observing.exports.eso_p2 import export_eso_p2
+from ucbplan.observing.exports.ics import export_ics
+from ucbplan.observing.exports.ing import export_ing_cat
+from ucbplan.observing.exports.keck import export_keck_starlist
+from ucbplan.observing.exports.lco import export_lco
+from ucbplan.observing.exports.proposal import PROPOSAL_FORMATS, export_proposal
+
+__all__ = [
+    "DEFAULT_ACQUISITION_S",
+    "EXPORTERS",
+    "EXPORT_FORMATS",
+    "PROPOSAL_FORMATS",
+    "ExportOptions",
+    "ExportResult",
+    "Exporter",
+    "export_blocks",
+    "export_eso_p2",
+    "export_ics",
+    "export_ing_cat",
+    "export_keck_starlist",
+    "export_lco",
+    "export_proposal",
+]
+
+#: Export formats by name (``ucbplan export --to NAME``), in the order the CLI help lists them.
+EXPORTERS: dict[str, Exporter] = {
+    "eso-p2": export_eso_p2,
+    "keck-starlist": export_keck_starlist,
+    "ics": export_ics,
+    "proposal": export_proposal,
+    "ing-cat": export_ing_cat,
+    "lco": export_lco,
+}
+
+#: The names ``--to`` accepts.
+EXPORT_FORMATS = tuple(EXPORTERS)
+
+
+def export_blocks(table: Table, to: str, options: ExportOptions | None = None) -> ExportResult:
+    """Export a master blocks table in the format named ``to``.
+
+    Parameters
+    ----------
+    table : astropy.table.Table
+        Master blocks table (:func:`ucbplan.observing.blocktable.read_blocks`).
+    to : str
+        Format name, one of :data:`EXPORT_FORMATS`.
+    options : ExportOptions, optional
+        Acquisition overhead, window rule and per-format choices (defaults when None).
+
+    Returns
+    -------
+    ExportResult
+        The file's bytes, its usual suffix and notes for the user.
+
+    Raises
+    ------
+    UcbplanError
+        For an unknown format name (the message lists the known ones) or an empty table.
+    """
+    try:
+        exporter = EXPORTERS[to]
+    except KeyError:
+        raise UcbplanError(
+            f"--to: unknown export format {to!r}; expected one of {', '.join(EXPORTERS)}"
+        ) from None
+    if len(table) == 0:
+        raise InputFileError("blocks table has no rows: nothing to export; re-run `ucbplan plan`")
+    return exporter(table, options or ExportOptions())

@@ -3,7 +3,7 @@
 One row per target: coordinates, magnitude, P_orb, the ephemeris file, σ_T at the semester
 midpoint, the anchor phases and their tolerance, usable windows per month, exposure and overheads
 per visit, visits, hours (total = integration + overheads), the time-critical flag and the
-constraints (EXPORTS.md "Proposal technical section").
+constraints (docs/exports.md, "Proposal technical section").
 
 Decisions where the issue is silent: the "semester" is the span of the blocks table (first block
 start to last block end) and σ_T at its midpoint is linearly interpolated in time between the
@@ -14,7 +14,6 @@ phase-targeted target is time critical.
 from __future__ import annotations
 
 import io
-import json
 import math
 from collections import Counter
 from dataclasses import dataclass
@@ -25,8 +24,9 @@ import numpy as np
 from astropy.table import Table
 
 from ucbplan.errors import InputFileError
-from ucbplan.observing.exports.common import (
+from ucbplan.observing.exports.base import (
     ExportOptions,
+    ExportResult,
     acquisition_s,
     coordinates,
     floats,
@@ -35,21 +35,22 @@ from ucbplan.observing.exports.common import (
     period_s,
     readout_total_s,
     required_times,
-    safe_name,
     sexagesimal,
     strings,
+    version,
     vmags,
 )
 
 __all__ = [
     "PROPOSAL_FORMATS",
-    "ing_catalogue",
-    "lco_requests",
+    "export_proposal",
     "proposal_table",
     "write_proposal",
 ]
 
-PROPOSAL_FORMATS = ("ecsv", "csv", "latex")
+#: Proposal table formats (``--format``) and the file suffix of each.
+PROPOSAL_SUFFIXES = {"ecsv": ".ecsv", "csv": ".csv", "latex": ".tex"}
+PROPOSAL_FORMATS = tuple(PROPOSAL_SUFFIXES)
 
 #: LaTeX display names (astropy's LaTeX writer does not escape column names).
 _LATEX_COLUMNS = {
@@ -227,8 +228,20 @@ def proposal_table(table: Table, options: ExportOptions, notes: list[str]) -> Ta
     out = Table(rows=rows, names=list(rows[0]))
     for col, unit in _UNITS.items():
         out[col].unit = unit
-    out.meta = {
-        "ucbplan_version": _version(),
+    out.meta = _summary_meta(table, out, (sem_start, sem_mid, sem_end), options)
+    return out
+
+
+def _summary_meta(
+    table: Table,
+    summary: Table,
+    semester: tuple[datetime, datetime, datetime],
+    options: ExportOptions,
+) -> dict[str, Any]:
+    """Provenance, the semester (start, mid, end UTC), the rules applied and the totals [h]."""
+    sem_start, sem_mid, sem_end = semester
+    return {
+        "ucbplan_version": version(),
         "source_created_utc": str((table.meta or {}).get("created_utc", "")),
         "site": (table.meta or {}).get("site", ""),
         "semester_start_utc": iso_ms(sem_start, 0),
@@ -244,18 +257,11 @@ def proposal_table(table: Table, options: ExportOptions, notes: list[str]) -> Ta
             f"{options.tolerance_floor_s:g} s) at the semester midpoint; tolerance_rad from "
             "a tol_rad column when the planner writes one"
         ),
-        "total_integration_h": float(np.sum(out["integration_h"])),
-        "total_overhead_h": float(np.sum(out["overhead_h"])),
-        "total_h": float(np.sum(out["total_h"])),
+        "total_integration_h": float(np.sum(summary["integration_h"])),
+        "total_overhead_h": float(np.sum(summary["overhead_h"])),
+        "total_h": float(np.sum(summary["total_h"])),
         "time_scale": "UTC at the site",
     }
-    return out
-
-
-def _version() -> str:
-    from ucbplan import __version__
-
-    return __version__
 
 
 def _latex_escape(text: str) -> str:
@@ -326,112 +332,16 @@ def write_proposal(summary: Table, fmt: str) -> str:
     return buf.getvalue()
 
 
-def ing_catalogue(table: Table) -> str:
-    """ING (WHT/ISIS) catalogue: ``NAME hh mm ss.ss ±dd mm ss.s J2000 ! comment`` per target.
+def export_proposal(table: Table, options: ExportOptions) -> ExportResult:
+    """Proposal technical-section table per target as ``options.proposal_format``.
 
-    Names are ≤ 20 characters without spaces, colons or tabs; the comment gives the first
-    block's UTC mid-time and σ. Save under a lower-case name ending ``.cat``.
+    Raises
+    ------
+    InputFileError
+        For an unknown proposal format.
     """
-    names = strings(table, "target")
-    ra, dec = coordinates(table)
-    sigma = floats(table, "sigma_t_s", unit="s")
-    mids = required_times(table, "t_mid_utc")
-    lines: list[str] = []
-    seen: set[str] = set()
-    for i in sorted(range(len(table)), key=lambda j: mids[j]):
-        short = safe_name(names[i], 20).replace(":", "_")
-        if short in seen:
-            continue
-        seen.add(short)
-        lines.append(
-            f"{short:<20} {sexagesimal(ra[i] / 15.0, 2, ' ', False)} "
-            f"{sexagesimal(dec[i], 1, ' ', True)} J2000 ! first UTC-mid {iso_ms(mids[i], 1)} "
-            f"+/-{fmt_sigma(float(sigma[i]))} s"
-        )
-    return "\n".join(lines) + "\n"
-
-
-def lco_requests(
-    table: Table,
-    options: ExportOptions,
-    *,
-    proposal: str = "FILL-ME",
-    instrument_type: str = "SOAR_GHTS_REDCAM",
-    telescope_class: str = "4m0",
-    max_airmass: float = 2.0,
-    min_lunar_distance: float = 30.0,
-) -> dict[str, Any]:
-    """LCO/SOAR OCS request group: one TIME_CRITICAL request per block, window on its start.
-
-    The window is the block start minus the acquisition overhead ± max(k·σ_t, floor), like the
-    ESO p2 export but with second resolution.
-    """
-    from datetime import timedelta
-
     notes: list[str] = []
-    acq = acquisition_s(table, options, notes)
-    names = strings(table, "target")
-    ra, dec = coordinates(table)
-    sigma = floats(table, "sigma_t_s", unit="s")
-    exptime, n_exp = floats(table, "exptime_s", unit="s"), floats(table, "n_exp")
-    starts = required_times(table, "t_start_utc")
-    mids = required_times(table, "t_mid_utc")
-    requests = []
-    for i in sorted(range(len(table)), key=lambda j: starts[j]):
-        half = max(options.tolerance_sigma * float(sigma[i]), options.tolerance_floor_s)
-        ob = starts[i] - timedelta(seconds=float(acq[i]))
-        window = {
-            "start": iso_ms(ob - timedelta(seconds=half), 0),
-            "end": iso_ms(ob + timedelta(seconds=half), 0),
-        }
-        requests.append(
-            {
-                "location": {"telescope_class": telescope_class},
-                "windows": [window],
-                "configurations": [
-                    {
-                        "type": "SPECTRUM",
-                        "instrument_type": instrument_type,
-                        "target": {
-                            "name": names[i],
-                            "type": "ICRS",
-                            "ra": float(ra[i]),
-                            "dec": float(dec[i]),
-                            "epoch": 2000,
-                        },
-                        "constraints": {
-                            "max_airmass": max_airmass,
-                            "min_lunar_distance": min_lunar_distance,
-                        },
-                        "instrument_configs": [
-                            {"exposure_time": float(exptime[i]), "exposure_count": int(n_exp[i])}
-                        ],
-                        "acquisition_config": {"mode": "WCS"},
-                        "guiding_config": {"mode": "ON", "optional": True},
-                    }
-                ],
-            }
-        )
-    if not requests:
-        raise InputFileError("blocks table has no rows: nothing to export")
-    return {
-        "name": safe_name(f"ucbplan {names[0]}", 50),
-        "proposal": proposal,
-        "ipp_value": 1.0,
-        "operator": "MANY",
-        "observation_type": "TIME_CRITICAL",
-        "requests": requests,
-        "ucbplan": {
-            "note": "ignored by the OCS API; block mid-times are UTC at the site with 1-sigma",
-            "blocks": [
-                {"t_mid_utc": iso_ms(mids[i]), "sigma_t_s": float(sigma[i])}
-                for i in sorted(range(len(table)), key=lambda j: starts[j])
-            ],
-            "notes": notes,
-        },
-    }
-
-
-def lco_json(table: Table, options: ExportOptions) -> str:
-    """:func:`lco_requests` as indented JSON text."""
-    return json.dumps(lco_requests(table, options), indent=2, allow_nan=False) + "\n"
+    summary = proposal_table(table, options, notes)
+    text = write_proposal(summary, options.proposal_format)
+    suffix = PROPOSAL_SUFFIXES[options.proposal_format]
+    return ExportResult(text.encode("utf-8"), suffix, tuple(dict.fromkeys(notes)))

@@ -1,0 +1,172 @@
+"""Keck starlist and ING catalogue: golden files, column rules checked against the blocks table."""
+
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+import pytest
+from astropy.coordinates import Angle
+from astropy.table import Table
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from test_exports_fixture import SDSS, SDSS_VMAG_META, golden, golden_export, ms, written_table
+
+from ucbplan.errors import InputFileError
+from ucbplan.observing.exports import ExportOptions, export_blocks
+from ucbplan.observing.exports.base import sexagesimal
+
+KECK = "exports_keck_starlist.txt"
+ING = "exports_ing.cat"
+KECK_COORDS = re.compile(r"(\d\d \d\d \d\d\.\d\d) ([+-]\d\d \d\d \d\d\.\d) 2000")
+KECK_COMMENT = re.compile(r"# (\S+) u\*=(\S+) \((\S+)\) UTC-mid (\S+) \+/-(\S+) s")
+ING_LINE = re.compile(
+    r"(\S{1,20}) +(\d\d \d\d \d\d\.\d\d) ([+-]\d\d \d\d \d\d\.\d) J2000"
+    r" ! first UTC-mid (\S+) \+/-(\S+) s"
+)
+
+
+@pytest.fixture(scope="module")
+def table(tmp_path_factory: pytest.TempPathFactory) -> Table:
+    return written_table(tmp_path_factory.mktemp("exports"))
+
+
+def _row_of(table: Table, short: str) -> Table.Row:
+    return next(r for r in table if str(r["target"]).replace(" ", "_") == short)
+
+
+def _check_coordinates(row: Table.Row, ra: str, dec: str, ra_dec: int, dec_dec: int) -> None:
+    """RA (hours) and Dec (degrees) strings agree with the table to half their last digit."""
+    assert abs(Angle(ra, unit="hourangle").deg - row["ra_deg"]) <= 0.5 * 10**-ra_dec * 15 / 3600
+    assert abs(Angle(dec, unit="deg").deg - row["dec_deg"]) <= 0.5 * 10**-dec_dec / 3600
+
+
+def _check_time_and_sigma(row: Table.Row, mid: str, sigma: str, decimals: int) -> None:
+    """A written UTC mid-time and σ agree with the table (to the digits written)."""
+    error = abs(ms(mid) - ms(row["t_mid_utc"])) / np.timedelta64(1, "ms")
+    assert error <= 0.5 * 10 ** (3 - decimals)
+    assert float(sigma) == pytest.approx(row["sigma_t_s"], rel=0.05)  # two significant figures
+
+
+# ---------------------------------------------------------------------------------------- Keck
+
+
+def test_keck_golden(table: Table) -> None:
+    assert golden_export(table, KECK) == golden(KECK), f"{KECK} differs; see test_exports_fixture"
+
+
+def _nearest_block(table: Table, short: str, mid: str) -> Table.Row:
+    """The block of target ``short`` whose t_mid_utc is closest to ``mid``."""
+    rows = [r for r in table if str(r["target"]).replace(" ", "_") == short]
+    return min(rows, key=lambda r: abs(ms(r["t_mid_utc"]) - ms(mid)))
+
+
+def _check_keck_target(line: str, table: Table, pending: list[Table.Row]) -> str:
+    """A target line: fixed columns, coordinates and vmag of the table, after its comments."""
+    name = line[:16].rstrip()  # name in columns 1-16, at most 15 characters, no blanks
+    assert 0 < len(name) <= 15 and " " not in name and line[15] == " "
+    ra, dec = KECK_COORDS.fullmatch(line[16:44]).groups()  # type: ignore[union-attr]
+    row = _row_of(table, name)
+    _check_coordinates(row, ra, dec, 2, 1)
+    pairs = dict(kv.split("=") for kv in line[45:].split())
+    vmag = row["vmag"] if math.isfinite(row["vmag"]) else SDSS_VMAG_META
+    assert pairs == {"vmag": f"{vmag:.1f}", "rotmode": "vertical"}
+    # The comments just above are this target's blocks, all of them, in time order.
+    own = table[table["target"] == row["target"]]
+    assert [r["block_id"] for r in pending] == list(own[np.argsort(own["t_mid_utc"])]["block_id"])
+    return name
+
+
+def test_keck_golden_follows_the_starlist_columns(table: Table) -> None:
+    text = golden(KECK).decode("ascii")
+    assert "\t" not in text and text.endswith("\n")
+    lines = text.splitlines()
+    assert lines[0].startswith("# ucbplan ") and "Paranal" in lines[0]
+    pending: list[Table.Row] = []
+    targets: list[str] = []
+    for line in lines[1:]:
+        if not line.startswith("#"):
+            targets.append(_check_keck_target(line, table, pending))
+            pending = []
+            continue
+        short, u_star, anchor, mid, sigma = KECK_COMMENT.fullmatch(line).groups()  # type: ignore[union-attr]
+        row = _nearest_block(table, short, mid)
+        assert anchor == row["anchor"]
+        assert float(u_star) == pytest.approx(row["u_star_rad"], abs=1e-5)
+        _check_time_and_sigma(row, mid, sigma, 1)
+        pending.append(row)
+    assert not pending
+    assert sorted(targets) == sorted({str(n).replace(" ", "_") for n in table["target"]})
+
+
+def test_keck_truncates_long_names_and_refuses_collisions(table: Table) -> None:
+    t = Table(table, copy=True)
+    t["target"] = t["target"].astype("U40")
+    t["target"][t["target"] == "HM Cnc"] = "A very long target name 1"
+    res = export_blocks(t, "keck-starlist", ExportOptions())
+    assert any("truncated" in n for n in res.notes)
+    assert "A_very_long_tar 08 06 23.20" in res.content.decode()
+    t["target"][t["target"] == SDSS] = "A very long target name 2"
+    with pytest.raises(InputFileError, match="both become 'A_very_long_tar'"):
+        export_blocks(t, "keck-starlist", ExportOptions())
+
+
+# ----------------------------------------------------------------------------------------- ING
+
+
+def test_ing_golden(table: Table) -> None:
+    assert golden_export(table, ING) == golden(ING), f"{ING} differs; see test_exports_fixture"
+
+
+def test_ing_golden_follows_the_catalogue_format(table: Table) -> None:
+    lines = golden(ING).decode("ascii").splitlines()
+    names = []
+    for line in lines:
+        name, ra, dec, mid, sigma = ING_LINE.fullmatch(line).groups()  # type: ignore[union-attr]
+        assert not set(name) & {":", "\t"}
+        row = _row_of(table, name)
+        _check_coordinates(row, ra, dec, 2, 1)
+        first = table[table["target"] == row["target"]]
+        first_row = first[np.argmin([ms(t) for t in first["t_mid_utc"]])]
+        _check_time_and_sigma(first_row, mid, sigma, 1)
+        names.append(name)
+    assert sorted(names) == sorted({str(n).replace(" ", "_") for n in table["target"]})
+
+
+def test_ing_names_lose_colons_and_stay_short(table: Table) -> None:
+    t = Table(table, copy=True)
+    t["target"] = t["target"].astype("U40")
+    t["target"][t["target"] == SDSS] = "Gaia DR3 1234:5678 with a long tail"
+    line = export_blocks(t, "ing-cat", ExportOptions()).content.decode().splitlines()[1]
+    assert line.startswith("Gaia_DR3_1234_5678_w ")
+
+
+# ------------------------------------------------------------------------------- sexagesimal
+
+
+@pytest.mark.parametrize(
+    ("value", "decimals", "signed", "expected"),
+    [
+        (10.9999999, 2, False, "11 00 00.00"),  # carry: never 59 60.00
+        (23.99999999, 2, False, "00 00 00.00"),  # RA wraps at 24 h
+        (-0.5, 1, True, "-00 30 00.0"),
+        (-0.000001, 1, True, "+00 00 00.0"),  # rounds to zero: no '-0'
+        (-12.5083333333, 1, True, "-12 30 30.0"),
+    ],
+)
+def test_sexagesimal(value: float, decimals: int, signed: bool, expected: str) -> None:
+    assert sexagesimal(value, decimals, " ", signed) == expected
+
+
+@given(st.floats(0.0, 24.0, exclude_max=True), st.integers(0, 3))
+@settings(max_examples=200, deadline=None)
+def test_sexagesimal_round_trip(hours: float, decimals: int) -> None:
+    # Parsing the string back differs from the input by at most half a unit of the last digit
+    # (modulo the 24 h wrap).
+    text = sexagesimal(hours, decimals, " ", False)
+    h, m, s = (float(x) for x in text.split())
+    back = h + m / 60 + s / 3600
+    err = abs((back - hours + 12) % 24 - 12) * 3600
+    assert err <= 0.5 * 10**-decimals + 1e-9
+    assert 0 <= m < 60 and 0 <= s < 60

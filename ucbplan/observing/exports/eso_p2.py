@@ -1,0 +1,277 @@
+"""ESO p2: absolute time windows on the OB start, one OB per visit (docs/exports.md).
+
+p2 takes absolute time constraints as ``YYYY-MM-DDTHH:MM`` UTC (whole minutes), so each window
+on the OB start is rounded outward to whole minutes; windows must not overlap.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+from datetime import datetime, timedelta
+from typing import Any
+
+import numpy as np
+from astropy.table import Table
+
+from ucbplan.errors import UcbplanError
+from ucbplan.observing.exports.base import (
+    ExportOptions,
+    ExportResult,
+    acquisition_s,
+    coordinates,
+    created_utc,
+    floats,
+    iso_minute,
+    iso_ms,
+    ob_start_window,
+    period_s,
+    required_times,
+    safe_name,
+    sexagesimal,
+    site_name,
+    strings,
+    time_order,
+    version,
+)
+
+__all__ = ["export_eso_p2"]
+
+
+def _floor_minute(t: datetime) -> datetime:
+    return t.replace(second=0, microsecond=0)
+
+
+def _ceil_minute(t: datetime) -> datetime:
+    base = _floor_minute(t)
+    return base if base == t else base + timedelta(minutes=1)
+
+
+@dataclass(frozen=True, slots=True)
+class _Member:
+    """One block of an OB (an OB executes one or more blocks after one acquisition)."""
+
+    block_id: str
+    t_mid_utc: str
+    sigma_t_s: float
+    mid: datetime
+
+
+@dataclass(slots=True)
+class _Ob:
+    """An OB being built: its JSON fields (in output order) and the bookkeeping beside them."""
+
+    doc: dict[str, Any]
+    lo: datetime  # window on the OB start, rounded outward to whole minutes (UTC)
+    hi: datetime
+    ob_start: datetime
+    period_s: float
+    session: str
+    members: list[_Member]
+
+
+@dataclass(frozen=True, slots=True)
+class _Columns:
+    """The blocks-table columns the ESO export reads (defaults applied, notes taken)."""
+
+    mids: list[datetime]
+    starts: list[datetime]
+    sigma: np.ndarray
+    acq: np.ndarray
+    period: np.ndarray
+    names: list[str]
+    blocks: list[str]
+    anchors: list[str]
+    u_star: np.ndarray
+    exptime: np.ndarray
+    n_exp: np.ndarray
+    sessions: list[str]
+
+
+def _columns(table: Table, options: ExportOptions, notes: list[str]) -> _Columns:
+    return _Columns(
+        mids=required_times(table, "t_mid_utc"),
+        starts=required_times(table, "t_start_utc"),
+        sigma=floats(table, "sigma_t_s", unit="s"),
+        acq=acquisition_s(table, options, notes),
+        period=period_s(table, notes),
+        names=strings(table, "target"),
+        blocks=strings(table, "block_id"),
+        anchors=strings(table, "anchor"),
+        u_star=floats(table, "u_star_rad", unit="rad"),
+        exptime=floats(table, "exptime_s", unit="s"),
+        n_exp=floats(table, "n_exp"),
+        sessions=strings(table, "session_id"),
+    )
+
+
+def _block_ob(c: _Columns, i: int, options: ExportOptions) -> _Ob:
+    """The OB of block ``i`` alone: window on its start, rounded outward to whole minutes."""
+    mid, sigma = c.mids[i], float(c.sigma[i])
+    w = ob_start_window(c.starts[i], float(c.acq[i]), sigma, options)
+    lo_min, hi_min = _floor_minute(w.lo), _ceil_minute(w.hi)
+    widening = (w.lo - lo_min).total_seconds() + (hi_min - w.hi).total_seconds()
+    doc = {
+        "name": safe_name(c.blocks[i], 32),
+        "target": c.names[i],
+        "block_ids": [c.blocks[i]],
+        "anchor": c.anchors[i],
+        "u_star_rad": float(c.u_star[i]),
+        "t_mid_utc": iso_ms(mid),
+        "sigma_t_s": sigma,
+        "ob_start_utc": iso_ms(w.ob_start),
+        "acquisition_s": float(c.acq[i]),
+        "exptime_s": float(c.exptime[i]),
+        "n_exp": int(c.n_exp[i]),
+        "window_half_width_s": w.half_width_s,
+        "window_exact_utc": {"from": iso_ms(w.lo), "to": iso_ms(w.hi)},
+        "rounding_widening_s": widening,
+    }
+    member = _Member(c.blocks[i], iso_ms(mid), sigma, mid)
+    return _Ob(doc, lo_min, hi_min, w.ob_start, float(c.period[i]), c.sessions[i], [member])
+
+
+def _eso_obs(table: Table, options: ExportOptions, notes: list[str]) -> list[_Ob]:
+    """Time-ordered OBs: one per session (or lone block), overlaps merged or refused."""
+    c = _columns(table, options, notes)
+    obs = _group_sessions([_block_ob(c, i, options) for i in time_order(table)])
+    for ob in obs:
+        _note_rounding(ob, options, notes)
+    return _resolve_overlaps(obs, options)
+
+
+def _note_rounding(ob: _Ob, options: ExportOptions, notes: list[str]) -> None:
+    """Warn when minute rounding widens the window by a large fraction of the period."""
+    per_s, widening = ob.period_s, ob.doc["rounding_widening_s"]
+    if math.isfinite(per_s) and widening > options.rounding_warn_fraction * per_s:
+        notes.append(
+            f"ESO p2 {ob.doc['name']}: minute rounding widens the OB start window by "
+            f"{widening:.0f} s = {widening / per_s:.2f} P_b; the OB start no longer fixes "
+            "the orbital phase: plan exposures covering the window and select in `reduce`"
+        )
+
+
+def _group_sessions(obs: list[_Ob]) -> list[_Ob]:
+    """One OB per planner session (one acquisition, e.g. a u = 0 / π pair); blank = own OB."""
+    out: list[_Ob] = []
+    first: dict[tuple[str, str], _Ob] = {}
+    for ob in obs:  # time-ordered
+        key = (ob.doc["target"], ob.session)
+        lead = first.get(key) if key[1] else None
+        if lead is None:
+            first[key] = ob
+            out.append(ob)
+        else:
+            _merge(lead, ob)
+    return out
+
+
+def _merge(lead: _Ob, ob: _Ob) -> None:
+    lead.doc["block_ids"] = [*lead.doc["block_ids"], *ob.doc["block_ids"]]
+    lead.members = [*lead.members, *ob.members]
+
+
+def _resolve_overlaps(obs: list[_Ob], options: ExportOptions) -> list[_Ob]:
+    obs = sorted(obs, key=lambda o: (o.lo, o.ob_start))
+    out: list[_Ob] = []
+    for ob in obs:
+        prev = out[-1] if out else None
+        if prev is None or ob.lo >= prev.hi:
+            out.append(ob)
+            continue
+        if not options.merge_overlaps or prev.doc["target"] != ob.doc["target"]:
+            raise _overlap_error(prev, ob)
+        _merge(prev, ob)
+    return out
+
+
+def _overlap_error(prev: _Ob, ob: _Ob) -> UcbplanError:
+    pair = f"{prev.doc['block_ids'][-1]} and {ob.doc['block_ids'][0]}"
+    how = (
+        "pass --merge-overlaps to execute them as one OB"
+        if prev.doc["target"] == ob.doc["target"]
+        else "drop one of them from the blocks table (different targets)"
+    )
+    return UcbplanError(
+        f"ESO p2: OB start windows of blocks {pair} overlap "
+        f"({iso_minute(prev.lo)}-{iso_minute(prev.hi)} and "
+        f"{iso_minute(ob.lo)}-{iso_minute(ob.hi)} UTC); {how}, "
+        "or lower --tolerance-sigma"
+    )
+
+
+def _visits(ob: _Ob) -> list[dict[str, Any]]:
+    """Every block of a merged OB with its mid-exposure offset from the nominal OB start."""
+    return [
+        {
+            "block_id": m.block_id,
+            "t_mid_utc": m.t_mid_utc,
+            "sigma_t_s": m.sigma_t_s,
+            "mid_offset_from_ob_start_s": round((m.mid - ob.ob_start).total_seconds(), 3),
+        }
+        for m in ob.members
+    ]
+
+
+def _ob_doc(ob: _Ob) -> dict[str, Any]:
+    """The OB's JSON: its fields, merged visits, the p2api constraint list and the OBX line."""
+    doc = ob.doc
+    if len(ob.members) > 1:
+        doc["merged_visits"] = _visits(ob)
+    doc["absoluteTimeConstraints"] = [{"from": iso_minute(ob.lo), "to": iso_minute(ob.hi)}]
+    doc["obx_absolute_times_list"] = (
+        f'absolute_times_list "{{{ob.lo:%Y-%m-%dT%H:%M:%S} {ob.hi:%Y-%m-%dT%H:%M:%S} 0}} "'
+    )
+    return doc
+
+
+def _target_list(table: Table) -> list[str]:
+    """p2 target-list CSV lines ``name,HH:MM:SS.SSS,±DD:MM:SS.SSS,J2000``, one per target."""
+    ra, dec = coordinates(table)
+    targets: dict[str, str] = {}
+    for name, r, d in zip(strings(table, "target"), ra, dec, strict=True):
+        targets.setdefault(
+            name,
+            f"{safe_name(name)},{sexagesimal(r / 15.0, 3, ':', False)},"
+            f"{sexagesimal(d, 3, ':', True)},J2000",
+        )
+    return list(targets.values())
+
+
+def export_eso_p2(table: Table, options: ExportOptions) -> ExportResult:
+    """ESO p2 absolute-time-window JSON: one OB per visit, windows on the OB start.
+
+    A visit is a planner session (blocks sharing ``session_id``, e.g. a u = 0 / π pair observed
+    after one acquisition) or a single block; a merged OB lists each block's mid-exposure offset
+    from the nominal OB start in ``merged_visits``.
+
+    The window is t_mid − (acquisition + exposure/2) ± max(k·σ_t, floor), i.e. the block start
+    minus the acquisition overhead, rounded outward to whole minutes (p2 drops seconds). Each OB
+    carries the p2api ``absoluteTimeConstraints`` list, the OBX ``absolute_times_list`` line, and
+    the document carries the p2 target-list CSV lines.
+
+    Raises
+    ------
+    UcbplanError
+        When windows overlap (different targets, or the same target without ``merge_overlaps``).
+    """
+    notes: list[str] = []
+    obs = _eso_obs(table, options, notes)
+    doc = {
+        "format": "ucbplan eso-p2 absolute time windows, version 1",
+        "ucbplan_version": version(),
+        "source_created_utc": created_utc(table),
+        "site": site_name(table),
+        "time_scale": "UTC at the site; windows constrain the OB start (acquisition included)",
+        "window_rule": (
+            "OB start = t_start_utc - acquisition_s; window = OB start +/- "
+            f"max({options.tolerance_sigma:g} sigma_t, {options.tolerance_floor_s:g} s), "
+            "rounded outward to whole minutes"
+        ),
+        "p2api_usage": "api.saveAbsoluteTimeConstraints(obId, ob['absoluteTimeConstraints'], v)",
+        "target_list_csv": _target_list(table),
+        "obs": [_ob_doc(ob) for ob in obs],
+    }
+    text = json.dumps(doc, indent=2, allow_nan=False) + "\n"
+    return ExportResult(text.encode(), ".json", tuple(dict.fromkeys(notes)))

@@ -1,0 +1,159 @@
+"""LCO/SOAR OCS request group JSON, TIME_CRITICAL, one request per block (docs/exports.md)."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from typing import Any
+
+from astropy.table import Table
+
+from ucbplan.errors import InputFileError
+from ucbplan.observing.exports.base import (
+    ExportOptions,
+    ExportResult,
+    acquisition_s,
+    coordinates,
+    floats,
+    iso_ms,
+    ob_start_window,
+    required_times,
+    safe_name,
+    strings,
+)
+
+__all__ = ["export_lco", "lco_json", "lco_requests"]
+
+
+@dataclass(frozen=True, slots=True)
+class _Settings:
+    """Request fields the blocks table does not know (see :func:`lco_requests`)."""
+
+    proposal: str
+    instrument_type: str
+    telescope_class: str
+    max_airmass: float
+    min_lunar_distance: float
+
+
+def _configuration(
+    name: str, ra_deg: float, dec_deg: float, exptime_s: float, n_exp: int, s: _Settings
+) -> dict[str, Any]:
+    """One SPECTRUM configuration: ICRS target, constraints, exposures, acquisition, guiding."""
+    return {
+        "type": "SPECTRUM",
+        "instrument_type": s.instrument_type,
+        "target": {"name": name, "type": "ICRS", "ra": ra_deg, "dec": dec_deg, "epoch": 2000},
+        "constraints": {
+            "max_airmass": s.max_airmass,
+            "min_lunar_distance": s.min_lunar_distance,
+        },
+        "instrument_configs": [{"exposure_time": exptime_s, "exposure_count": n_exp}],
+        "acquisition_config": {"mode": "WCS"},
+        "guiding_config": {"mode": "ON", "optional": True},
+    }
+
+
+def _requests(
+    table: Table, options: ExportOptions, s: _Settings, notes: list[str]
+) -> list[dict[str, Any]]:
+    """One request per block in start order; its window is the OB-start window (to the second)."""
+    acq = acquisition_s(table, options, notes)
+    names = strings(table, "target")
+    ra, dec = coordinates(table)
+    sigma = floats(table, "sigma_t_s", unit="s")
+    exptime, n_exp = floats(table, "exptime_s", unit="s"), floats(table, "n_exp")
+    starts = required_times(table, "t_start_utc")
+    requests = []
+    for i in sorted(range(len(table)), key=lambda j: starts[j]):
+        w = ob_start_window(starts[i], float(acq[i]), float(sigma[i]), options)
+        config = _configuration(
+            names[i], float(ra[i]), float(dec[i]), float(exptime[i]), int(n_exp[i]), s
+        )
+        requests.append(
+            {
+                "location": {"telescope_class": s.telescope_class},
+                "windows": [{"start": iso_ms(w.lo, 0), "end": iso_ms(w.hi, 0)}],
+                "configurations": [config],
+            }
+        )
+    return requests
+
+
+def lco_requests(
+    table: Table,
+    options: ExportOptions,
+    *,
+    proposal: str = "FILL-ME",
+    instrument_type: str = "SOAR_GHTS_REDCAM",
+    telescope_class: str = "4m0",
+    max_airmass: float = 2.0,
+    min_lunar_distance: float = 30.0,
+) -> dict[str, Any]:
+    """LCO/SOAR OCS request group: one TIME_CRITICAL request per block, window on its start.
+
+    The window is the block start minus the acquisition overhead ± max(k·σ_t, floor), like the
+    ESO p2 export but with second resolution. Block mid-times and σ go in an ``ucbplan`` key
+    the OCS API ignores.
+
+    Parameters
+    ----------
+    table : astropy.table.Table
+        Master blocks table.
+    options : ExportOptions
+        Acquisition overhead and window rule.
+    proposal : str
+        LCO proposal id (fill in before submitting).
+    instrument_type, telescope_class : str
+        OCS instrument type and telescope class.
+    max_airmass : float
+        Airmass limit of every request.
+    min_lunar_distance : float
+        Smallest Moon separation of every request [deg].
+
+    Raises
+    ------
+    InputFileError
+        For a table without rows.
+    """
+    s = _Settings(proposal, instrument_type, telescope_class, max_airmass, min_lunar_distance)
+    notes: list[str] = []
+    requests = _requests(table, options, s, notes)
+    if not requests:
+        raise InputFileError("blocks table has no rows: nothing to export")
+    return {
+        "name": safe_name(f"ucbplan {strings(table, 'target')[0]}", 50),
+        "proposal": s.proposal,
+        "ipp_value": 1.0,
+        "operator": "MANY",
+        "observation_type": "TIME_CRITICAL",
+        "requests": requests,
+        "ucbplan": {
+            "note": "ignored by the OCS API; block mid-times are UTC at the site with 1-sigma",
+            "blocks": _block_times(table),
+            "notes": notes,
+        },
+    }
+
+
+def _block_times(table: Table) -> list[dict[str, Any]]:
+    """UTC mid-time and 1σ of every block, in the order of the requests (block start)."""
+    sigma = floats(table, "sigma_t_s", unit="s")
+    starts = required_times(table, "t_start_utc")
+    mids = required_times(table, "t_mid_utc")
+    return [
+        {"t_mid_utc": iso_ms(mids[i]), "sigma_t_s": float(sigma[i])}
+        for i in sorted(range(len(table)), key=lambda j: starts[j])
+    ]
+
+
+def lco_json(table: Table, options: ExportOptions) -> str:
+    """:func:`lco_requests` as indented JSON text."""
+    return json.dumps(lco_requests(table, options), indent=2, allow_nan=False) + "\n"
+
+
+def export_lco(table: Table, options: ExportOptions) -> ExportResult:
+    """LCO/SOAR OCS request-group JSON, TIME_CRITICAL (see :func:`lco_requests`)."""
+    notes: list[str] = []
+    acquisition_s(table, options, notes)  # the defaults taken, for the user's stderr
+    return ExportResult(lco_json(table, options).encode(), ".json", tuple(notes))
