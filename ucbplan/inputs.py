@@ -16,15 +16,23 @@ and refuses other encodings with a message saying how to convert.
 
 from __future__ import annotations
 
+import math
 import re
 from pathlib import Path
 from typing import Any
 
 import yaml
 
-from ucbplan.errors import SchemaError
+from ucbplan.errors import InputError, SchemaError, shorten
 
-__all__ = ["MAX_ALIASES", "MAX_TEXT_BYTES", "MAX_YAML_BYTES", "load_yaml", "read_text"]
+__all__ = [
+    "MAX_ALIASES",
+    "MAX_TEXT_BYTES",
+    "MAX_YAML_BYTES",
+    "check_number",
+    "load_yaml",
+    "read_text",
+]
 
 #: Largest YAML input [bytes]; target and configuration files are a few kB.
 MAX_YAML_BYTES = 2_000_000
@@ -142,3 +150,25 @@ def load_yaml(path: Path, what: str = "YAML file", text: str | None = None) -> A
         raise SchemaError(f"{path}: not valid YAML: {' '.join(str(exc).split())}") from None
     finally:
         loader.dispose()
+
+
+def check_number(
+    name: str, value: float | None, low: float, high: float, unit: str = "", why: str = ""
+) -> None:
+    """Refuse a missing-range option value: finite and ``low < value <= high`` (``None`` passes).
+
+    Raises
+    ------
+    InputError
+        One line naming the option, the allowed range with its unit, the value and ``why``.
+    """
+    if value is None:
+        return
+    ok = isinstance(value, int | float) and math.isfinite(value) and low < value <= high
+    if not ok:
+        unit_s = f" {unit}" if unit else ""
+        reason = f" ({why})" if why else ""
+        raise InputError(
+            f"{name}: expected a number in ({low:g}, {high:g}]{unit_s}{reason}, "
+            f"got {shorten(value, 40)}"
+        )

@@ -25,7 +25,7 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import IO, Any
 
-from ucbplan.errors import InputError, OutputError, OutputExistsError
+from ucbplan.errors import InputError, OutputError, OutputExistsError, shorten
 
 __all__ = [
     "OUTPUT_FORMATS",
@@ -220,7 +220,7 @@ def output_format(
     suffix = path.suffix.lstrip(".").lower() if path is not None else ""
     suffix = {"yml": "yaml", "tex": "latex"}.get(suffix, suffix)
     if fmt is not None and fmt not in allowed:
-        raise InputError(f"--format: expected one of {', '.join(allowed)}, got {fmt!r}")
+        raise InputError(f"--format: expected one of {', '.join(allowed)}, got {shorten(fmt, 40)}")
     if fmt is None:
         return suffix if suffix in allowed else default
     if suffix in allowed and suffix != fmt and path is not None:

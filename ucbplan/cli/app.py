@@ -69,8 +69,16 @@ def _debug_requested(argv: list[str]) -> bool:
     return "--debug" in argv or os.environ.get("UCBPLAN_DEBUG", "") not in ("", "0")
 
 
+#: Longest error line printed [characters]; longer messages are cut in the middle.
+MAX_ERROR_CHARS = 390
+
+
 def _one_line(text: str) -> str:
-    return " ".join(str(text).split())
+    line = " ".join(str(text).split())
+    if len(line) <= MAX_ERROR_CHARS:
+        return line
+    half = MAX_ERROR_CHARS // 2 - 2
+    return f"{line[:half]} … {line[-half:]}"
 
 
 def _fail(message: str, code: int) -> NoReturn:

@@ -16,7 +16,8 @@ from rich.table import Table as RichTable
 
 from ucbplan.cli._console import dump_json, err_console, pick_format, write_output
 from ucbplan.core.constants import DAY_S, MONTH_S, YEAR_S
-from ucbplan.errors import UcbplanError
+from ucbplan.errors import UcbplanError, shorten
+from ucbplan.inputs import check_number
 
 __all__ = ["feasibility_command", "register"]
 
@@ -129,13 +130,13 @@ def _check_options(
     a_out: float,
 ) -> None:
     """Reject bad option values with the option's name (before any file is read)."""
-    if n_spectra < 1:
-        raise UcbplanError(f"--n-spectra: got {n_spectra}, expected an integer >= 1")
-    for name, value in (("--m1", m1), ("--m2", m2), ("--sigma-v", sigma_v), ("--m3", m3)):
-        if value is not None and not value > 0:
-            raise UcbplanError(f"{name}: got {value}, expected a positive number")
-    if not a_out > 0:
-        raise UcbplanError(f"--a-out: got {a_out}, expected a positive number [AU]")
+    check_number("--n-spectra", n_spectra, 0, 1e9, "spectra")
+    wd = "a white dwarf is lighter than the Chandrasekhar mass"
+    check_number("--m1", m1, 0.0, 1.5, "M_sun", wd)
+    check_number("--m2", m2, 0.0, 1.5, "M_sun", wd)
+    check_number("--sigma-v", sigma_v, 0.0, 1e4, "km/s")
+    check_number("--m3", m3, 0.0, 1e3, "M_sun")
+    check_number("--a-out", a_out, 0.0, 1e6, "AU")
 
 
 def _parse_baseline(text: str) -> float:
@@ -143,15 +144,17 @@ def _parse_baseline(text: str) -> float:
     import astropy.units as u
 
     try:
-        return float(text) * DAY_S
+        seconds = float(text) * DAY_S
     except ValueError:
-        pass
-    try:
-        return float(u.Quantity(text).to_value(u.s))
-    except (ValueError, TypeError, u.UnitsError) as exc:
-        raise UcbplanError(
-            f"--baseline: got {text!r}, expected a time like '30 d', '1 yr' or bare days"
-        ) from exc
+        try:
+            seconds = float(u.Quantity(text).to_value(u.s))
+        except (ValueError, TypeError, u.UnitsError):
+            raise UcbplanError(
+                f"--baseline: got {shorten(text, 40)}, expected a time like '30 d', '1 yr' or "
+                "bare days"
+            ) from None
+    check_number("--baseline", seconds / YEAR_S, 0.0, 100.0, "yr", "at most a century")
+    return seconds
 
 
 def _optical_offset(text: str, t_ref: Any) -> float:
