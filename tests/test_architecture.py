@@ -35,6 +35,7 @@ LAYER = {
     "lisa": 4,
     "feasibility": 4,
     "population": 4,
+    "timing": 4,
     "cli": 5,
     "__main__": 6,
 }
