@@ -7,6 +7,7 @@ reads back the same numbers.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Iterable
 from pathlib import Path
 from typing import IO, Any
@@ -19,6 +20,22 @@ from ucbplan.target.model import Spectroscopy, Target
 from ucbplan.target.schema import field
 
 __all__ = ["target_to_dict", "write_target"]
+
+
+class _Dumper(yaml.SafeDumper):
+    """SafeDumper that quotes text :func:`ucbplan.inputs.load_yaml` would read as a number.
+
+    load_yaml reads ``5e-14`` (an exponent without a decimal point) as a float, plain YAML as a
+    string; without this a target named ``1e3`` would be written unquoted and read back as a
+    number.
+    """
+
+
+_Dumper.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?(?:[0-9][0-9_]*)(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"),
+    list("-+0123456789"),
+)
 
 
 def _value(path: str, value: float) -> float | str:
@@ -125,6 +142,6 @@ def write_target(t: Target, path: Path, overwrite: bool = False, header: str = "
     def _write(handle: IO[Any]) -> None:
         for line in header.splitlines():
             handle.write(f"# {line}\n")
-        yaml.safe_dump(doc, handle, sort_keys=False, allow_unicode=True, width=100)
+        yaml.dump(doc, handle, Dumper=_Dumper, sort_keys=False, allow_unicode=True, width=100)
 
     write_output(path, _write, overwrite=overwrite)
