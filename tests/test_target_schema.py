@@ -232,7 +232,8 @@ def test_choices_are_accepted_and_others_are_not(load: Any, f: Field) -> None:
 
 def test_range_notation() -> None:
     assert str(field("lisa.cos_inclination").bounds) == "[-1, 1]"
-    assert str(field("lisa.f_gw").bounds) == "(0, inf)"
+    assert str(field("lisa.f_gw").bounds) == "(0, 1]"
+    assert str(field("lisa.distance").bounds) == "(0, inf)"
     assert str(field("sky.ra").bounds) == "[0, 360)"
 
 

@@ -12,7 +12,7 @@ import math
 from dataclasses import dataclass
 from typing import Any, Literal
 
-from ucbplan.core.constants import E_MAX
+from ucbplan.core.constants import C_KM_S, E_MAX
 from ucbplan.core.params import PARAM_NAMES, PARAM_UNITS
 
 __all__ = [
@@ -164,14 +164,21 @@ def _phase(
 
 
 def _velocity(name: str, example: str, doc: str, reason: str) -> Field:
-    """A spectroscopy velocity ``spectroscopy.<name>`` in km/s, positive."""
+    """A spectroscopy velocity ``spectroscopy.<name>`` in km/s, positive and below c."""
     return Field(
         f"spectroscopy.{name}",
         "quantity",
         "a velocity",
         example,
         unit="km / s",
-        bounds=_positive(reason),
+        bounds=Range(
+            0.0,
+            C_KM_S,
+            low_open=True,
+            high_open=True,
+            reason=f"{reason}, below the speed of light",
+            error=f"must be in (0, {C_KM_S:g}) km/s, got {{raw}}",
+        ),
         doc=doc,
     )
 
@@ -310,7 +317,14 @@ FIELDS: tuple[Field, ...] = (
         '"6.2204944286e-3 Hz"',
         "GW frequency at t_ref",
         required=True,
-        bounds=_positive("a GW frequency (twice the orbital frequency) is positive"),
+        bounds=Range(
+            0.0,
+            1.0,
+            low_open=True,
+            reason="a GW frequency (twice the orbital frequency) is positive, and LISA's band "
+            "ends near 1 Hz",
+            error="must be in (0, 1] Hz, got {raw}",
+        ),
         dimension_hint="give Hz (f = ω/2π)",
     ),
     _phase(

@@ -292,6 +292,13 @@ def _angle(value: Any, hours: bool) -> Angle:
         return Angle(float(text), unit=u.deg)
     if ":" in text or (" " in text and not re.search(r"[a-zA-Z]", text)):
         return Angle(text, unit=u.hourangle if hours else u.deg)
+    try:  # "1.5e-05 deg": astropy's angle parser refuses exponents, its quantity parser not
+        q = u.Quantity(text)
+    except MALFORMED:
+        pass
+    else:
+        if q.isscalar and q.unit.physical_type == "angle":
+            return Angle(q)
     angle = Angle(text)
     if not angle.isscalar:
         raise ValueError

@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import IO, Any
 
 import yaml
+from astropy.time import Time
 
 from ucbplan.core.params import PARAM_NAMES
 from ucbplan.io import write_output
@@ -74,7 +75,7 @@ def target_to_dict(t: Target) -> dict[str, Any]:
 
 def _lisa_dict(t: Target) -> dict[str, Any]:
     lisa: dict[str, Any] = {
-        "t_ref": t.t_ref.tdb.isot,
+        "t_ref": _epoch_text(t.t_ref),
         "t_obs": _value("lisa.t_obs", t.t_obs_s),
         "t_ref_is": "midpoint",
     }
@@ -97,6 +98,19 @@ def _lisa_dict(t: Target) -> dict[str, Any]:
         base = t.source.parent if t.source is not None else Path(".")
         lisa["samples"] = _relative(t.samples, base.resolve())
     return lisa
+
+
+def _epoch_text(t: Time) -> str:
+    """ISO TDB text of ``t`` to 1 µs: milliseconds when they are that close, else microseconds.
+
+    A start-referenced or converted epoch moved to the midpoint has sub-millisecond digits;
+    cutting them to 1 ms would shift the phase reference by up to 3e-4 rad at f = 0.1 Hz.
+    """
+    tdb = t.tdb
+    text: str = Time(tdb, precision=3).isot
+    if abs((Time(text, scale="tdb") - tdb).to_value("s")) > 1e-6:
+        text = Time(tdb, precision=6).isot
+    return text
 
 
 def _spectroscopy_dict(s: Spectroscopy) -> dict[str, Any]:
