@@ -566,3 +566,16 @@ def test_written_targets_read_back(tmp_path: Path) -> None:
     back = load_target(out)
     assert (back.name, back.ra_deg, back.dec_deg) == ("1e3", 1.5e-5, -2e-300)
     assert abs((back.t_ref - t.t_ref).to_value("s")) < 1e-6
+
+
+@pytest.mark.parametrize(
+    "name", ["a\x00b.yaml", "x" * 5000 + ".yaml", "\udcff.yaml", "missing.yaml", "."]
+)
+def test_unusable_paths_give_one_printable_line(tmp_path: Path, name: str) -> None:
+    """A NUL byte was a bare ValueError; a 5000-character path made a 5000-character line; an
+    undecodable file name made a message no terminal could print."""
+    with pytest.raises(TargetFileError) as exc:
+        load_target(tmp_path / name if name != "." else tmp_path)
+    msg = str(exc.value)
+    assert "\n" not in msg and len(msg) < 400
+    msg.encode("utf-8")

@@ -33,6 +33,7 @@ from ucbplan.target.values import (
     Ctx,
     check_keys,
     check_range,
+    one_line,
     parse_angle,
     parse_choice,
     parse_epoch,
@@ -65,13 +66,21 @@ def load_target(path: Path | str) -> Target:
         One line naming the file, the field path, what was expected and how to fix it.
     """
     path = Path(path)
+    label = Ctx(path).label
     try:
         doc = load_yaml(path, "target file")
     except SchemaError as exc:
-        raise TargetFileError(str(exc)) from None
+        msg = str(exc)
+        if len(msg) > 300 and msg.startswith(str(path)):  # a long path: its name is enough
+            msg = label + msg[len(str(path)) :]
+        raise TargetFileError(one_line(msg)) from None
     except RecursionError:
         raise TargetFileError(
-            f"{Ctx(path).label}: <top>: nested too deeply to be a target file; check the brackets"
+            one_line(f"{label}: <top>: nested too deeply to be a target file; check the brackets")
+        ) from None
+    except (OSError, ValueError, UnicodeError):
+        raise TargetFileError(
+            one_line(f"{shorten(str(path))}: cannot open; check the path")
         ) from None
     return target_from_dict(doc, path)
 

@@ -39,6 +39,7 @@ __all__ = [
     "check_keys",
     "check_range",
     "did_you_mean",
+    "one_line",
     "parse_angle",
     "parse_choice",
     "parse_epoch",
@@ -67,6 +68,16 @@ MALFORMED = (
 )
 
 
+def one_line(text: str) -> str:
+    """``text`` on one line, at most 399 characters, printable on any UTF-8 terminal (a lone
+    surrogate from an undecodable file name is escaped)."""
+    text = " ".join(text.splitlines())
+    text = text.encode("utf-8", "backslashreplace").decode("utf-8")
+    if len(text) > MAX_MESSAGE_CHARS:
+        text = f"{text[: MAX_MESSAGE_CHARS - 1]}…"
+    return text
+
+
 class Ctx:
     """Error context: the file name that starts every message."""
 
@@ -76,10 +87,7 @@ class Ctx:
 
     def fail(self, fieldname: str, msg: str) -> TargetFileError:
         """A one-line error ``label: fieldname: msg`` (to raise), at most 399 characters."""
-        text = " ".join(f"{self.label}: {fieldname}: {msg}".splitlines())
-        if len(text) > MAX_MESSAGE_CHARS:
-            text = f"{text[: MAX_MESSAGE_CHARS - 1]}…"
-        return TargetFileError(text)
+        return TargetFileError(one_line(f"{self.label}: {fieldname}: {msg}"))
 
     @staticmethod
     def key(key: Any) -> str:
