@@ -36,7 +36,7 @@ CATALOG_NAMES = ("hm-cnc.yaml", "fiducial-eccentric.yaml", "fiducial-injection.y
 DOCS = {name: yaml.safe_load((CATALOGS / name).read_text()) for name in CATALOG_NAMES}
 
 QUICK = settings(
-    max_examples=40,
+    max_examples=100,
     deadline=2000,
     suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
     derandomize=True,
