@@ -2,7 +2,9 @@
 
 Two forms are accepted: ``parameters`` + ``matrix`` (a full matrix), or ``sigma`` (marginal
 standard deviations, each in its parameter's unit) with optional ``correlation`` coefficients.
-Either way the result must be symmetric positive semi-definite.
+The forms cannot be mixed and unknown keys are refused (a misspelt ``correlation`` would
+otherwise drop the correlations silently). Either way the result must be finite, symmetric and
+positive semi-definite.
 """
 
 from __future__ import annotations
@@ -14,8 +16,16 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ucbplan.target.schema import COVARIANCE_PARAMETERS, field
-from ucbplan.target.values import Ctx, check_range, parse_quantity, to_float
+from ucbplan.errors import shorten
+from ucbplan.target.schema import COVARIANCE_PARAMETERS, field, section_fields
+from ucbplan.target.values import (
+    Ctx,
+    check_keys,
+    check_range,
+    did_you_mean,
+    parse_quantity,
+    to_float,
+)
 
 __all__ = ["parse_covariance"]
 
@@ -23,7 +33,9 @@ FloatArray = NDArray[np.float64]
 Named = tuple[tuple[str, ...], FloatArray]
 
 _PATH = "lisa.covariance"
+_KEYS = tuple(f.name for f in section_fields(_PATH))
 _ALLOWED = ", ".join(COVARIANCE_PARAMETERS)
+_FORMS = "give either parameters + matrix or sigma (+ correlation)"
 
 
 def parse_covariance(ctx: Ctx, cov: Any) -> Named:
@@ -32,64 +44,112 @@ def parse_covariance(ctx: Ctx, cov: Any) -> Named:
     Raises
     ------
     TargetFileError
-        Unknown or repeated names, a matrix of the wrong shape, σ < 0, |ρ| > 1, or a matrix
-        that is not symmetric positive semi-definite.
+        Unknown keys or names, mixed forms, repeated names or pairs, a matrix of the wrong
+        shape, σ ≤ 0, ρ outside [−1, 1] or not a number, non-finite entries, or a matrix that
+        is not symmetric positive semi-definite.
     """
     if cov is None:
         return (), np.zeros((0, 0))
     if not isinstance(cov, Mapping):
-        raise ctx.fail(_PATH, "expected a mapping with parameters+matrix or sigma")
-    if "matrix" in cov:
-        names, mat = _from_matrix(ctx, cov)
-    elif "sigma" in cov:
-        names, mat = _from_sigma(ctx, cov)
-    else:
-        raise ctx.fail(_PATH, "expected either 'parameters'+'matrix' or 'sigma' (+ 'correlation')")
-    _check_symmetric(ctx, mat)
-    _check_psd(ctx, mat)
+        raise ctx.fail(_PATH, f"expected a mapping: {_FORMS}; got {shorten(cov)}")
+    check_keys(ctx, _PATH, cov, _KEYS)
+    full = {"parameters", "matrix"} & set(cov)
+    marginal = {"sigma", "correlation"} & set(cov)
+    if full and marginal:
+        raise ctx.fail(
+            _PATH, f"{_FORMS}, not both; got {', '.join(sorted(full | marginal, key=_KEYS.index))}"
+        )
+    with np.errstate(all="ignore"), ctx.reading(_PATH, "a covariance"):
+        if full:
+            names, mat = _from_matrix(ctx, cov)
+        elif marginal:
+            names, mat = _from_sigma(ctx, cov)
+        else:
+            raise ctx.fail(_PATH, f"{_FORMS}; got an empty mapping")
+        _check_symmetric(ctx, mat)
+        _check_psd(ctx, mat)
     return names, mat
+
+
+def _parameter_names(ctx: Ctx, where: str, names: list[Any]) -> tuple[str, ...]:
+    """Known, distinct parameter names (each a string)."""
+    for n in names:
+        if not isinstance(n, str) or n not in COVARIANCE_PARAMETERS:
+            hint = did_you_mean(n, COVARIANCE_PARAMETERS)
+            raise ctx.fail(
+                where, f"unknown parameter {shorten(n, 60)}; {hint}expected some of {_ALLOWED}"
+            )
+    if len(set(names)) != len(names):
+        raise ctx.fail(where, "parameter names repeat")
+    return tuple(names)
 
 
 def _from_matrix(ctx: Ctx, cov: Mapping[str, Any]) -> Named:
     """The ``parameters`` + ``matrix`` form."""
     where = f"{_PATH}.parameters"
-    names = cov.get("parameters")
+    for key in ("parameters", "matrix"):
+        if key not in cov:
+            raise ctx.fail(f"{_PATH}.{key}", f"missing; {_FORMS}")
+    names = cov["parameters"]
     if not isinstance(names, list) or not names:
-        raise ctx.fail(where, "expected a list of parameter names")
-    names_t = tuple(str(n) for n in names)
-    for n in names_t:
-        if n not in COVARIANCE_PARAMETERS:
-            raise ctx.fail(where, f"unknown parameter {n!r}; expected some of {_ALLOWED}")
-    if len(set(names_t)) != len(names_t):
-        raise ctx.fail(where, "parameter names repeat")
-    try:
-        mat = np.array(
-            [[to_float(x) for x in row] for row in cov["matrix"]], dtype=np.float64, ndmin=2
+        raise ctx.fail(
+            where,
+            f"expected a list of parameter names like {field(where).example}, got {shorten(names)}",
         )
-    except (TypeError, ValueError):
-        raise ctx.fail(f"{_PATH}.matrix", "expected a square list of lists of numbers") from None
+    names_t = _parameter_names(ctx, where, names)
     size = len(names_t)
-    if mat.shape != (size, size):
-        raise ctx.fail(f"{_PATH}.matrix", f"expected a {size}×{size} matrix, got shape {mat.shape}")
-    return names_t, mat
+    rows = cov["matrix"]
+    where = f"{_PATH}.matrix"
+    if not (isinstance(rows, list) and all(isinstance(r, list) for r in rows)):
+        raise ctx.fail(where, f"expected a {size}×{size} list of lists of numbers")
+    if len(rows) != size or any(len(r) != size for r in rows):
+        shape = f"{len(rows)} rows of {sorted({len(r) for r in rows})} entries"
+        raise ctx.fail(where, f"expected a {size}×{size} matrix, got {shape}")
+    try:
+        mat = np.array([[to_float(x) for x in row] for row in rows], dtype=np.float64)
+    except ValueError:
+        bad = next(x for row in rows for x in row if not _is_number(x))
+        raise ctx.fail(where, f"expected numbers, got {shorten(bad)}") from None
+    return names_t, mat.reshape(size, size)
+
+
+def _is_number(x: Any) -> bool:
+    try:
+        to_float(x)
+    except ValueError:
+        return False
+    return True
 
 
 def _from_sigma(ctx: Ctx, cov: Mapping[str, Any]) -> Named:
     """The ``sigma`` (+ ``correlation``) form: Σ = ρ ∘ σσᵀ."""
+    where = f"{_PATH}.sigma"
+    if "sigma" not in cov:
+        raise ctx.fail(where, "missing; correlation needs the σ of its parameters")
     sig = cov["sigma"]
     if not isinstance(sig, Mapping) or not sig:
-        raise ctx.fail(f"{_PATH}.sigma", "expected a mapping parameter: sigma")
-    names = tuple(str(n) for n in sig)
+        raise ctx.fail(
+            where,
+            f"expected a mapping parameter: sigma like {field(where).example}, got {shorten(sig)}",
+        )
+    for n in sig:
+        if not isinstance(n, str) or n not in COVARIANCE_PARAMETERS:
+            hint = did_you_mean(n, COVARIANCE_PARAMETERS)
+            raise ctx.fail(
+                f"{where}.{ctx.key(n)}", f"unknown parameter; {hint}expected some of {_ALLOWED}"
+            )
+    names = tuple(sig)
     sigmas = np.array([_sigma(ctx, n, sig[n]) for n in names])
     corr = _correlation_matrix(ctx, names, cov.get("correlation"))
-    return names, corr * np.outer(sigmas, sigmas)
+    out = corr * np.outer(sigmas, sigmas)
+    if not np.all(np.isfinite(out)):
+        raise ctx.fail(where, "σ² overflows a float; check the units of sigma")
+    return names, out
 
 
 def _sigma(ctx: Ctx, name: str, raw: Any) -> float:
     """One marginal σ, read in the unit of parameter ``name``."""
     where = f"{_PATH}.sigma.{name}"
-    if name not in COVARIANCE_PARAMETERS:
-        raise ctx.fail(where, f"unknown parameter; expected some of {_ALLOWED}")
     s = parse_quantity(ctx, field(f"lisa.{name}"), raw, where=where)
     check_range(ctx, field(f"{_PATH}.sigma"), s, raw, where=where)
     return s
@@ -98,14 +158,24 @@ def _sigma(ctx: Ctx, name: str, raw: Any) -> float:
 def _correlation_matrix(ctx: Ctx, names: tuple[str, ...], raw: Any) -> FloatArray:
     """Correlation matrix of ``names``: identity plus the given coefficients."""
     corr = np.eye(len(names))
+    seen: set[frozenset[str]] = set()
+    f = field(f"{_PATH}.correlation")
     for (a, b), rho_raw in _iter_correlations(ctx, raw):
-        where = f"{_PATH}.correlation.{a},{b}"
+        where = f"{_PATH}.correlation.{ctx.key(a)},{ctx.key(b)}"
         if a not in names or b not in names or a == b:
             raise ctx.fail(
                 where, f"names must be two different parameters of sigma ({', '.join(names)})"
             )
-        rho = to_float(rho_raw)  # NaN lies outside every range
-        check_range(ctx, field(f"{_PATH}.correlation"), rho, rho_raw, where=where)
+        if frozenset((a, b)) in seen:
+            raise ctx.fail(where, "pair given twice; keep one coefficient per pair")
+        seen.add(frozenset((a, b)))
+        try:
+            rho = to_float(rho_raw)
+        except ValueError:
+            raise ctx.fail(
+                where, f"expected a number ρ in [-1, 1] like -0.7, got {shorten(rho_raw)}"
+            ) from None
+        check_range(ctx, f, rho, rho_raw, where=where)  # NaN lies outside every range
         i, j = names.index(a), names.index(b)
         corr[i, j] = corr[j, i] = rho
     return corr
@@ -113,6 +183,8 @@ def _correlation_matrix(ctx: Ctx, names: tuple[str, ...], raw: Any) -> FloatArra
 
 def _iter_correlations(ctx: Ctx, corr: Any) -> list[tuple[tuple[str, str], Any]]:
     """``((a, b), ρ)`` pairs from the mapping form ``{"a,b": ρ}`` or the list form."""
+    where = f"{_PATH}.correlation"
+    example = field(where).example
     if corr is None:
         return []
     if isinstance(corr, Mapping):
@@ -120,19 +192,30 @@ def _iter_correlations(ctx: Ctx, corr: Any) -> list[tuple[tuple[str, str], Any]]
     if isinstance(corr, list):
         out: list[tuple[tuple[str, str], Any]] = []
         for item in corr:
-            if not (isinstance(item, list) and len(item) == 3):
-                raise ctx.fail(f"{_PATH}.correlation", "expected entries like [phase, fdot, -0.7]")
-            out.append(((str(item[0]), str(item[1])), item[2]))
+            if not (
+                isinstance(item, list)
+                and len(item) == 3
+                and isinstance(item[0], str)
+                and isinstance(item[1], str)
+            ):
+                raise ctx.fail(
+                    where, f"expected entries like [phase, fdot, -0.7], got {shorten(item)}"
+                )
+            out.append(((item[0], item[1]), item[2]))
         return out
-    raise ctx.fail(f"{_PATH}.correlation", 'expected a mapping like {"phase,fdot": -0.7}')
+    raise ctx.fail(where, f"expected {example}, got {shorten(corr)}")
 
 
 def _pair_from_key(ctx: Ctx, key: Any, val: Any) -> tuple[tuple[str, str], Any]:
     """``"phase,fdot"`` (or ``"(phase fdot)"`` …) → ``(("phase", "fdot"), val)``."""
-    parts = [s for s in re.split(r"[,\s]+", str(key).strip("()[] ")) if s]
+    parts = (
+        [s for s in re.split(r"[,\s]+", key.strip("()[] ")) if s]
+        if isinstance(key, str) and len(key) <= 100
+        else []
+    )
     if len(parts) != 2:
         raise ctx.fail(
-            f"{_PATH}.correlation.{key}",
+            f"{_PATH}.correlation.{ctx.key(key)}",
             'expected a key naming two parameters, like "phase,fdot": -0.7',
         )
     return (parts[0], parts[1]), val
@@ -141,9 +224,9 @@ def _pair_from_key(ctx: Ctx, key: Any, val: Any) -> tuple[tuple[str, str], Any]:
 def _check_symmetric(ctx: Ctx, mat: FloatArray) -> None:
     """Finite entries, non-negative variances, symmetric to 1e-9 of σ_i σ_j."""
     if not np.all(np.isfinite(mat)):
-        raise ctx.fail(_PATH, "contains non-finite values")
+        raise ctx.fail(_PATH, "contains non-finite values; give finite numbers")
     if np.any(np.diag(mat) < 0):
-        raise ctx.fail(_PATH, "negative variance on the diagonal")
+        raise ctx.fail(_PATH, "negative variance on the diagonal (a variance is σ² ≥ 0)")
     scale = np.sqrt(np.abs(np.diag(mat)))
     tol = 1e-9 * np.outer(scale, scale) + 1e-300
     if np.any(np.abs(mat - mat.T) > tol):
@@ -155,7 +238,12 @@ def _check_psd(ctx: Ctx, mat: FloatArray) -> None:
     scale = np.sqrt(np.abs(np.diag(mat)))
     safe = np.where(scale > 0, scale, 1.0)
     corr = mat / np.outer(safe, safe)
-    eig = np.linalg.eigvalsh(0.5 * (corr + corr.T))
+    try:
+        eig = np.linalg.eigvalsh(0.5 * (corr + corr.T))
+    except np.linalg.LinAlgError:
+        raise ctx.fail(_PATH, "matrix cannot be decomposed; check its entries") from None
+    if not np.all(np.isfinite(eig)):
+        raise ctx.fail(_PATH, "matrix cannot be decomposed; check its entries")
     if eig.size and eig.min() < -1e-9:
         raise ctx.fail(
             _PATH,

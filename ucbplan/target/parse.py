@@ -10,13 +10,13 @@ validation failure is a one-line :class:`~ucbplan.errors.TargetFileError`:
 from __future__ import annotations
 
 import math
+import unicodedata
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 from astropy import units as u
 from astropy.coordinates import SkyCoord
 from astropy.time import Time, TimeDelta
@@ -24,14 +24,18 @@ from numpy.typing import NDArray
 
 from ucbplan.core.constants import E_MAX, L_B
 from ucbplan.core.params import PARAM_NAMES, PhaseParams, shift_jacobian, shift_reference
-from ucbplan.errors import TargetFileError
+from ucbplan.errors import SchemaError, TargetFileError, shorten
+from ucbplan.inputs import load_yaml
 from ucbplan.target.covariance import parse_covariance
 from ucbplan.target.model import Spectroscopy, Target
 from ucbplan.target.schema import Field, field, section_fields
 from ucbplan.target.values import (
     Ctx,
+    check_keys,
     check_range,
+    one_line,
     parse_angle,
+    parse_choice,
     parse_epoch,
     parse_number,
     parse_quantity,
@@ -45,12 +49,16 @@ _PHASE_MODEL = tuple(field(f"lisa.{n}") for n in PARAM_NAMES)
 _LISA_EXTRAS = tuple(
     field(f"lisa.{n}") for n in ("cos_inclination", "amplitude", "psi", "distance")
 )
+#: Longest target name [characters] (names go into starlists, headers and file names).
+MAX_NAME_CHARS = 200
+#: Unicode categories refused in a name: control characters, surrogates, line separators.
+_CONTROL = frozenset(("Cc", "Cs", "Zl", "Zp"))
 #: Powers of 1/s in the unit of each rate that a TCB → TDB conversion rescales.
 _TCB_POWER = {"f_gw": 1, "fdot": 2, "fddot": 3, "omega_dot": 1}
 
 
 def load_target(path: Path | str) -> Target:
-    """Read and validate a target YAML file (``yaml.safe_load`` only).
+    """Read and validate a target YAML file (strictly, see :func:`ucbplan.inputs.load_yaml`).
 
     Raises
     ------
@@ -58,18 +66,22 @@ def load_target(path: Path | str) -> Target:
         One line naming the file, the field path, what was expected and how to fix it.
     """
     path = Path(path)
+    label = Ctx(path).label
     try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise TargetFileError(f"{path}: file not found; check the path") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise TargetFileError(f"{path}: cannot read target file ({exc})") from None
-    try:
-        doc = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" at line {mark.line + 1}" if mark is not None else ""
-        raise TargetFileError(f"{Ctx(path).label}: not valid YAML{where}; fix the syntax") from None
+        doc = load_yaml(path, "target file")
+    except SchemaError as exc:
+        msg = str(exc)
+        if len(msg) > 300 and msg.startswith(str(path)):  # a long path: its name is enough
+            msg = label + msg[len(str(path)) :]
+        raise TargetFileError(one_line(msg)) from None
+    except RecursionError:
+        raise TargetFileError(
+            one_line(f"{label}: <top>: nested too deeply to be a target file; check the brackets")
+        ) from None
+    except (OSError, ValueError, UnicodeError):
+        raise TargetFileError(
+            one_line(f"{shorten(str(path))}: cannot open; check the path")
+        ) from None
     return target_from_dict(doc, path)
 
 
@@ -80,15 +92,22 @@ def target_from_dict(doc: Any, path: Path | None = None) -> Target:
     """
     ctx = Ctx(path)
     if not isinstance(doc, Mapping):
-        raise ctx.fail("<top>", "expected a YAML mapping with name, sky and lisa")
-    _no_unknown_fields(ctx, "", doc)
-    name = _parse_name(ctx, doc.get("name"))
-    ra, dec = _parse_sky(ctx, doc)
-    lisa = _parse_lisa(ctx, doc.get("lisa"), path)
-    spectroscopy = _parse_spectroscopy(ctx, doc.get("spectroscopy"))
+        raise ctx.fail(
+            "<top>", f"expected a YAML mapping with name, sky and lisa, got {_kind(doc)}"
+        )
+    check_keys(ctx, "", doc, _TOP)
+    with ctx.reading("name", "a name"):
+        name = _parse_name(ctx, doc.get("name"))
+    with ctx.reading("sky", "a sky position"):
+        ra, dec = _parse_sky(ctx, doc)
+    with ctx.reading("lisa", "the LISA posterior summary"):
+        lisa = _parse_lisa(ctx, doc.get("lisa"), path)
+    with ctx.reading("spectroscopy", "spectroscopy defaults"):
+        spectroscopy = _parse_spectroscopy(ctx, doc.get("spectroscopy"))
     priority = _number(ctx, doc, field("priority"))
     vmag = _number(ctx, doc, field("vmag"))
-    masses = _parse_masses(ctx, doc)
+    with ctx.reading("masses", "masses"):
+        masses = _parse_masses(ctx, doc)
     return Target(
         name=name,
         source=path.resolve() if path is not None else None,
@@ -119,16 +138,27 @@ def target_from_dict(doc: Any, path: Path | None = None) -> Target:
 # ---------------------------------------------------------------------------------------------
 
 
-def _no_unknown_fields(ctx: Ctx, section: str, mapping: Mapping[Any, Any]) -> None:
-    """Fail on the first (sorted) key of ``mapping`` that the schema's ``section`` lacks."""
-    allowed = sorted(f.name for f in section_fields(section))
-    unknown = set(mapping) - set(allowed)
-    if unknown:
-        first = sorted(unknown)[0]
-        raise ctx.fail(
-            f"{section}.{first}" if section else first,
-            f"unknown field; expected some of {', '.join(allowed)}",
-        )
+def _names(section: str) -> tuple[str, ...]:
+    return tuple(f.name for f in section_fields(section))
+
+
+_TOP = _names("")
+
+
+def _kind(value: Any) -> str:
+    if isinstance(value, list):
+        return "a list"
+    if value is None:
+        return "an empty document"
+    return f"{type(value).__name__} {shorten(value)}"
+
+
+def _mapping(ctx: Ctx, f: Field, value: Any) -> Mapping[Any, Any]:
+    """``value`` as a mapping of the fields of section ``f`` (unknown keys refused)."""
+    if not isinstance(value, Mapping):
+        raise ctx.fail(f.path, f"expected a mapping like {f.example}, got {shorten(value)}")
+    check_keys(ctx, f.path, value, _names(f.path))
+    return value
 
 
 def _quantities(ctx: Ctx, mapping: Mapping[str, Any], fields: Iterable[Field]) -> dict[str, Any]:
@@ -152,36 +182,46 @@ def _number(ctx: Ctx, doc: Mapping[str, Any], f: Field) -> Any:
 
 
 def _parse_name(ctx: Ctx, name: Any) -> str:
+    """A non-empty one-line name (no control characters), at most :data:`MAX_NAME_CHARS`."""
+    f = field("name")
+    expect = f"expected {f.what} like {f.example}"
+    if name is None:
+        raise ctx.fail(f.path, f"missing; {expect}")
     if not isinstance(name, str) or not name.strip():
-        f = field("name")
-        raise ctx.fail(f.path, f"expected {f.what} like {f.example}")
+        raise ctx.fail(f.path, f"{expect}, got {shorten(name)}")
+    if len(name) > MAX_NAME_CHARS:
+        raise ctx.fail(
+            f.path, f"{expect} of at most {MAX_NAME_CHARS} characters, got {shorten(name)}"
+        )
+    if any(unicodedata.category(c) in _CONTROL for c in name):
+        raise ctx.fail(
+            f.path, f"{expect} on one line without control characters, got {shorten(name)}"
+        )
     return name.strip()
 
 
 def _parse_sky(ctx: Ctx, doc: Mapping[str, Any]) -> tuple[float, float]:
     """ICRS (ra, dec) in degrees from ``sky``: ICRS ra/dec, or galactic l/b converted."""
-    example = field("sky").example
+    f = field("sky")
     if "sky" not in doc:
-        raise ctx.fail("sky", f"missing; add sky: {example}")
-    sky = doc["sky"]
-    if not isinstance(sky, Mapping):
-        raise ctx.fail("sky", f"expected a mapping like {example}")
+        raise ctx.fail(f.path, f"missing; add sky: {f.example}")
+    sky = _mapping(ctx, f, doc["sky"])
     keys = set(sky)
-    if {"l", "b"} <= keys and not ({"ra", "dec"} & keys):
+    if {"l", "b"} & keys:
+        if {"ra", "dec", "frame"} & keys:
+            raise ctx.fail(f.path, "give ICRS ra, dec (with frame) or galactic l, b, not both")
+        for k in ("l", "b"):
+            if k not in sky:
+                raise ctx.fail(f"sky.{k}", "missing; give galactic l and b together")
         lon = parse_angle(ctx, field("sky.l"), sky["l"])
         lat = parse_angle(ctx, field("sky.b"), sky["b"])
         c = SkyCoord(l=lon * u.deg, b=lat * u.deg, frame="galactic").icrs
         return float(c.ra.deg), float(c.dec.deg)
-    unknown = keys - {"ra", "dec", "frame"}
-    if unknown:
-        raise ctx.fail(f"sky.{sorted(unknown)[0]}", "unknown field; expected ra, dec (or l, b)")
     for k in ("ra", "dec"):
         if k not in sky:
-            raise ctx.fail(f"sky.{k}", "missing; give ICRS ra and dec")
+            raise ctx.fail(f"sky.{k}", "missing; give ICRS ra and dec (or galactic l and b)")
     frame_field = field("sky.frame")
-    frame = str(sky.get("frame", frame_field.default)).lower()
-    if frame not in frame_field.choices:
-        raise ctx.fail(frame_field.path, f"expected icrs, got {frame!r}")
+    parse_choice(ctx, frame_field, sky.get("frame", frame_field.default))
     ra = parse_angle(ctx, field("sky.ra"), sky["ra"], hours=True)
     return ra, parse_angle(ctx, field("sky.dec"), sky["dec"])
 
@@ -189,16 +229,9 @@ def _parse_sky(ctx: Ctx, doc: Mapping[str, Any]) -> tuple[float, float]:
 def _parse_spectroscopy(ctx: Ctx, spec: Any) -> Spectroscopy | None:
     if spec is None:
         return None
-    if not isinstance(spec, Mapping):
-        raise ctx.fail("spectroscopy", "expected a mapping with lines, K1, K2, sigma_v")
-    _no_unknown_fields(ctx, "spectroscopy", spec)
+    spec = _mapping(ctx, field("spectroscopy"), spec)
     lines_field = field("spectroscopy.lines")
-    lines = str(spec.get("lines", lines_field.default)).upper()
-    if lines not in lines_field.choices:
-        raise ctx.fail(
-            lines_field.path,
-            f"expected {' or '.join(lines_field.choices)}, got {spec.get('lines')!r}",
-        )
+    lines = parse_choice(ctx, lines_field, spec.get("lines", lines_field.default))
     vals: dict[str, Any] = {}
     for f in section_fields("spectroscopy"):
         if f.kind == "quantity":  # each read and range-checked in turn
@@ -209,11 +242,8 @@ def _parse_spectroscopy(ctx: Ctx, spec: Any) -> Spectroscopy | None:
 def _parse_masses(ctx: Ctx, doc: Mapping[str, Any]) -> dict[str, float | None]:
     if "masses" not in doc:
         return {}
-    masses = doc["masses"]
-    fields = section_fields("masses")
-    if not isinstance(masses, Mapping) or set(masses) - {f.name for f in fields}:
-        raise ctx.fail("masses", f"expected {field('masses').example}")
-    return _quantities(ctx, masses, fields)
+    masses = _mapping(ctx, field("masses"), doc["masses"])
+    return _quantities(ctx, masses, section_fields("masses"))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -252,7 +282,7 @@ def _parse_lisa(ctx: Ctx, lisa: Any, path: Path | None) -> _Lisa:
     shift = 0.0
     if ref_is == "start":
         shift = t_obs / 2.0
-        params, mat = _shift_named(params, names, mat, shift)
+        params, mat = _moved_to_midpoint(ctx, params, names, mat, shift)
         t_ref = t_ref + TimeDelta(shift, format="sec")
     return _Lisa(
         t_ref=t_ref,
@@ -267,11 +297,34 @@ def _parse_lisa(ctx: Ctx, lisa: Any, path: Path | None) -> _Lisa:
     )
 
 
+def _moved_to_midpoint(
+    ctx: Ctx, params: PhaseParams, names: tuple[str, ...], mat: FloatArray, shift: float
+) -> tuple[PhaseParams, FloatArray]:
+    """Start-referenced values moved by T_obs/2; they must stay finite, and f positive."""
+    why = (
+        "from the start to the midpoint of the observation (t_ref_is: start); check the "
+        "magnitudes and units of f_gw, fdot, fddot and omega_dot"
+    )
+    try:
+        with np.errstate(all="ignore"):
+            moved, moved_mat = _shift_named(params, names, mat, shift)
+    except (ValueError, OverflowError, ArithmeticError):
+        raise ctx.fail("lisa", f"values overflow when moved {why}") from None
+    if not (np.all(np.isfinite(moved.as_array())) and np.all(np.isfinite(moved_mat))):
+        raise ctx.fail("lisa", f"values overflow when moved {why}")
+    if moved.f_gw <= 0.0:
+        raise ctx.fail(
+            "lisa.f_gw", f"f_gw at the midpoint is {moved.f_gw:.4g} Hz ≤ 0 when moved {why}"
+        )
+    return moved, moved_mat
+
+
 def _check_lisa_fields(ctx: Ctx, lisa: Any) -> None:
     """``lisa`` is a mapping of known fields with every required one present."""
-    if not isinstance(lisa, Mapping):
-        raise ctx.fail("lisa", "missing or not a mapping; see the README target-file format")
-    _no_unknown_fields(ctx, "lisa", lisa)
+    f = field("lisa")
+    if lisa is None:
+        raise ctx.fail(f.path, f"missing; add lisa: {f.example}")
+    _mapping(ctx, f, lisa)
     for f in section_fields("lisa"):
         if f.required and f.name not in lisa:
             raise ctx.fail(
@@ -282,10 +335,7 @@ def _check_lisa_fields(ctx: Ctx, lisa: Any) -> None:
 def _reference_point(ctx: Ctx, lisa: Mapping[str, Any]) -> str:
     """``t_ref_is``: where in the observation t_ref lies (``midpoint`` or ``start``)."""
     f = field("lisa.t_ref_is")
-    ref_is = str(lisa.get(f.name, f.default)).strip().lower()
-    if ref_is not in f.choices:
-        raise ctx.fail(f.path, f"expected {' or '.join(map(repr, f.choices))}, got {ref_is!r}")
-    return ref_is
+    return parse_choice(ctx, f, lisa.get(f.name, f.default))
 
 
 def _check_eccentricity(ctx: Ctx, eta: float, kappa: float) -> None:
@@ -305,12 +355,18 @@ def _samples_path(ctx: Ctx, lisa: Mapping[str, Any], path: Path | None) -> Path 
     if f.name not in lisa:
         return None
     name = lisa[f.name]
-    if not isinstance(name, str):
-        raise ctx.fail(f.path, f"expected {f.what} like {f.example}")
+    if not isinstance(name, str) or not name.strip() or len(name) > 1000:
+        raise ctx.fail(f.path, f"expected {f.what} like {f.example}, got {shorten(name)}")
     base = path.parent if path is not None else Path(".")
-    samples = (base / name).resolve()
-    if not samples.exists():
-        raise ctx.fail(f.path, f"file {name!r} not found next to the target file")
+    try:
+        samples = (base / name).resolve()
+        found = samples.is_file()
+    except (OSError, ValueError, UnicodeError):
+        found = False
+    if not found:
+        raise ctx.fail(
+            f.path, f"file {shorten(name)} not found next to the target file (or not a file)"
+        )
     return samples
 
 

@@ -12,7 +12,7 @@ import math
 from dataclasses import dataclass
 from typing import Any, Literal
 
-from ucbplan.core.constants import E_MAX
+from ucbplan.core.constants import C_KM_S, E_MAX
 from ucbplan.core.params import PARAM_NAMES, PARAM_UNITS
 
 __all__ = [
@@ -48,7 +48,8 @@ class Range:
         The physical reason for the bound (for the docs).
     error : str
         Message after ``file: field:`` when a value falls outside; ``{raw}`` is the value as
-        written, ``{value}`` the parsed number.
+        written (quoted and shortened), ``{value}`` the parsed number. The parser appends the
+        reason in parentheses.
     """
 
     low: float = -math.inf
@@ -56,7 +57,7 @@ class Range:
     low_open: bool = False
     high_open: bool = False
     reason: str = ""
-    error: str = "must be positive, got {raw!r}"
+    error: str = "must be positive, got {raw}"
 
     def contains(self, x: float) -> bool:
         """Whether ``x`` lies inside the interval."""
@@ -102,6 +103,12 @@ class Field:
         Allowed values of a ``choice`` field.
     doc : str
         One line for the target-file reference.
+    dimension_hint : str
+        How to fix a quantity given with the wrong dimension (e.g. ``give Hz (f = ω/2π)``);
+        empty: "give <unit>".
+    cosine_of : str
+        For a cosine (dimensionless): the angle it is the cosine of; an angle given instead is
+        refused with the cosine to write.
     """
 
     path: str
@@ -114,6 +121,8 @@ class Field:
     bounds: Range | None = None
     choices: tuple[str, ...] = ()
     doc: str = ""
+    dimension_hint: str = ""
+    cosine_of: str = ""
 
     @property
     def name(self) -> str:
@@ -137,6 +146,7 @@ def _phase(
     doc: str,
     required: bool = False,
     bounds: Range | None = None,
+    dimension_hint: str = "",
 ) -> Field:
     """A phase-model parameter ``lisa.<name>`` in its core unit; optional ones default to 0."""
     return Field(
@@ -149,18 +159,26 @@ def _phase(
         default=None if required else 0.0,
         bounds=bounds,
         doc=doc,
+        dimension_hint=dimension_hint,
     )
 
 
 def _velocity(name: str, example: str, doc: str, reason: str) -> Field:
-    """A spectroscopy velocity ``spectroscopy.<name>`` in km/s, positive."""
+    """A spectroscopy velocity ``spectroscopy.<name>`` in km/s, positive and below c."""
     return Field(
         f"spectroscopy.{name}",
         "quantity",
         "a velocity",
         example,
         unit="km / s",
-        bounds=_positive(reason),
+        bounds=Range(
+            0.0,
+            C_KM_S,
+            low_open=True,
+            high_open=True,
+            reason=f"{reason}, below the speed of light",
+            error=f"must be in (0, {C_KM_S:g}) km/s, got {{raw}}",
+        ),
         doc=doc,
     )
 
@@ -187,7 +205,7 @@ FIELDS: tuple[Field, ...] = (
             360.0,
             high_open=True,
             reason="right ascension wraps at 24h",
-            error="right ascension must be in [0h, 24h), got {raw!r}",
+            error="right ascension must be in [0h, 24h), got {raw}",
         ),
         doc="ICRS right ascension (sexagesimal hours, or degrees); required unless l, b are given",
     ),
@@ -201,7 +219,7 @@ FIELDS: tuple[Field, ...] = (
             -90.0,
             90.0,
             reason="a latitude on the sky",
-            error="declination must be in [-90, +90] deg, got {raw!r}",
+            error="declination must be in [-90, +90] deg, got {raw}",
         ),
         doc="ICRS declination; required unless l, b are given",
     ),
@@ -232,7 +250,7 @@ FIELDS: tuple[Field, ...] = (
             -90.0,
             90.0,
             reason="a latitude on the sky",
-            error="declination must be in [-90, +90] deg, got {raw!r}",
+            error="declination must be in [-90, +90] deg, got {raw}",
         ),
         doc="galactic latitude (with l)",
     ),
@@ -267,7 +285,13 @@ FIELDS: tuple[Field, ...] = (
         '"126232599.05 s" or "4 yr"',
         unit="s",
         required=True,
-        bounds=_positive("an observation lasts a positive time"),
+        bounds=Range(
+            0.0,
+            3.15576e9,
+            low_open=True,
+            reason="an observation lasts a positive time, at most 100 yr",
+            error="must be positive and at most 100 yr (3.15576e9 s), got {raw}",
+        ),
         doc="length of the LISA observation",
     ),
     Field(
@@ -285,6 +309,7 @@ FIELDS: tuple[Field, ...] = (
         '5.500397 (rad) or "5.5 rad"',
         "φ_ref, GW phase of the n=2 mode at t_ref",
         required=True,
+        dimension_hint="give rad (or deg, cycle)",
     ),
     _phase(
         "f_gw",
@@ -292,23 +317,52 @@ FIELDS: tuple[Field, ...] = (
         '"6.2204944286e-3 Hz"',
         "GW frequency at t_ref",
         required=True,
-        bounds=_positive("a GW frequency (twice the orbital frequency) is positive"),
+        bounds=Range(
+            0.0,
+            1.0,
+            low_open=True,
+            reason="a GW frequency (twice the orbital frequency) is positive, and LISA's band "
+            "ends near 1 Hz",
+            error="must be in (0, 1] Hz, got {raw}",
+        ),
+        dimension_hint="give Hz (f = ω/2π)",
     ),
-    _phase("fdot", "a frequency derivative", '"7.07e-16 Hz / s"', "df/dt at t_ref", required=True),
-    _phase("fddot", "a second frequency derivative", '"-1.07e-26 Hz / s2"', "d²f/dt² at t_ref"),
+    _phase(
+        "fdot",
+        "a frequency derivative",
+        '"7.07e-16 Hz / s"',
+        "df/dt at t_ref",
+        required=True,
+        dimension_hint="give Hz / s (ḟ = ω̇_GW/2π)",
+    ),
+    _phase(
+        "fddot",
+        "a second frequency derivative",
+        '"-1.07e-26 Hz / s2"',
+        "d²f/dt² at t_ref",
+        dimension_hint="give Hz / s2 (f̈ = ω̈_GW/2π)",
+    ),
     _phase(
         "eta",
         "a dimensionless number",
         "0.0068 (dimensionless)",
         f"η = e sin ω of star 1 at t_ref; {_ECC_NOTE}",
+        dimension_hint="η = e sin ω is dimensionless: give a plain number",
     ),
     _phase(
         "kappa",
         "a dimensionless number",
         "0.0068 (dimensionless)",
         f"κ = e cos ω of star 1 at t_ref; {_ECC_NOTE}",
+        dimension_hint="κ = e cos ω is dimensionless: give a plain number",
     ),
-    _phase("omega_dot", "an angular rate", '"1.498e-6 rad / s"', "apsidal advance rate ω̇"),
+    _phase(
+        "omega_dot",
+        "an angular rate",
+        '"1.498e-6 rad / s"',
+        "apsidal advance rate ω̇",
+        dimension_hint="give rad/s (ω̇ = 2π rad × the rate in Hz)",
+    ),
     Field(
         "lisa.cos_inclination",
         "quantity",
@@ -318,10 +372,12 @@ FIELDS: tuple[Field, ...] = (
         bounds=Range(
             -1.0,
             1.0,
-            reason="the cosine of an angle",
+            reason="cos ι is the cosine of an angle",
             error="expected a value in [-1, 1], got {value}",
         ),
         doc="cos ι of the orbit",
+        dimension_hint="cos ι is a cosine, dimensionless: give a plain number",
+        cosine_of="inclination",
     ),
     Field(
         "lisa.amplitude",
@@ -331,6 +387,7 @@ FIELDS: tuple[Field, ...] = (
         unit="",
         bounds=_positive("a strain amplitude is positive"),
         doc="GW strain amplitude",
+        dimension_hint="a strain is dimensionless: give a plain number",
     ),
     Field(
         "lisa.psi",
@@ -375,7 +432,12 @@ FIELDS: tuple[Field, ...] = (
         "mapping",
         "a mapping parameter: sigma",
         '{phase: 0.022993, f_gw: "7.7e-12 Hz"}',
-        bounds=Range(0.0, reason="a standard deviation is ≥ 0", error="must be ≥ 0, got {raw!r}"),
+        bounds=Range(
+            0.0,
+            low_open=True,
+            reason="a standard deviation is positive; leave out a parameter known exactly",
+            error="must be > 0, got {raw}",
+        ),
         doc="marginal standard deviations, each in its parameter's unit",
     ),
     Field(
@@ -387,7 +449,7 @@ FIELDS: tuple[Field, ...] = (
             -1.0,
             1.0,
             reason="a correlation coefficient",
-            error="expected ρ in [-1, 1], got {raw!r}",
+            error="expected ρ in [-1, 1], got {raw}",
         ),
         doc="correlation coefficients between parameters of sigma (default 0)",
     ),
@@ -416,10 +478,22 @@ FIELDS: tuple[Field, ...] = (
         doc="component masses (feasibility, simulations)",
     ),
     Field(
-        "masses.m1", "quantity", "a mass", '"0.347 solMass"', unit="solMass", doc="mass of star 1"
+        "masses.m1",
+        "quantity",
+        "a mass",
+        '"0.347 solMass"',
+        unit="solMass",
+        bounds=_positive("a mass is positive"),
+        doc="mass of star 1",
     ),
     Field(
-        "masses.m2", "quantity", "a mass", '"0.285 solMass"', unit="solMass", doc="mass of star 2"
+        "masses.m2",
+        "quantity",
+        "a mass",
+        '"0.285 solMass"',
+        unit="solMass",
+        bounds=_positive("a mass is positive"),
+        doc="mass of star 2",
     ),
     Field(
         "spectroscopy",

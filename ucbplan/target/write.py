@@ -7,11 +7,13 @@ reads back the same numbers.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Iterable
 from pathlib import Path
 from typing import IO, Any
 
 import yaml
+from astropy.time import Time
 
 from ucbplan.core.params import PARAM_NAMES
 from ucbplan.io import write_output
@@ -19,6 +21,22 @@ from ucbplan.target.model import Spectroscopy, Target
 from ucbplan.target.schema import field
 
 __all__ = ["target_to_dict", "write_target"]
+
+
+class _Dumper(yaml.SafeDumper):
+    """SafeDumper that quotes text :func:`ucbplan.inputs.load_yaml` would read as a number.
+
+    load_yaml reads ``5e-14`` (an exponent without a decimal point) as a float, plain YAML as a
+    string; without this a target named ``1e3`` would be written unquoted and read back as a
+    number.
+    """
+
+
+_Dumper.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?(?:[0-9][0-9_]*)(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"),
+    list("-+0123456789"),
+)
 
 
 def _value(path: str, value: float) -> float | str:
@@ -57,7 +75,7 @@ def target_to_dict(t: Target) -> dict[str, Any]:
 
 def _lisa_dict(t: Target) -> dict[str, Any]:
     lisa: dict[str, Any] = {
-        "t_ref": t.t_ref.tdb.isot,
+        "t_ref": _epoch_text(t.t_ref),
         "t_obs": _value("lisa.t_obs", t.t_obs_s),
         "t_ref_is": "midpoint",
     }
@@ -80,6 +98,19 @@ def _lisa_dict(t: Target) -> dict[str, Any]:
         base = t.source.parent if t.source is not None else Path(".")
         lisa["samples"] = _relative(t.samples, base.resolve())
     return lisa
+
+
+def _epoch_text(t: Time) -> str:
+    """ISO TDB text of ``t`` to 1 µs: milliseconds when they are that close, else microseconds.
+
+    A start-referenced or converted epoch moved to the midpoint has sub-millisecond digits;
+    cutting them to 1 ms would shift the phase reference by up to 3e-4 rad at f = 0.1 Hz.
+    """
+    tdb = t.tdb
+    text: str = Time(tdb, precision=3).isot
+    if abs((Time(text, scale="tdb") - tdb).to_value("s")) > 1e-6:
+        text = Time(tdb, precision=6).isot
+    return text
 
 
 def _spectroscopy_dict(s: Spectroscopy) -> dict[str, Any]:
@@ -125,6 +156,6 @@ def write_target(t: Target, path: Path, overwrite: bool = False, header: str = "
     def _write(handle: IO[Any]) -> None:
         for line in header.splitlines():
             handle.write(f"# {line}\n")
-        yaml.safe_dump(doc, handle, sort_keys=False, allow_unicode=True, width=100)
+        yaml.dump(doc, handle, Dumper=_Dumper, sort_keys=False, allow_unicode=True, width=100)
 
     write_output(path, _write, overwrite=overwrite)
