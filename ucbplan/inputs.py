@@ -83,6 +83,8 @@ _StrictLoader.add_implicit_resolver("tag:yaml.org,2002:float", _FLOAT, list("-+0
 
 
 def _read_bytes(path: Path, limit: int, what: str) -> bytes:
+    if "\x00" in str(path) or len(str(path)) > 4096:
+        raise SchemaError(f"{shorten(str(path), 80)}: not a usable file name; check the path")
     try:
         size = path.stat().st_size
         if not path.is_file():
@@ -148,6 +150,8 @@ def load_yaml(path: Path, what: str = "YAML file", text: str | None = None) -> A
         raise SchemaError(f"{path}: not valid YAML: {where}{problem}") from None
     except yaml.YAMLError as exc:
         raise SchemaError(f"{path}: not valid YAML: {' '.join(str(exc).split())}") from None
+    except RecursionError:
+        raise SchemaError(f"{path}: nested too deeply to be a {what}; check the file") from None
     finally:
         loader.dispose()
 

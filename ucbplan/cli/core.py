@@ -19,7 +19,7 @@ from rich.markup import escape
 from ucbplan import __version__
 from ucbplan.cli._console import dump_json, err_console, pick_format, rich_table, write_output
 from ucbplan.core.constants import DAY_S
-from ucbplan.errors import UcbplanError
+from ucbplan.errors import UcbplanError, shorten
 from ucbplan.target import Target, load_target
 
 __all__ = ["register"]
@@ -200,7 +200,9 @@ def _window(t: Target, start: str, end: str, anchor: str, max_epochs: int) -> tu
     t1 = parse_tdb(end, "--end")
     tau0, tau1 = float(t.tau(t0)), float(t.tau(t1))
     if tau1 <= tau0:
-        raise UcbplanError(f"--end ({end}) must be after --start ({start})")
+        raise UcbplanError(
+            f"--end ({shorten(end, 60)}) must be after --start ({shorten(start, 60)})"
+        )
     expected = (tau1 - tau0) / t.period_s * (2 if anchor != "u" else 1)
     if expected > max_epochs:
         raise UcbplanError(

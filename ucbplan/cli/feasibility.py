@@ -164,9 +164,13 @@ def _optical_offset(text: str, t_ref: Any) -> float:
     from ucbplan.core.timescale import parse_tdb
 
     try:
-        epoch = Time(float(text), format="jd", scale="tdb")
+        jd = float(text)
     except ValueError:
         epoch = parse_tdb(text, "--optical-epoch")
+    else:
+        # a bare number is a BJD_TDB between the years 1000 and 3000
+        check_number("--optical-epoch", jd, 2086302.5, 2816787.5, "BJD_TDB")
+        epoch = Time(jd, format="jd", scale="tdb")
     return float((t_ref - epoch).to_value("s"))
 
 
