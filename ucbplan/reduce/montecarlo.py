@@ -16,6 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ucbplan.core.constants import G_SI, MSUN_KG
+from ucbplan.core.mvnormal import sample_normal, sqrt_factor
 from ucbplan.core.params import PARAM_NAMES
 from ucbplan.reduce import masses as _masses
 
@@ -85,9 +86,8 @@ def posterior_samples(
         cov[_COS_I, _COS_I] = cos_i_sigma**2
         if cos_i_sigma == 0.0:
             warn.append(_COS_I_FIXED)
-    vals, vecs = np.linalg.eigh(cov)
-    L = vecs * np.sqrt(np.clip(vals, 0.0, None))
-    out = mean + rng.standard_normal((n, 9)) @ L.T
+    # Correlation-scaled draw: σ's span ~40 orders of magnitude (issue 11).
+    out = sample_normal(mean, cov, n, rng)
     if columns is not None:
         size = len(next(iter(columns.values())))
         idx = rng.choice(size, size=n, replace=size < n)
@@ -105,7 +105,7 @@ def _draw_k_gamma(
     n = dtheta.shape[0]
     Ks, gs = [], []
     for j, f in enumerate(fits):
-        z = rng.standard_normal((n, 2)) @ np.linalg.cholesky(f.cov + 1e-30 * np.eye(2)).T
+        z = rng.standard_normal((n, 2)) @ sqrt_factor(f.cov).T
         # Re-regressing on the design of sample θ shifts K by −∂K/∂θ·δθ (phase_sensitivity).
         Ks.append(f.K + z[:, 1] - dtheta @ dK[j])
         gs.append(f.gamma + z[:, 0] - dtheta @ dg[j])
