@@ -313,13 +313,14 @@ def test_posterior_samples_file_drives_the_monte_carlo(tmp_path) -> None:  # typ
     stays within 3 MC standard errors of the fixed-cos ι run."""
     from astropy.table import Table
 
+    from ucbplan.core.mvnormal import sample_normal
     from ucbplan.reduce.pipeline import read_samples
 
     t = make_target()
     p = t.params
     rng = np.random.default_rng(4)
     n = 4000
-    th = rng.multivariate_normal(p.as_array(), t.covariance, size=n, method="eigh")
+    th = sample_normal(p.as_array(), t.covariance, n, rng)
     tab = Table(
         {
             name: th[:, k]

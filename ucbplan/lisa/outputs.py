@@ -78,6 +78,27 @@ def write_simulation(
     save_chain(chain, files.chain, extra, overwrite=overwrite)
 
 
+def _read_npz(path: Path) -> dict[str, F64]:
+    """Arrays of a .npz file (no pickles), or a one-line InputFileError."""
+    import zipfile
+
+    bad = InputFileError(f"{path}: --resume: not a .npz chain; give the .npz of a simulate run")
+    try:
+        archive = np.load(path, allow_pickle=False)
+        if not isinstance(archive, np.lib.npyio.NpzFile):
+            raise bad
+        with archive as z:
+            return {k: z[k] for k in z.files}
+    except FileNotFoundError:
+        raise InputFileError(f"{path}: --resume: file not found; check the path") from None
+    except IsADirectoryError:
+        raise InputFileError(f"{path}: --resume: is a folder; give the chain .npz") from None
+    except OSError as exc:
+        raise InputFileError(f"{path}: --resume: cannot read ({exc.strerror})") from None
+    except (ValueError, EOFError, zipfile.BadZipFile):
+        raise bad from None
+
+
 def load_resume(
     path: Path,
     theta0: F64,
@@ -100,25 +121,34 @@ def load_resume(
     InputFileError
         Unreadable chain, or one of another data set (seed, noise, N, T) or target/walkers.
     """
-    try:
-        with np.load(path) as z:
-            saved = {k: z[k] for k in z.files}
-    except (OSError, ValueError) as exc:
-        raise InputFileError(
-            f"{path}: cannot read the chain ({exc}); give a simulate .npz"
-        ) from None
+    saved = _read_npz(path)
     want = {"seed": seed, "noise": noise, "n_bins": n_bins, "t_obs_s": t_obs_s}
     for key, val in want.items():
-        if key not in saved or not np.isclose(float(saved[key]), float(val), rtol=1e-12):
-            got = saved[key].item() if key in saved else "missing"
+        got = saved[key].item() if key in saved and saved[key].size == 1 else "missing"
+        if not isinstance(got, (bool, int, float)) or not np.isclose(got, val, rtol=1e-12):
             raise InputFileError(
                 f"{path}: {key} = {got}, this run has {val}; resume with the same "
                 "--seed/--noise/--n-bins/--t-obs (the data must be identical)"
             )
-    saved_walkers = saved["theta"].shape[1]
+    missing = [k for k in ("theta", "log_prob", "theta0", "fisher_cov") if k not in saved]
+    if missing:
+        raise InputFileError(
+            f"{path}: not a simulate chain (no {missing[0]!r}); give a .npz of simulate"
+        )
+    chain, log_prob = saved["theta"], saved["log_prob"]
+    d = theta0.size
+    if chain.ndim != 3 or chain.shape[0] == 0 or log_prob.shape != chain.shape[:2]:
+        raise InputFileError(f"{path}: chain of shape {chain.shape} is empty or malformed")
+    if chain.shape[2] != d or saved["theta0"].shape != theta0.shape:
+        model = "circular" if chain.shape[2] == 6 else "eccentric"
+        raise InputFileError(
+            f"{path}: chain has {chain.shape[2]} parameters, this run {d}; resume the "
+            f"{model} model ({'--circular' if model == 'circular' else 'without --circular'})"
+        )
+    saved_walkers = chain.shape[1]
     if saved_walkers != walkers or not np.allclose(saved["theta0"], theta0, rtol=0):
         raise InputFileError(
             f"{path}: chain has {saved_walkers} walkers for another target; resume "
             f"with --walkers {saved_walkers} and the same target file"
         )
-    return (saved["theta"], saved["log_prob"]), saved["fisher_cov"]
+    return (chain, log_prob), saved["fisher_cov"]

@@ -28,7 +28,7 @@ from numpy.typing import NDArray
 
 from ucbplan.errors import UcbplanError
 from ucbplan.lisa import posterior as post
-from ucbplan.lisa.fisher import fisher_matrix
+from ucbplan.lisa.fisher import fisher_covariance
 from ucbplan.lisa.likelihood import (
     Likelihood,
     Prior,
@@ -155,9 +155,10 @@ def build_model(
     return LisaModel(base=base, truth=truth, model=model, eccentric=eccentric, n_bins=n_bins)
 
 
-def _fisher_cov(like: Likelihood, theta0: F64) -> F64:
-    """Inverse Fisher matrix at ``theta0`` (sampled coordinates)."""
-    return np.asarray(np.linalg.inv(fisher_matrix(like, theta0)), dtype=np.float64)
+def _where(model: LisaModel) -> str:
+    """Prefix of error messages: the target file (or the target's name)."""
+    src = model.base.source
+    return str(src) if src is not None else model.base.name
 
 
 def _sigmas(t: Target) -> dict[str, float]:
@@ -201,7 +202,7 @@ def fisher_forecast(model: LisaModel) -> FisherForecast:
     theta0 = model.theta0()
     like = model.likelihood(simulate_data(model.model, model.truth, SANGRIA, None))
     snr = float(like.snr(theta0[None])[0])
-    cov = _fisher_cov(like, theta0)
+    cov = fisher_covariance(like, theta0, _where(model))
     fis = post.gaussian_target(model.base, theta0, cov, model.t_obs_s)
     fis = dataclasses.replace(fis, name=f"{model.base.name} (Fisher forecast)")
     return FisherForecast(target=fis, snr=snr, theta0=theta0, cov_theta=cov)
@@ -271,7 +272,7 @@ def prepare_simulation(model: LisaModel, options: SimulateOptions) -> Simulation
     data = simulate_data(model.model, model.truth, SANGRIA, rng if options.noise else None)
     like = model.likelihood(data)
     snr = float(like.snr(theta0[None])[0])
-    cov = _fisher_cov(like, theta0)
+    cov = fisher_covariance(like, theta0, _where(model))
     previous = None
     if options.resume is not None:
         previous, cov = load_resume(

@@ -1,8 +1,8 @@
 """emcee sampling of the targeted-search posterior in Fisher-whitened coordinates.
 
-Walkers move in x with theta = theta0 + L x, where L is the correlation-scaled Cholesky factor of
-the Fisher covariance (:func:`ucbplan.lisa.fisher.whitening`); the Jacobian is constant, so the
-posterior density is unchanged. The ensemble starts in the Fisher ball x ~ N(0, s^2 I). The
+Walkers move in x with theta = theta0 + A x, where A A^T is the Fisher covariance (the
+correlation-scaled factor of :func:`ucbplan.lisa.fisher.whitening`); the Jacobian is constant, so
+the posterior density is unchanged. The ensemble starts in the Fisher ball x ~ N(0, s^2 I). The
 chain is accepted as converged when its length is at least 50 integrated autocorrelation times
 (emcee's estimator, the largest over parameters).
 """
@@ -17,6 +17,7 @@ from typing import IO, Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ucbplan.errors import ConvergenceError, InputFileError
 from ucbplan.lisa.likelihood import Likelihood
 
 __all__ = ["CONVERGENCE_FACTOR", "SamplerResult", "run_sampler", "save_chain"]
@@ -81,7 +82,11 @@ def _start(
         filled += len(take)
         if filled == n_walkers:
             return x
-    raise ValueError("could not place walkers inside the prior; the start point is at its edge")
+    raise ConvergenceError(
+        f"could not place {n_walkers} walkers inside the prior around the injection (only "
+        f"{filled} of 100 draws of the Fisher ball fell inside): the source sits at the edge of "
+        "the prior (e near 0.1, omega_dot near z_omega = 0 or 50 bins, |cos_inclination| near 1)"
+    )
 
 
 def run_sampler(
@@ -126,7 +131,7 @@ def run_sampler(
     from ucbplan.lisa.fisher import whitening
 
     rng = np.random.default_rng(seed)
-    chol = whitening(cov)
+    chol = whitening(cov)  # A with A A^T = cov (not triangular)
     d = theta0.size
 
     def log_prob(x: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -135,7 +140,7 @@ def run_sampler(
     n_before = 0 if previous is None else int(previous[0].shape[0])
     sampler = _seeded_sampler(log_prob, n_walkers, d, seed, n_before)
     if previous is not None:
-        state, x_prev, lp_prev = _resume_state(previous, theta0, chol, n_walkers)
+        state, x_prev, lp_prev = _resume_state(previous, theta0, cov, chol, n_walkers)
     else:
         x_prev = np.empty((0, n_walkers, d))
         lp_prev = np.empty((0, n_walkers))
@@ -182,17 +187,23 @@ def _seeded_sampler(
 def _resume_state(
     previous: tuple[NDArray[np.float64], NDArray[np.float64]],
     theta0: NDArray[np.float64],
+    cov: NDArray[np.float64],
     chol: NDArray[np.float64],
     n_walkers: int,
 ) -> tuple[object, NDArray[np.float64], NDArray[np.float64]]:
     """emcee state to continue from, the earlier chain in whitened x, and its log_prob."""
     import emcee
 
+    from ucbplan.lisa.fisher import unwhiten
+
     d = theta0.size
     shape: tuple[int, ...] = tuple(previous[0].shape)
     if len(shape) != 3 or shape[1] != n_walkers or shape[2] != d:
-        raise ValueError(f"resume: chain shape {shape} != (steps, {n_walkers}, {d})")
-    x = np.linalg.solve(chol, (previous[0] - theta0).reshape(-1, d).T).T.reshape(shape)
+        raise InputFileError(
+            f"--resume: chain shape {shape} does not fit this run (steps, {n_walkers} walkers, "
+            f"{d} parameters); resume with the options of the saved run"
+        )
+    x = unwhiten(cov, chol, (previous[0] - theta0).reshape(-1, d)).reshape(shape)
     x_prev: NDArray[np.float64] = np.asarray(x, dtype=np.float64)
     return emcee.State(x_prev[-1], log_prob=previous[1][-1]), x_prev, previous[1]
 
