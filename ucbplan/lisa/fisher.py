@@ -130,8 +130,9 @@ def _unconstrained(
     if sigma is not None:
         i = int(idx[0])
         span = like.prior.high[i] - like.prior.low[i]
-        what = f"{which[0]} unconstrained: its Fisher 1σ {sigma[i]:.3g} exceeds its prior width "
-        what += f"{span:.3g}" + (f" (also {', '.join(which[1:])})" if len(which) > 1 else "")
+        what = f"{which[0]} unconstrained: the Fisher 1σ of {names[i]} ({sigma[i]:.3g}) exceeds "
+        what += f"its prior width ({span:.3g})"
+        what += f" (also {', '.join(which[1:])})" if len(which) > 1 else ""
     elif len(which) > 1:
         what = f"{', '.join(which)} unconstrained: degenerate (singular Fisher matrix)"
     else:
@@ -140,8 +141,10 @@ def _unconstrained(
     snr = float(like.snr(theta0[None])[0])
     if abs(cos_i) > 0.99:
         why = f"the source is nearly face-on (cos_inclination = {cos_i:.4g}): phase and psi mix"
+    elif snr < 10.0:
+        why = f"optimal SNR {snr:.3g}: too faint to be forecast or sampled"
     else:
-        why = f"optimal SNR {snr:.3g}; a faint source cannot be forecast or sampled this way"
+        why = f"the data (optimal SNR {snr:.3g}) do not measure it"
     return NumericalError(f"{where}: Fisher matrix: {what}; {why}")
 
 

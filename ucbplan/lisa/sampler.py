@@ -20,7 +20,14 @@ from numpy.typing import NDArray
 from ucbplan.errors import ConvergenceError, InputFileError
 from ucbplan.lisa.likelihood import Likelihood
 
-__all__ = ["CONVERGENCE_FACTOR", "SamplerResult", "run_sampler", "save_chain"]
+__all__ = [
+    "CONVERGENCE_FACTOR",
+    "SamplerInterrupted",
+    "SamplerResult",
+    "chain_writer",
+    "run_sampler",
+    "save_chain",
+]
 
 #: Required chain length in units of the integrated autocorrelation time.
 CONVERGENCE_FACTOR = 50.0
@@ -62,6 +69,18 @@ class SamplerResult:
         burn = min(int(2 * tau), self.theta.shape[0] // 2)
         thin = max(1, int(tau / 2))
         return self.theta[burn::thin].reshape(-1, self.theta.shape[-1])
+
+
+class SamplerInterrupted(KeyboardInterrupt):
+    """Ctrl-C during sampling, carrying the chain so far (None before the first step).
+
+    A ``KeyboardInterrupt``, so it ends the program like any interrupt (exit 130) once the
+    caller has saved ``partial`` (e.g. with :func:`save_chain`) for ``--resume``.
+    """
+
+    def __init__(self, partial: SamplerResult | None) -> None:
+        super().__init__("interrupted")
+        self.partial = partial
 
 
 def _start(
@@ -145,25 +164,95 @@ def run_sampler(
         x_prev = np.empty((0, n_walkers, d))
         lp_prev = np.empty((0, n_walkers))
         state = _start(like, theta0, chol, n_walkers, start_scale, rng)
-    chain_x, tau, converged = _advance(
-        sampler,
-        state,
-        x_prev,
-        n_steps=n_steps,
-        until_converged=until_converged,
-        max_steps=max_steps,
-        check_every=check_every,
-        progress=progress,
-    )
-    theta = theta0 + chain_x @ chol.T
+    theta_prev = previous[0] if previous is not None else np.empty((0, n_walkers, d))
+
+    def to_theta(chain_x: NDArray[np.float64]) -> NDArray[np.float64]:
+        # the resumed part is kept bit for bit; only new steps are mapped back from x
+        new = theta0 + chain_x[theta_prev.shape[0] :] @ chol.T
+        return np.asarray(np.concatenate([theta_prev, new]), dtype=np.float64)
+
+    try:
+        with _DeferredInterrupt() as stop:
+            chain_x, tau, converged = _advance(
+                sampler,
+                state,
+                x_prev,
+                n_steps=n_steps,
+                until_converged=until_converged,
+                max_steps=max_steps,
+                check_every=check_every,
+                progress=progress,
+                stop=stop,
+            )
+    except KeyboardInterrupt:
+        partial = None
+        if x_prev.shape[0] + sampler.iteration > 0:
+            chain_x, lp = _chain_so_far(sampler, x_prev, lp_prev)
+            partial = SamplerResult(
+                theta=to_theta(chain_x),
+                log_prob=lp,
+                tau=np.full(d, np.inf),
+                converged=False,
+                acceptance=float(np.mean(sampler.acceptance_fraction))
+                if sampler.iteration
+                else 0.0,
+                seed=seed,
+                names=like.prior.names,
+            )
+        raise SamplerInterrupted(partial) from None
     return SamplerResult(
-        theta=np.asarray(theta),
+        theta=to_theta(chain_x),
         log_prob=np.concatenate([lp_prev, sampler.get_log_prob()]),
         tau=tau,
         converged=converged,
         acceptance=float(np.mean(sampler.acceptance_fraction)),
         seed=seed,
         names=like.prior.names,
+    )
+
+
+class _DeferredInterrupt:
+    """Ctrl-C (SIGINT) while sampling only sets a flag; the loop stops after the current step.
+
+    An interrupt inside the vectorised log-probability would otherwise surface inside emcee,
+    which prints a traceback, and could cut a step in half. Only the main thread can install a
+    handler; elsewhere the interrupt is left alone.
+    """
+
+    def __init__(self) -> None:
+        self.requested = False
+        self._previous: Any = None
+        self._installed = False
+
+    def _handle(self, signum: int, frame: object) -> None:
+        self.requested = True
+
+    def __enter__(self) -> _DeferredInterrupt:
+        import signal
+        import threading
+
+        if threading.current_thread() is threading.main_thread():
+            self._previous = signal.signal(signal.SIGINT, self._handle)
+            self._installed = True
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        import signal
+
+        if self._installed:
+            previous = self._previous if self._previous is not None else signal.SIG_DFL
+            signal.signal(signal.SIGINT, previous)
+
+
+def _chain_so_far(
+    sampler: Any, x_prev: NDArray[np.float64], lp_prev: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Whitened chain and log_prob of every completed step (an earlier run's included)."""
+    if sampler.iteration == 0:
+        return x_prev, lp_prev
+    return (
+        np.concatenate([x_prev, sampler.get_chain()]),
+        np.concatenate([lp_prev, sampler.get_log_prob()]),
     )
 
 
@@ -218,11 +307,13 @@ def _advance(
     max_steps: int,
     check_every: int,
     progress: Callable[[int, int, float], None] | None,
+    stop: _DeferredInterrupt | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], bool]:
     """Run ``n_steps`` (or chunks of ``check_every`` until converged or ``max_steps``).
 
     Returns the whole chain in whitened x (earlier part included), tau per parameter and
-    whether the chain is at least :data:`CONVERGENCE_FACTOR` tau long.
+    whether the chain is at least :data:`CONVERGENCE_FACTOR` tau long. Raises
+    ``KeyboardInterrupt`` after the step during which ``stop`` saw Ctrl-C.
     """
     import emcee
 
@@ -234,6 +325,8 @@ def _advance(
         target = total if not until_converged else max(total, done + check_every)
         for _ in sampler.sample(state, iterations=target - done, progress=False):
             done += 1
+            if stop is not None and stop.requested:
+                raise KeyboardInterrupt
             if progress is not None and done % 10 == 0:
                 progress(done, max(target, total), float(np.max(tau)))
         state = sampler.get_last_sample()
@@ -244,6 +337,27 @@ def _advance(
         if not until_converged or converged or n_all >= max_steps:
             return chain_x, tau, converged
         total = done
+
+
+def chain_writer(
+    result: SamplerResult, extra: dict[str, object] | None = None
+) -> Callable[[IO[bytes]], None]:
+    """Writer of the chain .npz (binary handle): chain, diagnostics and ``extra`` arrays."""
+    arrays: dict[str, Any] = {str(k): np.asarray(v) for k, v in (extra or {}).items()}
+    arrays |= {
+        "theta": result.theta,
+        "log_prob": result.log_prob,
+        "tau": result.tau,
+        "converged": np.asarray(result.converged),
+        "acceptance": np.asarray(result.acceptance),
+        "seed": np.asarray(result.seed),
+        "names": np.asarray(result.names),
+    }
+
+    def _write(handle: IO[bytes]) -> None:
+        np.savez_compressed(handle, **arrays)
+
+    return _write
 
 
 def save_chain(
@@ -262,18 +376,4 @@ def save_chain(
     """
     from ucbplan.io import write_output
 
-    arrays: dict[str, Any] = {str(k): np.asarray(v) for k, v in (extra or {}).items()}
-    arrays |= {
-        "theta": result.theta,
-        "log_prob": result.log_prob,
-        "tau": result.tau,
-        "converged": np.asarray(result.converged),
-        "acceptance": np.asarray(result.acceptance),
-        "seed": np.asarray(result.seed),
-        "names": np.asarray(result.names),
-    }
-
-    def _write(handle: IO[Any]) -> None:
-        np.savez_compressed(handle, **arrays)
-
-    write_output(path, _write, overwrite=overwrite, binary=True)
+    write_output(path, chain_writer(result, extra), overwrite=overwrite, binary=True)
