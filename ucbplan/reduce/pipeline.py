@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -39,6 +38,7 @@ from ucbplan.reduce.regression import (
     wilson_fit,
 )
 from ucbplan.reduce.velocities import VelocityTable, check_validity, read_velocities
+from ucbplan.target import load_samples
 
 if TYPE_CHECKING:
     from ucbplan.core.params import PhaseParams
@@ -48,7 +48,6 @@ __all__ = [
     "ReduceOptions",
     "Reduction",
     "design_jacobian",
-    "read_samples",
     "read_velocities",
     "reduce",
     "window_factors",
@@ -224,46 +223,6 @@ def _wilson(table: VelocityTable, fits: tuple[ComponentFit, ...]) -> WilsonFit |
     return wilson_fit(table.v[0], table.sigma[0], table.v[1], table.sigma[1], q0=q0)
 
 
-def read_samples(path: Path) -> dict[str, F64]:
-    """Numeric columns of a posterior-samples ECSV (bare SI values, PARAM_NAMES column names).
-
-    Fast path: the ECSV data block parsed with ``numpy.loadtxt`` (10⁵ rows in ~0.1 s); anything
-    it cannot parse falls back to astropy's ECSV reader.
-
-    Raises
-    ------
-    InputFileError
-        Unreadable file or no rows.
-    """
-    from ucbplan.errors import InputFileError
-
-    try:
-        lines = path.read_text(encoding="utf-8").splitlines()
-        delim = " "
-        for ln in lines:
-            if ln.startswith("# delimiter:"):
-                delim = ln.split(":", 1)[1].strip().strip("'\"") or " "
-        body = [ln for ln in lines if ln.strip() and not ln.startswith("#")]
-        names = body[0].split(None if delim == " " else delim)
-        data = np.loadtxt(body[1:], delimiter=None if delim == " " else delim, ndmin=2)
-        cols = {nm.strip().strip('"'): data[:, k] for k, nm in enumerate(names)}
-    except (OSError, ValueError, IndexError):
-        from astropy.table import Table
-
-        try:
-            tab = Table.read(path, format="ascii.ecsv")
-        except Exception as exc:
-            raise InputFileError(f"{path}: cannot read posterior samples ({exc})") from exc
-        cols = {
-            nm: np.asarray(tab[nm], float)
-            for nm in tab.colnames
-            if np.issubdtype(np.asarray(tab[nm]).dtype, np.number)
-        }
-    if not cols or len(next(iter(cols.values()))) == 0:
-        raise InputFileError(f"{path}: posterior samples file has no rows")
-    return cols
-
-
 def _resolve_seed(seed: int | None) -> int:
     """The given seed, or fresh entropy (reported in the Reduction)."""
     if seed is None:
@@ -290,9 +249,11 @@ def reduce(target: Target, table: VelocityTable, options: ReduceOptions | None =
     Raises
     ------
     VelocityFileError
-        Times outside the target's validity window.
-    ValueError
-        Fewer than two distinct phases.
+        Times outside the target's validity window, or too few spectra for the fits.
+    TargetFileError
+        The target's samples file is unreadable or has no parameter columns
+        (:func:`ucbplan.target.load_samples`, which also moves start-referenced samples to the
+        midpoint).
 
     Notes
     -----
@@ -318,7 +279,7 @@ def reduce(target: Target, table: VelocityTable, options: ReduceOptions | None =
         cos_i_sigma=opts.cos_i_sigma,
         mass_radius=opts.mass_radius,
         rng=np.random.default_rng(seed),
-        columns=read_samples(target.samples) if target.samples is not None else None,
+        columns=load_samples(target) if target.samples is not None else None,
     )
     groups, drift = _inter_session(target, table, tau, u, intra, lam_k, lam_kap)
     return Reduction(
