@@ -175,10 +175,28 @@ def monte_carlo(
                 "target has no lisa.cos_inclination: component masses not computed; add "
                 "it (and its σ) to the target file"
             )
+        elif min(f.K for f in fits) <= 0.0:
+            j = min(range(2), key=lambda i: fits[i].K)
+            warn.append(
+                f"star {j + 1}: K = {fits[j].K:.4g} km/s ≤ 0: its velocities do not follow the "
+                f"LISA phase of star {j + 1} (v1/v2 swapped, a wrong time column or another "
+                "target?); component masses not computed"
+            )
         else:
-            out |= _sb2_masses(Ks, gs, theta, target.amplitude is not None, mass_radius)
+            # draws with K ≤ 0 (K within a few σ of 0) give no masses: NaN, dropped by
+            # summarize() and reported below
+            with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+                masses = _sb2_masses(Ks, gs, theta, target.amplitude is not None, mass_radius)
+            out |= masses
+            lost = 1.0 - np.isfinite(masses["M1"]).mean()
+            if lost > 0.001:
+                warn.append(
+                    f"{100 * lost:.1f} % of the Monte-Carlo draws give no masses (K drawn ≤ 0): "
+                    "the mass summaries are conditional on K > 0"
+                )
     else:
-        out["mass_function"] = _mass_function(Ks[0], theta)
+        with np.errstate(invalid="ignore", over="ignore"):
+            out["mass_function"] = _mass_function(Ks[0], theta)
         warn = [w for w in warn if w != _COS_I_FIXED]  # f(M) does not use ι
         warn.append(
             "SB1: only the mass function f(M) = P K³(1−e²)^{3/2}/(2πG) is reported; "

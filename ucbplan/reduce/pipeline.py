@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ucbplan.core.constants import C_KM_S
+from ucbplan.errors import VelocityFileError
 from ucbplan.reduce import drifts as _drifts
 from ucbplan.reduce import masses as _masses
 from ucbplan.reduce.design import design_jacobian, designs, orbit, window_factors
@@ -37,7 +38,12 @@ from ucbplan.reduce.regression import (
     phase_sensitivity,
     wilson_fit,
 )
-from ucbplan.reduce.velocities import VelocityTable, check_validity, read_velocities
+from ucbplan.reduce.velocities import (
+    MIN_SPECTRA,
+    VelocityTable,
+    check_validity,
+    read_velocities,
+)
 from ucbplan.target import load_samples
 
 if TYPE_CHECKING:
@@ -117,9 +123,22 @@ class Reduction:
 
 
 def _fit_all(table: VelocityTable, design: tuple[F64, ...]) -> tuple[ComponentFit, ...]:
+    """One regression per star.
+
+    Raises
+    ------
+    VelocityFileError
+        The spectra sample a single value of the design F̄ (one orbital phase): K is undefined.
+    """
     fits = []
     for j, (v, s) in enumerate(zip(table.v, table.sigma, strict=True)):
-        fits.append(fit_component(design[j], v, s, star=j + 1))
+        g = design[j]
+        if not np.ptp(g) > 1e-9 * max(float(np.max(np.abs(g))), 1e-300):
+            raise VelocityFileError(
+                f"{table.source}: star {j + 1}: all {g.size} spectra sample the same orbital "
+                "phase (F̄ does not vary), so K is undetermined; add spectra at other phases"
+            )
+        fits.append(fit_component(g, v, s, star=j + 1))
     return tuple(fits)
 
 
@@ -265,6 +284,11 @@ def reduce(target: Target, table: VelocityTable, options: ReduceOptions | None =
     seed = _resolve_seed(opts.seed)
     p = target.params
     tau = check_validity(table, target)
+    if table.n < MIN_SPECTRA:
+        raise VelocityFileError(
+            f"{table.source}: {table.n} spectrum; the fit of γ and K needs at least "
+            f"{MIN_SPECTRA} spectra at different orbital phases — add one line per spectrum"
+        )
     lam_k, lam_kap = window_factors(table, p.f_gw)
     _, _, kap, u = orbit(p, tau)
     intra = _intra_session(p, table, tau, lam_k, lam_kap, opts.light_time)
