@@ -9,7 +9,7 @@ from typing import IO, TYPE_CHECKING, Any
 import typer
 
 from ucbplan.cli._console import check_output_path, err_console, pick_format, write_output
-from ucbplan.errors import InputError, UcbplanError
+from ucbplan.errors import InputError, UcbplanError, shorten
 from ucbplan.io import write_file_set
 
 if TYPE_CHECKING:
@@ -112,10 +112,10 @@ def _check_outputs(output: Path | None, em_prior: Path | None, overwrite: bool) 
     from ucbplan.io import output_format
 
     if em_prior is not None:
-        if output_format(em_prior, None, ("yaml", "json", "ecsv", "csv"), "yaml") != "yaml":
-            raise InputError(f"--em-prior {em_prior}: the EM prior is YAML; name it .yaml")
         if output is not None and output.resolve() == em_prior.resolve():
             raise InputError(f"{output}: -o and --em-prior name the same file; rename one")
+        if output_format(em_prior, None, ("yaml", "json", "ecsv", "csv"), "yaml") != "yaml":
+            raise InputError(f"--em-prior {em_prior}: the EM prior is YAML; name it .yaml")
     for path in (output, em_prior):
         if path is not None:
             check_output_path(path, overwrite)
@@ -126,8 +126,9 @@ def _check_mass_radius(mass_radius: str | None) -> str | None:
     from ucbplan.reduce.masses import MASS_RADIUS_MODELS
 
     if mass_radius is not None and mass_radius.lower() not in MASS_RADIUS_MODELS:
-        raise UcbplanError(
-            f"--mass-radius: got {mass_radius!r}, expected one of {', '.join(MASS_RADIUS_MODELS)}"
+        raise InputError(
+            f"--mass-radius: got {shorten(mass_radius)}, expected one of "
+            f"{', '.join(MASS_RADIUS_MODELS)}"
         )
     return mass_radius.lower() if mass_radius else None
 
