@@ -25,6 +25,7 @@ from ucbplan.lisa.pipeline import (
     SimulateOptions,
     build_model,
     fisher_forecast,
+    prepare_simulation,
     simulate,
 )
 from ucbplan.target import load_target, target_from_dict
@@ -106,12 +107,25 @@ def test_face_on_source_is_unconstrained_not_nan(cos_i: float) -> None:
 
 
 def test_faint_source_is_unconstrained() -> None:
-    """A source far below the noise: the Fisher σ exceeds the prior; one line names a
-    parameter and the SNR."""
+    """A source far below the noise: simulate refuses (the Fisher σ exceeds the prior: the
+    sampler cannot be whitened), one line naming a parameter and the SNR; the forecast is
+    still given, with the same text as a warning."""
     model = build_model(_variant(amplitude=1e-40), n_bins=64)
     with pytest.raises(NumericalError, match=r"unconstrained.*prior width.*SNR") as err:
-        fisher_forecast(model)
-    assert len(str(err.value)) < 400
+        prepare_simulation(model, SimulateOptions(walkers=18, steps=5))
+    assert len(str(err.value)) < 400 and "\n" not in str(err.value)
+    forecast = fisher_forecast(model)
+    assert forecast.warnings and "unconstrained" in forecast.warnings[0]
+
+
+def test_short_observation_leaves_fdot_unmeasured() -> None:
+    """Ten days cannot measure ḟ: the forecast warns about it (and only it), σ's stay finite."""
+    model = build_model(load_target(INJECTION), t_obs_s=10 * 86400.0, n_bins=64)
+    forecast = fisher_forecast(model)
+    assert len(forecast.warnings) == 1 and forecast.warnings[0].count("fdot") >= 1
+    assert "phase" not in forecast.warnings[0].split("(also")[0]
+    assert all(np.isfinite(s) for s in forecast.sigmas.values())
+    assert fisher_forecast(build_model(load_target(INJECTION), n_bins=64)).warnings == ()
 
 
 @pytest.mark.parametrize("fdot", ["1e-19 Hz / s", "5e-19 Hz / s", "2e-12 Hz / s"])

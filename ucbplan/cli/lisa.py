@@ -254,6 +254,8 @@ def fisher(
         check_output_path(output, overwrite)
     model = _model(target, t_obs, n_bins, circular)
     forecast = fisher_forecast(model)
+    for warning in forecast.warnings:
+        err_console.print(f"[yellow]warning: {escape(warning)}[/yellow]")
     fis = forecast.target
     _summary(f"{fis.name}: SNR {forecast.snr:.1f}", fis.cov_names, forecast.values, forecast.sigmas)
     if output is not None:

@@ -20,7 +20,14 @@ from ucbplan.core.mvnormal import correlation_split, inverse_scaled, sqrt_factor
 from ucbplan.errors import NumericalError
 from ucbplan.lisa.likelihood import Likelihood
 
-__all__ = ["STEPS", "fisher_covariance", "fisher_matrix", "unwhiten", "whitening"]
+__all__ = [
+    "STEPS",
+    "fisher_covariance",
+    "fisher_matrix",
+    "prior_excess",
+    "unwhiten",
+    "whitening",
+]
 
 #: Largest condition number of the Fisher correlation matrix that is still inverted: beyond it a
 #: combination of parameters is unconstrained (round-off alone gives ~1e-16 relative errors).
@@ -70,7 +77,11 @@ def fisher_matrix(like: Likelihood, theta0: NDArray[np.float64]) -> NDArray[np.f
 
 
 def fisher_covariance(
-    like: Likelihood, theta0: NDArray[np.float64], where: str = "source"
+    like: Likelihood,
+    theta0: NDArray[np.float64],
+    where: str = "source",
+    *,
+    within_prior: bool = True,
 ) -> NDArray[np.float64]:
     """Inverse Fisher matrix at ``theta0`` (sampled coordinates), checked.
 
@@ -82,16 +93,19 @@ def fisher_covariance(
         Sampled parameters (D,) (start epoch).
     where : str
         Prefix of the error message (the target file).
+    within_prior : bool
+        Also require every 1σ to be narrower than the parameter's prior (the sampler's whitening
+        needs it; a forecast reports it with :func:`prior_excess` instead).
 
     Raises
     ------
     NumericalError
         "unconstrained": the Fisher matrix is not finite, singular (a degenerate combination,
-        e.g. phase and psi of a face-on source), or gives a parameter a 1σ wider than its prior.
+        e.g. phase and psi of a face-on source), or (``within_prior``) gives a parameter a 1σ
+        wider than its prior.
     """
     names = like.prior.names
     fis = fisher_matrix(like, theta0)
-    width = np.asarray(like.prior.high) - np.asarray(like.prior.low)
     if not np.all(np.isfinite(fis)):
         raise _unconstrained(where, names, np.flatnonzero(~np.isfinite(np.diag(fis))), like, theta0)
     zero = np.flatnonzero(~(np.diag(fis) > 0))
@@ -108,13 +122,29 @@ def fisher_covariance(
         cov = inverse_scaled(fis)
     except np.linalg.LinAlgError:
         raise _unconstrained(where, names, np.arange(len(names)), like, theta0) from None
+    if within_prior:
+        excess = prior_excess(like, theta0, cov, where)
+        if excess is not None:
+            raise excess
+    return cov
+
+
+def prior_excess(
+    like: Likelihood,
+    theta0: NDArray[np.float64],
+    cov: NDArray[np.float64],
+    where: str = "source",
+) -> NumericalError | None:
+    """The "unconstrained" error for parameters whose 1σ exceeds their prior width, or None."""
+    names = like.prior.names
+    width = np.asarray(like.prior.high) - np.asarray(like.prior.low)
     sigma = np.sqrt(np.diag(cov))
     wide = np.flatnonzero(~(sigma < width))
-    if wide.size:
-        raise _unconstrained(
-            where, names, wide[np.argsort(-(sigma / width)[wide])], like, theta0, sigma
-        )
-    return cov
+    if not wide.size:
+        return None
+    return _unconstrained(
+        where, names, wide[np.argsort(-(sigma / width)[wide])], like, theta0, sigma
+    )
 
 
 def _unconstrained(
@@ -142,7 +172,7 @@ def _unconstrained(
     if abs(cos_i) > 0.99:
         why = f"the source is nearly face-on (cos_inclination = {cos_i:.4g}): phase and psi mix"
     elif snr < 10.0:
-        why = f"optimal SNR {snr:.3g}: too faint to be forecast or sampled"
+        why = f"optimal SNR {snr:.3g}: too faint"
     else:
         why = f"the data (optimal SNR {snr:.3g}) do not measure it"
     return NumericalError(f"{where}: Fisher matrix: {what}; {why}")

@@ -28,7 +28,7 @@ from numpy.typing import NDArray
 
 from ucbplan.errors import InputError
 from ucbplan.lisa import posterior as post
-from ucbplan.lisa.fisher import fisher_covariance
+from ucbplan.lisa.fisher import fisher_covariance, prior_excess
 from ucbplan.lisa.likelihood import (
     Likelihood,
     Prior,
@@ -178,12 +178,15 @@ class FisherForecast:
         Optimal SNR of the injection.
     theta0, cov_theta : numpy.ndarray
         Injection and inverse Fisher matrix in sampled coordinates (start epoch).
+    warnings : tuple of str
+        Parameters whose forecast 1σ exceeds their prior width (not measured by these data).
     """
 
     target: Target
     snr: float
     theta0: F64
     cov_theta: F64
+    warnings: tuple[str, ...] = ()
 
     @property
     def sigmas(self) -> dict[str, float]:
@@ -203,15 +206,19 @@ def fisher_forecast(model: LisaModel) -> FisherForecast:
     Raises
     ------
     NumericalError
-        A parameter the data do not constrain (:func:`ucbplan.lisa.fisher.fisher_covariance`).
+        A singular Fisher matrix: parameters the data cannot separate, e.g. phase and psi of a
+        face-on source (:func:`ucbplan.lisa.fisher.fisher_covariance`). A 1σ wider than the
+        prior is a warning of the forecast instead.
     """
     theta0 = model.theta0()
     like = model.likelihood(simulate_data(model.model, model.truth, SANGRIA, None))
     snr = float(like.snr(theta0[None])[0])
-    cov = fisher_covariance(like, theta0, _where(model))
+    cov = fisher_covariance(like, theta0, _where(model), within_prior=False)
+    excess = prior_excess(like, theta0, cov, _where(model))
+    warnings = () if excess is None else (f"{excess}; its forecast σ is not meaningful",)
     fis = post.gaussian_target(model.base, theta0, cov, model.t_obs_s)
     fis = dataclasses.replace(fis, name=f"{model.base.name} (Fisher forecast)")
-    return FisherForecast(target=fis, snr=snr, theta0=theta0, cov_theta=cov)
+    return FisherForecast(target=fis, snr=snr, theta0=theta0, cov_theta=cov, warnings=warnings)
 
 
 @dataclass(frozen=True, slots=True)
