@@ -169,7 +169,7 @@ def _unconstrained(
         what = f"{which[0]} unconstrained: the Fisher matrix has no usable information on it"
     cos_i = float(theta0[names.index("cos_inclination")])
     snr = float(like.snr(theta0[None])[0])
-    if abs(cos_i) > 0.99:
+    if abs(cos_i) > 0.99 or (abs(cos_i) > 0.9 and {"phase", "psi"} <= set(which)):
         why = f"the source is nearly face-on (cos_inclination = {cos_i:.4g}): phase and psi mix"
     elif snr < 10.0:
         why = f"optimal SNR {snr:.3g}: too faint"
