@@ -216,7 +216,7 @@ class _DeferredInterrupt:
 
     An interrupt inside the vectorised log-probability would otherwise surface inside emcee,
     which prints a traceback, and could cut a step in half. Only the main thread can install a
-    handler; elsewhere the interrupt is left alone.
+    handler; elsewhere, or when SIGINT is ignored, the interrupt is left alone.
     """
 
     def __init__(self) -> None:
@@ -231,9 +231,12 @@ class _DeferredInterrupt:
         import signal
         import threading
 
-        if threading.current_thread() is threading.main_thread():
-            self._previous = signal.signal(signal.SIGINT, self._handle)
-            self._installed = True
+        if threading.current_thread() is not threading.main_thread():
+            return self
+        if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+            return self  # the parent asked us to ignore Ctrl-C (e.g. nohup): keep it so
+        self._previous = signal.signal(signal.SIGINT, self._handle)
+        self._installed = True
         return self
 
     def __exit__(self, *exc: object) -> None:
