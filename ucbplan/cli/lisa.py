@@ -146,8 +146,13 @@ def simulate(
     files = simulation_files(output, chain)
     for p in (files.target, files.samples, files.chain):
         check_output_path(p, overwrite)
-    if plots is not None and not plots.is_dir():
-        raise UcbplanError(f"--plots: folder {plots} does not exist; create it first")
+    if plots is not None:
+        from ucbplan.lisa.plots import CORNER_NAMES
+
+        if not plots.is_dir():
+            raise UcbplanError(f"--plots: folder {plots} does not exist; create it first")
+        for name in CORNER_NAMES:  # before sampling, not after it
+            check_output_path(plots / name, overwrite)
     model = _model(target, t_obs, n_bins, circular)
     dim = model.theta0().size
     if walkers < 2 * dim:
@@ -204,7 +209,9 @@ def _save_interrupted(
     try:
         save_interrupted(problem, stop.partial, files.chain, overwrite=overwrite)
     except OutputError as exc:
-        err_console.print(f"interrupted after {n} steps; the chain was not saved: {exc}")
+        err_console.print(
+            f"interrupted after {n} steps; the chain was not saved: {exc}", markup=False
+        )
         return
     err_console.print(
         f"interrupted after {n} steps: chain saved to {files.chain}; continue with "
