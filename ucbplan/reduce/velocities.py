@@ -22,10 +22,11 @@ s). Times are mid-exposure (ESO's MJD-OBS is the exposure *start*: add half the 
 
 Files are UTF-8 (a byte-order mark is accepted; other encodings are refused with the fix, see
 :func:`ucbplan.inputs.read_text`). Every cell must hold a value: a blank cell, a non-finite
-number, a negative or zero σ, |v| ≥ c, a duplicate column or fewer than
-:data:`MIN_SPECTRA` rows is a one-line :class:`~ucbplan.errors.VelocityFileError` naming the
-file, row and column. Windows as long as the orbit are refused by
-:func:`ucbplan.reduce.design.window_factors` (it needs the target's period).
+number, a date outside 1858–2500, a negative or zero σ, |v| ≥ c or a duplicate column is a
+one-line :class:`~ucbplan.errors.VelocityFileError` naming the file, row and column. The
+reduction then needs at least :data:`MIN_SPECTRA` spectra at different phases, and refuses
+windows as long as the orbit (:func:`ucbplan.reduce.design.window_factors`: it needs the
+target's period).
 
 Validity (:func:`check_validity`): every time must lie between the start of the LISA observation
 and :data:`HORIZON_S` (20 Julian years) after its end; beyond that the u(t) extrapolation is not
