@@ -30,6 +30,7 @@ sys.path.insert(0, str(ROOT / "tests"))
 from test_reduce_synth import exposure_factor, session_times  # noqa: E402
 
 from ucbplan.core import ephemeris  # noqa: E402
+from ucbplan.core.mvnormal import sample_normal  # noqa: E402
 from ucbplan.core.params import PARAM_NAMES  # noqa: E402
 from ucbplan.offline import configure_offline  # noqa: E402
 from ucbplan.reduce import masses as m  # noqa: E402
@@ -78,7 +79,7 @@ def naive(t: Target, tab: VelocityTable, n_samples: int, seed: int) -> tuple[flo
     k1, k2 = c1[0], -c2[0]
     rng = np.random.default_rng(seed)
     cov = t.covariance
-    theta = rng.multivariate_normal(p.as_array(), cov, size=n_samples, method="eigh")
+    theta = sample_normal(p.as_array(), cov, n_samples, rng)
     k1s = rng.normal(k1, math.sqrt(cov1[0, 0]), n_samples)
     k2s = rng.normal(k2, math.sqrt(cov2[0, 0]), n_samples)
     assert t.cos_inclination is not None
@@ -119,9 +120,7 @@ def main(argv: list[str] | None = None) -> None:
 
     with tempfile.TemporaryDirectory() as tmp:
         rng = np.random.default_rng(9)
-        th = rng.multivariate_normal(
-            t.params.as_array(), t.covariance, size=n_samples, method="eigh"
-        )
+        th = sample_normal(t.params.as_array(), t.covariance, n_samples, rng)
         post = Table({name: th[:, k] for k, name in enumerate(PARAM_NAMES)})
         path = Path(tmp) / "posterior.ecsv"
         post.write(path, format="ascii.ecsv")

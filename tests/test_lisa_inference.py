@@ -9,7 +9,7 @@ import pytest
 from typer.testing import CliRunner
 
 from ucbplan.lisa import posterior as post
-from ucbplan.lisa.fisher import fisher_matrix
+from ucbplan.lisa.fisher import fisher_covariance
 from ucbplan.lisa.likelihood import (
     Likelihood,
     Prior,
@@ -41,7 +41,7 @@ def problem() -> tuple:
         model, simulate_data(model, truth, SANGRIA, None), Prior.paper(truth, t_obs), SANGRIA
     )
     theta0 = theta_from_source(truth, t_obs)
-    cov = np.linalg.inv(fisher_matrix(like, theta0))
+    cov = fisher_covariance(like, theta0)
     return target, truth, model, like, theta0, cov
 
 

@@ -155,3 +155,98 @@ def test_site_utc_times_are_converted(tmp_path: Path) -> None:
     )
     bad = CliRunner().invoke(app, ["reduce", str(TARGET), str(out)])
     assert bad.exit_code != 0 and "--site" in str(bad.exception)
+
+
+# --- issue 11: one -o rule, option values, outputs as a unit ---
+
+
+@pytest.mark.parametrize(
+    ("args", "fmt"),
+    [
+        (["-o", "{tmp}/r.json"], "json"),
+        (["-o", "{tmp}/r.yaml"], "yaml"),
+        (["-o", "{tmp}/r.YML"], "yaml"),
+        (["-o", "{tmp}/report"], "json"),  # no suffix: the first machine format
+        (["-o", "{tmp}/r.yaml", "--format", "yaml"], "yaml"),
+    ],
+)
+def test_output_format_follows_the_one_rule(tmp_path: Path, args: list[str], fmt: str) -> None:
+    """--format, else the -o suffix, else JSON for a file; the file holds that format."""
+    argv = [a.replace("{tmp}", str(tmp_path)) for a in args]
+    res = _run(*argv, "--samples", "200", "--seed", "1")
+    assert res.exit_code == 0, res.output  # type: ignore[attr-defined]
+    text = Path(argv[1]).read_text()
+    if fmt == "json":
+        assert json.loads(text)["seed"] == 1
+    else:
+        assert not text.lstrip().startswith("{") and yaml.safe_load(text)["seed"] == 1
+
+
+@pytest.mark.parametrize(
+    ("args", "needle"),
+    [
+        (["--format", "json", "-o", "{tmp}/x.yaml"], "suffix says yaml but --format says json"),
+        (["--format", "table", "-o", "{tmp}/x.json"], "--format table"),
+        (["--format", "xml"], "--format"),
+        (["-o", "{tmp}/x.json", "--em-prior", "{tmp}/x.json"], "same file"),
+        (["--em-prior", "{tmp}/prior.json"], "EM prior is YAML"),
+        (["--cos-i-sigma", "1e300"], "--cos-i-sigma"),
+        (["-o", "{tmp}"], "folder"),
+        (["-o", "{tmp}/missing/x.json"], "does not exist"),
+        (["--plots", "{tmp}/nope"], "--plots"),
+        (["--mass-radius", "x" * 3000], "--mass-radius"),
+        (["--site", "atlantis"], ""),
+    ],
+)
+def test_bad_output_and_option_values(tmp_path: Path, args: list[str], needle: str) -> None:
+    """One UcbplanError line naming the option; the folder is left as it was."""
+    from ucbplan.errors import UcbplanError
+
+    (tmp_path / "keep.txt").write_text("x")
+    argv = [a.replace("{tmp}", str(tmp_path)) for a in args]
+    res = _run(*argv, "--samples", "200")
+    exc = res.exception  # type: ignore[attr-defined]
+    if "--site" in args:  # a barycentric table needs no site: the option is unused
+        assert res.exit_code == 0  # type: ignore[attr-defined]
+        return
+    assert isinstance(exc, UcbplanError), (exc, res.output)  # type: ignore[attr-defined]
+    msg = str(exc)
+    assert needle in msg and "\n" not in msg and len(msg) < 400, msg
+    assert [p.name for p in tmp_path.iterdir()] == ["keep.txt"]
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["--samples", "5"],
+        ["--samples", "-5"],
+        ["--samples", "10000000000"],
+        ["--seed", "-1"],
+        ["--samples", "abc"],
+        ["--cos-i-sigma", "-1"],
+        ["--cos-i-sigma", "nan"],
+    ],
+)
+def test_out_of_range_numbers_are_usage_errors(tmp_path: Path, args: list[str]) -> None:
+    """Values typer checks (ranges, integers): exit 2 naming the option, nothing written."""
+    res = _run("-o", str(tmp_path / "r.json"), *args)
+    assert res.exit_code == 2  # type: ignore[attr-defined]
+    assert args[0] in res.output and "Traceback" not in res.output  # type: ignore[attr-defined]
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_report_and_em_prior_are_written_together(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """If writing the EM prior fails, the report is not left behind either."""
+    from ucbplan.reduce import report as rep
+
+    def fail(doc: object, handle: object) -> None:
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(rep, "write_yaml", fail)
+    out, prior = tmp_path / "r.json", tmp_path / "prior.yaml"
+    res = _run("-o", str(out), "--em-prior", str(prior), "--samples", "200")
+    assert res.exit_code != 0  # type: ignore[attr-defined]
+    assert "no space left" in str(res.exception)  # type: ignore[attr-defined]
+    assert list(tmp_path.iterdir()) == []

@@ -117,3 +117,132 @@ def test_validity_window(tmp_path: Path) -> None:
     late = _write(tmp_path, HEADER + f"{JD + 365.25 * 25},30,1,15,1,15,A\n", "late.csv")
     with pytest.raises(VelocityFileError, match=r"row 1: .*more than 20 yr"):
         check_validity(read_velocities(late), t)
+
+
+# --- issue 11: encodings, blank cells, ranges, too few rows, windows as long as the orbit ---
+
+ROOT = Path(__file__).resolve().parents[1]
+FIDUCIAL = ROOT / "catalogs" / "fiducial-eccentric.yaml"
+ROWS = [
+    f"{JD + 0.0003 * k:.10f},30,{100 * np.cos(k):.3f},15,{-120 * np.cos(k):.3f},15,A\n"
+    for k in range(8)
+]
+
+
+def _ecsv(tmp_path: Path, body: list[str], header: str = "bjd_tdb v sigma_v exptime_s") -> Path:
+    names = header.split()
+    lines = ["# %ECSV 1.0", "# ---", "# datatype:"]
+    lines += [f"# - {{name: {n}, datatype: float64}}" for n in names]
+    lines += ["# schema: astropy-2.0", header, *body]
+    return _write(tmp_path, "\n".join(lines) + "\n", "v.ecsv")
+
+
+def test_utf8_bom_and_crlf_are_read(tmp_path: Path) -> None:
+    """Excel's UTF-8 with a byte-order mark and CRLF line ends read like plain UTF-8."""
+    p = tmp_path / "bom.csv"
+    p.write_bytes(b"\xef\xbb\xbf" + (HEADER + "".join(ROWS)).replace("\n", "\r\n").encode())
+    tab = read_velocities(p)
+    assert tab.n == 8 and tab.session[0] == "A"
+
+
+def test_latin1_is_refused_with_the_fix(tmp_path: Path) -> None:
+    p = tmp_path / "latin.csv"
+    p.write_bytes(("# observer: Müller\n" + HEADER + "".join(ROWS)).encode("latin-1"))
+    with pytest.raises(VelocityFileError, match=r"not UTF-8 text .*iconv") as exc:
+        read_velocities(p)
+    assert str(p) in str(exc.value) and "\n" not in str(exc.value)
+
+
+@pytest.mark.parametrize(
+    "body, needle",
+    [
+        ([f'{JD} "" 15 30', f"{JD + 0.01} 2 15 30"], "row 1, column 'v': blank cell"),
+        ([f"{JD} 1 15 30", f'{JD + 0.01} 2 15 ""'], "row 2, column 'exptime_s': blank cell"),
+        ([f"{JD} 1 15 30", f"{JD + 0.01} inf 15 30"], "row 2, column 'v'"),
+        ([f"{JD} 1 -15 30", f"{JD + 0.01} 1 15 30"], "row 1, column 'sigma_v'"),
+    ],
+)
+def test_ecsv_blank_and_bad_cells_are_refused(tmp_path: Path, body: list[str], needle: str) -> None:
+    """A blank ECSV cell is masked by astropy; it used to be read as a number (0.0 or NaN)."""
+    with pytest.raises(VelocityFileError) as exc:
+        read_velocities(_ecsv(tmp_path, body))
+    assert needle in str(exc.value)
+
+
+@pytest.mark.parametrize(
+    "text, needle",
+    [
+        (HEADER + f"{JD},30,,15,1,15,A\n", "row 1, column 'v1': blank cell"),
+        (HEADER + f"{JD},30,1,15,1,15,\n", "row 1, column 'session': blank cell"),
+        (HEADER + f"{JD},30,1,15,1e400,15,A\n", "row 1, column 'v2'"),
+        (HEADER + f"{JD},30,3e5,15,1,15,A\n", "speed of light"),
+        (HEADER + "1e300,30,1,15,1,15,A\n", "row 1, column 'bjd_tdb'"),
+        (HEADER + f"{'9' * 5000},30,1,15,1,15,A\n", "characters"),
+        ("bjd_tdb,exptime_s,v1,sigma_v1,V1,sigma_v2\n", "column 'v1': appears twice"),
+        ("bjd_tdb,exptime_s,v,sigma_v,exptime_s\n", "column 'exptime_s': appears twice"),
+    ],
+)
+def test_more_malformed_tables(tmp_path: Path, text: str, needle: str) -> None:
+    p = _write(tmp_path, text)
+    with pytest.raises(VelocityFileError) as exc:
+        read_velocities(p)
+    msg = str(exc.value)
+    assert needle in msg and str(p) in msg and "\n" not in msg and len(msg) < 400
+
+
+def test_duplicate_ecsv_columns_differing_in_case_are_refused(tmp_path: Path) -> None:
+    p = _ecsv(tmp_path, [f"{JD} 1 15 30 2"], "bjd_tdb v sigma_v exptime_s V")
+    with pytest.raises(VelocityFileError, match="column 'v': appears twice"):
+        read_velocities(p)
+
+
+def _reduce(path: Path) -> object:
+    from ucbplan.reduce import ReduceOptions, reduce
+    from ucbplan.target import load_target
+
+    return reduce(load_target(FIDUCIAL), read_velocities(path), ReduceOptions(200, seed=1))
+
+
+@pytest.mark.parametrize("n_rows", [1])
+def test_too_few_spectra_is_one_line_error(tmp_path: Path, n_rows: int) -> None:
+    """One spectrum cannot fit γ and K (it was a ValueError traceback)."""
+    p = _write(tmp_path, HEADER + "".join(ROWS[:n_rows]))
+    with pytest.raises(VelocityFileError, match="at least 2 spectra") as exc:
+        _reduce(p)
+    assert str(p) in str(exc.value)
+
+
+def test_spectra_at_one_phase_are_one_line_error(tmp_path: Path) -> None:
+    """Three spectra at the same time: F̄ does not vary, K is undetermined."""
+    p = _write(tmp_path, HEADER + "".join(ROWS[0] for _ in range(3)))
+    with pytest.raises(VelocityFileError, match="same orbital phase"):
+        _reduce(p)
+
+
+@pytest.mark.parametrize("window", ["238", "300", "1000"])
+def test_window_as_long_as_the_orbit_is_refused(tmp_path: Path, window: str) -> None:
+    """exptime_s ≥ P_b (238 s) makes Λ_K ≤ 0: K1 came out as −1e7 km/s with exit 0."""
+    rows = [r.replace(",30,", f",{window},", 1) if k == 2 else r for k, r in enumerate(ROWS)]
+    p = _write(tmp_path, HEADER + "".join(rows))
+    with pytest.raises(VelocityFileError, match=r"row 3, column 'exptime_s'.*orbital period"):
+        _reduce(p)
+
+
+def test_two_spectra_at_different_phases_reduce(tmp_path: Path) -> None:
+    """Two spectra are the minimum (the two-spectrum quadrature technique): a result, no error."""
+    p = _write(tmp_path, HEADER + "".join(ROWS[:2]))
+    red = _reduce(p)
+    assert np.isfinite(red.fits[0].K)  # type: ignore[attr-defined]
+
+
+def test_swapped_star_gives_warning_not_nan_masses(tmp_path: Path) -> None:
+    """SB2 with K ≤ 0 for one star: masses are not computed and a warning says why."""
+    rows = [r.replace(",A\n", ",A\n") for r in ROWS]
+    flipped = []
+    for r in rows:
+        c = r.split(",")
+        c[4] = f"{-float(c[4]):.3f}"  # star 2 moving like star 1
+        flipped.append(",".join(c))
+    red = _reduce(_write(tmp_path, HEADER + "".join(flipped)))
+    assert "M1" not in red.summaries  # type: ignore[attr-defined]
+    assert any("K =" in w and "not computed" in w for w in red.warnings)  # type: ignore[attr-defined]

@@ -14,12 +14,21 @@ import typer
 from rich.markup import escape
 
 from ucbplan.cli._console import check_output_path, configure_offline, err_console, write_output
-from ucbplan.errors import UcbplanError
+from ucbplan.errors import InputError, UcbplanError
+from ucbplan.io import output_format
 
 if TYPE_CHECKING:
+    from ucbplan.lisa.outputs import SimulationFiles
     from ucbplan.lisa.pipeline import LisaModel, SimulationProblem, SimulationResult
+    from ucbplan.lisa.sampler import SamplerInterrupted
 
 __all__ = ["register"]
+
+
+#: Largest band width (memory: templates are walkers × 3 bands × 2 channels × N complex).
+MAX_BINS = 65536
+#: Shortest accepted observation [s] (a day: the response needs a resolved orbit).
+MIN_T_OBS_S = 86400.0
 
 
 def _t_obs(text: str | None, default_s: float) -> float:
@@ -27,15 +36,34 @@ def _t_obs(text: str | None, default_s: float) -> float:
         return default_s
     import astropy.units as u
 
+    from ucbplan.errors import shorten
+
     try:
         val = float(u.Quantity(text.replace(" ", "")).to_value(u.s))
-    except (TypeError, ValueError, u.UnitsError) as exc:
-        raise UcbplanError(
-            f"--t-obs: expected a duration like '4yr' (Julian) or '126232599.054s', got {text!r}"
-        ) from exc
-    if not val > 0:
-        raise UcbplanError(f"--t-obs: must be positive, got {text!r}")
+    except (TypeError, ValueError, u.UnitsError):
+        raise InputError(
+            f"--t-obs: expected a duration like '4yr' (Julian) or '126232599.054s', got "
+            f"{shorten(text)}"
+        ) from None
+    if not MIN_T_OBS_S <= val < float("inf"):
+        raise InputError(
+            f"--t-obs: expected a finite duration of at least 1 day, got {shorten(text)}"
+        )
     return val
+
+
+def _check_n_bins(n_bins: int) -> None:
+    if not (16 <= n_bins <= MAX_BINS and n_bins % 2 == 0):
+        raise InputError(
+            f"--n-bins: expected an even number of bins in [16, {MAX_BINS}], got {n_bins}"
+        )
+
+
+def _require_suffix(path: Path, fmt: str, option: str, what: str) -> None:
+    """The -o rule for single-format outputs: a suffix naming another format is an error."""
+    known = ("yaml", "json", "ecsv", "csv")
+    if output_format(path, None, known, fmt) != fmt:
+        raise InputError(f"{option} {path}: {what} is {fmt.upper()}; give the file a .{fmt} name")
 
 
 def _model(target_path: Path, t_obs: str | None, n_bins: int, circular: bool) -> LisaModel:
@@ -44,8 +72,7 @@ def _model(target_path: Path, t_obs: str | None, n_bins: int, circular: bool) ->
     from ucbplan.target import load_target
 
     configure_offline()
-    if n_bins < 16 or n_bins % 2:
-        raise UcbplanError(f"--n-bins: expected an even number >= 16, got {n_bins}")
+    _check_n_bins(n_bins)
     target = load_target(target_path)
     t_obs_s = _t_obs(t_obs, target.t_obs_s)
     return build_model(
@@ -87,13 +114,15 @@ def simulate(
     target: Path = typer.Argument(..., help="Target or injection YAML (needs amplitude, psi)."),
     output: Path = typer.Option(..., "-o", "--output", help="Posterior target YAML to write."),
     t_obs: str | None = typer.Option(None, "--t-obs", help="Observation length, e.g. '4yr'."),
-    seed: int = typer.Option(0, "--seed", help="Seed for the noise and the sampler."),
+    seed: int = typer.Option(0, "--seed", min=0, help="Seed for the noise and the sampler."),
     walkers: int = typer.Option(32, "--walkers", help="emcee walkers (>= 2 x parameters)."),
-    steps: int = typer.Option(2000, "--steps", help="Steps (minimum with --until-converged)."),
+    steps: int = typer.Option(
+        2000, "--steps", min=1, help="Steps (minimum with --until-converged)."
+    ),
     until_converged: bool = typer.Option(
         False, "--until-converged", help="Extend the chain until it is >= 50 τ long."
     ),
-    max_steps: int = typer.Option(50000, "--max-steps", help="Cap for --until-converged."),
+    max_steps: int = typer.Option(50000, "--max-steps", min=1, help="Cap for --until-converged."),
     noise: bool = typer.Option(True, "--noise/--no-noise", help="Add a Gaussian noise draw."),
     n_bins: int = typer.Option(
         512, "--n-bins", help="Band width N in bins (injection = templates)."
@@ -111,13 +140,26 @@ def simulate(
     from ucbplan.lisa import pipeline as lp
     from ucbplan.lisa.outputs import simulation_files, write_simulation
     from ucbplan.lisa.plots import simulation_corner_plots
+    from ucbplan.lisa.sampler import SamplerInterrupted
 
-    model = _model(target, t_obs, n_bins, circular)
+    _require_suffix(output, "yaml", "-o", "the posterior target file")
     files = simulation_files(output, chain)
     for p in (files.target, files.samples, files.chain):
         check_output_path(p, overwrite)
-    if plots is not None and not plots.is_dir():
-        raise UcbplanError(f"--plots: folder {plots} does not exist; create it first")
+    if plots is not None:
+        from ucbplan.lisa.plots import CORNER_NAMES
+
+        if not plots.is_dir():
+            raise UcbplanError(f"--plots: folder {plots} does not exist; create it first")
+        for name in CORNER_NAMES:  # before sampling, not after it
+            check_output_path(plots / name, overwrite)
+    model = _model(target, t_obs, n_bins, circular)
+    dim = model.theta0().size
+    if walkers < 2 * dim:
+        raise InputError(
+            f"--walkers: expected at least {2 * dim} (2 per parameter, {dim} parameters), "
+            f"got {walkers}"
+        )
     options = lp.SimulateOptions(
         seed=seed,
         walkers=walkers,
@@ -133,7 +175,11 @@ def simulate(
         f"N = {n_bins} bins, {problem.theta0.size} parameters, noise {'on' if noise else 'off'}, "
         f"seed {seed}"
     )
-    result = _run_with_progress(problem, steps)
+    try:
+        result = _run_with_progress(problem, steps)
+    except SamplerInterrupted as stop:
+        _save_interrupted(problem, stop, files, target, overwrite)
+        raise
     for warning in result.warnings:
         err_console.print(f"[yellow]warning: {escape(warning)}[/yellow]")
     write_simulation(result, files, overwrite=overwrite, source_name=target.name)
@@ -143,6 +189,37 @@ def simulate(
     if plots is not None:
         simulation_corner_plots(result, plots, overwrite=overwrite)
     err_console.print(f"wrote {output}, {files.samples.name}, {files.chain.name}")
+
+
+def _save_interrupted(
+    problem: SimulationProblem,
+    stop: SamplerInterrupted,
+    files: SimulationFiles,
+    target: Path,
+    overwrite: bool,
+) -> None:
+    """Ctrl-C: keep the chain so far for --resume (the interrupt then ends the program)."""
+    from ucbplan.errors import OutputError
+    from ucbplan.lisa.outputs import save_interrupted
+
+    if stop.partial is None:
+        err_console.print("interrupted before the first step: nothing to save", markup=False)
+        return
+    n = stop.partial.theta.shape[0]
+    try:
+        save_interrupted(problem, stop.partial, files.chain, overwrite=overwrite)
+    except OutputError as exc:
+        err_console.print(
+            f"interrupted after {n} steps; the chain was not saved: {exc}", markup=False
+        )
+        return
+    err_console.print(
+        f"interrupted after {n} steps: chain saved to {files.chain}; continue with "
+        f"ucbplan simulate {target} -o {files.target} --resume {files.chain} --overwrite "
+        "and the same options",
+        markup=False,
+        soft_wrap=True,
+    )
 
 
 def _run_with_progress(problem: SimulationProblem, steps: int) -> SimulationResult:
@@ -179,10 +256,13 @@ def fisher(
     from ucbplan.lisa.pipeline import fisher_forecast
     from ucbplan.target import write_target
 
-    model = _model(target, t_obs, n_bins, circular)
     if output is not None:
+        _require_suffix(output, "yaml", "-o", "the forecast target file")
         check_output_path(output, overwrite)
+    model = _model(target, t_obs, n_bins, circular)
     forecast = fisher_forecast(model)
+    for warning in forecast.warnings:
+        err_console.print(f"[yellow]warning: {escape(warning)}[/yellow]")
     fis = forecast.target
     _summary(f"{fis.name}: SNR {forecast.snr:.1f}", fis.cov_names, forecast.values, forecast.sigmas)
     if output is not None:
@@ -203,10 +283,13 @@ def waveform(
     from ucbplan.lisa.lines import waveform_lines
     from ucbplan.lisa.plots import waveform_plot
 
-    model = _model(target, t_obs, n_bins, False)
+    _require_suffix(output, "ecsv", "-o", "the lines table")
+    if plot is not None and plot.resolve() == output.resolve():
+        raise InputError(f"{plot}: --plot and -o name the same file; give each its own name")
     check_output_path(output, overwrite)
     if plot is not None:
         check_output_path(plot, overwrite)
+    model = _model(target, t_obs, n_bins, False)
     lines = waveform_lines(model)
     write_output(output, lambda h: lines.table.write(h, format="ascii.ecsv"), overwrite=overwrite)
     if plot is not None:

@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
 
 import typer
 
-from ucbplan.cli._console import check_output_path, err_console, write_output
-from ucbplan.errors import UcbplanError
+from ucbplan.cli._console import check_output_path, err_console, pick_format, write_output
+from ucbplan.errors import InputError, UcbplanError, shorten
+from ucbplan.io import write_file_set
 
 if TYPE_CHECKING:
     from ucbplan.reduce.velocities import VelocityTable
@@ -17,6 +19,8 @@ if TYPE_CHECKING:
 __all__ = ["reduce_cmd", "register"]
 
 _FORMATS = ("table", "json", "yaml")
+#: Most Monte-Carlo samples (memory: ~200 bytes per sample across the derived quantities).
+MAX_SAMPLES = 2_000_000
 
 
 def reduce_cmd(
@@ -24,11 +28,19 @@ def reduce_cmd(
     velocities: Path = typer.Argument(
         ..., help="Velocity table (CSV or ECSV): bjd_tdb, exptime_s, v1, sigma_v1, v2, sigma_v2."
     ),
-    fmt: str = typer.Option("table", "--format", help="table (rich, stderr) | json | yaml."),
-    output: Path | None = typer.Option(None, "-o", "--output", help="Write the report here."),
+    fmt: str | None = typer.Option(
+        None,
+        "--format",
+        help="table (rich, stderr) | json | yaml (default: the -o suffix, else table).",
+    ),
+    output: Path | None = typer.Option(
+        None, "-o", "--output", help="Write the report here (.json or .yaml)."
+    ),
     plots: Path | None = typer.Option(None, "--plots", help="Folder for PNG figures."),
-    samples: int = typer.Option(20000, "--samples", min=100, help="Monte-Carlo samples."),
-    seed: int | None = typer.Option(None, "--seed", help="Random seed (reported)."),
+    samples: int = typer.Option(
+        20000, "--samples", min=100, max=MAX_SAMPLES, help="Monte-Carlo samples."
+    ),
+    seed: int | None = typer.Option(None, "--seed", min=0, help="Random seed (reported)."),
     light_time: bool = typer.Option(
         False, "--light-time", help="Correct for the light travel time across the orbit."
     ),
@@ -57,12 +69,10 @@ def reduce_cmd(
     from ucbplan.reduce import report as rep
     from ucbplan.reduce.pipeline import ReduceOptions, reduce
 
-    fmt = _check_format(fmt)
+    machine = pick_format(output, fmt, _FORMATS)
     relation = _check_mass_radius(mass_radius)
-    machine = _machine_format(fmt, output)
-    for path in (output, em_prior):
-        if path is not None:
-            check_output_path(path, overwrite)
+    _check_cos_i_sigma(cos_i_sigma)
+    _check_outputs(output, em_prior, overwrite)
     if plots is not None and not plots.is_dir():
         raise UcbplanError(f"--plots: folder {plots} does not exist; create it first")
     tgt, table = _load(target, velocities, site)
@@ -76,10 +86,14 @@ def reduce_cmd(
     red = reduce(tgt, table, options)
     doc = rep.build_report(red)
     rep.print_report(doc, err_console)
-    if machine != "table":
-        _write_doc(doc, output, machine, overwrite)
+    if machine != "table" and output is None:
+        write_output(None, _doc_writer(doc, machine))
+    files = {output: _doc_writer(doc, machine)} if machine != "table" and output else {}
     if em_prior is not None:
-        _write_doc(rep.em_prior(red), em_prior, "yaml", overwrite)
+        files[em_prior] = _doc_writer(rep.em_prior(red), "yaml")
+    if files:
+        write_file_set(files, overwrite=overwrite)  # the report and EM prior: both or neither
+    if em_prior is not None:
         err_console.print(f"EM prior written to {em_prior}")
     if plots is not None:
         from ucbplan.reduce.plots import plot_all
@@ -88,11 +102,23 @@ def reduce_cmd(
             err_console.print(f"figure: {p}")
 
 
-def _check_format(fmt: str) -> str:
-    fmt = fmt.lower()
-    if fmt not in _FORMATS:
-        raise UcbplanError(f"--format: got {fmt!r}, expected one of {', '.join(_FORMATS)}")
-    return fmt
+def _check_cos_i_sigma(value: float) -> None:
+    if not 0.0 <= value <= 2.0:
+        raise InputError(f"--cos-i-sigma: expected a 1σ of cos ι in [0, 2], got {value}")
+
+
+def _check_outputs(output: Path | None, em_prior: Path | None, overwrite: bool) -> None:
+    """-o and --em-prior: distinct files that may be written; the EM prior is YAML."""
+    from ucbplan.io import output_format
+
+    if em_prior is not None:
+        if output is not None and output.resolve() == em_prior.resolve():
+            raise InputError(f"{output}: -o and --em-prior name the same file; rename one")
+        if output_format(em_prior, None, ("yaml", "json", "ecsv", "csv"), "yaml") != "yaml":
+            raise InputError(f"--em-prior {em_prior}: the EM prior is YAML; name it .yaml")
+    for path in (output, em_prior):
+        if path is not None:
+            check_output_path(path, overwrite)
 
 
 def _check_mass_radius(mass_radius: str | None) -> str | None:
@@ -100,22 +126,11 @@ def _check_mass_radius(mass_radius: str | None) -> str | None:
     from ucbplan.reduce.masses import MASS_RADIUS_MODELS
 
     if mass_radius is not None and mass_radius.lower() not in MASS_RADIUS_MODELS:
-        raise UcbplanError(
-            f"--mass-radius: got {mass_radius!r}, expected one of {', '.join(MASS_RADIUS_MODELS)}"
+        raise InputError(
+            f"--mass-radius: got {shorten(mass_radius)}, expected one of "
+            f"{', '.join(MASS_RADIUS_MODELS)}"
         )
     return mass_radius.lower() if mass_radius else None
-
-
-def _machine_format(fmt: str, output: Path | None) -> str:
-    """Format of the written report: --format, or from the -o suffix with --format table."""
-    if output is None or fmt != "table":
-        return fmt
-    suffix = output.suffix.lower()
-    if suffix not in (".json", ".yaml", ".yml"):
-        raise UcbplanError(
-            f"{output}: -o with --format table needs a .json or .yaml name, or pass --format"
-        )
-    return "json" if suffix == ".json" else "yaml"
 
 
 def _load(target: Path, velocities: Path, site: str | None) -> tuple[Target, VelocityTable]:
@@ -136,8 +151,8 @@ def _load(target: Path, velocities: Path, site: str | None) -> tuple[Target, Vel
     return tgt, table
 
 
-def _write_doc(doc: dict[str, Any], path: Path | None, fmt: str, overwrite: bool) -> None:
-    """Write a report dict as JSON or YAML to ``path`` (stdout if None), atomically."""
+def _doc_writer(doc: dict[str, Any], fmt: str) -> Callable[[IO[Any]], None]:
+    """Writer of a report dict as JSON or YAML."""
     from ucbplan.reduce import report as rep
 
     writer = rep.write_json if fmt == "json" else rep.write_yaml
@@ -145,7 +160,7 @@ def _write_doc(doc: dict[str, Any], path: Path | None, fmt: str, overwrite: bool
     def _write(handle: IO[Any]) -> None:
         writer(doc, handle)
 
-    write_output(path, _write, overwrite=overwrite)
+    return _write
 
 
 def register(app: typer.Typer) -> None:

@@ -3,6 +3,12 @@
 F_ij = (dh/dtheta_i | dh/dtheta_j), derivatives by central differences (the waveform is exactly
 linear in eta and kappa, so their columns are exact). Step sizes are a small fraction of the
 expected posterior width so that the O(step^2) truncation error is < 1e-4 relative.
+
+Inverting F and whitening with its inverse go through :mod:`ucbplan.core.mvnormal`
+(correlation-scaled), like every covariance in ucbplan. A parameter the data do not constrain
+(face-on: phase and psi are degenerate; a faint source: all of them) raises a
+:class:`~ucbplan.errors.NumericalError` naming it instead of returning NaN or a σ wider than
+the prior.
 """
 
 from __future__ import annotations
@@ -10,9 +16,24 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from ucbplan.core.mvnormal import correlation_split, inverse_scaled, sqrt_factor
+from ucbplan.errors import NumericalError
 from ucbplan.lisa.likelihood import Likelihood
 
-__all__ = ["STEPS", "fisher_matrix", "whitening"]
+__all__ = [
+    "STEPS",
+    "fisher_covariance",
+    "fisher_matrix",
+    "prior_excess",
+    "unwhiten",
+    "whitening",
+]
+
+#: Largest condition number of the Fisher correlation matrix that is still inverted: beyond it a
+#: combination of parameters is unconstrained (round-off alone gives ~1e-16 relative errors).
+MAX_CONDITION = 1e10
+#: User-facing names of the sampled coordinates (error messages).
+_LABELS = {"log10_amplitude": "amplitude", "log10_fdot": "fdot", "z_omega": "omega_dot"}
 
 #: Central-difference steps in sampled coordinates (same order as ECCENTRIC_NAMES); f_gw is in
 #: units of 1/T and scaled at run time.
@@ -55,12 +76,124 @@ def fisher_matrix(like: Likelihood, theta0: NDArray[np.float64]) -> NDArray[np.f
     return 0.5 * (fis + fis.T)
 
 
-def whitening(cov: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Lower Cholesky factor L of ``cov`` (C = L L^T): theta = theta0 + L x whitens the posterior.
+def fisher_covariance(
+    like: Likelihood,
+    theta0: NDArray[np.float64],
+    where: str = "source",
+    *,
+    within_prior: bool = True,
+) -> NDArray[np.float64]:
+    """Inverse Fisher matrix at ``theta0`` (sampled coordinates), checked.
 
-    Uses correlation scaling first (C = s R s) so that parameters with tiny absolute widths
-    (f_gw: 1e-11 Hz) do not spoil the factorisation.
+    Parameters
+    ----------
+    like : Likelihood
+        Templates, inner product and the prior (its widths bound a meaningful σ).
+    theta0 : numpy.ndarray
+        Sampled parameters (D,) (start epoch).
+    where : str
+        Prefix of the error message (the target file).
+    within_prior : bool
+        Also require every 1σ to be narrower than the parameter's prior (the sampler's whitening
+        needs it; a forecast reports it with :func:`prior_excess` instead).
+
+    Raises
+    ------
+    NumericalError
+        "unconstrained": the Fisher matrix is not finite, singular (a degenerate combination,
+        e.g. phase and psi of a face-on source), or (``within_prior``) gives a parameter a 1σ
+        wider than its prior.
     """
-    s = np.sqrt(np.diag(cov))
-    corr = cov / np.outer(s, s)
-    return np.asarray(s[:, None] * np.linalg.cholesky(0.5 * (corr + corr.T)))
+    names = like.prior.names
+    fis = fisher_matrix(like, theta0)
+    if not np.all(np.isfinite(fis)):
+        raise _unconstrained(where, names, np.flatnonzero(~np.isfinite(np.diag(fis))), like, theta0)
+    zero = np.flatnonzero(~(np.diag(fis) > 0))
+    if zero.size:
+        raise _unconstrained(where, names, zero, like, theta0)
+    _, corr = correlation_split(fis)
+    vals, vecs = np.linalg.eigh(corr)
+    if not vals[0] > vals[-1] / MAX_CONDITION:
+        # the weakest eigen-direction: the parameters that make it up are the degenerate ones
+        weak = np.argsort(-np.abs(vecs[:, 0]))
+        weak = weak[np.abs(vecs[weak, 0]) > 0.3]
+        raise _unconstrained(where, names, weak, like, theta0)
+    try:
+        cov = inverse_scaled(fis)
+    except np.linalg.LinAlgError:
+        raise _unconstrained(where, names, np.arange(len(names)), like, theta0) from None
+    if within_prior:
+        excess = prior_excess(like, theta0, cov, where)
+        if excess is not None:
+            raise excess
+    return cov
+
+
+def prior_excess(
+    like: Likelihood,
+    theta0: NDArray[np.float64],
+    cov: NDArray[np.float64],
+    where: str = "source",
+) -> NumericalError | None:
+    """The "unconstrained" error for parameters whose 1σ exceeds their prior width, or None."""
+    names = like.prior.names
+    width = np.asarray(like.prior.high) - np.asarray(like.prior.low)
+    sigma = np.sqrt(np.diag(cov))
+    wide = np.flatnonzero(~(sigma < width))
+    if not wide.size:
+        return None
+    return _unconstrained(
+        where, names, wide[np.argsort(-(sigma / width)[wide])], like, theta0, sigma
+    )
+
+
+def _unconstrained(
+    where: str,
+    names: tuple[str, ...],
+    idx: NDArray[np.intp],
+    like: Likelihood,
+    theta0: NDArray[np.float64],
+    sigma: NDArray[np.float64] | None = None,
+) -> NumericalError:
+    """One-line "unconstrained" error naming the parameters ``names[idx]`` and a likely cause."""
+    which = list(dict.fromkeys(_LABELS.get(names[i], names[i]) for i in idx)) or list(names)
+    if sigma is not None:
+        i = int(idx[0])
+        span = like.prior.high[i] - like.prior.low[i]
+        what = f"{which[0]} unconstrained: the Fisher 1σ of {names[i]} ({sigma[i]:.3g}) exceeds "
+        what += f"its prior width ({span:.3g})"
+        what += f" (also {', '.join(which[1:])})" if len(which) > 1 else ""
+    elif len(which) > 1:
+        what = f"{', '.join(which)} unconstrained: degenerate (singular Fisher matrix)"
+    else:
+        what = f"{which[0]} unconstrained: the Fisher matrix has no usable information on it"
+    cos_i = float(theta0[names.index("cos_inclination")])
+    snr = float(like.snr(theta0[None])[0])
+    if abs(cos_i) > 0.99 or (abs(cos_i) > 0.9 and {"phase", "psi"} <= set(which)):
+        why = f"the source is nearly face-on (cos_inclination = {cos_i:.4g}): phase and psi mix"
+    elif snr < 10.0:
+        why = f"optimal SNR {snr:.3g}: too faint"
+    else:
+        why = f"the data (optimal SNR {snr:.3g}) do not measure it"
+    return NumericalError(f"{where}: Fisher matrix: {what}; {why}")
+
+
+def whitening(cov: NDArray[np.float64]) -> NDArray[np.float64]:
+    """A with A Aᵀ = ``cov``: θ = θ0 + A x whitens the posterior (x ~ N(0, I) for θ ~ N(θ0, C)).
+
+    :func:`ucbplan.core.mvnormal.sqrt_factor` (correlation-scaled) so that parameters with tiny
+    absolute widths (f_gw: 1e-11 Hz) do not spoil the factorisation.
+    """
+    return sqrt_factor(cov)
+
+
+def unwhiten(
+    cov: NDArray[np.float64], root: NDArray[np.float64], delta: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """Whitened x of offsets ``delta`` = θ − θ0 (rows), the inverse of θ = θ0 + A x.
+
+    A⁻¹ = Aᵀ C⁻¹ for A Aᵀ = C, with C⁻¹ from :func:`ucbplan.core.mvnormal.inverse_scaled`: no
+    raw solve on a matrix whose entries span many orders of magnitude.
+    """
+    inv_root = root.T @ inverse_scaled(cov)
+    return np.asarray(delta @ inv_root.T, dtype=np.float64)

@@ -6,7 +6,8 @@ start of the observation:
 ==================  ===========================================================================
 log10_amplitude     uniform in [log10 A_s - 2, log10 A_s + 2] (A_s: search/injection value)
 f_gw                uniform within +-10 Fourier bins of the search value (paper: +-10/T_obs)
-log10_fdot          uniform in [-18, -12] (fdot > 0: inspiralling detached dWD; fdot [Hz/s])
+log10_fdot          uniform in [-18, -12] (fdot > 0: inspiralling detached dWD; fdot [Hz/s]),
+                    widened to one decade beyond a search value outside it
 cos_inclination     uniform in [-1, 1]
 psi                 uniform in [0, pi] (psi -> psi + pi is an exact symmetry)
 phase               uniform in [0, 2 pi]
@@ -78,13 +79,20 @@ class Prior:
 
     @classmethod
     def paper(cls, search: SourceParams, t_obs_s: float, eccentric: bool = True) -> Prior:
-        """The targeted-search priors of Appendix apsidal_mcmc around a search value."""
+        """The targeted-search priors of Appendix apsidal_mcmc around a search value.
+
+        The log10 ḟ range is the paper's [-18, -12] unless the search value lies outside it; then
+        it reaches one decade beyond that value, so every source with ḟ > 0 can be sampled.
+        """
         la = float(np.log10(search.amplitude))
+        lf = float(np.log10(search.fdot))
         df = 10.0 / t_obs_s
         bounds = {
             "log10_amplitude": (la - 2.0, la + 2.0),
             "f_gw": (search.f_gw - df, search.f_gw + df),
-            "log10_fdot": (-18.0, -12.0),
+            # the paper's [-18, -12], widened so that it covers the source (ḟ < 1e-18 Hz/s: a
+            # wide or low-mass binary; > 1e-12 Hz/s: nearly merging) with a decade to spare
+            "log10_fdot": (min(-18.0, np.floor(lf) - 1.0), max(-12.0, np.ceil(lf) + 1.0)),
             "cos_inclination": (-1.0, 1.0),
             "psi": (0.0, np.pi),
             "phase": (0.0, 2.0 * np.pi),
@@ -262,7 +270,8 @@ def source_from_target(target: Target) -> SourceParams:
         f_gw=start.f_gw,
         fdot=start.fdot,
         cos_inclination=float(target.cos_inclination),  # type: ignore[arg-type]
-        psi=float(target.psi),  # type: ignore[arg-type]
+        # ψ → ψ + π is an exact symmetry of the waveform: fold into the prior range [0, π)
+        psi=float(np.mod(float(target.psi), np.pi)),  # type: ignore[arg-type]
         phase=float(np.mod(start.phase, 2.0 * np.pi)),
         eta=start.eta,
         kappa=start.kappa,

@@ -26,9 +26,9 @@ import numpy as np
 from astropy.time import TimeDelta
 from numpy.typing import NDArray
 
-from ucbplan.errors import UcbplanError
+from ucbplan.errors import InputError
 from ucbplan.lisa import posterior as post
-from ucbplan.lisa.fisher import fisher_matrix
+from ucbplan.lisa.fisher import fisher_covariance, prior_excess
 from ucbplan.lisa.likelihood import (
     Likelihood,
     Prior,
@@ -127,22 +127,22 @@ def build_model(
 
     Raises
     ------
-    ValueError
+    InputError
         ``n_bins`` odd or below 16.
     TargetFileError
         The target lacks the GW-only fields or has fdot ≤ 0.
-    UcbplanError
+    InputError
         ω̇ puts z_ω = ω̇T/2π outside the prior [0, 50] bins.
     """
     if n_bins < 16 or n_bins % 2:
-        raise ValueError(f"n_bins: expected an even number >= 16, got {n_bins}")
+        raise InputError(f"n_bins: expected an even number >= 16, got {n_bins}")
     truth = source_from_target(target)
     t_obs = target.t_obs_s if t_obs_s is None else t_obs_s
     eccentric = (not circular) and (truth.eta != 0.0 or truth.kappa != 0.0)
     if not eccentric:
         truth = dataclasses.replace(truth, eta=0.0, kappa=0.0, omega_dot=0.0)
     if eccentric and not 0.0 <= truth.omega_dot * t_obs / (2 * np.pi) <= 50.0:
-        raise UcbplanError(
+        raise InputError(
             f"{where or target.source or target.name}: omega_dot gives z_omega outside the prior "
             f"[0, 50] bins for T = {t_obs:.6g} s; use a shorter --t-obs or --circular"
         )
@@ -155,9 +155,10 @@ def build_model(
     return LisaModel(base=base, truth=truth, model=model, eccentric=eccentric, n_bins=n_bins)
 
 
-def _fisher_cov(like: Likelihood, theta0: F64) -> F64:
-    """Inverse Fisher matrix at ``theta0`` (sampled coordinates)."""
-    return np.asarray(np.linalg.inv(fisher_matrix(like, theta0)), dtype=np.float64)
+def _where(model: LisaModel) -> str:
+    """Prefix of error messages: the target file (or the target's name)."""
+    src = model.base.source
+    return str(src) if src is not None else model.base.name
 
 
 def _sigmas(t: Target) -> dict[str, float]:
@@ -177,12 +178,15 @@ class FisherForecast:
         Optimal SNR of the injection.
     theta0, cov_theta : numpy.ndarray
         Injection and inverse Fisher matrix in sampled coordinates (start epoch).
+    warnings : tuple of str
+        Parameters whose forecast 1σ exceeds their prior width (not measured by these data).
     """
 
     target: Target
     snr: float
     theta0: F64
     cov_theta: F64
+    warnings: tuple[str, ...] = ()
 
     @property
     def sigmas(self) -> dict[str, float]:
@@ -197,14 +201,24 @@ class FisherForecast:
 
 
 def fisher_forecast(model: LisaModel) -> FisherForecast:
-    """Fisher forecast of the targeted-search parameters (the library behind ``ucbplan fisher``)."""
+    """Fisher forecast of the targeted-search parameters (the library behind ``ucbplan fisher``).
+
+    Raises
+    ------
+    NumericalError
+        A singular Fisher matrix: parameters the data cannot separate, e.g. phase and psi of a
+        face-on source (:func:`ucbplan.lisa.fisher.fisher_covariance`). A 1σ wider than the
+        prior is a warning of the forecast instead.
+    """
     theta0 = model.theta0()
     like = model.likelihood(simulate_data(model.model, model.truth, SANGRIA, None))
     snr = float(like.snr(theta0[None])[0])
-    cov = _fisher_cov(like, theta0)
+    cov = fisher_covariance(like, theta0, _where(model), within_prior=False)
+    excess = prior_excess(like, theta0, cov, _where(model))
+    warnings = () if excess is None else (f"{excess}; its forecast σ is not meaningful",)
     fis = post.gaussian_target(model.base, theta0, cov, model.t_obs_s)
     fis = dataclasses.replace(fis, name=f"{model.base.name} (Fisher forecast)")
-    return FisherForecast(target=fis, snr=snr, theta0=theta0, cov_theta=cov)
+    return FisherForecast(target=fis, snr=snr, theta0=theta0, cov_theta=cov, warnings=warnings)
 
 
 @dataclass(frozen=True, slots=True)
@@ -258,20 +272,28 @@ def prepare_simulation(model: LisaModel, options: SimulateOptions) -> Simulation
 
     Raises
     ------
-    UcbplanError
-        Fewer than 2 walkers per parameter.
+    InputError
+        Fewer than 2 walkers per parameter, or no steps.
+    NumericalError
+        The Fisher matrix leaves a parameter unconstrained
+        (:func:`ucbplan.lisa.fisher.fisher_covariance`).
     InputFileError
         ``options.resume`` does not fit this run
         (:func:`ucbplan.lisa.outputs.load_resume`).
     """
     theta0 = model.theta0()
     if options.walkers < 2 * theta0.size:
-        raise UcbplanError(f"--walkers: need >= {2 * theta0.size} for {theta0.size} parameters")
+        raise InputError(
+            f"--walkers: expected at least {2 * theta0.size} (2 per parameter, "
+            f"{theta0.size} parameters), got {options.walkers}"
+        )
+    if options.steps < 1 or options.max_steps < 1:
+        raise InputError(f"--steps/--max-steps: expected >= 1, got {options.steps}")
     rng = np.random.default_rng(options.seed)
     data = simulate_data(model.model, model.truth, SANGRIA, rng if options.noise else None)
     like = model.likelihood(data)
     snr = float(like.snr(theta0[None])[0])
-    cov = _fisher_cov(like, theta0)
+    cov = fisher_covariance(like, theta0, _where(model))
     previous = None
     if options.resume is not None:
         previous, cov = load_resume(
@@ -427,5 +449,11 @@ def simulate(
     """Simulate a LISA observation and sample the targeted-search posterior (``ucbplan simulate``).
 
     :func:`prepare_simulation` followed by :func:`run_simulation`.
+
+    Raises
+    ------
+    SamplerInterrupted
+        Ctrl-C during sampling; its ``partial`` holds the chain so far
+        (:func:`ucbplan.lisa.outputs.save_interrupted` keeps it for ``resume``).
     """
     return run_simulation(prepare_simulation(model, options), progress)

@@ -9,7 +9,9 @@ phi_mid = phi_0 + 2 pi (f_0 T/2 + fdot (T/2)^2 / 2), f_mid = f_0 + fdot T/2,
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 from pathlib import Path
+from typing import IO
 
 import numpy as np
 from numpy.typing import NDArray
@@ -25,6 +27,7 @@ __all__ = [
     "midpoint_samples",
     "posterior_target",
     "sampled_to_physical_jacobian",
+    "samples_writer",
     "write_samples",
 ]
 
@@ -75,15 +78,24 @@ def fold_phase_mode(cols: dict[str, NDArray], phase_ref: float) -> tuple[dict[st
     return out, int(np.count_nonzero(alt))
 
 
-def write_samples(cols: dict[str, NDArray], path: Path, overwrite: bool, meta: dict) -> None:
-    """Write posterior samples as ECSV (columns named like PARAM_NAMES, SI units)."""
+def samples_writer(cols: dict[str, NDArray], meta: dict) -> Callable[[IO[str]], None]:
+    """Writer of posterior samples as ECSV (columns named like PARAM_NAMES, SI units)."""
     from astropy.table import Table
-
-    from ucbplan.io import write_output
 
     tab = Table({k: np.asarray(v, dtype=float) for k, v in cols.items()})
     tab.meta.update(meta)
-    write_output(path, lambda h: tab.write(h, format="ascii.ecsv"), overwrite=overwrite)
+
+    def _write(handle: IO[str]) -> None:
+        tab.write(handle, format="ascii.ecsv")
+
+    return _write
+
+
+def write_samples(cols: dict[str, NDArray], path: Path, overwrite: bool, meta: dict) -> None:
+    """Write posterior samples as ECSV atomically (:func:`samples_writer`)."""
+    from ucbplan.io import write_output
+
+    write_output(path, samples_writer(cols, meta), overwrite=overwrite)
 
 
 def _with_moments(

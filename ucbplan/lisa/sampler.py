@@ -1,8 +1,8 @@
 """emcee sampling of the targeted-search posterior in Fisher-whitened coordinates.
 
-Walkers move in x with theta = theta0 + L x, where L is the correlation-scaled Cholesky factor of
-the Fisher covariance (:func:`ucbplan.lisa.fisher.whitening`); the Jacobian is constant, so the
-posterior density is unchanged. The ensemble starts in the Fisher ball x ~ N(0, s^2 I). The
+Walkers move in x with theta = theta0 + A x, where A A^T is the Fisher covariance (the
+correlation-scaled factor of :func:`ucbplan.lisa.fisher.whitening`); the Jacobian is constant, so
+the posterior density is unchanged. The ensemble starts in the Fisher ball x ~ N(0, s^2 I). The
 chain is accepted as converged when its length is at least 50 integrated autocorrelation times
 (emcee's estimator, the largest over parameters).
 """
@@ -17,9 +17,17 @@ from typing import IO, Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ucbplan.errors import ConvergenceError, InputFileError
 from ucbplan.lisa.likelihood import Likelihood
 
-__all__ = ["CONVERGENCE_FACTOR", "SamplerResult", "run_sampler", "save_chain"]
+__all__ = [
+    "CONVERGENCE_FACTOR",
+    "SamplerInterrupted",
+    "SamplerResult",
+    "chain_writer",
+    "run_sampler",
+    "save_chain",
+]
 
 #: Required chain length in units of the integrated autocorrelation time.
 CONVERGENCE_FACTOR = 50.0
@@ -63,6 +71,18 @@ class SamplerResult:
         return self.theta[burn::thin].reshape(-1, self.theta.shape[-1])
 
 
+class SamplerInterrupted(KeyboardInterrupt):
+    """Ctrl-C during sampling, carrying the chain so far (None before the first step).
+
+    A ``KeyboardInterrupt``, so it ends the program like any interrupt (exit 130) once the
+    caller has saved ``partial`` (e.g. with :func:`save_chain`) for ``--resume``.
+    """
+
+    def __init__(self, partial: SamplerResult | None) -> None:
+        super().__init__("interrupted")
+        self.partial = partial
+
+
 def _start(
     like: Likelihood,
     theta0: NDArray[np.float64],
@@ -81,7 +101,11 @@ def _start(
         filled += len(take)
         if filled == n_walkers:
             return x
-    raise ValueError("could not place walkers inside the prior; the start point is at its edge")
+    raise ConvergenceError(
+        f"could not place {n_walkers} walkers inside the prior around the injection (only "
+        f"{filled} of 100 draws of the Fisher ball fell inside): the source sits at the edge of "
+        "the prior (e near 0.1, omega_dot near z_omega = 0 or 50 bins, |cos_inclination| near 1)"
+    )
 
 
 def run_sampler(
@@ -126,7 +150,7 @@ def run_sampler(
     from ucbplan.lisa.fisher import whitening
 
     rng = np.random.default_rng(seed)
-    chol = whitening(cov)
+    chol = whitening(cov)  # A with A A^T = cov (not triangular)
     d = theta0.size
 
     def log_prob(x: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -135,30 +159,103 @@ def run_sampler(
     n_before = 0 if previous is None else int(previous[0].shape[0])
     sampler = _seeded_sampler(log_prob, n_walkers, d, seed, n_before)
     if previous is not None:
-        state, x_prev, lp_prev = _resume_state(previous, theta0, chol, n_walkers)
+        state, x_prev, lp_prev = _resume_state(previous, theta0, cov, chol, n_walkers)
     else:
         x_prev = np.empty((0, n_walkers, d))
         lp_prev = np.empty((0, n_walkers))
         state = _start(like, theta0, chol, n_walkers, start_scale, rng)
-    chain_x, tau, converged = _advance(
-        sampler,
-        state,
-        x_prev,
-        n_steps=n_steps,
-        until_converged=until_converged,
-        max_steps=max_steps,
-        check_every=check_every,
-        progress=progress,
-    )
-    theta = theta0 + chain_x @ chol.T
+    theta_prev = previous[0] if previous is not None else np.empty((0, n_walkers, d))
+
+    def to_theta(chain_x: NDArray[np.float64]) -> NDArray[np.float64]:
+        # the resumed part is kept bit for bit; only new steps are mapped back from x
+        new = theta0 + chain_x[theta_prev.shape[0] :] @ chol.T
+        return np.asarray(np.concatenate([theta_prev, new]), dtype=np.float64)
+
+    try:
+        with _DeferredInterrupt() as stop:
+            chain_x, tau, converged = _advance(
+                sampler,
+                state,
+                x_prev,
+                n_steps=n_steps,
+                until_converged=until_converged,
+                max_steps=max_steps,
+                check_every=check_every,
+                progress=progress,
+                stop=stop,
+            )
+    except KeyboardInterrupt:
+        partial = None
+        if x_prev.shape[0] + sampler.iteration > 0:
+            chain_x, lp = _chain_so_far(sampler, x_prev, lp_prev)
+            partial = SamplerResult(
+                theta=to_theta(chain_x),
+                log_prob=lp,
+                tau=np.full(d, np.inf),
+                converged=False,
+                acceptance=float(np.mean(sampler.acceptance_fraction))
+                if sampler.iteration
+                else 0.0,
+                seed=seed,
+                names=like.prior.names,
+            )
+        raise SamplerInterrupted(partial) from None
     return SamplerResult(
-        theta=np.asarray(theta),
+        theta=to_theta(chain_x),
         log_prob=np.concatenate([lp_prev, sampler.get_log_prob()]),
         tau=tau,
         converged=converged,
         acceptance=float(np.mean(sampler.acceptance_fraction)),
         seed=seed,
         names=like.prior.names,
+    )
+
+
+class _DeferredInterrupt:
+    """Ctrl-C (SIGINT) while sampling only sets a flag; the loop stops after the current step.
+
+    An interrupt inside the vectorised log-probability would otherwise surface inside emcee,
+    which prints a traceback, and could cut a step in half. Only the main thread can install a
+    handler; elsewhere, or when SIGINT is ignored, the interrupt is left alone.
+    """
+
+    def __init__(self) -> None:
+        self.requested = False
+        self._previous: Any = None
+        self._installed = False
+
+    def _handle(self, signum: int, frame: object) -> None:
+        self.requested = True
+
+    def __enter__(self) -> _DeferredInterrupt:
+        import signal
+        import threading
+
+        if threading.current_thread() is not threading.main_thread():
+            return self
+        if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+            return self  # the parent asked us to ignore Ctrl-C (e.g. nohup): keep it so
+        self._previous = signal.signal(signal.SIGINT, self._handle)
+        self._installed = True
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        import signal
+
+        if self._installed:
+            previous = self._previous if self._previous is not None else signal.SIG_DFL
+            signal.signal(signal.SIGINT, previous)
+
+
+def _chain_so_far(
+    sampler: Any, x_prev: NDArray[np.float64], lp_prev: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Whitened chain and log_prob of every completed step (an earlier run's included)."""
+    if sampler.iteration == 0:
+        return x_prev, lp_prev
+    return (
+        np.concatenate([x_prev, sampler.get_chain()]),
+        np.concatenate([lp_prev, sampler.get_log_prob()]),
     )
 
 
@@ -182,17 +279,23 @@ def _seeded_sampler(
 def _resume_state(
     previous: tuple[NDArray[np.float64], NDArray[np.float64]],
     theta0: NDArray[np.float64],
+    cov: NDArray[np.float64],
     chol: NDArray[np.float64],
     n_walkers: int,
 ) -> tuple[object, NDArray[np.float64], NDArray[np.float64]]:
     """emcee state to continue from, the earlier chain in whitened x, and its log_prob."""
     import emcee
 
+    from ucbplan.lisa.fisher import unwhiten
+
     d = theta0.size
     shape: tuple[int, ...] = tuple(previous[0].shape)
     if len(shape) != 3 or shape[1] != n_walkers or shape[2] != d:
-        raise ValueError(f"resume: chain shape {shape} != (steps, {n_walkers}, {d})")
-    x = np.linalg.solve(chol, (previous[0] - theta0).reshape(-1, d).T).T.reshape(shape)
+        raise InputFileError(
+            f"--resume: chain shape {shape} does not fit this run (steps, {n_walkers} walkers, "
+            f"{d} parameters); resume with the options of the saved run"
+        )
+    x = unwhiten(cov, chol, (previous[0] - theta0).reshape(-1, d)).reshape(shape)
     x_prev: NDArray[np.float64] = np.asarray(x, dtype=np.float64)
     return emcee.State(x_prev[-1], log_prob=previous[1][-1]), x_prev, previous[1]
 
@@ -207,11 +310,13 @@ def _advance(
     max_steps: int,
     check_every: int,
     progress: Callable[[int, int, float], None] | None,
+    stop: _DeferredInterrupt | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], bool]:
     """Run ``n_steps`` (or chunks of ``check_every`` until converged or ``max_steps``).
 
     Returns the whole chain in whitened x (earlier part included), tau per parameter and
-    whether the chain is at least :data:`CONVERGENCE_FACTOR` tau long.
+    whether the chain is at least :data:`CONVERGENCE_FACTOR` tau long. Raises
+    ``KeyboardInterrupt`` after the step during which ``stop`` saw Ctrl-C.
     """
     import emcee
 
@@ -223,6 +328,8 @@ def _advance(
         target = total if not until_converged else max(total, done + check_every)
         for _ in sampler.sample(state, iterations=target - done, progress=False):
             done += 1
+            if stop is not None and stop.requested:
+                raise KeyboardInterrupt
             if progress is not None and done % 10 == 0:
                 progress(done, max(target, total), float(np.max(tau)))
         state = sampler.get_last_sample()
@@ -233,6 +340,27 @@ def _advance(
         if not until_converged or converged or n_all >= max_steps:
             return chain_x, tau, converged
         total = done
+
+
+def chain_writer(
+    result: SamplerResult, extra: dict[str, object] | None = None
+) -> Callable[[IO[bytes]], None]:
+    """Writer of the chain .npz (binary handle): chain, diagnostics and ``extra`` arrays."""
+    arrays: dict[str, Any] = {str(k): np.asarray(v) for k, v in (extra or {}).items()}
+    arrays |= {
+        "theta": result.theta,
+        "log_prob": result.log_prob,
+        "tau": result.tau,
+        "converged": np.asarray(result.converged),
+        "acceptance": np.asarray(result.acceptance),
+        "seed": np.asarray(result.seed),
+        "names": np.asarray(result.names),
+    }
+
+    def _write(handle: IO[bytes]) -> None:
+        np.savez_compressed(handle, **arrays)
+
+    return _write
 
 
 def save_chain(
@@ -251,18 +379,4 @@ def save_chain(
     """
     from ucbplan.io import write_output
 
-    arrays: dict[str, Any] = {str(k): np.asarray(v) for k, v in (extra or {}).items()}
-    arrays |= {
-        "theta": result.theta,
-        "log_prob": result.log_prob,
-        "tau": result.tau,
-        "converged": np.asarray(result.converged),
-        "acceptance": np.asarray(result.acceptance),
-        "seed": np.asarray(result.seed),
-        "names": np.asarray(result.names),
-    }
-
-    def _write(handle: IO[Any]) -> None:
-        np.savez_compressed(handle, **arrays)
-
-    write_output(path, _write, overwrite=overwrite, binary=True)
+    write_output(path, chain_writer(result, extra), overwrite=overwrite, binary=True)

@@ -8,6 +8,6 @@ Its steps: :mod:`~ucbplan.reduce.velocities` (read, validate), :mod:`~ucbplan.re
 :mod:`~ucbplan.reduce.report` and :mod:`~ucbplan.reduce.plots` (output).
 """
 
-from ucbplan.reduce.pipeline import ReduceOptions, Reduction, read_samples, read_velocities, reduce
+from ucbplan.reduce.pipeline import ReduceOptions, Reduction, read_velocities, reduce
 
-__all__ = ["ReduceOptions", "Reduction", "read_samples", "read_velocities", "reduce"]
+__all__ = ["ReduceOptions", "Reduction", "read_velocities", "reduce"]

@@ -30,6 +30,11 @@ F64 = NDArray[np.float64]
 def window_factors(table: VelocityTable, f_hz: float) -> tuple[F64, F64]:
     """Λ_K and Λ_κ per spectrum from the window widths (or the given Λ_K).
 
+    Raises
+    ------
+    VelocityFileError
+        A window as long as the orbital period P_b = 2π/n̄_b or longer (Λ_K ≤ 0).
+
     Notes
     -----
     Eqs. Lambda_K, Lambda_kappa with n̄_b = π f. Where only Λ_K is known, x = n̄_b Δt/2 is
@@ -37,6 +42,7 @@ def window_factors(table: VelocityTable, f_hz: float) -> tuple[F64, F64]:
     """
     nbar = math.pi * f_hz
     w = table.window_s
+    _check_windows(table, 2.0 * math.pi / nbar)
     lk = np.where(np.isfinite(w), lambda_k(np.nan_to_num(w), nbar), table.lambda_k)
     x = np.zeros_like(lk)
     given = ~np.isfinite(w)
@@ -44,6 +50,26 @@ def window_factors(table: VelocityTable, f_hz: float) -> tuple[F64, F64]:
         x[given] = lambda_k_to_x(table.lambda_k[given])
     lkap = np.where(given, np.sinc(2.0 * x / np.pi), lambda_kappa(np.nan_to_num(w), nbar))
     return np.asarray(lk, float), np.asarray(lkap, float)
+
+
+def _check_windows(table: VelocityTable, period_s: float) -> None:
+    """Every window shorter than the orbital period: Λ_K = sin x/x > 0 (x = πΔt/P_b < π).
+
+    A window of one period averages the velocity curve to zero (Λ_K = 0) and a longer one flips
+    its sign: K = slope/Λ_K would blow up or change sign (K1 = −1e7 km/s was reported).
+    """
+    from ucbplan.errors import VelocityFileError
+
+    w = table.window_s
+    bad = np.flatnonzero(np.isfinite(w) & (w >= period_s))
+    if bad.size:
+        i = int(bad[0])
+        raise VelocityFileError(
+            f"{table.source}: row {i + 1}, column {table.window_column!r}: got {w[i]:.6g} s, "
+            f"expected a window shorter than the orbital period P_b = {period_s:.6g} s (Λ_K = "
+            f"sin x/x ≤ 0 there: the exposure averages the orbit away); split the exposure or "
+            "give shorter co-add windows"
+        )
 
 
 def orbit(p: PhaseParams, tau: F64) -> tuple[F64, F64, F64, F64]:

@@ -16,6 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ucbplan.core.constants import G_SI, MSUN_KG
+from ucbplan.core.mvnormal import sample_normal, sqrt_factor
 from ucbplan.core.params import PARAM_NAMES
 from ucbplan.reduce import masses as _masses
 
@@ -85,9 +86,8 @@ def posterior_samples(
         cov[_COS_I, _COS_I] = cos_i_sigma**2
         if cos_i_sigma == 0.0:
             warn.append(_COS_I_FIXED)
-    vals, vecs = np.linalg.eigh(cov)
-    L = vecs * np.sqrt(np.clip(vals, 0.0, None))
-    out = mean + rng.standard_normal((n, 9)) @ L.T
+    # Correlation-scaled draw: σ's span ~40 orders of magnitude (issue 11).
+    out = sample_normal(mean, cov, n, rng)
     if columns is not None:
         size = len(next(iter(columns.values())))
         idx = rng.choice(size, size=n, replace=size < n)
@@ -105,7 +105,7 @@ def _draw_k_gamma(
     n = dtheta.shape[0]
     Ks, gs = [], []
     for j, f in enumerate(fits):
-        z = rng.standard_normal((n, 2)) @ np.linalg.cholesky(f.cov + 1e-30 * np.eye(2)).T
+        z = rng.standard_normal((n, 2)) @ sqrt_factor(f.cov).T
         # Re-regressing on the design of sample θ shifts K by −∂K/∂θ·δθ (phase_sensitivity).
         Ks.append(f.K + z[:, 1] - dtheta @ dK[j])
         gs.append(f.gamma + z[:, 0] - dtheta @ dg[j])
@@ -175,10 +175,28 @@ def monte_carlo(
                 "target has no lisa.cos_inclination: component masses not computed; add "
                 "it (and its σ) to the target file"
             )
+        elif min(f.K for f in fits) <= 0.0:
+            j = min(range(2), key=lambda i: fits[i].K)
+            warn.append(
+                f"star {j + 1}: K = {fits[j].K:.4g} km/s ≤ 0: its velocities do not follow the "
+                f"LISA phase of star {j + 1} (v1/v2 swapped, a wrong time column or another "
+                "target?); component masses not computed"
+            )
         else:
-            out |= _sb2_masses(Ks, gs, theta, target.amplitude is not None, mass_radius)
+            # draws with K ≤ 0 (K within a few σ of 0) give no masses: NaN, dropped by
+            # summarize() and reported below
+            with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+                masses = _sb2_masses(Ks, gs, theta, target.amplitude is not None, mass_radius)
+            out |= masses
+            lost = 1.0 - np.isfinite(masses["M1"]).mean()
+            if lost > 0.001:
+                warn.append(
+                    f"{100 * lost:.1f} % of the Monte-Carlo draws give no masses (K drawn ≤ 0): "
+                    "the mass summaries are conditional on K > 0"
+                )
     else:
-        out["mass_function"] = _mass_function(Ks[0], theta)
+        with np.errstate(invalid="ignore", over="ignore"):
+            out["mass_function"] = _mass_function(Ks[0], theta)
         warn = [w for w in warn if w != _COS_I_FIXED]  # f(M) does not use ι
         warn.append(
             "SB1: only the mass function f(M) = P K³(1−e²)^{3/2}/(2πG) is reported; "

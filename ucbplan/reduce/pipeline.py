@@ -19,13 +19,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ucbplan.core.constants import C_KM_S
+from ucbplan.errors import VelocityFileError
 from ucbplan.reduce import drifts as _drifts
 from ucbplan.reduce import masses as _masses
 from ucbplan.reduce.design import design_jacobian, designs, orbit, window_factors
@@ -38,7 +38,13 @@ from ucbplan.reduce.regression import (
     phase_sensitivity,
     wilson_fit,
 )
-from ucbplan.reduce.velocities import VelocityTable, check_validity, read_velocities
+from ucbplan.reduce.velocities import (
+    MIN_SPECTRA,
+    VelocityTable,
+    check_validity,
+    read_velocities,
+)
+from ucbplan.target import load_samples
 
 if TYPE_CHECKING:
     from ucbplan.core.params import PhaseParams
@@ -48,7 +54,6 @@ __all__ = [
     "ReduceOptions",
     "Reduction",
     "design_jacobian",
-    "read_samples",
     "read_velocities",
     "reduce",
     "window_factors",
@@ -118,9 +123,22 @@ class Reduction:
 
 
 def _fit_all(table: VelocityTable, design: tuple[F64, ...]) -> tuple[ComponentFit, ...]:
+    """One regression per star.
+
+    Raises
+    ------
+    VelocityFileError
+        The spectra sample a single value of the design F̄ (one orbital phase): K is undefined.
+    """
     fits = []
     for j, (v, s) in enumerate(zip(table.v, table.sigma, strict=True)):
-        fits.append(fit_component(design[j], v, s, star=j + 1))
+        g = design[j]
+        if not np.ptp(g) > 1e-9 * max(float(np.max(np.abs(g))), 1e-300):
+            raise VelocityFileError(
+                f"{table.source}: star {j + 1}: all {g.size} spectra sample the same orbital "
+                "phase (F̄ does not vary), so K is undetermined; add spectra at other phases"
+            )
+        fits.append(fit_component(g, v, s, star=j + 1))
     return tuple(fits)
 
 
@@ -224,46 +242,6 @@ def _wilson(table: VelocityTable, fits: tuple[ComponentFit, ...]) -> WilsonFit |
     return wilson_fit(table.v[0], table.sigma[0], table.v[1], table.sigma[1], q0=q0)
 
 
-def read_samples(path: Path) -> dict[str, F64]:
-    """Numeric columns of a posterior-samples ECSV (bare SI values, PARAM_NAMES column names).
-
-    Fast path: the ECSV data block parsed with ``numpy.loadtxt`` (10⁵ rows in ~0.1 s); anything
-    it cannot parse falls back to astropy's ECSV reader.
-
-    Raises
-    ------
-    InputFileError
-        Unreadable file or no rows.
-    """
-    from ucbplan.errors import InputFileError
-
-    try:
-        lines = path.read_text(encoding="utf-8").splitlines()
-        delim = " "
-        for ln in lines:
-            if ln.startswith("# delimiter:"):
-                delim = ln.split(":", 1)[1].strip().strip("'\"") or " "
-        body = [ln for ln in lines if ln.strip() and not ln.startswith("#")]
-        names = body[0].split(None if delim == " " else delim)
-        data = np.loadtxt(body[1:], delimiter=None if delim == " " else delim, ndmin=2)
-        cols = {nm.strip().strip('"'): data[:, k] for k, nm in enumerate(names)}
-    except (OSError, ValueError, IndexError):
-        from astropy.table import Table
-
-        try:
-            tab = Table.read(path, format="ascii.ecsv")
-        except Exception as exc:
-            raise InputFileError(f"{path}: cannot read posterior samples ({exc})") from exc
-        cols = {
-            nm: np.asarray(tab[nm], float)
-            for nm in tab.colnames
-            if np.issubdtype(np.asarray(tab[nm]).dtype, np.number)
-        }
-    if not cols or len(next(iter(cols.values()))) == 0:
-        raise InputFileError(f"{path}: posterior samples file has no rows")
-    return cols
-
-
 def _resolve_seed(seed: int | None) -> int:
     """The given seed, or fresh entropy (reported in the Reduction)."""
     if seed is None:
@@ -290,9 +268,11 @@ def reduce(target: Target, table: VelocityTable, options: ReduceOptions | None =
     Raises
     ------
     VelocityFileError
-        Times outside the target's validity window.
-    ValueError
-        Fewer than two distinct phases.
+        Times outside the target's validity window, or too few spectra for the fits.
+    TargetFileError
+        The target's samples file is unreadable or has no parameter columns
+        (:func:`ucbplan.target.load_samples`, which also moves start-referenced samples to the
+        midpoint).
 
     Notes
     -----
@@ -304,6 +284,11 @@ def reduce(target: Target, table: VelocityTable, options: ReduceOptions | None =
     seed = _resolve_seed(opts.seed)
     p = target.params
     tau = check_validity(table, target)
+    if table.n < MIN_SPECTRA:
+        raise VelocityFileError(
+            f"{table.source}: {table.n} spectrum; the fit of γ and K needs at least "
+            f"{MIN_SPECTRA} spectra at different orbital phases — add one line per spectrum"
+        )
     lam_k, lam_kap = window_factors(table, p.f_gw)
     _, _, kap, u = orbit(p, tau)
     intra = _intra_session(p, table, tau, lam_k, lam_kap, opts.light_time)
@@ -318,7 +303,7 @@ def reduce(target: Target, table: VelocityTable, options: ReduceOptions | None =
         cos_i_sigma=opts.cos_i_sigma,
         mass_radius=opts.mass_radius,
         rng=np.random.default_rng(seed),
-        columns=read_samples(target.samples) if target.samples is not None else None,
+        columns=load_samples(target) if target.samples is not None else None,
     )
     groups, drift = _inter_session(target, table, tau, u, intra, lam_k, lam_kap)
     return Reduction(

@@ -20,6 +20,14 @@ column                 meaning
 Velocities are positive when receding. ECSV columns may carry units (velocity → km/s, window →
 s). Times are mid-exposure (ESO's MJD-OBS is the exposure *start*: add half the exposure).
 
+Files are UTF-8 (a byte-order mark is accepted; other encodings are refused with the fix, see
+:func:`ucbplan.inputs.read_text`). Every cell must hold a value: a blank cell, a non-finite
+number, a date outside 1858–2500, a negative or zero σ, |v| ≥ c or a duplicate column is a
+one-line :class:`~ucbplan.errors.VelocityFileError` naming the file, row and column. The
+reduction then needs at least :data:`MIN_SPECTRA` spectra at different phases, and refuses
+windows as long as the orbit (:func:`ucbplan.reduce.design.window_factors`: it needs the
+target's period).
+
 Validity (:func:`check_validity`): every time must lie between the start of the LISA observation
 and :data:`HORIZON_S` (20 Julian years) after its end; beyond that the u(t) extrapolation is not
 something ucbplan will stand behind.
@@ -38,7 +46,9 @@ import numpy as np
 from astropy.time import Time
 from numpy.typing import NDArray
 
-from ucbplan.errors import VelocityFileError
+from ucbplan.core.constants import C_KM_S
+from ucbplan.errors import SchemaError, VelocityFileError, shorten
+from ucbplan.inputs import read_text
 
 if TYPE_CHECKING:
     from astropy.coordinates import EarthLocation, SkyCoord
@@ -48,6 +58,7 @@ if TYPE_CHECKING:
 __all__ = [
     "HORIZON_S",
     "KNOWN_COLUMNS",
+    "MIN_SPECTRA",
     "SESSION_GAP_S",
     "VelocityTable",
     "check_validity",
@@ -61,6 +72,16 @@ F64 = NDArray[np.float64]
 HORIZON_S = 20.0 * 365.25 * 86400.0
 #: Without a session column, consecutive spectra further apart than this start a new session [s].
 SESSION_GAP_S = 0.5 * 86400.0
+#: Fewest spectra the fit v = γ ± K F̄ accepts (two unknowns per star).
+MIN_SPECTRA = 2
+#: Accepted range of each time column (JD or MJD): years 1858 … 2500, far wider than LISA's.
+_TIME_RANGE = {
+    "bjd_tdb": (2400000.5, 2634166.5),
+    "bmjd_tdb": (0.0, 234166.0),
+    "mjd_tdb": (0.0, 234166.0),
+    "jd_utc": (2400000.5, 2634166.5),
+    "mjd_utc": (0.0, 234166.0),
+}
 
 _TIME_COLS = {
     "bjd_tdb": 0.0,
@@ -118,6 +139,8 @@ class VelocityTable:
     site_utc : bool
         True while ``time`` is UTC at the (not yet known) telescope; :func:`to_barycentric`
         converts it.
+    window_column : str
+        The file's window column (``exptime_s``, ``window_s`` or ``lambda_k``), for messages.
     """
 
     source: Path | None
@@ -129,6 +152,7 @@ class VelocityTable:
     session: tuple[str, ...]
     u_star: F64 | None
     site_utc: bool = False
+    window_column: str = "exptime_s"
 
     @property
     def lines(self) -> str:
@@ -145,11 +169,21 @@ def _fail(path: Path, where: str, msg: str) -> VelocityFileError:
     return VelocityFileError(f"{path}: {where}: {msg}")
 
 
-def _read_csv(path: Path) -> tuple[list[str], list[tuple[int, list[str]]]]:
+def _col(name: str) -> str:
+    """A column name quoted for a message (cut to a sane length)."""
+    return shorten(name, 60)
+
+
+def _text(path: Path) -> str:
+    """The file's text (UTF-8, BOM accepted), or a one-line VelocityFileError."""
     try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise VelocityFileError(f"{path}: cannot read velocity file ({exc.strerror})") from exc
+        return read_text(path, "velocity table")
+    except SchemaError as exc:
+        raise VelocityFileError(str(exc)) from None
+
+
+def _read_csv(path: Path) -> tuple[list[str], list[tuple[int, list[str]]]]:
+    text = _text(path)
     lines = [
         (i + 1, ln)
         for i, ln in enumerate(text.splitlines())
@@ -160,7 +194,10 @@ def _read_csv(path: Path) -> tuple[list[str], list[tuple[int, list[str]]]]:
             f"{path}: empty velocity file; expected a header line like "
             "bjd_tdb,exptime_s,v1,sigma_v1,v2,sigma_v2"
         )
-    rows = list(csv.reader([ln for _, ln in lines]))
+    try:
+        rows = list(csv.reader([ln for _, ln in lines]))
+    except csv.Error as exc:
+        raise VelocityFileError(f"{path}: not a readable CSV table ({exc})") from None
     header = [h.strip().lower() for h in rows[0]]
     body = [(lines[k][0], [c.strip() for c in r]) for k, r in enumerate(rows[1:], start=1)]
     return header, body
@@ -169,56 +206,77 @@ def _read_csv(path: Path) -> tuple[list[str], list[tuple[int, list[str]]]]:
 def _read_ecsv(path: Path) -> tuple[list[str], dict[str, list[object]], list[int]]:
     from astropy.table import Table
 
+    text = _text(path)
     try:
-        tab = Table.read(path, format="ascii.ecsv")
+        tab = Table.read(text.splitlines(), format="ascii.ecsv")
     except Exception as exc:  # astropy raises many types for malformed ECSV
-        raise VelocityFileError(f"{path}: not a readable ECSV table ({exc})") from exc
+        why = " ".join(str(exc).split())[:200]
+        raise VelocityFileError(f"{path}: not a readable ECSV table ({why})") from None
+    header = [name.strip().lower() for name in tab.colnames]
     cols: dict[str, list[object]] = {}
-    for name in tab.colnames:
+    for name, key in zip(tab.colnames, header, strict=True):
         col = tab[name]
-        key = name.strip().lower()
+        mask = np.asarray(getattr(col, "mask", False))
+        if mask.any():
+            row = int(np.flatnonzero(mask.reshape(len(col), -1).any(axis=1))[0]) + 1
+            raise _fail(
+                path,
+                f"row {row}, column {_col(name)}",
+                "blank cell, expected a value (every spectrum needs one)",
+            )
+        if col.ndim > 1:
+            raise _fail(
+                path, f"column {_col(name)}", f"has shape {col.shape}, expected one value per row"
+            )
         unit = getattr(col, "unit", None)
         if key in _VEL_UNIT and unit is not None:
             try:
                 vals = col.quantity.to_value(_VEL_UNIT[key])
-            except Exception as exc:
+            except Exception:  # astropy: UnitConversionError, TypeError for strings, …
                 raise _fail(
-                    path, f"column {name!r}", f"unit {unit} is not convertible to {_VEL_UNIT[key]}"
-                ) from exc
+                    path,
+                    f"column {_col(name)}",
+                    f"unit {shorten(str(unit), 60)} is not convertible to {_VEL_UNIT[key]}",
+                ) from None
             cols[key] = list(vals)
         elif isinstance(col, Time):
             raise _fail(
                 path,
-                f"column {name!r}",
+                f"column {_col(name)}",
                 "Time columns are not accepted; write "
                 "bjd_tdb as a plain number (barycentric JD, TDB)",
             )
         else:
             cols[key] = list(col)
-    return list(cols), cols, list(range(1, len(tab) + 1))
+    return header, cols, list(range(1, len(tab) + 1))
 
 
 def _parse_float(path: Path, row: int, col: str, raw: object) -> float:
+    where = f"row {row}, column {_col(col)}"
+    if isinstance(raw, str) and not raw.strip():
+        raise _fail(path, where, "blank cell, expected a number (every spectrum needs one)")
     try:
         val = float(raw)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        raise _fail(path, f"row {row}, column {col!r}", f"got {raw!r}, expected a number") from None
+    except (TypeError, ValueError, OverflowError):
+        raise _fail(path, where, f"got {shorten(raw)}, expected a number") from None
     if not math.isfinite(val):
-        raise _fail(path, f"row {row}, column {col!r}", f"got {raw!r}, expected a finite number")
+        raise _fail(path, where, f"got {shorten(raw)}, expected a finite number")
     return val
 
 
 def _check_header(path: Path, header: list[str]) -> tuple[str, tuple[str, ...]]:
+    if len(set(header)) != len(header):
+        dup = next(h for h in header if header.count(h) > 1)
+        raise _fail(
+            path, f"column {_col(dup)}", "appears twice (column names ignore case); keep one"
+        )
     unknown = [h for h in header if h not in KNOWN_COLUMNS]
     if unknown:
         raise _fail(
             path,
-            f"column {unknown[0]!r}",
+            f"column {_col(unknown[0])}",
             f"unknown column; expected some of {', '.join(KNOWN_COLUMNS)}",
         )
-    if len(set(header)) != len(header):
-        dup = next(h for h in header if header.count(h) > 1)
-        raise _fail(path, f"column {dup!r}", "appears twice")
     times = [h for h in header if h in _TIME_COLS]
     if len(times) != 1:
         raise _fail(
@@ -263,8 +321,8 @@ def read_velocities(path: Path | str) -> VelocityTable:
     Raises
     ------
     VelocityFileError
-        Unreadable file, unknown/missing/duplicate columns, malformed, non-finite or non-positive
-        values; the message names the row and column.
+        Unreadable or non-UTF-8 file, unknown/missing/duplicate columns, blank cells, malformed,
+        non-finite or out-of-range values, no rows; one line naming the row and column.
     """
     path = Path(path)
     if path.suffix.lower() == ".ecsv":
@@ -293,6 +351,7 @@ def read_velocities(path: Path | str) -> VelocityTable:
         session=_sessions(path, colmap, rownums, jd),
         u_star=num.get("u_star"),
         site_utc=scale == "utc",
+        window_column=next(h for h in ("exptime_s", "window_s", "lambda_k") if h in num),
     )
 
 
@@ -325,9 +384,19 @@ _WINDOW_RANGES = (
 def _check_ranges(
     path: Path, num: dict[str, F64], comps: tuple[str, ...], rownums: list[int]
 ) -> None:
-    """Positive σ_v and windows in range; the error names the first offending row."""
+    """Times in range, positive σ_v, |v| < c and windows in range; names the first bad row."""
+    for h, (lo, hi) in _TIME_RANGE.items():
+        if h in num:
+            bad = np.flatnonzero((num[h] < lo) | (num[h] > hi))
+            if bad.size:
+                raise _fail(
+                    path,
+                    f"row {rownums[int(bad[0])]}, column {h!r}",
+                    f"got {num[h][bad[0]]:.10g}, expected a date in [{lo:.10g}, {hi:.10g}] "
+                    "(years 1858–2500); check the column's scale (JD vs MJD)",
+                )
     for c in comps:
-        bad = np.flatnonzero(num[f"sigma_{c}"] <= 0)
+        bad = np.flatnonzero(~(num[f"sigma_{c}"] > 0))
         if bad.size:
             r = rownums[int(bad[0])]
             raise _fail(
@@ -335,6 +404,15 @@ def _check_ranges(
                 f"row {r}, column 'sigma_{c}'",
                 f"got {num[f'sigma_{c}'][bad[0]]}, expected a positive 1σ in km/s",
             )
+        for h in (c, f"sigma_{c}"):
+            bad = np.flatnonzero(np.abs(num[h]) >= C_KM_S)
+            if bad.size:
+                raise _fail(
+                    path,
+                    f"row {rownums[int(bad[0])]}, column {h!r}",
+                    f"got {num[h][bad[0]]:.6g}, expected less than the speed of light in km/s "
+                    "(is the column in m/s?)",
+                )
     for h, lo, hi, what in _WINDOW_RANGES:
         if h in num:
             bad = np.flatnonzero((num[h] < lo) | (num[h] > hi))
@@ -355,7 +433,9 @@ def _sessions(
     sess = tuple(str(s).strip() for s in colmap["session"])
     empty = [r for r, s in zip(rownums, sess, strict=True) if not s]
     if empty:
-        raise _fail(path, f"row {empty[0]}, column 'session'", "empty label")
+        raise _fail(
+            path, f"row {empty[0]}, column 'session'", "blank cell, expected a session label"
+        )
     return sess
 
 
