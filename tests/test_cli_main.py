@@ -82,3 +82,13 @@ def test_os_error_is_a_user_error(
     assert capsys.readouterr().err.strip() == (
         "error: /data/t.yaml: Permission denied; check the path and its permissions"
     )
+
+
+def test_usage_error_is_one_line() -> None:
+    import subprocess
+
+    res = subprocess.run(
+        [sys.executable, "-m", "ucbplan", "plan", "--bogus"], capture_output=True, text=True
+    )
+    assert res.returncode == 2
+    assert res.stderr.strip() == "error: No such option: --bogus (see `ucbplan plan --help`)"

@@ -91,6 +91,13 @@ def _os_error(exc: OSError) -> str:
     return f"error: {where}{exc.strerror or exc}; check the path and its permissions"
 
 
+def _usage_line(exc: Exception, message: str) -> str:
+    """One line for a click/typer usage error: the message and where to find the options."""
+    ctx = getattr(exc, "ctx", None)
+    path = getattr(ctx, "command_path", "ucbplan") if ctx is not None else "ucbplan"
+    return f"error: {_one_line(message)} (see `{path} --help`)"
+
+
 def _run() -> int:
     """Run the app in non-standalone mode and return its exit code."""
     code = app(standalone_mode=False)
@@ -122,10 +129,12 @@ def main() -> None:
         _fail(_os_error(exc), EXIT_USER)
     except Exception as exc:
         # typer vendors click, so duck-type its ClickException (usage errors: show() + exit_code)
-        show, exit_code = getattr(exc, "show", None), getattr(exc, "exit_code", None)
-        if callable(show) and isinstance(exit_code, int):
-            show()
-            sys.exit(exit_code)
+        message, exit_code = getattr(exc, "format_message", None), getattr(exc, "exit_code", None)
+        if callable(message) and isinstance(exit_code, int):
+            text = str(message()).strip()
+            if not text:  # no arguments at all: the help was printed
+                sys.exit(exit_code)
+            _fail(_usage_line(exc, text), exit_code)
         if debug:
             raise
         _fail(f"internal error: {type(exc).__name__}: {_one_line(str(exc))[:150]}; {_REPORT}", 1)
