@@ -91,4 +91,6 @@ def test_usage_error_is_one_line() -> None:
         [sys.executable, "-m", "ucbplan", "plan", "--bogus"], capture_output=True, text=True
     )
     assert res.returncode == 2
-    assert res.stderr.strip() == "error: No such option: --bogus (see `ucbplan plan --help`)"
+    assert res.stderr.strip() == (
+        "error: No such option: --bogus (see `python -m ucbplan plan --help`)"
+    )
