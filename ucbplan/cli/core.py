@@ -20,6 +20,7 @@ from ucbplan import __version__
 from ucbplan.cli._console import dump_json, err_console, pick_format, rich_table, write_output
 from ucbplan.core.constants import DAY_S
 from ucbplan.errors import UcbplanError, shorten
+from ucbplan.inputs import check_number
 from ucbplan.target import Target, load_target
 
 __all__ = ["register"]
@@ -93,8 +94,13 @@ def _resolve_k_sigma(
             f"{target.name}: no semi-amplitude; pass --k-eff KM_S or add spectroscopy.K1/K2 "
             "(or K_eff) to the target file"
         )
-    if sv <= 0 or k <= 0:
-        raise UcbplanError(f"--sigma-v and --k-eff must be positive, got {sv}, {k}")
+    check_number("--sigma-v", sv, 0.0, 1e4, "km/s")
+    check_number("--k-eff", k, 0.1, 1e4, "km/s", "a binary's velocity semi-amplitude")
+    if sv >= k:
+        raise UcbplanError(
+            f"--sigma-v ({sv:g} km/s) must be smaller than --k-eff ({k:g} km/s): with "
+            "σ_v ≥ K no phase tolerance exists"
+        )
     return sv, k
 
 
