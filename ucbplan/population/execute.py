@@ -13,8 +13,8 @@ downloads anything.
 from __future__ import annotations
 
 import ctypes
-import functools
 import ctypes.util
+import functools
 import hashlib
 import json
 import math
