@@ -73,7 +73,7 @@ def test_bad_rows_named_by_number_or_skipped(tmp_path: Path) -> None:
 def test_column_map(tmp_path: Path) -> None:
     header = HEADER.replace("Frequency,", "f0,", 1).replace("Polarization", "psi")
     p = _csv(tmp_path, GOOD, header=header)
-    with pytest.raises(InputFileError, match="missing column.*Frequency.*--columns"):
+    with pytest.raises(InputFileError, match=r"missing column.*Frequency.*--columns"):
         read_catalog(p)
     cat = read_catalog(p, parse_column_map("f0=Frequency, psi=Polarization"))
     assert cat.sources[0].f_hz == 0.01
