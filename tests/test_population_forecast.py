@@ -1,0 +1,257 @@
+"""Population forecast: identical tables serial / pool / Dask, resume, per-source statuses."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from ucbplan.errors import NumericalError, OutputExistsError, UcbplanError
+from ucbplan.population import execute
+from ucbplan.population.catalog import Catalog, read_catalog
+from ucbplan.population.execute import ExecutorSpec, SerialExecutor, run_chunks, source_seed
+from ucbplan.population.forecast import ForecastOptions
+from ucbplan.population.run import run_forecast, write_table
+
+ROOT = Path(__file__).resolve().parents[1]
+CATALOG = ROOT / "catalogs" / "population" / "ldc-200.ecsv"
+OPTS = ForecastOptions(sigma_v_kms=15.0)
+
+
+def _subset(n: int) -> Catalog:
+    cat = read_catalog(CATALOG)
+    return dataclasses.replace(cat, sources=cat.sources[:n])
+
+
+def _table_bytes(tmp: Path, cat: Catalog, name: str, **kw: object) -> bytes:
+    run = run_forecast(cat, OPTS, parts=tmp / f"{name}.parts", **kw)  # type: ignore[arg-type]
+    out = tmp / f"{name}.ecsv"
+    write_table(run.table, out, overwrite=False)
+    return out.read_bytes()
+
+
+@pytest.fixture(scope="module")
+def cat40() -> Catalog:
+    return _subset(40)
+
+
+@pytest.fixture(scope="module")
+def serial40(tmp_path_factory: pytest.TempPathFactory, cat40: Catalog) -> bytes:
+    return _table_bytes(tmp_path_factory.mktemp("serial"), cat40, "serial", spec=ExecutorSpec())
+
+
+def test_pool_is_byte_identical_to_serial(tmp_path: Path, cat40: Catalog, serial40: bytes) -> None:
+    pool = _table_bytes(tmp_path, cat40, "pool", spec=ExecutorSpec(workers=2))
+    assert pool == serial40
+
+
+def test_chunking_does_not_change_the_table(
+    tmp_path: Path, cat40: Catalog, serial40: bytes
+) -> None:
+    assert _table_bytes(tmp_path, cat40, "c7", spec=ExecutorSpec(), chunk=7) == serial40
+    assert _table_bytes(tmp_path, cat40, "c1", spec=ExecutorSpec(), chunk=40) == serial40
+
+
+def test_table_has_provenance_and_statuses(cat40: Catalog, serial40: bytes) -> None:
+    text = serial40.decode()
+    for key in (
+        "sigma_v_kms: 15.0",
+        "catalog_sha256: " + cat40.sha256,
+        "reference_epoch_tdb",
+        "t_obs_s",
+        "ucbplan_version",
+        "k_eff_kms",
+    ):
+        assert key in text
+    from astropy.table import Table
+
+    tab = Table.read(text, format="ascii.ecsv")
+    assert tab["f_gw"].unit == "Hz" and tab["t_valid_quadrature_a1"].unit == "d"
+    assert set(tab["status"]) <= {"ok", "unconstrained"}
+    ok = tab["status"] == "ok"
+    assert ok.sum() > 20
+    assert np.all(np.isfinite(tab["t_valid_quadrature_a1"][ok]))
+
+
+def test_face_on_source_is_unconstrained_not_a_300_year_horizon(serial40: bytes) -> None:
+    from astropy.table import Table
+
+    tab = Table.read(serial40.decode(), format="ascii.ecsv")
+    row = tab[tab["source_id"] == "GB13-00001"][0]  # written face-on by the generator
+    assert row["cos_inclination"] == 1.0
+    assert row["status"] == "unconstrained"
+    for name in tab.colnames:
+        if name.startswith("t_valid_"):
+            assert np.isnan(row[name])
+
+
+def test_numerical_error_and_other_errors_are_per_source(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from ucbplan.lisa import pipeline
+
+    cat = _subset(3)
+    calls = {"n": 0}
+    real = pipeline.fisher_forecast
+
+    def fake(model):  # type: ignore[no-untyped-def]
+        calls["n"] += 1
+        if calls["n"] == 2:
+            raise NumericalError("Fisher matrix: phase unconstrained (face-on)")
+        if calls["n"] == 3:
+            raise UcbplanError("something else went wrong")
+        return real(model)
+
+    monkeypatch.setattr(pipeline, "fisher_forecast", fake)
+    run = run_forecast(cat, OPTS, spec=ExecutorSpec(), parts=tmp_path / "p")
+    status = list(run.table["status"])
+    assert status[1] == "unconstrained"
+    assert status[2] == "failed: something else went wrong"
+    assert run.table.meta["n_failed"] == 1
+
+
+def test_no_k_fails_the_source_not_the_run(tmp_path: Path) -> None:
+    cat = _subset(3)
+    srcs = tuple(dataclasses.replace(s, m1_msun=None, m2_msun=None) for s in cat.sources[1:3])
+    run = run_forecast(
+        dataclasses.replace(cat, sources=srcs), OPTS, spec=ExecutorSpec(), parts=tmp_path / "p"
+    )
+    assert all(s.startswith("failed: no K") for s in run.table["status"])
+
+
+def test_resume_reuses_parts_and_recomputes_deleted_or_corrupt(
+    tmp_path: Path, cat40: Catalog, serial40: bytes
+) -> None:
+    parts = tmp_path / "out.parts"
+    first = run_forecast(cat40, OPTS, spec=ExecutorSpec(), parts=parts, chunk=10)
+    files = sorted(parts.glob("part-*.json"))
+    assert len(files) == 4
+    files[1].unlink()
+    files[2].write_text("{not json", encoding="utf-8")
+    with pytest.raises(OutputExistsError, match="--resume"):
+        run_forecast(cat40, OPTS, spec=ExecutorSpec(), parts=parts, chunk=10)
+    again = run_forecast(cat40, OPTS, spec=ExecutorSpec(), parts=parts, chunk=10, resume=True)
+    assert again.reused == 2
+    out = tmp_path / "resumed.ecsv"
+    write_table(again.table, out, overwrite=False)
+    assert out.read_bytes() == serial40
+    # other options: parts are not reused
+    other = dataclasses.replace(OPTS, sigma_v_kms=10.0)
+    third = run_forecast(cat40, other, spec=ExecutorSpec(), parts=parts, chunk=10, resume=True)
+    assert third.reused == 0
+    assert first.n_chunks == 4
+
+
+def _square(xs: list[int]) -> list[dict[str, int]]:
+    return [{"x": x * x} for x in xs]
+
+
+def test_interrupted_run_keeps_finished_parts(tmp_path: Path) -> None:
+    parts = tmp_path / "p"
+    parts.mkdir()
+    items = list(range(10))
+    ids = [str(i) for i in items]
+    seen: list[int] = []
+
+    def dies_on_third(xs: list[int]) -> list[dict[str, int]]:
+        seen.append(xs[0])
+        if len(seen) == 3:
+            raise KeyboardInterrupt
+        return _square(xs)
+
+    common = dict(chunk=3, slots=1, parts=parts, kind="t", options={}, catalog_sha256="x")
+    with pytest.raises(KeyboardInterrupt):
+        run_chunks(dies_on_third, items, ids, executor=SerialExecutor(), **common)  # type: ignore[arg-type]
+    assert len(list(parts.glob("part-*.json"))) == 2
+    rows, reused = run_chunks(
+        _square,
+        items,
+        ids,
+        executor=SerialExecutor(),
+        resume=True,
+        **common,  # type: ignore[arg-type]
+    )
+    assert reused == 2 and [r["x"] for r in rows] == [i * i for i in items]
+    doc = json.loads((parts / "part-000000.json").read_text())
+    assert doc["ids"] == ["0", "1", "2"]
+
+
+def test_source_seed_depends_on_seed_and_id_only() -> None:
+    assert source_seed(1, "GB-1") == source_seed(1, "GB-1")
+    seeds = {source_seed(1, f"GB-{i}") for i in range(1000)}
+    assert len(seeds) == 1000
+    assert source_seed(2, "GB-1") != source_seed(1, "GB-1")
+    assert all(0 <= s < 2**63 for s in seeds)
+
+
+def test_default_chunk_is_about_one_second() -> None:
+    assert execute.default_chunk(10_000, 2, 0.02) == 50
+    assert execute.default_chunk(40, 2, 0.02) == 10
+    assert execute.default_chunk(1, 8, 0.02) == 1
+
+
+def test_worker_setup_is_offline() -> None:
+    from astropy.utils import data, iers
+
+    execute.worker_setup()
+    assert data.conf.allow_internet is False and iers.conf.auto_download is False
+
+
+def test_bad_executor_options(tmp_path: Path, cat40: Catalog) -> None:
+    with pytest.raises(UcbplanError, match="--workers"):
+        run_forecast(cat40, OPTS, spec=ExecutorSpec(workers=0), parts=tmp_path / "a")
+    with pytest.raises(UcbplanError, match="--scheduler"):
+        run_forecast(cat40, OPTS, spec=ExecutorSpec(scheduler="localhost"), parts=tmp_path / "b")
+    with pytest.raises(UcbplanError, match="--chunk"):
+        run_forecast(cat40, OPTS, spec=ExecutorSpec(), parts=tmp_path / "c", chunk=0)
+
+
+@pytest.mark.slow
+def test_dask_local_cluster_is_byte_identical(tmp_path: Path) -> None:
+    distributed = pytest.importorskip("distributed")
+    cat = _subset(200)
+    serial = _table_bytes(tmp_path, cat, "serial", spec=ExecutorSpec())
+    pool = _table_bytes(tmp_path, cat, "pool", spec=ExecutorSpec(workers=2))
+    with distributed.LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+    ) as cluster:
+        dask = _table_bytes(
+            tmp_path, cat, "dask", spec=ExecutorSpec(scheduler=cluster.scheduler_address)
+        )
+    assert serial == pool == dask
+
+
+@pytest.mark.slow
+def test_cli_run_killed_then_resumed(tmp_path: Path) -> None:
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    out = tmp_path / "f.ecsv"
+    code = (
+        "import sys, typer; from ucbplan.cli import population as p; app = typer.Typer(); "
+        "p.register(app); app(['population', *sys.argv[1:]])"
+    )
+    args = [sys.executable, "-c", code, "forecast", str(CATALOG), "-o", str(out), "--chunk", "5"]
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    proc = subprocess.Popen(args, env=env, stderr=subprocess.DEVNULL)
+    parts = tmp_path / "f.ecsv.parts"
+    deadline = time.time() + 60
+    while time.time() < deadline and len(list(parts.glob("part-*.json"))) < 3:
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    n_done = len(list(parts.glob("part-*.json")))
+    assert 3 <= n_done < 40 and not out.exists()
+    subprocess.run([*args, "--resume"], env=env, check=True, stderr=subprocess.DEVNULL)
+    ref = tmp_path / "ref.ecsv"
+    subprocess.run(
+        [*args[:6], str(ref), "--chunk", "5"], env=env, check=True, stderr=subprocess.DEVNULL
+    )
+    assert out.read_bytes() == ref.read_bytes()
+    assert not parts.exists()

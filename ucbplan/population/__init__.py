@@ -1,0 +1,11 @@
+"""Whole LISA catalogs: population forecasts, visibility and target selection (issue 13).
+
+Modules: :mod:`~ucbplan.population.catalog` (LDC-style catalogs from ECSV, CSV, HDF5),
+:mod:`~ucbplan.population.forecast` (per-source Fisher forecast, σ_u, T_valid, SNR),
+:mod:`~ucbplan.population.execute` (the executor seam: serial, process pool, Dask; part files,
+resume), :mod:`~ucbplan.population.run` (whole-catalog runs and the merged table),
+:mod:`~ucbplan.population.plots` (summary figures), :mod:`~ucbplan.population.semesters`
+(observatory semesters and ESO periods). Nothing is loaded on package import.
+"""
+
+__all__: list[str] = []

@@ -1,0 +1,345 @@
+"""The execution seam: serial, a local process pool or a Dask cluster behind one Executor.
+
+Work goes in chunks of sources. Each chunk is one task; the parent writes its result as a part
+file (atomically, named by chunk number) as soon as it arrives, and merges the parts in source
+order at the end, so the output does not depend on which worker ran what or when. A rerun with
+``resume`` reuses every part whose fingerprint (options, catalog, chunk contents) matches.
+
+Every task first calls :func:`worker_setup` (offline astropy, malloc tuning) in its own process:
+this works the same for a pool initializer, a Dask worker and the serial path, and never
+downloads anything.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import ctypes.util
+import functools
+import hashlib
+import json
+import math
+import os
+import time
+from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import FIRST_COMPLETED, Executor, Future, ProcessPoolExecutor, wait
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, TypeVar
+
+from ucbplan.errors import InputError, OutputExistsError, UcbplanError, shorten
+from ucbplan.io import write_output
+from ucbplan.offline import configure_offline
+
+__all__ = [
+    "ExecutorSpec",
+    "SerialExecutor",
+    "default_chunk",
+    "open_executor",
+    "run_chunks",
+    "source_seed",
+    "tune_malloc",
+    "worker_setup",
+]
+
+T = TypeVar("T")
+#: ``progress(sources_done, sources_total)``.
+Progress = Callable[[int, int], None]
+#: glibc mallopt parameters.
+_M_TRIM_THRESHOLD = -1
+_M_MMAP_THRESHOLD = -3
+#: Trim/mmap thresholds set in workers (glibc's dynamic maximum for the mmap threshold).
+MALLOC_THRESHOLD_BYTES = 32 * 1024 * 1024
+_SETUP_DONE = False
+
+
+def tune_malloc() -> bool:
+    """Undo a low ``MALLOC_TRIM_THRESHOLD_`` (Dask's nanny sets 64 KiB) with glibc ``mallopt``.
+
+    A fixed trim threshold switches off glibc's dynamic mmap threshold, so every numpy temporary
+    above 128 KiB is mmap'd, zero-filled and unmapped again (~40 % CPU in allocation-heavy code).
+    Setting the mmap and trim thresholds to 32 MiB restores reuse of freed memory; memory stays
+    bounded because chunks are streamed. Skipped when ``UCBPLAN_MALLOC_TUNE=0`` (benchmarks) or
+    not on glibc. Returns whether it was applied.
+    """
+    if os.environ.get("UCBPLAN_MALLOC_TUNE", "1") == "0":
+        return False
+    name = ctypes.util.find_library("c")
+    if not name:
+        return False
+    try:
+        libc = ctypes.CDLL(name)
+        mallopt = libc.mallopt
+    except (OSError, AttributeError):
+        return False
+    ok = mallopt(_M_MMAP_THRESHOLD, MALLOC_THRESHOLD_BYTES)
+    ok &= mallopt(_M_TRIM_THRESHOLD, 2 * MALLOC_THRESHOLD_BYTES)
+    return bool(ok)
+
+
+def worker_setup() -> None:
+    """Per-process set-up before any work: offline astropy (never download), malloc tuning."""
+    global _SETUP_DONE
+    if _SETUP_DONE:
+        return
+    configure_offline()
+    if "MALLOC_TRIM_THRESHOLD_" in os.environ:
+        tune_malloc()
+    _SETUP_DONE = True
+
+
+def source_seed(global_seed: int, source_id: str) -> int:
+    """Seed of one source from (global seed, source id): independent of chunking and workers."""
+    key = hashlib.sha256(f"{int(global_seed)}\x00{source_id}".encode()).digest()
+    return int.from_bytes(key[:8], "little") >> 1
+
+
+class SerialExecutor(Executor):
+    """An :class:`~concurrent.futures.Executor` that runs each task at submission (no processes)."""
+
+    def submit(self, fn: Callable[..., T], /, *args: Any, **kwargs: Any) -> Future[T]:
+        fut: Future[T] = Future()
+        try:
+            fut.set_result(fn(*args, **kwargs))
+        except BaseException as exc:  # handed to the caller through the future, like a pool
+            fut.set_exception(exc)
+        return fut
+
+
+@dataclass(frozen=True, slots=True)
+class ExecutorSpec:
+    """Where to run: ``workers`` local processes (1 = serial) or a Dask ``scheduler`` address."""
+
+    workers: int = 1
+    scheduler: str | None = None
+
+    def describe(self) -> str:
+        """One line for logs (not written into outputs: they are identical everywhere)."""
+        if self.scheduler:
+            return f"Dask cluster at {self.scheduler}"
+        return "serial" if self.workers <= 1 else f"{self.workers}-process pool"
+
+
+@contextmanager
+def open_executor(spec: ExecutorSpec) -> Iterator[tuple[Executor, int]]:
+    """The executor of ``spec`` and its number of task slots; shut down on exit.
+
+    Raises
+    ------
+    InputError
+        ``--workers`` < 1, Dask not installed, or the scheduler not reachable.
+    """
+    if spec.workers < 1:
+        raise InputError(f"--workers: expected >= 1, got {spec.workers}")
+    if spec.scheduler:
+        with _dask_executor(spec.scheduler) as pair:
+            yield pair
+        return
+    if spec.workers == 1:
+        yield SerialExecutor(), 1
+        return
+    import multiprocessing
+
+    ctx = multiprocessing.get_context("forkserver")
+    pool = ProcessPoolExecutor(spec.workers, mp_context=ctx, initializer=worker_setup)
+    try:
+        yield pool, spec.workers
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
+
+
+@contextmanager
+def _dask_executor(address: str) -> Iterator[tuple[Executor, int]]:
+    if not address.startswith(("tcp://", "tls://", "inproc://", "ucx://")):
+        raise InputError(
+            f"--scheduler: expected an address like tcp://HOST:8786, got {shorten(address)}"
+        )
+    try:
+        from distributed import Client
+    except ImportError:
+        raise InputError(
+            "--scheduler needs Dask distributed: pip install 'ucbplan[dask]'"
+        ) from None
+    try:
+        client = Client(address, timeout=30, set_as_default=False)
+    except (OSError, TimeoutError) as exc:
+        raise InputError(
+            f"--scheduler: cannot reach {shorten(address)} ({shorten(exc)}); is the scheduler up?"
+        ) from None
+    try:
+        client.run(worker_setup)
+        info = client.scheduler_info()
+        slots = sum(int(w.get("nthreads", 1)) for w in info.get("workers", {}).values()) or 1
+        yield client.get_executor(pure=False), slots
+    finally:
+        client.close()
+
+
+def default_chunk(n_sources: int, slots: int, seconds_per_source: float) -> int:
+    """Sources per task: ≥ ~1 s of work each, but at least ``2 × slots`` tasks for small runs."""
+    per_second = max(1, math.ceil(1.0 / max(seconds_per_source, 1e-6)))
+    spread = max(1, math.ceil(n_sources / (2 * max(slots, 1))))
+    return max(1, min(per_second, spread))
+
+
+def _fingerprint(kind: str, options: dict[str, Any], catalog_sha256: str, chunk: int) -> str:
+    doc = {"kind": kind, "options": options, "catalog": catalog_sha256, "chunk": chunk}
+    return hashlib.sha256(json.dumps(doc, sort_keys=True, default=str).encode()).hexdigest()
+
+
+def _part_path(folder: Path, index: int) -> Path:
+    return folder / f"part-{index:06d}.json"
+
+
+def _load_part(path: Path, fingerprint: str, ids: list[str]) -> list[dict[str, Any]] | None:
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    if not isinstance(doc, dict) or doc.get("fingerprint") != fingerprint:
+        return None
+    if doc.get("ids") != ids or not isinstance(doc.get("rows"), list):
+        return None
+    return list(doc["rows"])
+
+
+def _dump(doc: dict[str, Any], handle: Any) -> None:
+    handle.write(json.dumps(doc, allow_nan=True))
+
+
+def prepare_parts(folder: Path, *, resume: bool, overwrite: bool) -> None:
+    """Create the parts folder; refuse to mix with an earlier run unless resuming or overwriting.
+
+    Raises
+    ------
+    OutputExistsError
+        The folder holds parts and neither ``resume`` nor ``overwrite`` is set.
+    """
+    folder.mkdir(parents=True, exist_ok=True)
+    old = sorted(folder.glob("part-*.json"))
+    if old and not resume:
+        if not overwrite:
+            raise OutputExistsError(
+                f"{folder}: holds {len(old)} part file(s) of an earlier run; add --resume to "
+                "reuse them or --overwrite to start again"
+            )
+        for p in old:
+            p.unlink()
+
+
+def run_chunks(
+    task: Callable[[Sequence[Any]], list[dict[str, Any]]],
+    items: Sequence[Any],
+    ids: Sequence[str],
+    *,
+    chunk: int,
+    executor: Executor,
+    slots: int,
+    parts: Path,
+    kind: str,
+    options: dict[str, Any],
+    catalog_sha256: str,
+    resume: bool = False,
+    progress: Progress | None = None,
+) -> tuple[list[dict[str, Any]], int]:
+    """Run ``task`` over ``items`` in chunks; part files in ``parts``; rows in item order.
+
+    Parameters
+    ----------
+    task : callable
+        Picklable ``task(chunk_items) -> rows`` (one dict per item, in order); it must call
+        :func:`worker_setup` first.
+    ids : sequence of str
+        Identifier per item (part files record them; resume checks them).
+    chunk : int
+        Items per task.
+    slots : int
+        Tasks kept in flight is twice this (streaming keeps memory bounded).
+    parts : Path
+        Folder of part files (made by :func:`prepare_parts`).
+    kind, options, catalog_sha256
+        Fingerprint of the run: a part of another run is recomputed, never reused.
+
+    Returns
+    -------
+    rows, int
+        All rows in item order and the number of chunks reused from earlier parts.
+    """
+    if chunk < 1:
+        raise InputError(f"--chunk: expected >= 1, got {chunk}")
+    fp = _fingerprint(kind, options, catalog_sha256, chunk)
+    n = len(items)
+    bounds = [(s, min(s + chunk, n)) for s in range(0, n, chunk)]
+    results: dict[int, list[dict[str, Any]]] = {}
+    done = 0
+    if resume:
+        for k, (a, b) in enumerate(bounds):
+            rows = _load_part(_part_path(parts, k), fp, list(ids[a:b]))
+            if rows is not None and len(rows) == b - a:
+                results[k] = rows
+                done += b - a
+    reused = len(results)
+    if progress is not None:
+        progress(done, n)
+    todo = [k for k in range(len(bounds)) if k not in results]
+    pending: dict[Future[list[dict[str, Any]]], int] = {}
+    window = max(2, 2 * slots)
+    it = iter(todo)
+    try:
+        while True:
+            while len(pending) < window:
+                nxt = next(it, None)
+                if nxt is None:
+                    break
+                a, b = bounds[nxt]
+                pending[executor.submit(task, list(items[a:b]))] = nxt
+            if not pending:
+                break
+            finished, _ = wait(list(pending), return_when=FIRST_COMPLETED)
+            for fut in finished:
+                k = pending.pop(fut)
+                rows = fut.result()
+                a, b = bounds[k]
+                if len(rows) != b - a:
+                    raise UcbplanError(f"chunk {k}: {len(rows)} rows for {b - a} sources")
+                doc = {"fingerprint": fp, "ids": list(ids[a:b]), "rows": rows}
+                write_output(_part_path(parts, k), functools.partial(_dump, doc), overwrite=True)
+                results[k] = rows
+                done += b - a
+                if progress is not None:
+                    progress(done, n)
+    finally:
+        for fut in pending:
+            fut.cancel()
+    out: list[dict[str, Any]] = []
+    for k in range(len(bounds)):
+        out.extend(results[k])
+    return out, reused
+
+
+def remove_parts(folder: Path) -> None:
+    """Delete the part files and the folder if it is then empty (after a successful merge)."""
+    for p in folder.glob("part-*.json"):
+        p.unlink()
+    try:
+        folder.rmdir()
+    except OSError:
+        pass
+
+
+class Rate:
+    """Sources per second and ETA from progress calls (for the CLI's progress line)."""
+
+    def __init__(self) -> None:
+        self.t0 = time.perf_counter()
+        self.first: int | None = None
+
+    def eta(self, done: int, total: int) -> tuple[float, float]:
+        """(rate [sources/s], ETA [s]) counting only sources computed in this run."""
+        if self.first is None:
+            self.first = done
+            self.t0 = time.perf_counter()
+            return 0.0, math.nan
+        dt = time.perf_counter() - self.t0
+        rate = (done - self.first) / dt if dt > 0 else 0.0
+        return rate, (total - done) / rate if rate > 0 else math.nan

@@ -1,0 +1,265 @@
+"""Population forecast: per source the Fisher covariance, σ_u at the end, T_valid and SNR.
+
+Each catalog row becomes a target at the LISA midpoint (its LDC start-epoch parameters moved by
+T_obs/2), the library Fisher forecast (:func:`ucbplan.lisa.pipeline.fisher_forecast`, circular
+6-parameter model, zero-noise data) gives its covariance, and :func:`ucbplan.core.forecast.
+horizon_table` gives σ_u at the end of the observation and T_valid per anchor and α.
+
+A source whose Fisher matrix does not constrain the phase (face-on: ψ and φ degenerate) gets
+status ``unconstrained`` and NaN horizons, never a silent 300-year horizon; any other per-source
+error is ``failed: <message>``; neither stops the run.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import numpy as np
+
+from ucbplan.core.constants import DAY_S, G_SI, MSUN_KG
+from ucbplan.core.forecast import HORIZON_CAP_S, horizon_table
+from ucbplan.core.params import PhaseParams, shift_reference
+from ucbplan.errors import NumericalError, UcbplanError
+from ucbplan.population.catalog import Source
+from ucbplan.population.execute import worker_setup
+
+__all__ = [
+    "ALPHAS",
+    "ANCHORS",
+    "FORECAST_COLUMNS",
+    "ForecastOptions",
+    "forecast_chunk",
+    "forecast_source",
+    "k_total_kms",
+    "source_target",
+]
+
+#: Anchors and planning margins of every forecast table (fixed: the table schema is stable).
+ANCHORS: tuple[str, ...] = ("conjunction", "quadrature")
+ALPHAS: tuple[float, ...] = (0.5, 1.0)
+#: LISA mission start assumed by default (as catalogs/fiducial-injection.yaml), TDB.
+DEFAULT_T_START = "2035-01-01T00:00:00"
+#: 4 sidereal years [s] (the paper's T_obs).
+DEFAULT_T_OBS_S = 126232599.054
+
+
+@dataclass(frozen=True, slots=True)
+class ForecastOptions:
+    """Options of a population forecast (all of them go into the table meta).
+
+    Attributes
+    ----------
+    sigma_v_kms : float
+        RV precision per epoch [km/s].
+    k_eff_kms : float or None
+        K for the tolerance [km/s]; None: per source from Mass1+Mass2 (K1+K2, SB2).
+    t_obs_s : float
+        LISA observation length [s].
+    t_start_tdb : str
+        Start of the LISA observation (ISO, TDB): catalog t = 0.
+    n_bins : int
+        Band width of the Fisher model [bins].
+    n_epochs : int
+        Tolerance form (2: two-epoch difference).
+    """
+
+    sigma_v_kms: float = 15.0
+    k_eff_kms: float | None = None
+    t_obs_s: float = DEFAULT_T_OBS_S
+    t_start_tdb: str = DEFAULT_T_START
+    n_bins: int = 512
+    n_epochs: int = 2
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-ready mapping (fingerprints and meta)."""
+        return asdict(self)
+
+
+def _t_cols() -> list[tuple[str, str, str, str]]:
+    cols = []
+    for a in ANCHORS:
+        cols.append((f"sigma_u_end_{a}", "rad", "f8", f"σ_u at the end of LISA, {a} anchor"))
+        cols.append((f"tol_{a}", "rad", "f8", f"δu_tol for the {a} anchor"))
+        for al in ALPHAS:
+            cols.append(
+                (
+                    f"t_valid_{a}_a{al:g}",
+                    "d",
+                    "f8",
+                    f"T_valid after the end of LISA, {a}, α={al:g} (capped at 300 yr)",
+                )
+            )
+    return cols
+
+
+#: The forecast table, declared once: (name, unit, dtype, description).
+FORECAST_COLUMNS: tuple[tuple[str, str, str, str], ...] = (
+    ("source_id", "", "str", "catalog Name (or row number)"),
+    ("row", "", "i8", "catalog row (1 = first data row)"),
+    ("status", "", "str", "ok | unconstrained | failed: <error>"),
+    ("f_gw", "Hz", "f8", "GW frequency at the midpoint"),
+    ("fdot", "Hz / s", "f8", "ḟ at the midpoint"),
+    ("amplitude", "", "f8", "GW strain amplitude"),
+    ("cos_inclination", "", "f8", "cos ι"),
+    ("ra", "deg", "f8", "ICRS right ascension"),
+    ("dec", "deg", "f8", "ICRS declination"),
+    ("vmag", "mag", "f8", "catalog magnitude (NaN if none)"),
+    ("distance", "kpc", "f8", "catalog distance (NaN if none)"),
+    ("snr", "", "f8", "optimal LISA SNR"),
+    ("k_eff", "km / s", "f8", "K of the tolerance"),
+    ("sigma_phase", "rad", "f8", "Fisher σ of φ at the midpoint"),
+    ("sigma_f_gw", "Hz", "f8", "Fisher σ of f at the midpoint"),
+    ("sigma_fdot", "Hz / s", "f8", "Fisher σ of ḟ"),
+    ("corr_phase_f_gw", "", "f8", "correlation φ–f (midpoint)"),
+    ("corr_phase_fdot", "", "f8", "correlation φ–ḟ (midpoint)"),
+    ("corr_f_gw_fdot", "", "f8", "correlation f–ḟ (midpoint)"),
+    *_t_cols(),
+)
+
+
+def k_total_kms(m1_msun: float, m2_msun: float, f_gw_hz: float, cos_i: float) -> float:
+    """K1 + K2 = (G M π f)^{1/3} sin ι [km/s] (circular orbit, P_orb = 2/f)."""
+    v = (G_SI * (m1_msun + m2_msun) * MSUN_KG * math.pi * f_gw_hz) ** (1.0 / 3.0)
+    return v * math.sqrt(max(0.0, 1.0 - cos_i * cos_i)) / 1e3
+
+
+def source_target(src: Source, ra_deg: float, dec_deg: float, opts: ForecastOptions) -> Any:
+    """The catalog row as a :class:`ucbplan.target.Target` at the midpoint (no covariance)."""
+    from astropy.time import Time, TimeDelta
+
+    from ucbplan.target import Target
+
+    p0 = PhaseParams(phase=src.phase_rad % (2 * math.pi), f_gw=src.f_hz, fdot=src.fdot_hz_s)
+    mid, _ = shift_reference(p0, np.zeros((7, 7)), 0.5 * opts.t_obs_s)
+    t0 = Time(opts.t_start_tdb, scale="tdb")
+    return Target(
+        name=f"population source {src.source_id}",
+        source=None,
+        ra_deg=ra_deg,
+        dec_deg=dec_deg,
+        t_ref=t0 + TimeDelta(0.5 * opts.t_obs_s, format="sec"),
+        t_obs_s=opts.t_obs_s,
+        params=mid,
+        cov_names=(),
+        cov_matrix=np.zeros((0, 0)),
+        cos_inclination=math.cos(src.inclination_rad),
+        amplitude=src.amplitude,
+        psi=src.psi_rad % math.pi,
+        distance_kpc=src.distance_kpc,
+        vmag=src.vmag,
+        m1_msun=src.m1_msun,
+        m2_msun=src.m2_msun,
+    )
+
+
+def icrs_of(sources: Sequence[Source]) -> tuple[np.ndarray, np.ndarray]:
+    """ICRS (ra, dec) [deg] of the sources' barycentric mean ecliptic (J2000) positions."""
+    import astropy.units as u
+    from astropy.coordinates import BarycentricMeanEcliptic, SkyCoord
+
+    lon = np.array([s.ecl_lon_rad for s in sources])
+    lat = np.array([s.ecl_lat_rad for s in sources])
+    c = SkyCoord(lon=lon * u.rad, lat=lat * u.rad, frame=BarycentricMeanEcliptic()).icrs
+    return np.asarray(c.ra.deg, dtype=float), np.asarray(c.dec.deg, dtype=float)
+
+
+def _nan_row(src: Source, status: str) -> dict[str, Any]:
+    row: dict[str, Any] = {}
+    for name, _, dtype, _ in FORECAST_COLUMNS:
+        row[name] = "" if dtype == "str" else (0 if dtype == "i8" else math.nan)
+    row.update(source_id=src.source_id, row=src.row, status=status[:300])
+    row["vmag"] = math.nan if src.vmag is None else src.vmag
+    row["distance"] = math.nan if src.distance_kpc is None else src.distance_kpc
+    row["amplitude"] = src.amplitude
+    row["cos_inclination"] = math.cos(src.inclination_rad)
+    return row
+
+
+#: σ_φ at or above this leaves the GW phase unknown [rad].
+SIGMA_PHASE_MAX = math.pi
+
+
+def _constrained(cov: np.ndarray) -> bool:
+    """Finite, positive variances, σ_φ < π and |correlations| ≤ 1 over (φ, f, ḟ)."""
+    sub = cov[:3, :3]
+    d = np.diag(sub)
+    if not (np.all(np.isfinite(sub)) and np.all(d > 0)):
+        return False
+    if math.sqrt(d[0]) >= SIGMA_PHASE_MAX:
+        return False
+    corr = sub / np.sqrt(np.outer(d, d))
+    return bool(np.all(np.abs(corr) <= 1.0 + 1e-9))
+
+
+def forecast_source(
+    src: Source, ra_deg: float, dec_deg: float, opts: ForecastOptions
+) -> dict[str, Any]:
+    """One row of the forecast table (status ok | unconstrained | failed: …)."""
+    row = _nan_row(src, "ok")
+    row.update(ra=ra_deg, dec=dec_deg)
+    try:
+        from ucbplan.lisa.pipeline import build_model, fisher_forecast
+
+        target = source_target(src, ra_deg, dec_deg, opts)
+        row["f_gw"], row["fdot"] = target.params.f_gw, target.params.fdot
+        fc = fisher_forecast(build_model(target, n_bins=opts.n_bins, circular=True))
+    except NumericalError as exc:
+        msg = " ".join(str(exc).split())
+        row["status"] = "unconstrained" if "unconstrained" in msg else f"failed: {msg}"
+        return row
+    except np.linalg.LinAlgError:
+        row["status"] = "unconstrained"
+        return row
+    except (UcbplanError, ValueError) as exc:
+        row["status"] = f"failed: {' '.join(str(exc).split())}"
+        return row
+    row["snr"] = fc.snr
+    cov = fc.target.covariance
+    if not _constrained(cov):
+        row["status"] = "unconstrained"
+        return row
+    s = np.sqrt(np.diag(cov)[:3])
+    row["sigma_phase"], row["sigma_f_gw"], row["sigma_fdot"] = (float(x) for x in s)
+    row["corr_phase_f_gw"] = float(cov[0, 1] / (s[0] * s[1]))
+    row["corr_phase_fdot"] = float(cov[0, 2] / (s[0] * s[2]))
+    row["corr_f_gw_fdot"] = float(cov[1, 2] / (s[1] * s[2]))
+    if opts.k_eff_kms is not None:
+        k = opts.k_eff_kms
+    elif src.m1_msun is not None and src.m2_msun is not None:
+        k = k_total_kms(src.m1_msun, src.m2_msun, src.f_hz, math.cos(src.inclination_rad))
+    else:
+        row["status"] = "failed: no K: give --k-eff or Mass1 and Mass2 columns"
+        return row
+    row["k_eff"] = k
+    if not k > 0:
+        row["status"] = "failed: K = 0 (sin ι = 0): give --k-eff"
+        return row
+    try:
+        rows = horizon_table(
+            fc.target, opts.sigma_v_kms, k, ALPHAS, ANCHORS, n_epochs=opts.n_epochs
+        )
+    except UcbplanError as exc:
+        row["status"] = f"failed: {' '.join(str(exc).split())}"
+        return row
+    for hr in rows:
+        row[f"sigma_u_end_{hr.anchor}"] = hr.sigma_u_end_rad
+        row[f"tol_{hr.anchor}"] = hr.delta_u_tol_rad
+        row[f"t_valid_{hr.anchor}_a{hr.alpha:g}"] = hr.t_valid_days
+    return row
+
+
+def forecast_chunk(opts: ForecastOptions, sources: Sequence[Source]) -> list[dict[str, Any]]:
+    """Rows of ``sources`` in order (a picklable task for any executor)."""
+    worker_setup()
+    ra, dec = icrs_of(sources)
+    return [
+        forecast_source(s, float(r), float(d), opts)
+        for s, r, d in zip(sources, ra, dec, strict=True)
+    ]
+
+
+#: T_valid cap in days (horizons are searched up to 300 years).
+HORIZON_CAP_DAYS = HORIZON_CAP_S / DAY_S
