@@ -39,8 +39,9 @@ LAYER = {
     "cli": 5,
     "__main__": 6,
 }
-#: reduce converts site-UTC spectrum times to barycentric TDB with the observing time conversion.
-SIBLING_EDGES = {("reduce", "observing")}
+#: reduce converts site-UTC spectrum times to barycentric TDB with the observing time conversion;
+#: population runs the LISA Fisher forecast and the observing visibility per source.
+SIBLING_EDGES = {("reduce", "observing"), ("population", "lisa"), ("population", "observing")}
 
 
 def _module_name(path: Path) -> str:
