@@ -34,7 +34,8 @@ __all__ = ["ephemeris_fit", "register"]
 TimesArg = Annotated[
     Path,
     typer.Argument(
-        help="Eclipse times: CSV or ECSV with bjd_tdb (or bmjd_tdb), sigma_s [, kind, cycle]."
+        metavar="TIMES",
+        help="Eclipse times: CSV or ECSV with bjd_tdb (or bmjd_tdb), sigma_s [, kind, cycle].",
     ),
 ]
 TermsOpt = Annotated[int, typer.Option("--terms", help="2: T0, P; 3: + Pdot; 4: + Pddot.")]
@@ -108,6 +109,12 @@ def ephemeris_fit(
     if period is not None and initial is not None:
         raise InputError("--period, --initial: give one first ephemeris, not both")
     ident = identity(like, name, ra, dec) if fmt == "yaml" else None
+    if ident is None and any(x is not None for x in (like, name, ra, dec)):
+        err_console.print(
+            "note: --like/--name/--ra/--dec only shape the timing target (-o FILE.yaml or "
+            "--format yaml); ignored",
+            markup=False,
+        )
     _check_outputs(output, plot, overwrite)
     guess = read_initial(initial) if initial is not None else None
     if period is not None:

@@ -21,6 +21,7 @@ points (iteratively, each one reported).
 
 from __future__ import annotations
 
+import decimal
 import math
 from dataclasses import dataclass, field
 from decimal import Decimal
@@ -30,7 +31,7 @@ from numpy.typing import NDArray
 
 from ucbplan.core.mvnormal import inverse_scaled
 from ucbplan.errors import InputError, NumericalError
-from ucbplan.timing.times import EclipseTimes, seconds_to_jd
+from ucbplan.timing.times import DAY_S, EclipseTimes
 
 __all__ = [
     "OUTLIER_SIGMA",
@@ -123,14 +124,17 @@ def shift_coefficients(c: F64, m: float) -> F64:
 class EphemerisFit:
     """The fitted ephemeris and everything needed to report it.
 
-    ``values`` and ``cov`` are (T0, P, Ṗ[, P̈]) with T0 in seconds since ``ref_jd``; the
-    covariance is already rescaled when ``rescaled``. ``nu`` are the cycles of all points counted
-    from T0 (the primary eclipse at cycle ``t0_cycle`` of the input or counted numbering).
+    ``t0_jd`` is T0 as an exact JD (TDB). ``values`` and ``cov`` are (T0, P, Ṗ[, P̈]) with T0
+    in seconds since ``ref_jd`` (float64, for the covariance and plots); the covariance is
+    already rescaled when ``rescaled``. ``nu`` are the cycles of all points counted from T0 (the
+    primary eclipse at cycle ``t0_cycle`` of the input or counted numbering); ``o_minus_c_s``
+    the residuals from the full fit.
     """
 
     source: str
     terms: int
     ref_jd: Decimal
+    t0_jd: Decimal
     values: F64
     cov: F64
     t0_cycle: int
@@ -156,11 +160,6 @@ class EphemerisFit:
     def sigmas(self) -> F64:
         """1σ of each parameter (rescaled when χ²/dof > 1)."""
         return np.sqrt(np.diag(self.cov))
-
-    @property
-    def t0_jd(self) -> Decimal:
-        """T0 as an exact JD (TDB)."""
-        return seconds_to_jd(float(self.values[0]), self.ref_jd)
 
     @property
     def period_s(self) -> float:
@@ -206,20 +205,57 @@ class _Core:
     dof: int
 
 
-def _fit_core(t_s: F64, sigma: F64, cycles: F64, terms: int, label: str) -> _Core:
+def _fit_core(y: F64, sigma: F64, cycles: F64, terms: int, label: str) -> _Core:
     w = 1.0 / sigma**2
     wmean = float(np.sum(w * cycles) / np.sum(w))
     m = math.floor(wmean + 0.5)
     a = design(cycles - m, terms)
     try:
-        coef, cov_c = solve_wls(a, t_s, sigma)
+        coef, cov_c = solve_wls(a, y, sigma)
     except np.linalg.LinAlgError:
         raise NumericalError(
             f"{label}: the times do not constrain all {terms} parameters (singular design); "
             "fit fewer terms (--terms)"
         ) from None
-    resid = (t_s - a @ coef) / sigma
-    return _Core(m, wmean, coef, cov_c, float(resid @ resid), int(t_s.size - terms))
+    resid = (y - a @ coef) / sigma
+    return _Core(m, wmean, coef, cov_c, float(resid @ resid), int(y.size - terms))
+
+
+@dataclass(frozen=True)
+class _Base:
+    """A linear ephemeris T_b + P_b·(n − m_b), exact decimals, subtracted before the fit."""
+
+    m: int
+    t_s: Decimal
+    period_s: Decimal
+
+    def at(self, n: float) -> Decimal:
+        """T_b + P_b·(n − m_b) in seconds since the reference epoch (exact)."""
+        return _DEC.add(self.t_s, _DEC.multiply(self.period_s, Decimal(repr(float(n - self.m)))))
+
+
+_DEC = decimal.Context(prec=60)
+
+
+def _base(times: EclipseTimes, cycles: F64, terms: int) -> tuple[_Base, F64]:
+    """A first fit on float64 seconds, then the times minus its linear part, computed exactly.
+
+    The float64 seconds since the reference epoch carry a rounding of ~1e-16 of their size
+    (~1e-8 s over years), which a lever arm of many cycles can amplify; the detrended times are
+    O − C sized, so the second fit works with ~1e-13 s rounding.
+    """
+    first = _fit_core(times.t_s, times.sigma_s, cycles, terms, times.label())
+    base = _Base(first.m, Decimal(float(first.coef[0])), Decimal(float(first.coef[1])))
+    y = np.array(
+        [
+            float(_DEC.subtract(_DEC.multiply(_DEC.subtract(jd, times.ref_jd), _DAY), base.at(n)))
+            for jd, n in zip(times.jd, cycles, strict=True)
+        ]
+    )
+    return base, y
+
+
+_DAY = Decimal(DAY_S)
 
 
 def fit_ephemeris(
@@ -257,12 +293,13 @@ def fit_ephemeris(
     label = times.label()
     used = np.ones(times.n, dtype=bool)
     _check_counts(times, cycles, used, terms, "")
+    base, y = _base(times, cycles, terms)
     clipped: list[int] = []
     for _ in range(times.n):
-        core = _fit_core(times.t_s[used], times.sigma_s[used], cycles[used], terms, label)
+        core = _fit_core(y[used], times.sigma_s[used], cycles[used], terms, label)
         ratio = core.chi2 / core.dof if core.dof > 0 else 0.0
         scale = math.sqrt(ratio) if ratio > 1.0 else 1.0
-        oc = times.t_s - design(cycles - core.m, terms) @ core.coef
+        oc = y - design(cycles - core.m, terms) @ core.coef
         z = oc / (times.sigma_s * scale)
         if clip is None:
             break
@@ -272,7 +309,11 @@ def fit_ephemeris(
         clipped.extend(int(r) for r in times.rows[drop])
         used = used & ~drop
         _check_counts(times, cycles, used, terms, f"--clip {clip:g} leaves ")
-    values, jac = coefficients_to_parameters(core.coef)
+    t0_s = _DEC.add(base.at(core.m), Decimal(float(core.coef[0])))
+    coef = core.coef.copy()
+    coef[0] = float(t0_s)
+    coef[1] = float(_DEC.add(base.period_s, Decimal(float(coef[1]))))
+    values, jac = coefficients_to_parameters(coef)
     if values[1] <= 0:
         raise NumericalError(f"{label}: the fitted period is not positive; check the cycle numbers")
     cov = jac @ core.cov_c @ jac.T * scale**2
@@ -283,6 +324,7 @@ def fit_ephemeris(
         source=label,
         terms=terms,
         ref_jd=times.ref_jd,
+        t0_jd=_DEC.add(times.ref_jd, _DEC.divide(t0_s, _DAY)),
         values=values,
         cov=cov,
         t0_cycle=core.m,

@@ -21,7 +21,6 @@ from __future__ import annotations
 import csv
 import decimal
 import difflib
-import io
 import math
 import re
 from dataclasses import dataclass
@@ -62,7 +61,8 @@ JD_RANGE = (Decimal(2_363_000), Decimal(2_635_000))
 #: Text columns that may be present and are ignored.
 TEXT_COLUMNS = ("instrument", "reference", "note")
 KNOWN_COLUMNS = (*TIME_COLUMNS, "sigma_s", "kind", "cycle", *TEXT_COLUMNS)
-#: Largest accepted σ of one time [s] (a day: anything larger is no eclipse timing).
+#: Accepted σ of one time [s]: from 1 ns (below any clock) to a day (no eclipse timing).
+MIN_SIGMA_S = 1e-9
 MAX_SIGMA_S = 86400.0
 #: Largest |cycle| accepted.
 MAX_CYCLE = 1e12
@@ -242,11 +242,12 @@ def _ecsv_rows(
     from astropy.time import Time
 
     try:
-        tab = Table.read(io.StringIO(text), format="ascii.ecsv")
+        tab = Table.read(text if "\n" in text else text + "\n", format="ascii.ecsv")
     except Exception as exc:  # astropy raises many types for malformed ECSV
         msg = " ".join(str(exc).split())[:200]
         raise r.fail("table", f"not a readable ECSV table ({msg}); check the header") from None
     meta: dict[str, Any] = {}
+    time_cols: dict[str, Any] = {}
     for name in tab.colnames:
         col = tab[name]
         key = name.strip().lower()
@@ -258,15 +259,14 @@ def _ecsv_rows(
                     f"column {name!r}",
                     f"expected barycentric TDB times, got scale {col.scale}; convert to BJD_TDB",
                 )
-            meta[key] = col
+            time_cols[key] = col
+            meta[key] = None
             continue
         meta[key] = getattr(col, "unit", None)
         mask = getattr(col, "mask", None)
         if mask is not None and np.any(mask):
             k = int(np.flatnonzero(np.asarray(mask))[0]) + 1
             raise r.fail(f"row {k}, column {name!r}", "blank cell; every row needs a value")
-    if any(isinstance(v, Time) for v in meta.values()):
-        return _ecsv_time_rows(r, tab, meta)
     delim = " "
     m = re.search(r"^#\s*delimiter:\s*['\"]?(,|\s)['\"]?\s*$", text, flags=re.MULTILINE)
     if m and m.group(1) == ",":
@@ -277,34 +277,41 @@ def _ecsv_rows(
     parsed = list(csv.reader(lines, delimiter=delim, quotechar='"', skipinitialspace=True))
     header = [h.strip().lower() for h in parsed[0]] if parsed else []
     body = [(k, [c.strip() for c in cells]) for k, cells in enumerate(parsed[1:], start=1)]
-    if header != [c.strip().lower() for c in tab.colnames] or len(body) != len(tab):
+    names = [c.strip().lower() for c in tab.colnames]
+    if header != names:  # Time columns serialised as jd1/jd2: take the exact two parts
+        return names, _ecsv_time_rows(tab, names, time_cols), meta
+    if len(body) != len(tab):
         raise r.fail("table", "the ECSV data lines do not match its header; check the file")
     for k, cells in body:
         if len(cells) != len(header):
             raise r.fail(f"row {k}", f"has {len(cells)} fields, expected {len(header)}")
+    native = {"bjd_tdb": "jd", "bmjd_tdb": "mjd"}
+    for key, col in time_cols.items():
+        if col.format != native[key]:  # e.g. ISO text: the exact two parts, not the text
+            i = header.index(key)
+            exact = _ecsv_time_rows(tab, names, {key: col})
+            for (_, cells), (_, ex) in zip(body, exact, strict=True):
+                cells[i] = ex[i]
     return header, body, meta
 
 
 def _ecsv_time_rows(
-    r: _Reader, tab: Any, meta: dict[str, Any]
-) -> tuple[list[str], list[tuple[int, list[str]]], dict[str, Any]]:
-    """Rows of an ECSV with an astropy Time column: the epoch exactly from its two parts."""
-    from astropy.time import Time
-
-    header = [c.strip().lower() for c in tab.colnames]
+    tab: Any, names: list[str], time_cols: dict[str, Any]
+) -> list[tuple[int, list[str]]]:
+    """Rows of an ECSV as text, the Time columns from their exact two-part JDs."""
     body = []
     for k in range(len(tab)):
         cells = []
-        for name, key in zip(tab.colnames, header, strict=True):
-            col = tab[name]
-            if isinstance(col, Time):
+        for name, key in zip(tab.colnames, names, strict=True):
+            if key in time_cols:
+                col = time_cols[key]
                 jd = _CTX.add(Decimal(float(col.jd1[k])), Decimal(float(col.jd2[k])))
-                cells.append(str(jd - TIME_COLUMNS[key]))
+                rel = _CTX.subtract(jd, TIME_COLUMNS[key])  # 1e-18 d = 1e-13 s resolution
+                cells.append(str(rel.quantize(Decimal("1e-18"), context=_CTX)))
             else:
-                cells.append(str(col[k]).strip())
+                cells.append(str(tab[name][k]).strip())
         body.append((k + 1, cells))
-    meta = {k: (None if isinstance(v, Time) else v) for k, v in meta.items()}
-    return header, body, meta
+    return body
 
 
 def _check_header(r: _Reader, header: list[str]) -> str:
@@ -377,10 +384,11 @@ def _sigma(r: _Reader, k: int, cell: str, factor: float) -> float:
         raise r.fail(
             where, f"expected a positive number of seconds, got {shorten(cell, 60)}"
         ) from None
-    if not (math.isfinite(val) and 0 < val <= MAX_SIGMA_S):
+    if not (math.isfinite(val) and MIN_SIGMA_S <= val <= MAX_SIGMA_S):
         raise r.fail(
             where,
-            f"expected a positive timing error up to {MAX_SIGMA_S:g} s, got {shorten(cell, 60)}",
+            f"expected a positive timing error from {MIN_SIGMA_S:g} to {MAX_SIGMA_S:g} s, got "
+            f"{shorten(cell, 60)}",
         )
     return val
 
