@@ -29,10 +29,11 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import yaml
 from numpy.typing import NDArray
 
 from ucbplan.errors import InputError, InputFileError, shorten
-from ucbplan.inputs import read_text
+from ucbplan.inputs import MAX_ALIASES, MAX_YAML_BYTES, read_text
 
 __all__ = [
     "DAY_S",
@@ -241,6 +242,7 @@ def _ecsv_rows(
     from astropy.table import Table
     from astropy.time import Time
 
+    _check_ecsv_header(r, text)
     try:
         tab = Table.read(text if "\n" in text else text + "\n", format="ascii.ecsv")
     except Exception as exc:  # astropy raises many types for malformed ECSV
@@ -293,6 +295,32 @@ def _ecsv_rows(
             for (_, cells), (_, ex) in zip(body, exact, strict=True):
                 cells[i] = ex[i]
     return header, body, meta
+
+
+def _check_ecsv_header(r: _Reader, text: str) -> None:
+    """Count the aliases of the ECSV's YAML header before astropy constructs it: astropy's own
+    loader would expand an alias bomb ("billion laughs") into gigabytes."""
+    lines = []
+    for ln in text.splitlines():
+        if not ln.startswith("#"):
+            break
+        body = ln[2:] if ln.startswith("# ") else ln[1:]
+        if not body.startswith("%ECSV"):
+            lines.append(body)
+    header = "\n".join(lines)
+    if len(header) > MAX_YAML_BYTES:
+        raise r.fail("header", f"ECSV header larger than {MAX_YAML_BYTES} bytes; check the file")
+    try:
+        aliases = sum(
+            isinstance(ev, yaml.AliasEvent) for ev in yaml.parse(header, Loader=yaml.SafeLoader)
+        )
+    except yaml.YAMLError as exc:
+        msg = " ".join(str(exc).split())[:200]
+        raise r.fail("header", f"not a valid ECSV header ({msg})") from None
+    if aliases > MAX_ALIASES:
+        raise r.fail(
+            "header", f"more than {MAX_ALIASES} YAML aliases; write the header out without anchors"
+        )
 
 
 def _ecsv_time_rows(
