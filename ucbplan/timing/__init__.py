@@ -1,0 +1,70 @@
+"""Timing ephemerides from measured eclipse times: read, count cycles, fit, report, plot.
+
+- :mod:`~ucbplan.timing.times`: eclipse-time tables with full-precision epochs;
+- :mod:`~ucbplan.timing.initial`: a first ephemeris (``--period``, ``--initial TARGET.yaml``);
+- :mod:`~ucbplan.timing.cycles`: counting cycles from the times;
+- :mod:`~ucbplan.timing.fit`: the weighted least-squares fit of T0, P, Ṗ[, P̈];
+- :mod:`~ucbplan.timing.document`: the JSON report and the timing target file;
+- :mod:`~ucbplan.timing.plots`: the O − C figure.
+
+:func:`fit_times` runs the whole chain.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from ucbplan.timing.cycles import count_cycles
+from ucbplan.timing.fit import EphemerisFit, fit_ephemeris
+from ucbplan.timing.initial import PeriodGuess, period_guess, read_initial
+from ucbplan.timing.times import EclipseTimes, read_times
+
+__all__ = [
+    "EclipseTimes",
+    "EphemerisFit",
+    "PeriodGuess",
+    "count_cycles",
+    "fit_ephemeris",
+    "fit_times",
+    "period_guess",
+    "read_initial",
+    "read_times",
+]
+
+
+def fit_times(
+    times: EclipseTimes,
+    guess: PeriodGuess | None = None,
+    terms: int = 3,
+    clip: float | None = None,
+) -> EphemerisFit:
+    """Fit an ephemeris to ``times``: cycles from the table, else counted from ``guess``.
+
+    Raises
+    ------
+    InputError
+        No cycle column and no guess, an ambiguous count, too few times; see the parts.
+    """
+    from ucbplan.errors import InputFileError
+
+    if times.cycle is not None:
+        return fit_ephemeris(times, times.cycle, terms, clip, "given in the table")
+    if guess is None:
+        raise InputFileError(
+            f"{times.label()}: column 'cycle': missing, so cycles must be counted from the times; "
+            "give a first period guess (--period P) or an earlier ephemeris (--initial "
+            "TARGET.yaml), or add a cycle column"
+        )
+    cycles = count_cycles(times, guess)
+    return fit_ephemeris(times, cycles, terms, clip, f"counted from the times ({guess.origin})")
+
+
+def load_and_fit(
+    path: Path,
+    guess: PeriodGuess | None = None,
+    terms: int = 3,
+    clip: float | None = None,
+) -> tuple[EclipseTimes, EphemerisFit]:
+    """Read a table and fit it (:func:`read_times` then :func:`fit_times`)."""
+    times = read_times(path)
+    return times, fit_times(times, guess, terms, clip)
