@@ -131,9 +131,9 @@ def _check_options(
 ) -> None:
     """Reject bad option values with the option's name (before any file is read)."""
     check_number("--n-spectra", n_spectra, 0, 1e9, "spectra")
-    wd = "a white dwarf is lighter than the Chandrasekhar mass"
-    check_number("--m1", m1, 0.0, 1.5, "M_sun", wd)
-    check_number("--m2", m2, 0.0, 1.5, "M_sun", wd)
+    wd = "white dwarfs weigh between ~0.05 M_sun and the Chandrasekhar mass"
+    check_number("--m1", m1, 0.05, 1.5, "M_sun", wd)
+    check_number("--m2", m2, 0.05, 1.5, "M_sun", wd)
     check_number("--sigma-v", sigma_v, 0.0, 1e4, "km/s")
     check_number("--m3", m3, 0.0, 1e3, "M_sun")
     check_number("--a-out", a_out, 0.0, 1e6, "AU")
