@@ -165,7 +165,11 @@ def test_interrupted_run_keeps_finished_parts(tmp_path: Path) -> None:
     common = dict(chunk=3, slots=1, parts=parts, kind="t", options={}, catalog_sha256="x")
     with pytest.raises(KeyboardInterrupt):
         run_chunks(dies_on_third, items, ids, executor=SerialExecutor(), **common)  # type: ignore[arg-type]
-    assert len(list(parts.glob("part-*.json"))) == 2
+    # chunks 0 and 1 finished before the interrupt; chunk 3 may have finished beside chunk 2 (the
+    # order in which completed futures are handled is not defined); chunk 2 never finished
+    kept = {p.name for p in parts.glob("part-*.json")}
+    assert {"part-000000.json", "part-000001.json"} <= kept
+    assert "part-000002.json" not in kept
     rows, reused = run_chunks(
         _square,
         items,
@@ -174,7 +178,7 @@ def test_interrupted_run_keeps_finished_parts(tmp_path: Path) -> None:
         resume=True,
         **common,  # type: ignore[arg-type]
     )
-    assert reused == 2 and [r["x"] for r in rows] == [i * i for i in items]
+    assert reused == len(kept) and [r["x"] for r in rows] == [i * i for i in items]
     doc = json.loads((parts / "part-000000.json").read_text())
     assert doc["ids"] == ["0", "1", "2"]
 
