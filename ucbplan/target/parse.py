@@ -1,15 +1,17 @@
 """Read and validate a target file into a :class:`~ucbplan.target.model.Target`.
 
 ``load_target`` validates once, section by section, against the schema
-(:mod:`ucbplan.target.schema`), and returns parameters always referenced to the *midpoint* of
-the LISA observation (paper Sec. 4.1; ``docs/method.md``, "Phase model"). Every
-validation failure is a one-line :class:`~ucbplan.errors.TargetFileError`:
-``file: field: expected …, got …``.
+(:mod:`ucbplan.target.schema`). A ``lisa`` section gives parameters referenced to the *midpoint*
+of the LISA observation (paper Sec. 4.1; ``docs/method.md``, "Phase model"); a ``timing``
+section (exactly one of the two) is converted to the same phase model at its epoch T0 by
+:mod:`ucbplan.core.timing`. Every validation failure is a one-line
+:class:`~ucbplan.errors.TargetFileError`: ``file: field: expected …, got …``.
 """
 
 from __future__ import annotations
 
 import math
+import re
 import unicodedata
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
@@ -22,23 +24,34 @@ from astropy.coordinates import SkyCoord
 from astropy.time import Time, TimeDelta
 from numpy.typing import NDArray
 
-from ucbplan.core.constants import E_MAX, L_B
+from ucbplan.core.constants import E_MAX, L_B, YEAR_S
 from ucbplan.core.params import PARAM_NAMES, PhaseParams, shift_jacobian, shift_reference
+from ucbplan.core.timescale import parse_timing_epoch
+from ucbplan.core.timing import (
+    SIGN_SPAN_S,
+    TIMING_NAMES,
+    TimingEphemeris,
+    period_sign_change,
+    phase_covariance,
+    to_phase_params,
+)
 from ucbplan.errors import SchemaError, TargetFileError, shorten
 from ucbplan.inputs import load_yaml
 from ucbplan.target.covariance import parse_covariance
-from ucbplan.target.model import Spectroscopy, Target
-from ucbplan.target.schema import Field, field, section_fields
+from ucbplan.target.model import Spectroscopy, Target, TimingSection
+from ucbplan.target.schema import EPHEMERIS_KINDS, FIELDS, Field, field, section_fields
 from ucbplan.target.values import (
     Ctx,
     check_keys,
     check_range,
+    did_you_mean,
     one_line,
     parse_angle,
     parse_choice,
     parse_epoch,
     parse_number,
     parse_quantity,
+    to_float,
 )
 
 __all__ = ["load_target", "target_from_dict"]
@@ -100,12 +113,20 @@ def target_from_dict(doc: Any, path: Path | None = None) -> Target:
         name = _parse_name(ctx, doc.get("name"))
     with ctx.reading("sky", "a sky position"):
         ra, dec = _parse_sky(ctx, doc)
-    with ctx.reading("lisa", "the LISA posterior summary"):
-        lisa = _parse_lisa(ctx, doc.get("lisa"), path)
+    kind = _ephemeris_kind(ctx, doc)
+    if kind == "lisa":
+        with ctx.reading("lisa", "the LISA posterior summary"):
+            eph = _parse_lisa(ctx, doc.get("lisa"), path)
+    else:
+        with ctx.reading("timing", "a timing ephemeris"):
+            eph = _parse_timing(ctx, doc["timing"])
     with ctx.reading("spectroscopy", "spectroscopy defaults"):
         spectroscopy = _parse_spectroscopy(ctx, doc.get("spectroscopy"))
     priority = _number(ctx, doc, field("priority"))
-    vmag = _number(ctx, doc, field("vmag"))
+    with ctx.reading("magnitudes", "magnitudes"):
+        magnitudes = _parse_magnitudes(ctx, doc)
+    with ctx.reading("references", "references"):
+        references = _parse_references(ctx, doc)
     with ctx.reading("masses", "masses"):
         masses = _parse_masses(ctx, doc)
     return Target(
@@ -113,23 +134,45 @@ def target_from_dict(doc: Any, path: Path | None = None) -> Target:
         source=path.resolve() if path is not None else None,
         ra_deg=ra,
         dec_deg=dec,
-        t_ref=lisa.t_ref,
-        t_obs_s=lisa.t_obs_s,
-        params=lisa.params,
-        cov_names=lisa.cov_names,
-        cov_matrix=lisa.cov_matrix,
-        cos_inclination=lisa.extras["cos_inclination"],
-        amplitude=lisa.extras["amplitude"],
-        psi=lisa.extras["psi"],
-        distance_kpc=lisa.extras["distance"],
+        t_ref=eph.t_ref,
+        t_obs_s=eph.t_obs_s,
+        params=eph.params,
+        cov_names=eph.cov_names,
+        cov_matrix=eph.cov_matrix,
+        cos_inclination=eph.extras["cos_inclination"],
+        amplitude=eph.extras["amplitude"],
+        psi=eph.extras["psi"],
+        distance_kpc=eph.extras["distance"],
         spectroscopy=spectroscopy,
-        samples=lisa.samples,
+        samples=eph.samples,
         priority=priority,
-        vmag=vmag,
+        vmag=magnitudes.get("V"),
         m1_msun=masses.get("m1"),
         m2_msun=masses.get("m2"),
-        ref_shift_s=lisa.ref_shift_s,
-        notes={"t_ref_converted_from": lisa.converted} if lisa.converted else {},
+        ref_shift_s=eph.ref_shift_s,
+        notes={"t_ref_converted_from": eph.converted} if eph.converted else {},
+        kind=kind,
+        timing=eph.timing,
+        magnitudes=magnitudes,
+        references=references,
+    )
+
+
+def _ephemeris_kind(ctx: Ctx, doc: Mapping[str, Any]) -> str:
+    """``"lisa"`` or ``"timing"``: exactly one of the two sections must be given."""
+    given = [k for k in EPHEMERIS_KINDS if k in doc]
+    if len(given) == 1:
+        return given[0]
+    if given:
+        raise ctx.fail(
+            "lisa/timing",
+            "give exactly one of lisa (a LISA posterior) and timing (an optical/X-ray timing "
+            "ephemeris), not both; keep the other in a second target file",
+        )
+    raise ctx.fail(
+        "lisa",
+        f"missing; add lisa: {field('lisa').example} (a LISA posterior) or timing: "
+        f"{field('timing').example} (a timing ephemeris)",
     )
 
 
@@ -252,8 +295,9 @@ def _parse_masses(ctx: Ctx, doc: Mapping[str, Any]) -> dict[str, float | None]:
 
 
 @dataclass(frozen=True, slots=True)
-class _Lisa:
-    """The validated ``lisa`` section, moved to the observation midpoint and to TDB."""
+class _Ephemeris:
+    """A validated ephemeris section as the phase model: ``lisa`` moved to the observation
+    midpoint and to TDB, or ``timing`` at its epoch T0."""
 
     t_ref: Time
     t_obs_s: float
@@ -261,12 +305,13 @@ class _Lisa:
     cov_names: tuple[str, ...]
     cov_matrix: FloatArray
     extras: dict[str, float | None]
-    samples: Path | None
-    ref_shift_s: float
-    converted: str | None
+    samples: Path | None = None
+    ref_shift_s: float = 0.0
+    converted: str | None = None
+    timing: TimingSection | None = None
 
 
-def _parse_lisa(ctx: Ctx, lisa: Any, path: Path | None) -> _Lisa:
+def _parse_lisa(ctx: Ctx, lisa: Any, path: Path | None) -> _Ephemeris:
     """The ``lisa`` section; TCB rates are rescaled and start-referenced ones moved."""
     _check_lisa_fields(ctx, lisa)
     t_ref, converted = parse_epoch(ctx, field("lisa.t_ref"), lisa["t_ref"], lisa.get("t_ref_scale"))
@@ -284,7 +329,7 @@ def _parse_lisa(ctx: Ctx, lisa: Any, path: Path | None) -> _Lisa:
         shift = t_obs / 2.0
         params, mat = _moved_to_midpoint(ctx, params, names, mat, shift)
         t_ref = t_ref + TimeDelta(shift, format="sec")
-    return _Lisa(
+    return _Ephemeris(
         t_ref=t_ref,
         t_obs_s=t_obs,
         params=params,
@@ -321,15 +366,19 @@ def _moved_to_midpoint(
 
 def _check_lisa_fields(ctx: Ctx, lisa: Any) -> None:
     """``lisa`` is a mapping of known fields with every required one present."""
-    f = field("lisa")
-    if lisa is None:
-        raise ctx.fail(f.path, f"missing; add lisa: {f.example}")
-    _mapping(ctx, f, lisa)
-    for f in section_fields("lisa"):
-        if f.required and f.name not in lisa:
-            raise ctx.fail(
-                f.path, f"missing; expected {f.example if f.kind == 'quantity' else f.what}"
-            )
+    _check_section(ctx, "lisa", lisa)
+
+
+def _check_section(ctx: Ctx, section: str, value: Any) -> None:
+    """``value`` is a mapping of the known fields of ``section`` with every required one."""
+    f = field(section)
+    if value is None:
+        raise ctx.fail(f.path, f"missing; add {section}: {f.example}")
+    _mapping(ctx, f, value)
+    for f in section_fields(section):
+        if f.required and f.name not in value:
+            shown = f.example if f.kind in ("quantity", "mapping") else f.what
+            raise ctx.fail(f.path, f"missing; expected {shown}")
 
 
 def _reference_point(ctx: Ctx, lisa: Mapping[str, Any]) -> str:
@@ -338,12 +387,12 @@ def _reference_point(ctx: Ctx, lisa: Mapping[str, Any]) -> str:
     return parse_choice(ctx, f, lisa.get(f.name, f.default))
 
 
-def _check_eccentricity(ctx: Ctx, eta: float, kappa: float) -> None:
+def _check_eccentricity(ctx: Ctx, eta: float, kappa: float, where: str = "lisa") -> None:
     """e = |η + iκ| must stay inside the first-order small-e model."""
     ecc = math.hypot(eta, kappa)
     if ecc >= E_MAX:
         raise ctx.fail(
-            "lisa.eta/kappa",
+            f"{where}.eta/kappa",
             f"e = |η + iκ| = {ecc:.4g} ≥ {E_MAX}: outside the small-e (first-order) model of the "
             "paper; ucbplan cannot schedule such orbits",
         )
@@ -368,6 +417,193 @@ def _samples_path(ctx: Ctx, lisa: Mapping[str, Any], path: Path | None) -> Path 
             f.path, f"file {shorten(name)} not found next to the target file (or not a file)"
         )
     return samples
+
+
+# ---------------------------------------------------------------------------------------------
+# the timing section
+# ---------------------------------------------------------------------------------------------
+
+_TIMING_VALUES = tuple(field(f"timing.{n}") for n in ("period", "pdot", "pddot"))
+#: Longest free text (source, a citation) [characters].
+MAX_TEXT_CHARS = 500
+
+
+def _parse_timing(ctx: Ctx, timing: Any) -> _Ephemeris:
+    """The ``timing`` section as the phase model at t_ref = T0 (:mod:`ucbplan.core.timing`)."""
+    _check_section(ctx, "timing", timing)
+    f_t0 = field("timing.t0")
+    try:
+        t0 = parse_timing_epoch(timing["t0"])
+    except ValueError as exc:
+        raise ctx.fail(f_t0.path, str(exc)) from None
+    mark = parse_choice(ctx, field("timing.t0_marks"), timing["t0_marks"])
+    vals = _quantities(ctx, timing, _TIMING_VALUES)
+    ecc = _timing_eccentricity(ctx, timing)
+    eph = TimingEphemeris(mark, vals["period"], vals["pdot"], vals["pddot"], **ecc)
+    _check_period_sign(ctx, eph)
+    names, mat = parse_covariance(ctx, timing["covariance"], "timing")
+    cov_names, cov_matrix = _phase_model_covariance(ctx, eph, names, mat)
+    extras: dict[str, float | None] = {"cos_inclination": None, "amplitude": None, "psi": None}
+    if "inclination" in timing:
+        incl = parse_angle(ctx, field("timing.inclination"), timing["inclination"])
+        extras["cos_inclination"] = math.cos(math.radians(incl))
+    extras |= _quantities(ctx, timing, (field("timing.distance"),))
+    section = TimingSection(
+        ephemeris=eph,
+        t0_text=" ".join(str(timing["t0"]).split()),
+        cov_names=names,
+        cov_matrix=mat,
+        source=_parse_text(ctx, "timing.source", timing["source"], _expect(field("timing.source"))),
+        eccentricity_given="eccentricity" in timing,
+    )
+    return _Ephemeris(
+        t_ref=t0,
+        t_obs_s=0.0,
+        params=to_phase_params(eph),
+        cov_names=cov_names,
+        cov_matrix=cov_matrix,
+        extras=extras,
+        timing=section,
+    )
+
+
+def _timing_eccentricity(ctx: Ctx, timing: Mapping[str, Any]) -> dict[str, float]:
+    """η, κ, ω̇ of ``timing.eccentricity`` (0 when absent), e inside the small-e model."""
+    if "eccentricity" not in timing:
+        return {"eta": 0.0, "kappa": 0.0, "omega_dot": 0.0}
+    ecc = _mapping(ctx, field("timing.eccentricity"), timing["eccentricity"])
+    vals = _quantities(ctx, ecc, section_fields("timing.eccentricity"))
+    _check_eccentricity(ctx, vals["eta"], vals["kappa"], "timing.eccentricity")
+    return {k: float(v) for k, v in vals.items()}
+
+
+def _check_period_sign(ctx: Ctx, eph: TimingEphemeris) -> None:
+    """P (and the model frequency 2/P) must keep their sign within ±100 yr of T0."""
+    which, when = period_sign_change(eph)
+    if not which:
+        return
+    side = "after" if when > 0 else "before"
+    raise ctx.fail(
+        f"timing.{which}",
+        f"the period would reach zero {abs(when) / YEAR_S:.3g} yr {side} T0 (P = "
+        f"{eph.period_s:.10g} s, Ṗ = {eph.pdot:.4g}, P̈ = {eph.pddot:.4g} 1/s); it must stay "
+        f"positive within ±{SIGN_SPAN_S / YEAR_S:.0f} yr of T0: check the sign, value and unit "
+        "(Ṗ in s/s, P̈ in 1/s)",
+    )
+
+
+def _phase_model_covariance(
+    ctx: Ctx, eph: TimingEphemeris, names: tuple[str, ...], mat: FloatArray
+) -> tuple[tuple[str, ...], FloatArray]:
+    """The timing covariance moved to the phase-model parameters (those with σ > 0)."""
+    full = np.zeros((7, 7))
+    idx = [TIMING_NAMES.index(n) for n in names]
+    full[np.ix_(idx, idx)] = mat
+    with np.errstate(all="ignore"):
+        pcov = phase_covariance(eph, full)
+    if not np.all(np.isfinite(pcov)):
+        raise ctx.fail(
+            "timing.covariance", "overflows when moved to the phase model; check its units"
+        )
+    keep = [i for i in range(7) if pcov[i, i] > 0.0]
+    return tuple(PARAM_NAMES[i] for i in keep), pcov[np.ix_(keep, keep)]
+
+
+def _expect(f: Field) -> str:
+    return f"expected {f.what} like {f.example}"
+
+
+def _parse_text(ctx: Ctx, path: str, value: Any, expect: str) -> str:
+    """A non-empty one-line text of at most :data:`MAX_TEXT_CHARS` characters."""
+    if not isinstance(value, str) or not value.strip():
+        raise ctx.fail(path, f"{expect}, got {shorten(value)}")
+    if len(value) > MAX_TEXT_CHARS:
+        raise ctx.fail(
+            path, f"{expect} of at most {MAX_TEXT_CHARS} characters, got {shorten(value)}"
+        )
+    if any(unicodedata.category(c) in _CONTROL for c in value):
+        raise ctx.fail(path, f"{expect} on one line without control characters")
+    return " ".join(value.split())
+
+
+# ---------------------------------------------------------------------------------------------
+# magnitudes and references
+# ---------------------------------------------------------------------------------------------
+
+#: A photometric band name: V, g, G, G_BP, Ks, r', …
+_BAND = re.compile(r"[A-Za-z][A-Za-z0-9_']{0,15}")
+
+
+def _parse_magnitudes(ctx: Ctx, doc: Mapping[str, Any]) -> dict[str, float]:
+    """``magnitudes`` by band, with ``vmag`` as V (both given: they must agree)."""
+    f = field("magnitudes")
+    out: dict[str, float] = {}
+    if f.name in doc:
+        mags = doc[f.name]
+        if not isinstance(mags, Mapping) or not mags:
+            raise ctx.fail(f.path, f"expected {f.what} like {f.example}, got {shorten(mags)}")
+        for band, raw in mags.items():
+            where = f"{f.path}.{ctx.key(band)}"
+            if not isinstance(band, str) or not _BAND.fullmatch(band):
+                raise ctx.fail(where, "expected a band name like V, g, G or G_BP")
+            try:
+                x = to_float(raw)
+            except ValueError:
+                raise ctx.fail(
+                    where, f"expected a magnitude like 20.5, got {shorten(raw)}"
+                ) from None
+            check_range(ctx, f, x, raw, where=where)
+            out[band] = x
+    vmag = _number(ctx, doc, field("vmag"))
+    if vmag is not None:
+        if "V" in out and out["V"] != vmag:
+            raise ctx.fail(
+                "vmag", f"vmag {vmag:g} and magnitudes.V {out['V']:g} differ; give V once"
+            )
+        out = {"V": vmag, **out}
+    return out
+
+
+def _field_paths(doc: Mapping[str, Any]) -> list[str]:
+    """Schema field paths present in ``doc``, and ``magnitudes.<band>`` of its bands."""
+    paths = []
+    for f in FIELDS:
+        node: Any = doc
+        for part in f.path.split("."):
+            node = node.get(part) if isinstance(node, Mapping) else None
+        if node is not None:
+            paths.append(f.path)
+    mags = doc.get("magnitudes")
+    if isinstance(mags, Mapping):
+        paths += [f"magnitudes.{b}" for b in mags if isinstance(b, str)]
+    if "vmag" in doc:
+        paths.append("magnitudes.V")
+    return paths
+
+
+def _parse_references(ctx: Ctx, doc: Mapping[str, Any]) -> dict[str, str]:
+    """``references``: a citation for each field given in the file."""
+    f = field("references")
+    if f.name not in doc:
+        return {}
+    refs = doc[f.name]
+    if not isinstance(refs, Mapping) or not refs:
+        raise ctx.fail(f.path, f"expected {f.what} like {f.example}, got {shorten(refs)}")
+    present = _field_paths(doc)
+    out: dict[str, str] = {}
+    for key, raw in refs.items():
+        where = f"{f.path}.{ctx.key(key)}"
+        if not isinstance(key, str) or key not in present:
+            hint = did_you_mean(key, present)
+            raise ctx.fail(
+                where,
+                f"not a field of this file; {hint}cite fields the file gives, e.g. "
+                "timing.period, masses.m1 or magnitudes.V",
+            )
+        out[key] = _parse_text(
+            ctx, where, raw, 'expected a citation like "2019Natur.571..528B" or a DOI'
+        )
+    return out
 
 
 # ---------------------------------------------------------------------------------------------
