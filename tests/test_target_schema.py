@@ -1,8 +1,9 @@
 """The target-file schema and the parser cannot drift apart.
 
 The documents below are written by hand (not generated from the schema): together they use every
-field a target file may hold (a LISA posterior in two forms, a timing ephemeris in two forms). The tests check that the parser accepts exactly the schema's fields,
-that the schema's required flags, ranges, examples and choices are what the parser enforces.
+field a target file may hold (a LISA posterior in two forms, a timing ephemeris in two forms).
+The tests check that the parser accepts exactly the schema's fields, that the schema's required
+flags, ranges, examples and choices are what the parser enforces.
 """
 
 from __future__ import annotations

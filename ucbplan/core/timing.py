@@ -13,7 +13,7 @@ t_ref = T0:
 
 (Series inversion: n(τ) = τ/P − (Ṗ/2)τ²/P² + (Ṗ²/2 − PP̈/6)τ³/P³ + O(τ⁴), and f = 2 dn/dτ.)
 The phase model is a cubic in τ where the ephemeris is a cubic in n, so the two differ at fourth
-order: about 5(Ṗ/2)³(τ/P)⁴·P seconds (1.2 µs at 10 yr for ZTF J1539+5027, Ṗ = −2.4e-11), see
+order: about 5|Ṗ/2|³(τ/P)⁴·P seconds (1.2 µs at 10 yr for ZTF J1539+5027, Ṗ = −2.4e-11), see
 :func:`truncation_s`. Nothing else is approximated: every command reads the resulting
 :class:`~ucbplan.core.params.PhaseParams` and its covariance, so timing and LISA targets share one
 code path.
@@ -27,9 +27,11 @@ eclipse; reduced modulo 2π it would be π, the primary).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from typing import Any, Protocol
 
 import numpy as np
+from astropy.time import Time, TimeDelta
 from numpy.typing import ArrayLike, NDArray
 
 from ucbplan.core.constants import TWO_PI, YEAR_S
@@ -42,10 +44,14 @@ __all__ = [
     "TIMING_NAMES",
     "TIMING_UNITS",
     "Comparison",
+    "ComparisonReport",
+    "ReferencedSource",
     "TimingEphemeris",
     "compare",
+    "compare_sources",
     "cycle_time_s",
     "mark_phase_asc",
+    "midway",
     "period_sign_change",
     "phase_covariance",
     "phase_jacobian",
@@ -203,15 +209,17 @@ def cycle_time_s(eph: TimingEphemeris, n: ArrayLike) -> FloatArray:
 
 
 def truncation_s(eph: TimingEphemeris, tau_s: ArrayLike) -> FloatArray:
-    """Leading difference between the phase model and the polynomial t(n) at τ from T0 [s].
+    """Leading difference t_model − t(n) between the phase model and the polynomial [s].
 
-    The cubic-in-τ phase model drops the fourth-order term of n(τ); with b = Ṗ/2 and c = PP̈/6
-    it is (5b³ − 5bc)(τ/P)⁴ cycles (c = 0 without P̈), i.e. that times P in time.
+    The cubic-in-τ phase model drops the fourth-order term of the inverse series n(τ): with
+    b = Ṗ/2, c = PP̈/6 and x = τ/P it is (5b³ − 5bc)x⁴ cycles, so an event of the polynomial
+    comes (5bc − 5b³)x⁴·P seconds later in the model (+1.2 µs at +10 yr for Ṗ = −2.4e-11,
+    P = 415 s; higher orders are smaller by ~bx).
     """
     x = np.asarray(tau_s, dtype=np.float64) / eph.period_s
     b = 0.5 * eph.pdot
     c = eph.period_s * eph.pddot / 6.0
-    out: FloatArray = np.abs(5.0 * b**3 - 5.0 * b * c) * x**4 * eph.period_s
+    out: FloatArray = (5.0 * b * c - 5.0 * b**3) * x**4 * eph.period_s
     return out
 
 
@@ -364,3 +372,83 @@ def _cycles_between(p: PhaseParams, cov: FloatArray, t0: float, t1: float) -> tu
     jac = u_jacobian(p, tau)
     diff = jac[1] - jac[0]
     return cycles, float(max(diff @ cov @ diff, 0.0))
+
+
+class ReferencedSource(Protocol):
+    """An ephemeris with its reference epoch (a :class:`~ucbplan.target.Target` is one)."""
+
+    @property
+    def params(self) -> PhaseParams:
+        """Phase-model parameters at ``t_ref``."""
+        ...
+
+    @property
+    def covariance(self) -> FloatArray:
+        """Their covariance (7, 7)."""
+        ...
+
+    @property
+    def t_ref(self) -> Time:
+        """Reference epoch (TDB at the barycentre)."""
+        ...
+
+
+@dataclass(frozen=True, slots=True)
+class ComparisonReport:
+    """:func:`compare_sources`: the offset at an epoch, and under each φ_ref π-mode alternative.
+
+    Attributes
+    ----------
+    epoch : Time
+        The epoch of the comparison (TDB).
+    result : Comparison
+        A − B as given.
+    alternatives : tuple of (str, Comparison)
+        ``("a", …)`` / ``("b", …)``: the same with that side's φ_ref + π (LISA posteriors only).
+    """
+
+    epoch: Time
+    result: Comparison
+    alternatives: tuple[tuple[str, Comparison], ...]
+
+
+def midway(t_a: Time, t_b: Time) -> Time:
+    """The epoch halfway between two TDB epochs (two-part arithmetic)."""
+    half = 0.5 * float((t_b - t_a).to_value("s"))
+    return t_a + TimeDelta(half, format="sec")
+
+
+def compare_sources(
+    a: ReferencedSource, b: ReferencedSource, at: Time | None = None
+) -> ComparisonReport:
+    """Phase and time offset of two ephemerides of one system (A − B) at ``at``.
+
+    Parameters
+    ----------
+    a, b : ReferencedSource
+        The two ephemerides (targets); ``has_pi_mode`` (default True) adds the alternatives.
+    at : Time, optional
+        Epoch (TDB); default midway between the two reference epochs.
+
+    Returns
+    -------
+    ComparisonReport
+    """
+    epoch = midway(a.t_ref, b.t_ref) if at is None else at
+    tau_a = float((epoch - a.t_ref).to_value("s"))
+    tau_b = float((epoch - b.t_ref).to_value("s"))
+    ref_b = float((b.t_ref - a.t_ref).to_value("s"))
+
+    def run(pa: PhaseParams, pb: PhaseParams) -> Comparison:
+        return compare(pa, a.covariance, pb, b.covariance, tau_a, tau_b, ref_b)
+
+    alts: list[tuple[str, Comparison]] = []
+    for side, src in (("a", a), ("b", b)):
+        if _has_pi_mode(src):
+            flipped = replace(src.params, phase=src.params.phase + math.pi)
+            alts.append((side, run(flipped, b.params) if side == "a" else run(a.params, flipped)))
+    return ComparisonReport(epoch=epoch, result=run(a.params, b.params), alternatives=tuple(alts))
+
+
+def _has_pi_mode(src: Any) -> bool:
+    return bool(getattr(src, "has_pi_mode", True))
