@@ -377,7 +377,9 @@ def _check_section(ctx: Ctx, section: str, value: Any) -> None:
     _mapping(ctx, f, value)
     for f in section_fields(section):
         if f.required and f.name not in value:
-            shown = f.example if f.kind in ("quantity", "mapping") else f.what
+            if f.kind == "mapping":
+                raise ctx.fail(f.path, f"missing; add {f.name}: {f.example}")
+            shown = f.example if f.kind == "quantity" else f.what
             raise ctx.fail(f.path, f"missing; expected {shown}")
 
 
