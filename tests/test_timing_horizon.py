@@ -167,7 +167,7 @@ def test_horizon_cli_json_table_and_plot(ztf_file: Path, tmp_path: Path) -> None
         assert "dt_u_before_s" in r
     res = runner.invoke(app, ["horizon", str(ztf_file)])
     assert res.exit_code == 0
-    assert "T_valid before [d]" in res.output and "σ_u at T0" in res.output
+    assert "before" in res.output and "after" in res.output and "σ_u at T0" in res.output
     png = tmp_path / "h.png"
     res = runner.invoke(app, ["horizon", str(ztf_file), "--plot", str(png), "--format", "csv"])
     assert res.exit_code == 0, res.output

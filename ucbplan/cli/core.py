@@ -593,8 +593,6 @@ def _print_two_sided_horizon(t: Target, rows: list[Any], sv: float, k: float, ep
             "α·δu_tol [mrad]",
             "T_valid before [d]",
             "T_valid after [d]",
-            "before [yr]",
-            "after [yr]",
             "δt_u before [s]",
             "δt_u after [s]",
         ],
@@ -606,8 +604,6 @@ def _print_two_sided_horizon(t: Target, rows: list[Any], sv: float, k: float, ep
             f"{1e3 * r.tolerance_rad:.2f}",
             f"{r.t_valid_before_days:.0f}",
             f"{r.t_valid_days:.0f}",
-            f"{r.t_valid_before_days / 365.25:.2f}",
-            f"{r.t_valid_days / 365.25:.2f}",
             f"{r.dt_u_before_s:.2f}",
             f"{r.dt_u_s:.2f}",
         )
