@@ -212,6 +212,14 @@ def test_period_sign_change_within_100_yr(eph: TimingEphemeris, field: str, year
     assert when / YEAR_S == pytest.approx(years, rel=0.01)
 
 
+def test_a_second_derivative_may_save_the_sign() -> None:
+    """Ṗ alone would reach zero 3.2 yr after T0, but a large P̈ > 0 keeps P + Ṗτ + ½P̈τ² (and the
+    model frequency) positive; a small one does not."""
+    assert period_sign_change(TimingEphemeris("primary_eclipse", 400.0, -4e-6, 1e-13))[0] == ""
+    which, when = period_sign_change(TimingEphemeris("primary_eclipse", 400.0, -4e-6, 1e-15))
+    assert which == "pdot" and when / YEAR_S == pytest.approx(3.2, abs=0.1)
+
+
 def test_no_sign_change_for_real_systems() -> None:
     assert period_sign_change(ZTF) == ("", pytest.approx(math.nan, nan_ok=True))
     which, _ = period_sign_change(TimingEphemeris("primary_eclipse", 400.0, -1e-10))

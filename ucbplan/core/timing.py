@@ -230,7 +230,8 @@ def period_sign_change(eph: TimingEphemeris, span_s: float = SIGN_SPAN_S) -> tup
     -------
     (str, float)
         ``("", nan)`` if neither does; else the field to blame (``"pdot"`` when P + Ṗτ alone
-        reaches zero, ``"pddot"`` otherwise) and the signed time of the first zero [s].
+        reaches zero or there is no P̈, ``"pddot"`` otherwise) and the signed time of the first
+        zero [s].
 
     Notes
     -----
@@ -238,14 +239,14 @@ def period_sign_change(eph: TimingEphemeris, span_s: float = SIGN_SPAN_S) -> tup
     f(τ) = f + ḟτ + ½f̈τ² must both stay positive on [−span, +span].
     """
     p = eph.period_s
-    linear = _first_root(p, eph.pdot, 0.0, span_s)
-    if math.isfinite(linear):
-        return "pdot", linear
-    quad = _first_root(p, eph.pdot, 0.5 * eph.pddot, span_s)
     pp = to_phase_params(eph)
+    quad = _first_root(p, eph.pdot, 0.5 * eph.pddot, span_s)
     freq = _first_root(pp.f_gw, pp.fdot, 0.5 * pp.fddot, span_s)
     first = min((x for x in (quad, freq) if math.isfinite(x)), key=abs, default=math.nan)
-    return ("pddot", first) if math.isfinite(first) else ("", math.nan)
+    if not math.isfinite(first):
+        return "", math.nan
+    linear = _first_root(p, eph.pdot, 0.0, span_s)
+    return ("pdot" if eph.pddot == 0.0 or math.isfinite(linear) else "pddot"), first
 
 
 def _first_root(a: float, b: float, c: float, span: float) -> float:

@@ -487,7 +487,8 @@ def _check_period_sign(ctx: Ctx, eph: TimingEphemeris) -> None:
     side = "after" if when > 0 else "before"
     raise ctx.fail(
         f"timing.{which}",
-        f"the period would reach zero {abs(when) / YEAR_S:.3g} yr {side} T0 (P = "
+        f"the period (or the model frequency 2/P) would reach zero {abs(when) / YEAR_S:.3g} yr "
+        f"{side} T0 (P = "
         f"{eph.period_s:.10g} s, Ṗ = {eph.pdot:.4g}, P̈ = {eph.pddot:.4g} 1/s); it must stay "
         f"positive within ±{SIGN_SPAN_S / YEAR_S:.0f} yr of T0: check the sign, value and unit "
         "(Ṗ in s/s, P̈ in 1/s)",
