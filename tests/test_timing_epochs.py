@@ -136,3 +136,18 @@ def test_arbitrary_text_is_an_epoch_or_one_line(text: str) -> None:
     except ValueError as exc:
         msg = str(exc)
         assert "\n" not in msg.replace(repr(text), "") and len(msg) < 400
+
+
+def test_bjd_numbers_of_an_array_keep_full_precision() -> None:
+    """bjd_tdb_numbers (the ephemeris table's t_star_bjd_tdb) from two-part JDs, 12 decimals."""
+    from astropy.time import Time
+
+    from ucbplan.core.timescale import bjd_tdb_numbers
+
+    rng = random.Random(3)
+    texts = [
+        f"{rng.randint(2440000, 2480000)}.{rng.randint(0, 10**12 - 1):012d}" for _ in range(200)
+    ]
+    texts += ["2458305.999999999999", "2458306.000000000000", "2458305.500000000000"]
+    times = Time([parse_timing_epoch(f"BJD_TDB {x}") for x in texts])
+    assert bjd_tdb_numbers(times) == texts

@@ -361,7 +361,9 @@ def _epoch_table(t: Target, es: Any) -> Any:
     tab["u_star_rad"] = es.u_star_rad
     tab["t_star_tdb"] = _iso_us(t_star)
     if t.kind == "timing":
-        tab["t_star_bjd_tdb"] = _bjd_text(t_star)
+        from ucbplan.core.timescale import bjd_tdb_numbers
+
+        tab["t_star_bjd_tdb"] = bjd_tdb_numbers(t_star)
     tab["tau_s"] = es.tau_s
     tab["sigma_t_s"] = es.sigma_t_s
     tab["sigma_u_rad"] = es.sigma_u_rad
@@ -415,23 +417,6 @@ def _cycles(t: Target, es: Any) -> Any:
     eps = 0.0 if es.star == 1 else 0.5
     cycles = es.k + (es.u_star_rad / (2 * math.pi) - eps) - (m0[0] + g0[0])
     return np.round(cycles, 9)
-
-
-def _bjd_text(t: Any) -> list[str]:
-    """Full-precision BJD_TDB numbers (12 decimals, 86 ns) from the two-part JD."""
-    jd1 = np.atleast_1d(np.asarray(t.tdb.jd1, dtype=np.float64))
-    jd2 = np.atleast_1d(np.asarray(t.tdb.jd2, dtype=np.float64))
-    i1 = np.floor(jd1)
-    rest = (jd1 - i1) + jd2  # to ~1e-16 d: jd1 − floor(jd1) is 0 or 0.5, |jd2| ≤ 1
-    i2 = np.floor(rest)
-    out = []
-    for whole, frac in zip(i1 + i2, rest - i2, strict=True):
-        text = f"{frac:.12f}"
-        day = int(whole)
-        if text.startswith("1."):
-            day, text = day + 1, f"{0.0:.12f}"
-        out.append(f"{day}{text[1:]}")
-    return out
 
 
 def _iso_us(t: Any) -> list[str]:
@@ -684,28 +669,19 @@ def _comparison_doc(ta: Target, tb: Target, report: Any) -> dict[str, Any]:
             "t_ref_tdb": t.t_ref.tdb.isot,
         }
 
-    def offset(c: Any) -> dict[str, Any]:
-        return {
-            "phase_offset_rad": c.du_rad,
-            "sigma_phase_offset_rad": c.sigma_du_rad,
-            "time_offset_s": c.dt_s,
-            "sigma_time_offset_s": c.sigma_dt_s,
-            "significance": c.significance if math.isfinite(c.significance) else None,
-        }
-
     r = report.result
     return {
         "a": side(ta),
         "b": side(tb),
         "epoch_tdb": report.epoch.tdb.isot,
         "epoch_bjd_tdb": format_bjd_tdb(report.epoch).split()[1],
-        **offset(r),
+        **r.offsets(),
         "cycles_a": r.cycles_a,
         "cycles_b": r.cycles_b,
         "cycle_count_difference": r.cycle_difference,
         "sigma_cycle_count_difference": r.sigma_cycle_difference,
         "whole_cycle_difference": round(r.cycle_difference),
-        "pi_mode": [{"side": s, **offset(c)} for s, c in report.alternatives],
+        "pi_mode": [{"side": s, **c.offsets()} for s, c in report.alternatives],
         "convention": (
             "A - B for star 1: phase offset u1_A - u1_B at the epoch wrapped to (-pi, pi]; time "
             "offset t_A - t_B of the same orbital phase (negative: A predicts it earlier); "

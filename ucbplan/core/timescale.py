@@ -21,6 +21,7 @@ __all__ = [
     "SCALES",
     "TIMING_EPOCH_WORDS",
     "EpochRangeError",
+    "bjd_tdb_numbers",
     "epoch_in_scale",
     "format_bjd_tdb",
     "parse_tdb",
@@ -308,3 +309,28 @@ def format_bjd_tdb(t: Time, decimals: int = 13) -> str:
     total = Decimal(float(tdb.jd1)) + Decimal(float(tdb.jd2))
     q = Decimal(1).scaleb(-decimals)
     return f"BJD_TDB {total.quantize(q)}"
+
+
+def bjd_tdb_numbers(t: Time, decimals: int = 12) -> list[str]:
+    """BJD_TDB day numbers of (an array of) TDB epochs as text, from the two-part JD.
+
+    ``decimals=12`` is 86 ns; unlike one float64 of the JD (~40 µs steps) nothing is lost.
+    Vectorised: the whole day and the fraction are split before formatting.
+    """
+    import numpy as np
+
+    tdb = t.tdb
+    jd1 = np.atleast_1d(np.asarray(tdb.jd1, dtype=np.float64))
+    jd2 = np.atleast_1d(np.asarray(tdb.jd2, dtype=np.float64))
+    i1 = np.floor(jd1)
+    rest = (jd1 - i1) + jd2  # to ~1e-16 d: jd1 − floor(jd1) is 0 or 0.5, |jd2| ≤ 1
+    i2 = np.floor(rest)
+    zero = f"{0.0:.{decimals}f}"
+    out = []
+    for whole, frac in zip(i1 + i2, rest - i2, strict=True):
+        text = f"{frac:.{decimals}f}"
+        day = int(whole)
+        if text.startswith("1."):
+            day, text = day + 1, zero
+        out.append(f"{day}{text[1:]}")
+    return out

@@ -306,6 +306,16 @@ class Comparison:
     sigma_cycle_difference: float
     rate_rad_s: float
 
+    def offsets(self) -> dict[str, float | None]:
+        """The offset as JSON-ready numbers (significance None when σ = 0)."""
+        return {
+            "phase_offset_rad": self.du_rad,
+            "sigma_phase_offset_rad": self.sigma_du_rad,
+            "time_offset_s": self.dt_s,
+            "sigma_time_offset_s": self.sigma_dt_s,
+            "significance": self.significance if math.isfinite(self.significance) else None,
+        }
+
 
 def compare(
     pa: PhaseParams,
