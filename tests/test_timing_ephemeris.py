@@ -229,3 +229,16 @@ def test_u_at_t0_is_the_mark_through_the_cli(tmp_path: Path) -> None:
     at_t0 = [r for r in rows if abs(r["tau_s"]) < 1e-6]
     assert len(at_t0) == 1
     assert at_t0[0]["eclipse"] == "secondary" and at_t0[0]["cycle"] == 0.0
+
+
+def test_windows_beyond_the_horizons_warn_on_either_side(ztf: Path) -> None:
+    """The target's σ_v and K give T_valid(quadrature) ≈ 12.8 yr either side of T0."""
+    for tau0 in (-20 * YEAR_S, 20 * YEAR_S):
+        res = runner.invoke(
+            app, ["ephemeris", str(ztf), "--start", _iso(tau0), "--end", _iso(tau0 + 3600)]
+        )
+        assert res.exit_code == 0
+        side = "before" if tau0 < 0 else "after"
+        assert f"{side} T0 have σ_u above the phase tolerance" in " ".join(res.output.split())
+    res = runner.invoke(app, ["ephemeris", str(ztf), "--start", _iso(0), "--end", _iso(3600)])
+    assert "warning" not in res.output
