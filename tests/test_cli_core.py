@@ -184,3 +184,56 @@ def test_all_commands_registered() -> None:
         "waveform",
     ):
         assert cmd in res.stdout
+
+
+# ------------------------------------------------------------------ the ephemeris group
+
+
+def test_ephemeris_without_sub_command_is_predict(hm_cnc_path: Path) -> None:
+    """`ephemeris TARGET …` (as before the group existed) and `ephemeris predict TARGET …` give
+    the same output, with options before or after the target."""
+    window = ["--start", "2040-01-01T00:00:00", "--end", "2040-01-01T01:00:00"]
+    outs = []
+    for args in (
+        ["ephemeris", str(hm_cnc_path), *window, "--format", "json"],
+        ["ephemeris", "predict", str(hm_cnc_path), *window, "--format", "json"],
+        ["ephemeris", "--format", "json", *window, str(hm_cnc_path)],
+    ):
+        res = runner.invoke(app, args)
+        assert res.exit_code == 0, res.output
+        outs.append(json.loads(res.stdout))
+    assert outs[0] == outs[1] == outs[2]
+    assert "t_alt_tdb" in outs[0]["rows"][0]  # a LISA posterior keeps its π mode
+
+
+def test_ephemeris_group_help_and_no_arguments() -> None:
+    res = runner.invoke(app, ["ephemeris", "--help"])
+    assert res.exit_code == 0
+    assert "predict" in res.stdout and "compare" in res.stdout
+    proc = _run("ephemeris")
+    assert "Traceback" not in proc.stderr and "predict" in proc.stdout + proc.stderr
+    proc = _run("ephemeris", "compare")
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+
+
+def test_ephemeris_sub_commands_are_mountable() -> None:
+    """The lead mounts `fit` on the same group (cli/core.py, register): a new sub-command is
+    reachable by name and does not change the default routing."""
+    import typer
+
+    from ucbplan.cli.core import EphemerisGroup
+
+    sub = typer.Typer(cls=EphemerisGroup, add_completion=False)
+    seen: list[str] = []
+
+    @sub.command("predict")
+    def _predict(target: str) -> None:
+        seen.append(f"predict {target}")
+
+    @sub.command("fit")
+    def _fit(times: str) -> None:
+        seen.append(f"fit {times}")
+
+    assert runner.invoke(sub, ["fit", "t.csv"]).exit_code == 0
+    assert runner.invoke(sub, ["a.yaml"]).exit_code == 0
+    assert seen == ["fit t.csv", "predict a.yaml"]

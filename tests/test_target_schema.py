@@ -1,8 +1,9 @@
 """The target-file schema and the parser cannot drift apart.
 
 The documents below are written by hand (not generated from the schema): together they use every
-field a target file may hold. The tests check that the parser accepts exactly the schema's fields,
-that the schema's required flags, ranges, examples and choices are what the parser enforces.
+field a target file may hold (a LISA posterior in two forms, a timing ephemeris in two forms).
+The tests check that the parser accepts exactly the schema's fields, that the schema's required
+flags, ranges, examples and choices are what the parser enforces.
 """
 
 from __future__ import annotations
@@ -68,17 +69,68 @@ VARIANT: dict[str, Any] = {
         },
     },
 }
+#: A timing ephemeris (test input with the issue's ZTF J1539+5027 numbers, not a catalog entry),
+#: every timing field, matrix form; magnitudes and references at the top level.
+TIMING: dict[str, Any] = {
+    "name": "Timing",
+    "sky": {"ra": "15h39m32.16s", "dec": "+50d27m38.8s"},
+    "timing": {
+        "t0": "BJD_TDB 2458305.6827886",
+        "t0_marks": "primary_eclipse",
+        "period": "414.7915404 s",
+        "pdot": -2.373e-11,
+        "pddot": "0 1 / s",
+        "eccentricity": {"eta": 0.001, "kappa": 0.002, "omega_dot": "1e-7 rad / s"},
+        "inclination": "84.15 deg",
+        "distance": "2.34 kpc",
+        "covariance": {
+            "parameters": ["t0", "period", "pdot"],
+            "matrix": [[0.53, 0, 0], [0, 8.4e-12, 0], [0, 0, 2.5e-27]],
+        },
+        "source": "Burdge et al. 2019, Nature 571, 528",
+    },
+    "magnitudes": {"g": 20.5, "G": 20.4},
+    "references": {"timing": "2019Natur.571..528B", "magnitudes.g": "Burdge et al. 2019"},
+    "spectroscopy": {"lines": "SB2", "K1": "300 km/s", "K2": "870 km/s", "sigma_v": "20 km/s"},
+}
+#: The σ form of the timing covariance, with a correlation.
+TIMING_VARIANT: dict[str, Any] = {
+    **TIMING,
+    "timing": {
+        **TIMING["timing"],
+        "covariance": {
+            "sigma": {"t0": "8.4e-6 d", "period": "2.9e-6 s", "pdot": 5.0e-14},
+            "correlation": {"period,pdot": -0.5},
+        },
+    },
+}
+DOCS = (FULL, VARIANT, TIMING, TIMING_VARIANT)
 #: Mappings whose keys are field names (σ and ρ are keyed by parameter names instead).
-NESTED = {"sky", "lisa", "lisa.covariance", "masses", "spectroscopy"}
-#: Fields required within one of two forms (ra+dec or l+b; parameters+matrix or sigma).
+NESTED = {
+    "sky",
+    "lisa",
+    "lisa.covariance",
+    "timing",
+    "timing.covariance",
+    "timing.eccentricity",
+    "masses",
+    "spectroscopy",
+}
+#: Fields required within one of two forms (ra+dec or l+b; parameters+matrix or sigma; a LISA
+#: posterior or a timing ephemeris).
 ALTERNATIVES = {
     "sky.ra",
     "sky.dec",
     "sky.l",
     "sky.b",
+    "lisa",
+    "timing",
     "lisa.covariance.parameters",
     "lisa.covariance.matrix",
     "lisa.covariance.sigma",
+    "timing.covariance.parameters",
+    "timing.covariance.matrix",
+    "timing.covariance.sigma",
 }
 
 
@@ -97,8 +149,8 @@ def _paths(doc: dict[str, Any], prefix: str = "") -> set[str]:
 
 
 def _doc_with(f: Field) -> dict[str, Any]:
-    """A deep copy of the hand-written document that holds ``f``."""
-    return copy.deepcopy(FULL if f.path in _paths(FULL) else VARIANT)
+    """A deep copy of the first hand-written document that holds ``f``."""
+    return copy.deepcopy(next(d for d in DOCS if f.path in _paths(d)))
 
 
 def _set(doc: dict[str, Any], path: str, value: Any) -> None:
@@ -127,9 +179,9 @@ def load(tmp_path: Path) -> Any:
 
 def test_every_schema_field_is_accepted_and_nothing_else(load: Any) -> None:
     """The hand-written documents load, and their fields are exactly the schema's."""
-    assert isinstance(load(FULL), Target)
-    assert isinstance(load(VARIANT), Target)
-    assert _paths(FULL) | _paths(VARIANT) == {f.path for f in FIELDS}
+    for doc in DOCS:
+        assert isinstance(load(doc), Target)
+    assert set().union(*(_paths(d) for d in DOCS)) == {f.path for f in FIELDS}
     assert len({f.path for f in FIELDS}) == len(FIELDS)
 
 
@@ -137,7 +189,9 @@ def test_every_schema_field_is_accepted_and_nothing_else(load: Any) -> None:
 def test_a_field_outside_the_schema_is_rejected(load: Any, section: str) -> None:
     """Every section is strict (a misspelt lisa.covariance.correlation would drop the
     correlations), also beside galactic l, b."""
-    for base in (FULL, VARIANT):
+    for base in DOCS:
+        if section and section not in _paths(base):
+            continue
         doc = copy.deepcopy(base)
         path = f"{section}.not_a_field" if section else "not_a_field"
         _set(doc, path, 1)
@@ -154,6 +208,9 @@ def test_sections_are_the_nested_mappings() -> None:
 def test_required_flags_match_the_parser(load: Any, f: Field) -> None:
     doc = _doc_with(f)
     _delete(doc, f.path)
+    for key in list(doc.get("references", {})):  # a citation of a field left out is refused
+        if key == f.path or key.startswith(f"{f.path}."):
+            del doc["references"][key]
     if f.required:
         with pytest.raises(TargetFileError, match=re.escape(f.path)):
             load(doc)
@@ -165,7 +222,14 @@ def test_required_flags_match_the_parser(load: Any, f: Field) -> None:
 def test_alternative_forms_need_all_their_fields(load: Any, path: str) -> None:
     doc = _doc_with(field(path))
     _delete(doc, path)
-    with pytest.raises(TargetFileError, match=r"sky|covariance"):
+    with pytest.raises(TargetFileError, match=r"sky|covariance|lisa"):
+        load(doc)
+
+
+def test_lisa_and_timing_are_exclusive(load: Any) -> None:
+    doc = copy.deepcopy(FULL)
+    doc["timing"] = copy.deepcopy(TIMING["timing"])
+    with pytest.raises(TargetFileError, match=r"t.yaml: lisa/timing: give exactly one of lisa"):
         load(doc)
 
 
@@ -184,16 +248,21 @@ def test_declared_ranges_are_enforced(load: Any, f: Field) -> None:
     x = _outside(f)
     doc = _doc_with(f)
     where = f.path
-    if f.path == "lisa.covariance.sigma":
-        _set(doc, f.path, {"phase": x})
-        where = f"{f.path}.phase"
-    elif f.path == "lisa.covariance.correlation":
-        where = f"{f.path}.phase,fdot"
-        _set(doc, f.path, {"phase,fdot": x})
+    value: Any = f"{x} {f.unit}" if f.unit_required else x
+    keyed = {
+        "lisa.covariance.sigma": "phase",
+        "lisa.covariance.correlation": "phase,fdot",
+        "timing.covariance.sigma": "pdot",
+        "timing.covariance.correlation": "period,pdot",
+        "magnitudes": "g",
+    }
+    if f.path in keyed:
+        where = f"{f.path}.{keyed[f.path]}"
+        _set(doc, f.path, {keyed[f.path]: x})
     else:
-        _set(doc, f.path, x)
+        _set(doc, f.path, value)
     assert f.bounds is not None
-    message = f.bounds.error.format(raw=x, value=x)
+    message = f.bounds.error.format(raw=repr(value) if f.unit_required else x, value=x)
     with pytest.raises(TargetFileError, match=re.escape(f"t.yaml: {where}: {message}")):
         load(doc)
 
@@ -244,6 +313,13 @@ _PAIRS: dict[str, tuple[Any, Any]] = {
     "number": (2.0, 3.0),
     "epoch": ("2035-01-01T00:00:00", "2036-01-01T00:00:00"),
 }
+#: Fields whose kind's pair is not valid for them.
+_FIELD_PAIRS: dict[str, tuple[Any, Any]] = {
+    "timing.t0": ("BJD_TDB 2458305.6827886", "BMJD_TDB 58306.1827886"),
+    "timing.period": ("414.79 s", "0.0048 d"),
+    "timing.pdot": (-2.373e-11, 1e-12),
+    "timing.pddot": ("1e-21 1 / s", "-1e-21 1 / s"),
+}
 #: Accepted but without effect: free-form notes; j2000/fk5 are read as ICRS.
 _NO_EFFECT = {"notes", "sky.frame"}
 
@@ -256,7 +332,7 @@ _NO_EFFECT = {"notes", "sky.frame"}
 def test_every_value_reaches_the_target_and_the_written_file(load: Any, f: Field) -> None:
     """Two different values of a field give two different targets (so the parser reads the
     field) and two different written documents (so the writer writes what it depends on)."""
-    a, b = _PAIRS.get(f.kind, f.choices[:2])
+    a, b = _FIELD_PAIRS.get(f.path, _PAIRS.get(f.kind, f.choices[:2]))
     written = []
     for value in (a, b):
         doc = _doc_with(f)

@@ -6,6 +6,10 @@ target is anything shaped like :class:`~ucbplan.core.params.EphemerisSource`).
 - :mod:`.params`: :class:`~.params.PhaseParams`, reference-epoch shifts, ``EphemerisSource``;
 - :mod:`.phase`: GW phase, u(t), u̇, velocities, ∂u/∂θ (compensated arithmetic);
 - :mod:`.ephemeris`: the inversion u(t★) = u★ and :func:`~.ephemeris.find_epochs`;
-- :mod:`.forecast`: σ_u(t), tolerances, horizons T_valid;
-- :mod:`.smearing`, :mod:`.binary`, :mod:`.timescale`, :mod:`.constants`.
+- :mod:`.forecast`: σ_u(t), tolerances, horizons T_valid (after a LISA observation, or before and
+  after a timing ephemeris' T0);
+- :mod:`.timing`: timing ephemerides (T0, P, Ṗ, P̈) as the phase model, and the comparison of two
+  ephemerides;
+- :mod:`.timescale`: time-scale guards and full-precision BJD_TDB epochs;
+- :mod:`.smearing`, :mod:`.binary`, :mod:`.constants`.
 """

@@ -29,13 +29,14 @@ from ucbplan.core.phase import (
     u_jacobian,
     u_state,
 )
-from ucbplan.errors import ConvergenceError, UcbplanError
+from ucbplan.errors import ConvergenceError, UcbplanError, shorten
 
 __all__ = [
     "ANCHORS",
     "EpochSet",
     "arg_latitude",
     "arg_latitude_rate",
+    "eclipse_kind",
     "find_epochs",
     "gw_phase",
     "jacobian_kernel",
@@ -51,11 +52,23 @@ __all__ = [
 FloatArray = NDArray[np.float64]
 
 #: Named anchors → the u★ values they stand for [rad]; "zero-crossing" is solved from cos u = −κ(t).
+#: "eclipse" is the conjunctions labelled by which star is behind: star 1 (the star eclipsed at
+#: primary eclipse) at u₁ = π/2 is the primary eclipse, u₁ = 3π/2 the secondary.
 ANCHORS: dict[str, tuple[float, ...]] = {
     "quadrature": (0.0, math.pi),
     "conjunction": (math.pi / 2, 3 * math.pi / 2),
     "zero-crossing": (math.pi / 2, 3 * math.pi / 2),
+    "eclipse": (math.pi / 2, 3 * math.pi / 2),
 }
+
+
+def eclipse_kind(u_star_rad: FloatArray, star: int = 1) -> list[str]:
+    """``"primary"`` or ``"secondary"`` for conjunction epochs of ``star`` with u★ = π/2, 3π/2.
+
+    Primary: star 1 behind (u₁ = π/2, i.e. u₂ = 3π/2); secondary: star 2 behind.
+    """
+    u1 = np.mod(np.asarray(u_star_rad, dtype=np.float64) - (0.0 if star == 1 else math.pi), TWO_PI)
+    return ["primary" if abs(x - math.pi / 2) < 1.0 else "secondary" for x in np.atleast_1d(u1)]
 
 
 def _zero_crossing_target(
@@ -210,8 +223,10 @@ def resolve_anchor(anchor: str | float) -> tuple[str, list[float | str]]:
     if isinstance(anchor, int | float):
         return f"u={float(anchor):.6g}", [float(anchor)]
     text = str(anchor).strip().lower()
-    if text in ("quadrature", "conjunction"):
+    if text in ("quadrature", "conjunction", "eclipse"):
         return text, list(ANCHORS[text])
+    if text == "eclipses":
+        return "eclipse", list(ANCHORS["eclipse"])
     if text in ("zero-crossing", "zero_crossing", "zerocrossing"):
         return "zero-crossing", ["zero-crossing+", "zero-crossing-"]
     if text.startswith("u="):
@@ -220,11 +235,11 @@ def resolve_anchor(anchor: str | float) -> tuple[str, list[float | str]]:
         value = float(text)
     except ValueError:
         raise UcbplanError(
-            f"unknown anchor {anchor!r}: expected quadrature, conjunction, zero-crossing or a "
-            "number u★ in radians (e.g. 0.7854)"
+            f"unknown anchor {shorten(anchor, 60)}: expected quadrature, conjunction, eclipse, "
+            "zero-crossing or a number u★ in radians (e.g. 0.7854)"
         ) from None
     if not math.isfinite(value):
-        raise UcbplanError(f"anchor u★ must be finite, got {anchor!r}")
+        raise UcbplanError(f"anchor u★ must be finite, got {shorten(anchor, 60)}")
     return f"u={value:.6g}", [value]
 
 
@@ -262,6 +277,7 @@ def find_epochs(
     tau_end_s: float,
     anchor: str | float,
     star: int = 1,
+    pi_mode: bool | None = None,
 ) -> EpochSet:
     """All anchor epochs of a target in a window, with σ_t and the φ_ref π-mode alternative.
 
@@ -272,10 +288,14 @@ def find_epochs(
     tau_start_s, tau_end_s : float
         Window in TDB seconds since the target's reference epoch ``t_ref``.
     anchor : str or float
-        ``quadrature`` (u★ = 0, π), ``conjunction`` (π/2, 3π/2), ``zero-crossing`` (cos u = −κ),
-        or a numeric u★ [rad].
+        ``quadrature`` (u★ = 0, π), ``conjunction`` or ``eclipse`` (π/2, 3π/2),
+        ``zero-crossing`` (cos u = −κ), or a numeric u★ [rad].
     star : {1, 2}
         Component whose argument of latitude is targeted.
+    pi_mode : bool, optional
+        Solve the φ_ref + π alternative. Default: the source's ``has_pi_mode`` (True when it
+        has none: a LISA posterior's GW phase has the second mode, a timing ephemeris not);
+        without it ``tau_alt_s`` is NaN.
 
     Returns
     -------
@@ -291,7 +311,13 @@ def find_epochs(
     k, dt, us, origin = _solve_sorted(p, tau_start_s, tau_end_s, targets, star)
     rate = arg_latitude_rate(p, dt, star, origin)
     sig_u = sigma_u_from_jacobian(u_jacobian(p, origin + dt, star), source.covariance)
-    dt_alt = _pi_mode_offsets(p, origin, dt, us, rate, star, zero_crossing=label == "zero-crossing")
+    if pi_mode is None:
+        pi_mode = bool(getattr(source, "has_pi_mode", True))
+    if pi_mode:
+        zero = label == "zero-crossing"
+        tau_alt = origin + _pi_mode_offsets(p, origin, dt, us, rate, star, zero_crossing=zero)
+    else:
+        tau_alt = np.full(dt.shape, np.nan)
     return EpochSet(
         anchor=label,
         star=star,
@@ -301,7 +327,7 @@ def find_epochs(
         dt_s=dt,
         sigma_t_s=sig_u / np.abs(rate),
         sigma_u_rad=sig_u,
-        tau_alt_s=origin + dt_alt,
+        tau_alt_s=tau_alt,
         u_rate=rate,
     )
 

@@ -1,7 +1,14 @@
-"""Forecast: σ_u(t) from the LISA covariance, phase tolerances, and the horizon T_valid.
+"""Forecast: σ_u(t) from the ephemeris covariance, phase tolerances, and the horizon T_valid.
 
 Paper Sec. 4 (Eqs. sigma_u_from_PhiGW, T_valid_alpha, tol_conj_main, tol_quad_conj_main,
 timing_unc) and Appendix C (Eqs. tol_gen, tol_conj, tol_quad, horizon_condition).
+
+A LISA posterior's information ends with the observation, so its horizon is measured after the
+end of the observation (the paper's Tables 4 and 7). A timing ephemeris (``kind == "timing"``,
+T_obs = 0) is informed on both sides of its epoch T0, and σ_u grows both ways: its horizon is
+reported before and after T0 separately. The backward horizon is the forward one of the
+time-reversed model (ω̇ → −ω̇ and the covariance signs of f, f̈, ω̇ flipped: ∂u/∂θ(−τ; ω̇) =
+∂u/∂θ(τ; −ω̇)·D, D = diag(1, −1, 1, −1, 1, 1, −1)), so both directions run the same search.
 """
 
 from __future__ import annotations
@@ -20,6 +27,8 @@ from ucbplan.core.phase import jacobian_kernel, sigma_u_from_jacobian, u_jacobia
 from ucbplan.errors import UcbplanError
 
 __all__ = [
+    "AFTER",
+    "BEFORE",
     "HorizonRow",
     "anchor_sigma_u",
     "horizon_s",
@@ -30,7 +39,9 @@ __all__ = [
     "t_valid",
     "t_valid_batch",
     "tolerance",
+    "two_sided",
     "u_jacobian",
+    "valid_window_s",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -38,6 +49,10 @@ FloatArray = NDArray[np.float64]
 SourceLike = EphemerisSource | tuple[PhaseParams, FloatArray, float]
 #: Horizons are searched up to this long after the LISA observation [s].
 HORIZON_CAP_S = 300.0 * YEAR_S
+#: Directions of a horizon: after the end of the information (+1), before its start (−1).
+AFTER, BEFORE = 1, -1
+#: Signs of the parameters' columns of ∂u/∂θ under time reversal (see the module docstring).
+_REVERSAL = np.array([1.0, -1.0, 1.0, -1.0, 1.0, 1.0, -1.0])
 
 
 def sigma_u(p: PhaseParams, cov: FloatArray, tau_s: ArrayLike, star: int = 1) -> FloatArray:
@@ -141,6 +156,8 @@ def tolerance(
 def _anchor_kind(label: str, u_values: Sequence[float]) -> str:
     if label in ("conjunction", "quadrature", "zero-crossing"):
         return label
+    if label == "eclipse":
+        return "conjunction"
     u = u_values[0] % (2 * math.pi)
     if min(abs(u), abs(u - math.pi), abs(u - 2 * math.pi)) < 1e-12:
         return "quadrature"
@@ -174,16 +191,23 @@ def t_valid_batch(
     thr_rad: FloatArray | float,
     anchor_u_star: Sequence[float],
     star: int = 1,
+    direction: int = AFTER,
 ) -> FloatArray:
     """Vectorised horizons: closing τ − T/2 of the first window σ_u ≤ thr [s] (0 if none).
 
     Parameters
     ----------
     pars : (n, 7) parameters at the midpoint; covs : (n, 7, 7); t_obs_s : (n,);
-    thr_rad : (n,) thresholds α·δu_tol; anchor_u_star : the anchor's u★ values (max σ_u used).
+    thr_rad : (n,) thresholds α·δu_tol; anchor_u_star : the anchor's u★ values (max σ_u used);
+    direction : :data:`AFTER` (after the end of the observation, the default) or
+    :data:`BEFORE` (before its start: the result is then −T/2 − τ of the closing, also ≥ 0).
     """
     pars = np.atleast_2d(np.asarray(pars, dtype=np.float64))
     covs = np.asarray(covs, dtype=np.float64).reshape(-1, 7, 7)
+    if direction == BEFORE:
+        pars, covs = _time_reversed(pars, covs)
+    elif direction != AFTER:
+        raise UcbplanError(f"direction must be +1 (after) or -1 (before), got {direction!r}")
     t_obs = np.broadcast_to(np.asarray(t_obs_s, dtype=np.float64), (pars.shape[0],))
     thr = np.broadcast_to(np.asarray(thr_rad, dtype=np.float64), (pars.shape[0],))
     out = np.zeros(pars.shape[0])
@@ -196,6 +220,13 @@ def t_valid_batch(
                 pars[sel], covs[sel], t_obs[sel], thr[sel], anchor_u_star, star, bool(osc[sel[0]])
             )
     return out
+
+
+def _time_reversed(pars: FloatArray, covs: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Parameters and covariances whose σ_u at +τ is the original's at −τ (exactly)."""
+    rev = pars.copy()
+    rev[:, 6] = -rev[:, 6]
+    return rev, covs * np.outer(_REVERSAL, _REVERSAL)[None, :, :]
 
 
 def _t_valid_chunk(
@@ -289,6 +320,7 @@ def t_valid(
     anchor_u_star: Sequence[float] | float,
     alpha: float = 1.0,
     star: int = 1,
+    direction: int = AFTER,
 ) -> float:
     """Horizon T_valid [s after the end of the LISA observation] for one tolerance.
 
@@ -304,12 +336,16 @@ def t_valid(
         Planning margin α (Eq. T_valid_alpha).
     star : {1, 2}
         Component.
+    direction : {AFTER, BEFORE}
+        After the end of the information (default) or, mirrored, before its start.
 
     Returns
     -------
     float
         Closing time of the first admissible window σ_u ≤ α δu_tol open at or after the end of
-        the LISA observation, measured from that end [s]; 0 if there is none.
+        the LISA observation, measured from that end [s]; 0 if there is none. With
+        ``direction=BEFORE`` the same before the start (a positive duration). For a timing
+        ephemeris both ends are T0.
 
     Notes
     -----
@@ -318,8 +354,39 @@ def t_valid(
     """
     p, cov, t_obs = _unpack(target)
     us = [float(anchor_u_star)] if np.isscalar(anchor_u_star) else list(anchor_u_star)  # type: ignore[arg-type]
-    res = t_valid_batch(p.as_array()[None], cov[None], np.array([t_obs]), alpha * tol_rad, us, star)
+    res = t_valid_batch(
+        p.as_array()[None], cov[None], np.array([t_obs]), alpha * tol_rad, us, star, direction
+    )
     return float(res[0])
+
+
+def two_sided(target: SourceLike) -> bool:
+    """Whether horizons are reported both before and after the reference (timing ephemerides).
+
+    A target with ``kind == "timing"`` is; a LISA posterior (or a bare parameter tuple) is not.
+    """
+    return not isinstance(target, tuple) and getattr(target, "kind", "lisa") == "timing"
+
+
+def valid_window_s(
+    target: SourceLike,
+    tol_rad: float,
+    anchor_u_star: Sequence[float] | float,
+    alpha: float = 1.0,
+    star: int = 1,
+) -> tuple[float, float]:
+    """(first, last) τ [s from t_ref] where the ephemeris meets the tolerance α·δu_tol.
+
+    A LISA posterior: from the start of the observation (−T_obs/2) to T_valid after its end. A
+    timing ephemeris: T_valid before T0 to T_valid after it. For planners and reductions that
+    must accept epochs on both sides of a timing ephemeris' reference.
+    """
+    _, _, t_obs = _unpack(target)
+    after = t_obs / 2.0 + t_valid(target, tol_rad, anchor_u_star, alpha, star)
+    if not two_sided(target):
+        return -t_obs / 2.0, after
+    before = t_valid(target, tol_rad, anchor_u_star, alpha, star, BEFORE)
+    return -t_obs / 2.0 - before, after
 
 
 def _unpack(
@@ -343,10 +410,21 @@ class HorizonRow:
     dt_u_s: float
     sigma_u_end_rad: float
     n_epochs: int
+    t_valid_before_days: float | None = None
+    dt_u_before_s: float | None = None
+
+    @property
+    def two_sided(self) -> bool:
+        """Whether the row has a horizon before the reference too (timing ephemerides)."""
+        return self.t_valid_before_days is not None
 
     def as_dict(self) -> dict[str, float | str | int]:
-        """JSON-ready mapping (snake_case, units in the key names)."""
-        return {
+        """JSON-ready mapping (snake_case, units in the key names).
+
+        A two-sided (timing) row adds ``t_valid_before_days`` and ``dt_u_before_s``; there
+        ``t_valid_days``/``dt_u_s`` are after T0 and ``sigma_u_end_rad`` is σ_u at T0.
+        """
+        out: dict[str, float | str | int] = {
             "anchor": self.anchor,
             "alpha": self.alpha,
             "tolerance_rad": self.tolerance_rad,
@@ -356,6 +434,10 @@ class HorizonRow:
             "sigma_u_end_rad": self.sigma_u_end_rad,
             "n_epochs": self.n_epochs,
         }
+        if self.t_valid_before_days is not None and self.dt_u_before_s is not None:
+            out["t_valid_before_days"] = self.t_valid_before_days
+            out["dt_u_before_s"] = self.dt_u_before_s
+        return out
 
 
 def horizon_table(
@@ -372,9 +454,11 @@ def horizon_table(
     Notes
     -----
     δt_u = σ_u/|u̇| at T_valid (Eq. timing_unc with the full u̇); σ_u at the end of the LISA
-    observation is reported per anchor.
+    observation is reported per anchor. For a timing ephemeris (:func:`two_sided`) each row also
+    holds the horizon before T0 and δt_u there.
     """
     p, cov, t_obs = _unpack(target)
+    both = two_sided(target)
     rows: list[HorizonRow] = []
     for anchor in anchors:
         label, us = _anchor_u_values(anchor)
@@ -382,6 +466,13 @@ def horizon_table(
         sig_end = _max_anchor_sigma(p, cov, t_obs / 2.0, us, star)
         for alpha in alphas:
             tv = t_valid((p, cov, t_obs), tol, us, alpha, star)
+            before: dict[str, float] = {}
+            if both:
+                tb = t_valid((p, cov, t_obs), tol, us, alpha, star, BEFORE)
+                before = {
+                    "t_valid_before_days": tb / DAY_S,
+                    "dt_u_before_s": _timing_error(p, cov, -t_obs / 2.0 - tb, us, star),
+                }
             rows.append(
                 HorizonRow(
                     anchor=label,
@@ -392,6 +483,7 @@ def horizon_table(
                     dt_u_s=_timing_error(p, cov, t_obs / 2.0 + tv, us, star),
                     sigma_u_end_rad=sig_end,
                     n_epochs=n_epochs,
+                    **before,
                 )
             )
     return rows
@@ -446,4 +538,4 @@ def _timing_error(
 ) -> float:
     """δt_u = σ_u/Φ̇_asc at ``tau_s`` (Eq. timing_unc), σ_u the larger over the anchor's u★ [s]."""
     rate = math.pi * (p.f_gw + p.fdot * tau_s + p.fddot * tau_s**2 / 2)
-    return _max_anchor_sigma(p, cov, tau_s, us, star) / rate
+    return _max_anchor_sigma(p, cov, tau_s, us, star) / abs(rate)

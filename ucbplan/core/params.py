@@ -110,11 +110,14 @@ class EphemerisSource(Protocol):
 
     :class:`ucbplan.target.Target` satisfies it; so does any object with these attributes (a
     notebook record, a row of a catalogue), which keeps the core free of the target layer.
+    Optional attributes read with defaults: ``kind`` (``"lisa"``; ``"timing"`` makes horizons
+    two-sided, :func:`ucbplan.core.forecast.two_sided`) and ``has_pi_mode`` (True; False drops
+    the φ_ref + π alternative of :func:`ucbplan.core.ephemeris.find_epochs`).
     """
 
     @property
     def params(self) -> PhaseParams:
-        """Phase-model parameters at the reference epoch (the LISA midpoint)."""
+        """Phase-model parameters at the reference epoch (the LISA midpoint, or T0)."""
         ...
 
     @property
@@ -124,7 +127,8 @@ class EphemerisSource(Protocol):
 
     @property
     def t_obs_s(self) -> float:
-        """Length of the LISA observation T_obs [s]; it ends T_obs/2 after the reference."""
+        """Length of the LISA observation T_obs [s]; it ends T_obs/2 after the reference (0 for
+        a timing ephemeris: its information ends at T0, on both sides)."""
         ...
 
 

@@ -48,7 +48,9 @@ def horizon_plot(
     """σ_u(t) after the LISA observation with the tolerance lines α·δu_tol (paper Fig. horizon).
 
     The curve is the quadrature-anchor σ_u (max over u★ = 0, π) and, dashed, the conjunction one.
-    Written atomically to ``path`` (PNG, PDF or SVG by suffix).
+    For a timing ephemeris (rows with a horizon before the reference) the time axis runs from
+    before to after T0 and both horizons are marked. Written atomically to ``path`` (PNG, PDF or
+    SVG by suffix).
 
     Raises
     ------
@@ -56,8 +58,13 @@ def horizon_plot(
         If ``path`` exists and ``overwrite`` is false.
     """
     plt = pyplot()
+    two_sided = any(r.two_sided for r in rows)
     longest = max([r.t_valid_days for r in rows] + [365.0])
-    days = np.linspace(-target.t_obs_s / DAY_S, 1.3 * longest, 20000)
+    if two_sided:
+        earliest = max([r.t_valid_before_days or 0.0 for r in rows] + [365.0])
+        days = np.linspace(-1.3 * earliest, 1.3 * longest, 20000)
+    else:
+        days = np.linspace(-target.t_obs_s / DAY_S, 1.3 * longest, 20000)
     quad, conj = _anchor_curves(target, days)
     fig, ax = plt.subplots(figsize=(8, 4.5), constrained_layout=True)
     for curve, color, ls, name in (
@@ -75,7 +82,11 @@ def horizon_plot(
         )
     _tolerance_lines(ax, rows, days[0])
     ax.axvline(0.0, color="k", ls="--", lw=0.8)
-    ax.set_xlabel("time after the end of the LISA observation [days]")
+    ax.set_xlabel(
+        "time from the reference epoch T0 [days]"
+        if two_sided
+        else "time after the end of the LISA observation [days]"
+    )
     ax.set_ylabel("σ_u [mrad]")
     ax.set_title(f"{target.name}: phase-coherence forecast")
     ax.legend(loc="lower right", fontsize=8)
@@ -101,13 +112,14 @@ def _tolerance_lines(ax: Any, rows: Sequence[HorizonRow], x_text: float) -> None
         c = colors.get(r.anchor, "tab:green")
         ls = "-" if r.alpha >= 1 else ":"
         ax.axhline(1e3 * r.tolerance_rad, color=c, ls=ls, lw=1)
-        ax.text(
-            x_text,
-            1e3 * r.tolerance_rad,
-            f" {r.anchor}, α={r.alpha:g}: T_valid = {r.t_valid_days:.0f} d",
-            color=c,
-            va="bottom",
-            fontsize=8,
-        )
+        label = f" {r.anchor}, α={r.alpha:g}: T_valid = {r.t_valid_days:.0f} d"
+        if r.t_valid_before_days is not None:
+            label = (
+                f" {r.anchor}, α={r.alpha:g}: T_valid = {r.t_valid_before_days:.0f} d before, "
+                f"{r.t_valid_days:.0f} d after"
+            )
+        ax.text(x_text, 1e3 * r.tolerance_rad, label, color=c, va="bottom", fontsize=8)
         if r.t_valid_days > 0:
             ax.axvline(r.t_valid_days, color=c, ls=ls, lw=0.6, alpha=0.6)
+        if r.t_valid_before_days:
+            ax.axvline(-r.t_valid_before_days, color=c, ls=ls, lw=0.6, alpha=0.6)

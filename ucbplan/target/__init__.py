@@ -1,12 +1,14 @@
 """Target files: the YAML contract, its validation, and the :class:`Target` record.
 
-Modules: ``model`` (the :class:`Target` / :class:`Spectroscopy` records), ``schema`` (every field
-of a target file declared once: unit, range, example, default), ``values`` (scalar readers),
-``parse`` (:func:`load_target`), ``covariance`` (``lisa.covariance``), ``samples`` (posterior
-samples files), ``write`` (:func:`write_target`).
+Modules: ``model`` (the :class:`Target` / :class:`Spectroscopy` / :class:`TimingSection`
+records), ``schema`` (every field of a target file declared once: unit, range, example, default),
+``values`` (scalar readers), ``sections`` (helpers shared by the sections), ``parse``
+(:func:`load_target`), ``timing_section`` (``timing``, ``magnitudes``, ``references``),
+``covariance`` (``lisa.covariance``, ``timing.covariance``), ``samples`` (posterior samples
+files), ``write`` (:func:`write_target`).
 """
 
-from ucbplan.target.model import Spectroscopy, Target
+from ucbplan.target.model import Spectroscopy, Target, TimingSection
 from ucbplan.target.parse import load_target, target_from_dict
 from ucbplan.target.samples import load_samples, read_samples_file
 from ucbplan.target.write import target_to_dict, write_target
@@ -14,6 +16,7 @@ from ucbplan.target.write import target_to_dict, write_target
 __all__ = [
     "Spectroscopy",
     "Target",
+    "TimingSection",
     "load_samples",
     "load_target",
     "read_samples_file",

@@ -1,4 +1,4 @@
-"""``lisa.covariance`` of a target file → (parameter names, covariance matrix).
+"""``lisa.covariance`` and ``timing.covariance`` of a target file → (names, covariance matrix).
 
 Two forms are accepted: ``parameters`` + ``matrix`` (a full matrix), or ``sigma`` (marginal
 standard deviations, each in its parameter's unit) with optional ``correlation`` coefficients.
@@ -17,7 +17,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ucbplan.errors import shorten
-from ucbplan.target.schema import COVARIANCE_PARAMETERS, field, section_fields
+from ucbplan.target.schema import (
+    COVARIANCE_PARAMETERS,
+    TIMING_COVARIANCE_PARAMETERS,
+    Field,
+    field,
+    section_fields,
+    timing_parameter_field,
+)
 from ucbplan.target.values import (
     Ctx,
     check_keys,
@@ -32,14 +39,35 @@ __all__ = ["parse_covariance"]
 FloatArray = NDArray[np.float64]
 Named = tuple[tuple[str, ...], FloatArray]
 
-_PATH = "lisa.covariance"
-_KEYS = tuple(f.name for f in section_fields(_PATH))
-_ALLOWED = ", ".join(COVARIANCE_PARAMETERS)
 _FORMS = "give either parameters + matrix or sigma (+ correlation)"
 
 
-def parse_covariance(ctx: Ctx, cov: Any) -> Named:
-    """Names and matrix of ``lisa.covariance`` (``((), 0×0)`` when absent).
+class _Section:
+    """Where a covariance lives: its path, allowed parameter names and their unit fields."""
+
+    def __init__(self, section: str) -> None:
+        self.path = f"{section}.covariance"
+        self.keys = tuple(f.name for f in section_fields(self.path))
+        self.names = COVARIANCE_PARAMETERS if section == "lisa" else TIMING_COVARIANCE_PARAMETERS
+        self.allowed = ", ".join(self.names)
+        self.section = section
+
+    def unit_field(self, name: str) -> Field:
+        """The field a σ of parameter ``name`` is read with (its unit and example)."""
+        if self.section == "lisa":
+            return field(f"lisa.{name}")
+        return timing_parameter_field(name)
+
+
+_SECTIONS = {name: _Section(name) for name in ("lisa", "timing")}
+
+
+def parse_covariance(ctx: Ctx, cov: Any, section: str = "lisa") -> Named:
+    """Names and matrix of ``<section>.covariance`` (``((), 0×0)`` when absent).
+
+    ``section`` is ``"lisa"`` (phase-model parameters and cos ι, amplitude, ψ) or
+    ``"timing"`` (t0, period, pdot, pddot, eta, kappa, omega_dot; σ(t0) and σ(period) must carry
+    their unit).
 
     Raises
     ------
@@ -48,58 +76,58 @@ def parse_covariance(ctx: Ctx, cov: Any) -> Named:
         shape, σ ≤ 0, ρ outside [−1, 1] or not a number, non-finite entries, or a matrix that
         is not symmetric positive semi-definite.
     """
+    sec = _SECTIONS[section]
     if cov is None:
         return (), np.zeros((0, 0))
     if not isinstance(cov, Mapping):
-        raise ctx.fail(_PATH, f"expected a mapping: {_FORMS}; got {shorten(cov)}")
-    check_keys(ctx, _PATH, cov, _KEYS)
+        raise ctx.fail(sec.path, f"expected a mapping: {_FORMS}; got {shorten(cov)}")
+    check_keys(ctx, sec.path, cov, sec.keys)
     full = {"parameters", "matrix"} & set(cov)
     marginal = {"sigma", "correlation"} & set(cov)
     if full and marginal:
-        raise ctx.fail(
-            _PATH, f"{_FORMS}, not both; got {', '.join(sorted(full | marginal, key=_KEYS.index))}"
-        )
-    with np.errstate(all="ignore"), ctx.reading(_PATH, "a covariance"):
+        got = ", ".join(sorted(full | marginal, key=sec.keys.index))
+        raise ctx.fail(sec.path, f"{_FORMS}, not both; got {got}")
+    with np.errstate(all="ignore"), ctx.reading(sec.path, "a covariance"):
         if full:
-            names, mat = _from_matrix(ctx, cov)
+            names, mat = _from_matrix(ctx, sec, cov)
         elif marginal:
-            names, mat = _from_sigma(ctx, cov)
+            names, mat = _from_sigma(ctx, sec, cov)
         else:
-            raise ctx.fail(_PATH, f"{_FORMS}; got an empty mapping")
-        _check_symmetric(ctx, mat)
-        _check_psd(ctx, mat)
+            raise ctx.fail(sec.path, f"{_FORMS}; got an empty mapping")
+        _check_symmetric(ctx, sec.path, mat)
+        _check_psd(ctx, sec.path, mat)
     return names, mat
 
 
-def _parameter_names(ctx: Ctx, where: str, names: list[Any]) -> tuple[str, ...]:
+def _parameter_names(ctx: Ctx, sec: _Section, where: str, names: list[Any]) -> tuple[str, ...]:
     """Known, distinct parameter names (each a string)."""
     for n in names:
-        if not isinstance(n, str) or n not in COVARIANCE_PARAMETERS:
-            hint = did_you_mean(n, COVARIANCE_PARAMETERS)
+        if not isinstance(n, str) or n not in sec.names:
+            hint = did_you_mean(n, sec.names)
             raise ctx.fail(
-                where, f"unknown parameter {shorten(n, 60)}; {hint}expected some of {_ALLOWED}"
+                where, f"unknown parameter {shorten(n, 60)}; {hint}expected some of {sec.allowed}"
             )
     if len(set(names)) != len(names):
         raise ctx.fail(where, "parameter names repeat")
     return tuple(names)
 
 
-def _from_matrix(ctx: Ctx, cov: Mapping[str, Any]) -> Named:
+def _from_matrix(ctx: Ctx, sec: _Section, cov: Mapping[str, Any]) -> Named:
     """The ``parameters`` + ``matrix`` form."""
-    where = f"{_PATH}.parameters"
+    where = f"{sec.path}.parameters"
     for key in ("parameters", "matrix"):
         if key not in cov:
-            raise ctx.fail(f"{_PATH}.{key}", f"missing; {_FORMS}")
+            raise ctx.fail(f"{sec.path}.{key}", f"missing; {_FORMS}")
     names = cov["parameters"]
     if not isinstance(names, list) or not names:
         raise ctx.fail(
             where,
             f"expected a list of parameter names like {field(where).example}, got {shorten(names)}",
         )
-    names_t = _parameter_names(ctx, where, names)
+    names_t = _parameter_names(ctx, sec, where, names)
     size = len(names_t)
     rows = cov["matrix"]
-    where = f"{_PATH}.matrix"
+    where = f"{sec.path}.matrix"
     if not (isinstance(rows, list) and all(isinstance(r, list) for r in rows)):
         raise ctx.fail(where, f"expected a {size}×{size} list of lists of numbers")
     if len(rows) != size or any(len(r) != size for r in rows):
@@ -121,9 +149,9 @@ def _is_number(x: Any) -> bool:
     return True
 
 
-def _from_sigma(ctx: Ctx, cov: Mapping[str, Any]) -> Named:
+def _from_sigma(ctx: Ctx, sec: _Section, cov: Mapping[str, Any]) -> Named:
     """The ``sigma`` (+ ``correlation``) form: Σ = ρ ∘ σσᵀ."""
-    where = f"{_PATH}.sigma"
+    where = f"{sec.path}.sigma"
     if "sigma" not in cov:
         raise ctx.fail(where, "missing; correlation needs the σ of its parameters")
     sig = cov["sigma"]
@@ -133,35 +161,35 @@ def _from_sigma(ctx: Ctx, cov: Mapping[str, Any]) -> Named:
             f"expected a mapping parameter: sigma like {field(where).example}, got {shorten(sig)}",
         )
     for n in sig:
-        if not isinstance(n, str) or n not in COVARIANCE_PARAMETERS:
-            hint = did_you_mean(n, COVARIANCE_PARAMETERS)
+        if not isinstance(n, str) or n not in sec.names:
+            hint = did_you_mean(n, sec.names)
             raise ctx.fail(
-                f"{where}.{ctx.key(n)}", f"unknown parameter; {hint}expected some of {_ALLOWED}"
+                f"{where}.{ctx.key(n)}", f"unknown parameter; {hint}expected some of {sec.allowed}"
             )
     names = tuple(sig)
-    sigmas = np.array([_sigma(ctx, n, sig[n]) for n in names])
-    corr = _correlation_matrix(ctx, names, cov.get("correlation"))
+    sigmas = np.array([_sigma(ctx, sec, n, sig[n]) for n in names])
+    corr = _correlation_matrix(ctx, sec, names, cov.get("correlation"))
     out = corr * np.outer(sigmas, sigmas)
     if not np.all(np.isfinite(out)):
         raise ctx.fail(where, "σ² overflows a float; check the units of sigma")
     return names, out
 
 
-def _sigma(ctx: Ctx, name: str, raw: Any) -> float:
+def _sigma(ctx: Ctx, sec: _Section, name: str, raw: Any) -> float:
     """One marginal σ, read in the unit of parameter ``name``."""
-    where = f"{_PATH}.sigma.{name}"
-    s = parse_quantity(ctx, field(f"lisa.{name}"), raw, where=where)
-    check_range(ctx, field(f"{_PATH}.sigma"), s, raw, where=where)
+    where = f"{sec.path}.sigma.{name}"
+    s = parse_quantity(ctx, sec.unit_field(name), raw, where=where)
+    check_range(ctx, field(f"{sec.path}.sigma"), s, raw, where=where)
     return s
 
 
-def _correlation_matrix(ctx: Ctx, names: tuple[str, ...], raw: Any) -> FloatArray:
+def _correlation_matrix(ctx: Ctx, sec: _Section, names: tuple[str, ...], raw: Any) -> FloatArray:
     """Correlation matrix of ``names``: identity plus the given coefficients."""
     corr = np.eye(len(names))
     seen: set[frozenset[str]] = set()
-    f = field(f"{_PATH}.correlation")
-    for (a, b), rho_raw in _iter_correlations(ctx, raw):
-        where = f"{_PATH}.correlation.{ctx.key(a)},{ctx.key(b)}"
+    f = field(f"{sec.path}.correlation")
+    for (a, b), rho_raw in _iter_correlations(ctx, sec, raw):
+        where = f"{sec.path}.correlation.{ctx.key(a)},{ctx.key(b)}"
         if a not in names or b not in names or a == b:
             raise ctx.fail(
                 where, f"names must be two different parameters of sigma ({', '.join(names)})"
@@ -181,14 +209,14 @@ def _correlation_matrix(ctx: Ctx, names: tuple[str, ...], raw: Any) -> FloatArra
     return corr
 
 
-def _iter_correlations(ctx: Ctx, corr: Any) -> list[tuple[tuple[str, str], Any]]:
+def _iter_correlations(ctx: Ctx, sec: _Section, corr: Any) -> list[tuple[tuple[str, str], Any]]:
     """``((a, b), ρ)`` pairs from the mapping form ``{"a,b": ρ}`` or the list form."""
-    where = f"{_PATH}.correlation"
+    where = f"{sec.path}.correlation"
     example = field(where).example
     if corr is None:
         return []
     if isinstance(corr, Mapping):
-        return [_pair_from_key(ctx, key, val) for key, val in corr.items()]
+        return [_pair_from_key(ctx, where, key, val) for key, val in corr.items()]
     if isinstance(corr, list):
         out: list[tuple[tuple[str, str], Any]] = []
         for item in corr:
@@ -206,7 +234,7 @@ def _iter_correlations(ctx: Ctx, corr: Any) -> list[tuple[tuple[str, str], Any]]
     raise ctx.fail(where, f"expected {example}, got {shorten(corr)}")
 
 
-def _pair_from_key(ctx: Ctx, key: Any, val: Any) -> tuple[tuple[str, str], Any]:
+def _pair_from_key(ctx: Ctx, where: str, key: Any, val: Any) -> tuple[tuple[str, str], Any]:
     """``"phase,fdot"`` (or ``"(phase fdot)"`` …) → ``(("phase", "fdot"), val)``."""
     parts = (
         [s for s in re.split(r"[,\s]+", key.strip("()[] ")) if s]
@@ -215,25 +243,25 @@ def _pair_from_key(ctx: Ctx, key: Any, val: Any) -> tuple[tuple[str, str], Any]:
     )
     if len(parts) != 2:
         raise ctx.fail(
-            f"{_PATH}.correlation.{ctx.key(key)}",
+            f"{where}.{ctx.key(key)}",
             'expected a key naming two parameters, like "phase,fdot": -0.7',
         )
     return (parts[0], parts[1]), val
 
 
-def _check_symmetric(ctx: Ctx, mat: FloatArray) -> None:
+def _check_symmetric(ctx: Ctx, path: str, mat: FloatArray) -> None:
     """Finite entries, non-negative variances, symmetric to 1e-9 of σ_i σ_j."""
     if not np.all(np.isfinite(mat)):
-        raise ctx.fail(_PATH, "contains non-finite values; give finite numbers")
+        raise ctx.fail(path, "contains non-finite values; give finite numbers")
     if np.any(np.diag(mat) < 0):
-        raise ctx.fail(_PATH, "negative variance on the diagonal (a variance is σ² ≥ 0)")
+        raise ctx.fail(path, "negative variance on the diagonal (a variance is σ² ≥ 0)")
     scale = np.sqrt(np.abs(np.diag(mat)))
     tol = 1e-9 * np.outer(scale, scale) + 1e-300
     if np.any(np.abs(mat - mat.T) > tol):
-        raise ctx.fail(_PATH, "matrix is not symmetric; check the off-diagonal entries")
+        raise ctx.fail(path, "matrix is not symmetric; check the off-diagonal entries")
 
 
-def _check_psd(ctx: Ctx, mat: FloatArray) -> None:
+def _check_psd(ctx: Ctx, path: str, mat: FloatArray) -> None:
     """Positive semi-definite: the correlation matrix has no eigenvalue below −1e-9."""
     scale = np.sqrt(np.abs(np.diag(mat)))
     safe = np.where(scale > 0, scale, 1.0)
@@ -241,12 +269,12 @@ def _check_psd(ctx: Ctx, mat: FloatArray) -> None:
     try:
         eig = np.linalg.eigvalsh(0.5 * (corr + corr.T))
     except np.linalg.LinAlgError:
-        raise ctx.fail(_PATH, "matrix cannot be decomposed; check its entries") from None
+        raise ctx.fail(path, "matrix cannot be decomposed; check its entries") from None
     if not np.all(np.isfinite(eig)):
-        raise ctx.fail(_PATH, "matrix cannot be decomposed; check its entries")
+        raise ctx.fail(path, "matrix cannot be decomposed; check its entries")
     if eig.size and eig.min() < -1e-9:
         raise ctx.fail(
-            _PATH,
+            path,
             f"matrix is not positive semi-definite (smallest correlation eigenvalue "
             f"{eig.min():.3g}); export the full posterior covariance again",
         )

@@ -1,8 +1,11 @@
-"""The validated target: :class:`Target` and its :class:`Spectroscopy` defaults.
+"""The validated target: :class:`Target`, its :class:`Spectroscopy` defaults and its timing section.
 
-Both are frozen records; :func:`~ucbplan.target.parse.load_target` builds them from a target file
-and :func:`~ucbplan.target.write.write_target` writes them back. Parameters are always referenced
-to the *midpoint* of the LISA observation, epochs are TDB at the barycentre.
+All are frozen records; :func:`~ucbplan.target.parse.load_target` builds them from a target file
+and :func:`~ucbplan.target.write.write_target` writes them back. A target's ephemeris is a LISA
+posterior (``kind == "lisa"``: parameters referenced to the *midpoint* of the LISA observation)
+or a timing ephemeris (``kind == "timing"``: referenced to its epoch T0, :class:`TimingSection`);
+both are the same phase model (:class:`~ucbplan.core.params.PhaseParams` and its covariance).
+Epochs are TDB at the barycentre.
 """
 
 from __future__ import annotations
@@ -19,9 +22,10 @@ from astropy.time import Time, TimeDelta
 from numpy.typing import NDArray
 
 from ucbplan.core.params import PARAM_NAMES, PhaseParams
+from ucbplan.core.timing import TimingEphemeris
 from ucbplan.errors import TargetFileError
 
-__all__ = ["Spectroscopy", "Target"]
+__all__ = ["Spectroscopy", "Target", "TimingSection"]
 
 FloatArray = NDArray[np.float64]
 
@@ -59,8 +63,44 @@ class Spectroscopy:
 
 
 @dataclass(frozen=True, slots=True)
+class TimingSection:
+    """The ``timing`` section as given: the ephemeris, its epoch text, covariance and source.
+
+    Attributes
+    ----------
+    ephemeris : TimingEphemeris
+        Mark, P, Ṗ, P̈ and the eccentricity at T0 (SI).
+    t0_text : str
+        T0 as written (full precision, e.g. ``"BJD_TDB 2458305.6827886"``).
+    cov_names : tuple of str
+        Timing parameters of ``cov_matrix`` (``t0``, ``period``, ``pdot``, ``pddot``, ``eta``,
+        ``kappa``, ``omega_dot``), in its row order.
+    cov_matrix : ndarray
+        Their covariance in SI units (s² for t0 and period).
+    source : str
+        Where the ephemeris comes from.
+    eccentricity_given : bool
+        Whether the file had an ``eccentricity`` mapping (written back only then).
+    """
+
+    ephemeris: TimingEphemeris
+    t0_text: str
+    cov_names: tuple[str, ...]
+    cov_matrix: FloatArray
+    source: str
+    eccentricity_given: bool = False
+
+    def sigma(self, name: str) -> float | None:
+        """1σ of timing parameter ``name`` in SI units (None if it has no uncertainty)."""
+        if name not in self.cov_names:
+            return None
+        i = self.cov_names.index(name)
+        return float(np.sqrt(max(self.cov_matrix[i, i], 0.0)))
+
+
+@dataclass(frozen=True, slots=True)
 class Target:
-    """A validated target, parameters referenced to the LISA observation midpoint (TDB).
+    """A validated target: the phase model at its reference epoch t_ref (TDB), and the rest.
 
     Attributes
     ----------
@@ -71,9 +111,11 @@ class Target:
     ra_deg, dec_deg : float
         ICRS position [deg].
     t_ref : Time
-        Reference epoch, the midpoint of the LISA observation (TDB at the barycentre).
+        Reference epoch (TDB at the barycentre): the midpoint of the LISA observation, or T0 of
+        a timing ephemeris.
     t_obs_s : float
-        Length of the LISA observation [s, TDB].
+        Length of the LISA observation [s, TDB]; 0 for a timing ephemeris (its information ends
+        at T0, on both sides).
     params : PhaseParams
         Phase-model parameters at ``t_ref`` (SI).
     cov_names : tuple of str
@@ -91,13 +133,21 @@ class Target:
     priority : float
         Weight in night schedules (> 0).
     vmag : float or None
-        V magnitude [mag].
+        V magnitude [mag] (``vmag``, or ``magnitudes.V``).
     m1_msun, m2_msun : float or None
         Component masses [M_sun].
     ref_shift_s : float
         Midpoint minus the reference epoch as written (T_obs/2 for ``t_ref_is: start``) [s].
     notes : dict
         Provenance, e.g. ``{"t_ref_converted_from": "utc"}``.
+    kind : str
+        ``"lisa"`` (a LISA posterior) or ``"timing"`` (a timing ephemeris).
+    timing : TimingSection or None
+        The timing ephemeris as given (``kind == "timing"``).
+    magnitudes : dict
+        Apparent magnitudes by band [mag] (V included when ``vmag`` is given).
+    references : dict
+        Citation per field path (``"timing.period"`` → ``"2019Natur.571..528B"``).
     """
 
     name: str
@@ -121,6 +171,18 @@ class Target:
     m2_msun: float | None = None
     ref_shift_s: float = 0.0
     notes: dict[str, Any] = field(default_factory=dict)
+    kind: str = "lisa"
+    timing: TimingSection | None = None
+    magnitudes: dict[str, float] = field(default_factory=dict)
+    references: dict[str, str] = field(default_factory=dict)
+
+    @property
+    def has_pi_mode(self) -> bool:
+        """Whether φ_ref has the second posterior mode φ_ref + π (a LISA property, Appendix A1).
+
+        A timing ephemeris fixes the orbital phase by its mark: no π alternative.
+        """
+        return self.kind == "lisa"
 
     @property
     def covariance(self) -> FloatArray:
@@ -138,12 +200,12 @@ class Target:
 
     @property
     def t_start(self) -> Time:
-        """Start of the LISA observation (TDB)."""
+        """Start of the LISA observation (TDB); T0 for a timing ephemeris."""
         return self.t_ref - TimeDelta(self.t_obs_s / 2.0, format="sec")
 
     @property
     def t_end(self) -> Time:
-        """End of the LISA observation (TDB)."""
+        """End of the LISA observation (TDB); T0 for a timing ephemeris."""
         return self.t_ref + TimeDelta(self.t_obs_s / 2.0, format="sec")
 
     @property

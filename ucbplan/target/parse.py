@@ -1,44 +1,51 @@
 """Read and validate a target file into a :class:`~ucbplan.target.model.Target`.
 
 ``load_target`` validates once, section by section, against the schema
-(:mod:`ucbplan.target.schema`), and returns parameters always referenced to the *midpoint* of
-the LISA observation (paper Sec. 4.1; ``docs/method.md``, "Phase model"). Every
-validation failure is a one-line :class:`~ucbplan.errors.TargetFileError`:
-``file: field: expected …, got …``.
+(:mod:`ucbplan.target.schema`). A ``lisa`` section gives parameters referenced to the *midpoint*
+of the LISA observation (paper Sec. 4.1; ``docs/method.md``, "Phase model"); a ``timing``
+section (exactly one of the two) is converted to the same phase model at its epoch T0 by
+:mod:`ucbplan.core.timing`. Every validation failure is a one-line
+:class:`~ucbplan.errors.TargetFileError`: ``file: field: expected …, got …``.
 """
 
 from __future__ import annotations
 
-import math
 import unicodedata
-from collections.abc import Iterable, Mapping
-from dataclasses import dataclass
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from astropy import units as u
 from astropy.coordinates import SkyCoord
-from astropy.time import Time, TimeDelta
+from astropy.time import TimeDelta
 from numpy.typing import NDArray
 
-from ucbplan.core.constants import E_MAX, L_B
+from ucbplan.core.constants import L_B
 from ucbplan.core.params import PARAM_NAMES, PhaseParams, shift_jacobian, shift_reference
 from ucbplan.errors import SchemaError, TargetFileError, shorten
 from ucbplan.inputs import load_yaml
 from ucbplan.target.covariance import parse_covariance
 from ucbplan.target.model import Spectroscopy, Target
-from ucbplan.target.schema import Field, field, section_fields
+from ucbplan.target.schema import EPHEMERIS_KINDS, field, section_fields
+from ucbplan.target.sections import (
+    CONTROL,
+    Ephemeris,
+    check_eccentricity,
+    check_section,
+    mapping,
+    names,
+    number,
+    quantities,
+)
+from ucbplan.target.timing_section import parse_magnitudes, parse_references, parse_timing
 from ucbplan.target.values import (
     Ctx,
     check_keys,
-    check_range,
     one_line,
     parse_angle,
     parse_choice,
     parse_epoch,
-    parse_number,
-    parse_quantity,
 )
 
 __all__ = ["load_target", "target_from_dict"]
@@ -51,8 +58,6 @@ _LISA_EXTRAS = tuple(
 )
 #: Longest target name [characters] (names go into starlists, headers and file names).
 MAX_NAME_CHARS = 200
-#: Unicode categories refused in a name: control characters, surrogates, line separators.
-_CONTROL = frozenset(("Cc", "Cs", "Zl", "Zp"))
 #: Powers of 1/s in the unit of each rate that a TCB → TDB conversion rescales.
 _TCB_POWER = {"f_gw": 1, "fdot": 2, "fddot": 3, "omega_dot": 1}
 
@@ -100,12 +105,20 @@ def target_from_dict(doc: Any, path: Path | None = None) -> Target:
         name = _parse_name(ctx, doc.get("name"))
     with ctx.reading("sky", "a sky position"):
         ra, dec = _parse_sky(ctx, doc)
-    with ctx.reading("lisa", "the LISA posterior summary"):
-        lisa = _parse_lisa(ctx, doc.get("lisa"), path)
+    kind = _ephemeris_kind(ctx, doc)
+    if kind == "lisa":
+        with ctx.reading("lisa", "the LISA posterior summary"):
+            eph = _parse_lisa(ctx, doc.get("lisa"), path)
+    else:
+        with ctx.reading("timing", "a timing ephemeris"):
+            eph = parse_timing(ctx, doc["timing"])
     with ctx.reading("spectroscopy", "spectroscopy defaults"):
         spectroscopy = _parse_spectroscopy(ctx, doc.get("spectroscopy"))
-    priority = _number(ctx, doc, field("priority"))
-    vmag = _number(ctx, doc, field("vmag"))
+    priority = number(ctx, doc, field("priority"))
+    with ctx.reading("magnitudes", "magnitudes"):
+        magnitudes = parse_magnitudes(ctx, doc)
+    with ctx.reading("references", "references"):
+        references = parse_references(ctx, doc)
     with ctx.reading("masses", "masses"):
         masses = _parse_masses(ctx, doc)
     return Target(
@@ -113,23 +126,45 @@ def target_from_dict(doc: Any, path: Path | None = None) -> Target:
         source=path.resolve() if path is not None else None,
         ra_deg=ra,
         dec_deg=dec,
-        t_ref=lisa.t_ref,
-        t_obs_s=lisa.t_obs_s,
-        params=lisa.params,
-        cov_names=lisa.cov_names,
-        cov_matrix=lisa.cov_matrix,
-        cos_inclination=lisa.extras["cos_inclination"],
-        amplitude=lisa.extras["amplitude"],
-        psi=lisa.extras["psi"],
-        distance_kpc=lisa.extras["distance"],
+        t_ref=eph.t_ref,
+        t_obs_s=eph.t_obs_s,
+        params=eph.params,
+        cov_names=eph.cov_names,
+        cov_matrix=eph.cov_matrix,
+        cos_inclination=eph.extras["cos_inclination"],
+        amplitude=eph.extras["amplitude"],
+        psi=eph.extras["psi"],
+        distance_kpc=eph.extras["distance"],
         spectroscopy=spectroscopy,
-        samples=lisa.samples,
+        samples=eph.samples,
         priority=priority,
-        vmag=vmag,
+        vmag=magnitudes.get("V"),
         m1_msun=masses.get("m1"),
         m2_msun=masses.get("m2"),
-        ref_shift_s=lisa.ref_shift_s,
-        notes={"t_ref_converted_from": lisa.converted} if lisa.converted else {},
+        ref_shift_s=eph.ref_shift_s,
+        notes={"t_ref_converted_from": eph.converted} if eph.converted else {},
+        kind=kind,
+        timing=eph.timing,
+        magnitudes=magnitudes,
+        references=references,
+    )
+
+
+def _ephemeris_kind(ctx: Ctx, doc: Mapping[str, Any]) -> str:
+    """``"lisa"`` or ``"timing"``: exactly one of the two sections must be given."""
+    given = [k for k in EPHEMERIS_KINDS if k in doc]
+    if len(given) == 1:
+        return given[0]
+    if given:
+        raise ctx.fail(
+            "lisa/timing",
+            "give exactly one of lisa (a LISA posterior) and timing (an optical/X-ray timing "
+            "ephemeris), not both; keep the other in a second target file",
+        )
+    raise ctx.fail(
+        "lisa",
+        f"missing; add lisa: {field('lisa').example} (a LISA posterior) or timing: "
+        f"{field('timing').example} (a timing ephemeris)",
     )
 
 
@@ -138,11 +173,7 @@ def target_from_dict(doc: Any, path: Path | None = None) -> Target:
 # ---------------------------------------------------------------------------------------------
 
 
-def _names(section: str) -> tuple[str, ...]:
-    return tuple(f.name for f in section_fields(section))
-
-
-_TOP = _names("")
+_TOP = names("")
 
 
 def _kind(value: Any) -> str:
@@ -151,34 +182,6 @@ def _kind(value: Any) -> str:
     if value is None:
         return "an empty document"
     return f"{type(value).__name__} {shorten(value)}"
-
-
-def _mapping(ctx: Ctx, f: Field, value: Any) -> Mapping[Any, Any]:
-    """``value`` as a mapping of the fields of section ``f`` (unknown keys refused)."""
-    if not isinstance(value, Mapping):
-        raise ctx.fail(f.path, f"expected a mapping like {f.example}, got {shorten(value)}")
-    check_keys(ctx, f.path, value, _names(f.path))
-    return value
-
-
-def _quantities(ctx: Ctx, mapping: Mapping[str, Any], fields: Iterable[Field]) -> dict[str, Any]:
-    """Fields of ``mapping`` as floats (absent: the schema default), ranges checked after all
-    of them are read."""
-    fields = tuple(fields)
-    got = {f.name: parse_quantity(ctx, f, mapping[f.name]) for f in fields if f.name in mapping}
-    for f in fields:
-        if f.name in got:
-            check_range(ctx, f, got[f.name], mapping[f.name])
-    return {f.name: got.get(f.name, f.default) for f in fields}
-
-
-def _number(ctx: Ctx, doc: Mapping[str, Any], f: Field) -> Any:
-    """A plain number at the top level (absent: the schema default), range checked."""
-    if f.name not in doc:
-        return f.default
-    x = parse_number(ctx, f, doc[f.name])
-    check_range(ctx, f, x, doc[f.name])
-    return x
 
 
 def _parse_name(ctx: Ctx, name: Any) -> str:
@@ -193,7 +196,7 @@ def _parse_name(ctx: Ctx, name: Any) -> str:
         raise ctx.fail(
             f.path, f"{expect} of at most {MAX_NAME_CHARS} characters, got {shorten(name)}"
         )
-    if any(unicodedata.category(c) in _CONTROL for c in name):
+    if any(unicodedata.category(c) in CONTROL for c in name):
         raise ctx.fail(
             f.path, f"{expect} on one line without control characters, got {shorten(name)}"
         )
@@ -205,7 +208,7 @@ def _parse_sky(ctx: Ctx, doc: Mapping[str, Any]) -> tuple[float, float]:
     f = field("sky")
     if "sky" not in doc:
         raise ctx.fail(f.path, f"missing; add sky: {f.example}")
-    sky = _mapping(ctx, f, doc["sky"])
+    sky = mapping(ctx, f, doc["sky"])
     keys = set(sky)
     if {"l", "b"} & keys:
         if {"ra", "dec", "frame"} & keys:
@@ -229,21 +232,21 @@ def _parse_sky(ctx: Ctx, doc: Mapping[str, Any]) -> tuple[float, float]:
 def _parse_spectroscopy(ctx: Ctx, spec: Any) -> Spectroscopy | None:
     if spec is None:
         return None
-    spec = _mapping(ctx, field("spectroscopy"), spec)
+    spec = mapping(ctx, field("spectroscopy"), spec)
     lines_field = field("spectroscopy.lines")
     lines = parse_choice(ctx, lines_field, spec.get("lines", lines_field.default))
     vals: dict[str, Any] = {}
     for f in section_fields("spectroscopy"):
         if f.kind == "quantity":  # each read and range-checked in turn
-            vals |= _quantities(ctx, spec, (f,))
+            vals |= quantities(ctx, spec, (f,))
     return Spectroscopy(lines, vals["K1"], vals["K2"], vals["K_eff"], vals["sigma_v"])
 
 
 def _parse_masses(ctx: Ctx, doc: Mapping[str, Any]) -> dict[str, float | None]:
     if "masses" not in doc:
         return {}
-    masses = _mapping(ctx, field("masses"), doc["masses"])
-    return _quantities(ctx, masses, section_fields("masses"))
+    masses = mapping(ctx, field("masses"), doc["masses"])
+    return quantities(ctx, masses, section_fields("masses"))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -251,29 +254,14 @@ def _parse_masses(ctx: Ctx, doc: Mapping[str, Any]) -> dict[str, float | None]:
 # ---------------------------------------------------------------------------------------------
 
 
-@dataclass(frozen=True, slots=True)
-class _Lisa:
-    """The validated ``lisa`` section, moved to the observation midpoint and to TDB."""
-
-    t_ref: Time
-    t_obs_s: float
-    params: PhaseParams
-    cov_names: tuple[str, ...]
-    cov_matrix: FloatArray
-    extras: dict[str, float | None]
-    samples: Path | None
-    ref_shift_s: float
-    converted: str | None
-
-
-def _parse_lisa(ctx: Ctx, lisa: Any, path: Path | None) -> _Lisa:
+def _parse_lisa(ctx: Ctx, lisa: Any, path: Path | None) -> Ephemeris:
     """The ``lisa`` section; TCB rates are rescaled and start-referenced ones moved."""
     _check_lisa_fields(ctx, lisa)
     t_ref, converted = parse_epoch(ctx, field("lisa.t_ref"), lisa["t_ref"], lisa.get("t_ref_scale"))
-    t_obs = float(_quantities(ctx, lisa, (field("lisa.t_obs"),))["t_obs"])
+    t_obs = float(quantities(ctx, lisa, (field("lisa.t_obs"),))["t_obs"])
     ref_is = _reference_point(ctx, lisa)
-    vals = _quantities(ctx, lisa, _PHASE_MODEL)
-    _check_eccentricity(ctx, vals["eta"], vals["kappa"])
+    vals = quantities(ctx, lisa, _PHASE_MODEL)
+    check_eccentricity(ctx, vals["eta"], vals["kappa"])
     names, mat = parse_covariance(ctx, lisa.get("covariance"))
     if converted == "tcb":
         vals, mat = _tcb_to_tdb(vals, names, mat)
@@ -284,13 +272,13 @@ def _parse_lisa(ctx: Ctx, lisa: Any, path: Path | None) -> _Lisa:
         shift = t_obs / 2.0
         params, mat = _moved_to_midpoint(ctx, params, names, mat, shift)
         t_ref = t_ref + TimeDelta(shift, format="sec")
-    return _Lisa(
+    return Ephemeris(
         t_ref=t_ref,
         t_obs_s=t_obs,
         params=params,
         cov_names=names,
         cov_matrix=mat,
-        extras=_quantities(ctx, lisa, _LISA_EXTRAS),
+        extras=quantities(ctx, lisa, _LISA_EXTRAS),
         samples=_samples_path(ctx, lisa, path),
         ref_shift_s=shift,
         converted=converted,
@@ -321,32 +309,13 @@ def _moved_to_midpoint(
 
 def _check_lisa_fields(ctx: Ctx, lisa: Any) -> None:
     """``lisa`` is a mapping of known fields with every required one present."""
-    f = field("lisa")
-    if lisa is None:
-        raise ctx.fail(f.path, f"missing; add lisa: {f.example}")
-    _mapping(ctx, f, lisa)
-    for f in section_fields("lisa"):
-        if f.required and f.name not in lisa:
-            raise ctx.fail(
-                f.path, f"missing; expected {f.example if f.kind == 'quantity' else f.what}"
-            )
+    check_section(ctx, "lisa", lisa)
 
 
 def _reference_point(ctx: Ctx, lisa: Mapping[str, Any]) -> str:
     """``t_ref_is``: where in the observation t_ref lies (``midpoint`` or ``start``)."""
     f = field("lisa.t_ref_is")
     return parse_choice(ctx, f, lisa.get(f.name, f.default))
-
-
-def _check_eccentricity(ctx: Ctx, eta: float, kappa: float) -> None:
-    """e = |η + iκ| must stay inside the first-order small-e model."""
-    ecc = math.hypot(eta, kappa)
-    if ecc >= E_MAX:
-        raise ctx.fail(
-            "lisa.eta/kappa",
-            f"e = |η + iκ| = {ecc:.4g} ≥ {E_MAX}: outside the small-e (first-order) model of the "
-            "paper; ucbplan cannot schedule such orbits",
-        )
 
 
 def _samples_path(ctx: Ctx, lisa: Mapping[str, Any], path: Path | None) -> Path | None:

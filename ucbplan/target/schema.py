@@ -14,17 +14,21 @@ from typing import Any, Literal
 
 from ucbplan.core.constants import C_KM_S, E_MAX
 from ucbplan.core.params import PARAM_NAMES, PARAM_UNITS
+from ucbplan.core.timing import MARKS, TIMING_NAMES
 
 __all__ = [
     "COVARIANCE_EXTRAS",
     "COVARIANCE_PARAMETERS",
+    "EPHEMERIS_KINDS",
     "FIELDS",
     "SECTIONS",
+    "TIMING_COVARIANCE_PARAMETERS",
     "Field",
     "Kind",
     "Range",
     "field",
     "section_fields",
+    "timing_parameter_field",
 ]
 
 #: How a field's value is read: a number with a unit, a plain number, an angle, an epoch, one of
@@ -109,6 +113,9 @@ class Field:
     cosine_of : str
         For a cosine (dimensionless): the angle it is the cosine of; an angle given instead is
         refused with the cosine to write.
+    unit_required : bool
+        A bare number is refused: the value must carry its unit (a period or a σ of T0 is
+        published in seconds or in days; guessing would be off by 86400).
     """
 
     path: str
@@ -123,6 +130,7 @@ class Field:
     doc: str = ""
     dimension_hint: str = ""
     cosine_of: str = ""
+    unit_required: bool = False
 
     @property
     def name(self) -> str:
@@ -147,10 +155,11 @@ def _phase(
     required: bool = False,
     bounds: Range | None = None,
     dimension_hint: str = "",
+    section: str = "lisa",
 ) -> Field:
-    """A phase-model parameter ``lisa.<name>`` in its core unit; optional ones default to 0."""
+    """A phase-model parameter ``<section>.<name>`` in its core unit; optional ones default to 0."""
     return Field(
-        f"lisa.{name}",
+        f"{section}.{name}",
         "quantity",
         what,
         example,
@@ -182,6 +191,99 @@ def _velocity(name: str, example: str, doc: str, reason: str) -> Field:
         doc=doc,
     )
 
+
+def _eccentricity(section: str, epoch: str) -> tuple[Field, Field, Field]:
+    """η, κ (of star 1 at ``epoch``) and ω̇ of ``section``, as in the paper's LISA model."""
+    return (
+        _phase(
+            "eta",
+            "a dimensionless number",
+            "0.0068 (dimensionless)",
+            f"η = e sin ω of star 1 at {epoch}; {_ECC_NOTE}",
+            dimension_hint="η = e sin ω is dimensionless: give a plain number",
+            section=section,
+        ),
+        _phase(
+            "kappa",
+            "a dimensionless number",
+            "0.0068 (dimensionless)",
+            f"κ = e cos ω of star 1 at {epoch}; {_ECC_NOTE}",
+            dimension_hint="κ = e cos ω is dimensionless: give a plain number",
+            section=section,
+        ),
+        _phase(
+            "omega_dot",
+            "an angular rate",
+            '"1.498e-6 rad / s"',
+            "apsidal advance rate ω̇",
+            dimension_hint="give rad/s (ω̇ = 2π rad × the rate in Hz)",
+            section=section,
+        ),
+    )
+
+
+def _covariance(
+    section: str, names: str, example: str, sigma_example: str, required: bool = False
+) -> tuple[Field, ...]:
+    """The covariance mapping of ``section`` (two forms, as ``lisa.covariance``)."""
+    path = f"{section}.covariance"
+    return (
+        Field(
+            path,
+            "mapping",
+            "a mapping",
+            example,
+            required=required,
+            doc="covariance: parameters + matrix, or sigma (+ correlation)"
+            + ("; required (horizons and σ_t need it)" if required else ""),
+        ),
+        Field(
+            f"{path}.parameters",
+            "list",
+            "a list of parameter names",
+            names,
+            doc="names of the matrix rows, in the units of the parameters above",
+        ),
+        Field(
+            f"{path}.matrix",
+            "list",
+            "a square list of lists of numbers",
+            "[[5.29e-4, 0, 0], [0, 5.93e-23, 0], [0, 0, 2.17e-37]]",
+            doc="symmetric positive semi-definite covariance matrix",
+        ),
+        Field(
+            f"{path}.sigma",
+            "mapping",
+            "a mapping parameter: sigma",
+            sigma_example,
+            bounds=Range(
+                0.0,
+                low_open=True,
+                reason="a standard deviation is positive; leave out a parameter known exactly",
+                error="must be > 0, got {raw}",
+            ),
+            doc="marginal standard deviations, each in its parameter's unit",
+        ),
+        Field(
+            f"{path}.correlation",
+            "mapping",
+            "a mapping of parameter pairs to ρ",
+            '{"phase,fdot": -0.7} or [[phase, fdot, -0.7]]'
+            if section == "lisa"
+            else '{"period,pdot": -0.9} or [[period, pdot, -0.9]]',
+            bounds=Range(
+                -1.0,
+                1.0,
+                reason="a correlation coefficient",
+                error="expected ρ in [-1, 1], got {raw}",
+            ),
+            doc="correlation coefficients between parameters of sigma (default 0)",
+        ),
+    )
+
+
+#: Kinds of ephemeris a target file gives: exactly one of these sections.
+EPHEMERIS_KINDS: tuple[str, ...] = ("lisa", "timing")
 
 #: Every field of a target file, in document order (the order :func:`write_target` writes).
 FIELDS: tuple[Field, ...] = (
@@ -259,8 +361,7 @@ FIELDS: tuple[Field, ...] = (
         "mapping",
         "a mapping",
         "{t_ref: …, t_obs: …, phase: …, f_gw: …, fdot: …}",
-        required=True,
-        doc="the LISA posterior summary",
+        doc="the LISA posterior summary; give exactly one of lisa and timing",
     ),
     Field(
         "lisa.t_ref",
@@ -342,27 +443,7 @@ FIELDS: tuple[Field, ...] = (
         "d²f/dt² at t_ref",
         dimension_hint="give Hz / s2 (f̈ = ω̈_GW/2π)",
     ),
-    _phase(
-        "eta",
-        "a dimensionless number",
-        "0.0068 (dimensionless)",
-        f"η = e sin ω of star 1 at t_ref; {_ECC_NOTE}",
-        dimension_hint="η = e sin ω is dimensionless: give a plain number",
-    ),
-    _phase(
-        "kappa",
-        "a dimensionless number",
-        "0.0068 (dimensionless)",
-        f"κ = e cos ω of star 1 at t_ref; {_ECC_NOTE}",
-        dimension_hint="κ = e cos ω is dimensionless: give a plain number",
-    ),
-    _phase(
-        "omega_dot",
-        "an angular rate",
-        '"1.498e-6 rad / s"',
-        "apsidal advance rate ω̇",
-        dimension_hint="give rad/s (ω̇ = 2π rad × the rate in Hz)",
-    ),
+    *_eccentricity("lisa", "t_ref"),
     Field(
         "lisa.cos_inclination",
         "quantity",
@@ -406,52 +487,11 @@ FIELDS: tuple[Field, ...] = (
         bounds=_positive("a distance is positive"),
         doc="distance to the binary",
     ),
-    Field(
-        "lisa.covariance",
-        "mapping",
-        "a mapping",
-        '{sigma: {phase: 0.023, f_gw: "7.7e-12 Hz"}}',
-        doc="posterior covariance: parameters + matrix, or sigma (+ correlation)",
-    ),
-    Field(
-        "lisa.covariance.parameters",
-        "list",
-        "a list of parameter names",
+    *_covariance(
+        "lisa",
         "[phase, f_gw, fdot]",
-        doc="names of the matrix rows, in the units of the parameters above",
-    ),
-    Field(
-        "lisa.covariance.matrix",
-        "list",
-        "a square list of lists of numbers",
-        "[[5.29e-4, 0, 0], [0, 5.93e-23, 0], [0, 0, 2.17e-37]]",
-        doc="symmetric positive semi-definite covariance matrix",
-    ),
-    Field(
-        "lisa.covariance.sigma",
-        "mapping",
-        "a mapping parameter: sigma",
+        '{sigma: {phase: 0.023, f_gw: "7.7e-12 Hz"}}',
         '{phase: 0.022993, f_gw: "7.7e-12 Hz"}',
-        bounds=Range(
-            0.0,
-            low_open=True,
-            reason="a standard deviation is positive; leave out a parameter known exactly",
-            error="must be > 0, got {raw}",
-        ),
-        doc="marginal standard deviations, each in its parameter's unit",
-    ),
-    Field(
-        "lisa.covariance.correlation",
-        "mapping",
-        "a mapping of parameter pairs to ρ",
-        '{"phase,fdot": -0.7} or [[phase, fdot, -0.7]]',
-        bounds=Range(
-            -1.0,
-            1.0,
-            reason="a correlation coefficient",
-            error="expected ρ in [-1, 1], got {raw}",
-        ),
-        doc="correlation coefficients between parameters of sigma (default 0)",
     ),
     Field(
         "lisa.samples",
@@ -459,6 +499,112 @@ FIELDS: tuple[Field, ...] = (
         "a file name",
         "posterior.ecsv",
         doc="posterior samples (ECSV, next to this file), columns named like the parameters",
+    ),
+    Field(
+        "timing",
+        "mapping",
+        "a mapping",
+        '{t0: "BJD_TDB 2458305.6827886", t0_marks: primary_eclipse, period: "414.7915404 s", '
+        "pdot: -2.373e-11, covariance: …, source: …}",
+        doc="a timing (optical/X-ray) ephemeris t(n) = T0 + P n + ½PṖn² (+ ⅙P²P̈n³), n the "
+        "cycle number; give exactly one of lisa and timing",
+    ),
+    Field(
+        "timing.t0",
+        "epoch",
+        "a barycentric TDB epoch",
+        '"BJD_TDB 2458305.6827886"',
+        required=True,
+        doc='T0, TDB at the barycentre: "BJD_TDB …", "BMJD_TDB …", "MJD_TDB …" or an ISO epoch '
+        "labelled TDB, kept to full precision (HJD and UTC-based epochs are refused)",
+    ),
+    Field(
+        "timing.t0_marks",
+        "choice",
+        "an event",
+        "primary_eclipse",
+        required=True,
+        choices=tuple(MARKS),
+        doc="the event at T0; star 1 is the star eclipsed at primary eclipse (u₁ = π/2), the "
+        "secondary eclipse is u₁ = 3π/2, the ascending node and star 1's maximum recession u₁ = 0",
+    ),
+    Field(
+        "timing.period",
+        "quantity",
+        "a period",
+        '"414.7915404 s"',
+        unit="s",
+        required=True,
+        bounds=_positive("an orbital period is positive"),
+        doc="P at T0 (from node to node, f_gw = 2/P); the unit is required (s or d)",
+        dimension_hint="give a time, e.g. s or d",
+        unit_required=True,
+    ),
+    Field(
+        "timing.pdot",
+        "quantity",
+        "a period derivative",
+        "-2.373e-11 (s/s)",
+        unit="",
+        required=True,
+        doc="Ṗ = dP/dt at T0, dimensionless (s/s); P must keep its sign within ±100 yr of T0",
+        dimension_hint="Ṗ is dimensionless (s/s): give a plain number",
+    ),
+    Field(
+        "timing.pddot",
+        "quantity",
+        "a second period derivative",
+        '"1e-21 1 / s"',
+        unit="1 / s",
+        default=0.0,
+        doc="P̈ = d²P/dt² at T0 (the ephemeris gains ⅙P²P̈n³)",
+        dimension_hint='P̈ has the dimension 1/s: give e.g. "1e-21 1 / s"',
+    ),
+    Field(
+        "timing.eccentricity",
+        "mapping",
+        "a mapping",
+        '{eta: 0.0, kappa: 0.002, omega_dot: "1e-6 rad / s"}',
+        doc="small eccentricity (first order, as in lisa): η, κ of star 1 at T0 and ω̇",
+    ),
+    *_eccentricity("timing.eccentricity", "T0"),
+    Field(
+        "timing.inclination",
+        "angle",
+        "an angle",
+        '"84.15 deg"',
+        unit="deg",
+        bounds=Range(
+            0.0,
+            180.0,
+            reason="an orbital inclination",
+            error="expected an inclination in [0, 180] deg, got {raw}",
+        ),
+        doc="orbital inclination from the light-curve fit (feasibility, simulations)",
+    ),
+    Field(
+        "timing.distance",
+        "quantity",
+        "a distance",
+        '"2.34 kpc"',
+        unit="kpc",
+        bounds=_positive("a distance is positive"),
+        doc="distance to the binary",
+    ),
+    *_covariance(
+        "timing",
+        "[t0, period, pdot]",
+        '{sigma: {t0: "8.4e-6 d", period: "2.9e-6 s", pdot: 5.0e-14}}',
+        '{t0: "8.4e-6 d", period: "2.9e-6 s", pdot: 5.0e-14}',
+        required=True,
+    ),
+    Field(
+        "timing.source",
+        "text",
+        "a citation",
+        '"Burdge et al. 2019, Nature 571, 528"',
+        required=True,
+        doc="where the ephemeris comes from (paper, bibcode or DOI)",
     ),
     Field(
         "priority",
@@ -469,7 +615,40 @@ FIELDS: tuple[Field, ...] = (
         bounds=_positive("a weight; higher is scheduled first"),
         doc="weight in night schedules",
     ),
-    Field("vmag", "number", "a number", "21.1", doc="V magnitude, for starlists and proposals"),
+    Field(
+        "vmag",
+        "number",
+        "a number",
+        "21.1",
+        bounds=Range(
+            -30.0,
+            40.0,
+            reason="an apparent magnitude",
+            error="expected a magnitude in [-30, 40], got {raw}",
+        ),
+        doc="V magnitude, for starlists and proposals (the same as magnitudes: {V: …})",
+    ),
+    Field(
+        "magnitudes",
+        "mapping",
+        "a mapping band: magnitude",
+        "{V: 20.5, g: 20.3}",
+        bounds=Range(
+            -30.0,
+            40.0,
+            reason="an apparent magnitude",
+            error="expected a magnitude in [-30, 40], got {raw}",
+        ),
+        doc="apparent magnitudes by band (V, g, G, …); V is the vmag of starlists",
+    ),
+    Field(
+        "references",
+        "mapping",
+        "a mapping field: citation",
+        '{timing.period: "2019Natur.571..528B", masses.m1: "doi:10.1038/s41586-019-1403-0"}',
+        doc="where each number comes from: a field path (or magnitudes.BAND) and a bibcode, DOI "
+        "or citation",
+    ),
     Field(
         "masses",
         "mapping",
@@ -539,8 +718,34 @@ SECTIONS: tuple[str, ...] = (
 COVARIANCE_EXTRAS: tuple[str, ...] = ("cos_inclination", "amplitude", "psi")
 #: Every parameter a covariance may name (rows of ``lisa.covariance``, samples columns).
 COVARIANCE_PARAMETERS: tuple[str, ...] = (*PARAM_NAMES, *COVARIANCE_EXTRAS)
+#: Every parameter ``timing.covariance`` may name (``t0`` is the offset from the nominal T0).
+TIMING_COVARIANCE_PARAMETERS: tuple[str, ...] = TIMING_NAMES
 
 _BY_PATH = {f.path: f for f in FIELDS}
+#: σ(T0) is a duration; it must carry its unit (published in days or in seconds).
+_T0_SIGMA = Field(
+    "timing.t0",
+    "quantity",
+    "a duration",
+    '"8.4e-6 d"',
+    unit="s",
+    doc="σ of T0",
+    dimension_hint="give a time, e.g. s or d",
+    unit_required=True,
+)
+
+
+def timing_parameter_field(name: str) -> Field:
+    """The field whose unit and example read a timing parameter (its σ, its matrix row).
+
+    ``t0`` → a duration in s (unit required); ``period``, ``pdot``, ``pddot`` → the
+    ``timing.*`` fields; ``eta``, ``kappa``, ``omega_dot`` → ``timing.eccentricity.*``.
+    """
+    if name == "t0":
+        return _T0_SIGMA
+    if name in ("eta", "kappa", "omega_dot"):
+        return _BY_PATH[f"timing.eccentricity.{name}"]
+    return _BY_PATH[f"timing.{name}"]
 
 
 def field(path: str) -> Field:

@@ -191,6 +191,12 @@ def parse_quantity(ctx: Ctx, f: Field, value: Any, where: str | None = None) -> 
     expect = f"expected {f.what} like {f.example}"
     if isinstance(value, bool) or value is None:
         raise ctx.fail(path, f"{expect}, got {shorten(value)}")
+    if f.unit_required and _bare_number(value):
+        raise ctx.fail(
+            path,
+            f"{expect}, got the bare number {shorten(value)}; write its unit (it could be "
+            "seconds or days)",
+        )
     if isinstance(value, int | float):
         try:
             x = to_float(value)
@@ -206,6 +212,13 @@ def parse_quantity(ctx: Ctx, f: Field, value: Any, where: str | None = None) -> 
     if not math.isfinite(x):
         raise ctx.fail(path, f"{expect}, got non-finite value {shorten(value)}")
     return x
+
+
+def _bare_number(value: Any) -> bool:
+    """Whether ``value`` is a number without a unit (a YAML number or a numeric string)."""
+    if isinstance(value, int | float):
+        return True
+    return isinstance(value, str) and len(value) <= MAX_VALUE_CHARS and bool(NUM_RE.match(value))
 
 
 def _kind(value: Any) -> str:

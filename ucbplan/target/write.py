@@ -1,12 +1,14 @@
 """Write a :class:`~ucbplan.target.model.Target` back as a target file (schema order and units).
 
-Parameters are written at the midpoint (``t_ref_is: midpoint``), quantities with the unit the
-schema declares (:mod:`ucbplan.target.schema`), so :func:`~ucbplan.target.parse.load_target`
-reads back the same numbers.
+LISA parameters are written at the midpoint (``t_ref_is: midpoint``); a timing ephemeris is
+written as given (T0 as its full-precision text, the timing covariance as a matrix).
+Quantities carry the unit the schema declares (:mod:`ucbplan.target.schema`), so
+:func:`~ucbplan.target.parse.load_target` reads back the same numbers.
 """
 
 from __future__ import annotations
 
+import math
 import re
 from collections.abc import Iterable
 from pathlib import Path
@@ -17,7 +19,7 @@ from astropy.time import Time
 
 from ucbplan.core.params import PARAM_NAMES
 from ucbplan.io import write_output
-from ucbplan.target.model import Spectroscopy, Target
+from ucbplan.target.model import Spectroscopy, Target, TimingSection
 from ucbplan.target.schema import field
 
 __all__ = ["target_to_dict", "write_target"]
@@ -44,7 +46,7 @@ def _value(path: str, value: float) -> float | str:
     unit = field(path).unit
     if not unit or unit == "rad":
         return float(value)
-    return f"{value!r} {unit}"
+    return f"{float(value)!r} {unit}"
 
 
 def _given(section: str, pairs: Iterable[tuple[str, float | None]]) -> dict[str, float | str]:
@@ -60,12 +62,22 @@ def target_to_dict(t: Target) -> dict[str, Any]:
     doc: dict[str, Any] = {
         "name": t.name,
         "sky": _given("sky", (("ra", t.ra_deg), ("dec", t.dec_deg))),
-        "lisa": _lisa_dict(t),
     }
+    if t.kind == "timing" and t.timing is not None:
+        doc["timing"] = _timing_dict(t, t.timing)
+    else:
+        doc["lisa"] = _lisa_dict(t)
     if t.priority != field("priority").default:
         doc["priority"] = t.priority
+    mags = dict(t.magnitudes)
     if t.vmag is not None:
-        doc["vmag"] = t.vmag
+        mags.setdefault("V", t.vmag)
+    if set(mags) == {"V"}:
+        doc["vmag"] = mags["V"]
+    elif mags:
+        doc["magnitudes"] = mags
+    if t.references:
+        doc["references"] = dict(t.references)
     if t.m1_msun is not None or t.m2_msun is not None:
         doc["masses"] = _given("masses", (("m1", t.m1_msun), ("m2", t.m2_msun)))
     if t.spectroscopy is not None:
@@ -98,6 +110,32 @@ def _lisa_dict(t: Target) -> dict[str, Any]:
         base = t.source.parent if t.source is not None else Path(".")
         lisa["samples"] = _relative(t.samples, base.resolve())
     return lisa
+
+
+def _timing_dict(t: Target, s: TimingSection) -> dict[str, Any]:
+    """The ``timing`` section as given (T0 text, values at T0, the timing covariance)."""
+    e = s.ephemeris
+    out: dict[str, Any] = {"t0": s.t0_text, "t0_marks": e.mark}
+    out["period"] = _value("timing.period", e.period_s)
+    out["pdot"] = float(e.pdot)
+    if e.pddot != 0.0:
+        out["pddot"] = _value("timing.pddot", e.pddot)
+    if s.eccentricity_given:
+        out["eccentricity"] = _given(
+            "timing.eccentricity",
+            (("eta", e.eta), ("kappa", e.kappa), ("omega_dot", e.omega_dot)),
+        )
+    if t.cos_inclination is not None:
+        out["inclination"] = f"{math.degrees(math.acos(t.cos_inclination))!r} deg"
+    if t.distance_kpc is not None:
+        out["distance"] = _value("timing.distance", t.distance_kpc)
+    if s.cov_names:
+        out["covariance"] = {
+            "parameters": list(s.cov_names),
+            "matrix": [[float(x) for x in row] for row in s.cov_matrix],
+        }
+    out["source"] = s.source
+    return out
 
 
 def _epoch_text(t: Time) -> str:

@@ -1,0 +1,302 @@
+"""Target files with a ``timing:`` ephemeris: reading, writing, and every bad input one line.
+
+The timing target below is TEST INPUT written from the numbers quoted in issue 10 (ZTF J1539+5027,
+Burdge et al. 2019); it is not a catalog entry (the catalog waits for confirmed T0 values).
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import subprocess
+import sys
+import time
+from decimal import Decimal
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+import yaml
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from ucbplan.core.timing import TimingEphemeris, phase_covariance, to_phase_params
+from ucbplan.errors import TargetFileError
+from ucbplan.target import Target, load_target, target_from_dict, write_target
+
+#: ZTF J1539+5027 from the issue text (test input, not a catalog entry).
+ZTF_DOC: dict[str, Any] = {
+    "name": "ZTF J1539+5027 (test input)",
+    "sky": {"ra": "15h39m32.16s", "dec": "+50d27m38.8s"},
+    "timing": {
+        "t0": "BJD_TDB 2458305.6827886",
+        "t0_marks": "primary_eclipse",
+        "period": "414.7915404 s",
+        "pdot": -2.373e-11,
+        "covariance": {"sigma": {"t0": "8.4e-6 d", "period": "2.9e-6 s", "pdot": 5.0e-14}},
+        "source": "Burdge et al. 2019, Nature 571, 528",
+    },
+    "spectroscopy": {"lines": "SB2", "K1": "300 km/s", "K2": "870 km/s", "sigma_v": "20 km/s"},
+}
+
+
+def _load(doc: Any, tmp_path: Path | None = None) -> Target:
+    return target_from_dict(doc, (tmp_path or Path(".")) / "t.yaml")
+
+
+def _refused(doc: Any) -> str:
+    with pytest.raises(TargetFileError) as exc:
+        _load(doc)
+    msg = str(exc.value)
+    assert "\n" not in msg and len(msg) < 400, msg
+    assert msg.startswith("t.yaml: ")
+    return msg
+
+
+def _with(path: str, value: Any) -> dict[str, Any]:
+    doc = copy.deepcopy(ZTF_DOC)
+    *parents, key = path.split(".")
+    node = doc
+    for p in parents:
+        node = node[p]
+    if value is _DELETE:
+        del node[key]
+    else:
+        node[key] = value
+    return doc
+
+
+_DELETE = object()
+
+
+def test_timing_target_is_the_phase_model_at_t0() -> None:
+    t = _load(ZTF_DOC)
+    assert t.kind == "timing" and not t.has_pi_mode
+    assert t.t_obs_s == 0.0 and t.t_start == t.t_ref == t.t_end
+    exact = Decimal("2458305.6827886")
+    got = Decimal(float(t.t_ref.jd1)) + Decimal(float(t.t_ref.jd2))
+    assert abs(got - exact) * 86400 < Decimal("1e-9")  # s
+    eph = TimingEphemeris("primary_eclipse", 414.7915404, -2.373e-11)
+    assert t.params == to_phase_params(eph)
+    assert t.params.phase == pytest.approx(math.pi)
+    timing_cov = np.diag([(8.4e-6 * 86400) ** 2, (2.9e-6) ** 2, (5e-14) ** 2, 0, 0, 0, 0])
+    assert np.allclose(t.covariance, phase_covariance(eph, timing_cov), rtol=1e-12, atol=0)
+    assert t.cov_names == ("phase", "f_gw", "fdot", "fddot")
+    assert t.timing is not None and t.timing.sigma("t0") == pytest.approx(0.72576)
+    assert t.timing.source.startswith("Burdge")
+
+
+def test_lisa_targets_keep_their_kind(hm_cnc_path: Path) -> None:
+    t = load_target(hm_cnc_path)
+    assert t.kind == "lisa" and t.has_pi_mode and t.timing is None
+
+
+def test_write_and_read_back(tmp_path: Path) -> None:
+    doc = copy.deepcopy(ZTF_DOC)
+    doc["timing"]["pddot"] = "1e-21 1 / s"
+    doc["timing"]["eccentricity"] = {"eta": 0.001, "kappa": -0.002, "omega_dot": "1e-8 rad / s"}
+    doc["timing"]["inclination"] = "84.15 deg"
+    doc["timing"]["distance"] = "2.34 kpc"
+    doc["magnitudes"] = {"g": 20.5, "G": 20.4}
+    doc["references"] = {"timing": "2019Natur.571..528B", "magnitudes.g": "Burdge et al. 2019"}
+    t = _load(doc, tmp_path)
+    out = tmp_path / "written.yaml"
+    write_target(t, out)
+    text = out.read_text()
+    assert "BJD_TDB 2458305.6827886" in text and "lisa" not in text
+    back = load_target(out)
+    assert back.kind == "timing"
+    assert float((back.t_ref - t.t_ref).to_value("s")) == 0.0
+    assert back.params == t.params
+    assert np.allclose(back.covariance, t.covariance, rtol=1e-14, atol=0)
+    assert back.cos_inclination == pytest.approx(t.cos_inclination, rel=1e-14)
+    assert back.distance_kpc == t.distance_kpc
+    assert back.magnitudes == t.magnitudes and back.references == t.references
+
+
+def test_magnitudes_and_the_vmag_alias() -> None:
+    doc = copy.deepcopy(ZTF_DOC)
+    doc["vmag"] = 20.7
+    t = _load(doc)
+    assert t.vmag == 20.7 and t.magnitudes == {"V": 20.7}
+    doc["magnitudes"] = {"V": 20.7, "g": 20.3}
+    assert _load(doc).magnitudes == {"V": 20.7, "g": 20.3}
+    doc["magnitudes"] = {"g": 20.3}
+    assert _load(doc).vmag == 20.7
+    del doc["vmag"]
+    doc["magnitudes"] = {"V": 19.0}
+    assert _load(doc).vmag == 19.0
+
+
+BAD: list[tuple[str, Any, list[str]]] = [
+    ("timing.t0_marks", "primary", ["timing.t0_marks", "did you mean 'primary_eclipse'"]),
+    ("timing.t0_marks", "periastron", ["timing.t0_marks", "expected one of"]),
+    ("timing.t0", "BJD_XYZ 2458305.68", ["timing.t0", "unknown time-scale word"]),
+    ("timing.t0", "HJD 2458305.6827886", ["timing.t0", "HJD", "convert"]),
+    ("timing.t0", "2018-07-06T04:23:12 UTC", ["timing.t0", "UTC", "convert"]),
+    ("timing.t0", 2458305.6827886, ["timing.t0", "quote it"]),
+    ("timing.t0", "2458305.6827886", ["timing.t0", "state the time scale"]),
+    ("timing.period", "0 s", ["timing.period", "must be positive"]),
+    ("timing.period", "-414.79 s", ["timing.period", "must be positive"]),
+    ("timing.period", 414.79, ["timing.period", "bare number", "unit"]),
+    ("timing.period", "414.79 Hz", ["timing.period", "give a time"]),
+    ("timing.pdot", -4e-6, ["timing.pdot", "reach zero", "100 yr"]),
+    ("timing.pdot", 1e-5, ["timing.pdot", "before T0"]),
+    ("timing.pdot", "1e-11 Hz", ["timing.pdot", "dimensionless"]),
+    ("timing.pddot", "-1e-15 1 / s", ["timing.pddot", "reach zero"]),
+    ("timing.pddot", "1e-15 s", ["timing.pddot", "1/s"]),
+    ("timing.perod", "414 s", ["timing.perod", "did you mean 'period'"]),
+    ("timing.covariance", _DELETE, ["timing.covariance", "missing"]),
+    ("timing.source", _DELETE, ["timing.source", "missing"]),
+    ("timing.source", "", ["timing.source", "citation"]),
+    ("timing.source", "two\nlines", ["timing.source", "one line"]),
+    ("timing.t0_marks", _DELETE, ["timing.t0_marks", "missing"]),
+    ("timing.covariance.sigma", {"t0": 8.4e-6}, ["sigma.t0", "bare number", "unit"]),
+    ("timing.covariance.sigma", {"perod": "1 s"}, ["sigma.perod", "did you mean 'period'"]),
+    ("timing.covariance.sigma", {"phase": 0.1}, ["sigma.phase", "unknown parameter"]),
+    ("timing.covariance.sigma", {"pdot": -1e-14}, ["sigma.pdot", "must be > 0"]),
+    ("timing.covariance.correlaton", {}, ["correlaton", "did you mean 'correlation'"]),
+    ("timing.eccentricity", {"eta": 0.09, "kappa": 0.09}, ["timing.eccentricity", "small-e"]),
+    ("timing.eccentricity", {"e": 0.01}, ["timing.eccentricity.e", "unknown field"]),
+    ("timing.inclination", "95 rad", ["timing.inclination", "[0, 180]"]),
+    ("timing", "BJD_TDB 1", ["timing", "mapping"]),
+    ("magnitudes", {"V": "bright"}, ["magnitudes.V", "magnitude"]),
+    ("magnitudes", {"not a band!": 20.0}, ["magnitudes", "band name"]),
+    ("magnitudes", {"g": 99.0}, ["magnitudes.g", "[-30, 40]"]),
+    ("references", {"timing.perod": "x"}, ["references.timing.perod", "did you mean"]),
+    ("references", {"masses.m1": "x"}, ["references.masses.m1", "not a field of this file"]),
+    ("references", {"timing": ""}, ["references.timing", "citation"]),
+    ("lisa", {"t_ref": "2037-01-01T00:00:00"}, ["lisa/timing", "exactly one"]),
+    ("timing", _DELETE, ["lisa", "missing", "timing:"]),
+]
+
+
+@pytest.mark.parametrize(
+    ("path", "value", "words"), BAD, ids=[f"{p}-{i}" for i, (p, _, _) in enumerate(BAD)]
+)
+def test_bad_input_is_one_line_naming_the_field(path: str, value: Any, words: list[str]) -> None:
+    msg = _refused(_with(path, value))
+    for w in words:
+        assert w in msg, (w, msg)
+
+
+def test_vmag_and_magnitudes_v_must_agree() -> None:
+    doc = copy.deepcopy(ZTF_DOC)
+    doc["vmag"] = 20.7
+    doc["magnitudes"] = {"V": 20.1}
+    assert "vmag" in _refused(doc) and "differ" in _refused(doc)
+
+
+def test_validate_cli_one_line_exit_2(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(yaml.safe_dump(_with("timing.t0", "HJD 2458305.6827886")))
+    proc = subprocess.run(
+        [sys.executable, "-m", "ucbplan", "validate", str(bad)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert proc.returncode == 2
+    assert "Traceback" not in proc.stderr
+    lines = [ln for ln in proc.stderr.splitlines() if ln.strip()]
+    assert len(lines) == 1 and "bad.yaml: timing.t0:" in lines[0]
+
+
+# ------------------------------------------------------------------ property test
+
+#: Values that stress the readers: numbers, units of every dimension, epochs, junk.
+VALUES = st.one_of(
+    st.sampled_from(
+        [
+            0,
+            -1,
+            1e300,
+            float("nan"),
+            float("inf"),
+            True,
+            None,
+            "",
+            "414 s",
+            "0.0048 d",
+            "6e-3 Hz",
+            "-2.373e-11",
+            "5e-14",
+            "1e-21 1 / s",
+            "84 deg",
+            "BJD_TDB 2458305.6827886",
+            "BMJD_TDB 2458305.6827886",
+            "HJD 2458305.68",
+            "2018-07-06T04:23:12 TDB",
+            "2018-07-06T04:23:12",
+            "primary_eclipse",
+            "secondary_eclipse",
+            "x" * 5000,
+            [1, 2],
+            {"a": 1},
+            {"t0": "1 s"},
+            {"period": 0.1},
+        ]
+    ),
+    st.text(max_size=20),
+    st.floats(),
+    st.integers(),
+)
+PATHS = [
+    "timing",
+    "timing.t0",
+    "timing.t0_marks",
+    "timing.period",
+    "timing.pdot",
+    "timing.pddot",
+    "timing.covariance",
+    "timing.covariance.sigma",
+    "timing.covariance.sigma.t0",
+    "timing.covariance.sigma.pdot",
+    "timing.covariance.correlation",
+    "timing.covariance.parameters",
+    "timing.covariance.matrix",
+    "timing.eccentricity",
+    "timing.inclination",
+    "timing.distance",
+    "timing.source",
+    "timing.nonsense",
+    "magnitudes",
+    "references",
+    "vmag",
+]
+
+
+@given(st.lists(st.tuples(st.sampled_from(PATHS), VALUES), min_size=1, max_size=3))
+@settings(
+    max_examples=150,
+    deadline=2000,
+    derandomize=True,
+    suppress_health_check=[HealthCheck.too_slow],
+)
+def test_mutated_timing_targets_load_or_fail_in_one_line(edits: list[tuple[str, Any]]) -> None:
+    """Either a Target, or a TargetFileError of one line < 400 chars naming the file and a
+    field of the section that was changed; never another exception; fast."""
+    doc = copy.deepcopy(ZTF_DOC)
+    for path, value in edits:
+        *parents, key = path.split(".")
+        node: Any = doc
+        for p in parents:
+            if not isinstance(node.get(p), dict):
+                node[p] = {}
+            node = node[p]
+        node[key] = value
+    start = time.perf_counter()
+    try:
+        t = target_from_dict(doc, Path("t.yaml"))
+    except TargetFileError as exc:
+        msg = str(exc)
+        assert "\n" not in msg and len(msg) < 400
+        field = msg.split(": ")[1]
+        assert field.split(".")[0].split("/")[0] in {p.split(".")[0] for p, _ in edits} | {
+            "lisa"
+        }, (msg, edits)
+    else:
+        assert t.kind == "timing"
+        assert np.all(np.isfinite(t.covariance)) and np.all(np.isfinite(t.params.as_array()))
+    assert time.perf_counter() - start < 2.0
