@@ -221,7 +221,7 @@ def test_ephemeris_sub_commands_are_mountable() -> None:
     reachable by name and does not change the default routing."""
     import typer
 
-    from ucbplan.cli.core import EphemerisGroup
+    from ucbplan.cli.ephemeris import EphemerisGroup
 
     sub = typer.Typer(cls=EphemerisGroup, add_completion=False)
     seen: list[str] = []

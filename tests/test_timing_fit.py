@@ -557,14 +557,14 @@ def test_bad_period_guess(text: str) -> None:
 
 
 def run(args: list[str]) -> str:
-    """Run ``ephemeris-fit ARGS`` in-process; return stdout."""
+    """Run ``ephemeris fit ARGS`` in-process (the command function alone); return stdout."""
     app = typer.Typer(pretty_exceptions_enable=False)
 
     @app.callback()
     def _root() -> None:
         pass
 
-    timing_cli.register(app)
+    app.command("ephemeris-fit")(timing_cli.ephemeris_fit)
     out = io.StringIO()
     from contextlib import redirect_stdout
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
-from typing import Any
+from typing import IO, Any
 
 from rich.console import Console
 from rich.markup import escape
@@ -23,6 +23,7 @@ from ucbplan.offline import configure_offline
 
 __all__ = [
     "OUTPUT_FORMATS",
+    "TABLE_FORMATS",
     "check_output_path",
     "configure_offline",
     "dump_json",
@@ -31,6 +32,7 @@ __all__ = [
     "pick_format",
     "rich_table",
     "write_output",
+    "write_table_output",
 ]
 
 
@@ -72,3 +74,28 @@ def pick_format(output: Path | None, fmt: str | None, formats: tuple[str, ...]) 
             f"{' | '.join(machine)} (or leave --format out: the suffix decides)"
         )
     return output_format(output, fmt, machine, machine[0])
+
+
+#: Formats of the commands that print a table or write it (``--format``).
+TABLE_FORMATS = ("table", "ecsv", "csv", "json")
+
+
+def write_table_output(tab: Any, fmt: str, output: Path | None, overwrite: bool) -> None:
+    """Write an astropy table as JSON (meta + rows), ECSV or CSV to ``output`` or stdout."""
+    if fmt == "json":
+        rows = [
+            {
+                c: (v.item() if hasattr(v, "item") else v)
+                for c, v in zip(tab.colnames, row, strict=True)
+            }
+            for row in tab.iterrows()
+        ]
+        doc = {"meta": dict(tab.meta), "rows": rows}
+        write_output(output, lambda h: dump_json(doc, h), overwrite=overwrite)
+        return
+    fmt_name = "ascii.ecsv" if fmt == "ecsv" else "ascii.csv"
+
+    def _w(handle: IO[str]) -> None:
+        tab.write(handle, format=fmt_name)
+
+    write_output(output, _w, overwrite=overwrite)

@@ -49,9 +49,9 @@ def _root(
 
 
 def _register_all() -> None:
-    from ucbplan.cli import core, export, feasibility, lisa, plan, population, reduce, timing
+    from ucbplan.cli import core, export, feasibility, lisa, plan, population, reduce
 
-    for module in (core, plan, export, feasibility, reduce, lisa, timing, population):
+    for module in (core, plan, export, feasibility, reduce, lisa, population):
         module.register(app)
 
 

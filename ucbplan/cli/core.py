@@ -1,97 +1,50 @@
-"""Core commands: ``validate``, ``ephemeris`` and ``horizon`` (thin shell over the library).
+"""Core commands: ``validate`` and ``horizon`` (thin shells over the library).
 
-Each command parses its options, calls :mod:`ucbplan.core` (:func:`~ucbplan.core.ephemeris.
-find_epochs`, :func:`~ucbplan.core.forecast.horizon_table`, :func:`~ucbplan.core.timing.
-compare_sources`, the validate summary numbers) and prints or writes the result. The option
-types are module-level aliases so each command reads as its parameter list.
-
-``ephemeris`` is a command group whose default sub-command is ``predict``:
-``ucbplan ephemeris TARGET --start … --end …`` is ``ucbplan ephemeris predict TARGET …``
-(:class:`EphemerisGroup`); ``ucbplan ephemeris compare A B`` compares two ephemerides, and
-``ucbplan ephemeris fit`` is mounted by :func:`register` (see the marked place there).
+Each command parses its options, calls :mod:`ucbplan.core` (:func:`~ucbplan.core.forecast.
+horizon_table`, the validate summary numbers) and prints or writes the result. The option types
+are module-level aliases so each command reads as its parameter list; :mod:`ucbplan.cli.ephemeris`
+shares them.
 """
 
 from __future__ import annotations
 
 import math
-from pathlib import Path
-from typing import IO, Annotated, Any
+from typing import Any
 
 import numpy as np
 import typer
 import typer.core
 from rich.markup import escape
 
-from ucbplan import __version__
-from ucbplan.cli._console import dump_json, err_console, pick_format, rich_table, write_output
-from ucbplan.core.constants import DAY_S
-from ucbplan.errors import UcbplanError, shorten
+from ucbplan.cli._console import (
+    TABLE_FORMATS,
+    dump_json,
+    err_console,
+    pick_format,
+    rich_table,
+    write_output,
+    write_table_output,
+)
+from ucbplan.cli._options import (
+    AlphaOpt,
+    AnchorsOpt,
+    EpochsOpt,
+    KEffOpt,
+    OutputOpt,
+    OverwriteAllOpt,
+    PlotOpt,
+    SigmaVOpt,
+    TableFormatOpt,
+    TargetArg,
+    TargetsArg,
+    ValidateFormatOpt,
+)
+from ucbplan.cli.ephemeris import register as register_ephemeris
+from ucbplan.errors import UcbplanError
 from ucbplan.inputs import check_number
 from ucbplan.target import Target, load_target
 
-__all__ = ["EphemerisGroup", "ephemeris_app", "register"]
-
-TargetArg = Annotated[Path, typer.Argument(help="Target YAML file.")]
-TargetsArg = Annotated[list[Path], typer.Argument(help="Target YAML files to check.")]
-ValidateFormatOpt = Annotated[str, typer.Option("--format", help="table | json")]
-TableFormatOpt = Annotated[
-    str | None,
-    typer.Option("--format", help="table | ecsv | csv | json (default: the -o suffix, else table)"),
-]
-OutputOpt = Annotated[Path | None, typer.Option("-o", "--output", help="Write here (else stdout).")]
-OverwriteOutputOpt = Annotated[
-    bool, typer.Option("--overwrite", help="Replace an existing -o file.")
-]
-OverwriteAllOpt = Annotated[
-    bool, typer.Option("--overwrite", help="Replace existing output files.")
-]
-StartOpt = Annotated[str, typer.Option("--start", help="Window start, ISO, TDB at the barycentre.")]
-EndOpt = Annotated[str, typer.Option("--end", help="Window end, ISO, TDB at the barycentre.")]
-AnchorOpt = Annotated[
-    str,
-    typer.Option(
-        "--anchor",
-        help="quadrature | conjunction | eclipse (primary and secondary) | zero-crossing | U_RAD",
-    ),
-]
-StarOpt = Annotated[
-    int, typer.Option("--star", help="Component whose argument of latitude (1 or 2).")
-]
-MaxEpochsOpt = Annotated[
-    int, typer.Option("--max-epochs", help="Refuse windows with more epochs than this.")
-]
-SigmaVOpt = Annotated[
-    float | None,
-    typer.Option("--sigma-v", help="RV precision per epoch σ_v [km/s] (default: target file)."),
-]
-KEffOpt = Annotated[
-    float | None,
-    typer.Option(
-        "--k-eff", help="Semi-amplitude of the observable [km/s] (default: K_eff or K1+K2)."
-    ),
-]
-AlphaOpt = Annotated[list[float], typer.Option("--alpha", help="Margin α (repeatable).")]
-EpochsOpt = Annotated[
-    int, typer.Option("--epochs", help="1: single epoch, 2: two-epoch difference.")
-]
-AnchorsOpt = Annotated[list[str], typer.Option("--anchor", help="Anchors (repeatable).")]
-PlotOpt = Annotated[Path | None, typer.Option("--plot", help="Write the σ_u(t) horizon figure.")]
-CompareAArg = Annotated[Path, typer.Argument(help="Target YAML file A (e.g. a LISA posterior).")]
-CompareBArg = Annotated[Path, typer.Argument(help="Target YAML file B (e.g. a timing ephemeris).")]
-AtOpt = Annotated[
-    str | None,
-    typer.Option(
-        "--at",
-        help='Epoch, "BJD_TDB …" or ISO TDB (default: midway between the two reference epochs).',
-    ),
-]
-CompareFormatOpt = Annotated[
-    str | None,
-    typer.Option("--format", help="table | json (default: the -o suffix, else table)"),
-]
-
-
-_TABLE_FORMATS = ("table", "ecsv", "csv", "json")
+__all__ = ["horizon", "register", "validate"]
 
 
 def _check_format(fmt: str, allowed: tuple[str, ...]) -> str:
@@ -262,244 +215,6 @@ def _timing_summary(t: Target) -> dict[str, Any]:
     }
 
 
-def ephemeris(
-    target: TargetArg,
-    start: StartOpt,
-    end: EndOpt,
-    anchor: AnchorOpt = "quadrature",
-    star: StarOpt = 1,
-    fmt: TableFormatOpt = None,
-    output: OutputOpt = None,
-    overwrite: OverwriteOutputOpt = False,
-    max_epochs: MaxEpochsOpt = 2_000_000,
-) -> None:
-    """Barycentric epochs t★ (TDB) where u = u★, with σ_t and the φ_ref π-mode alternative.
-
-    A timing ephemeris has no π mode; its epochs carry the cycle number n of its polynomial.
-    `--anchor eclipse` gives primary and secondary eclipses.
-    """
-    from ucbplan.core.ephemeris import find_epochs
-
-    fmt = pick_format(output, fmt, _TABLE_FORMATS)
-    if star not in (1, 2):
-        raise UcbplanError(f"--star must be 1 or 2, got {star}")
-    t = load_target(target)
-    tau0, tau1 = _window(t, start, end, anchor, max_epochs)
-    es = find_epochs(t, tau0, tau1, anchor, star)
-    if t.kind == "timing":
-        _warn_timing_horizon(t, tau0, tau1)
-    elif tau1 > t.t_obs_s / 2:
-        _warn_horizon(t, tau1)
-    table = _epoch_table(t, es)
-    if fmt == "table":
-        _print_epochs(t, table)
-        return
-    _write_table(table, fmt, output, overwrite)
-
-
-def _window(t: Target, start: str, end: str, anchor: str, max_epochs: int) -> tuple[float, float]:
-    """--start/--end as TDB seconds since the target's t_ref; refuse empty or huge windows."""
-    from ucbplan.core.timescale import parse_tdb
-
-    t0 = parse_tdb(start, "--start")
-    t1 = parse_tdb(end, "--end")
-    tau0, tau1 = float(t.tau(t0)), float(t.tau(t1))
-    if tau1 <= tau0:
-        raise UcbplanError(
-            f"--end ({shorten(end, 60)}) must be after --start ({shorten(start, 60)})"
-        )
-    expected = (tau1 - tau0) / t.period_s * (2 if anchor != "u" else 1)
-    if expected > max_epochs:
-        raise UcbplanError(
-            f"window holds ~{expected:.3g} epochs (> --max-epochs {max_epochs}); shorten it"
-        )
-    return tau0, tau1
-
-
-def _warn_horizon(t: Target, tau_end: float) -> None:
-    """Warn when the window reaches past T_valid(quadrature, α = 1) of the target file's σ_v, K."""
-    spec = t.spectroscopy
-    if spec is None or spec.sigma_v_kms is None or spec.k_for_tolerance is None:
-        return
-    from ucbplan.core.forecast import horizon_s
-
-    tv = horizon_s(t, spec.sigma_v_kms, spec.k_for_tolerance, "quadrature")
-    if tau_end > t.t_obs_s / 2 + tv:
-        err_console.print(
-            f"[yellow]warning:[/] epochs after T_valid(quadrature, α=1) = {tv / DAY_S:.0f} d past "
-            "the LISA observation have σ_u above the phase tolerance; check σ_t before "
-            "scheduling them (see `ucbplan horizon`)"
-        )
-
-
-def _warn_timing_horizon(t: Target, tau0: float, tau1: float) -> None:
-    """Warn when the window reaches past T_valid(quadrature, α = 1) before or after T0."""
-    spec = t.spectroscopy
-    if spec is None or spec.sigma_v_kms is None or spec.k_for_tolerance is None:
-        return
-    from ucbplan.core.forecast import tolerance, valid_window_s
-
-    tol = tolerance("quadrature", spec.sigma_v_kms, spec.k_for_tolerance)
-    lo, hi = valid_window_s(t, tol, (0.0, math.pi))
-    for outside, side, span in ((tau0 < lo, "before", -lo), (tau1 > hi, "after", hi)):
-        if outside:
-            err_console.print(
-                f"[yellow]warning:[/] epochs more than T_valid(quadrature, α=1) = "
-                f"{span / DAY_S:.0f} d {side} T0 have σ_u above the phase tolerance; check σ_t "
-                "before scheduling them (see `ucbplan horizon`)"
-            )
-
-
-def _epoch_table(t: Target, es: Any) -> Any:
-    from astropy.table import Table
-    from astropy.time import TimeDelta
-
-    from ucbplan.core.ephemeris import eclipse_kind
-
-    t_star = t.t_ref + TimeDelta(es.origin_s, format="sec") + TimeDelta(es.dt_s, format="sec")
-    tab = Table()
-    tab["k"] = es.k
-    if t.kind == "timing":
-        tab["cycle"] = _cycles(t, es)
-    tab["anchor"] = [es.anchor] * len(es)
-    if es.anchor == "eclipse":
-        tab["eclipse"] = eclipse_kind(es.u_star_rad, es.star) if len(es) else []
-    tab["u_star_rad"] = es.u_star_rad
-    tab["t_star_tdb"] = _iso_us(t_star)
-    if t.kind == "timing":
-        from ucbplan.core.timescale import bjd_tdb_numbers
-
-        tab["t_star_bjd_tdb"] = bjd_tdb_numbers(t_star)
-    tab["tau_s"] = es.tau_s
-    tab["sigma_t_s"] = es.sigma_t_s
-    tab["sigma_u_rad"] = es.sigma_u_rad
-    units = [("u_star_rad", "rad"), ("tau_s", "s"), ("sigma_t_s", "s"), ("sigma_u_rad", "rad")]
-    if t.has_pi_mode:
-        t_alt = t.t_ref + TimeDelta(es.tau_alt_s, format="sec")
-        tab["t_alt_tdb"] = _iso_us(t_alt)
-        tab["tau_alt_s"] = es.tau_alt_s
-        units.append(("tau_alt_s", "s"))
-    for col, unit in units:
-        tab[col].unit = unit
-    tab.meta.update(
-        {
-            "ucbplan_version": __version__,
-            "target": t.name,
-            "target_file": str(t.source) if t.source else "",
-            "target_sha256": t.sha256 or "",
-            "time_scale": "TDB at the solar-system barycentre",
-            "t_ref_tdb": t.t_ref.tdb.isot,
-            "tau_origin": "seconds since t_ref (TDB)",
-            "phase_convention": (
-                "u = Phi_GW/2 + eps_j + 2 kappa sin Phi_asc - 2 eta cos Phi_asc; "
-                "eps_1=0, eps_2=pi; u=0 ascending node (max recession of star 1)"
-            ),
-            "star": es.star,
-        }
-    )
-    if t.has_pi_mode:
-        tab.meta["alt_epoch"] = "solution of the phi_ref + pi posterior mode (about P_b/4 earlier)"
-    if t.kind == "timing" and t.timing is not None:
-        from ucbplan.core.timescale import format_bjd_tdb
-
-        tab.meta.update(
-            {
-                "ephemeris": "timing",
-                "t0_bjd_tdb": format_bjd_tdb(t.t_ref).split()[1],
-                "t0_marks": t.timing.ephemeris.mark,
-                "cycle": "ephemeris cycle n of t(n) = T0 + P n + P Pdot n^2/2 (+ P^2 Pddot n^3/6)"
-                " for star 1: (u_1 - u_1(T0))/2pi, half-integer at the other conjunction",
-                "source": t.timing.source,
-            }
-        )
-    return tab
-
-
-def _cycles(t: Target, es: Any) -> Any:
-    """Ephemeris cycle number n of each epoch: (u₁ − u₁(T0))/2π (u₁ = u★ − ε of the star)."""
-    from ucbplan.core.phase import u_cycles
-
-    m0, g0 = u_cycles(t.params, np.array([0.0]))
-    eps = 0.0 if es.star == 1 else 0.5
-    cycles = es.k + (es.u_star_rad / (2 * math.pi) - eps) - (m0[0] + g0[0])
-    return np.round(cycles, 9)
-
-
-def _iso_us(t: Any) -> list[str]:
-    """TDB ISO strings with microseconds."""
-    tdb = t.tdb
-    tdb.precision = 6
-    return [str(x) for x in np.atleast_1d(tdb.isot)]
-
-
-def _print_epochs(t: Target, tab: Any) -> None:
-    if not t.has_pi_mode:
-        _print_timing_epochs(t, tab)
-        return
-    rt = rich_table(
-        f"{t.name}: {len(tab)} epochs (barycentric TDB)",
-        ["k", "u★ [rad]", "t★ (TDB)", "σ_t [s]", "π-mode alt. (TDB)"],
-    )
-    n = len(tab)
-    rows = range(n) if n <= 60 else [*range(30), -1, *range(n - 30, n)]
-    for i in rows:
-        if i == -1:
-            rt.add_row("…", "…", f"({n - 60} more; use -o or --format)", "…", "…")
-            continue
-        r = tab[i]
-        rt.add_row(
-            str(r["k"]),
-            f"{r['u_star_rad']:.6f}",
-            str(r["t_star_tdb"]),
-            f"±{r['sigma_t_s']:.3f}",
-            str(r["t_alt_tdb"]),
-        )
-    err_console.print(rt)
-
-
-def _print_timing_epochs(t: Target, tab: Any) -> None:
-    """The epochs of a timing ephemeris: cycle n, u★, t★ (TDB ISO and BJD_TDB), σ_t."""
-    eclipse = "eclipse" in tab.colnames
-    cols = ["n", *(["eclipse"] if eclipse else []), "u★ [rad]", "t★ (TDB)", "BJD_TDB", "σ_t [s]"]
-    rt = rich_table(f"{t.name}: {len(tab)} epochs (barycentric TDB)", cols)
-    n = len(tab)
-    rows = range(n) if n <= 60 else [*range(30), -1, *range(n - 30, n)]
-    for i in rows:
-        if i == -1:
-            rt.add_row(*(["…"] * (len(cols) - 1)), f"({n - 60} more; use -o or --format)")
-            continue
-        r = tab[i]
-        rt.add_row(
-            f"{r['cycle']:.12g}",
-            *([str(r["eclipse"])] if eclipse else []),
-            f"{r['u_star_rad']:.6f}",
-            str(r["t_star_tdb"]),
-            str(r["t_star_bjd_tdb"]),
-            f"±{r['sigma_t_s']:.3f}",
-        )
-    err_console.print(rt)
-
-
-def _write_table(tab: Any, fmt: str, output: Path | None, overwrite: bool) -> None:
-    if fmt == "json":
-        rows = [
-            {
-                c: (v.item() if hasattr(v, "item") else v)
-                for c, v in zip(tab.colnames, row, strict=True)
-            }
-            for row in tab.iterrows()
-        ]
-        doc = {"meta": dict(tab.meta), "rows": rows}
-        write_output(output, lambda h: dump_json(doc, h), overwrite=overwrite)
-        return
-    fmt_name = "ascii.ecsv" if fmt == "ecsv" else "ascii.csv"
-
-    def _w(handle: IO[str]) -> None:
-        tab.write(handle, format=fmt_name)
-
-    write_output(output, _w, overwrite=overwrite)
-
-
 def horizon(
     target: TargetArg,
     sigma_v: SigmaVOpt = None,
@@ -518,7 +233,7 @@ def horizon(
     """
     from ucbplan.core.forecast import horizon_table
 
-    fmt = pick_format(output, fmt, _TABLE_FORMATS)
+    fmt = pick_format(output, fmt, TABLE_FORMATS)
     t = load_target(target)
     sv, k = _resolve_k_sigma(t, sigma_v, k_eff)
     for a in alpha:
@@ -535,7 +250,7 @@ def horizon(
         doc = [r.as_dict() | {"target": t.name} for r in rows]
         write_output(output, lambda h: dump_json(doc, h), overwrite=overwrite)
     else:
-        _write_table(_horizon_table(t, rows, sv, k, epochs), fmt, output, overwrite)
+        write_table_output(_horizon_table(t, rows, sv, k, epochs), fmt, output, overwrite)
 
 
 def _horizon_table(t: Target, rows: list[Any], sv: float, k: float, epochs: int) -> Any:
@@ -611,173 +326,8 @@ def _print_two_sided_horizon(t: Target, rows: list[Any], sv: float, k: float, ep
 # ---------------------------------------------------------------------------------------------
 
 
-def compare(
-    a: CompareAArg,
-    b: CompareBArg,
-    at: AtOpt = None,
-    fmt: CompareFormatOpt = None,
-    output: OutputOpt = None,
-    overwrite: OverwriteOutputOpt = False,
-) -> None:
-    """Phase and time offset of two ephemerides of one system (A − B, star 1) at an epoch.
-
-    With σ from both covariances, the significance, and the cycles from A's reference epoch to
-    B's as each counts them (a whole-cycle disagreement the wrapped phase offset hides).
-    """
-    from ucbplan.core.timing import compare_sources
-
-    fmt = pick_format(output, fmt, ("table", "json"))
-    ta, tb = load_target(a), load_target(b)
-    epoch = _epoch_option(at, "--at") if at is not None else None
-    _warn_different_systems(ta, tb)
-    report = compare_sources(ta, tb, epoch)
-    doc = _comparison_doc(ta, tb, report)
-    if fmt == "table":
-        _print_comparison(doc)
-        return
-    write_output(output, lambda h: dump_json(doc, h), overwrite=overwrite)
-
-
-def _epoch_option(text: str, what: str) -> Any:
-    """An epoch option: ``"BJD_TDB …"`` (full precision) or ISO/MJD/JD TDB (:func:`parse_tdb`)."""
-    from ucbplan.core.timescale import TIMING_EPOCH_WORDS, parse_tdb, parse_timing_epoch
-    from ucbplan.errors import InputError
-
-    word = text.strip().split(" ", 1)[0].upper().replace("-", "_")
-    if word in TIMING_EPOCH_WORDS or word.startswith(("BJD", "BMJD", "HJD", "HMJD")):
-        try:
-            return parse_timing_epoch(text)
-        except ValueError as exc:
-            raise InputError(f"{what}: {exc}") from None
-    return parse_tdb(text, what)
-
-
-def _warn_different_systems(ta: Target, tb: Target) -> None:
-    """Warn when the two files look like different binaries (sky position, period)."""
-    sep = float(ta.coord.separation(tb.coord).arcsec)
-    dp = abs(ta.period_s - tb.period_s) / ta.period_s
-    if sep > 5.0 or dp > 1e-3:
-        err_console.print(
-            f"[yellow]warning:[/] {escape(ta.name)} and {escape(tb.name)} are {sep:.1f}″ apart "
-            f"and their periods differ by {100 * dp:.3g} %: compare two ephemerides of one system"
-        )
-
-
-def _comparison_doc(ta: Target, tb: Target, report: Any) -> dict[str, Any]:
-    """JSON-ready comparison: the two files, the epoch, the offset (and π-mode alternatives)."""
-    from ucbplan.core.timescale import format_bjd_tdb
-
-    def side(t: Target) -> dict[str, Any]:
-        return {
-            "name": t.name,
-            "file": str(t.source) if t.source else "",
-            "kind": t.kind,
-            "t_ref_tdb": t.t_ref.tdb.isot,
-        }
-
-    r = report.result
-    return {
-        "a": side(ta),
-        "b": side(tb),
-        "epoch_tdb": report.epoch.tdb.isot,
-        "epoch_bjd_tdb": format_bjd_tdb(report.epoch).split()[1],
-        **r.offsets(),
-        "cycles_a": r.cycles_a,
-        "cycles_b": r.cycles_b,
-        "cycle_count_difference": r.cycle_difference,
-        "sigma_cycle_count_difference": r.sigma_cycle_difference,
-        "whole_cycle_difference": round(r.cycle_difference),
-        "pi_mode": [{"side": s, **c.offsets()} for s, c in report.alternatives],
-        "convention": (
-            "A - B for star 1: phase offset u1_A - u1_B at the epoch wrapped to (-pi, pi]; time "
-            "offset t_A - t_B of the same orbital phase (negative: A predicts it earlier); "
-            "cycles_a/cycles_b: orbits from A's reference epoch to B's as counted by A and by B; "
-            "pi_mode: the same with that side's phi_ref + pi (LISA posteriors)"
-        ),
-    }
-
-
-def _print_comparison(doc: dict[str, Any]) -> None:
-    a, b = doc["a"], doc["b"]
-    rt = rich_table(
-        f"{a['name']} ({a['kind']}) − {b['name']} ({b['kind']}) at {doc['epoch_tdb']} TDB",
-        ["quantity", "value"],
-    )
-    sig = doc["significance"]
-    rows = [
-        ("phase offset u₁,A − u₁,B [mrad]", f"{1e3 * doc['phase_offset_rad']:.3f}"),
-        ("σ [mrad]", f"{1e3 * doc['sigma_phase_offset_rad']:.3f}"),
-        ("time offset t_A − t_B [s]", f"{doc['time_offset_s']:.4f}"),
-        ("σ [s]", f"{doc['sigma_time_offset_s']:.4f}"),
-        ("significance [σ]", "∞ (no uncertainty)" if sig is None else f"{sig:.2f}"),
-        ("cycles from A's epoch to B's, by A", f"{doc['cycles_a']:.6f}"),
-        ("cycles from A's epoch to B's, by B", f"{doc['cycles_b']:.6f}"),
-        (
-            "cycle count difference",
-            f"{doc['cycle_count_difference']:.6f} ± {doc['sigma_cycle_count_difference']:.6f}",
-        ),
-    ]
-    for alt in doc["pi_mode"]:
-        rows.append(
-            (
-                f"with {alt['side'].upper()}'s φ_ref + π: time offset [s]",
-                f"{alt['time_offset_s']:.4f} ± {alt['sigma_time_offset_s']:.4f}",
-            )
-        )
-    for label, value in rows:
-        rt.add_row(escape(label), escape(value))
-    err_console.print(rt)
-
-
-# ---------------------------------------------------------------------------------------------
-# the ephemeris group and registration
-# ---------------------------------------------------------------------------------------------
-
-
-class EphemerisGroup(typer.core.TyperGroup):
-    """A command group whose first argument, when it is not a sub-command, goes to ``predict``.
-
-    ``ucbplan ephemeris TARGET --start … --end …`` therefore keeps working exactly as before
-    the group existed; ``ucbplan ephemeris predict TARGET …`` is the same command.
-    """
-
-    default_command = "predict"
-
-    def parse_args(self, ctx: Any, args: list[str]) -> list[str]:
-        """Route ``ephemeris ARGS`` to ``ephemeris predict ARGS`` unless ARGS names a command."""
-        if args and args[0] not in self.commands and args[0] not in ctx.help_option_names:
-            args = [self.default_command, *args]
-        return super().parse_args(ctx, args)
-
-
-ephemeris_app = typer.Typer(
-    cls=EphemerisGroup,
-    name="ephemeris",
-    no_args_is_help=True,
-    add_completion=False,
-    help=(
-        "Ephemeris predictions and checks. `ucbplan ephemeris TARGET --start … --end …` is "
-        "`ucbplan ephemeris predict …` (epochs t★ where u = u★); `compare` offsets two "
-        "ephemerides of one system."
-    ),
-)
-ephemeris_app.command("predict")(ephemeris)
-ephemeris_app.command("compare")(compare)
-
-
 def register(app: typer.Typer) -> None:
     """Add the core commands to ``app``."""
     app.command("validate")(validate)
-    # ------------------------------------------------------------------------------------
-    # MOUNT POINT for `ucbplan ephemeris fit` (issue 10, item 3). The eclipse-time fit is a
-    # separate command function in ucbplan.cli.timing; the lead mounts it here, e.g.
-    #
-    #     from ucbplan.cli import timing
-    #     if "fit" not in {c.name for c in ephemeris_app.registered_commands}:
-    #         ephemeris_app.command("fit")(timing.fit)
-    #
-    # (any name other than `predict`/`compare` works: EphemerisGroup routes only arguments
-    # that are not sub-command names to `predict`).
-    # ------------------------------------------------------------------------------------
-    app.add_typer(ephemeris_app, name="ephemeris")
+    register_ephemeris(app)
     app.command("horizon")(horizon)

@@ -29,7 +29,7 @@ from ucbplan.cli._console import (
 from ucbplan.errors import InputError
 from ucbplan.inputs import check_number
 
-__all__ = ["ephemeris_fit", "register"]
+__all__ = ["ephemeris_fit"]
 
 TimesArg = Annotated[
     Path,
@@ -211,8 +211,3 @@ def _print_summary(fit: Any) -> None:
     for i in range(1, fit.terms):
         tab.add_row(fit.names[i], f"{fit.values[i]:.12g}", f"{sig[i]:.3g}", UNITS[i])
     err_console.print(tab)
-
-
-def register(app: typer.Typer) -> None:
-    """Add ``ephemeris-fit`` to ``app`` (mounted as ``ephemeris fit`` by the ephemeris group)."""
-    app.command("ephemeris-fit")(ephemeris_fit)
