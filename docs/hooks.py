@@ -134,8 +134,9 @@ def _param_rows(command: Any, ctx: Any) -> tuple[list[list[str]], list[list[str]
     return arguments, options
 
 
-def _command_section(name: str, command: Any, ctx: Any) -> list[str]:
-    out = [f"## `ucbplan {name}`", ""]
+def _command_section(name: str, command: Any, ctx: Any, level: int = 2) -> list[str]:
+    """The section of one command; a group (``ephemeris``, ``population``) lists its commands."""
+    out = [f"{'#' * level} `ucbplan {name}`", ""]
     for para in _paragraphs(command.help):
         out += [para, ""]
     usage = command.get_usage(ctx).removeprefix("Usage:").strip()
@@ -147,6 +148,12 @@ def _command_section(name: str, command: Any, ctx: Any) -> list[str]:
     if options:
         out += ["**Options**", ""]
         out += _table(["option", "value", "default", "description"], options)
+    for sub_name in getattr(command, "list_commands", lambda _ctx: [])(ctx):
+        sub = command.get_command(ctx, sub_name)
+        if sub is None or sub.hidden:
+            continue
+        sub_ctx = sub.context_class(sub, info_name=sub_name, parent=ctx)
+        out += _command_section(f"{name} {sub_name}", sub, sub_ctx, level + 1)
     return out
 
 
