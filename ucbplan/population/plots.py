@@ -32,10 +32,12 @@ def forecast_plots(
         ax.scatter(x, tv_plot, s=8)
         ax.set_xscale("log")
         ax.set_yscale("log")
+        _plain_log_ticks(ax.xaxis)
         ax.set_xlabel(xlabel)
         ax.set_ylabel(label)
         ax.set_title(f"{int(ok.sum())} constrained sources (T_valid = 0 not shown)")
         path = folder / name
+        fig.tight_layout()
         save_figure(fig, path, overwrite=overwrite)
         out.append(path)
     fig, ax = plt.subplots(figsize=(6, 4))
@@ -44,7 +46,20 @@ def forecast_plots(
     ax.set_xscale("log")
     ax.set_xlabel(label)
     ax.set_ylabel("number of sources with T_valid > x")
+    fig.tight_layout()
     path = folder / "tvalid_cumulative.png"
     save_figure(fig, path, overwrite=overwrite)
     out.append(path)
     return out
+
+
+def _plain_log_ticks(axis: Any) -> None:
+    """Plain numbers (2, 3, 10, 20) on a log axis that spans little more than a decade.
+
+    Matplotlib's default labels the minor ticks as 2×10⁰, 3×10⁰ …, which overprint each other.
+    """
+    from matplotlib.ticker import LogLocator, NullFormatter, ScalarFormatter
+
+    axis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+    axis.set_major_formatter(ScalarFormatter())
+    axis.set_minor_formatter(NullFormatter())
