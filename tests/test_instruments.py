@@ -15,9 +15,12 @@ from hypothesis import strategies as st
 from ucbplan.errors import InputError, InputFileError, UcbplanError
 from ucbplan.observing.instruments import (
     Instrument,
+    Overheads,
     SigmaRef,
+    check_exptime,
     get_instrument,
     instrument_magnitude,
+    instrument_overheads,
     load_instruments,
     sigma_v_kms,
 )
@@ -168,3 +171,27 @@ def test_sigma_v_fuzz(mag: float, t: float, x: float) -> None:
         assert "\n" not in str(exc) and len(str(exc)) < 400
         return
     assert s.shape == () and (math.isnan(float(s)) or float(s) >= 0.0)
+
+
+def test_overheads_option_wins_else_instrument_else_error() -> None:
+    xs = get_instrument("xshooter-vis")
+    assert instrument_overheads(xs) == Overheads(
+        409.0, 45.0, "instrument xshooter-vis", "instrument xshooter-vis"
+    )
+    got = instrument_overheads(xs, readout_s=11.0)
+    assert got.readout_s == 11.0 and got.readout_from == "--readout" and got.acquisition_s == 409
+    uves = get_instrument("uves")
+    with pytest.raises(InputError, match="pass --overhead SECONDS") as err:
+        instrument_overheads(uves)
+    assert "\n" not in str(err.value)
+    assert instrument_overheads(uves, acquisition_s=600, readout_s=60).acquisition_s == 600
+    with pytest.raises(InputError, match="--readout"):
+        instrument_overheads(None, acquisition_s=600)
+
+
+def test_minimum_exposure() -> None:
+    inst = replace(get_instrument("xshooter-vis"), min_exptime_s=1.0)
+    check_exptime(inst, 1.0)
+    with pytest.raises(InputError, match="at least 1 s"):
+        check_exptime(inst, 0.5)
+    check_exptime(get_instrument("uves"), 0.01)  # no confirmed minimum: nothing to refuse

@@ -34,9 +34,12 @@ from ucbplan.inputs import load_yaml
 __all__ = [
     "BUNDLED",
     "Instrument",
+    "Overheads",
     "SigmaRef",
+    "check_exptime",
     "get_instrument",
     "instrument_magnitude",
+    "instrument_overheads",
     "load_instruments",
     "sigma_v_kms",
 ]
@@ -343,3 +346,65 @@ def sigma_v_kms(
         * 10.0 ** (0.2 * k * (x - 1.0)),
         dtype=np.float64,
     )
+
+
+@dataclass(frozen=True)
+class Overheads:
+    """Acquisition per visit and readout per exposure [s] in force, and where each came from."""
+
+    acquisition_s: float
+    readout_s: float
+    acquisition_from: str
+    readout_from: str
+
+
+def instrument_overheads(
+    instrument: Instrument | None,
+    *,
+    acquisition_s: float | None = None,
+    readout_s: float | None = None,
+) -> Overheads:
+    """Overheads in force: an option the user gave (``--overhead``, ``--readout``) wins, else the
+    instrument's number.
+
+    Raises
+    ------
+    InputError
+        The instrument table has no confirmed number (named under ``missing``) and the user gave
+        none: one line naming the option to pass.
+    """
+
+    def pick(value: float | None, key: str, option: str) -> tuple[float, str]:
+        if value is not None:
+            if not _is_number(value) or value < 0:
+                raise InputError(f"{option}: expected seconds >= 0, got {shorten(value, 40)}")
+            return float(value), option
+        table = getattr(instrument, key) if instrument is not None else None
+        if table is None:
+            if instrument is None:
+                raise InputError(f"{option}: expected seconds (no --instrument given), got none")
+            raise InputError(
+                f"--instrument {instrument.name}: {key} is not confirmed in the instrument table; "
+                f"pass {option} SECONDS"
+            )
+        return float(table), f"instrument {instrument.name}" if instrument else option
+
+    acq, acq_from = pick(acquisition_s, "acquisition_s", "--overhead")
+    ro, ro_from = pick(readout_s, "readout_s", "--readout")
+    return Overheads(acq, ro, acq_from, ro_from)
+
+
+def check_exptime(instrument: Instrument, exptime_s: float) -> None:
+    """Refuse an exposure shorter than the instrument's minimum (when the table has one).
+
+    Raises
+    ------
+    InputError
+        One line naming the minimum.
+    """
+    low = instrument.min_exptime_s
+    if low is not None and exptime_s < low:
+        raise InputError(
+            f"--exptime: expected at least {low:g} s (minimum of {instrument.name}), "
+            f"got {exptime_s:g} s"
+        )
