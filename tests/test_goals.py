@@ -274,3 +274,11 @@ def test_spectra_for_goal_fuzz(sv: float, lam: float, goal: float) -> None:
         assert "\n" not in str(exc) and len(str(exc)) < 400
         return
     assert plan.n_spectra % 2 == 0 and plan.expected <= goal * (1 + 1e-9)
+
+
+def test_repeated_anchor_names_count_once() -> None:
+    assert anchor_phases(["quadrature", "Quadrature"]) == anchor_phases(["quadrature"])
+    with pytest.raises(InputError, match="--anchor"):
+        anchor_phases(["opposition"])
+    with pytest.raises(InputError, match="u=RADIANS"):
+        anchor_phases(["u=abc"])

@@ -196,7 +196,7 @@ def anchor_phases(anchors: tuple[str, ...] | list[str]) -> list[tuple[str, float
         Unknown anchor name.
     """
     out: list[tuple[str, float]] = []
-    for name in anchors:
+    for name in dict.fromkeys(str(a).strip().lower() for a in anchors):  # each anchor once
         key = str(name).strip().lower()
         if key == "quadrature":
             out += [("quadrature", 0.0), ("quadrature", math.pi)]
@@ -321,7 +321,7 @@ def spectra_for_goal(
     Parameters
     ----------
     goal : Goal
-        From :func:`parse_goal`.
+        From :func:`parse_goal`. ``sigma_K`` bounds σ_K of every star measured (both for SB2).
     K1, K2 : float
         Semi-amplitudes [km/s]; ``K2=None`` for a single-lined (SB1) target.
     sigma_v_kms, sigma_v2_kms : float
