@@ -9,7 +9,7 @@ observing values may be exactly 0 (``--readout 0``, ``--moon-sep 0``) or exactly
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, TypeGuard
 
 import numpy as np
 
@@ -18,7 +18,7 @@ from ucbplan.errors import InputError, shorten
 __all__ = ["check_int", "check_range", "is_number"]
 
 
-def is_number(value: Any) -> bool:
+def is_number(value: Any) -> TypeGuard[int | float | np.integer[Any] | np.floating[Any]]:
     """A real number (``int`` or ``float``, numpy scalars included), not a bool."""
     if isinstance(value, bool | np.bool_):
         return False
