@@ -245,3 +245,19 @@ def test_planner_never_overlaps(
     spans = sorted(starts.values(), key=lambda p: p[0].jd1 + p[0].jd2)
     for (_, a1), (b0, _) in itertools.pairwise(spans):
         assert (b0 - a1).to_value("s") >= overhead - 1e-3
+
+
+def test_failure_groups_nights(targets: list[Target]) -> None:
+    # 60 nights without a block were 60 clauses (thousands of characters, cut by the CLI).
+    from ucbplan.observing.schedule import plan_files
+
+    run = plan_files(
+        [HM],
+        first_night="2040-02-15",
+        n_nights=60,
+        site="paranal",
+        settings=PlanSettings(exposure=ExposurePlan(43200.0)),
+    )
+    text = run.failure()
+    assert text is not None and len(text) < 400, text
+    assert "HM Cnc (60 nights 2040-02-15..2040-04-14): " in text

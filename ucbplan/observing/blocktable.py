@@ -384,7 +384,11 @@ KNOWN_COLUMNS: dict[str, Column] = {c.name: c for c in (*COLUMNS, *USER_COLUMNS)
 BLANK_OK = frozenset(("t_alt_utc", "session_id", "pair_id"))
 
 #: Largest blocks table [bytes] (a year of blocks of a 5-min binary is a few MB).
-MAX_TABLE_BYTES = 200_000_000
+MAX_TABLE_BYTES = 100_000_000
+
+#: Largest ECSV header [characters] (column declarations and provenance: a year-long plan writes
+#: a few hundred kB).
+MAX_HEADER_CHARS = 4_000_000
 
 #: Years a blocks-table time may fall in (the planner plans nights in 1900-2100).
 TIME_YEARS = (1900, 2101)
@@ -731,16 +735,25 @@ def check_blocks(table: Table, where: str = "blocks table") -> Table:
     return out
 
 
-def _header_aliases(text: str, where: str) -> None:
-    """Refuse an ECSV header with more YAML aliases than a target file may have (an alias bomb
+def _check_header(text: str, where: str) -> None:
+    """Refuse an ECSV header larger than :data:`MAX_HEADER_CHARS` (astropy parses it in pure
+    Python, ~1 MB/s) or with more YAML aliases than a target file may have (an alias bomb
     expands when the metadata is written out again)."""
-    header = "\n".join(
-        line[2:] if line.startswith("# ") else line[1:]
-        for line in itertools.takewhile(lambda ln: ln.startswith("#"), text.splitlines())
-    )
+    lines = itertools.takewhile(lambda ln: ln.startswith("#"), text.splitlines())
+    header_lines: list[str] = []
+    size = 0
+    for line in lines:
+        size += len(line) + 1
+        if size > MAX_HEADER_CHARS:
+            raise InputFileError(
+                f"{where}: the ECSV header is larger than {MAX_HEADER_CHARS} characters, more "
+                "than any plan writes; regenerate the table with `ucbplan plan`"
+            )
+        header_lines.append(line[2:] if line.startswith("# ") else line[1:])
+    loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
     count = 0
     try:
-        for event in yaml.parse(header, Loader=yaml.SafeLoader):
+        for event in yaml.parse("\n".join(header_lines), Loader=loader):
             count += isinstance(event, yaml.AliasEvent)
             if count > MAX_ALIASES:
                 raise InputFileError(
@@ -819,7 +832,7 @@ def _csv_table(text: str, where: str) -> Table:
 
 
 def _ecsv_table(text: str, where: str) -> Table:
-    _header_aliases(text, where)
+    _check_header(text, where)
     try:
         return Table.read(text.splitlines(), format="ascii.ecsv")
     except Exception as exc:  # astropy raises many types for a malformed ECSV file

@@ -98,11 +98,20 @@ class PlanRun:
     result: PlanResult
 
     def failure(self) -> str | None:
-        """Why no block at all could be planned (None if some were)."""
+        """Why no block at all could be planned (None if some were), grouped by target and
+        reason over the nights."""
         if self.result.blocks:
             return None
-        reasons = "; ".join(f"{m.target} {m.night}: {m.reason}" for m in self.result.unplaced)
-        return f"no block could be planned at {self.site.name}: {reasons}"
+        grouped: dict[tuple[str, str], list[str]] = {}
+        for m in self.result.unplaced:
+            grouped.setdefault((m.target, m.reason), []).append(m.night)
+        parts = []
+        for (name, reason), nights in grouped.items():
+            when = (
+                nights[0] if len(nights) == 1 else f"{len(nights)} nights {nights[0]}..{nights[-1]}"
+            )
+            parts.append(f"{name} ({when}): {reason}")
+        return f"no block could be planned at {self.site.name}: {'; '.join(parts)}"
 
     def meta(self) -> dict[str, Any]:
         """Provenance of the run for the table ``meta`` (see :func:`make_meta`)."""
