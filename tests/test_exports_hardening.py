@@ -359,3 +359,17 @@ def test_export_cli_format_rule(tmp_path: Path) -> None:
     code, err = run_cli(["export", str(blocks), "--to", "ics", "--format", "csv"])
     check_outcome(code, err)
     assert code == 2 and "--format chooses the proposal table format" in err
+
+
+def test_shared_references_in_meta_cannot_expand() -> None:
+    # A YAML alias bomb read by another tool: 10^10 leaves through shared lists.
+    table = fixture_table()
+    bomb: list = ["lol"] * 10
+    for _ in range(9):
+        bomb = [bomb] * 10
+    table.meta["site"] = {"name": "Paranal", "bomb": bomb}
+    table.meta["constraints"] = [bomb]
+    with deadline(20):
+        for to in EXPORT_FORMATS:
+            res = export_blocks(table, to, ExportOptions(acquisition_s=600.0))
+            assert len(res.content) < 2_000_000

@@ -750,6 +750,8 @@ def _check_header(text: str, where: str) -> None:
                 "than any plan writes; regenerate the table with `ucbplan plan`"
             )
         header_lines.append(line[2:] if line.startswith("# ") else line[1:])
+    if header_lines and header_lines[0].startswith("%"):
+        header_lines[0] = ""  # the "%ECSV 1.0" line: libyaml refuses unknown directives
     loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
     count = 0
     try:

@@ -575,15 +575,18 @@ def _utf8(text: str) -> str:
     return text.encode("utf-8", "replace").decode("utf-8")
 
 
-def clean_meta(value: Any, depth: int = 0) -> Any:
+def clean_meta(value: Any, budget: list[int] | None = None, depth: int = 0) -> Any:
     """A copy of provenance metadata that can be written again: plain dicts, lists, numbers and
-    UTF-8 strings, at most 8 levels deep (a table's own metadata is returned unchanged)."""
-    if depth > 8:
+    UTF-8 strings, at most 8 levels deep and 10 000 values in all (shared references, as a YAML
+    alias makes them, cannot expand without limit). A table's own metadata comes back equal."""
+    budget = [10_000] if budget is None else budget
+    budget[0] -= 1
+    if depth > 8 or budget[0] < 0:
         return "..."
     if isinstance(value, Mapping):
-        return {_utf8(str(k)): clean_meta(v, depth + 1) for k, v in value.items()}
+        return {_utf8(str(k)): clean_meta(v, budget, depth + 1) for k, v in value.items()}
     if isinstance(value, list | tuple):
-        return [clean_meta(v, depth + 1) for v in value]
+        return [clean_meta(v, budget, depth + 1) for v in value]
     if isinstance(value, str):
         return _utf8(value)
     if value is None or isinstance(value, bool | int | float):
