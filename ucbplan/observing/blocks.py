@@ -170,8 +170,8 @@ def check_smear_budget(
         )
     if max_smear_kms is not None and math.isfinite(sm.smear_kms) and sm.smear_kms > max_smear_kms:
         raise UcbplanError(
-            f"{name}: smearing K(1-Lambda_K) = {sm.smear_kms:.2f} km/s exceeds --max-smear "
-            f"{max_smear_kms:.2f} km/s (Lambda_K = {sm.lambda_k:.4f}); shorten --exptime or --n-exp"
+            f"{name}: smearing K(1-Lambda_K) = {sm.smear_kms:.3g} km/s exceeds --max-smear "
+            f"{max_smear_kms:.3g} km/s (Lambda_K = {sm.lambda_k:.4f}); shorten --exptime or --n-exp"
         )
     if (
         max_smear_kms is None

@@ -82,7 +82,8 @@ def with_priorities(
     known = {t.name.lower() for t in targets}
     unknown = sorted(set(values) - known)
     if unknown:
-        names = shorten(", ".join(t.name for t in targets), 200)
+        names = ", ".join(t.name for t in targets)
+        names = names if len(names) <= 200 else f"{names[:199]}…"
         raise InputError(f"--priority: no target named {shorten(unknown[0], 60)}; targets: {names}")
     return [replace(t, priority=values.get(t.name.lower(), t.priority)) for t in targets]
 
