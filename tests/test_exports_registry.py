@@ -103,7 +103,9 @@ def test_bad_time_is_a_clear_error(table: Table) -> None:
     t = Table(table, copy=True)
     t["t_mid_utc"] = t["t_mid_utc"].astype("U30")
     t["t_mid_utc"][0] = "yesterday"
-    with pytest.raises(InputFileError, match="column t_mid_utc row 0: got 'yesterday'"):
+    with pytest.raises(
+        InputFileError, match=r"row 1, column t_mid_utc: expected an ISO time.*got 'yesterday'"
+    ):
         export_blocks(t, "ics", ExportOptions())
 
 
@@ -198,8 +200,13 @@ def test_cli_export_passes_options_through(blocks_path: Path) -> None:
     ("args", "message"),
     [
         (["--to", "nope"], "unknown export format 'nope'"),
-        (["--to", "proposal", "--format", "xlsx"], "expected ecsv, csv or latex"),
-        (["--to", "ics", "--tolerance-sigma", "-1"], "must be >= 0"),
+        (["--to", "proposal", "--format", "xlsx"], "expected one of ecsv, csv, latex"),
+        (["--to", "ics", "--tolerance-sigma", "-1"], "--tolerance-sigma: expected a number in [0,"),
+        (["--to", "ics", "--tolerance-floor", "nan"], "--tolerance-floor: expected a number"),
+        (["--to", "ics", "--acquisition", "1e300"], "--acquisition: expected a number"),
+        (["--to", "keck-starlist", "--rotmode", "sideways"], "--rotmode: expected pa, vertical"),
+        (["--to", "ics", "--format", "latex"], "--format chooses the proposal table format"),
+        (["--to", "proposal", "-o", "x.tex", "--format", "csv"], "the suffix says latex"),
     ],
 )
 def test_cli_export_refuses_bad_options(blocks_path: Path, args: list[str], message: str) -> None:

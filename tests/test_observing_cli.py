@@ -72,7 +72,7 @@ def test_errors_are_one_line_without_traceback(tmp_path: Path) -> None:
     proc = _run(["plan", str(north), "--site", "paranal", "--night", "2040-02-15"])
     assert proc.returncode == 2
     assert "Traceback" not in proc.stderr
-    assert "error: no block could be planned at Paranal: Far North 2040-02-15: never at" in (
+    assert "error: no block could be planned at Paranal: Far North (2040-02-15): never at" in (
         " ".join(proc.stderr.split())
     )
     proc = _run(["plan", HM, "--site", "atlantis", "--night", "2040-02-15"])

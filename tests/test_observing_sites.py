@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+import re
 from pathlib import Path
 
 import pytest
@@ -76,10 +78,12 @@ def test_user_site_file_first(tmp_path: Path) -> None:
     assert get_site("pole", path).lat_deg == -89.99
     assert get_site("paranal", path).name == "Paranal"  # bundled table still searched
     bad = tmp_path / "bad.yaml"
-    bad.write_text("sites:\n  - name: X\n    lon_deg: 0\n    lat_deg: 95\n    height_m: 0\n")
-    with pytest.raises(SiteError, match=r"lat_deg: expected -90\.0 <= value <= 90\.0, got 95"):
+    bad.write_text(
+        "sites:\n  - name: X\n    lon_deg: 0\n    lat_deg: 95\n    height_m: 0\n    timezone: UTC\n"
+    )
+    with pytest.raises(SiteError, match=r"lat_deg: expected a number in \[-90, 90\] deg.*got 95"):
         get_site("x", bad)
-    with pytest.raises(SiteError, match="cannot read site file"):
+    with pytest.raises(SiteError, match=r"--sites-file .*missing.yaml: file not found"):
         get_site("x", tmp_path / "missing.yaml")
 
 
@@ -92,3 +96,85 @@ def test_site_from_lonlat() -> None:
         site_from_lonlat("1,2")
     with pytest.raises(SiteError, match="expected three numbers"):
         site_from_lonlat("a,b,c")
+
+
+GOOD_SITE = (
+    "sites:\n  - name: Pole\n    lon_deg: 0\n    lat_deg: -89.99\n    height_m: 2835\n"
+    "    timezone: Antarctica/McMurdo\n"
+)
+
+
+@pytest.mark.parametrize(
+    ("text", "pattern"),
+    [
+        (GOOD_SITE.replace("lat_deg", "latitude"), r"latitude: unknown field; did you mean"),
+        (
+            GOOD_SITE.replace("lon_deg", "lon_dge"),
+            r"lon_dge: unknown field; did you mean 'lon_deg'",
+        ),
+        (GOOD_SITE.replace("sites:", "site:"), r"expected a top-level 'sites:' list"),
+        (GOOD_SITE + "extra: 1\n", r"extra: unknown top-level key"),
+        (GOOD_SITE.replace("    timezone: Antarctica/McMurdo\n", ""), r"timezone: missing"),
+        (GOOD_SITE.replace("Antarctica/McMurdo", "Mars/Olympus"), r"timezone: expected an IANA"),
+        (GOOD_SITE.replace("Antarctica/McMurdo", "antarctica/mcmurdo"), r"did you mean"),
+        (GOOD_SITE.replace("Antarctica/McMurdo", "../../etc/passwd"), r"timezone: expected"),
+        (GOOD_SITE.replace("Antarctica/McMurdo", "'" + "x" * 5000 + "'"), r"timezone: expected"),
+        (GOOD_SITE.replace("2835", "true"), r"height_m: expected a number"),
+        (GOOD_SITE.replace("2835", "'2835 m'"), r"height_m: expected a number"),
+        (GOOD_SITE.replace("2835", ".nan"), r"height_m: expected a number"),
+        (GOOD_SITE.replace("-89.99", "-91"), r"lat_deg: expected a number in \[-90, 90\]"),
+        (
+            GOOD_SITE + "    zenith_hole_deg: 90\n",
+            r"zenith_hole_deg: expected a number in \[0, 45\]",
+        ),
+        (GOOD_SITE + "    aliases: spole\n", r"aliases: expected a list"),
+        (GOOD_SITE + "    aliases: [[1]]\n", r"aliases\[0\]: expected a name"),
+        (GOOD_SITE.replace("name: Pole", 'name: "Po\\x07le"'), r"name: expected the site name"),
+        (GOOD_SITE.replace("name: Pole", "name: ''"), r"name: expected the site name"),
+        (GOOD_SITE + "    lat_deg: -89\n", r"duplicate key 'lat_deg'"),
+        (GOOD_SITE + GOOD_SITE.replace("sites:\n", ""), r"both answer to 'Pole'"),
+        (
+            GOOD_SITE
+            + GOOD_SITE.replace("sites:\n", "").replace("Pole", "X")
+            + "    aliases: [po-le]\n",
+            r"sites\[0\] \('Pole'\) and sites\[1\] \('X'\) both answer to 'po-le'",
+        ),
+        ("sites: []\n", r"sites: expected a list of site mappings"),
+        ("sites:\n  - [1, 2]\n", r"sites\[0\]: expected a mapping"),
+        ("a: &a [1]\n" + "b: [" + ", ".join(["*a"] * 60) + "]\n", r"more than 50 aliases"),
+        ("", r"expected a top-level 'sites:' list"),
+    ],
+)
+def test_site_file_is_read_strictly(tmp_path: Path, text: str, pattern: str) -> None:
+    path = tmp_path / "sites.yaml"
+    path.write_text(text, encoding="utf-8")
+    with pytest.raises(SiteError) as info:
+        load_sites(path)
+    message = str(info.value)
+    assert "\n" not in message and len(message) < 400, message
+    assert re.search(pattern, message), message
+
+
+def test_site_file_encodings_and_non_files(tmp_path: Path) -> None:
+    bom = tmp_path / "bom.yaml"
+    bom.write_bytes(b"\xef\xbb\xbf" + GOOD_SITE.encode())
+    assert load_sites(bom)[0].name == "Pole"
+    latin = tmp_path / "latin.yaml"
+    latin.write_bytes(GOOD_SITE.replace("Pole", "Pôle").encode("latin-1"))
+    with pytest.raises(SiteError, match="not UTF-8"):
+        load_sites(latin)
+    with pytest.raises(SiteError, match=r"is a folder|not a regular file"):
+        load_sites(tmp_path)
+    fifo = tmp_path / "fifo.yaml"
+    os.mkfifo(fifo)
+    with pytest.raises(SiteError, match="not a regular file"):
+        load_sites(fifo)  # must not block waiting for a writer
+
+
+def test_bundled_names_and_aliases_are_unique() -> None:
+    keys = [
+        key
+        for s in load_sites()
+        for key in {re.sub(r"[^a-z0-9.]", "", label.lower()) for label in (s.name, *s.aliases)}
+    ]
+    assert len(keys) == len(set(keys))

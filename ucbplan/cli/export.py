@@ -11,9 +11,10 @@ from pathlib import Path
 from typing import IO, Annotated
 
 import typer
+from rich.markup import escape
 
-from ucbplan.cli._console import err_console, write_output
-from ucbplan.errors import UcbplanError
+from ucbplan.cli._console import check_output_path, err_console, pick_format, write_output
+from ucbplan.errors import InputError, shorten
 
 __all__ = ["export_command", "register"]
 
@@ -22,14 +23,20 @@ __all__ = ["export_command", "register"]
 #: ~0.3 s on every command; the library is imported only when ``export`` runs.
 _EXPORT_HELP = "eso-p2 | keck-starlist | ics | proposal | ing-cat | lco"
 
-_Blocks = Annotated[Path, typer.Argument(help="Master blocks table (ECSV) from `ucbplan plan -o`.")]
+_Blocks = Annotated[
+    Path, typer.Argument(help="Master blocks table (ECSV, CSV or JSON) from `ucbplan plan -o`.")
+]
 _To = Annotated[str, typer.Option("--to", help=f"Export format: {_EXPORT_HELP}.")]
 _Output = Annotated[
     Path | None, typer.Option("-o", "--output", help="Output file (default stdout).")
 ]
 _Overwrite = Annotated[bool, typer.Option("--overwrite", help="Replace an existing output file.")]
 _Format = Annotated[
-    str, typer.Option("--format", help="Proposal table format: ecsv | csv | latex.")
+    str | None,
+    typer.Option(
+        "--format",
+        help="Proposal table format: ecsv | csv | latex (default: the -o suffix, else ecsv).",
+    ),
 ]
 _Acquisition = Annotated[
     float | None,
@@ -52,7 +59,9 @@ _MergeOverlaps = Annotated[
         "--merge-overlaps", help="ESO p2: merge overlapping OBs of one target into one OB."
     ),
 ]
-_Rotmode = Annotated[str, typer.Option("--rotmode", help="Keck starlist rotmode= value.")]
+_Rotmode = Annotated[
+    str, typer.Option("--rotmode", help="Keck starlist rotmode=: pa | vertical | stationary.")
+]
 
 
 def export_command(
@@ -60,7 +69,7 @@ def export_command(
     to: _To,
     output: _Output = None,
     overwrite: _Overwrite = False,
-    fmt: _Format = "ecsv",
+    fmt: _Format = None,
     acquisition: _Acquisition = None,
     tolerance_sigma: _ToleranceSigma = 3.0,
     tolerance_floor: _ToleranceFloor = 10.0,
@@ -72,35 +81,48 @@ def export_command(
     All times are UTC at the site with their 1σ uncertainty; notes go to stderr.
     """
     from ucbplan.observing.blocktable import read_blocks
-    from ucbplan.observing.exports import PROPOSAL_FORMATS, ExportOptions, export_blocks
+    from ucbplan.observing.exports import (
+        EXPORT_FORMATS,
+        PROPOSAL_FORMATS,
+        ExportOptions,
+        export_blocks,
+    )
 
-    if tolerance_sigma < 0 or tolerance_floor < 0 or (acquisition is not None and acquisition < 0):
-        raise UcbplanError(
-            "--tolerance-sigma, --tolerance-floor and --acquisition must be >= 0; "
-            f"got {tolerance_sigma}, {tolerance_floor}, {acquisition}"
+    if to not in EXPORT_FORMATS:
+        raise InputError(
+            f"--to: unknown export format {shorten(to, 40)}; expected one of "
+            f"{', '.join(EXPORT_FORMATS)}"
         )
-    if fmt not in PROPOSAL_FORMATS:
-        known = f"{', '.join(PROPOSAL_FORMATS[:-1])} or {PROPOSAL_FORMATS[-1]}"
-        raise UcbplanError(f"--format: got {fmt!r}, expected {known} (proposal table)")
+    if to == "proposal":
+        fmt = pick_format(output, fmt, PROPOSAL_FORMATS)
+    elif fmt is not None:
+        raise InputError(
+            f"--format chooses the proposal table format ({' | '.join(PROPOSAL_FORMATS)}); "
+            f"--to {to} writes one fixed format: leave --format out"
+        )
+    if output is not None:
+        check_output_path(output, overwrite)
     options = ExportOptions(
         acquisition_s=acquisition,
         tolerance_sigma=tolerance_sigma,
         tolerance_floor_s=tolerance_floor,
         merge_overlaps=merge_overlaps,
-        proposal_format=fmt,
+        proposal_format=fmt or PROPOSAL_FORMATS[0],
         keck_rotmode=rotmode,
     )
     table = read_blocks(blocks)
     result = export_blocks(table, to, options)
     for note in result.notes:
-        err_console.print(f"[yellow]note:[/] {note}", soft_wrap=True)
+        err_console.print(f"[yellow]note:[/] {escape(note)}", soft_wrap=True)
 
     def writer(handle: IO[bytes]) -> None:
         handle.write(result.content)
 
     write_output(output, writer, overwrite=overwrite, binary=True)
     if output is not None:
-        err_console.print(f"wrote {to} export of {len(table)} blocks to {output}")
+        err_console.print(
+            f"wrote {to} export of {len(table)} blocks to {escape(str(output))}", soft_wrap=True
+        )
 
 
 def register(app: typer.Typer) -> None:

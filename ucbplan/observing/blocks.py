@@ -13,9 +13,26 @@ from dataclasses import dataclass
 from astropy.time import Time
 
 from ucbplan.core.smearing import comb_attenuation, smear_velocity
-from ucbplan.errors import UcbplanError
+from ucbplan.errors import InputError, UcbplanError
+from ucbplan.observing.ranges import check_int, check_range
 
-__all__ = ["Block", "ExposurePlan", "Smearing", "block_smearing", "check_smear_budget"]
+__all__ = [
+    "MAX_BLOCK_S",
+    "MAX_N_EXP",
+    "MAX_READOUT_S",
+    "Block",
+    "ExposurePlan",
+    "Smearing",
+    "block_smearing",
+    "check_smear_budget",
+]
+
+#: Longest block, first exposure start to last exposure end [s]: a block must fit in one night.
+MAX_BLOCK_S = 43200.0
+#: Longest dead time between two exposures [s].
+MAX_READOUT_S = 3600.0
+#: Most exposures in one block.
+MAX_N_EXP = 10000
 
 
 @dataclass(frozen=True, slots=True)
@@ -75,12 +92,18 @@ class ExposurePlan:
     readout_s: float = 0.0
 
     def __post_init__(self) -> None:
-        if not (self.exptime_s > 0 and math.isfinite(self.exptime_s)):
-            raise UcbplanError(f"--exptime must be positive, got {self.exptime_s}")
-        if self.n_exp < 1:
-            raise UcbplanError(f"--n-exp must be >= 1, got {self.n_exp}")
-        if not self.readout_s >= 0:
-            raise UcbplanError(f"--readout must be >= 0, got {self.readout_s}")
+        night = "12 h: a block must fit in one night"
+        check_range("--exptime", self.exptime_s, 0.0, MAX_BLOCK_S, "s", night, low_open=True)
+        check_int("--n-exp", self.n_exp, 1, MAX_N_EXP, "exposures co-added in one block")
+        check_range(
+            "--readout", self.readout_s, 0.0, MAX_READOUT_S, "s", "dead time between exposures"
+        )
+        if self.span_s > MAX_BLOCK_S:
+            raise InputError(
+                f"--n-exp/--exptime/--readout: the block lasts {self.span_s:.0f} s = "
+                f"{self.n_exp} x {self.exptime_s:g} s + {self.n_exp - 1} x {self.readout_s:g} s, "
+                f"more than {MAX_BLOCK_S:.0f} s ({night}); use fewer or shorter exposures"
+            )
 
     @property
     def span_s(self) -> float:
@@ -147,8 +170,8 @@ def check_smear_budget(
         )
     if max_smear_kms is not None and math.isfinite(sm.smear_kms) and sm.smear_kms > max_smear_kms:
         raise UcbplanError(
-            f"{name}: smearing K(1-Lambda_K) = {sm.smear_kms:.2f} km/s exceeds --max-smear "
-            f"{max_smear_kms:.2f} km/s (Lambda_K = {sm.lambda_k:.4f}); shorten --exptime or --n-exp"
+            f"{name}: smearing K(1-Lambda_K) = {sm.smear_kms:.3g} km/s exceeds --max-smear "
+            f"{max_smear_kms:.3g} km/s (Lambda_K = {sm.lambda_k:.4f}); shorten --exptime or --n-exp"
         )
     if (
         max_smear_kms is None

@@ -13,8 +13,12 @@ the table ``meta`` and is preserved by ECSV.
 
 from __future__ import annotations
 
+import csv
 import hashlib
+import io
+import itertools
 import json
+import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from datetime import UTC, datetime
@@ -23,22 +27,31 @@ from typing import IO, Any
 from zoneinfo import ZoneInfo
 
 import numpy as np
+import yaml
+from astropy import units as u
 from astropy.coordinates import Angle
 from astropy.table import Table
 from astropy.time import Time
 
-from ucbplan.errors import InputFileError
-from ucbplan.observing.blocks import Block
+from ucbplan.errors import InputError, InputFileError, shorten
+from ucbplan.inputs import MAX_ALIASES, read_text
+from ucbplan.observing.blocks import MAX_BLOCK_S, MAX_N_EXP, MAX_READOUT_S, Block
 from ucbplan.observing.timeconv import quiet_erfa
+from ucbplan.target.values import one_line
 
 __all__ = [
+    "BLANK_OK",
     "COLUMNS",
     "COLUMN_BY_NAME",
     "EXTRA_COLUMNS",
+    "KNOWN_COLUMNS",
+    "MAX_TABLE_BYTES",
     "REQUIRED_COLUMNS",
     "TABLE_FORMATS",
+    "USER_COLUMNS",
     "Column",
     "blocks_to_table",
+    "check_blocks",
     "column_reference",
     "file_sha256",
     "make_meta",
@@ -73,6 +86,11 @@ class Column:
         ``source``), ``hms`` / ``dms`` (sexagesimal RA / Dec) or ``width`` (end − start).
     source : str
         The :class:`Block` attribute it comes from (default: ``name``).
+    bounds : tuple of float, optional
+        Smallest and largest value a reader accepts (in ``unit``); every value the planner
+        writes lies well inside.
+    nan_ok : bool
+        NaN (unknown) is an accepted value.
     """
 
     name: str
@@ -83,12 +101,17 @@ class Column:
     in_header: bool = True
     kind: str = "value"
     source: str = ""
+    bounds: tuple[float, float] | None = None
+    nan_ok: bool = False
 
     @property
     def attribute(self) -> str:
         """The :class:`Block` attribute the column is made from."""
         return self.source or self.name
 
+
+#: Largest |u★| a table may hold [rad] (the planner writes 0 <= u★ < 2π).
+_MAX_U = 4.0 * math.pi
 
 #: The master blocks table, column by column, in file order: required columns first (issue 3).
 COLUMNS: tuple[Column, ...] = (
@@ -101,7 +124,14 @@ COLUMNS: tuple[Column, ...] = (
         "anchor name (quadrature, conjunction, zero-crossing, u=VALUE, fixed-u-pairs)",
         required=True,
     ),
-    Column("u_star_rad", "float64", "rad", "target argument of latitude of star 1", required=True),
+    Column(
+        "u_star_rad",
+        "float64",
+        "rad",
+        "target argument of latitude of star 1",
+        required=True,
+        bounds=(-_MAX_U, _MAX_U),
+    ),
     Column(
         "t_mid_utc",
         "str",
@@ -140,6 +170,7 @@ COLUMNS: tuple[Column, ...] = (
         "s",
         "1-sigma timing uncertainty of the anchor epoch (sigma_u / u_dot)",
         required=True,
+        bounds=(0.0, 86400.0),
     ),
     Column(
         "t_alt_utc",
@@ -149,26 +180,60 @@ COLUMNS: tuple[Column, ...] = (
         required=True,
         kind="utc",
     ),
-    Column("exptime_s", "float64", "s", "single-exposure time", required=True),
-    Column("n_exp", "int64", None, "number of exposures in the block", required=True),
+    Column(
+        "exptime_s",
+        "float64",
+        "s",
+        "single-exposure time",
+        required=True,
+        bounds=(0.0, MAX_BLOCK_S),
+    ),
+    Column(
+        "n_exp",
+        "int64",
+        None,
+        "number of exposures in the block",
+        required=True,
+        bounds=(1, MAX_N_EXP),
+    ),
     Column(
         "lambda_k",
         "float64",
         None,
         "smearing attenuation of K over the block, sin(x)/x, x = n_b dt/2",
         required=True,
+        bounds=(-1.0, 1.0),
     ),
-    Column("altitude_deg", "float64", "deg", "target altitude at block centre", required=True),
-    Column("airmass", "float64", None, "airmass (sec z) at block centre", required=True),
+    Column(
+        "altitude_deg",
+        "float64",
+        "deg",
+        "target altitude at block centre",
+        required=True,
+        bounds=(-90.0, 90.0),
+    ),
+    Column(
+        "airmass",
+        "float64",
+        None,
+        "airmass (sec z) at block centre",
+        required=True,
+        bounds=(1.0, 1000.0),
+    ),
     Column(
         "moon_sep_deg",
         "float64",
         "deg",
         "smallest target-Moon separation over the block",
         required=True,
+        bounds=(0.0, 180.0),
     ),
-    Column("ra_deg", "float64", "deg", "right ascension (ICRS)", in_header=False),
-    Column("dec_deg", "float64", "deg", "declination (ICRS)", in_header=False),
+    Column(
+        "ra_deg", "float64", "deg", "right ascension (ICRS)", in_header=False, bounds=(0.0, 360.0)
+    ),
+    Column(
+        "dec_deg", "float64", "deg", "declination (ICRS)", in_header=False, bounds=(-90.0, 90.0)
+    ),
     Column("ra_hms", "str", None, "right ascension, HH:MM:SS.sss", in_header=False, kind="hms"),
     Column("dec_dms", "str", None, "declination, +DD:MM:SS.ss", in_header=False, kind="dms"),
     Column("night", "str", None, "local date of the evening the night starts"),
@@ -200,11 +265,46 @@ COLUMNS: tuple[Column, ...] = (
         source="t_end_utc",
     ),
     Column("timezone", "str", None, "IANA time zone of the site", in_header=False),
-    Column("alt_start_deg", "float64", "deg", "target altitude at block start", in_header=False),
-    Column("alt_end_deg", "float64", "deg", "target altitude at block end", in_header=False),
-    Column("airmass_start", "float64", None, "airmass at block start", in_header=False),
-    Column("airmass_end", "float64", None, "airmass at block end", in_header=False),
-    Column("readout_s", "float64", "s", "dead time between exposures", in_header=False),
+    Column(
+        "alt_start_deg",
+        "float64",
+        "deg",
+        "target altitude at block start",
+        in_header=False,
+        bounds=(-90.0, 90.0),
+    ),
+    Column(
+        "alt_end_deg",
+        "float64",
+        "deg",
+        "target altitude at block end",
+        in_header=False,
+        bounds=(-90.0, 90.0),
+    ),
+    Column(
+        "airmass_start",
+        "float64",
+        None,
+        "airmass at block start",
+        in_header=False,
+        bounds=(1.0, 1000.0),
+    ),
+    Column(
+        "airmass_end",
+        "float64",
+        None,
+        "airmass at block end",
+        in_header=False,
+        bounds=(1.0, 1000.0),
+    ),
+    Column(
+        "readout_s",
+        "float64",
+        "s",
+        "dead time between exposures",
+        in_header=False,
+        bounds=(0.0, MAX_READOUT_S),
+    ),
     Column(
         "block_width_s",
         "float64",
@@ -212,12 +312,47 @@ COLUMNS: tuple[Column, ...] = (
         "block length, first exposure start to last exposure end",
         in_header=False,
         kind="width",
+        bounds=(0.0, 86400.0),
     ),
-    Column("lambda_kappa", "float64", None, "attenuation of the eccentricity terms, sin(2x)/(2x)"),
-    Column("smear_kms", "float64", "km / s", "velocity smear K(1 - lambda_k); NaN if K unknown"),
-    Column("period_s", "float64", "s", "orbital period P_b", in_header=False),
-    Column("moon_illum", "float64", None, "illuminated fraction of the Moon at block centre"),
-    Column("priority", "float64", None, "target priority (higher first)", in_header=False),
+    Column(
+        "lambda_kappa",
+        "float64",
+        None,
+        "attenuation of the eccentricity terms, sin(2x)/(2x)",
+        bounds=(-1.0, 1.0),
+    ),
+    Column(
+        "smear_kms",
+        "float64",
+        "km / s",
+        "velocity smear K(1 - lambda_k); NaN if K unknown",
+        bounds=(-1e5, 1e5),
+        nan_ok=True,
+    ),
+    Column(
+        "period_s",
+        "float64",
+        "s",
+        "orbital period P_b",
+        in_header=False,
+        bounds=(0.0, 1e7),
+        nan_ok=True,
+    ),
+    Column(
+        "moon_illum",
+        "float64",
+        None,
+        "illuminated fraction of the Moon at block centre",
+        bounds=(0.0, 1.0),
+    ),
+    Column(
+        "priority",
+        "float64",
+        None,
+        "target priority (higher first)",
+        in_header=False,
+        bounds=(-1e9, 1e9),
+    ),
     Column("session_id", "str", None, "blocks sharing a session (e.g. a quadrature pair)"),
     Column("pair_id", "str", None, "fixed-u pair identifier (same u at two epochs)"),
     Column(
@@ -225,11 +360,38 @@ COLUMNS: tuple[Column, ...] = (
         "float64",
         None,
         "predicted kappa change over the pair baseline (Eq. delta_kappa_rewrite)",
+        bounds=(-2.0, 2.0),
+        nan_ok=True,
     ),
+)
+
+#: Optional columns the planner does not write but exports read when a user adds them.
+USER_COLUMNS: tuple[Column, ...] = (
+    Column("vmag", "float64", "mag", "V magnitude", bounds=(-30.0, 40.0), nan_ok=True),
+    Column(
+        "acq_s", "float64", "s", "acquisition overhead before the block", bounds=(0.0, MAX_BLOCK_S)
+    ),
+    Column("tol_rad", "float64", "rad", "phase tolerance", bounds=(0.0, 10.0), nan_ok=True),
 )
 
 #: Columns by name.
 COLUMN_BY_NAME: dict[str, Column] = {c.name: c for c in COLUMNS}
+
+#: Every column a reader knows (planner columns and :data:`USER_COLUMNS`), by name.
+KNOWN_COLUMNS: dict[str, Column] = {c.name: c for c in (*COLUMNS, *USER_COLUMNS)}
+
+#: Columns whose cells may be empty: no π-mode alternative, no session, no pair.
+BLANK_OK = frozenset(("t_alt_utc", "session_id", "pair_id"))
+
+#: Largest blocks table [bytes] (a year of blocks of a 5-min binary is a few MB).
+MAX_TABLE_BYTES = 100_000_000
+
+#: Largest ECSV header [characters] (column declarations and provenance: a year-long plan writes
+#: a few hundred kB).
+MAX_HEADER_CHARS = 4_000_000
+
+#: Years a blocks-table time may fall in (the planner plans nights in 1900-2100).
+TIME_YEARS = (1900, 2101)
 
 #: Columns every master table has, in this order; extras follow.
 REQUIRED_COLUMNS: tuple[str, ...] = tuple(c.name for c in COLUMNS if c.required)
@@ -424,37 +586,292 @@ def write_table(table: Table, handle: IO[str], fmt: str) -> None:
         raise InputFileError(f"unknown table format {fmt!r}; expected one of {TABLE_FORMATS}")
 
 
-def read_blocks(path: Path | str) -> Table:
-    """Read a master blocks table written as ECSV and check its required columns.
+def _bad_cell(where: str, row: int, column: str, expected: str, value: Any) -> InputFileError:
+    return InputFileError(
+        f"{where}: row {row + 1}, column {column}: expected {expected}, got {shorten(value, 60)}; "
+        "regenerate the table with `ucbplan plan`"
+    )
+
+
+def _cells(col: Any) -> list[Any]:
+    """Python values of a table column, None for masked (blank) cells."""
+    mask = np.ma.getmaskarray(col) if hasattr(col, "mask") else np.zeros(len(col), dtype=bool)
+    values = np.asarray(col).tolist() if not isinstance(col, Time) else list(col)
+    return [None if m else v for v, m in zip(values, mask, strict=True)]
+
+
+def _time_strings(col: Time, kind: str) -> list[str]:
+    """ISO strings of an astropy Time column, in the scale of the column's kind."""
+    with quiet_erfa():
+        return list(np.atleast_1d(getattr(col, "tdb" if kind == "tdb" else "utc").isot))
+
+
+def _check_time(text: str, where: str, row: int, name: str) -> None:
+    try:
+        value = datetime.fromisoformat(text.strip()) if len(text) <= 64 else None
+    except ValueError:
+        value = None
+    if value is None or not TIME_YEARS[0] <= value.year <= TIME_YEARS[1]:
+        expected = f"an ISO time like 2037-01-15T01:02:03.400 in {TIME_YEARS[0]}-{TIME_YEARS[1]}"
+        raise _bad_cell(where, row, name, expected, text)
+
+
+def _text_column(c: Column, col: Any, where: str) -> np.ndarray:
+    """A text column: every cell text (blank only where allowed), times parseable."""
+    cells = _time_strings(col, c.kind) if isinstance(col, Time) else _cells(col)
+    out: list[str] = []
+    for i, v in enumerate(cells):
+        if v is None or (isinstance(v, str) and not v.strip()):
+            if c.name not in BLANK_OK:
+                raise _bad_cell(where, i, c.name, "a value (blank cell)", "")
+            v = ""
+        if isinstance(v, bytes):
+            v = v.decode("utf-8", "replace")
+        if not isinstance(v, str):
+            raise _bad_cell(where, i, c.name, "text", v)
+        try:
+            v.encode("utf-8")
+        except UnicodeEncodeError:
+            raise _bad_cell(where, i, c.name, "Unicode text", v) from None
+        if v and c.kind in ("utc", "tdb"):
+            _check_time(v, where, i, c.name)
+        out.append(v)
+    return np.array(out, dtype=str) if out else np.array([], dtype="U1")
+
+
+def _number(v: Any) -> float | None:
+    """A cell as a float (text is parsed), None if it is not a number."""
+    if isinstance(v, bool | np.bool_) or v is None:
+        return None
+    if isinstance(v, int | float | np.integer | np.floating):
+        return float(v)
+    if isinstance(v, str | bytes) and len(v) <= 64:
+        try:
+            return float(v)
+        except ValueError:
+            return None
+    return None
+
+
+def _numeric_column(c: Column, col: Any, where: str) -> np.ndarray:
+    """A number column: no blanks, finite (or NaN where allowed), inside ``c.bounds``."""
+    scale = 1.0
+    unit = getattr(col, "unit", None)
+    if unit is not None and c.unit is not None:
+        try:
+            scale = float(u.Unit(unit).to(c.unit))
+        except (u.UnitsError, ValueError, TypeError):
+            raise InputFileError(
+                f"{where}: column {c.name}: unit {shorten(str(unit), 40)} is not {c.unit}; "
+                "regenerate the table with `ucbplan plan`"
+            ) from None
+    lo, hi = c.bounds if c.bounds is not None else (-math.inf, math.inf)
+    whole = c.dtype == "int64"
+    kind = "a whole number" if whole else "a number"
+    expected = f"{kind} in [{lo:g}, {hi:g}]{f' {c.unit}' if c.unit else ''}"
+    out: list[float] = []
+    for i, v in enumerate(_cells(col)):
+        if v is None or (isinstance(v, str) and not v.strip()):
+            raise _bad_cell(where, i, c.name, f"{expected} (blank cell; write nan if unknown)", "")
+        x = _number(v)
+        if x is not None and math.isnan(x) and c.nan_ok:
+            out.append(x)
+            continue
+        if x is None or not (math.isfinite(x) and lo <= x * scale <= hi):
+            raise _bad_cell(where, i, c.name, expected, v)
+        if whole and x != int(x):
+            raise _bad_cell(where, i, c.name, expected, v)
+        out.append(x)
+    return np.array(out, dtype=np.int64 if whole else np.float64)
+
+
+def _check_rows(table: Table, where: str) -> None:
+    """Unique block ids; every block ends after it starts."""
+    seen: dict[str, int] = {}
+    for i, block in enumerate(table["block_id"]):
+        first = seen.setdefault(str(block), i)
+        if first != i:
+            raise InputFileError(
+                f"{where}: rows {first + 1} and {i + 1}: block_id {shorten(str(block), 60)} "
+                "appears twice; block ids must be unique (calendar UIDs, OB names)"
+            )
+    for i, (t0, t1) in enumerate(zip(table["t_start_utc"], table["t_end_utc"], strict=True)):
+        if datetime.fromisoformat(str(t1).strip()) < datetime.fromisoformat(str(t0).strip()):
+            raise _bad_cell(where, i, "t_end_utc", f"a time after t_start_utc {t0}", str(t1))
+
+
+def check_blocks(table: Table, where: str = "blocks table") -> Table:
+    """A checked copy of a blocks table: the columns every reader relies on, cell by cell.
+
+    Required columns present; every declared column (:data:`KNOWN_COLUMNS`) of its type, without
+    blank cells (except :data:`BLANK_OK`), finite (or NaN where declared) and inside its bounds;
+    times ISO in 1900-2101 (astropy Time columns become ISO strings); unique block ids; blocks
+    that end after they start. Other columns are kept as they are.
 
     Raises
     ------
     InputFileError
-        If the file cannot be read as ECSV or lacks required columns.
+        One line naming the row and the column, what was expected and what was found.
     """
-    path = Path(path)
-    try:
-        table = Table.read(path, format="ascii.ecsv")
-    except FileNotFoundError as exc:
-        raise InputFileError(
-            f"{path}: file not found; pass a blocks table from `ucbplan plan -o`"
-        ) from exc
-    except Exception as exc:
-        raise InputFileError(
-            f"{path}: not a readable ECSV blocks table ({exc}); write one with "
-            "`ucbplan plan ... -o blocks.ecsv`"
-        ) from exc
-    for name in table.colnames:
-        column = table[name]
-        if column.dtype.kind in "US" and getattr(column, "mask", None) is not None:
-            table[name] = column.filled("")  # ECSV reads empty strings (no t_alt_utc) as masked
+    if not isinstance(table, Table):
+        raise InputFileError(f"{where}: expected a table of blocks, got {shorten(table, 60)}")
     missing = [c for c in REQUIRED_COLUMNS if c not in table.colnames]
     if missing:
         raise InputFileError(
-            f"{path}: blocks table lacks required columns {missing}; "
-            "regenerate it with `ucbplan plan`"
+            f"{where}: blocks table lacks required columns {', '.join(missing)}; regenerate it "
+            "with `ucbplan plan ... -o blocks.ecsv`"
         )
+    out = Table(meta=dict(table.meta) if isinstance(table.meta, Mapping) else {})
+    for name in table.colnames:
+        col, c = table[name], KNOWN_COLUMNS.get(name)
+        if c is None:
+            out[name] = col
+            continue
+        check = _text_column if c.dtype == "str" else _numeric_column
+        out[name] = check(c, col, where)
+        out[name].unit = getattr(col, "unit", None) if c.dtype != "str" else None
+        out[name].description = getattr(col, "description", None)
+    _check_rows(out, where)
+    return out
+
+
+def _check_header(text: str, where: str) -> None:
+    """Refuse an ECSV header larger than :data:`MAX_HEADER_CHARS` (astropy parses it in pure
+    Python, ~1 MB/s) or with more YAML aliases than a target file may have (an alias bomb
+    expands when the metadata is written out again)."""
+    lines = itertools.takewhile(lambda ln: ln.startswith("#"), text.splitlines())
+    header_lines: list[str] = []
+    size = 0
+    for line in lines:
+        size += len(line) + 1
+        if size > MAX_HEADER_CHARS:
+            raise InputFileError(
+                f"{where}: the ECSV header is larger than {MAX_HEADER_CHARS} characters, more "
+                "than any plan writes; regenerate the table with `ucbplan plan`"
+            )
+        header_lines.append(line[2:] if line.startswith("# ") else line[1:])
+    if header_lines and header_lines[0].startswith("%"):
+        header_lines[0] = ""  # the "%ECSV 1.0" line: libyaml refuses unknown directives
+    loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+    count = 0
+    try:
+        for event in yaml.parse("\n".join(header_lines), Loader=loader):
+            count += isinstance(event, yaml.AliasEvent)
+            if count > MAX_ALIASES:
+                raise InputFileError(
+                    f"{where}: the ECSV header uses more than {MAX_ALIASES} YAML aliases; "
+                    "write the metadata out or regenerate the table with `ucbplan plan`"
+                )
+    except yaml.YAMLError:
+        return  # astropy reports the malformed header
+
+
+def _object_column(cells: list[Any], mask: list[bool]) -> np.ma.MaskedArray:
+    """Cells as a 1-d masked object array (a cell holding a list stays one cell)."""
+    data = np.empty(len(cells), dtype=object)
+    data[:] = cells
+    return np.ma.array(data, mask=mask)
+
+
+def _json_table(text: str, where: str) -> Table:
+    """A JSON list of row objects (``plan --format json``) as a table; null is NaN / blank."""
+    try:
+        rows = json.loads(text)
+    except (ValueError, RecursionError) as exc:
+        raise InputFileError(f"{where}: not valid JSON ({one_line(str(exc))[:120]})") from None
+    if not isinstance(rows, list) or not all(isinstance(r, dict) for r in rows):
+        raise InputFileError(
+            f"{where}: expected a JSON list of row objects (`ucbplan plan --format json`)"
+        )
+    names = list(dict.fromkeys(k for r in rows for k in r))
+    columns: dict[str, Any] = {}
+    for name in names:
+        c = KNOWN_COLUMNS.get(name)
+        cells = []
+        for i, row in enumerate(rows):
+            if name not in row:
+                raise _bad_cell(where, i, name, "a value (the row lacks this column)", "")
+            v = row[name]
+            numeric = c is not None and c.dtype != "str"
+            cells.append(math.nan if v is None and numeric else v)
+        columns[name] = _object_column(cells, [v is None for v in cells])
+    table = Table(columns) if columns else Table()
+    for name in table.colnames:
+        c = KNOWN_COLUMNS.get(name)
+        if c is not None and c.unit is not None:
+            table[name].unit = c.unit
     return table
+
+
+def _csv_table(text: str, where: str) -> Table:
+    """A CSV blocks table (``plan --format csv``): every cell read as text, then typed."""
+    try:
+        reader = csv.reader(io.StringIO(text, newline=""))
+        header = next(reader, None)
+        rows = list(reader)
+    except csv.Error as exc:
+        raise InputFileError(f"{where}: not valid CSV ({one_line(str(exc))[:120]})") from None
+    if not header:
+        raise InputFileError(f"{where}: empty file; pass a blocks table from `ucbplan plan -o`")
+    if len(set(header)) != len(header):
+        raise InputFileError(f"{where}: a column name appears twice in the CSV header")
+    for i, row in enumerate(rows):
+        if len(row) != len(header):
+            raise InputFileError(
+                f"{where}: row {i + 1}: {len(row)} cells for {len(header)} columns; "
+                "regenerate the table with `ucbplan plan`"
+            )
+    columns = {}
+    for k, name in enumerate(header):
+        cells = [row[k] for row in rows]
+        columns[name] = _object_column(cells, [not v.strip() for v in cells])
+    table = Table(columns) if rows else Table(names=header, dtype=[str] * len(header))
+    for name in table.colnames:
+        c = KNOWN_COLUMNS.get(name)
+        if c is not None and c.unit is not None:
+            table[name].unit = c.unit
+    return table
+
+
+def _ecsv_table(text: str, where: str) -> Table:
+    _check_header(text, where)
+    try:
+        return Table.read(text.splitlines(), format="ascii.ecsv")
+    except Exception as exc:  # astropy raises many types for a malformed ECSV file
+        detail = one_line(f"{type(exc).__name__}: {exc}")[:160]
+        raise InputFileError(
+            f"{where}: not a readable ECSV blocks table ({detail}); write one with "
+            "`ucbplan plan ... -o blocks.ecsv`"
+        ) from None
+
+
+def read_blocks(path: Path | str) -> Table:
+    """Read a master blocks table written by ``ucbplan plan`` as ECSV, CSV or JSON.
+
+    The file is read by :func:`ucbplan.inputs.read_text` (regular files only, size limit, UTF-8
+    with or without a byte-order mark); its format is recognised by its content (``# %ECSV``,
+    a JSON list, else CSV); then :func:`check_blocks` checks every cell.
+
+    Raises
+    ------
+    InputFileError
+        One line: unreadable file, malformed format, missing required columns, or a bad cell
+        (with its row and column).
+    """
+    path = Path(path)
+    where = shorten(str(path), 120).strip("'")
+    try:
+        text = read_text(path, "blocks table", limit=MAX_TABLE_BYTES)
+    except InputError as exc:
+        raise InputFileError(f"{exc}; pass a blocks table from `ucbplan plan -o`") from None
+    head = text.lstrip()
+    if head.startswith("# %ECSV"):
+        table = _ecsv_table(text, where)
+    elif head.startswith(("[", "{")):
+        table = _json_table(text, where)
+    else:
+        table = _csv_table(text, where)
+    return check_blocks(table, where)
 
 
 def column_reference() -> str:

@@ -18,7 +18,8 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
-from ucbplan.errors import UcbplanError
+from ucbplan.errors import InputError, UcbplanError, shorten
+from ucbplan.observing.ranges import check_range
 from ucbplan.observing.sky import SkyModel, airmass_from_alt
 
 __all__ = [
@@ -44,6 +45,14 @@ TWILIGHT_SUN_ALT_DEG = {"civil": -6.0, "nautical": -12.0, "astronomical": -18.0}
 
 #: Largest spacing between constraint samples inside a block [s].
 SAMPLE_STEP_S = 300.0
+
+#: Largest airmass limit: sec z = 100 is 0.6 deg above the horizon.
+MAX_AIRMASS = 100.0
+#: Largest zenith-hole radius [deg] (alt-az telescopes have holes of a few degrees).
+MAX_ZENITH_HOLE_DEG = 45.0
+
+#: Most samples :func:`evaluate_window` holds in memory at once (blocks x samples per block).
+_MAX_SAMPLES = 1_000_000
 
 
 class Constraint:
@@ -72,9 +81,10 @@ class NightConstraint(Constraint):
     name: ClassVar[str] = "night"
 
     def __post_init__(self) -> None:
-        if self.twilight not in TWILIGHT_SUN_ALT_DEG:
-            raise UcbplanError(
-                f"--twilight: expected one of {sorted(TWILIGHT_SUN_ALT_DEG)}, got {self.twilight!r}"
+        if not isinstance(self.twilight, str) or self.twilight not in TWILIGHT_SUN_ALT_DEG:
+            raise InputError(
+                f"--twilight: expected {', '.join(TWILIGHT_SUN_ALT_DEG)} (Sun below -6, -12 or "
+                f"-18 deg), got {shorten(self.twilight, 40)}"
             )
 
     @property
@@ -100,8 +110,8 @@ class AirmassConstraint(Constraint):
     name: ClassVar[str] = "airmass"
 
     def __post_init__(self) -> None:
-        if not self.max_airmass >= 1.0:
-            raise UcbplanError(f"--airmass-max must be >= 1, got {self.max_airmass}")
+        why = "sec z: 1 at the zenith, 100 at 0.6 deg altitude"
+        check_range("--airmass-max", self.max_airmass, 1.0, MAX_AIRMASS, "", why)
 
     def ok(self, sky: SkyModel, i: int, x: FloatArray) -> BoolArray:
         return np.asarray(airmass_from_alt(sky.target_alt_deg(i, x)) <= self.max_airmass)
@@ -117,6 +127,9 @@ class AltitudeConstraint(Constraint):
     min_deg: float = 30.0
     name: ClassVar[str] = "altitude"
 
+    def __post_init__(self) -> None:
+        check_range("altitude limit", self.min_deg, -90.0, 90.0, "deg", "an altitude")
+
     def ok(self, sky: SkyModel, i: int, x: FloatArray) -> BoolArray:
         return np.asarray(sky.target_alt_deg(i, x) >= self.min_deg)
 
@@ -130,6 +143,10 @@ class ZenithHoleConstraint(Constraint):
 
     radius_deg: float = 4.0
     name: ClassVar[str] = "zenith-hole"
+
+    def __post_init__(self) -> None:
+        why = "radius around the zenith; alt-az telescopes have a few degrees, 0 = none"
+        check_range("--zenith-hole", self.radius_deg, 0.0, MAX_ZENITH_HOLE_DEG, "deg", why)
 
     def ok(self, sky: SkyModel, i: int, x: FloatArray) -> BoolArray:
         return np.asarray(sky.target_alt_deg(i, x) <= 90.0 - self.radius_deg)
@@ -148,6 +165,10 @@ class MoonSeparationConstraint(Constraint):
     min_deg: float = 30.0
     name: ClassVar[str] = "moon-sep"
 
+    def __post_init__(self) -> None:
+        why = "an angle on the sky; 0 = no limit"
+        check_range("--moon-sep", self.min_deg, 0.0, 180.0, "deg", why)
+
     def ok(self, sky: SkyModel, i: int, x: FloatArray) -> BoolArray:
         return np.asarray((sky.moon_sep_deg(i, x) >= self.min_deg) | (sky.moon_alt_deg(x) < 0.0))
 
@@ -164,6 +185,10 @@ class MoonIlluminationConstraint(Constraint):
 
     max_fraction: float = 1.0
     name: ClassVar[str] = "moon-illum"
+
+    def __post_init__(self) -> None:
+        why = "illuminated fraction: 0 new Moon, 1 full Moon"
+        check_range("--moon-illum", self.max_fraction, 0.0, 1.0, "", why)
 
     def ok(self, sky: SkyModel, i: int, x: FloatArray) -> BoolArray:
         return np.asarray((sky.moon_illum(x) <= self.max_fraction) | (sky.moon_alt_deg(x) < 0.0))
@@ -277,18 +302,36 @@ def evaluate_window(
         Index (in iteration order of ``constraints``) of the first violated constraint, −1
         where ``ok``.
     """
+    active = list(constraints)
     xs = np.asarray(x_start, dtype=np.float64)
     xe = np.asarray(x_end, dtype=np.float64)
-    width = float(np.max(xe - xs)) if xs.size else 0.0
+    ok = np.ones(xs.shape, dtype=bool)
+    first = np.full(xs.shape, -1, dtype=np.int64)
+    if not active or xs.size == 0:
+        return ok, first
+    width = float(np.max(xe - xs))
     n = max(3, math.ceil(width / SAMPLE_STEP_S) + 1)
     if n % 2 == 0:
         n += 1  # keep the exact middle among the samples
     frac = np.linspace(0.0, 1.0, n)
-    x = xs[:, None] + (xe - xs)[:, None] * frac[None, :]
-    ok = np.ones(xs.shape, dtype=bool)
-    first = np.full(xs.shape, -1, dtype=np.int64)
-    for j, c in enumerate(constraints):
-        good = np.all(c.ok(sky, i, x), axis=1)
-        first[(~good) & ok] = j
-        ok &= good
+    # The first constraint (the night) at start, middle and end settles most blocks (daytime)
+    # without the interior samples; the rest are checked in chunks of bounded memory.
+    ends = frac[[0, n // 2, n - 1]]
+    coarse = xs[:, None] + (xe - xs)[:, None] * ends[None, :]
+    failed = ~np.all(active[0].ok(sky, i, coarse), axis=1)
+    ok[failed] = False
+    first[failed] = 0
+    todo = np.flatnonzero(~failed)
+    step = max(1, _MAX_SAMPLES // n)
+    for k in range(0, todo.size, step):
+        idx = todo[k : k + step]
+        x = xs[idx, None] + (xe - xs)[idx, None] * frac[None, :]
+        ok_k = np.ones(idx.size, dtype=bool)
+        first_k = np.full(idx.size, -1, dtype=np.int64)
+        for j, c in enumerate(active):
+            good = np.all(c.ok(sky, i, x), axis=1)
+            first_k[(~good) & ok_k] = j
+            ok_k &= good
+        ok[idx] = ok_k
+        first[idx] = first_k
     return ok, first

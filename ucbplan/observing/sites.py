@@ -6,18 +6,21 @@ Never ``EarthLocation.of_site`` (it needs the network): sites come from ``ucbpla
 
 from __future__ import annotations
 
+import functools
 import re
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 from typing import Any
-from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
+from zoneinfo import ZoneInfo, ZoneInfoNotFoundError, available_timezones
 
-import yaml
 from astropy import units as u
 from astropy.coordinates import EarthLocation
 
-from ucbplan.errors import SiteError, UcbplanError
+from ucbplan.errors import InputError, SiteError, UcbplanError, shorten
+from ucbplan.inputs import load_yaml
+from ucbplan.observing.ranges import check_range
+from ucbplan.target.values import did_you_mean
 
 __all__ = ["Site", "get_site", "load_sites", "resolve_site", "site_from_lonlat"]
 
@@ -79,74 +82,171 @@ def _key(name: str) -> str:
     return re.sub(r"[^a-z0-9.]", "", name.lower())
 
 
-def _number(entry: dict[str, Any], key: str, where: str, lo: float, hi: float) -> float:
-    try:
-        value = float(entry[key])
-    except KeyError as exc:
-        raise SiteError(f"{where}: field {key!r} is missing; add it (degrees/metres)") from exc
-    except (TypeError, ValueError) as exc:
-        raise SiteError(f"{where}: {key}: expected a number, got {entry[key]!r}") from exc
-    if not lo <= value <= hi:
-        raise SiteError(f"{where}: {key}: expected {lo} <= value <= {hi}, got {value}")
-    return value
+#: Fields of one site entry: required ones first.
+SITE_FIELDS = ("name", "lon_deg", "lat_deg", "height_m", "timezone", "zenith_hole_deg", "aliases")
+_REQUIRED = ("name", "lon_deg", "lat_deg", "height_m", "timezone")
+#: Ranges of the numeric fields: (low, high, unit, why).
+_RANGES = {
+    "lon_deg": (-180.0, 360.0, "deg", "east longitude"),
+    "lat_deg": (-90.0, 90.0, "deg", "geodetic latitude"),
+    "height_m": (-500.0, 10000.0, "m", "height above the WGS84 ellipsoid"),
+    "zenith_hole_deg": (0.0, 45.0, "deg", "radius around the zenith; omit when unknown"),
+}
+#: Longest site name or alias [characters].
+_MAX_NAME_CHARS = 100
+#: Most aliases of one site.
+_MAX_ALIASES = 100
 
 
-def _check_zone(zone: str, where: str) -> str:
-    try:
-        ZoneInfo(zone)
-    except (ZoneInfoNotFoundError, ValueError) as exc:
-        raise SiteError(
-            f"{where}: timezone: unknown IANA time zone {zone!r}; use e.g. 'America/Santiago'"
-        ) from exc
-    return zone
+@functools.lru_cache(maxsize=1)
+def _zone_names() -> frozenset[str]:
+    return frozenset(available_timezones())
 
 
-def _parse_site(entry: Any, where: str) -> Site:
-    if not isinstance(entry, dict) or "name" not in entry:
-        raise SiteError(f"{where}: expected a mapping with 'name', got {entry!r}")
-    where = f"{where} ({entry['name']})"
-    hole = entry.get("zenith_hole_deg")
-    aliases = entry.get("aliases") or []
-    if not isinstance(aliases, list):
-        raise SiteError(f"{where}: aliases: expected a list of names, got {aliases!r}")
-    return Site(
-        name=str(entry["name"]),
-        lon_deg=_number(entry, "lon_deg", where, -180.0, 360.0),
-        lat_deg=_number(entry, "lat_deg", where, -90.0, 90.0),
-        height_m=_number(entry, "height_m", where, -500.0, 10000.0),
-        timezone=_check_zone(str(entry.get("timezone", "UTC")), where),
-        zenith_hole_deg=None if hole is None else _number(entry, "zenith_hole_deg", where, 0, 45),
-        aliases=tuple(str(a) for a in aliases),
+def _check_zone(zone: Any, where: str) -> str:
+    """``zone`` if it is an IANA time-zone name this Python knows."""
+    names = _zone_names()
+    if isinstance(zone, str) and len(zone) <= 100 and (not names or zone in names):
+        try:
+            ZoneInfo(zone)
+            return zone
+        except (ZoneInfoNotFoundError, ValueError, OSError):
+            pass
+    hint = did_you_mean(zone, sorted(names)) if isinstance(zone, str) else ""
+    raise SiteError(
+        f"{where}: timezone: {hint}expected an IANA time-zone name like 'America/Santiago', "
+        f"got {shorten(zone, 60)}"
     )
 
 
-def _read_yaml(text: str, where: str) -> list[Site]:
-    try:
-        doc = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        raise SiteError(f"{where}: not valid YAML ({exc})".replace("\n", " ")) from exc
-    if not isinstance(doc, dict) or not isinstance(doc.get("sites"), list):
+def _text(value: Any, where: str, what: str) -> str:
+    """A non-empty printable name of at most :data:`_MAX_NAME_CHARS` characters."""
+    ok = isinstance(value, str) and 0 < len(value.strip()) and len(value) <= _MAX_NAME_CHARS
+    if not ok or not value.isprintable():
+        raise SiteError(
+            f"{where}: expected {what} (printable text of 1-{_MAX_NAME_CHARS} characters), "
+            f"got {shorten(value, 60)}"
+        )
+    return str(value).strip()
+
+
+def _check_keys(entry: dict[Any, Any], where: str) -> None:
+    for key in entry:
+        if key not in SITE_FIELDS:
+            hint = did_you_mean(key, SITE_FIELDS) if isinstance(key, str) else ""
+            raise SiteError(
+                f"{where}: {_label(key)}: unknown field; {hint}fields are {', '.join(SITE_FIELDS)}"
+            )
+    for key in _REQUIRED:
+        if key not in entry:
+            raise SiteError(
+                f"{where}: {key}: missing; every site needs {', '.join(_REQUIRED)} "
+                "(degrees, metres, IANA time zone)"
+            )
+
+
+def _aliases(value: Any, where: str) -> tuple[str, ...]:
+    if value is None:
+        return ()
+    if not isinstance(value, list) or len(value) > _MAX_ALIASES:
+        raise SiteError(
+            f"{where}: aliases: expected a list of at most {_MAX_ALIASES} names, "
+            f"got {shorten(value, 60)}"
+        )
+    return tuple(_text(a, f"{where}: aliases[{k}]", "a name") for k, a in enumerate(value))
+
+
+def _parse_site(entry: Any, where: str) -> Site:
+    if not isinstance(entry, dict):
+        raise SiteError(f"{where}: expected a mapping of site fields, got {shorten(entry, 60)}")
+    name = _text(entry.get("name"), f"{where}: name", "the site name")
+    where = f"{where} ({shorten(name, 40)})"
+    _check_keys(entry, where)
+    num = {
+        k: check_range(f"{where}: {k}", entry[k], *_RANGES[k], error=SiteError)
+        for k in _RANGES
+        if entry.get(k) is not None or k in _REQUIRED
+    }
+    return Site(
+        name=name,
+        lon_deg=num["lon_deg"],
+        lat_deg=num["lat_deg"],
+        height_m=num["height_m"],
+        timezone=_check_zone(entry["timezone"], where),
+        zenith_hole_deg=num.get("zenith_hole_deg"),
+        aliases=_aliases(entry.get("aliases"), where),
+    )
+
+
+def _unique(sites: list[Site], where: str) -> list[Site]:
+    """Refuse two sites of one table sharing a name or alias (lookups would be ambiguous)."""
+    owner: dict[str, int] = {}
+    for i, site in enumerate(sites):
+        for label in (site.name, *site.aliases):
+            key = _key(label)
+            if owner.setdefault(key, i) != i:
+                raise SiteError(
+                    f"{where}: sites[{owner[key]}] ({shorten(sites[owner[key]].name, 40)}) and "
+                    f"sites[{i}] ({shorten(site.name, 40)}) both answer to {shorten(label, 40)}; "
+                    "rename one or drop the alias"
+                )
+    return sites
+
+
+def _label(key: Any) -> str:
+    """A mapping key as messages show it: plain when it is a short printable name."""
+    if isinstance(key, str) and key.isprintable() and 0 < len(key) <= 40:
+        return key
+    return shorten(key, 40)
+
+
+def _read_yaml(path: Path, text: str | None = None) -> list[Site]:
+    doc = load_yaml(path, "site table", text=text)
+    where = str(path)
+    if not isinstance(doc, dict) or "sites" not in doc:
         raise SiteError(f"{where}: expected a top-level 'sites:' list of site mappings")
-    return [_parse_site(e, f"{where}: sites[{i}]") for i, e in enumerate(doc["sites"])]
+    for key in doc:
+        if key != "sites":
+            hint = did_you_mean(key, ["sites"]) if isinstance(key, str) else ""
+            raise SiteError(
+                f"{where}: {_label(key)}: unknown top-level key; {hint}the file holds "
+                "one 'sites:' list"
+            )
+    entries = doc["sites"]
+    if not isinstance(entries, list) or not entries:
+        raise SiteError(
+            f"{where}: sites: expected a list of site mappings, got {shorten(entries, 60)}"
+        )
+    return _unique([_parse_site(e, f"{where}: sites[{i}]") for i, e in enumerate(entries)], where)
+
+
+@functools.lru_cache(maxsize=1)
+def _bundled() -> tuple[Site, ...]:
+    text = resources.files("ucbplan").joinpath("data/sites.yaml").read_text(encoding="utf-8")
+    return tuple(_read_yaml(Path("ucbplan/data/sites.yaml"), text))
 
 
 def load_sites(path: Path | None = None) -> list[Site]:
     """Load a site table: the bundled one (default) or a user YAML file with the same schema.
 
+    The file is read by :func:`ucbplan.inputs.load_yaml` (UTF-8, size limit, no duplicate keys,
+    alias budget). Every entry needs ``name``, ``lon_deg``, ``lat_deg``, ``height_m`` and an
+    IANA ``timezone``; ``zenith_hole_deg`` and ``aliases`` are optional; other keys are refused
+    with the closest field name.
+
     Raises
     ------
     SiteError
-        If the file is missing or malformed.
+        If the file is missing, unreadable or malformed (one line naming the field).
     """
     if path is None:
-        text = resources.files("ucbplan").joinpath("data/sites.yaml").read_text(encoding="utf-8")
-        return _read_yaml(text, "ucbplan/data/sites.yaml")
-    path = Path(path)
+        return list(_bundled())
     try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise SiteError(f"{path}: cannot read site file ({exc.strerror}); check the path") from exc
-    return _read_yaml(text, str(path))
+        return _read_yaml(Path(path))
+    except SiteError:
+        raise
+    except InputError as exc:  # unreadable, not UTF-8, not YAML: say it is the site file
+        raise SiteError(f"--sites-file {exc}") from None
 
 
 def get_site(name: str, sites_file: Path | None = None) -> Site:
@@ -160,14 +260,14 @@ def get_site(name: str, sites_file: Path | None = None) -> Site:
         If no site matches; the message lists the known names.
     """
     tables = ([*load_sites(sites_file)] if sites_file is not None else []) + load_sites()
-    key = _key(name)
+    key = _key(name) if isinstance(name, str) and len(name) <= _MAX_NAME_CHARS else None
     for site in tables:
         if key in {_key(site.name), *(_key(a) for a in site.aliases)}:
             return site
-    known = ", ".join(dict.fromkeys(s.name for s in tables))
+    known = shorten(", ".join(dict.fromkeys(s.name for s in tables)), 200).strip("'\"")
     raise SiteError(
-        f"unknown site {name!r}; known sites: {known}; or give --site-lonlat LON,LAT,HEIGHT "
-        "or --sites-file FILE"
+        f"--site: unknown site {shorten(name, 60)}; known sites: {known}; or give "
+        "--site-lonlat LON,LAT,HEIGHT or --sites-file FILE"
     )
 
 
@@ -182,17 +282,22 @@ def site_from_lonlat(text: str, timezone: str | None = None) -> Site:
     SiteError
         If the text is not three numbers in range.
     """
-    parts = [p.strip() for p in text.split(",")]
+    form = "LON,LAT,HEIGHT (deg east, deg north, m)"
+    parts = [p.strip() for p in text.split(",")] if len(text) <= 200 else []
     if len(parts) != 3:
-        raise SiteError(
-            f"--site-lonlat: expected LON,LAT,HEIGHT (deg east, deg north, m), got {text!r}"
-        )
+        raise SiteError(f"--site-lonlat: expected {form}, got {shorten(text, 60)}")
     try:
-        lon, lat, height = (float(p) for p in parts)
-    except ValueError as exc:
-        raise SiteError(f"--site-lonlat: expected three numbers, got {text!r}") from exc
-    entry = {"name": f"lon{lon:+.4f} lat{lat:+.4f}", "lon_deg": lon, "lat_deg": lat}
-    entry["height_m"] = height
+        numbers = [float(p) for p in parts]
+    except ValueError:
+        raise SiteError(
+            f"--site-lonlat: expected three numbers {form}, got {shorten(text, 60)}"
+        ) from None
+    lon, lat, height = (
+        check_range(f"--site-lonlat: {k}", v, *_RANGES[k], error=SiteError)
+        for k, v in zip(("lon_deg", "lat_deg", "height_m"), numbers, strict=True)
+    )
+    entry: dict[str, Any] = {"name": f"lon{lon:+.4f} lat{lat:+.4f}", "lon_deg": lon}
+    entry.update(lat_deg=lat, height_m=height)
     if timezone is None:
         offset = round(((lon + 180.0) % 360.0 - 180.0) / 15.0)
         # Etc/GMT signs are inverted (POSIX): Etc/GMT+5 is UTC-5.

@@ -11,7 +11,8 @@ from __future__ import annotations
 
 from astropy.table import Table
 
-from ucbplan.errors import InputFileError, UcbplanError
+from ucbplan.errors import InputError, InputFileError, shorten
+from ucbplan.observing.blocktable import check_blocks
 from ucbplan.observing.exports.base import (
     DEFAULT_ACQUISITION_S,
     Exporter,
@@ -76,14 +77,14 @@ def export_blocks(table: Table, to: str, options: ExportOptions | None = None) -
     Raises
     ------
     UcbplanError
-        For an unknown format name (the message lists the known ones) or an empty table.
+        For an unknown format name (the message lists the known ones), an empty table or a bad
+        cell (:func:`~ucbplan.observing.blocktable.check_blocks`).
     """
-    try:
-        exporter = EXPORTERS[to]
-    except KeyError:
-        raise UcbplanError(
-            f"--to: unknown export format {to!r}; expected one of {', '.join(EXPORTERS)}"
-        ) from None
+    exporter = EXPORTERS.get(to) if isinstance(to, str) else None
+    if exporter is None:
+        raise InputError(
+            f"--to: unknown export format {shorten(to, 40)}; expected one of {', '.join(EXPORTERS)}"
+        )
     if len(table) == 0:
         raise InputFileError("blocks table has no rows: nothing to export; re-run `ucbplan plan`")
-    return exporter(table, options or ExportOptions())
+    return exporter(check_blocks(table), options or ExportOptions())

@@ -17,7 +17,10 @@ from __future__ import annotations
 
 import hashlib
 import math
-from collections.abc import Callable
+import os
+import stat
+import unicodedata
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from datetime import UTC, datetime, timedelta
 from pathlib import Path
@@ -28,19 +31,29 @@ from astropy.coordinates import Angle
 from astropy.table import Table
 from astropy.time import Time
 
-from ucbplan.errors import InputFileError, UcbplanError
+from ucbplan.errors import InputError, InputFileError, UcbplanError, shorten
+from ucbplan.inputs import MAX_YAML_BYTES, load_yaml
+from ucbplan.observing.blocks import MAX_BLOCK_S
 from ucbplan.observing.blocktable import EXTRA_COLUMNS, REQUIRED_COLUMNS
+from ucbplan.observing.blocktable import USER_COLUMNS as USER_COLUMN_DECLS
+from ucbplan.observing.ranges import check_range, is_number
 from ucbplan.observing.timeconv import quiet_erfa
-from ucbplan.target import load_target
+from ucbplan.target import target_from_dict
 
 __all__ = [
     "DEFAULT_ACQUISITION_S",
+    "KECK_ROTMODES",
+    "MAX_TOLERANCE_SIGMA",
     "USER_COLUMNS",
     "ExportOptions",
     "ExportResult",
     "Exporter",
     "ObStartWindow",
     "acquisition_s",
+    "ascii_name",
+    "ascii_names",
+    "ascii_text",
+    "clean_meta",
     "coordinates",
     "created_utc",
     "floats",
@@ -67,9 +80,15 @@ __all__ = [
 #: (a typical VLT/Keck slit acquisition of a faint target: pointing, acquisition image, centring).
 DEFAULT_ACQUISITION_S = 600.0
 
+#: Largest window half-width in units of σ_t.
+MAX_TOLERANCE_SIGMA = 100.0
+#: Rotator modes a Keck starlist takes (``rotmode=``; ``vertical`` keeps the slit parallactic).
+KECK_ROTMODES = ("pa", "vertical", "stationary")
+
 #: Optional columns the planner does not write but the exports read when a user adds them:
-#: ``vmag`` [mag], ``acq_s`` (acquisition overhead per block) [s], ``tol_rad`` (phase tolerance).
-USER_COLUMNS = ("vmag", "acq_s", "tol_rad")
+#: ``vmag`` [mag], ``acq_s`` (acquisition overhead per block) [s], ``tol_rad`` (phase tolerance);
+#: declared (type, unit, range) in :data:`ucbplan.observing.blocktable.USER_COLUMNS`.
+USER_COLUMNS = tuple(c.name for c in USER_COLUMN_DECLS)
 
 _KNOWN_COLUMNS = frozenset((*REQUIRED_COLUMNS, *EXTRA_COLUMNS, *USER_COLUMNS))
 
@@ -104,6 +123,21 @@ class ExportOptions:
     merge_overlaps: bool = False
     proposal_format: str = "ecsv"
     keck_rotmode: str = "vertical"
+
+    def __post_init__(self) -> None:
+        why = "acquisition before the first exposure; a block must fit in one night"
+        if self.acquisition_s is not None:
+            check_range("--acquisition", self.acquisition_s, 0.0, MAX_BLOCK_S, "s", why)
+        why = "window half-width in units of the block's 1-sigma timing error"
+        check_range("--tolerance-sigma", self.tolerance_sigma, 0.0, MAX_TOLERANCE_SIGMA, "", why)
+        why = "smallest window half-width; a day at most"
+        check_range("--tolerance-floor", self.tolerance_floor_s, 0.0, 86400.0, "s", why)
+        check_range("rounding_warn_fraction", self.rounding_warn_fraction, 0.0, 1.0)
+        if not isinstance(self.keck_rotmode, str) or self.keck_rotmode not in KECK_ROTMODES:
+            raise InputError(
+                f"--rotmode: expected {', '.join(KECK_ROTMODES)} (Keck starlist rotator "
+                f"modes), got {shorten(self.keck_rotmode, 40)}"
+            )
 
 
 @dataclass(frozen=True, slots=True)
@@ -248,9 +282,99 @@ def sexagesimal(value: float, decimals: int, sep: str, signed: bool, width: int 
 
 
 def safe_name(name: str, max_len: int | None = None) -> str:
-    """Spaces → underscores (optionally truncated), for catalogue and OB names."""
-    text = "_".join(name.split())
+    """Spaces → underscores, control characters dropped (optionally truncated), for catalogue
+    and OB names."""
+    text = "_".join("".join(ch for ch in name if ch.isprintable() or ch.isspace()).split())
     return text[:max_len] if max_len else text
+
+
+#: Dash-like characters written as ``-`` in ASCII names (hyphens, en/em dashes, minus signs).
+_DASHES = dict.fromkeys(
+    map(ord, "\u2010\u2011\u2012\u2013\u2014\u2015\u2212\ufe58\ufe63\uff0d"), "-"
+)
+#: Letters NFKD does not decompose, spelled in ASCII.
+_LETTERS = str.maketrans(
+    {
+        "ß": "ss",
+        "æ": "ae",
+        "Æ": "AE",
+        "œ": "oe",
+        "Œ": "OE",
+        "ø": "o",
+        "Ø": "O",
+        "đ": "d",
+        "Đ": "D",
+        "ł": "l",
+        "Ł": "L",
+        "þ": "th",
+        "Þ": "Th",
+        "ı": "i",
+        "ð": "d",
+        "Ð": "D",
+    }
+)
+
+
+def ascii_name(name: str) -> str:
+    """``name`` in printable ASCII: dashes → ``-``, accents dropped (Unicode NFKD), a few
+    letters spelled out (ß → ss, ø → o), any other non-ASCII character → ``_``; control
+    characters dropped."""
+    text = unicodedata.normalize("NFKD", name.translate(_DASHES).translate(_LETTERS))
+    text = "".join(ch for ch in text if not unicodedata.combining(ch))
+    text = "".join(ch if ch.isascii() else "_" for ch in text.translate(_DASHES))
+    return "".join(ch for ch in text if ch.isprintable() or ch.isspace())
+
+
+def ascii_text(text: str) -> str:
+    """Free text (a site name, an anchor) as one line of printable ASCII (see
+    :func:`ascii_name`)."""
+    return " ".join(ascii_name(text).split())
+
+
+def ascii_names(
+    names: list[str],
+    fmt: str,
+    notes: list[str],
+    max_len: int | None = None,
+    drop: str = "",
+    what: str = "target",
+) -> dict[str, str]:
+    """The ASCII catalogue name of each distinct target name for a format that takes ASCII only.
+
+    Names are transliterated (:func:`ascii_name`, with a note), characters in ``drop`` become
+    ``_``, white space ``_`` (:func:`safe_name`) and names are cut to ``max_len`` (with a note).
+
+    Raises
+    ------
+    InputFileError
+        A name without any ASCII letter or digit, or two names that become the same (both named).
+    """
+    out: dict[str, str] = {}
+    owner: dict[str, str] = {}
+    for name in dict.fromkeys(names):
+        text = ascii_name(name)
+        for ch in drop:
+            text = text.replace(ch, "_")
+        text = safe_name(text)
+        if not any(ch.isalnum() for ch in text):
+            raise InputFileError(
+                f"{fmt}: {what} {shorten(name, 60)} has no ASCII spelling ({fmt} takes ASCII "
+                "names only); give it an ASCII name in its target file"
+            )
+        if text != safe_name(name):
+            notes.append(f"{fmt}: {what} {shorten(name, 60)} written as {text!r} (ASCII only)")
+        if max_len and len(text) > max_len:
+            notes.append(f"{fmt}: name {shorten(text, 60)} truncated to {max_len} characters")
+            text = text[:max_len]
+        if owner.setdefault(text, name) != name:
+            raise InputFileError(
+                f"{fmt}: {what}s {shorten(owner[text], 60)} and {shorten(name, 60)} both become "
+                f"{text!r}"
+                + (f" ({max_len}-character limit)" if max_len else "")
+                + "; rename one in its target file"
+            )
+        out[name] = text
+    return out
 
 
 def fmt_sigma(sigma_s: float) -> str:
@@ -303,13 +427,14 @@ def acquisition_s(table: Table, options: ExportOptions, notes: list[str]) -> np.
         return np.full(len(table), float(options.acquisition_s))
     if has_column(table, "acq_s"):
         return floats(table, "acq_s", unit="s")
-    planned = (table.meta or {}).get("overhead_s")
-    if isinstance(planned, int | float) and math.isfinite(planned) and planned >= 0:
+    value = meta(table).get("overhead_s")
+    planned = float(value) if is_number(value) else math.nan
+    if 0 <= planned <= MAX_BLOCK_S:
         notes.append(
-            f"acquisition overhead {float(planned):.0f} s from the plan's overhead_s (the time "
+            f"acquisition overhead {planned:.0f} s from the plan's overhead_s (the time "
             "`ucbplan plan` reserved before each session); pass --acquisition S to change it"
         )
-        return np.full(len(table), float(planned))
+        return np.full(len(table), planned)
     notes.append(
         f"no acq_s column: assuming {DEFAULT_ACQUISITION_S:.0f} s acquisition overhead; "
         "pass --acquisition S with your instrument's value"
@@ -329,32 +454,97 @@ def readout_total_s(table: Table, notes: list[str]) -> np.ndarray:
     return np.maximum(width - n_exp * floats(table, "exptime_s", unit="s"), 0.0)
 
 
-def _file_vmag(entry: dict[str, Any]) -> float | None:
-    """``vmag`` of the target file named in the table's provenance, if it is still readable."""
+def _regular_file_bytes(path: Path, limit: int) -> bytes:
+    """The bytes of ``path`` if it is a regular file of at most ``limit`` bytes.
+
+    Opened without blocking and checked on the open descriptor, so a FIFO, a device or a folder
+    named in a table's provenance is refused at once instead of hanging the export.
+
+    Raises
+    ------
+    OSError
+        Not a regular file, too large, or unreadable (``strerror`` says which).
+    """
+    fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
+    try:
+        info = os.fstat(fd)
+        if not stat.S_ISREG(info.st_mode):
+            raise OSError(0, "not a regular file")
+        if info.st_size > limit:
+            raise OSError(0, f"larger than {limit} bytes")
+        with os.fdopen(os.dup(fd), "rb") as handle:
+            data = handle.read(limit + 1)
+        if len(data) > limit:
+            raise OSError(0, f"larger than {limit} bytes")
+        return data
+    finally:
+        os.close(fd)
+
+
+def _file_vmag(entry: dict[str, Any]) -> tuple[float | None, str | None]:
+    """``vmag`` of the target file named in the table's provenance, and a note when the file
+    cannot be used (missing, not a regular file, changed since planning, not a target file)."""
     path = entry.get("file")
     if not path:
-        return None
+        return None, None
+    if not isinstance(path, str) or len(path) > 4096 or "\x00" in path:
+        return None, f"target file {shorten(path, 80)} in the table's provenance is not a path"
+    label = shorten(path, 120)
     try:
-        digest = hashlib.sha256(Path(str(path)).read_bytes()).hexdigest()
-        if entry.get("sha256") and digest != entry["sha256"]:
-            return None  # the file changed since planning: do not trust it
-        return load_target(str(path)).vmag
-    except (UcbplanError, OSError):
+        data = _regular_file_bytes(Path(path), MAX_YAML_BYTES)
+    except (OSError, ValueError) as exc:
+        why = exc.strerror if isinstance(exc, OSError) and exc.strerror else "cannot be read"
+        return None, f"target file {label} ({why}): its magnitude is not read"
+    digest = hashlib.sha256(data).hexdigest()
+    if entry.get("sha256") and digest != entry["sha256"]:
+        return (
+            None,
+            f"target file {label} changed since planning (SHA-256 differs): its magnitude is "
+            "not read",
+        )
+    try:
+        doc = load_yaml(Path(path), "target file", text=data.decode("utf-8-sig"))
+        return target_from_dict(doc, Path(path)).vmag, None
+    except (UcbplanError, UnicodeDecodeError, RecursionError, ValueError, TypeError):
+        return None, f"target file {label} is not a valid target file: its magnitude is not read"
+
+
+def _meta_vmag(entry: dict[str, Any], notes: list[str]) -> float | None:
+    """The magnitude of one ``meta['targets']`` entry: its ``vmag``, else its target file's."""
+    value = entry.get("vmag")
+    if value is not None:
+        if is_number(value) and -30.0 <= float(value) <= 40.0:
+            return float(value)
+        notes.append(
+            f"meta targets: vmag {shorten(value, 40)} of {shorten(entry.get('name'), 60)} is "
+            "not a magnitude: ignored"
+        )
         return None
+    vmag, note = _file_vmag(entry)
+    if note:
+        notes.append(note)
+    return vmag
 
 
-def vmags(table: Table) -> np.ndarray:
+def vmags(table: Table, notes: list[str] | None = None) -> np.ndarray:
     """V magnitude per row: ``vmag`` column, else ``meta['targets'][*]`` (its ``vmag`` or the
-    ``vmag`` of the target file it names), else NaN."""
+    ``vmag`` of the target file it names, read only if it is a regular file whose SHA-256 still
+    matches), else NaN. Why a file could not be used goes to ``notes``."""
     out = floats(table, "vmag", default=math.nan)
     if np.all(np.isfinite(out)):
         return out
-    items = table.meta.get("targets", []) if table.meta else []
-    by_name = {
-        str(t.get("name")): t.get("vmag") if t.get("vmag") is not None else _file_vmag(t)
-        for t in items
-        if isinstance(t, dict)
-    }
+    items = meta(table).get("targets", [])
+    items = items if isinstance(items, list) else []
+    wanted = {n for n, v in zip(strings(table, "target"), out, strict=True) if not math.isfinite(v)}
+    found = notes if notes is not None else []
+    by_name: dict[str, float | None] = {}
+    for t in items:
+        if (
+            isinstance(t, dict)
+            and str(t.get("name")) in wanted
+            and str(t.get("name")) not in by_name
+        ):
+            by_name[str(t.get("name"))] = _meta_vmag(t, found)
     for i, name in enumerate(strings(table, "target")):
         value = by_name.get(name)
         if not math.isfinite(out[i]) and value is not None:
@@ -367,17 +557,54 @@ def vmags(table: Table) -> np.ndarray:
 # --------------------------------------------------------------------------------------------
 
 
+def meta(table: Table) -> dict[str, Any]:
+    """The table's ``meta`` as a dict (empty when absent or not a mapping)."""
+    return dict(table.meta) if isinstance(table.meta, Mapping) else {}
+
+
+def _meta_text(value: Any, default: str) -> str:
+    """A provenance value as one short line of text (``default`` unless it is a plain value)."""
+    if isinstance(value, str | int | float) and not isinstance(value, bool):
+        text = " ".join(_utf8(str(value)).split())
+        return text[:200] if text else default
+    return default
+
+
+def _utf8(text: str) -> str:
+    """``text`` without lone surrogates (a YAML ``"\\ud800"`` escape cannot be written)."""
+    return text.encode("utf-8", "replace").decode("utf-8")
+
+
+def clean_meta(value: Any, budget: list[int] | None = None, depth: int = 0) -> Any:
+    """A copy of provenance metadata that can be written again: plain dicts, lists, numbers and
+    UTF-8 strings, at most 8 levels deep and 10 000 values in all (shared references, as a YAML
+    alias makes them, cannot expand without limit). A table's own metadata comes back equal."""
+    budget = [10_000] if budget is None else budget
+    budget[0] -= 1
+    if depth > 8 or budget[0] < 0:
+        return "..."
+    if isinstance(value, Mapping):
+        return {_utf8(str(k)): clean_meta(v, budget, depth + 1) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [clean_meta(v, budget, depth + 1) for v in value]
+    if isinstance(value, str):
+        return _utf8(value)
+    if value is None or isinstance(value, bool | int | float):
+        return value
+    return _utf8(str(value))
+
+
 def created_utc(table: Table) -> str:
     """The table's ``meta['created_utc']`` ('' when absent)."""
-    return str(table.meta.get("created_utc", "")) if table.meta else ""
+    return _meta_text(meta(table).get("created_utc"), "")
 
 
 def site_name(table: Table) -> str:
     """The observing site's name from the table ``meta`` ('unknown site' when absent)."""
-    site = table.meta.get("site") if table.meta else None
-    if isinstance(site, dict):
-        return str(site.get("name", "unknown site"))
-    return str(site) if site else "unknown site"
+    site = meta(table).get("site")
+    if isinstance(site, Mapping):
+        return _meta_text(site.get("name"), "unknown site")
+    return _meta_text(site, "unknown site")
 
 
 def version() -> str:

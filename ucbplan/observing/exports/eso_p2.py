@@ -6,6 +6,7 @@ on the OB start is rounded outward to whole minutes; windows must not overlap.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 from dataclasses import dataclass
@@ -15,11 +16,12 @@ from typing import Any
 import numpy as np
 from astropy.table import Table
 
-from ucbplan.errors import UcbplanError
+from ucbplan.errors import InputFileError, UcbplanError, shorten
 from ucbplan.observing.exports.base import (
     ExportOptions,
     ExportResult,
     acquisition_s,
+    ascii_names,
     coordinates,
     created_utc,
     floats,
@@ -28,7 +30,6 @@ from ucbplan.observing.exports.base import (
     ob_start_window,
     period_s,
     required_times,
-    safe_name,
     sexagesimal,
     site_name,
     strings,
@@ -36,7 +37,10 @@ from ucbplan.observing.exports.base import (
     version,
 )
 
-__all__ = ["export_eso_p2"]
+__all__ = ["ESO_NAME_MAX", "export_eso_p2"]
+
+#: Longest OB name p2 accepts.
+ESO_NAME_MAX = 32
 
 
 def _floor_minute(t: datetime) -> datetime:
@@ -106,14 +110,14 @@ def _columns(table: Table, options: ExportOptions, notes: list[str]) -> _Columns
     )
 
 
-def _block_ob(c: _Columns, i: int, options: ExportOptions) -> _Ob:
+def _block_ob(c: _Columns, i: int, options: ExportOptions, ob_names: dict[str, str]) -> _Ob:
     """The OB of block ``i`` alone: window on its start, rounded outward to whole minutes."""
     mid, sigma = c.mids[i], float(c.sigma[i])
     w = ob_start_window(c.starts[i], float(c.acq[i]), sigma, options)
     lo_min, hi_min = _floor_minute(w.lo), _ceil_minute(w.hi)
     widening = (w.lo - lo_min).total_seconds() + (hi_min - w.hi).total_seconds()
     doc = {
-        "name": safe_name(c.blocks[i], 32),
+        "name": ob_names[c.blocks[i]],
         "target": c.names[i],
         "block_ids": [c.blocks[i]],
         "anchor": c.anchors[i],
@@ -132,10 +136,42 @@ def _block_ob(c: _Columns, i: int, options: ExportOptions) -> _Ob:
     return _Ob(doc, lo_min, hi_min, w.ob_start, float(c.period[i]), c.sessions[i], [member])
 
 
+def _ob_names(blocks: list[str], notes: list[str]) -> dict[str, str]:
+    """OB name of each block id: ASCII, at most :data:`ESO_NAME_MAX` characters; a longer id is
+    cut and given a stable 6-character hash suffix so that names stay unique.
+
+    Raises
+    ------
+    InputFileError
+        Two block ids that still give the same name (both named).
+    """
+    names = ascii_names(blocks, "ESO p2 OB name", notes, what="block")
+    cut = 0
+    for block, name in names.items():
+        if len(name) > ESO_NAME_MAX:
+            digest = hashlib.sha256(block.encode("utf-8")).hexdigest()[:6]
+            names[block] = f"{name[: ESO_NAME_MAX - 7]}-{digest}"
+            cut += 1
+    if cut:
+        notes.append(
+            f"ESO p2: {cut} OB names longer than {ESO_NAME_MAX} characters cut and given a "
+            "hash suffix of their block id (block_ids keeps the full ids)"
+        )
+    owner: dict[str, str] = {}
+    for block, name in names.items():
+        if owner.setdefault(name, block) != block:
+            raise InputFileError(
+                f"ESO p2: blocks {shorten(owner[name], 60)} and {shorten(block, 60)} both "
+                f"become OB name {name!r}; rename one"
+            )
+    return names
+
+
 def _eso_obs(table: Table, options: ExportOptions, notes: list[str]) -> list[_Ob]:
     """Time-ordered OBs: one per session (or lone block), overlaps merged or refused."""
     c = _columns(table, options, notes)
-    obs = _group_sessions([_block_ob(c, i, options) for i in time_order(table)])
+    ob_names = _ob_names(c.blocks, notes)
+    obs = _group_sessions([_block_ob(c, i, options, ob_names) for i in time_order(table)])
     for ob in obs:
         _note_rounding(ob, options, notes)
     return _resolve_overlaps(obs, options)
@@ -226,14 +262,17 @@ def _ob_doc(ob: _Ob) -> dict[str, Any]:
     return doc
 
 
-def _target_list(table: Table) -> list[str]:
-    """p2 target-list CSV lines ``name,HH:MM:SS.SSS,±DD:MM:SS.SSS,J2000``, one per target."""
+def _target_list(table: Table, notes: list[str]) -> list[str]:
+    """p2 target-list CSV lines ``name,HH:MM:SS.SSS,±DD:MM:SS.SSS,J2000``, one per target
+    (ASCII names without commas or quotes)."""
     ra, dec = coordinates(table)
+    names = strings(table, "target")
+    short = ascii_names(names, "ESO p2 target list", notes, drop=',"')
     targets: dict[str, str] = {}
-    for name, r, d in zip(strings(table, "target"), ra, dec, strict=True):
+    for name, r, d in zip(names, ra, dec, strict=True):
         targets.setdefault(
             name,
-            f"{safe_name(name)},{sexagesimal(r / 15.0, 3, ':', False)},"
+            f"{short[name]},{sexagesimal(r / 15.0, 3, ':', False)},"
             f"{sexagesimal(d, 3, ':', True)},J2000",
         )
     return list(targets.values())
@@ -270,7 +309,7 @@ def export_eso_p2(table: Table, options: ExportOptions) -> ExportResult:
             "rounded outward to whole minutes"
         ),
         "p2api_usage": "api.saveAbsoluteTimeConstraints(obId, ob['absoluteTimeConstraints'], v)",
-        "target_list_csv": _target_list(table),
+        "target_list_csv": _target_list(table, notes),
         "obs": [_ob_doc(ob) for ob in obs],
     }
     text = json.dumps(doc, indent=2, allow_nan=False) + "\n"

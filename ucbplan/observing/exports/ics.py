@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import unicodedata
 from dataclasses import dataclass
 from datetime import datetime, timedelta
 
 import numpy as np
 from astropy.table import Table
 
-from ucbplan.errors import InputFileError
+from ucbplan.errors import InputFileError, shorten
 from ucbplan.observing.exports.base import (
     ExportOptions,
     ExportResult,
@@ -33,7 +34,17 @@ ICS_LINE_OCTETS = 75
 
 
 def ics_escape(text: str) -> str:
-    """Escape a TEXT value (RFC 5545 §3.3.11): backslash, semicolon, comma, newline."""
+    """Escape a TEXT value (RFC 5545 §3.3.11): backslash, semicolon, comma, newline.
+
+    Line breaks of any kind (CR LF, a bare CR, U+2028/2029) become the escaped ``\\n``; other
+    control characters, which no TEXT value may hold (§3.3.11, ``TSAFE-CHAR``), are dropped.
+    """
+    text = text.replace("\r\n", "\n").replace("\r", "\n")
+    text = "".join(
+        "\n" if unicodedata.category(ch) in ("Zl", "Zp") else ch
+        for ch in text
+        if ch in "\n\t" or unicodedata.category(ch) not in ("Cc", "Cs")
+    )
     return text.replace("\\", "\\\\").replace(";", "\\;").replace(",", "\\,").replace("\n", "\\n")
 
 
@@ -137,7 +148,7 @@ def _event(c: _Columns, i: int, site: str, stamp: str) -> list[str]:
     )
     return [
         "BEGIN:VEVENT",
-        f"UID:{safe_name(c.blocks[i])}@ucbplan",
+        f"UID:{ics_escape(safe_name(c.blocks[i]))}@ucbplan",
         f"DTSTAMP:{stamp}",
         f"DTSTART:{_ics_stamp(c.starts[i].replace(microsecond=0))}",
         f"DTEND:{_ics_stamp(_ceil_second(c.ends[i]))}",
@@ -149,6 +160,18 @@ def _event(c: _Columns, i: int, site: str, stamp: str) -> list[str]:
     ]
 
 
+def _check_uids(blocks: list[str]) -> None:
+    """Refuse two blocks whose ids give the same calendar UID (a calendar keeps only one)."""
+    owner: dict[str, str] = {}
+    for block in blocks:
+        uid = ics_escape(safe_name(block))
+        if owner.setdefault(uid, block) != block:
+            raise InputFileError(
+                f"ICS: blocks {shorten(owner[uid], 60)} and {shorten(block, 60)} both become "
+                f"calendar UID {shorten(uid, 60)}@ucbplan; rename one"
+            )
+
+
 def export_ics(table: Table, options: ExportOptions) -> ExportResult:
     """ICS calendar: one VEVENT per block, DTSTART/DTEND in UTC rounded outward to seconds.
 
@@ -157,6 +180,7 @@ def export_ics(table: Table, options: ExportOptions) -> ExportResult:
     folded at 75 octets.
     """
     c = _columns(table)
+    _check_uids(c.blocks)
     site = site_name(table)
     stamp = _dtstamp(table, min(c.starts, default=None))
     lines = [

@@ -7,12 +7,12 @@ from astropy.table import Table
 from ucbplan.observing.exports.base import (
     ExportOptions,
     ExportResult,
+    ascii_names,
     coordinates,
     floats,
     fmt_sigma,
     iso_ms,
     required_times,
-    safe_name,
     sexagesimal,
     strings,
     time_order,
@@ -24,20 +24,30 @@ __all__ = ["export_ing_cat", "ing_catalogue"]
 ING_NAME_MAX = 20
 
 
-def ing_catalogue(table: Table) -> str:
+def ing_catalogue(table: Table, notes: list[str] | None = None) -> str:
     """ING (WHT/ISIS) catalogue: ``NAME hh mm ss.ss ±dd mm ss.s J2000 ! comment`` per target.
 
-    Names are ≤ 20 characters without spaces, colons or tabs; the comment gives the first
-    block's UTC mid-time and σ. Save under a lower-case name ending ``.cat``.
+    Names are ≤ 20 ASCII characters without spaces, colons or tabs (transliterated with a note,
+    see :func:`~ucbplan.observing.exports.base.ascii_names`); the comment gives the first block's
+    UTC mid-time and σ. Save under a lower-case name ending ``.cat``.
+
+    Raises
+    ------
+    InputFileError
+        If two targets become the same catalogue name (both named), or a name has no ASCII
+        spelling.
     """
     names = strings(table, "target")
+    short_names = ascii_names(
+        names, "ING catalogue", notes if notes is not None else [], ING_NAME_MAX, ":"
+    )
     ra, dec = coordinates(table)
     sigma = floats(table, "sigma_t_s", unit="s")
     mids = required_times(table, "t_mid_utc")
     lines: list[str] = []
     seen: set[str] = set()
     for i in time_order(table):
-        short = safe_name(names[i], ING_NAME_MAX).replace(":", "_")
+        short = short_names[names[i]]
         if short in seen:
             continue
         seen.add(short)
@@ -51,4 +61,6 @@ def ing_catalogue(table: Table) -> str:
 
 def export_ing_cat(table: Table, options: ExportOptions) -> ExportResult:
     """ING (WHT/ISIS) ``.cat`` catalogue, one line per target (see :func:`ing_catalogue`)."""
-    return ExportResult(ing_catalogue(table).encode("ascii"), ".cat")
+    notes: list[str] = []
+    text = ing_catalogue(table, notes)
+    return ExportResult(text.encode("ascii"), ".cat", tuple(dict.fromkeys(notes)))

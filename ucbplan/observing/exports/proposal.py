@@ -28,10 +28,13 @@ from ucbplan.observing.exports.base import (
     ExportOptions,
     ExportResult,
     acquisition_s,
+    clean_meta,
     coordinates,
+    created_utc,
     floats,
     fmt_sigma,
     iso_ms,
+    meta,
     period_s,
     readout_total_s,
     required_times,
@@ -88,8 +91,9 @@ def _seconds(ts: list[datetime]) -> np.ndarray:
 
 
 def _meta_targets(table: Table) -> dict[str, dict[str, Any]]:
-    items = table.meta.get("targets", []) if table.meta else []
-    return {str(t.get("name")): dict(t) for t in items if isinstance(t, dict)}
+    items = meta(table).get("targets", [])
+    items = items if isinstance(items, list) else []
+    return {str(clean_meta(t.get("name"))): dict(t) for t in items if isinstance(t, dict)}
 
 
 def _months(ts: list[datetime]) -> int:
@@ -147,7 +151,7 @@ def _columns(table: Table, options: ExportOptions, notes: list[str]) -> _Columns
         period=period_s(table, notes),
         ra=ra,
         dec=dec,
-        vmag=vmags(table),
+        vmag=vmags(table, notes),
         tol=floats(table, "tol_rad", default=math.nan),
         starts=required_times(table, "t_start_utc"),
         mids=_seconds(required_times(table, "t_mid_utc")),
@@ -215,12 +219,15 @@ def proposal_table(table: Table, options: ExportOptions, notes: list[str]) -> Ta
     t_mid_sem = float(_seconds([sem_mid])[0])
     months = _months(c.starts)
     meta_t = _meta_targets(table)
-    constraints = "; ".join(str(x) for x in (table.meta or {}).get("constraints", []))
+    listed = meta(table).get("constraints", [])
+    constraints = "; ".join(
+        " ".join(str(clean_meta(x)).split()) for x in (listed if isinstance(listed, list) else [])
+    )
     rows: list[dict[str, Any]] = []
     for name in dict.fromkeys(c.names):
         idx = np.array([i for i, n in enumerate(c.names) if n == name])
         row = _target_row(c, idx, t_mid_sem, months, options)
-        row["ephemeris"] = str(meta_t.get(name, {}).get("file") or "")
+        row["ephemeris"] = " ".join(str(clean_meta(meta_t.get(name, {}).get("file") or "")).split())
         row["constraints"] = constraints
         rows.append(row)
     if any(not math.isfinite(r["vmag"]) for r in rows):
@@ -242,8 +249,8 @@ def _summary_meta(
     sem_start, sem_mid, sem_end = semester
     return {
         "ucbplan_version": version(),
-        "source_created_utc": str((table.meta or {}).get("created_utc", "")),
-        "site": (table.meta or {}).get("site", ""),
+        "source_created_utc": created_utc(table),
+        "site": clean_meta(meta(table).get("site", "")),
         "semester_start_utc": iso_ms(sem_start, 0),
         "semester_end_utc": iso_ms(sem_end, 0),
         "semester_mid_utc": iso_ms(sem_mid, 0),
@@ -264,10 +271,29 @@ def _summary_meta(
     }
 
 
+#: LaTeX's special characters in text and how to write them.
+_LATEX_SPECIAL = {
+    "\\": r"\textbackslash{}",
+    "_": r"\_",
+    "&": r"\&",
+    "%": r"\%",
+    "#": r"\#",
+    "$": r"\$",
+    "{": r"\{",
+    "}": r"\}",
+    "~": r"\textasciitilde{}",
+    "^": r"\textasciicircum{}",
+}
+
+
 def _latex_escape(text: str) -> str:
-    for char, repl in (("\\", r"\textbackslash{}"), ("_", r"\_"), ("&", r"\&"), ("%", r"\%")):
-        text = text.replace(char, repl)
-    return text.replace("#", r"\#").replace("$", r"\$")
+    """Text for a LaTeX table cell: special characters escaped, line breaks and other control
+    characters dropped (one pass, so an escape is never escaped again)."""
+    return "".join(
+        _LATEX_SPECIAL.get(ch, ch)
+        for ch in " ".join(text.split())
+        if ch.isprintable() and not 0xD800 <= ord(ch) <= 0xDFFF
+    )
 
 
 def _latex(summary: Table) -> str:

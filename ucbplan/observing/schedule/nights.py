@@ -8,12 +8,27 @@ from typing import NamedTuple
 
 from astropy.time import Time
 
-from ucbplan.errors import UcbplanError
+from ucbplan.errors import InputError, shorten
+from ucbplan.observing.ranges import check_int
 from ucbplan.observing.sites import Site
 from ucbplan.observing.timeaxis import TimeAxis
 from ucbplan.observing.timeconv import quiet_erfa
 
-__all__ = ["NightSpan", "NightWindow", "night_dates", "night_spans", "night_windows"]
+__all__ = [
+    "MAX_NIGHTS",
+    "NIGHT_RANGE",
+    "NightSpan",
+    "NightWindow",
+    "night_dates",
+    "night_spans",
+    "night_windows",
+]
+
+#: Most nights in one plan (a year).
+MAX_NIGHTS = 366
+#: First and last night that can be planned (the built-in Earth ephemeris, ERFA epv00, used for
+#: the light time, is valid 1900-2100).
+NIGHT_RANGE = (date(1900, 1, 1), date(2100, 12, 30))
 
 
 class NightWindow(NamedTuple):
@@ -32,25 +47,37 @@ class NightSpan(NamedTuple):
     x1: float
 
 
+def _parse_night(text: object) -> date:
+    """``YYYY-MM-DD`` as a date."""
+    t = text.strip() if isinstance(text, str) and len(text) <= 40 else ""
+    try:
+        if len(t) == 10:
+            return date.fromisoformat(t)
+    except ValueError:
+        pass
+    raise InputError(
+        f"--night: expected the local evening date YYYY-MM-DD, got {shorten(text, 40)}"
+    )
+
+
 def night_dates(first: str | date, count: int = 1) -> list[date]:
     """``count`` consecutive local evening dates from ``first`` (a date or ``YYYY-MM-DD``).
 
     Raises
     ------
-    UcbplanError
-        For a malformed date or ``count`` < 1.
+    InputError
+        For a malformed date, ``count`` outside 1..:data:`MAX_NIGHTS`, or nights outside
+        :data:`NIGHT_RANGE`.
     """
-    if isinstance(first, date):
-        start = first
-    else:
-        try:
-            start = date.fromisoformat(first)
-        except ValueError:
-            raise UcbplanError(
-                f"--night: expected the local evening date YYYY-MM-DD, got {first!r}"
-            ) from None
-    if count < 1:
-        raise UcbplanError(f"--nights must be >= 1, got {count}")
+    check_int("--nights", count, 1, MAX_NIGHTS, "a year at most; plan longer runs in parts")
+    start = first if isinstance(first, date) else _parse_night(first)
+    lo, hi = NIGHT_RANGE
+    if not (lo <= start <= hi and (hi - start).days >= count - 1):
+        span = str(start) if count == 1 else f"{count} nights from {start}"
+        raise InputError(
+            f"--night/--nights: expected nights from {lo} to {hi} (the built-in Earth ephemeris "
+            f"of the light time is valid 1900-2100), got {span}"
+        )
     return [start + timedelta(days=k) for k in range(count)]
 
 

@@ -8,7 +8,7 @@ delta_kappa_rewrite). The second night is the first observable one among the bas
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import replace
 from datetime import date, timedelta
 from typing import TYPE_CHECKING
@@ -32,8 +32,9 @@ __all__ = ["SecondEpoch", "delta_kappa", "pair_blocks"]
 
 FloatArray = NDArray[np.float64]
 
-#: Plans the single u★ = 0 block of one target on one night (None if nothing is observable).
-SecondEpoch = Callable[["Target", date], Block | None]
+#: Plans the single u★ = 0 block of one target on one night, clear of the blocks given (None if
+#: nothing is observable there).
+SecondEpoch = Callable[["Target", date, Sequence[Block]], Block | None]
 
 #: Baselines considered: |Δκ_LISA| at least this fraction of its largest value inside T_valid.
 _DK_FRACTION = 0.8
@@ -65,9 +66,15 @@ def _best_baselines(
 
 
 def _pair(
-    n: int, first: Block, run: TargetRun, max_baseline_days: float, second_epoch: SecondEpoch
+    n: int,
+    first: Block,
+    run: TargetRun,
+    max_baseline_days: float,
+    second_epoch: SecondEpoch,
+    busy: Sequence[Block],
 ) -> tuple[list[Block], list[Unplaced]]:
-    """Pair ``n`` (0-based): the first block with its second epoch, or the reason there is none."""
+    """Pair ``n`` (0-based): the first block with its second epoch clear of ``busy``, or the
+    reason there is none."""
     t, p = run.target, run.target.params
     eta, kappa = ll_pair(p, np.array([run.cand.epochs.tau(first.t_mid_tdb_bary)]))
     eta_a, kappa_a = float(eta[0]), float(kappa[0])
@@ -78,7 +85,11 @@ def _pair(
     good = _best_baselines(eta_a, kappa_a, p.omega_dot, max_days)
     night0 = date.fromisoformat(first.night)
     second = next(
-        (b for d in good if (b := second_epoch(t, night0 + timedelta(days=int(d)))) is not None),
+        (
+            b
+            for d in good
+            if (b := second_epoch(t, night0 + timedelta(days=int(d)), busy)) is not None
+        ),
         None,
     )
     pair = f"{slug(t.name)}-P{n + 1:02d}"
@@ -113,7 +124,8 @@ def pair_blocks(
     max_baseline_days : float
         Longest baseline searched [d].
     second_epoch : callable
-        ``(target, night) -> Block or None``: plans the second epoch on one night.
+        ``(target, night, busy) -> Block or None``: plans the second epoch on one night, clear
+        of the blocks ``busy`` (every first block and the second epochs chosen so far).
 
     Returns
     -------
@@ -126,8 +138,29 @@ def pair_blocks(
     out: list[Block] = []
     unplaced: list[Unplaced] = []
     by_name = {r.target.name: r for r in runs}
+    seconds: list[Block] = []
+    used = {b.block_id for b in firsts} | {b.session_id for b in firsts}
     for n, first in enumerate(firsts):
-        blocks, missing = _pair(n, first, by_name[first.target], max_baseline_days, second_epoch)
+        run = by_name[first.target]
+        busy = [*firsts, *seconds]
+        blocks, missing = _pair(n, first, run, max_baseline_days, second_epoch, busy)
+        blocks[1:] = [_renumbered(b, used) for b in blocks[1:]]
         out += blocks
+        seconds += blocks[1:]
         unplaced += missing
     return out, unplaced
+
+
+def _renumbered(block: Block, used: set[str]) -> Block:
+    """``block`` with the next free ``-NN`` / ``-SNN`` numbers of its target and night.
+
+    A second epoch is planned alone on its night, so it is numbered 01 there; another block of
+    the run may already hold that identifier.
+    """
+    prefix = block.block_id.rsplit("-", 1)[0]
+    k = 1
+    while f"{prefix}-{k:02d}" in used or f"{prefix}-S{k:02d}" in used:
+        k += 1
+    block_id, session_id = f"{prefix}-{k:02d}", f"{prefix}-S{k:02d}"
+    used.update((block_id, session_id))
+    return replace(block, block_id=block_id, session_id=session_id)

@@ -8,7 +8,9 @@ gets fewer is reported as :class:`Unplaced` with the reason in words a user can 
 
 from __future__ import annotations
 
+import bisect
 from collections import Counter
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -46,19 +48,46 @@ class Session:
 
 @dataclass
 class _Timeline:
-    """Sessions placed so far, and the taken intervals of each night."""
+    """Sessions placed so far and the taken intervals of the whole run [s on the plan's axis].
+
+    Taken intervals are kept sorted and pairwise apart by at least the overhead, so a new
+    session is checked against its two neighbours only (placement stays fast for thousands of
+    sessions), and no two placed sessions ever overlap, whatever their night or target.
+    """
 
     overhead_s: float
-    taken: dict[int, list[tuple[float, float]]] = field(default_factory=dict)
+    starts: list[float] = field(default_factory=list)
+    ends: list[float] = field(default_factory=list)
     placed: list[Session] = field(default_factory=list)
+
+    def free(self, x0: float, x1: float) -> bool:
+        """Whether [x0, x1], with the overhead before it and before the next, is free."""
+        gap = max(self.overhead_s, 0.0)
+        k = bisect.bisect_left(self.starts, x1 + gap)  # intervals starting before our end
+        return not (k > 0 and self.ends[k - 1] > x0 - gap)
+
+    def take(self, x0: float, x1: float) -> None:
+        """Mark [x0, x1] as taken (the caller checked :meth:`free`)."""
+        k = bisect.bisect_left(self.starts, x0)
+        self.starts.insert(k, x0)
+        self.ends.insert(k, x1)
+
+    def block_out(self, intervals: Sequence[tuple[float, float]]) -> None:
+        """Mark ``intervals`` (e.g. blocks planned earlier) as taken, merging any that touch."""
+        merged: list[list[float]] = []
+        for x0, x1 in sorted([*zip(self.starts, self.ends, strict=True), *intervals]):
+            if merged and x0 <= merged[-1][1]:
+                merged[-1][1] = max(merged[-1][1], x1)
+            else:
+                merged.append([x0, x1])
+        self.starts = [m[0] for m in merged]
+        self.ends = [m[1] for m in merged]
 
     def add(self, s: Session) -> bool:
         """Place ``s`` unless it (with its overhead before the start) overlaps a taken interval."""
-        taken = self.taken.setdefault(s.night_i, [])
-        a0 = s.x0 - self.overhead_s
-        if any(a0 < b1 and b0 - self.overhead_s < s.x1 for b0, b1 in taken):
+        if not self.free(s.x0, s.x1):
             return False
-        taken.append((s.x0, s.x1))
+        self.take(s.x0, s.x1)
         self.placed.append(s)
         return True
 
@@ -137,10 +166,15 @@ def _place_night(
 
 
 def place_sessions(
-    runs: list[TargetRun], spans: list[NightSpan], frame: PlanFrame, settings: PlanSettings
+    runs: list[TargetRun],
+    spans: list[NightSpan],
+    frame: PlanFrame,
+    settings: PlanSettings,
+    busy: Sequence[tuple[float, float]] = (),
 ) -> tuple[list[Session], list[Unplaced]]:
     """Greedy night schedule: targets by priority, each night's best sessions (lowest airmass)
-    that keep the overhead gap to everything already placed.
+    that keep the overhead gap to everything already placed (and to the ``busy`` intervals
+    [s on the plan's axis], e.g. blocks of an earlier plan).
 
     Returns
     -------
@@ -150,6 +184,7 @@ def place_sessions(
         One entry per target and night that got fewer sessions than asked.
     """
     timeline = _Timeline(settings.overhead_s)
+    timeline.block_out(busy)
     unplaced: list[Unplaced] = []
     for run in sorted(runs, key=lambda r: -r.target.priority):
         for n, span in enumerate(spans):

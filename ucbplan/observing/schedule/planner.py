@@ -13,10 +13,12 @@ could not be placed is reported with the reason.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from datetime import date
 from typing import TYPE_CHECKING
 
+import numpy as np
 from astropy.time import Time
 
 from ucbplan.errors import UcbplanError
@@ -28,7 +30,8 @@ from ucbplan.observing.schedule.placement import Unplaced, place_sessions
 from ucbplan.observing.schedule.records import block_records
 from ucbplan.observing.schedule.settings import PlanSettings
 from ucbplan.observing.sites import Site
-from ucbplan.observing.timeconv import coverage_warnings
+from ucbplan.observing.timeaxis import TimeAxis
+from ucbplan.observing.timeconv import coverage_warnings, quiet_erfa
 
 if TYPE_CHECKING:
     from ucbplan.target import Target
@@ -78,14 +81,32 @@ def _check_inputs(targets: list[Target], nights: list[date], settings: PlanSetti
 
 
 def _second_epoch(site: Site, settings: PlanSettings) -> SecondEpoch:
-    """The single u★ = 0 block of a target on one night (for fixed-u pairs)."""
+    """The single u★ = 0 block of a target on one night clear of ``busy`` (for fixed-u pairs)."""
     single = replace(settings, mode="u=0", sessions_per_night=1)
 
-    def plan_one(target: Target, night: date) -> Block | None:
-        res = plan_nights([target], site, [night], single)
+    def plan_one(target: Target, night: date, busy: Sequence[Block]) -> Block | None:
+        res = plan_nights([target], site, [night], single, busy=busy)
         return res.blocks[0] if res.blocks else None
 
     return plan_one
+
+
+#: Padding of blocks planned earlier when a new plan must keep clear of them [s]: covers the
+#: UTC↔axis round trip (≤ 30 µs per day of span, see TimeAxis.x).
+_BUSY_PAD_S = 1e-3
+
+
+def _busy_x(axis: TimeAxis, busy: Sequence[Block]) -> list[tuple[float, float]]:
+    """Blocks planned earlier as intervals on ``axis`` [s], padded by :data:`_BUSY_PAD_S`."""
+    if not busy:
+        return []
+    with quiet_erfa():
+        x0 = (Time([b.t_start_utc for b in busy]) - axis.origin).to_value("s")
+        x1 = (Time([b.t_end_utc for b in busy]) - axis.origin).to_value("s")
+    return [
+        (float(a) - _BUSY_PAD_S, float(b) + _BUSY_PAD_S)
+        for a, b in zip(np.atleast_1d(x0), np.atleast_1d(x1), strict=True)
+    ]
 
 
 def plan_nights(
@@ -93,8 +114,12 @@ def plan_nights(
     site: Site,
     nights: list[date],
     settings: PlanSettings,
+    busy: Sequence[Block] = (),
 ) -> PlanResult:
     """Plan blocks for ``targets`` at ``site`` on the given local evening dates.
+
+    No two blocks of the result overlap, whatever their targets, and each session keeps the
+    slew/acquisition overhead clear of every other block.
 
     Parameters
     ----------
@@ -106,6 +131,8 @@ def plan_nights(
         Local dates of the evenings the nights start.
     settings : PlanSettings
         Mode, constraints, exposure plan, tolerance inputs, overheads.
+    busy : sequence of Block
+        Blocks planned earlier that the new blocks (and their overheads) must keep clear of.
 
     Returns
     -------
@@ -125,7 +152,7 @@ def plan_nights(
     windows = night_windows(site, nights)
     frame, runs, warns = prepare_runs(targets, site, windows, settings)
     spans = night_spans(windows, frame.axis)
-    placed, unplaced = place_sessions(runs, spans, frame, settings)
+    placed, unplaced = place_sessions(runs, spans, frame, settings, _busy_x(frame.axis, busy))
     blocks = block_records(placed, runs, spans, frame, site, settings)
     if frame.mode.label == "fixed-u-pairs":
         second = _second_epoch(site, settings)

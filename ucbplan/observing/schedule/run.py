@@ -7,6 +7,7 @@ returns a :class:`PlanRun` that builds the master blocks table with its provenan
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from datetime import date
@@ -15,8 +16,9 @@ from typing import Any
 
 from astropy.table import Table
 
-from ucbplan.errors import UcbplanError
+from ucbplan.errors import InputError, shorten
 from ucbplan.observing.blocktable import blocks_to_table, make_meta
+from ucbplan.observing.ranges import check_range
 from ucbplan.observing.schedule.nights import night_dates
 from ucbplan.observing.schedule.planner import PlanResult, plan_nights
 from ucbplan.observing.schedule.settings import PlanSettings
@@ -24,7 +26,10 @@ from ucbplan.observing.sites import Site, resolve_site
 from ucbplan.observing.timeconv import quiet_erfa
 from ucbplan.target import Target, load_target
 
-__all__ = ["PlanRun", "parse_priorities", "plan_files", "with_priorities"]
+__all__ = ["MAX_PRIORITY", "PlanRun", "parse_priorities", "plan_files", "with_priorities"]
+
+#: Largest |priority| (priorities only order the targets).
+MAX_PRIORITY = 1.0e9
 
 
 def parse_priorities(items: Sequence[str]) -> dict[str, float]:
@@ -32,18 +37,24 @@ def parse_priorities(items: Sequence[str]) -> dict[str, float]:
 
     Raises
     ------
-    UcbplanError
-        For an item that is not ``NAME=NUMBER``.
+    InputError
+        For an item that is not ``NAME=NUMBER`` with a finite number.
     """
     values: dict[str, float] = {}
     for item in items:
-        name, sep, value = item.rpartition("=")
+        name, sep, value = item.rpartition("=") if isinstance(item, str) else ("", "", "")
         try:
-            values[name.strip().lower()] = float(value)
+            number = float(value) if len(value) <= 40 else math.nan
         except ValueError:
-            name = ""
-        if not sep or not name:
-            raise UcbplanError(f"--priority: expected NAME=NUMBER, got {item!r}")
+            number = math.nan
+        if not sep or not name.strip() or not math.isfinite(number):
+            raise InputError(
+                "--priority: expected NAME=NUMBER (a target name and a finite number, e.g. "
+                f"'HM Cnc=2'), got {shorten(item, 80)}"
+            )
+        values[name.strip().lower()] = check_range(
+            f"--priority {shorten(name.strip(), 40)}", number, -MAX_PRIORITY, MAX_PRIORITY
+        )
     return values
 
 
@@ -65,16 +76,15 @@ def with_priorities(
         For a malformed override or a name that is not one of the targets.
     """
     if isinstance(priorities, Mapping):
-        values = {k.strip().lower(): float(v) for k, v in priorities.items()}
+        values = parse_priorities([f"{k}={v}" for k, v in priorities.items()])
     else:
         values = parse_priorities(priorities)
     known = {t.name.lower() for t in targets}
     unknown = sorted(set(values) - known)
     if unknown:
-        raise UcbplanError(
-            f"--priority: no target named {unknown[0]!r}; targets: "
-            + ", ".join(t.name for t in targets)
-        )
+        names = ", ".join(t.name for t in targets)
+        names = names if len(names) <= 200 else f"{names[:199]}…"
+        raise InputError(f"--priority: no target named {shorten(unknown[0], 60)}; targets: {names}")
     return [replace(t, priority=values.get(t.name.lower(), t.priority)) for t in targets]
 
 
@@ -89,11 +99,20 @@ class PlanRun:
     result: PlanResult
 
     def failure(self) -> str | None:
-        """Why no block at all could be planned (None if some were)."""
+        """Why no block at all could be planned (None if some were), grouped by target and
+        reason over the nights."""
         if self.result.blocks:
             return None
-        reasons = "; ".join(f"{m.target} {m.night}: {m.reason}" for m in self.result.unplaced)
-        return f"no block could be planned at {self.site.name}: {reasons}"
+        grouped: dict[tuple[str, str], list[str]] = {}
+        for m in self.result.unplaced:
+            grouped.setdefault((m.target, m.reason), []).append(m.night)
+        parts = []
+        for (name, reason), nights in grouped.items():
+            when = (
+                nights[0] if len(nights) == 1 else f"{len(nights)} nights {nights[0]}..{nights[-1]}"
+            )
+            parts.append(f"{name} ({when}): {reason}")
+        return f"no block could be planned at {self.site.name}: {'; '.join(parts)}"
 
     def meta(self) -> dict[str, Any]:
         """Provenance of the run for the table ``meta`` (see :func:`make_meta`)."""
@@ -164,9 +183,12 @@ def plan_files(
     UcbplanError
         For a bad site, date, target file, override or planning input (one line each).
     """
-    the_site = resolve_site(site, site_lonlat, sites_file)
-    dates = night_dates(first_night, n_nights)
-    targets = with_priorities([load_target(p) for p in target_files], priorities)
+    # every option first (cheap, one line each), then the files, then the work
     settings = settings if settings is not None else PlanSettings()
+    dates = night_dates(first_night, n_nights)
+    if not isinstance(priorities, Mapping):
+        parse_priorities(priorities)
+    the_site = resolve_site(site, site_lonlat, sites_file)
+    targets = with_priorities([load_target(p) for p in target_files], priorities)
     result = plan_nights(targets, the_site, dates, settings)
     return PlanRun(targets, the_site, dates, settings, result)

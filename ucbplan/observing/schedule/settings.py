@@ -6,8 +6,9 @@ import math
 import re
 from dataclasses import dataclass, field
 
-from ucbplan.errors import UcbplanError
-from ucbplan.observing.blocks import ExposurePlan
+from ucbplan.core.smearing import parse_smear_budget
+from ucbplan.errors import InputError, UcbplanError, shorten
+from ucbplan.observing.blocks import MAX_BLOCK_S, ExposurePlan
 from ucbplan.observing.constraints import (
     AirmassConstraint,
     ConstraintSet,
@@ -16,12 +17,24 @@ from ucbplan.observing.constraints import (
     NightConstraint,
     ZenithHoleConstraint,
 )
+from ucbplan.observing.ranges import check_int, check_range
 from ucbplan.observing.sites import Site
 
 __all__ = ["MODES", "ModeSpec", "PlanSettings", "parse_mode"]
 
 #: The planning modes, as ``--mode`` spells them.
 MODES = ("quadrature", "conjunction", "zero-crossing", "fixed-u-pairs", "u=VALUE")
+
+#: Largest |u★| of ``--mode u=VALUE`` [rad] (two turns; the anchor is taken modulo 2π).
+MAX_ABS_U_RAD = 4.0 * math.pi
+#: Largest RV precision or semi-amplitude [km/s] (white-dwarf binaries have K < 3000 km/s).
+MAX_SPEED_KMS = 1.0e4
+#: Largest planning margin α (1 spends the whole phase tolerance; more is no longer a margin).
+MAX_ALPHA = 10.0
+#: Most sessions per target and night (a 5-min binary has ~100 u = 0 / π pairs in a night).
+MAX_SESSIONS = 1000
+#: Longest ``--max-smear`` text [characters].
+_MAX_SMEAR_CHARS = 60
 
 
 @dataclass(frozen=True, slots=True)
@@ -50,7 +63,13 @@ class ModeSpec:
 
 
 def _u_value(text: str) -> float | None:
-    """The number of ``u=VALUE`` (radians), or None if ``text`` is not of that form."""
+    """The number of ``u=VALUE`` (radians), or None if ``text`` is not of that form.
+
+    Raises
+    ------
+    InputError
+        For a number outside ±:data:`MAX_ABS_U_RAD`.
+    """
     m = re.fullmatch(r"u\s*=\s*([-+0-9.eE]+)", text)
     if not m:
         return None
@@ -58,7 +77,8 @@ def _u_value(text: str) -> float | None:
         value = float(m.group(1))
     except ValueError:
         return None
-    return value if math.isfinite(value) else None
+    why = "argument of latitude; the anchor is taken modulo 2 pi"
+    return check_range("--mode u=VALUE", value, -MAX_ABS_U_RAD, MAX_ABS_U_RAD, "rad", why)
 
 
 def parse_mode(text: str) -> ModeSpec:
@@ -66,10 +86,13 @@ def parse_mode(text: str) -> ModeSpec:
 
     Raises
     ------
-    UcbplanError
-        For an unknown mode (lists the valid ones).
+    InputError
+        For an unknown mode (lists the valid ones) or a ``u=VALUE`` out of range.
     """
-    t = text.strip().lower()
+    if not isinstance(text, str) or len(text) > 60:
+        t = ""
+    else:
+        t = text.strip().lower()
     half_pi = (math.pi / 2, 3 * math.pi / 2)
     if t == "quadrature":
         return ModeSpec("quadrature", "quadrature", (0.0, math.pi), "quadrature", True)
@@ -82,9 +105,9 @@ def parse_mode(text: str) -> ModeSpec:
     value = _u_value(t)
     if value is not None:
         return ModeSpec(f"u={value:g}", value, (value,), "generic", False)
-    raise UcbplanError(
-        f"--mode: unknown mode {text!r}; expected quadrature, conjunction, zero-crossing, "
-        "fixed-u-pairs or u=VALUE (radians, e.g. u=0.785)"
+    raise InputError(
+        f"--mode: unknown mode {shorten(text, 60)}; expected quadrature, conjunction, "
+        "zero-crossing, fixed-u-pairs or u=VALUE (radians, e.g. u=0.785)"
     )
 
 
@@ -129,8 +152,9 @@ class PlanSettings:
 
     Raises
     ------
-    UcbplanError
-        If ``alpha`` is not positive or ``sessions_per_night`` < 1.
+    InputError
+        For any value outside its physical range (one line naming the option, the range and
+        why), before any planning work.
     """
 
     mode: str = "quadrature"
@@ -152,29 +176,71 @@ class PlanSettings:
     star: int = 1
 
     def __post_init__(self) -> None:
-        if not (self.alpha > 0 and math.isfinite(self.alpha)):
-            raise UcbplanError(f"--alpha must be positive, got {self.alpha}")
-        if self.sessions_per_night < 1:
-            raise UcbplanError(f"--sessions must be >= 1, got {self.sessions_per_night}")
+        parse_mode(self.mode)
+        self.constraints(None)  # twilight, airmass, Moon and zenith-hole limits
+        if not isinstance(self.exposure, ExposurePlan):
+            raise InputError(f"exposure: expected an ExposurePlan, got {shorten(self.exposure)}")
+        why = "margin on the phase tolerance: 1 spends all of it"
+        check_range("--alpha", self.alpha, 0.0, MAX_ALPHA, "", why, low_open=True)
+        check_int("n_epochs", self.n_epochs, 1, 10**6, "epochs sharing the tolerance")
+        for name, value in (("--sigma-v", self.sigma_v_kms), ("--k-eff", self.k_eff_kms)):
+            if value is not None:
+                check_range(name, value, 0.0, MAX_SPEED_KMS, "km/s", "", low_open=True)
+        self._check_budgets()
+        why = "slew + acquisition before each session; a block must fit in one night"
+        check_range("--overhead", self.overhead_s, 0.0, MAX_BLOCK_S, "s", why)
+        check_int("--sessions", self.sessions_per_night, 1, MAX_SESSIONS, "per target and night")
+        why = "longest baseline of a fixed-u pair: a century at most"
+        check_range("max_pair_baseline_days", self.max_pair_baseline_days, 0.0, 36525.0, "d", why)
+        if self.star not in (1, 2) or isinstance(self.star, bool):
+            raise InputError(f"star: expected 1 or 2, got {shorten(self.star)}")
+
+    def _check_budgets(self) -> None:
+        """``--max-smear`` (its form, and a positive budget) and ``--max-bin-fraction``."""
+        if self.max_bin_fraction is not None:
+            why = "largest block span as a fraction of the orbital period"
+            check_range(
+                "--max-bin-fraction", self.max_bin_fraction, 0.0, 1.0, "", why, low_open=True
+            )
+        if self.max_smear is None:
+            return
+        if not isinstance(self.max_smear, str) or len(self.max_smear) > _MAX_SMEAR_CHARS:
+            raise InputError(
+                "--max-smear: expected e.g. '0.5*sigma_v' or '2 km/s', got "
+                f"{shorten(self.max_smear, 40)}"
+            )
+        # the form and sign now; a sigma_v budget is scaled by each target's sigma_v later
+        try:
+            budget = parse_smear_budget(self.max_smear, 1.0)
+        except UcbplanError:
+            raise
+        except ValueError:  # a factor that is not a number, e.g. '..*sigma_v'
+            raise InputError(
+                "--max-smear: expected e.g. '0.5*sigma_v' or '2 km/s', got "
+                f"{shorten(self.max_smear, 40)}"
+            ) from None
+        why = "a velocity, or a multiple of sigma_v"
+        check_range("--max-smear", budget, 0.0, MAX_SPEED_KMS, "km/s", why, low_open=True)
 
     @property
     def spec(self) -> ModeSpec:
         """The parsed planning mode."""
         return parse_mode(self.mode)
 
-    def constraints(self, site: Site) -> ConstraintSet:
-        """The constraints of a run at ``site``, by name."""
-        hole = self.zenith_hole_deg if self.zenith_hole_deg is not None else site.zenith_hole_deg
+    def constraints(self, site: Site | None) -> ConstraintSet:
+        """The constraints of a run at ``site`` (None: without the site's zenith hole), by name."""
+        hole = self.zenith_hole_deg
+        if hole is None and site is not None:
+            hole = site.zenith_hole_deg
+        # built (and so range-checked) even when 0 switches them off
+        hole_c = ZenithHoleConstraint(radius_deg=hole) if hole is not None else None
+        moon_c = MoonSeparationConstraint(min_deg=self.moon_sep_deg)
         moon_illum = self.moon_illum_max
         return ConstraintSet(
             night=NightConstraint(twilight=self.twilight),
             airmass=AirmassConstraint(max_airmass=self.airmass_max),
-            zenith_hole=ZenithHoleConstraint(radius_deg=hole) if hole else None,
-            moon_sep=(
-                MoonSeparationConstraint(min_deg=self.moon_sep_deg)
-                if self.moon_sep_deg > 0
-                else None
-            ),
+            zenith_hole=hole_c if hole_c is not None and hole_c.radius_deg > 0 else None,
+            moon_sep=moon_c if moon_c.min_deg > 0 else None,
             moon_illum=(
                 MoonIlluminationConstraint(max_fraction=moon_illum)
                 if moon_illum is not None
