@@ -476,7 +476,8 @@ def check_validity(table: VelocityTable, target: Target) -> F64:
     ------
     VelocityFileError
         UTC site times that were not converted (give ``--site``); a time before the LISA start
-        or more than :data:`HORIZON_S` after its end (names the first offending row).
+        or more than :data:`HORIZON_S` after its end, or, for a timing ephemeris, more than
+        :data:`HORIZON_S` from T0 on either side (names the first offending row).
     """
     if table.site_utc:
         raise VelocityFileError(
@@ -484,18 +485,25 @@ def check_validity(table: VelocityTable, target: Target) -> F64:
             "--site NAME so they can be converted to barycentric TDB"
         )
     tau = np.asarray((table.time - target.t_ref).to_value("s"), dtype=np.float64)
-    lo = -0.5 * target.t_obs_s
+    timing = getattr(target, "kind", "lisa") == "timing"
+    # a timing ephemeris holds on both sides of T0; a LISA posterior from the mission start on
+    lo = -HORIZON_S if timing else -0.5 * target.t_obs_s
     hi = 0.5 * target.t_obs_s + HORIZON_S
     bad = np.flatnonzero((tau < lo) | (tau > hi))
     if bad.size:
         i = int(bad[0])
-        when = (
-            "before the LISA observation start"
-            if tau[i] < lo
-            else ("more than 20 yr after the LISA observation end")
-        )
+        if timing:
+            when = "more than 20 yr from the ephemeris epoch T0"
+            span = f"T0 = {target.t_ref.tdb.isot} TDB"
+        else:
+            when = (
+                "before the LISA observation start"
+                if tau[i] < lo
+                else "more than 20 yr after the LISA observation end"
+            )
+            span = f"{target.t_start.isot} – {target.t_end.isot} TDB"
         raise VelocityFileError(
             f"{table.source}: row {i + 1}: time {table.time[i].tdb.isot} TDB is {when} "
-            f"({target.t_start.isot} – {target.t_end.isot} TDB); check the time column and scale"
+            f"({span}); check the time column and scale"
         )
     return tau

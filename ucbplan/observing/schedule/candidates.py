@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 
 from ucbplan.core.constants import TWO_PI
 from ucbplan.core.ephemeris import find_epochs
-from ucbplan.core.forecast import t_valid, tolerance
+from ucbplan.core.forecast import tolerance, valid_window_s
 from ucbplan.core.smearing import parse_smear_budget
 from ucbplan.errors import UcbplanError
 from ucbplan.observing.blocks import ExposurePlan, Smearing, block_smearing, check_smear_budget
@@ -160,9 +160,12 @@ class TargetRun:
     ok, score : ndarray of float
         Session usable (1.0) or not; its worst airmass (placement prefers low scores).
     valid : ndarray of bool
-        Session inside T_valid.
+        Session inside the validity window (σ_u ≤ α·δu_tol).
     until : Time
         End of validity (TDB).
+    since : Time
+        Start of validity (TDB): the LISA observation start, or T_valid before T0 for a timing
+        ephemeris.
     """
 
     target: Target
@@ -174,12 +177,17 @@ class TargetRun:
     valid: NDArray[np.bool_]
     until: Time
     smearing: Smearing
+    since: Time
 
 
 def _tolerance_and_validity(
     target: Target, mode: ModeSpec, settings: PlanSettings
-) -> tuple[Time, float | None, float | None]:
-    """(valid-until TDB, σ_v, K) for a target; errors say which number is missing."""
+) -> tuple[Time, Time, float | None, float | None]:
+    """(valid-since, valid-until TDB, σ_v, K) for a target; errors say which number is missing.
+
+    The window is where σ_u ≤ α·δu_tol (:func:`~ucbplan.core.forecast.valid_window_s`): from the
+    LISA start to T_valid after its end, or T_valid before to T_valid after a timing T0.
+    """
     spec = target.spectroscopy
     sigma_v = settings.sigma_v_kms or (spec.sigma_v_kms if spec else None)
     k = settings.k_eff_kms or (spec.k_for_tolerance if spec else None)
@@ -190,10 +198,11 @@ def _tolerance_and_validity(
         )
     u_star = mode.u_values[0] if mode.tol_kind == "generic" else None
     tol = tolerance(mode.tol_kind, sigma_v, k, settings.n_epochs, u_star)
-    tv = t_valid(target, tol, mode.u_values, settings.alpha, settings.star)
+    first, last = valid_window_s(target, tol, mode.u_values, settings.alpha, settings.star)
     with quiet_erfa():
-        until = target.t_end + TimeDelta(tv * u.s)
-    return until, sigma_v, k
+        since = target.t_ref + TimeDelta(first * u.s)
+        until = target.t_ref + TimeDelta(last * u.s)
+    return since, until, sigma_v, k
 
 
 def _smearing(
@@ -211,7 +220,7 @@ def _smearing(
 def _target_run(
     target: Target, i: int, frame: PlanFrame, settings: PlanSettings
 ) -> tuple[TargetRun, list[str]]:
-    until, sigma_v, k = _tolerance_and_validity(target, frame.mode, settings)
+    since, until, sigma_v, k = _tolerance_and_validity(target, frame.mode, settings)
     sm, warns = _smearing(target, settings, sigma_v, k)
     cand = candidate_blocks(
         target,
@@ -225,10 +234,11 @@ def _target_run(
         settings.exposure,
         settings.star,
     )
-    valid = (cand.tau_origin_s + cand.dt_s) <= cand.epochs.tau(until)
+    tau = cand.tau_origin_s + cand.dt_s
+    valid = (tau >= cand.epochs.tau(since)) & (tau <= cand.epochs.tau(until))
     partner, ok, score = session_partners(cand, frame.mode.paired)
     valid = valid & ((partner < 0) | valid[np.maximum(partner, 0)])
-    return TargetRun(target, i, cand, partner, ok, score, valid, until, sm), warns
+    return TargetRun(target, i, cand, partner, ok, score, valid, until, sm, since), warns
 
 
 def prepare_runs(

@@ -123,6 +123,17 @@ def _unusable_reason(
 ) -> str:
     """Why none of the sessions ``js`` of a night can be used."""
     if not np.any(run.valid[js]):
+        if span.x1 <= frame.axis.x(run.since) and run.target.kind != "timing":
+            return (
+                f"before the LISA observation starts ({run.since.tdb.iso[:10]} TDB): a LISA "
+                "ephemeris predicts the orbit from then on; pick a later night"
+            )
+        if span.x1 <= frame.axis.x(run.since):
+            return (
+                f"before the validity window: {frame.mode.label} epochs are valid from "
+                f"{run.since.utc.iso[:16]} UTC (alpha={settings.alpha:g}); pick a later night "
+                "or a larger --alpha"
+            )
         return (
             f"past T_valid: {frame.mode.label} epochs are valid until "
             f"{run.until.utc.iso[:16]} UTC (alpha={settings.alpha:g}); pick an "

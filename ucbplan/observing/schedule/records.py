@@ -85,7 +85,9 @@ def _geometry(run: TargetRun, js: NDArray[np.int64], frame: PlanFrame, span_s: f
     alt = sky.target_alt_deg(i, xs)
     n_s = max(3, math.ceil(span_s / SAMPLE_STEP_S) + 1)
     fine = c.x_start[js][:, None] + np.linspace(0, 1, n_s)[None, :] * span_s
-    x_all = np.concatenate([xs, c.x_alt[js][:, None]], axis=1)
+    # a timing ephemeris has no π-mode alternative (NaN): keep the time conversion finite
+    x_alt = np.where(np.isfinite(c.x_alt[js]), c.x_alt[js], c.x_mid[js])
+    x_all = np.concatenate([xs, x_alt[:, None]], axis=1)
     return _Geometry(
         alt=alt,
         airmass=airmass_from_alt(alt),
@@ -118,7 +120,7 @@ def _block(
         t_end_utc=g.utc[k, 2],
         t_mid_tdb_bary=g.tdb[k],
         sigma_t_s=float(c.sigma_t_s[j]),
-        t_alt_utc=g.utc[k, 3],
+        t_alt_utc=g.utc[k, 3] if np.isfinite(c.x_alt[j]) else None,
         exptime_s=plan.exptime_s,
         n_exp=plan.n_exp,
         readout_s=plan.readout_s,
