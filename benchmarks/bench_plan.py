@@ -47,7 +47,7 @@ REPO = Path(__file__).resolve().parents[1]
 
 def make_targets(n: int) -> list[Target]:
     """HM Cnc clones spread over RA (all observable from Paranal part of the semester)."""
-    hm = load_target(REPO / "catalogs" / "hm-cnc.yaml")
+    hm = load_target(REPO / "catalogs" / "hm-cnc-simulated.yaml")
     rng = np.random.default_rng(2024)
     out = []
     for k in range(n):

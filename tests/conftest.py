@@ -28,7 +28,7 @@ def _offline() -> None:
 
 @pytest.fixture
 def hm_cnc_path() -> Path:
-    return CATALOGS / "hm-cnc.yaml"
+    return CATALOGS / "hm-cnc-simulated.yaml"
 
 
 @pytest.fixture

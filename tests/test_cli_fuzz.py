@@ -21,7 +21,7 @@ from hypothesis import strategies as st
 from ucbplan.cli import app as app_module
 
 ROOT = Path(__file__).resolve().parents[1]
-HM = str(ROOT / "catalogs" / "hm-cnc.yaml")
+HM = str(ROOT / "catalogs" / "hm-cnc-simulated.yaml")
 ECC = str(ROOT / "catalogs" / "fiducial-eccentric.yaml")
 VEL = str(ROOT / "catalogs" / "fiducial-eccentric-velocities.csv")
 

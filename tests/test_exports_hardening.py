@@ -190,7 +190,7 @@ def test_provenance_target_file_never_hangs(tmp_path: Path, kind: str) -> None:
     table.remove_column("vmag")
     entry = table.meta["targets"][0]
     target = tmp_path / "hm.yaml"
-    target.write_bytes((REPO / "catalogs" / "hm-cnc.yaml").read_bytes())
+    target.write_bytes((REPO / "catalogs" / "hm-cnc-simulated.yaml").read_bytes())
     paths: dict[str, object] = {
         "fifo": tmp_path / "fifo.yaml",
         "folder": tmp_path,
@@ -216,7 +216,7 @@ def test_provenance_target_file_read_when_unchanged(tmp_path: Path) -> None:
 
     table = fixture_table()
     table.remove_column("vmag")
-    path = REPO / "catalogs" / "hm-cnc.yaml"
+    path = REPO / "catalogs" / "hm-cnc-simulated.yaml"
     table.meta["targets"][0].update(file=str(path), sha256=file_sha256(path))
     res = export_blocks(table, "keck-starlist", OPTS)
     line = next(ln for ln in res.content.decode().splitlines() if ln.startswith("HM_Cnc"))

@@ -132,7 +132,7 @@ def test_iso_rounding_is_half_up() -> None:
 
 
 def test_acquisition_from_plan_meta_and_vmag_from_target_file(table: Table) -> None:
-    hm_file = Path(__file__).resolve().parents[1] / "catalogs" / "hm-cnc.yaml"
+    hm_file = Path(__file__).resolve().parents[1] / "catalogs" / "hm-cnc-simulated.yaml"
     t = minimal_table(table)
     digest = hashlib.sha256(hm_file.read_bytes()).hexdigest()
     t.meta = {
@@ -140,7 +140,7 @@ def test_acquisition_from_plan_meta_and_vmag_from_target_file(table: Table) -> N
         "targets": [{"name": "HM Cnc", "file": str(hm_file), "sha256": digest}],
     }
     res = export_blocks(t, "keck-starlist", ExportOptions())
-    # vmag 21.1 is in catalogs/hm-cnc.yaml; the table itself has no vmag.
+    # vmag 21.1 is in catalogs/hm-cnc-simulated.yaml; the table itself has no vmag.
     assert "HM_Cnc          08 06 23.20 +15 27 30.0 2000 vmag=21.1 rotmode=vertical" in (
         res.content.decode().splitlines()
     )

@@ -40,7 +40,7 @@ from ucbplan.feasibility import (
 )
 
 ROOT = Path(__file__).resolve().parents[1]
-HM_CNC = ROOT / "catalogs" / "hm-cnc.yaml"
+HM_CNC = ROOT / "catalogs" / "hm-cnc-simulated.yaml"
 FIDUCIAL = ROOT / "catalogs" / "fiducial-eccentric.yaml"
 P_FID = 0.00275386 * 86400.0  # paper Sec. 4.1 [s]
 I_FID = 1.4775  # rad

@@ -22,7 +22,7 @@ pytestmark = [
 ]
 
 REPO = Path(__file__).resolve().parents[1]
-HM = str(REPO / "catalogs" / "hm-cnc.yaml")
+HM = str(REPO / "catalogs" / "hm-cnc-simulated.yaml")
 BASE = ["plan", HM, "--site", "paranal", "--night", "2040-02-15"]
 
 
@@ -133,7 +133,7 @@ def test_night_chart_axes() -> None:
     ax = fig.axes[0]
     assert ax.get_ylabel() == "altitude [deg]"
     assert ax.get_xlabel().startswith("UTC [hh:mm]")
-    assert {t.get_text() for t in ax.get_legend().get_texts()} >= {"HM Cnc", "Moon", "airmass 2"}
+    assert {t.get_text() for t in ax.get_legend().get_texts()} >= {"HM Cnc (simulated)", "Moon", "airmass 2"}
     pyplot().close(fig)
 
 
@@ -164,6 +164,6 @@ def test_priority_option_orders_the_schedule() -> None:
 
     # Measured: fiducial 1.203 -> 1.168 (its transit), HM Cnc 1.305 (transit) -> 1.379.
     assert best(boosted, "Fiducial eccentric dWD") < best(base, "Fiducial eccentric dWD") - 0.02
-    assert best(boosted, "HM Cnc") > best(base, "HM Cnc") + 0.05
+    assert best(boosted, "HM Cnc (simulated)") > best(base, "HM Cnc (simulated)") + 0.05
     bad = CliRunner().invoke(app, [*args, "--priority", "nobody=3"])
     assert "no target named 'nobody'" in str(bad.exception)

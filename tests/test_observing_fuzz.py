@@ -44,7 +44,7 @@ pytestmark = [
 ]
 
 REPO = Path(__file__).resolve().parents[1]
-HM = REPO / "catalogs" / "hm-cnc.yaml"
+HM = REPO / "catalogs" / "hm-cnc-simulated.yaml"
 FAST = settings(
     max_examples=25,
     deadline=None,

@@ -32,7 +32,7 @@ pytestmark = [
 ]
 
 REPO = Path(__file__).resolve().parents[1]
-HM = REPO / "catalogs" / "hm-cnc.yaml"
+HM = REPO / "catalogs" / "hm-cnc-simulated.yaml"
 ECC = REPO / "catalogs" / "fiducial-eccentric.yaml"
 INJ = REPO / "catalogs" / "fiducial-injection.yaml"
 NIGHT = date(2040, 2, 15)
@@ -260,4 +260,4 @@ def test_failure_groups_nights(targets: list[Target]) -> None:
     )
     text = run.failure()
     assert text is not None and len(text) < 400, text
-    assert "HM Cnc (60 nights 2040-02-15..2040-04-14): " in text
+    assert "HM Cnc (simulated) (60 nights 2040-02-15..2040-04-14): " in text

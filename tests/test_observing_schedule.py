@@ -39,7 +39,7 @@ def _offline() -> None:
 
 @pytest.fixture(scope="module")
 def hm() -> Target:
-    return load_target(REPO / "catalogs" / "hm-cnc.yaml")
+    return load_target(REPO / "catalogs" / "hm-cnc-simulated.yaml")
 
 
 @pytest.fixture(scope="module")
@@ -240,7 +240,7 @@ def test_plan_files_is_the_plan_command_as_a_call(hm: Target) -> None:
     from ucbplan.observing.schedule import plan_files, with_priorities
 
     run = plan_files(
-        [REPO / "catalogs" / "hm-cnc.yaml", REPO / "catalogs" / "fiducial-eccentric.yaml"],
+        [REPO / "catalogs" / "hm-cnc-simulated.yaml", REPO / "catalogs" / "fiducial-eccentric.yaml"],
         first_night="2040-02-15",
         site="paranal",
         settings=PlanSettings(overhead_s=7200.0),
@@ -252,8 +252,8 @@ def test_plan_files_is_the_plan_command_as_a_call(hm: Target) -> None:
     assert len(table) == len(run.result.blocks) > 0
     assert table.meta["nights"] == ["2040-02-15"]
     assert table.meta["overhead_s"] == 7200.0
-    assert set(table.meta["valid_until_tdb"]) == {"HM Cnc", "Fiducial eccentric dWD"}
+    assert set(table.meta["valid_until_tdb"]) == {"HM Cnc (simulated)", "Fiducial eccentric dWD"}
     with pytest.raises(UcbplanError, match="no target named 'nobody'"):
         with_priorities([hm], ["nobody=3"])
     with pytest.raises(UcbplanError, match="NAME=NUMBER"):
-        with_priorities([hm], ["HM Cnc"])
+        with_priorities([hm], ["HM Cnc (simulated)"])

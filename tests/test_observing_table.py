@@ -76,7 +76,7 @@ def _make_block(i: int, alt: bool) -> Block:
 def _meta() -> dict:
     return make_meta(
         site={"name": "Paranal", "lon_deg": -70.4, "lat_deg": -24.6, "height_m": 2635.0},
-        targets=[{"name": "HM Cnc", "file": "catalogs/hm-cnc.yaml", "sha256": "0" * 64}],
+        targets=[{"name": "HM Cnc", "file": "catalogs/hm-cnc-simulated.yaml", "sha256": "0" * 64}],
         constraints=["airmass <= 2"],
         mode="quadrature",
     )

@@ -32,7 +32,7 @@ from ucbplan.target.schema import COVARIANCE_PARAMETERS, field
 from ucbplan.target.values import Ctx
 
 CATALOGS = Path(__file__).resolve().parents[1] / "catalogs"
-CATALOG_NAMES = ("hm-cnc.yaml", "fiducial-eccentric.yaml", "fiducial-injection.yaml")
+CATALOG_NAMES = ("hm-cnc-simulated.yaml", "fiducial-eccentric.yaml", "fiducial-injection.yaml")
 DOCS = {name: yaml.safe_load((CATALOGS / name).read_text()) for name in CATALOG_NAMES}
 
 QUICK = settings(

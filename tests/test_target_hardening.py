@@ -68,7 +68,7 @@ def _one_line(msg: str, name: str) -> str:
 
 def test_duplicate_keys_are_refused(tmp_path: Path) -> None:
     text = (
-        (CATALOGS / "hm-cnc.yaml")
+        (CATALOGS / "hm-cnc-simulated.yaml")
         .read_text()
         .replace("  phase: 5.500397", "  phase: 5.500397\n  phase: 1.0")
     )
@@ -97,20 +97,20 @@ def test_alias_bomb_is_refused_fast(tmp_path: Path) -> None:
 def test_byte_order_mark_and_exponent_without_point(tmp_path: Path) -> None:
     """A UTF-8 BOM (Windows editors) is accepted; 5e-14 is a number, as in the docs."""
     text = (
-        (CATALOGS / "hm-cnc.yaml")
+        (CATALOGS / "hm-cnc-simulated.yaml")
         .read_text()
         .replace('fdot: "7.073958e-16 Hz / s"', "fdot: 7.073958e-16")
     )
     path = tmp_path / "bom.yaml"
     path.write_bytes(b"\xef\xbb\xbf" + text.encode())
     t = load_target(path)
-    ref = load_target(CATALOGS / "hm-cnc.yaml")
-    assert t.params == ref.params and t.name == ref.name == "HM Cnc"
+    ref = load_target(CATALOGS / "hm-cnc-simulated.yaml")
+    assert t.params == ref.params and t.name == ref.name == "HM Cnc (simulated)"
 
 
 def test_not_utf8_is_refused(tmp_path: Path) -> None:
     path = tmp_path / "latin.yaml"
-    path.write_bytes((CATALOGS / "hm-cnc.yaml").read_bytes().replace(b"HM Cnc", b"HM C\xe9nc"))
+    path.write_bytes((CATALOGS / "hm-cnc-simulated.yaml").read_bytes().replace(b"HM Cnc", b"HM C\xe9nc"))
     with pytest.raises(TargetFileError) as exc:
         load_target(path)
     assert "UTF-8" in _one_line(str(exc.value), "latin.yaml")
@@ -519,7 +519,7 @@ def test_overflow_when_moving_to_the_midpoint_is_refused(tmp_path: Path) -> None
 # ------------------------------------------------------------------ valid files unchanged
 
 
-@pytest.mark.parametrize("catalog", ["hm-cnc.yaml", "fiducial-eccentric.yaml"])
+@pytest.mark.parametrize("catalog", ["hm-cnc-simulated.yaml", "fiducial-eccentric.yaml"])
 def test_bundled_catalogs_load_to_the_same_target(catalog: str) -> None:
     """The strict loader reads the bundled catalogs exactly as yaml.safe_load did."""
     path = CATALOGS / catalog

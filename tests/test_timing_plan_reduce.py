@@ -16,7 +16,7 @@ from ucbplan.target import load_target
 
 ROOT = Path(__file__).resolve().parents[1]
 SYN = ROOT / "catalogs" / "examples" / "synthetic-eclipsing.yaml"
-HM = ROOT / "catalogs" / "hm-cnc.yaml"
+HM = ROOT / "catalogs" / "hm-cnc-simulated.yaml"
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_cli_fuzz import run_cli  # noqa: E402

@@ -246,6 +246,11 @@ def sigma_k_per_pattern(phases: list[float], lambda_k: float, sigma_v: float = 1
     return float(math.sqrt(cov[1, 1]))
 
 
+#: Smallest smearing factor Λ_K a goal is computed for: below it the exposure has averaged the
+#: velocity curve away and no number of spectra measures K.
+LAMBDA_K_MIN = 0.01
+
+
 def _positive(name: str, value: float | None, high: float = math.inf) -> float:
     if value is None or not isinstance(value, int | float) or not math.isfinite(value):
         raise InputError(f"{name}: expected a positive number, got {shorten(value, 40)}")
@@ -354,6 +359,11 @@ def spectra_for_goal(
     sv1 = _positive("--sigma-v", sigma_v_kms)
     sv2 = _positive("--sigma-v (star 2)", sigma_v2_kms) if sigma_v2_kms is not None else sv1
     lam = _positive("lambda_k", lambda_k, 1.0)
+    if lam < LAMBDA_K_MIN:
+        raise InputError(
+            f"lambda_k: {lam:.3g} is below {LAMBDA_K_MIN}: the exposure averages the orbit away "
+            "(shorten the exposures)"
+        )
     if period_s is not None:
         _positive("P_b", period_s)
     if sin_i is not None:
