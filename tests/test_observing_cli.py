@@ -133,7 +133,11 @@ def test_night_chart_axes() -> None:
     ax = fig.axes[0]
     assert ax.get_ylabel() == "altitude [deg]"
     assert ax.get_xlabel().startswith("UTC [hh:mm]")
-    assert {t.get_text() for t in ax.get_legend().get_texts()} >= {"HM Cnc (simulated)", "Moon", "airmass 2"}
+    assert {t.get_text() for t in ax.get_legend().get_texts()} >= {
+        "HM Cnc (simulated)",
+        "Moon",
+        "airmass 2",
+    }
     pyplot().close(fig)
 
 

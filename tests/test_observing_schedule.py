@@ -240,7 +240,10 @@ def test_plan_files_is_the_plan_command_as_a_call(hm: Target) -> None:
     from ucbplan.observing.schedule import plan_files, with_priorities
 
     run = plan_files(
-        [REPO / "catalogs" / "hm-cnc-simulated.yaml", REPO / "catalogs" / "fiducial-eccentric.yaml"],
+        [
+            REPO / "catalogs" / "hm-cnc-simulated.yaml",
+            REPO / "catalogs" / "fiducial-eccentric.yaml",
+        ],
         first_night="2040-02-15",
         site="paranal",
         settings=PlanSettings(overhead_s=7200.0),

@@ -22,18 +22,8 @@ from ucbplan.target import load_target, target_from_dict
 
 CATALOGS = Path(__file__).resolve().parents[1] / "catalogs"
 
-BASE: dict[str, Any] = {
-    "name": "Test",
-    "sky": {"ra": "08h06m23.2s", "dec": "+15d27m30s"},
-    "lisa": {
-        "t_ref": "2037-01-01T00:00:00",
-        "t_obs": "126232599.05 s",
-        "phase": 5.5,
-        "f_gw": "6.2204944286e-3 Hz",
-        "fdot": "7.073958e-16 Hz / s",
-        "covariance": {"sigma": {"phase": 0.02, "f_gw": "7.7e-12 Hz"}},
-    },
-}
+# the same minimal valid document as tests/test_target.py (declared once)
+from test_target import BASE  # noqa: E402
 
 
 def _doc(**lisa: Any) -> dict[str, Any]:
@@ -110,7 +100,9 @@ def test_byte_order_mark_and_exponent_without_point(tmp_path: Path) -> None:
 
 def test_not_utf8_is_refused(tmp_path: Path) -> None:
     path = tmp_path / "latin.yaml"
-    path.write_bytes((CATALOGS / "hm-cnc-simulated.yaml").read_bytes().replace(b"HM Cnc", b"HM C\xe9nc"))
+    path.write_bytes(
+        (CATALOGS / "hm-cnc-simulated.yaml").read_bytes().replace(b"HM Cnc", b"HM C\xe9nc")
+    )
     with pytest.raises(TargetFileError) as exc:
         load_target(path)
     assert "UTF-8" in _one_line(str(exc.value), "latin.yaml")
