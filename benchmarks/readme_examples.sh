@@ -7,7 +7,9 @@
 #   diff -r -I created_utc -I DTSTAMP /tmp/a /tmp/b
 # Usage: readme_examples.sh OUTDIR
 set -u
-OUT=$1; rm -rf "$OUT"; mkdir -p "$OUT"
+OUT=${1:?give a new output folder}
+if [ -e "$OUT" ]; then echo "$OUT exists; give a new folder" >&2; exit 2; fi
+mkdir -p "$OUT"
 C=$PWD/catalogs
 cd "$OUT"; mkdir -p figs simfigs
 r() { local name=$1; shift; ucbplan "$@" >"$name.out" 2>"$name.err"; echo "rc=$?" >>"$name.err"; }
