@@ -30,6 +30,7 @@ from ucbplan.errors import TargetFileError
 from ucbplan.target import Target, load_target, write_target
 from ucbplan.target.schema import COVARIANCE_PARAMETERS, field
 from ucbplan.target.values import Ctx
+from ucbplan.target.write import _Dumper
 
 CATALOGS = Path(__file__).resolve().parents[1] / "catalogs"
 CATALOG_NAMES = ("hm-cnc-simulated.yaml", "fiducial-eccentric.yaml", "fiducial-injection.yaml")
@@ -496,7 +497,11 @@ def _same(t1: Target, t2: Target) -> None:
 
 def _check_valid(tmp_path: Path, doc: dict[str, Any]) -> None:
     src = tmp_path / "gen.yaml"
-    src.write_text(yaml.safe_dump(doc, allow_unicode=True, sort_keys=False), encoding="utf-8")
+    # a generated name such as "0E0" is text: dump it the way ucbplan's writer does (quoted),
+    # since ucbplan reads an unquoted 0E0 as a number
+    src.write_text(
+        yaml.dump(doc, Dumper=_Dumper, allow_unicode=True, sort_keys=False), encoding="utf-8"
+    )
     start = time.perf_counter()
     t1 = load_target(src)
     out = tmp_path / "written.yaml"
