@@ -67,3 +67,11 @@ def test_reduce_accepts_spectra_before_t0(tmp_path: Path) -> None:
     far = Time("1990-01-01T00:00:00", scale="tdb").jd
     with pytest.raises(ValueError, match="more than 20 yr from the ephemeris epoch T0"):
         check_validity(_table(tmp_path / "x", [f"{far:.6f}", f"{after:.6f}"]), target)
+
+
+def test_plan_terminal_has_no_pi_mode_column_for_timing_targets() -> None:
+    code, err = run_cli(["plan", str(SYN), "--site", "paranal", "--night", "2026-01-15"])
+    assert code == 0, err[-300:]
+    assert "π-mode" not in err and "-21474836" not in err
+    code, err = run_cli(["plan", str(HM), "--site", "paranal", "--night", "2040-02-15"])
+    assert code == 0 and "π-mode alt. UTC" in err

@@ -102,6 +102,8 @@ def _local(b: Any) -> str:
 
 def _print_night(blocks: list[Any], night: str, site: Any) -> None:
     paired = any(b.pair_id for b in blocks)
+    # the φ_ref π-mode exists only for LISA posteriors; a night of timing targets has none
+    pi_mode = any(b.t_alt_utc is not None for b in blocks)
     table = rich_table(
         f"Night of {night} at {site.name} — times are UTC at the site (light time removed); "
         "±σ is the 1σ timing uncertainty",
@@ -116,7 +118,7 @@ def _print_night(blocks: list[Any], night: str, site: Any) -> None:
             "airmass s/m/e",
             "Moon [deg]",
             "Λ_K",
-            "π-mode alt. UTC",
+            *(["π-mode alt. UTC"] if pi_mode else []),
             *(["pair: Δκ_LISA"] if paired else []),
         ],
     )
@@ -132,7 +134,7 @@ def _print_night(blocks: list[Any], night: str, site: Any) -> None:
             f"{b.airmass_start:.2f}/{b.airmass:.2f}/{b.airmass_end:.2f}",
             f"{b.moon_sep_deg:.0f}",
             f"{b.lambda_k:.4f}",
-            b.t_alt_utc.iso[11:21] if b.t_alt_utc is not None else "",
+            *([b.t_alt_utc.iso[11:21] if b.t_alt_utc is not None else "—"] if pi_mode else []),
             *([f"{escape(b.pair_id)}: {b.delta_kappa:+.2e}"] if paired else []),
         )
     err_console.print(table)
