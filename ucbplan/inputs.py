@@ -11,7 +11,9 @@ through :func:`load_yaml`, which
   reads them as strings).
 
 Text tables go through :func:`read_text`, which accepts UTF-8 with or without a byte-order mark
-and refuses other encodings with a message saying how to convert.
+and refuses other encodings with a message saying how to convert. Option values and table cells
+are range-checked with :func:`check_range` / :func:`check_int` (one line naming the option, the
+range with its unit and reason, and the value).
 """
 
 from __future__ import annotations
@@ -19,8 +21,9 @@ from __future__ import annotations
 import math
 import re
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeGuard
 
+import numpy as np
 import yaml
 
 from ucbplan.errors import InputError, SchemaError, shorten
@@ -29,7 +32,10 @@ __all__ = [
     "MAX_ALIASES",
     "MAX_TEXT_BYTES",
     "MAX_YAML_BYTES",
+    "check_int",
     "check_number",
+    "check_range",
+    "is_number",
     "load_yaml",
     "read_text",
 ]
@@ -156,23 +162,83 @@ def load_yaml(path: Path, what: str = "YAML file", text: str | None = None) -> A
         loader.dispose()
 
 
+def is_number(value: Any) -> TypeGuard[int | float | np.integer[Any] | np.floating[Any]]:
+    """A real number (``int`` or ``float``, numpy scalars included), not a bool."""
+    if isinstance(value, bool | np.bool_):
+        return False
+    return isinstance(value, int | float | np.integer | np.floating)
+
+
+def _suffix(unit: str, why: str) -> str:
+    return (f" {unit}" if unit else "") + (f" ({why})" if why else "")
+
+
+def check_range(
+    name: str,
+    value: Any,
+    low: float,
+    high: float,
+    unit: str = "",
+    why: str = "",
+    *,
+    low_open: bool = False,
+    error: type[InputError] = InputError,
+) -> float:
+    """``value`` as a float if it is a finite number with ``low <= value <= high``
+    (``low < value`` with ``low_open``).
+
+    Raises
+    ------
+    InputError
+        (or ``error``) One line: ``NAME: expected a number in [LOW, HIGH] UNIT (WHY), got V``.
+    """
+    ok = is_number(value) and math.isfinite(float(value))
+    ok = ok and (low < float(value) if low_open else low <= float(value)) and float(value) <= high
+    if not ok:
+        bracket = "(" if low_open else "["
+        raise error(
+            f"{name}: expected a number in {bracket}{low:g}, {high:g}]{_suffix(unit, why)}, "
+            f"got {shorten(value, 40)}"
+        )
+    return float(value)
+
+
+def check_int(
+    name: str,
+    value: Any,
+    low: int,
+    high: int,
+    why: str = "",
+    *,
+    error: type[InputError] = InputError,
+) -> int:
+    """``value`` as an int if it is a whole number with ``low <= value <= high``.
+
+    Raises
+    ------
+    InputError
+        (or ``error``) One line: ``NAME: expected a whole number in [LOW, HIGH] (WHY), got V``.
+    """
+    ok = is_number(value) and math.isfinite(float(value)) and float(value) == int(value)
+    if not (ok and low <= int(value) <= high):
+        raise error(
+            f"{name}: expected a whole number in [{low}, {high}]{_suffix('', why)}, "
+            f"got {shorten(value, 40)}"
+        )
+    return int(value)
+
+
 def check_number(
     name: str, value: float | None, low: float, high: float, unit: str = "", why: str = ""
 ) -> None:
-    """Refuse a missing-range option value: finite and ``low < value <= high`` (``None`` passes).
+    """Refuse an option value outside ``low < value <= high`` (``None`` passes).
+
+    :func:`check_range` with an open lower bound, for values that must be strictly positive.
 
     Raises
     ------
     InputError
         One line naming the option, the allowed range with its unit, the value and ``why``.
     """
-    if value is None:
-        return
-    ok = isinstance(value, int | float) and math.isfinite(value) and low < value <= high
-    if not ok:
-        unit_s = f" {unit}" if unit else ""
-        reason = f" ({why})" if why else ""
-        raise InputError(
-            f"{name}: expected a number in ({low:g}, {high:g}]{unit_s}{reason}, "
-            f"got {shorten(value, 40)}"
-        )
+    if value is not None:
+        check_range(name, value, low, high, unit, why, low_open=True)

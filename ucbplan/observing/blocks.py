@@ -14,7 +14,7 @@ from astropy.time import Time
 
 from ucbplan.core.smearing import comb_attenuation, smear_velocity
 from ucbplan.errors import InputError, UcbplanError
-from ucbplan.observing.ranges import check_int, check_range
+from ucbplan.inputs import check_int, check_range
 
 __all__ = [
     "MAX_BLOCK_S",

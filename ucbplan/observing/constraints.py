@@ -19,7 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ucbplan.errors import InputError, UcbplanError, shorten
-from ucbplan.observing.ranges import check_range
+from ucbplan.inputs import check_range
 from ucbplan.observing.sky import SkyModel, airmass_from_alt
 
 __all__ = [

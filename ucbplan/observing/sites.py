@@ -18,8 +18,7 @@ from astropy import units as u
 from astropy.coordinates import EarthLocation
 
 from ucbplan.errors import InputError, SiteError, UcbplanError, shorten
-from ucbplan.inputs import load_yaml
-from ucbplan.observing.ranges import check_range
+from ucbplan.inputs import check_range, load_yaml
 from ucbplan.target.values import did_you_mean
 
 __all__ = ["Site", "get_site", "load_sites", "resolve_site", "site_from_lonlat"]

@@ -32,11 +32,10 @@ from astropy.table import Table
 from astropy.time import Time
 
 from ucbplan.errors import InputError, InputFileError, UcbplanError, shorten
-from ucbplan.inputs import MAX_YAML_BYTES, load_yaml
+from ucbplan.inputs import MAX_YAML_BYTES, check_range, is_number, load_yaml
 from ucbplan.observing.blocks import MAX_BLOCK_S
 from ucbplan.observing.blocktable import EXTRA_COLUMNS, REQUIRED_COLUMNS
 from ucbplan.observing.blocktable import USER_COLUMNS as USER_COLUMN_DECLS
-from ucbplan.observing.ranges import check_range, is_number
 from ucbplan.observing.timeconv import quiet_erfa
 from ucbplan.target import target_from_dict
 

@@ -9,7 +9,7 @@ from typing import NamedTuple
 from astropy.time import Time
 
 from ucbplan.errors import InputError, shorten
-from ucbplan.observing.ranges import check_int
+from ucbplan.inputs import check_int
 from ucbplan.observing.sites import Site
 from ucbplan.observing.timeaxis import TimeAxis
 from ucbplan.observing.timeconv import quiet_erfa

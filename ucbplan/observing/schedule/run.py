@@ -17,8 +17,8 @@ from typing import Any
 from astropy.table import Table
 
 from ucbplan.errors import InputError, shorten
+from ucbplan.inputs import check_range
 from ucbplan.observing.blocktable import blocks_to_table, make_meta
-from ucbplan.observing.ranges import check_range
 from ucbplan.observing.schedule.nights import night_dates
 from ucbplan.observing.schedule.planner import PlanResult, plan_nights
 from ucbplan.observing.schedule.settings import PlanSettings

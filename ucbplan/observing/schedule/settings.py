@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 
 from ucbplan.core.smearing import parse_smear_budget
 from ucbplan.errors import InputError, UcbplanError, shorten
+from ucbplan.inputs import check_int, check_range
 from ucbplan.observing.blocks import MAX_BLOCK_S, ExposurePlan
 from ucbplan.observing.constraints import (
     AirmassConstraint,
@@ -17,7 +18,6 @@ from ucbplan.observing.constraints import (
     NightConstraint,
     ZenithHoleConstraint,
 )
-from ucbplan.observing.ranges import check_int, check_range
 from ucbplan.observing.sites import Site
 
 __all__ = ["MODES", "ModeSpec", "PlanSettings", "parse_mode"]
