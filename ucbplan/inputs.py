@@ -29,6 +29,7 @@ import yaml
 from ucbplan.errors import InputError, SchemaError, shorten
 
 __all__ = [
+    "EXPONENT_FLOAT",
     "MAX_ALIASES",
     "MAX_TEXT_BYTES",
     "MAX_YAML_BYTES",
@@ -47,7 +48,9 @@ MAX_TEXT_BYTES = 2_000_000_000
 #: Most aliases (``*name``) one YAML file may use.
 MAX_ALIASES = 50
 
-_FLOAT = re.compile(r"^[-+]?(?:[0-9][0-9_]*)(?:\.[0-9_]*)?[eE][-+]?[0-9]+$")
+#: Numbers written with an exponent but no decimal point (``5e-14``), which load_yaml reads as
+#: floats (plain YAML 1.1 reads them as strings); writers must quote text that matches.
+EXPONENT_FLOAT = re.compile(r"^[-+]?(?:[0-9][0-9_]*)(?:\.[0-9_]*)?[eE][-+]?[0-9]+$")
 
 
 class _StrictLoader(yaml.SafeLoader):
@@ -85,7 +88,7 @@ class _StrictLoader(yaml.SafeLoader):
         return super().construct_mapping(node, deep=deep)
 
 
-_StrictLoader.add_implicit_resolver("tag:yaml.org,2002:float", _FLOAT, list("-+0123456789"))
+_StrictLoader.add_implicit_resolver("tag:yaml.org,2002:float", EXPONENT_FLOAT, list("-+0123456789"))
 
 
 def _read_bytes(path: Path, limit: int, what: str) -> bytes:

@@ -9,7 +9,6 @@ Quantities carry the unit the schema declares (:mod:`ucbplan.target.schema`), so
 from __future__ import annotations
 
 import math
-import re
 from collections.abc import Iterable
 from pathlib import Path
 from typing import IO, Any
@@ -18,6 +17,7 @@ import yaml
 from astropy.time import Time
 
 from ucbplan.core.params import PARAM_NAMES
+from ucbplan.inputs import EXPONENT_FLOAT
 from ucbplan.io import write_output
 from ucbplan.target.model import Spectroscopy, Target, TimingSection
 from ucbplan.target.schema import field
@@ -36,7 +36,7 @@ class _Dumper(yaml.SafeDumper):
 
 _Dumper.add_implicit_resolver(
     "tag:yaml.org,2002:float",
-    re.compile(r"^[-+]?(?:[0-9][0-9_]*)(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"),
+    EXPONENT_FLOAT,
     list("-+0123456789"),
 )
 
