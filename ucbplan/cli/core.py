@@ -47,13 +47,6 @@ from ucbplan.target import Target, load_target
 __all__ = ["horizon", "register", "validate"]
 
 
-def _check_format(fmt: str, allowed: tuple[str, ...]) -> str:
-    fmt = fmt.lower()
-    if fmt not in allowed:
-        raise UcbplanError(f"--format {fmt!r}: expected one of {', '.join(allowed)}")
-    return fmt
-
-
 def _resolve_k_sigma(
     target: Target, sigma_v: float | None, k_eff: float | None
 ) -> tuple[float, float]:
@@ -85,7 +78,7 @@ def validate(targets: TargetsArg, fmt: ValidateFormatOpt = "table") -> None:
 
     For a timing ephemeris: T0, P, Ṗ with their σ, and σ_u one year before and after T0.
     """
-    _check_format(fmt, ("table", "json"))
+    fmt = pick_format(None, fmt, ("table", "json"))
     summaries = [_summary(load_target(path)) for path in targets]
     if fmt == "json":
         write_output(None, lambda h: dump_json(summaries, h))
