@@ -28,7 +28,6 @@ from typing import IO, Any
 from ucbplan.errors import InputError, OutputError, OutputExistsError, shorten
 
 __all__ = [
-    "OUTPUT_FORMATS",
     "check_output_path",
     "dump_json",
     "json_default",
@@ -36,8 +35,6 @@ __all__ = [
     "write_file_set",
     "write_output",
 ]
-
-OUTPUT_FORMATS = ("table", "json", "ecsv", "csv")
 
 Writer = Callable[[IO[Any]], None]
 

@@ -12,23 +12,19 @@ from rich.table import Table as RichTable
 
 from ucbplan.errors import InputError
 from ucbplan.io import (
-    OUTPUT_FORMATS,
     check_output_path,
     dump_json,
-    json_default,
     output_format,
     write_output,
 )
 from ucbplan.offline import configure_offline
 
 __all__ = [
-    "OUTPUT_FORMATS",
     "TABLE_FORMATS",
     "check_output_path",
     "configure_offline",
     "dump_json",
     "err_console",
-    "json_default",
     "pick_format",
     "rich_table",
     "write_output",
