@@ -90,8 +90,12 @@ def test_user_site_file_first(tmp_path: Path) -> None:
 def test_site_from_lonlat() -> None:
     site = site_from_lonlat("-70.4,-24.6,2635")
     assert (site.lon_deg, site.lat_deg, site.height_m) == (-70.4, -24.6, 2635.0)
-    assert site.timezone == "Etc/GMT+5"  # POSIX sign: UTC-5 for 70.4 W
-    assert site_from_lonlat("2.5,40,0").timezone == "Etc/UTC"
+    # Regression (issue 15): the zone was the nautical one of the longitude (Etc/GMT+5, UTC-5),
+    # four or five hours off Chile's civil time, so local columns were wrong.
+    assert site.timezone == "America/Santiago"
+    assert site_from_lonlat("-3.7,40.4,650").timezone == "Europe/Madrid"
+    assert site_from_lonlat("-30,0,0").timezone == "Etc/GMT+2"  # open ocean: nautical zone
+    assert site_from_lonlat("-70.4,-24.6,2635", timezone="UTC").timezone == "UTC"
     with pytest.raises(SiteError, match="expected LON,LAT,HEIGHT"):
         site_from_lonlat("1,2")
     with pytest.raises(SiteError, match="expected three numbers"):
@@ -178,3 +182,28 @@ def test_bundled_names_and_aliases_are_unique() -> None:
         for key in {re.sub(r"[^a-z0-9.]", "", label.lower()) for label in (s.name, *s.aliases)}
     ]
     assert len(keys) == len(set(keys))
+
+
+def test_lonlat_zone_matches_every_bundled_site() -> None:
+    """Independent check: the zone looked up from each bundled site's coordinates is the zone
+    the hand-curated site table declares (or one with the same UTC offsets all year)."""
+    from datetime import datetime
+    from zoneinfo import ZoneInfo
+
+    for site in load_sites():
+        found = site_from_lonlat(f"{site.lon_deg},{site.lat_deg},{site.height_m}").timezone
+        days = [datetime(2031, m, 1, 12) for m in range(1, 13)]
+        offsets = {
+            z: [d.replace(tzinfo=ZoneInfo(z)).utcoffset() for d in days]
+            for z in (found, site.timezone)
+        }
+        assert offsets[found] == offsets[site.timezone], (site.name, found, site.timezone)
+
+
+def test_tz_option_replaces_zone_and_refuses_unknown() -> None:
+    from ucbplan.observing.sites import resolve_site
+
+    assert resolve_site("paranal", timezone="UTC").timezone == "UTC"
+    assert resolve_site("paranal").timezone == "America/Santiago"
+    with pytest.raises(SiteError, match=r"--tz: timezone: .*IANA"):
+        resolve_site("paranal", timezone="Mars/Olympus")

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import functools
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -273,8 +273,10 @@ def get_site(name: str, sites_file: Path | None = None) -> Site:
 def site_from_lonlat(text: str, timezone: str | None = None) -> Site:
     """Site from ``"LON,LAT,HEIGHT"`` (degrees east, degrees north, metres).
 
-    Without ``timezone`` the zone is the nautical one of the longitude (``Etc/GMT±N``), which is
-    only used to interpret ``--night`` as a local date.
+    Without ``timezone`` (``--tz``) the IANA zone is looked up from the coordinates with
+    ``timezonefinder`` (offline, its boundary data ship with the package); over open sea it is
+    the nautical zone ``Etc/GMT±N``. The zone sets the local evening of ``--night`` and the
+    local-time columns.
 
     Raises
     ------
@@ -297,19 +299,31 @@ def site_from_lonlat(text: str, timezone: str | None = None) -> Site:
     )
     entry: dict[str, Any] = {"name": f"lon{lon:+.4f} lat{lat:+.4f}", "lon_deg": lon}
     entry.update(lat_deg=lat, height_m=height)
-    if timezone is None:
+    entry["timezone"] = _zone_at(lon, lat) if timezone is None else timezone
+    return _parse_site(entry, "--site-lonlat" if timezone is None else "--tz")
+
+
+def _zone_at(lon: float, lat: float) -> str:
+    """IANA zone at a longitude/latitude [deg]; the nautical zone over open sea."""
+    from timezonefinder import TimezoneFinder  # imported here: ~0.1 s, only for --site-lonlat
+
+    zone = TimezoneFinder().timezone_at(lng=lon, lat=lat)
+    if zone is None:  # not expected (the data cover the oceans); keep the nautical rule
         offset = round(((lon + 180.0) % 360.0 - 180.0) / 15.0)
         # Etc/GMT signs are inverted (POSIX): Etc/GMT+5 is UTC-5.
-        timezone = "Etc/UTC" if offset == 0 else f"Etc/GMT{-offset:+d}"
-    entry["timezone"] = timezone
-    return _parse_site(entry, "--site-lonlat")
+        zone = "Etc/UTC" if offset == 0 else f"Etc/GMT{-offset:+d}"
+    return str(zone)
 
 
 def resolve_site(
-    name: str | None = None, lonlat: str | None = None, sites_file: Path | None = None
+    name: str | None = None,
+    lonlat: str | None = None,
+    sites_file: Path | None = None,
+    timezone: str | None = None,
 ) -> Site:
     """The site named by ``--site NAME`` (looked up, ``sites_file`` first) or given by
-    ``--site-lonlat LON,LAT,HEIGHT`` (which wins when both are given).
+    ``--site-lonlat LON,LAT,HEIGHT`` (which wins when both are given); ``timezone`` (``--tz``)
+    replaces the site's zone.
 
     Raises
     ------
@@ -317,7 +331,10 @@ def resolve_site(
         If neither is given, or the name or coordinates are not valid.
     """
     if lonlat:
-        return site_from_lonlat(lonlat)
+        return site_from_lonlat(lonlat, timezone)
     if not name:
         raise UcbplanError("no site: pass --site NAME (e.g. paranal) or --site-lonlat LON,LAT,H")
-    return get_site(name, sites_file)
+    site = get_site(name, sites_file)
+    if timezone is None:
+        return site
+    return replace(site, timezone=_check_zone(timezone, "--tz"))
