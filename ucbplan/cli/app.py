@@ -24,7 +24,8 @@ app = typer.Typer(
     name="ucbplan",
     help="Phase-targeted spectroscopy of ultracompact binaries from LISA ephemerides.",
     no_args_is_help=True,
-    add_completion=False,
+    add_completion=True,
+    rich_markup_mode=None,  # plain help: rich markup ate "[deg]"-style units (issue 15)
     pretty_exceptions_enable=False,
 )
 

@@ -81,7 +81,7 @@ def feasibility_command(
     output: OutputOpt = None,
     overwrite: OverwriteOpt = False,
 ) -> None:
-    """Expected signal magnitudes (paper Sec. 3): K_j, apsidal rates, ΔK, Δv_aps, e floor, Δv_CM,
+    """Expected signal sizes (paper Section 3): K_j, apsidal rates, ΔK, Δv_aps, e floor, Δv_CM,
     and GW vs optical timing errors."""
     from ucbplan.feasibility import optical_ephemeris, plot_report, report_for_target
     from ucbplan.target import load_target
