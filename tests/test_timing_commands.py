@@ -194,3 +194,20 @@ def test_export_proposal(blocks: Path, fmt: str, suffix: str) -> None:
     if fmt != "latex":
         row = Table.read(text, format="ascii." + fmt)[0]
         assert row["p_orb_min"] == pytest.approx(P_S / 60.0, rel=1e-6)
+
+
+def test_feasibility_plot_of_a_timing_target(tmp_path: Path) -> None:
+    """K1 from the file and ω̇ (GR + tide from the masses) are enough for the Δv_aps plot."""
+    png = tmp_path / "aps.png"
+    code, err = run_cli(["feasibility", str(SYN), "--plot", str(png)])
+    assert code == 0, err[-600:]
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_feasibility_refuses_to_overwrite_in_one_line(tmp_path: Path) -> None:
+    out = tmp_path / "feas.json"
+    out.write_text("keep me\n")
+    code, err = run_cli(["feasibility", str(SYN), "--format", "json", "-o", str(out)])
+    check_outcome(code, err)
+    assert code == 2 and out.read_text() == "keep me\n"
+    assert "--overwrite" in err.strip().splitlines()[-1]
