@@ -36,7 +36,7 @@ __all__ = ["FeasibilityReport", "feasibility_report", "report_for_target"]
 
 #: Default velocity precision per spectrum when neither the caller nor the target gives one [m/s].
 DEFAULT_SIGMA_V_M_S = 15e3
-#: Default rows of the timing table: ΔT after the LISA midpoint [Julian years].
+#: Default rows of the timing table: ΔT after the reference epoch (LISA midpoint or T0) [Julian yr].
 TIMING_YEARS = (0.0, 1.0, 2.0, 4.0, 6.0, 8.0, 10.0)
 
 
@@ -192,7 +192,10 @@ def _mass_terms(
     w_gr = omega_dot_gr(m1_msun + m2_msun, period_s, e)
     w_tide = omega_dot_tide(m1_msun, m2_msun, period_s, e)
     if sin_i is None:
-        notes.append("no inclination: K_j not computed; give cos_inclination in the target")
+        notes.append(
+            "no inclination: K_j not computed; give lisa.cos_inclination or timing.inclination "
+            "in the target file"
+        )
         return _MassTerms(None, None, w_gr, w_tide)
     k1, k2 = semi_amplitudes(m1_msun, m2_msun, period_s, sin_i, e)
     return _MassTerms(k1, k2, w_gr, w_tide)
@@ -258,9 +261,11 @@ def report_for_target(
 ) -> FeasibilityReport:
     """:func:`feasibility_report` for a loaded target; explicit values override the target file.
 
-    ``optical_offset_s`` is the LISA midpoint minus the optical ephemeris reference epoch, so the
-    optical ΔT at a given date is ΔT_LISA + offset (0: both referenced to the LISA midpoint).
-    Timing rows are ΔT after the LISA midpoint in Julian years.
+    ``optical_offset_s`` is the target's reference epoch (the LISA midpoint, or T0 of a timing
+    ephemeris) minus the optical ephemeris reference epoch, so the optical ΔT at a given date is
+    ΔT_target + offset (0: both referenced to the same epoch). Timing rows are ΔT after the
+    target's reference epoch in Julian years; for a timing target the "GW" column is the timing
+    ephemeris's own error (its T0, P, Ṗ covariance), the same phase model.
     """
     p = target.params
     cos_i = target.cos_inclination

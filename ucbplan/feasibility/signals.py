@@ -394,7 +394,10 @@ def optical_timing_s(eph: OpticalEphemeris, baseline_s: ArrayLike) -> NDArray[np
 
 
 def gw_timing_s(target: EphemerisSource, baseline_s: ArrayLike) -> NDArray[np.float64]:
-    """Timing error of the LISA ephemeris ΔT after its reference epoch (the LISA midpoint).
+    """Timing error of the target's ephemeris ΔT after its reference epoch.
+
+    The reference epoch is the LISA midpoint for a LISA posterior and T0 for a timing ephemeris
+    (the same phase model: for a timing target this is the error of T0 + P n + ½PṖn²).
 
     Returns
     -------
