@@ -250,7 +250,7 @@ def test_report_for_fiducial_target() -> None:
     rep = report_for_target(load_target(FIDUCIAL), baseline_s=30 * 86400.0)
     # Masses from the file; K1 from the target's own P_b and cos i (Table 3) ≈ 585.3 km/s.
     assert rep.k1_m_s is not None and rep.k1_m_s / KMS == pytest.approx(585.3, abs=0.5)
-    assert rep.omega_dot_source == "target (LISA)"
+    assert rep.omega_dot_source == "target file"
     assert rep.omega_dot_used == pytest.approx(1.496836e-6, rel=1e-12)
     assert rep.omega_dot_gr == pytest.approx(1.498e-6, rel=1e-3)
     assert rep.e_floor == pytest.approx(15e3 / (2 * rep.k1_m_s), rel=1e-12)

@@ -118,6 +118,15 @@ def test_feasibility_optical_epoch_labels_work_or_fail_in_one_line(epoch: str) -
         assert "--optical-epoch" in err.strip().splitlines()[-1]
 
 
+def test_feasibility_optical_epoch_bjd_word_equals_bare_number(tmp_path: Path) -> None:
+    """Regression: "BJD_TDB 2461000.5" was refused ("expected an ISO epoch") although the help
+    says BJD_TDB is accepted; it must give exactly the bare number's result."""
+    args = ["--optical-sigma-t0", str(SIG_T0_S), "--optical-sigma-p", str(SIG_P_S)]
+    worded = _feasibility_json(tmp_path, SYN, "--optical-epoch", "BJD_TDB 2461000.5", *args)
+    bare = _feasibility_json(tmp_path, SYN, "--optical-epoch", "2461000.5", "--overwrite", *args)
+    assert worded["optical_timing_s"] == bare["optical_timing_s"]
+
+
 @pytest.fixture(scope="module")
 def blocks(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """Blocks of the synthetic timing target at Paranal on the night of 2026-11-24."""

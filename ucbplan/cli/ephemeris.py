@@ -27,6 +27,7 @@ from ucbplan.cli._console import (
     write_output,
     write_table_output,
 )
+from ucbplan.cli._epochs import epoch_option
 from ucbplan.cli._options import (
     AnchorOpt,
     AtOpt,
@@ -285,7 +286,7 @@ def compare(
 
     fmt = pick_format(output, fmt, ("table", "json"))
     ta, tb = load_target(a), load_target(b)
-    epoch = _epoch_option(at, "--at") if at is not None else None
+    epoch = epoch_option(at, "--at") if at is not None else None
     _warn_different_systems(ta, tb)
     report = compare_sources(ta, tb, epoch)
     doc = _comparison_doc(ta, tb, report)
@@ -293,20 +294,6 @@ def compare(
         _print_comparison(doc)
         return
     write_output(output, lambda h: dump_json(doc, h), overwrite=overwrite)
-
-
-def _epoch_option(text: str, what: str) -> Any:
-    """An epoch option: ``"BJD_TDB …"`` (full precision) or ISO/MJD/JD TDB (:func:`parse_tdb`)."""
-    from ucbplan.core.timescale import TIMING_EPOCH_WORDS, parse_tdb, parse_timing_epoch
-    from ucbplan.errors import InputError
-
-    word = text.strip().split(" ", 1)[0].upper().replace("-", "_")
-    if word in TIMING_EPOCH_WORDS or word.startswith(("BJD", "BMJD", "HJD", "HMJD")):
-        try:
-            return parse_timing_epoch(text)
-        except ValueError as exc:
-            raise InputError(f"{what}: {exc}") from None
-    return parse_tdb(text, what)
 
 
 def _warn_different_systems(ta: Target, tb: Target) -> None:

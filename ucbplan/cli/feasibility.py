@@ -15,6 +15,7 @@ import typer
 from rich.table import Table as RichTable
 
 from ucbplan.cli._console import dump_json, err_console, pick_format, write_output
+from ucbplan.cli._epochs import epoch_option
 from ucbplan.core.constants import DAY_S, MONTH_S, YEAR_S
 from ucbplan.errors import UcbplanError, shorten
 from ucbplan.inputs import check_number
@@ -47,7 +48,7 @@ OptEpochOpt = Annotated[
         "--optical-epoch",
         help=(
             "Optical ephemeris reference epoch: ISO (TDB unless labelled UTC) or BJD_TDB; "
-            "default: the LISA midpoint."
+            "default: the target's reference epoch (LISA midpoint or timing T0)."
         ),
     ),
 ]
@@ -158,15 +159,14 @@ def _parse_baseline(text: str) -> float:
 
 
 def _optical_offset(text: str, t_ref: Any) -> float:
-    """Seconds from the optical reference epoch (bare number = BJD_TDB) to the LISA midpoint."""
+    """Seconds from the optical reference epoch (bare number = BJD_TDB) to the target's
+    reference epoch."""
     from astropy.time import Time
-
-    from ucbplan.core.timescale import parse_tdb
 
     try:
         jd = float(text)
     except ValueError:
-        epoch = parse_tdb(text, "--optical-epoch")
+        epoch = epoch_option(text, "--optical-epoch")
     else:
         # a bare number is a BJD_TDB between the years 1000 and 3000
         check_number("--optical-epoch", jd, 2086302.5, 2816787.5, "BJD_TDB")
@@ -201,7 +201,7 @@ def _quantity_table(rep: Any) -> RichTable:
 
     row("P_b", rep.period_s / 60.0, ".4f", "min", "")
     row("e", rep.e, ".4g", "", "")
-    row("ω0 at the LISA midpoint", rep.omega0_rad, ".4g", "rad", "")
+    row("ω0 at the reference epoch", rep.omega0_rad, ".4g", "rad", "")
     row("K1", rep.k1_m_s, ".1f", "km/s", "semiamp_est", kms)
     row("K2", rep.k2_m_s, ".1f", "km/s", "semiamp_est", kms)
     row("ω̇_GR", rep.omega_dot_gr, ".4g", "rad/s", "omega_dot_GR")
@@ -224,10 +224,10 @@ def _quantity_table(rep: Any) -> RichTable:
 
 
 def _timing_table(rep: Any) -> RichTable:
-    """GW δt_u and optical δt per row of ΔT after the LISA midpoint."""
-    tt = RichTable(title="Timing error after the LISA midpoint (1σ)")
+    """Target-ephemeris δt_u and optical δt per row of ΔT after the reference epoch."""
+    tt = RichTable(title="Timing error after the reference epoch (LISA midpoint or T0), 1σ")
     tt.add_column("ΔT (yr)")
-    tt.add_column("GW δt_u (s)")
+    tt.add_column("target δt_u (s)")
     tt.add_column("optical δt (s), Eq. optical_timing_prec")
     for i, y in enumerate(rep.timing_years):
         gw = rep.gw_timing_s[i] if rep.gw_timing_s is not None else None

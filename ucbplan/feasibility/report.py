@@ -206,7 +206,7 @@ def _apsidal_rate(
 ) -> tuple[float, str]:
     """ω̇ for the apsidal signal [rad/s] and where it came from (LISA's, else GR + tide, else 0)."""
     if omega_dot_target != 0.0:
-        return omega_dot_target, "target (LISA)"
+        return omega_dot_target, "target file"
     if w_gr is not None and w_tide is not None:
         return w_gr + w_tide, "GR + tide from masses"
     return 0.0, "none"
