@@ -12,6 +12,8 @@ import pytest
 from astropy.coordinates import Angle
 from astropy.table import Table
 from astropy.time import Time
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from test_exports_fixture import (
     GOLDEN_ACQUISITION_S,
     HM_P_S,
@@ -23,6 +25,7 @@ from test_exports_fixture import (
 
 from ucbplan.errors import UcbplanError
 from ucbplan.observing.exports import ExportOptions, export_blocks
+from ucbplan.observing.exports.eso_p2 import ESO_NAME_MAX, _ob_names
 from ucbplan.observing.timeconv import quiet_erfa
 
 NAME = "exports_eso_p2.json"
@@ -174,3 +177,27 @@ def test_sessions_are_one_ob(table: Table) -> None:
     assert ob["block_ids"] == ["HM_Cnc-001", "HM_Cnc-001b"]
     offsets = [v["mid_offset_from_ob_start_s"] for v in ob["merged_visits"]]
     assert offsets == pytest.approx([625.0, 625.0 + HM_P_S / 2], abs=1e-3)  # ms ISO times
+
+
+@given(
+    st.lists(
+        st.text(alphabet="abcXYZ_-0123456789 é", min_size=1, max_size=60).filter(
+            lambda s: any(c.isalnum() for c in s) and s == " ".join(s.split())
+        ),
+        min_size=1,
+        max_size=12,
+        unique_by=lambda s: "_".join(s.split()),
+    )
+)
+@settings(max_examples=60, deadline=None)
+def test_ob_names_are_unique_short_and_stable(blocks: list[str]) -> None:
+    # Block ids that differ only after 32 characters must still give distinct OB names.
+    ids = [f"{'long_common_prefix_of_a_block_id_'}{b}" for b in blocks]
+    try:
+        names = _ob_names(ids, [])
+    except UcbplanError as exc:  # only a transliteration collision may remain (both named)
+        assert "both become" in str(exc)
+        return
+    assert len(set(names.values())) == len(ids)
+    assert all(len(n) <= ESO_NAME_MAX and n.isascii() for n in names.values())
+    assert _ob_names(list(reversed(ids)), []) == names  # a block's name does not depend on order

@@ -62,6 +62,12 @@ _MergeOverlaps = Annotated[
 _Rotmode = Annotated[
     str, typer.Option("--rotmode", help="Keck starlist rotmode=: pa | vertical | stationary.")
 ]
+_Force = Annotated[
+    bool,
+    typer.Option(
+        "--force", help="Write the file even if the plan's site is not the format's observatory."
+    ),
+]
 
 
 def export_command(
@@ -75,6 +81,7 @@ def export_command(
     tolerance_floor: _ToleranceFloor = 10.0,
     merge_overlaps: _MergeOverlaps = False,
     rotmode: _Rotmode = "vertical",
+    force: _Force = False,
 ) -> None:
     """Export a blocks table for an observatory (ESO p2, Keck, ING, LCO), a calendar or a proposal.
 
@@ -109,6 +116,7 @@ def export_command(
         merge_overlaps=merge_overlaps,
         proposal_format=fmt or PROPOSAL_FORMATS[0],
         keck_rotmode=rotmode,
+        force=force,
     )
     table = read_blocks(blocks)
     result = export_blocks(table, to, options)

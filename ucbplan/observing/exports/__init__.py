@@ -9,6 +9,8 @@ way: this registry → format modules → base. Formats are described in docs/ex
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 from astropy.table import Table
 
 from ucbplan.errors import InputError, InputFileError, shorten
@@ -18,6 +20,7 @@ from ucbplan.observing.exports.base import (
     Exporter,
     ExportOptions,
     ExportResult,
+    meta,
 )
 from ucbplan.observing.exports.eso_p2 import export_eso_p2
 from ucbplan.observing.exports.ics import export_ics
@@ -25,6 +28,7 @@ from ucbplan.observing.exports.ing import export_ing_cat
 from ucbplan.observing.exports.keck import export_keck_starlist
 from ucbplan.observing.exports.lco import export_lco
 from ucbplan.observing.exports.proposal import PROPOSAL_FORMATS, export_proposal
+from ucbplan.observing.exports.sites import check_site
 
 __all__ = [
     "DEFAULT_ACQUISITION_S",
@@ -79,6 +83,9 @@ def export_blocks(table: Table, to: str, options: ExportOptions | None = None) -
     UcbplanError
         For an unknown format name (the message lists the known ones), an empty table or a bad
         cell (:func:`~ucbplan.observing.blocktable.check_blocks`).
+    SiteError
+        The plan's site is not one of the format's observatory sites and ``options.force`` is
+        False (:func:`~ucbplan.observing.exports.sites.check_site`).
     """
     exporter = EXPORTERS.get(to) if isinstance(to, str) else None
     if exporter is None:
@@ -87,4 +94,7 @@ def export_blocks(table: Table, to: str, options: ExportOptions | None = None) -
         )
     if len(table) == 0:
         raise InputFileError("blocks table has no rows: nothing to export; re-run `ucbplan plan`")
-    return exporter(check_blocks(table), options or ExportOptions())
+    options = options or ExportOptions()
+    site_notes = check_site(meta(table).get("site"), to, options.force)
+    result = exporter(check_blocks(table), options)
+    return replace(result, notes=(*site_notes, *result.notes)) if site_notes else result

@@ -113,6 +113,8 @@ class ExportOptions:
         ``ecsv``, ``csv`` or ``latex`` for the proposal table.
     keck_rotmode : str
         Keck ``rotmode=`` value (``vertical`` = parallactic slit, right for spectroscopy).
+    force : bool
+        Write a format even when the plan's site is not one of its observatory's sites.
     """
 
     acquisition_s: float | None = None
@@ -122,6 +124,7 @@ class ExportOptions:
     merge_overlaps: bool = False
     proposal_format: str = "ecsv"
     keck_rotmode: str = "vertical"
+    force: bool = False
 
     def __post_init__(self) -> None:
         why = "acquisition before the first exposure; a block must fit in one night"
