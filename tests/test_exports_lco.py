@@ -77,7 +77,10 @@ def test_golden_windows_hold_the_whole_request(doc: dict[str, Any], table: Table
         request_start = ms(row["t_start_utc"]) - np.timedelta64(round(GOLDEN_ACQUISITION_S), "s")
         request_end = ms(row["t_end_utc"])
         (window,) = request["windows"]
-        assert window == {"start": _floor_s(request_start - half), "end": _ceil_s(request_end + half)}
+        assert window == {
+            "start": _floor_s(request_start - half),
+            "end": _ceil_s(request_end + half),
+        }
         lo, hi = np.datetime64(window["start"], "ms"), np.datetime64(window["end"], "ms")
         assert lo <= request_start and request_end <= hi  # the window contains the request
         slack = (hi - lo) - (request_end - request_start)  # how far the start can slide

@@ -68,6 +68,14 @@ _Force = Annotated[
         "--force", help="Write the file even if the plan's site is not the format's observatory."
     ),
 ]
+_Semester = Annotated[
+    str | None,
+    typer.Option(
+        "--semester",
+        help="Proposal semester: 2041A | 2041B (A = Feb-Jul) or an ESO period like P147 "
+        "(default: the one containing the plan).",
+    ),
+]
 
 
 def export_command(
@@ -82,6 +90,7 @@ def export_command(
     merge_overlaps: _MergeOverlaps = False,
     rotmode: _Rotmode = "vertical",
     force: _Force = False,
+    semester: _Semester = None,
 ) -> None:
     """Export a blocks table for an observatory (ESO p2, Keck, ING, LCO), a calendar or a proposal.
 
@@ -102,6 +111,8 @@ def export_command(
         )
     if to == "proposal":
         fmt = pick_format(output, fmt, PROPOSAL_FORMATS)
+    elif semester is not None:
+        raise InputError(f"--semester chooses the proposal's semester: --to {to} takes none")
     elif fmt is not None:
         raise InputError(
             f"--format chooses the proposal table format ({' | '.join(PROPOSAL_FORMATS)}); "
@@ -117,6 +128,7 @@ def export_command(
         proposal_format=fmt or PROPOSAL_FORMATS[0],
         keck_rotmode=rotmode,
         force=force,
+        semester=semester,
     )
     table = read_blocks(blocks)
     result = export_blocks(table, to, options)

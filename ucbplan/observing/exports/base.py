@@ -36,6 +36,7 @@ from ucbplan.inputs import MAX_YAML_BYTES, check_range, is_number, load_yaml
 from ucbplan.observing.blocks import MAX_BLOCK_S
 from ucbplan.observing.blocktable import EXTRA_COLUMNS, REQUIRED_COLUMNS
 from ucbplan.observing.blocktable import USER_COLUMNS as USER_COLUMN_DECLS
+from ucbplan.observing.semesters import semester_dates
 from ucbplan.observing.timeconv import quiet_erfa
 from ucbplan.target import target_from_dict
 
@@ -115,6 +116,9 @@ class ExportOptions:
         Keck ``rotmode=`` value (``vertical`` = parallactic slit, right for spectroscopy).
     force : bool
         Write a format even when the plan's site is not one of its observatory's sites.
+    semester : str or None
+        Proposal semester ``2041A``/``2041B`` or ESO period ``P147``; None = the one containing
+        the plan.
     """
 
     acquisition_s: float | None = None
@@ -125,6 +129,7 @@ class ExportOptions:
     proposal_format: str = "ecsv"
     keck_rotmode: str = "vertical"
     force: bool = False
+    semester: str | None = None
 
     def __post_init__(self) -> None:
         why = "acquisition before the first exposure; a block must fit in one night"
@@ -135,6 +140,8 @@ class ExportOptions:
         why = "smallest window half-width; a day at most"
         check_range("--tolerance-floor", self.tolerance_floor_s, 0.0, 86400.0, "s", why)
         check_range("rounding_warn_fraction", self.rounding_warn_fraction, 0.0, 1.0)
+        if self.semester is not None:
+            semester_dates(self.semester)  # refuses anything but 2041A, 2041B, P147
         if not isinstance(self.keck_rotmode, str) or self.keck_rotmode not in KECK_ROTMODES:
             raise InputError(
                 f"--rotmode: expected {', '.join(KECK_ROTMODES)} (Keck starlist rotator "

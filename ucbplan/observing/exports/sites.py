@@ -17,7 +17,7 @@ from ucbplan.errors import SiteError, UcbplanError, shorten
 from ucbplan.inputs import is_number
 from ucbplan.observing.sites import get_site
 
-__all__ = ["FORMAT_SITES", "SITE_MATCH_KM", "ObservatorySite", "check_site"]
+__all__ = ["FORMAT_SITES", "SITE_MATCH_KM", "ObservatorySite", "check_site", "serves_site"]
 
 #: Largest distance between a plan's site and an observatory that still counts as that
 #: observatory [km]: a mountain's telescopes lie within ~2 km; the closest distinct sites in the
@@ -102,6 +102,17 @@ def _plan_site(site: object) -> tuple[str, float, float] | None:
     return name, known.lon_deg, known.lat_deg
 
 
+def _matches(plan: tuple[str, float, float], sites: tuple[ObservatorySite, ...]) -> bool:
+    _, lon, lat = plan
+    return any(_distance_km(lon, lat, s.lon_deg, s.lat_deg) <= SITE_MATCH_KM for s in sites)
+
+
+def serves_site(site: object, to: str) -> bool:
+    """Whether the format ``to`` has an observatory at the plan's site (``meta['site']``)."""
+    sites, plan = FORMAT_SITES.get(to), _plan_site(site)
+    return sites is not None and plan is not None and _matches(plan, sites)
+
+
 def check_site(site: object, to: str, force: bool) -> list[str]:
     """Check that a plan's site (``meta['site']``) is one the format ``to`` serves.
 
@@ -123,9 +134,9 @@ def check_site(site: object, to: str, force: bool) -> list[str]:
     where = ", ".join(s.name for s in sites)
     if plan is None:
         return [f"{to}: the table names no known site; check that it was planned for: {where}"]
-    name, lon, lat = plan
-    if any(_distance_km(lon, lat, s.lon_deg, s.lat_deg) <= SITE_MATCH_KM for s in sites):
+    if _matches(plan, sites):
         return []
+    name, lon, lat = plan
     label = f"{shorten(name, 40)} (lon {lon:.3f}, lat {lat:.3f} deg)"
     if force:
         return [f"{to}: written for site {label}, none of {where}, because of --force"]
