@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import re
 from itertools import pairwise
 
@@ -201,3 +202,48 @@ def test_ob_names_are_unique_short_and_stable(blocks: list[str]) -> None:
     assert len(set(names.values())) == len(ids)
     assert all(len(n) <= ESO_NAME_MAX and n.isascii() for n in names.values())
     assert _ob_names(list(reversed(ids)), []) == names  # a block's name does not depend on order
+
+
+def test_ob_bodies_carry_target_constraints_and_exposures(table: Table) -> None:
+    doc = json.loads(golden(NAME))
+    rows = {str(r["block_id"]): r for r in table}
+    for ob in doc["obs"]:
+        body = ob["ob"]
+        row = rows[ob["block_ids"][0]]
+        target = body["target"]
+        # Read back by astropy: the p2 sexagesimal strings are the table's coordinates.
+        assert Angle(target["ra"], unit="hourangle").deg == pytest.approx(row["ra_deg"], abs=2e-7)
+        assert Angle(target["dec"], unit="deg").deg == pytest.approx(row["dec_deg"], abs=3e-6)
+        assert target["equinox"] == "J2000" and target["epoch"] == 2000.0
+        assert body["constraints"] == {
+            "name": "ucbplan constraints",
+            "airmass": 2.0,  # from the plan's "airmass <= 2.0"
+            "moonDistance": 30,  # from "moon separation >= 30 deg"
+            "seeing": 1.0,
+        }
+        science = body["templates"][1]["parameters"]
+        assert science["exposure_time_s"] == row["exptime_s"] and science["n_exp"] == row["n_exp"]
+        assert body["obsDescription"]["name"] == ob["name"]
+        assert all(b in body["obsDescription"]["userComments"] for b in ob["block_ids"])
+
+
+def test_ob_constraints_follow_the_plan_and_options(table: Table) -> None:
+    t = Table(table, copy=True)
+    t.meta["constraints"] = ["airmass <= 1.5", "moon separation >= 45.0 deg"]
+    opts = ExportOptions(acquisition_s=600.0, seeing_arcsec=0.8, instrument="xshooter-uvb")
+    res = export_blocks(t, "eso-p2", opts)
+    body = json.loads(res.content)["obs"][0]["ob"]
+    assert (body["constraints"]["airmass"], body["constraints"]["moonDistance"]) == (1.5, 45)
+    assert body["constraints"]["seeing"] == 0.8
+    science = body["templates"][1]["parameters"]
+    assert science["instrument"] == "xshooter-uvb" and science["readout_s"] == 34.0
+    assert body["templates"][0]["parameters"] == {"acquisition_s": 409.0}
+    t.meta["constraints"] = []
+    res = export_blocks(t, "eso-p2", opts)
+    assert any("names no airmass limit" in n for n in res.notes)
+
+
+@pytest.mark.parametrize("seeing", [0.0, -1.0, 6.0, math.nan])
+def test_bad_seeing_is_refused(seeing: float) -> None:
+    with pytest.raises(UcbplanError, match="--seeing: expected a number in"):
+        ExportOptions(seeing_arcsec=seeing)

@@ -7,8 +7,10 @@ command reads at a glance.
 
 from __future__ import annotations
 
+import os
+import sys
 from pathlib import Path
-from typing import IO, Annotated
+from typing import IO, Annotated, Any
 
 import typer
 from rich.markup import escape
@@ -76,6 +78,66 @@ _Semester = Annotated[
         "(default: the one containing the plan).",
     ),
 ]
+_Seeing = Annotated[
+    float,
+    typer.Option("--seeing", help="ESO p2: seeing limit of the OB constraint set (arcsec)."),
+]
+_Instrument = Annotated[
+    str | None,
+    typer.Option(
+        "--instrument",
+        help="ESO p2: instrument whose readout mode and overheads go into the OB templates.",
+    ),
+]
+_Create = Annotated[
+    bool,
+    typer.Option(
+        "--create",
+        help="ESO p2: create the OBs in a p2 container with p2api (a dry run unless --no-dry-run).",
+    ),
+]
+_DryRun = Annotated[
+    bool,
+    typer.Option(
+        "--dry-run/--no-dry-run", help="With --create: list the OBs only (default) or create them."
+    ),
+]
+_Container = Annotated[
+    int | None, typer.Option("--container", help="With --create: p2 container id (a run/folder).")
+]
+_P2Env = Annotated[
+    str,
+    typer.Option("--p2-environment", help="With --create: demo | production | production_lasilla."),
+]
+_P2User = Annotated[
+    str | None,
+    typer.Option(
+        "--p2-user",
+        help="With --no-dry-run: ESO user name (password from UCBPLAN_P2_PASSWORD or a prompt).",
+    ),
+]
+
+
+def _create(content: bytes, to: str, c: dict[str, Any]) -> None:
+    """``--create``: list (dry run) or create the OBs of an eso-p2 export with p2api."""
+    from ucbplan.observing.exports.eso_create import connect, create_from_export
+
+    if to != "eso-p2":
+        raise InputError(f"--create makes ESO p2 OBs: use it with --to eso-p2, not --to {to}")
+    if c["container"] is None:
+        raise InputError("--create: expected --container ID (the p2 run or folder for the OBs)")
+    connection = None
+    if not c["dry_run"]:
+        if not c["user"]:
+            raise InputError("--no-dry-run: expected --p2-user NAME (your ESO user portal name)")
+        password = os.environ.get("UCBPLAN_P2_PASSWORD") or typer.prompt(
+            "ESO password", hide_input=True
+        )
+        connection = connect(c["environment"], c["user"], password)
+    report = create_from_export(
+        content, c["container"], dry_run=c["dry_run"], connection=connection
+    )
+    sys.stdout.write(report)
 
 
 def export_command(
@@ -91,10 +153,18 @@ def export_command(
     rotmode: _Rotmode = "vertical",
     force: _Force = False,
     semester: _Semester = None,
+    seeing: _Seeing = 1.0,
+    instrument: _Instrument = None,
+    create: _Create = False,
+    dry_run: _DryRun = True,
+    container: _Container = None,
+    p2_environment: _P2Env = "demo",
+    p2_user: _P2User = None,
 ) -> None:
     """Export a blocks table for an observatory (ESO p2, Keck, ING, LCO), a calendar or a proposal.
 
-    All times are UTC at the site with their 1σ uncertainty; notes go to stderr.
+    All times are UTC at the site with their 1σ uncertainty; notes go to stderr. With --create
+    (ESO p2), the OBs are listed (dry run) or created in p2 and the file is written only with -o.
     """
     from ucbplan.observing.blocktable import read_blocks
     from ucbplan.observing.exports import (
@@ -129,6 +199,8 @@ def export_command(
         keck_rotmode=rotmode,
         force=force,
         semester=semester,
+        seeing_arcsec=seeing,
+        instrument=instrument,
     )
     table = read_blocks(blocks)
     result = export_blocks(table, to, options)
@@ -138,6 +210,11 @@ def export_command(
     def writer(handle: IO[bytes]) -> None:
         handle.write(result.content)
 
+    if create:
+        p2 = {"container": container, "dry_run": dry_run, "environment": p2_environment}
+        _create(result.content, to, {**p2, "user": p2_user})
+        if output is None:
+            return
     write_output(output, writer, overwrite=overwrite, binary=True)
     if output is not None:
         err_console.print(

@@ -119,6 +119,11 @@ class ExportOptions:
     semester : str or None
         Proposal semester ``2041A``/``2041B`` or ESO period ``P147``; None = the one containing
         the plan.
+    seeing_arcsec : float
+        Seeing limit of the ESO constraint set [arcsec].
+    instrument : str or None
+        Instrument configuration (``ucbplan instruments``) whose readout mode and overheads go
+        into the ESO OB templates; None = the exposure numbers of the plan only.
     """
 
     acquisition_s: float | None = None
@@ -130,6 +135,8 @@ class ExportOptions:
     keck_rotmode: str = "vertical"
     force: bool = False
     semester: str | None = None
+    seeing_arcsec: float = 1.0
+    instrument: str | None = None
 
     def __post_init__(self) -> None:
         why = "acquisition before the first exposure; a block must fit in one night"
@@ -140,6 +147,8 @@ class ExportOptions:
         why = "smallest window half-width; a day at most"
         check_range("--tolerance-floor", self.tolerance_floor_s, 0.0, 86400.0, "s", why)
         check_range("rounding_warn_fraction", self.rounding_warn_fraction, 0.0, 1.0)
+        why = "seeing limit of the ESO constraint set"
+        check_range("--seeing", self.seeing_arcsec, 0.0, 5.0, "arcsec", why, low_open=True)
         if self.semester is not None:
             semester_dates(self.semester)  # refuses anything but 2041A, 2041B, P147
         if not isinstance(self.keck_rotmode, str) or self.keck_rotmode not in KECK_ROTMODES:
