@@ -47,6 +47,8 @@ GOLDEN_CASES = {
     "exports_proposal.tex": ("proposal", "latex"),
     "exports_ing.cat": ("ing-cat", "ecsv"),
     "exports_lco.json": ("lco", "ecsv"),
+    "exports_gemini.json": ("gemini", "ecsv"),
+    "exports_phase_table.ecsv": ("phase-table", "ecsv"),
 }
 GOLDEN_ACQUISITION_S = 600.0
 

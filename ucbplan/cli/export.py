@@ -23,7 +23,7 @@ __all__ = ["export_command", "register"]
 #: ``--to`` help: the names of ``ucbplan.observing.exports.EXPORT_FORMATS`` (a test keeps them
 #: equal). Spelled out because importing the exports (astropy.coordinates) at CLI start-up costs
 #: ~0.3 s on every command; the library is imported only when ``export`` runs.
-_EXPORT_HELP = "eso-p2 | keck-starlist | ics | proposal | ing-cat | lco"
+_EXPORT_HELP = "eso-p2 | keck-starlist | ics | proposal | ing-cat | lco | gemini | phase-table"
 
 _Blocks = Annotated[
     Path, typer.Argument(help="Master blocks table (ECSV, CSV or JSON) from `ucbplan plan -o`.")
@@ -161,7 +161,8 @@ def export_command(
     p2_environment: _P2Env = "demo",
     p2_user: _P2User = None,
 ) -> None:
-    """Export a blocks table for an observatory (ESO p2, Keck, ING, LCO), a calendar or a proposal.
+    """Export a blocks table for an observatory (ESO p2, Keck, ING, LCO, Gemini), a phase table,
+    a calendar or a proposal.
 
     All times are UTC at the site with their 1σ uncertainty; notes go to stderr. With --create
     (ESO p2), the OBs are listed (dry run) or created in p2 and the file is written only with -o.
