@@ -488,3 +488,21 @@ def test_proposal_latex_escapes_underscores(table: Table) -> None:
     outside_math = re.sub(r"\$[^$]*\$", "", latex)
     assert not re.search(r"(?<!\\)_", outside_math)  # every _ outside math mode is escaped
     _check_balanced(latex)
+
+
+def test_cli_semester_reaches_the_table(tmp_path: Path) -> None:
+    from test_cli_fuzz import run_cli
+
+    blocks = tmp_path / "blocks.ecsv"
+    written_table(tmp_path).write(blocks, format="ascii.ecsv", overwrite=True)
+    out = tmp_path / "p.ecsv"
+    code, err = run_cli(
+        ["export", str(blocks), "--to", "proposal", "--semester", "2037A", "-o", str(out)]
+    )
+    assert code == 0, err
+    assert Table.read(out, format="ascii.ecsv").meta["semester"] == "2037A"
+    assert "3 of 4 blocks fall outside semester 2037A" in " ".join(err.split())
+    code, err = run_cli(["export", str(blocks), "--to", "ics", "--semester", "2037A"])
+    assert code == 2 and "--semester chooses the proposal's semester" in err
+    code, err = run_cli(["export", str(blocks), "--to", "proposal", "--semester", "2037C"])
+    assert code == 2 and "--semester: expected YYYYA" in err

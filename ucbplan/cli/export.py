@@ -118,6 +118,30 @@ _P2User = Annotated[
 ]
 
 
+def _proposal_format(
+    to: str, output: Path | None, fmt: str | None, semester: str | None
+) -> str | None:
+    """The proposal table format (``--format``, else the ``-o`` suffix); refuses an unknown
+    ``--to`` and the proposal-only options with another format."""
+    from ucbplan.observing.exports import EXPORT_FORMATS, PROPOSAL_FORMATS
+
+    if to not in EXPORT_FORMATS:
+        raise InputError(
+            f"--to: unknown export format {shorten(to, 40)}; expected one of "
+            f"{', '.join(EXPORT_FORMATS)}"
+        )
+    if to == "proposal":
+        return pick_format(output, fmt, PROPOSAL_FORMATS)
+    if semester is not None:
+        raise InputError(f"--semester chooses the proposal's semester: --to {to} takes none")
+    if fmt is not None:
+        raise InputError(
+            f"--format chooses the proposal table format ({' | '.join(PROPOSAL_FORMATS)}); "
+            f"--to {to} writes one fixed format: leave --format out"
+        )
+    return None
+
+
 def _create(content: bytes, to: str, c: dict[str, Any]) -> None:
     """``--create``: list (dry run) or create the OBs of an eso-p2 export with p2api."""
     from ucbplan.observing.exports.eso_create import connect, create_from_export
@@ -168,27 +192,9 @@ def export_command(
     (ESO p2), the OBs are listed (dry run) or created in p2 and the file is written only with -o.
     """
     from ucbplan.observing.blocktable import read_blocks
-    from ucbplan.observing.exports import (
-        EXPORT_FORMATS,
-        PROPOSAL_FORMATS,
-        ExportOptions,
-        export_blocks,
-    )
+    from ucbplan.observing.exports import PROPOSAL_FORMATS, ExportOptions, export_blocks
 
-    if to not in EXPORT_FORMATS:
-        raise InputError(
-            f"--to: unknown export format {shorten(to, 40)}; expected one of "
-            f"{', '.join(EXPORT_FORMATS)}"
-        )
-    if to == "proposal":
-        fmt = pick_format(output, fmt, PROPOSAL_FORMATS)
-    elif semester is not None:
-        raise InputError(f"--semester chooses the proposal's semester: --to {to} takes none")
-    elif fmt is not None:
-        raise InputError(
-            f"--format chooses the proposal table format ({' | '.join(PROPOSAL_FORMATS)}); "
-            f"--to {to} writes one fixed format: leave --format out"
-        )
+    fmt = _proposal_format(to, output, fmt, semester)
     if output is not None:
         check_output_path(output, overwrite)
     options = ExportOptions(
