@@ -31,6 +31,17 @@ p2api = pytest.importorskip("p2api")
 p2api_module = pytest.importorskip("p2api.p2api")
 
 TOKEN = "fake-token"
+#: Keywords the fake p2's templates have (a real template lists its own).
+TEMPLATE_KEYWORDS = ("DET.WIN1.UIT1", "SEQ.NEXPO", "TEL.AG.GUIDESTAR")
+TEMPLATES_YAML = """\
+acquisition:
+  name: XSHOOTER_slt_acq
+  parameters: {TEL.AG.GUIDESTAR: CATALOGUE}
+science:
+  name: XSHOOTER_slt_obs_Stare
+  exptime_keyword: DET.WIN1.UIT1
+  nexp_keyword: SEQ.NEXPO
+"""
 
 
 class _P2:
@@ -41,6 +52,7 @@ class _P2:
         self.obs: dict[int, dict[str, Any]] = {}
         self.windows: dict[int, list[dict[str, str]]] = {}
         self.fail_on_ob: int | None = None
+        self.templates: dict[int, tuple[int, dict[str, Any]]] = {}
 
 
 def _handler(state: _P2) -> type[BaseHTTPRequestHandler]:
@@ -87,6 +99,19 @@ def _handler(state: _P2) -> type[BaseHTTPRequestHandler]:
                 return
             if not self._authorised():
                 return
+            if self.path.endswith("/templates"):
+                ob_id = int(self.path.split("/")[-2])
+                tpl_id = 5000 + len(state.templates)
+                tpl = {
+                    "templateId": tpl_id,
+                    "templateName": body["templateName"],
+                    "parameters": [
+                        {"name": k, "type": "number", "value": 0} for k in TEMPLATE_KEYWORDS
+                    ],
+                }
+                state.templates[tpl_id] = (ob_id, tpl)
+                self._reply(201, tpl, etag=f'"tpl{tpl_id}v1"')
+                return
             container = int(self.path.split("/")[-2])
             ob_id = 1000 + len(state.obs)
             if state.fail_on_ob == len(state.obs):
@@ -116,6 +141,14 @@ def _handler(state: _P2) -> type[BaseHTTPRequestHandler]:
             if not self._authorised():
                 return
             parts = self.path.split("/")
+            if parts[-2] == "templates":
+                tpl_id = int(parts[-1])
+                if self.headers.get("If-Match") != f'"tpl{tpl_id}v1"':
+                    self._reply(412, {"error": "stale version"})
+                    return
+                state.templates[tpl_id] = (int(parts[-3]), body)
+                self._reply(200, body, etag=f'"tpl{tpl_id}v2"')
+                return
             if parts[-1] == "absolute":
                 ob_id = int(parts[-3])
                 if self.headers.get("If-Match") != f'"tc{ob_id}v1"':
@@ -243,3 +276,54 @@ def test_p2api_is_not_imported_by_the_exports() -> None:
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
+
+
+def _export_with_templates(tmp_path: Path, text: str = TEMPLATES_YAML) -> bytes:
+    path = tmp_path / "templates.yaml"
+    path.write_text(text, encoding="utf-8")
+    opts = ExportOptions(acquisition_s=600.0, eso_templates=str(path))
+    return export_blocks(fixture_table(), "eso-p2", opts).content
+
+
+def test_templates_from_the_file_are_attached_with_the_block_exposures(
+    tmp_path: Path, fake_p2: _P2
+) -> None:
+    content = _export_with_templates(tmp_path)
+    doc = json.loads(content)
+    api = connect("demo", "52052", "secret")
+    create_from_export(content, 42, dry_run=False, connection=api)
+    by_ob: dict[int, list[dict[str, Any]]] = {}
+    for ob_id, tpl in fake_p2.templates.values():
+        by_ob.setdefault(ob_id, []).append(tpl)
+    for (ob_id, _), entry in zip(sorted(fake_p2.obs.items()), doc["obs"], strict=True):
+        acq, sci = by_ob[ob_id]  # acquisition first
+        assert acq["templateName"] == "XSHOOTER_slt_acq"
+        assert {p["name"]: p["value"] for p in acq["parameters"]}["TEL.AG.GUIDESTAR"] == (
+            "CATALOGUE"
+        )
+        values = {p["name"]: p["value"] for p in sci["parameters"]}
+        assert (
+            values["DET.WIN1.UIT1"] == entry["exptime_s"] and values["SEQ.NEXPO"] == entry["n_exp"]
+        )
+
+
+def test_a_keyword_the_template_lacks_is_an_error_not_dropped(tmp_path: Path, fake_p2: _P2) -> None:
+    content = _export_with_templates(tmp_path, TEMPLATES_YAML.replace("SEQ.NEXPO", "SEQ.NOPE"))
+    api = connect("demo", "52052", "secret")
+    with pytest.raises(UcbplanError, match=r"has no keyword SEQ\.NOPE"):
+        create_from_export(content, 42, dry_run=False, connection=api)
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("science: {name: 3}\n", "science.name: expected a template name"),
+        ("science: {name: X, colour: red}\n", "science: unknown key 'colour'"),
+        ("acquisition: {name: X, parameters: {A: [1]}}\n", "acquisition.parameters.'A'"),
+        ("- a\n", "expected a mapping with acquisition"),
+    ],
+)
+def test_bad_templates_file_is_one_line(tmp_path: Path, text: str, message: str) -> None:
+    with pytest.raises(UcbplanError) as info:
+        _export_with_templates(tmp_path, text)
+    assert message in str(info.value) and "\n" not in str(info.value)

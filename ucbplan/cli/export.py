@@ -89,6 +89,13 @@ _Instrument = Annotated[
         help="ESO p2: instrument whose readout mode and overheads go into the OB templates.",
     ),
 ]
+_EsoTemplates = Annotated[
+    Path | None,
+    typer.Option(
+        "--eso-templates",
+        help="ESO p2: YAML file with the acquisition/science template names and keywords.",
+    ),
+]
 _Create = Annotated[
     bool,
     typer.Option(
@@ -179,6 +186,7 @@ def export_command(
     semester: _Semester = None,
     seeing: _Seeing = 1.0,
     instrument: _Instrument = None,
+    eso_templates: _EsoTemplates = None,
     create: _Create = False,
     dry_run: _DryRun = True,
     container: _Container = None,
@@ -208,6 +216,7 @@ def export_command(
         semester=semester,
         seeing_arcsec=seeing,
         instrument=instrument,
+        eso_templates=str(eso_templates) if eso_templates else None,
     )
     table = read_blocks(blocks)
     result = export_blocks(table, to, options)

@@ -124,6 +124,8 @@ class ExportOptions:
     instrument : str or None
         Instrument configuration (``ucbplan instruments``) whose readout mode and overheads go
         into the ESO OB templates; None = the exposure numbers of the plan only.
+    eso_templates : str or None
+        YAML file naming the ESO p2 acquisition and science templates and their keywords.
     """
 
     acquisition_s: float | None = None
@@ -137,6 +139,7 @@ class ExportOptions:
     semester: str | None = None
     seeing_arcsec: float = 1.0
     instrument: str | None = None
+    eso_templates: str | None = None
 
     def __post_init__(self) -> None:
         why = "acquisition before the first exposure; a block must fit in one night"

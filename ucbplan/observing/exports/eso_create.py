@@ -4,9 +4,10 @@
 the OBs, their bodies and time windows that would be created, without a connection. With
 ``--no-dry-run`` it logs in (``p2api.ApiConnection``) and, per OB, calls ``createOB``, copies the
 body (target, constraint set, description) into it and ``saveOB``, then
-``getAbsoluteTimeConstraints`` / ``saveAbsoluteTimeConstraints`` with the OB's window. Templates
-are left to p2 (:mod:`.eso_ob`). ``p2api`` is an optional dependency (``ucbplan[eso]``), imported
-only here and only when a connection is made.
+``getAbsoluteTimeConstraints`` / ``saveAbsoluteTimeConstraints`` with the OB's window, then
+``createTemplate`` / ``setTemplateParams`` for each template the body names (``--eso-templates``;
+without it the templates are left to p2, :mod:`.eso_ob`). ``p2api`` is an optional dependency
+(``ucbplan[eso]``), imported only here and only when a connection is made.
 """
 
 from __future__ import annotations
@@ -46,6 +47,10 @@ class P2Api(Protocol):
         timeConstraints: list[dict[str, str]],
         version: str,
     ) -> tuple[Any, str]: ...
+    def createTemplate(self, obId: int, name: str) -> tuple[dict[str, Any], str]: ...
+    def setTemplateParams(
+        self, obId: int, template: dict[str, Any], params: dict[str, Any], version: str
+    ) -> tuple[dict[str, Any], str]: ...
 
 
 @dataclass
@@ -78,6 +83,20 @@ class DryRunApi:
         self.calls.append(("saveAbsoluteTimeConstraints", {"obId": obId, "tc": timeConstraints}))
         return timeConstraints, version
 
+    def createTemplate(self, obId: int, name: str) -> tuple[dict[str, Any], str]:
+        self.calls.append(("createTemplate", {"obId": obId, "name": name}))
+        return {"templateId": -len(self.calls), "templateName": name, "parameters": []}, "dry-run"
+
+    def setTemplateParams(
+        self,
+        obId: int,
+        template: dict[str, Any],
+        params: dict[str, Any],
+        version: str,
+    ) -> tuple[dict[str, Any], str]:
+        self.calls.append(("setTemplateParams", {"obId": obId, "params": params}))
+        return template, version
+
 
 @dataclass(frozen=True, slots=True)
 class CreatedOb:
@@ -100,6 +119,23 @@ def _obs(doc: Mapping[str, Any]) -> list[dict[str, Any]]:
     return obs
 
 
+def _add_templates(api: P2Api, ob_id: int, templates: list[dict[str, Any]]) -> None:
+    """Attach each named template (acquisition first) and set its ESO keywords."""
+    for template in templates:
+        if not template.get("name"):
+            continue
+        tpl, version = api.createTemplate(ob_id, template["name"])
+        params = template.get("eso_parameters") or {}
+        known = {p.get("name") for p in tpl.get("parameters") or [] if isinstance(p, dict)}
+        missing = sorted(set(params) - known) if known else []
+        if missing:  # p2api's setTemplateParams would drop them without a word
+            raise ValueError(
+                f"template {template['name']} has no keyword {missing[0]}; check --eso-templates"
+            )
+        if params:
+            api.setTemplateParams(ob_id, tpl, params, version)
+
+
 def create_obs(doc: Mapping[str, Any], api: P2Api, container_id: int) -> list[CreatedOb]:
     """Create every OB of an ``eso-p2`` export document in the p2 container ``container_id``.
 
@@ -118,6 +154,7 @@ def create_obs(doc: Mapping[str, Any], api: P2Api, container_id: int) -> list[Cr
             ob, version = api.saveOB(ob, version)
             _, tc_version = api.getAbsoluteTimeConstraints(ob["obId"])
             api.saveAbsoluteTimeConstraints(ob["obId"], windows, tc_version)
+            _add_templates(api, ob["obId"], body.get("templates", []))
         except Exception as exc:  # p2api raises P2Error, requests its own: report all alike
             done = ", ".join(f"{c.name} ({c.ob_id})" for c in created) or "none"
             raise UcbplanError(

@@ -12,8 +12,11 @@ copy them into a new OB and save it with ``saveOB``:
 - ``templates``: the acquisition and the science exposures with the numbers the plan used
   (exposure time, count) and, with ``--instrument``, that instrument's readout mode and overheads
   from its configuration (:mod:`ucbplan.observing.instruments`). ESO's template names and keywords
-  differ per instrument and instrument-package version and are not in that configuration, so the
-  ``name`` of each template is null: choose the template in p2 (``--create`` leaves them out).
+  differ per instrument and instrument-package version and are not in that configuration: they
+  come from the user's ``--eso-templates`` file (:mod:`.eso_templates`), which gives each
+  template its ``name`` and ``eso_parameters`` (keyword → value, the block's exposure time and
+  count included); without it the ``name`` is null and the templates are chosen in p2
+  (``--create`` then leaves them out).
 """
 
 from __future__ import annotations
@@ -23,6 +26,7 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from ucbplan.observing.exports.base import fmt_sigma, sexagesimal
+from ucbplan.observing.exports.eso_templates import EsoTemplate, EsoTemplates
 from ucbplan.observing.instruments import Instrument, get_instrument
 
 __all__ = ["DEFAULT_MAX_AIRMASS", "DEFAULT_MOON_DISTANCE_DEG", "eso_constraints", "ob_body"]
@@ -73,7 +77,17 @@ def instrument_for(name: str | None) -> Instrument | None:
     return get_instrument(name)
 
 
-def _templates(exptime_s: float, n_exp: int, instrument: Instrument | None) -> list[dict[str, Any]]:
+def _eso(template: EsoTemplate | None, exptime_s: float, n_exp: int) -> dict[str, Any]:
+    if template is None:
+        return {"name": None}
+    return {"name": template.name, "eso_parameters": template.values(exptime_s, n_exp)}
+
+
+def _templates(
+    exptime_s: float, n_exp: int, instrument: Instrument | None, eso: EsoTemplates | None
+) -> list[dict[str, Any]]:
+    acq_eso = _eso(eso.acquisition if eso else None, exptime_s, n_exp)
+    sci_eso = _eso(eso.science if eso else None, exptime_s, n_exp)
     setup: dict[str, Any] = {}
     if instrument is not None:
         setup = {
@@ -83,10 +97,10 @@ def _templates(exptime_s: float, n_exp: int, instrument: Instrument | None) -> l
         }
     acq = {"acquisition_s": instrument.acquisition_s} if instrument is not None else {}
     return [
-        {"type": "acquisition", "name": None, "parameters": acq},
+        {"type": "acquisition", **acq_eso, "parameters": acq},
         {
             "type": "science",
-            "name": None,
+            **sci_eso,
             "parameters": {"exposure_time_s": exptime_s, "n_exp": n_exp, **setup},
         },
     ]
@@ -103,6 +117,7 @@ def ob_body(
     exptime_s: float,
     n_exp: int,
     instrument: Instrument | None,
+    eso_templates: EsoTemplates | None = None,
 ) -> dict[str, Any]:
     """One OB's p2 fields (see the module docstring).
 
@@ -124,5 +139,5 @@ def ob_body(
             "properMotionDec": 0.0,
         },
         "constraints": dict(constraints),
-        "templates": _templates(exptime_s, n_exp, instrument),
+        "templates": _templates(exptime_s, n_exp, instrument, eso_templates),
     }

@@ -38,6 +38,7 @@ from ucbplan.observing.exports.base import (
     version,
 )
 from ucbplan.observing.exports.eso_ob import eso_constraints, instrument_for, ob_body
+from ucbplan.observing.exports.eso_templates import EsoTemplates, load_eso_templates
 
 __all__ = ["ESO_NAME_MAX", "export_eso_p2"]
 
@@ -266,6 +267,7 @@ class _BodyContext:
     short_names: dict[str, str]
     constraints: dict[str, Any]
     instrument: Any
+    templates: EsoTemplates | None
 
 
 def _ob_doc(ob: _Ob, ctx: _BodyContext) -> dict[str, Any]:
@@ -288,6 +290,7 @@ def _ob_doc(ob: _Ob, ctx: _BodyContext) -> dict[str, Any]:
         exptime_s=doc["exptime_s"],
         n_exp=doc["n_exp"],
         instrument=ctx.instrument,
+        eso_templates=ctx.templates,
     )
     return doc
 
@@ -339,10 +342,15 @@ def export_eso_p2(table: Table, options: ExportOptions) -> ExportResult:
             meta(table).get("constraints"), options.seeing_arcsec, "ucbplan constraints", notes
         ),
         instrument_for(options.instrument),
+        load_eso_templates(options.eso_templates) if options.eso_templates else None,
     )
     notes.append(
-        "ESO p2: OB bodies carry no proper motion (target files have none) and no template "
-        "names (choose the instrument's templates in p2)"
+        "ESO p2: OB bodies carry no proper motion (target files have none)"
+        + (
+            ""
+            if ctx.templates
+            else "; no template names: pass --eso-templates FILE or pick them in p2"
+        )
     )
     doc = {
         "format": "ucbplan eso-p2 OBs with absolute time windows, version 2",
