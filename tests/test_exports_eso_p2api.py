@@ -327,3 +327,11 @@ def test_bad_templates_file_is_one_line(tmp_path: Path, text: str, message: str)
     with pytest.raises(UcbplanError) as info:
         _export_with_templates(tmp_path, text)
     assert message in str(info.value) and "\n" not in str(info.value)
+
+
+@pytest.mark.parametrize("extra", [["--create", "--container", "1"], ["--instrument", "uves"]])
+def test_eso_options_are_refused_with_other_formats(tmp_path: Path, extra: list[str]) -> None:
+    blocks = tmp_path / "blocks.ecsv"
+    fixture_table().write(blocks, format="ascii.ecsv")
+    code, err = run_cli(["export", str(blocks), "--to", "ics", *extra])
+    assert code == 2 and f"{extra[0]} is an ESO p2 option" in err

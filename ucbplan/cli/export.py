@@ -149,12 +149,17 @@ def _proposal_format(
     return None
 
 
-def _create(content: bytes, to: str, c: dict[str, Any]) -> None:
+def _check_eso_only(to: str, given: dict[str, bool]) -> None:
+    """Refuse an ESO p2 option with another format (it would be ignored without a word)."""
+    used = [name for name, on in given.items() if on]
+    if to != "eso-p2" and used:
+        raise InputError(f"{used[0]} is an ESO p2 option: use it with --to eso-p2, not --to {to}")
+
+
+def _create(content: bytes, c: dict[str, Any]) -> None:
     """``--create``: list (dry run) or create the OBs of an eso-p2 export with p2api."""
     from ucbplan.observing.exports.eso_create import connect, create_from_export
 
-    if to != "eso-p2":
-        raise InputError(f"--create makes ESO p2 OBs: use it with --to eso-p2, not --to {to}")
     if c["container"] is None:
         raise InputError("--create: expected --container ID (the p2 run or folder for the OBs)")
     connection = None
@@ -203,6 +208,8 @@ def export_command(
     from ucbplan.observing.exports import PROPOSAL_FORMATS, ExportOptions, export_blocks
 
     fmt = _proposal_format(to, output, fmt, semester)
+    eso_only = {"--create": create, "--instrument": instrument is not None}
+    _check_eso_only(to, {**eso_only, "--eso-templates": eso_templates is not None})
     if output is not None:
         check_output_path(output, overwrite)
     options = ExportOptions(
@@ -228,7 +235,7 @@ def export_command(
 
     if create:
         p2 = {"container": container, "dry_run": dry_run, "environment": p2_environment}
-        _create(result.content, to, {**p2, "user": p2_user})
+        _create(result.content, {**p2, "user": p2_user})
         if output is None:
             return
     write_output(output, writer, overwrite=overwrite, binary=True)
