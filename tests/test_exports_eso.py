@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import re
 from itertools import pairwise
 
@@ -12,6 +13,8 @@ import pytest
 from astropy.coordinates import Angle
 from astropy.table import Table
 from astropy.time import Time
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from test_exports_fixture import (
     GOLDEN_ACQUISITION_S,
     HM_P_S,
@@ -23,6 +26,7 @@ from test_exports_fixture import (
 
 from ucbplan.errors import UcbplanError
 from ucbplan.observing.exports import ExportOptions, export_blocks
+from ucbplan.observing.exports.eso_p2 import ESO_NAME_MAX, _ob_names
 from ucbplan.observing.timeconv import quiet_erfa
 
 NAME = "exports_eso_p2.json"
@@ -174,3 +178,72 @@ def test_sessions_are_one_ob(table: Table) -> None:
     assert ob["block_ids"] == ["HM_Cnc-001", "HM_Cnc-001b"]
     offsets = [v["mid_offset_from_ob_start_s"] for v in ob["merged_visits"]]
     assert offsets == pytest.approx([625.0, 625.0 + HM_P_S / 2], abs=1e-3)  # ms ISO times
+
+
+@given(
+    st.lists(
+        st.text(alphabet="abcXYZ_-0123456789 é", min_size=1, max_size=60).filter(
+            lambda s: any(c.isalnum() for c in s) and s == " ".join(s.split())
+        ),
+        min_size=1,
+        max_size=12,
+        unique_by=lambda s: "_".join(s.split()),
+    )
+)
+@settings(max_examples=60, deadline=None)
+def test_ob_names_are_unique_short_and_stable(blocks: list[str]) -> None:
+    # Block ids that differ only after 32 characters must still give distinct OB names.
+    ids = [f"{'long_common_prefix_of_a_block_id_'}{b}" for b in blocks]
+    try:
+        names = _ob_names(ids, [])
+    except UcbplanError as exc:  # only a transliteration collision may remain (both named)
+        assert "both become" in str(exc)
+        return
+    assert len(set(names.values())) == len(ids)
+    assert all(len(n) <= ESO_NAME_MAX and n.isascii() for n in names.values())
+    assert _ob_names(list(reversed(ids)), []) == names  # a block's name does not depend on order
+
+
+def test_ob_bodies_carry_target_constraints_and_exposures(table: Table) -> None:
+    doc = json.loads(golden(NAME))
+    rows = {str(r["block_id"]): r for r in table}
+    for ob in doc["obs"]:
+        body = ob["ob"]
+        row = rows[ob["block_ids"][0]]
+        target = body["target"]
+        # Read back by astropy: the p2 sexagesimal strings are the table's coordinates.
+        assert Angle(target["ra"], unit="hourangle").deg == pytest.approx(row["ra_deg"], abs=2e-7)
+        assert Angle(target["dec"], unit="deg").deg == pytest.approx(row["dec_deg"], abs=3e-6)
+        assert target["equinox"] == "J2000" and target["epoch"] == 2000.0
+        assert body["constraints"] == {
+            "name": "ucbplan constraints",
+            "airmass": 2.0,  # from the plan's "airmass <= 2.0"
+            "moonDistance": 30,  # from "moon separation >= 30 deg"
+            "seeing": 1.0,
+        }
+        science = body["templates"][1]["parameters"]
+        assert science["exposure_time_s"] == row["exptime_s"] and science["n_exp"] == row["n_exp"]
+        assert body["obsDescription"]["name"] == ob["name"]
+        assert all(b in body["obsDescription"]["userComments"] for b in ob["block_ids"])
+
+
+def test_ob_constraints_follow_the_plan_and_options(table: Table) -> None:
+    t = Table(table, copy=True)
+    t.meta["constraints"] = ["airmass <= 1.5", "moon separation >= 45.0 deg"]
+    opts = ExportOptions(acquisition_s=600.0, seeing_arcsec=0.8, instrument="xshooter-uvb")
+    res = export_blocks(t, "eso-p2", opts)
+    body = json.loads(res.content)["obs"][0]["ob"]
+    assert (body["constraints"]["airmass"], body["constraints"]["moonDistance"]) == (1.5, 45)
+    assert body["constraints"]["seeing"] == 0.8
+    science = body["templates"][1]["parameters"]
+    assert science["instrument"] == "xshooter-uvb" and science["readout_s"] == 34.0
+    assert body["templates"][0]["parameters"] == {"acquisition_s": 409.0}
+    t.meta["constraints"] = []
+    res = export_blocks(t, "eso-p2", opts)
+    assert any("names no airmass limit" in n for n in res.notes)
+
+
+@pytest.mark.parametrize("seeing", [0.0, -1.0, 6.0, math.nan])
+def test_bad_seeing_is_refused(seeing: float) -> None:
+    with pytest.raises(UcbplanError, match="--seeing: expected a number in"):
+        ExportOptions(seeing_arcsec=seeing)

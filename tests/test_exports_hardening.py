@@ -35,7 +35,7 @@ pytestmark = [
 ]
 
 REPO = Path(__file__).resolve().parents[1]
-OPTS = ExportOptions(acquisition_s=600.0)
+OPTS = ExportOptions(force=True, acquisition_s=600.0)
 UNICODE_NAME = "Ŭcb J0806–1527"  # a breve and an en dash
 
 
@@ -232,7 +232,9 @@ def test_export_cli_with_a_fifo_in_the_provenance(tmp_path: Path) -> None:
     blocks.write_text(_ecsv(table), encoding="utf-8")
     out = tmp_path / "list.txt"
     with deadline(30):
-        code, err = run_cli(["export", str(blocks), "--to", "keck-starlist", "-o", str(out)])
+        code, err = run_cli(
+            ["export", str(blocks), "--to", "keck-starlist", "--force", "-o", str(out)]
+        )
     check_outcome(code, err)
     assert code == 0 and out.exists() and "not a regular file" in err
 
@@ -279,7 +281,7 @@ def test_ics_has_no_control_characters() -> None:
 
 
 def test_latex_escapes_specials_and_drops_controls() -> None:
-    opts = ExportOptions(acquisition_s=600.0, proposal_format="latex")
+    opts = ExportOptions(force=True, acquisition_s=600.0, proposal_format="latex")
     tex = export_blocks(_named("A_{b}~c^d\\e\x07"), "proposal", opts).content.decode()
     assert r"A\_\{b\}\textasciitilde{}c\textasciicircum{}d\textbackslash{}e &" in tex
     assert "\x07" not in tex
@@ -371,5 +373,5 @@ def test_shared_references_in_meta_cannot_expand() -> None:
     table.meta["constraints"] = [bomb]
     with deadline(20):
         for to in EXPORT_FORMATS:
-            res = export_blocks(table, to, ExportOptions(acquisition_s=600.0))
+            res = export_blocks(table, to, ExportOptions(force=True, acquisition_s=600.0))
             assert len(res.content) < 2_000_000

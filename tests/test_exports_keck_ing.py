@@ -104,12 +104,12 @@ def test_keck_truncates_long_names_and_refuses_collisions(table: Table) -> None:
     t = Table(table, copy=True)
     t["target"] = t["target"].astype("U40")
     t["target"][t["target"] == "HM Cnc"] = "A very long target name 1"
-    res = export_blocks(t, "keck-starlist", ExportOptions())
+    res = export_blocks(t, "keck-starlist", ExportOptions(force=True))
     assert any("truncated" in n for n in res.notes)
     assert "A_very_long_tar 08 06 23.20" in res.content.decode()
     t["target"][t["target"] == SDSS] = "A very long target name 2"
     with pytest.raises(InputFileError, match="both become 'A_very_long_tar'"):
-        export_blocks(t, "keck-starlist", ExportOptions())
+        export_blocks(t, "keck-starlist", ExportOptions(force=True))
 
 
 # ----------------------------------------------------------------------------------------- ING
@@ -138,7 +138,7 @@ def test_ing_names_lose_colons_and_stay_short(table: Table) -> None:
     t = Table(table, copy=True)
     t["target"] = t["target"].astype("U40")
     t["target"][t["target"] == SDSS] = "Gaia DR3 1234:5678 with a long tail"
-    line = export_blocks(t, "ing-cat", ExportOptions()).content.decode().splitlines()[1]
+    line = export_blocks(t, "ing-cat", ExportOptions(force=True)).content.decode().splitlines()[1]
     assert line.startswith("Gaia_DR3_1234_5678_w ")
 
 

@@ -53,7 +53,7 @@ def test_every_registered_format_has_a_golden() -> None:
 
 def test_unknown_format_lists_known_names(table: Table) -> None:
     with pytest.raises(UcbplanError, match="expected one of eso-p2, keck-starlist, ics, proposal"):
-        export_blocks(table, "eso", ExportOptions())
+        export_blocks(table, "eso", ExportOptions(force=True))
 
 
 def test_exports_read_only_declared_columns(table: Table) -> None:
@@ -67,7 +67,7 @@ def test_exports_read_only_declared_columns(table: Table) -> None:
 
 def test_minimal_table_uses_documented_defaults(table: Table) -> None:
     small = minimal_table(table)
-    res = export_blocks(small, "proposal", ExportOptions())
+    res = export_blocks(small, "proposal", ExportOptions(force=True))
     text = " ".join(res.notes)
     assert "assuming 600 s acquisition" in text
     assert "P_b estimated as 4|t_alt_utc - t_mid_utc|" in text
@@ -79,21 +79,21 @@ def test_minimal_table_uses_documented_defaults(table: Table) -> None:
     assert hm["overhead_per_visit_s"] == pytest.approx(610.0, abs=1e-6)
     assert hm["p_orb_min"] == pytest.approx(HM_P_S / 60, abs=2e-3 / 60)  # ms ISO times: 4 x 0.5 ms
     for to in ("eso-p2", "keck-starlist", "ics", "ing-cat", "lco"):
-        assert export_blocks(small, to, ExportOptions()).content
+        assert export_blocks(small, to, ExportOptions(force=True)).content
 
 
 def test_missing_coordinates_is_a_clear_error(table: Table) -> None:
     small = minimal_table(table)
     small.remove_columns(["ra_deg", "dec_deg"])
     with pytest.raises(InputFileError, match="neither ra_deg/dec_deg nor ra_hms/dec_dms"):
-        export_blocks(small, "keck-starlist", ExportOptions())
+        export_blocks(small, "keck-starlist", ExportOptions(force=True))
 
 
 def test_sexagesimal_coordinates_suffice(table: Table) -> None:
     # Without ra_deg/dec_deg the exports read ra_hms/dec_dms and give the same starlist.
     t = Table(table, copy=True)
     t.remove_columns(["ra_deg", "dec_deg"])
-    opts = ExportOptions()
+    opts = ExportOptions(force=True)
     assert export_blocks(t, "keck-starlist", opts).content == (
         export_blocks(table, "keck-starlist", opts).content
     )
@@ -106,12 +106,12 @@ def test_bad_time_is_a_clear_error(table: Table) -> None:
     with pytest.raises(
         InputFileError, match=r"row 1, column t_mid_utc: expected an ISO time.*got 'yesterday'"
     ):
-        export_blocks(t, "ics", ExportOptions())
+        export_blocks(t, "ics", ExportOptions(force=True))
 
 
 def test_empty_table(table: Table) -> None:
     with pytest.raises(InputFileError, match="no rows"):
-        export_blocks(table[:0], "ics", ExportOptions())
+        export_blocks(table[:0], "ics", ExportOptions(force=True))
 
 
 def test_time_columns_give_the_same_export(table: Table) -> None:
@@ -121,7 +121,7 @@ def test_time_columns_give_the_same_export(table: Table) -> None:
         for col in ("t_mid_utc", "t_start_utc", "t_end_utc"):
             t[col] = Time(list(t[col]), scale="utc", precision=3)
     for to in ("eso-p2", "ics", "keck-starlist"):
-        opts = ExportOptions(acquisition_s=600.0)
+        opts = ExportOptions(force=True, acquisition_s=600.0)
         assert export_blocks(t, to, opts).content == export_blocks(table, to, opts).content
 
 
@@ -139,16 +139,18 @@ def test_acquisition_from_plan_meta_and_vmag_from_target_file(table: Table) -> N
         "overhead_s": 300.0,
         "targets": [{"name": "HM Cnc", "file": str(hm_file), "sha256": digest}],
     }
-    res = export_blocks(t, "keck-starlist", ExportOptions())
+    res = export_blocks(t, "keck-starlist", ExportOptions(force=True))
     # vmag 21.1 is in catalogs/hm-cnc-simulated.yaml; the table itself has no vmag.
     assert "HM_Cnc          08 06 23.20 +15 27 30.0 2000 vmag=21.1 rotmode=vertical" in (
         res.content.decode().splitlines()
     )
-    doc = json.loads(export_blocks(t, "eso-p2", ExportOptions()).content)
+    doc = json.loads(export_blocks(t, "eso-p2", ExportOptions(force=True)).content)
     assert {ob["acquisition_s"] for ob in doc["obs"]} == {300.0}
     # A file that changed since planning (sha256 mismatch) is not trusted: no vmag.
     t.meta["targets"][0]["sha256"] = "0" * 64
-    assert "vmag=" not in export_blocks(t, "keck-starlist", ExportOptions()).content.decode()
+    assert (
+        "vmag=" not in export_blocks(t, "keck-starlist", ExportOptions(force=True)).content.decode()
+    )
 
 
 # ----------------------------------------------------------------------------------------- CLI

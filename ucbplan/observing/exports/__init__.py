@@ -1,13 +1,16 @@
 """Observatory and proposal exports of the master blocks table, one module per format.
 
 Each format is a function ``(table, options) -> ExportResult`` in its own module
-(:mod:`.eso_p2`, :mod:`.keck`, :mod:`.ics`, :mod:`.ing`, :mod:`.lco`, :mod:`.proposal`), built
+(:mod:`.eso_p2`, :mod:`.keck`, :mod:`.ics`, :mod:`.ing`, :mod:`.lco`, :mod:`.proposal`,
+:mod:`.gemini`, :mod:`.phase_table`), built
 on the shared helpers of :mod:`.base`, and registered here by name in :data:`EXPORTERS`;
 :func:`export_blocks` looks the name up and fails with the list of known names. Imports point one
 way: this registry → format modules → base. Formats are described in docs/exports.md.
 """
 
 from __future__ import annotations
+
+from dataclasses import replace
 
 from astropy.table import Table
 
@@ -18,13 +21,17 @@ from ucbplan.observing.exports.base import (
     Exporter,
     ExportOptions,
     ExportResult,
+    meta,
 )
 from ucbplan.observing.exports.eso_p2 import export_eso_p2
+from ucbplan.observing.exports.gemini import export_gemini
 from ucbplan.observing.exports.ics import export_ics
 from ucbplan.observing.exports.ing import export_ing_cat
 from ucbplan.observing.exports.keck import export_keck_starlist
 from ucbplan.observing.exports.lco import export_lco
+from ucbplan.observing.exports.phase_table import export_phase_table
 from ucbplan.observing.exports.proposal import PROPOSAL_FORMATS, export_proposal
+from ucbplan.observing.exports.sites import check_site
 
 __all__ = [
     "DEFAULT_ACQUISITION_S",
@@ -36,10 +43,12 @@ __all__ = [
     "Exporter",
     "export_blocks",
     "export_eso_p2",
+    "export_gemini",
     "export_ics",
     "export_ing_cat",
     "export_keck_starlist",
     "export_lco",
+    "export_phase_table",
     "export_proposal",
 ]
 
@@ -51,6 +60,8 @@ EXPORTERS: dict[str, Exporter] = {
     "proposal": export_proposal,
     "ing-cat": export_ing_cat,
     "lco": export_lco,
+    "gemini": export_gemini,
+    "phase-table": export_phase_table,
 }
 
 #: The names ``--to`` accepts.
@@ -79,6 +90,9 @@ def export_blocks(table: Table, to: str, options: ExportOptions | None = None) -
     UcbplanError
         For an unknown format name (the message lists the known ones), an empty table or a bad
         cell (:func:`~ucbplan.observing.blocktable.check_blocks`).
+    SiteError
+        The plan's site is not one of the format's observatory sites and ``options.force`` is
+        False (:func:`~ucbplan.observing.exports.sites.check_site`).
     """
     exporter = EXPORTERS.get(to) if isinstance(to, str) else None
     if exporter is None:
@@ -87,4 +101,7 @@ def export_blocks(table: Table, to: str, options: ExportOptions | None = None) -
         )
     if len(table) == 0:
         raise InputFileError("blocks table has no rows: nothing to export; re-run `ucbplan plan`")
-    return exporter(check_blocks(table), options or ExportOptions())
+    options = options or ExportOptions()
+    site_notes = check_site(meta(table).get("site"), to, options.force)
+    result = exporter(check_blocks(table), options)
+    return replace(result, notes=(*site_notes, *result.notes)) if site_notes else result

@@ -36,6 +36,7 @@ from ucbplan.inputs import MAX_YAML_BYTES, check_range, is_number, load_yaml
 from ucbplan.observing.blocks import MAX_BLOCK_S
 from ucbplan.observing.blocktable import EXTRA_COLUMNS, REQUIRED_COLUMNS
 from ucbplan.observing.blocktable import USER_COLUMNS as USER_COLUMN_DECLS
+from ucbplan.observing.semesters import semester_dates
 from ucbplan.observing.timeconv import quiet_erfa
 from ucbplan.target import target_from_dict
 
@@ -113,6 +114,18 @@ class ExportOptions:
         ``ecsv``, ``csv`` or ``latex`` for the proposal table.
     keck_rotmode : str
         Keck ``rotmode=`` value (``vertical`` = parallactic slit, right for spectroscopy).
+    force : bool
+        Write a format even when the plan's site is not one of its observatory's sites.
+    semester : str or None
+        Proposal semester ``2041A``/``2041B`` or ESO period ``P147``; None = the one containing
+        the plan.
+    seeing_arcsec : float
+        Seeing limit of the ESO constraint set [arcsec].
+    instrument : str or None
+        Instrument configuration (``ucbplan instruments``) whose readout mode and overheads go
+        into the ESO OB templates; None = the exposure numbers of the plan only.
+    eso_templates : str or None
+        YAML file naming the ESO p2 acquisition and science templates and their keywords.
     """
 
     acquisition_s: float | None = None
@@ -122,6 +135,11 @@ class ExportOptions:
     merge_overlaps: bool = False
     proposal_format: str = "ecsv"
     keck_rotmode: str = "vertical"
+    force: bool = False
+    semester: str | None = None
+    seeing_arcsec: float = 1.0
+    instrument: str | None = None
+    eso_templates: str | None = None
 
     def __post_init__(self) -> None:
         why = "acquisition before the first exposure; a block must fit in one night"
@@ -132,6 +150,10 @@ class ExportOptions:
         why = "smallest window half-width; a day at most"
         check_range("--tolerance-floor", self.tolerance_floor_s, 0.0, 86400.0, "s", why)
         check_range("rounding_warn_fraction", self.rounding_warn_fraction, 0.0, 1.0)
+        why = "seeing limit of the ESO constraint set"
+        check_range("--seeing", self.seeing_arcsec, 0.0, 5.0, "arcsec", why, low_open=True)
+        if self.semester is not None:
+            semester_dates(self.semester)  # refuses anything but 2041A, 2041B, P147
         if not isinstance(self.keck_rotmode, str) or self.keck_rotmode not in KECK_ROTMODES:
             raise InputError(
                 f"--rotmode: expected {', '.join(KECK_ROTMODES)} (Keck starlist rotator "

@@ -27,6 +27,7 @@ from ucbplan.observing.exports.base import (
     floats,
     iso_minute,
     iso_ms,
+    meta,
     ob_start_window,
     period_s,
     required_times,
@@ -36,6 +37,8 @@ from ucbplan.observing.exports.base import (
     time_order,
     version,
 )
+from ucbplan.observing.exports.eso_ob import eso_constraints, instrument_for, ob_body
+from ucbplan.observing.exports.eso_templates import EsoTemplates, load_eso_templates
 
 __all__ = ["ESO_NAME_MAX", "export_eso_p2"]
 
@@ -73,6 +76,7 @@ class _Ob:
     period_s: float
     session: str
     members: list[_Member]
+    position: tuple[float, float] = (0.0, 0.0)  # ICRS RA, Dec [deg]
 
 
 @dataclass(frozen=True, slots=True)
@@ -91,6 +95,8 @@ class _Columns:
     exptime: np.ndarray
     n_exp: np.ndarray
     sessions: list[str]
+    ra: np.ndarray
+    dec: np.ndarray
 
 
 def _columns(table: Table, options: ExportOptions, notes: list[str]) -> _Columns:
@@ -107,6 +113,8 @@ def _columns(table: Table, options: ExportOptions, notes: list[str]) -> _Columns
         exptime=floats(table, "exptime_s", unit="s"),
         n_exp=floats(table, "n_exp"),
         sessions=strings(table, "session_id"),
+        ra=coordinates(table)[0],
+        dec=coordinates(table)[1],
     )
 
 
@@ -133,7 +141,9 @@ def _block_ob(c: _Columns, i: int, options: ExportOptions, ob_names: dict[str, s
         "rounding_widening_s": widening,
     }
     member = _Member(c.blocks[i], iso_ms(mid), sigma, mid)
-    return _Ob(doc, lo_min, hi_min, w.ob_start, float(c.period[i]), c.sessions[i], [member])
+    ob = _Ob(doc, lo_min, hi_min, w.ob_start, float(c.period[i]), c.sessions[i], [member])
+    ob.position = (float(c.ra[i]), float(c.dec[i]))
+    return ob
 
 
 def _ob_names(blocks: list[str], notes: list[str]) -> dict[str, str]:
@@ -250,8 +260,19 @@ def _visits(ob: _Ob) -> list[dict[str, Any]]:
     ]
 
 
-def _ob_doc(ob: _Ob) -> dict[str, Any]:
-    """The OB's JSON: its fields, merged visits, the p2api constraint list and the OBX line."""
+@dataclass(frozen=True, slots=True)
+class _BodyContext:
+    """What every OB body shares: target-list names, constraint set, instrument."""
+
+    short_names: dict[str, str]
+    constraints: dict[str, Any]
+    instrument: Any
+    templates: EsoTemplates | None
+
+
+def _ob_doc(ob: _Ob, ctx: _BodyContext) -> dict[str, Any]:
+    """The OB's JSON: its fields, merged visits, the p2api constraint list, the OBX line and the
+    OB body (:func:`~ucbplan.observing.exports.eso_ob.ob_body`)."""
     doc = ob.doc
     if len(ob.members) > 1:
         doc["merged_visits"] = _visits(ob)
@@ -259,15 +280,30 @@ def _ob_doc(ob: _Ob) -> dict[str, Any]:
     doc["obx_absolute_times_list"] = (
         f'absolute_times_list "{{{ob.lo:%Y-%m-%dT%H:%M:%S} {ob.hi:%Y-%m-%dT%H:%M:%S} 0}} "'
     )
+    doc["ob"] = ob_body(
+        ob_name=doc["name"],
+        target_name=ctx.short_names[doc["target"]],
+        ra_deg=ob.position[0],
+        dec_deg=ob.position[1],
+        constraints=ctx.constraints,
+        members=[(m.block_id, m.t_mid_utc, m.sigma_t_s) for m in ob.members],
+        exptime_s=doc["exptime_s"],
+        n_exp=doc["n_exp"],
+        instrument=ctx.instrument,
+        eso_templates=ctx.templates,
+    )
     return doc
 
 
-def _target_list(table: Table, notes: list[str]) -> list[str]:
-    """p2 target-list CSV lines ``name,HH:MM:SS.SSS,±DD:MM:SS.SSS,J2000``, one per target
-    (ASCII names without commas or quotes)."""
+def _target_names(table: Table, notes: list[str]) -> dict[str, str]:
+    """ASCII p2 target name of each target (no commas or quotes)."""
+    return ascii_names(strings(table, "target"), "ESO p2 target list", notes, drop=',"')
+
+
+def _target_list(table: Table, short: dict[str, str]) -> list[str]:
+    """p2 target-list CSV lines ``name,HH:MM:SS.SSS,±DD:MM:SS.SSS,J2000``, one per target."""
     ra, dec = coordinates(table)
     names = strings(table, "target")
-    short = ascii_names(names, "ESO p2 target list", notes, drop=',"')
     targets: dict[str, str] = {}
     for name, r, d in zip(names, ra, dec, strict=True):
         targets.setdefault(
@@ -279,7 +315,7 @@ def _target_list(table: Table, notes: list[str]) -> list[str]:
 
 
 def export_eso_p2(table: Table, options: ExportOptions) -> ExportResult:
-    """ESO p2 absolute-time-window JSON: one OB per visit, windows on the OB start.
+    """ESO p2 JSON: one OB per visit with its body and its absolute window on the OB start.
 
     A visit is a planner session (blocks sharing ``session_id``, e.g. a u = 0 / π pair observed
     after one acquisition) or a single block; a merged OB lists each block's mid-exposure offset
@@ -288,7 +324,9 @@ def export_eso_p2(table: Table, options: ExportOptions) -> ExportResult:
     The window is t_mid − (acquisition + exposure/2) ± max(k·σ_t, floor), i.e. the block start
     minus the acquisition overhead, rounded outward to whole minutes (p2 drops seconds). Each OB
     carries the p2api ``absoluteTimeConstraints`` list, the OBX ``absolute_times_list`` line, and
-    the document carries the p2 target-list CSV lines.
+    the document carries the p2 target-list CSV lines. Each OB's ``ob`` holds its p2 body
+    (target, constraint set, description, templates: :mod:`.eso_ob`), which ``--create`` sends
+    with p2api (:mod:`.eso_create`).
 
     Raises
     ------
@@ -297,8 +335,25 @@ def export_eso_p2(table: Table, options: ExportOptions) -> ExportResult:
     """
     notes: list[str] = []
     obs = _eso_obs(table, options, notes)
+    short = _target_names(table, notes)
+    ctx = _BodyContext(
+        short,
+        eso_constraints(
+            meta(table).get("constraints"), options.seeing_arcsec, "ucbplan constraints", notes
+        ),
+        instrument_for(options.instrument),
+        load_eso_templates(options.eso_templates) if options.eso_templates else None,
+    )
+    notes.append(
+        "ESO p2: OB bodies carry no proper motion (target files have none)"
+        + (
+            ""
+            if ctx.templates
+            else "; no template names: pass --eso-templates FILE or pick them in p2"
+        )
+    )
     doc = {
-        "format": "ucbplan eso-p2 absolute time windows, version 1",
+        "format": "ucbplan eso-p2 OBs with absolute time windows, version 2",
         "ucbplan_version": version(),
         "source_created_utc": created_utc(table),
         "site": site_name(table),
@@ -309,8 +364,8 @@ def export_eso_p2(table: Table, options: ExportOptions) -> ExportResult:
             "rounded outward to whole minutes"
         ),
         "p2api_usage": "api.saveAbsoluteTimeConstraints(obId, ob['absoluteTimeConstraints'], v)",
-        "target_list_csv": _target_list(table, notes),
-        "obs": [_ob_doc(ob) for ob in obs],
+        "target_list_csv": _target_list(table, short),
+        "obs": [_ob_doc(ob, ctx) for ob in obs],
     }
     text = json.dumps(doc, indent=2, allow_nan=False) + "\n"
     return ExportResult(text.encode(), ".json", tuple(dict.fromkeys(notes)))

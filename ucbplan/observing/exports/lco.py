@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass
+from datetime import datetime, timedelta
 from typing import Any
 
 from astropy.table import Table
@@ -22,7 +23,7 @@ from ucbplan.observing.exports.base import (
     strings,
 )
 
-__all__ = ["export_lco", "lco_json", "lco_requests"]
+__all__ = ["export_lco", "lco_json", "lco_requests", "request_window"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -54,26 +55,50 @@ def _configuration(
     }
 
 
+def _floor_second(t: datetime) -> datetime:
+    return t.replace(microsecond=0)
+
+
+def _ceil_second(t: datetime) -> datetime:
+    base = t.replace(microsecond=0)
+    return base if base == t else base + timedelta(seconds=1)
+
+
+def request_window(
+    start: datetime, end: datetime, acquisition: float, sigma_s: float, options: ExportOptions
+) -> tuple[datetime, datetime]:
+    """The OCS window of one request: it holds the whole request, whose start may slide ±half.
+
+    The request is the acquisition followed by the block: it starts at t_start − acquisition
+    and ends at t_end. The OCS schedules a request anywhere its full duration fits inside the
+    window, so the window is [t_start − acquisition − half, t_end + half] with half =
+    max(k·σ_t, floor), rounded outward to whole seconds: the request then starts within ±half
+    (+ < 1 s of rounding) of its nominal start, exactly the OB-start window of the ESO export.
+    """
+    w = ob_start_window(start, acquisition, sigma_s, options)
+    return _floor_second(w.lo), _ceil_second(end + timedelta(seconds=w.half_width_s))
+
+
 def _requests(
     table: Table, options: ExportOptions, s: _Settings, notes: list[str]
 ) -> list[dict[str, Any]]:
-    """One request per block in start order; its window is the OB-start window (to the second)."""
+    """One request per block in start order; its window holds the whole request (to the second)."""
     acq = acquisition_s(table, options, notes)
     names = strings(table, "target")
     ra, dec = coordinates(table)
     sigma = floats(table, "sigma_t_s", unit="s")
     exptime, n_exp = floats(table, "exptime_s", unit="s"), floats(table, "n_exp")
-    starts = required_times(table, "t_start_utc")
+    starts, ends = required_times(table, "t_start_utc"), required_times(table, "t_end_utc")
     requests = []
     for i in sorted(range(len(table)), key=lambda j: starts[j]):
-        w = ob_start_window(starts[i], float(acq[i]), float(sigma[i]), options)
+        lo, hi = request_window(starts[i], ends[i], float(acq[i]), float(sigma[i]), options)
         config = _configuration(
             names[i], float(ra[i]), float(dec[i]), float(exptime[i]), int(n_exp[i]), s
         )
         requests.append(
             {
                 "location": {"telescope_class": s.telescope_class},
-                "windows": [{"start": iso_ms(w.lo, 0), "end": iso_ms(w.hi, 0)}],
+                "windows": [{"start": iso_ms(lo, 0), "end": iso_ms(hi, 0)}],
                 "configurations": [config],
             }
         )
@@ -90,11 +115,11 @@ def lco_requests(
     max_airmass: float = 2.0,
     min_lunar_distance: float = 30.0,
 ) -> dict[str, Any]:
-    """LCO/SOAR OCS request group: one TIME_CRITICAL request per block, window on its start.
+    """LCO/SOAR OCS request group: one TIME_CRITICAL request per block.
 
-    The window is the block start minus the acquisition overhead ± max(k·σ_t, floor), like the
-    ESO p2 export but with second resolution. Block mid-times and σ go in an ``ucbplan`` key
-    the OCS API ignores.
+    Each window holds the whole request (acquisition + block) with its start free by
+    ± max(k·σ_t, floor) (:func:`request_window`); the OCS refuses a window shorter than the
+    request. Block mid-times and σ go in an ``ucbplan`` key the OCS API ignores.
 
     Parameters
     ----------

@@ -1,48 +1,55 @@
-"""Proposal technical-section table, ING catalogue and LCO request JSON from a blocks table.
+"""Proposal technical-section table from a blocks table (docs/exports.md, "Proposal table").
 
 One row per target: coordinates, magnitude, P_orb, the ephemeris file, σ_T at the semester
-midpoint, the anchor phases and their tolerance, usable windows per month, exposure and overheads
-per visit, visits, hours (total = integration + overheads), the time-critical flag and the
-constraints (docs/exports.md, "Proposal technical section").
+midpoint, the anchor phases and their tolerance, windows per month, visits and exposures, shutter,
+overheads and idle time (from the plan's own time accounting, else from the blocks:
+:mod:`.accounting`), efficiency, the time-critical flag and the constraints. The LaTeX form is
+written by :mod:`.proposal_latex`.
 
-Decisions where the issue is silent: the "semester" is the span of the blocks table (first block
-start to last block end) and σ_T at its midpoint is linearly interpolated in time between the
-target's blocks; windows per month = visits divided by the calendar months the table spans; every
-phase-targeted target is time critical.
+Decisions where the issue is silent: the semester is the observatory's own (``--semester 2041A``
+or ``P147``; default: the one containing the plan's first night, an ESO period for a plan made
+for an ESO site); σ_T at the semester midpoint (its middle date, 00:00 UTC) is linearly
+interpolated between the target's blocks (held at the first/last block outside them); windows per
+month = visits divided by the calendar months the table spans; the phase tolerance is the
+``tol_rad`` column, else the timing window as a phase, 2π·half-width/P_b; every phase-targeted
+target is time critical.
 """
 
 from __future__ import annotations
 
+import datetime as dt
 import io
 import math
 from collections import Counter
 from dataclasses import dataclass
-from datetime import UTC, datetime
+from datetime import UTC, datetime, timedelta
 from typing import Any
+from zoneinfo import ZoneInfo
 
 import numpy as np
-from astropy.table import Table
+from astropy.table import MaskedColumn, Table
 
 from ucbplan.errors import InputFileError
+from ucbplan.observing.exports.accounting import TimeAccount, plan_accounting
 from ucbplan.observing.exports.base import (
     ExportOptions,
     ExportResult,
-    acquisition_s,
     clean_meta,
     coordinates,
     created_utc,
     floats,
-    fmt_sigma,
     iso_ms,
     meta,
     period_s,
-    readout_total_s,
     required_times,
     sexagesimal,
     strings,
     version,
     vmags,
 )
+from ucbplan.observing.exports.proposal_latex import proposal_latex
+from ucbplan.observing.exports.sites import serves_site
+from ucbplan.observing.semesters import semester_dates, semester_label
 
 __all__ = [
     "PROPOSAL_FORMATS",
@@ -55,22 +62,6 @@ __all__ = [
 PROPOSAL_SUFFIXES = {"ecsv": ".ecsv", "csv": ".csv", "latex": ".tex"}
 PROPOSAL_FORMATS = tuple(PROPOSAL_SUFFIXES)
 
-#: LaTeX display names (astropy's LaTeX writer does not escape column names).
-_LATEX_COLUMNS = {
-    "target": "Target",
-    "ra_hms": r"RA (J2000)",
-    "dec_dms": r"Dec (J2000)",
-    "vmag": r"$V$ [mag]",
-    "p_orb_min": r"$P_\mathrm{orb}$ [min]",
-    "sigma_t_mid_s": r"$\sigma_T$ [s]",
-    "anchors": r"Phases $u_\star$ [rad]",
-    "n_visits": "Visits",
-    "windows_per_month": "Windows/month",
-    "exposure_per_visit_s": r"$t_\mathrm{exp}$/visit [s]",
-    "overhead_per_visit_s": "Overheads/visit [s]",
-    "total_h": "Total [h]",
-}
-
 _UNITS = {
     "p_orb_min": "min",
     "sigma_t_mid_s": "s",
@@ -78,11 +69,15 @@ _UNITS = {
     "window_half_width_s": "s",
     "exposure_per_visit_s": "s",
     "overhead_per_visit_s": "s",
+    "idle_per_visit_s": "s",
     "integration_h": "h",
     "overhead_h": "h",
+    "idle_h": "h",
     "total_h": "h",
     "vmag": "mag",
 }
+#: Columns written blank (masked) where the number is not known, never as NaN.
+_MAY_BE_BLANK = ("vmag", "p_orb_min", "tolerance_rad")
 
 
 def _seconds(ts: list[datetime]) -> np.ndarray:
@@ -124,9 +119,6 @@ class _Columns:
     visit: list[str]
     u_star: np.ndarray
     sigma: np.ndarray
-    exposure: np.ndarray
-    acquisition: np.ndarray
-    readout: np.ndarray
     period: np.ndarray
     ra: np.ndarray
     dec: np.ndarray
@@ -136,7 +128,7 @@ class _Columns:
     mids: np.ndarray
 
 
-def _columns(table: Table, options: ExportOptions, notes: list[str]) -> _Columns:
+def _columns(table: Table, notes: list[str]) -> _Columns:
     sessions, blocks = strings(table, "session_id"), strings(table, "block_id")
     ra, dec = coordinates(table)
     return _Columns(
@@ -145,9 +137,6 @@ def _columns(table: Table, options: ExportOptions, notes: list[str]) -> _Columns
         visit=[s or f"block {b}" for s, b in zip(sessions, blocks, strict=True)],
         u_star=floats(table, "u_star_rad", unit="rad"),
         sigma=floats(table, "sigma_t_s", unit="s"),
-        exposure=floats(table, "n_exp") * floats(table, "exptime_s", unit="s"),
-        acquisition=acquisition_s(table, options, notes),
-        readout=readout_total_s(table, notes),
         period=period_s(table, notes),
         ra=ra,
         dec=dec,
@@ -158,39 +147,92 @@ def _columns(table: Table, options: ExportOptions, notes: list[str]) -> _Columns
     )
 
 
+def _tolerance_rad(tol: np.ndarray, half_width_s: float, period: float) -> float:
+    """The ``tol_rad`` column's median, else the timing window as a phase, 2π·h/P_b."""
+    given = _nanmedian(tol)
+    return given if math.isfinite(given) else 2.0 * math.pi * half_width_s / period
+
+
 def _target_row(
-    c: _Columns, idx: np.ndarray, t_mid_sem: float, months: int, options: ExportOptions
+    c: _Columns,
+    idx: np.ndarray,
+    t_mid_sem: float,
+    months: int,
+    account: TimeAccount,
+    options: ExportOptions,
 ) -> dict[str, Any]:
-    """One proposal row; a visit is a planner session (one acquisition) or a lone block."""
+    """One proposal row; visits, exposures and times come from ``account``."""
     srt = idx[np.argsort(c.mids[idx], kind="stable")]
     first_of_visit = {c.visit[i]: int(i) for i in srt[::-1]}  # earliest block of each visit
-    visits = sorted(first_of_visit.values(), key=lambda i: c.mids[i])
-    n_visits = len(visits)
-    by_month = Counter(c.starts[i].strftime("%Y-%m") for i in visits)
-    overhead = float(np.sum(c.acquisition[visits])) + float(np.sum(c.readout[idx]))
-    exposure = float(np.sum(c.exposure[idx]))
+    by_month = Counter(c.starts[i].strftime("%Y-%m") for i in first_of_visit.values())
     sigma_mid = float(np.interp(t_mid_sem, c.mids[srt], c.sigma[srt]))
+    half = max(options.tolerance_sigma * sigma_mid, options.tolerance_floor_s)
+    period = _nanmedian(c.period[idx])
+    visits = max(account.visits, 1)
     return {
         "target": c.names[idx[0]],
         "ra_hms": sexagesimal(c.ra[idx[0]] / 15.0, 2, ":", False),
         "dec_dms": sexagesimal(c.dec[idx[0]], 1, ":", True),
         "vmag": float(c.vmag[idx[0]]),
-        "p_orb_min": _nanmedian(c.period[idx]) / 60.0,
+        "p_orb_min": period / 60.0,
         "sigma_t_mid_s": sigma_mid,
         "anchors": _anchor_text([c.anchors[i] for i in srt], c.u_star[srt]),
-        "tolerance_rad": _nanmedian(c.tol[idx]),
-        "window_half_width_s": max(options.tolerance_sigma * sigma_mid, options.tolerance_floor_s),
+        "tolerance_rad": _tolerance_rad(c.tol[idx], half, period),
+        "window_half_width_s": half,
         "n_blocks": len(idx),
-        "n_visits": n_visits,
-        "windows_per_month": n_visits / months,
+        "n_visits": account.visits,
+        "n_exposures": account.exposures,
+        "windows_per_month": account.visits / months,
         "windows_by_month": " ".join(f"{k}:{v}" for k, v in sorted(by_month.items())),
-        "exposure_per_visit_s": exposure / n_visits,
-        "overhead_per_visit_s": overhead / n_visits,
-        "integration_h": exposure / 3600.0,
-        "overhead_h": overhead / 3600.0,
-        "total_h": (exposure + overhead) / 3600.0,
+        "exposure_per_visit_s": account.shutter_s / visits,
+        "overhead_per_visit_s": account.overhead_s / visits,
+        "idle_per_visit_s": account.idle_s / visits,
+        "integration_h": account.shutter_s / 3600.0,
+        "overhead_h": account.overhead_s / 3600.0,
+        "idle_h": account.idle_s / 3600.0,
+        "total_h": account.total_s / 3600.0,
+        "efficiency": account.efficiency,
         "time_critical": True,
     }
+
+
+def _night_date(t: datetime, site: Any) -> dt.date:
+    """Local date of the evening of the night holding ``t``: (local time − 12 h).date(), in the
+    site's time zone (else the longitude's mean solar time, else UTC)."""
+    site = site if isinstance(site, dict) else {}
+    try:
+        local = t.astimezone(ZoneInfo(str(site["timezone"])))
+    except (KeyError, ValueError, OSError):
+        lon = site.get("lon_deg")
+        hours = float(lon) / 15.0 if isinstance(lon, int | float) and math.isfinite(lon) else 0.0
+        local = t + timedelta(hours=hours)
+    return (local - timedelta(hours=12)).date()
+
+
+def _semester(
+    table: Table, starts: list[datetime], options: ExportOptions, notes: list[str]
+) -> tuple[str, dt.date, dt.date]:
+    """The semester (label, first date, end date): ``options.semester``, else the one of the
+    plan's first night (an ESO period for a plan made for an ESO site)."""
+    site = meta(table).get("site")
+    nights = [_night_date(t, site) for t in starts]
+    label = options.semester or semester_label(min(nights), serves_site(site, "eso-p2"))
+    first, end = semester_dates(label)
+    outside = sum(not first <= n < end for n in nights)
+    if outside:
+        notes.append(
+            f"proposal: {outside} of {len(nights)} blocks fall outside semester {label} "
+            f"({first} to {end - timedelta(days=1)}); pass --semester to choose another"
+        )
+    return label.strip().upper(), first, end
+
+
+def _blank_unknown(out: Table) -> None:
+    """Unknown numbers (NaN) become blank cells, so that every number written is finite."""
+    for col in _MAY_BE_BLANK:
+        values = np.asarray(out[col], dtype=float)
+        if not np.all(np.isfinite(values)):
+            out[col] = MaskedColumn(values, mask=~np.isfinite(values), unit=out[col].unit)
 
 
 def proposal_table(table: Table, options: ExportOptions, notes: list[str]) -> Table:
@@ -201,21 +243,20 @@ def proposal_table(table: Table, options: ExportOptions, notes: list[str]) -> Ta
     table : astropy.table.Table
         Master blocks table (``ucbplan plan -o``).
     options : ExportOptions
-        Acquisition overhead and tolerance rule (k·σ_t) used for the timing tolerance column.
+        Acquisition overhead, tolerance rule (k·σ_t) and ``semester``.
     notes : list of str
         Receives one note per default taken.
 
     Returns
     -------
     astropy.table.Table
-        One row per target in order of first appearance; totals and rules in ``meta``. A visit
-        is a planner session (blocks sharing ``session_id``: one acquisition) or a lone block;
-        overheads = one acquisition per visit + the readout inside every block.
+        One row per target in order of first appearance; semester, totals and rules in ``meta``.
+        Every number is finite; an unknown magnitude, period or tolerance is blank (masked).
     """
-    c = _columns(table, options, notes)
-    ends = required_times(table, "t_end_utc")
-    sem_start, sem_end = min(c.starts), max(ends)
-    sem_mid = sem_start + (sem_end - sem_start) / 2
+    c = _columns(table, notes)
+    accounts, source = plan_accounting(table, options, notes)
+    label, first, end = _semester(table, c.starts, options, notes)
+    sem_mid = datetime.combine(first + (end - first) / 2, dt.time(), tzinfo=UTC)
     t_mid_sem = float(_seconds([sem_mid])[0])
     months = _months(c.starts)
     meta_t = _meta_targets(table)
@@ -226,7 +267,7 @@ def proposal_table(table: Table, options: ExportOptions, notes: list[str]) -> Ta
     rows: list[dict[str, Any]] = []
     for name in dict.fromkeys(c.names):
         idx = np.array([i for i, n in enumerate(c.names) if n == name])
-        row = _target_row(c, idx, t_mid_sem, months, options)
+        row = _target_row(c, idx, t_mid_sem, months, accounts[name], options)
         row["ephemeris"] = " ".join(str(clean_meta(meta_t.get(name, {}).get("file") or "")).split())
         row["constraints"] = constraints
         rows.append(row)
@@ -235,103 +276,54 @@ def proposal_table(table: Table, options: ExportOptions, notes: list[str]) -> Ta
     out = Table(rows=rows, names=list(rows[0]))
     for col, unit in _UNITS.items():
         out[col].unit = unit
-    out.meta = _summary_meta(table, out, (sem_start, sem_mid, sem_end), options)
+    _blank_unknown(out)
+    total = sum(accounts.values(), TimeAccount(0, 0, 0.0, 0.0, 0.0))
+    out.meta = _summary_meta(table, total, source, (label, first, end, sem_mid), options)
     return out
 
 
 def _summary_meta(
     table: Table,
-    summary: Table,
-    semester: tuple[datetime, datetime, datetime],
+    total: TimeAccount,
+    source: str,
+    semester: tuple[str, dt.date, dt.date, datetime],
     options: ExportOptions,
 ) -> dict[str, Any]:
-    """Provenance, the semester (start, mid, end UTC), the rules applied and the totals [h]."""
-    sem_start, sem_mid, sem_end = semester
+    """Provenance, the semester, the rules applied and the totals [h]."""
+    label, first, end, sem_mid = semester
     return {
         "ucbplan_version": version(),
         "source_created_utc": created_utc(table),
         "site": clean_meta(meta(table).get("site", "")),
-        "semester_start_utc": iso_ms(sem_start, 0),
-        "semester_end_utc": iso_ms(sem_end, 0),
+        "semester": label,
+        "semester_first_night": first.isoformat(),
+        "semester_last_night": (end - timedelta(days=1)).isoformat(),
         "semester_mid_utc": iso_ms(sem_mid, 0),
-        "sigma_t_mid_rule": "sigma_T linearly interpolated between the target's blocks at mid",
-        "overheads_rule": (
-            "a visit is a planner session (one acquisition) or a lone block; overheads = one "
-            "acquisition per visit + readout inside every block"
+        "sigma_t_mid_rule": (
+            "sigma_T linearly interpolated between the target's blocks at the semester midpoint "
+            "(held at the first/last block outside them)"
+        ),
+        "time_source": (
+            "the plan's time_accounting"
+            if source == "plan"
+            else "the blocks: a visit is a planner session (one acquisition) or a lone block; "
+            "overheads = acquisition per visit + readout of every exposure; idle = waits "
+            "between the blocks of a visit"
         ),
         "window_rule": (
             f"window_half_width_s = max({options.tolerance_sigma:g} sigma_T, "
             f"{options.tolerance_floor_s:g} s) at the semester midpoint; tolerance_rad from "
-            "a tol_rad column when the planner writes one"
+            "a tol_rad column, else 2 pi window_half_width_s / P_b"
         ),
-        "total_integration_h": float(np.sum(summary["integration_h"])),
-        "total_overhead_h": float(np.sum(summary["overhead_h"])),
-        "total_h": float(np.sum(summary["total_h"])),
+        "n_visits": total.visits,
+        "n_exposures": total.exposures,
+        "total_integration_h": total.shutter_s / 3600.0,
+        "total_overhead_h": total.overhead_s / 3600.0,
+        "total_idle_h": total.idle_s / 3600.0,
+        "total_h": total.total_s / 3600.0,
+        "efficiency": total.efficiency,
         "time_scale": "UTC at the site",
     }
-
-
-#: LaTeX's special characters in text and how to write them.
-_LATEX_SPECIAL = {
-    "\\": r"\textbackslash{}",
-    "_": r"\_",
-    "&": r"\&",
-    "%": r"\%",
-    "#": r"\#",
-    "$": r"\$",
-    "{": r"\{",
-    "}": r"\}",
-    "~": r"\textasciitilde{}",
-    "^": r"\textasciicircum{}",
-}
-
-
-def _latex_escape(text: str) -> str:
-    """Text for a LaTeX table cell: special characters escaped, line breaks and other control
-    characters dropped (one pass, so an escape is never escaped again)."""
-    return "".join(
-        _LATEX_SPECIAL.get(ch, ch)
-        for ch in " ".join(text.split())
-        if ch.isprintable() and not 0xD800 <= ord(ch) <= 0xDFFF
-    )
-
-
-def _latex(summary: Table) -> str:
-    def num(v: float, fmt: str) -> str:
-        return "--" if not math.isfinite(v) else format(v, fmt)
-
-    cols: dict[str, list[str]] = {k: [] for k in _LATEX_COLUMNS}
-    for r in summary:
-        cols["target"].append(_latex_escape(str(r["target"])))
-        cols["ra_hms"].append(str(r["ra_hms"]))
-        cols["dec_dms"].append(str(r["dec_dms"]).replace("-", "$-$"))
-        cols["vmag"].append(num(float(r["vmag"]), ".1f"))
-        cols["p_orb_min"].append(num(float(r["p_orb_min"]), ".3f"))
-        cols["sigma_t_mid_s"].append(fmt_sigma(float(r["sigma_t_mid_s"])))
-        cols["anchors"].append(_latex_escape(str(r["anchors"])))
-        cols["n_visits"].append(str(int(r["n_visits"])))
-        cols["windows_per_month"].append(num(float(r["windows_per_month"]), ".1f"))
-        cols["exposure_per_visit_s"].append(num(float(r["exposure_per_visit_s"]), ".0f"))
-        cols["overhead_per_visit_s"].append(num(float(r["overhead_per_visit_s"]), ".0f"))
-        cols["total_h"].append(num(float(r["total_h"]), ".2f"))
-    for key in cols:
-        cols[key].append("")
-    cols["target"][-1] = "Total"
-    cols["n_visits"][-1] = str(int(np.sum(summary["n_visits"])))
-    cols["total_h"][-1] = format(float(summary.meta["total_h"]), ".2f")
-    latex = Table([cols[k] for k in _LATEX_COLUMNS], names=list(_LATEX_COLUMNS.values()))
-    buf = io.StringIO()
-    caption = (
-        r"Phase-targeted visits (times UTC at the site; $\sigma_T$ at the semester midpoint "
-        + summary.meta["semester_mid_utc"].replace("T", " ")
-        + r" UTC; total = integration + overheads)."
-    )
-    latex.write(
-        buf,
-        format="ascii.latex",
-        latexdict={"caption": caption, "tabletype": "table*", "col_align": "lllrrrlrrrrr"},
-    )
-    return buf.getvalue()
 
 
 def write_proposal(summary: Table, fmt: str) -> str:
@@ -347,7 +339,7 @@ def write_proposal(summary: Table, fmt: str) -> str:
             f"--format: got {fmt!r}, expected one of {', '.join(PROPOSAL_FORMATS)}"
         )
     if fmt == "latex":
-        return _latex(summary)
+        return proposal_latex(summary)
     buf = io.StringIO()
     if fmt == "ecsv":
         summary.write(buf, format="ascii.ecsv")
