@@ -162,17 +162,17 @@ def test_export_eso_p2(blocks: Path) -> None:
 
 
 def test_export_keck_starlist(blocks: Path) -> None:
-    text, _ = _export(blocks, "keck-starlist", ".txt")
+    text, _ = _export(blocks, "keck-starlist", ".txt", "--force")  # Paranal plan
     assert "Synthetic_eclip 08 00 00.00 -20 00 00.0 2000" in text  # 15-character Keck name
 
 
 def test_export_ing_catalogue(blocks: Path) -> None:
-    text, _ = _export(blocks, "ing-cat", ".cat")
+    text, _ = _export(blocks, "ing-cat", ".cat", "--force")  # Paranal plan
     assert "08 00 00.00 -20 00 00.0 J2000" in text
 
 
 def test_export_lco(blocks: Path) -> None:
-    text, _ = _export(blocks, "lco", ".json")
+    text, _ = _export(blocks, "lco", ".json", "--force")  # Paranal plan
     doc = json.loads(text)
     tgt = doc["requests"][0]["configurations"][0]["target"]
     assert tgt["ra"] == pytest.approx(120.0) and tgt["dec"] == pytest.approx(-20.0)
@@ -186,11 +186,6 @@ def test_export_ics_events_start_at_the_blocks(blocks: Path) -> None:
     assert starts == expect
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="ics.py writes 'pi-mode alternative UTC none' for targets without a pi mode; "
-    "remove this marker when the line is left out for timing targets",
-)
 def test_export_ics_has_no_pi_mode_line_for_a_timing_target(blocks: Path) -> None:
     text, _ = _export(blocks, "ics", ".ics")
     assert "pi-mode" not in text
@@ -220,3 +215,11 @@ def test_feasibility_refuses_to_overwrite_in_one_line(tmp_path: Path) -> None:
     check_outcome(code, err)
     assert code == 2 and out.read_text() == "keep me\n"
     assert "--overwrite" in err.strip().splitlines()[-1]
+
+
+def test_export_to_another_observatory_needs_force(blocks: Path) -> None:
+    """A Paranal plan exported as a Keck starlist is refused in one line unless --force."""
+    out = blocks.parent / "refused.txt"
+    code, err = run_cli(["export", str(blocks), "--to", "keck-starlist", "-o", str(out)])
+    assert code == 2 and "--force" in err.strip().splitlines()[-1]
+    assert not out.exists()

@@ -128,13 +128,15 @@ def _columns(table: Table) -> _Columns:
 
 def _description(c: _Columns, i: int, site: str) -> str:
     alt = c.alts[i]
+    # The pi-mode line only where there is one: a timing ephemeris has no phase ambiguity.
+    pi_mode = [] if alt is None else [f"pi-mode alternative UTC {iso_ms(alt)}"]
     return "\n".join(
         [
             f"{c.names[i]} block {c.blocks[i]}: {c.anchors[i]}, u*={c.u_star[i]:.6g} rad (star 1)",
             f"mid-exposure UTC {iso_ms(c.mids[i])} +/- {fmt_sigma(float(c.sigma[i]))} s "
             f"(1 sigma), at {site}",
             f"barycentric TDB {c.tdb[i]}",
-            f"pi-mode alternative UTC {iso_ms(alt) if alt is not None else 'none'}",
+            *pi_mode,
             f"{int(c.n_exp[i])} x {c.exptime[i]:g} s; airmass {c.airmass[i]:.2f}, altitude "
             f"{c.alt[i]:.1f} deg, Moon separation {c.moon[i]:.1f} deg",
         ]
