@@ -280,7 +280,8 @@ def coverage_warnings(t_first: Time, t_last: Time) -> list[str]:
     Returns
     -------
     list of str
-        Zero, one or two one-line warnings telling the user the impact and what to do.
+        Zero, one or two one-line warnings (< 200 characters each) telling the user the impact
+        and what to do; docs/method.md ("Barycentric and site time") explains them in full.
     """
     iers_end, expires = _table_ends()
     out: list[str] = []
@@ -288,20 +289,15 @@ def coverage_warnings(t_first: Time, t_last: Time) -> list[str]:
         if t_last > iers_end:
             first = max(t_first, iers_end)
             out.append(
-                f"nights from {first.utc.iso[:10]} lie past the bundled IERS-A predictions "
-                f"(end {iers_end.iso[:10]}): UT1-UTC and polar motion are extrapolated (held at "
-                "the last value / 50-yr mean); with UTC kept within 0.9 s of UT1 this moves "
-                "altitudes by <~ 15 arcsec per second of UT1-UTC error, negligible for airmass "
-                "and twilight limits; block times are unaffected. Update astropy-iers-data "
-                "(pip install -U astropy-iers-data) closer to the date."
+                f"nights from {first.utc.iso[:10]} are past the bundled IERS-A predictions "
+                f"(end {iers_end.iso[:10]}): altitudes may be off by ~15 arcsec, block "
+                "times are not; pip install -U astropy-iers-data before observing"
             )
         if t_last > expires:
             first = max(t_first, expires)
             out.append(
-                f"nights from {first.utc.iso[:10]} lie past the leap-second table expiry "
-                f"({expires.iso[:10]}): no leap seconds after it are known, so each leap second "
-                "announced later shifts the true UTC of every block by 1 s (a positive leap "
-                "second makes it 1 s earlier than printed); barycentric TDB epochs are exact. "
-                "Re-run `ucbplan plan` with an updated astropy-iers-data before observing."
+                f"nights from {first.utc.iso[:10]} are past the leap-second table (expires "
+                f"{expires.iso[:10]}): a later leap second moves all UTC times by 1 s (TDB "
+                "is exact); pip install -U astropy-iers-data, re-plan before observing"
             )
     return out
