@@ -262,6 +262,84 @@ def visibility(
     _finish(run, output, overwrite, keep_parts)
 
 
+@population_app.command("rank")
+def rank(
+    source: Path = typer.Argument(..., help="Forecast table (ECSV) or an LDC-style catalog."),
+    out_dir: Path = typer.Option(..., "--out-dir", help="Folder for ranked.ecsv and targets."),
+    top: int = typer.Option(10, "--top", help="Write target files for the best N."),
+    goal: str = typer.Option("K1=5%", "--goal", help="Precision goal (K1=5%, M1=2%, q=3%…)."),
+    instrument: str | None = typer.Option(None, "--instrument", help="σ_ref and overheads."),
+    instruments_file: Path | None = typer.Option(None, "--instruments-file", help="YAML table."),
+    sigma_ref: str | None = typer.Option(
+        None, "--sigma-ref", help="SIGMA_KMS,MAG,EXPTIME_S: σ_v of one exposure at V = MAG."
+    ),
+    exptime: float = typer.Option(60.0, "--exptime", help="One exposure [s]."),
+    readout: float | None = typer.Option(None, "--readout", help="Readout per exposure [s]."),
+    overhead: float | None = typer.Option(None, "--overhead", help="Acquisition per visit [s]."),
+    visit: float = typer.Option(3600.0, "--visit", help="Visit length [s]."),
+    catalog: Path | None = typer.Option(
+        None, "--catalog", help="The forecast's catalog (default: the path in its meta)."
+    ),
+    sigma_v: SigmaV = 15.0,
+    k_eff: KEff = None,
+    t_obs: TObs = None,
+    t_start: TStart = DEFAULT_T_START,
+    n_bins: NBins = 512,
+    columns: Columns = None,
+    hdf5_path: Hdf5Path = None,
+    skip_bad: SkipBad = False,
+    workers: Workers = 1,
+    scheduler: Scheduler = None,
+    cluster: Cluster = None,
+    jobs: Jobs = 2,
+    overwrite: Overwrite = False,
+) -> None:
+    """Order sources by a stated figure of merit; target files for the top N (for `plan`)."""
+    from ucbplan.population import rank as rk
+    from ucbplan.population.execute import remove_parts
+    from ucbplan.population.run import parts_folder, run_forecast, write_table
+
+    configure_offline()
+    out_dir.mkdir(parents=True, exist_ok=True)
+    ranked_path = out_dir / "ranked.ecsv"
+    check_output_path(ranked_path, overwrite)
+    ropts = rk.rank_options(
+        top=top,
+        goal=goal,
+        instrument=instrument,
+        instruments_file=instruments_file,
+        sigma_ref=sigma_ref,
+        exptime_s=exptime,
+        readout_s=readout,
+        acquisition_s=overhead,
+        visit_s=visit,
+    )
+    tab = rk.read_forecast_table(source)
+    if tab is None:
+        cat = _catalog(source, columns, hdf5_path, skip_bad)
+        fopts = _forecast_opts(cat, sigma_v, k_eff, t_obs, t_start, n_bins)
+        parts = parts_folder(out_dir / "forecast.ecsv")
+        spec = _spec(workers, scheduler, cluster, jobs)
+        tab = _with_progress(
+            "forecast",
+            len(cat.sources),
+            lambda p: run_forecast(cat, fopts, spec=spec, parts=parts, overwrite=True, progress=p),
+        ).table
+        remove_parts(parts)
+    else:
+        fopts = rk.forecast_options_of(tab.meta, source)
+        cat_path = catalog or Path(str(tab.meta.get("catalog_path", tab.meta.get("catalog"))))
+        cat = _catalog(cat_path, columns, hdf5_path, skip_bad)
+        rk.check_catalog_of(tab, cat, source)
+    ranked = rk.rank_table(tab, cat, ropts)
+    paths = rk.write_top_targets(ranked, cat, fopts, out_dir, top, overwrite)
+    write_table(ranked, ranked_path, overwrite)
+    err_console.print(
+        f"wrote {ranked_path} ({ranked.meta['figure_of_merit']}) and {len(paths)} target "
+        f"file(s) in {out_dir}"
+    )
+
+
 @population_app.command("semester")
 def semester(
     name: str = typer.Argument(..., help="2041A, 2041B or an ESO period like P147."),
