@@ -340,6 +340,77 @@ def rank(
     )
 
 
+@population_app.command("simulate")
+def simulate(
+    catalog: CatalogArg,
+    output: TableOut,
+    out_dir: Path = typer.Option(..., "--out-dir", help="Folder for the posterior targets."),
+    seed: int = typer.Option(0, "--seed", help="Global seed (per source: seed + source id)."),
+    walkers: int = typer.Option(32, "--walkers", help="emcee walkers (≥ 12)."),
+    steps: int = typer.Option(2000, "--steps", help="Chain steps (minimum with --until-conv.)."),
+    until_converged: bool = typer.Option(
+        False, "--until-converged", help="Extend each chain to ≥ 50 τ (or --max-steps)."
+    ),
+    max_steps: int = typer.Option(50000, "--max-steps", help="Cap for --until-converged."),
+    no_noise: bool = typer.Option(False, "--no-noise", help="Zero-noise data."),
+    sigma_v: SigmaV = 15.0,
+    k_eff: KEff = None,
+    t_obs: TObs = None,
+    t_start: TStart = DEFAULT_T_START,
+    n_bins: NBins = 512,
+    columns: Columns = None,
+    hdf5_path: Hdf5Path = None,
+    skip_bad: SkipBad = False,
+    workers: Workers = 1,
+    scheduler: Scheduler = None,
+    cluster: Cluster = None,
+    jobs: Jobs = 2,
+    chunk: Chunk = None,
+    resume: Resume = False,
+    keep_parts: KeepParts = False,
+    overwrite: Overwrite = False,
+) -> None:
+    """Simulate LISA per source → summary ECSV (posterior vs Fisher σ) + a target file each."""
+    from ucbplan.population.run import parts_folder
+    from ucbplan.population.simulate import PopulationSimulateOptions, run_simulate
+
+    configure_offline()
+    check_output_path(output, overwrite)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    cat = _catalog(catalog, columns, hdf5_path, skip_bad)
+    fopts = _forecast_opts(cat, sigma_v, k_eff, t_obs, t_start, n_bins)
+    opts = PopulationSimulateOptions(
+        seed=seed,
+        walkers=walkers,
+        steps=steps,
+        until_converged=until_converged,
+        max_steps=max_steps,
+        noise=not no_noise,
+        forecast=fopts,
+    )
+    spec = _spec(workers, scheduler, cluster, jobs)
+    err_console.print(f"{len(cat.sources)} sources from {catalog}; {spec.describe()}")
+    parts = parts_folder(output)
+    run = _with_progress(
+        "simulate",
+        len(cat.sources),
+        lambda p: run_simulate(
+            cat,
+            opts,
+            out_dir=out_dir,
+            spec=spec,
+            parts=parts,
+            chunk=chunk,
+            resume=resume,
+            overwrite=overwrite,
+            progress=p,
+        ),
+    )
+    _finish(run, output, overwrite, keep_parts)
+    for f in run.table.meta["failed"]:
+        err_console.print(f"[yellow]failed {escape(f['source_id'])}: {escape(f['error'])}[/yellow]")
+
+
 @population_app.command("semester")
 def semester(
     name: str = typer.Argument(..., help="2041A, 2041B or an ESO period like P147."),
