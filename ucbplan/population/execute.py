@@ -108,6 +108,8 @@ class SerialExecutor(Executor):
         return fut
 
 
+#: Address schemes of a Dask scheduler.
+_SCHEMES = ("tcp://", "tls://", "inproc://", "ucx://")
 #: Batch systems ``--cluster`` starts Dask workers on (dask-jobqueue class names).
 CLUSTERS = {"slurm": "SLURMCluster", "pbs": "PBSCluster"}
 
@@ -121,6 +123,28 @@ class ExecutorSpec:
     scheduler: str | None = None
     cluster: str | None = None
     jobs: int = 2
+
+    def __post_init__(self) -> None:
+        """Check the options before any work (one line each, naming the option)."""
+        if self.workers < 1:
+            raise InputError(f"--workers: expected >= 1, got {self.workers}")
+        if self.scheduler and not self.scheduler.startswith(_SCHEMES):
+            raise InputError(
+                "--scheduler: expected an address like tcp://HOST:8786, got "
+                f"{shorten(self.scheduler)}"
+            )
+        if self.cluster is None:
+            return
+        if self.scheduler:
+            raise InputError("--cluster and --scheduler: give one of them, not both")
+        if self.cluster.strip().lower() not in CLUSTERS:
+            raise InputError(
+                f"--cluster: expected {' or '.join(CLUSTERS)}, got {shorten(self.cluster)}; for "
+                "another batch system start a Dask scheduler yourself and pass --scheduler "
+                "tcp://HOST:PORT"
+            )
+        if self.jobs < 1:
+            raise InputError(f"--jobs: expected >= 1, got {self.jobs}")
 
     def describe(self) -> str:
         """One line for logs (not written into outputs: they are identical everywhere)."""
@@ -141,10 +165,8 @@ def open_executor(spec: ExecutorSpec) -> Iterator[tuple[Executor, int]]:
         ``--workers`` < 1, ``--scheduler`` with ``--cluster``, Dask or dask-jobqueue not
         installed, an unknown batch system, or the scheduler not reachable.
     """
-    if spec.workers < 1:
-        raise InputError(f"--workers: expected >= 1, got {spec.workers}")
     if spec.cluster:
-        with _jobqueue_executor(spec.cluster, spec.jobs, spec.scheduler) as pair:
+        with _jobqueue_executor(spec.cluster, spec.jobs) as pair:
             yield pair
         return
     if spec.scheduler:
@@ -188,10 +210,6 @@ def _client_executor(client: Any, min_slots: int = 1) -> Iterator[tuple[Executor
 
 @contextmanager
 def _dask_executor(address: str) -> Iterator[tuple[Executor, int]]:
-    if not address.startswith(("tcp://", "tls://", "inproc://", "ucx://")):
-        raise InputError(
-            f"--scheduler: expected an address like tcp://HOST:8786, got {shorten(address)}"
-        )
     client_cls = _client_class()
     try:
         client = client_cls(address, timeout=30, set_as_default=False)
@@ -229,21 +247,16 @@ def jobqueue_cluster_class(name: str) -> Any:
 
 
 @contextmanager
-def _jobqueue_executor(
-    name: str, jobs: int, scheduler: str | None
-) -> Iterator[tuple[Executor, int]]:
-    if scheduler:
-        raise InputError("--cluster and --scheduler: give one of them, not both")
-    if jobs < 1:
-        raise InputError(f"--jobs: expected >= 1, got {jobs}")
+def _jobqueue_executor(name: str, jobs: int) -> Iterator[tuple[Executor, int]]:
     cluster_cls = jobqueue_cluster_class(name)
     client_cls = _client_class()
     try:
         cluster = cluster_cls()  # cores, memory, queue … from the dask-jobqueue config file
     except (ValueError, TypeError, KeyError) as exc:
         raise InputError(
-            f"--cluster {shorten(name)}: dask-jobqueue could not configure the cluster "
-            f"({shorten(exc)}); see docs/population.md"
+            f"--cluster {name}: dask-jobqueue could not configure the cluster "
+            f"({shorten(' '.join(str(exc).split()), 160)}); set cores and memory in "
+            "~/.config/dask/jobqueue.yaml (docs/population.md)"
         ) from None
     with cluster:
         cluster.scale(jobs=jobs)
