@@ -157,11 +157,11 @@ def forecast(
 
     configure_offline()
     check_output_path(output, overwrite)
+    spec = _spec(workers, scheduler, cluster, jobs)
     if plots is not None and not plots.is_dir():
         raise UcbplanError(f"--plots: folder {plots} does not exist; create it first")
     cat = _catalog(catalog, columns, hdf5_path, skip_bad)
     opts = _forecast_opts(cat, sigma_v, k_eff, t_obs, t_start, n_bins)
-    spec = _spec(workers, scheduler, cluster, jobs)
     err_console.print(f"{len(cat.sources)} sources from {catalog}; {spec.describe()}")
     parts = parts_folder(output)
     run = _with_progress(
@@ -226,6 +226,7 @@ def visibility(
 
     configure_offline()
     check_output_path(output, overwrite)
+    spec = _spec(workers, scheduler, cluster, jobs)
     where = resolve_site(site, site_lonlat, sites_file)
     settings = PlanSettings(
         twilight=twilight,
@@ -239,7 +240,6 @@ def visibility(
     opts = VisibilityOptions(
         site=where, semester=semester, settings=settings, min_hours=min_hours, forecast=fopts
     )
-    spec = _spec(workers, scheduler, cluster, jobs)
     err_console.print(
         f"{len(cat.sources)} sources from {catalog}; {where.name}, {opts.semester.upper()}; "
         f"{spec.describe()}"
@@ -303,6 +303,7 @@ def rank(
     out_dir.mkdir(parents=True, exist_ok=True)
     ranked_path = out_dir / "ranked.ecsv"
     check_output_path(ranked_path, overwrite)
+    spec = _spec(workers, scheduler, cluster, jobs)
     ropts = rk.rank_options(
         top=top,
         goal=goal,
@@ -319,7 +320,6 @@ def rank(
         cat = _catalog(source, columns, hdf5_path, skip_bad)
         fopts = _forecast_opts(cat, sigma_v, k_eff, t_obs, t_start, n_bins)
         parts = parts_folder(out_dir / "forecast.ecsv")
-        spec = _spec(workers, scheduler, cluster, jobs)
         tab = _with_progress(
             "forecast",
             len(cat.sources),
@@ -376,6 +376,7 @@ def simulate(
 
     configure_offline()
     check_output_path(output, overwrite)
+    spec = _spec(workers, scheduler, cluster, jobs)
     out_dir.mkdir(parents=True, exist_ok=True)
     cat = _catalog(catalog, columns, hdf5_path, skip_bad)
     fopts = _forecast_opts(cat, sigma_v, k_eff, t_obs, t_start, n_bins)
@@ -388,7 +389,6 @@ def simulate(
         noise=not no_noise,
         forecast=fopts,
     )
-    spec = _spec(workers, scheduler, cluster, jobs)
     err_console.print(f"{len(cat.sources)} sources from {catalog}; {spec.describe()}")
     parts = parts_folder(output)
     run = _with_progress(
