@@ -46,11 +46,11 @@ def _astropy_hours(ra: float, dec: float, step_s: float = 1200.0) -> float:
     from astropy.time import Time
 
     site = get_site("paranal")
-    # local noon of 2040-04-01 (UTC-4) to local noon of 2040-10-01 (UTC-3)
-    t0 = Time("2040-04-01T16:00:00", scale="utc")
-    n = round((Time("2040-10-01T15:00:00", scale="utc") - t0).to_value(u.s) / step_s)
-    with warnings.catch_warnings():
+    with warnings.catch_warnings():  # ERFA's "dubious year" for dates past the leap-second table
         warnings.simplefilter("ignore")
+        # local noon of 2040-04-01 (UTC-4) to local noon of 2040-10-01 (UTC-3)
+        t0 = Time("2040-04-01T16:00:00", scale="utc")
+        n = round((Time("2040-10-01T15:00:00", scale="utc") - t0).to_value(u.s) / step_s)
         t = t0 + (np.arange(n) + 0.5) * step_s * u.s
         frame = AltAz(obstime=t, location=site.location)
         sun = get_sun(t).transform_to(frame).alt.deg
