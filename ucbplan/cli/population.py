@@ -1,13 +1,16 @@
-"""``ucbplan population forecast``: whole LISA catalogs (issue 13).
+"""``ucbplan population …``: whole LISA catalogs (issue 13).
 
-A thin shell: read the catalog, run :func:`ucbplan.population.run.run_forecast` through the
-executor seam (serial, ``--workers N`` processes, or ``--scheduler tcp://HOST:PORT`` Dask), show
-a progress line on stderr, write the ECSV table and the summary plots.
+Thin shells: read the catalog, run one library function of :mod:`ucbplan.population` through
+the executor seam (serial, ``--workers N`` processes, ``--scheduler tcp://HOST:PORT`` Dask, or a
+``--cluster slurm|pbs`` started with dask-jobqueue), show a progress line on stderr, write the
+ECSV table (and figures or target files).
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
+from typing import Annotated, Any
 
 import typer
 from rich.markup import escape
@@ -18,117 +21,82 @@ from ucbplan.errors import UcbplanError
 __all__ = ["register"]
 
 population_app = typer.Typer(
-    help="Whole LISA catalogs: population forecasts (T_valid, σ_u, SNR per source).",
+    help="Whole LISA catalogs: forecasts, visibility, ranking and simulations per source.",
     no_args_is_help=True,
 )
 
-
-def _t_obs_s(text: str | None, default_s: float) -> float:
-    if text is None:
-        return default_s
-    import astropy.units as u
-
-    try:
-        val = float(u.Quantity(text.replace(" ", "")).to_value(u.s))
-    except (TypeError, ValueError, u.UnitsError):
-        raise UcbplanError(
-            f"--t-obs: expected a duration like '4yr' or '1.2e8 s', got {text!r}"
-        ) from None
-    if not val > 0:
-        raise UcbplanError(f"--t-obs: must be positive, got {text!r}")
-    return val
-
-
-@population_app.command("forecast")
-def forecast(
-    catalog: Path = typer.Argument(..., help="LDC-style catalog: ECSV, CSV or HDF5 (.h5)."),
-    output: Path = typer.Option(..., "-o", "--output", help="Forecast table (ECSV)."),
-    sigma_v: float = typer.Option(15.0, "--sigma-v", help="RV precision per epoch [km/s]."),
-    k_eff: float | None = typer.Option(
-        None, "--k-eff", help="K for the tolerance [km/s] (default: K1+K2 from Mass1, Mass2)."
+CatalogArg = Annotated[Path, typer.Argument(help="LDC-style catalog: ECSV, CSV or HDF5 (.h5).")]
+TableOut = Annotated[Path, typer.Option("-o", "--output", help="Output table (ECSV).")]
+SigmaV = Annotated[float, typer.Option("--sigma-v", help="RV precision per epoch [km/s].")]
+KEff = Annotated[
+    float | None,
+    typer.Option("--k-eff", help="K for the tolerance [km/s] (default: K1+K2 from Mass1, Mass2)."),
+]
+TObs = Annotated[str | None, typer.Option("--t-obs", help="LISA observation, e.g. '4yr'.")]
+TStart = Annotated[str, typer.Option("--t-start", help="LISA start (TDB): the catalog's t = 0.")]
+NBins = Annotated[int, typer.Option("--n-bins", help="Band width N of the Fisher model.")]
+Columns = Annotated[
+    str | None, typer.Option("--columns", help="Column map old=new,... onto the LDC names.")
+]
+Hdf5Path = Annotated[str | None, typer.Option("--hdf5-path", help="Table inside an HDF5 file.")]
+SkipBad = Annotated[bool, typer.Option("--skip-bad", help="Skip bad rows (listed in meta).")]
+Workers = Annotated[int, typer.Option("--workers", help="Local processes (1 = serial).")]
+Scheduler = Annotated[
+    str | None,
+    typer.Option("--scheduler", help="Existing Dask scheduler, tcp://HOST:PORT (ucbplan[dask])."),
+]
+Cluster = Annotated[
+    str | None,
+    typer.Option(
+        "--cluster", help="Start Dask workers on a batch system: slurm | pbs (dask-jobqueue)."
     ),
-    t_obs: str | None = typer.Option(None, "--t-obs", help="LISA observation, e.g. '4yr'."),
-    t_start: str = typer.Option(
-        "2035-01-01T00:00:00", "--t-start", help="LISA start (TDB): the catalog's t = 0."
-    ),
-    n_bins: int = typer.Option(512, "--n-bins", help="Band width N of the Fisher model."),
-    columns: str | None = typer.Option(
-        None, "--columns", help="Column map old=new,... onto the LDC names."
-    ),
-    hdf5_path: str | None = typer.Option(None, "--hdf5-path", help="Table inside an HDF5 file."),
-    skip_bad: bool = typer.Option(False, "--skip-bad", help="Skip bad rows (listed in meta)."),
-    workers: int = typer.Option(1, "--workers", help="Local processes (1 = serial)."),
-    scheduler: str | None = typer.Option(
-        None, "--scheduler", help="Existing Dask scheduler, tcp://HOST:PORT (ucbplan[dask])."
-    ),
-    chunk: int | None = typer.Option(None, "--chunk", help="Sources per task (default ≥ ~1 s)."),
-    resume: bool = typer.Option(False, "--resume", help="Reuse finished part files."),
-    keep_parts: bool = typer.Option(False, "--keep-parts", help="Keep part files after merging."),
-    plots: Path | None = typer.Option(None, "--plots", help="Folder for the summary plots."),
-    overwrite: bool = typer.Option(False, "--overwrite", help="Replace existing outputs."),
-) -> None:
-    """Per-source Fisher forecast of a catalog → ECSV (σ_u at the end, T_valid, SNR, status)."""
-    from astropy.time import Time
+]
+Jobs = Annotated[int, typer.Option("--jobs", help="Batch jobs to start with --cluster.")]
+Chunk = Annotated[int | None, typer.Option("--chunk", help="Sources per task (default ≥ ~1 s).")]
+Resume = Annotated[bool, typer.Option("--resume", help="Reuse finished part files.")]
+KeepParts = Annotated[bool, typer.Option("--keep-parts", help="Keep part files after merging.")]
+Overwrite = Annotated[bool, typer.Option("--overwrite", help="Replace existing outputs.")]
+DEFAULT_T_START = "2035-01-01T00:00:00"
 
+
+def _catalog(path: Path, columns: str | None, hdf5_path: str | None, skip_bad: bool) -> Any:
+    """The catalog, with its skipped rows printed (one yellow line each)."""
     from ucbplan.population.catalog import parse_column_map, read_catalog
-    from ucbplan.population.execute import ExecutorSpec, remove_parts
-    from ucbplan.population.forecast import DEFAULT_T_OBS_S, ForecastOptions
-    from ucbplan.population.plots import forecast_plots
-    from ucbplan.population.run import parts_folder, write_table
 
-    configure_offline()
-    check_output_path(output, overwrite)
-    if plots is not None and not plots.is_dir():
-        raise UcbplanError(f"--plots: folder {plots} does not exist; create it first")
-    if not sigma_v > 0:
-        raise UcbplanError(f"--sigma-v: expected > 0 km/s, got {sigma_v}")
-    if k_eff is not None and not k_eff > 0:
-        raise UcbplanError(f"--k-eff: expected > 0 km/s, got {k_eff}")
-    if n_bins < 16 or n_bins % 2:
-        raise UcbplanError(f"--n-bins: expected an even number >= 16, got {n_bins}")
-    try:
-        t0 = Time(t_start, scale="tdb").isot
-    except ValueError:
-        raise UcbplanError(f"--t-start: expected an ISO time, got {t_start!r}") from None
-    cat = read_catalog(catalog, parse_column_map(columns), skip_bad=skip_bad, hdf5_path=hdf5_path)
-    if k_eff is None and not {"Mass1", "Mass2"} <= set(cat.optional):
-        raise UcbplanError(f"--k-eff: needed: {catalog} has no Mass1 and Mass2 columns")
+    cat = read_catalog(path, parse_column_map(columns), skip_bad=skip_bad, hdf5_path=hdf5_path)
     for row, msg in cat.bad:
         err_console.print(f"[yellow]skipped row {row}: {escape(msg)}[/yellow]")
-    opts = ForecastOptions(
-        sigma_v_kms=sigma_v,
-        k_eff_kms=k_eff,
-        t_obs_s=_t_obs_s(t_obs, DEFAULT_T_OBS_S),
-        t_start_tdb=t0,
-        n_bins=n_bins,
-    )
-    spec = ExecutorSpec(workers=workers, scheduler=scheduler)
-    parts = parts_folder(output)
-    err_console.print(f"{len(cat.sources)} sources from {catalog}; {spec.describe()}")
-    run = _run_with_progress(cat, opts, spec, parts, chunk, resume, overwrite)
-    write_table(run.table, output, overwrite)
-    if not keep_parts:
-        remove_parts(parts)
-    meta = run.table.meta
-    err_console.print(
-        f"wrote {output}: {meta['n_ok']} ok, {meta['n_unconstrained']} unconstrained, "
-        f"{meta['n_failed']} failed; chunk {run.chunk}, {run.reused}/{run.n_chunks} parts reused"
-    )
-    if plots is not None:
-        for p in forecast_plots(run.table, plots, overwrite=overwrite):
-            err_console.print(f"wrote {p}")
+    return cat
 
 
-def _run_with_progress(cat, opts, spec, parts, chunk, resume, overwrite):  # type: ignore[no-untyped-def]
-    """:func:`run_forecast` under a progress line on stderr (sources done, rate, ETA)."""
+def _spec(workers: int, scheduler: str | None, cluster: str | None, jobs: int) -> Any:
+    from ucbplan.population.execute import ExecutorSpec
+
+    return ExecutorSpec(workers=workers, scheduler=scheduler, cluster=cluster, jobs=jobs)
+
+
+def _forecast_opts(
+    cat: Any, sigma_v: float, k_eff: float | None, t_obs: str | None, t_start: str, n_bins: int
+) -> Any:
+    from ucbplan.population.forecast import forecast_options
+
+    opts = forecast_options(
+        sigma_v_kms=sigma_v, k_eff_kms=k_eff, t_obs=t_obs, t_start=t_start, n_bins=n_bins
+    )
+    if k_eff is None and not {"Mass1", "Mass2"} <= set(cat.optional):
+        raise UcbplanError(f"--k-eff: needed: {cat.path.name} has no Mass1 and Mass2 columns")
+    return opts
+
+
+def _with_progress(label: str, total: int, run: Callable[[Any], Any]) -> Any:
+    """``run(progress)`` under a progress line on stderr (sources done, rate, ETA)."""
     from rich.progress import BarColumn, Progress, TextColumn
 
     from ucbplan.population.execute import Rate
-    from ucbplan.population.run import run_forecast
 
     rate = Rate()
     with Progress(
-        TextColumn("forecast"),
+        TextColumn(label),
         BarColumn(),
         TextColumn(
             "{task.completed}/{task.total} sources {task.fields[rate]} ETA {task.fields[eta]}"
@@ -136,14 +104,70 @@ def _run_with_progress(cat, opts, spec, parts, chunk, resume, overwrite):  # typ
         console=err_console,
         transient=True,
     ) as prog:
-        task = prog.add_task("forecast", total=len(cat.sources), rate="", eta="?")
+        task = prog.add_task(label, total=total, rate="", eta="?")
 
-        def _progress(done: int, total: int) -> None:
-            r, eta = rate.eta(done, total)
+        def _progress(done: int, n: int) -> None:
+            r, eta = rate.eta(done, n)
             eta_text = "?" if eta != eta else f"{eta:.0f} s"
             prog.update(task, completed=done, rate=f"{r:.1f}/s", eta=eta_text)
 
-        return run_forecast(
+        return run(_progress)
+
+
+def _finish(run: Any, output: Path, overwrite: bool, keep_parts: bool) -> None:
+    """Write the merged table, remove the parts (unless kept), print the summary line."""
+    from ucbplan.population.execute import remove_parts
+    from ucbplan.population.run import parts_folder, write_table
+
+    write_table(run.table, output, overwrite)
+    if not keep_parts:
+        remove_parts(parts_folder(output))
+    meta = run.table.meta
+    err_console.print(
+        f"wrote {output}: {meta['n_ok']} ok, {meta['n_unconstrained']} unconstrained, "
+        f"{meta['n_failed']} failed; chunk {run.chunk}, {run.reused}/{run.n_chunks} parts reused"
+    )
+
+
+@population_app.command("forecast")
+def forecast(
+    catalog: CatalogArg,
+    output: TableOut,
+    sigma_v: SigmaV = 15.0,
+    k_eff: KEff = None,
+    t_obs: TObs = None,
+    t_start: TStart = DEFAULT_T_START,
+    n_bins: NBins = 512,
+    columns: Columns = None,
+    hdf5_path: Hdf5Path = None,
+    skip_bad: SkipBad = False,
+    workers: Workers = 1,
+    scheduler: Scheduler = None,
+    cluster: Cluster = None,
+    jobs: Jobs = 2,
+    chunk: Chunk = None,
+    resume: Resume = False,
+    keep_parts: KeepParts = False,
+    plots: Path | None = typer.Option(None, "--plots", help="Folder for the summary plots."),
+    overwrite: Overwrite = False,
+) -> None:
+    """Per-source Fisher forecast of a catalog → ECSV (σ_u at the end, T_valid, SNR, status)."""
+    from ucbplan.population.plots import forecast_plots
+    from ucbplan.population.run import parts_folder, run_forecast
+
+    configure_offline()
+    check_output_path(output, overwrite)
+    spec = _spec(workers, scheduler, cluster, jobs)
+    if plots is not None and not plots.is_dir():
+        raise UcbplanError(f"--plots: folder {plots} does not exist; create it first")
+    cat = _catalog(catalog, columns, hdf5_path, skip_bad)
+    opts = _forecast_opts(cat, sigma_v, k_eff, t_obs, t_start, n_bins)
+    err_console.print(f"{len(cat.sources)} sources from {catalog}; {spec.describe()}")
+    parts = parts_folder(output)
+    run = _with_progress(
+        "forecast",
+        len(cat.sources),
+        lambda p: run_forecast(
             cat,
             opts,
             spec=spec,
@@ -151,8 +175,240 @@ def _run_with_progress(cat, opts, spec, parts, chunk, resume, overwrite):  # typ
             chunk=chunk,
             resume=resume,
             overwrite=overwrite,
-            progress=_progress,
-        )
+            progress=p,
+        ),
+    )
+    _finish(run, output, overwrite, keep_parts)
+    if plots is not None:
+        for path in forecast_plots(run.table, plots, overwrite=overwrite):
+            err_console.print(f"wrote {path}")
+
+
+@population_app.command("visibility")
+def visibility(
+    catalog: CatalogArg,
+    output: TableOut,
+    semester: str = typer.Option(..., "--semester", help="2041A, 2041B or an ESO period P147."),
+    site: str | None = typer.Option(None, "--site", help="Site name or alias (e.g. paranal)."),
+    site_lonlat: str | None = typer.Option(
+        None, "--site-lonlat", help="LON,LAT,HEIGHT (deg east, deg north, m) instead of --site."
+    ),
+    sites_file: Path | None = typer.Option(None, "--sites-file", help="YAML site table."),
+    airmass_max: float = typer.Option(2.0, "--airmass-max", help="Largest airmass (sec z)."),
+    twilight: str = typer.Option("nautical", "--twilight", help="civil|nautical|astronomical"),
+    moon_sep: float = typer.Option(30.0, "--moon-sep", help="Smallest Moon separation [deg]."),
+    min_hours: float = typer.Option(1.0, "--min-hours", help="Usable hours of a usable night."),
+    exptime: float = typer.Option(60.0, "--exptime", help="Block (exposure) length [s]."),
+    alpha: float = typer.Option(1.0, "--alpha", help="Planning margin α of T_valid."),
+    sigma_v: SigmaV = 15.0,
+    k_eff: KEff = None,
+    t_obs: TObs = None,
+    t_start: TStart = DEFAULT_T_START,
+    n_bins: NBins = 512,
+    columns: Columns = None,
+    hdf5_path: Hdf5Path = None,
+    skip_bad: SkipBad = False,
+    workers: Workers = 1,
+    scheduler: Scheduler = None,
+    cluster: Cluster = None,
+    jobs: Jobs = 2,
+    chunk: Chunk = None,
+    resume: Resume = False,
+    keep_parts: KeepParts = False,
+    overwrite: Overwrite = False,
+) -> None:
+    """Per source: usable nights, hours at airmass < X, anchor epochs inside T_valid → ECSV."""
+    from ucbplan.observing.blocks import ExposurePlan
+    from ucbplan.observing.schedule.settings import PlanSettings
+    from ucbplan.observing.sites import resolve_site
+    from ucbplan.population.run import parts_folder, run_visibility
+    from ucbplan.population.visibility import VisibilityOptions
+
+    configure_offline()
+    check_output_path(output, overwrite)
+    spec = _spec(workers, scheduler, cluster, jobs)
+    where = resolve_site(site, site_lonlat, sites_file)
+    settings = PlanSettings(
+        twilight=twilight,
+        airmass_max=airmass_max,
+        moon_sep_deg=moon_sep,
+        exposure=ExposurePlan(exptime_s=exptime),
+        alpha=alpha,
+    )
+    cat = _catalog(catalog, columns, hdf5_path, skip_bad)
+    fopts = _forecast_opts(cat, sigma_v, k_eff, t_obs, t_start, n_bins)
+    opts = VisibilityOptions(
+        site=where, semester=semester, settings=settings, min_hours=min_hours, forecast=fopts
+    )
+    err_console.print(
+        f"{len(cat.sources)} sources from {catalog}; {where.name}, {opts.semester.upper()}; "
+        f"{spec.describe()}"
+    )
+    parts = parts_folder(output)
+    run = _with_progress(
+        "visibility",
+        len(cat.sources),
+        lambda p: run_visibility(
+            cat,
+            opts,
+            spec=spec,
+            parts=parts,
+            chunk=chunk,
+            resume=resume,
+            overwrite=overwrite,
+            progress=p,
+        ),
+    )
+    _finish(run, output, overwrite, keep_parts)
+
+
+@population_app.command("rank")
+def rank(
+    source: Path = typer.Argument(..., help="Forecast table (ECSV) or an LDC-style catalog."),
+    out_dir: Path = typer.Option(..., "--out-dir", help="Folder for ranked.ecsv and targets."),
+    top: int = typer.Option(10, "--top", help="Write target files for the best N."),
+    goal: str = typer.Option("K1=5%", "--goal", help="Precision goal (K1=5%, M1=2%, q=3%…)."),
+    instrument: str | None = typer.Option(None, "--instrument", help="σ_ref and overheads."),
+    instruments_file: Path | None = typer.Option(None, "--instruments-file", help="YAML table."),
+    sigma_ref: str | None = typer.Option(
+        None, "--sigma-ref", help="SIGMA_KMS,MAG,EXPTIME_S: σ_v of one exposure at V = MAG."
+    ),
+    exptime: float = typer.Option(60.0, "--exptime", help="One exposure [s]."),
+    readout: float | None = typer.Option(None, "--readout", help="Readout per exposure [s]."),
+    overhead: float | None = typer.Option(None, "--overhead", help="Acquisition per visit [s]."),
+    visit: float = typer.Option(3600.0, "--visit", help="Visit length [s]."),
+    catalog: Path | None = typer.Option(
+        None, "--catalog", help="The forecast's catalog (default: the path in its meta)."
+    ),
+    sigma_v: SigmaV = 15.0,
+    k_eff: KEff = None,
+    t_obs: TObs = None,
+    t_start: TStart = DEFAULT_T_START,
+    n_bins: NBins = 512,
+    columns: Columns = None,
+    hdf5_path: Hdf5Path = None,
+    skip_bad: SkipBad = False,
+    workers: Workers = 1,
+    scheduler: Scheduler = None,
+    cluster: Cluster = None,
+    jobs: Jobs = 2,
+    overwrite: Overwrite = False,
+) -> None:
+    """Order sources by a stated figure of merit; target files for the top N (for `plan`)."""
+    from ucbplan.population import rank as rk
+    from ucbplan.population.execute import remove_parts
+    from ucbplan.population.run import parts_folder, run_forecast, write_table
+
+    configure_offline()
+    out_dir.mkdir(parents=True, exist_ok=True)
+    ranked_path = out_dir / "ranked.ecsv"
+    check_output_path(ranked_path, overwrite)
+    spec = _spec(workers, scheduler, cluster, jobs)
+    ropts = rk.rank_options(
+        top=top,
+        goal=goal,
+        instrument=instrument,
+        instruments_file=instruments_file,
+        sigma_ref=sigma_ref,
+        exptime_s=exptime,
+        readout_s=readout,
+        acquisition_s=overhead,
+        visit_s=visit,
+    )
+    tab = rk.read_forecast_table(source)
+    if tab is None:
+        cat = _catalog(source, columns, hdf5_path, skip_bad)
+        fopts = _forecast_opts(cat, sigma_v, k_eff, t_obs, t_start, n_bins)
+        parts = parts_folder(out_dir / "forecast.ecsv")
+        tab = _with_progress(
+            "forecast",
+            len(cat.sources),
+            lambda p: run_forecast(cat, fopts, spec=spec, parts=parts, overwrite=True, progress=p),
+        ).table
+        remove_parts(parts)
+    else:
+        fopts = rk.forecast_options_of(tab.meta, source)
+        cat_path = catalog or Path(str(tab.meta.get("catalog_path", tab.meta.get("catalog"))))
+        cat = _catalog(cat_path, columns, hdf5_path, skip_bad)
+        rk.check_catalog_of(tab, cat, source)
+    ranked = rk.rank_table(tab, cat, ropts)
+    paths = rk.write_top_targets(ranked, cat, fopts, out_dir, top, overwrite)
+    write_table(ranked, ranked_path, overwrite)
+    err_console.print(
+        f"wrote {ranked_path} ({ranked.meta['figure_of_merit']}) and {len(paths)} target "
+        f"file(s) in {out_dir}"
+    )
+
+
+@population_app.command("simulate")
+def simulate(
+    catalog: CatalogArg,
+    output: TableOut,
+    out_dir: Path = typer.Option(..., "--out-dir", help="Folder for the posterior targets."),
+    seed: int = typer.Option(0, "--seed", help="Global seed (per source: seed + source id)."),
+    walkers: int = typer.Option(32, "--walkers", help="emcee walkers (≥ 12)."),
+    steps: int = typer.Option(2000, "--steps", help="Chain steps (minimum with --until-conv.)."),
+    until_converged: bool = typer.Option(
+        False, "--until-converged", help="Extend each chain to ≥ 50 τ (or --max-steps)."
+    ),
+    max_steps: int = typer.Option(50000, "--max-steps", help="Cap for --until-converged."),
+    no_noise: bool = typer.Option(False, "--no-noise", help="Zero-noise data."),
+    sigma_v: SigmaV = 15.0,
+    k_eff: KEff = None,
+    t_obs: TObs = None,
+    t_start: TStart = DEFAULT_T_START,
+    n_bins: NBins = 512,
+    columns: Columns = None,
+    hdf5_path: Hdf5Path = None,
+    skip_bad: SkipBad = False,
+    workers: Workers = 1,
+    scheduler: Scheduler = None,
+    cluster: Cluster = None,
+    jobs: Jobs = 2,
+    chunk: Chunk = None,
+    resume: Resume = False,
+    keep_parts: KeepParts = False,
+    overwrite: Overwrite = False,
+) -> None:
+    """Simulate LISA per source → summary ECSV (posterior vs Fisher σ) + a target file each."""
+    from ucbplan.population.run import parts_folder
+    from ucbplan.population.simulate import PopulationSimulateOptions, run_simulate
+
+    configure_offline()
+    check_output_path(output, overwrite)
+    spec = _spec(workers, scheduler, cluster, jobs)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    cat = _catalog(catalog, columns, hdf5_path, skip_bad)
+    fopts = _forecast_opts(cat, sigma_v, k_eff, t_obs, t_start, n_bins)
+    opts = PopulationSimulateOptions(
+        seed=seed,
+        walkers=walkers,
+        steps=steps,
+        until_converged=until_converged,
+        max_steps=max_steps,
+        noise=not no_noise,
+        forecast=fopts,
+    )
+    err_console.print(f"{len(cat.sources)} sources from {catalog}; {spec.describe()}")
+    parts = parts_folder(output)
+    run = _with_progress(
+        "simulate",
+        len(cat.sources),
+        lambda p: run_simulate(
+            cat,
+            opts,
+            out_dir=out_dir,
+            spec=spec,
+            parts=parts,
+            chunk=chunk,
+            resume=resume,
+            overwrite=overwrite,
+            progress=p,
+        ),
+    )
+    _finish(run, output, overwrite, keep_parts)
+    for f in run.table.meta["failed"]:
+        err_console.print(f"[yellow]failed {escape(f['source_id'])}: {escape(f['error'])}[/yellow]")
 
 
 @population_app.command("semester")

@@ -5,7 +5,10 @@ Modules: :mod:`~ucbplan.population.catalog` (LDC-style catalogs from ECSV, CSV, 
 :mod:`~ucbplan.population.execute` (the executor seam: serial, process pool, Dask; part files,
 resume), :mod:`~ucbplan.population.run` (whole-catalog runs and the merged table),
 :mod:`~ucbplan.population.plots` (summary figures), :mod:`~ucbplan.population.semesters`
-(observatory semesters and ESO periods). Nothing is loaded on package import.
+(observatory semesters and ESO periods), :mod:`~ucbplan.population.visibility` (usable hours,
+nights and anchor epochs at a site in a semester), :mod:`~ucbplan.population.rank` (figures of
+merit, target files for the best sources), :mod:`~ucbplan.population.simulate` (the simulate
+pipeline per source). Nothing is loaded on package import.
 """
 
 __all__: list[str] = []

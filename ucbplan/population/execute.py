@@ -32,9 +32,11 @@ from ucbplan.io import write_output
 from ucbplan.offline import configure_offline
 
 __all__ = [
+    "CLUSTERS",
     "ExecutorSpec",
     "SerialExecutor",
     "default_chunk",
+    "jobqueue_cluster_class",
     "open_executor",
     "run_chunks",
     "source_seed",
@@ -106,15 +108,48 @@ class SerialExecutor(Executor):
         return fut
 
 
+#: Address schemes of a Dask scheduler.
+_SCHEMES = ("tcp://", "tls://", "inproc://", "ucx://")
+#: Batch systems ``--cluster`` starts Dask workers on (dask-jobqueue class names).
+CLUSTERS = {"slurm": "SLURMCluster", "pbs": "PBSCluster"}
+
+
 @dataclass(frozen=True, slots=True)
 class ExecutorSpec:
-    """Where to run: ``workers`` local processes (1 = serial) or a Dask ``scheduler`` address."""
+    """Where to run: ``workers`` local processes (1 = serial), a Dask ``scheduler`` address, or
+    a Dask ``cluster`` of ``jobs`` batch jobs started with dask-jobqueue (``slurm``, ``pbs``)."""
 
     workers: int = 1
     scheduler: str | None = None
+    cluster: str | None = None
+    jobs: int = 2
+
+    def __post_init__(self) -> None:
+        """Check the options before any work (one line each, naming the option)."""
+        if self.workers < 1:
+            raise InputError(f"--workers: expected >= 1, got {self.workers}")
+        if self.scheduler and not self.scheduler.startswith(_SCHEMES):
+            raise InputError(
+                "--scheduler: expected an address like tcp://HOST:8786, got "
+                f"{shorten(self.scheduler)}"
+            )
+        if self.cluster is None:
+            return
+        if self.scheduler:
+            raise InputError("--cluster and --scheduler: give one of them, not both")
+        if self.cluster.strip().lower() not in CLUSTERS:
+            raise InputError(
+                f"--cluster: expected {' or '.join(CLUSTERS)}, got {shorten(self.cluster)}; for "
+                "another batch system start a Dask scheduler yourself and pass --scheduler "
+                "tcp://HOST:PORT"
+            )
+        if self.jobs < 1:
+            raise InputError(f"--jobs: expected >= 1, got {self.jobs}")
 
     def describe(self) -> str:
         """One line for logs (not written into outputs: they are identical everywhere)."""
+        if self.cluster:
+            return f"Dask on {self.jobs} {self.cluster} job(s) (dask-jobqueue)"
         if self.scheduler:
             return f"Dask cluster at {self.scheduler}"
         return "serial" if self.workers <= 1 else f"{self.workers}-process pool"
@@ -127,10 +162,13 @@ def open_executor(spec: ExecutorSpec) -> Iterator[tuple[Executor, int]]:
     Raises
     ------
     InputError
-        ``--workers`` < 1, Dask not installed, or the scheduler not reachable.
+        ``--workers`` < 1, ``--scheduler`` with ``--cluster``, Dask or dask-jobqueue not
+        installed, an unknown batch system, or the scheduler not reachable.
     """
-    if spec.workers < 1:
-        raise InputError(f"--workers: expected >= 1, got {spec.workers}")
+    if spec.cluster:
+        with _jobqueue_executor(spec.cluster, spec.jobs) as pair:
+            yield pair
+        return
     if spec.scheduler:
         with _dask_executor(spec.scheduler) as pair:
             yield pair
@@ -148,31 +186,83 @@ def open_executor(spec: ExecutorSpec) -> Iterator[tuple[Executor, int]]:
         pool.shutdown(wait=True, cancel_futures=True)
 
 
-@contextmanager
-def _dask_executor(address: str) -> Iterator[tuple[Executor, int]]:
-    if not address.startswith(("tcp://", "tls://", "inproc://", "ucx://")):
-        raise InputError(
-            f"--scheduler: expected an address like tcp://HOST:8786, got {shorten(address)}"
-        )
+def _client_class() -> Any:
     try:
         from distributed import Client
     except ImportError:
         raise InputError(
-            "--scheduler needs Dask distributed: pip install 'ucbplan[dask]'"
+            "--scheduler/--cluster need Dask distributed: pip install 'ucbplan[dask]'"
         ) from None
+    return Client
+
+
+@contextmanager
+def _client_executor(client: Any, min_slots: int = 1) -> Iterator[tuple[Executor, int]]:
+    """A Dask client's executor and slots (worker threads; ``min_slots`` while none are up)."""
     try:
-        client = Client(address, timeout=30, set_as_default=False)
+        client.run(worker_setup)
+        info = client.scheduler_info()
+        slots = sum(int(w.get("nthreads", 1)) for w in info.get("workers", {}).values())
+        yield client.get_executor(pure=False), max(slots, min_slots, 1)
+    finally:
+        client.close()
+
+
+@contextmanager
+def _dask_executor(address: str) -> Iterator[tuple[Executor, int]]:
+    client_cls = _client_class()
+    try:
+        client = client_cls(address, timeout=30, set_as_default=False)
     except (OSError, TimeoutError) as exc:
         raise InputError(
             f"--scheduler: cannot reach {shorten(address)} ({shorten(exc)}); is the scheduler up?"
         ) from None
+    with _client_executor(client) as pair:
+        yield pair
+
+
+def jobqueue_cluster_class(name: str) -> Any:
+    """The dask-jobqueue cluster class of ``--cluster NAME`` (``slurm`` or ``pbs``).
+
+    Raises
+    ------
+    InputError
+        Unknown batch system, or dask-jobqueue not installed (one line each).
+    """
+    key = name.strip().lower()
+    if key not in CLUSTERS:
+        raise InputError(
+            f"--cluster: expected {' or '.join(CLUSTERS)}, got {shorten(name)}; for another "
+            "batch system start a Dask scheduler yourself and pass --scheduler tcp://HOST:PORT"
+        )
+    _client_class()
     try:
-        client.run(worker_setup)
-        info = client.scheduler_info()
-        slots = sum(int(w.get("nthreads", 1)) for w in info.get("workers", {}).values()) or 1
-        yield client.get_executor(pure=False), slots
-    finally:
-        client.close()
+        import dask_jobqueue
+    except ImportError:
+        raise InputError(
+            "--cluster needs dask-jobqueue: pip install dask-jobqueue (and set cores, memory, "
+            "queue in ~/.config/dask/jobqueue.yaml; see docs/population.md)"
+        ) from None
+    return getattr(dask_jobqueue, CLUSTERS[key])
+
+
+@contextmanager
+def _jobqueue_executor(name: str, jobs: int) -> Iterator[tuple[Executor, int]]:
+    cluster_cls = jobqueue_cluster_class(name)
+    client_cls = _client_class()
+    try:
+        cluster = cluster_cls()  # cores, memory, queue … from the dask-jobqueue config file
+    except (ValueError, TypeError, KeyError) as exc:
+        raise InputError(
+            f"--cluster {name}: dask-jobqueue could not configure the cluster "
+            f"({shorten(' '.join(str(exc).split()), 160)}); set cores and memory in "
+            "~/.config/dask/jobqueue.yaml (docs/population.md)"
+        ) from None
+    with cluster:
+        cluster.scale(jobs=jobs)
+        client = client_cls(cluster, set_as_default=False)
+        with _client_executor(client, min_slots=jobs) as pair:
+            yield pair
 
 
 def default_chunk(n_sources: int, slots: int, seconds_per_source: float) -> int:

@@ -12,6 +12,7 @@ error is ``failed: <message>``; neither stops the run.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
@@ -22,9 +23,10 @@ import numpy as np
 from ucbplan.core.constants import DAY_S, G_SI, MSUN_KG
 from ucbplan.core.forecast import HORIZON_CAP_S, horizon_table
 from ucbplan.core.params import PhaseParams, shift_reference
-from ucbplan.errors import NumericalError, UcbplanError
+from ucbplan.errors import InputError, NumericalError, UcbplanError, shorten
 from ucbplan.population.catalog import Source
 from ucbplan.population.execute import worker_setup
+from ucbplan.target.model import Spectroscopy
 
 __all__ = [
     "ALPHAS",
@@ -32,7 +34,10 @@ __all__ = [
     "FORECAST_COLUMNS",
     "ForecastOptions",
     "forecast_chunk",
+    "forecast_options",
     "forecast_source",
+    "forecast_with_target",
+    "icrs_of",
     "k_total_kms",
     "source_target",
 ]
@@ -198,6 +203,14 @@ def forecast_source(
     src: Source, ra_deg: float, dec_deg: float, opts: ForecastOptions
 ) -> dict[str, Any]:
     """One row of the forecast table (status ok | unconstrained | failed: …)."""
+    return forecast_with_target(src, ra_deg, dec_deg, opts)[0]
+
+
+def forecast_with_target(
+    src: Source, ra_deg: float, dec_deg: float, opts: ForecastOptions
+) -> tuple[dict[str, Any], Any]:
+    """The forecast row and, when its status is ``ok``, the Fisher target (midpoint, full
+    covariance, ``spectroscopy`` carrying σ_v and the K of the tolerance); else None."""
     row = _nan_row(src, "ok")
     row.update(ra=ra_deg, dec=dec_deg)
     try:
@@ -209,18 +222,18 @@ def forecast_source(
     except NumericalError as exc:
         msg = " ".join(str(exc).split())
         row["status"] = "unconstrained" if "unconstrained" in msg else f"failed: {msg}"
-        return row
+        return row, None
     except np.linalg.LinAlgError:
         row["status"] = "unconstrained"
-        return row
+        return row, None
     except (UcbplanError, ValueError) as exc:
         row["status"] = f"failed: {' '.join(str(exc).split())}"
-        return row
+        return row, None
     row["snr"] = fc.snr
     cov = fc.target.covariance
     if not _constrained(cov):
         row["status"] = "unconstrained"
-        return row
+        return row, None
     s = np.sqrt(np.diag(cov)[:3])
     row["sigma_phase"], row["sigma_f_gw"], row["sigma_fdot"] = (float(x) for x in s)
     row["corr_phase_f_gw"] = float(cov[0, 1] / (s[0] * s[1]))
@@ -232,23 +245,24 @@ def forecast_source(
         k = k_total_kms(src.m1_msun, src.m2_msun, src.f_hz, math.cos(src.inclination_rad))
     else:
         row["status"] = "failed: no K: give --k-eff or Mass1 and Mass2 columns"
-        return row
+        return row, None
     row["k_eff"] = k
     if not k > 0:
         row["status"] = "failed: K = 0 (sin ι = 0): give --k-eff"
-        return row
+        return row, None
     try:
         rows = horizon_table(
             fc.target, opts.sigma_v_kms, k, ALPHAS, ANCHORS, n_epochs=opts.n_epochs
         )
     except UcbplanError as exc:
         row["status"] = f"failed: {' '.join(str(exc).split())}"
-        return row
+        return row, None
     for hr in rows:
         row[f"sigma_u_end_{hr.anchor}"] = hr.sigma_u_end_rad
         row[f"tol_{hr.anchor}"] = hr.delta_u_tol_rad
         row[f"t_valid_{hr.anchor}_a{hr.alpha:g}"] = hr.t_valid_days
-    return row
+    spec = Spectroscopy(K_eff_kms=k, sigma_v_kms=opts.sigma_v_kms)
+    return row, dataclasses.replace(fc.target, spectroscopy=spec)
 
 
 def forecast_chunk(opts: ForecastOptions, sources: Sequence[Source]) -> list[dict[str, Any]]:
@@ -263,3 +277,47 @@ def forecast_chunk(opts: ForecastOptions, sources: Sequence[Source]) -> list[dic
 
 #: T_valid cap in days (horizons are searched up to 300 years).
 HORIZON_CAP_DAYS = HORIZON_CAP_S / DAY_S
+
+
+def forecast_options(
+    *,
+    sigma_v_kms: float,
+    k_eff_kms: float | None,
+    t_obs: str | None,
+    t_start: str,
+    n_bins: int,
+) -> ForecastOptions:
+    """Checked :class:`ForecastOptions` from the command-line values (``--t-obs`` as text).
+
+    Raises
+    ------
+    InputError
+        One line naming the option: σ_v or K not positive, a duration that is not one, an
+        odd or too small ``--n-bins``, a start that is not an ISO time.
+    """
+    import astropy.units as u
+    from astropy.time import Time
+
+    if not sigma_v_kms > 0:
+        raise InputError(f"--sigma-v: expected > 0 km/s, got {sigma_v_kms}")
+    if k_eff_kms is not None and not k_eff_kms > 0:
+        raise InputError(f"--k-eff: expected > 0 km/s, got {k_eff_kms}")
+    if n_bins < 16 or n_bins % 2:
+        raise InputError(f"--n-bins: expected an even number >= 16, got {n_bins}")
+    try:
+        t0 = Time(t_start, scale="tdb").isot
+    except ValueError:
+        raise InputError(f"--t-start: expected an ISO time, got {shorten(t_start)}") from None
+    t_obs_s = DEFAULT_T_OBS_S
+    if t_obs is not None:
+        try:
+            t_obs_s = float(u.Quantity(t_obs.replace(" ", "")).to_value(u.s))
+        except (TypeError, ValueError, u.UnitsError):
+            raise InputError(
+                f"--t-obs: expected a duration like '4yr' or '1.2e8 s', got {shorten(t_obs)}"
+            ) from None
+        if not t_obs_s > 0:
+            raise InputError(f"--t-obs: must be positive, got {shorten(t_obs)}")
+    return ForecastOptions(
+        sigma_v_kms=sigma_v_kms, k_eff_kms=k_eff_kms, t_obs_s=t_obs_s, t_start_tdb=t0, n_bins=n_bins
+    )

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import functools
 import math
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -29,8 +30,27 @@ from ucbplan.population.forecast import (
     ForecastOptions,
     forecast_chunk,
 )
+from ucbplan.population.semesters import semester_dates
+from ucbplan.population.visibility import (
+    GRID_STEP_S,
+    VISIBILITY_COLUMNS,
+    VISIBILITY_SECONDS_PER_SOURCE,
+    VisibilityOptions,
+    visibility_chunk,
+)
 
-__all__ = ["ForecastRun", "forecast_table", "parts_folder", "run_forecast", "write_table"]
+__all__ = [
+    "ForecastRun",
+    "columns_table",
+    "forecast_table",
+    "parts_folder",
+    "provenance",
+    "run_catalog",
+    "run_forecast",
+    "run_visibility",
+    "visibility_table",
+    "write_table",
+]
 
 #: Measured Fisher + horizons per source on one core (issue 13: 12–27 ms) [s].
 FORECAST_SECONDS_PER_SOURCE = 0.02
@@ -43,27 +63,15 @@ def parts_folder(output: Path) -> Path:
 
 def forecast_table(rows: list[dict[str, Any]], catalog: Catalog, opts: ForecastOptions) -> Any:
     """Astropy table of forecast rows with units, descriptions and provenance meta."""
-    import numpy as np
-    from astropy.table import Column, Table
     from astropy.time import Time, TimeDelta
 
-    cols = []
-    for name, unit, dtype, desc in FORECAST_COLUMNS:
-        vals = [r[name] for r in rows]
-        data = np.array(vals, dtype=str if dtype == "str" else dtype)
-        cols.append(Column(data, name=name, unit=unit or None, description=desc))
-    tab = Table(cols)
+    tab = columns_table(rows, FORECAST_COLUMNS)
     t0 = Time(opts.t_start_tdb, scale="tdb")
     t_ref = t0 + TimeDelta(0.5 * opts.t_obs_s, format="sec")
     status = [r["status"] for r in rows]
+    tab.meta.update(provenance("ucbplan population forecast", catalog))
     tab.meta.update(
         {
-            "ucbplan_version": __version__,
-            "command": "ucbplan population forecast",
-            "catalog": catalog.path.name,
-            "catalog_sha256": catalog.sha256,
-            "catalog_rows": catalog.n_rows,
-            "bad_rows": [{"row": r, "error": m} for r, m in catalog.bad],
             "sigma_v_kms": opts.sigma_v_kms,
             "k_eff_kms": opts.k_eff_kms if opts.k_eff_kms is not None else "per source: K1+K2",
             "t_obs_s": opts.t_obs_s,
@@ -99,6 +107,58 @@ class ForecastRun:
         self.table, self.chunk, self.reused, self.n_chunks = table, chunk, reused, n_chunks
 
 
+def run_catalog(
+    catalog: Catalog,
+    task: Callable[[Sequence[Any]], list[dict[str, Any]]],
+    *,
+    kind: str,
+    options: dict[str, Any],
+    seconds_per_source: float,
+    spec: ExecutorSpec,
+    parts: Path,
+    chunk: int | None = None,
+    resume: bool = False,
+    overwrite: bool = False,
+    progress: Progress | None = None,
+) -> tuple[list[dict[str, Any]], int, int]:
+    """Run the picklable ``task`` over the catalog's sources in chunks through the seam.
+
+    Returns
+    -------
+    rows, chunk, reused
+        Rows in source order, the chunk size used and the number of parts reused.
+
+    Raises
+    ------
+    OutputExistsError
+        ``parts`` holds parts of an earlier run and neither ``resume`` nor ``overwrite``.
+    InputError
+        Bad ``--workers``/``--chunk``/``--scheduler``/``--cluster``.
+    """
+    prepare_parts(parts, resume=resume, overwrite=overwrite)
+    sources = catalog.sources
+    ids = [s.source_id for s in sources]
+    with open_executor(spec) as (executor, slots):
+        size = (
+            chunk if chunk is not None else default_chunk(len(sources), slots, seconds_per_source)
+        )
+        rows, reused = run_chunks(
+            task,
+            sources,
+            ids,
+            chunk=size,
+            executor=executor,
+            slots=slots,
+            parts=parts,
+            kind=kind,
+            options=options,
+            catalog_sha256=catalog.sha256,
+            resume=resume,
+            progress=progress,
+        )
+    return rows, size, reused
+
+
 def run_forecast(
     catalog: Catalog,
     opts: ForecastOptions,
@@ -113,36 +173,112 @@ def run_forecast(
     """Forecast every source of ``catalog``; part files stay in ``parts``.
 
     Remove them with :func:`ucbplan.population.execute.remove_parts` once the table is written.
-
-    Raises
-    ------
-    OutputExistsError
-        ``parts`` holds parts of an earlier run and neither ``resume`` nor ``overwrite``.
-    InputError
-        Bad ``--workers``/``--chunk``/``--scheduler``.
+    Raises as :func:`run_catalog`.
     """
-    prepare_parts(parts, resume=resume, overwrite=overwrite)
-    sources = catalog.sources
-    ids = [s.source_id for s in sources]
-    with open_executor(spec) as (executor, slots):
-        size = (
-            chunk
-            if chunk is not None
-            else default_chunk(len(sources), slots, FORECAST_SECONDS_PER_SOURCE)
-        )
-        rows, reused = run_chunks(
-            functools.partial(forecast_chunk, opts),
-            sources,
-            ids,
-            chunk=size,
-            executor=executor,
-            slots=slots,
-            parts=parts,
-            kind="forecast",
-            options=opts.as_dict(),
-            catalog_sha256=catalog.sha256,
-            resume=resume,
-            progress=progress,
-        )
+    rows, size, reused = run_catalog(
+        catalog,
+        functools.partial(forecast_chunk, opts),
+        kind="forecast",
+        options=opts.as_dict(),
+        seconds_per_source=FORECAST_SECONDS_PER_SOURCE,
+        spec=spec,
+        parts=parts,
+        chunk=chunk,
+        resume=resume,
+        overwrite=overwrite,
+        progress=progress,
+    )
     tab = forecast_table(rows, catalog, opts)
-    return ForecastRun(tab, size, reused, math.ceil(len(sources) / size))
+    return ForecastRun(tab, size, reused, math.ceil(len(catalog.sources) / size))
+
+
+def run_visibility(
+    catalog: Catalog,
+    opts: VisibilityOptions,
+    *,
+    spec: ExecutorSpec,
+    parts: Path,
+    chunk: int | None = None,
+    resume: bool = False,
+    overwrite: bool = False,
+    progress: Progress | None = None,
+) -> ForecastRun:
+    """Visibility of every source of ``catalog`` at one site in one semester (ECSV table).
+
+    Part files stay in ``parts``; raises as :func:`run_catalog`.
+    """
+    rows, size, reused = run_catalog(
+        catalog,
+        functools.partial(visibility_chunk, opts),
+        kind="visibility",
+        options=opts.as_dict(),
+        seconds_per_source=VISIBILITY_SECONDS_PER_SOURCE,
+        spec=spec,
+        parts=parts,
+        chunk=chunk,
+        resume=resume,
+        overwrite=overwrite,
+        progress=progress,
+    )
+    tab = visibility_table(rows, catalog, opts)
+    return ForecastRun(tab, size, reused, math.ceil(len(catalog.sources) / size))
+
+
+def columns_table(rows: list[dict[str, Any]], columns: Sequence[tuple[str, str, str, str]]) -> Any:
+    """Astropy table of ``rows`` with the declared (name, unit, dtype, description) columns."""
+    import numpy as np
+    from astropy.table import Column, Table
+
+    cols = []
+    for name, unit, dtype, desc in columns:
+        vals = [r[name] for r in rows]
+        data = np.array(vals, dtype=str if dtype == "str" else dtype)
+        cols.append(Column(data, name=name, unit=unit or None, description=desc))
+    return Table(cols)
+
+
+def provenance(command: str, catalog: Catalog) -> dict[str, Any]:
+    """Meta every population table starts with: version, command, catalog and its bad rows."""
+    return {
+        "ucbplan_version": __version__,
+        "command": command,
+        "catalog": catalog.path.name,
+        "catalog_path": str(catalog.path),
+        "catalog_sha256": catalog.sha256,
+        "catalog_rows": catalog.n_rows,
+        "bad_rows": [{"row": r, "error": m} for r, m in catalog.bad],
+    }
+
+
+def visibility_table(rows: list[dict[str, Any]], catalog: Catalog, opts: VisibilityOptions) -> Any:
+    """Astropy table of visibility rows with units, descriptions and provenance meta."""
+    first, end = semester_dates(opts.semester)
+    tab = columns_table(rows, VISIBILITY_COLUMNS)
+    status = [r["status"] for r in rows]
+    tab.meta.update(provenance("ucbplan population visibility", catalog))
+    tab.meta.update(
+        {
+            "site": opts.site.as_dict(),
+            "semester": opts.semester.strip().upper(),
+            "nights": f"{first.isoformat()} .. {end.isoformat()} (local evening dates, end "
+            "exclusive)",
+            "constraints": opts.settings.constraints(opts.site).describe(),
+            "min_hours": opts.min_hours,
+            "grid_step_s": GRID_STEP_S,
+            "block_s": opts.settings.exposure.span_s,
+            "alpha": opts.settings.alpha,
+            "n_epochs": opts.settings.n_epochs,
+            "sigma_v_kms": opts.forecast.sigma_v_kms,
+            "k_eff_kms": opts.forecast.k_eff_kms
+            if opts.forecast.k_eff_kms is not None
+            else "per source: K1+K2",
+            "t_obs_s": opts.forecast.t_obs_s,
+            "t_start_tdb": opts.forecast.t_start_tdb,
+            "validity": "epochs_* counts blocks inside sigma_u <= alpha * delta_u_tol "
+            "(Fisher forecast, circular model)",
+            "n_ok": status.count("ok"),
+            "n_unconstrained": status.count("unconstrained"),
+            "n_failed": sum(s.startswith("failed") for s in status),
+        }
+    )
+    return tab
