@@ -63,7 +63,12 @@ _ZenithHole = Annotated[
 ]
 _Exptime = Annotated[float, typer.Option("--exptime", help="Single-exposure time [s].")]
 _NExp = Annotated[int, typer.Option("--n-exp", help="Exposures per block (co-added).")]
-_Readout = Annotated[float, typer.Option("--readout", help="Dead time between exposures [s].")]
+_Readout = Annotated[
+    float | None,
+    typer.Option(
+        "--readout", help="Readout after each exposure [s] (default: the instrument's, else 0)."
+    ),
+]
 _Alpha = Annotated[float, typer.Option("--alpha", help="Planning margin α of T_valid.")]
 _SigmaV = Annotated[float | None, typer.Option("--sigma-v", help="RV precision σ_v [km/s].")]
 _KEff = Annotated[float | None, typer.Option("--k-eff", help="Semi-amplitude K_eff [km/s].")]
@@ -76,7 +81,52 @@ _MaxBinFraction = Annotated[
     typer.Option("--max-bin-fraction", help="Largest block span as a fraction of P_b."),
 ]
 _Overhead = Annotated[
-    float, typer.Option("--overhead", help="Slew + acquisition before each session [s].")
+    float | None,
+    typer.Option(
+        "--overhead",
+        help="Slew + acquisition before each visit or session [s] (default: the instrument's, "
+        "else 300).",
+    ),
+]
+_Visit = Annotated[
+    str | None,
+    typer.Option(
+        "--visit",
+        help="Plan visits of this length (1h, 45min, 3600s; acquisition included): one "
+        "acquisition, then exposures each centred on an anchor.",
+    ),
+]
+_Cadence = Annotated[
+    str,
+    typer.Option(
+        "--cadence",
+        help="anchor (wait for the next anchor) | phase-locked (exposure + readout = anchor "
+        "spacing, no waiting).",
+    ),
+]
+_Instrument = Annotated[
+    str | None,
+    typer.Option("--instrument", help="Spectrograph (e.g. xshooter-vis, uves, esi): overheads."),
+]
+_InstrumentsFile = Annotated[
+    Path | None,
+    typer.Option("--instruments-file", help="YAML instrument table searched before the bundled."),
+]
+_Goal = Annotated[
+    str | None,
+    typer.Option(
+        "--goal", help="Precision goal (sigma_K=2km/s, K1=1%, q=1%): plan the spectra it needs."
+    ),
+]
+_MinLambdaK = Annotated[
+    float | None,
+    typer.Option(
+        "--min-lambda-k",
+        help="Smallest smearing factor Λ_K of an exposure (default 0.9 with --visit).",
+    ),
+]
+_AllowSmeared = Annotated[
+    bool, typer.Option("--allow-smeared", help="Plan exposures below the Λ_K floor.")
 ]
 _Sessions = Annotated[int, typer.Option("--sessions", help="Sessions per target and night.")]
 _Priority = Annotated[
@@ -158,6 +208,64 @@ def _report(run: Any) -> None:
     blocks = run.result.blocks
     for label in dict.fromkeys(b.night for b in blocks):
         _print_night([b for b in blocks if b.night == label], label, run.site)
+    _print_accounting(run)
+
+
+def _given(ctx: typer.Context, name: str) -> bool:
+    """Whether the user gave option ``name`` (not its default)."""
+    from click.core import ParameterSource
+
+    return ctx.get_parameter_source(name) not in (ParameterSource.DEFAULT, None)
+
+
+def _hours(seconds: float) -> str:
+    return f"{seconds / 3600:.2f} h"
+
+
+def _print_accounting(run: Any) -> None:
+    """Visits (with --visit) and the time accounting, per target and in total."""
+    if run.settings.visit_s is not None:
+        visits = rich_table(
+            "Visits — one acquisition each, then exposures centred on anchors (UTC)",
+            ["visit", "target", "acquisition", "exposures", "end", "n", "idle"],
+        )
+        for v in run.visits():
+            visits.add_row(
+                escape(v.visit_id.rsplit("-", 1)[-1]),
+                escape(v.target),
+                v.acq_start_utc.replace("T", " "),
+                v.start_utc[11:],
+                v.end_utc[11:],
+                str(v.exposures),
+                f"{v.idle_s:.0f} s",
+            )
+        err_console.print(visits)
+    acc = run.accounting()
+    table = rich_table(
+        "Time accounting — efficiency = shutter / (shutter + overheads + idle)",
+        ["target", "visits", "exposures", "shutter", "overheads", "idle", "efficiency"],
+    )
+    rows = [
+        *acc["targets"].items(),
+        *([("total", acc["total"])] if len(acc["targets"]) > 1 else []),
+    ]
+    for name, e in rows:
+        table.add_row(
+            escape(name),
+            str(e["visits"]),
+            str(e["exposures"]),
+            _hours(e["shutter_s"]),
+            _hours(e["overhead_s"]),
+            _hours(e["idle_s"]),
+            f"{e['efficiency']:.1%}",
+        )
+    err_console.print(table)
+    for name, goal in run.result.goals.items():
+        err_console.print(
+            f"goal {escape(goal.goal.describe())}: {escape(name)} needs {goal.n_spectra} spectra "
+            f"({', '.join(f'{n} x {a}' for a, n in goal.per_anchor)}); planned",
+            soft_wrap=True,
+        )
 
 
 def _write(run: Any, fmt: str, output: Path | None, plot: Path | None, overwrite: bool) -> None:
@@ -185,6 +293,7 @@ def _write(run: Any, fmt: str, output: Path | None, plot: Path | None, overwrite
 
 # ``plan`` is long only by its 27 options and their one-to-one mapping into PlanSettings.
 def plan(
+    ctx: typer.Context,
     targets: _Targets,
     site: _SiteName = None,
     site_lonlat: _SiteLonLat = None,
@@ -199,14 +308,21 @@ def plan(
     zenith_hole: _ZenithHole = None,
     exptime: _Exptime = 60.0,
     n_exp: _NExp = 1,
-    readout: _Readout = 0.0,
+    readout: _Readout = None,
     alpha: _Alpha = 1.0,
     sigma_v: _SigmaV = None,
     k_eff: _KEff = None,
     max_smear: _MaxSmear = None,
     max_bin_fraction: _MaxBinFraction = None,
-    overhead: _Overhead = 300.0,
+    overhead: _Overhead = None,
     sessions: _Sessions = 1,
+    visit: _Visit = None,
+    cadence: _Cadence = "anchor",
+    instrument: _Instrument = None,
+    instruments_file: _InstrumentsFile = None,
+    goal: _Goal = None,
+    min_lambda_k: _MinLambdaK = None,
+    allow_smeared: _AllowSmeared = False,
     priority: _Priority = [],  # noqa: B006  # typer copies the default; never mutated
     output: _Output = None,
     fmt: _Format = None,
@@ -214,8 +330,7 @@ def plan(
     overwrite: _Overwrite = False,
 ) -> None:
     """Plan phase-targeted observing blocks (UTC at the site) for one or more nights."""
-    from ucbplan.observing.blocks import ExposurePlan
-    from ucbplan.observing.schedule import PlanSettings, plan_files
+    from ucbplan.observing.schedule import plan_files, plan_settings
     from ucbplan.observing.timeconv import quiet_erfa
 
     fmt = pick_format(output, fmt, ("table", *_MACHINE))
@@ -223,20 +338,30 @@ def plan(
         if path is not None:
             check_output_path(path, overwrite)
     with quiet_erfa():
-        settings = PlanSettings(
+        settings = plan_settings(
+            instrument=instrument,
+            instruments_file=instruments_file,
+            # a default exposure is capped at the smearing floor, a given one refused below it
+            exptime_s=exptime if _given(ctx, "exptime") else None,
+            n_exp=n_exp,
+            readout_s=readout,
+            overhead_s=overhead,
+            visit=visit,
+            sigma_v_kms=sigma_v,
+            cadence=cadence,
+            goal=goal,
+            min_lambda_k=min_lambda_k,
+            allow_smeared=allow_smeared,
             mode=mode,
             twilight=twilight,
             airmass_max=airmass_max,
             moon_sep_deg=moon_sep,
             moon_illum_max=moon_illum,
             zenith_hole_deg=zenith_hole,
-            exposure=ExposurePlan(exptime_s=exptime, n_exp=n_exp, readout_s=readout),
             alpha=alpha,
-            sigma_v_kms=sigma_v,
             k_eff_kms=k_eff,
             max_smear=max_smear,
             max_bin_fraction=max_bin_fraction,
-            overhead_s=overhead,
             sessions_per_night=sessions,
         )
         run = plan_files(

@@ -44,6 +44,7 @@ __all__ = [
     "COLUMNS",
     "COLUMN_BY_NAME",
     "EXTRA_COLUMNS",
+    "JSON_META_KEYS",
     "KNOWN_COLUMNS",
     "MAX_TABLE_BYTES",
     "REQUIRED_COLUMNS",
@@ -363,6 +364,21 @@ COLUMNS: tuple[Column, ...] = (
         bounds=(-2.0, 2.0),
         nan_ok=True,
     ),
+    Column(
+        "visit_id",
+        "str",
+        None,
+        "visit (one acquisition followed by continuous exposures) the exposure belongs to",
+    ),
+    Column(
+        "sigma_v_kms",
+        "float64",
+        "km / s",
+        "RV precision of the exposure (--sigma-v, or instrument, magnitude and airmass); NaN "
+        "if unknown",
+        bounds=(0.0, 1e5),
+        nan_ok=True,
+    ),
 )
 
 #: Optional columns the planner does not write but exports read when a user adds them.
@@ -380,8 +396,8 @@ COLUMN_BY_NAME: dict[str, Column] = {c.name: c for c in COLUMNS}
 #: Every column a reader knows (planner columns and :data:`USER_COLUMNS`), by name.
 KNOWN_COLUMNS: dict[str, Column] = {c.name: c for c in (*COLUMNS, *USER_COLUMNS)}
 
-#: Columns whose cells may be empty: no π-mode alternative, no session, no pair.
-BLANK_OK = frozenset(("t_alt_utc", "session_id", "pair_id"))
+#: Columns whose cells may be empty: no π-mode alternative, no session, no pair, no visit.
+BLANK_OK = frozenset(("t_alt_utc", "session_id", "pair_id", "visit_id"))
 
 #: Largest blocks table [bytes] (a year of blocks of a 5-min binary is a few MB).
 MAX_TABLE_BYTES = 100_000_000
@@ -571,8 +587,14 @@ def table_to_json_rows(table: Table) -> list[dict[str, Any]]:
     return rows
 
 
+#: Meta keys ``--format json`` writes beside the rows: ``{"blocks": [rows], "visits": [...],
+#: "time_accounting": {...}}`` (a table without them is written as the bare list of rows).
+JSON_META_KEYS = ("visits", "time_accounting")
+
+
 def write_table(table: Table, handle: IO[str], fmt: str) -> None:
-    """Write ``table`` to an open text handle as ``ecsv``, ``csv`` or ``json`` (list of rows)."""
+    """Write ``table`` to an open text handle as ``ecsv``, ``csv`` or ``json`` (rows, with the
+    visit summary and time accounting when the table has them; see :data:`JSON_META_KEYS`)."""
     if fmt == "ecsv":
         table.write(handle, format="ascii.ecsv")
     elif fmt == "csv":
@@ -580,7 +602,10 @@ def write_table(table: Table, handle: IO[str], fmt: str) -> None:
         plain.meta = {}
         plain.write(handle, format="ascii.csv")
     elif fmt == "json":
-        json.dump(table_to_json_rows(table), handle, indent=2, allow_nan=False)
+        rows = table_to_json_rows(table)
+        summary = {k: table.meta[k] for k in JSON_META_KEYS if k in table.meta}
+        doc: Any = {"blocks": rows, **summary} if summary else rows
+        json.dump(doc, handle, indent=2, allow_nan=False)
         handle.write("\n")
     else:
         raise InputFileError(f"unknown table format {fmt!r}; expected one of {TABLE_FORMATS}")
@@ -779,6 +804,8 @@ def _json_table(text: str, where: str) -> Table:
         rows = json.loads(text)
     except (ValueError, RecursionError) as exc:
         raise InputFileError(f"{where}: not valid JSON ({one_line(str(exc))[:120]})") from None
+    if isinstance(rows, dict) and "blocks" in rows:  # rows with the plan's summary
+        rows = rows["blocks"]
     if not isinstance(rows, list) or not all(isinstance(r, dict) for r in rows):
         raise InputFileError(
             f"{where}: expected a JSON list of row objects (`ucbplan plan --format json`)"

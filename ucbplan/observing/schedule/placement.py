@@ -20,7 +20,7 @@ from ucbplan.observing.schedule.nights import NightSpan
 from ucbplan.observing.schedule.settings import PlanSettings
 from ucbplan.observing.sky import airmass_from_alt
 
-__all__ = ["Session", "Unplaced", "place_sessions"]
+__all__ = ["Session", "Timeline", "Unplaced", "place_sessions", "unusable_reason"]
 
 #: Sampling step of the night when explaining why nothing fits [s].
 _REASON_STEP_S = 300.0
@@ -47,7 +47,7 @@ class Session:
 
 
 @dataclass
-class _Timeline:
+class Timeline:
     """Sessions placed so far and the taken intervals of the whole run [s on the plan's axis].
 
     Taken intervals are kept sorted and pairwise apart by at least the overhead, so a new
@@ -118,7 +118,7 @@ def _no_session_reason(run: TargetRun, frame: PlanFrame, window: tuple[float, fl
     return f"every block {frame.constraints.active[worst].reason()}"
 
 
-def _unusable_reason(
+def unusable_reason(
     run: TargetRun, js: np.ndarray, span: NightSpan, frame: PlanFrame, settings: PlanSettings
 ) -> str:
     """Why none of the sessions ``js`` of a night can be used."""
@@ -146,7 +146,7 @@ def _place_night(
     run: TargetRun,
     n: int,
     span: NightSpan,
-    timeline: _Timeline,
+    timeline: Timeline,
     frame: PlanFrame,
     settings: PlanSettings,
 ) -> str | None:
@@ -158,7 +158,7 @@ def _place_night(
     js = np.arange(j0, j1)
     usable = js[(run.ok[js] > 0) & run.valid[js]]
     if usable.size == 0:
-        return _unusable_reason(run, js, span, frame, settings)
+        return unusable_reason(run, js, span, frame, settings)
     usable = usable[np.argsort(run.score[usable], kind="stable")]
     wanted, count = settings.sessions_per_night, 0
     for j in usable:
@@ -194,7 +194,7 @@ def place_sessions(
     unplaced : list of Unplaced
         One entry per target and night that got fewer sessions than asked.
     """
-    timeline = _Timeline(settings.overhead_s)
+    timeline = Timeline(settings.overhead_s)
     timeline.block_out(busy)
     unplaced: list[Unplaced] = []
     for run in sorted(runs, key=lambda r: -r.target.priority):

@@ -14,7 +14,7 @@ could not be placed is reported with the reason.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from datetime import date
 from typing import TYPE_CHECKING
 
@@ -23,12 +23,16 @@ from astropy.time import Time
 
 from ucbplan.errors import UcbplanError
 from ucbplan.observing.blocks import Block
+from ucbplan.observing.goals import GoalPlan
 from ucbplan.observing.schedule.candidates import prepare_runs
+from ucbplan.observing.schedule.exposure import TargetExposure
+from ucbplan.observing.schedule.goalplan import check_goals, goal_plans
 from ucbplan.observing.schedule.nights import night_spans, night_windows
 from ucbplan.observing.schedule.pairs import SecondEpoch, pair_blocks
 from ucbplan.observing.schedule.placement import Unplaced, place_sessions
 from ucbplan.observing.schedule.records import block_records
 from ucbplan.observing.schedule.settings import PlanSettings
+from ucbplan.observing.schedule.visits import place_visits
 from ucbplan.observing.sites import Site
 from ucbplan.observing.timeaxis import TimeAxis
 from ucbplan.observing.timeconv import coverage_warnings, quiet_erfa
@@ -55,6 +59,10 @@ class PlanResult:
         One line per applied constraint (provenance).
     valid_until : dict of str to Time
         End of each target's validity T_valid (TDB).
+    goals : dict of str to GoalPlan
+        Each target's goal plan (``--goal``; empty without).
+    exposures : dict of str to TargetExposure
+        Each target's exposure plan and cadence.
     """
 
     blocks: list[Block]
@@ -62,6 +70,8 @@ class PlanResult:
     warnings: list[str]
     constraints: list[str]
     valid_until: dict[str, Time]
+    goals: dict[str, GoalPlan] = field(default_factory=dict)
+    exposures: dict[str, TargetExposure] = field(default_factory=dict)
 
 
 def _check_inputs(targets: list[Target], nights: list[date], settings: PlanSettings) -> None:
@@ -152,17 +162,27 @@ def plan_nights(
     windows = night_windows(site, nights)
     frame, runs, warns = prepare_runs(targets, site, windows, settings)
     spans = night_spans(windows, frame.axis)
-    placed, unplaced = place_sessions(runs, spans, frame, settings, _busy_x(frame.axis, busy))
+    busy_x = _busy_x(frame.axis, busy)
+    goals: dict[int, GoalPlan] = {}
+    if settings.visit_s is not None:
+        goals = goal_plans(runs, settings)
+        quotas = {i: g.n_spectra for i, g in goals.items()} if goals else None
+        placed, unplaced = place_visits(runs, spans, frame, settings, busy_x, quotas)
+    else:
+        placed, unplaced = place_sessions(runs, spans, frame, settings, busy_x)
     blocks = block_records(placed, runs, spans, frame, site, settings)
     if frame.mode.label == "fixed-u-pairs":
         second = _second_epoch(site, settings)
         blocks, more = pair_blocks(blocks, runs, settings.max_pair_baseline_days, second)
         unplaced += more
     blocks.sort(key=lambda b: (b.t_mid_utc.jd1, b.t_mid_utc.jd2))
+    check_goals(goals, runs, blocks)
     return PlanResult(
         blocks=blocks,
         unplaced=unplaced,
         warnings=warns + coverage_warnings(windows[0].start, windows[-1].end),
         constraints=frame.constraints.describe(),
         valid_until={r.target.name: r.until for r in runs},
+        goals={runs[i].target.name: g for i, g in goals.items()},
+        exposures={r.target.name: r.exposure for r in runs},
     )

@@ -18,9 +18,27 @@ from ucbplan.observing.constraints import (
     NightConstraint,
     ZenithHoleConstraint,
 )
+from ucbplan.observing.goals import parse_goal
+from ucbplan.observing.instruments import Instrument
 from ucbplan.observing.sites import Site
 
-__all__ = ["MODES", "ModeSpec", "PlanSettings", "parse_mode"]
+__all__ = ["CADENCES", "MODES", "ModeSpec", "PlanSettings", "parse_duration", "parse_mode"]
+
+#: Exposure cadences inside a visit (``--cadence``): ``anchor`` centres every exposure on an
+#: anchor and waits for the next one it can reach; ``phase-locked`` sets exposure + readout to
+#: the anchor spacing, so consecutive exposures centre on consecutive anchors without waiting.
+CADENCES = ("anchor", "phase-locked")
+#: Default smallest smearing factor Λ_K of a planned exposure (``--min-lambda-k``).
+DEFAULT_MIN_LAMBDA_K = 0.9
+#: Seconds per unit of a ``--visit`` duration.
+_DURATION_UNITS = {
+    "s": 1.0,
+    "sec": 1.0,
+    "min": 60.0,
+    "m": 60.0,
+    "h": 3600.0,
+    "hr": 3600.0,
+}
 
 #: The planning modes, as ``--mode`` spells them.
 MODES = ("quadrature", "conjunction", "zero-crossing", "fixed-u-pairs", "u=VALUE")
@@ -35,6 +53,28 @@ MAX_ALPHA = 10.0
 MAX_SESSIONS = 1000
 #: Longest ``--max-smear`` text [characters].
 _MAX_SMEAR_CHARS = 60
+
+
+def parse_duration(text: str | float, option: str = "--visit") -> float:
+    """A duration such as ``1h``, ``45min``, ``3600s`` or ``1.5h`` → seconds.
+
+    Raises
+    ------
+    InputError
+        For any other form, or a duration outside (0, 12 h].
+    """
+    if isinstance(text, int | float) and not isinstance(text, bool):
+        value, unit = float(text), "s"
+    else:
+        m = re.fullmatch(r"\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*([a-z]*)\s*", str(text)[:40])
+        if not m or m.group(2) not in _DURATION_UNITS:
+            raise InputError(
+                f"{option}: expected a duration such as 1h, 45min or 3600s, got {shorten(text, 40)}"
+            )
+        value, unit = float(m.group(1)), m.group(2)
+    seconds = value * _DURATION_UNITS[unit]
+    why = "a visit (acquisition included) must fit in one night"
+    return check_range(option, seconds, 0.0, MAX_BLOCK_S, "s", why, low_open=True)
 
 
 @dataclass(frozen=True, slots=True)
@@ -149,6 +189,23 @@ class PlanSettings:
         Longest baseline searched for the second epoch of a fixed-u pair [d].
     star : int
         Component whose argument of latitude is targeted (1 or 2).
+    visit_s : float or None
+        Visit length, acquisition included [s] (``--visit``); None plans sessions as before.
+    cadence : str
+        Exposure cadence inside a visit (see :data:`CADENCES`).
+    min_lambda_k : float or None
+        Smallest smearing factor Λ_K of a planned block (``--min-lambda-k``). None: 0.9
+        (:data:`DEFAULT_MIN_LAMBDA_K`) with visits; without, only Λ_K > 0 (the signal is not
+        averaged away or inverted), as sessions of co-added blocks always were planned.
+    allow_smeared : bool
+        Plan exposures below ``min_lambda_k`` (``--allow-smeared``).
+    exptime_explicit : bool
+        The exposure time was chosen by the user (the default for library calls): below the
+        floor it is refused, not capped; the CLI sets False when ``--exptime`` is not given.
+    instrument : Instrument or None
+        Spectrograph whose σ_ref scales σ_v per exposure (overheads are resolved already).
+    goal : str or None
+        Precision goal (``--goal``, e.g. ``sigma_K=2km/s``): plans the spectra that reach it.
 
     Raises
     ------
@@ -174,6 +231,13 @@ class PlanSettings:
     sessions_per_night: int = 1
     max_pair_baseline_days: float = 365.0
     star: int = 1
+    visit_s: float | None = None
+    cadence: str = "anchor"
+    min_lambda_k: float | None = None
+    allow_smeared: bool = False
+    exptime_explicit: bool = True
+    instrument: Instrument | None = None
+    goal: str | None = None
 
     def __post_init__(self) -> None:
         parse_mode(self.mode)
@@ -194,6 +258,36 @@ class PlanSettings:
         check_range("max_pair_baseline_days", self.max_pair_baseline_days, 0.0, 36525.0, "d", why)
         if self.star not in (1, 2) or isinstance(self.star, bool):
             raise InputError(f"star: expected 1 or 2, got {shorten(self.star)}")
+        self._check_visits()
+
+    def _check_visits(self) -> None:
+        """``--visit``, ``--cadence``, ``--min-lambda-k`` and ``--goal``."""
+        if self.visit_s is not None:
+            parse_duration(self.visit_s)
+            if self.exposure.n_exp != 1:
+                raise InputError(
+                    f"--n-exp: expected 1 with --visit (each exposure of a visit is centred on "
+                    f"its own anchor), got {self.exposure.n_exp}; drop --n-exp"
+                )
+        if self.cadence not in CADENCES:
+            raise InputError(
+                f"--cadence: expected {' or '.join(CADENCES)}, got {shorten(self.cadence, 40)}"
+            )
+        if self.cadence == "phase-locked":
+            if self.visit_s is None:
+                raise InputError("--cadence phase-locked: expected --visit DURATION as well")
+            if self.exptime_explicit:
+                raise InputError(
+                    "--cadence phase-locked sets exposure + readout to the anchor spacing; "
+                    "drop --exptime (or use --cadence anchor)"
+                )
+        why = "smallest smearing factor of an exposure: 0 = none, 1 = no smearing at all"
+        if self.min_lambda_k is not None:
+            check_range("--min-lambda-k", self.min_lambda_k, 0.0, 1.0, "", why)
+        if self.goal is not None:
+            parse_goal(self.goal)
+            if self.visit_s is None:
+                raise InputError("--goal: expected --visit DURATION as well (goals plan visits)")
 
     def _check_budgets(self) -> None:
         """``--max-smear`` (its form, and a positive budget) and ``--max-bin-fraction``."""
@@ -221,6 +315,13 @@ class PlanSettings:
             ) from None
         why = "a velocity, or a multiple of sigma_v"
         check_range("--max-smear", budget, 0.0, MAX_SPEED_KMS, "km/s", why, low_open=True)
+
+    @property
+    def lambda_k_floor(self) -> float:
+        """The smearing floor in force (see ``min_lambda_k``)."""
+        if self.min_lambda_k is not None:
+            return self.min_lambda_k
+        return DEFAULT_MIN_LAMBDA_K if self.visit_s is not None else 0.0
 
     @property
     def spec(self) -> ModeSpec:
