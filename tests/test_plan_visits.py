@@ -110,7 +110,7 @@ def test_done_when_one_acquisition_per_visit_no_overlap(done_when: Table) -> Non
         assert wall <= 3600.0 + 1e-6
     starts = [_iso(t) for t in done_when["t_start_utc"]]
     ends = [_iso(t) for t in done_when["t_end_utc"]]
-    for (s0, e0), (s1, _) in itertools.pairwise(zip(starts, ends, strict=True)):
+    for (_, e0), (s1, _) in itertools.pairwise(zip(starts, ends, strict=True)):
         # the next exposure starts after this one ends and is read out (0.1 s light-time slack)
         assert (s1 - e0).to_value(u.s) >= READOUT_S - 0.1
 
