@@ -332,3 +332,43 @@ def test_sigma_v_per_exposure_scales_with_instrument(tmp_path: Path) -> None:
         want = 10 * 10 ** (0.2 * 1.1) * math.sqrt(10.0) * 10 ** (0.04 * (b.airmass - 1))
         assert b.sigma_v_kms == pytest.approx(want, rel=1e-9)
     assert run.visits()[0].overhead_s == pytest.approx(300 + 30 * len(run.result.blocks))
+
+
+def _printed(run: Any, monkeypatch: pytest.MonkeyPatch, width: int = 100, **kw: bool) -> str:
+    import io
+
+    from rich.console import Console
+
+    from ucbplan.cli import plan as plan_cli
+
+    buf = io.StringIO()
+    monkeypatch.setattr(plan_cli, "err_console", Console(width=width, file=buf, no_color=True))
+    plan_cli._report(run, **kw)
+    return buf.getvalue()
+
+
+def test_plan_table_fits_100_columns(monkeypatch: pytest.MonkeyPatch) -> None:
+    settings = plan_settings(visit="1h", sigma_v_kms=5.0, sessions_per_night=2, k_eff_kms=400)
+    run = plan_files([HM, FID], first_night="2040-02-15", site="paranal", settings=settings)
+    text = _printed(run, monkeypatch, verbose=True)
+    lines = [ln for ln in text.splitlines() if ln.startswith(("│", "┃"))]
+    assert len(lines) > len(run.result.blocks)  # every exposure printed ...
+    table = [ln for ln in text.splitlines() if ln[:1] in "│┃┏┡└━┌"]
+    assert all(len(ln) <= 100 for ln in table)  # the warnings above are soft-wrapped text
+    assert "…" not in "\n".join(table)  # ... and no cell cut
+    for b in run.result.blocks:
+        assert f"{b.t_start_utc.iso[:19]}–{b.t_end_utc.iso[11:19]}" in text
+    wide = _printed(run, monkeypatch, width=250, verbose=True, wide=True)
+    assert "local mid" in wide and "local mid" not in text
+
+
+def test_long_plan_prints_a_per_night_summary(monkeypatch: pytest.MonkeyPatch) -> None:
+    settings = plan_settings(visit="1h", sigma_v_kms=5.0)
+    run = plan_files([HM], first_night="2040-02-15", n_nights=4, site="paranal", settings=settings)
+    text = _printed(run, monkeypatch)
+    assert "per night" in text and "--verbose" in text
+    assert run.result.blocks[0].t_start_utc.iso[:19] not in text  # no exposure rows
+    for night in ("2040-02-15", "2040-02-18"):
+        assert night in text
+    full = _printed(run, monkeypatch, verbose=True)
+    assert run.result.blocks[0].t_start_utc.iso[:19] in full

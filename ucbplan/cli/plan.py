@@ -125,6 +125,10 @@ _MinLambdaK = Annotated[
         help="Smallest smearing factor Λ_K of an exposure (default 0.9 with --visit).",
     ),
 ]
+_Wide = Annotated[bool, typer.Option("--wide", help="Print every column of the plan table.")]
+_Verbose = Annotated[
+    bool, typer.Option("--verbose", help="Print every night's table, however long the plan.")
+]
 _AllowSmeared = Annotated[
     bool, typer.Option("--allow-smeared", help="Plan exposures below the Λ_K floor.")
 ]
@@ -148,6 +152,71 @@ def _local(b: Any) -> str:
 
     dt = b.t_mid_utc.to_datetime(timezone=UTC).astimezone(ZoneInfo(b.timezone))
     return dt.strftime("%H:%M:%S %Z")
+
+
+def _exposure_labels(blocks: list[Any]) -> list[str]:
+    """``V01/03``: visit and exposure number inside it, per block (blocks in time order)."""
+    count: dict[tuple[str, str], int] = {}
+    out = []
+    for b in blocks:
+        key = (b.target, b.visit_id)
+        count[key] = count.get(key, 0) + 1
+        visit = b.visit_id.rsplit("-", 1)[-1] if b.visit_id else "—"
+        out.append(f"{visit}/{count[key]:02d}")
+    return out
+
+
+def _print_compact(blocks: list[Any], night: str, site: Any) -> None:
+    """The essential columns of a night, fitting 100 terminal columns (``--wide``: all)."""
+    names = list(dict.fromkeys(b.target for b in blocks))
+    who = f"{names[0]}, " if len(names) == 1 else ""
+    table = rich_table(
+        f"{who}night of {night} at {site.name} — UTC at the site (light time removed)",
+        [
+            *(["target"] if len(names) > 1 else []),
+            "visit/exp",
+            "UTC start–end",
+            "u★ [rad]",
+            "airmass",
+            "Λ_K",
+            "σ_t [s]",
+        ],
+    )
+    for column in table.columns:
+        column.no_wrap = True
+    for b, label in zip(blocks, _exposure_labels(blocks), strict=True):
+        table.add_row(
+            *([escape(b.target[:12])] if len(names) > 1 else []),
+            label,
+            f"{b.t_start_utc.iso[:19]}–{b.t_end_utc.iso[11:19]}",
+            f"{b.u_star_rad:.4f}",
+            f"{b.airmass:.2f}",
+            f"{b.lambda_k:.3f}",
+            f"{b.sigma_t_s:.2f}",
+        )
+    err_console.print(table)
+
+
+def _print_summary(run: Any) -> None:
+    """One row per night: visits, exposures and hours (a long plan, without --verbose)."""
+    visits = run.visits()
+    table = rich_table(
+        f"Plan at {run.site.name}, per night (the full table: -o FILE or --verbose)",
+        ["night", "visits", "exposures", "hours"],
+    )
+    for night in dict.fromkeys(b.night for b in run.result.blocks):
+        vs = [v for v in visits if v.night == night]
+        table.add_row(
+            night,
+            str(len(vs)),
+            str(sum(v.exposures for v in vs)),
+            f"{sum(v.wall_s for v in vs) / 3600:.2f}",
+        )
+    err_console.print(table)
+
+
+#: A plan longer than this many nights or rows prints the per-night summary (issue 15).
+SUMMARY_NIGHTS, SUMMARY_ROWS = 3, 60
 
 
 def _print_night(blocks: list[Any], night: str, site: Any) -> None:
@@ -190,7 +259,7 @@ def _print_night(blocks: list[Any], night: str, site: Any) -> None:
     err_console.print(table)
 
 
-def _report(run: Any) -> None:
+def _report(run: Any, wide: bool = False, verbose: bool = False) -> None:
     """Warnings and what was not placed (grouped over nights), then one table per night."""
     for w in run.result.warnings:
         err_console.print(f"[yellow]warning:[/] {escape(w)}", soft_wrap=True)
@@ -206,9 +275,14 @@ def _report(run: Any) -> None:
     if failure is not None:
         raise UcbplanError(failure)
     blocks = run.result.blocks
-    for label in dict.fromkeys(b.night for b in blocks):
-        _print_night([b for b in blocks if b.night == label], label, run.site)
-    _print_accounting(run)
+    nights = list(dict.fromkeys(b.night for b in blocks))
+    if not verbose and (len(nights) > SUMMARY_NIGHTS or len(blocks) > SUMMARY_ROWS):
+        _print_summary(run)
+    else:
+        show = _print_night if wide else _print_compact
+        for label in nights:
+            show([b for b in blocks if b.night == label], label, run.site)
+    _print_accounting(run, verbose)
 
 
 def _given(ctx: typer.Context, name: str) -> bool:
@@ -222,15 +296,16 @@ def _hours(seconds: float) -> str:
     return f"{seconds / 3600:.2f} h"
 
 
-def _print_accounting(run: Any) -> None:
+def _print_accounting(run: Any, verbose: bool = False) -> None:
     """Visits (with --visit) and the time accounting, per target and in total."""
-    if run.settings.visit_s is not None:
-        visits = rich_table(
+    visits = run.visits()
+    if run.settings.visit_s is not None and (verbose or len(visits) <= SUMMARY_ROWS):
+        table_v = rich_table(
             "Visits — one acquisition each, then exposures centred on anchors (UTC)",
-            ["visit", "target", "acquisition", "exposures", "end", "n", "idle"],
+            ["visit", "target", "acquisition starts", "first exposure", "last ends", "n", "idle"],
         )
-        for v in run.visits():
-            visits.add_row(
+        for v in visits:
+            table_v.add_row(
                 escape(v.visit_id.rsplit("-", 1)[-1]),
                 escape(v.target),
                 v.acq_start_utc.replace("T", " "),
@@ -239,7 +314,7 @@ def _print_accounting(run: Any) -> None:
                 str(v.exposures),
                 f"{v.idle_s:.0f} s",
             )
-        err_console.print(visits)
+        err_console.print(table_v)
     acc = run.accounting()
     table = rich_table(
         "Time accounting — efficiency = shutter / (shutter + overheads + idle)",
@@ -323,6 +398,8 @@ def plan(
     goal: _Goal = None,
     min_lambda_k: _MinLambdaK = None,
     allow_smeared: _AllowSmeared = False,
+    wide: _Wide = False,
+    verbose: _Verbose = False,
     priority: _Priority = [],  # noqa: B006  # typer copies the default; never mutated
     output: _Output = None,
     fmt: _Format = None,
@@ -374,7 +451,7 @@ def plan(
             settings=settings,
             priorities=priority,
         )
-        _report(run)
+        _report(run, wide, verbose)
         _write(run, fmt, output, plot, overwrite)
 
 
