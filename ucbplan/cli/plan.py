@@ -125,6 +125,12 @@ _MinLambdaK = Annotated[
         help="Smallest smearing factor Λ_K of an exposure (default 0.9 with --visit).",
     ),
 ]
+_Budget = Annotated[
+    list[str],
+    typer.Option(
+        "--budget", help="NAME=DURATION: wall time a target may get over all nights (e.g. 2h)."
+    ),
+]
 _Wide = Annotated[bool, typer.Option("--wide", help="Print every column of the plan table.")]
 _Verbose = Annotated[
     bool, typer.Option("--verbose", help="Print every night's table, however long the plan.")
@@ -285,6 +291,24 @@ def _report(run: Any, wide: bool = False, verbose: bool = False) -> None:
     _print_accounting(run, verbose)
 
 
+def _print_reasons(run: Any) -> None:
+    """Night-time anchor epochs not planned, by reason, summed over the nights (one line per
+    target; per night in the table meta ``not_planned``)."""
+    for name, nights in run.result.reasons.items():
+        total: dict[str, int] = {}
+        for counts in nights.values():
+            for why, k in counts.items():
+                total[why] = total.get(why, 0) + k
+        if not total:
+            continue
+        span = f"{len(nights)} night{'s' if len(nights) > 1 else ''}"
+        parts = ", ".join(f"{k} {why}" for why, k in total.items())
+        err_console.print(
+            f"night-time anchors not planned: {escape(name)} ({span}): {escape(parts)}",
+            soft_wrap=True,
+        )
+
+
 def _given(ctx: typer.Context, name: str) -> bool:
     """Whether the user gave option ``name`` (not its default)."""
     from click.core import ParameterSource
@@ -335,6 +359,7 @@ def _print_accounting(run: Any, verbose: bool = False) -> None:
             f"{e['efficiency']:.1%}",
         )
     err_console.print(table)
+    _print_reasons(run)
     for name, goal in run.result.goals.items():
         err_console.print(
             f"goal {escape(goal.goal.describe())}: {escape(name)} needs {goal.n_spectra} spectra "
@@ -398,6 +423,7 @@ def plan(
     goal: _Goal = None,
     min_lambda_k: _MinLambdaK = None,
     allow_smeared: _AllowSmeared = False,
+    budget: _Budget = [],  # noqa: B006  # typer copies the default; never mutated
     wide: _Wide = False,
     verbose: _Verbose = False,
     priority: _Priority = [],  # noqa: B006  # typer copies the default; never mutated
@@ -429,6 +455,7 @@ def plan(
             goal=goal,
             min_lambda_k=min_lambda_k,
             allow_smeared=allow_smeared,
+            budgets=budget,
             mode=mode,
             twilight=twilight,
             airmass_max=airmass_max,

@@ -251,6 +251,8 @@ def _target_run(
     valid = (tau >= cand.epochs.tau(since)) & (tau <= cand.epochs.tau(until))
     paired = frame.mode.paired and settings.visit_s is None
     partner, ok, score = session_partners(cand, paired)
+    if not te.floor_ok:
+        ok = np.zeros_like(ok)  # no exposure keeps the smearing floor
     valid = valid & ((partner < 0) | valid[np.maximum(partner, 0)])
     return TargetRun(target, i, cand, partner, ok, score, valid, until, sm, since, te), warns
 

@@ -39,6 +39,8 @@ __all__ = ["TargetExposure", "exposure_sigma_v", "floor_exptime", "target_exposu
 
 #: Time kept free in each step of a phase-locked cadence besides the readout [s].
 _LOCK_MARGIN_S = 0.2
+#: Shortest exposure the smearing floor may cap to [s].
+_SHORTEST_S = 0.1
 #: Relative precision of the floor exposure time found by bisection.
 _FLOOR_RTOL = 1e-9
 
@@ -59,6 +61,8 @@ class TargetExposure:
         Smearing factor Λ_K of one block.
     notes : tuple of str
         One-line notes (exposure capped at the floor, phase-locked duty cycle).
+    floor_ok : bool
+        False when no exposure of the target keeps the smearing floor (nothing is planned).
     """
 
     plan: ExposurePlan
@@ -66,6 +70,7 @@ class TargetExposure:
     step_s: float
     lambda_k: float
     notes: tuple[str, ...] = ()
+    floor_ok: bool = True
 
     @property
     def duty_cycle(self) -> float:
@@ -108,7 +113,14 @@ def _capped(
         return plan, []
     best = floor_exptime(plan, n_bar, floor)
     period = f"P_b = {target.period_s:.1f} s"
-    if settings.exptime_explicit or best is None or best <= 0:
+    if best is not None and best < _SHORTEST_S:
+        best = None  # only a vanishing exposure would keep the floor
+    if not settings.exptime_explicit and best is None:
+        return plan, [
+            f"{target.name}: no exposure keeps Lambda_K >= {floor:g} ({period}): not planned; "
+            "lower --min-lambda-k or pass --allow-smeared"
+        ]
+    if settings.exptime_explicit or best is None:
         fix = f"use --exptime <= {math.floor(best * 10) / 10:g} s" if best else "fewer --n-exp"
         raise InputError(
             f"--exptime: {target.name}: {plan.exptime_s:g} s gives Lambda_K = {lam:.3f} "
@@ -160,6 +172,8 @@ def target_exposure(target: Target, settings: PlanSettings) -> TargetExposure:
     else:
         plan, why = settings.exposure, "default" if not settings.exptime_explicit else "given"
     plan, notes = _capped(target, plan, settings, why)
+    lam = _lambda_k(plan, target.params.n_bar)
+    floor_ok = settings.allow_smeared or (lam >= settings.lambda_k_floor and lam > 0)
     cost = plan.exptime_s + plan.readout_s
     step = math.ceil(cost / spacing * (1.0 - 1e-12)) * spacing
     if settings.visit_s is not None and settings.overhead_s + cost > settings.visit_s:
@@ -174,7 +188,7 @@ def target_exposure(target: Target, settings: PlanSettings) -> TargetExposure:
             f"{step:.1f} s (P_b/{m} x {round(step / spacing)}), duty cycle "
             f"{plan.exptime_s / step:.1%}"
         )
-    return TargetExposure(plan, spacing, step, _lambda_k(plan, target.params.n_bar), tuple(notes))
+    return TargetExposure(plan, spacing, step, lam, tuple(notes), floor_ok)
 
 
 def exposure_sigma_v(

@@ -8,13 +8,14 @@ defaults of the ``plan`` command before instruments existed (300 s acquisition, 
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 from ucbplan.errors import InputError
 from ucbplan.observing.blocks import ExposurePlan
 from ucbplan.observing.instruments import check_exptime, get_instrument, instrument_overheads
-from ucbplan.observing.schedule.settings import PlanSettings, parse_duration
+from ucbplan.observing.schedule.settings import PlanSettings, parse_budgets, parse_duration
 
 __all__ = ["DEFAULT_EXPTIME_S", "DEFAULT_OVERHEAD_S", "DEFAULT_READOUT_S", "plan_settings"]
 
@@ -36,6 +37,7 @@ def plan_settings(
     overhead_s: float | None = None,
     visit: str | float | None = None,
     sigma_v_kms: float | None = None,
+    budgets: Sequence[str] = (),
     **options: Any,
 ) -> PlanSettings:
     """:class:`PlanSettings` from the ``plan`` options (module notes).
@@ -51,6 +53,8 @@ def plan_settings(
         ``--visit`` duration (``1h``, ``45min``, ``3600s`` or seconds).
     sigma_v_kms : float, optional
         ``--sigma-v``; required with an instrument that has no σ reference.
+    budgets : sequence of str
+        ``--budget NAME=DURATION`` items: wall time per target over all nights.
     **options
         Every other :class:`PlanSettings` field by name.
 
@@ -83,5 +87,6 @@ def plan_settings(
         instrument=inst,
         visit_s=parse_duration(visit) if visit is not None else None,
         sigma_v_kms=sigma_v_kms,
+        budgets=parse_budgets(list(budgets)),
         **options,
     )

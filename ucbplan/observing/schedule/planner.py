@@ -24,12 +24,13 @@ from astropy.time import Time
 from ucbplan.errors import UcbplanError
 from ucbplan.observing.blocks import Block
 from ucbplan.observing.goals import GoalPlan
-from ucbplan.observing.schedule.candidates import prepare_runs
+from ucbplan.observing.schedule.candidates import TargetRun, prepare_runs
 from ucbplan.observing.schedule.exposure import TargetExposure
 from ucbplan.observing.schedule.goalplan import check_goals, goal_plans
 from ucbplan.observing.schedule.nights import night_spans, night_windows
 from ucbplan.observing.schedule.pairs import SecondEpoch, pair_blocks
-from ucbplan.observing.schedule.placement import Unplaced, place_sessions
+from ucbplan.observing.schedule.placement import Allowance, Unplaced, place_sessions
+from ucbplan.observing.schedule.reasons import not_planned
 from ucbplan.observing.schedule.records import block_records
 from ucbplan.observing.schedule.settings import PlanSettings
 from ucbplan.observing.schedule.visits import place_visits
@@ -63,6 +64,9 @@ class PlanResult:
         Each target's goal plan (``--goal``; empty without).
     exposures : dict of str to TargetExposure
         Each target's exposure plan and cadence.
+    reasons : dict
+        {target: {night: {reason: count}}}: night-time anchor epochs not planned, by reason
+        (:mod:`.reasons`).
     """
 
     blocks: list[Block]
@@ -72,6 +76,7 @@ class PlanResult:
     valid_until: dict[str, Time]
     goals: dict[str, GoalPlan] = field(default_factory=dict)
     exposures: dict[str, TargetExposure] = field(default_factory=dict)
+    reasons: dict[str, dict[str, dict[str, int]]] = field(default_factory=dict)
 
 
 def _check_inputs(targets: list[Target], nights: list[date], settings: PlanSettings) -> None:
@@ -119,6 +124,24 @@ def _busy_x(axis: TimeAxis, busy: Sequence[Block]) -> list[tuple[float, float]]:
     ]
 
 
+def _allowances(
+    runs: Sequence[TargetRun], settings: PlanSettings, goals: dict[int, GoalPlan]
+) -> dict[int, Allowance]:
+    """Exposures (``--goal``) and wall time (``--budget``) each target may be given."""
+    budgets = dict(settings.budgets)
+    out = {}
+    for r in runs:
+        goal = goals.get(r.index)
+        seconds = budgets.get(r.target.name.lower())
+        if goal is not None or seconds is not None:
+            plan = r.exposure.plan
+            smallest = settings.overhead_s + plan.span_s
+            if settings.visit_s is not None:
+                smallest += plan.readout_s
+            out[r.index] = Allowance(goal.n_spectra if goal else None, seconds, smallest)
+    return out
+
+
 def plan_nights(
     targets: list[Target],
     site: Site,
@@ -163,13 +186,14 @@ def plan_nights(
     frame, runs, warns = prepare_runs(targets, site, windows, settings)
     spans = night_spans(windows, frame.axis)
     busy_x = _busy_x(frame.axis, busy)
-    goals: dict[int, GoalPlan] = {}
+    goals = goal_plans(runs, settings)
+    allowances = _allowances(runs, settings, goals)
     if settings.visit_s is not None:
-        goals = goal_plans(runs, settings)
-        quotas = {i: g.n_spectra for i, g in goals.items()} if goals else None
-        placed, unplaced = place_visits(runs, spans, frame, settings, busy_x, quotas)
+        placed, unplaced = place_visits(runs, spans, frame, settings, busy_x, allowances)
     else:
-        placed, unplaced = place_sessions(runs, spans, frame, settings, busy_x)
+        placed, unplaced = place_sessions(runs, spans, frame, settings, busy_x, allowances)
+    gap = 0.0 if settings.visit_s is not None else settings.overhead_s
+    reasons = not_planned(runs, spans, frame, placed, unplaced, gap)
     blocks = block_records(placed, runs, spans, frame, site, settings)
     if frame.mode.label == "fixed-u-pairs":
         second = _second_epoch(site, settings)
@@ -185,4 +209,5 @@ def plan_nights(
         valid_until={r.target.name: r.until for r in runs},
         goals={runs[i].target.name: g for i, g in goals.items()},
         exposures={r.target.name: r.exposure for r in runs},
+        reasons=reasons,
     )

@@ -178,6 +178,7 @@ class PlanRun:
                 "warnings": res.warnings,
                 "unplaced": [f"{m.target} {m.night}: {m.reason}" for m in res.unplaced],
                 "planning": self._planning(),
+                "not_planned": res.reasons,
                 "visits": [v.as_dict() for v in self.visits()],
                 "time_accounting": self.accounting(),
             },
@@ -186,6 +187,16 @@ class PlanRun:
     def table(self) -> Table:
         """The master blocks table (:mod:`ucbplan.observing.blocktable`) with provenance."""
         return blocks_to_table(self.result.blocks, self.meta())
+
+
+def _check_budget_names(targets: Sequence[Target], settings: PlanSettings) -> None:
+    """Every ``--budget`` names a target of the run (case-insensitive)."""
+    known = {t.name.lower() for t in targets}
+    for name, _ in settings.budgets:
+        if name not in known:
+            names = ", ".join(t.name for t in targets)
+            names = names if len(names) <= 200 else f"{names[:199]}…"
+            raise InputError(f"--budget: no target named {shorten(name, 60)}; targets: {names}")
 
 
 def plan_files(
@@ -232,5 +243,6 @@ def plan_files(
         parse_priorities(priorities)
     the_site = resolve_site(site, site_lonlat, sites_file)
     targets = with_priorities([load_target(p) for p in target_files], priorities)
+    _check_budget_names(targets, settings)
     result = plan_nights(targets, the_site, dates, settings)
     return PlanRun(targets, the_site, dates, settings, result)

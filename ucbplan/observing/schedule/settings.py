@@ -22,7 +22,15 @@ from ucbplan.observing.goals import parse_goal
 from ucbplan.observing.instruments import Instrument
 from ucbplan.observing.sites import Site
 
-__all__ = ["CADENCES", "MODES", "ModeSpec", "PlanSettings", "parse_duration", "parse_mode"]
+__all__ = [
+    "CADENCES",
+    "MODES",
+    "ModeSpec",
+    "PlanSettings",
+    "parse_budgets",
+    "parse_duration",
+    "parse_mode",
+]
 
 #: Exposure cadences inside a visit (``--cadence``): ``anchor`` centres every exposure on an
 #: anchor and waits for the next one it can reach; ``phase-locked`` sets exposure + readout to
@@ -30,6 +38,8 @@ __all__ = ["CADENCES", "MODES", "ModeSpec", "PlanSettings", "parse_duration", "p
 CADENCES = ("anchor", "phase-locked")
 #: Default smallest smearing factor Λ_K of a planned exposure (``--min-lambda-k``).
 DEFAULT_MIN_LAMBDA_K = 0.9
+#: Longest per-target time budget [s] (a year of nights).
+MAX_BUDGET_S = 366 * 86400.0
 #: Seconds per unit of a ``--visit`` duration.
 _DURATION_UNITS = {
     "s": 1.0,
@@ -55,13 +65,15 @@ MAX_SESSIONS = 1000
 _MAX_SMEAR_CHARS = 60
 
 
-def parse_duration(text: str | float, option: str = "--visit") -> float:
+def parse_duration(
+    text: str | float, option: str = "--visit", longest_s: float = MAX_BLOCK_S
+) -> float:
     """A duration such as ``1h``, ``45min``, ``3600s`` or ``1.5h`` → seconds.
 
     Raises
     ------
     InputError
-        For any other form, or a duration outside (0, 12 h].
+        For any other form, or a duration outside (0, ``longest_s``].
     """
     if isinstance(text, int | float) and not isinstance(text, bool):
         value, unit = float(text), "s"
@@ -74,7 +86,37 @@ def parse_duration(text: str | float, option: str = "--visit") -> float:
         value, unit = float(m.group(1)), m.group(2)
     seconds = value * _DURATION_UNITS[unit]
     why = "a visit (acquisition included) must fit in one night"
-    return check_range(option, seconds, 0.0, MAX_BLOCK_S, "s", why, low_open=True)
+    if longest_s != MAX_BLOCK_S:
+        why = "a time budget over the nights planned"
+    return check_range(option, seconds, 0.0, longest_s, "s", why, low_open=True)
+
+
+def parse_budgets(items: object) -> tuple[tuple[str, float], ...]:
+    """``NAME=DURATION`` items (``--budget 'HM Cnc=2h'``) → ((lower-case name, seconds), ...).
+
+    Raises
+    ------
+    InputError
+        For an item that is not ``NAME=DURATION``, or a name given twice.
+    """
+    if not isinstance(items, list | tuple):
+        raise InputError(f"--budget: expected NAME=DURATION items, got {shorten(items, 60)}")
+    out: dict[str, float] = {}
+    for item in items:
+        if isinstance(item, tuple) and len(item) == 2:
+            name, text = str(item[0]), item[1]
+        else:
+            name, sep, text = str(item).rpartition("=")
+            if not sep or not name.strip():
+                raise InputError(
+                    "--budget: expected NAME=DURATION (a target name and e.g. 2h or 90min), "
+                    f"got {shorten(item, 80)}"
+                )
+        key = name.strip().lower()
+        if key in out:
+            raise InputError(f"--budget: target {shorten(name.strip(), 40)} is given twice")
+        out[key] = parse_duration(text, f"--budget {shorten(name.strip(), 40)}", MAX_BUDGET_S)
+    return tuple(out.items())
 
 
 @dataclass(frozen=True, slots=True)
@@ -206,6 +248,8 @@ class PlanSettings:
         Spectrograph whose σ_ref scales σ_v per exposure (overheads are resolved already).
     goal : str or None
         Precision goal (``--goal``, e.g. ``sigma_K=2km/s``): plans the spectra that reach it.
+    budgets : tuple of (str, float)
+        Wall-time budget per target (lower-case name, seconds) over all nights (``--budget``).
 
     Raises
     ------
@@ -238,6 +282,7 @@ class PlanSettings:
     exptime_explicit: bool = True
     instrument: Instrument | None = None
     goal: str | None = None
+    budgets: tuple[tuple[str, float], ...] = ()
 
     def __post_init__(self) -> None:
         parse_mode(self.mode)
@@ -284,6 +329,7 @@ class PlanSettings:
         why = "smallest smearing factor of an exposure: 0 = none, 1 = no smearing at all"
         if self.min_lambda_k is not None:
             check_range("--min-lambda-k", self.min_lambda_k, 0.0, 1.0, "", why)
+        parse_budgets(list(self.budgets))
         if self.goal is not None:
             parse_goal(self.goal)
             if self.visit_s is None:

@@ -24,6 +24,7 @@ from ucbplan.observing.constraints import evaluate_window
 from ucbplan.observing.schedule.candidates import PlanFrame, TargetRun
 from ucbplan.observing.schedule.nights import NightSpan
 from ucbplan.observing.schedule.placement import (
+    Allowance,
     Session,
     Timeline,
     Unplaced,
@@ -65,15 +66,16 @@ def _best_visit(
     timeline: Timeline,
     frame: PlanFrame,
     settings: PlanSettings,
-    cap: int,
+    allowance: Allowance,
 ) -> tuple[tuple[int, ...], float, float] | None:
-    """The best free visit of ``run`` in a night: (exposures, start, end) or None."""
+    """The best free visit of ``run`` in a night within its allowance: (exposures, start,
+    end) or None."""
     c, te = run.cand, run.exposure
     acq, r, visit_s = settings.overhead_s, te.plan.readout_s, float(settings.visit_s or 0.0)
     j0, j1 = np.searchsorted(c.x_mid, [span.x0, span.x1])
     if j1 == j0:
         return None
-    good = (c.ok & run.valid).copy()
+    good = (run.ok > 0) & run.valid
     js = np.arange(j0, j1)
     acq_cs = (frame.constraints.night, frame.constraints.airmass)
     acq_ok, _ = evaluate_window(acq_cs, frame.sky, run.index, c.x_start[js] - acq, c.x_start[js])
@@ -81,9 +83,13 @@ def _best_visit(
     nxt = np.searchsorted(c.x_start, c.x_end + r - _READOUT_SLACK_S, side="left")
     best: tuple[tuple[int, ...], float, float] | None = None
     best_key = (0, 0.0)
+    cap = c.x_mid.size if allowance.exposures is None else allowance.exposures
+    length = visit_s if allowance.seconds is None else min(visit_s, allowance.seconds)
     for j in starts:
         x0 = float(c.x_start[j]) - acq
-        exps = _chain(int(j), nxt, good, c.x_start, c.x_end, x0 + visit_s, r, cap)
+        exps = _chain(int(j), nxt, good, c.x_start, c.x_end, x0 + length, r, cap)
+        if exps and float(c.x_end[exps[-1]]) + r > x0 + length:
+            exps = []  # not even one exposure fits the time budget left
         while exps and not timeline.free(x0, float(c.x_end[exps[-1]]) + r):
             exps.pop()
         if not exps:
@@ -101,35 +107,37 @@ def _place_night(
     timeline: Timeline,
     frame: PlanFrame,
     settings: PlanSettings,
-    quota: int | None,
-) -> tuple[int, str | None]:
-    """Place one target's visits in night ``n``: (exposures placed, reason if fewer)."""
+    allowance: Allowance,
+) -> str | None:
+    """Place one target's visits in night ``n`` within its allowance; the reason if fewer."""
     c = run.cand
     j0, j1 = np.searchsorted(c.x_mid, [span.x0, span.x1])
     if j1 == j0:
-        return 0, "no anchor epoch in the night window"
+        return "no anchor epoch in the night window"
     js = np.arange(j0, j1)
-    if not np.any(c.ok[js] & run.valid[js]):
-        return 0, unusable_reason(run, js, span, frame, settings)
-    wanted, placed, exposures = settings.sessions_per_night, 0, 0
-    while placed < wanted and (quota is None or exposures < quota):
-        cap = c.x_mid.size if quota is None else quota - exposures
-        pick = _best_visit(run, span, timeline, frame, settings, cap)
+    if not np.any((run.ok[js] > 0) & run.valid[js]):
+        return unusable_reason(run, js, span, frame, settings)
+    wanted, placed = settings.sessions_per_night, 0
+    while placed < wanted and not allowance.spent:
+        pick = _best_visit(run, span, timeline, frame, settings, allowance)
         if pick is None:
             break
         idx, x0, x1 = pick
         timeline.add(Session(run.index, n, idx, x0, x1))
-        placed, exposures = placed + 1, exposures + len(idx)
-    if quota is not None and exposures >= quota:
-        return exposures, None
+        allowance.charge(len(idx), x1 - x0)
+        placed += 1
+    if allowance.spent and allowance.exposures is not None:
+        return None  # the goal is planned
+    if allowance.spent or (placed < wanted and allowance.seconds is not None and placed > 0):
+        return f"time budget spent after {placed} visit(s)"
     if placed == 0:
-        return 0, (
+        return (
             "every usable visit overlaps higher-priority visits (or its acquisition falls in "
             "twilight or above the airmass limit)"
         )
     if placed < wanted:
-        return exposures, f"only {placed} of {wanted} visits fit"
-    return exposures, None
+        return f"only {placed} of {wanted} visits fit"
+    return None
 
 
 def place_visits(
@@ -138,15 +146,15 @@ def place_visits(
     frame: PlanFrame,
     settings: PlanSettings,
     busy: Sequence[tuple[float, float]] = (),
-    quotas: Mapping[int, int] | None = None,
+    allowances: Mapping[int, Allowance] | None = None,
 ) -> tuple[list[Session], list[Unplaced]]:
     """Greedy visit schedule: targets by priority, each night's best visits (module notes).
 
     Parameters
     ----------
-    quotas : mapping of int to int, optional
-        Exposures wanted per target index over all nights (a ``--goal``); planning of a target
-        stops when its quota is reached.
+    allowances : mapping of int to Allowance, optional
+        Exposures (a ``--goal``) and wall time (``--budget``) per target index over all nights;
+        planning of a target stops when its allowance is spent (it is spent in place).
 
     Returns
     -------
@@ -159,12 +167,13 @@ def place_visits(
     timeline.block_out(busy)
     unplaced: list[Unplaced] = []
     for run in sorted(runs, key=lambda r: -r.target.priority):
-        left = None if quotas is None else quotas.get(run.index)
+        allowance = (allowances or {}).get(run.index) or Allowance()
         for n, span in enumerate(spans):
-            if left is not None and left <= 0:
-                break
-            got, reason = _place_night(run, n, span, timeline, frame, settings, left)
-            left = None if left is None else left - got
+            if allowance.spent:
+                if allowance.exposures is None:  # a time budget, not a goal
+                    unplaced.append(Unplaced(run.target.name, span.label, "time budget spent"))
+                continue
+            reason = _place_night(run, n, span, timeline, frame, settings, allowance)
             if reason is not None:
                 unplaced.append(Unplaced(run.target.name, span.label, reason))
     return timeline.placed, unplaced
