@@ -339,11 +339,11 @@ def _printed(run: Any, monkeypatch: pytest.MonkeyPatch, width: int = 100, **kw: 
 
     from rich.console import Console
 
-    from ucbplan.cli import plan as plan_cli
+    from ucbplan.cli import _plan_view as plan_cli
 
     buf = io.StringIO()
     monkeypatch.setattr(plan_cli, "err_console", Console(width=width, file=buf, no_color=True))
-    plan_cli._report(run, **kw)
+    plan_cli.report(run, **kw)
     return buf.getvalue()
 
 
@@ -372,3 +372,27 @@ def test_long_plan_prints_a_per_night_summary(monkeypatch: pytest.MonkeyPatch) -
         assert night in text
     full = _printed(run, monkeypatch, verbose=True)
     assert run.result.blocks[0].t_start_utc.iso[:19] in full
+
+
+def test_phase_locked_quadrature_and_conjunction_every_quarter_orbit() -> None:
+    settings = plan_settings(
+        visit="30min",
+        sigma_v_kms=5.0,
+        cadence="phase-locked",
+        readout_s=45.0,
+        mode="quadrature+conjunction",
+    )
+    run = plan_files([HM], first_night="2040-02-15", site="paranal", settings=settings)
+    hm = load_target(HM)
+    blocks = run.result.blocks
+    assert len(blocks) >= 15
+    quarter = hm.period_s / 4
+    for a, b in itertools.pairwise(blocks):
+        step = (b.t_mid_utc - a.t_mid_utc).to_value(u.s)
+        assert step == pytest.approx(quarter, abs=0.1)
+        assert _wrap(b.u_star_rad - a.u_star_rad - math.pi / 2) == pytest.approx(0.0, abs=1e-9)
+    for b in blocks:
+        assert abs(_wrap(_u_back(hm, b.t_mid_utc) - b.u_star_rad)) < 1e-6
+    te = run.result.exposures[hm.name]
+    assert te.plan.exptime_s + 45.0 <= quarter
+    assert te.duty_cycle == pytest.approx(te.plan.exptime_s / quarter)

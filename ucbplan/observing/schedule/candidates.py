@@ -10,8 +10,8 @@ RV zero crossings, or single blocks). All times are on one :class:`TimeAxis`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from astropy import units as u
@@ -20,7 +20,7 @@ from astropy.time import Time, TimeDelta
 from numpy.typing import NDArray
 
 from ucbplan.core.constants import TWO_PI
-from ucbplan.core.ephemeris import find_epochs
+from ucbplan.core.ephemeris import EpochSet, find_epochs
 from ucbplan.core.forecast import tolerance, valid_window_s
 from ucbplan.core.smearing import parse_smear_budget
 from ucbplan.errors import UcbplanError
@@ -68,6 +68,35 @@ class Candidates:
     airmass_mid: FloatArray
 
 
+def _find_epochs(
+    target: Target, tau_lo: float, tau_hi: float, anchor: str | float, star: int
+) -> EpochSet:
+    """:func:`~ucbplan.core.ephemeris.find_epochs`, also for combined anchors such as
+    ``quadrature+conjunction``: each anchor solved on its own, merged on one origin in time
+    order (the origins differ by whole seconds at most ~10⁸ s: exact in float64)."""
+    if not isinstance(anchor, str) or "+" not in anchor:
+        return find_epochs(target, tau_lo, tau_hi, anchor, star)
+    sets = [find_epochs(target, tau_lo, tau_hi, a, star) for a in anchor.split("+")]
+    origin = sets[0].origin_s
+    dt = np.concatenate([e.dt_s + (e.origin_s - origin) for e in sets])
+    order = np.argsort(dt, kind="stable")
+
+    def cat(name: str) -> Any:
+        return np.concatenate([getattr(e, name) for e in sets])[order]
+
+    return replace(
+        sets[0],
+        anchor=anchor,
+        u_star_rad=cat("u_star_rad"),
+        k=cat("k"),
+        dt_s=dt[order],
+        sigma_t_s=cat("sigma_t_s"),
+        sigma_u_rad=cat("sigma_u_rad"),
+        tau_alt_s=cat("tau_alt_s"),
+        u_rate=cat("u_rate"),
+    )
+
+
 def candidate_blocks(
     target: Target,
     i: int,
@@ -90,7 +119,7 @@ def candidate_blocks(
     epochs = axis.epoch_axis(target.t_ref)
     lo, hi = span_x
     tau_lo, tau_hi = epochs.from_x(lo) - _EPOCH_PAD_S, epochs.from_x(hi) + _EPOCH_PAD_S
-    es = find_epochs(target, tau_lo, tau_hi, mode.anchor, star)
+    es = _find_epochs(target, tau_lo, tau_hi, mode.anchor, star)
     x_mid = interp.site_x(epochs.to_x(es.origin_s, es.dt_s))
     x_alt = interp.site_x(epochs.to_x(es.tau_alt_s))
     keep = (x_mid >= lo) & (x_mid < hi)

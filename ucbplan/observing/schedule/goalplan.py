@@ -70,7 +70,7 @@ def goal_plans(runs: Sequence[TargetRun], settings: PlanSettings) -> dict[int, G
             K2=k2,
             sigma_v_kms=_goal_sigma_v(run, settings),
             lambda_k=run.exposure.lambda_k,
-            anchors=(settings.spec.label,),
+            anchors=tuple(settings.spec.label.split("+")),
             period_s=t.period_s,
             sin_i=sin_i,
             e=t.params.eccentricity,

@@ -51,7 +51,14 @@ _DURATION_UNITS = {
 }
 
 #: The planning modes, as ``--mode`` spells them.
-MODES = ("quadrature", "conjunction", "zero-crossing", "fixed-u-pairs", "u=VALUE")
+MODES = (
+    "quadrature",
+    "conjunction",
+    "zero-crossing",
+    "fixed-u-pairs",
+    "quadrature+conjunction",
+    "u=VALUE",
+)
 
 #: Largest |u★| of ``--mode u=VALUE`` [rad] (two turns; the anchor is taken modulo 2π).
 MAX_ABS_U_RAD = 4.0 * math.pi
@@ -178,6 +185,10 @@ def parse_mode(text: str) -> ModeSpec:
     half_pi = (math.pi / 2, 3 * math.pi / 2)
     if t == "quadrature":
         return ModeSpec("quadrature", "quadrature", (0.0, math.pi), "quadrature", True)
+    if t in ("quadrature+conjunction", "quad+conj"):
+        quarter = (0.0, math.pi / 2, math.pi, 3 * math.pi / 2)
+        label = "quadrature+conjunction"
+        return ModeSpec(label, label, quarter, "quadrature", False)
     if t == "conjunction":
         return ModeSpec("conjunction", "conjunction", half_pi, "conjunction", False)
     if t in ("zero-crossing", "zero_crossing"):
@@ -189,7 +200,7 @@ def parse_mode(text: str) -> ModeSpec:
         return ModeSpec(f"u={value:g}", value, (value,), "generic", False)
     raise InputError(
         f"--mode: unknown mode {shorten(text, 60)}; expected quadrature, conjunction, "
-        "zero-crossing, fixed-u-pairs or u=VALUE (radians, e.g. u=0.785)"
+        "zero-crossing, fixed-u-pairs, quadrature+conjunction or u=VALUE (radians, e.g. u=0.785)"
     )
 
 

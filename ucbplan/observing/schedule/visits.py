@@ -84,6 +84,7 @@ def _best_visit(
     best: tuple[tuple[int, ...], float, float] | None = None
     best_key = (0, 0.0)
     cap = c.x_mid.size if allowance.exposures is None else allowance.exposures
+    pattern = len(settings.spec.u_values)
     length = visit_s if allowance.seconds is None else min(visit_s, allowance.seconds)
     for j in starts:
         x0 = float(c.x_start[j]) - acq
@@ -92,6 +93,8 @@ def _best_visit(
             exps = []  # not even one exposure fits the time budget left
         while exps and not timeline.free(x0, float(c.x_end[exps[-1]]) + r):
             exps.pop()
+        if allowance.exposures is not None and len(exps) > pattern:
+            del exps[len(exps) - len(exps) % pattern :]  # whole anchor patterns for a goal
         if not exps:
             continue
         key = (len(exps), -float(np.mean(c.airmass_mid[exps])))
