@@ -179,19 +179,21 @@ def _print_accounting(run: Any, verbose: bool = False) -> None:
     visits = run.visits()
     if run.settings.visit_s is not None and (verbose or len(visits) <= SUMMARY_ROWS):
         table_v = rich_table(
-            "Visits — one acquisition each, then exposures centred on anchors (UTC)",
-            ["visit", "target", "acquisition starts", "first exposure", "last ends", "n", "idle"],
+            "Visits — one acquisition, then exposures centred on anchors (UTC at the site)",
+            ["visit", "target", "acquisition", "first exp.", "last end", "exp.", "idle [s]"],
         )
         for v in visits:
             table_v.add_row(
-                escape(v.visit_id.rsplit("-", 1)[-1]),
-                escape(v.target),
-                v.acq_start_utc.replace("T", " "),
+                escape("-".join(v.visit_id.rsplit("-", 2)[-2:])),
+                escape(v.target[:18]),
+                v.acq_start_utc[11:],
                 v.start_utc[11:],
                 v.end_utc[11:],
                 str(v.exposures),
-                f"{v.idle_s:.0f} s",
+                f"{v.idle_s:.0f}",
             )
+        for column in table_v.columns:
+            column.no_wrap = True
         err_console.print(table_v)
     acc = run.accounting()
     table = rich_table(
@@ -215,8 +217,21 @@ def _print_accounting(run: Any, verbose: bool = False) -> None:
     err_console.print(table)
     _print_reasons(run)
     for name, goal in run.result.goals.items():
+        at: dict[float, int] = {}
+        for b in run.result.blocks:
+            if b.target == name:
+                at[round(b.u_star_rad, 4)] = at.get(round(b.u_star_rad, 4), 0) + b.n_exp
+        split = ", ".join(f"{k} at u★ = {u:.4f}" for u, k in sorted(at.items()))
         err_console.print(
-            f"goal {escape(goal.goal.describe())}: {escape(name)} needs {goal.n_spectra} spectra "
-            f"({', '.join(f'{n} x {a}' for a, n in goal.per_anchor)}); planned",
+            f"goal {escape(goal.goal.describe())}: {escape(name)}: {goal.n_spectra} spectra "
+            f"planned ({split}), expected {escape(_expected(goal))}",
             soft_wrap=True,
         )
+
+
+def _expected(goal: Any) -> str:
+    """The σ a goal plan reaches, in the goal's unit."""
+    if goal.goal.relative:
+        return f"{100 * goal.expected:.3g} %"
+    unit = {"q": "", "M1": " Msun", "M2": " Msun"}.get(goal.goal.quantity, " km/s")
+    return f"{goal.expected:.3g}{unit}"
