@@ -320,6 +320,11 @@ class PlanSettings:
         """``--visit``, ``--cadence``, ``--min-lambda-k`` and ``--goal``."""
         if self.visit_s is not None:
             parse_duration(self.visit_s)
+            if self.spec.label == "fixed-u-pairs":
+                raise InputError(
+                    "--visit: fixed-u pairs are single blocks at two epochs; drop --visit or "
+                    "use --mode quadrature"
+                )
             if self.exposure.n_exp != 1:
                 raise InputError(
                     f"--n-exp: expected 1 with --visit (each exposure of a visit is centred on "
