@@ -19,6 +19,8 @@ from astropy import units as u
 from astropy.coordinates import AltAz, SkyCoord, get_sun
 from astropy.table import Table
 from astropy.time import Time
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 from ucbplan.cli.app import app
@@ -396,3 +398,73 @@ def test_phase_locked_quadrature_and_conjunction_every_quarter_orbit() -> None:
     te = run.result.exposures[hm.name]
     assert te.plan.exptime_s + 45.0 <= quarter
     assert te.duty_cycle == pytest.approx(te.plan.exptime_s / quarter)
+
+
+def test_json_plan_reads_back(tmp_path: Path) -> None:
+    out = tmp_path / "plan.json"
+    res = CliRunner().invoke(app, [*DONE_WHEN, "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    table = read_blocks(out)
+    assert len(table) == 20 and "visit_id" in table.colnames
+
+
+def test_goal_with_instrument_sigma_at_the_airmass_limit(tmp_path: Path) -> None:
+    table = tmp_path / "inst.yaml"
+    table.write_text(
+        "instruments:\n"
+        "  testspec:\n"
+        "    telescope: test\n"
+        "    sites: [paranal]\n"
+        "    acquisition_s: 300\n"
+        "    readout_s: 30\n"
+        "    min_exptime_s: 1\n"
+        "    extinction_k: 0.2\n"
+        "    extinction_band: V\n"
+        "    sigma_ref: {sigma_v_kms: 3, mag: 20, band: V, exptime_s: 600}\n"
+    )
+    settings = plan_settings(
+        instrument="testspec", instruments_file=table, visit="1h", goal="sigma_K=3km/s"
+    )
+    run = plan_files([HM], first_night="2040-02-15", n_nights=2, site="paranal", settings=settings)
+    # σ_v at airmass 2 (the limit): 3 km/s x 10^0.22 x sqrt(10) x 10^0.04 = 17.2 km/s
+    sigma_v = 3 * 10 ** (0.2 * 1.1) * math.sqrt(10.0) * 10 ** (0.2 * 0.2)
+    lam = run.result.blocks[0].lambda_k
+    n = len(run.result.blocks)
+    assert n == 2 * math.ceil(sigma_v**2 / (3**2 * lam**2) / 2)
+    # every exposure is at least as precise as the σ_v the goal was computed with
+    assert max(b.sigma_v_kms for b in run.result.blocks) <= sigma_v
+
+
+@pytest.mark.slow
+@settings(max_examples=6, deadline=None)
+@given(
+    visit_min=st.integers(15, 120),
+    exptime=st.floats(10.0, 80.0),
+    readout=st.floats(0.0, 60.0),
+    acq=st.floats(0.0, 600.0),
+)
+def test_visit_invariants_hold_for_any_visit(
+    visit_min: int, exptime: float, readout: float, acq: float
+) -> None:
+    if acq + exptime + readout > visit_min * 60:
+        return
+    settings = plan_settings(
+        visit=f"{visit_min}min",
+        exptime_s=exptime,
+        readout_s=readout,
+        overhead_s=acq,
+        sigma_v_kms=5.0,
+        sessions_per_night=3,
+    )
+    run = plan_files([HM], first_night="2040-02-15", site="paranal", settings=settings)
+    blocks = run.result.blocks
+    assert blocks
+    for a, b in itertools.pairwise(blocks):
+        gap = (b.t_start_utc - a.t_end_utc).to_value(u.s)
+        assert gap >= (readout if a.visit_id == b.visit_id else readout + acq) - 0.1
+    for v in run.visits():
+        assert v.wall_s <= visit_min * 60 + 1e-6
+        assert v.idle_s >= 0 and v.overhead_s == pytest.approx(acq + v.exposures * readout)
+        assert v.shutter_s == pytest.approx(v.exposures * exptime)
+    total = run.accounting()["total"]
+    assert total["exposures"] == len(blocks)
