@@ -69,9 +69,9 @@ def _print_summary(run: Any) -> None:
     visits = run.visits()
     table = rich_table(
         f"Plan at {run.site.name}, per night (the full table: -o FILE or --verbose)",
-        ["night", "visits", "exposures", "hours"],
+        ["night", "visits", "exposures", "hours (wall)"],
     )
-    for night in dict.fromkeys(b.night for b in run.result.blocks):
+    for night in (d.isoformat() for d in run.nights):  # nights without a visit too
         vs = [v for v in visits if v.night == night]
         table.add_row(
             night,
