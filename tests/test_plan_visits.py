@@ -255,6 +255,8 @@ def test_goal_out_of_reach_is_one_line_and_writes_nothing(
         (["--instrument", "nosuch"], "unknown instrument"),
         (["--exptime", "150"], "--min-lambda-k"),
         (["--cadence", "sometimes"], "--cadence"),
+        (["--instrument", "uves"], "pass --overhead SECONDS"),
+        (["--goal", "q=1%"], "double-lined (SB2)"),
     ],
 )
 def test_bad_visit_input_is_one_line(
