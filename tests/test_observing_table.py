@@ -125,7 +125,9 @@ def test_json_rows_and_csv() -> None:
     table = blocks_to_table([_block(0)], _meta())
     buf = io.StringIO()
     write_table(table, buf, "json")
-    rows = json.loads(buf.getvalue())
+    doc = json.loads(buf.getvalue())
+    assert doc["meta"]["mode"] == table.meta["mode"]  # {"meta", "rows"} like every command
+    rows = doc["rows"]
     assert isinstance(rows, list) and rows[0]["target"] == "HM Cnc"
     assert rows[0]["smear_kms"] is None  # NaN -> null, valid JSON
     assert rows[0]["n_exp"] == 4

@@ -216,22 +216,22 @@ def _json(args: list[str]) -> Any:
 
 def test_json_carries_visits_and_time_accounting() -> None:
     doc = _json(DONE_WHEN)
-    assert len(doc["blocks"]) == doc["time_accounting"]["total"]["exposures"]
-    assert doc["visits"][0]["exposures"] == len(doc["blocks"])
-    assert all(r["visit_id"] == doc["visits"][0]["visit_id"] for r in doc["blocks"])
+    assert len(doc["rows"]) == doc["meta"]["time_accounting"]["total"]["exposures"]
+    assert doc["meta"]["visits"][0]["exposures"] == len(doc["rows"])
+    assert all(r["visit_id"] == doc["meta"]["visits"][0]["visit_id"] for r in doc["rows"])
 
 
 def test_goal_sigma_k_plans_n_quadrature_spectra() -> None:
     # N = σ_v²/(σ_K² Λ_K²) with equal numbers at u = 0 and π, equal σ_v (issue 9, done-when).
     args = [*DONE_WHEN, "--nights", "3", "--goal", "sigma_K=1km/s"]
     doc = _json(args)
-    rows = doc["blocks"]
+    rows = doc["rows"]
     lam = rows[0]["lambda_k"]
     expected = 5.0**2 / (1.0**2 * lam**2)
     assert len(rows) == pytest.approx(expected, rel=0.10)
     at_zero = sum(1 for r in rows if abs(r["u_star_rad"]) < 1e-9)
     assert at_zero == len(rows) - at_zero
-    assert doc["time_accounting"]["total"]["exposures"] == len(rows)
+    assert doc["meta"]["time_accounting"]["total"]["exposures"] == len(rows)
 
 
 def test_goal_out_of_reach_is_one_line_and_writes_nothing(

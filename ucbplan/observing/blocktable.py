@@ -44,7 +44,6 @@ __all__ = [
     "COLUMNS",
     "COLUMN_BY_NAME",
     "EXTRA_COLUMNS",
-    "JSON_META_KEYS",
     "KNOWN_COLUMNS",
     "MAX_TABLE_BYTES",
     "REQUIRED_COLUMNS",
@@ -587,14 +586,22 @@ def table_to_json_rows(table: Table) -> list[dict[str, Any]]:
     return rows
 
 
-#: Meta keys ``--format json`` writes beside the rows: ``{"blocks": [rows], "visits": [...],
-#: "time_accounting": {...}}`` (a table without them is written as the bare list of rows).
-JSON_META_KEYS = ("visits", "time_accounting")
+def _plain_meta(value: Any) -> Any:
+    """Table meta as plain JSON values (NaN and infinities → null), recursively."""
+    if isinstance(value, Mapping):
+        return {str(k): _plain_meta(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_plain_meta(v) for v in value]
+    value = _plain(value)
+    return value if isinstance(value, str | int | float | bool | type(None)) else str(value)
 
 
 def write_table(table: Table, handle: IO[str], fmt: str) -> None:
-    """Write ``table`` to an open text handle as ``ecsv``, ``csv`` or ``json`` (rows, with the
-    visit summary and time accounting when the table has them; see :data:`JSON_META_KEYS`)."""
+    """Write ``table`` to an open text handle as ``ecsv``, ``csv`` or ``json``.
+
+    JSON is ``{"meta": {...}, "rows": [...]}`` like every command's JSON (the meta of a plan
+    holds ``visits`` and ``time_accounting``), or the bare list of rows for a table without
+    meta."""
     if fmt == "ecsv":
         table.write(handle, format="ascii.ecsv")
     elif fmt == "csv":
@@ -603,8 +610,7 @@ def write_table(table: Table, handle: IO[str], fmt: str) -> None:
         plain.write(handle, format="ascii.csv")
     elif fmt == "json":
         rows = table_to_json_rows(table)
-        summary = {k: table.meta[k] for k in JSON_META_KEYS if k in table.meta}
-        doc: Any = {"blocks": rows, **summary} if summary else rows
+        doc: Any = {"meta": _plain_meta(dict(table.meta)), "rows": rows} if table.meta else rows
         json.dump(doc, handle, indent=2, allow_nan=False)
         handle.write("\n")
     else:
@@ -804,8 +810,8 @@ def _json_table(text: str, where: str) -> Table:
         rows = json.loads(text)
     except (ValueError, RecursionError) as exc:
         raise InputFileError(f"{where}: not valid JSON ({one_line(str(exc))[:120]})") from None
-    if isinstance(rows, dict) and "blocks" in rows:  # rows with the plan's summary
-        rows = rows["blocks"]
+    if isinstance(rows, dict) and "rows" in rows:  # {"meta": ..., "rows": [...]}
+        rows = rows["rows"]
     if not isinstance(rows, list) or not all(isinstance(r, dict) for r in rows):
         raise InputFileError(
             f"{where}: expected a JSON list of row objects (`ucbplan plan --format json`)"
