@@ -125,12 +125,14 @@ def test_json_rows_and_csv() -> None:
     table = blocks_to_table([_block(0)], _meta())
     buf = io.StringIO()
     write_table(table, buf, "json")
-    doc = json.loads(buf.getvalue())
-    assert doc["meta"]["mode"] == table.meta["mode"]  # {"meta", "rows"} like every command
-    rows = doc["rows"]
+    rows = json.loads(buf.getvalue())
     assert isinstance(rows, list) and rows[0]["target"] == "HM Cnc"
     assert rows[0]["smear_kms"] is None  # NaN -> null, valid JSON
     assert rows[0]["n_exp"] == 4
+    buf = io.StringIO()
+    write_table(table, buf, "json", json_meta=True)  # plan --format json: {"meta", "rows"}
+    doc = json.loads(buf.getvalue())
+    assert doc["meta"]["mode"] == table.meta["mode"] and doc["rows"] == rows
     buf = io.StringIO()
     write_table(table, buf, "csv")
     header = buf.getvalue().splitlines()[0].split(",")

@@ -168,7 +168,7 @@ def _write(run: Any, fmt: str, output: Path | None, plot: Path | None, overwrite
         table = run.table()
 
         def _write_table(handle: IO[str]) -> None:
-            write_table(table, handle, fmt)
+            write_table(table, handle, fmt, json_meta=True)
 
         write_output(output, _write_table, overwrite=overwrite)
         if output is not None:

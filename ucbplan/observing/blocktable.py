@@ -596,12 +596,12 @@ def _plain_meta(value: Any) -> Any:
     return value if isinstance(value, str | int | float | bool | type(None)) else str(value)
 
 
-def write_table(table: Table, handle: IO[str], fmt: str) -> None:
+def write_table(table: Table, handle: IO[str], fmt: str, *, json_meta: bool = False) -> None:
     """Write ``table`` to an open text handle as ``ecsv``, ``csv`` or ``json``.
 
-    JSON is ``{"meta": {...}, "rows": [...]}`` like every command's JSON (the meta of a plan
-    holds ``visits`` and ``time_accounting``), or the bare list of rows for a table without
-    meta."""
+    JSON is the list of rows, or with ``json_meta`` ``{"meta": {...}, "rows": [...]}`` like
+    every command's JSON (``plan --format json``: the meta holds ``visits`` and
+    ``time_accounting``). :func:`read_blocks` reads both."""
     if fmt == "ecsv":
         table.write(handle, format="ascii.ecsv")
     elif fmt == "csv":
@@ -610,7 +610,7 @@ def write_table(table: Table, handle: IO[str], fmt: str) -> None:
         plain.write(handle, format="ascii.csv")
     elif fmt == "json":
         rows = table_to_json_rows(table)
-        doc: Any = {"meta": _plain_meta(dict(table.meta)), "rows": rows} if table.meta else rows
+        doc: Any = {"meta": _plain_meta(dict(table.meta)), "rows": rows} if json_meta else rows
         json.dump(doc, handle, indent=2, allow_nan=False)
         handle.write("\n")
     else:
