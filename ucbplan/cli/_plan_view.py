@@ -96,6 +96,7 @@ def _print_night(blocks: list[Any], night: str, site: Any) -> None:
         [
             "target",
             "block",
+            "visit/exp",
             "anchor",
             "u★ [rad]",
             "UTC mid ± σ",
@@ -104,14 +105,16 @@ def _print_night(blocks: list[Any], night: str, site: Any) -> None:
             "airmass s/m/e",
             "Moon [deg]",
             "Λ_K",
+            "σ_v [km/s]",
             *(["π-mode alt. UTC"] if pi_mode else []),
             *(["pair: Δκ_LISA"] if paired else []),
         ],
     )
-    for b in blocks:
+    for b, label in zip(blocks, _exposure_labels(blocks), strict=True):
         table.add_row(
             escape(b.target),
             escape(b.block_id.rsplit("-", 1)[-1]),
+            label,
             escape(b.anchor),
             f"{b.u_star_rad:.4f}",
             f"{b.t_mid_utc.iso[11:23]} ± {b.sigma_t_s:.2f} s",
@@ -120,6 +123,7 @@ def _print_night(blocks: list[Any], night: str, site: Any) -> None:
             f"{b.airmass_start:.2f}/{b.airmass:.2f}/{b.airmass_end:.2f}",
             f"{b.moon_sep_deg:.0f}",
             f"{b.lambda_k:.4f}",
+            f"{b.sigma_v_kms:.2f}",
             *([b.t_alt_utc.iso[11:21] if b.t_alt_utc is not None else "—"] if pi_mode else []),
             *([f"{escape(b.pair_id)}: {b.delta_kappa:+.2e}"] if paired else []),
         )
