@@ -470,3 +470,15 @@ def test_visit_invariants_hold_for_any_visit(
         assert v.shutter_s == pytest.approx(v.exposures * exptime)
     total = run.accounting()["total"]
     assert total["exposures"] == len(blocks)
+
+
+def test_cli_default_exposure_is_not_explicit() -> None:
+    # without --exptime the CLI lets ucbplan choose: phase-locked works, the floor caps
+    doc = _json([*DONE_WHEN, "--cadence", "phase-locked"])
+    exptime = {r["exptime_s"] for r in doc["rows"]}
+    assert len(exptime) == 1 and 80.0 < exptime.pop() < 81.0  # capped at Lambda_K = 0.9
+    assert doc["meta"]["planning"]["cadence"] == "phase-locked"
+    capped = _json([*DONE_WHEN, "--min-lambda-k", "0.99"])
+    assert capped["rows"][0]["exptime_s"] < 60.0  # the default 60 s, capped
+    res = CliRunner().invoke(app, [*DONE_WHEN, "--min-lambda-k", "0.99", "--exptime", "60"])
+    assert res.exit_code != 0 and "--min-lambda-k" in str(res.exception)  # given: refused

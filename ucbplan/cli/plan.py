@@ -154,10 +154,10 @@ _Overwrite = Annotated[bool, typer.Option("--overwrite", help="Replace existing 
 
 
 def _given(ctx: typer.Context, name: str) -> bool:
-    """Whether the user gave option ``name`` (not its default)."""
-    from click.core import ParameterSource
-
-    return ctx.get_parameter_source(name) not in (ParameterSource.DEFAULT, None)
+    """Whether the user gave option ``name`` (not its default). Compared by name: typer may
+    carry its own copy of click's ``ParameterSource`` enum."""
+    source = ctx.get_parameter_source(name)
+    return source is not None and getattr(source, "name", "") != "DEFAULT"
 
 
 def _write(run: Any, fmt: str, output: Path | None, plot: Path | None, overwrite: bool) -> None:
