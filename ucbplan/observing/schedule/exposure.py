@@ -183,10 +183,12 @@ def target_exposure(target: Target, settings: PlanSettings) -> TargetExposure:
             "lengthen --visit or shorten the exposure"
         )
     if settings.cadence == "phase-locked":
+        wait = step - cost
         notes.append(
             f"{target.name}: phase-locked cadence: {plan.exptime_s:.1f} s exposures every "
             f"{step:.1f} s (P_b/{m} x {round(step / spacing)}), duty cycle "
             f"{plan.exptime_s / step:.1%}"
+            + (f"; the OB must wait {wait:.1f} s after each readout" if wait > 1.0 else "")
         )
     return TargetExposure(plan, spacing, step, lam, tuple(notes), floor_ok)
 
