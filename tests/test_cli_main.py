@@ -88,9 +88,12 @@ def test_usage_error_is_one_line() -> None:
     import subprocess
 
     res = subprocess.run(
-        [sys.executable, "-m", "ucbplan", "plan", "--bogus"], capture_output=True, text=True
+        # '--bogus' alone draws click's "(Possible options: --verbose)" since plan has --verbose
+        [sys.executable, "-m", "ucbplan", "plan", "--bogus-flag"],
+        capture_output=True,
+        text=True,
     )
     assert res.returncode == 2
     assert res.stderr.strip() == (
-        "error: No such option: --bogus (see `python -m ucbplan plan --help`)"
+        "error: No such option: --bogus-flag (see `python -m ucbplan plan --help`)"
     )

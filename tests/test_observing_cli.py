@@ -52,7 +52,7 @@ def test_plan_writes_ecsv_and_plot(tmp_path: Path) -> None:
 def test_plan_json_to_stdout() -> None:
     res = CliRunner().invoke(app, [*BASE, "--format", "json", "--exptime", "20", "--n-exp", "3"])
     assert res.exit_code == 0
-    rows = json.loads(res.stdout)
+    rows = json.loads(res.stdout)["rows"]
     assert [r["n_exp"] for r in rows] == [3, 3]
     assert rows[0]["t_mid_utc"].startswith("2040-02-16T")
 
@@ -95,7 +95,7 @@ def test_site_lonlat_and_sites_file(tmp_path: Path) -> None:
     ]
     by_coords = CliRunner().invoke(app, lonlat)
     assert by_coords.exit_code == 0, by_coords.output
-    a, b = json.loads(by_name.stdout), json.loads(by_coords.stdout)
+    a, b = json.loads(by_name.stdout)["rows"], json.loads(by_coords.stdout)["rows"]
     assert [r["t_mid_utc"] for r in a] == [r["t_mid_utc"] for r in b]
     sites = tmp_path / "sites.yaml"
     sites.write_text(
@@ -118,7 +118,7 @@ def test_site_lonlat_and_sites_file(tmp_path: Path) -> None:
         ],
     )
     assert mine.exit_code == 0, mine.output
-    assert [r["t_mid_utc"] for r in json.loads(mine.stdout)] == [r["t_mid_utc"] for r in a]
+    assert [r["t_mid_utc"] for r in json.loads(mine.stdout)["rows"]] == [r["t_mid_utc"] for r in a]
 
 
 def test_night_chart_axes() -> None:
@@ -158,10 +158,10 @@ def test_priority_option_orders_the_schedule() -> None:
     ]
     # With a 2-h overhead the two transits (~02:13 and ~03:06 UTC) cannot both be used: HM Cnc
     # (listed first) gets its transit at equal priority, the fiducial source when boosted.
-    base = json.loads(CliRunner().invoke(app, args).stdout)
+    base = json.loads(CliRunner().invoke(app, args).stdout)["rows"]
     boosted = json.loads(
         CliRunner().invoke(app, [*args, "--priority", "Fiducial eccentric dWD=5"]).stdout
-    )
+    )["rows"]
 
     def best(rows: list[dict], name: str) -> float:
         return min(r["airmass"] for r in rows if r["target"] == name)

@@ -256,7 +256,7 @@ def test_failure_groups_nights(targets: list[Target]) -> None:
         first_night="2040-02-15",
         n_nights=60,
         site="paranal",
-        settings=PlanSettings(exposure=ExposurePlan(43200.0)),
+        settings=PlanSettings(exposure=ExposurePlan(43200.0), allow_smeared=True),
     )
     text = run.failure()
     assert text is not None and len(text) < 400, text

@@ -130,6 +130,10 @@ def test_json_rows_and_csv() -> None:
     assert rows[0]["smear_kms"] is None  # NaN -> null, valid JSON
     assert rows[0]["n_exp"] == 4
     buf = io.StringIO()
+    write_table(table, buf, "json", json_meta=True)  # plan --format json: {"meta", "rows"}
+    doc = json.loads(buf.getvalue())
+    assert doc["meta"]["mode"] == table.meta["mode"] and doc["rows"] == rows
+    buf = io.StringIO()
     write_table(table, buf, "csv")
     header = buf.getvalue().splitlines()[0].split(",")
     assert tuple(header[: len(REQUIRED_COLUMNS)]) == REQUIRED_COLUMNS

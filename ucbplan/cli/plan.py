@@ -17,10 +17,9 @@ from ucbplan.cli._console import (
     check_output_path,
     err_console,
     pick_format,
-    rich_table,
     write_output,
 )
-from ucbplan.errors import UcbplanError
+from ucbplan.cli._plan_view import report
 
 __all__ = ["register"]
 
@@ -45,7 +44,9 @@ _Nights = Annotated[int, typer.Option("--nights", help="Number of consecutive ni
 _Mode = Annotated[
     str,
     typer.Option(
-        "--mode", help="quadrature | conjunction | zero-crossing | fixed-u-pairs | u=VALUE [rad]."
+        "--mode",
+        help="quadrature | conjunction | zero-crossing | fixed-u-pairs | quadrature+conjunction "
+        "| u=VALUE [rad].",
     ),
 ]
 _Twilight = Annotated[str, typer.Option("--twilight", help="civil | nautical | astronomical")]
@@ -63,7 +64,12 @@ _ZenithHole = Annotated[
 ]
 _Exptime = Annotated[float, typer.Option("--exptime", help="Single-exposure time [s].")]
 _NExp = Annotated[int, typer.Option("--n-exp", help="Exposures per block (co-added).")]
-_Readout = Annotated[float, typer.Option("--readout", help="Dead time between exposures [s].")]
+_Readout = Annotated[
+    float | None,
+    typer.Option(
+        "--readout", help="Readout after each exposure [s] (default: the instrument's, else 0)."
+    ),
+]
 _Alpha = Annotated[float, typer.Option("--alpha", help="Planning margin α of T_valid.")]
 _SigmaV = Annotated[float | None, typer.Option("--sigma-v", help="RV precision σ_v [km/s].")]
 _KEff = Annotated[float | None, typer.Option("--k-eff", help="Semi-amplitude K_eff [km/s].")]
@@ -76,7 +82,62 @@ _MaxBinFraction = Annotated[
     typer.Option("--max-bin-fraction", help="Largest block span as a fraction of P_b."),
 ]
 _Overhead = Annotated[
-    float, typer.Option("--overhead", help="Slew + acquisition before each session [s].")
+    float | None,
+    typer.Option(
+        "--overhead",
+        help="Slew + acquisition before each visit or session [s] (default: the instrument's, "
+        "else 300).",
+    ),
+]
+_Visit = Annotated[
+    str | None,
+    typer.Option(
+        "--visit",
+        help="Plan visits of this length (1h, 45min, 3600s; acquisition included): one "
+        "acquisition, then exposures each centred on an anchor.",
+    ),
+]
+_Cadence = Annotated[
+    str,
+    typer.Option(
+        "--cadence",
+        help="anchor (wait for the next anchor) | phase-locked (exposure + readout = anchor "
+        "spacing, no waiting).",
+    ),
+]
+_Instrument = Annotated[
+    str | None,
+    typer.Option("--instrument", help="Spectrograph (e.g. xshooter-vis, uves, esi): overheads."),
+]
+_InstrumentsFile = Annotated[
+    Path | None,
+    typer.Option("--instruments-file", help="YAML instrument table searched before the bundled."),
+]
+_Goal = Annotated[
+    str | None,
+    typer.Option(
+        "--goal", help="Precision goal (sigma_K=2km/s, K1=1%, q=1%): plan the spectra it needs."
+    ),
+]
+_MinLambdaK = Annotated[
+    float | None,
+    typer.Option(
+        "--min-lambda-k",
+        help="Smallest smearing factor Λ_K of an exposure (default 0.9 with --visit).",
+    ),
+]
+_Budget = Annotated[
+    list[str],
+    typer.Option(
+        "--budget", help="NAME=DURATION: wall time a target may get over all nights (e.g. 2h)."
+    ),
+]
+_Wide = Annotated[bool, typer.Option("--wide", help="Print every column of the plan table.")]
+_Verbose = Annotated[
+    bool, typer.Option("--verbose", help="Print every night's table, however long the plan.")
+]
+_AllowSmeared = Annotated[
+    bool, typer.Option("--allow-smeared", help="Plan exposures below the Λ_K floor.")
 ]
 _Sessions = Annotated[int, typer.Option("--sessions", help="Sessions per target and night.")]
 _Priority = Annotated[
@@ -92,72 +153,11 @@ _Plot = Annotated[Path | None, typer.Option("--plot", help="Night chart PNG (fir
 _Overwrite = Annotated[bool, typer.Option("--overwrite", help="Replace existing output files.")]
 
 
-def _local(b: Any) -> str:
-    from datetime import UTC
-    from zoneinfo import ZoneInfo
-
-    dt = b.t_mid_utc.to_datetime(timezone=UTC).astimezone(ZoneInfo(b.timezone))
-    return dt.strftime("%H:%M:%S %Z")
-
-
-def _print_night(blocks: list[Any], night: str, site: Any) -> None:
-    paired = any(b.pair_id for b in blocks)
-    # the φ_ref π-mode exists only for LISA posteriors; a night of timing targets has none
-    pi_mode = any(b.t_alt_utc is not None for b in blocks)
-    table = rich_table(
-        f"Night of {night} at {site.name} — times are UTC at the site (light time removed); "
-        "±σ is the 1σ timing uncertainty",
-        [
-            "target",
-            "block",
-            "anchor",
-            "u★ [rad]",
-            "UTC mid ± σ",
-            "local mid",
-            "UTC start–end",
-            "airmass s/m/e",
-            "Moon [deg]",
-            "Λ_K",
-            *(["π-mode alt. UTC"] if pi_mode else []),
-            *(["pair: Δκ_LISA"] if paired else []),
-        ],
-    )
-    for b in blocks:
-        table.add_row(
-            escape(b.target),
-            escape(b.block_id.rsplit("-", 1)[-1]),
-            escape(b.anchor),
-            f"{b.u_star_rad:.4f}",
-            f"{b.t_mid_utc.iso[11:23]} ± {b.sigma_t_s:.2f} s",
-            _local(b),
-            f"{b.t_start_utc.iso[11:19]}–{b.t_end_utc.iso[11:19]}",
-            f"{b.airmass_start:.2f}/{b.airmass:.2f}/{b.airmass_end:.2f}",
-            f"{b.moon_sep_deg:.0f}",
-            f"{b.lambda_k:.4f}",
-            *([b.t_alt_utc.iso[11:21] if b.t_alt_utc is not None else "—"] if pi_mode else []),
-            *([f"{escape(b.pair_id)}: {b.delta_kappa:+.2e}"] if paired else []),
-        )
-    err_console.print(table)
-
-
-def _report(run: Any) -> None:
-    """Warnings and what was not placed (grouped over nights), then one table per night."""
-    for w in run.result.warnings:
-        err_console.print(f"[yellow]warning:[/] {escape(w)}", soft_wrap=True)
-    grouped: dict[tuple[str, str], list[str]] = {}
-    for miss in run.result.unplaced:
-        grouped.setdefault((miss.target, miss.reason), []).append(miss.night)
-    for (name, reason), when in grouped.items():
-        span = when[0] if len(when) == 1 else f"{len(when)} nights {when[0]}..{when[-1]}"
-        err_console.print(
-            f"[yellow]not placed:[/] {escape(name)} ({span}): {escape(reason)}", soft_wrap=True
-        )
-    failure = run.failure()
-    if failure is not None:
-        raise UcbplanError(failure)
-    blocks = run.result.blocks
-    for label in dict.fromkeys(b.night for b in blocks):
-        _print_night([b for b in blocks if b.night == label], label, run.site)
+def _given(ctx: typer.Context, name: str) -> bool:
+    """Whether the user gave option ``name`` (not its default). Compared by name: typer may
+    carry its own copy of click's ``ParameterSource`` enum."""
+    source = ctx.get_parameter_source(name)
+    return source is not None and getattr(source, "name", "") != "DEFAULT"
 
 
 def _write(run: Any, fmt: str, output: Path | None, plot: Path | None, overwrite: bool) -> None:
@@ -168,7 +168,7 @@ def _write(run: Any, fmt: str, output: Path | None, plot: Path | None, overwrite
         table = run.table()
 
         def _write_table(handle: IO[str]) -> None:
-            write_table(table, handle, fmt)
+            write_table(table, handle, fmt, json_meta=True)
 
         write_output(output, _write_table, overwrite=overwrite)
         if output is not None:
@@ -185,6 +185,7 @@ def _write(run: Any, fmt: str, output: Path | None, plot: Path | None, overwrite
 
 # ``plan`` is long only by its 27 options and their one-to-one mapping into PlanSettings.
 def plan(
+    ctx: typer.Context,
     targets: _Targets,
     site: _SiteName = None,
     site_lonlat: _SiteLonLat = None,
@@ -199,14 +200,24 @@ def plan(
     zenith_hole: _ZenithHole = None,
     exptime: _Exptime = 60.0,
     n_exp: _NExp = 1,
-    readout: _Readout = 0.0,
+    readout: _Readout = None,
     alpha: _Alpha = 1.0,
     sigma_v: _SigmaV = None,
     k_eff: _KEff = None,
     max_smear: _MaxSmear = None,
     max_bin_fraction: _MaxBinFraction = None,
-    overhead: _Overhead = 300.0,
+    overhead: _Overhead = None,
     sessions: _Sessions = 1,
+    visit: _Visit = None,
+    cadence: _Cadence = "anchor",
+    instrument: _Instrument = None,
+    instruments_file: _InstrumentsFile = None,
+    goal: _Goal = None,
+    min_lambda_k: _MinLambdaK = None,
+    allow_smeared: _AllowSmeared = False,
+    budget: _Budget = [],  # noqa: B006  # typer copies the default; never mutated
+    wide: _Wide = False,
+    verbose: _Verbose = False,
     priority: _Priority = [],  # noqa: B006  # typer copies the default; never mutated
     output: _Output = None,
     fmt: _Format = None,
@@ -214,8 +225,7 @@ def plan(
     overwrite: _Overwrite = False,
 ) -> None:
     """Plan phase-targeted observing blocks (UTC at the site) for one or more nights."""
-    from ucbplan.observing.blocks import ExposurePlan
-    from ucbplan.observing.schedule import PlanSettings, plan_files
+    from ucbplan.observing.schedule import plan_files, plan_settings
     from ucbplan.observing.timeconv import quiet_erfa
 
     fmt = pick_format(output, fmt, ("table", *_MACHINE))
@@ -223,20 +233,31 @@ def plan(
         if path is not None:
             check_output_path(path, overwrite)
     with quiet_erfa():
-        settings = PlanSettings(
+        settings = plan_settings(
+            instrument=instrument,
+            instruments_file=instruments_file,
+            # a default exposure is capped at the smearing floor, a given one refused below it
+            exptime_s=exptime if _given(ctx, "exptime") else None,
+            n_exp=n_exp,
+            readout_s=readout,
+            overhead_s=overhead,
+            visit=visit,
+            sigma_v_kms=sigma_v,
+            cadence=cadence,
+            goal=goal,
+            min_lambda_k=min_lambda_k,
+            allow_smeared=allow_smeared,
+            budgets=budget,
             mode=mode,
             twilight=twilight,
             airmass_max=airmass_max,
             moon_sep_deg=moon_sep,
             moon_illum_max=moon_illum,
             zenith_hole_deg=zenith_hole,
-            exposure=ExposurePlan(exptime_s=exptime, n_exp=n_exp, readout_s=readout),
             alpha=alpha,
-            sigma_v_kms=sigma_v,
             k_eff_kms=k_eff,
             max_smear=max_smear,
             max_bin_fraction=max_bin_fraction,
-            overhead_s=overhead,
             sessions_per_night=sessions,
         )
         run = plan_files(
@@ -249,7 +270,7 @@ def plan(
             settings=settings,
             priorities=priority,
         )
-        _report(run)
+        report(run, wide, verbose)
         _write(run, fmt, output, plot, overwrite)
 
 

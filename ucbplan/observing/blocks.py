@@ -77,6 +77,8 @@ class Block:
     session_id: str = ""
     pair_id: str = ""
     delta_kappa: float = float("nan")
+    visit_id: str = ""
+    sigma_v_kms: float = float("nan")
 
 
 @dataclass(frozen=True, slots=True)

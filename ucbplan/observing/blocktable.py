@@ -363,6 +363,21 @@ COLUMNS: tuple[Column, ...] = (
         bounds=(-2.0, 2.0),
         nan_ok=True,
     ),
+    Column(
+        "visit_id",
+        "str",
+        None,
+        "visit (one acquisition followed by continuous exposures) the exposure belongs to",
+    ),
+    Column(
+        "sigma_v_kms",
+        "float64",
+        "km / s",
+        "RV precision of the exposure (--sigma-v, or instrument, magnitude and airmass); NaN "
+        "if unknown",
+        bounds=(0.0, 1e5),
+        nan_ok=True,
+    ),
 )
 
 #: Optional columns the planner does not write but exports read when a user adds them.
@@ -380,8 +395,8 @@ COLUMN_BY_NAME: dict[str, Column] = {c.name: c for c in COLUMNS}
 #: Every column a reader knows (planner columns and :data:`USER_COLUMNS`), by name.
 KNOWN_COLUMNS: dict[str, Column] = {c.name: c for c in (*COLUMNS, *USER_COLUMNS)}
 
-#: Columns whose cells may be empty: no π-mode alternative, no session, no pair.
-BLANK_OK = frozenset(("t_alt_utc", "session_id", "pair_id"))
+#: Columns whose cells may be empty: no π-mode alternative, no session, no pair, no visit.
+BLANK_OK = frozenset(("t_alt_utc", "session_id", "pair_id", "visit_id"))
 
 #: Largest blocks table [bytes] (a year of blocks of a 5-min binary is a few MB).
 MAX_TABLE_BYTES = 100_000_000
@@ -571,8 +586,22 @@ def table_to_json_rows(table: Table) -> list[dict[str, Any]]:
     return rows
 
 
-def write_table(table: Table, handle: IO[str], fmt: str) -> None:
-    """Write ``table`` to an open text handle as ``ecsv``, ``csv`` or ``json`` (list of rows)."""
+def _plain_meta(value: Any) -> Any:
+    """Table meta as plain JSON values (NaN and infinities → null), recursively."""
+    if isinstance(value, Mapping):
+        return {str(k): _plain_meta(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_plain_meta(v) for v in value]
+    value = _plain(value)
+    return value if isinstance(value, str | int | float | bool | type(None)) else str(value)
+
+
+def write_table(table: Table, handle: IO[str], fmt: str, *, json_meta: bool = False) -> None:
+    """Write ``table`` to an open text handle as ``ecsv``, ``csv`` or ``json``.
+
+    JSON is the list of rows, or with ``json_meta`` ``{"meta": {...}, "rows": [...]}`` like
+    every command's JSON (``plan --format json``: the meta holds ``visits`` and
+    ``time_accounting``). :func:`read_blocks` reads both."""
     if fmt == "ecsv":
         table.write(handle, format="ascii.ecsv")
     elif fmt == "csv":
@@ -580,7 +609,9 @@ def write_table(table: Table, handle: IO[str], fmt: str) -> None:
         plain.meta = {}
         plain.write(handle, format="ascii.csv")
     elif fmt == "json":
-        json.dump(table_to_json_rows(table), handle, indent=2, allow_nan=False)
+        rows = table_to_json_rows(table)
+        doc: Any = {"meta": _plain_meta(dict(table.meta)), "rows": rows} if json_meta else rows
+        json.dump(doc, handle, indent=2, allow_nan=False)
         handle.write("\n")
     else:
         raise InputFileError(f"unknown table format {fmt!r}; expected one of {TABLE_FORMATS}")
@@ -779,6 +810,8 @@ def _json_table(text: str, where: str) -> Table:
         rows = json.loads(text)
     except (ValueError, RecursionError) as exc:
         raise InputFileError(f"{where}: not valid JSON ({one_line(str(exc))[:120]})") from None
+    if isinstance(rows, dict) and "rows" in rows:  # {"meta": ..., "rows": [...]}
+        rows = rows["rows"]
     if not isinstance(rows, list) or not all(isinstance(r, dict) for r in rows):
         raise InputFileError(
             f"{where}: expected a JSON list of row objects (`ucbplan plan --format json`)"

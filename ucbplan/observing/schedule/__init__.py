@@ -10,6 +10,7 @@ time axis), :mod:`.placement` (priority placement into nights, reasons for what 
 
 from ucbplan.observing.schedule.candidates import Candidates, candidate_blocks
 from ucbplan.observing.schedule.nights import NightWindow, night_dates, night_windows
+from ucbplan.observing.schedule.options import plan_settings
 from ucbplan.observing.schedule.pairs import delta_kappa
 from ucbplan.observing.schedule.placement import Unplaced
 from ucbplan.observing.schedule.planner import PlanResult, plan_nights
@@ -32,5 +33,6 @@ __all__ = [
     "parse_mode",
     "plan_files",
     "plan_nights",
+    "plan_settings",
     "with_priorities",
 ]

@@ -10,8 +10,8 @@ RV zero crossings, or single blocks). All times are on one :class:`TimeAxis`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from astropy import units as u
@@ -20,12 +20,13 @@ from astropy.time import Time, TimeDelta
 from numpy.typing import NDArray
 
 from ucbplan.core.constants import TWO_PI
-from ucbplan.core.ephemeris import find_epochs
+from ucbplan.core.ephemeris import EpochSet, find_epochs
 from ucbplan.core.forecast import tolerance, valid_window_s
 from ucbplan.core.smearing import parse_smear_budget
 from ucbplan.errors import UcbplanError
 from ucbplan.observing.blocks import ExposurePlan, Smearing, block_smearing, check_smear_budget
 from ucbplan.observing.constraints import ConstraintSet, evaluate_window
+from ucbplan.observing.schedule.exposure import TargetExposure, exposure_sigma_v, target_exposure
 from ucbplan.observing.schedule.nights import NightWindow
 from ucbplan.observing.schedule.settings import ModeSpec, PlanSettings
 from ucbplan.observing.sites import Site
@@ -67,6 +68,35 @@ class Candidates:
     airmass_mid: FloatArray
 
 
+def _find_epochs(
+    target: Target, tau_lo: float, tau_hi: float, anchor: str | float, star: int
+) -> EpochSet:
+    """:func:`~ucbplan.core.ephemeris.find_epochs`, also for combined anchors such as
+    ``quadrature+conjunction``: each anchor solved on its own, merged on one origin in time
+    order (the origins differ by whole seconds at most ~10⁸ s: exact in float64)."""
+    if not isinstance(anchor, str) or "+" not in anchor:
+        return find_epochs(target, tau_lo, tau_hi, anchor, star)
+    sets = [find_epochs(target, tau_lo, tau_hi, a, star) for a in anchor.split("+")]
+    origin = sets[0].origin_s
+    dt = np.concatenate([e.dt_s + (e.origin_s - origin) for e in sets])
+    order = np.argsort(dt, kind="stable")
+
+    def cat(name: str) -> Any:
+        return np.concatenate([getattr(e, name) for e in sets])[order]
+
+    return replace(
+        sets[0],
+        anchor=anchor,
+        u_star_rad=cat("u_star_rad"),
+        k=cat("k"),
+        dt_s=dt[order],
+        sigma_t_s=cat("sigma_t_s"),
+        sigma_u_rad=cat("sigma_u_rad"),
+        tau_alt_s=cat("tau_alt_s"),
+        u_rate=cat("u_rate"),
+    )
+
+
 def candidate_blocks(
     target: Target,
     i: int,
@@ -89,7 +119,7 @@ def candidate_blocks(
     epochs = axis.epoch_axis(target.t_ref)
     lo, hi = span_x
     tau_lo, tau_hi = epochs.from_x(lo) - _EPOCH_PAD_S, epochs.from_x(hi) + _EPOCH_PAD_S
-    es = find_epochs(target, tau_lo, tau_hi, mode.anchor, star)
+    es = _find_epochs(target, tau_lo, tau_hi, mode.anchor, star)
     x_mid = interp.site_x(epochs.to_x(es.origin_s, es.dt_s))
     x_alt = interp.site_x(epochs.to_x(es.tau_alt_s))
     keep = (x_mid >= lo) & (x_mid < hi)
@@ -166,6 +196,8 @@ class TargetRun:
     since : Time
         Start of validity (TDB): the LISA observation start, or T_valid before T0 for a timing
         ephemeris.
+    exposure : TargetExposure
+        The target's exposure plan and visit cadence (smearing floor applied).
     """
 
     target: Target
@@ -178,10 +210,11 @@ class TargetRun:
     until: Time
     smearing: Smearing
     since: Time
+    exposure: TargetExposure
 
 
 def _tolerance_and_validity(
-    target: Target, mode: ModeSpec, settings: PlanSettings
+    target: Target, mode: ModeSpec, settings: PlanSettings, exptime_s: float
 ) -> tuple[Time, Time, float | None, float | None]:
     """(valid-since, valid-until TDB, σ_v, K) for a target; errors say which number is missing.
 
@@ -189,7 +222,8 @@ def _tolerance_and_validity(
     LISA start to T_valid after its end, or T_valid before to T_valid after a timing T0.
     """
     spec = target.spectroscopy
-    sigma_v = settings.sigma_v_kms or (spec.sigma_v_kms if spec else None)
+    sigma_v: float | None = float(exposure_sigma_v(target, settings, exptime_s, 1.0))
+    sigma_v = sigma_v if sigma_v is not None and np.isfinite(sigma_v) else None
     k = settings.k_eff_kms or (spec.k_for_tolerance if spec else None)
     if sigma_v is None or k is None:
         raise UcbplanError(
@@ -206,12 +240,16 @@ def _tolerance_and_validity(
 
 
 def _smearing(
-    target: Target, settings: PlanSettings, sigma_v: float | None, k: float | None
+    target: Target,
+    settings: PlanSettings,
+    plan: ExposurePlan,
+    sigma_v: float | None,
+    k: float | None,
 ) -> tuple[Smearing, list[str]]:
     """Smearing of the exposure plan for ``target``, checked against the budget."""
     spec = target.spectroscopy
     k_smear = (spec.K1_kms if spec and spec.K1_kms else None) or k
-    sm = block_smearing(settings.exposure, target.params.n_bar, k_smear)
+    sm = block_smearing(plan, target.params.n_bar, k_smear)
     max_smear = parse_smear_budget(settings.max_smear, sigma_v) if settings.max_smear else None
     warns = check_smear_budget(target.name, sm, max_smear, settings.max_bin_fraction, sigma_v)
     return sm, warns
@@ -220,8 +258,12 @@ def _smearing(
 def _target_run(
     target: Target, i: int, frame: PlanFrame, settings: PlanSettings
 ) -> tuple[TargetRun, list[str]]:
-    since, until, sigma_v, k = _tolerance_and_validity(target, frame.mode, settings)
-    sm, warns = _smearing(target, settings, sigma_v, k)
+    te = target_exposure(target, settings)
+    since, until, sigma_v, k = _tolerance_and_validity(
+        target, frame.mode, settings, te.plan.exptime_s
+    )
+    sm, warns = _smearing(target, settings, te.plan, sigma_v, k)
+    warns = [*te.notes, *warns]
     cand = candidate_blocks(
         target,
         i,
@@ -231,14 +273,17 @@ def _target_run(
         frame.track.delay_interpolator(target.coord),
         frame.sky,
         frame.constraints,
-        settings.exposure,
+        te.plan,
         settings.star,
     )
     tau = cand.tau_origin_s + cand.dt_s
     valid = (tau >= cand.epochs.tau(since)) & (tau <= cand.epochs.tau(until))
-    partner, ok, score = session_partners(cand, frame.mode.paired)
+    paired = frame.mode.paired and settings.visit_s is None
+    partner, ok, score = session_partners(cand, paired)
+    if not te.floor_ok:
+        ok = np.zeros_like(ok)  # no exposure keeps the smearing floor
     valid = valid & ((partner < 0) | valid[np.maximum(partner, 0)])
-    return TargetRun(target, i, cand, partner, ok, score, valid, until, sm, since), warns
+    return TargetRun(target, i, cand, partner, ok, score, valid, until, sm, since, te), warns
 
 
 def prepare_runs(

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import bisect
 from collections import Counter
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -20,7 +20,7 @@ from ucbplan.observing.schedule.nights import NightSpan
 from ucbplan.observing.schedule.settings import PlanSettings
 from ucbplan.observing.sky import airmass_from_alt
 
-__all__ = ["Session", "Unplaced", "place_sessions"]
+__all__ = ["Allowance", "Session", "Timeline", "Unplaced", "place_sessions", "unusable_reason"]
 
 #: Sampling step of the night when explaining why nothing fits [s].
 _REASON_STEP_S = 300.0
@@ -47,7 +47,38 @@ class Session:
 
 
 @dataclass
-class _Timeline:
+class Allowance:
+    """What a target may still be given over the run: exposures (a ``--goal``) and wall time
+    (``--budget``) [s]; None = no limit. ``smallest_s`` is the wall time of the shortest visit
+    or session (acquisition + one exposure): a budget with less left is spent."""
+
+    exposures: int | None = None
+    seconds: float | None = None
+    smallest_s: float = 0.0
+
+    @property
+    def spent(self) -> bool:
+        """Nothing more may be planned (less time left than the shortest visit/session)."""
+        return (self.exposures is not None and self.exposures <= 0) or (
+            self.seconds is not None and self.seconds < max(self.smallest_s, 1e-9)
+        )
+
+    def fits(self, n_exposures: int, wall_s: float) -> bool:
+        """Whether a visit or session of ``n_exposures`` and ``wall_s`` fits."""
+        return (self.exposures is None or n_exposures <= self.exposures) and (
+            self.seconds is None or wall_s <= self.seconds + 1e-6
+        )
+
+    def charge(self, n_exposures: int, wall_s: float) -> None:
+        """Spend a placed visit or session."""
+        if self.exposures is not None:
+            self.exposures -= n_exposures
+        if self.seconds is not None:
+            self.seconds -= wall_s
+
+
+@dataclass
+class Timeline:
     """Sessions placed so far and the taken intervals of the whole run [s on the plan's axis].
 
     Taken intervals are kept sorted and pairwise apart by at least the overhead, so a new
@@ -118,10 +149,15 @@ def _no_session_reason(run: TargetRun, frame: PlanFrame, window: tuple[float, fl
     return f"every block {frame.constraints.active[worst].reason()}"
 
 
-def _unusable_reason(
+def unusable_reason(
     run: TargetRun, js: np.ndarray, span: NightSpan, frame: PlanFrame, settings: PlanSettings
 ) -> str:
     """Why none of the sessions ``js`` of a night can be used."""
+    if not run.exposure.floor_ok:
+        return (
+            f"smearing floor: no exposure keeps Lambda_K >= {settings.lambda_k_floor:g}; lower "
+            "--min-lambda-k or pass --allow-smeared"
+        )
     if not np.any(run.valid[js]):
         if span.x1 <= frame.axis.x(run.since) and run.target.kind != "timing":
             return (
@@ -146,9 +182,10 @@ def _place_night(
     run: TargetRun,
     n: int,
     span: NightSpan,
-    timeline: _Timeline,
+    timeline: Timeline,
     frame: PlanFrame,
     settings: PlanSettings,
+    allowance: Allowance,
 ) -> str | None:
     """Place one target's best sessions in night ``n``; the reason if fewer than asked fit."""
     c = run.cand
@@ -158,16 +195,24 @@ def _place_night(
     js = np.arange(j0, j1)
     usable = js[(run.ok[js] > 0) & run.valid[js]]
     if usable.size == 0:
-        return _unusable_reason(run, js, span, frame, settings)
+        return unusable_reason(run, js, span, frame, settings)
     usable = usable[np.argsort(run.score[usable], kind="stable")]
-    wanted, count = settings.sessions_per_night, 0
+    wanted, count, n_exp = settings.sessions_per_night, 0, run.exposure.plan.n_exp
+    over_budget = False
     for j in usable:
         idx = (int(j),) if run.partner[j] < 0 else (int(j), int(run.partner[j]))
         s = Session(run.index, n, idx, float(c.x_start[idx[0]]), float(c.x_end[idx[-1]]))
+        wall = settings.overhead_s + s.x1 - s.x0
+        if not allowance.fits(len(idx) * n_exp, wall):
+            over_budget = True
+            continue
         if timeline.add(s):
+            allowance.charge(len(idx) * n_exp, wall)
             count += 1
             if count == wanted:
                 return None
+    if over_budget:
+        return f"time budget spent after {count} session(s)"
     if count == 0:
         return (
             f"all {usable.size} usable sessions overlap higher-priority blocks "
@@ -182,6 +227,7 @@ def place_sessions(
     frame: PlanFrame,
     settings: PlanSettings,
     busy: Sequence[tuple[float, float]] = (),
+    allowances: Mapping[int, Allowance] | None = None,
 ) -> tuple[list[Session], list[Unplaced]]:
     """Greedy night schedule: targets by priority, each night's best sessions (lowest airmass)
     that keep the overhead gap to everything already placed (and to the ``busy`` intervals
@@ -194,12 +240,16 @@ def place_sessions(
     unplaced : list of Unplaced
         One entry per target and night that got fewer sessions than asked.
     """
-    timeline = _Timeline(settings.overhead_s)
+    timeline = Timeline(settings.overhead_s)
     timeline.block_out(busy)
     unplaced: list[Unplaced] = []
     for run in sorted(runs, key=lambda r: -r.target.priority):
+        allowance = (allowances or {}).get(run.index) or Allowance()
         for n, span in enumerate(spans):
-            reason = _place_night(run, n, span, timeline, frame, settings)
+            if allowance.spent:
+                unplaced.append(Unplaced(run.target.name, span.label, "time budget spent"))
+                continue
+            reason = _place_night(run, n, span, timeline, frame, settings, allowance)
             if reason is not None:
                 unplaced.append(Unplaced(run.target.name, span.label, reason))
     return timeline.placed, unplaced

@@ -14,7 +14,7 @@ could not be placed is reported with the reason.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from datetime import date
 from typing import TYPE_CHECKING
 
@@ -23,12 +23,17 @@ from astropy.time import Time
 
 from ucbplan.errors import UcbplanError
 from ucbplan.observing.blocks import Block
-from ucbplan.observing.schedule.candidates import prepare_runs
+from ucbplan.observing.goals import GoalPlan
+from ucbplan.observing.schedule.candidates import TargetRun, prepare_runs
+from ucbplan.observing.schedule.exposure import TargetExposure
+from ucbplan.observing.schedule.goalplan import check_goals, goal_plans
 from ucbplan.observing.schedule.nights import night_spans, night_windows
 from ucbplan.observing.schedule.pairs import SecondEpoch, pair_blocks
-from ucbplan.observing.schedule.placement import Unplaced, place_sessions
+from ucbplan.observing.schedule.placement import Allowance, Unplaced, place_sessions
+from ucbplan.observing.schedule.reasons import not_planned
 from ucbplan.observing.schedule.records import block_records
 from ucbplan.observing.schedule.settings import PlanSettings
+from ucbplan.observing.schedule.visits import place_visits
 from ucbplan.observing.sites import Site
 from ucbplan.observing.timeaxis import TimeAxis
 from ucbplan.observing.timeconv import coverage_warnings, quiet_erfa
@@ -55,6 +60,13 @@ class PlanResult:
         One line per applied constraint (provenance).
     valid_until : dict of str to Time
         End of each target's validity T_valid (TDB).
+    goals : dict of str to GoalPlan
+        Each target's goal plan (``--goal``; empty without).
+    exposures : dict of str to TargetExposure
+        Each target's exposure plan and cadence.
+    reasons : dict
+        {target: {night: {reason: count}}}: night-time anchor epochs not planned, by reason
+        (:mod:`.reasons`).
     """
 
     blocks: list[Block]
@@ -62,6 +74,9 @@ class PlanResult:
     warnings: list[str]
     constraints: list[str]
     valid_until: dict[str, Time]
+    goals: dict[str, GoalPlan] = field(default_factory=dict)
+    exposures: dict[str, TargetExposure] = field(default_factory=dict)
+    reasons: dict[str, dict[str, dict[str, int]]] = field(default_factory=dict)
 
 
 def _check_inputs(targets: list[Target], nights: list[date], settings: PlanSettings) -> None:
@@ -109,6 +124,24 @@ def _busy_x(axis: TimeAxis, busy: Sequence[Block]) -> list[tuple[float, float]]:
     ]
 
 
+def _allowances(
+    runs: Sequence[TargetRun], settings: PlanSettings, goals: dict[int, GoalPlan]
+) -> dict[int, Allowance]:
+    """Exposures (``--goal``) and wall time (``--budget``) each target may be given."""
+    budgets = dict(settings.budgets)
+    out = {}
+    for r in runs:
+        goal = goals.get(r.index)
+        seconds = budgets.get(r.target.name.lower())
+        if goal is not None or seconds is not None:
+            plan = r.exposure.plan
+            smallest = settings.overhead_s + plan.span_s
+            if settings.visit_s is not None:
+                smallest += plan.readout_s
+            out[r.index] = Allowance(goal.n_spectra if goal else None, seconds, smallest)
+    return out
+
+
 def plan_nights(
     targets: list[Target],
     site: Site,
@@ -152,17 +185,29 @@ def plan_nights(
     windows = night_windows(site, nights)
     frame, runs, warns = prepare_runs(targets, site, windows, settings)
     spans = night_spans(windows, frame.axis)
-    placed, unplaced = place_sessions(runs, spans, frame, settings, _busy_x(frame.axis, busy))
+    busy_x = _busy_x(frame.axis, busy)
+    goals = goal_plans(runs, settings)
+    allowances = _allowances(runs, settings, goals)
+    if settings.visit_s is not None:
+        placed, unplaced = place_visits(runs, spans, frame, settings, busy_x, allowances)
+    else:
+        placed, unplaced = place_sessions(runs, spans, frame, settings, busy_x, allowances)
+    gap = 0.0 if settings.visit_s is not None else settings.overhead_s
+    reasons = not_planned(runs, spans, frame, placed, unplaced, gap)
     blocks = block_records(placed, runs, spans, frame, site, settings)
     if frame.mode.label == "fixed-u-pairs":
         second = _second_epoch(site, settings)
         blocks, more = pair_blocks(blocks, runs, settings.max_pair_baseline_days, second)
         unplaced += more
     blocks.sort(key=lambda b: (b.t_mid_utc.jd1, b.t_mid_utc.jd2))
+    check_goals(goals, runs, blocks)
     return PlanResult(
         blocks=blocks,
         unplaced=unplaced,
         warnings=warns + coverage_warnings(windows[0].start, windows[-1].end),
         constraints=frame.constraints.describe(),
         valid_until={r.target.name: r.until for r in runs},
+        goals={runs[i].target.name: g for i, g in goals.items()},
+        exposures={r.target.name: r.exposure for r in runs},
+        reasons=reasons,
     )

@@ -20,7 +20,9 @@ from numpy.typing import NDArray
 from ucbplan.core.constants import TWO_PI
 from ucbplan.observing.blocks import Block
 from ucbplan.observing.constraints import SAMPLE_STEP_S
+from ucbplan.observing.instruments import MAX_AIRMASS
 from ucbplan.observing.schedule.candidates import PlanFrame, TargetRun
+from ucbplan.observing.schedule.exposure import exposure_sigma_v
 from ucbplan.observing.schedule.nights import NightSpan
 from ucbplan.observing.schedule.placement import Session
 from ucbplan.observing.schedule.settings import PlanSettings
@@ -38,11 +40,12 @@ def slug(name: str) -> str:
 
 
 class BlockLabel(NamedTuple):
-    """Night label, block and session identifiers of one block."""
+    """Night label, block, session and visit identifiers of one block."""
 
     night: str
     block_id: str
     session_id: str
+    visit_id: str
 
 
 def _labels(
@@ -59,10 +62,11 @@ def _labels(
         js, labels = out.setdefault(s.target_i, ([], []))
         sessions[key] += 1
         session_id = f"{prefix}-S{sessions[key]:02d}"
+        visit_id = f"{prefix}-V{sessions[key]:02d}"
         for j in s.idx:
             blocks[key] += 1
             js.append(j)
-            labels.append(BlockLabel(label, f"{prefix}-{blocks[key]:02d}", session_id))
+            labels.append(BlockLabel(label, f"{prefix}-{blocks[key]:02d}", session_id, visit_id))
     return out
 
 
@@ -76,11 +80,15 @@ class _Geometry:
     moon_illum: FloatArray
     utc: Time  # (n, 4): start, middle, end, π-mode alternative
     tdb: Time  # (n,) barycentric anchor epochs
+    sigma_v: FloatArray  # σ_v per exposure at the block-centre airmass [km/s]
 
 
-def _geometry(run: TargetRun, js: NDArray[np.int64], frame: PlanFrame, span_s: float) -> _Geometry:
+def _geometry(
+    run: TargetRun, js: NDArray[np.int64], frame: PlanFrame, settings: PlanSettings
+) -> _Geometry:
     """Geometry and times of candidates ``js`` (one vectorised pass per target)."""
-    c, sky, i = run.cand, frame.sky, run.index
+    c, sky, i, plan = run.cand, frame.sky, run.index, run.exposure.plan
+    span_s = plan.span_s
     xs = np.stack([c.x_start[js], c.x_mid[js], c.x_end[js]], axis=1)
     alt = sky.target_alt_deg(i, xs)
     n_s = max(3, math.ceil(span_s / SAMPLE_STEP_S) + 1)
@@ -88,13 +96,16 @@ def _geometry(run: TargetRun, js: NDArray[np.int64], frame: PlanFrame, span_s: f
     # a timing ephemeris has no π-mode alternative (NaN): keep the time conversion finite
     x_alt = np.where(np.isfinite(c.x_alt[js]), c.x_alt[js], c.x_mid[js])
     x_all = np.concatenate([xs, x_alt[:, None]], axis=1)
+    airmass = airmass_from_alt(alt)
+    x_sigma = np.clip(airmass[:, 1], 1.0, MAX_AIRMASS)
     return _Geometry(
         alt=alt,
-        airmass=airmass_from_alt(alt),
+        airmass=airmass,
         moon_sep=np.min(sky.moon_sep_deg(i, fine), axis=1),
         moon_illum=sky.moon_illum(c.x_mid[js]),
         utc=frame.axis.utc(x_all),
         tdb=c.epochs.time(c.tau_origin_s, c.dt_s[js]),
+        sigma_v=exposure_sigma_v(run.target, settings, plan.exptime_s, x_sigma),
     )
 
 
@@ -109,7 +120,7 @@ def _block(
     settings: PlanSettings,
 ) -> Block:
     """Block ``k`` (candidate ``j``) of a target's placed blocks."""
-    t, sm, c, plan = run.target, run.smearing, run.cand, settings.exposure
+    t, sm, c, plan = run.target, run.smearing, run.cand, run.exposure.plan
     return Block(
         target=t.name,
         block_id=label.block_id,
@@ -142,6 +153,8 @@ def _block(
         period_s=t.period_s,
         priority=t.priority,
         session_id=label.session_id,
+        visit_id=label.visit_id,
+        sigma_v_kms=float(g.sigma_v[k]),
     )
 
 
@@ -157,7 +170,7 @@ def block_records(
     out: list[Block] = []
     for i, (idx, labels) in _labels(placed, runs, spans).items():
         js = np.asarray(idx, dtype=np.int64)
-        g = _geometry(runs[i], js, frame, settings.exposure.span_s)
+        g = _geometry(runs[i], js, frame, settings)
         out += [
             _block(runs[i], g, k, int(j), labels[k], frame.mode.label, site, settings)
             for k, j in enumerate(js)

@@ -19,6 +19,7 @@ from astropy.table import Table
 from ucbplan.errors import InputError, shorten
 from ucbplan.inputs import check_range
 from ucbplan.observing.blocktable import blocks_to_table, make_meta
+from ucbplan.observing.schedule.accounting import VisitSummary, time_accounting, visit_summaries
 from ucbplan.observing.schedule.nights import night_dates
 from ucbplan.observing.schedule.planner import PlanResult, plan_nights
 from ucbplan.observing.schedule.settings import PlanSettings
@@ -114,6 +115,44 @@ class PlanRun:
             parts.append(f"{name} ({when}): {reason}")
         return f"no block could be planned at {self.site.name}: {'; '.join(parts)}"
 
+    def visits(self) -> list[VisitSummary]:
+        """One summary per visit (acquisition + exposures), in time order."""
+        trailing = self.settings.visit_s is not None
+        return visit_summaries(self.result.blocks, self.settings.overhead_s, trailing)
+
+    def accounting(self) -> dict[str, Any]:
+        """Time accounting, ``{"total": {...}, "targets": {NAME: {...}}}`` (see
+        :func:`~ucbplan.observing.schedule.accounting.time_accounting`)."""
+        return time_accounting(self.visits())
+
+    def _planning(self) -> dict[str, Any]:
+        """Visit, instrument, cadence and goal facts of the run, per target."""
+        s = self.settings
+        out: dict[str, Any] = {
+            "visit_s": s.visit_s,
+            "cadence": s.cadence,
+            "min_lambda_k": s.lambda_k_floor,
+            "allow_smeared": s.allow_smeared,
+            "instrument": s.instrument.name if s.instrument is not None else None,
+            "goal": s.goal,
+        }
+        per_target = {}
+        for name, te in self.result.exposures.items():
+            entry: dict[str, Any] = {
+                "exptime_s": te.plan.exptime_s,
+                "readout_s": te.plan.readout_s,
+                "step_s": round(te.step_s, 6),
+                "duty_cycle": round(te.duty_cycle, 6),
+                "lambda_k": round(te.lambda_k, 6),
+            }
+            goal = self.result.goals.get(name)
+            if goal is not None:
+                entry["goal_spectra"] = goal.n_spectra
+                entry["goal_expected"] = goal.expected
+            per_target[name] = entry
+        out["targets"] = per_target
+        return out
+
     def meta(self) -> dict[str, Any]:
         """Provenance of the run for the table ``meta`` (see :func:`make_meta`)."""
         res, plan = self.result, self.settings.exposure
@@ -138,12 +177,26 @@ class PlanRun:
                 "valid_until_tdb": valid_until,
                 "warnings": res.warnings,
                 "unplaced": [f"{m.target} {m.night}: {m.reason}" for m in res.unplaced],
+                "planning": self._planning(),
+                "not_planned": res.reasons,
+                "visits": [v.as_dict() for v in self.visits()],
+                "time_accounting": self.accounting(),
             },
         )
 
     def table(self) -> Table:
         """The master blocks table (:mod:`ucbplan.observing.blocktable`) with provenance."""
         return blocks_to_table(self.result.blocks, self.meta())
+
+
+def _check_budget_names(targets: Sequence[Target], settings: PlanSettings) -> None:
+    """Every ``--budget`` names a target of the run (case-insensitive)."""
+    known = {t.name.lower() for t in targets}
+    for name, _ in settings.budgets:
+        if name not in known:
+            names = ", ".join(t.name for t in targets)
+            names = names if len(names) <= 200 else f"{names[:199]}…"
+            raise InputError(f"--budget: no target named {shorten(name, 60)}; targets: {names}")
 
 
 def plan_files(
@@ -190,5 +243,6 @@ def plan_files(
         parse_priorities(priorities)
     the_site = resolve_site(site, site_lonlat, sites_file)
     targets = with_priorities([load_target(p) for p in target_files], priorities)
+    _check_budget_names(targets, settings)
     result = plan_nights(targets, the_site, dates, settings)
     return PlanRun(targets, the_site, dates, settings, result)

@@ -18,12 +18,47 @@ from ucbplan.observing.constraints import (
     NightConstraint,
     ZenithHoleConstraint,
 )
+from ucbplan.observing.goals import parse_goal
+from ucbplan.observing.instruments import Instrument
 from ucbplan.observing.sites import Site
 
-__all__ = ["MODES", "ModeSpec", "PlanSettings", "parse_mode"]
+__all__ = [
+    "CADENCES",
+    "MODES",
+    "ModeSpec",
+    "PlanSettings",
+    "parse_budgets",
+    "parse_duration",
+    "parse_mode",
+]
+
+#: Exposure cadences inside a visit (``--cadence``): ``anchor`` centres every exposure on an
+#: anchor and waits for the next one it can reach; ``phase-locked`` sets exposure + readout to
+#: the anchor spacing, so consecutive exposures centre on consecutive anchors without waiting.
+CADENCES = ("anchor", "phase-locked")
+#: Default smallest smearing factor Λ_K of a planned exposure (``--min-lambda-k``).
+DEFAULT_MIN_LAMBDA_K = 0.9
+#: Longest per-target time budget [s] (a year of nights).
+MAX_BUDGET_S = 366 * 86400.0
+#: Seconds per unit of a ``--visit`` duration.
+_DURATION_UNITS = {
+    "s": 1.0,
+    "sec": 1.0,
+    "min": 60.0,
+    "m": 60.0,
+    "h": 3600.0,
+    "hr": 3600.0,
+}
 
 #: The planning modes, as ``--mode`` spells them.
-MODES = ("quadrature", "conjunction", "zero-crossing", "fixed-u-pairs", "u=VALUE")
+MODES = (
+    "quadrature",
+    "conjunction",
+    "zero-crossing",
+    "fixed-u-pairs",
+    "quadrature+conjunction",
+    "u=VALUE",
+)
 
 #: Largest |u★| of ``--mode u=VALUE`` [rad] (two turns; the anchor is taken modulo 2π).
 MAX_ABS_U_RAD = 4.0 * math.pi
@@ -35,6 +70,60 @@ MAX_ALPHA = 10.0
 MAX_SESSIONS = 1000
 #: Longest ``--max-smear`` text [characters].
 _MAX_SMEAR_CHARS = 60
+
+
+def parse_duration(
+    text: str | float, option: str = "--visit", longest_s: float = MAX_BLOCK_S
+) -> float:
+    """A duration such as ``1h``, ``45min``, ``3600s`` or ``1.5h`` → seconds.
+
+    Raises
+    ------
+    InputError
+        For any other form, or a duration outside (0, ``longest_s``].
+    """
+    if isinstance(text, int | float) and not isinstance(text, bool):
+        value, unit = float(text), "s"
+    else:
+        m = re.fullmatch(r"\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*([a-z]*)\s*", str(text)[:40])
+        if not m or m.group(2) not in _DURATION_UNITS:
+            raise InputError(
+                f"{option}: expected a duration such as 1h, 45min or 3600s, got {shorten(text, 40)}"
+            )
+        value, unit = float(m.group(1)), m.group(2)
+    seconds = value * _DURATION_UNITS[unit]
+    why = "a visit (acquisition included) must fit in one night"
+    if longest_s != MAX_BLOCK_S:
+        why = "a time budget over the nights planned"
+    return check_range(option, seconds, 0.0, longest_s, "s", why, low_open=True)
+
+
+def parse_budgets(items: object) -> tuple[tuple[str, float], ...]:
+    """``NAME=DURATION`` items (``--budget 'HM Cnc=2h'``) → ((lower-case name, seconds), ...).
+
+    Raises
+    ------
+    InputError
+        For an item that is not ``NAME=DURATION``, or a name given twice.
+    """
+    if not isinstance(items, list | tuple):
+        raise InputError(f"--budget: expected NAME=DURATION items, got {shorten(items, 60)}")
+    out: dict[str, float] = {}
+    for item in items:
+        if isinstance(item, tuple) and len(item) == 2:
+            name, text = str(item[0]), item[1]
+        else:
+            name, sep, text = str(item).rpartition("=")
+            if not sep or not name.strip():
+                raise InputError(
+                    "--budget: expected NAME=DURATION (a target name and e.g. 2h or 90min), "
+                    f"got {shorten(item, 80)}"
+                )
+        key = name.strip().lower()
+        if key in out:
+            raise InputError(f"--budget: target {shorten(name.strip(), 40)} is given twice")
+        out[key] = parse_duration(text, f"--budget {shorten(name.strip(), 40)}", MAX_BUDGET_S)
+    return tuple(out.items())
 
 
 @dataclass(frozen=True, slots=True)
@@ -96,6 +185,10 @@ def parse_mode(text: str) -> ModeSpec:
     half_pi = (math.pi / 2, 3 * math.pi / 2)
     if t == "quadrature":
         return ModeSpec("quadrature", "quadrature", (0.0, math.pi), "quadrature", True)
+    if t in ("quadrature+conjunction", "quad+conj"):
+        quarter = (0.0, math.pi / 2, math.pi, 3 * math.pi / 2)
+        label = "quadrature+conjunction"
+        return ModeSpec(label, label, quarter, "quadrature", False)
     if t == "conjunction":
         return ModeSpec("conjunction", "conjunction", half_pi, "conjunction", False)
     if t in ("zero-crossing", "zero_crossing"):
@@ -107,7 +200,7 @@ def parse_mode(text: str) -> ModeSpec:
         return ModeSpec(f"u={value:g}", value, (value,), "generic", False)
     raise InputError(
         f"--mode: unknown mode {shorten(text, 60)}; expected quadrature, conjunction, "
-        "zero-crossing, fixed-u-pairs or u=VALUE (radians, e.g. u=0.785)"
+        "zero-crossing, fixed-u-pairs, quadrature+conjunction or u=VALUE (radians, e.g. u=0.785)"
     )
 
 
@@ -149,6 +242,25 @@ class PlanSettings:
         Longest baseline searched for the second epoch of a fixed-u pair [d].
     star : int
         Component whose argument of latitude is targeted (1 or 2).
+    visit_s : float or None
+        Visit length, acquisition included [s] (``--visit``); None plans sessions as before.
+    cadence : str
+        Exposure cadence inside a visit (see :data:`CADENCES`).
+    min_lambda_k : float or None
+        Smallest smearing factor Λ_K of a planned block (``--min-lambda-k``). None: 0.9
+        (:data:`DEFAULT_MIN_LAMBDA_K`) with visits; without, only Λ_K > 0 (the signal is not
+        averaged away or inverted), as sessions of co-added blocks always were planned.
+    allow_smeared : bool
+        Plan exposures below ``min_lambda_k`` (``--allow-smeared``).
+    exptime_explicit : bool
+        The exposure time was chosen by the user (the default for library calls): below the
+        floor it is refused, not capped; the CLI sets False when ``--exptime`` is not given.
+    instrument : Instrument or None
+        Spectrograph whose σ_ref scales σ_v per exposure (overheads are resolved already).
+    goal : str or None
+        Precision goal (``--goal``, e.g. ``sigma_K=2km/s``): plans the spectra that reach it.
+    budgets : tuple of (str, float)
+        Wall-time budget per target (lower-case name, seconds) over all nights (``--budget``).
 
     Raises
     ------
@@ -174,6 +286,14 @@ class PlanSettings:
     sessions_per_night: int = 1
     max_pair_baseline_days: float = 365.0
     star: int = 1
+    visit_s: float | None = None
+    cadence: str = "anchor"
+    min_lambda_k: float | None = None
+    allow_smeared: bool = False
+    exptime_explicit: bool = True
+    instrument: Instrument | None = None
+    goal: str | None = None
+    budgets: tuple[tuple[str, float], ...] = ()
 
     def __post_init__(self) -> None:
         parse_mode(self.mode)
@@ -194,6 +314,42 @@ class PlanSettings:
         check_range("max_pair_baseline_days", self.max_pair_baseline_days, 0.0, 36525.0, "d", why)
         if self.star not in (1, 2) or isinstance(self.star, bool):
             raise InputError(f"star: expected 1 or 2, got {shorten(self.star)}")
+        self._check_visits()
+
+    def _check_visits(self) -> None:
+        """``--visit``, ``--cadence``, ``--min-lambda-k`` and ``--goal``."""
+        if self.visit_s is not None:
+            parse_duration(self.visit_s)
+            if self.spec.label == "fixed-u-pairs":
+                raise InputError(
+                    "--visit: fixed-u pairs are single blocks at two epochs; drop --visit or "
+                    "use --mode quadrature"
+                )
+            if self.exposure.n_exp != 1:
+                raise InputError(
+                    f"--n-exp: expected 1 with --visit (each exposure of a visit is centred on "
+                    f"its own anchor), got {self.exposure.n_exp}; drop --n-exp"
+                )
+        if self.cadence not in CADENCES:
+            raise InputError(
+                f"--cadence: expected {' or '.join(CADENCES)}, got {shorten(self.cadence, 40)}"
+            )
+        if self.cadence == "phase-locked":
+            if self.visit_s is None:
+                raise InputError("--cadence phase-locked: expected --visit DURATION as well")
+            if self.exptime_explicit:
+                raise InputError(
+                    "--cadence phase-locked sets exposure + readout to the anchor spacing; "
+                    "drop --exptime (or use --cadence anchor)"
+                )
+        why = "smallest smearing factor of an exposure: 0 = none, 1 = no smearing at all"
+        if self.min_lambda_k is not None:
+            check_range("--min-lambda-k", self.min_lambda_k, 0.0, 1.0, "", why)
+        parse_budgets(list(self.budgets))
+        if self.goal is not None:
+            parse_goal(self.goal)
+            if self.visit_s is None:
+                raise InputError("--goal: expected --visit DURATION as well (goals plan visits)")
 
     def _check_budgets(self) -> None:
         """``--max-smear`` (its form, and a positive budget) and ``--max-bin-fraction``."""
@@ -221,6 +377,13 @@ class PlanSettings:
             ) from None
         why = "a velocity, or a multiple of sigma_v"
         check_range("--max-smear", budget, 0.0, MAX_SPEED_KMS, "km/s", why, low_open=True)
+
+    @property
+    def lambda_k_floor(self) -> float:
+        """The smearing floor in force (see ``min_lambda_k``)."""
+        if self.min_lambda_k is not None:
+            return self.min_lambda_k
+        return DEFAULT_MIN_LAMBDA_K if self.visit_s is not None else 0.0
 
     @property
     def spec(self) -> ModeSpec:

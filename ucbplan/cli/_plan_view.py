@@ -1,0 +1,241 @@
+"""What ``ucbplan plan`` prints: the night tables (100 columns, or all with --wide), the per-night
+summary of long plans, visits, time accounting and the reasons anchors were not planned."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from rich.markup import escape
+
+from ucbplan.cli._console import err_console, rich_table
+from ucbplan.errors import UcbplanError
+
+__all__ = ["SUMMARY_NIGHTS", "SUMMARY_ROWS", "report"]
+
+
+def _local(b: Any) -> str:
+    from datetime import UTC
+    from zoneinfo import ZoneInfo
+
+    dt = b.t_mid_utc.to_datetime(timezone=UTC).astimezone(ZoneInfo(b.timezone))
+    return dt.strftime("%H:%M:%S %Z")
+
+
+def _exposure_labels(blocks: list[Any]) -> list[str]:
+    """``V01/03``: visit and exposure number inside it, per block (blocks in time order)."""
+    count: dict[tuple[str, str], int] = {}
+    out = []
+    for b in blocks:
+        key = (b.target, b.visit_id)
+        count[key] = count.get(key, 0) + 1
+        visit = b.visit_id.rsplit("-", 1)[-1] if b.visit_id else "—"
+        out.append(f"{visit}/{count[key]:02d}")
+    return out
+
+
+def _print_compact(blocks: list[Any], night: str, site: Any) -> None:
+    """The essential columns of a night, fitting 100 terminal columns (``--wide``: all)."""
+    names = list(dict.fromkeys(b.target for b in blocks))
+    who = f"{names[0]}, " if len(names) == 1 else ""
+    table = rich_table(
+        f"{who}night of {night} at {site.name} — UTC at the site (light time removed)",
+        [
+            *(["target"] if len(names) > 1 else []),
+            "visit/exp",
+            "UTC start–end",
+            "u★ [rad]",
+            "airmass",
+            "Λ_K",
+            "σ_t [s]",
+        ],
+    )
+    for column in table.columns:
+        column.no_wrap = True
+    for b, label in zip(blocks, _exposure_labels(blocks), strict=True):
+        table.add_row(
+            *([escape(b.target[:12])] if len(names) > 1 else []),
+            label,
+            f"{b.t_start_utc.iso[:19]}–{b.t_end_utc.iso[11:19]}",
+            f"{b.u_star_rad:.4f}",
+            f"{b.airmass:.2f}",
+            f"{b.lambda_k:.3f}",
+            f"{b.sigma_t_s:.2f}",
+        )
+    err_console.print(table)
+
+
+def _print_summary(run: Any) -> None:
+    """One row per night: visits, exposures and hours (a long plan, without --verbose)."""
+    visits = run.visits()
+    table = rich_table(
+        f"Plan at {run.site.name}, per night (the full table: -o FILE or --verbose)",
+        ["night", "visits", "exposures", "hours (wall)"],
+    )
+    for night in (d.isoformat() for d in run.nights):  # nights without a visit too
+        vs = [v for v in visits if v.night == night]
+        table.add_row(
+            night,
+            str(len(vs)),
+            str(sum(v.exposures for v in vs)),
+            f"{sum(v.wall_s for v in vs) / 3600:.2f}",
+        )
+    err_console.print(table)
+
+
+#: A plan longer than this many nights or rows prints the per-night summary (issue 15).
+SUMMARY_NIGHTS, SUMMARY_ROWS = 3, 60
+
+
+def _print_night(blocks: list[Any], night: str, site: Any) -> None:
+    paired = any(b.pair_id for b in blocks)
+    # the φ_ref π-mode exists only for LISA posteriors; a night of timing targets has none
+    pi_mode = any(b.t_alt_utc is not None for b in blocks)
+    table = rich_table(
+        f"Night of {night} at {site.name} — times are UTC at the site (light time removed); "
+        "±σ is the 1σ timing uncertainty",
+        [
+            "target",
+            "block",
+            "visit/exp",
+            "anchor",
+            "u★ [rad]",
+            "UTC mid ± σ",
+            "local mid",
+            "UTC start–end",
+            "airmass s/m/e",
+            "Moon [deg]",
+            "Λ_K",
+            "σ_v [km/s]",
+            *(["π-mode alt. UTC"] if pi_mode else []),
+            *(["pair: Δκ_LISA"] if paired else []),
+        ],
+    )
+    for b, label in zip(blocks, _exposure_labels(blocks), strict=True):
+        table.add_row(
+            escape(b.target),
+            escape(b.block_id.rsplit("-", 1)[-1]),
+            label,
+            escape(b.anchor),
+            f"{b.u_star_rad:.4f}",
+            f"{b.t_mid_utc.iso[11:23]} ± {b.sigma_t_s:.2f} s",
+            _local(b),
+            f"{b.t_start_utc.iso[11:19]}–{b.t_end_utc.iso[11:19]}",
+            f"{b.airmass_start:.2f}/{b.airmass:.2f}/{b.airmass_end:.2f}",
+            f"{b.moon_sep_deg:.0f}",
+            f"{b.lambda_k:.4f}",
+            f"{b.sigma_v_kms:.2f}",
+            *([b.t_alt_utc.iso[11:21] if b.t_alt_utc is not None else "—"] if pi_mode else []),
+            *([f"{escape(b.pair_id)}: {b.delta_kappa:+.2e}"] if paired else []),
+        )
+    err_console.print(table)
+
+
+def report(run: Any, wide: bool = False, verbose: bool = False) -> None:
+    """Warnings and what was not placed (grouped over nights), then one table per night."""
+    for w in run.result.warnings:
+        err_console.print(f"[yellow]warning:[/] {escape(w)}", soft_wrap=True)
+    grouped: dict[tuple[str, str], list[str]] = {}
+    for miss in run.result.unplaced:
+        grouped.setdefault((miss.target, miss.reason), []).append(miss.night)
+    for (name, reason), when in grouped.items():
+        span = when[0] if len(when) == 1 else f"{len(when)} nights {when[0]}..{when[-1]}"
+        err_console.print(
+            f"[yellow]not placed:[/] {escape(name)} ({span}): {escape(reason)}", soft_wrap=True
+        )
+    failure = run.failure()
+    if failure is not None:
+        raise UcbplanError(failure)
+    blocks = run.result.blocks
+    nights = list(dict.fromkeys(b.night for b in blocks))
+    if not verbose and (len(nights) > SUMMARY_NIGHTS or len(blocks) > SUMMARY_ROWS):
+        _print_summary(run)
+    else:
+        show = _print_night if wide else _print_compact
+        for label in nights:
+            show([b for b in blocks if b.night == label], label, run.site)
+    _print_accounting(run, verbose)
+
+
+def _print_reasons(run: Any) -> None:
+    """Night-time anchor epochs not planned, by reason, summed over the nights (one line per
+    target; per night in the table meta ``not_planned``)."""
+    for name, nights in run.result.reasons.items():
+        total: dict[str, int] = {}
+        for counts in nights.values():
+            for why, k in counts.items():
+                total[why] = total.get(why, 0) + k
+        if not total:
+            continue
+        span = f"{len(nights)} night{'s' if len(nights) > 1 else ''}"
+        parts = ", ".join(f"{k} {why}" for why, k in total.items())
+        err_console.print(
+            f"night-time anchors not planned: {escape(name)} ({span}): {escape(parts)}",
+            soft_wrap=True,
+        )
+
+
+def _hours(seconds: float) -> str:
+    return f"{seconds / 3600:.2f} h"
+
+
+def _print_accounting(run: Any, verbose: bool = False) -> None:
+    """Visits (with --visit) and the time accounting, per target and in total."""
+    visits = run.visits()
+    if run.settings.visit_s is not None and (verbose or len(visits) <= SUMMARY_ROWS):
+        table_v = rich_table(
+            "Visits — one acquisition, then exposures centred on anchors (UTC at the site)",
+            ["visit", "target", "acquisition", "first exp.", "last end", "exp.", "idle [s]"],
+        )
+        for v in visits:
+            table_v.add_row(
+                escape("-".join(v.visit_id.rsplit("-", 2)[-2:])),
+                escape(v.target[:18]),
+                v.acq_start_utc[11:],
+                v.start_utc[11:],
+                v.end_utc[11:],
+                str(v.exposures),
+                f"{v.idle_s:.0f}",
+            )
+        for column in table_v.columns:
+            column.no_wrap = True
+        err_console.print(table_v)
+    acc = run.accounting()
+    table = rich_table(
+        "Time accounting — efficiency = shutter / (shutter + overheads + idle)",
+        ["target", "visits", "exposures", "shutter", "overheads", "idle", "efficiency"],
+    )
+    rows = [
+        *acc["targets"].items(),
+        *([("total", acc["total"])] if len(acc["targets"]) > 1 else []),
+    ]
+    for name, e in rows:
+        table.add_row(
+            escape(name),
+            str(e["visits"]),
+            str(e["exposures"]),
+            _hours(e["shutter_s"]),
+            _hours(e["overhead_s"]),
+            _hours(e["idle_s"]),
+            f"{e['efficiency']:.1%}",
+        )
+    err_console.print(table)
+    _print_reasons(run)
+    for name, goal in run.result.goals.items():
+        at: dict[float, int] = {}
+        for b in run.result.blocks:
+            if b.target == name:
+                at[round(b.u_star_rad, 4)] = at.get(round(b.u_star_rad, 4), 0) + b.n_exp
+        split = ", ".join(f"{k} at u★ = {u:.4f}" for u, k in sorted(at.items()))
+        err_console.print(
+            f"goal {escape(goal.goal.describe())}: {escape(name)}: {goal.n_spectra} spectra "
+            f"planned ({split}), expected {escape(_expected(goal))}",
+            soft_wrap=True,
+        )
+
+
+def _expected(goal: Any) -> str:
+    """The σ a goal plan reaches, in the goal's unit."""
+    if goal.goal.relative:
+        return f"{100 * goal.expected:.3g} %"
+    unit = {"q": "", "M1": " Msun", "M2": " Msun"}.get(goal.goal.quantity, " km/s")
+    return f"{goal.expected:.3g}{unit}"

@@ -1,0 +1,129 @@
+"""Time accounting of a plan: visits, exposures, shutter-open time, overheads, idle time.
+
+A visit (``visit_id``) is one acquisition of ``acquisition_s`` that ends when its first exposure
+starts, then its blocks. Its wall time runs from the acquisition start to the end of the last
+exposure, plus that exposure's readout when exposures are read out one by one inside a visit
+(``--visit``; a co-added block of ``n_exp`` exposures has ``n_exp − 1`` readouts inside it):
+
+    shutter  = Σ n_exp · exptime
+    overhead = acquisition + Σ (readouts) · readout
+    idle     = wall − shutter − overhead          (waiting for the next anchor's phase)
+    efficiency = shutter / (shutter + overhead + idle) = shutter / wall
+
+These are the numbers the proposal export reads from the ECSV meta (``time_accounting``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from astropy.time import Time, TimeDelta
+
+from ucbplan.observing.blocks import Block
+from ucbplan.observing.timeconv import quiet_erfa
+
+__all__ = ["ACCOUNT_KEYS", "VisitSummary", "time_accounting", "visit_summaries"]
+
+#: Keys of one time-accounting entry (the proposal export reads exactly these).
+ACCOUNT_KEYS = ("visits", "exposures", "shutter_s", "overhead_s", "idle_s", "efficiency")
+
+
+@dataclass(frozen=True, slots=True)
+class VisitSummary:
+    """One visit: its acquisition, exposures and time split [s]."""
+
+    visit_id: str
+    target: str
+    night: str
+    acq_start_utc: str
+    start_utc: str
+    end_utc: str
+    exposures: int
+    shutter_s: float
+    overhead_s: float
+    idle_s: float
+
+    @property
+    def wall_s(self) -> float:
+        """Acquisition start to the end of the last readout [s]."""
+        return self.shutter_s + self.overhead_s + self.idle_s
+
+    def as_dict(self) -> dict[str, Any]:
+        """Plain values for the table meta and JSON."""
+        return {
+            "visit_id": self.visit_id,
+            "target": self.target,
+            "night": self.night,
+            "acq_start_utc": self.acq_start_utc,
+            "start_utc": self.start_utc,
+            "end_utc": self.end_utc,
+            "exposures": self.exposures,
+            "shutter_s": round(self.shutter_s, 3),
+            "overhead_s": round(self.overhead_s, 3),
+            "idle_s": round(self.idle_s, 3),
+        }
+
+
+def visit_summaries(
+    blocks: Sequence[Block], acquisition_s: float, trailing_readout: bool
+) -> list[VisitSummary]:
+    """One :class:`VisitSummary` per visit of ``blocks`` (grouped by ``visit_id``; a block
+    without one is a visit of its own), in time order."""
+    groups: dict[tuple[str, str], list[Block]] = {}
+    for k, b in enumerate(blocks):
+        groups.setdefault((b.target, b.visit_id or f"#{k}"), []).append(b)
+    out = []
+    with quiet_erfa():
+        for (_, vid), bs in groups.items():
+            bs = sorted(bs, key=lambda b: (b.t_start_utc.jd1, b.t_start_utc.jd2))
+            start, end = bs[0].t_start_utc, max((b.t_end_utc for b in bs), key=lambda t: t.jd)
+            drop = 0 if trailing_readout else 1
+            readout = float(sum((b.n_exp - drop) * b.readout_s for b in bs))
+            last_readout = bs[-1].readout_s if trailing_readout else 0.0
+            span = float((end - start).to_value("s")) + last_readout
+            shutter = float(sum(b.n_exp * b.exptime_s for b in bs))
+            overhead = acquisition_s + readout
+            wall = acquisition_s + span
+            acq = start - TimeDelta(acquisition_s, format="sec")
+            out.append(
+                VisitSummary(
+                    visit_id=vid if not vid.startswith("#") else "",
+                    target=bs[0].target,
+                    night=bs[0].night,
+                    acq_start_utc=Time(acq, precision=0).utc.isot,
+                    start_utc=Time(start, precision=0).utc.isot,
+                    end_utc=Time(end, precision=0).utc.isot,
+                    exposures=sum(b.n_exp for b in bs),
+                    shutter_s=shutter,
+                    overhead_s=overhead,
+                    idle_s=max(0.0, wall - shutter - overhead),
+                )
+            )
+    out.sort(key=lambda v: v.acq_start_utc)
+    return out
+
+
+def _entry(visits: Sequence[VisitSummary]) -> dict[str, Any]:
+    shutter = sum(v.shutter_s for v in visits)
+    overhead = sum(v.overhead_s for v in visits)
+    idle = sum(v.idle_s for v in visits)
+    wall = shutter + overhead + idle
+    return {
+        "visits": len(visits),
+        "exposures": sum(v.exposures for v in visits),
+        "shutter_s": round(shutter, 3),
+        "overhead_s": round(overhead, 3),
+        "idle_s": round(idle, 3),
+        "efficiency": round(shutter / wall, 6) if wall > 0 else 0.0,
+    }
+
+
+def time_accounting(visits: Sequence[VisitSummary]) -> dict[str, Any]:
+    """``{"total": {...}, "targets": {NAME: {...}}}`` with the :data:`ACCOUNT_KEYS` each."""
+    names = list(dict.fromkeys(v.target for v in visits))
+    return {
+        "total": _entry(visits),
+        "targets": {n: _entry([v for v in visits if v.target == n]) for n in names},
+    }

@@ -1,0 +1,92 @@
+"""The ``plan`` options as :class:`~ucbplan.observing.schedule.PlanSettings`: instrument,
+overheads, exposure, visits and goal resolved in one place.
+
+Overheads: an option the user gives (``--overhead`` = acquisition per visit or session,
+``--readout`` per exposure) wins; else the instrument's number (``--instrument``); else the
+defaults of the ``plan`` command before instruments existed (300 s acquisition, no readout).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from ucbplan.errors import InputError
+from ucbplan.observing.blocks import ExposurePlan
+from ucbplan.observing.instruments import check_exptime, get_instrument, instrument_overheads
+from ucbplan.observing.schedule.settings import PlanSettings, parse_budgets, parse_duration
+
+__all__ = ["DEFAULT_EXPTIME_S", "DEFAULT_OVERHEAD_S", "DEFAULT_READOUT_S", "plan_settings"]
+
+#: Exposure time without ``--exptime`` [s].
+DEFAULT_EXPTIME_S = 60.0
+#: Acquisition without ``--overhead`` or ``--instrument`` [s].
+DEFAULT_OVERHEAD_S = 300.0
+#: Readout without ``--readout`` or ``--instrument`` [s].
+DEFAULT_READOUT_S = 0.0
+
+
+def plan_settings(
+    *,
+    instrument: str | None = None,
+    instruments_file: Path | str | None = None,
+    exptime_s: float | None = None,
+    n_exp: int = 1,
+    readout_s: float | None = None,
+    overhead_s: float | None = None,
+    visit: str | float | None = None,
+    sigma_v_kms: float | None = None,
+    budgets: Sequence[str] = (),
+    **options: Any,
+) -> PlanSettings:
+    """:class:`PlanSettings` from the ``plan`` options (module notes).
+
+    Parameters
+    ----------
+    instrument, instruments_file : str, path, optional
+        ``--instrument NAME`` looked up in the bundled table (a user file searched first).
+    exptime_s, n_exp, readout_s, overhead_s : optional
+        Exposure time, exposures per block, readout and acquisition [s]; None takes the
+        instrument's or the default.
+    visit : str or float, optional
+        ``--visit`` duration (``1h``, ``45min``, ``3600s`` or seconds).
+    sigma_v_kms : float, optional
+        ``--sigma-v``; required with an instrument that has no σ reference.
+    budgets : sequence of str
+        ``--budget NAME=DURATION`` items: wall time per target over all nights.
+    **options
+        Every other :class:`PlanSettings` field by name.
+
+    Raises
+    ------
+    InputError
+        Unknown instrument, an instrument without σ_ref and no ``--sigma-v``, an overhead the
+        instrument does not confirm and the user did not give, an exposure below the
+        instrument's minimum, a malformed duration: one line each.
+    """
+    inst = get_instrument(instrument, instruments_file) if instrument is not None else None
+    if inst is not None and sigma_v_kms is None and inst.sigma_ref is None:
+        raise InputError(
+            f"--instrument {inst.name}: the instrument table has no confirmed RV-precision "
+            "reference (sigma_ref); pass --sigma-v KM_S (sigma_v per exposure)"
+        )
+    if inst is not None:
+        over = instrument_overheads(inst, acquisition_s=overhead_s, readout_s=readout_s)
+        acq, readout = over.acquisition_s, over.readout_s
+    else:
+        acq = DEFAULT_OVERHEAD_S if overhead_s is None else overhead_s
+        readout = DEFAULT_READOUT_S if readout_s is None else readout_s
+    exptime = DEFAULT_EXPTIME_S if exptime_s is None else exptime_s
+    if inst is not None:
+        check_exptime(inst, exptime)
+    return PlanSettings(
+        exposure=ExposurePlan(exptime_s=exptime, n_exp=n_exp, readout_s=readout),
+        overhead_s=acq,
+        exptime_explicit=exptime_s is not None,
+        instrument=inst,
+        visit_s=parse_duration(visit) if visit is not None else None,
+        sigma_v_kms=sigma_v_kms,
+        budgets=parse_budgets(list(budgets)),
+        **options,
+    )

@@ -1,0 +1,126 @@
+"""Why anchor epochs were not planned: counts per target, night and reason, kept apart.
+
+Only night-time candidates count: anchor epochs whose centre falls while the Sun is below the
+twilight limit (daytime epochs are no loss). Each one that was not planned is counted under the
+first reason that applies, in this order:
+
+1. ``outside validity`` — σ_u(t) > α·δu_tol at its own epoch (before or after the reference);
+2. ``smearing floor`` — no exposure of the target keeps Λ_K ≥ the floor;
+3. the first constraint it fails over its exposure: ``daylight/twilight`` (it runs into
+   twilight), ``altitude/airmass``, ``zenith hole``, ``Moon separation``, ``Moon illumination``;
+4. ``taken by a higher-priority target`` — it overlaps a visit or session of another target
+   (with the acquisition before it);
+5. ``time budget spent`` — the target's ``--budget`` was used up;
+6. ``not needed`` — usable, but the night's visits/sessions (or the goal) were already planned.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ucbplan.observing.schedule.candidates import PlanFrame, TargetRun
+from ucbplan.observing.schedule.nights import NightSpan
+from ucbplan.observing.schedule.placement import Session, Unplaced
+
+__all__ = ["REASONS", "not_planned"]
+
+#: The reasons, in the order they are tried.
+REASONS = (
+    "outside validity",
+    "smearing floor",
+    "daylight/twilight",
+    "altitude/airmass",
+    "zenith hole",
+    "Moon separation",
+    "Moon illumination",
+    "taken by a higher-priority target",
+    "time budget spent",
+    "not needed",
+)
+#: Constraint name → reason.
+_BY_CONSTRAINT = {
+    "night": "daylight/twilight",
+    "airmass": "altitude/airmass",
+    "altitude": "altitude/airmass",
+    "zenith-hole": "zenith hole",
+    "moon-sep": "Moon separation",
+    "moon-illum": "Moon illumination",
+}
+
+
+def _overlaps(
+    x0: NDArray[np.float64], x1: NDArray[np.float64], taken: list[tuple[float, float]]
+) -> NDArray[np.bool_]:
+    """Whether each [x0, x1] overlaps one of the ``taken`` intervals."""
+    if not taken:
+        return np.zeros(x0.shape, dtype=bool)
+    starts = np.array([a for a, _ in sorted(taken)])
+    ends = np.maximum.accumulate(np.array([b for _, b in sorted(taken)]))
+    k = np.searchsorted(starts, x1, side="left")  # intervals starting before our end
+    return (k > 0) & (ends[np.maximum(k - 1, 0)] > x0)
+
+
+def _reason_of(
+    run: TargetRun, js: NDArray[np.int64], frame: PlanFrame, others: NDArray[np.bool_]
+) -> list[str]:
+    """The reason of each candidate ``js`` (not planned) up to 'taken' (module notes)."""
+    c = run.cand
+    tau = c.tau_origin_s + c.dt_s[js]
+    valid = (tau >= c.epochs.tau(run.since)) & (tau <= c.epochs.tau(run.until))
+    names = [con.name for con in frame.constraints.active]
+    out = []
+    for k, j in enumerate(js):
+        if not valid[k]:
+            out.append("outside validity")
+        elif not run.exposure.floor_ok:
+            out.append("smearing floor")
+        elif not c.ok[j]:
+            out.append(_BY_CONSTRAINT.get(names[int(c.first_failed[j])], "altitude/airmass"))
+        elif others[k]:
+            out.append("taken by a higher-priority target")
+        else:
+            out.append("")
+    return out
+
+
+def not_planned(
+    runs: Sequence[TargetRun],
+    spans: Sequence[NightSpan],
+    frame: PlanFrame,
+    placed: Sequence[Session],
+    unplaced: Sequence[Unplaced],
+    gap_s: float,
+) -> dict[str, dict[str, dict[str, int]]]:
+    """{target: {night: {reason: count}}} of the night-time anchor epochs not planned.
+
+    ``gap_s`` is the time kept free before a session of another target (its acquisition);
+    visits include their acquisition already (0).
+    """
+    out: dict[str, dict[str, dict[str, int]]] = {}
+    budget = {(m.target, m.night) for m in unplaced if m.reason.startswith("time budget spent")}
+    limit = frame.constraints.night.sun_alt_max_deg
+    order = [r.index for r in sorted(runs, key=lambda r: -r.target.priority)]
+    for run in runs:
+        used = {j for s in placed if s.target_i == run.index for j in s.idx}
+        before = set(order[: order.index(run.index)])  # placed before this target
+        taken = [(s.x0 - gap_s, s.x1) for s in placed if s.target_i in before]
+        c, per_night = run.cand, {}
+        for span in spans:
+            j0, j1 = np.searchsorted(c.x_mid, [span.x0, span.x1])
+            js = np.arange(j0, j1)
+            js = js[frame.sky.sun_alt_deg(c.x_mid[js]) <= limit]
+            js = np.array([j for j in js if int(j) not in used], dtype=np.int64)
+            if js.size == 0:
+                continue
+            others = _overlaps(c.x_start[js] - gap_s, c.x_end[js] + gap_s, taken)
+            counts: dict[str, int] = {}
+            spent = (run.target.name, span.label) in budget
+            for why in _reason_of(run, js, frame, others):
+                why = why or ("time budget spent" if spent else "not needed")
+                counts[why] = counts.get(why, 0) + 1
+            per_night[span.label] = {r: counts[r] for r in REASONS if r in counts}
+        out[run.target.name] = per_night
+    return out

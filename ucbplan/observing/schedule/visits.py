@@ -1,0 +1,182 @@
+"""Visits: one acquisition, then continuous exposures, each centred on an anchor epoch.
+
+A visit of length D (``--visit``, acquisition included) starts with the acquisition (slew +
+acquisition + set-up, ``overhead_s``) that ends when the first exposure starts; each exposure is
+centred on an anchor epoch, and the next exposure is the first anchor whose exposure starts at
+least one readout after the previous one ends (:mod:`.exposure` gives the cadence). The visit
+ends with the readout of its last exposure, at most D after it started. Every exposure satisfies
+every constraint over its whole length and lies inside the validity window; the acquisition is
+in the night and below the airmass limit too; a visit stops at the first anchor that fails.
+
+Targets are taken in priority order; in each night a target gets its best visits (most
+exposures, then lowest mean airmass) that keep clear of everything placed before, up to
+``sessions_per_night`` visits, or until its quota of exposures (a ``--goal``) is planned.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ucbplan.observing.constraints import evaluate_window
+from ucbplan.observing.schedule.candidates import PlanFrame, TargetRun
+from ucbplan.observing.schedule.nights import NightSpan
+from ucbplan.observing.schedule.placement import (
+    Allowance,
+    Session,
+    Timeline,
+    Unplaced,
+    unusable_reason,
+)
+from ucbplan.observing.schedule.settings import PlanSettings
+
+__all__ = ["place_visits"]
+
+#: Slack on the readout between two exposures [s]: the light time moves anchors by up to ~0.02 s
+#: per minute, so a phase-locked cadence may find the next exposure starting a hair early.
+_READOUT_SLACK_S = 0.1
+
+
+def _chain(
+    j: int,
+    nxt: NDArray[np.int64],
+    good: NDArray[np.bool_],
+    x_start: NDArray[np.float64],
+    x_end: NDArray[np.float64],
+    end_limit: float,
+    readout_s: float,
+    cap: int,
+) -> list[int]:
+    """Exposures of the visit whose first exposure is anchor ``j`` (anchor indices)."""
+    out = [j]
+    n = x_start.size
+    while len(out) < cap:
+        k = int(nxt[out[-1]])
+        if k >= n or not good[k] or x_end[k] + readout_s > end_limit:
+            break
+        out.append(k)
+    return out
+
+
+def _best_visit(
+    run: TargetRun,
+    span: NightSpan,
+    timeline: Timeline,
+    frame: PlanFrame,
+    settings: PlanSettings,
+    allowance: Allowance,
+) -> tuple[tuple[int, ...], float, float] | None:
+    """The best free visit of ``run`` in a night within its allowance: (exposures, start,
+    end) or None."""
+    c, te = run.cand, run.exposure
+    acq, r, visit_s = settings.overhead_s, te.plan.readout_s, float(settings.visit_s or 0.0)
+    j0, j1 = np.searchsorted(c.x_mid, [span.x0, span.x1])
+    if j1 == j0:
+        return None
+    good = (run.ok > 0) & run.valid
+    js = np.arange(j0, j1)
+    acq_cs = (frame.constraints.night, frame.constraints.airmass)
+    acq_ok, _ = evaluate_window(acq_cs, frame.sky, run.index, c.x_start[js] - acq, c.x_start[js])
+    starts = js[good[js] & acq_ok]
+    nxt = np.searchsorted(c.x_start, c.x_end + r - _READOUT_SLACK_S, side="left")
+    best: tuple[tuple[int, ...], float, float] | None = None
+    best_key = (0, 0.0)
+    cap = c.x_mid.size if allowance.exposures is None else allowance.exposures
+    pattern = len(settings.spec.u_values)
+    length = visit_s if allowance.seconds is None else min(visit_s, allowance.seconds)
+    for j in starts:
+        x0 = float(c.x_start[j]) - acq
+        exps = _chain(int(j), nxt, good, c.x_start, c.x_end, x0 + length, r, cap)
+        if exps and float(c.x_end[exps[-1]]) + r > x0 + length:
+            exps = []  # not even one exposure fits the time budget left
+        while exps and not timeline.free(x0, float(c.x_end[exps[-1]]) + r):
+            exps.pop()
+        if allowance.exposures is not None and len(exps) > pattern:
+            del exps[len(exps) - len(exps) % pattern :]  # whole anchor patterns for a goal
+        if not exps:
+            continue
+        key = (len(exps), -float(np.mean(c.airmass_mid[exps])))
+        if best is None or key > best_key:
+            best, best_key = (tuple(exps), x0, float(c.x_end[exps[-1]]) + r), key
+    return best
+
+
+def _place_night(
+    run: TargetRun,
+    n: int,
+    span: NightSpan,
+    timeline: Timeline,
+    frame: PlanFrame,
+    settings: PlanSettings,
+    allowance: Allowance,
+) -> str | None:
+    """Place one target's visits in night ``n`` within its allowance; the reason if fewer."""
+    c = run.cand
+    j0, j1 = np.searchsorted(c.x_mid, [span.x0, span.x1])
+    if j1 == j0:
+        return "no anchor epoch in the night window"
+    js = np.arange(j0, j1)
+    if not np.any((run.ok[js] > 0) & run.valid[js]):
+        return unusable_reason(run, js, span, frame, settings)
+    wanted, placed = settings.sessions_per_night, 0
+    while placed < wanted and not allowance.spent:
+        pick = _best_visit(run, span, timeline, frame, settings, allowance)
+        if pick is None:
+            break
+        idx, x0, x1 = pick
+        timeline.add(Session(run.index, n, idx, x0, x1))
+        allowance.charge(len(idx), x1 - x0)
+        placed += 1
+    if allowance.spent and allowance.exposures is not None:
+        return None  # the goal is planned
+    if allowance.spent or (placed < wanted and allowance.seconds is not None and placed > 0):
+        return f"time budget spent after {placed} visit(s)"
+    if placed == 0:
+        return (
+            "every usable visit overlaps higher-priority visits (or its acquisition falls in "
+            "twilight or above the airmass limit)"
+        )
+    if placed < wanted:
+        return f"only {placed} of {wanted} visits fit"
+    return None
+
+
+def place_visits(
+    runs: list[TargetRun],
+    spans: list[NightSpan],
+    frame: PlanFrame,
+    settings: PlanSettings,
+    busy: Sequence[tuple[float, float]] = (),
+    allowances: Mapping[int, Allowance] | None = None,
+) -> tuple[list[Session], list[Unplaced]]:
+    """Greedy visit schedule: targets by priority, each night's best visits (module notes).
+
+    Parameters
+    ----------
+    allowances : mapping of int to Allowance, optional
+        Exposures (a ``--goal``) and wall time (``--budget``) per target index over all nights;
+        planning of a target stops when its allowance is spent (it is spent in place).
+
+    Returns
+    -------
+    placed : list of Session
+        One per visit; ``x0`` is the acquisition start and ``x1`` the end of the last readout.
+    unplaced : list of Unplaced
+        One entry per target and night that got fewer visits than asked.
+    """
+    timeline = Timeline(0.0)
+    timeline.block_out(busy)
+    unplaced: list[Unplaced] = []
+    for run in sorted(runs, key=lambda r: -r.target.priority):
+        allowance = (allowances or {}).get(run.index) or Allowance()
+        for n, span in enumerate(spans):
+            if allowance.spent:
+                if allowance.exposures is None:  # a time budget, not a goal
+                    unplaced.append(Unplaced(run.target.name, span.label, "time budget spent"))
+                continue
+            reason = _place_night(run, n, span, timeline, frame, settings, allowance)
+            if reason is not None:
+                unplaced.append(Unplaced(run.target.name, span.label, reason))
+    return timeline.placed, unplaced
