@@ -311,12 +311,27 @@ def source_from_target(target: Target) -> SourceParams:
 
 
 def model_for_target(
-    target: Target, t_obs_s: float, n: int, eccentric: bool, f_center_hz: float
+    target: Target,
+    t_obs_s: float,
+    n: int,
+    eccentric: bool,
+    f_center_hz: float,
+    *,
+    fdot_ref: float = 0.0,
+    omega_dot_ref: float = 0.0,
 ) -> FourLineModel:
-    """Four-line model for the target's (fixed) sky and an observation of ``t_obs_s``."""
+    """Four-line model for the target's (fixed) sky and an observation of ``t_obs_s``.
+
+    ``f_center_hz`` fixes the bands; with ``fdot_ref`` [Hz/s] and ``omega_dot_ref`` [rad/s]
+    (the search values) it is the reference track that makes templates near it cheap
+    (:class:`~ucbplan.lisa.waveform.FourLineModel`).
+    """
     from ucbplan.lisa.orbits import EqualArmOrbits
     from ucbplan.lisa.response import ecliptic_from_icrs, response_grid, sky_frame
 
     lon, lat = ecliptic_from_icrs(target.ra_deg, target.dec_deg)
     grid = response_grid(EqualArmOrbits(), sky_frame(lon, lat), t_obs_s, n)
-    return FourLineModel(grid, f_center_hz, (1, 2, 3) if eccentric else (2,))
+    harmonics = (1, 2, 3) if eccentric else (2,)
+    return FourLineModel(
+        grid, f_center_hz, harmonics, fdot_ref=fdot_ref, omega_dot_ref=omega_dot_ref
+    )

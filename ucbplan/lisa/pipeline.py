@@ -151,7 +151,15 @@ def build_model(
         t_ref=target.t_start + TimeDelta(0.5 * t_obs, format="sec"),
         t_obs_s=t_obs,
     )
-    model = model_for_target(target, t_obs, n_bins, eccentric, truth.f_gw)
+    model = model_for_target(
+        target,
+        t_obs,
+        n_bins,
+        eccentric,
+        truth.f_gw,
+        fdot_ref=truth.fdot,
+        omega_dot_ref=truth.omega_dot,
+    )
     return LisaModel(base=base, truth=truth, model=model, eccentric=eccentric, n_bins=n_bins)
 
 
