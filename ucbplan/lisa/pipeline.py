@@ -408,6 +408,11 @@ def _convergence_warnings(chain: SamplerResult) -> tuple[str, ...]:
     if chain.converged:
         return ()
     n_done, tau_max = chain.theta.shape[0], float(np.max(chain.tau))
+    if not np.isfinite(tau_max):
+        return (
+            f"chain of {n_done} steps is too short to estimate τ (a walker has not moved yet): "
+            "the posterior σ's are not reliable; rerun with more --steps or --until-converged",
+        )
     return (
         f"chain of {n_done} steps is shorter than {CONVERGENCE_FACTOR:g} τ "
         f"(τ_max = {tau_max:.0f} steps): the posterior σ's are not reliable; rerun with "
