@@ -128,19 +128,48 @@ def test_short_observation_leaves_fdot_unmeasured() -> None:
     assert fisher_forecast(build_model(load_target(INJECTION), n_bins=64)).warnings == ()
 
 
-@pytest.mark.parametrize("fdot", ["1e-19 Hz / s", "5e-19 Hz / s", "2e-12 Hz / s"])
-def test_prior_covers_fdot_outside_the_paper_range(fdot: str) -> None:
-    """ḟ below 1e-18 or above 1e-12 Hz/s: the prior is widened to cover the source (it used to
-    start the walkers outside the prior and crash, or truncate the posterior at 1e-18)."""
+@pytest.mark.parametrize("fdot", ["2e-12 Hz / s"])
+def test_prior_covers_fdot_above_the_paper_range(fdot: str) -> None:
+    """ḟ above 1e-12 Hz/s: the log10 ḟ prior is widened to cover the source (it used to start
+    the walkers outside the prior and crash)."""
     target = _variant(fdot=fdot)
     truth = source_from_target(target)
     prior = Prior.paper(truth, target.t_obs_s)
     model = build_model(target, n_bins=64)
-    assert prior.contains(model.theta0()[None])[0]
+    assert prior.names[2] == "log10_fdot" and prior.contains(model.theta0()[None])[0]
     lo, hi = prior.low[2], prior.high[2]
-    assert lo <= np.log10(truth.fdot) - 1 and hi >= np.log10(truth.fdot) + 1
+    assert lo == -18.0 and hi >= np.log10(truth.fdot) + 1
     res = simulate(model, SimulateOptions(seed=2, walkers=18, steps=15, noise=False))
     assert np.all(np.isfinite(res.chain.log_prob[-1]))
+
+
+@pytest.mark.parametrize(
+    "fdot", ["5e-19 Hz / s", "1e-20 Hz / s", "1e-23 Hz / s", "0 Hz / s", "-3e-19 Hz / s"]
+)
+def test_fdot_below_the_paper_range_is_sampled_linearly(fdot: str) -> None:
+    """ḟ < 1e-18 Hz/s (issue 13: simulate's prior excluded it; ḟ ≲ 1e-20 still failed with
+    "fdot unconstrained", ḟ ≤ 0 was refused): ḟ itself is sampled, uniform in ±1e-12 Hz/s.
+
+    Independent check: ḟ enters the waveform only through the phase π ḟ t², so its Fisher 1σ
+    hardly depends on ḟ; it must match the fiducial's σ(log10 ḟ) · ḟ ln 10 (the log-coordinate
+    forecast of the same source, propagated) to 5 %."""
+    model = build_model(_variant(fdot=fdot), n_bins=64)
+    truth = model.truth
+    prior = model.likelihood(np.zeros((3, 2, 64), complex)).prior
+    assert prior.names[2] == "fdot" and (prior.low[2], prior.high[2]) == (-1e-12, 1e-12)
+    assert prior.contains(model.theta0()[None])[0]
+    assert model.theta0()[2] == truth.fdot
+    forecast = fisher_forecast(model)
+    assert forecast.warnings == ()
+    fid = build_model(load_target(INJECTION), n_bins=64)
+    fid_fc = fisher_forecast(fid)
+    sigma_fid = np.sqrt(fid_fc.cov_theta[2, 2]) * np.log(10.0) * fid.truth.fdot
+    assert np.sqrt(forecast.cov_theta[2, 2]) == pytest.approx(sigma_fid, rel=0.05)
+    assert forecast.sigmas["fdot"] == pytest.approx(sigma_fid, rel=0.05)
+    res = simulate(model, SimulateOptions(seed=2, walkers=18, steps=15, noise=True))
+    assert np.all(np.isfinite(res.chain.log_prob[-1])) and res.chain.names[2] == "fdot"
+    assert res.columns["fdot"].std() < 20 * sigma_fid
+    assert abs(res.columns["fdot"].mean() - truth.fdot) < 20 * sigma_fid
 
 
 def test_paper_fdot_prior_unchanged_for_the_fiducial(fiducial: LisaModel) -> None:

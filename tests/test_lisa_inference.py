@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
+from ucbplan.core.mvnormal import sample_normal
 from ucbplan.lisa import posterior as post
 from ucbplan.lisa.fisher import fisher_covariance
 from ucbplan.lisa.likelihood import (
@@ -114,6 +115,19 @@ def test_prior_returns_minus_inf_never_nan(problem: tuple) -> None:
     lp = like.log_prob(np.vstack([bad, theta0[None]]))
     assert np.all(lp[:5] == -np.inf)
     assert np.isfinite(lp[5]) and lp[5] == pytest.approx(0.0, abs=1e-6)
+
+
+def test_log_likelihood_equals_the_inner_products(problem: tuple) -> None:
+    """The BLAS form of ln L equals (d|h) - (h|h)/2 - (d|d)/2 written with ``inner`` (noisy
+    data, walkers across the Fisher ball), to 1e-12 of (d|d)."""
+    _, truth, model, like, theta0, cov = problem
+    data = simulate_data(model, truth, SANGRIA, np.random.default_rng(3))
+    noisy = Likelihood(model, data, like.prior, SANGRIA)
+    theta = sample_normal(theta0, 4.0 * cov, 12, np.random.default_rng(4))
+    h = noisy.templates(theta)
+    expect = noisy.inner(data[None], h) - 0.5 * noisy.inner(h, h) - 0.5 * noisy.d_d
+    got = noisy.log_likelihood(theta)
+    np.testing.assert_allclose(got, expect, rtol=0, atol=1e-12 * noisy.d_d)
 
 
 def test_fisher_matches_likelihood_curvature(problem: tuple) -> None:

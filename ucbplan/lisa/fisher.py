@@ -36,11 +36,13 @@ MAX_CONDITION = 1e10
 _LABELS = {"log10_amplitude": "amplitude", "log10_fdot": "fdot", "z_omega": "omega_dot"}
 
 #: Central-difference steps in sampled coordinates (same order as ECCENTRIC_NAMES); f_gw is in
-#: units of 1/T and scaled at run time.
+#: units of 1/T and a linear fdot in units of 1/T^2 (a phase step pi * 1e-5 rad), scaled at run
+#: time.
 STEPS: dict[str, float] = {
     "log10_amplitude": 1e-5,
     "f_gw": 1e-4,
     "log10_fdot": 1e-6,
+    "fdot": 1e-5,
     "cos_inclination": 1e-5,
     "psi": 1e-6,
     "phase": 1e-6,
@@ -62,7 +64,10 @@ def fisher_matrix(like: Likelihood, theta0: NDArray[np.float64]) -> NDArray[np.f
     """
     names = like.prior.names
     steps = np.array([STEPS[n] for n in names])
-    steps[names.index("f_gw")] /= like.model.grid.t_obs_s
+    t_obs = like.model.grid.t_obs_s
+    steps[names.index("f_gw")] /= t_obs
+    if "fdot" in names:
+        steps[names.index("fdot")] /= t_obs * t_obs
     d = len(names)
     pts = np.repeat(theta0[None, :], 2 * d, axis=0)
     for i in range(d):

@@ -7,7 +7,10 @@ start of the observation:
 log10_amplitude     uniform in [log10 A_s - 2, log10 A_s + 2] (A_s: search/injection value)
 f_gw                uniform within +-10 Fourier bins of the search value (paper: +-10/T_obs)
 log10_fdot          uniform in [-18, -12] (fdot > 0: inspiralling detached dWD; fdot [Hz/s]),
-                    widened to one decade beyond a search value outside it
+                    widened to one decade beyond a search value within a decade of its ends
+fdot                replaces log10_fdot when the search value is below 1e-18 Hz/s (or <= 0:
+                    a wide, low-mass or mass-transferring binary, whose fdot the data cannot
+                    separate from 0 on a log scale): uniform in [-1e-12, 1e-12] Hz/s
 cos_inclination     uniform in [-1, 1]
 psi                 uniform in [0, pi] (psi -> psi + pi is an exact symmetry)
 phase               uniform in [0, 2 pi]
@@ -38,10 +41,13 @@ if TYPE_CHECKING:
 __all__ = [
     "CIRCULAR_NAMES",
     "ECCENTRIC_NAMES",
+    "LOG10_FDOT_RANGE",
     "Likelihood",
     "Prior",
+    "linear_fdot",
     "model_for_target",
     "physical_from_theta",
+    "sampled_names",
     "simulate_data",
     "source_from_target",
     "theta_from_source",
@@ -59,6 +65,21 @@ ECCENTRIC_NAMES: tuple[str, ...] = (
     "z_omega",
 )
 CIRCULAR_NAMES: tuple[str, ...] = ECCENTRIC_NAMES[:6]
+#: The paper's log10 ḟ prior range [log10(Hz/s)]; below its floor ḟ is sampled linearly.
+LOG10_FDOT_RANGE = (-18.0, -12.0)
+
+
+def linear_fdot(fdot: float) -> bool:
+    """Whether ḟ [Hz/s] is sampled linearly (below the paper's log10 ḟ floor, or ≤ 0)."""
+    return not fdot >= 10.0 ** LOG10_FDOT_RANGE[0]
+
+
+def sampled_names(eccentric: bool, fdot: float) -> tuple[str, ...]:
+    """Names of the sampled coordinates for a search value ``fdot`` [Hz/s]."""
+    names = ECCENTRIC_NAMES if eccentric else CIRCULAR_NAMES
+    if linear_fdot(fdot):
+        names = tuple("fdot" if n == "log10_fdot" else n for n in names)
+    return names
 
 
 @dataclass(frozen=True, slots=True)
@@ -81,18 +102,23 @@ class Prior:
     def paper(cls, search: SourceParams, t_obs_s: float, eccentric: bool = True) -> Prior:
         """The targeted-search priors of Appendix apsidal_mcmc around a search value.
 
-        The log10 ḟ range is the paper's [-18, -12] unless the search value lies outside it; then
-        it reaches one decade beyond that value, so every source with ḟ > 0 can be sampled.
+        The log10 ḟ range is the paper's [-18, -12], widened to one decade beyond a search value
+        within a decade of its ends. Below 1e-18 Hz/s (or ḟ ≤ 0) ḟ itself is sampled, uniform
+        in ±1e-12 Hz/s: a log prior has no floor there (its posterior piles up at the prior's
+        lower edge and the Fisher σ of log10 ḟ exceeds any width), while ḟ's likelihood is a
+        smooth Gaussian through 0.
         """
         la = float(np.log10(search.amplitude))
-        lf = float(np.log10(search.fdot))
+        lo, hi = LOG10_FDOT_RANGE
+        lf = float(np.log10(search.fdot)) if search.fdot > 0 else lo
         df = 10.0 / t_obs_s
         bounds = {
             "log10_amplitude": (la - 2.0, la + 2.0),
             "f_gw": (search.f_gw - df, search.f_gw + df),
             # the paper's [-18, -12], widened so that it covers the source (ḟ < 1e-18 Hz/s: a
             # wide or low-mass binary; > 1e-12 Hz/s: nearly merging) with a decade to spare
-            "log10_fdot": (min(-18.0, np.floor(lf) - 1.0), max(-12.0, np.ceil(lf) + 1.0)),
+            "log10_fdot": (min(lo, np.floor(lf) - 1.0), max(hi, np.ceil(lf) + 1.0)),
+            "fdot": (-(10.0**hi), 10.0**hi),
             "cos_inclination": (-1.0, 1.0),
             "psi": (0.0, np.pi),
             "phase": (0.0, 2.0 * np.pi),
@@ -100,7 +126,7 @@ class Prior:
             "kappa": (-E_MAX, E_MAX),
             "z_omega": (0.0, 50.0),
         }
-        names = ECCENTRIC_NAMES if eccentric else CIRCULAR_NAMES
+        names = sampled_names(eccentric, search.fdot)
         return cls(
             names=names,
             low=tuple(bounds[n][0] for n in names),
@@ -119,11 +145,14 @@ class Prior:
 
 
 def theta_from_source(p: SourceParams, t_obs_s: float, eccentric: bool = True) -> NDArray:
-    """Sampled-coordinate vector (D,) of a physical parameter set (start epoch)."""
+    """Sampled-coordinate vector (D,) of a physical parameter set (start epoch).
+
+    The third coordinate is ḟ itself when :func:`linear_fdot`, else log10 ḟ.
+    """
     th = [
         np.log10(p.amplitude),
         p.f_gw,
-        np.log10(p.fdot),
+        p.fdot if linear_fdot(p.fdot) else np.log10(p.fdot),
         p.cos_inclination,
         p.psi,
         p.phase,
@@ -133,13 +162,19 @@ def theta_from_source(p: SourceParams, t_obs_s: float, eccentric: bool = True) -
     return np.asarray(th, dtype=float)
 
 
-def physical_from_theta(theta: NDArray[np.float64], t_obs_s: float) -> dict[str, NDArray]:
-    """Physical (SI) parameter arrays (W,) from sampled rows (W, 6 or 9)."""
+def physical_from_theta(
+    theta: NDArray[np.float64], t_obs_s: float, names: tuple[str, ...] | None = None
+) -> dict[str, NDArray]:
+    """Physical (SI) parameter arrays (W,) from sampled rows (W, 6 or 9).
+
+    ``names`` (the prior's) says whether column 2 is ḟ or log10 ḟ (default: log10 ḟ).
+    """
     th = np.atleast_2d(theta)
+    log_fdot = names is None or names[2] == "log10_fdot"
     out = {
         "amplitude": 10.0 ** th[:, 0],
         "f_gw": th[:, 1],
-        "fdot": 10.0 ** th[:, 2],
+        "fdot": 10.0 ** th[:, 2] if log_fdot else th[:, 2],
         "cos_inclination": th[:, 3],
         "psi": th[:, 4],
         "phase": th[:, 5],
@@ -185,6 +220,14 @@ class Likelihood:
         self.psd = psd_a(model.freqs_hz, t_obs, noise)  # (n_bands, N)
         self.weight = (4.0 / (self.psd * t_obs))[:, None, :]  # (n_bands, 1, N)
         self.d_d = float(np.sum(self.weight * np.abs(data) ** 2))
+        # (d|h) = sum w (Re d Re h + Im d Im h) and (h|h) = sum w ((Re h)^2 + (Im h)^2) as real
+        # dot products with h viewed as interleaved floats (one BLAS call per batch each)
+        shape = np.broadcast_shapes(self.weight.shape, data.shape)
+        w2 = np.repeat(np.broadcast_to(self.weight, shape), 2, axis=-1).ravel()
+        self._w2 = np.ascontiguousarray(w2)
+        self._wd2 = np.ascontiguousarray(
+            w2 * np.asarray(data, dtype=complex).view(np.float64).ravel()
+        )
 
     def inner(self, a: NDArray[np.complex128], b: NDArray[np.complex128]) -> NDArray:
         """Noise-weighted inner product (a|b) over bands and channels (broadcast over W)."""
@@ -192,14 +235,15 @@ class Likelihood:
 
     def templates(self, theta: NDArray[np.float64]) -> NDArray[np.complex128]:
         """Band templates (W, n_bands, 2, N) for sampled rows (W, D)."""
-        p = physical_from_theta(theta, self.model.grid.t_obs_s)
+        p = physical_from_theta(theta, self.model.grid.t_obs_s, self.prior.names)
         return self.model.bands(**p)
 
     def log_likelihood(self, theta: NDArray[np.float64]) -> NDArray[np.float64]:
         """ln L (W,) for rows inside the prior support (no prior check)."""
         h = self.templates(theta)
-        d_h = self.inner(self.data, h)
-        h_h = np.sum(self.weight * np.abs(h) ** 2, axis=(-3, -2, -1))
+        hf = h.view(np.float64).reshape(h.shape[0], -1)
+        d_h = hf @ self._wd2
+        h_h = (hf * hf) @ self._w2
         return np.asarray(d_h - 0.5 * h_h - 0.5 * self.d_d, dtype=float)
 
     def log_prob(self, theta: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -247,7 +291,7 @@ def source_from_target(target: Target) -> SourceParams:
     ------
     TargetFileError
         If the target lacks the GW-only fields the waveform needs (amplitude, cos_inclination,
-        psi) or has fdot <= 0 (the sampler uses log10 fdot).
+        psi).
     """
     from ucbplan.core.params import shift_reference
     from ucbplan.errors import TargetFileError
@@ -259,11 +303,6 @@ def source_from_target(target: Target) -> SourceParams:
                 f"{where}: lisa.{key}: missing; the LISA simulation needs amplitude, "
                 "cos_inclination and psi (see catalogs/fiducial-injection.yaml)"
             )
-    if target.params.fdot <= 0:
-        raise TargetFileError(
-            f"{where}: lisa.fdot: expected > 0 Hz/s for the targeted search (log10 fdot prior), "
-            f"got {target.params.fdot!r}"
-        )
     start, _ = shift_reference(target.params, np.zeros((7, 7)), -0.5 * target.t_obs_s)
     return SourceParams(
         amplitude=float(target.amplitude),  # type: ignore[arg-type]
@@ -281,12 +320,27 @@ def source_from_target(target: Target) -> SourceParams:
 
 
 def model_for_target(
-    target: Target, t_obs_s: float, n: int, eccentric: bool, f_center_hz: float
+    target: Target,
+    t_obs_s: float,
+    n: int,
+    eccentric: bool,
+    f_center_hz: float,
+    *,
+    fdot_ref: float = 0.0,
+    omega_dot_ref: float = 0.0,
 ) -> FourLineModel:
-    """Four-line model for the target's (fixed) sky and an observation of ``t_obs_s``."""
+    """Four-line model for the target's (fixed) sky and an observation of ``t_obs_s``.
+
+    ``f_center_hz`` fixes the bands; with ``fdot_ref`` [Hz/s] and ``omega_dot_ref`` [rad/s]
+    (the search values) it is the reference track that makes templates near it cheap
+    (:class:`~ucbplan.lisa.waveform.FourLineModel`).
+    """
     from ucbplan.lisa.orbits import EqualArmOrbits
     from ucbplan.lisa.response import ecliptic_from_icrs, response_grid, sky_frame
 
     lon, lat = ecliptic_from_icrs(target.ra_deg, target.dec_deg)
     grid = response_grid(EqualArmOrbits(), sky_frame(lon, lat), t_obs_s, n)
-    return FourLineModel(grid, f_center_hz, (1, 2, 3) if eccentric else (2,))
+    harmonics = (1, 2, 3) if eccentric else (2,)
+    return FourLineModel(
+        grid, f_center_hz, harmonics, fdot_ref=fdot_ref, omega_dot_ref=omega_dot_ref
+    )

@@ -130,7 +130,7 @@ def build_model(
     InputError
         ``n_bins`` odd or below 16.
     TargetFileError
-        The target lacks the GW-only fields or has fdot ≤ 0.
+        The target lacks the GW-only fields (amplitude, cos_inclination, psi).
     InputError
         ω̇ puts z_ω = ω̇T/2π outside the prior [0, 50] bins.
     """
@@ -151,7 +151,15 @@ def build_model(
         t_ref=target.t_start + TimeDelta(0.5 * t_obs, format="sec"),
         t_obs_s=t_obs,
     )
-    model = model_for_target(target, t_obs, n_bins, eccentric, truth.f_gw)
+    model = model_for_target(
+        target,
+        t_obs,
+        n_bins,
+        eccentric,
+        truth.f_gw,
+        fdot_ref=truth.fdot,
+        omega_dot_ref=truth.omega_dot,
+    )
     return LisaModel(base=base, truth=truth, model=model, eccentric=eccentric, n_bins=n_bins)
 
 
@@ -216,7 +224,7 @@ def fisher_forecast(model: LisaModel) -> FisherForecast:
     cov = fisher_covariance(like, theta0, _where(model), within_prior=False)
     excess = prior_excess(like, theta0, cov, _where(model))
     warnings = () if excess is None else (f"{excess}; its forecast σ is not meaningful",)
-    fis = post.gaussian_target(model.base, theta0, cov, model.t_obs_s)
+    fis = post.gaussian_target(model.base, theta0, cov, model.t_obs_s, like.prior.names)
     fis = dataclasses.replace(fis, name=f"{model.base.name} (Fisher forecast)")
     return FisherForecast(target=fis, snr=snr, theta0=theta0, cov_theta=cov, warnings=warnings)
 
@@ -400,6 +408,11 @@ def _convergence_warnings(chain: SamplerResult) -> tuple[str, ...]:
     if chain.converged:
         return ()
     n_done, tau_max = chain.theta.shape[0], float(np.max(chain.tau))
+    if not np.isfinite(tau_max):
+        return (
+            f"chain of {n_done} steps is too short to estimate τ (a walker has not moved yet): "
+            "the posterior σ's are not reliable; rerun with more --steps or --until-converged",
+        )
     return (
         f"chain of {n_done} steps is shorter than {CONVERGENCE_FACTOR:g} τ "
         f"(τ_max = {tau_max:.0f} steps): the posterior σ's are not reliable; rerun with "
@@ -434,10 +447,11 @@ def run_simulation(
         previous=problem.previous,
     )
     flat = chain.flat_samples()
-    cols = post.midpoint_samples(flat, t_obs_s)
-    inj = {k: float(v[0]) for k, v in post.midpoint_samples(theta0[None], t_obs_s).items()}
+    names = problem.likelihood.prior.names
+    cols = post.midpoint_samples(flat, t_obs_s, names)
+    inj = {k: float(v[0]) for k, v in post.midpoint_samples(theta0[None], t_obs_s, names).items()}
     cols, n_fold = post.fold_phase_mode(cols, inj["phase"])
-    fis = post.gaussian_target(problem.model.base, theta0, problem.fisher_cov, t_obs_s)
+    fis = post.gaussian_target(problem.model.base, theta0, problem.fisher_cov, t_obs_s, names)
     return SimulationResult(
         problem, chain, flat, cols, inj, n_fold, fis, _convergence_warnings(chain)
     )

@@ -36,7 +36,9 @@ _ECC_NAMES = ("phase", "f_gw", "fdot", "eta", "kappa", "omega_dot")
 _CIRC_NAMES = ("phase", "f_gw", "fdot")
 
 
-def midpoint_samples(theta: NDArray[np.float64], t_obs_s: float) -> dict[str, NDArray]:
+def midpoint_samples(
+    theta: NDArray[np.float64], t_obs_s: float, names: tuple[str, ...] | None = None
+) -> dict[str, NDArray]:
     """Physical samples referenced to the midpoint, keyed like PARAM_NAMES + EXTRA_NAMES.
 
     Parameters
@@ -45,8 +47,10 @@ def midpoint_samples(theta: NDArray[np.float64], t_obs_s: float) -> dict[str, ND
         Sampled-coordinate rows (S, D), start epoch.
     t_obs_s : float
         Observation length T [s].
+    names : tuple of str, optional
+        Sampled coordinates (the prior's names; default: log10 ḟ).
     """
-    p = physical_from_theta(theta, t_obs_s)
+    p = physical_from_theta(theta, t_obs_s, names)
     names = _ECC_NAMES if theta.shape[1] > 6 else _CIRC_NAMES
     return shift_columns({k: p[k] for k in (*names, *EXTRA_NAMES)}, 0.5 * t_obs_s)
 
@@ -142,9 +146,13 @@ def posterior_target(
 
 
 def sampled_to_physical_jacobian(
-    theta0: NDArray[np.float64], t_obs_s: float
+    theta0: NDArray[np.float64], t_obs_s: float, sampled: tuple[str, ...] | None = None
 ) -> tuple[tuple[str, ...], NDArray[np.float64]]:
-    """Jacobian d(physical, start epoch)/d(sampled) at ``theta0``; names of the physical rows."""
+    """Jacobian d(physical, start epoch)/d(sampled) at ``theta0``; names of the physical rows.
+
+    ``sampled`` (the prior's names) says whether column 2 is ḟ or log10 ḟ (default: log10 ḟ).
+    """
+    log_fdot = sampled is None or sampled[2] == "log10_fdot"
     ecc = theta0.size > 6
     names = (_ECC_NAMES if ecc else _CIRC_NAMES) + EXTRA_NAMES
     j = np.zeros((len(names), theta0.size))
@@ -155,7 +163,7 @@ def sampled_to_physical_jacobian(
         if n == "amplitude":
             j[i, col["log10_amplitude"]] = ln10 * 10.0 ** theta0[0]
         elif n == "fdot":
-            j[i, col["log10_fdot"]] = ln10 * 10.0 ** theta0[2]
+            j[i, col["log10_fdot"]] = ln10 * 10.0 ** theta0[2] if log_fdot else 1.0
         elif n == "omega_dot":
             j[i, col["z_omega"]] = 2.0 * np.pi / t_obs_s
         else:
@@ -164,18 +172,23 @@ def sampled_to_physical_jacobian(
 
 
 def gaussian_target(
-    base: Target, theta0: NDArray[np.float64], cov_theta: NDArray[np.float64], t_obs_s: float
+    base: Target,
+    theta0: NDArray[np.float64],
+    cov_theta: NDArray[np.float64],
+    t_obs_s: float,
+    sampled: tuple[str, ...] | None = None,
 ) -> Target:
     """Target (midpoint) from a Gaussian in sampled coordinates at the start (Fisher forecast).
 
     Means are ``theta0`` moved to the midpoint; the covariance is propagated through the
-    sampled -> physical Jacobian and :func:`ucbplan.core.params.shift_jacobian` (T/2).
+    sampled -> physical Jacobian and :func:`ucbplan.core.params.shift_jacobian` (T/2);
+    ``sampled`` are the prior's names (default: log10 ḟ).
     """
-    names, j = sampled_to_physical_jacobian(theta0, t_obs_s)
+    names, j = sampled_to_physical_jacobian(theta0, t_obs_s, sampled)
     cov_start = j @ cov_theta @ j.T
-    cols = midpoint_samples(theta0[None, :], t_obs_s)
+    cols = midpoint_samples(theta0[None, :], t_obs_s, sampled)
     mean = {k: float(v[0]) for k, v in cols.items()}
-    p = physical_from_theta(theta0[None, :], t_obs_s)
+    p = physical_from_theta(theta0[None, :], t_obs_s, sampled)
     p_start = PhaseParams(
         phase=float(p["phase"][0]),
         f_gw=float(p["f_gw"][0]),

@@ -31,6 +31,7 @@ __all__ = [
     "ResponseGrid",
     "SkyFrame",
     "band_transform",
+    "band_weights",
     "ecliptic_from_icrs",
     "response_grid",
     "sky_frame",
@@ -228,8 +229,21 @@ def band_transform(
         of the finite observation that a plain DFT would alias back into the band.
     """
     n = slow.shape[-1] - 1
-    spec = np.fft.fftshift(np.fft.fft(slow[..., :n], axis=-1), axes=-1) * (t_obs_s / n)
-    spec += (slow[..., n] - slow[..., 0])[..., None] * _endpoint_weights(n, t_obs_s)
-    factor = 1.0 - np.exp(-4j * np.pi * f_hz * arm_s)
-    out: NDArray[np.complex128] = spec * (0.5 * factor)
+    dft_w, jump_w = band_weights(t_obs_s, f_hz, arm_s)
+    spec = np.fft.fftshift(np.fft.fft(slow[..., :n], axis=-1), axes=-1)
+    out: NDArray[np.complex128] = spec * dft_w + (slow[..., n] - slow[..., 0])[..., None] * jump_w
     return out
+
+
+def band_weights(
+    t_obs_s: float, f_hz: NDArray[np.float64], arm_s: float
+) -> tuple[NDArray[np.complex128], NDArray[np.complex128]]:
+    """Per-bin weights of :func:`band_transform`: x~ = DFT * w_dft + (Y(T) - Y(0)) * w_jump.
+
+    Both include the factor 1/2 (positive-frequency half) and the exact (1 - D^2) TDI factor;
+    w_dft holds T/N, w_jump the end-point weights (:func:`_endpoint_weights`). Bins in the order
+    k = -N/2 .. N/2 - 1 of ``f_hz`` (N,).
+    """
+    n = f_hz.shape[-1]
+    half_factor = 0.5 * (1.0 - np.exp(-4j * np.pi * f_hz * arm_s))
+    return half_factor * (t_obs_s / n), half_factor * _endpoint_weights(n, t_obs_s)

@@ -1,4 +1,5 @@
-"""emcee sampling of the targeted-search posterior in Fisher-whitened coordinates.
+"""emcee sampling (differential-evolution moves) of the targeted-search posterior in
+Fisher-whitened coordinates.
 
 Walkers move in x with theta = theta0 + A x, where A A^T is the Fisher covariance (the
 correlation-scaled factor of :func:`ucbplan.lisa.fisher.whitening`); the Jacobian is constant, so
@@ -266,10 +267,18 @@ def _seeded_sampler(
     seed: int,
     n_before: int,
 ) -> Any:
-    """Vectorised emcee sampler whose moves draw from a stream of (seed, steps before)."""
+    """Vectorised emcee sampler whose moves draw from a stream of (seed, steps before).
+
+    Differential-evolution moves (ter Braak 2006; emcee's ``DEMove``): in the Fisher-whitened
+    coordinates the posterior is close to N(0, I), where their autocorrelation time is ~3x
+    shorter than the stretch move's (~31 instead of ~100 steps for 9 parameters and 32
+    walkers), so 50 tau cost 3x fewer steps. (Mixing in emcee's DE snooker move was tried and
+    dropped: on N(0, I) in 9 dimensions its samples' σ came out 6 % low.)
+    """
     import emcee
 
-    sampler = emcee.EnsembleSampler(n_walkers, d, log_prob, vectorize=True)
+    move = emcee.moves.DEMove()
+    sampler = emcee.EnsembleSampler(n_walkers, d, log_prob, vectorize=True, moves=move)
     # emcee draws its moves from a legacy RandomState; seed it explicitly for reproducibility.
     stream = int(np.random.SeedSequence([seed, n_before]).generate_state(1)[0])
     sampler.random_state = np.random.RandomState(stream).get_state()
@@ -322,10 +331,10 @@ def _advance(
 
     n_prev = x_prev.shape[0]
     total = max(n_steps, 1)
-    done = 0
+    done, chunk = 0, check_every
     tau = np.full(x_prev.shape[2], np.inf)
     while True:
-        target = total if not until_converged else max(total, done + check_every)
+        target = total if not until_converged else max(total, min(done + chunk, max_steps - n_prev))
         for _ in sampler.sample(state, iterations=target - done, progress=False):
             done += 1
             if stop is not None and stop.requested:
@@ -334,12 +343,24 @@ def _advance(
                 progress(done, max(target, total), float(np.max(tau)))
         state = sampler.get_last_sample()
         chain_x = np.concatenate([x_prev, sampler.get_chain()])
-        tau = np.asarray(emcee.autocorr.integrated_time(chain_x, tol=0, quiet=True), dtype=float)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            tau_est = emcee.autocorr.integrated_time(chain_x, tol=0, quiet=True)
+        tau = np.asarray(tau_est, dtype=float)
+        tau[~np.isfinite(tau)] = np.inf  # NaN: a walker that never moved (a very short chain)
         n_all = n_prev + done
         converged = bool(np.all(np.isfinite(tau)) and n_all >= CONVERGENCE_FACTOR * np.max(tau))
         if not until_converged or converged or n_all >= max_steps:
             return chain_x, tau, converged
-        total = done
+        total, chunk = done, _next_chunk(tau, n_all, check_every)
+
+
+def _next_chunk(tau: NDArray[np.float64], n_all: int, check_every: int) -> int:
+    """Steps before the next convergence check: to 1.1 x 50 tau as estimated now, at least a
+    tenth of ``check_every`` and at most ``check_every`` (no long overshoot past 50 tau)."""
+    if not np.all(np.isfinite(tau)):
+        return check_every
+    short = int(np.ceil(CONVERGENCE_FACTOR * float(np.max(tau)) * 11 / 10)) - n_all
+    return int(np.clip(short, max(1, check_every // 10), check_every))
 
 
 def chain_writer(

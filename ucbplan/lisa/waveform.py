@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ucbplan.lisa.response import LINKS, ResponseGrid, band_transform, tdi_coefficients
+from ucbplan.lisa.response import LINKS, ResponseGrid, band_weights, tdi_coefficients
 
 __all__ = [
     "LINES",
@@ -139,17 +139,26 @@ def line_amplitudes(
     return h
 
 
-#: Walkers per internal block of :meth:`FourLineModel.bands` (cache blocking).
-_CHUNK = 16
+#: Walkers per internal block of :meth:`FourLineModel.bands`: cache blocking, and small enough
+#: that OpenBLAS keeps the moment product on one thread (64 walkers made it spawn threads, 5x
+#: slower on a loaded machine).
+_CHUNK = 32
+
+#: Table length of the apsidal rotation exp(i wdot t) (:meth:`FourLineModel._carriers`).
+_Q = 32
+
+#: Relative truncation error of the Taylor series of the link phases (was 1e-10 before the
+#: reference track made the series short).
+_TAYLOR_TOL = 1e-13
 
 #: Most Taylor terms of the walker-dependent link phase (enough for |beta delay| <= 1.5 rad).
 _K_MAX = 24
 
 
 def _taylor_terms(x: float) -> int:
-    """Smallest K >= 2 with x^K / K! < 1e-10 (relative truncation error of the link phase)."""
+    """Smallest K >= 2 with x^K / K! < _TAYLOR_TOL (relative truncation of the link phase)."""
     term, k = 1.0, 0
-    while term >= 1e-10 or k < 2:
+    while term >= _TAYLOR_TOL or k < 2:
         k += 1
         term *= x / k
         if k >= _K_MAX:
@@ -180,6 +189,10 @@ class FourLineModel:
         q_n = round(n f_center T / 2), band bins q_n - N/2 .. q_n + N/2 - 1.
     harmonics : tuple of int
         Harmonics to model: (1, 2, 3) eccentric, (2,) circular.
+    fdot_ref : float
+        Frequency derivative of the reference track [Hz/s] (the search / injection value).
+    omega_dot_ref : float
+        Apsidal rate of the reference track [rad/s].
 
     Notes
     -----
@@ -190,11 +203,19 @@ class FourLineModel:
     the TDI link delays inside the slow envelopes use the band-centre frequency (phase error
     <= 2 pi (N/2T) 3L/c ~ 3e-4 rad at the band edge; the (1 - D^2) factor is exact per bin);
     the walker-dependent part of the link phases, exp(-i beta (d_j + L)), is summed as a Taylor
-    series with source-independent spacecraft moments (truncation < 1e-10 relative).
+    series around the reference track (f_center_hz, fdot_ref, omega_dot_ref) with
+    source-independent spacecraft moments (truncation < 1e-13 relative). The reference changes
+    only how many Taylor terms are needed (templates near it need two), not the waveform.
     """
 
     def __init__(
-        self, grid: ResponseGrid, f_center_hz: float, harmonics: tuple[int, ...] = (1, 2, 3)
+        self,
+        grid: ResponseGrid,
+        f_center_hz: float,
+        harmonics: tuple[int, ...] = (1, 2, 3),
+        *,
+        fdot_ref: float = 0.0,
+        omega_dot_ref: float = 0.0,
     ) -> None:
         self.grid = grid
         self.harmonics = tuple(sorted(harmonics))
@@ -209,49 +230,71 @@ class FourLineModel:
             for li, line in enumerate(LINES)
             if line.harmonic in self.harmonics
         )
-        # Per band: weights (channel, pol) x spacecraft for emitted and received light.
-        emit = np.zeros((len(self.harmonics), 4, 3, grid.t_s.size), dtype=complex)
+        self.f_center_hz = float(f_center_hz)
+        self.fdot_ref = float(fdot_ref)
+        self.omega_dot_ref = float(omega_dot_ref)
+        self._f_het = round(f_center_hz * t_obs) / (2.0 * t_obs)  # c1 heterodyne [Hz]
+        self._delay_max = float(np.max(np.abs(grid.delay_s)) + grid.arm_s)
+        self._moments = self._link_moments()
+        weights = [band_weights(t_obs, f, grid.arm_s) for f in self.freqs_hz]
+        self._dft_w = np.stack([w[0] for w in weights])[:, None, :]  # (n_bands, 1, N)
+        self._jump_w = np.stack([w[1] for w in weights])[:, None, :]
+        self._t3 = grid.t_s**3 / 3.0
+
+    def _link_weights(self) -> tuple[NDArray[np.complex128], NDArray[np.complex128]]:
+        """Per band: TDI weights (channel, pol) x spacecraft of emitted and received light."""
+        g = self.grid
+        emit = np.zeros((self.n_bands, 4, 3, g.t_s.size), dtype=complex)
         recv = np.zeros_like(emit)
         for b, q in enumerate(self.band_bins):
-            w = tdi_coefficients(q / t_obs, grid.arm_s)
+            w = tdi_coefficients(q / g.t_obs_s, g.arm_s)
             for li, (s, r) in enumerate(LINKS):
                 for ch in range(2):
-                    for pol, proj in enumerate((grid.proj_plus, grid.proj_cross)):
+                    for pol, proj in enumerate((g.proj_plus, g.proj_cross)):
                         emit[b, 2 * ch + pol, s] += w[ch, li] * proj[li]
                         recv[b, 2 * ch + pol, r] += w[ch, li] * proj[li]
-        # Every link factor exp(-2 pi i f_p(t) delay) is split into a fixed part at the reference
-        # frequency (f = n f_c / 2) and a walker-dependent part exp(-i beta_p(t) delay) with
-        # beta_p = n pi (f(t) - f_c) + s wdot, the same for all spacecraft. Its Taylor series in
-        # beta has moments sum_j delay_j^k (weights)_j that do not depend on the source, so the
-        # sum over spacecraft is done once here: MOM[b, k] = (-i)^k / k! sum_j
-        # [(d_j + L)^k emit_j - d_j^k recv_j] (emitters carry the arm delay L).
-        self.f_center_hz = float(f_center_hz)
-        self._f_het = round(f_center_hz * t_obs) / (2.0 * t_obs)  # c1 heterodyne [Hz]
-        d = grid.delay_s  # (3, M)
-        moments = np.empty((len(self.harmonics), _K_MAX, 4, grid.t_s.size), dtype=complex)
-        for b, h in enumerate(self.harmonics):
-            dop0 = np.exp(-1j * np.pi * h * f_center_hz * d)  # (3, M)
-            arm0 = np.exp(-1j * np.pi * h * f_center_hz * grid.arm_s)
-            e_w = emit[b] * (dop0 * arm0)[None]
-            r_w = recv[b] * dop0[None]
+        return emit, recv
+
+    def _link_moments(self) -> NDArray[np.float64]:
+        """Source-independent Taylor moments of the link phases, (line, 4, K, channel, 2M) real.
+
+        Every link factor exp(-2 pi i f_p(t) delay) of line p (2 pi f_p = n pi f(t) + s wdot)
+        is split into a fixed part on the reference track (f_ref(t) = f_c + fdot_ref t,
+        wdot_ref) and a walker-dependent part exp(-i beta_p(t) delay) with
+        beta_p = n pi (f(t) - f_ref(t)) + s (wdot - wdot_ref), the same for all spacecraft. Its
+        Taylor series in beta has moments that do not depend on the source, so the sum over
+        spacecraft is done once here: MOM[p, k] = (-i)^k / k! sum_j [(d_j + L)^k emit_j -
+        d_j^k recv_j] times the fixed part (emitters carry the arm delay L). The fixed band
+        rotation and the (-1)^m that fftshifts the DFT (N even; (-1)^0 = (-1)^N leaves the
+        end-point jump unchanged) are folded in too. Sources near the reference track need
+        few Taylor terms.
+        """
+        g = self.grid
+        t_obs, d, arm = g.t_obs_s, g.delay_s, g.arm_s
+        emit, recv = self._link_weights()
+        sign = np.where(np.arange(g.t_s.size) % 2 == 0, 1.0, -1.0)
+        het = round(self.f_center_hz * t_obs) / 2.0
+        moments = np.zeros((len(LINES), _K_MAX, 4, g.t_s.size), dtype=complex)
+        for li, b in self.lines:
+            h, s = LINES[li].harmonic, LINES[li].shift
+            rot = np.exp(2j * np.pi * (h * het - self.band_bins[b]) * g.t_s / t_obs) * sign
+            rate = np.pi * h * (self.f_center_hz + self.fdot_ref * g.t_s) + s * self.omega_dot_ref
+            dop0 = np.exp(-1j * rate * d)  # (3, M)
+            e_w = emit[b] * (dop0 * np.exp(-1j * rate * arm) * rot)[None]
+            r_w = recv[b] * (dop0 * rot)[None]
             for order in range(_K_MAX):
                 fac = (-1j) ** order / math.factorial(order)
-                moments[b, order] = fac * (
-                    np.einsum("cjm,jm->cm", e_w, (d + grid.arm_s) ** order)
+                moments[li, order] = fac * (
+                    np.einsum("cjm,jm->cm", e_w, (d + arm) ** order)
                     - np.einsum("cjm,jm->cm", r_w, d**order)
                 )
-        # (band, pol, K * channel * M) for one matmul with the (W, pol) amplitudes
-        self._moments = np.ascontiguousarray(
-            moments.reshape(len(self.harmonics), _K_MAX, 2, 2, -1).transpose(0, 3, 1, 2, 4)
-        )
-        self._delay_max = float(np.max(np.abs(d)) + grid.arm_s)
-        self._emit = emit
-        self._recv = recv
-        offs = [
-            h * round(f_center_hz * t_obs) / 2.0 - q
-            for h, q in zip(self.harmonics, self.band_bins, strict=True)
-        ]
-        self._band_rot = np.exp(2j * np.pi * np.outer(offs, grid.t_s) / t_obs)  # (n_bands, M)
+        # (line, 4, K, channel, 2M) real: rows (MOM_+, MOM_x, i MOM_+, i MOM_x) as interleaved
+        # re/im floats, so that [Re a_+, Re a_x, Im a_+, Im a_x] @ rows is the complex product
+        # a . MOM; moments[p, :, :K] reshaped to (4, K * channel * 2M) is a strided matrix for
+        # one real BLAS product (faster than the complex one at this inner size) with the walkers
+        by_pol = moments.reshape(len(LINES), _K_MAX, 2, 2, -1).transpose(0, 3, 1, 2, 4)
+        rows = np.concatenate([by_pol, 1j * by_pol], axis=1)
+        return np.ascontiguousarray(rows).view(np.float64)
 
     @property
     def n_bands(self) -> int:
@@ -309,50 +352,100 @@ class FourLineModel:
 
     def _bands(self, flat: list[NDArray[np.float64]]) -> NDArray[np.complex128]:
         amp, f0, fd, ci, ps, ph, et, ka, wd, fdd = flat
-        g = self.grid
-        t = g.t_s[None, :]
-        n_walk = f0.size
+        t = self.grid.t_s[None, :]
+        n_walk, n = f0.size, self.grid.n
         h = line_amplitudes(amp, ci, et, ka)  # (4, 2, W)
         c2, s2 = np.cos(2.0 * ps), np.sin(2.0 * ps)
-        hp = h[:, 0] * c2 - h[:, 1] * s2  # (4, W)
-        hx = h[:, 0] * s2 + h[:, 1] * c2
+        # (line, W, pol) amplitudes after the polarization rotation by 2 psi
+        hpx = np.stack([h[:, 0] * c2 - h[:, 1] * s2, h[:, 0] * s2 + h[:, 1] * c2], axis=-1)
         # Orbital-phase carrier c1 = exp(i theta_2 / 2) heterodyned at f_het; line n is c1^n
         # times fixed band rotations and exp(i s wdot t) (all lines share one orbital phase).
-        df_t = (f0 - self.f_center_hz)[:, None] + fd[:, None] * t + 0.5 * fdd[:, None] * t * t
-        chirp = np.pi * (fd[:, None] * t * t + fdd[:, None] * t**3 / 3.0)
-        c1 = _cis(
-            0.5 * ph[:, None] + 2.0 * np.pi * (0.5 * f0 - self._f_het)[:, None] * t + 0.5 * chirp
-        )
-        powers = {1: c1}
-        if max(self.harmonics) >= 2:
-            powers[2] = c1 * c1
-        if max(self.harmonics) >= 3:
-            powers[3] = powers[2] * c1
-        shifted = any(LINES[li].shift for li, _ in self.lines)
-        apsis = _cis(wd[:, None] * t) if shifted else np.ones((1, 1), dtype=complex)
-        # Taylor order for exp(-i beta delay): error (beta delay)^K / K! < 1e-10.
-        beta_max = np.pi * 3.0 * float(np.max(np.abs(df_t))) + float(np.max(np.abs(wd)))
+        # df_t: f(t) - f_ref(t) of the n = 2 line [Hz]; chirp: the carrier's phase [rad]
+        df_t = (f0 - self.f_center_hz)[:, None] + (fd - self.fdot_ref)[:, None] * t
+        chirp = fd[:, None] * (t * t)
+        if np.any(fdd):
+            df_t += 0.5 * fdd[:, None] * t * t
+            chirp += fdd[:, None] * self._t3
+        chirp *= 0.5 * np.pi
+        chirp += 0.5 * ph[:, None] + 2.0 * np.pi * (0.5 * f0 - self._f_het)[:, None] * t
+        carriers = self._carriers(_cis(chirp), wd)
+        # Taylor order for exp(-i beta delay): error (beta delay)^K / K! < _TAYLOR_TOL.
+        dwd = (wd - self.omega_dot_ref)[:, None, None]
+        beta_max = np.pi * 3.0 * float(np.max(np.abs(df_t))) + float(np.max(np.abs(dwd)))
         n_terms = _taylor_terms(beta_max * self._delay_max)
-        slow = np.zeros((n_walk, self.n_bands, 2, t.size), dtype=complex)
+        # pi (f(t) - f_ref(t)) twice per sample (the real and imaginary parts of the envelopes)
+        base = np.repeat(np.pi * df_t, 2, axis=-1)[:, None, :]  # (W, 1, 2M)
+        slow = np.empty((n_walk, self.n_bands, 2, t.size), dtype=complex)
+        filled: set[int] = set()
         for li, b in self.lines:
-            line = LINES[li]
-            n_h, s = line.harmonic, line.shift
-            carrier = powers[n_h] * self._band_rot[b][None, :]
-            if s == 1:
-                carrier = carrier * apsis
-            elif s == -1:
-                carrier = carrier * np.conj(apsis)
-            mom = self._moments[b]  # (pol, K, ch, M)
-            beta = ((n_h * np.pi) * df_t + (s * wd)[:, None])[:, None, None, :]  # (W,1,1,M)
-            acc = mom[:, n_terms - 1] * beta + mom[:, n_terms - 2]  # (W, pol, ch, M)
-            for k in range(n_terms - 3, -1, -1):
-                acc *= beta
-                acc += mom[:, k]
-            acc = hp[li][:, None, None] * acc[:, 0] + hx[li][:, None, None] * acc[:, 1]
-            slow[:, b] += acc * carrier[:, None, :]
-        out = np.empty((n_walk, self.n_bands, 2, g.n), dtype=complex)
-        for b in range(self.n_bands):
-            out[:, b] = band_transform(slow[:, b], g.t_obs_s, self.freqs_hz[b], g.arm_s)
+            n_h, s = LINES[li].harmonic, LINES[li].shift
+            beta = n_h * base + s * dwd if s else n_h * base  # (W, 1, 2M), real
+            if b in filled:
+                acc = self._link_sum(hpx[li], beta, li, n_terms)
+                acc *= carriers[li][:, None, :]
+                slow[:, b] += acc
+            else:
+                out = slow[:, b]
+                self._link_sum(hpx[li], beta, li, n_terms, out)
+                out *= carriers[li][:, None, :]
+                filled.add(b)
+        spec = np.fft.fft(slow[..., :n], axis=-1)  # fftshifted by the (-1)^m in the moments
+        spec *= self._dft_w
+        spec += (slow[..., n] - slow[..., 0])[..., None] * self._jump_w
+        return spec
+
+    def _carriers(
+        self, c1: NDArray[np.complex128], wd: NDArray[np.float64]
+    ) -> dict[int, NDArray[np.complex128]]:
+        """c1^n exp(i s wdot t) of each modelled line (index in LINES), (W, M) each."""
+        need = {li for li, _ in self.lines}
+        out: dict[int, NDArray[np.complex128]] = {}
+        if 2 in need or 3 in need:
+            c2 = c1 * c1
+            out[2] = c2
+        if need & {0, 1, 3}:
+            # exp(+-i wdot t_m) on the uniform grid t_m = m h as exp(i wdot h q) exp(i wdot h Q p)
+            # with m = Q p + q: two short tables instead of a sine and cosine per sample
+            m = c1.shape[-1]
+            step = self.grid.t_obs_s / self.grid.n
+            lo = _cis(wd[:, None] * (step * np.arange(_Q)))  # (W, Q)
+            hi = _cis(wd[:, None] * (step * _Q * np.arange(-(-m // _Q))))  # (W, P)
+            apsis = (hi[:, :, None] * lo[:, None, :]).reshape(c1.shape[0], -1)[:, :m]
+            out[0] = c1 * apsis
+            np.conjugate(apsis, out=apsis)
+            minus = c1 * apsis
+            out[1] = minus
+            if 3 in need:
+                out[3] = c2 * minus
+        return out
+
+    def _link_sum(
+        self,
+        amp: NDArray[np.complex128],
+        beta2: NDArray[np.float64],
+        line: int,
+        n_terms: int,
+        out: NDArray[np.complex128] | None = None,
+    ) -> NDArray[np.complex128]:
+        """sum_k beta^k (amp . MOM[line, :, k]): the links' walker-dependent phases, (W, 2, M).
+
+        ``beta2`` (W, 1, 2M) holds each beta twice (real and imaginary part). One real BLAS
+        product contracts the (W, pol) amplitudes with the moments of all K orders; Horner's
+        rule in beta then runs on the real and imaginary parts as floats, into ``out`` if given.
+        """
+        n_walk = amp.shape[0]
+        m2 = beta2.shape[-1]
+        mom = self._moments[line, :, :n_terms].reshape(4, -1)  # (4, K * ch * 2M), a view
+        coef = np.concatenate([amp.real, amp.imag], axis=1)  # (W, 4)
+        terms = (coef @ mom).reshape(n_walk, n_terms, 2, m2)
+        if out is None:
+            out = np.empty((n_walk, 2, m2 // 2), dtype=complex)
+        acc = out.view(np.float64)
+        np.multiply(terms[:, n_terms - 1], beta2, out=acc)
+        for k in range(n_terms - 2, 0, -1):
+            acc += terms[:, k]
+            acc *= beta2
+        acc += terms[:, 0]
         return out
 
     def bands_for(self, p: SourceParams) -> NDArray[np.complex128]:
