@@ -1,0 +1,246 @@
+"""Night charts of every night and the night sheet (PDF one page per night, self-contained HTML).
+
+The plan is a real 3-night ``ucbplan plan`` table (HM Cnc from Paranal, one quadrature session of
+two blocks per night). Independent checks: the chart's edges are placed against the Sun's
+altitude from astropy's own AltAz transform; the HTML is read back with ``html.parser``; PDF pages
+are counted in the file's own page objects.
+"""
+
+from __future__ import annotations
+
+import base64
+import re
+from html.parser import HTMLParser
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from astropy import units as u
+from astropy.coordinates import AltAz, get_sun
+from astropy.table import Table
+from astropy.time import Time
+from typer.testing import CliRunner
+
+from ucbplan.cli.app import app
+from ucbplan.errors import InputError, OutputExistsError
+from ucbplan.observing import nightplot, nightsheet
+from ucbplan.observing.blocktable import read_blocks
+from ucbplan.observing.constraints import AirmassConstraint, ConstraintSet
+from ucbplan.observing.nightplot import (
+    chart_figure,
+    group_visits,
+    night_chart,
+    write_night_charts,
+)
+from ucbplan.observing.nightsheet import write_night_sheet
+from ucbplan.observing.sites import Site, get_site
+from ucbplan.plotting import pyplot
+from ucbplan.plotting.layout import layout_problems
+
+pytestmark = [
+    pytest.mark.filterwarnings("ignore::erfa.ErfaWarning"),
+    pytest.mark.filterwarnings("ignore::astropy.utils.exceptions.AstropyWarning"),
+]
+
+HM = Path(__file__).resolve().parents[1] / "catalogs" / "hm-cnc-simulated.yaml"
+NIGHTS = ("2040-02-15", "2040-02-16", "2040-02-17")
+
+
+@pytest.fixture(scope="module")
+def table(tmp_path_factory: pytest.TempPathFactory) -> Table:
+    out = tmp_path_factory.mktemp("plan") / "b.ecsv"
+    args = ["plan", str(HM), "--site", "paranal", "--night", NIGHTS[0], "--nights", "3"]
+    res = CliRunner().invoke(app, [*args, "--format", "ecsv", "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    return read_blocks(out)
+
+
+@pytest.fixture
+def site() -> Site:
+    return get_site("paranal")
+
+
+def _pdf_pages(path: Path) -> int:
+    return len(re.findall(rb"/Type\s*/Page[^s]", path.read_bytes()))
+
+
+# -- visits ---------------------------------------------------------------------------------------
+
+
+def test_visits_group_by_session_then_by_visit_id(table: Table, site: Site) -> None:
+    by_session = group_visits(table, site)
+    assert list(by_session) == list(NIGHTS)
+    assert [len(v) for v in by_session.values()] == [1, 1, 1]
+    assert all(len(v[0].rows) == 2 for v in by_session.values())
+    split = table.copy()
+    split["visit_id"] = [f"V{k}" for k in range(len(split))]
+    assert [len(v) for v in group_visits(split, site).values()] == [2, 2, 2]
+    one = table.copy()
+    one["visit_id"] = "V"  # one id over three nights: still one visit per night
+    assert [len(v) for v in group_visits(one, site).values()] == [1, 1, 1]
+
+
+def test_night_falls_back_to_local_evening_date(table: Table, site: Site) -> None:
+    bare = table.copy()
+    bare.remove_column("night")
+    assert list(group_visits(bare, site)) == list(NIGHTS)
+
+
+# -- charts ---------------------------------------------------------------------------------------
+
+
+def _sun_alt_deg(site: Site, iso: str) -> float:
+    t = Time(iso, scale="utc")
+    frame = AltAz(obstime=t, location=site.location)
+    return float(get_sun(t).transform_to(frame).alt.to_value(u.deg))
+
+
+def test_chart_spans_sunset_to_sunrise_not_24_hours(table: Table, site: Site) -> None:
+    """Edges 20 min outside sunset/sunrise: astropy's Sun is within ±1° of the horizon there
+    (the Sun moves ~0.2°/min at Paranal; the edges are found on a 1-min grid)."""
+    chart = night_chart(table, site)[0]
+    fig = chart_figure([chart], site)
+    ax = fig.axes[0]
+    lo_h, hi_h = ax.get_xlim()
+    assert 10.0 < hi_h - lo_h < 13.0  # a Paranal February night: ~11 h of dark + 40 min
+    start = chart.window.start
+    edges = [(start + (h * 3600 + s) * u.s).isot for h, s in ((lo_h, 1200), (hi_h, -1200))]
+    for iso in edges:
+        assert abs(_sun_alt_deg(site, iso)) < 1.0, iso
+    assert "2040-02-15" in ax.get_xlabel() and "UTC" in ax.get_xlabel()
+    pyplot().close(fig)
+
+
+def test_chart_draws_visits_anchor_ticks_and_limits(table: Table, site: Site) -> None:
+    cs = ConstraintSet(airmass=AirmassConstraint(max_airmass=1.5))
+    chart = night_chart(table, site)[1]
+    fig = chart_figure([chart], site, cs)
+    ax = fig.axes[0]
+    labels = {t.get_text() for t in ax.get_legend().get_texts()}
+    assert {"Moon", "airmass 1.5", "visit", "anchor epoch (block centre)"} <= labels
+    ticks = [ln for ln in ax.get_lines() if ln.get_marker() == "|" and len(ln.get_xdata())]
+    assert sum(len(ln.get_xdata()) for ln in ticks) == len(chart.visits[0].rows)
+    assert layout_problems(fig) == []
+    pyplot().close(fig)
+
+
+def test_every_night_charted_png_panels_and_pdf_pages(
+    table: Table, site: Site, tmp_path: Path
+) -> None:
+    png, pdf = tmp_path / "n.png", tmp_path / "n.pdf"
+    assert write_night_charts(table, site, png) == 3
+    assert png.read_bytes()[:4] == b"\x89PNG"
+    assert write_night_charts(table, site, pdf) == 3
+    assert _pdf_pages(pdf) == 3
+    fig = chart_figure(night_chart(table, site), site)
+    assert len(fig.axes) == 3
+    assert layout_problems(fig) == []
+    pyplot().close(fig)
+    with pytest.raises(OutputExistsError):
+        write_night_charts(table, site, png)
+
+
+def test_too_many_nights_for_one_image(
+    table: Table, site: Site, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(nightplot, "MAX_PANELS", 2)
+    with pytest.raises(InputError, match=r"give a \.pdf path"):
+        write_night_charts(table, site, tmp_path / "n.png")
+    assert not (tmp_path / "n.png").exists()
+
+
+# -- the night sheet ------------------------------------------------------------------------------
+
+
+class _Reader(HTMLParser):
+    """Collects tags, attributes and text of each <section>."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.sections: list[dict[str, Any]] = []
+        self.urls: list[str] = []
+        self._cell: list[str] | None = None
+
+    def handle_starttag(self, tag: str, attrs: list[tuple[str, str | None]]) -> None:
+        a = dict(attrs)
+        self.urls += [v or "" for k, v in attrs if k in ("src", "href")]
+        if tag == "section":
+            self.sections.append({"h2": "", "img": [], "rows": [], "text": ""})
+        elif tag == "img":
+            self.sections[-1]["img"].append(a.get("src", ""))
+        elif tag == "tr":
+            self.sections[-1]["rows"].append([])
+        elif tag in ("td", "h2"):
+            self._cell = []
+
+    def handle_endtag(self, tag: str) -> None:
+        if tag == "td" and self._cell is not None:
+            self.sections[-1]["rows"][-1].append("".join(self._cell))
+        if tag == "h2" and self._cell is not None:
+            self.sections[-1]["h2"] = "".join(self._cell)
+        if tag in ("td", "h2"):
+            self._cell = None
+
+    def handle_data(self, data: str) -> None:
+        if self._cell is not None:
+            self._cell.append(data)
+
+
+def test_html_sheet_is_self_contained_and_says_what_to_do(
+    table: Table, site: Site, tmp_path: Path
+) -> None:
+    path = tmp_path / "night.html"
+    assert write_night_sheet(table, site, path) == 3
+    reader = _Reader()
+    reader.feed(path.read_text(encoding="utf-8"))
+    assert [s["h2"] for s in reader.sections] == [f"Paranal, night of {n}" for n in NIGHTS]
+    assert all(u.startswith("data:image/png;base64,") for u in reader.urls)  # no network
+    for night, section in zip(NIGHTS, reader.sections, strict=True):
+        (img,) = section["img"]
+        assert base64.b64decode(img.split(",", 1)[1])[:4] == b"\x89PNG"
+        visits = [r for r in section["rows"] if r]
+        assert len(visits) == 1
+        number, visit_id, target, start, end, sequence, tell = visits[0]
+        rows = table[table["night"] == night]
+        assert visit_id == rows["session_id"][0] and target == "HM Cnc (simulated)"
+        first, last = str(min(rows["t_start_utc"])), str(max(rows["t_end_utc"]))
+        assert number == "1"
+        assert start == f"{first[:10]} {first[11:19]} UTC"  # date, time and scale
+        assert end == f"{last[:10]} {last[11:19]} UTC"
+        for row in rows:
+            assert f"anchor quadrature (u★ = {row['u_star_rad']:.3f} rad)" in sequence
+            assert str(row["t_mid_utc"])[11:19] in tell
+        assert f"RA {rows['ra_hms'][0]}, Dec {rows['dec_dms'][0]} (ICRS)" in tell
+        assert "1 × 60 s" in tell and f"by {start}" in tell
+
+
+def test_pdf_sheet_has_one_page_per_night(table: Table, site: Site, tmp_path: Path) -> None:
+    path = tmp_path / "night.pdf"
+    assert write_night_sheet(table, site, path) == 3
+    assert path.read_bytes()[:5] == b"%PDF-"
+    assert _pdf_pages(path) == 3
+    with pytest.raises(OutputExistsError):
+        write_night_sheet(table, site, path)
+    assert write_night_sheet(table, site, path, overwrite=True) == 3
+
+
+def test_pdf_sheet_continues_a_long_night_on_more_pages(
+    table: Table, site: Site, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(nightsheet, "_LINES_PER_PAGE", 2)
+    monkeypatch.setattr(nightsheet, "_LINES_PER_CONTINUATION", 3)
+    path = tmp_path / "night.pdf"
+    write_night_sheet(table, site, path)
+    lines = len(nightsheet._text_lines(night_chart(table, site)[0]))
+    assert _pdf_pages(path) == 3 * (1 + int(np.ceil((lines - 2) / 3)))
+
+
+def test_sheet_refuses_other_formats_and_empty_plans(
+    table: Table, site: Site, tmp_path: Path
+) -> None:
+    with pytest.raises(InputError, match=r"\.pdf or \.html"):
+        write_night_sheet(table, site, tmp_path / "night.png")
+    with pytest.raises(InputError, match="no blocks"):
+        write_night_sheet(table[:0], site, tmp_path / "night.pdf")
+    assert not list(tmp_path.iterdir())

@@ -1,0 +1,257 @@
+"""The night sheet for the telescope: per night, the chart and what to tell the night assistant.
+
+:func:`write_night_sheet` writes a PDF (one page per night; a night with many visits continues
+on further pages) or a self-contained HTML file (charts embedded as base64 PNG, no links, no
+scripts, no network). Each night lists its visits in time order with UTC start and end (date and
+time, scale stated), the exposure sequence of every block and a plain instruction: target,
+ICRS coordinates, when to be acquired, exposure time × number, and the anchor epochs.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import io
+import math
+from collections.abc import Sequence
+from pathlib import Path
+from typing import IO, Any
+
+import numpy as np
+from astropy.table import Table
+
+from ucbplan.errors import InputError
+from ucbplan.io import write_output
+from ucbplan.observing.constraints import ConstraintSet
+from ucbplan.observing.nightplot import NightChart, Visit, chart_figure, night_chart
+from ucbplan.observing.sites import Site
+from ucbplan.plotting import pyplot
+
+__all__ = ["SHEET_FORMATS", "visit_instruction", "visit_lines", "write_night_sheet"]
+
+#: Formats of :func:`write_night_sheet`, by file suffix.
+SHEET_FORMATS = ("pdf", "html")
+#: Text lines of the visit list on one PDF page (below the chart).
+_LINES_PER_PAGE = 22
+#: Text lines on a continuation page (no chart).
+_LINES_PER_CONTINUATION = 50
+#: Characters per line and font size [pt] of the PDF visit list (fills an A4 landscape page).
+_WIDTH, _FONT_PT = 140, 8.5
+
+
+def _utc(iso: str) -> str:
+    """``YYYY-MM-DD HH:MM:SS UTC`` of an ISO UTC string (rounded down to the second)."""
+    return f"{iso[:10]} {iso[11:19]} UTC"
+
+
+def _cell(row: Any, name: str) -> float | None:
+    """A float cell, None when the column is absent, masked or NaN."""
+    if name not in row.colnames or np.ma.is_masked(row[name]):
+        return None
+    value = float(row[name])
+    return value if math.isfinite(value) else None
+
+
+def _exposures(row: Any) -> str:
+    readout = _cell(row, "readout_s")
+    dead = f", {readout:g} s between" if readout else ""
+    return f"{int(row['n_exp'])} × {float(row['exptime_s']):g} s{dead}"
+
+
+def visit_lines(visit: Visit) -> list[str]:
+    """The exposure sequence of a visit, one line per block: UTC start–end, exposures, anchor
+    (u★ [rad]) and its epoch (block centre, UTC) ± σ_t [s], airmass at the centre."""
+    out = []
+    for row in visit.rows:
+        start, end, mid = str(row["t_start_utc"]), str(row["t_end_utc"]), str(row["t_mid_utc"])
+        out.append(
+            f"{row['block_id']}: {_utc(start)} to {end[11:19]} UTC, {_exposures(row)}; anchor "
+            f"{row['anchor']} (u★ = {float(row['u_star_rad']):.3f} rad) at {mid[11:23]} UTC "
+            f"± {float(row['sigma_t_s']):.2g} s; airmass {float(row['airmass']):.2f}"
+        )
+    return out
+
+
+def visit_instruction(visit: Visit) -> str:
+    """What to tell the night assistant about a visit, in one paragraph."""
+    row = visit.rows[0]
+    ra = str(row["ra_hms"]) if "ra_hms" in visit.rows.colnames else f"{float(row['ra_deg']):.5f}°"
+    dec = (
+        str(row["dec_dms"])
+        if "dec_dms" in visit.rows.colnames
+        else f"{float(row['dec_deg']):+.5f}°"
+    )
+    acq = _cell(row, "acq_s")
+    ready = f"start acquiring by {acq / 60:.0f} min before" if acq else "be acquired and guiding by"
+    n_blocks = len(visit.rows)
+    seq = "; ".join(f"{_exposures(r)} from {str(r['t_start_utc'])[11:19]} UTC" for r in visit.rows)
+    anchors = ", ".join(f"{r['anchor']} at {str(r['t_mid_utc'])[11:19]} UTC" for r in visit.rows)
+    return (
+        f"{visit.target}: RA {ra}, Dec {dec} (ICRS). Please {ready} {_utc(visit.start_utc)}. "
+        f"{n_blocks} block{'s' if n_blocks > 1 else ''}: {seq}. The exposure start times are "
+        f"fixed (phase-critical): the anchor epochs are {anchors}. Finished at "
+        f"{_utc(visit.end_utc)}."
+    )
+
+
+def _night_rows(chart: NightChart) -> list[tuple[str, Visit]]:
+    return [(f"{k + 1}", v) for k, v in enumerate(chart.visits)]
+
+
+# -- PDF ------------------------------------------------------------------------------------------
+
+
+def _wrap(text: str, width: int = _WIDTH) -> list[str]:
+    import textwrap
+
+    return textwrap.wrap(text, width=width, subsequent_indent="      ") or [""]
+
+
+def _text_lines(chart: NightChart) -> list[str]:
+    lines: list[str] = []
+    for number, v in _night_rows(chart):
+        lines += _wrap(f"Visit {number} ({v.visit_id}): {_utc(v.start_utc)} to {_utc(v.end_utc)}")
+        for line in visit_lines(v):
+            lines += _wrap(f"   {line}")
+        lines += _wrap(f"   Tell the night assistant: {visit_instruction(v)}")
+    return lines
+
+
+def _pdf_pages(chart: NightChart, site: Site, constraints: ConstraintSet | None) -> list[Any]:
+    """The figures of one night: chart and first lines, then continuation pages."""
+    plt = pyplot()
+    lines = _text_lines(chart)
+    first = chart_figure([chart], site, constraints)
+    first.set_size_inches(11.69, 8.27)
+    engine: Any = first.get_layout_engine()
+    engine.set(rect=(0.0, 0.42, 1.0, 0.58))
+    pages = [first]
+    chunk, rest = lines[:_LINES_PER_PAGE], lines[_LINES_PER_PAGE:]
+    first.text(0.02, 0.40, "\n".join(chunk), family="monospace", fontsize=_FONT_PT, va="top")
+    while rest:
+        fig = plt.figure(figsize=(11.69, 8.27))
+        head = f"{site.name}, night of {chart.window.label} (continued)"
+        fig.text(0.02, 0.97, head, fontsize=10, va="top")
+        body, rest = rest[:_LINES_PER_CONTINUATION], rest[_LINES_PER_CONTINUATION:]
+        fig.text(0.02, 0.93, "\n".join(body), family="monospace", fontsize=_FONT_PT, va="top")
+        pages.append(fig)
+    return pages
+
+
+def _write_pdf(handle: IO[Any], charts: Sequence[NightChart], site: Site, cs: Any) -> None:
+    from matplotlib.backends.backend_pdf import PdfPages
+
+    plt = pyplot()
+    with PdfPages(handle) as pdf:
+        for chart in charts:
+            for fig in _pdf_pages(chart, site, cs):
+                pdf.savefig(fig)
+                plt.close(fig)
+
+
+# -- HTML -----------------------------------------------------------------------------------------
+
+_STYLE = (
+    "body{font-family:sans-serif;max-width:1100px;margin:1em auto}"
+    "table{border-collapse:collapse;font-size:90%}td,th{border:1px solid #999;padding:2px 6px;"
+    "vertical-align:top}section{page-break-after:always}img{max-width:100%}"
+)
+
+
+def _png(chart: NightChart, site: Site, constraints: ConstraintSet | None) -> str:
+    fig = chart_figure([chart], site, constraints)
+    buf = io.BytesIO()
+    try:
+        fig.savefig(buf, format="png", dpi=100)
+    finally:
+        pyplot().close(fig)
+    return base64.b64encode(buf.getvalue()).decode("ascii")
+
+
+def _html_night(chart: NightChart, site: Site, constraints: ConstraintSet | None) -> str:
+    e = html.escape
+    rows = []
+    for number, v in _night_rows(chart):
+        blocks = "<br>".join(e(line) for line in visit_lines(v))
+        rows.append(
+            f"<tr><td>{number}</td><td>{e(v.visit_id)}</td><td>{e(v.target)}</td>"
+            f"<td>{e(_utc(v.start_utc))}</td><td>{e(_utc(v.end_utc))}</td><td>{blocks}</td>"
+            f"<td>{e(visit_instruction(v))}</td></tr>"
+        )
+    head = (
+        "<tr><th>#</th><th>visit</th><th>target</th><th>start (UTC)</th><th>end (UTC)</th>"
+        "<th>exposure sequence</th><th>tell the night assistant</th></tr>"
+    )
+    return (
+        f"<section><h2>{e(site.name)}, night of {e(chart.window.label)}</h2>"
+        f'<img alt="altitude chart of the night of {e(chart.window.label)}" '
+        f'src="data:image/png;base64,{_png(chart, site, constraints)}">'
+        f"<table>{head}{''.join(rows)}</table></section>"
+    )
+
+
+def _html(charts: Sequence[NightChart], site: Site, constraints: ConstraintSet | None) -> str:
+    body = "".join(_html_night(c, site, constraints) for c in charts)
+    return (
+        '<!DOCTYPE html><html lang="en"><head><meta charset="utf-8">'
+        f"<title>Night sheet: {html.escape(site.name)}</title><style>{_STYLE}</style></head>"
+        f"<body><h1>Night sheet: {html.escape(site.name)}, {len(charts)} night(s)</h1>"
+        "<p>All times are UTC (date and time). Exposure start times are phase-critical.</p>"
+        f"{body}</body></html>\n"
+    )
+
+
+def write_night_sheet(
+    table: Table,
+    site: Site,
+    path: Path,
+    *,
+    constraints: ConstraintSet | None = None,
+    overwrite: bool = False,
+) -> int:
+    """Write the night sheet of a blocks table to ``path`` (.pdf or .html); the number of nights.
+
+    Parameters
+    ----------
+    table : astropy.table.Table
+        The blocks table (columns of :data:`ucbplan.observing.blocktable.COLUMNS`; visits by
+        ``visit_id`` when present, else ``session_id``).
+    site : Site
+        The observatory of the plan.
+    path : Path
+        Output file; the suffix picks the format (:data:`SHEET_FORMATS`).
+    constraints : ConstraintSet, optional
+        The plan's constraints (airmass/altitude limits drawn, twilight named).
+    overwrite : bool
+        Replace an existing file.
+
+    Raises
+    ------
+    InputError
+        Unknown suffix or a table without blocks.
+    OutputExistsError
+        ``path`` exists and ``overwrite`` is false.
+    """
+    fmt = path.suffix.lstrip(".").lower()
+    if fmt not in SHEET_FORMATS:
+        raise InputError(
+            f"--sheet: expected a .pdf or .html file, got {path.name!r}; name the sheet night.pdf"
+        )
+    charts = night_chart(table, site)
+    if not charts:
+        raise InputError("--sheet: the plan has no blocks; nothing to put on a night sheet")
+    if fmt == "pdf":
+        write_output(
+            path,
+            lambda h: _write_pdf(h, charts, site, constraints),
+            overwrite=overwrite,
+            binary=True,
+        )
+    else:
+        text = _html(charts, site, constraints)
+
+        def _write_html(handle: IO[str]) -> None:
+            handle.write(text)
+
+        write_output(path, _write_html, overwrite=overwrite)
+    return len(charts)
