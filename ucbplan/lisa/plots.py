@@ -96,6 +96,8 @@ def asd_plot(
         Line positions with and without the apsidal shift (dashed red / black).
     """
     plt = pyplot()
+    from matplotlib.ticker import MaxNLocator
+
     fig, axes = plt.subplots(
         len(harmonics), 1, figsize=(7, 2.9 * len(harmonics)), squeeze=False, layout="constrained"
     )
@@ -126,6 +128,9 @@ def asd_plot(
         ax.set_ylabel("ASD [1/√Hz]")
         ax.set_title(f"n = {harmonics[b]} band ({freqs_hz.shape[1]} bins)", fontsize=9)
         ax.set_xlabel("frequency [mHz]", fontsize=8)
+        # plain frequencies: an offset ("+1.2609e1") is easy to misread
+        ax.ticklabel_format(axis="x", useOffset=False)
+        ax.xaxis.set_major_locator(MaxNLocator(5))
     # one legend above the panels: inside a panel it covered the lines
     handles, labels = axes[0, 0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="outside upper center", ncol=len(labels), fontsize=8)

@@ -62,6 +62,7 @@ def _boxes(fig: Figure, renderer: Any) -> list[tuple[str, Bbox]]:
             for tick in _drawn_ticks(axis):
                 for lab in (tick.label1, tick.label2):
                     add(f"{where} {name} tick {lab.get_text()!r}", lab)
+            add(f"{where} {name} offset text", axis.get_offset_text())
         for t in ax.texts:
             add(f"{where} text {t.get_text()!r}", t)
         add(f"{where} legend", ax.get_legend())
