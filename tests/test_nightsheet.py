@@ -118,9 +118,21 @@ def test_chart_draws_visits_anchor_ticks_and_limits(table: Table, site: Site) ->
     fig = chart_figure([chart], site, cs)
     ax = fig.axes[0]
     labels = {t.get_text() for t in ax.get_legend().get_texts()}
-    assert {"Moon", "airmass 1.5", "visit", "anchor epoch (block centre)"} <= labels
+    assert {"Moon", "airmass 1.5", "visit (number)", "anchor epoch (block centre)"} <= labels
     ticks = [ln for ln in ax.get_lines() if ln.get_marker() == "|" and len(ln.get_xdata())]
     assert sum(len(ln.get_xdata()) for ln in ticks) == len(chart.visits[0].rows)
+    assert layout_problems(fig) == []
+    pyplot().close(fig)
+
+
+def test_close_visits_get_numbers_that_do_not_overprint(table: Table, site: Site) -> None:
+    """Each block its own visit: two visits 2.7 min apart, numbered 1 and 2 on two rows."""
+    split = table.copy()
+    split["visit_id"] = [f"V{k}" for k in range(len(split))]
+    fig = chart_figure(night_chart(split, site)[:1], site)
+    numbers = [t for t in fig.axes[0].texts if t.get_text().isdigit()]
+    assert [t.get_text() for t in numbers] == ["1", "2"]
+    assert numbers[0].get_position()[1] != numbers[1].get_position()[1]
     assert layout_problems(fig) == []
     pyplot().close(fig)
 

@@ -235,3 +235,17 @@ def test_apsidal_signal_default_grid(saved: list[Any], tmp_path: Path) -> None:
         target_omega1=math.pi / 3,
     )
     _clean(saved, 1)
+
+
+@pytest.mark.slow
+def test_simulation_corner_plots(saved: list[Any], tmp_path: Path) -> None:
+    """The three corner plots of a tiny eccentric simulation (N = 64 bins, 20 steps)."""
+    injection = CATALOGS / "fiducial-injection.yaml"
+    out = tmp_path / "post.yaml"
+    _run(
+        "simulate", injection, "-o", out, "--n-bins", "64", "--steps", "20", "--seed", "3",
+        "--walkers", "18", "--no-noise", "--plots", tmp_path,
+    )  # fmt: skip
+    names = sorted(Path(n).name for n, _ in saved)
+    _clean(saved, 3)
+    assert len(names) == 3

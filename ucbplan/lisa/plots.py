@@ -59,13 +59,22 @@ def corner_plot(
         title_fmt=".3g",
         quantiles=[0.16, 0.5, 0.84],
         label_kwargs={"fontsize": 9},
-        title_kwargs={"fontsize": 7},
+        title_kwargs={"fontsize": 8},
         max_n_ticks=3,
+        labelpad=0.15,
+    )
+    # room between panels for the 45° tick labels, below them for the offset text, and at the
+    # left and bottom for the labels moved clear of it
+    par = fig.subplotpars
+    width, height = fig.get_size_inches()
+    fig.subplots_adjust(
+        left=par.left + 0.4 / width, bottom=par.bottom + 0.4 / height, wspace=0.12, hspace=0.12
     )
     for ax in fig.axes:
         ax.tick_params(labelsize=7)
     if title:
-        fig.suptitle(title)
+        # in the empty upper triangle: centred, it sat on the first panel's title
+        fig.suptitle(title, x=0.97, y=0.97, ha="right", va="top")
     save_figure(fig, path, overwrite=overwrite, dpi=_DPI)
 
 

@@ -59,6 +59,9 @@ FloatArray = NDArray[np.float64]
 _SHADES = ((0.0, 0.93), (-6.0, 0.82), (-12.0, 0.68), (-18.0, 0.5))
 #: Margin of the chart around sunset and sunrise [s].
 _MARGIN_S = 1200.0
+#: Altitudes [deg] of the rows of visit numbers, and the least gap [h] between two in one row.
+_NUMBER_ALT_DEG = (81.0, 74.0, 67.0)
+_NUMBER_GAP_H = 0.4
 #: Most nights a PNG/SVG holds (one panel each); longer plans go to a PDF, a page per night.
 MAX_PANELS = 7
 
@@ -203,18 +206,26 @@ def _draw_limits(ax: Any, constraints: ConstraintSet | None, airmass_max: float 
 
 
 def _draw_visits(ax: Any, axis: TimeAxis, chart: NightChart, colours: Any) -> None:
-    """Visits as shaded spans, block centres (anchor epochs) as ticks at the top [h]."""
+    """Visits as shaded spans numbered as on the night sheet, block centres (anchor epochs) as
+    ticks at the top [h]."""
     names = [t[0] for t in chart.targets]
-    for v in chart.visits:
+    last = [-math.inf] * len(_NUMBER_ALT_DEG)
+    for k, v in enumerate(chart.visits):
         h0 = _seconds(axis, [v.start_utc])[0] / 3600.0
         h1 = _seconds(axis, [v.end_utc])[0] / 3600.0
         colour = colours(names.index(v.target) % 10)
         ax.axvspan(h0, h1, color=colour, alpha=0.35, lw=0, zorder=1)
         mids = _seconds(axis, [str(t) for t in v.rows["t_mid_utc"]]) / 3600.0
         ax.plot(mids, np.full(mids.shape, 88.0), "|", color="k", ms=9, mew=1.2, zorder=4)
+        centre = (h0 + h1) / 2.0
+        level = next((j for j, x in enumerate(last) if centre - x > _NUMBER_GAP_H), 0)
+        last[level] = centre
+        box = {"fc": "white", "ec": colour, "pad": 1.5, "alpha": 0.8}
+        y = _NUMBER_ALT_DEG[level]
+        ax.text(centre, y, str(k + 1), ha="center", va="center", fontsize="small", bbox=box)
     if chart.visits:
         ax.plot([], [], "|", color="k", ms=9, mew=1.2, label="anchor epoch (block centre)")
-        ax.axvspan(np.nan, np.nan, color="0.5", alpha=0.35, lw=0, label="visit")
+        ax.axvspan(np.nan, np.nan, color="0.5", alpha=0.35, lw=0, label="visit (number)")
 
 
 def _utc_ticks(ax: Any, axis: TimeAxis, span: tuple[float, float]) -> None:
