@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 from astropy import units as u
 from astropy.coordinates import AltAz, get_sun
-from astropy.table import Table
+from astropy.table import Table, vstack
 from astropy.time import Time
 from typer.testing import CliRunner
 
@@ -244,8 +244,61 @@ def test_pdf_sheet_continues_a_long_night_on_more_pages(
     monkeypatch.setattr(nightsheet, "_LINES_PER_CONTINUATION", 3)
     path = tmp_path / "night.pdf"
     write_night_sheet(table, site, path)
-    lines = len(nightsheet._text_lines(night_chart(table, site)[0]))
-    assert _pdf_pages(path) == 3 * (1 + int(np.ceil((lines - 2) / 3)))
+    head = len(nightsheet._wrap(nightsheet.plan_note(table))) + 1
+    lines = [head + len(nightsheet._text_lines(c)) for c in night_chart(table, site)]
+    assert _pdf_pages(path) == sum(1 + int(np.ceil((n - 2) / 3)) for n in lines)
+
+
+def _crowded(table: Table, n: int) -> Table:
+    """The first night's session repeated ``n`` times, 30 min apart, as ``n`` visits."""
+    first = table[table["night"] == NIGHTS[0]]
+    parts = []
+    for k in range(n):
+        part = first.copy()
+        for name in ("t_start_utc", "t_mid_utc", "t_end_utc"):
+            shifted = Time(list(part[name]), scale="utc") + (k * 30 - 120) * u.min
+            part[name] = [t.isot for t in shifted]
+        part["visit_id"] = f"V{k:02d}"
+        part["block_id"] = [f"{b}-{k}" for b in part["block_id"]]
+        parts.append(part)
+    return vstack(parts)
+
+
+def test_pdf_pages_of_a_crowded_night_are_laid_out(table: Table, site: Site) -> None:
+    """Twelve visits: numbers in rows on the chart, the list continued on a second page, and no
+    text of any page overprinting another or leaving the page."""
+    crowded = _crowded(table, 12)
+    (chart,) = night_chart(crowded, site)
+    pages = nightsheet._pdf_pages(chart, site, None, nightsheet.plan_note(crowded))
+    assert len(pages) >= 2
+    for fig in pages:
+        assert layout_problems(fig) == []
+        pyplot().close(fig)
+
+
+def test_instruction_with_acquisition_time_and_magnitude(table: Table, site: Site) -> None:
+    rich = table.copy()
+    rich["acq_s"] = 300.0
+    rich["vmag"] = 13.94
+    visit = group_visits(rich, site)[NIGHTS[0]][0]
+    start = Time(visit.start_utc, scale="utc")
+    acquire = (start - 300 * u.s).isot  # independent: astropy's own time arithmetic
+    text = nightsheet.visit_instruction(visit)
+    assert f"Start acquiring at {acquire[:10]} {acquire[11:19]} UTC (5 min acquisition)" in text
+    assert "V = 13.9 mag" in text
+
+
+@pytest.mark.parametrize(
+    ("name", "fmt"), [("n.pdf", "pdf"), ("n.HTML", "html"), ("n.htm", "html"), ("n.png", None)]
+)
+def test_sheet_format_by_suffix(name: str, fmt: str | None) -> None:
+    if fmt is None:
+        with pytest.raises(
+            InputError, match=r"^--sheet: expected a \.pdf or \.html file, got .n\.png"
+        ):
+            nightsheet.sheet_format(Path(name))
+    else:
+        assert nightsheet.sheet_format(Path(name)) == fmt
 
 
 def test_sheet_refuses_other_formats_and_empty_plans(

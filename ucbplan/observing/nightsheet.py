@@ -14,25 +14,33 @@ import html
 import io
 import math
 from collections.abc import Sequence
+from datetime import datetime, timedelta
 from pathlib import Path
 from typing import IO, Any
 
 import numpy as np
 from astropy.table import Table
 
-from ucbplan.errors import InputError
+from ucbplan.errors import InputError, shorten
 from ucbplan.io import write_output
 from ucbplan.observing.constraints import ConstraintSet
 from ucbplan.observing.nightplot import NightChart, Visit, chart_figure, night_chart
 from ucbplan.observing.sites import Site
 from ucbplan.plotting import pyplot
 
-__all__ = ["SHEET_FORMATS", "visit_instruction", "visit_lines", "write_night_sheet"]
+__all__ = [
+    "SHEET_FORMATS",
+    "plan_note",
+    "sheet_format",
+    "visit_instruction",
+    "visit_lines",
+    "write_night_sheet",
+]
 
 #: Formats of :func:`write_night_sheet`, by file suffix.
 SHEET_FORMATS = ("pdf", "html")
 #: Text lines of the visit list on one PDF page (below the chart).
-_LINES_PER_PAGE = 22
+_LINES_PER_PAGE = 19
 #: Text lines on a continuation page (no chart).
 _LINES_PER_CONTINUATION = 50
 #: Characters per line and font size [pt] of the PDF visit list (fills an A4 landscape page).
@@ -72,26 +80,57 @@ def visit_lines(visit: Visit) -> list[str]:
     return out
 
 
+def _local(row: Any, name: str) -> str:
+    """`` (local HH:MM)`` from a ``t_*_local`` cell, empty when the table has none."""
+    text = str(row[name]).strip() if name in row.colnames and not np.ma.is_masked(row[name]) else ""
+    return f" (local {text[11:16]})" if len(text) >= 16 else ""
+
+
+def _minus(iso: str, seconds: float) -> str:
+    """``_utc`` of an ISO UTC string moved back by ``seconds``."""
+    t = datetime.fromisoformat(iso[:19]) - timedelta(seconds=seconds)
+    return _utc(t.isoformat())
+
+
 def visit_instruction(visit: Visit) -> str:
-    """What to tell the night assistant about a visit, in one paragraph."""
+    """What to tell the night assistant about a visit, in one paragraph: target, ICRS position,
+    magnitude (if the table has ``vmag``), when to be on target, the exposures and the anchors."""
     row = visit.rows[0]
-    ra = str(row["ra_hms"]) if "ra_hms" in visit.rows.colnames else f"{float(row['ra_deg']):.5f}°"
-    dec = (
-        str(row["dec_dms"])
-        if "dec_dms" in visit.rows.colnames
-        else f"{float(row['dec_deg']):+.5f}°"
-    )
+    names = visit.rows.colnames
+    ra = str(row["ra_hms"]) if "ra_hms" in names else f"{float(row['ra_deg']):.5f}°"
+    dec = str(row["dec_dms"]) if "dec_dms" in names else f"{float(row['dec_deg']):+.5f}°"
+    vmag = _cell(row, "vmag")
+    mag = f", V = {vmag:.1f} mag" if vmag is not None else ""
     acq = _cell(row, "acq_s")
-    ready = f"start acquiring by {acq / 60:.0f} min before" if acq else "be acquired and guiding by"
+    start = f"{_utc(visit.start_utc)}{_local(row, 't_start_local')}"
+    ready = (
+        f"Start acquiring at {_minus(visit.start_utc, acq)} ({acq / 60:.0f} min acquisition) so "
+        f"that the first exposure starts at {start}"
+        if acq
+        else f"Be on target and guiding by {start}, when the first exposure starts"
+    )
     n_blocks = len(visit.rows)
     seq = "; ".join(f"{_exposures(r)} from {str(r['t_start_utc'])[11:19]} UTC" for r in visit.rows)
     anchors = ", ".join(f"{r['anchor']} at {str(r['t_mid_utc'])[11:19]} UTC" for r in visit.rows)
     return (
-        f"{visit.target}: RA {ra}, Dec {dec} (ICRS). Please {ready} {_utc(visit.start_utc)}. "
+        f"{visit.target}: RA {ra}, Dec {dec} (ICRS){mag}. {ready}. "
         f"{n_blocks} block{'s' if n_blocks > 1 else ''}: {seq}. The exposure start times are "
         f"fixed (phase-critical): the anchor epochs are {anchors}. Finished at "
         f"{_utc(visit.end_utc)}."
     )
+
+
+def plan_note(table: Table) -> str:
+    """One line on the plan from the table's provenance: mode, constraints, ucbplan version."""
+    meta = table.meta
+    parts = ["All times UTC (date and time); exposure start times are phase-critical"]
+    if meta.get("mode"):
+        parts.append(f"mode {meta['mode']}")
+    if meta.get("constraints"):
+        parts.append("constraints: " + ", ".join(str(c) for c in meta["constraints"]))
+    if meta.get("ucbplan_version"):
+        parts.append(f"planned with ucbplan {meta['ucbplan_version']}")
+    return "; ".join(parts) + "."
 
 
 def _night_rows(chart: NightChart) -> list[tuple[str, Visit]]:
@@ -117,10 +156,13 @@ def _text_lines(chart: NightChart) -> list[str]:
     return lines
 
 
-def _pdf_pages(chart: NightChart, site: Site, constraints: ConstraintSet | None) -> list[Any]:
+def _pdf_pages(
+    chart: NightChart, site: Site, constraints: ConstraintSet | None, note: str = ""
+) -> list[Any]:
     """The figures of one night: chart and first lines, then continuation pages."""
     plt = pyplot()
-    lines = _text_lines(chart)
+    lines = [*_wrap(note), ""] if note else []
+    lines += _text_lines(chart)
     first = chart_figure([chart], site, constraints)
     first.set_size_inches(11.69, 8.27)
     engine: Any = first.get_layout_engine()
@@ -138,13 +180,15 @@ def _pdf_pages(chart: NightChart, site: Site, constraints: ConstraintSet | None)
     return pages
 
 
-def _write_pdf(handle: IO[Any], charts: Sequence[NightChart], site: Site, cs: Any) -> None:
+def _write_pdf(
+    handle: IO[Any], charts: Sequence[NightChart], site: Site, cs: Any, note: str
+) -> None:
     from matplotlib.backends.backend_pdf import PdfPages
 
     plt = pyplot()
     with PdfPages(handle) as pdf:
         for chart in charts:
-            for fig in _pdf_pages(chart, site, cs):
+            for fig in _pdf_pages(chart, site, cs, note):
                 pdf.savefig(fig)
                 plt.close(fig)
 
@@ -190,15 +234,36 @@ def _html_night(chart: NightChart, site: Site, constraints: ConstraintSet | None
     )
 
 
-def _html(charts: Sequence[NightChart], site: Site, constraints: ConstraintSet | None) -> str:
+def _html(
+    charts: Sequence[NightChart], site: Site, constraints: ConstraintSet | None, note: str
+) -> str:
     body = "".join(_html_night(c, site, constraints) for c in charts)
     return (
         '<!DOCTYPE html><html lang="en"><head><meta charset="utf-8">'
         f"<title>Night sheet: {html.escape(site.name)}</title><style>{_STYLE}</style></head>"
         f"<body><h1>Night sheet: {html.escape(site.name)}, {len(charts)} night(s)</h1>"
-        "<p>All times are UTC (date and time). Exposure start times are phase-critical.</p>"
+        f"<p>{html.escape(note)}</p>"
         f"{body}</body></html>\n"
     )
+
+
+def sheet_format(path: Path) -> str:
+    """The sheet format of ``path`` by its suffix (``pdf`` or ``html``); check it before planning.
+
+    Raises
+    ------
+    InputError
+        Any other suffix.
+    """
+    fmt = path.suffix.lstrip(".").lower()
+    if fmt == "htm":
+        return "html"
+    if fmt not in SHEET_FORMATS:
+        raise InputError(
+            f"--sheet: expected a .pdf or .html file, got {shorten(path.name, 60)}; "
+            "name the sheet e.g. night.pdf"
+        )
+    return fmt
 
 
 def write_night_sheet(
@@ -232,23 +297,19 @@ def write_night_sheet(
     OutputExistsError
         ``path`` exists and ``overwrite`` is false.
     """
-    fmt = path.suffix.lstrip(".").lower()
-    if fmt not in SHEET_FORMATS:
-        raise InputError(
-            f"--sheet: expected a .pdf or .html file, got {path.name!r}; name the sheet night.pdf"
-        )
+    fmt = sheet_format(path)
     charts = night_chart(table, site)
     if not charts:
         raise InputError("--sheet: the plan has no blocks; nothing to put on a night sheet")
     if fmt == "pdf":
         write_output(
             path,
-            lambda h: _write_pdf(h, charts, site, constraints),
+            lambda h: _write_pdf(h, charts, site, constraints, plan_note(table)),
             overwrite=overwrite,
             binary=True,
         )
     else:
-        text = _html(charts, site, constraints)
+        text = _html(charts, site, constraints, plan_note(table))
 
         def _write_html(handle: IO[str]) -> None:
             handle.write(text)
