@@ -309,3 +309,20 @@ def test_sheet_refuses_other_formats_and_empty_plans(
     with pytest.raises(InputError, match="no blocks"):
         write_night_sheet(table[:0], site, tmp_path / "night.pdf")
     assert not list(tmp_path.iterdir())
+
+
+def test_night_without_darkness_spans_the_whole_day() -> None:
+    """Svalbard at midsummer: the Sun never sets, so the chart spans local noon to noon (24 h)
+    instead of failing to find a sunset."""
+    from datetime import date
+
+    from ucbplan.observing.nightplot import plot_night
+    from ucbplan.target import load_target
+
+    svalbard = Site("Svalbard", 15.6, 78.2, 500.0, "Arctic/Longyearbyen")
+    fig = plot_night([load_target(HM)], svalbard, date(2040, 6, 21), [], 2.0)
+    lo, hi = fig.axes[0].get_xlim()
+    assert hi - lo == pytest.approx(24.0)
+    assert "sunset" not in fig.axes[0].get_title()
+    assert layout_problems(fig) == []  # 2-hourly ticks over 24 h
+    pyplot().close(fig)

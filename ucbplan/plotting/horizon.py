@@ -140,7 +140,10 @@ def _tolerance_lines(ax: Any, rows: Sequence[HorizonRow], x_text: float) -> None
         ax.axhline(y, color=c, ls=ls, lw=1)
         below = (not below) if y < 1.15 * previous else False
         previous = y
-        ax.text(x_text, y, label, color=c, va="top" if below else "bottom", fontsize=8)
+        ax.text(
+            x_text, y, label, color=c, va="top" if below else "bottom", fontsize=8,
+            bbox={"fc": "white", "ec": "none", "alpha": 0.75, "pad": 1.0},  # readable on curves
+        )  # fmt: skip
         for other in rows:
             if other.alpha == r.alpha and other.tolerance_rad == r.tolerance_rad:
                 _valid_lines(ax, other, colors.get(other.anchor, "tab:green"), ls)
