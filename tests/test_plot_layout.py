@@ -79,6 +79,19 @@ def test_checker_reports_overlap_outside_hidden_curve_and_missing_unit() -> None
     assert "y axis" not in problems
 
 
+def test_checker_sees_points_and_contours_under_a_legend() -> None:
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(4, 3))
+    g = np.linspace(-1, 1, 50)
+    ax.contour(g, g, np.hypot(*np.meshgrid(g, g)), levels=[0.3])
+    ax.scatter(0.05 * np.cos(g * 3), 0.05 * np.sin(g * 3), label="points near the centre")
+    ax.legend(loc="center", fontsize=14)
+    problems = "\n".join(layout_problems(fig, check_units=False))
+    plt.close(fig)
+    assert "legend hides" in problems and "contour" in problems
+    assert "points 'points near the centre'" in problems
+
+
 def test_checker_passes_a_clean_figure_and_sees_tick_overlap() -> None:
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(5, 3), layout="constrained")

@@ -92,6 +92,32 @@ def _inside(pix: np.ndarray, box: Bbox) -> np.ndarray:
     return np.asarray((x > box.x0) & (x < box.x1) & (y > box.y0) & (y < box.y1))
 
 
+def _drawn_points(ax: Any) -> list[tuple[str, np.ndarray]]:
+    """Display coordinates of what an axes draws as data: lines (≥ 10 points), scatter offsets
+    and unfilled contour lines, each with its label. Filled areas (shading, bands) are not data
+    a legend may not cover."""
+    from matplotlib.collections import PathCollection
+    from matplotlib.contour import ContourSet
+
+    out = []
+    for line in ax.get_lines():
+        xy = np.asarray(line.get_xydata(), dtype=float)
+        if len(xy) >= 10 and line.get_visible():
+            out.append((f"curve {line.get_label()!r}", line.get_transform().transform(xy)))
+    for coll in ax.collections:
+        if isinstance(coll, ContourSet) and not coll.filled:
+            verts = [np.asarray(p.vertices, dtype=float) for p in coll.get_paths()]
+            verts = [v.reshape(-1, 2) for v in verts if v.size]
+            if verts:
+                out.append(("contour", coll.get_transform().transform(np.concatenate(verts))))
+        elif isinstance(coll, PathCollection):
+            xy = np.asarray(coll.get_offsets(), dtype=float).reshape(-1, 2)
+            if len(xy) >= 10:
+                pix = coll.get_offset_transform().transform(xy)
+                out.append((f"points {coll.get_label()!r}", pix))
+    return out
+
+
 def _hidden_curves(fig: Figure, renderer: Any) -> list[str]:
     """Legends that cover more than :data:`_HIDDEN_FRACTION` of a curve's drawn points."""
     problems = []
@@ -100,20 +126,13 @@ def _hidden_curves(fig: Figure, renderer: Any) -> list[str]:
         if leg is None or not leg.get_visible():
             continue
         box = leg.get_window_extent(renderer)
-        for line in ax.get_lines():
-            xy = np.asarray(line.get_xydata(), dtype=float)
-            if len(xy) < 10 or not line.get_visible():
-                continue
-            pix = line.get_transform().transform(xy)
+        for name, pix in _drawn_points(ax):
             pts = pix[_inside(pix, ax.bbox) & np.all(np.isfinite(pix), axis=1)]
             if len(pts) == 0:
                 continue
             under = _inside(pts, box)
             if under.mean() > _HIDDEN_FRACTION:
-                problems.append(
-                    f"axes {k}: legend hides {100 * under.mean():.0f} % of curve "
-                    f"{line.get_label()!r}"
-                )
+                problems.append(f"axes {k}: legend hides {100 * under.mean():.0f} % of {name}")
     return problems
 
 
