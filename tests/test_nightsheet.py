@@ -153,6 +153,13 @@ def test_every_night_charted_png_panels_and_pdf_pages(
         write_night_charts(table, site, png)
 
 
+def test_chart_refuses_other_formats(table: Table, site: Site, tmp_path: Path) -> None:
+    with pytest.raises(InputError, match=r"^--plot: expected a \.png, \.pdf or \.svg file"):
+        write_night_charts(table, site, tmp_path / "n.jpg")
+    assert nightplot.chart_format(Path("n.SVG")) == "svg"
+    assert not list(tmp_path.iterdir())
+
+
 def test_too_many_nights_for_one_image(
     table: Table, site: Site, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:

@@ -24,7 +24,7 @@ from astropy.table import Table
 from astropy.time import Time
 from numpy.typing import NDArray
 
-from ucbplan.errors import InputError
+from ucbplan.errors import InputError, shorten
 from ucbplan.io import write_output
 from ucbplan.observing.blocks import Block
 from ucbplan.observing.blocktable import blocks_to_table
@@ -42,10 +42,12 @@ if TYPE_CHECKING:
     from ucbplan.target import Target
 
 __all__ = [
+    "CHART_FORMATS",
     "MAX_PANELS",
     "NightChart",
     "Visit",
     "chart_figure",
+    "chart_format",
     "group_visits",
     "night_chart",
     "night_figures",
@@ -62,6 +64,8 @@ _MARGIN_S = 1200.0
 #: Altitudes [deg] of the rows of visit numbers, and the least gap [h] between two in one row.
 _NUMBER_ALT_DEG = (81.0, 74.0, 67.0)
 _NUMBER_GAP_H = 0.4
+#: Formats of :func:`write_night_charts`, by file suffix.
+CHART_FORMATS = ("png", "pdf", "svg")
 #: Most nights a PNG/SVG holds (one panel each); longer plans go to a PDF, a page per night.
 MAX_PANELS = 7
 
@@ -356,6 +360,24 @@ def night_figures(
     return [chart_figure([c], site, constraints) for c in night_chart(table, site)]
 
 
+def chart_format(path: Path) -> str:
+    """The chart format of ``path`` by its suffix (:data:`CHART_FORMATS`); check it before
+    planning.
+
+    Raises
+    ------
+    InputError
+        Any other suffix.
+    """
+    fmt = path.suffix.lstrip(".").lower()
+    if fmt not in CHART_FORMATS:
+        raise InputError(
+            f"--plot: expected a .png, .pdf or .svg file, got {shorten(path.name, 60)}; "
+            "name the chart e.g. nights.pdf"
+        )
+    return fmt
+
+
 def write_night_charts(
     table: Table,
     site: Site,
@@ -372,12 +394,13 @@ def write_night_charts(
     Raises
     ------
     InputError
-        The table has no blocks, or too many nights for one image.
+        The suffix is not one of :data:`CHART_FORMATS`, the table has no blocks, or it has too
+        many nights for one image.
     OutputExistsError
         ``path`` exists and ``overwrite`` is false.
     """
+    fmt = chart_format(path)
     charts = night_chart(table, site)
-    fmt = path.suffix.lstrip(".").lower() or "png"
     if not charts:
         raise InputError(f"--plot {path.name}: the plan has no blocks; nothing to chart")
     if fmt != "pdf" and len(charts) > MAX_PANELS:
