@@ -81,6 +81,13 @@ def test_visits_group_by_session_then_by_visit_id(table: Table, site: Site) -> N
     assert [len(v) for v in group_visits(one, site).values()] == [1, 1, 1]
 
 
+def test_table_without_positions_is_a_one_line_error(table: Table, site: Site) -> None:
+    bare = table.copy()
+    bare.remove_columns(["ra_deg", "dec_deg"])
+    with pytest.raises(InputError, match="expected the columns ra_deg, dec_deg"):
+        night_chart(bare, site)
+
+
 def test_night_falls_back_to_local_evening_date(table: Table, site: Site) -> None:
     bare = table.copy()
     bare.remove_column("night")

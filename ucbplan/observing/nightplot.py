@@ -64,6 +64,8 @@ _MARGIN_S = 1200.0
 #: Altitudes [deg] of the rows of visit numbers, and the least gap [h] between two in one row.
 _NUMBER_ALT_DEG = (81.0, 74.0, 67.0)
 _NUMBER_GAP_H = 0.4
+#: Columns a night chart or sheet reads.
+_NEEDED = ("target", "block_id", "ra_deg", "dec_deg", "t_start_utc", "t_mid_utc", "t_end_utc")
 #: Formats of :func:`write_night_charts`, by file suffix.
 CHART_FORMATS = ("png", "pdf", "svg")
 #: Most nights a PNG/SVG holds (one panel each); longer plans go to a PDF, a page per night.
@@ -160,7 +162,19 @@ def _targets(table: Table) -> tuple[tuple[str, float, float], ...]:
 
 
 def night_chart(table: Table, site: Site) -> list[NightChart]:
-    """One :class:`NightChart` per night of the table (all the table's targets on each)."""
+    """One :class:`NightChart` per night of the table (all the table's targets on each).
+
+    Raises
+    ------
+    InputError
+        The table lacks a column the chart needs (positions, times, exposures).
+    """
+    missing = [c for c in _NEEDED if c not in table.colnames]
+    if missing:
+        raise InputError(
+            f"blocks table: expected the columns {', '.join(missing)} (as `ucbplan plan` writes "
+            "them), got a table without; re-run plan or add them"
+        )
     targets = _targets(table)
     nights = group_visits(table, site)
     windows = night_windows(site, [date.fromisoformat(n) for n in nights])
