@@ -213,6 +213,37 @@ class _Reader(HTMLParser):
             self._cell.append(data)
 
 
+def test_night_events_against_astropy_altaz(table: Table, site: Site) -> None:
+    """Each reported crossing, evaluated with astropy's own AltAz (geometric, no refraction),
+    lies within 0.3° of its altitude (1-min grid, linear interpolation; Sun 15°/h at most)."""
+    from astropy.coordinates import get_body
+
+    chart = night_chart(table, site)[0]
+    events, illum = nightsheet.night_events(chart, site)
+    names = [name for name, _ in events]
+    assert names[:4] == [
+        "sunset",
+        "civil twilight ends",
+        "nautical twilight ends",
+        "astronomical twilight ends",
+    ]
+    assert names[-1] == "sunrise" and "moonset" in names
+    levels = {"sunset": 0.0, "sunrise": 0.0, "civil": -6.0, "nautical": -12.0}
+    levels |= {"astronomical": -18.0}
+    for name, iso in events:
+        t = Time(iso, scale="utc")
+        frame = AltAz(obstime=t, location=site.location)
+        if name.startswith("moon"):
+            alt = get_body("moon", t, site.location).transform_to(frame).alt.to_value(u.deg)
+            assert abs(alt) < 0.5, (name, iso, alt)
+        else:
+            level = levels[name.split()[0]]
+            assert abs(_sun_alt_deg(site, iso) - level) < 0.3, (name, iso)
+    assert 0.0 <= illum <= 1.0
+    line = nightsheet.sky_line(chart, site)
+    assert line.startswith("Sun and Moon (UTC, from 2040-02-15): sunset ")
+
+
 def test_html_sheet_is_self_contained_and_says_what_to_do(
     table: Table, site: Site, tmp_path: Path
 ) -> None:
@@ -259,7 +290,13 @@ def test_pdf_sheet_continues_a_long_night_on_more_pages(
     path = tmp_path / "night.pdf"
     write_night_sheet(table, site, path)
     head = len(nightsheet._wrap(nightsheet.plan_note(table))) + 1
-    lines = [head + len(nightsheet._text_lines(c)) for c in night_chart(table, site)]
+    lines = [
+        head
+        + len(nightsheet._wrap(nightsheet.sky_line(c, site)))
+        + 1
+        + len(nightsheet._text_lines(c))
+        for c in night_chart(table, site)
+    ]
     assert _pdf_pages(path) == sum(1 + int(np.ceil((n - 2) / 3)) for n in lines)
 
 

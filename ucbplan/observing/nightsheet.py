@@ -19,6 +19,8 @@ from pathlib import Path
 from typing import IO, Any
 
 import numpy as np
+from astropy import units as u
+from astropy.coordinates import SkyCoord
 from astropy.table import Table
 
 from ucbplan.errors import InputError, shorten
@@ -26,12 +28,17 @@ from ucbplan.io import write_output
 from ucbplan.observing.constraints import ConstraintSet
 from ucbplan.observing.nightplot import NightChart, Visit, chart_figure, night_chart
 from ucbplan.observing.sites import Site
+from ucbplan.observing.sky import SkyModel
+from ucbplan.observing.timeaxis import TimeAxis
+from ucbplan.observing.timeconv import quiet_erfa
 from ucbplan.plotting import pyplot
 
 __all__ = [
     "SHEET_FORMATS",
+    "night_events",
     "plan_note",
     "sheet_format",
+    "sky_line",
     "visit_instruction",
     "visit_lines",
     "write_night_sheet",
@@ -120,6 +127,58 @@ def visit_instruction(visit: Visit) -> str:
     )
 
 
+#: Sun altitudes [deg] whose crossings the sheet lists, with the evening and morning names.
+_SUN_EVENTS = (
+    (0.0, "sunset", "sunrise"),
+    (-6.0, "civil twilight ends", "civil twilight begins"),
+    (-12.0, "nautical twilight ends", "nautical twilight begins"),
+    (-18.0, "astronomical twilight ends", "astronomical twilight begins"),
+)
+
+
+def _crossings(x: np.ndarray, f: np.ndarray) -> list[tuple[float, bool]]:
+    """Where ``f`` changes sign between samples (linear interpolation) and whether it falls."""
+    out = []
+    for i in np.flatnonzero(np.signbit(f[:-1]) != np.signbit(f[1:])):
+        xc = x[i] - f[i] * (x[i + 1] - x[i]) / (f[i + 1] - f[i])
+        out.append((float(xc), bool(f[i] >= 0.0)))
+    return out
+
+
+def night_events(chart: NightChart, site: Site) -> tuple[list[tuple[str, str]], float]:
+    """Sunset, twilights, sunrise, and any moonrise or moonset between sunset and sunrise
+    (name, ISO UTC, in time order), found on a 1-min grid of geometric altitudes (no refraction);
+    and the Moon's illuminated fraction at local midnight."""
+    axis = TimeAxis.starting_at(chart.window.start, site.location)
+    probe = SkyCoord([0.0] * u.deg, [0.0] * u.deg)
+    sky = SkyModel.build(site.location, axis.origin, (0.0, 86400.0), probe)
+    x = np.linspace(0.0, 86400.0, 1441)
+    sun = sky.sun_alt_deg(x)
+    found = [
+        (xc, evening if falling else morning)
+        for level, evening, morning in _SUN_EVENTS
+        for xc, falling in _crossings(x, sun - level)
+    ]
+    dark = [xc for xc, name in found if name in ("sunset", "sunrise")]
+    lo, hi = (min(dark), max(dark)) if len(dark) == 2 else (0.0, 86400.0)
+    moon = _crossings(x, sky.moon_alt_deg(x))
+    found += [(xc, "moonset" if down else "moonrise") for xc, down in moon if lo <= xc <= hi]
+    found.sort()
+    times = axis.utc([xc for xc, _ in found]) if found else []
+    with quiet_erfa():
+        events = [(name, t.isot) for (_, name), t in zip(found, times, strict=True)]
+    return events, float(sky.moon_illum(np.array([43200.0]))[0])
+
+
+def sky_line(chart: NightChart, site: Site) -> str:
+    """The night's Sun and Moon events in one line (UTC, date stated once)."""
+    events, illum = night_events(chart, site)
+    if not events:
+        return f"Sun and Moon: no rising or setting this night; Moon {illum:.0%} illuminated."
+    text = ", ".join(f"{name} {iso[11:16]}" for name, iso in events)
+    return f"Sun and Moon (UTC, from {events[0][1][:10]}): {text}; Moon {illum:.0%} illuminated."
+
+
 def plan_note(table: Table) -> str:
     """One line on the plan from the table's provenance: mode, constraints, ucbplan version."""
     meta = table.meta
@@ -162,6 +221,7 @@ def _pdf_pages(
     """The figures of one night: chart and first lines, then continuation pages."""
     plt = pyplot()
     lines = [*_wrap(note), ""] if note else []
+    lines += [*_wrap(sky_line(chart, site)), ""]
     lines += _text_lines(chart)
     first = chart_figure([chart], site, constraints)
     first.set_size_inches(11.69, 8.27)
@@ -228,6 +288,7 @@ def _html_night(chart: NightChart, site: Site, constraints: ConstraintSet | None
     )
     return (
         f"<section><h2>{e(site.name)}, night of {e(chart.window.label)}</h2>"
+        f"<p>{e(sky_line(chart, site))}</p>"
         f'<img alt="altitude chart of the night of {e(chart.window.label)}" '
         f'src="data:image/png;base64,{_png(chart, site, constraints)}">'
         f"<table>{head}{''.join(rows)}</table></section>"
