@@ -242,6 +242,10 @@ def test_night_events_against_astropy_altaz(table: Table, site: Site) -> None:
     assert 0.0 <= illum <= 1.0
     line = nightsheet.sky_line(chart, site)
     assert line.startswith("Sun and Moon (UTC, from 2040-02-15): sunset ")
+    sunset = dict(events)["sunset"]
+    fig = chart_figure([chart], site)
+    assert f"sunset {nightplot.hhmm(sunset)}," in fig.axes[0].get_title()  # chart and sheet agree
+    pyplot().close(fig)
 
 
 def test_html_sheet_is_self_contained_and_says_what_to_do(

@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from datetime import date, timedelta
+from datetime import date, datetime, timedelta
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
 
@@ -49,6 +49,8 @@ __all__ = [
     "chart_figure",
     "chart_format",
     "group_visits",
+    "hhmm",
+    "level_crossings",
     "night_chart",
     "night_figures",
     "plot_night",
@@ -260,6 +262,22 @@ def _utc_ticks(ax: Any, axis: TimeAxis, span: tuple[float, float]) -> None:
     ax.set_xlim(span[0] / 3600.0, span[1] / 3600.0)
 
 
+def level_crossings(x: FloatArray, f: FloatArray) -> list[tuple[float, bool]]:
+    """Where ``f`` changes sign between samples ``x`` (linear interpolation), and whether it falls
+    there (e.g. the Sun's altitude minus a twilight limit: setting is falling)."""
+    out = []
+    for i in np.flatnonzero(np.signbit(f[:-1]) != np.signbit(f[1:])):
+        xc = x[i] - f[i] * (x[i + 1] - x[i]) / (f[i + 1] - f[i])
+        out.append((float(xc), bool(f[i] >= 0.0)))
+    return out
+
+
+def hhmm(iso: str) -> str:
+    """``HH:MM`` of an ISO time string, rounded to the nearest minute."""
+    t = datetime.fromisoformat(iso[:19]) + timedelta(seconds=30)
+    return t.strftime("%H:%M")
+
+
 def _label(ax: Any, axis: TimeAxis, chart: NightChart, site_name: str, sky: SkyModel) -> None:
     """Axis labels and a title with the UTC date, sunset/sunrise and the Moon's illumination."""
     night = chart.window.label
@@ -271,12 +289,13 @@ def _label(ax: Any, axis: TimeAxis, chart: NightChart, site_name: str, sky: SkyM
     ax.set_xlabel(f"UTC [hh:mm] from {start} UTC")
     ax.set_ylabel("altitude [deg]")
     ax.set_ylim(0, 90)
-    dark = np.flatnonzero(sun < 0.0)
     sun_txt = ""
-    if dark.size:
-        with quiet_erfa():
-            t = axis.utc(x[[dark[0], dark[-1]]])
-        sun_txt = f"; sunset {t[0].iso[11:16]}, sunrise {t[1].iso[11:16]} UTC"
+    edges = level_crossings(x, sun)
+    sets = [xc for xc, falling in edges if falling]
+    rises = [xc for xc, falling in edges if not falling]
+    if sets and rises:
+        t = axis.utc([sets[0], rises[-1]])
+        sun_txt = f"; sunset {hhmm(t[0].isot)}, sunrise {hhmm(t[1].isot)} UTC"
     ax.set_title(
         f"{site_name}, night of {night} (local evening){sun_txt}; Moon {illum:.0%} lit",
         fontsize="medium",

@@ -26,7 +26,14 @@ from astropy.table import Table
 from ucbplan.errors import InputError, shorten
 from ucbplan.io import write_output
 from ucbplan.observing.constraints import ConstraintSet
-from ucbplan.observing.nightplot import NightChart, Visit, chart_figure, night_chart
+from ucbplan.observing.nightplot import (
+    NightChart,
+    Visit,
+    chart_figure,
+    hhmm,
+    level_crossings,
+    night_chart,
+)
 from ucbplan.observing.sites import Site
 from ucbplan.observing.sky import SkyModel
 from ucbplan.observing.timeaxis import TimeAxis
@@ -136,15 +143,6 @@ _SUN_EVENTS = (
 )
 
 
-def _crossings(x: np.ndarray, f: np.ndarray) -> list[tuple[float, bool]]:
-    """Where ``f`` changes sign between samples (linear interpolation) and whether it falls."""
-    out = []
-    for i in np.flatnonzero(np.signbit(f[:-1]) != np.signbit(f[1:])):
-        xc = x[i] - f[i] * (x[i + 1] - x[i]) / (f[i + 1] - f[i])
-        out.append((float(xc), bool(f[i] >= 0.0)))
-    return out
-
-
 def night_events(chart: NightChart, site: Site) -> tuple[list[tuple[str, str]], float]:
     """Sunset, twilights, sunrise, and any moonrise or moonset between sunset and sunrise
     (name, ISO UTC, in time order), found on a 1-min grid of geometric altitudes (no refraction);
@@ -157,11 +155,11 @@ def night_events(chart: NightChart, site: Site) -> tuple[list[tuple[str, str]], 
     found = [
         (xc, evening if falling else morning)
         for level, evening, morning in _SUN_EVENTS
-        for xc, falling in _crossings(x, sun - level)
+        for xc, falling in level_crossings(x, sun - level)
     ]
     dark = [xc for xc, name in found if name in ("sunset", "sunrise")]
     lo, hi = (min(dark), max(dark)) if len(dark) == 2 else (0.0, 86400.0)
-    moon = _crossings(x, sky.moon_alt_deg(x))
+    moon = level_crossings(x, sky.moon_alt_deg(x))
     found += [(xc, "moonset" if down else "moonrise") for xc, down in moon if lo <= xc <= hi]
     found.sort()
     times = axis.utc([xc for xc, _ in found]) if found else []
@@ -175,7 +173,7 @@ def sky_line(chart: NightChart, site: Site) -> str:
     events, illum = night_events(chart, site)
     if not events:
         return f"Sun and Moon: no rising or setting this night; Moon {illum:.0%} illuminated."
-    text = ", ".join(f"{name} {iso[11:16]}" for name, iso in events)
+    text = ", ".join(f"{name} {hhmm(iso)}" for name, iso in events)
     return f"Sun and Moon (UTC, from {events[0][1][:10]}): {text}; Moon {illum:.0%} illuminated."
 
 
