@@ -52,7 +52,7 @@ def plot_apsidal_signal(
     t_aps = apsidal_period_s(omega_dot_rad_s)
     baseline = np.linspace(0.0, 2.5 * t_aps, 600)
     days = baseline / DAY_S
-    fig, ax = plt.subplots(figsize=(8, 4.5))
+    fig, ax = plt.subplots(figsize=(9, 4.5), layout="constrained")
     colours = plt.get_cmap("viridis")(np.linspace(0, 0.9, len(omega1_values)))
     for j, w1 in enumerate(omega1_values):
         for i, e in enumerate(e_values):
@@ -73,7 +73,6 @@ def plot_apsidal_signal(
         label = f"target e={target_e:.3g}, ω₁={target_omega1:.2f} rad"
         ax.plot(days, dv, color="k", lw=2.2, label=label)
     _decorate(ax, t_aps, k1_m_s, title)
-    fig.tight_layout()
     save_figure(fig, Path(path), overwrite=overwrite, dpi=120)
 
 
@@ -83,7 +82,8 @@ def _decorate(ax: Any, t_aps: float, k1_m_s: float, title: str) -> None:
     ax.set_xlabel("baseline ΔT = t_β − t_α [days]")
     ax.set_ylabel("Δv_aps [km/s]")
     ax.set_title(title or f"apsidal signal, K₁ = {k1_m_s / 1e3:.0f} km/s")
-    ax.legend(fontsize=7, ncol=2, loc="upper right")
+    # beside the axes, not on them: the curves fill the whole panel
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
 
 
 def plot_report(report: FeasibilityReport, path: Path, *, overwrite: bool = False) -> None:

@@ -25,15 +25,15 @@ CORNER_NAMES = ("corner_start.png", "corner_midpoint.png", "corner_e_omega.png")
 _DPI = 110
 #: Axis labels of the sampled parameters.
 _LABELS = {
-    "log10_amplitude": r"$\log_{10}\mathcal{A}$",
+    "log10_amplitude": r"$\log_{10}\mathcal{A}$ [1]",
     "f_gw": r"$f_0$ [Hz]",
-    "log10_fdot": r"$\log_{10}\dot f$",
-    "cos_inclination": r"$\cos\iota$",
-    "psi": r"$\psi$",
-    "phase": r"$\phi_0$",
-    "eta": r"$\eta_0$",
-    "kappa": r"$\kappa_0$",
-    "z_omega": r"$z_\omega$",
+    "log10_fdot": r"$\log_{10}\dot f$ [dex(Hz/s)]",
+    "cos_inclination": r"$\cos\iota$ [1]",
+    "psi": r"$\psi$ [rad]",
+    "phase": r"$\phi_0$ [rad]",
+    "eta": r"$\eta_0$ [1]",
+    "kappa": r"$\kappa_0$ [1]",
+    "z_omega": r"$z_\omega$ [bins]",
 }
 
 
@@ -59,9 +59,22 @@ def corner_plot(
         title_fmt=".3g",
         quantiles=[0.16, 0.5, 0.84],
         label_kwargs={"fontsize": 9},
+        title_kwargs={"fontsize": 8},
+        max_n_ticks=3,
+        labelpad=0.15,
     )
+    # room between panels for the 45° tick labels, below them for the offset text, and at the
+    # left and bottom for the labels moved clear of it
+    par = fig.subplotpars
+    width, height = fig.get_size_inches()
+    fig.subplots_adjust(
+        left=par.left + 0.4 / width, bottom=par.bottom + 0.4 / height, wspace=0.12, hspace=0.12
+    )
+    for ax in fig.axes:
+        ax.tick_params(labelsize=7)
     if title:
-        fig.suptitle(title)
+        # in the empty upper triangle: centred, it sat on the first panel's title
+        fig.suptitle(title, x=0.97, y=0.97, ha="right", va="top")
     save_figure(fig, path, overwrite=overwrite, dpi=_DPI)
 
 
@@ -92,7 +105,11 @@ def asd_plot(
         Line positions with and without the apsidal shift (dashed red / black).
     """
     plt = pyplot()
-    fig, axes = plt.subplots(len(harmonics), 1, figsize=(7, 2.6 * len(harmonics)), squeeze=False)
+    from matplotlib.ticker import MaxNLocator
+
+    fig, axes = plt.subplots(
+        len(harmonics), 1, figsize=(7, 2.9 * len(harmonics)), squeeze=False, layout="constrained"
+    )
     for b, ax in enumerate(axes[:, 0]):
         f = freqs_hz[b] * 1e3
         # one-sided ASD of the signal on the same scale as sqrt(S): 2 |x~| / sqrt(T)
@@ -119,9 +136,13 @@ def asd_plot(
                 )
         ax.set_ylabel("ASD [1/√Hz]")
         ax.set_title(f"n = {harmonics[b]} band ({freqs_hz.shape[1]} bins)", fontsize=9)
-        ax.legend(fontsize=7, loc="lower right")
-    axes[-1, 0].set_xlabel("frequency [mHz]")
-    fig.tight_layout()
+        ax.set_xlabel("frequency [mHz]", fontsize=8)
+        # plain frequencies: an offset ("+1.2609e1") is easy to misread
+        ax.ticklabel_format(axis="x", useOffset=False)
+        ax.xaxis.set_major_locator(MaxNLocator(5))
+    # one legend above the panels: inside a panel it covered the lines
+    handles, labels = axes[0, 0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside upper center", ncol=len(labels), fontsize=8)
     save_figure(fig, path, overwrite=overwrite, dpi=_DPI)
 
 
@@ -160,7 +181,9 @@ def _midpoint_corner(result: SimulationResult, path: Path, overwrite: bool) -> N
         r"$\Delta f_{\rm mid} T_{\rm obs}$ [bins]",
         r"$\phi_{\rm mid}$ [rad]",
     ]
-    labels += [r"$\eta_{\rm mid}$", r"$\kappa_{\rm mid}$", r"$\dot\omega$ [rad/s]"][: len(mid) - 3]
+    labels += [r"$\eta_{\rm mid}$ [1]", r"$\kappa_{\rm mid}$ [1]", r"$\dot\omega$ [rad/s]"][
+        : len(mid) - 3
+    ]
     truths = [inj[n] if n != "f_gw" else 0.0 for n in mid]
     corner_plot(data, labels, truths, path, "midpoint t_mid", overwrite=overwrite)
 
@@ -177,7 +200,7 @@ def _eccentricity_corner(result: SimulationResult, path: Path, overwrite: bool) 
     ]
     corner_plot(
         np.stack([e, w0, flat[:, i_z]], axis=1),
-        [r"$e$", r"$\omega_0$ [rad]", r"$z_\omega$ [bins]"],
+        [r"$e$ [1]", r"$\omega_0$ [rad]", r"$z_\omega$ [bins]"],
         [*tr, float(theta0[i_z])],
         path,
         "eccentricity and apsidal advance",

@@ -105,21 +105,53 @@ def _anchor_curves(target: EphemerisSource, days: np.ndarray) -> tuple[np.ndarra
     return quad, conj
 
 
-def _tolerance_lines(ax: Any, rows: Sequence[HorizonRow], x_text: float) -> None:
-    """One horizontal line α·δu_tol per row, labelled, and a vertical line at its T_valid."""
-    colors = {"conjunction": "tab:red", "quadrature": "tab:blue"}
+def _row_text(r: HorizonRow) -> str:
+    """The T_valid part of a tolerance-line label."""
+    if r.t_valid_before_days is not None:
+        return f"T_valid = {r.t_valid_before_days:.0f} d before, {r.t_valid_days:.0f} d after"
+    return f"T_valid = {r.t_valid_days:.0f} d"
+
+
+def _merged_labels(rows: Sequence[HorizonRow]) -> list[tuple[HorizonRow, str]]:
+    """One label per distinct (α, tolerance, T_valid): anchors that share a line share a label
+    (conjunction and zero-crossing have the same tolerance and would overprint)."""
+    groups: dict[tuple[float, float, str], list[HorizonRow]] = {}
     for r in rows:
+        groups.setdefault((r.alpha, round(r.tolerance_rad, 12), _row_text(r)), []).append(r)
+    return [
+        (g[0], f" {', '.join(r.anchor for r in g)}, α={g[0].alpha:g}: {_row_text(g[0])}")
+        for g in groups.values()
+    ]
+
+
+def _tolerance_lines(ax: Any, rows: Sequence[HorizonRow], x_text: float) -> None:
+    """One horizontal line α·δu_tol per row, labelled, and a vertical line at its T_valid.
+
+    Labels of lines closer than ~15 % in σ_u (one text height on the log axis) alternate above and
+    below their line so that they do not overprint.
+    """
+    colors = {"conjunction": "tab:red", "quadrature": "tab:blue"}
+    previous = -math.inf
+    below = False
+    for r, label in sorted(_merged_labels(rows), key=lambda item: item[0].tolerance_rad):
         c = colors.get(r.anchor, "tab:green")
         ls = "-" if r.alpha >= 1 else ":"
-        ax.axhline(1e3 * r.tolerance_rad, color=c, ls=ls, lw=1)
-        label = f" {r.anchor}, α={r.alpha:g}: T_valid = {r.t_valid_days:.0f} d"
-        if r.t_valid_before_days is not None:
-            label = (
-                f" {r.anchor}, α={r.alpha:g}: T_valid = {r.t_valid_before_days:.0f} d before, "
-                f"{r.t_valid_days:.0f} d after"
-            )
-        ax.text(x_text, 1e3 * r.tolerance_rad, label, color=c, va="bottom", fontsize=8)
-        if r.t_valid_days > 0:
-            ax.axvline(r.t_valid_days, color=c, ls=ls, lw=0.6, alpha=0.6)
-        if r.t_valid_before_days:
-            ax.axvline(-r.t_valid_before_days, color=c, ls=ls, lw=0.6, alpha=0.6)
+        y = 1e3 * r.tolerance_rad
+        ax.axhline(y, color=c, ls=ls, lw=1)
+        below = (not below) if y < 1.15 * previous else False
+        previous = y
+        ax.text(
+            x_text, y, label, color=c, va="top" if below else "bottom", fontsize=8,
+            bbox={"fc": "white", "ec": "none", "alpha": 0.75, "pad": 1.0},  # readable on curves
+        )  # fmt: skip
+        for other in rows:
+            if other.alpha == r.alpha and other.tolerance_rad == r.tolerance_rad:
+                _valid_lines(ax, other, colors.get(other.anchor, "tab:green"), ls)
+
+
+def _valid_lines(ax: Any, r: HorizonRow, c: str, ls: str) -> None:
+    """Vertical lines at the row's T_valid after (and before) the reference."""
+    if r.t_valid_days > 0:
+        ax.axvline(r.t_valid_days, color=c, ls=ls, lw=0.6, alpha=0.6)
+    if r.t_valid_before_days:
+        ax.axvline(-r.t_valid_before_days, color=c, ls=ls, lw=0.6, alpha=0.6)

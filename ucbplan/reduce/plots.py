@@ -148,7 +148,7 @@ def fig_mass_mass(red: Reduction) -> Figure | None:
     g1 = np.linspace(m1c - span, m1c + span, 400)
     g2 = np.linspace(m2c - span, m2c + span, 400)
     M1, M2 = np.meshgrid(g1, g2)
-    fig, ax = plt.subplots(figsize=(6.5, 6))
+    fig, ax = plt.subplots(figsize=(9.5, 6), layout="constrained")
     loci: list[
         tuple[
             Callable[[NDArray[np.float64], NDArray[np.float64]], NDArray[np.float64]], str, str, str
@@ -175,9 +175,9 @@ def fig_mass_mass(red: Reduction) -> Figure | None:
     ax.set_ylabel("M2 [M☉]")
     ax.set_xlim(g1[0], g1[-1])
     ax.set_ylim(g2[0], g2[-1])
-    ax.legend(fontsize=8, loc="upper right")
+    # beside the axes: inside, it covered the loci
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
     ax.set_title(f"{red.target.name}: mass–mass diagram (1σ bands)")
-    fig.tight_layout()
     return fig
 
 
