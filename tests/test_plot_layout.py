@@ -198,11 +198,6 @@ def test_plan_night_chart(saved: list[Any], tmp_path: Path) -> None:
     _clean(saved, 1)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="population/plots.py (not this branch's files): 'LISA optimal SNR' needs a unit, "
-    "e.g. 'LISA optimal SNR [1]'",
-)
 def test_population_plots(saved: list[Any], tmp_path: Path) -> None:
     from astropy.table import Table
 
@@ -220,11 +215,6 @@ def test_population_plots(saved: list[Any], tmp_path: Path) -> None:
     _clean(saved, 3)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="timing/plots.py (not this branch's files): the cycle axis needs a unit, "
-    "e.g. 'cycle since T0 (...) [1]'",
-)
 def test_timing_oc_plot(saved: list[Any], tmp_path: Path) -> None:
     p_day, t0 = 0.004800, 2460000.0
     cycles = np.arange(0, 60000, 1000)

@@ -28,6 +28,7 @@ _LABELS = {
     "log10_amplitude": r"$\log_{10}\mathcal{A}$ [1]",
     "f_gw": r"$f_0$ [Hz]",
     "log10_fdot": r"$\log_{10}\dot f$ [dex(Hz/s)]",
+    "fdot": r"$\dot f$ [Hz/s]",  # sources with fdot < 1e-18 Hz/s are sampled in fdot itself
     "cos_inclination": r"$\cos\iota$ [1]",
     "psi": r"$\psi$ [rad]",
     "phase": r"$\phi_0$ [rad]",

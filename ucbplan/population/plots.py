@@ -26,7 +26,7 @@ def forecast_plots(
     out: list[Path] = []
     for name, x, xlabel in (
         ("tvalid_vs_f.png", f_mhz, "GW frequency f [mHz]"),
-        ("tvalid_vs_snr.png", snr, "LISA optimal SNR"),
+        ("tvalid_vs_snr.png", snr, "LISA optimal SNR [1]"),
     ):
         fig, ax = plt.subplots(figsize=(6, 4))
         ax.scatter(x, tv_plot, s=8)
@@ -45,7 +45,7 @@ def forecast_plots(
     ax.step(xs, np.arange(xs.size, 0, -1), where="post")
     ax.set_xscale("log")
     ax.set_xlabel(label)
-    ax.set_ylabel("number of sources with T_valid > x")
+    ax.set_ylabel("number of sources with T_valid > x [1]")
     fig.tight_layout()
     path = folder / "tvalid_cumulative.png"
     save_figure(fig, path, overwrite=overwrite)

@@ -53,7 +53,7 @@ def oc_figure(fit: EphemerisFit, times: EclipseTimes, title: str | None = None) 
     bottom.axhline(0.0, color="k", lw=1.0)
     top.set_ylabel("O − C (linear ephemeris) [s]")
     bottom.set_ylabel("residual [s]")
-    bottom.set_xlabel(f"cycle since T0 ({_t0_label(fit)})")
+    bottom.set_xlabel(f"cycle since T0 ({_t0_label(fit)}) [1]")
     scale = f", σ's ×{fit.sigma_scale:.2f}" if fit.rescaled else ""
     ratio = f"{fit.chi2 / fit.dof:.2f}" if fit.dof > 0 else "n/a"
     top.set_title(title or f"{fit.source}: {fit.n_used} times, χ²/dof = {ratio}{scale}")
