@@ -32,7 +32,9 @@ __all__ = [
     "AFTER",
     "BEFORE",
     "HorizonRow",
+    "anchor_kind",
     "anchor_sigma_u",
+    "anchor_u_values",
     "horizon_s",
     "horizon_table",
     "sigma_u",
@@ -133,7 +135,8 @@ def tolerance(
     raise UcbplanError(f"unknown tolerance kind {kind!r}: expected conjunction|quadrature|generic")
 
 
-def _anchor_kind(label: str, u_values: Sequence[float]) -> str:
+def anchor_kind(label: str, u_values: Sequence[float]) -> str:
+    """Tolerance kind of an anchor (:func:`tolerance`) from its label and u★ values."""
     if label in ("conjunction", "quadrature", "zero-crossing"):
         return label
     if label == "eclipse":
@@ -146,7 +149,8 @@ def _anchor_kind(label: str, u_values: Sequence[float]) -> str:
     return "generic"
 
 
-def _anchor_u_values(anchor: str | float) -> tuple[str, list[float]]:
+def anchor_u_values(anchor: str | float) -> tuple[str, list[float]]:
+    """An anchor's label and its u★ values [rad] (zero-crossing: both crossings)."""
     label, targets = resolve_anchor(anchor)
     if label == "zero-crossing":
         return label, list(ANCHORS["zero-crossing"])
@@ -362,8 +366,8 @@ def horizon_table(
     both = two_sided(target)
     rows: list[HorizonRow] = []
     for anchor in anchors:
-        label, us = _anchor_u_values(anchor)
-        tol = tolerance(_anchor_kind(label, us), sigma_v, k_eff, n_epochs, us[0])
+        label, us = anchor_u_values(anchor)
+        tol = tolerance(anchor_kind(label, us), sigma_v, k_eff, n_epochs, us[0])
         sig_end = _max_anchor_sigma(p, cov, t_obs / 2.0, us, star)
         for alpha in alphas:
             tv = t_valid((p, cov, t_obs), tol, us, alpha, star)
@@ -404,8 +408,8 @@ def horizon_s(
     The tolerance is :func:`tolerance` of the anchor's kind for σ_v and K (same units);
     see :func:`t_valid` for the horizon itself and :func:`horizon_table` for all rows at once.
     """
-    label, us = _anchor_u_values(anchor)
-    tol = tolerance(_anchor_kind(label, us), sigma_v, k_eff, n_epochs, us[0])
+    label, us = anchor_u_values(anchor)
+    tol = tolerance(anchor_kind(label, us), sigma_v, k_eff, n_epochs, us[0])
     return t_valid(target, tol, us, alpha, star)
 
 
@@ -422,7 +426,7 @@ def sigma_u_end(target: SourceLike, anchor: str | float = "quadrature", star: in
         Component.
     """
     p, cov, t_obs = _unpack(target)
-    _, us = _anchor_u_values(anchor)
+    _, us = anchor_u_values(anchor)
     return _max_anchor_sigma(p, cov, t_obs / 2.0, us, star)
 
 

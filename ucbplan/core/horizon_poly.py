@@ -132,7 +132,12 @@ def t_valid_poly(
     for p in polys:
         p[:, 0] -= thr**2
     n = pars.shape[0]
-    roots = np.concatenate([_roots_01(p) for p in polys], axis=1)
+    roots = np.full((n, 6 * len(polys)), np.nan)
+    for j, p in enumerate(polys):  # a u★ whose σ_u² repeats an earlier one adds no roots
+        new = np.ones(n, dtype=bool)
+        for q in polys[:j]:
+            new &= ~np.all(p == q, axis=1)
+        roots[new, 6 * j : 6 * j + 6] = _roots_01(p[new])
     pts = np.sort(np.concatenate([np.zeros((n, 1)), roots, np.ones((n, 1))], axis=1), axis=1)
     pts = np.where(np.isnan(pts), 1.0, pts)
     mid = 0.5 * (pts[:, :-1] + pts[:, 1:])
