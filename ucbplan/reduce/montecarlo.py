@@ -9,6 +9,7 @@ Gaussian posterior of the covariance) and (γ_j, K_j) from the regression covari
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
@@ -24,12 +25,23 @@ if TYPE_CHECKING:
     from ucbplan.reduce.regression import ComponentFit
     from ucbplan.target import Target
 
-__all__ = ["EXTRA_NAMES", "MonteCarlo", "monte_carlo", "posterior_samples"]
+__all__ = [
+    "CHUNK",
+    "EXTRA_NAMES",
+    "MonteCarlo",
+    "derive_samples",
+    "monte_carlo",
+    "posterior_samples",
+]
 
 F64 = NDArray[np.float64]
 #: Columns drawn beyond PARAM_NAMES (cos ι, GW amplitude 𝒜): 9 columns in all.
 EXTRA_NAMES = ("cos_inclination", "amplitude")
 _COS_I = 7  # column of cos ι in the (n, 9) draws
+#: Samples per chunk above which the Monte Carlo runs chunked (~0.6 kB per sample in flight).
+CHUNK = 250_000
+#: Rows per block of the posterior-mean sum (a chunk is a whole number of blocks).
+MEAN_BLOCK = 1000
 _COS_I_FIXED = (
     "cos ι has no uncertainty in the target (covariance or samples): it is "
     "held fixed, so mass σ exclude the inclination; pass --cos-i-sigma or "
@@ -98,14 +110,34 @@ def posterior_samples(
     return out
 
 
+def block_sums(x: F64) -> F64:
+    """Column sums of consecutive blocks of :data:`MEAN_BLOCK` rows (the last may be shorter).
+
+    The posterior mean is the sum of these over blocks: the same numbers whether the samples are
+    held at once or in chunks of a multiple of the block (:mod:`ucbplan.reduce.mc_chunked`).
+    """
+    full = x.shape[0] // MEAN_BLOCK * MEAN_BLOCK
+    parts = [np.ascontiguousarray(x[:full]).reshape(-1, MEAN_BLOCK, x.shape[1]).sum(axis=1)]
+    if full < x.shape[0]:
+        parts.append(np.ascontiguousarray(x[full:]).sum(axis=0)[None, :])
+    return np.concatenate(parts)
+
+
 def _draw_k_gamma(
-    fits: tuple[ComponentFit, ...], dK: F64, dg: F64, dtheta: F64, rng: np.random.Generator
+    fits: tuple[ComponentFit, ...],
+    dK: F64,
+    dg: F64,
+    dtheta: F64,
+    rngs: Sequence[np.random.Generator],
 ) -> tuple[list[F64], list[F64]]:
-    """K_j, γ_j per sample: regression covariance draw minus the phase sensitivity ∂/∂θ·δθ."""
+    """K_j, γ_j per sample: regression covariance draw minus the phase sensitivity ∂/∂θ·δθ.
+
+    ``rngs[j]`` draws component j (the same generator twice: component 2 follows component 1).
+    """
     n = dtheta.shape[0]
     Ks, gs = [], []
     for j, f in enumerate(fits):
-        z = rng.standard_normal((n, 2)) @ sqrt_factor(f.cov).T
+        z = rngs[j].standard_normal((n, 2)) @ sqrt_factor(f.cov).T
         # Re-regressing on the design of sample θ shifts K by −∂K/∂θ·δθ (phase_sensitivity).
         Ks.append(f.K + z[:, 1] - dtheta @ dK[j])
         gs.append(f.gamma + z[:, 0] - dtheta @ dg[j])
@@ -151,6 +183,7 @@ def monte_carlo(
     mass_radius: str | None,
     rng: np.random.Generator,
     columns: dict[str, F64] | None = None,
+    chunk: int | None = None,
 ) -> MonteCarlo:
     """Joint Monte Carlo over the LISA posterior and the (γ_j, K_j) regression covariance.
 
@@ -162,11 +195,39 @@ def monte_carlo(
         ∂K_j/∂θ and ∂γ_j/∂θ per component (n_components, 7).
     columns : dict of numpy.ndarray, optional
         The target's posterior samples (see :func:`posterior_samples`).
+    chunk : int, optional
+        Default :data:`CHUNK`. More samples than this run in chunks of this size
+        (:mod:`ucbplan.reduce.mc_chunked`): the same random stream and summaries (to 1e-12
+        relative), memory bounded by the chunk, and ``samples`` left empty.
     """
+    chunk = CHUNK if chunk is None else chunk
+    if n_samples > chunk:
+        from ucbplan.reduce.mc_chunked import chunked_monte_carlo
+
+        return chunked_monte_carlo(
+            target, fits, dK, dg, n_samples, cos_i_sigma, mass_radius, rng, columns, chunk
+        )
     warn: list[str] = []
     theta = posterior_samples(target, n_samples, rng, cos_i_sigma, columns, warn)
-    dtheta = theta[:, :7] - theta[:, :7].mean(axis=0)
-    Ks, gs = _draw_k_gamma(fits, dK, dg, dtheta, rng)
+    dtheta = theta[:, :7] - block_sums(theta[:, :7]).sum(axis=0) / n_samples
+    Ks, gs = _draw_k_gamma(fits, dK, dg, dtheta, [rng, rng])
+    out, more = derive_samples(target, fits, theta, Ks, gs, mass_radius)
+    finite_m1 = float(np.isfinite(out["M1"]).mean()) if "M1" in out else None
+    warn = _final_warnings(warn, more, len(fits), finite_m1)
+    summaries = {k: _masses.summarize(v) for k, v in out.items()}
+    return MonteCarlo(out, summaries, tuple(warn))
+
+
+def derive_samples(
+    target: Target,
+    fits: tuple[ComponentFit, ...],
+    theta: F64,
+    Ks: list[F64],
+    gs: list[F64],
+    mass_radius: str | None,
+) -> tuple[dict[str, F64], list[str]]:
+    """Every Monte-Carlo quantity per sample, and the warnings that do not depend on the draws."""
+    warn: list[str] = []
     out: dict[str, F64] = {"K1": Ks[0], "gamma1": gs[0]}
     if len(fits) == 2:
         out |= {"K2": Ks[1], "gamma2": gs[1]}
@@ -184,23 +245,34 @@ def monte_carlo(
             )
         else:
             # draws with K ≤ 0 (K within a few σ of 0) give no masses: NaN, dropped by
-            # summarize() and reported below
+            # summarize() and reported by _final_warnings
             with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-                masses = _sb2_masses(Ks, gs, theta, target.amplitude is not None, mass_radius)
-            out |= masses
-            lost = 1.0 - np.isfinite(masses["M1"]).mean()
-            if lost > 0.001:
-                warn.append(
-                    f"{100 * lost:.1f} % of the Monte-Carlo draws give no masses (K drawn ≤ 0): "
-                    "the mass summaries are conditional on K > 0"
-                )
+                out |= _sb2_masses(Ks, gs, theta, target.amplitude is not None, mass_radius)
     else:
         with np.errstate(invalid="ignore", over="ignore"):
             out["mass_function"] = _mass_function(Ks[0], theta)
+    return out, warn
+
+
+def _final_warnings(
+    drawn: list[str], derived: list[str], n_fits: int, finite_m1: float | None
+) -> list[str]:
+    """The run's warnings: the draw's, the derivation's, lost draws, the SB1 note.
+
+    ``finite_m1`` is the fraction of draws with a finite M1 (None: masses not computed).
+    """
+    warn = [*drawn, *derived]
+    if n_fits == 2:
+        if finite_m1 is not None and 1.0 - finite_m1 > 0.001:
+            lost = 1.0 - finite_m1
+            warn.append(
+                f"{100 * lost:.1f} % of the Monte-Carlo draws give no masses (K drawn ≤ 0): "
+                "the mass summaries are conditional on K > 0"
+            )
+    else:
         warn = [w for w in warn if w != _COS_I_FIXED]  # f(M) does not use ι
         warn.append(
             "SB1: only the mass function f(M) = P K³(1−e²)^{3/2}/(2πG) is reported; "
             "component masses need both stars' velocities"
         )
-    summaries = {k: _masses.summarize(v) for k, v in out.items()}
-    return MonteCarlo(out, summaries, tuple(warn))
+    return warn
