@@ -10,9 +10,8 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
-import numpy as np
 import typer
 import typer.core
 from rich.markup import escape
@@ -41,8 +40,12 @@ from ucbplan.cli._options import (
 )
 from ucbplan.cli.ephemeris import register as register_ephemeris
 from ucbplan.errors import UcbplanError
-from ucbplan.inputs import check_number
-from ucbplan.target import Target, load_target
+
+if TYPE_CHECKING:
+    from ucbplan.target import Target
+
+# numpy, ucbplan.target (astropy) and ucbplan.inputs (yaml) are imported inside the commands:
+# `ucbplan --help` must not pay for them (benchmarks/startup.py).
 
 __all__ = ["horizon", "register", "validate"]
 
@@ -63,6 +66,8 @@ def _resolve_k_sigma(
             f"{target.name}: no semi-amplitude; pass --k-eff KM_S or add spectroscopy.K1/K2 "
             "(or K_eff) to the target file"
         )
+    from ucbplan.inputs import check_number
+
     check_number("--sigma-v", sv, 0.0, 1e4, "km/s")
     check_number("--k-eff", k, 0.1, 1e4, "km/s", "a binary's velocity semi-amplitude")
     if sv >= k:
@@ -78,6 +83,8 @@ def validate(targets: TargetsArg, fmt: ValidateFormatOpt = "table") -> None:
 
     For a timing ephemeris: T0, P, Ṗ with their σ, and σ_u one year before and after T0.
     """
+    from ucbplan.target import load_target
+
     fmt = pick_format(None, fmt, ("table", "json"))
     summaries = [_summary(load_target(path)) for path in targets]
     if fmt == "json":
@@ -171,6 +178,8 @@ def _summary(t: Target) -> dict[str, Any]:
 
 def _timing_summary(t: Target) -> dict[str, Any]:
     """The validate row of a timing ephemeris: T0, P, Ṗ (P̈) with σ, σ_u at ±1 yr."""
+    import numpy as np
+
     from ucbplan.core.constants import YEAR_S
     from ucbplan.core.forecast import anchor_sigma_u
     from ucbplan.core.timescale import format_bjd_tdb
@@ -256,6 +265,7 @@ def horizon(
         _horizon_many(paths, sigma_v, k_eff, alpha, epochs, anchor, fmt, output, overwrite)
         return
     from ucbplan.core.forecast import horizon_table
+    from ucbplan.target import load_target
 
     t = load_target(paths[0])
     sv, k = _resolve_k_sigma(t, sigma_v, k_eff)
@@ -289,10 +299,12 @@ def _horizon_many(
     overwrite: bool,
 ) -> None:
     """One row per target: horizon_columns over all targets at once."""
+    import numpy as np
     from astropy.table import Table
 
     from ucbplan.core.forecast import two_sided
     from ucbplan.core.horizon_batch import horizon_columns
+    from ucbplan.target import load_target
 
     targets = [load_target(p) for p in paths]
     sk = np.array([_resolve_k_sigma(t, sigma_v, k_eff) for t in targets])
@@ -325,6 +337,8 @@ def _horizon_many(
 
 def _print_many(tab: Any) -> None:
     """The per-target table on the terminal, or a summary of it when it is long."""
+    import numpy as np
+
     shown = [c for c in tab.colnames if c == "target" or c.startswith("t_valid_days")]
     if len(tab) <= _MANY_ROWS:
         rt = rich_table(f"horizons of {len(tab)} targets [d]", shown)

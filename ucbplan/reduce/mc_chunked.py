@@ -9,7 +9,7 @@ then draw from those copies in step. ``Generator.standard_normal`` fills arrays 
 (c₁, d) then (c₂, d) draws equal one (c₁ + c₂, d) draw. Summaries are exact percentiles
 (:class:`~ucbplan.reduce.quantiles.ChunkedPercentiles`); the per-sample arrays are not kept.
 
-The posterior mean is a sum of fixed blocks of rows (:func:`~ucbplan.reduce.montecarlo.
+The posterior mean is a sum of fixed blocks of rows (:func:`~ucbplan.reduce.mc_samples.
 block_sums`) in both runs, and a chunk is a whole number of blocks, so the summaries agree to
 rounding of the row-wise matrix products (tested at 1e-12 relative).
 """
@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 from ucbplan.core.mvnormal import sqrt_factor
 from ucbplan.core.params import PARAM_NAMES
 from ucbplan.reduce import masses as _masses
-from ucbplan.reduce.montecarlo import (
+from ucbplan.reduce.mc_samples import (
     _COS_I,
     _COS_I_FIXED,
     EXTRA_NAMES,
@@ -33,9 +33,9 @@ from ucbplan.reduce.montecarlo import (
     MonteCarlo,
     _draw_k_gamma,
     _ext_cov,
-    _final_warnings,
     block_sums,
     derive_samples,
+    final_warnings,
 )
 from ucbplan.reduce.quantiles import BracketMissed, ChunkedPercentiles
 
@@ -62,7 +62,7 @@ def _theta(
     s: int,
     e: int,
 ) -> F64:
-    """Posterior rows s:e, as :func:`~ucbplan.reduce.montecarlo.posterior_samples` makes them."""
+    """Posterior rows s:e, as :func:`~ucbplan.reduce.mc_samples.posterior_samples` makes them."""
     theta: F64 = mean + rng.standard_normal((e - s, mean.size)) @ root.T
     if columns is not None and idx is not None:
         for k, name in enumerate((*PARAM_NAMES, *EXTRA_NAMES)):
@@ -123,7 +123,7 @@ def chunked_monte_carlo(
         except BracketMissed:
             widen *= 10.0
     finite_m1 = acc["M1"].n_finite / n if "M1" in acc else None
-    warn = _final_warnings(warn, derived, len(fits), finite_m1)
+    warn = final_warnings(warn, derived, len(fits), finite_m1)
     return MonteCarlo({}, summaries, tuple(warn))
 
 
