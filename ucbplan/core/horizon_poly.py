@@ -87,10 +87,65 @@ def _horner(coef: FloatArray, x: FloatArray) -> tuple[FloatArray, FloatArray]:
     return val, der
 
 
+def _bernstein_matrix(m: int) -> FloatArray:
+    """M with (power coefficients of degree ≤ m) @ M = Bernstein coefficients on [0, 1]."""
+    out = np.zeros((m + 1, m + 1))
+    for k in range(m + 1):
+        for j in range(k, m + 1):
+            out[k, j] = math.comb(j, k) / math.comb(m, k)
+    return out
+
+
+def _monotone(coef: FloatArray) -> NDArray[np.bool_]:
+    """Rows whose polynomial is strictly monotone on [0, 1] (its derivative's Bernstein
+    coefficients all share one strict sign: a sufficient condition)."""
+    width = coef.shape[1]
+    deriv = coef[:, 1:] * np.arange(1, width)[None, :]
+    bern = deriv @ _bernstein_matrix(width - 2)
+    out: NDArray[np.bool_] = np.all(bern > 0.0, axis=1) | np.all(bern < 0.0, axis=1)
+    return out
+
+
+def _monotone_root(coef: FloatArray) -> FloatArray:
+    """The root in (0, 1) of polynomials monotone on [0, 1] with a sign change there.
+
+    Safeguarded Newton: the bracket [lo, hi] always holds the root; a Newton step that leaves it
+    is replaced by bisection. Converges to the last bit of x in ~10 iterations.
+    """
+    lo, hi = np.zeros(coef.shape[0]), np.ones(coef.shape[0])
+    rising = coef.sum(axis=1) > coef[:, 0]  # P(1) > P(0)
+    x = np.full(coef.shape[0], 0.5)
+    for _ in range(100):
+        val, der = _horner(coef, x[:, None])
+        val, der = val[:, 0], der[:, 0]
+        above = (val > 0.0) == rising  # the root is below x
+        hi, lo = np.where(above, x, hi), np.where(above, lo, x)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            newton = x - val / der
+        new = np.where((newton > lo) & (newton < hi), newton, 0.5 * (lo + hi))
+        new = np.where(val == 0.0, x, new)
+        done = np.all(new == x) or np.all(hi - lo <= 4e-16)
+        x = new
+        if done:
+            break
+    return x
+
+
 def _roots_01(coef: FloatArray) -> FloatArray:
-    """Real roots in (0, 1) of each row's polynomial (ascending), NaN-padded to (n, D)."""
+    """Real roots in (0, 1) of each row's polynomial (ascending), NaN-padded to (n, D).
+
+    A polynomial monotone on [0, 1] (the usual σ_u², growing after the end of the information)
+    has at most one root there, found by :func:`_monotone_root`; the others take the
+    eigenvalues of their companion matrix.
+    """
     n, width = coef.shape
     out = np.full((n, width - 1), np.nan)
+    mono = _monotone(coef)
+    p0, p1 = coef[:, 0], coef.sum(axis=1)
+    one = np.nonzero(mono & (p0 * p1 < 0.0))[0]
+    if one.size:
+        out[one, 0] = _monotone_root(coef[one])
+    coef = np.where(mono[:, None], 0.0, coef)  # done: no rows left for the eigenvalues
     size = np.sum(np.abs(coef), axis=1)  # bound of |p| on [0, 1]
     live = np.abs(coef) > _REL_ZERO * size[:, None]
     deg = np.where(live.any(axis=1), width - 1 - np.argmax(live[:, ::-1], axis=1), 0)
