@@ -237,3 +237,43 @@ def test_ephemeris_sub_commands_are_mountable() -> None:
     assert runner.invoke(sub, ["fit", "t.csv"]).exit_code == 0
     assert runner.invoke(sub, ["a.yaml"]).exit_code == 0
     assert seen == ["fit t.csv", "predict a.yaml"]
+
+
+def test_horizon_many_targets_match_single(
+    tmp_path: Path, hm_cnc_path: Path, eccentric_path: Path
+) -> None:
+    """A directory of targets gives one row each, equal to the one-target command's numbers."""
+    import shutil
+
+    from astropy.table import Table
+
+    for p in (hm_cnc_path, eccentric_path):
+        shutil.copy(p, tmp_path / p.name)
+    out = tmp_path / "h.ecsv"
+    res = runner.invoke(
+        app, ["horizon", str(tmp_path), "--sigma-v", "15", "--k-eff", "400", "-o", str(out)]
+    )
+    assert res.exit_code == 0, res.output
+    tab = Table.read(out)
+    assert len(tab) == 2
+    for row in tab:
+        src = hm_cnc_path if row["target"].startswith("HM Cnc") else eccentric_path
+        one = runner.invoke(
+            app, ["horizon", str(src), "--sigma-v", "15", "--k-eff", "400", "--format", "json"]
+        )
+        for r in json.loads(one.stdout):
+            key = f"t_valid_days_{r['anchor']}_a{r['alpha']:g}"
+            assert row[key] == pytest.approx(r["t_valid_days"], rel=1e-12)
+
+
+def test_horizon_many_targets_refuse_plot(tmp_path: Path, hm_cnc_path: Path) -> None:
+    res = _run("horizon", str(hm_cnc_path), str(hm_cnc_path), "--plot", str(tmp_path / "x.png"))
+    assert res.returncode == 2
+    assert "--plot takes one target" in res.stderr
+    assert not (tmp_path / "x.png").exists()
+
+
+def test_horizon_empty_directory(tmp_path: Path) -> None:
+    res = _run("horizon", str(tmp_path))
+    assert res.returncode == 2
+    assert "no *.yaml target files" in res.stderr

@@ -9,9 +9,9 @@ shares them.
 from __future__ import annotations
 
 import math
-from typing import Any
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated, Any
 
-import numpy as np
 import typer
 import typer.core
 from rich.markup import escape
@@ -35,14 +35,17 @@ from ucbplan.cli._options import (
     PlotOpt,
     SigmaVOpt,
     TableFormatOpt,
-    TargetArg,
     TargetsArg,
     ValidateFormatOpt,
 )
 from ucbplan.cli.ephemeris import register as register_ephemeris
 from ucbplan.errors import UcbplanError
-from ucbplan.inputs import check_number
-from ucbplan.target import Target, load_target
+
+if TYPE_CHECKING:
+    from ucbplan.target import Target
+
+# numpy, ucbplan.target (astropy) and ucbplan.inputs (yaml) are imported inside the commands:
+# `ucbplan --help` must not pay for them (benchmarks/startup.py).
 
 __all__ = ["horizon", "register", "validate"]
 
@@ -63,6 +66,8 @@ def _resolve_k_sigma(
             f"{target.name}: no semi-amplitude; pass --k-eff KM_S or add spectroscopy.K1/K2 "
             "(or K_eff) to the target file"
         )
+    from ucbplan.inputs import check_number
+
     check_number("--sigma-v", sv, 0.0, 1e4, "km/s")
     check_number("--k-eff", k, 0.1, 1e4, "km/s", "a binary's velocity semi-amplitude")
     if sv >= k:
@@ -78,6 +83,8 @@ def validate(targets: TargetsArg, fmt: ValidateFormatOpt = "table") -> None:
 
     For a timing ephemeris: T0, P, Ṗ with their σ, and σ_u one year before and after T0.
     """
+    from ucbplan.target import load_target
+
     fmt = pick_format(None, fmt, ("table", "json"))
     summaries = [_summary(load_target(path)) for path in targets]
     if fmt == "json":
@@ -171,6 +178,8 @@ def _summary(t: Target) -> dict[str, Any]:
 
 def _timing_summary(t: Target) -> dict[str, Any]:
     """The validate row of a timing ephemeris: T0, P, Ṗ (P̈) with σ, σ_u at ±1 yr."""
+    import numpy as np
+
     from ucbplan.core.constants import YEAR_S
     from ucbplan.core.forecast import anchor_sigma_u
     from ucbplan.core.timescale import format_bjd_tdb
@@ -208,8 +217,28 @@ def _timing_summary(t: Target) -> dict[str, Any]:
     }
 
 
+HorizonTargetsArg = Annotated[
+    list[Path],
+    typer.Argument(help="Target YAML file(s), or directories of them (*.yaml, *.yml)."),
+]
+
+
+def _expand_targets(paths: list[Path]) -> list[Path]:
+    """Files as given; a directory contributes its *.yaml and *.yml files, sorted."""
+    out: list[Path] = []
+    for path in paths:
+        if path.is_dir():
+            found = sorted([*path.glob("*.yaml"), *path.glob("*.yml")])
+            if not found:
+                raise UcbplanError(f"{path}: no *.yaml target files in this directory")
+            out.extend(found)
+        else:
+            out.append(path)
+    return out
+
+
 def horizon(
-    target: TargetArg,
+    target: HorizonTargetsArg,
     sigma_v: SigmaVOpt = None,
     k_eff: KEffOpt = None,
     alpha: AlphaOpt = [0.5, 1.0],  # noqa: B006 (typer reads the default, never mutates it)
@@ -222,16 +251,24 @@ def horizon(
 ) -> None:
     """Phase-coherence horizons T_valid (paper Tables 4 and 7) and σ_u at the end of LISA.
 
-    For a timing ephemeris: T_valid before and after T0, separately.
+    For a timing ephemeris: T_valid before and after T0, separately. Several targets (files or
+    directories) give one row per target, computed in one vectorised pass.
     """
-    from ucbplan.core.forecast import horizon_table
-
     fmt = pick_format(output, fmt, TABLE_FORMATS)
-    t = load_target(target)
-    sv, k = _resolve_k_sigma(t, sigma_v, k_eff)
     for a in alpha:
         if not (a > 0 and math.isfinite(a)):
             raise UcbplanError(f"--alpha must be positive, got {a}")
+    paths = _expand_targets(target)
+    if len(paths) > 1:
+        if plot is not None:
+            raise UcbplanError("--plot takes one target; give a single target file")
+        _horizon_many(paths, sigma_v, k_eff, alpha, epochs, anchor, fmt, output, overwrite)
+        return
+    from ucbplan.core.forecast import horizon_table
+    from ucbplan.target import load_target
+
+    t = load_target(paths[0])
+    sv, k = _resolve_k_sigma(t, sigma_v, k_eff)
     rows = horizon_table(t, sv, k, alphas=alpha, anchors=anchor, n_epochs=epochs)
     if plot is not None:
         from ucbplan.plotting.horizon import horizon_plot
@@ -244,6 +281,77 @@ def horizon(
         write_output(output, lambda h: dump_json(doc, h), overwrite=overwrite)
     else:
         write_table_output(_horizon_table(t, rows, sv, k, epochs), fmt, output, overwrite)
+
+
+#: Above this many targets the terminal gets a summary instead of the full table.
+_MANY_ROWS = 40
+
+
+def _horizon_many(
+    paths: list[Path],
+    sigma_v: float | None,
+    k_eff: float | None,
+    alpha: list[float],
+    epochs: int,
+    anchor: list[str],
+    fmt: str,
+    output: Path | None,
+    overwrite: bool,
+) -> None:
+    """One row per target: horizon_columns over all targets at once."""
+    import numpy as np
+    from astropy.table import Table
+
+    from ucbplan.core.forecast import two_sided
+    from ucbplan.core.horizon_batch import horizon_columns
+    from ucbplan.target import load_target
+
+    targets = [load_target(p) for p in paths]
+    sk = np.array([_resolve_k_sigma(t, sigma_v, k_eff) for t in targets])
+    cols = horizon_columns(
+        np.array([t.params.as_array() for t in targets]),
+        np.array([t.covariance for t in targets]),
+        np.array([t.t_obs_s for t in targets]),
+        sk[:, 0],
+        sk[:, 1],
+        alphas=alpha,
+        anchors=anchor,
+        n_epochs=epochs,
+        two_sided=[two_sided(t) for t in targets],
+    )
+    tab = Table()
+    tab["target"] = [t.name for t in targets]
+    tab["sigma_v_kms"], tab["k_eff_kms"] = sk[:, 0], sk[:, 1]
+    for key, values in cols.items():  # "field:anchor[:alpha]" → field_anchor[_aALPHA]
+        field, *rest = key.split(":")
+        tab["_".join([field, rest[0], *(f"a{x}" for x in rest[1:])])] = values
+    tab.meta.update({"n_epochs": epochs})
+    if fmt == "json":
+        doc = [dict(zip(tab.colnames, row, strict=True)) for row in tab.iterrows()]
+        write_output(output, lambda h: dump_json(doc, h), overwrite=overwrite)
+    elif fmt != "table":
+        write_table_output(tab, fmt, output, overwrite)
+    else:
+        _print_many(tab)
+
+
+def _print_many(tab: Any) -> None:
+    """The per-target table on the terminal, or a summary of it when it is long."""
+    import numpy as np
+
+    shown = [c for c in tab.colnames if c == "target" or c.startswith("t_valid_days")]
+    if len(tab) <= _MANY_ROWS:
+        rt = rich_table(f"horizons of {len(tab)} targets [d]", shown)
+        for row in tab.iterrows(*shown):
+            rt.add_row(row[0], *(f"{v:.0f}" for v in row[1:]))
+        err_console.print(rt)
+        return
+    for c in shown[1:]:
+        v = np.asarray(tab[c])
+        err_console.print(
+            escape(f"{c}: median {np.median(v):.0f} d, min {v.min():.0f} d, max {v.max():.0f} d")
+        )
+    err_console.print(f"{len(tab)} targets: write the full table with -o FILE.ecsv")
 
 
 def _horizon_table(t: Target, rows: list[Any], sv: float, k: float, epochs: int) -> Any:

@@ -19,8 +19,9 @@ if TYPE_CHECKING:
 __all__ = ["reduce_cmd", "register"]
 
 _FORMATS = ("table", "json", "yaml")
-#: Most Monte-Carlo samples (memory: ~200 bytes per sample across the derived quantities).
-MAX_SAMPLES = 2_000_000
+#: Most Monte-Carlo samples: above 250 000 they run in chunks; 10⁷ take ~0.65 GB peak resident
+#: memory and ~20 s (benchmarks/reduce_scaling.py).
+MAX_SAMPLES = 10_000_000
 
 
 def reduce_cmd(

@@ -14,23 +14,27 @@ time-reversed model (ω̇ → −ω̇ and the covariance signs of f, f̈, ω̇ f
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ucbplan.core.constants import DAY_S, YEAR_S
+from ucbplan.core.constants import DAY_S
 from ucbplan.core.ephemeris import ANCHORS, resolve_anchor
+from ucbplan.core.horizon_grid import HORIZON_CAP_S, anchor_sigma_batch, oscillating, t_valid_grid
+from ucbplan.core.horizon_poly import t_valid_poly
 from ucbplan.core.params import EphemerisSource, PhaseParams
-from ucbplan.core.phase import jacobian_kernel, sigma_u_from_jacobian, u_jacobian
+from ucbplan.core.phase import sigma_u_from_jacobian, u_jacobian
 from ucbplan.errors import UcbplanError
 
 __all__ = [
     "AFTER",
     "BEFORE",
     "HorizonRow",
+    "anchor_kind",
     "anchor_sigma_u",
+    "anchor_u_values",
     "horizon_s",
     "horizon_table",
     "sigma_u",
@@ -47,8 +51,6 @@ __all__ = [
 FloatArray = NDArray[np.float64]
 #: A target, or its (parameters, covariance, T_obs [s]) directly.
 SourceLike = EphemerisSource | tuple[PhaseParams, FloatArray, float]
-#: Horizons are searched up to this long after the LISA observation [s].
-HORIZON_CAP_S = 300.0 * YEAR_S
 #: Directions of a horizon: after the end of the information (+1), before its start (−1).
 AFTER, BEFORE = 1, -1
 #: Signs of the parameters' columns of ∂u/∂θ under time reversal (see the module docstring).
@@ -75,28 +77,8 @@ def anchor_sigma_u(
     them at the anchor, so the result varies only on the apsidal period (smooth in τ).
     """
     tau = np.asarray(tau_s, dtype=np.float64)
-    out = _anchor_sigma_batch(p.as_array()[None, :], np.asarray(cov)[None], tau[None], u_star, star)
+    out = anchor_sigma_batch(p.as_array()[None, :], np.asarray(cov)[None], tau[None], u_star, star)
     return out[0]
-
-
-def _anchor_sigma_batch(
-    pars: FloatArray, covs: FloatArray, tau: FloatArray, u_star: float, star: int = 1
-) -> FloatArray:
-    """Batched :func:`anchor_sigma_u`: pars (n, 7), covs (n, 7, 7), tau (n, G) → (n, G)."""
-    eta0, kap0, wdot = pars[:, 4:5], pars[:, 5:6], pars[:, 6:7]
-    eps = 0.0 if star == 1 else math.pi
-    w = wdot * tau
-    cw, sw = np.cos(w), np.sin(w)
-    phi_a = np.full_like(tau, u_star - eps)
-    if np.any(eta0 != 0.0) or np.any(kap0 != 0.0):
-        eta = eta0 * cw + kap0 * sw
-        kap = kap0 * cw - eta0 * sw
-        for _ in range(2):  # Φ_asc = u★ − ε − δ(Φ_asc): contraction 2e, two steps leave O(e³)
-            phi_a = u_star - eps - (2 * kap * np.sin(phi_a) - 2 * eta * np.cos(phi_a))
-    jac = jacobian_kernel(eta0, kap0, wdot, tau, np.sin(phi_a), np.cos(phi_a), (cw, sw))
-    var = np.sum(np.matmul(jac, covs) * jac, axis=-1)
-    out: FloatArray = np.sqrt(np.maximum(var, 0.0))
-    return out
 
 
 def tolerance(
@@ -153,7 +135,8 @@ def tolerance(
     raise UcbplanError(f"unknown tolerance kind {kind!r}: expected conjunction|quadrature|generic")
 
 
-def _anchor_kind(label: str, u_values: Sequence[float]) -> str:
+def anchor_kind(label: str, u_values: Sequence[float]) -> str:
+    """Tolerance kind of an anchor (:func:`tolerance`) from its label and u★ values."""
     if label in ("conjunction", "quadrature", "zero-crossing"):
         return label
     if label == "eclipse":
@@ -166,22 +149,12 @@ def _anchor_kind(label: str, u_values: Sequence[float]) -> str:
     return "generic"
 
 
-def _anchor_u_values(anchor: str | float) -> tuple[str, list[float]]:
+def anchor_u_values(anchor: str | float) -> tuple[str, list[float]]:
+    """An anchor's label and its u★ values [rad] (zero-crossing: both crossings)."""
     label, targets = resolve_anchor(anchor)
     if label == "zero-crossing":
         return label, list(ANCHORS["zero-crossing"])
     return label, [float(t) for t in targets]
-
-
-_OFFSETS = np.concatenate([[0.0], np.geomspace(60.0, HORIZON_CAP_S, 320)])
-_REFINE = np.linspace(0.0, 1.0, 65)
-
-
-def _oscillating(pars: FloatArray, covs: FloatArray) -> NDArray[np.bool_]:
-    """Rows whose anchor σ_u oscillates (apsidal period): ω̇ ≠ 0 and e or its σ non-zero."""
-    ecc = (pars[:, 4] != 0) | (pars[:, 5] != 0) | np.any(covs[:, 4:7, :] != 0, axis=(1, 2))
-    out: NDArray[np.bool_] = (pars[:, 6] != 0) & ecc
-    return out
 
 
 def t_valid_batch(
@@ -192,6 +165,7 @@ def t_valid_batch(
     anchor_u_star: Sequence[float],
     star: int = 1,
     direction: int = AFTER,
+    method: str = "analytic",
 ) -> FloatArray:
     """Vectorised horizons: closing τ − T/2 of the first window σ_u ≤ thr [s] (0 if none).
 
@@ -200,7 +174,13 @@ def t_valid_batch(
     pars : (n, 7) parameters at the midpoint; covs : (n, 7, 7); t_obs_s : (n,);
     thr_rad : (n,) thresholds α·δu_tol; anchor_u_star : the anchor's u★ values (max σ_u used);
     direction : :data:`AFTER` (after the end of the observation, the default) or
-    :data:`BEFORE` (before its start: the result is then −T/2 − τ of the closing, also ≥ 0).
+    :data:`BEFORE` (before its start: the result is then −T/2 − τ of the closing, also ≥ 0);
+    method : ``"analytic"`` (default) finds the window from the roots of the polynomial σ_u²(τ)
+    (:mod:`ucbplan.core.horizon_poly`) wherever σ_u does not oscillate and samples only the
+    oscillating rows; ``"grid"`` samples every row (:mod:`ucbplan.core.horizon_grid`).
+
+    A row whose σ_u never exceeds the threshold (e.g. a zero covariance) gets the search cap
+    :data:`HORIZON_CAP_S`; one that never meets it gets 0.
     """
     pars = np.atleast_2d(np.asarray(pars, dtype=np.float64))
     covs = np.asarray(covs, dtype=np.float64).reshape(-1, 7, 7)
@@ -211,12 +191,22 @@ def t_valid_batch(
     t_obs = np.broadcast_to(np.asarray(t_obs_s, dtype=np.float64), (pars.shape[0],))
     thr = np.broadcast_to(np.asarray(thr_rad, dtype=np.float64), (pars.shape[0],))
     out = np.zeros(pars.shape[0])
-    osc = _oscillating(pars, covs)
-    for mask, size in ((~osc, 256), (osc, 32)):  # small chunks: fine grids differ per row
+    osc = oscillating(pars, covs)
+    if method not in ("analytic", "grid"):
+        raise UcbplanError(f"method must be 'analytic' or 'grid', got {method!r}")
+    sampled = [(osc, 32)]  # small chunks: fine grids differ per row
+    if method == "grid":
+        sampled.append((~osc, 256))
+    elif not osc.all():
+        flat = np.nonzero(~osc)[0]
+        out[flat] = t_valid_poly(
+            pars[flat], covs[flat], t_obs[flat], thr[flat], anchor_u_star, star, HORIZON_CAP_S
+        )
+    for mask, size in sampled:
         idx = np.nonzero(mask)[0]
         for start in range(0, idx.size, size):
             sel = idx[start : start + size]
-            out[sel] = _t_valid_chunk(
+            out[sel] = t_valid_grid(
                 pars[sel], covs[sel], t_obs[sel], thr[sel], anchor_u_star, star, bool(osc[sel[0]])
             )
     return out
@@ -227,91 +217,6 @@ def _time_reversed(pars: FloatArray, covs: FloatArray) -> tuple[FloatArray, Floa
     rev = pars.copy()
     rev[:, 6] = -rev[:, 6]
     return rev, covs * np.outer(_REVERSAL, _REVERSAL)[None, :, :]
-
-
-def _t_valid_chunk(
-    pars: FloatArray,
-    covs: FloatArray,
-    t_obs: FloatArray,
-    thr: FloatArray,
-    us: Sequence[float],
-    star: int,
-    oscillating: bool,
-) -> FloatArray:
-    def fn(tau: FloatArray) -> FloatArray:
-        vals = [_anchor_sigma_batch(pars, covs, tau, u, star) for u in us]
-        return np.max(vals, axis=0)
-
-    tau_end = t_obs / 2.0
-    grid = tau_end[:, None] + _OFFSETS[None, :]
-    vals = fn(grid)
-    if oscillating:
-        grid, vals = _resolve_oscillation(fn, grid, vals, thr, pars[:, 6])
-        vals = _with_peaks(grid, vals)
-    ok = vals <= thr[:, None]
-    has = ok.any(axis=1)
-    first = np.argmax(ok, axis=1)
-    cols = np.arange(grid.shape[1])[None, :]
-    rest = (~ok) & (cols >= first[:, None])
-    closes = rest.any(axis=1)
-    close = np.argmax(rest, axis=1)
-    rows = np.arange(grid.shape[0])
-    a = grid[rows, np.maximum(close - 1, 0)]
-    # an interpolated peak at ``close`` may lie up to one step beyond it
-    b = grid[rows, np.minimum(close + 1, grid.shape[1] - 1) if oscillating else close]
-    for _ in range(3):  # three 64-fold subdivisions: 6 % grid step → 2e-7 relative
-        g = a[:, None] + (b - a)[:, None] * _REFINE[None, :]
-        above = fn(g) > thr[:, None]
-        j = np.argmax(above, axis=1)
-        j = np.where(above.any(axis=1), j, _REFINE.size - 1)
-        j = np.maximum(j, 1)
-        a, b = g[rows, j - 1], g[rows, j]
-    tau_close = np.where(closes, 0.5 * (a + b), grid[:, -1])
-    res: FloatArray = np.where(has, np.maximum(tau_close - tau_end, 0.0), 0.0)
-    return res
-
-
-def _with_peaks(grid: FloatArray, vals: FloatArray) -> FloatArray:
-    """Replace sampled local maxima by their parabolic peak value (sampling-independent peaks).
-
-    At P_aps/24 sampling a sinusoid's maximum can be under-sampled by up to 1 %; a peak that
-    touches the threshold between samples still closes the window.
-    """
-    x0, x1, x2 = grid[:, :-2], grid[:, 1:-1], grid[:, 2:]
-    v0, v1, v2 = vals[:, :-2], vals[:, 1:-1], vals[:, 2:]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        d1 = (v1 - v0) / (x1 - x0)
-        d2 = (v2 - v1) / (x2 - x1)
-        a = (d2 - d1) / (x2 - x0)
-        b = (d1 * (x2 - x1) + d2 * (x1 - x0)) / (x2 - x0)
-        peak = np.where((v1 >= v0) & (v1 >= v2) & (a < 0), v1 - b * b / (4 * a), v1)
-    out = vals.copy()
-    out[:, 1:-1] = np.maximum(v1, np.nan_to_num(peak, nan=0.0, posinf=0.0, neginf=0.0))
-    return out
-
-
-def _resolve_oscillation(
-    fn: Callable[[FloatArray], FloatArray],
-    grid: FloatArray,
-    vals: FloatArray,
-    thr: FloatArray,
-    wdot: FloatArray,
-) -> tuple[FloatArray, FloatArray]:
-    """Add a P_aps/24 grid wherever the coarse σ_u is within 30 % of the threshold."""
-    ok = vals <= thr[:, None]
-    near = np.abs(vals - thr[:, None]) < 0.3 * thr[:, None]
-    first = np.where(near.any(axis=1), np.argmax(near, axis=1), 0)
-    cols = np.arange(grid.shape[1])[None, :]
-    beyond = (~ok) & (cols >= first[:, None])
-    last = np.where(beyond.any(axis=1), np.argmax(beyond, axis=1), grid.shape[1] - 1)
-    rows = np.arange(grid.shape[0])
-    lo = grid[rows, np.maximum(first - 1, 0)]
-    hi = grid[rows, np.minimum(last + 1, grid.shape[1] - 1)]
-    period = 2 * math.pi / np.abs(wdot)
-    n_fine = int(np.clip(np.max(np.ceil((hi - lo) / (period / 24.0))), 2, 20_000))
-    fine = lo[:, None] + (hi - lo)[:, None] * np.linspace(0.0, 1.0, n_fine + 1)[None, :]
-    merged = np.sort(np.concatenate([grid, fine], axis=1), axis=1)
-    return merged, fn(merged)
 
 
 def t_valid(
@@ -461,8 +366,8 @@ def horizon_table(
     both = two_sided(target)
     rows: list[HorizonRow] = []
     for anchor in anchors:
-        label, us = _anchor_u_values(anchor)
-        tol = tolerance(_anchor_kind(label, us), sigma_v, k_eff, n_epochs, us[0])
+        label, us = anchor_u_values(anchor)
+        tol = tolerance(anchor_kind(label, us), sigma_v, k_eff, n_epochs, us[0])
         sig_end = _max_anchor_sigma(p, cov, t_obs / 2.0, us, star)
         for alpha in alphas:
             tv = t_valid((p, cov, t_obs), tol, us, alpha, star)
@@ -503,8 +408,8 @@ def horizon_s(
     The tolerance is :func:`tolerance` of the anchor's kind for σ_v and K (same units);
     see :func:`t_valid` for the horizon itself and :func:`horizon_table` for all rows at once.
     """
-    label, us = _anchor_u_values(anchor)
-    tol = tolerance(_anchor_kind(label, us), sigma_v, k_eff, n_epochs, us[0])
+    label, us = anchor_u_values(anchor)
+    tol = tolerance(anchor_kind(label, us), sigma_v, k_eff, n_epochs, us[0])
     return t_valid(target, tol, us, alpha, star)
 
 
@@ -521,7 +426,7 @@ def sigma_u_end(target: SourceLike, anchor: str | float = "quadrature", star: in
         Component.
     """
     p, cov, t_obs = _unpack(target)
-    _, us = _anchor_u_values(anchor)
+    _, us = anchor_u_values(anchor)
     return _max_anchor_sigma(p, cov, t_obs / 2.0, us, star)
 
 

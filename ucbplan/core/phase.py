@@ -29,6 +29,7 @@ __all__ = [
     "gw_phase",
     "jacobian_kernel",
     "ll_pair",
+    "orbit_state",
     "phase_asc",
     "radial_velocity",
     "sigma_ascending_node_s",
@@ -161,6 +162,27 @@ def u_state(
     rate_a = math.pi * (p.f_gw + p.fdot * tau + p.fddot * tau * tau / 2.0)
     rate = rate_a + 2.0 * (rate_a - p.omega_dot) * (kap * c + eta * s)
     return half, frac_orbit + (_star_offset(star) + delta) / TWO_PI, rate
+
+
+def orbit_state(p: PhaseParams, tau_s: ArrayLike) -> tuple[FloatArray, ...]:
+    """(Φ_asc, η, κ, u of star 1) at ``tau_s`` from one phase evaluation [rad, 1, 1, rad].
+
+    Bit-identical to :func:`phase_asc`, :func:`ll_pair` and :func:`arg_latitude` (star 1) called
+    separately, at the cost of one of them.
+    """
+    tau = np.asarray(tau_s, dtype=np.float64)
+    n, f = _gw_cycles(p, tau)
+    phi = 0.5 * (TWO_PI * (n + f))
+    half = np.floor(n / 2.0)
+    frac_orbit = (n - 2.0 * half + f) / 2.0
+    phi_a = TWO_PI * frac_orbit
+    w = p.omega_dot * tau
+    cw, sw = np.cos(w), np.sin(w)
+    eta = p.eta * cw + p.kappa * sw
+    kap = p.kappa * cw - p.eta * sw
+    delta = 2.0 * kap * np.sin(phi_a) - 2.0 * eta * np.cos(phi_a)
+    u = TWO_PI * (half + (frac_orbit + delta / TWO_PI))
+    return phi, eta, kap, u
 
 
 def u_cycles(

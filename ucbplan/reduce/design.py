@@ -74,12 +74,10 @@ def _check_windows(table: VelocityTable, period_s: float) -> None:
 
 def orbit(p: PhaseParams, tau: F64) -> tuple[F64, F64, F64, F64]:
     """(Φ_asc, η, κ, u of star 1) at ``tau`` [s since t_ref]."""
-    from ucbplan.core import ephemeris
+    from ucbplan.core.phase import orbit_state
 
-    phi = np.asarray(ephemeris.phase_asc(p, tau), float)
-    eta, kap = ephemeris.ll_pair(p, tau)
-    u = np.asarray(ephemeris.arg_latitude(p, tau, star=1), float)
-    return phi, np.asarray(eta, float), np.asarray(kap, float), u
+    phi, eta, kap, u = orbit_state(p, tau)
+    return phi, eta, kap, u
 
 
 def design_jacobian(p: PhaseParams, tau: F64, lam_k: F64, lam_kap: F64) -> F64:
@@ -113,10 +111,10 @@ def designs(
 ) -> tuple[F64, ...]:
     """Design G per component; with K given, evaluated at the emission time τ − ΔR_j."""
     out = []
+    u = orbit(p, tau)[3] if K is not None else tau
     for j in range(ncomp):
         t = tau
         if K is not None:
-            _, _, _, u = orbit(p, tau)
             nb = math.pi * p.f_gw - p.omega_dot
             sign = 1.0 if j == 0 else -1.0
             t = tau - sign * K[j] / (C_KM_S * nb) * np.sin(u)

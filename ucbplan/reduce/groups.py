@@ -105,57 +105,85 @@ def group_spectra(
     list of Group
         Sorted by time.
     """
-    sess = np.asarray(list(sessions), dtype=object)
     tau = np.asarray(tau_s, float)
     u = np.asarray(u_rad, float)
     us = np.asarray(u_star, float)
     lk = np.broadcast_to(np.asarray(lam_k, float), tau.shape)
     lkap = np.broadcast_to(np.asarray(lam_kappa, float), tau.shape)
     G = np.asarray(design, float)
-    vel = [
-        (np.asarray(v, float), np.asarray(sg, float))
-        for v, sg in zip(velocities, sigmas, strict=True)
-    ]
-    groups: list[Group] = []
-    keys = {(str(s), float(a)) for s, a in zip(sess, us, strict=True) if np.isfinite(a)}
-    for s, a in sorted(keys, key=lambda k: (k[0], k[1])):
-        m = (sess == s) & (us == a)
-        means = [
-            _component_means(v[m], sg[m], (1.0 if j == 0 else -1.0) * K[j], lk[m], u[m], a, G[m])
-            for j, (v, sg) in enumerate(vel)
-        ]
-        vs, ss, gs = (tuple(x) for x in zip(*means, strict=True))
-        groups.append(
-            Group(
-                session=s,
-                u_star=a,
-                tau_s=float(tau[m].mean()),
-                n=int(m.sum()),
-                v=vs,
-                sigma=ss,
-                gamma_est=gs,
-                gamma_sigma=ss,
-                lam_k=float(lk[m].mean()),
-                lam_kappa=float(lkap[m].mean()),
-            )
+    keep = np.nonzero(np.isfinite(us))[0]
+    names, code = np.unique(np.asarray([str(x) for x in sessions])[keep], return_inverse=True)
+    # one pass: groups sorted by (session, u★), as the former per-key masks were
+    order = np.lexsort((us[keep], code.reshape(-1)))
+    rows = keep[order]
+    key_s, key_u = code.reshape(-1)[order], us[rows]
+    new = np.ones(rows.size, dtype=bool)
+    new[1:] = (key_s[1:] != key_s[:-1]) | (key_u[1:] != key_u[:-1])
+    starts = np.nonzero(new)[0]
+    counts = np.diff(np.append(starts, rows.size))
+    gid = np.cumsum(new) - 1
+    comps = [
+        _component_means(
+            np.asarray(v, float)[rows],
+            np.asarray(sg, float)[rows],
+            (1.0 if j == 0 else -1.0) * K[j],
+            lk[rows],
+            u[rows],
+            key_u,
+            G[rows],
+            gid,
         )
+        for j, (v, sg) in enumerate(zip(velocities, sigmas, strict=True))
+    ]
+    tau_mean = _group_mean(tau[rows], gid, counts)
+    lk_mean = _group_mean(lk[rows], gid, counts)
+    lkap_mean = _group_mean(lkap[rows], gid, counts)
+    groups = [
+        Group(
+            session=str(names[key_s[i]]),
+            u_star=float(key_u[i]),
+            tau_s=float(tau_mean[g]),
+            n=int(counts[g]),
+            v=tuple(float(c[0][g]) for c in comps),
+            sigma=tuple(float(c[1][g]) for c in comps),
+            gamma_est=tuple(float(c[2][g]) for c in comps),
+            gamma_sigma=tuple(float(c[1][g]) for c in comps),
+            lam_k=float(lk_mean[g]),
+            lam_kappa=float(lkap_mean[g]),
+        )
+        for g, i in enumerate(starts)
+    ]
     groups.sort(key=lambda g: g.tau_s)
     return groups
 
 
+def _group_mean(x: F64, gid: NDArray[np.intp], counts: NDArray[np.intp]) -> F64:
+    """Mean of ``x`` per group (rows sorted by group id)."""
+    out: F64 = np.bincount(gid, weights=x, minlength=counts.size) / counts
+    return out
+
+
 def _component_means(
-    v: F64, sigma: F64, sK: float, lam_k: F64, u: F64, u_star: float, G: F64
-) -> tuple[float, float, float]:
-    """One component of one group: (fixed-u mean, its σ, zero-crossing γ estimate).
+    v: F64,
+    sigma: F64,
+    sK: float,
+    lam_k: F64,
+    u: F64,
+    u_star: F64,
+    G: F64,
+    gid: NDArray[np.intp],
+) -> tuple[F64, F64, F64]:
+    """One component of every group: (fixed-u mean, its σ, zero-crossing γ estimate) per group.
 
     ``sK`` is ±K_j (the star's sign); the velocities are moved to the exact u★ first and the γ
-    estimate removes the whole orbital term ±K_j G.
+    estimate removes the whole orbital term ±K_j G. ``gid`` numbers each row's group.
     """
     w = 1.0 / sigma**2
-    vc = v - sK * lam_k * (np.cos(u) - math.cos(u_star))
+    vc = v - sK * lam_k * (np.cos(u) - np.cos(u_star))
     gam = v - sK * G
+    wsum = np.bincount(gid, weights=w)
     return (
-        float((w * vc).sum() / w.sum()),
-        float(1.0 / math.sqrt(w.sum())),
-        float((w * gam).sum() / w.sum()),
+        np.bincount(gid, weights=w * vc) / wsum,
+        1.0 / np.sqrt(wsum),
+        np.bincount(gid, weights=w * gam) / wsum,
     )

@@ -110,6 +110,8 @@ class Reduction:
     attenuation: tuple[float, ...]
     wilson: WilsonFit | None
     light_time: dict[str, float]
+    #: Monte-Carlo draws per quantity; empty above montecarlo.CHUNK samples (chunked run:
+    #: the summaries are exact, the draws are not kept).
     samples: dict[str, F64]
     summaries: dict[str, _masses.Summary]
     groups: tuple[Group, ...]

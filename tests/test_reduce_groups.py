@@ -1,0 +1,82 @@
+"""group_spectra (one sort + bincount) against a brute-force per-(session, u★) loop."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from ucbplan.reduce.groups import ANCHOR_U, group_spectra
+
+
+def _brute(sessions, tau, u, us, vels, sigs, K, G, lk, lkap):  # type: ignore[no-untyped-def]
+    out = []
+    keys = sorted({(s, a) for s, a in zip(sessions, us, strict=True) if np.isfinite(a)})
+    for s, a in keys:
+        m = np.array([x == s for x in sessions]) & (us == a)
+        comp = []
+        for j, (v, sg) in enumerate(zip(vels, sigs, strict=True)):
+            sk = (1.0 if j == 0 else -1.0) * K[j]
+            w = 1.0 / sg[m] ** 2
+            vc = v[m] - sk * lk[m] * (np.cos(u[m]) - math.cos(a))
+            gam = v[m] - sk * G[m]
+            comp.append(
+                (np.sum(w * vc) / w.sum(), 1 / math.sqrt(w.sum()), np.sum(w * gam) / w.sum())
+            )
+        out.append((s, a, tau[m].mean(), int(m.sum()), comp, lk[m].mean(), lkap[m].mean()))
+    out.sort(key=lambda r: r[2])
+    return out
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_groups_match_brute_force(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    n = 500
+    sessions = [f"night{k}" for k in rng.integers(0, 7, n)]
+    tau = rng.uniform(0, 1e6, n)
+    u = rng.uniform(0, 2 * math.pi, n)
+    us = rng.choice([*ANCHOR_U, np.nan], n)
+    vels = [rng.normal(0, 300, n), rng.normal(0, 300, n)]
+    sigs = [rng.uniform(5, 20, n), rng.uniform(5, 20, n)]
+    G, lk, lkap = rng.normal(size=n), rng.uniform(0.9, 1, n), rng.uniform(0.9, 1, n)
+    K = (500.0, 600.0)
+    got = group_spectra(
+        sessions=sessions,
+        tau_s=tau,
+        u_rad=u,
+        u_star=us,
+        velocities=vels,
+        sigmas=sigs,
+        K=K,
+        design=G,
+        lam_k=lk,
+        lam_kappa=lkap,
+    )
+    ref = _brute(sessions, tau, u, us, vels, sigs, K, G, lk, lkap)
+    assert len(got) == len(ref) > 20
+    for g, (s, a, t, k, comp, mk, mkap) in zip(got, ref, strict=True):
+        assert (g.session, g.u_star, g.n) == (s, a, k)
+        assert g.tau_s == pytest.approx(t, rel=1e-12)
+        assert (g.lam_k, g.lam_kappa) == pytest.approx((mk, mkap), rel=1e-12)
+        for j, (v, sg, gm) in enumerate(comp):
+            assert g.v[j] == pytest.approx(v, rel=1e-12, abs=1e-9)
+            assert g.sigma[j] == pytest.approx(sg, rel=1e-12)
+            assert g.gamma_est[j] == pytest.approx(gm, rel=1e-12, abs=1e-9)
+            assert g.gamma_sigma[j] == g.sigma[j]
+
+
+def test_no_assigned_spectra_give_no_groups() -> None:
+    out = group_spectra(
+        sessions=["a", "b"],
+        tau_s=[0.0, 1.0],
+        u_rad=[0.0, 1.0],
+        u_star=[np.nan, np.nan],
+        velocities=[[1.0, 2.0]],
+        sigmas=[[1.0, 1.0]],
+        K=(1.0,),
+        design=[0.0, 0.0],
+        lam_k=1.0,
+        lam_kappa=1.0,
+    )
+    assert out == []
