@@ -16,6 +16,13 @@ settings.register_profile("ci", derandomize=True, print_blob=True)
 if os.environ.get("CI"):
     settings.load_profile("ci")
 
+# The parsed-IERS cache goes to a per-run temporary folder, not the user's ~/.cache (set before
+# any test imports the tables; CLI subprocesses inherit it).
+if "UCBPLAN_CACHE_DIR" not in os.environ:
+    import tempfile
+
+    os.environ["UCBPLAN_CACHE_DIR"] = tempfile.mkdtemp(prefix="ucbplan-test-cache-")
+
 ROOT = Path(__file__).resolve().parents[1]
 CATALOGS = ROOT / "catalogs"
 

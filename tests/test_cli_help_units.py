@@ -44,3 +44,21 @@ def test_every_bracketed_unit_is_shown_in_help() -> None:
 def test_completion_is_offered() -> None:
     result = CliRunner().invoke(app, ["--help"], env={"COLUMNS": "100"})
     assert "--show-completion" in result.output
+
+
+def test_help_does_not_import_the_science_stack() -> None:
+    """Start-up (issue 14): ``ucbplan --help`` must not import astropy or numpy (the commands
+    import them when they run). Checked structurally in a fresh interpreter, not timed."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys\n"
+        "from ucbplan.cli.app import main\n"
+        "sys.argv = ['ucbplan', '--help']\n"
+        "try:\n    main()\nexcept SystemExit:\n    pass\n"
+        "heavy = sorted(m for m in ('astropy', 'numpy', 'scipy', 'matplotlib') if m in sys.modules)\n"
+        "print('HEAVY', heavy)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert "HEAVY []" in out.stdout, out.stdout[-300:]

@@ -10,9 +10,8 @@
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import numpy as np
 import typer
 import typer.core
 from rich.markup import escape
@@ -46,7 +45,9 @@ from ucbplan.cli._options import (
 from ucbplan.cli.timing import ephemeris_fit
 from ucbplan.core.constants import DAY_S
 from ucbplan.errors import UcbplanError, shorten
-from ucbplan.target import Target, load_target
+
+if TYPE_CHECKING:  # ucbplan.target pulls in astropy: imported inside the commands
+    from ucbplan.target import Target
 
 __all__ = ["EphemerisGroup", "ephemeris_app", "register"]
 
@@ -72,6 +73,8 @@ def ephemeris(
     fmt = pick_format(output, fmt, TABLE_FORMATS)
     if star not in (1, 2):
         raise UcbplanError(f"--star must be 1 or 2, got {star}")
+    from ucbplan.target import load_target
+
     t = load_target(target)
     tau0, tau1 = _window(t, start, end, anchor, max_epochs)
     es = find_epochs(t, tau0, tau1, anchor, star)
@@ -206,6 +209,8 @@ def _epoch_table(t: Target, es: Any) -> Any:
 
 def _cycles(t: Target, es: Any) -> Any:
     """Ephemeris cycle number n of each epoch: (u₁ − u₁(T0))/2π (u₁ = u★ − ε of the star)."""
+    import numpy as np
+
     from ucbplan.core.phase import u_cycles
 
     m0, g0 = u_cycles(t.params, np.array([0.0]))
@@ -216,6 +221,8 @@ def _cycles(t: Target, es: Any) -> Any:
 
 def _iso_us(t: Any) -> list[str]:
     """TDB ISO strings with microseconds."""
+    import numpy as np
+
     tdb = t.tdb
     tdb.precision = 6
     return [str(x) for x in np.atleast_1d(tdb.isot)]
@@ -285,6 +292,8 @@ def compare(
     from ucbplan.core.timing import compare_sources
 
     fmt = pick_format(output, fmt, ("table", "json"))
+    from ucbplan.target import load_target
+
     ta, tb = load_target(a), load_target(b)
     epoch = epoch_option(at, "--at") if at is not None else None
     _warn_different_systems(ta, tb)

@@ -18,7 +18,6 @@ from ucbplan.cli._console import dump_json, err_console, pick_format, write_outp
 from ucbplan.cli._epochs import epoch_option
 from ucbplan.core.constants import DAY_S, MONTH_S, YEAR_S
 from ucbplan.errors import UcbplanError, shorten
-from ucbplan.inputs import check_number
 
 __all__ = ["feasibility_command", "register"]
 
@@ -172,6 +171,14 @@ def _optical_offset(text: str, t_ref: Any) -> float:
         check_number("--optical-epoch", jd, 2086302.5, 2816787.5, "BJD_TDB")
         epoch = Time(jd, format="jd", scale="tdb")
     return float((t_ref - epoch).to_value("s"))
+
+
+def check_number(*args: Any, **kwargs: Any) -> Any:
+    """:func:`ucbplan.inputs.check_number`, imported on first use (it pulls in numpy/yaml; the
+    module is imported for every ``--help``)."""
+    from ucbplan.inputs import check_number as check
+
+    return check(*args, **kwargs)
 
 
 def _fmt(value: float | None, fmt: str) -> str:

@@ -27,7 +27,6 @@ from ucbplan.cli._console import (
     write_output,
 )
 from ucbplan.errors import InputError
-from ucbplan.inputs import check_number
 
 __all__ = ["ephemeris_fit"]
 
@@ -99,6 +98,7 @@ def ephemeris_fit(
     dec: DecOpt = None,
 ) -> None:
     """Fit T0, P, Pdot (--terms) to eclipse times; write a timing target, report and O-C plot."""
+    from ucbplan.inputs import check_number
     from ucbplan.timing import fit_times, period_guess, read_initial, read_times
     from ucbplan.timing.document import fit_report, identity, target_document, write_yaml
 
