@@ -149,7 +149,24 @@ _Format = Annotated[
     str | None,
     typer.Option("--format", help="table | ecsv | csv | json (default: the -o suffix, else table)"),
 ]
-_Plot = Annotated[Path | None, typer.Option("--plot", help="Night chart PNG (first night).")]
+_Plot = Annotated[
+    Path | None,
+    typer.Option(
+        "--plot",
+        help="Night charts of every night: .png/.svg (up to 7 panels) or .pdf (a page each).",
+    ),
+]
+_Sheet = Annotated[
+    Path | None,
+    typer.Option(
+        "--sheet",
+        help="Night sheet (.pdf or self-contained .html): chart and visits of each night.",
+    ),
+]
+_Tz = Annotated[
+    str | None,
+    typer.Option("--tz", help="IANA time zone replacing the site's (e.g. America/Santiago)."),
+]
 _Overwrite = Annotated[bool, typer.Option("--overwrite", help="Replace existing output files.")]
 
 
@@ -160,12 +177,19 @@ def _given(ctx: typer.Context, name: str) -> bool:
     return source is not None and getattr(source, "name", "") != "DEFAULT"
 
 
-def _write(run: Any, fmt: str, output: Path | None, plot: Path | None, overwrite: bool) -> None:
-    """The blocks table (stdout or ``output``) and the night chart of the first night."""
+def _write(
+    run: Any,
+    fmt: str,
+    output: Path | None,
+    figures: tuple[Path | None, Path | None],
+    overwrite: bool,
+) -> None:
+    """The blocks table (stdout or ``output``), the night charts and the night sheet."""
+    plot, sheet = figures
+    if fmt in _MACHINE or plot is not None or sheet is not None:
+        table = run.table()
     if fmt in _MACHINE:
         from ucbplan.observing.blocktable import write_table
-
-        table = run.table()
 
         def _write_table(handle: IO[str]) -> None:
             write_table(table, handle, fmt, json_meta=True)
@@ -173,14 +197,17 @@ def _write(run: Any, fmt: str, output: Path | None, plot: Path | None, overwrite
         write_output(output, _write_table, overwrite=overwrite)
         if output is not None:
             err_console.print(f"wrote {len(table)} blocks to {escape(str(output))} ({fmt})")
+    constraints = run.settings.constraints(run.site)
     if plot is not None:
-        from ucbplan.observing.nightplot import plot_night
-        from ucbplan.plotting import save_figure
+        from ucbplan.observing.nightplot import write_night_charts
 
-        airmass_max = run.settings.airmass_max
-        fig = plot_night(run.targets, run.site, run.nights[0], run.result.blocks, airmass_max)
-        save_figure(fig, plot, overwrite=overwrite, dpi=120)
-        err_console.print(f"wrote night chart to {escape(str(plot))}")
+        n = write_night_charts(table, run.site, plot, constraints=constraints, overwrite=overwrite)
+        err_console.print(f"wrote night charts of {n} night(s) to {escape(str(plot))}")
+    if sheet is not None:
+        from ucbplan.observing.nightsheet import write_night_sheet
+
+        n = write_night_sheet(table, run.site, sheet, constraints=constraints, overwrite=overwrite)
+        err_console.print(f"wrote the night sheet of {n} night(s) to {escape(str(sheet))}")
 
 
 # ``plan`` is long only by its 27 options and their one-to-one mapping into PlanSettings.
@@ -222,16 +249,24 @@ def plan(
     output: _Output = None,
     fmt: _Format = None,
     plot: _Plot = None,
+    sheet: _Sheet = None,
+    tz: _Tz = None,
     overwrite: _Overwrite = False,
 ) -> None:
     """Plan phase-targeted observing blocks (UTC at the site) for one or more nights."""
+    from ucbplan.observing.nightplot import chart_format
+    from ucbplan.observing.nightsheet import sheet_format
     from ucbplan.observing.schedule import plan_files, plan_settings
     from ucbplan.observing.timeconv import quiet_erfa
 
     fmt = pick_format(output, fmt, ("table", *_MACHINE))
-    for path in (output, plot):
+    for path in (output, plot, sheet):
         if path is not None:
             check_output_path(path, overwrite)
+    if plot is not None:
+        chart_format(plot)  # a wrong suffix fails before the planning, not after
+    if sheet is not None:
+        sheet_format(sheet)
     with quiet_erfa():
         settings = plan_settings(
             instrument=instrument,
@@ -269,9 +304,10 @@ def plan(
             sites_file=sites_file,
             settings=settings,
             priorities=priority,
+            timezone=tz,
         )
         report(run, wide, verbose)
-        _write(run, fmt, output, plot, overwrite)
+        _write(run, fmt, output, (plot, sheet), overwrite)
 
 
 def register(app: typer.Typer) -> None:

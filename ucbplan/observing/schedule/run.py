@@ -209,6 +209,7 @@ def plan_files(
     sites_file: Path | None = None,
     settings: PlanSettings | None = None,
     priorities: Mapping[str, float] | Sequence[str] = (),
+    timezone: str | None = None,
 ) -> PlanRun:
     """Plan blocks for target files at a site on ``n_nights`` nights from ``first_night``.
 
@@ -226,6 +227,9 @@ def plan_files(
         Mode, constraints, exposures ... (defaults: :class:`PlanSettings`).
     priorities : mapping or sequence of str
         Priority overrides by target name (see :func:`with_priorities`).
+    timezone : str, optional
+        IANA zone replacing the site's (``--tz``): the local evening of ``first_night`` and the
+        local-time columns.
 
     Returns
     -------
@@ -241,7 +245,7 @@ def plan_files(
     dates = night_dates(first_night, n_nights)
     if not isinstance(priorities, Mapping):
         parse_priorities(priorities)
-    the_site = resolve_site(site, site_lonlat, sites_file)
+    the_site = resolve_site(site, site_lonlat, sites_file, timezone)
     targets = with_priorities([load_target(p) for p in target_files], priorities)
     _check_budget_names(targets, settings)
     result = plan_nights(targets, the_site, dates, settings)
