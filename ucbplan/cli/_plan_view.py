@@ -119,7 +119,7 @@ def _print_night(blocks: list[Any], night: str, site: Any) -> None:
             f"{b.u_star_rad:.4f}",
             f"{b.t_mid_utc.iso[11:23]} ± {b.sigma_t_s:.2f} s",
             _local(b),
-            f"{b.t_start_utc.iso[11:19]}–{b.t_end_utc.iso[11:19]}",
+            f"{b.t_start_utc.iso[:19]}–{b.t_end_utc.iso[11:19]}",
             f"{b.airmass_start:.2f}/{b.airmass:.2f}/{b.airmass_end:.2f}",
             f"{b.moon_sep_deg:.0f}",
             f"{b.lambda_k:.4f}",
@@ -184,20 +184,19 @@ def _print_accounting(run: Any, verbose: bool = False) -> None:
     if run.settings.visit_s is not None and (verbose or len(visits) <= SUMMARY_ROWS):
         table_v = rich_table(
             "Visits — one acquisition, then exposures centred on anchors (UTC at the site)",
-            ["visit", "target", "acquisition", "first exp.", "last end", "exp.", "idle [s]"],
+            ["visit", "target", "acq. start UTC", "last end UTC", "exp.", "idle [s]"],
         )
         for v in visits:
             table_v.add_row(
                 escape("-".join(v.visit_id.rsplit("-", 2)[-2:])),
-                escape(v.target[:18]),
-                v.acq_start_utc[11:],
-                v.start_utc[11:],
-                v.end_utc[11:],
+                escape(v.target),
+                v.acq_start_utc[:19].replace("T", " "),  # its UTC date: the night label is local
+                v.end_utc[11:19],
                 str(v.exposures),
                 f"{v.idle_s:.0f}",
             )
-        for column in table_v.columns:
-            column.no_wrap = True
+        for i, column in enumerate(table_v.columns):
+            column.no_wrap = i != 1  # a long target name wraps; times are never cut
         err_console.print(table_v)
     acc = run.accounting()
     table = rich_table(
