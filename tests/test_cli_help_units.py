@@ -57,7 +57,8 @@ def test_help_does_not_import_the_science_stack() -> None:
         "from ucbplan.cli.app import main\n"
         "sys.argv = ['ucbplan', '--help']\n"
         "try:\n    main()\nexcept SystemExit:\n    pass\n"
-        "heavy = sorted(m for m in ('astropy', 'numpy', 'scipy', 'matplotlib') if m in sys.modules)\n"
+        "stack = ('astropy', 'numpy', 'scipy', 'matplotlib')\n"
+        "heavy = sorted(m for m in stack if m in sys.modules)\n"
         "print('HEAVY', heavy)\n"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
