@@ -188,7 +188,7 @@ def cli_rows(
 
 
 def rows(quick: bool) -> list[dict[str, object]]:
-    """Kernel epochs/s against astroplan, and the whole plan_nights of the semester."""
+    """Kernel epochs/s against astroplan; the semester via the API and the CLI (issue 14)."""
     configure_offline()
     warnings.simplefilter("ignore")
     n_nights, n_targets, n_sample = 183, 10, (600 if quick else 3000)  # goal size: ~10 s
@@ -220,15 +220,13 @@ def rows(quick: bool) -> list[dict[str, object]]:
     t0 = time.perf_counter()
     res = plan_nights(targets, get_site("paranal"), nights, PlanSettings())
     whole = time.perf_counter() - t0
-    full = n_targets == 10 and n_nights == 183
     semester: dict[str, object] = {
         "name": f"semester plan via the API (plan_nights), {what}",
         "value": whole,
         "unit": "s",
-        "goal": f"≤ {GOAL_SEMESTER_S:g} s for 10 targets × 183 nights",
-        "met": bool(whole <= GOAL_SEMESTER_S) if full else None,
-        "note": f"validity, candidates, schedule, {len(res.blocks)} block records"
-        + ("" if full else "; quick mode: smaller than the goal's semester, not judged"),
+        "goal": f"≤ {GOAL_SEMESTER_S:g} s",
+        "met": bool(whole <= GOAL_SEMESTER_S),
+        "note": f"validity, candidates, schedule, {len(res.blocks)} block records",
     }
     peer_rate = rate / float(kernel["ratio"]) if "ratio" in kernel else None  # type: ignore[arg-type]
     return [kernel, semester, *cli_rows(targets, nights, whole, peer_rate)]
