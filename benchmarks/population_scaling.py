@@ -6,12 +6,15 @@ shared machine):
 - 2-process pool wall time ≤ 1.3 × serial / 2;
 - Dask LocalCluster (2 workers × 1 thread, default chunk) ≤ 1.2 × the pool;
 - peak memory (max RSS) per worker bounded: chunks are streamed, so it does not grow with the
-  catalog (compare ``-n 1000`` with the default 10⁴).
+  catalog (compare ``-n 1000`` with the default 10⁴);
+- the cost of Dask's nanny setting ``MALLOC_TRIM_THRESHOLD_`` low: Dask run once with ucbplan's
+  worker malloc tuning (the default) and once without (``UCBPLAN_MALLOC_TUNE=0``).
 
 The three tables are checked byte-identical. Usage::
 
     python benchmarks/population_scaling.py            # 10⁴ sources (minutes)
     python benchmarks/population_scaling.py --quick    # 10³ sources (CI)
+    python -m benchmarks --only population_scaling [--quick]
 """
 
 from __future__ import annotations
@@ -36,6 +39,7 @@ from ucbplan.population.forecast import ForecastOptions, forecast_chunk
 from ucbplan.population.run import FORECAST_SECONDS_PER_SOURCE, forecast_table
 
 OPTS = ForecastOptions(sigma_v_kms=15.0)
+GOAL_POOL, GOAL_DASK = 1.3, 1.2
 
 
 def _maxrss_mb() -> float:
@@ -80,29 +84,114 @@ def _forecast(cat, spec: ExecutorSpec, tmp: Path, name: str) -> tuple[float, byt
     return wall, out.read_bytes(), chunk, rss
 
 
-def _dask(cat, tmp: Path) -> tuple[float, bytes, int, dict] | None:
+def _dask(cat, tmp: Path, name: str, tune: bool = True) -> tuple[float, bytes, int, dict, list]:
+    """One forecast on a 2-worker LocalCluster; ``tune=False`` leaves the nanny's malloc setting."""
+    import distributed
+
+    os.environ["UCBPLAN_MALLOC_TUNE"] = "1" if tune else "0"  # inherited by the workers
     try:
-        import distributed
-    except ImportError:
-        print("Dask: distributed not installed (pip install 'ucbplan[dask]'); skipped")
-        return None
-    with (
-        distributed.LocalCluster(
-            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
-        ) as cluster,
-        distributed.Client(cluster) as client,
-    ):
-        wall, data, chunk, _ = _forecast(
-            cat, ExecutorSpec(scheduler=cluster.scheduler_address), tmp, "dask"
-        )
-        rss = client.run(_maxrss_mb)
-        trim = sorted(set(client.run(lambda: os.environ.get("MALLOC_TRIM_THRESHOLD_")).values()))
-    print(f"  Dask workers' MALLOC_TRIM_THRESHOLD_ (set by the nanny): {trim}; ucbplan retunes")
-    return wall, data, chunk, rss
+        with (
+            distributed.LocalCluster(
+                n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+            ) as cluster,
+            distributed.Client(cluster) as client,
+        ):
+            wall, data, chunk, _ = _forecast(
+                cat, ExecutorSpec(scheduler=cluster.scheduler_address), tmp, name
+            )
+            rss = client.run(_maxrss_mb)
+            env = client.run(lambda: os.environ.get("MALLOC_TRIM_THRESHOLD_"))
+    finally:
+        os.environ.pop("UCBPLAN_MALLOC_TUNE", None)
+    return wall, data, chunk, rss, sorted(set(env.values()))
+
+
+def _row(name: str, wall: float, n: int, chunk: int, rss: dict, **kw: object) -> dict:
+    return {
+        "name": f"population forecast, {n:,} sources, {name}",
+        "value": wall,
+        "unit": "s wall",
+        "peak_mb": max(rss.values()),
+        "note": f"{1e3 * wall / n:.2f} ms/source, chunk {chunk}, peak RSS per worker "
+        f"{_rss_text(rss)}",
+    } | kw
 
 
 def _rss_text(rss: dict) -> str:
     return ", ".join(f"{v:.0f}" for v in sorted(rss.values())) + " MB"
+
+
+def measure(n: int, tmp: Path) -> list[dict[str, object]]:
+    """Serial, 2-process pool and 2-worker Dask (tuned and untuned malloc) on one catalog."""
+    path = tmp / "cat.ecsv"
+    make(n, 13).write(path, format="ascii.ecsv")
+    cat = read_catalog(path)
+    t_ser, ref, c_ser, rss_ser = _forecast(cat, ExecutorSpec(), tmp, "serial")
+    out = [_row("serial", t_ser, n, c_ser, rss_ser)]
+    t_pool, pool, c_pool, rss_pool = _forecast(cat, ExecutorSpec(workers=2), tmp, "pool")
+    rel = t_pool / (t_ser / 2)
+    out.append(
+        _row("2-process pool", t_pool, n, c_pool, rss_pool)
+        | {
+            "ratio": t_ser / t_pool,
+            "peer": f"serial ({t_ser:.2f} s)",
+            "goal": f"≤ {GOAL_POOL:g} × serial/2",
+            "met": bool(rel <= GOAL_POOL),
+        }
+    )
+    out[-1]["note"] = f"pool / (serial/2) = {rel:.2f}; " + str(out[-1]["note"])
+    same = {"pool": pool == ref}
+    try:
+        import distributed  # noqa: F401
+    except ImportError:
+        out.append(
+            {
+                "name": f"population forecast, {n:,} sources, Dask LocalCluster",
+                "value": float("nan"),
+                "note": "distributed is not installed (pip install 'ucbplan[dask]'): not measured",
+            }
+        )
+    else:
+        t_dask, dask, c_dask, rss_dask, _ = _dask(cat, tmp, "dask")
+        t_raw, raw, _, rss_raw, trim = _dask(cat, tmp, "dask_raw", tune=False)
+        same |= {"Dask": dask == ref, "Dask untuned": raw == ref}
+        out.append(
+            _row("Dask 2 workers × 1 thread", t_dask, n, c_dask, rss_dask)
+            | {
+                "ratio": t_pool / t_dask,
+                "peer": f"2-process pool ({t_pool:.2f} s)",
+                "goal": f"≤ {GOAL_DASK:g} × the pool",
+                "met": bool(t_dask / t_pool <= GOAL_DASK),
+            }
+        )
+        out.append(
+            _row("Dask, nanny's malloc setting kept", t_raw, n, c_dask, rss_raw)
+            | {
+                "ratio": t_raw / t_dask,
+                "peer": "the tuned Dask run (ratio > 1: the tuning pays)",
+            }
+        )
+        out[-1]["note"] = f"MALLOC_TRIM_THRESHOLD_ {trim} (UCBPLAN_MALLOC_TUNE=0); " + str(
+            out[-1]["note"]
+        )
+    ok = all(same.values())
+    out.append(
+        {
+            "name": "population tables byte-identical across executors",
+            "value": float(ok),
+            "unit": "1 = yes",
+            "goal": "identical",
+            "met": ok,
+            "note": ", ".join(f"{k} {'=' if v else '≠'} serial" for k, v in same.items()),
+        }
+    )
+    return out
+
+
+def rows(quick: bool) -> list[dict[str, object]]:
+    """Issue 13's scaling goals on 10³ (quick) or 10⁴ sources."""
+    with tempfile.TemporaryDirectory() as d:
+        return measure(1000 if quick else 10_000, Path(d))
 
 
 def main() -> int:
@@ -111,33 +200,13 @@ def main() -> int:
     ap.add_argument("-n", type=int, default=None, help="sources (default 10^4; --quick 10^3)")
     args = ap.parse_args()
     n = args.n or (1000 if args.quick else 10_000)
+    print(f"population forecast of {n} sources; os.cpu_count() = {os.cpu_count()}")
     with tempfile.TemporaryDirectory() as d:
-        tmp = Path(d)
-        path = tmp / "cat.ecsv"
-        make(n, 13).write(path, format="ascii.ecsv")
-        cat = read_catalog(path)
-        print(f"population forecast of {n} sources; os.cpu_count() = {os.cpu_count()}")
-        t_ser, ref, c_ser, rss_ser = _forecast(cat, ExecutorSpec(), tmp, "serial")
-        print(
-            f"serial          {t_ser:8.2f} s  {1e3 * t_ser / n:6.2f} ms/source  chunk {c_ser:4d}  "
-            f"peak RSS {_rss_text(rss_ser)}"
-        )
-        t_pool, pool, c_pool, rss_pool = _forecast(cat, ExecutorSpec(workers=2), tmp, "pool")
-        print(
-            f"2-process pool  {t_pool:8.2f} s  pool / (serial/2) = {t_pool / (t_ser / 2):.2f} "
-            f"(goal <= 1.3)  chunk {c_pool:4d}  peak RSS per worker {_rss_text(rss_pool)}"
-        )
-        same = pool == ref
-        res = _dask(cat, tmp)
-        if res is not None:
-            t_dask, dask, c_dask, rss_dask = res
-            print(
-                f"Dask 2 workers  {t_dask:8.2f} s  dask / pool = {t_dask / t_pool:.2f} "
-                f"(goal <= 1.2)  chunk {c_dask:4d}  peak RSS per worker {_rss_text(rss_dask)}"
-            )
-            same = same and dask == ref
-        print(f"tables byte-identical (serial, pool, Dask): {same}")
-        return 0 if same else 1
+        out = measure(n, Path(d))
+    for r in out:
+        ratio = f"  {r['ratio']:.2f}x {r['peer']}" if r.get("ratio") else ""
+        print(f"{r['name']}: {r['value']:.2f} {r.get('unit', '')}{ratio}; {r.get('note', '')}")
+    return 0 if out[-1]["met"] else 1
 
 
 if __name__ == "__main__":
