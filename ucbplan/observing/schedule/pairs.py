@@ -72,9 +72,8 @@ def pair_infeasible_reason(target: Target) -> str | None:
     if p.omega_dot != 0.0 and p.eccentricity != 0.0:
         return None
     return (
-        "fixed-u pairs need apsidal motion: Delta-kappa_LISA is 0 (circular orbit or "
-        "omega_dot = 0), so a pair would only measure Delta-v_CM; plan it with --mode "
-        "quadrature or u=VALUE"
+        "Delta-kappa_LISA is 0 (circular orbit or no apsidal motion), so fixed-u pairs would "
+        "only measure Delta-v_CM: plan it with --mode quadrature or u=VALUE"
     )
 
 
@@ -156,6 +155,9 @@ def _fraction_notes(fractions: dict[tuple[str, str], list[float]]) -> list[Unpla
     out = []
     for (name, night), fr in fractions.items():
         worst = min(fr)
+        span = (
+            f"{worst:.2f}" if f"{worst:.2f}" == f"{max(fr):.2f}" else f"{worst:.2f}-{max(fr):.2f}"
+        )
         if worst < DK_FRACTION:
             out.append(
                 Unplaced(
@@ -163,7 +165,7 @@ def _fraction_notes(fractions: dict[tuple[str, str], list[float]]) -> list[Unpla
                     night,
                     f"the best baseline (apsidal maximum of |Delta-kappa_LISA|) is outside the "
                     f"nights given; planned the best pairs inside: |Delta-kappa_LISA| = "
-                    f"{worst:.2f}-{max(fr):.2f} of the optimum (add later nights to reach it)",
+                    f"{span} of the optimum (add later nights to reach it)",
                 )
             )
     return out
