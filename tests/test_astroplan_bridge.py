@@ -100,6 +100,30 @@ def _edge_ok(mismatch: np.ndarray, theirs_at: object, times: Time, ours_mask: np
     return bool(np.all((before == ours_mask[idx]) | (after == ours_mask[idx])))
 
 
+def _our_edges(ok: object, x: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """Our edges [s on the axis], bisected to 0.05 s between samples where the mask changes."""
+    k = np.flatnonzero(mask[1:] != mask[:-1])
+    lo, hi = x[k].copy(), x[k + 1].copy()
+    while np.any(hi - lo > 0.05):
+        mid = (lo + hi) / 2
+        same = ok(mid) == mask[k]  # type: ignore[operator]
+        lo, hi = np.where(same, mid, lo), np.where(same, hi, mid)
+    return (lo + hi) / 2
+
+
+def _edges_match(
+    ok: object, theirs_at: object, x: np.ndarray, mask: np.ndarray, origin: Time
+) -> bool:
+    """astroplan is on our side of each of our edges 1 s before and 1 s after it."""
+    k = np.flatnonzero(mask[1:] != mask[:-1])
+    if k.size == 0:
+        return True
+    edges = origin + _our_edges(ok, x, mask) * u.s
+    before = theirs_at(edges - 1 * u.s)  # type: ignore[operator]
+    after = theirs_at(edges + 1 * u.s)  # type: ignore[operator]
+    return bool(np.all((before == mask[k]) & (after == mask[k + 1])))
+
+
 @pytest.mark.slow
 @settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(
@@ -119,7 +143,8 @@ def test_visibility_agrees_with_astroplan(
     limits: tuple[float, float, float],
 ) -> None:
     """Ours vs astroplan's AltitudeConstraint, AirmassConstraint, AtNightConstraint and
-    MoonSeparationConstraint at 241 instants over one day (inside the bundled IERS tables).
+    MoonSeparationConstraint at 241 instants over one day (inside the bundled IERS tables), and
+    at each of our edges (bisected to 0.05 s): astroplan must agree 1 s before and 1 s after.
 
     Tolerance: masks may differ only within 1 s of an edge. One second moves the Sun, Moon and
     target by <= 15 arcsec in altitude, more than the < 2 arcsec between our spline sky model
@@ -149,6 +174,8 @@ def test_visibility_agrees_with_astroplan(
             return np.asarray(c(observer, target, times=t)).ravel()  # type: ignore[operator]
 
         assert _edge_ok(mask != at(times), at, times, mask), type(mine).__name__
+        ok = lambda xs, c=mine: c.ok(sky, 0, xs)  # noqa: E731
+        assert _edges_match(ok, at, x, mask, times[0]), type(mine).__name__
     # Ours passes the Moon separation while the Moon is down; astroplan's does not look.
     sep = ap.MoonSeparationConstraint(min=moon_sep * u.deg)
 
@@ -158,3 +185,5 @@ def test_visibility_agrees_with_astroplan(
 
     mask = ours.MoonSeparationConstraint(moon_sep).ok(sky, 0, x)
     assert _edge_ok(mask != moon_at(times), moon_at, times, mask), "moon separation"
+    moon_ok = ours.MoonSeparationConstraint(moon_sep)
+    assert _edges_match(lambda xs: moon_ok.ok(sky, 0, xs), moon_at, x, mask, times[0])
