@@ -15,8 +15,8 @@ priorities 1-3, night caps, time budgets, 0-600 s overhead):
    observer is at the South Pole and the targets at Dec -89 deg so that astroplan's built-in
    horizon constraint never binds. Placed astroplan blocks are mapped back to their candidate.
 
-Usage: python -m benchmarks.scheduler_value [--quick]
-(writes benchmarks/results/scheduler_value.md)
+Usage: python -m benchmarks.scheduler_value [--quick] [--output FILE]
+(the full run writes benchmarks/results/scheduler_value.md; --quick only prints)
 """
 
 from __future__ import annotations
@@ -183,7 +183,9 @@ def peer_table(n: int) -> list[str]:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="fewer instances (CI)")
-    ap.add_argument("--output", type=Path, default=RESULT, help="Markdown table written here")
+    ap.add_argument(
+        "--output", type=Path, default=None, help=f"Markdown written here (full run: {RESULT})"
+    )
     args = ap.parse_args()
     configure_offline()
     n_value, n_peer = (20, 1) if args.quick else (200, 4)
@@ -198,8 +200,10 @@ def main() -> None:
     lines, _ = value_table(n_value)
     text = "\n".join(head + lines + peer_table(n_peer))
     print(text)
-    args.output.parent.mkdir(parents=True, exist_ok=True)
-    args.output.write_text(text, encoding="utf-8")
+    out = args.output or (None if args.quick else RESULT)  # --quick never replaces the table
+    if out is not None:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(text + "\n", encoding="utf-8")
 
 
 if __name__ == "__main__":
