@@ -41,8 +41,16 @@ def plan_table() -> Table:
     return blocks_to_table(res.blocks, {})
 
 
+def test_planner_visits_become_astroplan_blocks(plan_table: Table) -> None:
+    """The planner's table carries visit_id (each session one visit): one block per visit."""
+    sched = to_astroplan(plan_table, get_site("paranal"))
+    assert [b.name for b in sched.observing_blocks] == list(dict.fromkeys(plan_table["visit_id"]))
+
+
 def test_schedule_holds_every_block(plan_table: Table) -> None:
     site = get_site("paranal")
+    plan_table = plan_table.copy()
+    plan_table.remove_column("visit_id")  # without visits: one astroplan block per row
     sched = to_astroplan(plan_table, site)
     blocks = sched.observing_blocks
     assert [b.name for b in blocks] == list(plan_table["block_id"])  # time order
@@ -65,6 +73,8 @@ def test_visits_group_rows(plan_table: Table) -> None:
 
 
 def test_schedule_table(plan_table: Table) -> None:
+    plan_table = plan_table.copy()
+    plan_table.remove_column("visit_id")
     table = to_astroplan(plan_table, get_site("paranal")).to_table()
     assert list(table["target"]) == list(plan_table["target"])
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import itertools
 import math
 import sys
-from datetime import date
+from datetime import date, timedelta
 from pathlib import Path
 
 import numpy as np
@@ -200,12 +200,16 @@ def test_zero_overhead_never_overlaps(targets: list[Target], mode: str) -> None:
 
 def test_fixed_u_pairs_are_unique_and_never_overlap(targets: list[Target]) -> None:
     # Second epochs were planned alone on their night: several first blocks chose the same
-    # second block (duplicate ids, identical rows) on top of other targets' blocks.
+    # second block (duplicate ids, identical rows) on top of other targets' blocks, and on
+    # nights outside the plan. Now: only the nights given, unique ids, no overlaps.
     s = PlanSettings(mode="fixed-u-pairs", overhead_s=0.0, sessions_per_night=3)
-    res = plan_nights(targets[1:], get_site("paranal"), [NIGHT], s)
+    nights = [NIGHT + timedelta(days=i) for i in range(8)]
+    res = plan_nights(targets[1:], get_site("paranal"), nights, s)
     seconds = [b for b in res.blocks if b.night != NIGHT.isoformat()]
     assert len(seconds) >= 4
+    assert {b.night for b in res.blocks} <= {n.isoformat() for n in nights}
     _assert_no_overlap(res.blocks)
+    assert len({b.block_id for b in res.blocks}) == len(res.blocks)
     assert len({b.session_id for b in seconds}) == len(seconds)
 
 

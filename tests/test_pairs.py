@@ -127,11 +127,6 @@ def test_circular_target_is_infeasible(hm: Target, fid: Target) -> None:
     assert [(x.target, x.night) for x in out] == [(hm.name, "2037-01-10")]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="needs planner._check_inputs to stop raising and plan_nights to call pair_targets "
-    "(outside this branch's files; see the s2-sched report)",
-)
 def test_circular_target_reported_others_planned(hm: Target, fid: Target) -> None:
     res = plan_nights([hm, fid], get_site("paranal"), NIGHTS[:2], SETTINGS)
     assert {b.target for b in res.blocks} == {fid.name}

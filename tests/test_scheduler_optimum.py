@@ -84,6 +84,7 @@ def _as_runs(inst: Instance) -> tuple[list[SimpleNamespace], list[NightSpan]]:
                 valid=np.ones(js.size, dtype=bool),
                 score=inst.score[js],
                 partner=np.full(js.size, -1),
+                exposure=SimpleNamespace(plan=SimpleNamespace(n_exp=1)),
                 js=js,
             )
         )

@@ -31,7 +31,7 @@ from scipy import sparse
 from scipy.optimize import Bounds, LinearConstraint, milp
 
 from ucbplan.errors import NumericalError
-from ucbplan.observing.schedule.placement import _Timeline
+from ucbplan.observing.schedule.placement import Timeline
 
 __all__ = ["Instance", "Solution", "greedy", "is_feasible", "optimum"]
 
@@ -148,7 +148,7 @@ def optimum(inst: Instance) -> Solution:
 def greedy(inst: Instance) -> Solution:
     """The planner's placement rule (:func:`~.placement.place_sessions`) applied to ``inst``,
     with the per-target time budget: a session that would exceed it is skipped."""
-    timeline = _Timeline(inst.overhead_s)
+    timeline = Timeline(inst.overhead_s)
     chosen = np.zeros(inst.size, dtype=bool)
     for t in sorted(range(inst.priority.size), key=lambda k: -inst.priority[k]):
         used = 0.0

@@ -28,7 +28,7 @@ from ucbplan.observing.schedule.candidates import TargetRun, prepare_runs
 from ucbplan.observing.schedule.exposure import TargetExposure
 from ucbplan.observing.schedule.goalplan import check_goals, goal_plans
 from ucbplan.observing.schedule.nights import night_spans, night_windows
-from ucbplan.observing.schedule.pairs import SecondEpoch, pair_blocks
+from ucbplan.observing.schedule.pairs import SecondEpoch, pair_blocks, pair_targets
 from ucbplan.observing.schedule.placement import Allowance, Unplaced, place_sessions
 from ucbplan.observing.schedule.reasons import not_planned
 from ucbplan.observing.schedule.records import block_records
@@ -85,14 +85,7 @@ def _check_inputs(targets: list[Target], nights: list[date], settings: PlanSetti
         raise UcbplanError("no targets given; pass one or more target YAML files")
     if not nights:
         raise UcbplanError("--nights must be >= 1")
-    if settings.spec.label != "fixed-u-pairs":
-        return
-    for t in targets:
-        if t.params.omega_dot == 0.0 or t.params.eccentricity == 0.0:
-            raise UcbplanError(
-                f"{t.name}: Delta-kappa_LISA is 0 (circular orbit or no apsidal motion); "
-                "fixed-u pairs would only measure Delta-v_CM: use --mode quadrature or u=VALUE"
-            )
+
 
 
 def _second_epoch(site: Site, settings: PlanSettings) -> SecondEpoch:
@@ -182,6 +175,11 @@ def plan_nights(
     T_valid_alpha; smearing: Eqs. Lambda_K, Lambda_kappa; fixed-u pairs: Eq. delta_kappa_rewrite.
     """
     _check_inputs(targets, nights, settings)
+    infeasible: list[Unplaced] = []
+    if settings.spec.label == "fixed-u-pairs":  # a circular target is reported, not fatal
+        targets, infeasible = pair_targets(targets, nights[0].isoformat())
+        if not targets:
+            raise UcbplanError(f"fixed-u pairs: no target can be planned: {infeasible[0].reason}")
     windows = night_windows(site, nights)
     frame, runs, warns = prepare_runs(targets, site, windows, settings)
     spans = night_spans(windows, frame.axis)
@@ -197,8 +195,10 @@ def plan_nights(
     blocks = block_records(placed, runs, spans, frame, site, settings)
     if frame.mode.label == "fixed-u-pairs":
         second = _second_epoch(site, settings)
-        blocks, more = pair_blocks(blocks, runs, settings.max_pair_baseline_days, second)
-        unplaced += more
+        blocks, more = pair_blocks(
+            blocks, runs, settings.max_pair_baseline_days, second, nights=nights
+        )
+        unplaced += more + infeasible
     blocks.sort(key=lambda b: (b.t_mid_utc.jd1, b.t_mid_utc.jd2))
     check_goals(goals, runs, blocks)
     return PlanResult(
