@@ -5,7 +5,9 @@ Modules, in data-flow order: ``sites`` (bundled observatory table), ``timeconv``
 epoch), ``sky`` (fast Sun/Moon/target geometry), ``constraints`` (night, airmass, Moon ... by
 name), ``blocks`` (exposure plan around an anchor epoch), ``schedule`` (modes, candidates,
 placement, fixed-u pairs: the night schedule), ``blocktable`` (the master blocks table every
-export reads, its columns declared once), ``exports`` (observatory formats) and ``nightplot``.
+export reads, its columns declared once), ``exports`` (observatory formats), ``instruments`` and
+``goals`` (overheads, σ_v per exposure, spectra a precision needs), ``semesters``, ``nightplot``
+and ``nightsheet`` (charts and the telescope's night sheet) and ``astroplan_bridge``.
 Nothing is imported here so that ``import ucbplan.observing`` stays cheap.
 """
 

@@ -87,7 +87,6 @@ def _check_inputs(targets: list[Target], nights: list[date], settings: PlanSetti
         raise UcbplanError("--nights must be >= 1")
 
 
-
 def _second_epoch(site: Site, settings: PlanSettings) -> SecondEpoch:
     """The single u★ = 0 block of a target on one night clear of ``busy`` (for fixed-u pairs)."""
     single = replace(settings, mode="u=0", sessions_per_night=1)
