@@ -8,6 +8,7 @@ appears in that command's rendered ``--help``.
 from __future__ import annotations
 
 import re
+from pathlib import Path
 from typing import Any
 
 import typer
@@ -63,3 +64,21 @@ def test_help_does_not_import_the_science_stack() -> None:
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert "HEAVY []" in out.stdout, out.stdout[-300:]
+
+
+def test_quiet_prints_only_warnings_and_errors(tmp_path: Path) -> None:
+    """``ucbplan --quiet`` (issue 15): no tables or notes; warnings and errors still shown; the
+    output file is written as without it."""
+    import subprocess
+    import sys
+
+    hm = Path(__file__).resolve().parents[1] / "catalogs" / "hm-cnc-simulated.yaml"
+    base = [sys.executable, "-m", "ucbplan", "--quiet", "plan", str(hm), "--night", "2040-02-15"]
+    ok = subprocess.run(
+        [*base, "--site", "paranal", "-o", str(tmp_path / "q.ecsv")], capture_output=True, text=True
+    )
+    assert ok.returncode == 0 and (tmp_path / "q.ecsv").exists()
+    lines = ok.stderr.strip().splitlines()
+    assert lines and all(line.startswith("warning:") for line in lines), lines  # 2040: data age
+    bad = subprocess.run([*base, "--site", "nowhere"], capture_output=True, text=True)
+    assert bad.returncode == 2 and bad.stderr.strip().startswith("error: --site")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import re
 from pathlib import Path
 from typing import IO, Any
 
@@ -32,11 +33,35 @@ __all__ = [
 ]
 
 
-def _make_console() -> Console:
-    console = Console(stderr=True, highlight=False)
+#: Markup tags, removed before deciding whether a message is an alert.
+_TAG = re.compile(r"\[/?[a-z #]*\]")
+#: Plain-text starts of the messages ``--quiet`` still prints.
+ALERTS = ("warning", "error", "interrupted")
+
+
+class _Console(Console):
+    """A rich console that, with ``quiet_info`` set (``ucbplan --quiet``), prints only warnings
+    and errors: tables, notes and "wrote …" lines are left out; machine output on stdout is not
+    affected."""
+
+    quiet_info = False
+
+    def print(self, *objects: Any, **kwargs: Any) -> None:
+        if self.quiet_info and not _is_alert(objects):
+            return
+        super().print(*objects, **kwargs)
+
+
+def _is_alert(objects: tuple[Any, ...]) -> bool:
+    first = objects[0] if objects else ""
+    return isinstance(first, str) and _TAG.sub("", first).lstrip().startswith(ALERTS)
+
+
+def _make_console() -> _Console:
+    console = _Console(stderr=True, highlight=False)
     if not console.is_terminal and "COLUMNS" not in os.environ:
         # pipes and CI logs: wide enough that ISO times with microseconds are never cut
-        console = Console(stderr=True, highlight=False, width=180)
+        console = _Console(stderr=True, highlight=False, width=180)
     return console
 
 

@@ -44,8 +44,12 @@ def _root(
     debug: bool = typer.Option(
         False, "--debug", help="On an internal error, show the Python traceback (for bug reports)."
     ),
+    quiet: bool = typer.Option(
+        False, "--quiet", "-q", help="Print only warnings and errors (no tables or notes)."
+    ),
 ) -> None:
     """Configure offline astropy once, before any command runs."""
+    err_console.quiet_info = quiet
     configure_offline()
 
 
