@@ -14,6 +14,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ucbplan.observing.schedule.candidates import Candidates, PlanFrame, TargetRun
 from ucbplan.observing.schedule.nights import NightSpan
@@ -178,6 +179,20 @@ def unusable_reason(
     return _no_session_reason(run, frame, (span.x0, span.x1))
 
 
+def night_usable(
+    run: TargetRun, span: NightSpan, frame: PlanFrame, settings: PlanSettings
+) -> NDArray[np.int64] | str:
+    """Indices of ``run``'s usable candidates in the night ``span``, or why there are none."""
+    j0, j1 = np.searchsorted(run.cand.x_mid, [span.x0, span.x1])
+    if j1 == j0:
+        return "no anchor epoch in the night window"
+    js = np.arange(j0, j1)
+    usable = js[(run.ok[js] > 0) & run.valid[js]]
+    if usable.size == 0:
+        return unusable_reason(run, js, span, frame, settings)
+    return usable
+
+
 def _place_night(
     run: TargetRun,
     n: int,
@@ -189,13 +204,9 @@ def _place_night(
 ) -> str | None:
     """Place one target's best sessions in night ``n``; the reason if fewer than asked fit."""
     c = run.cand
-    j0, j1 = np.searchsorted(c.x_mid, [span.x0, span.x1])
-    if j1 == j0:
-        return "no anchor epoch in the night window"
-    js = np.arange(j0, j1)
-    usable = js[(run.ok[js] > 0) & run.valid[js]]
-    if usable.size == 0:
-        return unusable_reason(run, js, span, frame, settings)
+    usable = night_usable(run, span, frame, settings)
+    if isinstance(usable, str):
+        return usable
     usable = usable[np.argsort(run.score[usable], kind="stable")]
     wanted, count, n_exp = settings.sessions_per_night, 0, run.exposure.plan.n_exp
     over_budget = False

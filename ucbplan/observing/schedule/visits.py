@@ -28,7 +28,7 @@ from ucbplan.observing.schedule.placement import (
     Session,
     Timeline,
     Unplaced,
-    unusable_reason,
+    night_usable,
 )
 from ucbplan.observing.schedule.settings import PlanSettings
 
@@ -113,13 +113,9 @@ def _place_night(
     allowance: Allowance,
 ) -> str | None:
     """Place one target's visits in night ``n`` within its allowance; the reason if fewer."""
-    c = run.cand
-    j0, j1 = np.searchsorted(c.x_mid, [span.x0, span.x1])
-    if j1 == j0:
-        return "no anchor epoch in the night window"
-    js = np.arange(j0, j1)
-    if not np.any((run.ok[js] > 0) & run.valid[js]):
-        return unusable_reason(run, js, span, frame, settings)
+    usable = night_usable(run, span, frame, settings)
+    if isinstance(usable, str):
+        return usable
     wanted, placed = settings.sessions_per_night, 0
     while placed < wanted and not allowance.spent:
         pick = _best_visit(run, span, timeline, frame, settings, allowance)
