@@ -34,11 +34,13 @@ __all__ = [
     "NightConstraint",
     "ZenithHoleConstraint",
     "evaluate_window",
+    "evaluate_window_exact",
     "make_constraint",
 ]
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
+Int8Array = NDArray[np.int8]
 
 #: Sun altitude [deg] that ends each twilight.
 TWILIGHT_SUN_ALT_DEG = {"civil": -6.0, "nautical": -12.0, "astronomical": -18.0}
@@ -54,6 +56,39 @@ MAX_ZENITH_HOLE_DEG = 45.0
 #: Most samples :func:`evaluate_window` holds in memory at once (blocks x samples per block).
 _MAX_SAMPLES = 1_000_000
 
+#: Bounds on how fast the screened quantities of the sky model change (with ≥ 5 % to spare):
+#: an altitude by the Earth's rotation (15.04 deg/h = 0.00418 deg/s) plus the body's own
+#: motion and topocentric parallax (Moon: ≤ 0.0002 deg/s more); the Moon's distance from a
+#: fixed target by its orbital motion (≤ 0.6 deg/h) and parallax (≤ 1 deg turning once a day);
+#: its (geocentric) illuminated fraction by ≤ ½ of its phase-angle rate (≤ 16 deg/day).
+ALT_RATE_DEG_S = 0.0045
+MOON_ALT_RATE_DEG_S = 0.005
+MOON_SEP_RATE_DEG_S = 5e-4
+MOON_ILLUM_RATE_S = 5e-6
+
+#: Node spacing of the screening grid of :func:`evaluate_window` [s].
+SCREEN_STEP_S = 300.0
+#: Margin beyond the rate bound that a screened answer keeps from a limit (absorbs the
+#: rounding of the limit itself, e.g. airmass 2 ↔ altitude 30 deg) [deg or 1].
+_SCREEN_EPS = 1e-6
+
+
+def _certain(margin: FloatArray, rate: float, slack_s: float) -> Int8Array:
+    """+1 / −1 where ``margin`` (positive = ok) keeps its sign for ``slack_s`` at ``rate``."""
+    reach = rate * slack_s + _SCREEN_EPS
+    out = np.zeros(np.shape(margin), dtype=np.int8)
+    out[margin > reach] = 1
+    out[margin < -reach] = -1
+    return out
+
+
+def _either(a: Int8Array, b: Int8Array) -> Int8Array:
+    """Screen of ``ok_a | ok_b``: certain if either is certainly ok, or both certainly fail."""
+    out = np.zeros(a.shape, dtype=np.int8)
+    out[(a == 1) | (b == 1)] = 1
+    out[(a == -1) & (b == -1)] = -1
+    return out
+
 
 class Constraint:
     """Base class: ``ok(sky, i, x)`` → boolean mask over times ``x`` for target ``i``."""
@@ -67,6 +102,12 @@ class Constraint:
     def describe(self) -> str:
         """One-line human description (goes into the table provenance)."""
         raise NotImplementedError
+
+    def screen(self, sky: SkyModel, i: int, x: FloatArray, slack_s: float) -> Int8Array:
+        """Where the answer is certain near ``x``: +1 if ``ok`` holds at every time within
+        ``slack_s`` of each ``x``, −1 if it fails at every such time, 0 if it may change (the
+        exact check decides). The default screens nothing (all 0)."""
+        return np.zeros(np.shape(x), dtype=np.int8)
 
     def reason(self) -> str:
         """Why a block fails this constraint (for the 'not placed' report)."""
@@ -95,6 +136,9 @@ class NightConstraint(Constraint):
     def ok(self, sky: SkyModel, i: int, x: FloatArray) -> BoolArray:
         return np.asarray(sky.sun_alt_deg(x) <= self.sun_alt_max_deg)
 
+    def screen(self, sky: SkyModel, i: int, x: FloatArray, slack_s: float) -> Int8Array:
+        return _certain(self.sun_alt_max_deg - sky.sun_alt_deg(x), ALT_RATE_DEG_S, slack_s)
+
     def describe(self) -> str:
         return f"{self.twilight} night (Sun altitude <= {self.sun_alt_max_deg:g} deg)"
 
@@ -116,6 +160,10 @@ class AirmassConstraint(Constraint):
     def ok(self, sky: SkyModel, i: int, x: FloatArray) -> BoolArray:
         return np.asarray(airmass_from_alt(sky.target_alt_deg(i, x)) <= self.max_airmass)
 
+    def screen(self, sky: SkyModel, i: int, x: FloatArray, slack_s: float) -> Int8Array:
+        alt_min = math.degrees(math.asin(1.0 / self.max_airmass))  # sec z = max_airmass
+        return _certain(sky.target_alt_deg(i, x) - alt_min, ALT_RATE_DEG_S, slack_s)
+
     def describe(self) -> str:
         return f"airmass <= {self.max_airmass:g}"
 
@@ -132,6 +180,9 @@ class AltitudeConstraint(Constraint):
 
     def ok(self, sky: SkyModel, i: int, x: FloatArray) -> BoolArray:
         return np.asarray(sky.target_alt_deg(i, x) >= self.min_deg)
+
+    def screen(self, sky: SkyModel, i: int, x: FloatArray, slack_s: float) -> Int8Array:
+        return _certain(sky.target_alt_deg(i, x) - self.min_deg, ALT_RATE_DEG_S, slack_s)
 
     def describe(self) -> str:
         return f"altitude >= {self.min_deg:g} deg"
@@ -150,6 +201,10 @@ class ZenithHoleConstraint(Constraint):
 
     def ok(self, sky: SkyModel, i: int, x: FloatArray) -> BoolArray:
         return np.asarray(sky.target_alt_deg(i, x) <= 90.0 - self.radius_deg)
+
+    def screen(self, sky: SkyModel, i: int, x: FloatArray, slack_s: float) -> Int8Array:
+        margin = 90.0 - self.radius_deg - sky.target_alt_deg(i, x)
+        return _certain(margin, ALT_RATE_DEG_S, slack_s)
 
     def describe(self) -> str:
         return f"outside the {self.radius_deg:g} deg zenith hole"
@@ -172,6 +227,10 @@ class MoonSeparationConstraint(Constraint):
     def ok(self, sky: SkyModel, i: int, x: FloatArray) -> BoolArray:
         return np.asarray((sky.moon_sep_deg(i, x) >= self.min_deg) | (sky.moon_alt_deg(x) < 0.0))
 
+    def screen(self, sky: SkyModel, i: int, x: FloatArray, slack_s: float) -> Int8Array:
+        far = _certain(sky.moon_sep_deg(i, x) - self.min_deg, MOON_SEP_RATE_DEG_S, slack_s)
+        return _either(far, _certain(-sky.moon_alt_deg(x), MOON_ALT_RATE_DEG_S, slack_s))
+
     def describe(self) -> str:
         return f"Moon separation >= {self.min_deg:g} deg (or Moon down)"
 
@@ -192,6 +251,10 @@ class MoonIlluminationConstraint(Constraint):
 
     def ok(self, sky: SkyModel, i: int, x: FloatArray) -> BoolArray:
         return np.asarray((sky.moon_illum(x) <= self.max_fraction) | (sky.moon_alt_deg(x) < 0.0))
+
+    def screen(self, sky: SkyModel, i: int, x: FloatArray, slack_s: float) -> Int8Array:
+        dim = _certain(self.max_fraction - sky.moon_illum(x), MOON_ILLUM_RATE_S, slack_s)
+        return _either(dim, _certain(-sky.moon_alt_deg(x), MOON_ALT_RATE_DEG_S, slack_s))
 
     def describe(self) -> str:
         return f"Moon illumination <= {self.max_fraction:g} (or Moon down)"
@@ -293,6 +356,12 @@ def evaluate_window(
     Samples start, middle, end and enough interior points that consecutive samples are at most
     :data:`SAMPLE_STEP_S` apart (altitude is monotonic between samples except near transit, where
     the zenith-hole constraint matters: 5-min sampling resolves a 4° hole for any declination).
+    A block fails the first constraint (in iteration order) that fails at one of its samples.
+
+    Many blocks are first screened on a grid of :data:`SCREEN_STEP_S` (:meth:`Constraint.screen`):
+    a sample far enough from every limit, given how fast the sky changes, has a certain answer;
+    only the others are checked exactly. The result is the exact one
+    (:func:`evaluate_window_exact`; tests compare the two).
 
     Returns
     -------
@@ -305,33 +374,83 @@ def evaluate_window(
     active = list(constraints)
     xs = np.asarray(x_start, dtype=np.float64)
     xe = np.asarray(x_end, dtype=np.float64)
+    if not active or xs.size == 0:
+        return np.ones(xs.shape, dtype=bool), np.full(xs.shape, -1, dtype=np.int64)
+    frac = _sample_fractions(xs, xe)
+    lo, hi = float(np.min(xs)), float(np.max(xe))
+    n_nodes = math.ceil((hi - lo) / SCREEN_STEP_S) + 1
+    if n_nodes > 4 * xs.size * frac.size:  # a few blocks over a long span: check them all
+        return evaluate_window_exact(active, sky, i, xs, xe)
+    nodes = lo + SCREEN_STEP_S * np.arange(n_nodes)
+    slack = SCREEN_STEP_S / 2 + 1e-3  # a sample is this close to its nearest node
+    codes = [c.screen(sky, i, nodes, slack) for c in active]
+    ok = np.ones(xs.shape, dtype=bool)
+    first = np.full(xs.shape, -1, dtype=np.int64)
+    step = max(1, _MAX_SAMPLES // frac.size)
+    for k in range(0, xs.size, step):
+        part = slice(k, k + step)
+        ok[part], first[part] = _screened(active, codes, sky, i, xs[part], xe[part], frac, lo)
+    return ok, first
+
+
+def _sample_fractions(xs: FloatArray, xe: FloatArray) -> FloatArray:
+    """Sample positions inside a block (0 = start, 1 = end): an odd count keeps the middle."""
+    width = float(np.max(xe - xs))
+    n = max(3, math.ceil(width / SAMPLE_STEP_S) + 1)
+    if n % 2 == 0:
+        n += 1
+    return np.linspace(0.0, 1.0, n)
+
+
+def _screened(
+    active: list[Constraint],
+    codes: list[Int8Array],
+    sky: SkyModel,
+    i: int,
+    xs: FloatArray,
+    xe: FloatArray,
+    frac: FloatArray,
+    lo: float,
+) -> tuple[BoolArray, NDArray[np.int64]]:
+    """:func:`evaluate_window` for one chunk of blocks, given the grid screens ``codes``."""
+    x = xs[:, None] + (xe - xs)[:, None] * frac[None, :]
+    node = np.rint((x - lo) / SCREEN_STEP_S).astype(np.int64)
+    ok = np.ones(xs.shape, dtype=bool)
+    first = np.full(xs.shape, -1, dtype=np.int64)
+    for j, (c, code) in enumerate(zip(active, codes, strict=True)):
+        at = code[node]
+        fails = ok & np.any(at == -1, axis=1)
+        unsure = np.flatnonzero(ok & ~fails & ~np.all(at == 1, axis=1))
+        if unsure.size:
+            fails[unsure] = ~np.all(c.ok(sky, i, x[unsure]), axis=1)
+        first[fails] = j
+        ok &= ~fails
+    return ok, first
+
+
+def evaluate_window_exact(
+    constraints: Iterable[Constraint],
+    sky: SkyModel,
+    i: int,
+    x_start: FloatArray,
+    x_end: FloatArray,
+) -> tuple[BoolArray, NDArray[np.int64]]:
+    """:func:`evaluate_window` evaluating every constraint at every sample (no screening)."""
+    active = list(constraints)
+    xs = np.asarray(x_start, dtype=np.float64)
+    xe = np.asarray(x_end, dtype=np.float64)
     ok = np.ones(xs.shape, dtype=bool)
     first = np.full(xs.shape, -1, dtype=np.int64)
     if not active or xs.size == 0:
         return ok, first
-    width = float(np.max(xe - xs))
-    n = max(3, math.ceil(width / SAMPLE_STEP_S) + 1)
-    if n % 2 == 0:
-        n += 1  # keep the exact middle among the samples
-    frac = np.linspace(0.0, 1.0, n)
-    # The first constraint (the night) at start, middle and end settles most blocks (daytime)
-    # without the interior samples; the rest are checked in chunks of bounded memory.
-    ends = frac[[0, n // 2, n - 1]]
-    coarse = xs[:, None] + (xe - xs)[:, None] * ends[None, :]
-    failed = ~np.all(active[0].ok(sky, i, coarse), axis=1)
-    ok[failed] = False
-    first[failed] = 0
-    todo = np.flatnonzero(~failed)
-    step = max(1, _MAX_SAMPLES // n)
-    for k in range(0, todo.size, step):
-        idx = todo[k : k + step]
-        x = xs[idx, None] + (xe - xs)[idx, None] * frac[None, :]
-        ok_k = np.ones(idx.size, dtype=bool)
-        first_k = np.full(idx.size, -1, dtype=np.int64)
+    frac = _sample_fractions(xs, xe)
+    step = max(1, _MAX_SAMPLES // frac.size)
+    for k in range(0, xs.size, step):
+        idx = np.arange(k, min(k + step, xs.size))
         for j, c in enumerate(active):
-            good = np.all(c.ok(sky, i, x), axis=1)
-            first_k[(~good) & ok_k] = j
-            ok_k &= good
-        ok[idx] = ok_k
-        first[idx] = first_k
+            idx = idx[ok[idx]]  # blocks that passed every constraint so far
+            x = xs[idx, None] + (xe - xs)[idx, None] * frac[None, :]
+            fails = idx[~np.all(c.ok(sky, i, x), axis=1)]
+            first[fails] = j
+            ok[fails] = False
     return ok, first

@@ -63,27 +63,21 @@ def _overlaps(
     return (k > 0) & (ends[np.maximum(k - 1, 0)] > x0)
 
 
-def _reason_of(
-    run: TargetRun, js: NDArray[np.int64], frame: PlanFrame, others: NDArray[np.bool_]
-) -> list[str]:
-    """The reason of each candidate ``js`` (not planned) up to 'taken' (module notes)."""
+def _reason_codes(run: TargetRun, frame: PlanFrame) -> NDArray[np.int64]:
+    """Index into :data:`REASONS` of the first reason up to 'taken' for every candidate of
+    ``run`` (−1: usable; module notes), in one vectorised pass."""
     c = run.cand
-    tau = c.tau_origin_s + c.dt_s[js]
+    tau = c.tau_origin_s + c.dt_s
     valid = (tau >= c.epochs.tau(run.since)) & (tau <= c.epochs.tau(run.until))
     names = [con.name for con in frame.constraints.active]
-    out = []
-    for k, j in enumerate(js):
-        if not valid[k]:
-            out.append("outside validity")
-        elif not run.exposure.floor_ok:
-            out.append("smearing floor")
-        elif not c.ok[j]:
-            out.append(_BY_CONSTRAINT.get(names[int(c.first_failed[j])], "altitude/airmass"))
-        elif others[k]:
-            out.append("taken by a higher-priority target")
-        else:
-            out.append("")
-    return out
+    by_index = np.array(
+        [REASONS.index(_BY_CONSTRAINT.get(n, "altitude/airmass")) for n in names] or [-1],
+        dtype=np.int64,
+    )
+    code = np.where(c.ok, -1, by_index[np.maximum(c.first_failed, 0)])
+    if not run.exposure.floor_ok:
+        code = np.full(code.shape, REASONS.index("smearing floor"), dtype=np.int64)
+    return np.where(valid, code, REASONS.index("outside validity")).astype(np.int64)
 
 
 def not_planned(
@@ -103,24 +97,27 @@ def not_planned(
     budget = {(m.target, m.night) for m in unplaced if m.reason.startswith("time budget spent")}
     limit = frame.constraints.night.sun_alt_max_deg
     order = [r.index for r in sorted(runs, key=lambda r: -r.target.priority)]
+    taken_code, last = REASONS.index("taken by a higher-priority target"), len(REASONS)
     for run in runs:
-        used = {j for s in placed if s.target_i == run.index for j in s.idx}
+        c, per_night = run.cand, {}
+        free = np.ones(c.x_mid.size, dtype=bool)
+        free[[j for s in placed if s.target_i == run.index for j in s.idx]] = False
         before = set(order[: order.index(run.index)])  # placed before this target
         taken = [(s.x0 - gap_s, s.x1) for s in placed if s.target_i in before]
-        c, per_night = run.cand, {}
+        dark = free & (frame.sky.sun_alt_deg(c.x_mid) <= limit)
+        codes = _reason_codes(run, frame)
         for span in spans:
             j0, j1 = np.searchsorted(c.x_mid, [span.x0, span.x1])
             js = np.arange(j0, j1)
-            js = js[frame.sky.sun_alt_deg(c.x_mid[js]) <= limit]
-            js = np.array([j for j in js if int(j) not in used], dtype=np.int64)
+            js = js[dark[js]]
             if js.size == 0:
                 continue
             others = _overlaps(c.x_start[js] - gap_s, c.x_end[js] + gap_s, taken)
-            counts: dict[str, int] = {}
-            spent = (run.target.name, span.label) in budget
-            for why in _reason_of(run, js, frame, others):
-                why = why or ("time budget spent" if spent else "not needed")
-                counts[why] = counts.get(why, 0) + 1
-            per_night[span.label] = {r: counts[r] for r in REASONS if r in counts}
+            code = codes[js]
+            code = np.where((code < 0) & others, taken_code, code)
+            rest = "time budget spent" if (run.target.name, span.label) in budget else "not needed"
+            code = np.where(code < 0, REASONS.index(rest), code)
+            counts = np.bincount(code, minlength=last)
+            per_night[span.label] = {r: int(counts[k]) for k, r in enumerate(REASONS) if counts[k]}
         out[run.target.name] = per_night
     return out
