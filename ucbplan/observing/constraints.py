@@ -381,7 +381,7 @@ def evaluate_window(
     n_nodes = math.ceil((hi - lo) / SCREEN_STEP_S) + 1
     if n_nodes > 4 * xs.size * frac.size:  # a few blocks over a long span: check them all
         return evaluate_window_exact(active, sky, i, xs, xe)
-    nodes = lo + SCREEN_STEP_S * np.arange(n_nodes)
+    nodes = np.asarray(lo + SCREEN_STEP_S * np.arange(n_nodes), dtype=np.float64)
     slack = SCREEN_STEP_S / 2 + 1e-3  # a sample is this close to its nearest node
     codes = [c.screen(sky, i, nodes, slack) for c in active]
     ok = np.ones(xs.shape, dtype=bool)
