@@ -51,7 +51,8 @@ class Candidates:
     """All anchor epochs of one target in a span, as blocks on the plan's time axis (arrays).
 
     ``epochs.time(tau_origin_s, dt_s)`` is the barycentric TDB epoch t★; the ``x_*`` arrays are
-    site arrival times [s on the plan's :class:`TimeAxis`].
+    site arrival times [s on the plan's :class:`TimeAxis`]. ``airmass_mid`` is the airmass at
+    the block centre of blocks that pass every constraint (``ok``), +inf for the others.
     """
 
     epochs: EpochAxis
@@ -138,8 +139,16 @@ def candidate_blocks(
         x_alt=x_alt[keep],
         ok=ok,
         first_failed=first,
-        airmass_mid=airmass_from_alt(sky.target_alt_deg(i, x_mid)),
+        airmass_mid=_airmass_where(ok, sky, i, x_mid),
     )
+
+
+def _airmass_where(ok: NDArray[np.bool_], sky: SkyModel, i: int, x: FloatArray) -> FloatArray:
+    """Airmass of target ``i`` at ``x`` where ``ok``; +inf elsewhere (never used: only usable
+    blocks are scored)."""
+    out = np.full(x.shape, np.inf)
+    out[ok] = airmass_from_alt(sky.target_alt_deg(i, x[ok]))
+    return out
 
 
 def session_partners(

@@ -21,6 +21,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from ucbplan.observing.constraints import evaluate_window
 from ucbplan.observing.schedule.candidates import PlanFrame, TargetRun
 from ucbplan.observing.schedule.nights import NightSpan
 from ucbplan.observing.schedule.placement import Session, Unplaced
@@ -57,8 +58,9 @@ def _overlaps(
     """Whether each [x0, x1] overlaps one of the ``taken`` intervals."""
     if not taken:
         return np.zeros(x0.shape, dtype=bool)
-    starts = np.array([a for a, _ in sorted(taken)])
-    ends = np.maximum.accumulate(np.array([b for _, b in sorted(taken)]))
+    ordered = sorted(taken)
+    starts = np.array([a for a, _ in ordered])
+    ends = np.maximum.accumulate(np.array([b for _, b in ordered]))
     k = np.searchsorted(starts, x1, side="left")  # intervals starting before our end
     return (k > 0) & (ends[np.maximum(k - 1, 0)] > x0)
 
@@ -95,7 +97,7 @@ def not_planned(
     """
     out: dict[str, dict[str, dict[str, int]]] = {}
     budget = {(m.target, m.night) for m in unplaced if m.reason.startswith("time budget spent")}
-    limit = frame.constraints.night.sun_alt_max_deg
+    night = frame.constraints.night
     order = [r.index for r in sorted(runs, key=lambda r: -r.target.priority)]
     taken_code, last = REASONS.index("taken by a higher-priority target"), len(REASONS)
     for run in runs:
@@ -104,7 +106,8 @@ def not_planned(
         free[[j for s in placed if s.target_i == run.index for j in s.idx]] = False
         before = set(order[: order.index(run.index)])  # placed before this target
         taken = [(s.x0 - gap_s, s.x1) for s in placed if s.target_i in before]
-        dark = free & (frame.sky.sun_alt_deg(c.x_mid) <= limit)
+        dark = free & evaluate_window([night], frame.sky, run.index, c.x_mid, c.x_mid)[0]
+        others = _overlaps(c.x_start - gap_s, c.x_end + gap_s, taken)
         codes = _reason_codes(run, frame)
         for span in spans:
             j0, j1 = np.searchsorted(c.x_mid, [span.x0, span.x1])
@@ -112,9 +115,8 @@ def not_planned(
             js = js[dark[js]]
             if js.size == 0:
                 continue
-            others = _overlaps(c.x_start[js] - gap_s, c.x_end[js] + gap_s, taken)
             code = codes[js]
-            code = np.where((code < 0) & others, taken_code, code)
+            code = np.where((code < 0) & others[js], taken_code, code)
             rest = "time budget spent" if (run.target.name, span.label) in budget else "not needed"
             code = np.where(code < 0, REASONS.index(rest), code)
             counts = np.bincount(code, minlength=last)
