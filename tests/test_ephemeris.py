@@ -8,6 +8,7 @@ conjunction) to O(e²); an exact Kepler-equation orbit; the ELL1 Roemer-delay ve
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -237,3 +238,25 @@ def test_find_epochs_takes_any_ephemeris_source() -> None:
     assert np.allclose(es.sigma_t_s, 5e-3 / (math.pi * FID.f_gw), rtol=4 * FID.eccentricity)
     # π-mode alternative a quarter orbit (≈ P_b/4 ≈ 59.5 s) earlier
     assert np.allclose(es.tau_s - es.tau_alt_s, 0.25 * 2 / FID.f_gw, rtol=0.1)
+
+
+def test_details_of_a_subset_equal_those_of_the_whole_set(
+    hm_cnc_path: Path, eccentric_path: Path
+) -> None:
+    """σ_t, σ_u, u̇ and the π-mode alternative of chosen epochs (the planner's usable blocks)
+    are bit for bit those that find_epochs computes for every epoch."""
+    from ucbplan.core.ephemeris import find_epochs, with_details
+    from ucbplan.target import load_target
+
+    for path in (hm_cnc_path, eccentric_path):
+        target = load_target(path)
+        for anchor in ("quadrature", "zero-crossing"):
+            whole = find_epochs(target, 0.0, 30 * 86400.0, anchor)
+            bare = find_epochs(target, 0.0, 30 * 86400.0, anchor, details=False)
+            assert np.all(np.isnan(bare.sigma_t_s)) and np.array_equal(bare.dt_s, whole.dt_s)
+            idx = np.sort(np.random.default_rng(3).choice(len(whole), 500, replace=False))
+            part = with_details(target, bare, idx)
+            for field in ("sigma_t_s", "sigma_u_rad", "tau_alt_s", "u_rate"):
+                np.testing.assert_array_equal(getattr(part, field)[idx], getattr(whole, field)[idx])
+                others = np.setdiff1d(np.arange(len(whole)), idx)
+                assert np.all(np.isnan(getattr(part, field)[others]))

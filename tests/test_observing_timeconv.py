@@ -114,3 +114,20 @@ def test_round_trip_property(day: float, ra: float, dec: float, site_name: str) 
         t_star = Time("2030-01-01", scale="tdb") + TimeDelta(day * u.d)
     back = site_utc_to_bary_tdb(bary_tdb_to_site_utc(t_star, coord, loc), coord, loc)
     assert abs((back - t_star).to_value(u.s)) < 1e-6
+
+
+def test_site_track_positions_equal_astropys_frame_chain() -> None:
+    """The site track's direct rotations give astropy's ITRS → GCRS → ICRS chain (the one
+    ``Time.light_travel_time`` uses) bit for bit, and that chain's light time is astropy's."""
+    from ucbplan.observing.timeconv import _site_icrs_m, site_icrs_frames
+
+    site = get_site("paranal")
+    with quiet_erfa():
+        t = Time("2040-01-01", scale="tdb", location=site.location) + TimeDelta(
+            np.linspace(0.0, 366.0, 400) * u.d
+        )
+        fast = _site_icrs_m(site.location, t)
+        np.testing.assert_array_equal(fast, site_icrs_frames(site.location, t))
+        n_hat = HM_CNC.cartesian.xyz.value
+        ltt = fast @ n_hat / 299792458.0
+    np.testing.assert_allclose(ltt, light_time_s(t, HM_CNC, site.location), rtol=0, atol=1e-12)

@@ -9,7 +9,7 @@ phase-model functions are re-exported here for callers that know them from this 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -47,6 +47,7 @@ __all__ = [
     "sigma_u_from_jacobian",
     "solve_u",
     "u_jacobian",
+    "with_details",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -278,6 +279,7 @@ def find_epochs(
     anchor: str | float,
     star: int = 1,
     pi_mode: bool | None = None,
+    details: bool = True,
 ) -> EpochSet:
     """All anchor epochs of a target in a window, with σ_t and the φ_ref π-mode alternative.
 
@@ -296,6 +298,9 @@ def find_epochs(
         Solve the φ_ref + π alternative. Default: the source's ``has_pi_mode`` (True when it
         has none: a LISA posterior's GW phase has the second mode, a timing ephemeris not);
         without it ``tau_alt_s`` is NaN.
+    details : bool
+        Compute σ_t, σ_u, u̇ and the π-mode alternative of every epoch. False leaves them NaN,
+        for a caller that needs them for a few epochs only (:func:`with_details`).
 
     Returns
     -------
@@ -307,29 +312,51 @@ def find_epochs(
     same u★ with φ_ref + π (Appendix A1: the GW phase posterior's second mode), ≈ P_b/4 earlier.
     """
     label, targets = resolve_anchor(anchor)
-    p = source.params
-    k, dt, us, origin = _solve_sorted(p, tau_start_s, tau_end_s, targets, star)
-    rate = arg_latitude_rate(p, dt, star, origin)
-    sig_u = sigma_u_from_jacobian(u_jacobian(p, origin + dt, star), source.covariance)
-    if pi_mode is None:
-        pi_mode = bool(getattr(source, "has_pi_mode", True))
-    if pi_mode:
-        zero = label == "zero-crossing"
-        tau_alt = origin + _pi_mode_offsets(p, origin, dt, us, rate, star, zero_crossing=zero)
-    else:
-        tau_alt = np.full(dt.shape, np.nan)
-    return EpochSet(
+    k, dt, us, origin = _solve_sorted(source.params, tau_start_s, tau_end_s, targets, star)
+    es = EpochSet(
         anchor=label,
         star=star,
         u_star_rad=us,
         k=k,
         origin_s=origin,
         dt_s=dt,
-        sigma_t_s=sig_u / np.abs(rate),
-        sigma_u_rad=sig_u,
-        tau_alt_s=tau_alt,
-        u_rate=rate,
+        sigma_t_s=np.full(dt.shape, np.nan),
+        sigma_u_rad=np.full(dt.shape, np.nan),
+        tau_alt_s=np.full(dt.shape, np.nan),
+        u_rate=np.full(dt.shape, np.nan),
     )
+    return with_details(source, es, pi_mode=pi_mode) if details else es
+
+
+def with_details(
+    source: EphemerisSource,
+    es: EpochSet,
+    idx: NDArray[np.int64] | None = None,
+    pi_mode: bool | None = None,
+) -> EpochSet:
+    """``es`` with σ_t, σ_u, u̇ and the π-mode alternative computed at the epochs ``idx`` (all
+    by default); the other epochs keep the values they had.
+
+    Every quantity is computed epoch by epoch, so a subset gets the values the whole set would
+    (tests compare them bit for bit). Arguments as :func:`find_epochs`.
+    """
+    p = source.params
+    sel = np.arange(len(es)) if idx is None else np.asarray(idx, dtype=np.int64)
+    dt, us, origin = es.dt_s[sel], es.u_star_rad[sel], es.origin_s
+    rate = arg_latitude_rate(p, dt, es.star, origin)
+    sig_u = sigma_u_from_jacobian(u_jacobian(p, origin + dt, es.star), source.covariance)
+    if pi_mode is None:
+        pi_mode = bool(getattr(source, "has_pi_mode", True))
+    if pi_mode:
+        zero = es.anchor == "zero-crossing"
+        tau_alt = origin + _pi_mode_offsets(p, origin, dt, us, rate, es.star, zero_crossing=zero)
+    else:
+        tau_alt = np.full(dt.shape, np.nan)
+    values = {"sigma_t_s": sig_u / np.abs(rate), "sigma_u_rad": sig_u, "tau_alt_s": tau_alt}
+    out = {name: getattr(es, name).copy() for name in (*values, "u_rate")}
+    for name, v in (*values.items(), ("u_rate", rate)):
+        out[name][sel] = v
+    return replace(es, **out)
 
 
 def _solve_sorted(

@@ -31,6 +31,7 @@ __all__ = [
     "coverage_warnings",
     "light_time_s",
     "quiet_erfa",
+    "site_icrs_frames",
     "site_utc_to_bary_tdb",
 ]
 
@@ -83,6 +84,37 @@ def _invert_exact(t_star: Time, coord: SkyCoord, location: EarthLocation) -> np.
     return delay
 
 
+def site_icrs_frames(location: EarthLocation, t: Time) -> np.ndarray:
+    """Barycentric (ICRS) position of ``location`` at times ``t`` [m], shape (n, 3): the chain
+    of :meth:`Time.light_travel_time`, ITRS → GCRS → ICRS through astropy's frames."""
+    from astropy.coordinates import GCRS, ICRS
+
+    itrs = location.get_itrs(obstime=t)
+    bary = itrs.transform_to(GCRS(obstime=t)).transform_to(ICRS())
+    return np.asarray(bary.cartesian.xyz.to_value(u.m).T, dtype=np.float64)
+
+
+def _site_icrs_m(location: EarthLocation, t: Time) -> np.ndarray:
+    """:func:`site_icrs_frames` with the two rotations applied directly: the same matrices in
+    the same order, bit for bit (tests compare), without the frame machinery, which compares
+    every per-time observer position one by one (half the time for long grids)."""
+    from astropy.coordinates import GCRS, ICRS
+
+    try:
+        from astropy.coordinates.builtin_frames.intermediate_rotation_transforms import (
+            cirs_to_itrs_mat,
+            gcrs_to_cirs_mat,
+        )
+        from astropy.coordinates.matrix_utilities import matrix_transpose
+    except ImportError:  # a future astropy moved them: the public chain gives the same numbers
+        return site_icrs_frames(location, t)
+    itrs = location.get_itrs(obstime=t).cartesian
+    cirs = itrs.transform(matrix_transpose(cirs_to_itrs_mat(t)))
+    gcrs = cirs.transform(matrix_transpose(gcrs_to_cirs_mat(t)))
+    bary = GCRS(gcrs, obstime=t).transform_to(ICRS())
+    return np.asarray(bary.cartesian.xyz.to_value(u.m).T, dtype=np.float64)
+
+
 @dataclass(frozen=True)
 class SiteTrack:
     """Barycentric position of a site sampled on a grid of site TDB times (shared by targets).
@@ -113,7 +145,7 @@ class SiteTrack:
     ) -> SiteTrack:
         """Sample the site's barycentric position every ``step_s`` over ``span_s`` (s after
         ``origin``), padded by the maximum light time plus one step on both sides."""
-        from astropy.coordinates import GCRS, ICRS, solar_system_ephemeris
+        from astropy.coordinates import solar_system_ephemeris
 
         pad = 520.0 + step_s
         lo, hi = float(span_s[0]) - pad, float(span_s[1]) + pad
@@ -122,9 +154,7 @@ class SiteTrack:
         origin = Time(origin, scale="tdb", location=location)
         with quiet_erfa(), solar_system_ephemeris.set("builtin"):
             t = origin + TimeDelta(x * u.s)
-            itrs = location.get_itrs(obstime=t)
-            bary = itrs.transform_to(GCRS(obstime=t)).transform_to(ICRS())
-            r = bary.cartesian.xyz.to_value(u.m).T
+            r = _site_icrs_m(location, t)
         return cls(origin=origin, x_s=x, r_m=np.ascontiguousarray(r), location=location)
 
     def delay_interpolator(self, coord: SkyCoord) -> DelayInterpolator:

@@ -20,7 +20,7 @@ from astropy.time import Time, TimeDelta
 from numpy.typing import NDArray
 
 from ucbplan.core.constants import TWO_PI
-from ucbplan.core.ephemeris import EpochSet, find_epochs
+from ucbplan.core.ephemeris import EpochSet, find_epochs, with_details
 from ucbplan.core.forecast import tolerance, valid_window_s
 from ucbplan.core.smearing import parse_smear_budget
 from ucbplan.errors import UcbplanError
@@ -52,7 +52,9 @@ class Candidates:
 
     ``epochs.time(tau_origin_s, dt_s)`` is the barycentric TDB epoch t★; the ``x_*`` arrays are
     site arrival times [s on the plan's :class:`TimeAxis`]. ``airmass_mid`` is the airmass at
-    the block centre of blocks that pass every constraint (``ok``), +inf for the others.
+    the block centre of blocks that pass every constraint (``ok``), +inf for the others;
+    ``sigma_t_s`` and ``x_alt`` (the π-mode alternative) are computed for those blocks only
+    (NaN for the others: only usable blocks are placed).
     """
 
     epochs: EpochAxis
@@ -74,9 +76,13 @@ def _find_epochs(
 ) -> EpochSet:
     """:func:`~ucbplan.core.ephemeris.find_epochs`, also for combined anchors such as
     ``quadrature+conjunction``: each anchor solved on its own, merged on one origin in time
-    order (the origins differ by whole seconds at most ~10⁸ s: exact in float64)."""
+    order (the origins differ by whole seconds at most ~10⁸ s: exact in float64).
+
+    A single anchor's σ_t and π-mode alternative are left to :func:`_with_details` (only
+    usable blocks need them); a combined anchor's are computed here, for every epoch.
+    """
     if not isinstance(anchor, str) or "+" not in anchor:
-        return find_epochs(target, tau_lo, tau_hi, anchor, star)
+        return find_epochs(target, tau_lo, tau_hi, anchor, star, details=False)
     sets = [find_epochs(target, tau_lo, tau_hi, a, star) for a in anchor.split("+")]
     origin = sets[0].origin_s
     dt = np.concatenate([e.dt_s + (e.origin_s - origin) for e in sets])
@@ -96,6 +102,14 @@ def _find_epochs(
         tau_alt_s=cat("tau_alt_s"),
         u_rate=cat("u_rate"),
     )
+
+
+def _with_details(target: Target, es: EpochSet, idx: NDArray[np.int64]) -> EpochSet:
+    """σ_t and the π-mode alternative of the epochs ``idx`` (NaN for the others), unless
+    :func:`_find_epochs` computed them for all already (a combined anchor)."""
+    if np.all(np.isnan(es.u_rate)):
+        return with_details(target, es, idx)
+    return es
 
 
 def candidate_blocks(
@@ -122,11 +136,14 @@ def candidate_blocks(
     tau_lo, tau_hi = epochs.from_x(lo) - _EPOCH_PAD_S, epochs.from_x(hi) + _EPOCH_PAD_S
     es = _find_epochs(target, tau_lo, tau_hi, mode.anchor, star)
     x_mid = interp.site_x(epochs.to_x(es.origin_s, es.dt_s))
-    x_alt = interp.site_x(epochs.to_x(es.tau_alt_s))
     keep = (x_mid >= lo) & (x_mid < hi)
     half = plan.span_s / 2.0
     x_mid = x_mid[keep]
     ok, first = evaluate_window(constraints, sky, i, x_mid - half, x_mid + half)
+    es = _with_details(target, es, np.flatnonzero(keep)[ok])
+    x_alt = np.full(es.tau_alt_s.shape, np.nan)
+    has_alt = np.isfinite(es.tau_alt_s)
+    x_alt[has_alt] = interp.site_x(epochs.to_x(es.tau_alt_s[has_alt]))
     return Candidates(
         epochs=epochs,
         tau_origin_s=es.origin_s,
