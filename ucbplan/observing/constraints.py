@@ -381,16 +381,40 @@ def evaluate_window(
     n_nodes = math.ceil((hi - lo) / SCREEN_STEP_S) + 1
     if n_nodes > 4 * xs.size * frac.size:  # a few blocks over a long span: check them all
         return evaluate_window_exact(active, sky, i, xs, xe)
-    nodes = np.asarray(lo + SCREEN_STEP_S * np.arange(n_nodes), dtype=np.float64)
-    slack = SCREEN_STEP_S / 2 + 1e-3  # a sample is this close to its nearest node
-    codes = [c.screen(sky, i, nodes, slack) for c in active]
     ok = np.ones(xs.shape, dtype=bool)
     first = np.full(xs.shape, -1, dtype=np.int64)
+    grid = _ScreenGrid(lo, n_nodes, [None] * len(active))
     step = max(1, _MAX_SAMPLES // frac.size)
     for k in range(0, xs.size, step):
         part = slice(k, k + step)
-        ok[part], first[part] = _screened(active, codes, sky, i, xs[part], xe[part], frac, lo)
+        ok[part], first[part] = _screened(active, grid, sky, i, xs[part], xe[part], frac)
     return ok, first
+
+
+@dataclass
+class _ScreenGrid:
+    """Nodes ``lo + k·SCREEN_STEP_S`` and each constraint's screen there (computed for the
+    nodes a chunk of blocks needs, when it first needs them; 2 = not computed yet)."""
+
+    lo: float
+    n_nodes: int
+    codes: list[Int8Array | None]
+
+    def code(
+        self, j: int, c: Constraint, sky: SkyModel, i: int, node: NDArray[np.int64]
+    ) -> Int8Array:
+        """Constraint ``j``'s screen at grid nodes ``node`` (any shape)."""
+        codes = self.codes[j]
+        if codes is None:
+            codes = self.codes[j] = np.full(self.n_nodes, 2, dtype=np.int8)
+        todo = np.zeros(self.n_nodes, dtype=bool)
+        todo[node.ravel()] = True
+        todo &= codes == 2
+        if todo.any():
+            at = np.flatnonzero(todo)
+            x = np.asarray(self.lo + SCREEN_STEP_S * at, dtype=np.float64)
+            codes[at] = c.screen(sky, i, x, SCREEN_STEP_S / 2 + 1e-3)  # nearest-node slack
+        return codes[node]
 
 
 def _sample_fractions(xs: FloatArray, xe: FloatArray) -> FloatArray:
@@ -404,27 +428,36 @@ def _sample_fractions(xs: FloatArray, xe: FloatArray) -> FloatArray:
 
 def _screened(
     active: list[Constraint],
-    codes: list[Int8Array],
+    grid: _ScreenGrid,
     sky: SkyModel,
     i: int,
     xs: FloatArray,
     xe: FloatArray,
     frac: FloatArray,
-    lo: float,
 ) -> tuple[BoolArray, NDArray[np.int64]]:
-    """:func:`evaluate_window` for one chunk of blocks, given the grid screens ``codes``."""
+    """:func:`evaluate_window` for one chunk of blocks, screened on ``grid``.
+
+    A block's screen for a constraint is the least over its samples: −1 (one sample certainly
+    fails), 1 (all certainly pass) or 0 (check exactly). Each constraint sees only the blocks
+    that passed the ones before it.
+    """
     x = xs[:, None] + (xe - xs)[:, None] * frac[None, :]
-    node = np.rint((x - lo) / SCREEN_STEP_S).astype(np.int64)
+    node = np.rint((x - grid.lo) / SCREEN_STEP_S).astype(np.int64)
     ok = np.ones(xs.shape, dtype=bool)
     first = np.full(xs.shape, -1, dtype=np.int64)
-    for j, (c, code) in enumerate(zip(active, codes, strict=True)):
-        at = code[node]
-        fails = ok & np.any(at == -1, axis=1)
-        unsure = np.flatnonzero(ok & ~fails & ~np.all(at == 1, axis=1))
+    pend = np.arange(xs.size)
+    for j, c in enumerate(active):
+        at = grid.code(j, c, sky, i, node[pend])
+        least = at[:, 0].copy()
+        for k in range(1, at.shape[1]):
+            np.minimum(least, at[:, k], out=least)
+        fails = least == -1
+        unsure = np.flatnonzero(least == 0)
         if unsure.size:
-            fails[unsure] = ~np.all(c.ok(sky, i, x[unsure]), axis=1)
-        first[fails] = j
-        ok &= ~fails
+            fails[unsure] = ~np.all(c.ok(sky, i, x[pend[unsure]]), axis=1)
+        first[pend[fails]] = j
+        ok[pend[fails]] = False
+        pend = pend[~fails]
     return ok, first
 
 
