@@ -174,3 +174,13 @@ def test_plan_settings_constraints_follow_site_and_options() -> None:
     assert got.moon_illum == MoonIlluminationConstraint(max_fraction=0.5)
     with pytest.raises(UcbplanError, match="--twilight"):
         PlanSettings(twilight="dusk").constraints(paranal)
+
+
+def test_sun_direct_rotation_equals_astropys_frames() -> None:
+    """The sky model's Sun: astropy's GCRS → CIRS matrix applied directly gives the frame
+    transformation's positions bit for bit."""
+    from ucbplan.observing.sky import _sun_cirs_m, sun_cirs_frames
+
+    with quiet_erfa():
+        t = Time(ORIGIN, scale="tdb") + TimeDelta(np.linspace(0.0, 200.0, 300) * u.d)
+        np.testing.assert_array_equal(_sun_cirs_m(t), sun_cirs_frames(t))

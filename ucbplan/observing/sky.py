@@ -29,7 +29,7 @@ from scipy.interpolate import CubicSpline
 from ucbplan.observing.timeaxis import TimeAxis
 from ucbplan.observing.timeconv import quiet_erfa
 
-__all__ = ["SLOW_STEP_S", "SkyModel", "airmass_from_alt"]
+__all__ = ["SLOW_STEP_S", "SkyModel", "airmass_from_alt", "sun_cirs_frames"]
 
 FloatArray = NDArray[np.float64]
 
@@ -47,6 +47,26 @@ def airmass_from_alt(alt_deg: FloatArray) -> FloatArray:
 
 def _unit(v: FloatArray) -> FloatArray:
     return np.asarray(v / np.linalg.norm(v, axis=-1, keepdims=True), dtype=np.float64)
+
+
+def sun_cirs_frames(t: Time) -> FloatArray:
+    """Geocentric CIRS position of the Sun at ``t`` [m], (n, 3), through astropy's frames."""
+    sun = get_sun(t).transform_to(CIRS(obstime=t)).cartesian.xyz.to_value(u.m).T
+    return np.asarray(sun, dtype=np.float64)
+
+
+def _sun_cirs_m(t: Time) -> FloatArray:
+    """:func:`sun_cirs_frames` with astropy's GCRS → CIRS rotation applied directly: the same
+    matrix, bit for bit (tests compare), without the frame machinery's per-element comparison
+    of observer positions."""
+    try:
+        from astropy.coordinates.builtin_frames.intermediate_rotation_transforms import (
+            gcrs_to_cirs_mat,
+        )
+    except ImportError:  # a future astropy moved it: the public chain gives the same numbers
+        return sun_cirs_frames(t)
+    sun = get_sun(t).cartesian.transform(gcrs_to_cirs_mat(t)).xyz.to_value(u.m).T
+    return np.asarray(sun, dtype=np.float64)
 
 
 @dataclass(frozen=True)
@@ -103,7 +123,8 @@ class SkyModel:
             ut1 = t.ut1
             era = np.unwrap(erfa.era00(ut1.jd1, ut1.jd2))
             frame = CIRS(obstime=t)
-            sun = get_sun(t).transform_to(frame).cartesian.xyz.to_value(u.m).T
+            sun = _sun_cirs_m(t)
+            # the Moon seen from the site (t has its location), then geocentric CIRS
             moon = get_body("moon", t).transform_to(frame).cartesian.xyz.to_value(u.m).T
             tgt = coords[:, None].transform_to(CIRS(obstime=t[None, :]))
             tvec = tgt.cartesian.xyz.value  # (3, n_targets, n_nodes), unit vectors
