@@ -82,6 +82,24 @@ def _reason_codes(run: TargetRun, frame: PlanFrame) -> NDArray[np.int64]:
     return np.where(valid, code, REASONS.index("outside validity")).astype(np.int64)
 
 
+def _counts_per_night(
+    x_mid: NDArray[np.float64],
+    counted: NDArray[np.bool_],
+    codes: NDArray[np.int64],
+    spans: Sequence[NightSpan],
+) -> NDArray[np.int64]:
+    """(night, reason) counts of the ``counted`` candidates, from running sums over the
+    time-sorted candidates: column ``len(REASONS)`` counts the usable ones (code −1)."""
+    klass = np.where(codes < 0, len(REASONS), codes)
+    onehot = np.zeros((x_mid.size + 1, len(REASONS) + 1), dtype=np.int64)
+    at = np.flatnonzero(counted)
+    onehot[at + 1, klass[at]] = 1
+    prefix = np.cumsum(onehot, axis=0)
+    j0 = np.searchsorted(x_mid, [sp.x0 for sp in spans])
+    j1 = np.searchsorted(x_mid, [sp.x1 for sp in spans])
+    return np.asarray(prefix[j1] - prefix[j0], dtype=np.int64)
+
+
 def not_planned(
     runs: Sequence[TargetRun],
     spans: Sequence[NightSpan],
@@ -109,17 +127,15 @@ def not_planned(
         dark = free & evaluate_window([night], frame.sky, run.index, c.x_mid, c.x_mid)[0]
         others = _overlaps(c.x_start - gap_s, c.x_end + gap_s, taken)
         codes = _reason_codes(run, frame)
-        for span in spans:
-            j0, j1 = np.searchsorted(c.x_mid, [span.x0, span.x1])
-            js = np.arange(j0, j1)
-            js = js[dark[js]]
-            if js.size == 0:
-                continue
-            code = codes[js]
-            code = np.where((code < 0) & others[js], taken_code, code)
-            rest = "time budget spent" if (run.target.name, span.label) in budget else "not needed"
-            code = np.where(code < 0, REASONS.index(rest), code)
-            counts = np.bincount(code, minlength=last)
-            per_night[span.label] = {r: int(counts[k]) for k, r in enumerate(REASONS) if counts[k]}
+        codes = np.where((codes < 0) & others, taken_code, codes)
+        table = _counts_per_night(c.x_mid, dark, codes, spans)
+        spent = np.array([(run.target.name, sp.label) in budget for sp in spans], dtype=bool)
+        usable = table[:, last]
+        table = table[:, :last]
+        table[spent, REASONS.index("time budget spent")] += usable[spent]
+        table[~spent, REASONS.index("not needed")] += usable[~spent]
+        for k in np.flatnonzero(table.sum(axis=1)):
+            row = table[k]
+            per_night[spans[k].label] = {r: int(row[m]) for m, r in enumerate(REASONS) if row[m]}
         out[run.target.name] = per_night
     return out
