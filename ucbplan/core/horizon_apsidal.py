@@ -1,0 +1,349 @@
+"""Horizons of apsidally precessing targets: an envelope bracket, then a certified scan.
+
+With ω̇ ≠ 0 the anchor's Jacobian (``jacobian_kernel`` with Φ_asc placed on u★) is a cubic in τ
+whose coefficients depend on the apsidal angle w = ω̇τ alone, so in x = (τ − τ_end)/cap
+
+    σ_u²(x) = ∑_{m=0}^{6} x^m F_m(w),   w = ω̇ (τ_end + cap·x),
+
+with each F_m a smooth 2π-periodic function of w. Sampling the F_m at 32 angles gives their
+Fourier series; the padded sums ∑_k k^p |c_k| (p = 0, 1, 2) bound the oscillation and its first
+two w-derivatives. For x ≥ 0 that yields
+
+* an envelope L(x) ≤ σ_u²(x) ≤ U(x) of two polynomials: no window can close before U reaches
+  thr², and one has closed once L exceeds it (their first roots bracket the crossing);
+* a curvature bound K(x) ≥ |d²σ_u²/dx²|, a polynomial with non-negative coefficients.
+
+Inside the bracket σ_u² is sampled with a step h (at most P_aps/12) chosen so that K h²/8 is 1 %
+of thr²: a sample gap whose two ends lie further than that below thr² cannot hide a crossing, and
+the few gaps that do not are subdivided. The first gap that crosses is narrowed by subdivision
+(first crossing sample each round) to ~1e-6 of the step. σ_u is evaluated exactly as by the grid
+search (:func:`ucbplan.core.horizon_grid.anchor_sigma_batch`). A row whose scan would need more
+than ``_MAX_SAMPLES`` samples is left to the grid search (reported by :func:`t_valid_apsidal`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ucbplan.core.horizon_grid import anchor_sigma_batch
+from ucbplan.core.horizon_poly import anchor_phase, horner, roots_01, shift_matrix
+
+__all__ = ["envelope", "t_valid_apsidal"]
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.intp]
+#: Samples of the apsidal angle per period for the Fourier bounds of the F_m.
+_N_ANGLE = 32
+#: Safety factor on the Fourier amplitude sums (aliasing of harmonics above 16).
+_PAD = 1.25
+#: Scan samples in the first chunk (doubling per chunk up to the last); samples per row before
+#: it is left to the grid search.
+_CHUNKS, _MAX_SAMPLES = (32, 64, 128, 256, 512, 1024), 16_384
+#: Subdivisions of a doubtful or crossing gap; levels of doubt subdivision; narrowing rounds.
+_SUB, _LEVELS, _ROUNDS = 16, 3, 6
+_SUBSTEPS = np.linspace(0.0, 1.0, _SUB + 1)
+
+
+def _angle_coefficients(
+    pars: FloatArray, covs: FloatArray, tau_end: FloatArray, scale: float, u_star: float, star: int
+) -> FloatArray:
+    """F_m at the angles w_k = 2πk/N: coefficients (n, N, 7) of σ_u² in powers of x."""
+    n = pars.shape[0]
+    w = 2.0 * math.pi * np.arange(_N_ANGLE) / _N_ANGLE
+    cw, sw = np.cos(w), np.sin(w)
+    eta0, kap0 = pars[:, 4:5], pars[:, 5:6]
+    eta, kap = eta0 * cw + kap0 * sw, kap0 * cw - eta0 * sw
+    s, c = anchor_phase(eta, kap, u_star, star)
+    d = 1.0 + 2.0 * kap * c + 2.0 * eta * s
+    b = np.zeros((n, _N_ANGLE, 4, 7))
+    b[..., 0, 0] = 0.5 * d
+    b[..., 0, 4] = -2.0 * sw * s - 2.0 * cw * c
+    b[..., 0, 5] = 2.0 * cw * s - 2.0 * sw * c
+    b[..., 1, 1] = math.pi * d
+    b[..., 1, 6] = -2.0 * (eta * s + kap * c)
+    b[..., 2, 2] = math.pi * d / 2.0
+    b[..., 3, 3] = math.pi * d / 6.0
+    # to powers of x, then the Gram products b_j C b_kᵀ, as power_gram per angle
+    shift = np.swapaxes(shift_matrix(tau_end, scale), 1, 2)
+    bx = (shift @ np.moveaxis(b, 2, 1).reshape(n, 4, -1)).reshape(n, 4, _N_ANGLE, 7)
+    bx = np.moveaxis(bx, 1, 2)
+    proj = (bx.reshape(n, -1, 7) @ covs).reshape(bx.shape)
+    gram = np.einsum("nmjl,nmkl->nmjk", proj, bx)
+    coef = np.zeros((n, _N_ANGLE, 7))
+    for j in range(4):
+        for k in range(4):
+            coef[..., j + k] += gram[..., j, k]
+    return coef
+
+
+def envelope(
+    pars: FloatArray,
+    covs: FloatArray,
+    tau_end: FloatArray,
+    scale: float,
+    u_star: float,
+    star: int = 1,
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """(lower, upper, curvature) coefficients (n, 7) in powers of x = (τ − τ_end)/scale.
+
+    For x ≥ 0: lower(x) ≤ σ_u²(x) ≤ upper(x) and |d²σ_u²/dx²| ≤ curvature(x) [rad²].
+
+    Notes
+    -----
+    The extremes of F_m lie within ``max|F_m''| h²/8`` of its extreme samples (h = 2π/N, F_m' = 0
+    there); the padded Fourier sums ∑ k^p |c_k| bound |F_m'| and |F_m''|.
+    """
+    coef = _angle_coefficients(pars, covs, tau_end, scale, u_star, star)
+    amp = 2.0 * np.abs(np.fft.rfft(coef, axis=1)[:, 1:] / _N_ANGLE)
+    amp[:, -1] *= 0.5  # the Nyquist term appears once
+    k = np.arange(1, amp.shape[1] + 1, dtype=np.float64)[None, :, None]
+    r1, r2 = (_PAD * np.sum(amp * k**p, axis=1) for p in (1, 2))
+    top, bottom = coef.max(axis=1), coef.min(axis=1)
+    pad = r2 * (2.0 * math.pi / _N_ANGLE) ** 2 / 8.0 + 1e-9 * (np.abs(top) + np.abs(bottom))
+    upper, lower = top + pad, bottom - pad
+    rate = np.abs(pars[:, 6:7]) * scale  # dw/dx
+    size = np.maximum(np.abs(upper), np.abs(lower))
+    m = np.arange(7, dtype=np.float64)[None, :]
+    curv = rate**2 * r2
+    curv[:, :6] += 2.0 * m[:, 1:] * rate * r1[:, 1:]
+    curv[:, :5] += m[:, 2:] * (m[:, 2:] - 1.0) * size[:, 2:]
+    return lower, upper, curv
+
+
+@dataclass(frozen=True)
+class _Rows:
+    """The precessing rows being searched, their envelopes and exact σ_u² − thr²."""
+
+    pars: FloatArray
+    covs: FloatArray
+    tau_end: FloatArray
+    thr2: FloatArray
+    us: tuple[float, ...]
+    star: int
+    scale: float
+    lower: FloatArray  # (n_u, n, 7) minus thr² in the constant term
+    upper: FloatArray  # (n_u, n, 7) minus thr² in the constant term
+    curv: FloatArray  # (n, 7), the largest over u★ coefficient-wise
+    period: FloatArray  # apsidal period in x
+    lower_roots: FloatArray  # (n_u, n, 6) roots in (0, 1), NaN-padded
+    upper_roots: FloatArray
+
+    def values(self, rows: IntArray, x: FloatArray) -> FloatArray:
+        """σ_u² − thr² (n_u, len(rows), m) at x (len(rows), m)."""
+        tau = self.tau_end[rows, None] + self.scale * x
+        p, c = self.pars[rows], self.covs[rows]
+        sig = [anchor_sigma_batch(p, c, tau, u, self.star) for u in self.us]
+        out: FloatArray = np.square(sig) - self.thr2[rows, None]
+        return out
+
+    def doubt(self, rows: IntArray, grid: FloatArray) -> FloatArray:
+        """Bound K h²/8 on how far σ_u² can stray from the chord over each gap of ``grid``."""
+        k = horner(self.curv[rows], grid[:, 1:])[0]  # K grows with x: its value at the right end
+        out: FloatArray = k * np.square(np.diff(grid, axis=1)) / 8.0
+        return out
+
+
+def _setup(
+    pars: FloatArray,
+    covs: FloatArray,
+    tau_end: FloatArray,
+    thr: FloatArray,
+    us: Sequence[float],
+    star: int,
+    cap_s: float,
+) -> _Rows:
+    lows, ups, curvs = [], [], []
+    for u in us:
+        lo, up, cu = envelope(pars, covs, tau_end, cap_s, u, star)
+        lo[:, 0] -= thr**2
+        up[:, 0] -= thr**2
+        lows.append(lo)
+        ups.append(up)
+        curvs.append(cu)
+    period = 2.0 * math.pi / (np.abs(pars[:, 6]) * cap_s)
+    low, up = np.array(lows), np.array(ups)
+    roots = roots_01(np.concatenate([low, up]).reshape(-1, 7)).reshape(2, len(us), -1, 6)
+    return _Rows(
+        pars, covs, tau_end, thr**2, tuple(us), star, cap_s,
+        low, up, np.max(curvs, axis=0), period, roots[0], roots[1],
+    )  # fmt: skip
+
+
+def _first_nonneg(coef: FloatArray, r: FloatArray, x0: FloatArray) -> FloatArray:
+    """First x in [x0, 1) where each row's polynomial is ≥ 0 (inf if none); r its roots."""
+    at0 = horner(coef, x0[:, None])[0][:, 0] >= 0.0
+    with np.errstate(invalid="ignore"):
+        r = np.where(r >= x0[:, None], r, np.inf)
+    out: FloatArray = np.where(at0, x0, r.min(axis=1, initial=np.inf))
+    return out
+
+
+def _hits(v: FloatArray, closing: bool) -> NDArray[np.bool_]:
+    """Samples past the crossing: some σ_u above thr (closing) or all below (opening)."""
+    worst = v.max(axis=0)
+    out: NDArray[np.bool_] = worst > 0.0 if closing else worst <= 0.0
+    return out
+
+
+def _clean(v: FloatArray, doubt: FloatArray, closing: bool) -> NDArray[np.bool_]:
+    """Sample gaps that provably hold no crossing, given |σ_u²''| h²/8 ≤ doubt."""
+    if closing:
+        top = np.maximum(v[..., :-1], v[..., 1:]).max(axis=0)
+        return top + doubt < 0.0
+    low = np.minimum(v[..., :-1], v[..., 1:]).max(axis=0)  # one σ_u stays above thr
+    return low - doubt > 0.0
+
+
+def _first_gap(
+    t: _Rows, rows: IntArray, grid: FloatArray, closing: bool, level: int = 0
+) -> tuple[NDArray[np.bool_], FloatArray, FloatArray]:
+    """Per row of sample points ``grid`` (m, G+1): whether a crossing lies on it, and the gap
+    [a, b] that holds the first one (b past it).
+
+    Gaps before the first sample past the crossing that the curvature bound does not clear are
+    subdivided ``_SUB``-fold, up to ``_LEVELS`` times (then cleared: the doubt left is < 1e-5
+    of the first one).
+    """
+    v = t.values(rows, grid)
+    hit = _hits(v, closing)
+    size = grid.shape[1] - 1
+    first = np.where(hit.any(axis=1), np.argmax(hit, axis=1), size + 1)
+    idx = np.arange(rows.size)
+    a = grid[idx, np.clip(first - 1, 0, size)]
+    b = grid[idx, np.minimum(first, size)]
+    found = first <= size
+    if level == _LEVELS:
+        return found, a, b
+    cols = np.arange(size)[None, :]
+    bad = ~_clean(v, t.doubt(rows, grid), closing) & (cols + 1 < first[:, None])
+    pr, pj = np.nonzero(bad)  # ordered by row, then gap
+    if pr.size:
+        sub = grid[pr, pj, None] + (grid[pr, pj + 1] - grid[pr, pj])[:, None] * _SUBSTEPS[None, :]
+        got, sa, sb = _first_gap(t, rows[pr], sub, closing, level + 1)
+        hits = np.nonzero(got)[0]
+        owner, at = np.unique(pr[hits], return_index=True)  # the earliest such gap per row
+        a[owner], b[owner] = sa[hits[at]], sb[hits[at]]
+        found[owner] = True
+    return found, a, b
+
+
+def _scan(
+    t: _Rows, rows: IntArray, lo: FloatArray, hi: FloatArray, closing: bool
+) -> tuple[FloatArray, FloatArray, NDArray[np.int8]]:
+    """First crossing gap [a, b] in [lo, hi] per row; state 1 found, 0 none, −1 unresolved."""
+    n = rows.size
+    a, b = np.full(n, np.nan), np.full(n, np.nan)
+    state = np.full(n, -1, dtype=np.int8)
+    step = np.minimum(t.period[rows] / 12.0, (hi - lo) / 16.0)
+    x = lo.copy()
+    act = np.arange(n)
+    used, i = 0, 0
+    while act.size and used < _MAX_SAMPLES:
+        size = _CHUNKS[min(i, len(_CHUNKS) - 1)]
+        i, used = i + 1, used + size
+        grid = x[act, None] + step[act, None] * np.arange(size + 1.0)[None, :]
+        grid = np.minimum(grid, hi[act, None])
+        got, a[act], b[act] = _first_gap(t, rows[act], grid, closing)
+        over = ~got & (grid[:, -1] >= hi[act])
+        state[act[got]] = 1
+        state[act[over]] = 0
+        x[act] = grid[:, -1]
+        act = act[~got & ~over]
+    return a, b, state
+
+
+def _narrow(
+    t: _Rows, rows: IntArray, a: FloatArray, b: FloatArray, closing: bool
+) -> tuple[FloatArray, FloatArray]:
+    """Shrink crossing gaps [a, b] (b past the crossing) ``_SUB``-fold per round, keeping the
+    first crossing."""
+    for _ in range(_ROUNDS):
+        sub = a[:, None] + (b - a)[:, None] * _SUBSTEPS[None, :]
+        got, sa, sb = _first_gap(t, rows, sub, closing)
+        a, b = np.where(got, sa, a), np.where(got, sb, b)
+    return a, b
+
+
+def _segments_below(lower: FloatArray, roots: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Per row, the intervals of [0, 1] where every lower envelope is ≤ thr² (the only places a
+    window can open), in order: (starts, ends) (n, S), NaN-padded. ``roots``: the envelopes'."""
+    n = lower.shape[1]
+    roots = np.concatenate(list(roots), axis=1)
+    pts = np.sort(np.concatenate([np.zeros((n, 1)), roots, np.ones((n, 1))], axis=1), axis=1)
+    pts = np.where(np.isnan(pts), 1.0, pts)
+    mid = 0.5 * (pts[:, :-1] + pts[:, 1:])
+    below = np.max([horner(low, mid)[0] for low in lower], axis=0) <= 0.0
+    below &= pts[:, 1:] > pts[:, :-1]
+    order = np.argsort(~below, axis=1, kind="stable")  # admissible segments first, in order
+    keep = np.take_along_axis(below, order, axis=1)
+    starts = np.where(keep, np.take_along_axis(pts[:, :-1], order, axis=1), np.nan)
+    ends = np.where(keep, np.take_along_axis(pts[:, 1:], order, axis=1), np.nan)
+    return starts, ends
+
+
+def _open(t: _Rows) -> tuple[FloatArray, NDArray[np.int8]]:
+    """Opening x of the first window σ_u ≤ thr per row; state 1 open, 0 never, −1 unresolved."""
+    n = t.tau_end.size
+    rows = np.arange(n)
+    x_open = np.zeros(n)
+    state = np.ones(n, dtype=np.int8)
+    late = np.nonzero(_hits(t.values(rows, np.zeros((n, 1))), closing=True)[:, 0])[0]
+    state[late] = 0
+    starts, ends = _segments_below(t.lower[:, late], t.lower_roots[:, late])
+    for k in range(starts.shape[1]):
+        sel = np.nonzero((state[late] == 0) & np.isfinite(starts[:, k]))[0]
+        if sel.size == 0:
+            break
+        lo = starts[sel, k] * (1.0 - 1e-9)
+        hi = np.minimum(ends[sel, k] * (1.0 + 1e-9) + 1e-15, 1.0)
+        a, b, got = _scan(t, late[sel], lo, hi, closing=False)
+        found = got == 1
+        _, x_open[late[sel[found]]] = _narrow(t, late[sel[found]], a[found], b[found], False)
+        state[late[sel]] = got
+    return x_open, state
+
+
+def _close(t: _Rows, rows: IntArray, x_open: FloatArray) -> tuple[FloatArray, NDArray[np.int8]]:
+    """Closing x of the window opened at ``x_open``; state 1 closes, 0 open at the cap, −1
+    unresolved."""
+    ups = zip(t.upper[:, rows], t.upper_roots[:, rows], strict=True)
+    start = np.min([_first_nonneg(up, r, x_open) for up, r in ups], axis=0)
+    start = np.maximum(np.minimum(start * (1.0 - 1e-9), 1.0), x_open)
+    lows = zip(t.lower[:, rows], t.lower_roots[:, rows], strict=True)
+    bound = np.min([_first_nonneg(low, r, start) for low, r in lows], axis=0)
+    hi = np.minimum(bound * (1.0 + 1e-9) + 1e-15, 1.0)
+    a, b, state = _scan(t, rows, start, hi, closing=True)
+    x = np.ones(rows.size)
+    found = state == 1
+    a, b = _narrow(t, rows[found], a[found], b[found], closing=True)
+    x[found] = 0.5 * (a + b)
+    return x, state
+
+
+def t_valid_apsidal(
+    pars: FloatArray,
+    covs: FloatArray,
+    t_obs: FloatArray,
+    thr: FloatArray,
+    us: Sequence[float],
+    star: int,
+    cap_s: float,
+) -> tuple[FloatArray, NDArray[np.bool_]]:
+    """Closing τ − τ_end of the first window max_u★ σ_u ≤ thr after τ_end = T/2 [s] (0 if none),
+    and the rows left unresolved (to be searched on the grid; their value is NaN).
+
+    Same contract as :func:`ucbplan.core.horizon_grid.t_valid_grid`; rows must have ω̇ ≠ 0.
+    """
+    t = _setup(pars, covs, t_obs / 2.0, thr, us, star, cap_s)
+    x_open, opened = _open(t)
+    out = np.where(opened == 0, 0.0, np.nan)
+    rows = np.nonzero(opened == 1)[0]
+    x_close, closed = _close(t, rows, x_open[rows])
+    out[rows] = np.where(closed >= 0, x_close * cap_s, np.nan)
+    res: FloatArray = out
+    return res, np.isnan(out)
