@@ -31,7 +31,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ucbplan.core.horizon_grid import anchor_sigma_batch
-from ucbplan.core.horizon_poly import anchor_phase, horner, roots_01, shift_matrix
+from ucbplan.core.horizon_poly import (
+    anchor_phase,
+    companion_roots_01,
+    horner,
+    monotone_01,
+    shift_matrix,
+)
 
 __all__ = ["envelope", "t_valid_apsidal"]
 
@@ -43,42 +49,54 @@ _N_ANGLE = 32
 _PAD = 1.25
 #: Scan samples in the first chunk (doubling per chunk up to the last); samples per row before
 #: it is left to the grid search.
-_CHUNKS, _MAX_SAMPLES = (32, 64, 128, 256, 512, 1024), 16_384
-#: Subdivisions of a doubtful or crossing gap; levels of doubt subdivision; narrowing rounds.
-_SUB, _LEVELS, _ROUNDS = 16, 3, 6
+_CHUNKS, _MAX_SAMPLES = (64, 128, 256, 512, 1024), 16_384
+#: Subdivisions of a doubtful or crossing gap; levels of doubt subdivision; narrowing rounds
+#: of a closing (32⁴: a P_aps/12 gap to ~1e-6 of it) and of an opening (only its window matters).
+_SUB, _LEVELS, _ROUNDS, _ROUNDS_OPEN = 32, 2, 4, 2
 _SUBSTEPS = np.linspace(0.0, 1.0, _SUB + 1)
+#: First samples of an envelope's sign change, as fractions of [x0, 1].
+_GEOM = np.concatenate([[0.0], np.geomspace(1e-12, 1.0, 48)])
 
 
-def _angle_coefficients(
-    pars: FloatArray, covs: FloatArray, tau_end: FloatArray, scale: float, u_star: float, star: int
+def _basis_gram(
+    pars: FloatArray, covs: FloatArray, tau_end: FloatArray, scale: float
 ) -> FloatArray:
-    """F_m at the angles w_k = 2πk/N: coefficients (n, N, 7) of σ_u² in powers of x."""
+    """G (n, 4, 4, 7): σ_u² = ∑_m x^m ∑_ab g_a(w) g_b(w) G[a, b, m] for the factors of
+    :func:`_angle_factors`; the same for every anchor."""
     n = pars.shape[0]
+    basis = np.zeros((4, 4, 7))  # factor a, power of τ, parameter: ∂u/∂θ = ∑_a g_a(w) B_a(τ)
+    basis[0, [0, 1, 2, 3], [0, 1, 2, 3]] = 0.5, math.pi, math.pi / 2.0, math.pi / 6.0
+    basis[1, 0, 4] = basis[2, 0, 5] = 1.0
+    basis[3, 1, 6] = -2.0
+    shift = np.swapaxes(shift_matrix(tau_end, scale), 1, 2)  # powers of τ → powers of x
+    bx = (shift[:, None] @ basis[None]).reshape(n, 16, 7)
+    gram = (bx @ covs @ np.swapaxes(bx, 1, 2)).reshape(n, 4, 4, 4, 4)  # a, j, b, k
+    out = np.zeros((n, 4, 4, 7))
+    for j in range(4):
+        for k in range(4):
+            out[..., j + k] += gram[:, :, j, :, k]
+    return out
+
+
+def _angle_factors(pars: FloatArray, u_star: float, star: int) -> FloatArray:
+    """g (n, N, 4) at w_i = 2πi/N: ∂u/∂Φ_asc, the η and κ columns, and (η sin + κ cos) Φ_asc,
+    with Φ_asc placed on u★ as in the grid search (``jacobian_kernel`` at w)."""
     w = 2.0 * math.pi * np.arange(_N_ANGLE) / _N_ANGLE
     cw, sw = np.cos(w), np.sin(w)
     eta0, kap0 = pars[:, 4:5], pars[:, 5:6]
     eta, kap = eta0 * cw + kap0 * sw, kap0 * cw - eta0 * sw
     s, c = anchor_phase(eta, kap, u_star, star)
     d = 1.0 + 2.0 * kap * c + 2.0 * eta * s
-    b = np.zeros((n, _N_ANGLE, 4, 7))
-    b[..., 0, 0] = 0.5 * d
-    b[..., 0, 4] = -2.0 * sw * s - 2.0 * cw * c
-    b[..., 0, 5] = 2.0 * cw * s - 2.0 * sw * c
-    b[..., 1, 1] = math.pi * d
-    b[..., 1, 6] = -2.0 * (eta * s + kap * c)
-    b[..., 2, 2] = math.pi * d / 2.0
-    b[..., 3, 3] = math.pi * d / 6.0
-    # to powers of x, then the Gram products b_j C b_kᵀ, as power_gram per angle
-    shift = np.swapaxes(shift_matrix(tau_end, scale), 1, 2)
-    bx = (shift @ np.moveaxis(b, 2, 1).reshape(n, 4, -1)).reshape(n, 4, _N_ANGLE, 7)
-    bx = np.moveaxis(bx, 1, 2)
-    proj = (bx.reshape(n, -1, 7) @ covs).reshape(bx.shape)
-    gram = np.einsum("nmjl,nmkl->nmjk", proj, bx)
-    coef = np.zeros((n, _N_ANGLE, 7))
-    for j in range(4):
-        for k in range(4):
-            coef[..., j + k] += gram[..., j, k]
-    return coef
+    cols = (d, -2.0 * sw * s - 2.0 * cw * c, 2.0 * cw * s - 2.0 * sw * c, eta * s + kap * c)
+    return np.stack(cols, axis=-1)
+
+
+def _angle_coefficients(gram: FloatArray, g: FloatArray) -> FloatArray:
+    """F_m at the angles: coefficients (n, N, 7) of σ_u² in powers of x."""
+    n = g.shape[0]
+    outer = (g[..., :, None] * g[..., None, :]).reshape(n, _N_ANGLE, 16)
+    out: FloatArray = outer @ gram.reshape(n, 16, 7)
+    return out
 
 
 def envelope(
@@ -92,13 +110,21 @@ def envelope(
     """(lower, upper, curvature) coefficients (n, 7) in powers of x = (τ − τ_end)/scale.
 
     For x ≥ 0: lower(x) ≤ σ_u²(x) ≤ upper(x) and |d²σ_u²/dx²| ≤ curvature(x) [rad²].
+    """
+    coef = _angle_coefficients(
+        _basis_gram(pars, covs, tau_end, scale), _angle_factors(pars, u_star, star)
+    )
+    return _bounds(coef, np.abs(pars[:, 6:7]) * scale)
+
+
+def _bounds(coef: FloatArray, rate: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """:func:`envelope` from the F_m at the angles and dw/dx.
 
     Notes
     -----
     The extremes of F_m lie within ``max|F_m''| h²/8`` of its extreme samples (h = 2π/N, F_m' = 0
     there); the padded Fourier sums ∑ k^p |c_k| bound |F_m'| and |F_m''|.
     """
-    coef = _angle_coefficients(pars, covs, tau_end, scale, u_star, star)
     amp = 2.0 * np.abs(np.fft.rfft(coef, axis=1)[:, 1:] / _N_ANGLE)
     amp[:, -1] *= 0.5  # the Nyquist term appears once
     k = np.arange(1, amp.shape[1] + 1, dtype=np.float64)[None, :, None]
@@ -106,7 +132,6 @@ def envelope(
     top, bottom = coef.max(axis=1), coef.min(axis=1)
     pad = r2 * (2.0 * math.pi / _N_ANGLE) ** 2 / 8.0 + 1e-9 * (np.abs(top) + np.abs(bottom))
     upper, lower = top + pad, bottom - pad
-    rate = np.abs(pars[:, 6:7]) * scale  # dw/dx
     size = np.maximum(np.abs(upper), np.abs(lower))
     m = np.arange(7, dtype=np.float64)[None, :]
     curv = rate**2 * r2
@@ -130,8 +155,6 @@ class _Rows:
     upper: FloatArray  # (n_u, n, 7) minus thr² in the constant term
     curv: FloatArray  # (n, 7), the largest over u★ coefficient-wise
     period: FloatArray  # apsidal period in x
-    lower_roots: FloatArray  # (n_u, n, 6) roots in (0, 1), NaN-padded
-    upper_roots: FloatArray
 
     def values(self, rows: IntArray, x: FloatArray) -> FloatArray:
         """σ_u² − thr² (n_u, len(rows), m) at x (len(rows), m)."""
@@ -157,9 +180,11 @@ def _setup(
     star: int,
     cap_s: float,
 ) -> _Rows:
+    gram = _basis_gram(pars, covs, tau_end, cap_s)
+    rate = np.abs(pars[:, 6:7]) * cap_s
     lows, ups, curvs = [], [], []
     for u in us:
-        lo, up, cu = envelope(pars, covs, tau_end, cap_s, u, star)
+        lo, up, cu = _bounds(_angle_coefficients(gram, _angle_factors(pars, u, star)), rate)
         lo[:, 0] -= thr**2
         up[:, 0] -= thr**2
         lows.append(lo)
@@ -167,20 +192,49 @@ def _setup(
         curvs.append(cu)
     period = 2.0 * math.pi / (np.abs(pars[:, 6]) * cap_s)
     low, up = np.array(lows), np.array(ups)
-    roots = roots_01(np.concatenate([low, up]).reshape(-1, 7)).reshape(2, len(us), -1, 6)
     return _Rows(
         pars, covs, tau_end, thr**2, tuple(us), star, cap_s,
-        low, up, np.max(curvs, axis=0), period, roots[0], roots[1],
+        low, up, np.max(curvs, axis=0), period,
     )  # fmt: skip
 
 
-def _first_nonneg(coef: FloatArray, r: FloatArray, x0: FloatArray) -> FloatArray:
-    """First x in [x0, 1) where each row's polynomial is ≥ 0 (inf if none); r its roots."""
-    at0 = horner(coef, x0[:, None])[0][:, 0] >= 0.0
-    with np.errstate(invalid="ignore"):
-        r = np.where(r >= x0[:, None], r, np.inf)
-    out: FloatArray = np.where(at0, x0, r.min(axis=1, initial=np.inf))
-    return out
+def _first_nonneg(coef: FloatArray, x0: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Per row, a bracket (a, b) of the first x in [x0, 1] where the polynomial is ≥ 0: the
+    polynomial is < 0 on [x0, a) and ≥ 0 at b (x0, x0 if it is there; inf, inf if never).
+
+    Polynomials monotone on [0, 1] (the usual envelope) are bisected from a geometric sampling;
+    the others take their companion-matrix roots.
+    """
+    n = coef.shape[0]
+    a, b = np.full(n, np.inf), np.full(n, np.inf)
+    now = horner(coef, x0[:, None])[0][:, 0] >= 0.0
+    a[now], b[now] = x0[now], x0[now]
+    ends = coef.sum(axis=1) >= 0.0
+    mono = monotone_01(coef)
+    rows = np.nonzero(mono & ~now & ends)[0]
+    if rows.size:
+        a[rows], b[rows] = _bisect(coef[rows], x0[rows])
+    rows = np.nonzero(~mono & ~now)[0]
+    if rows.size:
+        r = companion_roots_01(coef[rows])
+        with np.errstate(invalid="ignore"):
+            r = np.where(r >= x0[rows, None], r, np.inf).min(axis=1, initial=np.inf)
+        a[rows], b[rows] = r * (1.0 - 1e-9), r * (1.0 + 1e-9)
+    return a, b
+
+
+def _bisect(coef: FloatArray, x0: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Bracket (a, b), b/a − 1 ≲ 1e-4, of the one sign change of increasing polynomials negative
+    at x0 and non-negative at 1 (a scan start need not be sharper than its step)."""
+    x = x0[:, None] + (1.0 - x0)[:, None] * _GEOM[None, :]
+    j = np.argmax(horner(coef, x)[0] >= 0.0, axis=1)
+    idx = np.arange(coef.shape[0])
+    a, b = x[idx, j - 1], x[idx, j]
+    for _ in range(14):
+        mid = 0.5 * (a + b)
+        up = horner(coef, mid[:, None])[0][:, 0] >= 0.0
+        a, b = np.where(up, a, mid), np.where(up, mid, b)
+    return a, b
 
 
 def _hits(v: FloatArray, closing: bool) -> NDArray[np.bool_]:
@@ -262,17 +316,18 @@ def _narrow(
 ) -> tuple[FloatArray, FloatArray]:
     """Shrink crossing gaps [a, b] (b past the crossing) ``_SUB``-fold per round, keeping the
     first crossing."""
-    for _ in range(_ROUNDS):
+    for _ in range(_ROUNDS if closing else _ROUNDS_OPEN):
         sub = a[:, None] + (b - a)[:, None] * _SUBSTEPS[None, :]
         got, sa, sb = _first_gap(t, rows, sub, closing)
         a, b = np.where(got, sa, a), np.where(got, sb, b)
     return a, b
 
 
-def _segments_below(lower: FloatArray, roots: FloatArray) -> tuple[FloatArray, FloatArray]:
+def _segments_below(lower: FloatArray) -> tuple[FloatArray, FloatArray]:
     """Per row, the intervals of [0, 1] where every lower envelope is ≤ thr² (the only places a
-    window can open), in order: (starts, ends) (n, S), NaN-padded. ``roots``: the envelopes'."""
+    window can open), in order: (starts, ends) (n, S), NaN-padded."""
     n = lower.shape[1]
+    roots = companion_roots_01(lower.reshape(-1, 7)).reshape(lower.shape[0], n, 6)
     roots = np.concatenate(list(roots), axis=1)
     pts = np.sort(np.concatenate([np.zeros((n, 1)), roots, np.ones((n, 1))], axis=1), axis=1)
     pts = np.where(np.isnan(pts), 1.0, pts)
@@ -294,7 +349,7 @@ def _open(t: _Rows) -> tuple[FloatArray, NDArray[np.int8]]:
     state = np.ones(n, dtype=np.int8)
     late = np.nonzero(_hits(t.values(rows, np.zeros((n, 1))), closing=True)[:, 0])[0]
     state[late] = 0
-    starts, ends = _segments_below(t.lower[:, late], t.lower_roots[:, late])
+    starts, ends = _segments_below(t.lower[:, late])
     for k in range(starts.shape[1]):
         sel = np.nonzero((state[late] == 0) & np.isfinite(starts[:, k]))[0]
         if sel.size == 0:
@@ -311,13 +366,16 @@ def _open(t: _Rows) -> tuple[FloatArray, NDArray[np.int8]]:
 def _close(t: _Rows, rows: IntArray, x_open: FloatArray) -> tuple[FloatArray, NDArray[np.int8]]:
     """Closing x of the window opened at ``x_open``; state 1 closes, 0 open at the cap, −1
     unresolved."""
-    ups = zip(t.upper[:, rows], t.upper_roots[:, rows], strict=True)
-    start = np.min([_first_nonneg(up, r, x_open) for up, r in ups], axis=0)
-    start = np.maximum(np.minimum(start * (1.0 - 1e-9), 1.0), x_open)
-    lows = zip(t.lower[:, rows], t.lower_roots[:, rows], strict=True)
-    bound = np.min([_first_nonneg(low, r, start) for low, r in lows], axis=0)
-    hi = np.minimum(bound * (1.0 + 1e-9) + 1e-15, 1.0)
+    # L ≤ U: the lower envelope cannot reach thr² before the upper one, so both from x_open
+    nu, m = len(t.us), rows.size
+    env = np.concatenate([t.upper[:, rows], t.lower[:, rows]]).reshape(-1, 7)
+    a, b = _first_nonneg(env, np.tile(x_open, 2 * nu))
+    start = np.maximum(np.minimum(a[: nu * m].reshape(nu, m).min(axis=0), 1.0), x_open)
+    hi = np.minimum(b[nu * m :].reshape(nu, m).min(axis=0), 1.0)
+    sure = np.max([horner(low, hi[:, None])[0][:, 0] for low in t.lower[:, rows]], axis=0) > 0
+    hi = np.where(sure, hi, 1.0)  # a spurious root: no bracket end
     a, b, state = _scan(t, rows, start, hi, closing=True)
+    state[(state == 0) & (hi < 1.0)] = -1  # past the bracket without a crossing: rounding
     x = np.ones(rows.size)
     found = state == 1
     a, b = _narrow(t, rows[found], a[found], b[found], closing=True)

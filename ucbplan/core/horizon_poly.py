@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 __all__ = [
     "anchor_phase",
     "horner",
+    "monotone_01",
     "power_gram",
     "roots_01",
     "shift_matrix",
@@ -122,7 +123,7 @@ def _bernstein_matrix(m: int) -> FloatArray:
     return out
 
 
-def _monotone(coef: FloatArray) -> NDArray[np.bool_]:
+def monotone_01(coef: FloatArray) -> NDArray[np.bool_]:
     """Rows whose polynomial is strictly monotone on [0, 1] (its derivative's Bernstein
     coefficients all share one strict sign: a sufficient condition)."""
     width = coef.shape[1]
@@ -162,16 +163,24 @@ def roots_01(coef: FloatArray) -> FloatArray:
 
     A polynomial monotone on [0, 1] (the usual σ_u², growing after the end of the information)
     has at most one root there, found by :func:`_monotone_root`; the others take the
-    eigenvalues of their companion matrix.
+    eigenvalues of their companion matrix (:func:`companion_roots_01`).
     """
     n, width = coef.shape
     out = np.full((n, width - 1), np.nan)
-    mono = _monotone(coef)
+    mono = monotone_01(coef)
     p0, p1 = coef[:, 0], coef.sum(axis=1)
     one = np.nonzero(mono & (p0 * p1 < 0.0))[0]
     if one.size:
         out[one, 0] = _monotone_root(coef[one])
-    coef = np.where(mono[:, None], 0.0, coef)  # done: no rows left for the eigenvalues
+    rest = np.nonzero(~mono)[0]
+    out[rest] = companion_roots_01(coef[rest])
+    return out
+
+
+def companion_roots_01(coef: FloatArray) -> FloatArray:
+    """Real roots in (0, 1) from companion-matrix eigenvalues, Newton-polished, NaN-padded."""
+    n, width = coef.shape
+    out = np.full((n, width - 1), np.nan)
     size = np.sum(np.abs(coef), axis=1)  # bound of |p| on [0, 1]
     live = np.abs(coef) > _REL_ZERO * size[:, None]
     deg = np.where(live.any(axis=1), width - 1 - np.argmax(live[:, ::-1], axis=1), 0)
