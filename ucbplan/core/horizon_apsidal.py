@@ -51,8 +51,9 @@ _PAD = 1.25
 #: it is left to the grid search.
 _CHUNKS, _MAX_SAMPLES = (64, 128, 256, 512, 1024), 16_384
 #: Subdivisions of a doubtful or crossing gap; levels of doubt subdivision; narrowing rounds
-#: of a closing (32⁴: a P_aps/12 gap to ~1e-6 of it) and of an opening (only its window matters).
-_SUB, _LEVELS, _ROUNDS, _ROUNDS_OPEN = 32, 2, 4, 2
+#: of a closing (32²: a P_aps/12 gap to ~6 min, then its secant) and of an opening (only its
+#: window matters).
+_SUB, _LEVELS, _ROUNDS, _ROUNDS_OPEN = 32, 2, 2, 1
 _SUBSTEPS = np.linspace(0.0, 1.0, _SUB + 1)
 #: First samples of an envelope's sign change, as fractions of [x0, 1].
 _GEOM = np.concatenate([[0.0], np.geomspace(1e-12, 1.0, 48)])
@@ -198,23 +199,28 @@ def _setup(
     )  # fmt: skip
 
 
-def _first_nonneg(coef: FloatArray, x0: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """Per row, a bracket (a, b) of the first x in [x0, 1] where the polynomial is ≥ 0: the
-    polynomial is < 0 on [x0, a) and ≥ 0 at b (x0, x0 if it is there; inf, inf if never).
+def _first_nonneg(
+    coef: FloatArray, x0: FloatArray, first: NDArray[np.bool_]
+) -> tuple[FloatArray, FloatArray]:
+    """Per row, a bracket (a, b) of a point in [x0, 1] where the polynomial turns ≥ 0: it is
+    ≥ 0 at b, and (rows with ``first``) < 0 on all of [x0, a); (x0, x0) if it is ≥ 0 at x0,
+    (inf, inf) if it stays < 0.
 
-    Polynomials monotone on [0, 1] (the usual envelope) are bisected from a geometric sampling;
-    the others take their companion-matrix roots.
+    Bisection from a geometric sampling finds a sign change; it is the first one where the
+    polynomial is monotone on [0, 1] (the usual envelope); other ``first`` rows take their
+    companion-matrix roots.
     """
     n = coef.shape[0]
     a, b = np.full(n, np.inf), np.full(n, np.inf)
     now = horner(coef, x0[:, None])[0][:, 0] >= 0.0
     a[now], b[now] = x0[now], x0[now]
-    ends = coef.sum(axis=1) >= 0.0
-    mono = monotone_01(coef)
-    rows = np.nonzero(mono & ~now & ends)[0]
+    x = x0[:, None] + (1.0 - x0)[:, None] * _GEOM[None, :]
+    up = horner(coef, x)[0] >= 0.0
+    hard = first & ~monotone_01(coef) & ~now
+    rows = np.nonzero(up[:, -1] & ~now & ~hard)[0]
     if rows.size:
-        a[rows], b[rows] = _bisect(coef[rows], x0[rows])
-    rows = np.nonzero(~mono & ~now)[0]
+        a[rows], b[rows] = _bisect(coef[rows], x[rows], np.argmax(up[rows], axis=1))
+    rows = np.nonzero(hard)[0]
     if rows.size:
         r = companion_roots_01(coef[rows])
         with np.errstate(invalid="ignore"):
@@ -223,11 +229,10 @@ def _first_nonneg(coef: FloatArray, x0: FloatArray) -> tuple[FloatArray, FloatAr
     return a, b
 
 
-def _bisect(coef: FloatArray, x0: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """Bracket (a, b), b/a − 1 ≲ 1e-4, of the one sign change of increasing polynomials negative
-    at x0 and non-negative at 1 (a scan start need not be sharper than its step)."""
-    x = x0[:, None] + (1.0 - x0)[:, None] * _GEOM[None, :]
-    j = np.argmax(horner(coef, x)[0] >= 0.0, axis=1)
+def _bisect(coef: FloatArray, x: FloatArray, j: IntArray) -> tuple[FloatArray, FloatArray]:
+    """Bracket (a, b), b/a − 1 ≲ 1e-4, of a sign change (< 0 at a, ≥ 0 at b) of polynomials
+    sampled at x (m, G) with the first non-negative sample j > 0 (a scan start need not be
+    sharper than its step)."""
     idx = np.arange(coef.shape[0])
     a, b = x[idx, j - 1], x[idx, j]
     for _ in range(14):
@@ -255,9 +260,9 @@ def _clean(v: FloatArray, doubt: FloatArray, closing: bool) -> NDArray[np.bool_]
 
 def _first_gap(
     t: _Rows, rows: IntArray, grid: FloatArray, closing: bool, level: int = 0
-) -> tuple[NDArray[np.bool_], FloatArray, FloatArray]:
-    """Per row of sample points ``grid`` (m, G+1): whether a crossing lies on it, and the gap
-    [a, b] that holds the first one (b past it).
+) -> tuple[NDArray[np.bool_], FloatArray, FloatArray, FloatArray]:
+    """Per row of sample points ``grid`` (m, G+1): whether a crossing lies on it, the gap
+    [a, b] that holds the first one (b past it) and max_u σ_u² − thr² at a and b (2, m).
 
     Gaps before the first sample past the crossing that the curvature bound does not clear are
     subdivided ``_SUB``-fold, up to ``_LEVELS`` times (then cleared: the doubt left is < 1e-5
@@ -268,22 +273,24 @@ def _first_gap(
     size = grid.shape[1] - 1
     first = np.where(hit.any(axis=1), np.argmax(hit, axis=1), size + 1)
     idx = np.arange(rows.size)
-    a = grid[idx, np.clip(first - 1, 0, size)]
-    b = grid[idx, np.minimum(first, size)]
+    ends = np.clip(first - 1, 0, size), np.minimum(first, size)
+    a, b = grid[idx, ends[0]], grid[idx, ends[1]]
+    worst = v.max(axis=0)
+    g = np.array([worst[idx, ends[0]], worst[idx, ends[1]]])
     found = first <= size
     if level == _LEVELS:
-        return found, a, b
+        return found, a, b, g
     cols = np.arange(size)[None, :]
     bad = ~_clean(v, t.doubt(rows, grid), closing) & (cols + 1 < first[:, None])
     pr, pj = np.nonzero(bad)  # ordered by row, then gap
     if pr.size:
         sub = grid[pr, pj, None] + (grid[pr, pj + 1] - grid[pr, pj])[:, None] * _SUBSTEPS[None, :]
-        got, sa, sb = _first_gap(t, rows[pr], sub, closing, level + 1)
+        got, sa, sb, sg = _first_gap(t, rows[pr], sub, closing, level + 1)
         hits = np.nonzero(got)[0]
         owner, at = np.unique(pr[hits], return_index=True)  # the earliest such gap per row
-        a[owner], b[owner] = sa[hits[at]], sb[hits[at]]
+        a[owner], b[owner], g[:, owner] = sa[hits[at]], sb[hits[at]], sg[:, hits[at]]
         found[owner] = True
-    return found, a, b
+    return found, a, b, g
 
 
 def _scan(
@@ -302,7 +309,7 @@ def _scan(
         i, used = i + 1, used + size
         grid = x[act, None] + step[act, None] * np.arange(size + 1.0)[None, :]
         grid = np.minimum(grid, hi[act, None])
-        got, a[act], b[act] = _first_gap(t, rows[act], grid, closing)
+        got, a[act], b[act], _ = _first_gap(t, rows[act], grid, closing)
         over = ~got & (grid[:, -1] >= hi[act])
         state[act[got]] = 1
         state[act[over]] = 0
@@ -311,16 +318,20 @@ def _scan(
     return a, b, state
 
 
-def _narrow(
-    t: _Rows, rows: IntArray, a: FloatArray, b: FloatArray, closing: bool
-) -> tuple[FloatArray, FloatArray]:
-    """Shrink crossing gaps [a, b] (b past the crossing) ``_SUB``-fold per round, keeping the
-    first crossing."""
-    for _ in range(_ROUNDS if closing else _ROUNDS_OPEN):
+def _narrow(t: _Rows, rows: IntArray, a: FloatArray, b: FloatArray, closing: bool) -> FloatArray:
+    """The crossing in gaps [a, b] (b past it): ``_SUB``-fold subdivision rounds keeping the first
+    crossing (doubtful sub-gaps checked in the first round: later ones are 32× finer), then the
+    secant of the last gap for a closing, its end past the crossing for an opening."""
+    g = np.full((2, rows.size), np.nan)
+    for i in range(_ROUNDS if closing else _ROUNDS_OPEN):
         sub = a[:, None] + (b - a)[:, None] * _SUBSTEPS[None, :]
-        got, sa, sb = _first_gap(t, rows, sub, closing)
-        a, b = np.where(got, sa, a), np.where(got, sb, b)
-    return a, b
+        got, sa, sb, sg = _first_gap(t, rows, sub, closing, 0 if i == 0 else _LEVELS)
+        a, b, g = np.where(got, sa, a), np.where(got, sb, b), np.where(got, sg, g)
+    if not closing:
+        return b
+    frac = np.clip(-g[0] / (g[1] - g[0]), 0.0, 1.0)
+    out: FloatArray = np.where(np.isfinite(frac) & (g[0] <= 0.0), a + (b - a) * frac, 0.5 * (a + b))
+    return out
 
 
 def _segments_below(lower: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -358,7 +369,7 @@ def _open(t: _Rows) -> tuple[FloatArray, NDArray[np.int8]]:
         hi = np.minimum(ends[sel, k] * (1.0 + 1e-9) + 1e-15, 1.0)
         a, b, got = _scan(t, late[sel], lo, hi, closing=False)
         found = got == 1
-        _, x_open[late[sel[found]]] = _narrow(t, late[sel[found]], a[found], b[found], False)
+        x_open[late[sel[found]]] = _narrow(t, late[sel[found]], a[found], b[found], False)
         state[late[sel]] = got
     return x_open, state
 
@@ -369,7 +380,8 @@ def _close(t: _Rows, rows: IntArray, x_open: FloatArray) -> tuple[FloatArray, ND
     # L ≤ U: the lower envelope cannot reach thr² before the upper one, so both from x_open
     nu, m = len(t.us), rows.size
     env = np.concatenate([t.upper[:, rows], t.lower[:, rows]]).reshape(-1, 7)
-    a, b = _first_nonneg(env, np.tile(x_open, 2 * nu))
+    first = np.repeat([True, False], nu * m)  # the start must be the first: the end need not
+    a, b = _first_nonneg(env, np.tile(x_open, 2 * nu), first)
     start = np.maximum(np.minimum(a[: nu * m].reshape(nu, m).min(axis=0), 1.0), x_open)
     hi = np.minimum(b[nu * m :].reshape(nu, m).min(axis=0), 1.0)
     sure = np.max([horner(low, hi[:, None])[0][:, 0] for low in t.lower[:, rows]], axis=0) > 0
@@ -378,8 +390,7 @@ def _close(t: _Rows, rows: IntArray, x_open: FloatArray) -> tuple[FloatArray, ND
     state[(state == 0) & (hi < 1.0)] = -1  # past the bracket without a crossing: rounding
     x = np.ones(rows.size)
     found = state == 1
-    a, b = _narrow(t, rows[found], a[found], b[found], closing=True)
-    x[found] = 0.5 * (a + b)
+    x[found] = _narrow(t, rows[found], a[found], b[found], closing=True)
     return x, state
 
 
