@@ -57,6 +57,7 @@ _SUB, _LEVELS, _ROUNDS, _ROUNDS_OPEN = 32, 2, 2, 1
 _SUBSTEPS = np.linspace(0.0, 1.0, _SUB + 1)
 #: First samples of an envelope's sign change, as fractions of [x0, 1].
 _GEOM = np.concatenate([[0.0], np.geomspace(1e-12, 1.0, 48)])
+_BISECT = np.linspace(0.0, 1.0, 65)
 
 
 def _basis_gram(
@@ -230,15 +231,15 @@ def _first_nonneg(
 
 
 def _bisect(coef: FloatArray, x: FloatArray, j: IntArray) -> tuple[FloatArray, FloatArray]:
-    """Bracket (a, b), b/a − 1 ≲ 1e-4, of a sign change (< 0 at a, ≥ 0 at b) of polynomials
-    sampled at x (m, G) with the first non-negative sample j > 0 (a scan start need not be
-    sharper than its step)."""
+    """Bracket (a, b), b/a − 1 ≲ 2e-4, of a sign change (< 0 at a, ≥ 0 at b) of polynomials
+    sampled at x (m, G) with the first non-negative sample j > 0: two 64-fold subdivisions (a
+    scan start need not be sharper than its step)."""
     idx = np.arange(coef.shape[0])
     a, b = x[idx, j - 1], x[idx, j]
-    for _ in range(14):
-        mid = 0.5 * (a + b)
-        up = horner(coef, mid[:, None])[0][:, 0] >= 0.0
-        a, b = np.where(up, a, mid), np.where(up, mid, b)
+    for _ in range(2):
+        sub = a[:, None] + (b - a)[:, None] * _BISECT[None, :]
+        k = np.argmax(horner(coef, sub)[0] >= 0.0, axis=1)  # the last point is ≥ 0
+        a, b = sub[idx, np.maximum(k - 1, 0)], sub[idx, k]
     return a, b
 
 
@@ -360,6 +361,10 @@ def _open(t: _Rows) -> tuple[FloatArray, NDArray[np.int8]]:
     state = np.ones(n, dtype=np.int8)
     late = np.nonzero(_hits(t.values(rows, np.zeros((n, 1))), closing=True)[:, 0])[0]
     state[late] = 0
+    # the usual late row never opens: one lower envelope rises from above thr² at x = 0
+    low = t.lower[:, late]
+    rising = (monotone_01(low.reshape(-1, 7)).reshape(low.shape[:2])) & (low[..., 0] > 0.0)
+    late = late[~(rising & (low.sum(axis=-1) > low[..., 0])).any(axis=0)]
     starts, ends = _segments_below(t.lower[:, late])
     for k in range(starts.shape[1]):
         sel = np.nonzero((state[late] == 0) & np.isfinite(starts[:, k]))[0]
