@@ -1,24 +1,27 @@
 """Horizons of apsidally precessing targets: an envelope bracket, then a certified scan.
 
 With ω̇ ≠ 0 the anchor's Jacobian (``jacobian_kernel`` with Φ_asc placed on u★) is a cubic in τ
-whose coefficients depend on the apsidal angle w = ω̇τ alone, so in x = (τ − τ_end)/cap
+whose coefficients are four functions of the apsidal angle w = ω̇τ alone (∂u/∂Φ_asc, the η and κ
+columns, η sin Φ + κ cos Φ), so in x = (τ − τ_end)/cap
 
     σ_u²(x) = ∑_{m=0}^{6} x^m F_m(w),   w = ω̇ (τ_end + cap·x),
 
-with each F_m a smooth 2π-periodic function of w. Sampling the F_m at 32 angles gives their
-Fourier series; the padded sums ∑_k k^p |c_k| (p = 0, 1, 2) bound the oscillation and its first
-two w-derivatives. For x ≥ 0 that yields
+each F_m a smooth 2π-periodic function of w built from one Gram matrix per target (the same for
+every anchor). The F_m at 32 angles give their extremes (padded by max|F_m''| h²/8) and Fourier
+sums ∑_k k^p |c_k| (padded) that bound |F_m'| and |F_m''|. For x ≥ 0 that yields
 
 * an envelope L(x) ≤ σ_u²(x) ≤ U(x) of two polynomials: no window can close before U reaches
-  thr², and one has closed once L exceeds it (their first roots bracket the crossing);
+  thr², and one has closed once L exceeds it; the crossing is searched between the two;
 * a curvature bound K(x) ≥ |d²σ_u²/dx²|, a polynomial with non-negative coefficients.
 
-Inside the bracket σ_u² is sampled with a step h (at most P_aps/12) chosen so that K h²/8 is 1 %
-of thr²: a sample gap whose two ends lie further than that below thr² cannot hide a crossing, and
-the few gaps that do not are subdivided. The first gap that crosses is narrowed by subdivision
-(first crossing sample each round) to ~1e-6 of the step. σ_u is evaluated exactly as by the grid
-search (:func:`ucbplan.core.horizon_grid.anchor_sigma_batch`). A row whose scan would need more
-than ``_MAX_SAMPLES`` samples is left to the grid search (reported by :func:`t_valid_apsidal`).
+Inside the bracket σ_u² is sampled every P_aps/12 (or finer); a sample gap is cleared when its
+ends lie further below thr² than K h²/8 (it cannot hide a crossing), and the others are
+subdivided 32-fold (twice at most). The first gap that crosses is narrowed by two 32-fold
+subdivisions (first crossing sample each round) and its secant. σ_u is evaluated exactly as by
+the grid search (:func:`ucbplan.core.horizon_grid.anchor_sigma_batch`), so the definition of the
+window is the same; a window is found however brief (the grid may step over one: its result then
+differs and a dense evaluation agrees with this one). A row whose scan would need more than
+``_MAX_SAMPLES`` samples is left to the grid search (reported by :func:`t_valid_apsidal`).
 """
 
 from __future__ import annotations
@@ -45,7 +48,7 @@ FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
 #: Samples of the apsidal angle per period for the Fourier bounds of the F_m.
 _N_ANGLE = 32
-#: Safety factor on the Fourier amplitude sums (aliasing of harmonics above 16).
+#: Safety factor on the Fourier sums (harmonics above 16 alias into them).
 _PAD = 1.25
 #: Scan samples in the first chunk (doubling per chunk up to the last); samples per row before
 #: it is left to the grid search.
@@ -182,6 +185,7 @@ def _setup(
     star: int,
     cap_s: float,
 ) -> _Rows:
+    """Envelopes (thr² subtracted) per u★ and the curvature bound (the largest over u★)."""
     gram = _basis_gram(pars, covs, tau_end, cap_s)
     rate = np.abs(pars[:, 6:7]) * cap_s
     lows, ups, curvs = [], [], []
