@@ -22,6 +22,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ucbplan.core.constants import DAY_S
 from ucbplan.core.ephemeris import ANCHORS, resolve_anchor
+from ucbplan.core.horizon_apsidal import t_valid_apsidal
 from ucbplan.core.horizon_grid import HORIZON_CAP_S, anchor_sigma_batch, oscillating, t_valid_grid
 from ucbplan.core.horizon_poly import t_valid_poly
 from ucbplan.core.params import EphemerisSource, PhaseParams
@@ -176,8 +177,10 @@ def t_valid_batch(
     direction : :data:`AFTER` (after the end of the observation, the default) or
     :data:`BEFORE` (before its start: the result is then −T/2 − τ of the closing, also ≥ 0);
     method : ``"analytic"`` (default) finds the window from the roots of the polynomial σ_u²(τ)
-    (:mod:`ucbplan.core.horizon_poly`) wherever σ_u does not oscillate and samples only the
-    oscillating rows; ``"grid"`` samples every row (:mod:`ucbplan.core.horizon_grid`).
+    (:mod:`ucbplan.core.horizon_poly`) wherever σ_u does not oscillate, and for apsidally
+    oscillating rows from an envelope bracket and a curvature-certified scan
+    (:mod:`ucbplan.core.horizon_apsidal`; a row it cannot settle within its sample budget goes
+    to the grid); ``"grid"`` samples every row (:mod:`ucbplan.core.horizon_grid`).
 
     A row whose σ_u never exceeds the threshold (e.g. a zero covariance) gets the search cap
     :data:`HORIZON_CAP_S`; one that never meets it gets 0.
@@ -197,11 +200,8 @@ def t_valid_batch(
     sampled = [(osc, 32)]  # small chunks: fine grids differ per row
     if method == "grid":
         sampled.append((~osc, 256))
-    elif not osc.all():
-        flat = np.nonzero(~osc)[0]
-        out[flat] = t_valid_poly(
-            pars[flat], covs[flat], t_obs[flat], thr[flat], anchor_u_star, star, HORIZON_CAP_S
-        )
+    else:
+        sampled = [(_analytic(pars, covs, t_obs, thr, anchor_u_star, star, osc, out), 32)]
     for mask, size in sampled:
         idx = np.nonzero(mask)[0]
         for start in range(0, idx.size, size):
@@ -210,6 +210,32 @@ def t_valid_batch(
                 pars[sel], covs[sel], t_obs[sel], thr[sel], anchor_u_star, star, bool(osc[sel[0]])
             )
     return out
+
+
+def _analytic(
+    pars: FloatArray,
+    covs: FloatArray,
+    t_obs: FloatArray,
+    thr: FloatArray,
+    us: Sequence[float],
+    star: int,
+    osc: NDArray[np.bool_],
+    out: FloatArray,
+) -> NDArray[np.bool_]:
+    """Fill ``out`` by the σ_u² roots (rows with ``osc`` False) and the apsidal envelope search
+    (``osc`` True); return the rows left for the grid search."""
+    left = np.zeros(pars.shape[0], dtype=bool)
+    flat, prec = np.nonzero(~osc)[0], np.nonzero(osc)[0]
+    if flat.size:
+        out[flat] = t_valid_poly(
+            pars[flat], covs[flat], t_obs[flat], thr[flat], us, star, HORIZON_CAP_S
+        )
+    if prec.size:
+        out[prec], unresolved = t_valid_apsidal(
+            pars[prec], covs[prec], t_obs[prec], thr[prec], us, star, HORIZON_CAP_S
+        )
+        left[prec[unresolved]] = True
+    return left
 
 
 def _time_reversed(pars: FloatArray, covs: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -255,7 +281,8 @@ def t_valid(
     Notes
     -----
     Eq. T_valid_alpha and the text around Table 4. When ω̇ ≠ 0, σ_u oscillates on the apsidal
-    period; the grid is refined to P_aps/24 around the threshold so the first closing is found.
+    period; the first closing is found inside an envelope bracket by a scan whose sample gaps are
+    cleared by a curvature bound (:mod:`ucbplan.core.horizon_apsidal`).
     """
     p, cov, t_obs = _unpack(target)
     us = [float(anchor_u_star)] if np.isscalar(anchor_u_star) else list(anchor_u_star)  # type: ignore[arg-type]

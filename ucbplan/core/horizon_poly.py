@@ -19,7 +19,16 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["sigma2_coefficients", "t_valid_poly"]
+__all__ = [
+    "anchor_phase",
+    "horner",
+    "monotone_01",
+    "power_gram",
+    "roots_01",
+    "shift_matrix",
+    "sigma2_coefficients",
+    "t_valid_poly",
+]
 
 FloatArray = NDArray[np.float64]
 _BINOM = np.array([[math.comb(k, j) for j in range(4)] for k in range(4)], dtype=np.float64)
@@ -27,11 +36,13 @@ _BINOM = np.array([[math.comb(k, j) for j in range(4)] for k in range(4)], dtype
 _REL_ZERO = 1e-15
 
 
-def _anchor_phase(pars: FloatArray, u_star: float, star: int) -> tuple[FloatArray, FloatArray]:
-    """sin, cos of Φ_asc at the anchor, as in the grid search (two fixed-point steps)."""
-    eta, kap = pars[:, 4], pars[:, 5]
+def anchor_phase(
+    eta: FloatArray, kap: FloatArray, u_star: float, star: int
+) -> tuple[FloatArray, FloatArray]:
+    """sin, cos of Φ_asc at the anchor for (η, κ) of any shape, as in the grid search (two
+    fixed-point steps)."""
     eps = 0.0 if star == 1 else math.pi
-    phi = np.full(pars.shape[0], u_star - eps)
+    phi = np.full(np.shape(eta), u_star - eps)
     if np.any(eta != 0.0) or np.any(kap != 0.0):
         for _ in range(2):
             phi = u_star - eps - (2 * kap * np.sin(phi) - 2 * eta * np.cos(phi))
@@ -52,8 +63,8 @@ def sigma2_coefficients(
     ``jacobian_kernel`` at the anchor is ∑_k b_k τ^k with the b_k below.
     """
     n = pars.shape[0]
-    s, c = _anchor_phase(pars, u_star, star)
     eta, kap = pars[:, 4], pars[:, 5]
+    s, c = anchor_phase(eta, kap, u_star, star)
     d = 1.0 + 2.0 * kap * c + 2.0 * eta * s
     b = np.zeros((n, 4, 7))
     b[:, 0, 0] = 0.5 * d
@@ -63,12 +74,28 @@ def sigma2_coefficients(
     b[:, 1, 6] = -2.0 * (eta * s + kap * c)
     b[:, 2, 2] = math.pi * d / 2.0
     b[:, 3, 3] = math.pi * d / 6.0
+    return power_gram(b, covs, tau_end, scale_s)
+
+
+def shift_matrix(tau_end: FloatArray, scale_s: float) -> FloatArray:
+    """S (n, 4, 4) with τ^k = ∑_j S[k, j] x^j for x = (τ − τ_end)/scale."""
     # τ^k = ∑_j C(k, j) τ_end^(k−j) scale^j x^j
     powers = np.arange(4)
     diff = powers[:, None] - powers[None, :]
     te = tau_end[:, None, None] ** np.maximum(diff, 0)[None]
-    shift = np.where(diff[None] >= 0, _BINOM[None] * te, 0.0) * scale_s ** powers[None, None, :]
-    bx = np.einsum("nkj,nki->nji", shift, b)
+    out: FloatArray = (
+        np.where(diff[None] >= 0, _BINOM[None] * te, 0.0) * scale_s ** powers[None, None, :]
+    )
+    return out
+
+
+def power_gram(b: FloatArray, covs: FloatArray, tau_end: FloatArray, scale_s: float) -> FloatArray:
+    """Coefficients (n, 7) in x = (τ − τ_end)/scale of (∑_k b_k τ^k) C (∑_k b_k τ^k)ᵀ.
+
+    ``b`` (n, 4, 7): the Jacobian's coefficients of τ^0..τ^3; ``covs`` (n, 7, 7).
+    """
+    n = b.shape[0]
+    bx = np.einsum("nkj,nki->nji", shift_matrix(tau_end, scale_s), b)
     m = bx @ covs @ np.swapaxes(bx, 1, 2)
     coef = np.zeros((n, 7))
     for j in range(4):
@@ -77,7 +104,7 @@ def sigma2_coefficients(
     return coef
 
 
-def _horner(coef: FloatArray, x: FloatArray) -> tuple[FloatArray, FloatArray]:
+def horner(coef: FloatArray, x: FloatArray) -> tuple[FloatArray, FloatArray]:
     """Value and derivative of polynomials (n, D+1) ascending at points x (n, m)."""
     val = np.zeros_like(x) + coef[:, -1:]
     der = np.zeros_like(x)
@@ -96,7 +123,7 @@ def _bernstein_matrix(m: int) -> FloatArray:
     return out
 
 
-def _monotone(coef: FloatArray) -> NDArray[np.bool_]:
+def monotone_01(coef: FloatArray) -> NDArray[np.bool_]:
     """Rows whose polynomial is strictly monotone on [0, 1] (its derivative's Bernstein
     coefficients all share one strict sign: a sufficient condition)."""
     width = coef.shape[1]
@@ -116,7 +143,7 @@ def _monotone_root(coef: FloatArray) -> FloatArray:
     rising = coef.sum(axis=1) > coef[:, 0]  # P(1) > P(0)
     x = np.full(coef.shape[0], 0.5)
     for _ in range(100):
-        val, der = _horner(coef, x[:, None])
+        val, der = horner(coef, x[:, None])
         val, der = val[:, 0], der[:, 0]
         above = (val > 0.0) == rising  # the root is below x
         hi, lo = np.where(above, x, hi), np.where(above, lo, x)
@@ -131,21 +158,29 @@ def _monotone_root(coef: FloatArray) -> FloatArray:
     return x
 
 
-def _roots_01(coef: FloatArray) -> FloatArray:
+def roots_01(coef: FloatArray) -> FloatArray:
     """Real roots in (0, 1) of each row's polynomial (ascending), NaN-padded to (n, D).
 
     A polynomial monotone on [0, 1] (the usual σ_u², growing after the end of the information)
     has at most one root there, found by :func:`_monotone_root`; the others take the
-    eigenvalues of their companion matrix.
+    eigenvalues of their companion matrix (:func:`companion_roots_01`).
     """
     n, width = coef.shape
     out = np.full((n, width - 1), np.nan)
-    mono = _monotone(coef)
+    mono = monotone_01(coef)
     p0, p1 = coef[:, 0], coef.sum(axis=1)
     one = np.nonzero(mono & (p0 * p1 < 0.0))[0]
     if one.size:
         out[one, 0] = _monotone_root(coef[one])
-    coef = np.where(mono[:, None], 0.0, coef)  # done: no rows left for the eigenvalues
+    rest = np.nonzero(~mono)[0]
+    out[rest] = companion_roots_01(coef[rest])
+    return out
+
+
+def companion_roots_01(coef: FloatArray) -> FloatArray:
+    """Real roots in (0, 1) from companion-matrix eigenvalues, Newton-polished, NaN-padded."""
+    n, width = coef.shape
+    out = np.full((n, width - 1), np.nan)
     size = np.sum(np.abs(coef), axis=1)  # bound of |p| on [0, 1]
     live = np.abs(coef) > _REL_ZERO * size[:, None]
     deg = np.where(live.any(axis=1), width - 1 - np.argmax(live[:, ::-1], axis=1), 0)
@@ -160,7 +195,7 @@ def _roots_01(coef: FloatArray) -> FloatArray:
         z = np.linalg.eigvals(comp)
         x = np.where(np.abs(z.imag) <= 1e-6 * (1.0 + np.abs(z.real)), z.real, np.nan)
         for _ in range(3):  # Newton polish on the unscaled polynomial
-            val, der = _horner(coef[rows, : d + 1], np.nan_to_num(x))
+            val, der = horner(coef[rows, : d + 1], np.nan_to_num(x))
             with np.errstate(divide="ignore", invalid="ignore"):
                 step = np.where(der != 0.0, val / der, 0.0)
             x = x - np.where(np.abs(step) < 1e-3, step, 0.0)
@@ -192,11 +227,11 @@ def t_valid_poly(
         new = np.ones(n, dtype=bool)
         for q in polys[:j]:
             new &= ~np.all(p == q, axis=1)
-        roots[new, 6 * j : 6 * j + 6] = _roots_01(p[new])
+        roots[new, 6 * j : 6 * j + 6] = roots_01(p[new])
     pts = np.sort(np.concatenate([np.zeros((n, 1)), roots, np.ones((n, 1))], axis=1), axis=1)
     pts = np.where(np.isnan(pts), 1.0, pts)
     mid = 0.5 * (pts[:, :-1] + pts[:, 1:])
-    worst = np.max([_horner(p, mid)[0] for p in polys], axis=0)
+    worst = np.max([horner(p, mid)[0] for p in polys], axis=0)
     cols = np.arange(mid.shape[1])
     # a zero-length segment (a repeated root) takes the state of the segment before it
     src = np.maximum.accumulate(np.where(pts[:, 1:] > pts[:, :-1], cols[None, :], 0), axis=1)
