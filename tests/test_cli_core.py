@@ -277,3 +277,13 @@ def test_horizon_empty_directory(tmp_path: Path) -> None:
     res = _run("horizon", str(tmp_path))
     assert res.returncode == 2
     assert "no *.yaml target files" in res.stderr
+
+
+@pytest.mark.parametrize("alpha", ["2.556621066963388e+77", "0", "-1", "nan", "11"])
+def test_horizon_alpha_outside_its_range_is_one_line_exit_2(hm_cnc_path: Path, alpha: str) -> None:
+    """Regression (found by the CLI fuzz test): --alpha 2.6e77 overflowed inside the root
+    finder and ended as an internal error; horizon now checks --alpha like plan does."""
+    res = _run("horizon", str(hm_cnc_path), "--alpha", alpha)
+    assert res.returncode == 2, res.stderr
+    assert "--alpha: expected a number in (0, 10]" in res.stderr
+    assert "Traceback" not in res.stderr and len(res.stderr.strip().splitlines()) == 1

@@ -31,8 +31,10 @@ from ucbplan.errors import InputError, SchemaError, shorten
 __all__ = [
     "EXPONENT_FLOAT",
     "MAX_ALIASES",
+    "MAX_ALPHA",
     "MAX_TEXT_BYTES",
     "MAX_YAML_BYTES",
+    "check_alpha",
     "check_int",
     "check_number",
     "check_range",
@@ -245,3 +247,19 @@ def check_number(
     """
     if value is not None:
         check_range(name, value, low, high, unit, why, low_open=True)
+
+
+#: Largest planning margin α (1 spends the whole phase tolerance; more is no longer a margin).
+MAX_ALPHA = 10.0
+
+
+def check_alpha(alpha: object) -> float:
+    """``--alpha``, the planning margin on the phase tolerance, in (0, :data:`MAX_ALPHA`].
+
+    Raises
+    ------
+    InputError
+        Otherwise (one line naming the option, the range and the value).
+    """
+    why = "margin on the phase tolerance: 1 spends all of it"
+    return check_range("--alpha", alpha, 0.0, MAX_ALPHA, "", why, low_open=True)

@@ -255,9 +255,10 @@ def horizon(
     directories) give one row per target, computed in one vectorised pass.
     """
     fmt = pick_format(output, fmt, TABLE_FORMATS)
+    from ucbplan.inputs import check_alpha
+
     for a in alpha:
-        if not (a > 0 and math.isfinite(a)):
-            raise UcbplanError(f"--alpha must be positive, got {a}")
+        check_alpha(a)
     paths = _expand_targets(target)
     if len(paths) > 1:
         if plot is not None:

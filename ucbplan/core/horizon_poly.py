@@ -169,7 +169,7 @@ def roots_01(coef: FloatArray) -> FloatArray:
     out = np.full((n, width - 1), np.nan)
     mono = monotone_01(coef)
     p0, p1 = coef[:, 0], coef.sum(axis=1)
-    one = np.nonzero(mono & (p0 * p1 < 0.0))[0]
+    one = np.nonzero(mono & (((p0 < 0.0) & (p1 > 0.0)) | ((p0 > 0.0) & (p1 < 0.0))))[0]
     if one.size:
         out[one, 0] = _monotone_root(coef[one])
     rest = np.nonzero(~mono)[0]

@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 
 from ucbplan.core.smearing import parse_smear_budget
 from ucbplan.errors import InputError, UcbplanError, shorten
-from ucbplan.inputs import check_int, check_range
+from ucbplan.inputs import check_alpha, check_int, check_range
 from ucbplan.observing.blocks import MAX_BLOCK_S, ExposurePlan
 from ucbplan.observing.constraints import (
     AirmassConstraint,
@@ -64,8 +64,6 @@ MODES = (
 MAX_ABS_U_RAD = 4.0 * math.pi
 #: Largest RV precision or semi-amplitude [km/s] (white-dwarf binaries have K < 3000 km/s).
 MAX_SPEED_KMS = 1.0e4
-#: Largest planning margin α (1 spends the whole phase tolerance; more is no longer a margin).
-MAX_ALPHA = 10.0
 #: Most sessions per target and night (a 5-min binary has ~100 u = 0 / π pairs in a night).
 MAX_SESSIONS = 1000
 #: Longest ``--max-smear`` text [characters].
@@ -300,8 +298,7 @@ class PlanSettings:
         self.constraints(None)  # twilight, airmass, Moon and zenith-hole limits
         if not isinstance(self.exposure, ExposurePlan):
             raise InputError(f"exposure: expected an ExposurePlan, got {shorten(self.exposure)}")
-        why = "margin on the phase tolerance: 1 spends all of it"
-        check_range("--alpha", self.alpha, 0.0, MAX_ALPHA, "", why, low_open=True)
+        check_alpha(self.alpha)
         check_int("n_epochs", self.n_epochs, 1, 10**6, "epochs sharing the tolerance")
         for name, value in (("--sigma-v", self.sigma_v_kms), ("--k-eff", self.k_eff_kms)):
             if value is not None:
