@@ -22,11 +22,13 @@ All lines share one orbital phase: theta_p = (n/2) theta_2 + s wdot t with s = 0
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ucbplan.lisa import _fused
 from ucbplan.lisa.response import LINKS, ResponseGrid, band_weights, tdi_coefficients
 
 __all__ = [
@@ -194,31 +196,48 @@ def _gemm(a: NDArray[np.float64], b: NDArray[np.float64], out: NDArray[np.float6
         np.matmul(a, b[:, j : j + width], out=out[:, j : j + width])
 
 
-def _quadratic_cis(
+def _quadratic_tables(
     a: NDArray[np.float64] | None,
     b: NDArray[np.float64],
     c: NDArray[np.float64] | None,
     m: int,
-) -> NDArray[np.complex128]:
-    """exp(i (a + b k + c k^2)) for k = 0 .. m - 1, shape (W, m), from short tables.
+) -> tuple[NDArray[np.complex128], NDArray[np.complex128], NDArray[np.complex128] | None]:
+    """Tables of exp(i (a + b k + c k^2)), k = Q p + q < m: (A_p, B_q, D_q), each (W, .).
 
-    With k = Q p + q the phase is (a + b Q p + c Q^2 p^2) + (b q + c q^2) + 2 c Q p q: a table
-    over p, a table over q, and D_q^p with D_q = exp(2 i c Q q). The powers of D are built by
-    doubling (D^(2j) from D^j squared, the block p + j from the block p times D^j), so each
-    value is a product of at most ~2 log2(P) rounded factors: a few 1e-15 relative, for
-    P + 2Q sines and cosines per walker instead of m. ``a``, ``c`` None: zero.
+    The phase is (a + b Q p + c Q^2 p^2) + (b q + c q^2) + 2 c Q p q, so the value is
+    A_p B_q D_q^p with A_p = exp(i (a + b Q p + c Q^2 p^2)), B_q = exp(i (b q + c q^2)) and
+    D_q = exp(2 i c Q q): P + 2Q sines and cosines per walker instead of m. ``a``, ``c`` None:
+    zero (then D is None: a plain outer product).
     """
     n_p = -(-m // _Q)
     p, q = np.arange(n_p, dtype=float), np.arange(_Q, dtype=float)
     b = b[:, None]
     rows = (_Q * b) * p if a is None else a[:, None] + (_Q * b) * p
     if c is None:
-        out = _cis(rows)[:, :, None] * _cis(b * q)[:, None, :]
-        return out.reshape(b.shape[0], -1)[:, :m]
+        return _cis(rows), _cis(b * q), None
     c = c[:, None]
+    rows += (_Q * _Q) * c * p * p
+    return _cis(rows), _cis(b * q + c * q * q), _cis((2.0 * _Q) * c * q)
+
+
+def _quadratic_cis(
+    a: NDArray[np.float64] | None,
+    b: NDArray[np.float64],
+    c: NDArray[np.float64] | None,
+    m: int,
+) -> NDArray[np.complex128]:
+    """exp(i (a + b k + c k^2)) for k = 0 .. m - 1, shape (W, m), from :func:`_quadratic_tables`.
+
+    The powers D_q^p are built by doubling (D^(2j) from D^j squared, the block p + j from the
+    block p times D^j), so each value is a product of at most ~2 log2(P) rounded factors: a few
+    1e-15 relative.
+    """
+    rows, cols, step = _quadratic_tables(a, b, c, m)
+    if step is None:
+        return (rows[:, :, None] * cols[:, None, :]).reshape(b.shape[0], -1)[:, :m]
+    n_p = rows.shape[1]
     out = np.empty((b.shape[0], n_p, _Q), dtype=complex)
-    out[:, 0] = _cis(b * q + c * q * q)
-    step = _cis((2.0 * _Q) * c * q)  # D^1
+    out[:, 0] = cols
     done = 1
     while done < n_p:
         size = min(done, n_p - done)
@@ -226,8 +245,7 @@ def _quadratic_cis(
         done += size
         if done < n_p:
             step *= step
-    rows += (_Q * _Q) * c * p * p
-    out *= _cis(rows)[:, :, None]
+    out *= rows[:, :, None]
     return out.reshape(b.shape[0], -1)[:, :m]
 
 
@@ -317,6 +335,10 @@ class FourLineModel:
         self._jump_w = np.stack([w[1] for w in weights])[:, None, :]
         self._t3 = grid.t_s**3 / 3.0
         self._tau = grid.t_s / t_obs
+        # per modelled line: index in LINES, band, harmonic n, apsidal sign s (fused kernel)
+        self._line_table = np.array(
+            [(li, b, LINES[li].harmonic, LINES[li].shift) for li, b in self.lines], dtype=np.int64
+        )
         self._bases: dict[tuple[int, int, int], NDArray[np.float64]] = {}
 
     def _link_weights(self) -> tuple[NDArray[np.complex128], NDArray[np.complex128]]:
@@ -425,7 +447,7 @@ class FourLineModel:
     def _batch(self, *flat: NDArray[np.float64]) -> NDArray[np.complex128]:
         """Per-walker coefficients for the whole batch, then the sampled arrays in blocks of
         _CHUNK walkers (cache blocking)."""
-        amp, f0, fd, ci, ps, ph, et, ka, wd, fdd = flat
+        amp, f0, fd, ci, ps, _ph, et, ka, wd, fdd = flat
         coef = self._amplitude_rows(amp, ci, ps, et, ka)  # (lines, W, 4)
         cubic = bool(np.any(fdd))
         # f(t) - f_ref(t) of the n = 2 line times pi, as a polynomial in tau = t / T
@@ -445,17 +467,33 @@ class FourLineModel:
             coef = (coef[..., None] * powers.reshape(*beta.shape[:2], 1, -1)).reshape(
                 *beta.shape[:2], -1
             )
-        blocks = [
-            self._block(
-                coef[:, i : i + _CHUNK],
-                None if poly else beta[:, i : i + _CHUNK],
-                n_terms,
-                [x[i : i + _CHUNK] for x in (f0, fd, ph, fdd, wd)],
-                cubic,
+        fused = _fused.kernels()
+        if fused is not None and not cubic:  # (the compiled loop takes quadratic phases)
+            return self._blocks(
+                lambda sl: self._block_fused(
+                    fused,
+                    coef[:, sl],
+                    None if poly else beta[:, sl],
+                    n_terms,
+                    [x[sl] for x in flat],
+                    cubic,
+                ),
+                f0.size,
             )
-            for i in range(0, f0.size, _CHUNK)
-        ]
-        return blocks[0] if len(blocks) == 1 else np.concatenate(blocks)
+        return self._blocks(
+            lambda sl: self._block(
+                coef[:, sl], None if poly else beta[:, sl], n_terms, [x[sl] for x in flat], cubic
+            ),
+            f0.size,
+        )
+
+    @staticmethod
+    def _blocks(
+        block: Callable[[slice], NDArray[np.complex128]], n_walk: int
+    ) -> NDArray[np.complex128]:
+        """``block`` over consecutive slices of at most _CHUNK walkers, concatenated."""
+        out = [block(slice(i, i + _CHUNK)) for i in range(0, n_walk, _CHUNK)]
+        return out[0] if len(out) == 1 else np.concatenate(out)
 
     def _amplitude_rows(
         self,
@@ -483,20 +521,17 @@ class FourLineModel:
         """A and E of one block of walkers, (W, n_bands, 2, N).
 
         ``coef``: walker rows of each line's link sum (polynomial rows, or the four amplitude
-        parts with ``beta`` for Horner's rule); ``source``: f0, fdot, phase, fddot, wdot.
+        parts with ``beta`` for Horner's rule); ``source``: the parameters (order of
+        :meth:`bands`).
         """
-        f0, fd, ph, fdd, wd = source
+        f0, fd, ph, fdd, wd = (source[i] for i in (1, 2, 5, 9, 8))
         n_walk, n = f0.size, self.grid.n
         carriers = self._carriers(self._orbital_carrier(f0, fd, ph, fdd, cubic), wd)
         slow = np.empty((n_walk, self.n_bands, 2, n + 1), dtype=complex)
         filled: set[int] = set()
         for i, (li, b) in enumerate(self.lines):
             out = slow[:, b] if b not in filled else np.empty((n_walk, 2, n + 1), dtype=complex)
-            acc = out.view(np.float64).reshape(n_walk, -1)  # (W, ch * 2M) view
-            if beta is None:
-                _gemm(coef[i], self._poly_basis(li, n_terms, cubic + 1), acc)
-            else:
-                self._horner_sum(coef[i], beta[i], li, n_terms, acc)
+            self._link_sum(coef[i], None if beta is None else beta[i], li, n_terms, 1 + cubic, out)
             out *= carriers[li][:, None, :]
             if b in filled:
                 slow[:, b] += out
@@ -504,6 +539,37 @@ class FourLineModel:
         spec = np.fft.fft(slow[..., :n], axis=-1)  # fftshifted by the (-1)^m in the moments
         spec *= self._dft_w
         spec += (slow[..., n] - slow[..., 0])[..., None] * self._jump_w
+        return spec
+
+    def _block_fused(
+        self,
+        fused: tuple[Callable[..., None], Callable[..., None]],
+        coef: NDArray[np.float64],
+        beta: NDArray[np.float64] | None,
+        n_terms: int,
+        source: list[NDArray[np.float64]],
+        cubic: bool,
+    ) -> NDArray[np.complex128]:
+        """:meth:`_block` with the compiled loops of :mod:`ucbplan.lisa._fused`: link sums by
+        BLAS, then one loop for carriers and bands, the FFT, one loop for the bin weights."""
+        assemble, weigh = fused
+        f0, fd, ph, wd = (source[i] for i in (1, 2, 5, 8))
+        n_walk, n = f0.size, self.grid.n
+        orbit = _quadratic_tables(*self._orbit_phase(f0, fd, ph), n + 1)
+        apsis = _quadratic_tables(None, wd * (self.grid.t_obs_s / n), None, n + 1)
+        tables = np.zeros((n_walk, 5, max(_Q, orbit[0].shape[1])), dtype=complex)
+        for row, table in enumerate((*orbit, *apsis[:2])):
+            assert table is not None
+            tables[:, row, : table.shape[1]] = table
+        sums = np.empty((len(self.lines), n_walk, 2, n + 1), dtype=complex)
+        for i, (li, _) in enumerate(self.lines):
+            beta_i = None if beta is None else beta[i]
+            self._link_sum(coef[i], beta_i, li, n_terms, 1 + cubic, sums[i])
+        x = np.empty((n_walk, self.n_bands, 2, n), dtype=complex)
+        jump = np.empty((n_walk, self.n_bands, 2), dtype=complex)
+        assemble(sums, self._line_table[:, 1:], tables, _Q, x, jump)
+        spec = np.fft.fft(x, axis=-1, out=x)  # fftshifted by the (-1)^m in the moments
+        weigh(spec, jump, self._dft_w[:, 0], self._jump_w[:, 0])
         return spec
 
     def _n_terms(self, df_tau: NDArray[np.float64], dwd: NDArray[np.float64]) -> int:
@@ -519,6 +585,15 @@ class FourLineModel:
         beta_max = 3.0 * float(np.max(drift)) + float(np.max(np.abs(dwd)))
         return _taylor_terms(beta_max * self._delay_max)
 
+    def _orbit_phase(
+        self, f0: NDArray[np.float64], fd: NDArray[np.float64], ph: NDArray[np.float64]
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """(a, b, c) of the heterodyned orbital phase a + b m + c m^2 at t_m = m T / N:
+        phi0/2 + 2 pi (f0/2 - f_het) t + pi/2 fdot t^2 (theta_2 / 2 without fddot)."""
+        step = self.grid.t_obs_s / self.grid.n
+        lin = 2.0 * np.pi * (0.5 * f0 - self._f_het) * step
+        return 0.5 * ph, lin, 0.5 * np.pi * fd * step * step
+
     def _orbital_carrier(
         self,
         f0: NDArray[np.float64],
@@ -529,13 +604,12 @@ class FourLineModel:
     ) -> NDArray[np.complex128]:
         """c1 = exp(i theta_2 / 2) heterodyned at f_het on the grid, (W, M).
 
-        Its phase phi0/2 + 2 pi (f0/2 - f_het) t + pi/2 (fdot t^2 + fddot t^3 / 3) is quadratic
-        in the sample index without fddot (:func:`_quadratic_cis`, t_m = m T / N).
+        Without fddot its phase is quadratic in the sample index (:meth:`_orbit_phase`,
+        :func:`_quadratic_cis`); with it, phi0/2 + 2 pi (f0/2 - f_het) t + pi/2 (fdot t^2 +
+        fddot t^3 / 3) is evaluated per sample.
         """
-        step = self.grid.t_obs_s / self.grid.n
         if not cubic:
-            lin = 2.0 * np.pi * (0.5 * f0 - self._f_het) * step
-            return _quadratic_cis(0.5 * ph, lin, 0.5 * np.pi * fd * step * step, self.grid.n + 1)
+            return _quadratic_cis(*self._orbit_phase(f0, fd, ph), self.grid.n + 1)
         t = self.grid.t_s[None, :]
         chirp = fd[:, None] * (t * t) + fdd[:, None] * self._t3
         chirp *= 0.5 * np.pi
@@ -565,6 +639,24 @@ class FourLineModel:
             if 3 in need:
                 out[3] = c2 * minus
         return out
+
+    def _link_sum(
+        self,
+        coef: NDArray[np.float64],
+        beta: NDArray[np.float64] | None,
+        line: int,
+        n_terms: int,
+        degree: int,
+        out: NDArray[np.complex128],
+    ) -> None:
+        """Link sums of one line into ``out`` (W, 2, M): polynomial rows (``beta`` None, one
+        product with :meth:`_poly_basis`; ``degree`` of beta in tau) or Horner's rule
+        (:meth:`_horner_sum`)."""
+        acc = out.view(np.float64).reshape(out.shape[0], -1)  # (W, ch * 2M) view
+        if beta is None:
+            _gemm(coef, self._poly_basis(line, n_terms, degree), acc)
+        else:
+            self._horner_sum(coef, beta, line, n_terms, acc)
 
     def _horner_sum(
         self,

@@ -1,0 +1,125 @@
+"""Optional compiled (numba) kernel of :class:`ucbplan.lisa.waveform.FourLineModel`.
+
+With numba installed (``pip install ucbplan[fast]``) the carriers, their products with the link
+sums and the band accumulation, and the per-bin weighting after the FFT run as two fused loops
+instead of about ten numpy passes over the (walker, band, channel, sample) arrays; the link sums
+stay one BLAS product per line.
+numba is imported, and the loops compiled (about a second, not cached on disk), only at the
+first waveform; without it :func:`kernels` returns None and the numpy path runs. Both paths
+compute the same sums (tests/test_lisa_waveform_kernel.py compares them).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+_kernels: tuple[Callable[..., None], Callable[..., None]] | None = None
+_tried = False
+
+#: Set to False to force the numpy path (tests, comparisons).
+enabled = True
+
+
+def kernels() -> tuple[Callable[..., None], Callable[..., None]] | None:
+    """(assemble, weigh) compiled by numba, or None if numba is absent or disabled."""
+    global _kernels, _tried
+    if not enabled:
+        return None
+    if not _tried:
+        _tried = True
+        try:
+            import numba
+        except ImportError:
+            return None
+        jit = numba.njit(cache=False, nogil=True, error_model="numpy")
+        _kernels = (jit(_assemble), jit(_weigh))
+    return _kernels
+
+
+def _assemble(
+    sums: NDArray[np.complex128],
+    lines: NDArray[np.int64],
+    tables: NDArray[np.complex128],
+    n_q: int,
+    x: NDArray[np.complex128],
+    jump: NDArray[np.complex128],
+) -> None:
+    """Multiply every line's link sum by its carrier and add it into its band.
+
+    sums (L, W, 2, M): link sums of the modelled lines; lines (L, 3): band, harmonic n and
+    apsidal sign s of each. tables (W, 5, >= P, Q) holds, for m = n_q p + q, the orbital carrier
+    c1 = exp(i theta_2 / 2) = A_p B_q D_q^p and the apsidal rotation exp(i wdot t) = H_p G_q
+    as rows A (first P entries), B, D, H (first P entries), G (see
+    :func:`ucbplan.lisa.waveform._quadratic_cis`); D_q^p is kept by one product per row.
+    The carrier of a line is c1^n exp(i s wdot t). Writes samples m < N into x
+    (W, bands, 2, N) and Y(T) - Y(0) into jump (W, bands, 2), overwriting both (lines of one
+    band must be adjacent; every band must have a line).
+    """
+    n_lines, n_walk, m_all = sums.shape[0], sums.shape[1], sums.shape[3]
+    n = m_all - 1
+    z = np.empty(m_all, dtype=np.complex128)  # c1
+    rot = np.empty(m_all, dtype=np.complex128)  # exp(i wdot t)
+    car = np.empty(m_all, dtype=np.complex128)
+    e = np.empty(n_q, dtype=np.complex128)
+    for w in range(n_walk):
+        for q in range(n_q):
+            e[q] = tables[w, 1, q]
+        for m0 in range(0, m_all, n_q):
+            p = m0 // n_q
+            if p > 0:
+                for q in range(n_q):
+                    e[q] = e[q] * tables[w, 2, q]
+            for q in range(min(n_q, m_all - m0)):
+                z[m0 + q] = tables[w, 0, p] * e[q]
+                rot[m0 + q] = tables[w, 3, p] * tables[w, 4, q]
+        for i in range(n_lines):
+            b, h, s = lines[i, 0], lines[i, 1], lines[i, 2]
+            first = i == 0 or lines[i - 1, 0] != b
+            for m in range(m_all):
+                c = z[m] if h == 1 else (z[m] * z[m] if h == 2 else z[m] * z[m] * z[m])
+                if s == 1:
+                    c = c * rot[m]
+                elif s == -1:
+                    c = c * rot[m].conjugate()
+                car[m] = c
+            for ch in range(2):
+                row = sums[i, w, ch]
+                out = x[w, b, ch]
+                if first:
+                    for m in range(n):
+                        out[m] = row[m] * car[m]
+                    jump[w, b, ch] = row[n] * car[n] - row[0] * car[0]
+                else:
+                    for m in range(n):
+                        out[m] += row[m] * car[m]
+                    jump[w, b, ch] += row[n] * car[n] - row[0] * car[0]
+
+
+def _weigh(
+    spec: NDArray[np.complex128],
+    jump: NDArray[np.complex128],
+    dft_w: NDArray[np.complex128],
+    jump_w: NDArray[np.complex128],
+) -> None:
+    """spec = spec dft_w + jump jump_w in place: spec (W, bands, 2, N), jump (W, bands, 2),
+    weights (bands, N) (:func:`ucbplan.lisa.response.band_weights`)."""
+    n_walk, n_bands, n_ch, n = spec.shape
+    for w in range(n_walk):
+        for b in range(n_bands):
+            for ch in range(n_ch):
+                dj = jump[w, b, ch]
+                for k in range(n):
+                    spec[w, b, ch, k] = spec[w, b, ch, k] * dft_w[b, k] + dj * jump_w[b, k]
+
+
+def describe() -> dict[str, Any]:
+    """Which waveform path runs here: {'path': 'numba' | 'numpy', 'numba': version or None}."""
+    try:
+        import numba
+    except ImportError:
+        return {"path": "numpy", "numba": None}
+    return {"path": "numba" if enabled else "numpy", "numba": numba.__version__}
