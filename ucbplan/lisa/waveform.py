@@ -141,8 +141,9 @@ def line_amplitudes(
     return h
 
 
-#: Walkers per internal block of :meth:`FourLineModel.bands` (cache blocking: the block's
-#: (walker, band, channel, sample) arrays stay in L2).
+#: Walkers per internal block of :meth:`FourLineModel.bands`: a sampler batch in one block (with
+#: the link sums as column-blocked BLAS products, 64 beat 8, 16 and 32: the per-block Python
+#: work outweighs the cache misses of the larger arrays).
 _CHUNK = 64
 
 #: Table length of the block split k = Q p + q of the slow-time index (the orbital carrier and the
@@ -163,7 +164,7 @@ _K_MAX = 24
 _GEMM_SERIAL = 65536 * 4
 
 #: Most rows (4 amplitude parts x monomials in beta) of the polynomial link sum; sources that
-#: need more Taylor terms use Horner's rule (:meth:`FourLineModel._link_sum`).
+#: need more Taylor terms use Horner's rule (:meth:`FourLineModel._horner_sum`).
 _POLY_ROWS = 48
 
 
@@ -476,7 +477,6 @@ class FourLineModel:
                     None if poly else beta[:, sl],
                     n_terms,
                     [x[sl] for x in flat],
-                    cubic,
                 ),
                 f0.size,
             )
@@ -548,10 +548,9 @@ class FourLineModel:
         beta: NDArray[np.float64] | None,
         n_terms: int,
         source: list[NDArray[np.float64]],
-        cubic: bool,
     ) -> NDArray[np.complex128]:
-        """:meth:`_block` with the compiled loops of :mod:`ucbplan.lisa._fused`: link sums by
-        BLAS, then one loop for carriers and bands, the FFT, one loop for the bin weights."""
+        """:meth:`_block` with the compiled loops of :mod:`ucbplan.lisa._fused` (no fddot):
+        link sums by BLAS, one loop for carriers and bands, the FFT, one loop for the weights."""
         assemble, weigh = fused
         f0, fd, ph, wd = (source[i] for i in (1, 2, 5, 8))
         n_walk, n = f0.size, self.grid.n
@@ -564,7 +563,7 @@ class FourLineModel:
         sums = np.empty((len(self.lines), n_walk, 2, n + 1), dtype=complex)
         for i, (li, _) in enumerate(self.lines):
             beta_i = None if beta is None else beta[i]
-            self._link_sum(coef[i], beta_i, li, n_terms, 1 + cubic, sums[i])
+            self._link_sum(coef[i], beta_i, li, n_terms, 1, sums[i])
         x = np.empty((n_walk, self.n_bands, 2, n), dtype=complex)
         jump = np.empty((n_walk, self.n_bands, 2), dtype=complex)
         assemble(sums, self._line_table[:, 1:], tables, _Q, x, jump)
