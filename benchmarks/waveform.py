@@ -12,6 +12,7 @@ Usage: ``python -m benchmarks --only waveform [--quick]``.
 
 from __future__ import annotations
 
+import os
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -79,7 +80,10 @@ def _paths(ours: Any, quick_params: dict[str, np.ndarray]) -> dict[str, Callable
 
     def on(path: str) -> Callable[..., Any]:
         def call(p: dict[str, np.ndarray]) -> Any:
-            _fused.enabled = path == "numba"
+            if path == "numba":
+                os.environ[_fused.ENV] = "1"
+            else:
+                os.environ.pop(_fused.ENV, None)
             return ours.bands(**p)
 
         return call
@@ -89,7 +93,6 @@ def _paths(ours: Any, quick_params: dict[str, np.ndarray]) -> dict[str, Callable
         import numba  # noqa: F401
     except ImportError:
         return paths
-    _fused.WARMUP = 0
     paths["numba"] = on("numba")
     return paths
 
@@ -102,7 +105,7 @@ def _compile_seconds(ours: Any, params: dict[str, np.ndarray]) -> float | None:
         import numba  # noqa: F401
     except ImportError:
         return None
-    _fused.enabled, _fused.WARMUP = True, 0
+    os.environ[_fused.ENV] = "1"
     t0 = time.perf_counter()
     ours.bands(**params)
     return time.perf_counter() - t0
@@ -137,7 +140,7 @@ def rows(quick: bool) -> list[dict[str, object]]:
     )
     from ucbplan.lisa import _fused
 
-    _fused.enabled = True  # the likelihood as a sampler run uses it (numba if installed)
+    os.environ.pop(_fused.ENV, None)  # the likelihood as a default run computes it (numpy)
     th = theta[:16]
     lk = _best_rates({"like": lambda: like.log_prob(th)}, 16, window, rounds)["like"]
     out.append(
@@ -168,7 +171,7 @@ def _row(
     if path == "numba":
         note = (
             f"optional numba loops (pip install ucbplan[fast]); import + compilation "
-            f"{compile_s:.1f} s once per process, after {WARMUP_NOTE}"
+            f"{compile_s:.1f} s once per process; on with UCBPLAN_NUMBA=1"
         )
     else:
         note = "numpy + BLAS (default; no compiled code)"
@@ -182,7 +185,3 @@ def _row(
         "met": bool(ratio >= GOAL) if w == 64 else None,
         "note": note if w == 64 else None,
     }
-
-
-#: When the compiled loops start in a normal run (ucbplan.lisa._fused.WARMUP).
-WARMUP_NOTE = "20,000 waveforms of a process (a sampler run; short runs stay on numpy)"

@@ -12,12 +12,14 @@ arithmetic before them), and the optional numba loops against the numpy path.
 
 from __future__ import annotations
 
+import sys
 from functools import cache
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from ucbplan.errors import UcbplanError
 from ucbplan.lisa import _fused, waveform
 from ucbplan.lisa.likelihood import model_for_target, source_from_target
 from ucbplan.lisa.waveform import FourLineModel
@@ -175,7 +177,7 @@ def test_kernel_matches_horner_with_per_sample_carriers(
     1e-13 of each band's largest value (measured 2e-14: round-off of phases of ~50 rad)."""
     model = _models(True)["ecc512"]
     p = _random_walkers(40, 11, fddot)
-    monkeypatch.setattr(_fused, "enabled", False)
+    monkeypatch.delenv(_fused.ENV, raising=False)
     new = model.bands(**p)
     monkeypatch.setattr(waveform, "_POLY_ROWS", 0)
     monkeypatch.setattr(waveform, "_quadratic_cis", _direct_carrier)
@@ -192,23 +194,24 @@ def test_numba_path_matches_numpy_path(case: str, monkeypatch: pytest.MonkeyPatc
     p = _random_walkers(70, 2)
     if case == "circ64":
         p |= {"eta": np.zeros(70), "kappa": np.zeros(70)}
-    monkeypatch.setattr(_fused, "enabled", False)
+    monkeypatch.delenv(_fused.ENV, raising=False)
     ref = model.bands(**p)
-    monkeypatch.setattr(_fused, "enabled", True)
-    monkeypatch.setattr(_fused, "WARMUP", 0)
+    monkeypatch.setenv(_fused.ENV, "1")
     assert _fused.kernels() is not None
     assert _fused.describe().startswith("numba")
     assert _max_rel_diff(model.bands(**p), ref) <= 1e-13
 
 
-def test_numba_waits_for_warmup(monkeypatch: pytest.MonkeyPatch) -> None:
-    """Short runs stay on the numpy path: nothing is compiled before WARMUP waveforms."""
+def test_numba_only_when_asked(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Off by default (every process on the same path: serial and parallel runs agree bit for
+    bit); asked for without numba, one clear error saying what to install."""
+    monkeypatch.delenv(_fused.ENV, raising=False)
+    assert _fused.kernels() is None and _fused.describe() == "numpy"
+    monkeypatch.setenv(_fused.ENV, "1")
     monkeypatch.setattr(_fused, "_kernels", None)
-    monkeypatch.setattr(_fused, "_state", {"served": 0, "tried": False})
-    monkeypatch.setattr(_fused, "WARMUP", 100)
-    _models()["circ64"].bands(**_params("circ64"))
-    assert _fused.kernels() is None
-    assert _fused.describe() == "numpy"
+    monkeypatch.setitem(sys.modules, "numba", None)  # import numba → ImportError
+    with pytest.raises(UcbplanError, match=r"pip install 'ucbplan\[fast\]'"):
+        _fused.kernels()
 
 
 if __name__ == "__main__":

@@ -7,42 +7,52 @@ stay one BLAS product per line. Both paths compute the same sums (to ~1e-14;
 tests/test_lisa_waveform_kernel.py compares them).
 
 Compiling costs seconds (measured: import 0.8-1 s, compilation 2-6 s on a shared two-core
-machine; nothing is cached on disk) and saves some 30 us per waveform, so the loops are compiled
-only once a process has asked for WARMUP waveforms: a Fisher forecast or a single CLI run stays
-on the numpy path and never imports numba, a sampler run pays the compilation once.
+machine; nothing is cached on disk) and saves some 30 us per waveform, so the loops are used only
+when asked for: ``UCBPLAN_NUMBA=1`` in the environment. Off by default, every process of a run
+takes the numpy path, so serial and parallel runs agree bit for bit; with it on, every process
+takes the compiled path (the two paths agree to ~1e-15, not bit for bit).
 """
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import NDArray
 
-#: Waveforms computed on the numpy path before the loops are compiled (break-even of the
-#: compilation: about 1e5 waveforms).
-WARMUP = 20_000
+from ucbplan.errors import UcbplanError
 
-#: Set to False to force the numpy path (tests, comparisons).
-enabled = True
+#: Environment variable that switches the compiled loops on (value ``1``).
+ENV = "UCBPLAN_NUMBA"
 
 _kernels: tuple[Callable[..., None], Callable[..., None]] | None = None
-_state = {"served": 0, "tried": False}
 
 
-def kernels(n_waveforms: int = 0) -> tuple[Callable[..., None], Callable[..., None]] | None:
-    """(assemble, weigh) compiled by numba, or None: numba absent, disabled, or fewer than
-    WARMUP waveforms (counting ``n_waveforms``, those about to be computed) asked for so far."""
+def requested() -> bool:
+    """Whether the environment asks for the compiled loops (``UCBPLAN_NUMBA=1``)."""
+    return os.environ.get(ENV, "") == "1"
+
+
+def kernels() -> tuple[Callable[..., None], Callable[..., None]] | None:
+    """(assemble, weigh) compiled by numba when :data:`ENV` asks for them, else None.
+
+    Raises
+    ------
+    UcbplanError
+        If they are asked for and numba is not installed.
+    """
     global _kernels
-    if not enabled:
+    if not requested():
         return None
-    _state["served"] += n_waveforms
-    if _kernels is None and not _state["tried"] and _state["served"] >= WARMUP:
-        _state["tried"] = True
+    if _kernels is None:
         try:
             import numba
         except ImportError:
-            return None
+            raise UcbplanError(
+                f"{ENV}=1 asks for the compiled waveform loops but numba is not installed: "
+                f"pip install 'ucbplan[fast]', or unset {ENV}"
+            ) from None
         jit = numba.njit(cache=False, nogil=True, error_model="numpy")
         _kernels = (jit(_assemble), jit(_weigh))
     return _kernels

@@ -468,7 +468,7 @@ class FourLineModel:
             coef = (coef[..., None] * powers.reshape(*beta.shape[:2], 1, -1)).reshape(
                 *beta.shape[:2], -1
             )
-        fused = _fused.kernels(f0.size)
+        fused = _fused.kernels()
         if fused is not None and not cubic:  # (the compiled loop takes quadratic phases)
             return self._blocks(
                 lambda sl: self._block_fused(
