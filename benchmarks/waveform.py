@@ -4,12 +4,15 @@ kernel as it was before issue 14 (``benchmarks/waveform_before.py``), measured s
 Parameters are walkers drawn from the fiducial source's Fisher ball (what the sampler asks
 for), the same sets for both kernels; the two are timed back to back in each round, the ratio
 is the median of the per-round ratios and the rates are the best rounds (the machine may be
-shared). Goal (issue 14): ≥ 3× today.
+shared). Our kernel is timed on both of its paths when numba is installed (numpy + BLAS, the
+default, and the optional compiled loops of ``ucbplan.lisa._fused``); the row names say which.
+Goal (issue 14): ≥ 3× today.
 Usage: ``python -m benchmarks --only waveform [--quick]``.
 """
 
 from __future__ import annotations
 
+import os
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -70,48 +73,115 @@ def setup(n_walkers: int, seed: int = 7) -> tuple[Any, Any, np.ndarray, dict[str
     return before, ours, theta, params, like
 
 
+def _paths(ours: Any, quick_params: dict[str, np.ndarray]) -> dict[str, Callable[..., Any]]:
+    """Our kernel on each available path: 'numpy', and 'numba' when numba is installed (its
+    loops compiled here, outside the timing). Each callable takes the parameter dict."""
+    from ucbplan.lisa import _fused
+
+    def on(path: str) -> Callable[..., Any]:
+        def call(p: dict[str, np.ndarray]) -> Any:
+            if path == "numba":
+                os.environ[_fused.ENV] = "1"
+            else:
+                os.environ.pop(_fused.ENV, None)
+            return ours.bands(**p)
+
+        return call
+
+    paths = {"numpy": on("numpy")}
+    try:
+        import numba  # noqa: F401
+    except ImportError:
+        return paths
+    paths["numba"] = on("numba")
+    return paths
+
+
+def _compile_seconds(ours: Any, params: dict[str, np.ndarray]) -> float | None:
+    """Import and compilation time of the numba loops (first call), or None without numba."""
+    from ucbplan.lisa import _fused
+
+    try:
+        import numba  # noqa: F401
+    except ImportError:
+        return None
+    os.environ[_fused.ENV] = "1"
+    t0 = time.perf_counter()
+    ours.bands(**params)
+    return time.perf_counter() - t0
+
+
 def rows(quick: bool) -> list[dict[str, object]]:
-    """Waveforms/s (batch 64 and 1) vs today, the cost relative to the FFT, likelihood/s."""
+    """Waveforms/s (batch 64 and 1) vs today on each path, the cost relative to the FFT,
+    likelihood/s."""
     window, rounds = (0.3, 5) if quick else (1.0, 9)
     before, ours, theta, params, like = setup(64)
+    compile_s = _compile_seconds(ours, {k: v[:2] for k, v in params.items()})
+    paths = _paths(ours, params)
     out: list[dict[str, object]] = []
     for w in (64, 1):
         p = {k: v[:w] for k, v in params.items()}
-        per_round = _round_rates(
-            {"before": lambda p=p: before.bands(**p), "ours": lambda p=p: ours.bands(**p)},
-            w,
-            window,
-            rounds,
-        )
-        r = {k: max(x[k] for x in per_round) for k in ("before", "ours")}
-        ratio = float(np.median([x["ours"] / x["before"] for x in per_round]))
-        out.append(
-            {
-                "name": f"eccentric waveform, N=512, 3 bands, batch {w}",
-                "value": r["ours"],
-                "unit": "waveforms/s",
-                "ratio": ratio,
-                "peer": f"pre-issue-14 kernel ({r['before']:,.0f}/s)",
-                "goal": f"≥ {GOAL:g}× today" if w == 64 else None,
-                "met": bool(ratio >= GOAL) if w == 64 else None,
-                "note": None
-                if ratio >= GOAL or w != 64
-                else "numpy-bound: every remaining pass over the (walker, band, channel, sample) "
-                "array (link sum, carrier, FFT weights) costs about one FFT; fusing them needs a "
-                "compiled kernel (numba/C), a new dependency",
-            }
-        )
+        fns = {"before": lambda p=p: before.bands(**p)}
+        fns |= {name: (lambda p=p, f=f: f(p)) for name, f in paths.items()}
+        per_round = _round_rates(fns, w, window, rounds)
+        base = max(x["before"] for x in per_round)
+        for name in paths:
+            out.append(_row(w, name, per_round, base, compile_s))
+    best = max((r for r in out if "batch 64" in str(r["name"])), key=lambda r: r["value"])
     spec = np.zeros((64, ours.n_bands, 2, N_BINS), dtype=complex)
     fft = _best_rates({"fft": lambda: np.fft.fft(spec, axis=-1)}, 64, window, rounds)["fft"]
     out.append(
         {
-            "name": "waveform cost / its FFT cost (batch 64)",
-            "value": fft / out[0]["value"],  # type: ignore[operator]
+            "name": f"waveform cost / its FFT cost (batch 64, {_path_of(best)} path)",
+            "value": fft / best["value"],  # type: ignore[operator]
             "unit": "×",
             "note": "the FFT of the 3 bands x 2 channels alone is the floor of this design",
         }
     )
+    from ucbplan.lisa import _fused
+
+    os.environ.pop(_fused.ENV, None)  # the likelihood as a default run computes it (numpy)
     th = theta[:16]
     lk = _best_rates({"like": lambda: like.log_prob(th)}, 16, window, rounds)["like"]
-    out.append({"name": "log-likelihood (9 parameters), batch 16", "value": lk, "unit": "evals/s"})
+    out.append(
+        {
+            "name": "log-likelihood (9 parameters), batch 16",
+            "value": lk,
+            "unit": "evals/s",
+            "note": f"waveform path: {_fused.describe()}",
+        }
+    )
     return out
+
+
+def _path_of(row: dict[str, object]) -> str:
+    return "numba" if "numba" in str(row["name"]) else "numpy"
+
+
+def _row(
+    w: int,
+    path: str,
+    per_round: list[dict[str, float]],
+    base: float,
+    compile_s: float | None,
+) -> dict[str, object]:
+    """One throughput row: best rate on ``path``, ratio = median of the per-round ratios."""
+    rate = max(x[path] for x in per_round)
+    ratio = float(np.median([x[path] / x["before"] for x in per_round]))
+    if path == "numba":
+        note = (
+            f"optional numba loops (pip install ucbplan[fast]); import + compilation "
+            f"{compile_s:.1f} s once per process; on with UCBPLAN_NUMBA=1"
+        )
+    else:
+        note = "numpy + BLAS (default; no compiled code)"
+    return {
+        "name": f"eccentric waveform, N=512, 3 bands, batch {w}, {path} path",
+        "value": rate,
+        "unit": "waveforms/s",
+        "ratio": ratio,
+        "peer": f"pre-issue-14 kernel ({base:,.0f}/s)",
+        "goal": f"≥ {GOAL:g}× today" if w == 64 else None,
+        "met": bool(ratio >= GOAL) if w == 64 else None,
+        "note": note if w == 64 else None,
+    }

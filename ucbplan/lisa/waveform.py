@@ -22,11 +22,13 @@ All lines share one orbital phase: theta_p = (n/2) theta_2 + s wdot t with s = 0
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ucbplan.lisa import _fused
 from ucbplan.lisa.response import LINKS, ResponseGrid, band_weights, tdi_coefficients
 
 __all__ = [
@@ -139,12 +141,13 @@ def line_amplitudes(
     return h
 
 
-#: Walkers per internal block of :meth:`FourLineModel.bands`: cache blocking, and small enough
-#: that OpenBLAS keeps the moment product on one thread (64 walkers made it spawn threads, 5x
-#: slower on a loaded machine).
-_CHUNK = 32
+#: Walkers per internal block of :meth:`FourLineModel.bands`: a sampler batch in one block (with
+#: the link sums as column-blocked BLAS products, 64 beat 8, 16 and 32: the per-block Python
+#: work outweighs the cache misses of the larger arrays).
+_CHUNK = 64
 
-#: Table length of the apsidal rotation exp(i wdot t) (:meth:`FourLineModel._carriers`).
+#: Table length of the block split k = Q p + q of the slow-time index (the orbital carrier and the
+#: apsidal rotation, :func:`_quadratic_cis`).
 _Q = 32
 
 #: Relative truncation error of the Taylor series of the link phases (was 1e-10 before the
@@ -153,6 +156,16 @@ _TAYLOR_TOL = 1e-13
 
 #: Most Taylor terms of the walker-dependent link phase (enough for |beta delay| <= 1.5 rad).
 _K_MAX = 24
+
+#: Largest m n k of one real matrix product. OpenBLAS runs dgemm on one thread up to
+#: 65536 x GEMM_MULTITHREAD_THRESHOLD (4 in numpy's builds) and threads above it; threaded, the
+#: link sums were 5-10x slower on a shared two-core machine, so products are split into column
+#: blocks below this size.
+_GEMM_SERIAL = 65536 * 4
+
+#: Most rows (4 amplitude parts x monomials in beta) of the polynomial link sum; sources that
+#: need more Taylor terms use Horner's rule (:meth:`FourLineModel._horner_sum`).
+_POLY_ROWS = 48
 
 
 def _taylor_terms(x: float) -> int:
@@ -175,6 +188,88 @@ def _cis(x: NDArray[np.float64]) -> NDArray[np.complex128]:
     np.cos(x, out=out.real)
     np.sin(x, out=out.imag)
     return out
+
+
+def _gemm(a: NDArray[np.float64], b: NDArray[np.float64], out: NDArray[np.float64]) -> None:
+    """out = a @ b in column blocks of at most _GEMM_SERIAL multiply-adds (one BLAS thread)."""
+    width = max(1, _GEMM_SERIAL // (a.shape[0] * a.shape[1]))
+    for j in range(0, b.shape[1], width):
+        np.matmul(a, b[:, j : j + width], out=out[:, j : j + width])
+
+
+def _quadratic_tables(
+    a: NDArray[np.float64] | None,
+    b: NDArray[np.float64],
+    c: NDArray[np.float64] | None,
+    m: int,
+) -> tuple[NDArray[np.complex128], NDArray[np.complex128], NDArray[np.complex128] | None]:
+    """Tables of exp(i (a + b k + c k^2)), k = Q p + q < m: (A_p, B_q, D_q), each (W, .).
+
+    The phase is (a + b Q p + c Q^2 p^2) + (b q + c q^2) + 2 c Q p q, so the value is
+    A_p B_q D_q^p with A_p = exp(i (a + b Q p + c Q^2 p^2)), B_q = exp(i (b q + c q^2)) and
+    D_q = exp(2 i c Q q): P + 2Q sines and cosines per walker instead of m. ``a``, ``c`` None:
+    zero (then D is None: a plain outer product).
+    """
+    n_p = -(-m // _Q)
+    p, q = np.arange(n_p, dtype=float), np.arange(_Q, dtype=float)
+    b = b[:, None]
+    rows = (_Q * b) * p if a is None else a[:, None] + (_Q * b) * p
+    if c is None:
+        return _cis(rows), _cis(b * q), None
+    c = c[:, None]
+    rows += (_Q * _Q) * c * p * p
+    return _cis(rows), _cis(b * q + c * q * q), _cis((2.0 * _Q) * c * q)
+
+
+def _quadratic_cis(
+    a: NDArray[np.float64] | None,
+    b: NDArray[np.float64],
+    c: NDArray[np.float64] | None,
+    m: int,
+) -> NDArray[np.complex128]:
+    """exp(i (a + b k + c k^2)) for k = 0 .. m - 1, shape (W, m), from :func:`_quadratic_tables`.
+
+    The powers D_q^p are built by doubling (D^(2j) from D^j squared, the block p + j from the
+    block p times D^j), so each value is a product of at most ~2 log2(P) rounded factors: a few
+    1e-15 relative.
+    """
+    rows, cols, step = _quadratic_tables(a, b, c, m)
+    if step is None:
+        return (rows[:, :, None] * cols[:, None, :]).reshape(b.shape[0], -1)[:, :m]
+    n_p = rows.shape[1]
+    out = np.empty((b.shape[0], n_p, _Q), dtype=complex)
+    out[:, 0] = cols
+    done = 1
+    while done < n_p:
+        size = min(done, n_p - done)
+        np.multiply(out[:, :size], step[:, None, :], out=out[:, done : done + size])
+        done += size
+        if done < n_p:
+            step *= step
+    out *= rows[:, :, None]
+    return out.reshape(b.shape[0], -1)[:, :m]
+
+
+def _n_monomials(n_terms: int, degree: int) -> int:
+    """Coefficients of beta^0 .. beta^(n_terms - 1) for beta(tau) of the given degree."""
+    return n_terms + degree * n_terms * (n_terms - 1) // 2
+
+
+def _beta_powers(coeffs: NDArray[np.float64], n_terms: int) -> NDArray[np.float64]:
+    """Coefficients of beta^k, k < n_terms, in powers of tau: (W, monomials), k-major.
+
+    ``coeffs`` (W, d + 1) holds beta(tau) = sum_j coeffs[:, j] tau^j; beta^k has k d + 1
+    coefficients (order of :meth:`FourLineModel._poly_basis`).
+    """
+    cur = np.ones((coeffs.shape[0], 1))
+    out = [cur]
+    for _ in range(1, n_terms):
+        nxt = np.zeros((cur.shape[0], cur.shape[1] + coeffs.shape[1] - 1))
+        for j in range(coeffs.shape[1]):
+            nxt[:, j : j + cur.shape[1]] += coeffs[:, j : j + 1] * cur
+        out.append(nxt)
+        cur = nxt
+    return np.concatenate(out, axis=1)
 
 
 class FourLineModel:
@@ -240,6 +335,12 @@ class FourLineModel:
         self._dft_w = np.stack([w[0] for w in weights])[:, None, :]  # (n_bands, 1, N)
         self._jump_w = np.stack([w[1] for w in weights])[:, None, :]
         self._t3 = grid.t_s**3 / 3.0
+        self._tau = grid.t_s / t_obs
+        # per modelled line: index in LINES, band, harmonic n, apsidal sign s (fused kernel)
+        self._line_table = np.array(
+            [(li, b, LINES[li].harmonic, LINES[li].shift) for li, b in self.lines], dtype=np.int64
+        )
+        self._bases: dict[tuple[int, int, int], NDArray[np.float64]] = {}
 
     def _link_weights(self) -> tuple[NDArray[np.complex128], NDArray[np.complex128]]:
         """Per band: TDI weights (channel, pol) x spacecraft of emitted and received light."""
@@ -342,75 +443,194 @@ class FourLineModel:
                 )
             )
         )
-        flat = [a.ravel() for a in arrs]
-        n_walk = flat[0].size
-        if n_walk > _CHUNK:  # cache blocking: working set of ~16 walkers stays in L2
-            return np.concatenate(
-                [self._bands([a[i : i + _CHUNK] for a in flat]) for i in range(0, n_walk, _CHUNK)]
-            )
-        return self._bands(flat)
+        return self._batch(*(a.ravel() for a in arrs))
 
-    def _bands(self, flat: list[NDArray[np.float64]]) -> NDArray[np.complex128]:
-        amp, f0, fd, ci, ps, ph, et, ka, wd, fdd = flat
-        t = self.grid.t_s[None, :]
-        n_walk, n = f0.size, self.grid.n
-        h = line_amplitudes(amp, ci, et, ka)  # (4, 2, W)
+    def _batch(self, *flat: NDArray[np.float64]) -> NDArray[np.complex128]:
+        """Per-walker coefficients for the whole batch, then the sampled arrays in blocks of
+        _CHUNK walkers (cache blocking)."""
+        amp, f0, fd, ci, ps, _ph, et, ka, wd, fdd = flat
+        coef = self._amplitude_rows(amp, ci, ps, et, ka)  # (lines, W, 4)
+        cubic = bool(np.any(fdd))
+        # f(t) - f_ref(t) of the n = 2 line times pi, as a polynomial in tau = t / T
+        t_obs = self.grid.t_obs_s
+        df = [f0 - self.f_center_hz, (fd - self.fdot_ref) * t_obs]
+        if cubic:
+            df.append(0.5 * fdd * t_obs**2)
+        df_tau = np.pi * np.stack(df, axis=-1)  # (W, d + 1)
+        dwd = wd - self.omega_dot_ref
+        n_terms = self._n_terms(df_tau, dwd)
+        # beta_p(tau) = n pi (f(t) - f_ref(t)) + s (wdot - wdot_ref) of each modelled line
+        beta = np.stack([LINES[li].harmonic * df_tau for li, _ in self.lines])
+        beta[:, :, 0] += np.array([LINES[li].shift for li, _ in self.lines])[:, None] * dwd
+        poly = 4 * _n_monomials(n_terms, df_tau.shape[1] - 1) <= _POLY_ROWS
+        if poly:  # walker rows of the polynomial link sums: amplitude part x monomial
+            powers = _beta_powers(beta.reshape(-1, beta.shape[-1]), n_terms)
+            coef = (coef[..., None] * powers.reshape(*beta.shape[:2], 1, -1)).reshape(
+                *beta.shape[:2], -1
+            )
+        fused = _fused.kernels()
+        if fused is not None and not cubic:  # (the compiled loop takes quadratic phases)
+            return self._blocks(
+                lambda sl: self._block_fused(
+                    fused,
+                    coef[:, sl],
+                    None if poly else beta[:, sl],
+                    n_terms,
+                    [x[sl] for x in flat],
+                ),
+                f0.size,
+            )
+        return self._blocks(
+            lambda sl: self._block(
+                coef[:, sl], None if poly else beta[:, sl], n_terms, [x[sl] for x in flat], cubic
+            ),
+            f0.size,
+        )
+
+    @staticmethod
+    def _blocks(
+        block: Callable[[slice], NDArray[np.complex128]], n_walk: int
+    ) -> NDArray[np.complex128]:
+        """``block`` over consecutive slices of at most _CHUNK walkers, concatenated."""
+        out = [block(slice(i, i + _CHUNK)) for i in range(0, n_walk, _CHUNK)]
+        return out[0] if len(out) == 1 else np.concatenate(out)
+
+    def _amplitude_rows(
+        self,
+        amp: NDArray[np.float64],
+        ci: NDArray[np.float64],
+        ps: NDArray[np.float64],
+        et: NDArray[np.float64],
+        ka: NDArray[np.float64],
+    ) -> NDArray[np.float64]:
+        """[Re a+, Re ax, Im a+, Im ax] of each modelled line after the polarization rotation
+        by 2 psi, (lines, W, 4): the row order of the moments."""
+        h = line_amplitudes(amp, ci, et, ka)[[li for li, _ in self.lines]]  # (lines, 2, W)
         c2, s2 = np.cos(2.0 * ps), np.sin(2.0 * ps)
-        # (line, W, pol) amplitudes after the polarization rotation by 2 psi
-        hpx = np.stack([h[:, 0] * c2 - h[:, 1] * s2, h[:, 0] * s2 + h[:, 1] * c2], axis=-1)
-        # Orbital-phase carrier c1 = exp(i theta_2 / 2) heterodyned at f_het; line n is c1^n
-        # times fixed band rotations and exp(i s wdot t) (all lines share one orbital phase).
-        # df_t: f(t) - f_ref(t) of the n = 2 line [Hz]; chirp: the carrier's phase [rad]
-        df_t = (f0 - self.f_center_hz)[:, None] + (fd - self.fdot_ref)[:, None] * t
-        chirp = fd[:, None] * (t * t)
-        if np.any(fdd):
-            df_t += 0.5 * fdd[:, None] * t * t
-            chirp += fdd[:, None] * self._t3
-        chirp *= 0.5 * np.pi
-        chirp += 0.5 * ph[:, None] + 2.0 * np.pi * (0.5 * f0 - self._f_het)[:, None] * t
-        carriers = self._carriers(_cis(chirp), wd)
-        # Taylor order for exp(-i beta delay): error (beta delay)^K / K! < _TAYLOR_TOL.
-        dwd = (wd - self.omega_dot_ref)[:, None, None]
-        beta_max = np.pi * 3.0 * float(np.max(np.abs(df_t))) + float(np.max(np.abs(dwd)))
-        n_terms = _taylor_terms(beta_max * self._delay_max)
-        # pi (f(t) - f_ref(t)) twice per sample (the real and imaginary parts of the envelopes)
-        base = np.repeat(np.pi * df_t, 2, axis=-1)[:, None, :]  # (W, 1, 2M)
-        slow = np.empty((n_walk, self.n_bands, 2, t.size), dtype=complex)
+        hp, hx = h[:, 0] * c2 - h[:, 1] * s2, h[:, 0] * s2 + h[:, 1] * c2
+        return np.stack([hp.real, hx.real, hp.imag, hx.imag], axis=-1)
+
+    def _block(
+        self,
+        coef: NDArray[np.float64],
+        beta: NDArray[np.float64] | None,
+        n_terms: int,
+        source: list[NDArray[np.float64]],
+        cubic: bool,
+    ) -> NDArray[np.complex128]:
+        """A and E of one block of walkers, (W, n_bands, 2, N).
+
+        ``coef``: walker rows of each line's link sum (polynomial rows, or the four amplitude
+        parts with ``beta`` for Horner's rule); ``source``: the parameters (order of
+        :meth:`bands`).
+        """
+        f0, fd, ph, fdd, wd = (source[i] for i in (1, 2, 5, 9, 8))
+        n_walk, n = f0.size, self.grid.n
+        carriers = self._carriers(self._orbital_carrier(f0, fd, ph, fdd, cubic), wd)
+        slow = np.empty((n_walk, self.n_bands, 2, n + 1), dtype=complex)
         filled: set[int] = set()
-        for li, b in self.lines:
-            n_h, s = LINES[li].harmonic, LINES[li].shift
-            beta = n_h * base + s * dwd if s else n_h * base  # (W, 1, 2M), real
+        for i, (li, b) in enumerate(self.lines):
+            out = slow[:, b] if b not in filled else np.empty((n_walk, 2, n + 1), dtype=complex)
+            self._link_sum(coef[i], None if beta is None else beta[i], li, n_terms, 1 + cubic, out)
+            out *= carriers[li][:, None, :]
             if b in filled:
-                acc = self._link_sum(hpx[li], beta, li, n_terms)
-                acc *= carriers[li][:, None, :]
-                slow[:, b] += acc
-            else:
-                out = slow[:, b]
-                self._link_sum(hpx[li], beta, li, n_terms, out)
-                out *= carriers[li][:, None, :]
-                filled.add(b)
+                slow[:, b] += out
+            filled.add(b)
         spec = np.fft.fft(slow[..., :n], axis=-1)  # fftshifted by the (-1)^m in the moments
         spec *= self._dft_w
         spec += (slow[..., n] - slow[..., 0])[..., None] * self._jump_w
         return spec
 
+    def _block_fused(
+        self,
+        fused: tuple[Callable[..., None], Callable[..., None]],
+        coef: NDArray[np.float64],
+        beta: NDArray[np.float64] | None,
+        n_terms: int,
+        source: list[NDArray[np.float64]],
+    ) -> NDArray[np.complex128]:
+        """:meth:`_block` with the compiled loops of :mod:`ucbplan.lisa._fused` (no fddot):
+        link sums by BLAS, one loop for carriers and bands, the FFT, one loop for the weights."""
+        assemble, weigh = fused
+        f0, fd, ph, wd = (source[i] for i in (1, 2, 5, 8))
+        n_walk, n = f0.size, self.grid.n
+        orbit = _quadratic_tables(*self._orbit_phase(f0, fd, ph), n + 1)
+        apsis = _quadratic_tables(None, wd * (self.grid.t_obs_s / n), None, n + 1)
+        tables = np.zeros((n_walk, 5, max(_Q, orbit[0].shape[1])), dtype=complex)
+        for row, table in enumerate((*orbit, *apsis[:2])):
+            assert table is not None
+            tables[:, row, : table.shape[1]] = table
+        sums = np.empty((len(self.lines), n_walk, 2, n + 1), dtype=complex)
+        for i, (li, _) in enumerate(self.lines):
+            beta_i = None if beta is None else beta[i]
+            self._link_sum(coef[i], beta_i, li, n_terms, 1, sums[i])
+        x = np.empty((n_walk, self.n_bands, 2, n), dtype=complex)
+        jump = np.empty((n_walk, self.n_bands, 2), dtype=complex)
+        assemble(sums, self._line_table[:, 1:], tables, _Q, x, jump)
+        spec = np.fft.fft(x, axis=-1, out=x)  # fftshifted by the (-1)^m in the moments
+        weigh(spec, jump, self._dft_w[:, 0], self._jump_w[:, 0])
+        return spec
+
+    def _n_terms(self, df_tau: NDArray[np.float64], dwd: NDArray[np.float64]) -> int:
+        """Taylor order for exp(-i beta delay): (beta_max delay_max)^K / K! < _TAYLOR_TOL.
+
+        beta_max bounds every line over the grid: 3 pi max |f(t) - f_ref(t)| + max |dwdot|
+        (linear drift: the end points; with fddot: every grid sample).
+        """
+        if df_tau.shape[1] == 2:
+            drift = np.abs(df_tau[:, :1] + df_tau[:, 1:] * np.array([0.0, 1.0]))
+        else:
+            drift = np.abs(np.polynomial.polynomial.polyval(self._tau, df_tau.T, tensor=True))
+        beta_max = 3.0 * float(np.max(drift)) + float(np.max(np.abs(dwd)))
+        return _taylor_terms(beta_max * self._delay_max)
+
+    def _orbit_phase(
+        self, f0: NDArray[np.float64], fd: NDArray[np.float64], ph: NDArray[np.float64]
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """(a, b, c) of the heterodyned orbital phase a + b m + c m^2 at t_m = m T / N:
+        phi0/2 + 2 pi (f0/2 - f_het) t + pi/2 fdot t^2 (theta_2 / 2 without fddot)."""
+        step = self.grid.t_obs_s / self.grid.n
+        lin = 2.0 * np.pi * (0.5 * f0 - self._f_het) * step
+        return 0.5 * ph, lin, 0.5 * np.pi * fd * step * step
+
+    def _orbital_carrier(
+        self,
+        f0: NDArray[np.float64],
+        fd: NDArray[np.float64],
+        ph: NDArray[np.float64],
+        fdd: NDArray[np.float64],
+        cubic: bool,
+    ) -> NDArray[np.complex128]:
+        """c1 = exp(i theta_2 / 2) heterodyned at f_het on the grid, (W, M).
+
+        Without fddot its phase is quadratic in the sample index (:meth:`_orbit_phase`,
+        :func:`_quadratic_cis`); with it, phi0/2 + 2 pi (f0/2 - f_het) t + pi/2 (fdot t^2 +
+        fddot t^3 / 3) is evaluated per sample.
+        """
+        if not cubic:
+            return _quadratic_cis(*self._orbit_phase(f0, fd, ph), self.grid.n + 1)
+        t = self.grid.t_s[None, :]
+        chirp = fd[:, None] * (t * t) + fdd[:, None] * self._t3
+        chirp *= 0.5 * np.pi
+        chirp += 0.5 * ph[:, None] + 2.0 * np.pi * (0.5 * f0 - self._f_het)[:, None] * t
+        return _cis(chirp)
+
     def _carriers(
         self, c1: NDArray[np.complex128], wd: NDArray[np.float64]
     ) -> dict[int, NDArray[np.complex128]]:
-        """c1^n exp(i s wdot t) of each modelled line (index in LINES), (W, M) each."""
+        """c1^n exp(i s wdot t) of each modelled line (index in LINES), (W, M) each.
+
+        All lines share one orbital phase: line n is c1^n times exp(i s wdot t) (the fixed band
+        rotations are in the moments).
+        """
         need = {li for li, _ in self.lines}
         out: dict[int, NDArray[np.complex128]] = {}
         if 2 in need or 3 in need:
             c2 = c1 * c1
             out[2] = c2
         if need & {0, 1, 3}:
-            # exp(+-i wdot t_m) on the uniform grid t_m = m h as exp(i wdot h q) exp(i wdot h Q p)
-            # with m = Q p + q: two short tables instead of a sine and cosine per sample
-            m = c1.shape[-1]
-            step = self.grid.t_obs_s / self.grid.n
-            lo = _cis(wd[:, None] * (step * np.arange(_Q)))  # (W, Q)
-            hi = _cis(wd[:, None] * (step * _Q * np.arange(-(-m // _Q))))  # (W, P)
-            apsis = (hi[:, :, None] * lo[:, None, :]).reshape(c1.shape[0], -1)[:, :m]
+            # exp(i wdot t_m), t_m = m T / N: two short tables (:func:`_quadratic_cis`)
+            apsis = _quadratic_cis(None, wd * (self.grid.t_obs_s / self.grid.n), None, c1.shape[1])
             out[0] = c1 * apsis
             np.conjugate(apsis, out=apsis)
             minus = c1 * apsis
@@ -421,32 +641,65 @@ class FourLineModel:
 
     def _link_sum(
         self,
-        amp: NDArray[np.complex128],
-        beta2: NDArray[np.float64],
+        coef: NDArray[np.float64],
+        beta: NDArray[np.float64] | None,
         line: int,
         n_terms: int,
-        out: NDArray[np.complex128] | None = None,
-    ) -> NDArray[np.complex128]:
-        """sum_k beta^k (amp . MOM[line, :, k]): the links' walker-dependent phases, (W, 2, M).
+        degree: int,
+        out: NDArray[np.complex128],
+    ) -> None:
+        """Link sums of one line into ``out`` (W, 2, M): polynomial rows (``beta`` None, one
+        product with :meth:`_poly_basis`; ``degree`` of beta in tau) or Horner's rule
+        (:meth:`_horner_sum`)."""
+        acc = out.view(np.float64).reshape(out.shape[0], -1)  # (W, ch * 2M) view
+        if beta is None:
+            _gemm(coef, self._poly_basis(line, n_terms, degree), acc)
+        else:
+            self._horner_sum(coef, beta, line, n_terms, acc)
 
-        ``beta2`` (W, 1, 2M) holds each beta twice (real and imaginary part). One real BLAS
-        product contracts the (W, pol) amplitudes with the moments of all K orders; Horner's
-        rule in beta then runs on the real and imaginary parts as floats, into ``out`` if given.
+    def _horner_sum(
+        self,
+        coef: NDArray[np.float64],
+        beta: NDArray[np.float64],
+        line: int,
+        n_terms: int,
+        acc: NDArray[np.float64],
+    ) -> None:
+        """sum_k beta^k (amp . MOM[line, :, k]) by Horner's rule in beta(t), into ``acc``.
+
+        ``coef`` (W, 4): [Re a+, Re ax, Im a+, Im ax]; ``beta`` (W, d + 1): beta(tau); ``acc``
+        (W, ch * 2M): the real view of the (W, 2, M) link sums. One real product contracts the
+        amplitudes with the moments of all orders, Horner's rule then runs on floats (for long
+        series, where the polynomial rows of :meth:`_poly_basis` would be too many).
         """
-        n_walk = amp.shape[0]
-        m2 = beta2.shape[-1]
+        n_walk = coef.shape[0]
         mom = self._moments[line, :, :n_terms].reshape(4, -1)  # (4, K * ch * 2M), a view
-        coef = np.concatenate([amp.real, amp.imag], axis=1)  # (W, 4)
-        terms = (coef @ mom).reshape(n_walk, n_terms, 2, m2)
-        if out is None:
-            out = np.empty((n_walk, 2, m2 // 2), dtype=complex)
-        acc = out.view(np.float64)
+        flat = np.empty((n_walk, mom.shape[1]))
+        _gemm(coef, mom, flat)
+        terms = flat.reshape(n_walk, n_terms, -1)
+        beta_t = np.polynomial.polynomial.polyval(self._tau, beta.T)  # (W, M)
+        beta2 = np.tile(np.repeat(beta_t, 2, axis=-1), (1, 2))  # re, im of both channels
         np.multiply(terms[:, n_terms - 1], beta2, out=acc)
         for k in range(n_terms - 2, 0, -1):
             acc += terms[:, k]
             acc *= beta2
         acc += terms[:, 0]
-        return out
+
+    def _poly_basis(self, line: int, n_terms: int, degree: int) -> NDArray[np.float64]:
+        """Rows tau^e MOM[line, r, k] (r amplitude part, k < n_terms, e <= k degree), cached.
+
+        Shape (4 x monomials, ch * 2M), r-major then k, e as in :func:`_beta_powers`.
+        """
+        key = (line, n_terms, degree)
+        if key not in self._bases:
+            mom = self._moments[line, :, :n_terms]  # (4, K, ch, 2M)
+            tau2 = np.repeat(self._tau, 2)
+            rows = [
+                mom[:, k] * tau2**e for k in range(n_terms) for e in range(k * degree + 1)
+            ]  # each (4, ch, 2M)
+            basis = np.stack(rows, axis=1)
+            self._bases[key] = np.ascontiguousarray(basis.reshape(-1, basis[0, 0].size))
+        return self._bases[key]
 
     def bands_for(self, p: SourceParams) -> NDArray[np.complex128]:
         """:meth:`bands` for a single :class:`SourceParams`; shape (n_bands, 2, N)."""
