@@ -86,10 +86,11 @@ def make_targets(n: int) -> list[Target]:
     return out
 
 
-def ours(targets: list[Target], nights: list[date], hole: bool = True) -> tuple[float, int, list]:
+def ours(
+    targets: list[Target], nights: list[date], constraints: ConstraintSet | None = None
+) -> tuple[float, int, list]:
     """Epochs + light time + constraints for every quadrature epoch; returns (s, n, [(candidates,
-    axis)]). ``hole``: with Paranal's zenith hole (the planner's default), else only the night,
-    airmass and Moon constraints astroplan is given."""
+    axis)]). ``constraints``: default, the planner's at Paranal (with its 4° zenith hole)."""
     site = get_site("paranal")
     settings = PlanSettings(exposure=ExposurePlan(60.0))
     mode = parse_mode("quadrature")
@@ -100,7 +101,7 @@ def ours(targets: list[Target], nights: list[date], hole: bool = True) -> tuple[
     coords = SkyCoord([t.ra_deg for t in targets] * u.deg, [t.dec_deg for t in targets] * u.deg)
     sky = SkyModel.build(site.location, axis.origin, span, coords)
     track = SiteTrack.build(axis.origin, span, site.location)
-    constraints = settings.constraints(site if hole else None)
+    constraints = constraints or settings.constraints(site)
     n = 0
     cands = []
     for i, t in enumerate(targets):
@@ -254,14 +255,14 @@ def rows(quick: bool) -> list[dict[str, object]]:
     rate = n_epochs / seconds
     what = f"{n_targets} targets × {n_nights} nights at Paranal"
     # The same blocks with only the constraints astroplan is given (no zenith hole).
-    same = ours(targets, nights, hole=False)[2]
     cs = PlanSettings(exposure=ExposurePlan(60.0)).constraints(None)
+    same = ours(targets, nights, cs)[2]
     coords = [t.coord for t in targets]
     picks = random_picks([c.x_mid.size for c, _ in same], n_sample, seed=1)
     samples = make_samples(coords, same, picks)
     note = f"{n_epochs:,} epochs in {seconds:.2f} s (with the 4° zenith hole)"
     kernel, peers = kernel_rows(rate, what, note, samples, cs)
-    edges = make_samples(coords, same, edge_picks([c.ok for c, _ in same], n_edge, seed=2))
+    edges = make_samples(coords, same, edge_picks(same, n_edge, seed=2))
     t0 = time.perf_counter()
     res = plan_nights(targets, get_site("paranal"), nights, PlanSettings())
     whole = time.perf_counter() - t0

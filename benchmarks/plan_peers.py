@@ -89,17 +89,21 @@ def random_picks(sizes: Sequence[int], n_sample: int, seed: int) -> list[NDArray
     return out
 
 
-def edge_picks(oks: Sequence[BoolArray], per_target: int, seed: int) -> list[NDArray[np.int64]]:
-    """Up to ``per_target`` blocks per target whose decision differs from a neighbour's (the
-    blocks next to a night, airmass or Moon limit: where disagreements would show)."""
+def edge_picks(cands: Sequence[Any], per_target: int, seed: int) -> list[NDArray[np.int64]]:
+    """Blocks whose decision differs from a neighbour's (next to a night, airmass or Moon limit:
+    where disagreements would show), per target: every pair at a change decided by a constraint
+    after the night and airmass (the Moon: rare), then a random choice up to ``per_target``."""
     rng = np.random.default_rng(seed)
     out = []
-    for ok in oks:
-        flip = np.flatnonzero(ok[1:] != ok[:-1])
-        edge = np.unique(np.concatenate([flip, flip + 1]))
-        if edge.size > per_target:
-            edge = np.sort(rng.choice(edge, size=per_target, replace=False))
-        out.append(edge.astype(np.int64))
+    for c, _ in cands:
+        flip = np.flatnonzero(c.ok[1:] != c.ok[:-1])
+        rare = (c.first_failed[flip] > 1) | (c.first_failed[flip + 1] > 1)
+        keep = np.concatenate([flip[rare], flip[rare] + 1])
+        rest = np.setdiff1d(np.concatenate([flip, flip + 1]), keep)
+        room = max(per_target - keep.size, 0)
+        if rest.size > room:
+            rest = rng.choice(rest, size=room, replace=False)
+        out.append(np.unique(np.concatenate([keep, rest])).astype(np.int64))
     return out
 
 
@@ -212,19 +216,29 @@ def peer_rates(
 
 def astroplan_blocks(observer: Any, s: Sample, cs: ConstraintSet) -> tuple[BoolArray, BoolArray]:
     """astroplan's decisions per block: ``is_event_observable`` as is, and with our Moon rule
-    (each constraint at start and end, the separation passing while the Moon is down)."""
+    (the separation passes while the Moon is down). The rule can only rescue blocks that
+    astroplan rejects with night and airmass met at both ends (its cached altitudes); for those
+    each end is checked again: separation met or Moon below the horizon."""
     from astroplan import is_event_observable
 
-    cons = astroplan_constraints(cs)
+    night, air, sep = astroplan_constraints(cs)
     pairs = s.pairs()
     with quiet_erfa():
-        plain = np.asarray(is_event_observable(cons, observer, s.coord, times_ingress_egress=pairs))
-        ours_rule = np.ones(s.size, dtype=bool)
+        plain = np.asarray(
+            is_event_observable([night, air, sep], observer, s.coord, times_ingress_egress=pairs)
+        ).ravel()
+        rule = plain.copy()
+        maybe = ~plain
         for t in (pairs[:, 0], pairs[:, 1]):
-            night, air, sep = (np.asarray(c(observer, s.coord, times=t)).ravel() for c in cons)
-            down = np.asarray(observer.moon_altaz(t).alt.deg < MOON_DOWN_DEG).ravel()
-            ours_rule &= night & air & (sep | down)
-    return plain.ravel(), ours_rule
+            maybe &= np.asarray(night(observer, s.coord, times=t)).ravel()
+            maybe &= np.asarray(air(observer, s.coord, times=t)).ravel()
+        idx = np.flatnonzero(maybe)
+        if idx.size:
+            rule[idx] = True
+            for t in (pairs[idx, 0], pairs[idx, 1]):
+                down = np.asarray(observer.moon_altaz(t).alt.deg < MOON_DOWN_DEG).ravel()
+                rule[idx] &= np.asarray(sep(observer, s.coord, times=t)).ravel() | down
+    return plain, rule
 
 
 def three_point_quantities(location: EarthLocation, s: Sample) -> dict[str, FloatArray]:
