@@ -4,15 +4,20 @@ Measures the planner's per-epoch pipeline — anchor epochs (vectorised Newton),
 time removed (shared site track + spline), every constraint checked over the whole block (start,
 middle, end) — for ALL quadrature epochs of a 183-night semester, then the full ``plan_nights``
 (schedule + block records). The peer is astroplan's ``is_event_observable`` with the same
-constraints (nautical night, airmass ≤ 2, Moon separation ≥ 30°) on the block start/end times of
-a random sample of the SAME epochs (astroplan is too slow to run on all of them; its cost is
-linear in the number of times, so the rate is what is compared). astroplan does less work: it
-neither finds the epochs nor removes the light time.
+constraints (nautical night, airmass ≤ 2, Moon separation ≥ 30°; ours also checks Paranal's 4°
+zenith hole) on the block start/end times of a random sample of the SAME epochs (astroplan is
+too slow to run on all of them; its cost is linear in the number of times, so the rate is what
+is compared). astroplan does less work: it neither finds the epochs nor removes the light time.
+The second peer, naive astropy (one ``AltAz`` transform of target, Sun and Moon per target), is
+timed alternately with astroplan on the same blocks, and our accept/reject decisions are
+compared with astroplan's on them (:mod:`benchmarks.plan_peers`).
 
 Usage: ``python benchmarks/bench_plan.py [--quick]`` or ``python -m benchmarks --only plan``.
 Goals (issue 14): the kernel through the API ≥ 500× astroplan; the semester plan (10 targets,
 183 nights) ≤ 1.5 s via the API and the CLI within 1.3× of it; through the CLI, the marginal
-cost per epoch (30 nights minus 1 night of one target, output written) ≥ 100× astroplan's.
+cost per epoch (30 nights minus 1 night of one target, output written) ≥ 100× astroplan's and
+≥ 100× naive astropy's; the same epochs with the same constraints give identical accepted sets
+(up to the sky model's accuracy at a limit).
 """
 
 from __future__ import annotations
@@ -23,6 +28,7 @@ import sys
 import tempfile
 import time
 import warnings
+from collections.abc import Callable
 from dataclasses import replace
 from datetime import date, timedelta
 from pathlib import Path
@@ -143,10 +149,16 @@ def marginal_row(per_ms: float, note: str, peer: str, peer_rate: float | None) -
 
 
 def cli_rows(
-    targets: list[Target], nights: list[date], api_s: float, peers: dict[str, float | None]
+    targets: list[Target],
+    nights: list[date],
+    api_s: float,
+    peers: dict[str, float | None],
+    again: Callable[[], dict[str, float | None]],
 ) -> list[dict[str, object]]:
     """The semester through the CLI against the API, and its marginal cost per epoch against
-    each peer (``peers``: epochs/s by name, None if not measured)."""
+    each peer (``peers``: epochs/s by name, None if not measured). Each CLI run is best of two
+    and each peer rate the best of ``peers`` and ``again()``, timed right after the CLI runs
+    (the machine's load drifts between the kernel and the CLI measurements)."""
     with tempfile.TemporaryDirectory() as d:
         tmp = Path(d)
         files = [tmp / f"{t.name}.yaml" for t in targets]
@@ -154,10 +166,15 @@ def cli_rows(
             write_target(t, f)
         cli = cli_seconds(files, len(nights), tmp / "plan.ecsv")
         one = min(cli_seconds(files[:1], 1, tmp / "one.ecsv") for _ in range(2))
-        month = cli_seconds(files[:1], 30, tmp / "month.ecsv")
+        month = min(cli_seconds(files[:1], 30, tmp / "month.ecsv") for _ in range(2))
+    later = again()
+    best = {k: None if v is None else max(v, later[k] or v) for k, v in peers.items()}
     n_one, n_month = ours(targets[:1], nights[:1])[1], ours(targets[:1], nights[:30])[1]
     per_ms = 1e3 * (month - one) / (n_month - n_one)
-    note = f"{n_month - n_one} more quadrature epochs in {month - one:.2f} s, output included"
+    note = (
+        f"{n_month - n_one} more quadrature epochs in {month - one:.2f} s, output included; "
+        "CLI runs best of 2, peers best of 2 (at the kernel and right after the CLI runs)"
+    )
     semester = {
         "name": f"semester plan via the CLI, {len(targets)} targets × {len(nights)} nights",
         "value": cli,
@@ -168,7 +185,7 @@ def cli_rows(
         "met": bool(cli <= GOAL_CLI_API * api_s),
         "note": f"fresh process (start-up {one:.2f} s for one night), blocks table written",
     }
-    return [semester, *(marginal_row(per_ms, note, k, v) for k, v in peers.items())]
+    return [semester, *(marginal_row(per_ms, note, k, v) for k, v in best.items())]
 
 
 def kernel_rows(
@@ -274,7 +291,8 @@ def rows(quick: bool) -> list[dict[str, object]]:
         "met": bool(whole <= GOAL_SEMESTER_S),
         "note": f"validity, candidates, schedule, {len(res.blocks)} block records",
     }
-    cli = cli_rows(targets, nights, whole, peers)
+    site = get_site("paranal")
+    cli = cli_rows(targets, nights, whole, peers, lambda: peer_rates(site.location, samples, cs))
     return [*kernel, agreement_row(samples, edges, cs), semester, *cli]
 
 
