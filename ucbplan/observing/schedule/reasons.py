@@ -136,6 +136,8 @@ def not_planned(
         table[~spent, REASONS.index("not needed")] += usable[~spent]
         for k in np.flatnonzero(table.sum(axis=1)):
             row = table[k]
-            per_night[spans[int(k)].label] = {r: int(row[m]) for m, r in enumerate(REASONS) if row[m]}
+            per_night[spans[int(k)].label] = {
+                r: int(row[m]) for m, r in enumerate(REASONS) if row[m]
+            }
         out[run.target.name] = per_night
     return out
