@@ -355,3 +355,16 @@ def test_json_rows_match_row_by_row() -> None:
     masked["m"] = MaskedColumn([1.0, 2.0, 3.0, 4.0], mask=[False, True, False, False])
     assert table_to_json_rows(masked) == _reference_rows(masked)  # row by row (masked)
     assert table_to_json_rows(table[:0]) == []
+
+
+def test_sexagesimal_columns_match_per_element() -> None:
+    # repeated (a target's blocks), signed zero, rounding carries, the poles and NaN
+    ra = np.array([121.5967, 121.5967, 0.0, -0.0, 359.99999999, 15.0, 121.5967, np.nan])
+    dec = np.array([15.4583, -0.0, 0.0, -0.0000001, 89.9999999999, -90.0, 15.4583, np.nan])
+    got_ra, got_dec = blocktable._ra_hms(ra), blocktable._dec_dms(dec)
+    ref_ra = [str(blocktable._hms(np.array([x]))[0]) for x in ra]
+    ref_dec = [str(blocktable._dms(np.array([x]))[0]) for x in dec]
+    assert list(got_ra) == ref_ra and list(got_dec) == ref_dec
+    assert (got_dec[1], got_dec[2]) == ("-00:00:00.00", "+00:00:00.00")  # -0.0 on its own
+    assert got_ra.dtype == blocktable._hms(ra).dtype  # the table column's width unchanged
+    assert len(blocktable._ra_hms(np.array([]))) == 0

@@ -500,20 +500,34 @@ def _local_iso(times: Sequence[Time], zones: Sequence[str]) -> np.ndarray:
     return np.array(out, dtype=str) if out else np.array([], dtype="U1")
 
 
-def _ra_hms(ra_deg: np.ndarray) -> np.ndarray:
-    if len(ra_deg) == 0:
+def _per_distinct(values: np.ndarray, fmt: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
+    """``fmt(values)``, formatting each distinct value (bit for bit: -0.0 is not 0.0) once: a
+    target's coordinates repeat on every one of its blocks."""
+    if len(values) == 0:
         return np.array([], dtype="U1")
+    bits = np.ascontiguousarray(values, dtype=np.float64).view(np.int64)
+    _, first, inverse = np.unique(bits, return_index=True, return_inverse=True)
+    return fmt(values[first])[inverse.ravel()]
+
+
+def _hms(ra_deg: np.ndarray) -> np.ndarray:
     ra = Angle(ra_deg, unit="deg").to_string(unit="hourangle", sep=":", precision=3, pad=True)
     return np.atleast_1d(ra).astype(str)
 
 
-def _dec_dms(dec_deg: np.ndarray) -> np.ndarray:
-    if len(dec_deg) == 0:
-        return np.array([], dtype="U1")
+def _dms(dec_deg: np.ndarray) -> np.ndarray:
     dec = Angle(dec_deg, unit="deg").to_string(
         unit="deg", sep=":", precision=2, pad=True, alwayssign=True
     )
     return np.atleast_1d(dec).astype(str)
+
+
+def _ra_hms(ra_deg: np.ndarray) -> np.ndarray:
+    return _per_distinct(ra_deg, _hms)
+
+
+def _dec_dms(dec_deg: np.ndarray) -> np.ndarray:
+    return _per_distinct(dec_deg, _dms)
 
 
 def _attribute(column: Column, blocks: list[Block]) -> list[Any]:
