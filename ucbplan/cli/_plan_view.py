@@ -13,12 +13,12 @@ from ucbplan.errors import UcbplanError
 __all__ = ["SUMMARY_NIGHTS", "SUMMARY_ROWS", "report"]
 
 
-def _local(b: Any) -> str:
-    from datetime import UTC
-    from zoneinfo import ZoneInfo
+def _local(blocks: list[Any]) -> list[str]:
+    """Local civil time of each block centre, ``HH:MM:SS TZ`` (one conversion for the night)."""
+    from ucbplan.observing.blocktable import local_datetimes
 
-    dt = b.t_mid_utc.to_datetime(timezone=UTC).astimezone(ZoneInfo(b.timezone))
-    return dt.strftime("%H:%M:%S %Z")
+    times = local_datetimes([b.t_mid_utc for b in blocks], [b.timezone for b in blocks])
+    return [dt.strftime("%H:%M:%S %Z") for dt in times]
 
 
 def _exposure_labels(blocks: list[Any]) -> list[str]:
@@ -71,8 +71,11 @@ def _print_summary(run: Any) -> None:
         f"Plan at {run.site.name}, per night (the full table: -o FILE or --verbose)",
         ["night", "visits", "exposures", "hours (wall)"],
     )
+    by_night: dict[str, list[Any]] = {}
+    for v in visits:
+        by_night.setdefault(v.night, []).append(v)
     for night in (d.isoformat() for d in run.nights):  # nights without a visit too
-        vs = [v for v in visits if v.night == night]
+        vs = by_night.get(night, [])
         table.add_row(
             night,
             str(len(vs)),
@@ -110,7 +113,7 @@ def _print_night(blocks: list[Any], night: str, site: Any) -> None:
             *(["pair: Δκ_LISA"] if paired else []),
         ],
     )
-    for b, label in zip(blocks, _exposure_labels(blocks), strict=True):
+    for b, label, local in zip(blocks, _exposure_labels(blocks), _local(blocks), strict=True):
         table.add_row(
             escape(b.target),
             escape(b.block_id.rsplit("-", 1)[-1]),
@@ -118,7 +121,7 @@ def _print_night(blocks: list[Any], night: str, site: Any) -> None:
             escape(b.anchor),
             f"{b.u_star_rad:.4f}",
             f"{b.t_mid_utc.iso[11:23]} ± {b.sigma_t_s:.2f} s",
-            _local(b),
+            local,
             f"{b.t_start_utc.iso[:19]}–{b.t_end_utc.iso[11:19]}",
             f"{b.airmass_start:.2f}/{b.airmass:.2f}/{b.airmass_end:.2f}",
             f"{b.moon_sep_deg:.0f}",
@@ -146,13 +149,15 @@ def report(run: Any, wide: bool = False, verbose: bool = False) -> None:
     if failure is not None:
         raise UcbplanError(failure)
     blocks = run.result.blocks
-    nights = list(dict.fromkeys(b.night for b in blocks))
+    nights: dict[str, list[Any]] = {}
+    for b in blocks:
+        nights.setdefault(b.night, []).append(b)
     if not verbose and (len(nights) > SUMMARY_NIGHTS or len(blocks) > SUMMARY_ROWS):
         _print_summary(run)
     else:
         show = _print_night if wide else _print_compact
-        for label in nights:
-            show([b for b in blocks if b.night == label], label, run.site)
+        for label, night_blocks in nights.items():
+            show(night_blocks, label, run.site)
     _print_accounting(run, verbose)
 
 

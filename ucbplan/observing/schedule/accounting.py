@@ -19,9 +19,11 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
 from astropy.time import Time, TimeDelta
 
 from ucbplan.observing.blocks import Block
+from ucbplan.observing.blocktable import jd_parts, time_array
 from ucbplan.observing.timeconv import quiet_erfa
 
 __all__ = ["ACCOUNT_KEYS", "VisitSummary", "time_accounting", "visit_summaries"]
@@ -66,43 +68,78 @@ class VisitSummary:
         }
 
 
+def _groups(blocks: Sequence[Block]) -> dict[tuple[str, str], list[int]]:
+    """Block indices per visit (``(target, visit_id)``; a block without one is its own visit),
+    each in time order of the block starts (the Julian dates of the times as stored)."""
+    groups: dict[tuple[str, str], list[int]] = {}
+    for k, b in enumerate(blocks):
+        groups.setdefault((b.target, b.visit_id or f"#{k}"), []).append(k)
+    jd1, jd2 = jd_parts([b.t_start_utc for b in blocks])
+    keys = list(zip(jd1.tolist(), jd2.tolist(), strict=True))
+    return {g: sorted(ks, key=keys.__getitem__) for g, ks in groups.items()}
+
+
 def visit_summaries(
     blocks: Sequence[Block], acquisition_s: float, trailing_readout: bool
 ) -> list[VisitSummary]:
     """One :class:`VisitSummary` per visit of ``blocks`` (grouped by ``visit_id``; a block
-    without one is a visit of its own), in time order."""
-    groups: dict[tuple[str, str], list[Block]] = {}
-    for k, b in enumerate(blocks):
-        groups.setdefault((b.target, b.visit_id or f"#{k}"), []).append(b)
-    out = []
+    without one is a visit of its own), in time order.
+
+    The times of all visits are converted together (one astropy call per quantity, not per
+    visit); sums over a visit's blocks run in time order, as they always did."""
+    if not blocks:
+        return []
+    groups = _groups(blocks)
     with quiet_erfa():
-        for (_, vid), bs in groups.items():
-            bs = sorted(bs, key=lambda b: (b.t_start_utc.jd1, b.t_start_utc.jd2))
-            start, end = bs[0].t_start_utc, max((b.t_end_utc for b in bs), key=lambda t: t.jd)
-            drop = 0 if trailing_readout else 1
-            readout = float(sum((b.n_exp - drop) * b.readout_s for b in bs))
-            last_readout = bs[-1].readout_s if trailing_readout else 0.0
-            span = float((end - start).to_value("s")) + last_readout
-            shutter = float(sum(b.n_exp * b.exptime_s for b in bs))
-            overhead = acquisition_s + readout
-            wall = acquisition_s + span
-            acq = start - TimeDelta(acquisition_s, format="sec")
-            out.append(
-                VisitSummary(
-                    visit_id=vid if not vid.startswith("#") else "",
-                    target=bs[0].target,
-                    night=bs[0].night,
-                    acq_start_utc=Time(acq, precision=0).utc.isot,
-                    start_utc=Time(start, precision=0).utc.isot,
-                    end_utc=Time(end, precision=0).utc.isot,
-                    exposures=sum(b.n_exp for b in bs),
-                    shutter_s=shutter,
-                    overhead_s=overhead,
-                    idle_s=max(0.0, wall - shutter - overhead),
-                )
-            )
+        starts = time_array([b.t_start_utc for b in blocks], "utc")
+        ends = time_array([b.t_end_utc for b in blocks], "utc")
+        end_jd = ends.jd
+        first = [ks[0] for ks in groups.values()]
+        # the latest end (the first of equal ones, in time order of the starts)
+        last = [max(ks, key=end_jd.__getitem__) for ks in groups.values()]
+        start, end = starts[first], ends[last]
+        spans = np.atleast_1d((end - start).to_value("s"))
+        acq = start - TimeDelta(acquisition_s, format="sec")
+        iso = [np.atleast_1d(Time(t, precision=0).utc.isot) for t in (acq, start, end)]
+    out = [
+        _summary(
+            [blocks[k] for k in ks], vid, float(span), (a, s, e), acquisition_s, trailing_readout
+        )
+        for ((_, vid), ks), span, a, s, e in zip(groups.items(), spans, *iso, strict=True)
+    ]
     out.sort(key=lambda v: v.acq_start_utc)
     return out
+
+
+def _summary(
+    bs: list[Block],
+    vid: str,
+    span_s: float,
+    iso: tuple[str, str, str],
+    acquisition_s: float,
+    trailing_readout: bool,
+) -> VisitSummary:
+    """One visit from its blocks (in time order), first start to latest end [s] and the ISO
+    times of its acquisition start, first start and latest end."""
+    drop = 0 if trailing_readout else 1
+    readout = float(sum((b.n_exp - drop) * b.readout_s for b in bs))
+    last_readout = bs[-1].readout_s if trailing_readout else 0.0
+    span = span_s + last_readout
+    shutter = float(sum(b.n_exp * b.exptime_s for b in bs))
+    overhead = acquisition_s + readout
+    wall = acquisition_s + span
+    return VisitSummary(
+        visit_id=vid if not vid.startswith("#") else "",
+        target=bs[0].target,
+        night=bs[0].night,
+        acq_start_utc=str(iso[0]),
+        start_utc=str(iso[1]),
+        end_utc=str(iso[2]),
+        exposures=sum(b.n_exp for b in bs),
+        shutter_s=shutter,
+        overhead_s=overhead,
+        idle_s=max(0.0, wall - shutter - overhead),
+    )
 
 
 def _entry(visits: Sequence[VisitSummary]) -> dict[str, Any]:

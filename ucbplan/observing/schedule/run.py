@@ -11,6 +11,7 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from datetime import date
+from functools import cached_property
 from pathlib import Path
 from typing import Any
 
@@ -115,10 +116,16 @@ class PlanRun:
             parts.append(f"{name} ({when}): {reason}")
         return f"no block could be planned at {self.site.name}: {'; '.join(parts)}"
 
+    @cached_property
+    def _visits(self) -> tuple[VisitSummary, ...]:
+        """The visits, computed once per run (the table meta, the accounting and the terminal
+        report all read them)."""
+        trailing = self.settings.visit_s is not None
+        return tuple(visit_summaries(self.result.blocks, self.settings.overhead_s, trailing))
+
     def visits(self) -> list[VisitSummary]:
         """One summary per visit (acquisition + exposures), in time order."""
-        trailing = self.settings.visit_s is not None
-        return visit_summaries(self.result.blocks, self.settings.overhead_s, trailing)
+        return list(self._visits)
 
     def accounting(self) -> dict[str, Any]:
         """Time accounting, ``{"total": {...}, "targets": {NAME: {...}}}`` (see

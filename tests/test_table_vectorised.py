@@ -1,0 +1,370 @@
+"""Vectorised blocks-table and visit code against the per-element way (issue 14).
+
+Each vectorised function is compared with a reference that works one element at a time with
+astropy scalars (what the code did before), on inputs chosen for the edge cases: DST changes in
+three zones, times whose stored Julian-date split is not astropy's normal one, microsecond
+rounding at a second boundary, a leap second, visits given out of time order with equal ends.
+Equality is exact (tolerance 0): outputs are promised byte-identical.
+"""
+
+from __future__ import annotations
+
+import io
+import random
+from datetime import UTC, datetime, timedelta
+from zoneinfo import ZoneInfo
+
+import astropy.units as u
+import numpy as np
+import pytest
+from astropy.table import MaskedColumn, Table
+from astropy.time import Time, TimeDelta
+
+from ucbplan.observing import blocktable
+from ucbplan.observing.blocks import Block
+from ucbplan.observing.blocktable import (
+    jd_parts,
+    local_datetimes,
+    table_to_json_rows,
+    time_array,
+    write_table,
+)
+from ucbplan.observing.schedule import accounting
+from ucbplan.observing.schedule.accounting import visit_summaries
+from ucbplan.observing.timeconv import quiet_erfa
+from ucbplan.offline import configure_offline
+
+pytestmark = pytest.mark.filterwarnings("ignore::erfa.ErfaWarning")
+
+ZONES = ("Europe/Madrid", "America/Santiago", "Pacific/Auckland")
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _offline() -> None:
+    configure_offline()
+
+
+def _transitions(zone: str, year: int) -> list[datetime]:
+    """UTC instants (to the second) at which ``zone`` changes its offset in ``year``."""
+    tz = ZoneInfo(zone)
+    out = []
+    t = datetime(year, 1, 1, tzinfo=UTC)
+    while t.year == year:
+        nxt = t + timedelta(hours=1)
+        if t.astimezone(tz).utcoffset() != nxt.astimezone(tz).utcoffset():
+            lo, hi = t, nxt
+            while hi - lo > timedelta(seconds=1):
+                mid = lo + (hi - lo) / 2
+                same = mid.astimezone(tz).utcoffset() == lo.astimezone(tz).utcoffset()
+                lo, hi = (mid, hi) if same else (lo, mid)
+            out.append(hi)
+        t = nxt
+    return out
+
+
+def _scalars(iso: list[str], scale: str = "utc") -> list[Time]:
+    """Scalar Times cut from one array Time, as the planner makes the blocks' times."""
+    with quiet_erfa():
+        times = Time(iso, scale=scale)
+    return [times[i] for i in range(len(times))]
+
+
+def _dst_times(zone: str) -> list[Time]:
+    """Times every 7 min 13.4 s over ±2 h around each 2040 DST change of ``zone``, and the
+    last whole second before and the first after each change."""
+    iso = []
+    for change in _transitions(zone, 2040):
+        for k in range(-17, 18):
+            iso.append((change + k * timedelta(seconds=433.4)).strftime("%Y-%m-%dT%H:%M:%S.%f"))
+        for s in (-1, 0, 1):
+            iso.append((change + timedelta(seconds=s)).strftime("%Y-%m-%dT%H:%M:%S"))
+    return _scalars(iso)
+
+
+def _reference_local(times: list[Time], zones: list[str]) -> list[datetime]:
+    """The per-element way: one astropy ``to_datetime`` per time."""
+    return [
+        t.utc.to_datetime(timezone=UTC).astimezone(ZoneInfo(z))
+        for t, z in zip(times, zones, strict=True)
+    ]
+
+
+def test_dst_changes_found_in_each_zone() -> None:
+    # Madrid: the EU rule, last Sundays of March and October at 01:00 UTC
+    assert _transitions("Europe/Madrid", 2040) == [
+        datetime(2040, 3, 25, 1, tzinfo=UTC),
+        datetime(2040, 10, 28, 1, tzinfo=UTC),
+    ]
+    assert all(len(_transitions(z, 2040)) == 2 for z in ZONES)
+
+
+@pytest.mark.parametrize("zone", ZONES)
+def test_local_times_across_dst_match_per_element(zone: str) -> None:
+    times = _dst_times(zone)
+    zones = [zone] * len(times)
+    with quiet_erfa():
+        got = local_datetimes(times, zones)
+        ref = _reference_local(times, zones)
+        got_iso = blocktable._local_iso(times, zones)
+    assert got == ref
+    assert [d.utcoffset() for d in got] == [d.utcoffset() for d in ref]
+    assert list(got_iso) == [d.isoformat(timespec="seconds") for d in ref]
+    assert len({d.utcoffset() for d in got}) == 2  # both sides of every change are sampled
+
+
+def test_local_times_known_madrid_offsets() -> None:
+    # 2040-03-25 01:00 UTC: CET (+01:00) becomes CEST (+02:00); independent of astropy
+    times = _scalars(["2040-03-25T00:59:59", "2040-03-25T01:00:00"])
+    with quiet_erfa():
+        got = blocktable._local_iso(times, ["Europe/Madrid"] * 2)
+    assert list(got) == ["2040-03-25T01:59:59+01:00", "2040-03-25T03:00:00+02:00"]
+
+
+def test_local_times_mixed_zones_and_rounding_carry() -> None:
+    # 0.4 µs before a second rounds up to it (astropy's µs datetime), carrying into the date
+    iso = ["2040-12-31T23:59:59.9999996", "2040-06-30T11:59:59.9999994", "2040-01-01T12:00:00"]
+    times = _scalars(iso)
+    zones = ["Pacific/Auckland", "America/Santiago", "Europe/Madrid"]
+    with quiet_erfa():
+        assert local_datetimes(times, zones) == _reference_local(times, zones)
+    assert local_datetimes([], []) == []
+
+
+def _unnormalised() -> list[Time]:
+    """UTC times stored with jd1 one day early and jd2 > 1 (the same instants, not the split
+    ``Time(jd1, jd2)`` makes; astropy itself always re-splits, a future version might not)."""
+    with quiet_erfa():
+        utc = Time(
+            np.full(4, 2465000.0), np.array([-0.49999, 0.1, 0.4999, 0.5]), format="jd", scale="utc"
+        )
+    utc._time.jd1 = utc._time.jd1 - 1.0
+    utc._time.jd2 = utc._time.jd2 + 1.0
+    return [utc[i] for i in range(len(utc))]
+
+
+def test_time_array_keeps_the_stored_split() -> None:
+    times = _unnormalised()
+    jd1, jd2 = jd_parts(times)
+    assert np.all(np.abs(jd2) > 0.5)  # the case the fallback exists for
+    with quiet_erfa():
+        arr = time_array(times, "utc")
+        assert np.array_equal(arr.jd1, jd1) and np.array_equal(arr.jd2, jd2)
+        assert list(arr.isot) == [t.isot for t in times]
+        assert local_datetimes(times, ["Europe/Madrid"] * 4) == _reference_local(
+            times, ["Europe/Madrid"] * 4
+        )
+        tdb = _scalars(["2040-02-16T02:03:12.123456"], "tdb")
+        assert time_array(tdb, "utc").isot[0] == tdb[0].utc.isot  # converted like .utc
+
+
+def test_leap_second_is_refused_as_before() -> None:
+    times = _scalars(["2016-12-31T23:59:60.5"])
+    with quiet_erfa(), pytest.raises(ValueError, match="leap second"):
+        local_datetimes(times, ["UTC"])
+
+
+def test_iso_columns_match_per_element() -> None:
+    times = [*_dst_times("Europe/Madrid")[:10], *_unnormalised(), None]
+    with quiet_erfa():
+        got = blocktable._iso(times, 3, "utc")
+        ref = [
+            "" if t is None else Time(t.utc.jd1, t.utc.jd2, format="jd", precision=3).isot
+            for t in times
+        ]
+        tdb = blocktable._iso(times[:-1], 6, "tdb")
+        ref_tdb = [Time(t.tdb.jd1, t.tdb.jd2, format="jd", precision=6).isot for t in times[:-1]]
+    assert list(got) == ref and list(tdb) == ref_tdb
+
+
+def _visit_block(target: str, visit: str, start: Time, n_exp: int, k: int) -> Block:
+    with quiet_erfa():
+        end = start + (n_exp * 60.0 + (n_exp - 1) * 7.5) * u.s
+        mid = start + (end - start) / 2
+    return Block(
+        target=target, block_id=f"{target}-{k:02d}", anchor="quadrature", u_star_rad=0.0,
+        t_mid_utc=mid, t_start_utc=start, t_end_utc=end, t_mid_tdb_bary=mid.tdb,
+        sigma_t_s=1.0, t_alt_utc=None, exptime_s=60.0, n_exp=n_exp, readout_s=7.5,
+        lambda_k=0.95, lambda_kappa=0.8, smear_kms=1.0, alt_start_deg=50.0, altitude_deg=51.0,
+        alt_end_deg=52.0, airmass_start=1.3, airmass=1.29, airmass_end=1.28, moon_sep_deg=90.0,
+        moon_illum=0.5, ra_deg=120.0, dec_deg=15.0, night="2040-03-24",
+        timezone="Europe/Madrid", period_s=321.5, visit_id=visit,
+    )  # fmt: skip
+
+
+def _visit_blocks() -> list[Block]:
+    """Two targets' visits out of time order, blocks without a visit, equal visit ends."""
+    rng = random.Random(3)
+    base = _dst_times("Europe/Madrid")[:30]
+    blocks = []
+    for k, start in enumerate(base):
+        target = "A" if k % 3 else "B Cnc"
+        visit = "" if k % 7 == 0 else f"{target}-V{k % 4:02d}"
+        blocks.append(_visit_block(target, visit, start, 1 + k % 3, k))
+    blocks.append(_visit_block("A", "A-V01", base[5], 3, 99))  # same start as another
+    rng.shuffle(blocks)
+    return blocks
+
+
+def _reference_visits(blocks: list[Block], acq_s: float, trailing: bool) -> list[tuple]:
+    """The per-visit way: scalar astropy arithmetic on each visit's first and last block."""
+    groups: dict[tuple[str, str], list[Block]] = {}
+    for k, b in enumerate(blocks):
+        groups.setdefault((b.target, b.visit_id or f"#{k}"), []).append(b)
+    out = []
+    for (_, vid), bs in groups.items():
+        bs = sorted(bs, key=lambda b: (b.t_start_utc.jd1, b.t_start_utc.jd2))
+        start, end = bs[0].t_start_utc, max((b.t_end_utc for b in bs), key=lambda t: t.jd)
+        drop = 0 if trailing else 1
+        readout = float(sum((b.n_exp - drop) * b.readout_s for b in bs))
+        span = float((end - start).to_value("s")) + (bs[-1].readout_s if trailing else 0.0)
+        shutter = float(sum(b.n_exp * b.exptime_s for b in bs))
+        acq = start - TimeDelta(acq_s, format="sec")
+        wall = acq_s + span
+        iso = [Time(t, precision=0).utc.isot for t in (acq, start, end)]
+        idle = max(0.0, wall - shutter - (acq_s + readout))
+        out.append(
+            (vid if not vid.startswith("#") else "", bs[0].target, bs[0].night, *iso,
+             sum(b.n_exp for b in bs), shutter, acq_s + readout, idle)
+        )  # fmt: skip
+    return sorted(out, key=lambda v: v[3])
+
+
+@pytest.mark.parametrize("trailing", [False, True])
+def test_visit_summaries_match_per_visit_reference(trailing: bool) -> None:
+    blocks = _visit_blocks()
+    with quiet_erfa():
+        got = visit_summaries(blocks, 300.0, trailing)
+        ref = _reference_visits(blocks, 300.0, trailing)
+    fields = [
+        (v.visit_id, v.target, v.night, v.acq_start_utc, v.start_utc, v.end_utc, v.exposures,
+         v.shutter_s, v.overhead_s, v.idle_s)
+        for v in got
+    ]  # fmt: skip
+    assert fields == ref
+    assert visit_summaries([], 300.0, trailing) == []
+
+
+def test_plan_run_computes_visits_once(monkeypatch: pytest.MonkeyPatch) -> None:
+    from ucbplan.observing.schedule import run as run_module
+    from ucbplan.observing.schedule.run import PlanRun
+
+    calls = []
+
+    def counting(*args: object) -> list:
+        calls.append(args)
+        return accounting.visit_summaries(*args)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(run_module, "visit_summaries", counting)
+    settings = type("S", (), {"visit_s": None, "overhead_s": 300.0})()
+    result = type("R", (), {"blocks": _visit_blocks()})()
+    run = PlanRun([], None, [], settings, result)  # type: ignore[arg-type]
+    first = run.visits()
+    first.clear()  # a caller's list is its own
+    assert run.visits() == run.visits() != []
+    run.accounting()
+    assert len(calls) == 1
+
+
+def _random_meta(rng: random.Random, alphabet: str, depth: int = 0) -> object:
+    kind = rng.random()
+    if depth < 3 and kind < 0.2:
+        return {
+            "".join(rng.choice(alphabet) for _ in range(rng.randint(1, 40))) or "k": (
+                _random_meta(rng, alphabet, depth + 1)
+            )
+            for _ in range(rng.randint(0, 4))
+        }
+    if depth < 3 and kind < 0.35:
+        return [_random_meta(rng, alphabet, depth + 1) for _ in range(rng.randint(0, 4))]
+    if kind < 0.5:
+        return rng.choice([0, -3, 2**70, True, None, 0.1, 1e17, float("nan"), float("inf")])
+    return "".join(rng.choice(alphabet) for _ in range(rng.choice([0, 1, 5, 40, 140, 300])))
+
+
+def _pyyaml_ecsv(table: Table) -> str:
+    buf = io.StringIO()
+    table.write(buf, format="ascii.ecsv")  # astropy's own writer (PyYAML's emitter)
+    return buf.getvalue()
+
+
+def _ours(table: Table, fmt: str = "ecsv") -> str:
+    buf = io.StringIO()
+    write_table(table, buf, fmt)
+    return buf.getvalue()
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_ecsv_header_bytes_as_astropy_writes_them(seed: int) -> None:
+    rng = random.Random(seed)
+    ascii_text = "abcXYZ019 _-.:,#'\"!&*?|>%@`[]{}=+/\\~" + "  "
+    other = ascii_text + "\n\té σΛ★\x85\u2028\ufeff"
+    alphabet = ascii_text if seed % 2 else other  # odd seeds: libyaml, even: mostly not
+    meta = {f"key{k}": _random_meta(rng, alphabet) for k in range(rng.randint(1, 6))}
+    if seed % 4 == 0:
+        meta[""] = "empty key"  # libyaml writes empty keys otherwise than PyYAML
+    table = Table({"a": [1.5, float("nan")], "b": ["x y", ""]}, meta=meta)
+    table["a"].unit = "km / s"
+    table["a"].description = "a speed: the 'fast' one"
+    assert blocktable._header_safe(table) == bool(seed % 2)
+    assert _ours(table) == _pyyaml_ecsv(table)
+
+
+def test_plan_table_header_uses_libyaml_when_safe(monkeypatch: pytest.MonkeyPatch) -> None:
+    import yaml
+    from yaml._yaml import CEmitter
+
+    from tests.test_observing_table import _block, _meta
+
+    with quiet_erfa():
+        table = blocktable.blocks_to_table([_block(i) for i in range(5)], _meta())
+    assert blocktable._header_safe(table)
+    expected = _pyyaml_ecsv(table)
+    dumpers = []
+    real_dump = yaml.dump
+
+    def spy(*args: object, **kwargs: object) -> object:
+        dumpers.append(kwargs.get("Dumper"))
+        return real_dump(*args, **kwargs)  # type: ignore[call-overload]
+
+    monkeypatch.setattr(yaml, "dump", spy)
+    assert _ours(table) == expected
+    assert len(dumpers) == 1 and issubclass(dumpers[0], CEmitter)  # type: ignore[arg-type]
+
+
+def _reference_rows(table: Table) -> list[dict]:
+    """The row-by-row way: ``item()`` of every cell, NaN as None."""
+    rows = []
+    for row in table:
+        cells = {n: row[n].item() if hasattr(row[n], "item") else row[n] for n in table.colnames}
+        rows.append({n: blocktable._plain(v) for n, v in cells.items()})
+    return rows
+
+
+def test_json_rows_match_row_by_row() -> None:
+    table = Table(
+        {
+            "f": [1.0, float("nan"), -0.0, 1e-300],
+            "i": np.array([1, 2, 3, 2**62], dtype=np.int64),
+            "s": ["a", "", "é", "x y"],
+            "b": [True, False, True, False],
+        }
+    )
+    assert table_to_json_rows(table) == _reference_rows(table)
+    assert [type(v) for v in table_to_json_rows(table)[0].values()] == [float, int, str, bool]
+    masked = table.copy()
+    masked["m"] = MaskedColumn([1.0, 2.0, 3.0, 4.0], mask=[False, True, False, False])
+    assert table_to_json_rows(masked) == _reference_rows(masked)  # row by row (masked)
+    assert table_to_json_rows(table[:0]) == []
+
+
+def test_sexagesimal_columns_match_per_element() -> None:
+    # repeated (a target's blocks), signed zero, rounding carries, the poles and NaN
+    ra = np.array([121.5967, 121.5967, 0.0, -0.0, 359.99999999, 15.0, 121.5967, np.nan])
+    dec = np.array([15.4583, -0.0, 0.0, -0.0000001, 89.9999999999, -90.0, 15.4583, np.nan])
+    got_ra, got_dec = blocktable._ra_hms(ra), blocktable._dec_dms(dec)
+    ref_ra = [str(blocktable._hms(np.array([x]))[0]) for x in ra]
+    ref_dec = [str(blocktable._dms(np.array([x]))[0]) for x in dec]
+    assert list(got_ra) == ref_ra and list(got_dec) == ref_dec
+    assert (got_dec[1], got_dec[2]) == ("-00:00:00.00", "+00:00:00.00")  # -0.0 on its own
+    assert got_ra.dtype == blocktable._hms(ra).dtype  # the table column's width unchanged
+    assert len(blocktable._ra_hms(np.array([]))) == 0
