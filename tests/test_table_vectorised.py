@@ -313,7 +313,7 @@ def test_plan_table_header_uses_libyaml_when_safe(monkeypatch: pytest.MonkeyPatc
     import yaml
     from yaml._yaml import CEmitter
 
-    from tests.test_observing_table import _block, _meta
+    from test_observing_table import _block, _meta  # tests/ is on sys.path (no __init__.py)
 
     with quiet_erfa():
         table = blocktable.blocks_to_table([_block(i) for i in range(5)], _meta())
