@@ -311,9 +311,8 @@ def test_ecsv_header_bytes_as_astropy_writes_them(seed: int) -> None:
 
 def test_plan_table_header_uses_libyaml_when_safe(monkeypatch: pytest.MonkeyPatch) -> None:
     import yaml
-    from yaml._yaml import CEmitter
-
     from test_observing_table import _block, _meta  # tests/ is on sys.path (no __init__.py)
+    from yaml._yaml import CEmitter
 
     with quiet_erfa():
         table = blocktable.blocks_to_table([_block(i) for i in range(5)], _meta())
