@@ -22,6 +22,7 @@ import json
 import os
 import platform
 import resource
+import signal
 import subprocess
 import sys
 import time
@@ -87,6 +88,8 @@ def collect(name: str, quick: bool, timeout: float) -> list[dict[str, Any]]:
     lines = [ln for ln in res.stdout.splitlines() if ln.startswith(MARK)]
     if res.returncode != 0 or not lines:
         err = (res.stderr.strip().splitlines() or ["no output"])[-1]
+        if res.returncode < 0:  # killed by a signal, e.g. SIGILL: a wheel built for another CPU
+            err = f"killed by {signal.Signals(-res.returncode).name}; {err}"
         return [{"name": f"{name}: FAILED ({err[:120]})", "module": name}]
     rows: list[dict[str, Any]] = json.loads(lines[-1][len(MARK) :])
     print(f"  {name}: {len(rows)} rows in {time.perf_counter() - t0:.0f} s", file=sys.stderr)
