@@ -27,7 +27,7 @@ from numpy.typing import NDArray
 from scipy.interpolate import CubicSpline
 
 from ucbplan.observing.timeaxis import TimeAxis
-from ucbplan.observing.timeconv import quiet_erfa
+from ucbplan.observing.timeconv import astropy_rotations, quiet_erfa
 
 __all__ = ["SLOW_STEP_S", "SkyModel", "airmass_from_alt", "sun_cirs_frames"]
 
@@ -56,16 +56,12 @@ def sun_cirs_frames(t: Time) -> FloatArray:
 
 
 def _sun_cirs_m(t: Time) -> FloatArray:
-    """:func:`sun_cirs_frames` with astropy's GCRS → CIRS rotation applied directly: the same
-    matrix, bit for bit (tests compare), without the frame machinery's per-element comparison
-    of observer positions."""
-    try:
-        from astropy.coordinates.builtin_frames.intermediate_rotation_transforms import (
-            gcrs_to_cirs_mat,
-        )
-    except ImportError:  # a future astropy moved it: the public chain gives the same numbers
+    """:func:`sun_cirs_frames` with astropy's GCRS → CIRS rotation (:func:`astropy_rotations`)
+    applied directly: the same matrix, bit for bit (tests compare)."""
+    rotations = astropy_rotations()
+    if rotations is None:
         return sun_cirs_frames(t)
-    sun = get_sun(t).cartesian.transform(gcrs_to_cirs_mat(t)).xyz.to_value(u.m).T
+    sun = get_sun(t).cartesian.transform(rotations[1](t)).xyz.to_value(u.m).T
     return np.asarray(sun, dtype=np.float64)
 
 

@@ -14,7 +14,7 @@ is built on nodes t★_k = t_k + Δ(t_k), exact at every node without iteration.
 from __future__ import annotations
 
 import warnings
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 
@@ -27,6 +27,7 @@ from scipy.interpolate import CubicSpline
 __all__ = [
     "DelayInterpolator",
     "SiteTrack",
+    "astropy_rotations",
     "bary_tdb_to_site_utc",
     "coverage_warnings",
     "light_time_s",
@@ -94,20 +95,31 @@ def site_icrs_frames(location: EarthLocation, t: Time) -> np.ndarray:
     return np.asarray(bary.cartesian.xyz.to_value(u.m).T, dtype=np.float64)
 
 
-def _site_icrs_m(location: EarthLocation, t: Time) -> np.ndarray:
-    """:func:`site_icrs_frames` with the two rotations applied directly: the same matrices in
-    the same order, bit for bit (tests compare), without the frame machinery, which compares
-    every per-time observer position one by one (half the time for long grids)."""
-    from astropy.coordinates import GCRS, ICRS
-
+def astropy_rotations() -> tuple[Callable[[Time], np.ndarray], Callable[[Time], np.ndarray]] | None:
+    """astropy's own (CIRS → ITRS, GCRS → CIRS) rotation-matrix functions, the ones its frame
+    transformations apply, or None if a future astropy moved them (callers then take the public
+    frame chain, which gives the same numbers). Applying them directly skips the frame
+    machinery, which compares every per-time observer position one by one."""
     try:
         from astropy.coordinates.builtin_frames.intermediate_rotation_transforms import (
             cirs_to_itrs_mat,
             gcrs_to_cirs_mat,
         )
-        from astropy.coordinates.matrix_utilities import matrix_transpose
-    except ImportError:  # a future astropy moved them: the public chain gives the same numbers
+    except ImportError:
+        return None
+    return cirs_to_itrs_mat, gcrs_to_cirs_mat
+
+
+def _site_icrs_m(location: EarthLocation, t: Time) -> np.ndarray:
+    """:func:`site_icrs_frames` with the two rotations of :func:`astropy_rotations` applied
+    directly: the same matrices in the same order, bit for bit (tests compare)."""
+    from astropy.coordinates import GCRS, ICRS
+    from astropy.coordinates.matrix_utilities import matrix_transpose
+
+    rotations = astropy_rotations()
+    if rotations is None:
         return site_icrs_frames(location, t)
+    cirs_to_itrs_mat, gcrs_to_cirs_mat = rotations
     itrs = location.get_itrs(obstime=t).cartesian
     cirs = itrs.transform(matrix_transpose(cirs_to_itrs_mat(t)))
     gcrs = cirs.transform(matrix_transpose(gcrs_to_cirs_mat(t)))

@@ -78,10 +78,11 @@ def _find_epochs(
     ``quadrature+conjunction``: each anchor solved on its own, merged on one origin in time
     order (the origins differ by whole seconds at most ~10⁸ s: exact in float64).
 
-    A single anchor's σ_t and π-mode alternative are left to :func:`_with_details` (only
-    usable blocks need them); a combined anchor's are computed here, for every epoch.
+    A single anchor's σ_t and π-mode alternative are left to
+    :func:`~ucbplan.core.ephemeris.with_details` (only usable blocks need them); a combined
+    anchor's are computed here, for every epoch.
     """
-    if not isinstance(anchor, str) or "+" not in anchor:
+    if not isinstance(anchor, str) or not _combined(anchor):
         return find_epochs(target, tau_lo, tau_hi, anchor, star, details=False)
     sets = [find_epochs(target, tau_lo, tau_hi, a, star) for a in anchor.split("+")]
     origin = sets[0].origin_s
@@ -104,12 +105,9 @@ def _find_epochs(
     )
 
 
-def _with_details(target: Target, es: EpochSet, idx: NDArray[np.int64]) -> EpochSet:
-    """σ_t and the π-mode alternative of the epochs ``idx`` (NaN for the others), unless
-    :func:`_find_epochs` computed them for all already (a combined anchor)."""
-    if np.all(np.isnan(es.u_rate)):
-        return with_details(target, es, idx)
-    return es
+def _combined(anchor: str | float) -> bool:
+    """Whether ``anchor`` combines several (``quadrature+conjunction``)."""
+    return isinstance(anchor, str) and "+" in anchor
 
 
 def candidate_blocks(
@@ -140,7 +138,8 @@ def candidate_blocks(
     half = plan.span_s / 2.0
     x_mid = x_mid[keep]
     ok, first = evaluate_window(constraints, sky, i, x_mid - half, x_mid + half)
-    es = _with_details(target, es, np.flatnonzero(keep)[ok])
+    if not _combined(mode.anchor):  # σ_t and the π-mode alternative of usable blocks only
+        es = with_details(target, es, np.flatnonzero(keep)[ok])
     x_alt = np.full(es.tau_alt_s.shape, np.nan)
     has_alt = np.isfinite(es.tau_alt_s)
     x_alt[has_alt] = interp.site_x(epochs.to_x(es.tau_alt_s[has_alt]))
