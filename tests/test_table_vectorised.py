@@ -255,7 +255,7 @@ def test_plan_run_computes_visits_once(monkeypatch: pytest.MonkeyPatch) -> None:
         return accounting.visit_summaries(*args)  # type: ignore[arg-type]
 
     monkeypatch.setattr(run_module, "visit_summaries", counting)
-    settings = type("S", (), {"visit_s": None, "overhead_s": 300.0})()
+    settings = type("S", (), {"visit_s": None, "overhead_s": 300.0, "plans_visits": False})()
     result = type("R", (), {"blocks": _visit_blocks()})()
     run = PlanRun([], None, [], settings, result)  # type: ignore[arg-type]
     first = run.visits()

@@ -49,19 +49,26 @@ class Session:
 
 @dataclass
 class Allowance:
-    """What a target may still be given over the run: exposures (a ``--goal``) and wall time
-    (``--budget``) [s]; None = no limit. ``smallest_s`` is the wall time of the shortest visit
-    or session (acquisition + one exposure): a budget with less left is spent."""
+    """What a target may still be given over the run: information on K (a ``--goal``)
+    [(km/s)⁻²] and wall time (``--budget``) [s]; None = no limit. ``smallest_s`` is the wall
+    time of the shortest visit or session (acquisition + one exposure): a budget with less left
+    is spent. ``exposures`` limits the number of exposures (library callers)."""
 
     exposures: int | None = None
     seconds: float | None = None
     smallest_s: float = 0.0
+    info: float | None = None
+
+    def __post_init__(self) -> None:
+        self.info_asked = self.info or 0.0
 
     @property
     def spent(self) -> bool:
         """Nothing more may be planned (less time left than the shortest visit/session)."""
-        return (self.exposures is not None and self.exposures <= 0) or (
-            self.seconds is not None and self.seconds < max(self.smallest_s, 1e-9)
+        return (
+            (self.exposures is not None and self.exposures <= 0)
+            or (self.info is not None and self.info <= 0)
+            or (self.seconds is not None and self.seconds < max(self.smallest_s, 1e-9))
         )
 
     def fits(self, n_exposures: int, wall_s: float) -> bool:
@@ -70,12 +77,20 @@ class Allowance:
             self.seconds is None or wall_s <= self.seconds + 1e-6
         )
 
-    def charge(self, n_exposures: int, wall_s: float) -> None:
-        """Spend a placed visit or session."""
+    def charge(self, n_exposures: int, wall_s: float, info: float = 0.0) -> None:
+        """Spend a placed visit or session (``info``: the information it collects)."""
         if self.exposures is not None:
             self.exposures -= n_exposures
         if self.seconds is not None:
             self.seconds -= wall_s
+        if self.info is not None:
+            self.info -= info
+            if self.info <= INFO_RTOL * self.info_asked:
+                self.info = 0.0
+
+
+#: Relative shortfall of a goal's information counted as reached (rounding of the sums).
+INFO_RTOL = 1e-9
 
 
 @dataclass

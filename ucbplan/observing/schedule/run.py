@@ -21,6 +21,8 @@ from ucbplan.errors import InputError, shorten
 from ucbplan.inputs import check_range
 from ucbplan.observing.blocktable import blocks_to_table, make_meta
 from ucbplan.observing.schedule.accounting import VisitSummary, time_accounting, visit_summaries
+from ucbplan.observing.schedule.exposure import strategy_facts
+from ucbplan.observing.schedule.goalplan import info_of_blocks
 from ucbplan.observing.schedule.nights import night_dates
 from ucbplan.observing.schedule.planner import PlanResult, plan_nights
 from ucbplan.observing.schedule.settings import PlanSettings
@@ -120,7 +122,7 @@ class PlanRun:
     def _visits(self) -> tuple[VisitSummary, ...]:
         """The visits, computed once per run (the table meta, the accounting and the terminal
         report all read them)."""
-        trailing = self.settings.visit_s is not None
+        trailing = self.settings.plans_visits
         return tuple(visit_summaries(self.result.blocks, self.settings.overhead_s, trailing))
 
     def visits(self) -> list[VisitSummary]:
@@ -156,9 +158,19 @@ class PlanRun:
             if goal is not None:
                 entry["goal_spectra"] = goal.n_spectra
                 entry["goal_expected"] = goal.expected
+            if te.results:
+                entry["strategy"] = strategy_facts(te, self.collected_info().get(name, 0.0))
             per_target[name] = entry
         out["targets"] = per_target
         return out
+
+    def collected_info(self) -> dict[str, float]:
+        """Information on K each target's planned spectra collect [(km/s)⁻²], from the rows
+        (Σ (Λ_K cos u)²/σ_v²)."""
+        out: dict[str, list[Any]] = {}
+        for b in self.result.blocks:
+            out.setdefault(b.target, []).append(b)
+        return {k: info_of_blocks(v, self.settings.spec.u_values) for k, v in out.items()}
 
     def meta(self) -> dict[str, Any]:
         """Provenance of the run for the table ``meta`` (see :func:`make_meta`)."""

@@ -20,6 +20,7 @@ from ucbplan.observing.constraints import (
 )
 from ucbplan.observing.goals import parse_goal
 from ucbplan.observing.instruments import Instrument
+from ucbplan.observing.sigma_model import SigmaVModel
 from ucbplan.observing.sites import Site
 
 __all__ = [
@@ -32,12 +33,17 @@ __all__ = [
     "parse_mode",
 ]
 
-#: Exposure cadences inside a visit (``--cadence``): ``anchor`` centres every exposure on an
-#: anchor and waits for the next one it can reach; ``phase-locked`` sets exposure + readout to
-#: the anchor spacing, so consecutive exposures centre on consecutive anchors without waiting.
-CADENCES = ("anchor", "phase-locked")
-#: Default smallest smearing factor Λ_K of a planned exposure (``--min-lambda-k``).
+#: Exposure cadences inside a visit (``--cadence``): ``auto`` takes the strategy with the most
+#: information per visit when σ_v follows the exposure time (:mod:`ucbplan.observing.strategy`),
+#: else ``targeted``; ``targeted`` (or ``anchor``) centres every exposure on an anchor and waits
+#: for the next one it can reach; ``phase-locked`` sets exposure + readout to the anchor spacing,
+#: so consecutive exposures centre on consecutive anchors without waiting; ``untargeted`` takes
+#: back-to-back exposures at whatever phase they fall.
+CADENCES = ("auto", "targeted", "anchor", "phase-locked", "untargeted")
+#: Default smallest smearing factor Λ_K of a planned exposure (``--min-lambda-k``), in every mode.
 DEFAULT_MIN_LAMBDA_K = 0.9
+#: Longest visit a goal plans without ``--visit`` (``--max-visit``) [s].
+DEFAULT_MAX_VISIT_S = 7200.0
 #: Longest per-target time budget [s] (a year of nights).
 MAX_BUDGET_S = 366 * 86400.0
 #: Seconds per unit of a ``--visit`` duration.
@@ -227,7 +233,11 @@ class PlanSettings:
     n_epochs : int
         Number of epochs the tolerance is shared between.
     sigma_v_kms, k_eff_kms : float or None
-        RV precision σ_v and semi-amplitude K_eff [km/s]; None takes the target file's.
+        RV precision σ_v of every exposure and semi-amplitude K_eff [km/s]; None takes the
+        target file's.
+    sigma_model : SigmaVModel or None
+        σ_v that follows the exposure time, magnitude and airmass (``--sigma-v 30km/s@600s``);
+        the exposure time and cadence are then chosen for information per hour.
     max_smear : str or None
         Smearing budget (``0.5*sigma_v`` or km/s); exceeding it is an error.
     max_bin_fraction : float or None
@@ -241,18 +251,21 @@ class PlanSettings:
     star : int
         Component whose argument of latitude is targeted (1 or 2).
     visit_s : float or None
-        Visit length, acquisition included [s] (``--visit``); None plans sessions as before.
+        Visit length, acquisition included [s] (``--visit``); None plans sessions (or, with a
+        goal, visits of up to ``max_visit_s``).
+    max_visit_s : float
+        Longest visit a goal plans (``--max-visit``) [s]; visits are balanced below it.
     cadence : str
         Exposure cadence inside a visit (see :data:`CADENCES`).
     min_lambda_k : float or None
         Smallest smearing factor Λ_K of a planned block (``--min-lambda-k``). None: 0.9
-        (:data:`DEFAULT_MIN_LAMBDA_K`) with visits; without, only Λ_K > 0 (the signal is not
-        averaged away or inverted), as sessions of co-added blocks always were planned.
+        (:data:`DEFAULT_MIN_LAMBDA_K`), in every mode.
     allow_smeared : bool
         Plan exposures below ``min_lambda_k`` (``--allow-smeared``).
-    exptime_explicit : bool
-        The exposure time was chosen by the user (the default for library calls): below the
-        floor it is refused, not capped; the CLI sets False when ``--exptime`` is not given.
+    exptime_explicit : bool or None
+        The exposure time was chosen by the user: below the floor it is refused, not capped,
+        and it is not optimised. None (library calls): chosen unless ``exposure`` keeps the
+        default 60 s. The CLI sets it from whether ``--exptime`` was given.
     instrument : Instrument or None
         Spectrograph whose σ_ref scales σ_v per exposure (overheads are resolved already).
     goal : str or None
@@ -277,6 +290,7 @@ class PlanSettings:
     alpha: float = 1.0
     n_epochs: int = 2
     sigma_v_kms: float | None = None
+    sigma_model: SigmaVModel | None = None
     k_eff_kms: float | None = None
     max_smear: str | None = None
     max_bin_fraction: float | None = None
@@ -285,10 +299,11 @@ class PlanSettings:
     max_pair_baseline_days: float = 365.0
     star: int = 1
     visit_s: float | None = None
-    cadence: str = "anchor"
+    max_visit_s: float = DEFAULT_MAX_VISIT_S
+    cadence: str = "auto"
     min_lambda_k: float | None = None
     allow_smeared: bool = False
-    exptime_explicit: bool = True
+    exptime_explicit: bool | None = None
     instrument: Instrument | None = None
     goal: str | None = None
     budgets: tuple[tuple[str, float], ...] = ()
@@ -327,14 +342,22 @@ class PlanSettings:
                     f"--n-exp: expected 1 with --visit (each exposure of a visit is centred on "
                     f"its own anchor), got {self.exposure.n_exp}; drop --n-exp"
                 )
+        parse_duration(self.max_visit_s, "--max-visit")
         if self.cadence not in CADENCES:
             raise InputError(
-                f"--cadence: expected {' or '.join(CADENCES)}, got {shorten(self.cadence, 40)}"
+                f"--cadence: expected {', '.join(CADENCES)}, got {shorten(self.cadence, 40)}"
             )
+        if self.cadence in ("phase-locked", "untargeted"):
+            if self.visit_s is None and self.goal is None:
+                raise InputError(
+                    f"--cadence {self.cadence}: expected --visit DURATION (or --goal) as well"
+                )
+            if self.spec.label == "fixed-u-pairs":
+                raise InputError(
+                    f"--cadence {self.cadence}: fixed-u pairs are single blocks; drop --cadence"
+                )
         if self.cadence == "phase-locked":
-            if self.visit_s is None:
-                raise InputError("--cadence phase-locked: expected --visit DURATION as well")
-            if self.exptime_explicit:
+            if self.exptime_given:
                 raise InputError(
                     "--cadence phase-locked sets exposure + readout to the anchor spacing; "
                     "drop --exptime (or use --cadence anchor)"
@@ -345,8 +368,8 @@ class PlanSettings:
         parse_budgets(list(self.budgets))
         if self.goal is not None:
             parse_goal(self.goal)
-            if self.visit_s is None:
-                raise InputError("--goal: expected --visit DURATION as well (goals plan visits)")
+            if self.spec.label == "fixed-u-pairs":
+                raise InputError("--goal: fixed-u pairs plan two blocks each; drop --goal")
 
     def _check_budgets(self) -> None:
         """``--max-smear`` (its form, and a positive budget) and ``--max-bin-fraction``."""
@@ -378,9 +401,29 @@ class PlanSettings:
     @property
     def lambda_k_floor(self) -> float:
         """The smearing floor in force (see ``min_lambda_k``)."""
-        if self.min_lambda_k is not None:
-            return self.min_lambda_k
-        return DEFAULT_MIN_LAMBDA_K if self.visit_s is not None else 0.0
+        return DEFAULT_MIN_LAMBDA_K if self.min_lambda_k is None else self.min_lambda_k
+
+    @property
+    def plans_visits(self) -> bool:
+        """Whether the run plans visits (``--visit``, or a goal, which chooses their length)."""
+        return self.visit_s is not None or self.goal is not None
+
+    @property
+    def optimises_exposure(self) -> bool:
+        """Whether the exposure time is chosen for information per hour: σ_v follows the
+        exposure time and the user gave none."""
+        law = self.sigma_model is not None and self.sigma_model.follows_exposure
+        inst = self.instrument is not None and self.instrument.sigma_ref is not None
+        fixed = self.sigma_v_kms is not None and self.sigma_model is None
+        return (law or (inst and not fixed)) and not self.exptime_given
+
+    @property
+    def exptime_given(self) -> bool:
+        """Whether the exposure time was chosen by the user (``exptime_explicit``; None: an
+        ``exposure`` other than the default :class:`ExposurePlan`)."""
+        if self.exptime_explicit is not None:
+            return self.exptime_explicit
+        return self.exposure.exptime_s != ExposurePlan().exptime_s
 
     @property
     def spec(self) -> ModeSpec:
