@@ -198,3 +198,136 @@ def test_information_from_rows() -> None:
     assert sigma_k_from_rows(lam, u, sig) == pytest.approx(want**-0.5, rel=1e-12)
     # all at one quadrature: γ and K degenerate
     assert sigma_k_from_rows(lam[:1], u[:1], sig[:1]) == math.inf
+
+
+# ------------------------------------------------------------------ the plan end to end
+
+HM_FILE = "catalogs/hm-cnc-simulated.yaml"
+
+
+def _plan(**kw: object):  # type: ignore[no-untyped-def]
+    from ucbplan.observing.schedule import plan_files
+    from ucbplan.observing.schedule.options import plan_settings
+
+    nights = int(kw.pop("nights", 1))  # type: ignore[call-overload]
+    settings = plan_settings(**kw)  # type: ignore[arg-type]
+    return plan_files([HM_FILE], first_night="2040-02-15", n_nights=nights, site="paranal",
+                      settings=settings)  # fmt: skip
+
+
+@pytest.mark.parametrize(("readout", "acq"), [(45.0, 409.0), (5.0, 600.0)])
+def test_plan_rows_collect_the_brute_force_optimum(readout: float, acq: float) -> None:
+    """The information the plan's own rows collect, Σ(Λ_K cos u)²/σ_v², in a 1-h visit is
+    ≥ 95 % of the brute-force optimum of the same visit (the acceptance test of issue 20)."""
+    run = _plan(visit="1h", readout_s=readout, overhead_s=acq, sigma_v_kms="30km/s@300s")
+    rows = run.result.blocks
+    got = information([b.lambda_k for b in rows], [b.u_star_rad for b in rows],
+                      [b.sigma_v_kms for b in rows])  # fmt: skip
+    model = parse_sigma_v("30km/s@300s")
+    period = run.targets[0].period_s
+    ref = brute_force_best(period, readout, acq, 3600.0, lambda t: model.sigma(t))
+    assert got >= 0.95 * ref
+    assert all(b.exptime_s == round(b.exptime_s) and b.lambda_k >= 0.9 for b in rows)
+    assert len({b.visit_id for b in rows}) == 1
+
+
+def test_goal_alone_plans_balanced_visits_near_the_minimum() -> None:
+    """--goal without --visit: visits of at most 2 h, balanced, hours within 5 % of the
+    fewest the scan (checked above against the brute force) finds."""
+    run = _plan(nights=30, readout_s=45.0, overhead_s=409.0, sigma_v_kms="10km/s@300s",
+                goal="sigma_K=2km/s")  # fmt: skip
+    rows = run.result.blocks
+    info = information([b.lambda_k for b in rows], [b.u_star_rad for b in rows],
+                       [b.sigma_v_kms for b in rows])  # fmt: skip
+    assert info >= 1 / 2.0**2 * (1 - 1e-9)
+    counts = [v.exposures for v in run.visits()]
+    assert max(counts) - min(counts) <= 2  # whole u = 0 / π pairs, evenly split
+    acc = run.accounting()["total"]
+    hours = (acc["shutter_s"] + acc["overhead_s"] + acc["idle_s"]) / 3600
+    model = parse_sigma_v("10km/s@300s")
+    p = run.targets[0].period_s
+    shape = VisitShape(p, run.targets[0].params.n_bar, (0.0, math.pi), 45.0, 409.0, 7200.0)
+    best = min(goal_time(0.25, shape, lambda t: model.sigma(t), n).hours for n in STRATEGIES)
+    assert hours <= 1.05 * best
+
+
+def test_fixed_sigma_keeps_the_exposure_and_says_so() -> None:
+    run = _plan(visit="1h", sigma_v_kms=30.0)
+    assert {b.exptime_s for b in run.result.blocks} == {60.0}
+    assert any("not optimised" in w for w in run.result.warnings)
+
+
+def test_untargeted_rows_carry_their_phase() -> None:
+    run = _plan(visit="1h", readout_s=5.0, overhead_s=600.0, sigma_v_kms="30km/s@300s",
+                cadence="untargeted")  # fmt: skip
+    rows = run.result.blocks
+    assert {b.anchor for b in rows} == {"untargeted"}
+    starts = sorted(b.t_start_utc.jd for b in rows)
+    gaps = np.diff(starts) * 86400 - rows[0].exptime_s
+    assert np.allclose(gaps, 5.0, atol=0.05)  # back to back: one readout apart
+    # u from the phase model at each exposure's barycentric mid-time
+    from ucbplan.core.phase import arg_latitude
+
+    t = run.targets[0]
+    for b in rows[:5]:
+        tau = float((b.t_mid_tdb_bary - t.t_ref).to_value("s"))
+        want = float(np.mod(arg_latitude(t.params, tau), 2 * np.pi))
+        assert abs(np.angle(np.exp(1j * (b.u_star_rad - want)))) < 1e-6
+
+
+@pytest.mark.parametrize(
+    ("args", "needle"),
+    [
+        (["--sigma-v", "30km/s@"], "--sigma-v"),
+        (["--sigma-v", "30km/s@-5s"], "--sigma-v"),
+        (["--sigma-v", "30km/s@600s,Q=20"], "unknown band"),
+        (["--sigma-v", "30km/s@300s", "--goal", "sigma_K=2km/s", "--max-visit", "5min"],
+         "--max-visit"),
+        (["--sigma-v", "30km/s@300s", "--goal", "sigma_K=0.1km/s"], "add nights"),
+        (["--exptime", "129", "--sigma-v", "30"], "--min-lambda-k"),
+        (["--sigma-floor", "2"], "--sigma-floor"),
+    ],
+)  # fmt: skip
+def test_bad_plan_options_one_line_no_file(
+    tmp_path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+    args: list[str],
+    needle: str,
+) -> None:  # type: ignore[no-untyped-def]
+    import sys
+
+    from ucbplan.cli import app as app_module
+
+    out = tmp_path / "plan.ecsv"
+    base = ["plan", HM_FILE, "--site", "paranal", "--night", "2040-02-15", "-o", str(out)]
+    monkeypatch.setattr(sys, "argv", ["ucbplan", *base, *args])
+    with pytest.raises(SystemExit) as exit_:
+        app_module.main()
+    err = capsys.readouterr().err
+    assert exit_.value.code == 2, err
+    lines = [x for x in err.splitlines() if x.startswith("error")]
+    assert len(lines) == 1 and needle in err, err
+    assert "Traceback" not in err
+    assert not out.exists()
+
+
+def test_feasibility_compares_strategies_json(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    import json
+
+    from typer.testing import CliRunner
+
+    from ucbplan.cli.app import app
+
+    out = tmp_path / "f.json"
+    res = CliRunner().invoke(app, ["feasibility", HM_FILE, "--sigma-v", "30km/s@300s",
+                                   "--readout", "45", "--overhead", "480", "--goal",
+                                   "sigma_K=2km/s", "-o", str(out)])  # fmt: skip
+    assert res.exit_code == 0, res.output
+    doc = json.loads(out.read_text())["strategies"]
+    rows = {r["name"]: r for r in doc["strategies"]}
+    assert set(rows) == set(STRATEGIES)
+    assert doc["best"] == "targeted"
+    ratio = rows["untargeted"]["hours"] / rows["targeted"]["hours"]
+    assert doc["targeted_over_untargeted"] == pytest.approx(ratio)
+    assert rows["phase-locked"]["hours"] is None  # Λ_K 0.80 below the floor

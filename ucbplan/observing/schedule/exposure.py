@@ -356,6 +356,10 @@ def optimised_exposure(target: Target, settings: PlanSettings) -> TargetExposure
 
     visit = _visit_length(settings)
     hours: tuple[float, ...] = ()
+    shortest = replace(
+        settings.exposure, exptime_s=visit_shape(target, settings, 0.0).min_exptime_s
+    )
+    _check_visit(target, settings, shortest)
     if visit is None:  # sessions: the pattern's blocks after one acquisition
         n = len(settings.spec.u_values) if settings.spec.paired else 1
         shape = visit_shape(target, settings, settings.overhead_s + 43200.0)

@@ -9,6 +9,7 @@ gets fewer is reported as :class:`Unplaced` with the reason in words a user can 
 from __future__ import annotations
 
 import bisect
+import math
 from collections import Counter
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -58,9 +59,20 @@ class Allowance:
     seconds: float | None = None
     smallest_s: float = 0.0
     info: float | None = None
+    per_spectrum: float = 0.0
+    visits_left: int = 1
 
     def __post_init__(self) -> None:
         self.info_asked = self.info or 0.0
+
+    def share(self, pattern: int) -> int | None:
+        """Exposures the next visit of a goal should hold so that the visits left share the
+        spectra still needed evenly (whole anchor patterns); None without a goal estimate."""
+        if self.info is None or self.per_spectrum <= 0:
+            return None
+        need = math.ceil(self.info / self.per_spectrum * (1.0 - 1e-12))
+        groups = math.ceil(need / pattern)
+        return pattern * math.ceil(groups / max(1, self.visits_left))
 
     @property
     def spent(self) -> bool:
@@ -84,6 +96,7 @@ class Allowance:
         if self.seconds is not None:
             self.seconds -= wall_s
         if self.info is not None:
+            self.visits_left = max(1, self.visits_left - 1)
             self.info -= info
             if self.info <= INFO_RTOL * self.info_asked:
                 self.info = 0.0

@@ -130,8 +130,12 @@ def _allowances(
             smallest = settings.overhead_s + plan.span_s
             if settings.plans_visits:
                 smallest += plan.readout_s
-            info = goal.info_needed if goal is not None else None
-            out[r.index] = Allowance(None, seconds, smallest, info)
+            if goal is None:
+                out[r.index] = Allowance(None, seconds, smallest)
+                continue
+            per = goal.info_needed / goal.n_spectra if goal.info_needed else 0.0
+            visits = goal.time.n_visits if goal.time is not None else 1
+            out[r.index] = Allowance(None, seconds, smallest, goal.info_needed, per, visits)
     return out
 
 

@@ -103,8 +103,9 @@ def _best_visit(
     nxt = np.searchsorted(c.x_start, c.x_end + r - _READOUT_SLACK_S, side="left")
     best: tuple[tuple[int, ...], float, float] | None = None
     best_key = (0.0, 0.0)
-    cap = c.x_mid.size if allowance.exposures is None else allowance.exposures
     pattern = len(settings.spec.u_values) if te.strategy != "untargeted" else 1
+    cap = c.x_mid.size if allowance.exposures is None else allowance.exposures
+    cap = min(cap, allowance.share(pattern) or cap)
     length = visit_s if allowance.seconds is None else min(visit_s, allowance.seconds)
     for j in starts:
         x0 = float(c.x_start[j]) - acq
