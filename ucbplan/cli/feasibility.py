@@ -90,7 +90,7 @@ def feasibility_command(
     _check_options(n_spectra, m1, m2, sigma_v, m3, a_out)
     tgt = load_target(target)
     optical = optical_ephemeris(
-        tgt.period_s,
+        tgt.params.nodal_period_s,
         sigma_phase_cycles=opt_phase,
         sigma_f_rel=opt_f_rel,
         sigma_fdot_rel_s=opt_fdot_rel,
