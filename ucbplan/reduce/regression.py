@@ -12,7 +12,10 @@ mid-time, the phase-averaged velocity is (Eq. vbar_master)
 
 with Φ_c = Φ_asc at mid-exposure, Λ_K = sin x / x, Λ_κ = sin 2x / 2x, x = n̄_b Δt / 2
 (Eqs. Lambda_K, Lambda_kappa). For Λ = 1 the bracket equals F = cos u + κ (Eq. F_definition) to
-O(e²), so regressing on the bracket ``G`` gives slope K_j and intercept γ_j directly. For a common
+O(e²), so regressing on the bracket ``G`` gives slope K_j and intercept γ_j directly, up to its
+O(e²) remainder (≈ −e²K_j in K_j). ``ucbplan reduce`` therefore regresses on the exposure average
+of the exact Kepler curve instead (:mod:`ucbplan.reduce.design`, :mod:`ucbplan.core.kepler`);
+:func:`binned_design` is the paper's first-order form, kept for cross-checks. For a common
 window this is the paper's recipe (slope on F divided by Λ_K, intercept with the Λ_κ κ_s K_j
 term, Eq. sb2_half_sum_ecc) plus the O(e(1−Λ)) term ∝ (Λ_K − Λ_κ) sin u that the F regression
 leaves in the residuals; see :func:`paper_recipe` for the literal form used as a cross-check.
