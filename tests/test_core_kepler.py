@@ -107,3 +107,34 @@ def test_harmonics_limits_and_count() -> None:
     assert n_harmonics(0.0) == 1 < n_harmonics(0.0094) < n_harmonics(0.1) <= 20
     with pytest.raises(ValueError, match="eccentricity"):
         harmonics(1.0)
+
+
+@pytest.mark.parametrize("ecc", [0.0, 1e-9, 0.0094, 0.08])
+def test_design_jacobian_matches_finite_differences_of_the_design(ecc: float) -> None:
+    """∂G/∂θ of reduce's design vs central differences of G over each of the 7 parameters.
+
+    Steps: 1e-6 of each parameter's natural scale (φ: 1e-6 rad, ḟ: 1e-6/τ², …, η, κ: 1e-6,
+    f and ω̇: 1e-4/τ, against the rounding of f·τ and of G); tolerance 1e-6 of the
+    column's largest entry: the Jacobian leaves out the window rates' own dependence on ḟτ and
+    ω̇ (2e-7 relative). e = 0 and 1e-9 use Eq. vbar_master's Jacobian (exact at e = 0).
+    """
+    from ucbplan.core.params import PARAM_NAMES, PhaseParams
+    from ucbplan.reduce.design import design_jacobian, designs
+
+    p = PhaseParams(
+        2.41, 8.406e-3, 1.64e-15, 1e-27, ecc * math.sin(1.2), ecc * math.cos(1.2), 1.5e-6
+    )
+    tau = 6.3e7 + np.linspace(0.0, 3 * PB, 40)
+    win = np.full(tau.size, PB / 5)
+    jac = design_jacobian(p, tau, win)
+    scale = {"phase": 1.0, "f_gw": 1 / 6.3e7, "fdot": 1 / 6.3e7**2, "fddot": 1 / 6.3e7**3}
+    scale |= {"eta": 1.0, "kappa": 1.0, "omega_dot": 1 / 6.3e7}
+    for k, name in enumerate(PARAM_NAMES):
+        h = (1e-4 if name in ("f_gw", "omega_dot") else 1e-6) * scale[name]
+        vals = p.as_array()
+        up = PhaseParams(*(vals + h * (np.arange(7) == k)))
+        dn = PhaseParams(*(vals - h * (np.arange(7) == k)))
+        fd = (designs(up, tau, win, 1, None)[0] - designs(dn, tau, win, 1, None)[0]) / (2 * h)
+        # + the rounding floor of G (a few ulp) over the step, where the derivative is ~0
+        floor = 4e-16 / h
+        np.testing.assert_allclose(jac[:, k], fd, rtol=0, atol=1e-6 * np.max(np.abs(fd)) + floor)

@@ -145,9 +145,12 @@ def design_jacobian(p: PhaseParams, tau: F64, window_s: F64) -> F64:
 
 
 def _first_order_jacobian(p: PhaseParams, tau: F64, window_s: F64) -> F64:
-    """∂G/∂θ of Eq. vbar_master (exact at e = 0)."""
-    nbar = math.pi * p.f_gw
-    lam_k, lam_kap = lambda_k(window_s, nbar), lambda_kappa(window_s, nbar)
+    """∂G/∂θ of Eq. vbar_master (exact at e = 0), with the window rates of the exact design:
+    n̄(τ) for the cos Φ term and 2n̄(τ) − ω̇ for the (η, κ) term."""
+    nbar = math.pi * (p.f_gw + p.fdot * tau + p.fddot * tau**2 / 2.0)
+    half = 0.5 * window_s
+    lam_k = np.sinc(nbar * half / math.pi)
+    lam_kap = np.sinc((2.0 * nbar - p.omega_dot) * half / math.pi)
     phi, eta, kap, _ = orbit(p, tau)
     dG_dphi = -lam_k * np.sin(phi) + 2.0 * lam_kap * (
         -kap * np.sin(2 * phi) + eta * np.cos(2 * phi)
