@@ -111,6 +111,7 @@ _SUMMARY_LABELS = (
     ("sigma_t_asc_s", "σ(T_asc) [s]"),
     ("sigma_u_end_mrad", "σ_u at end of LISA obs. [mrad]"),
     ("sigmas", "σ's (SI)"),
+    ("covariance_from", "covariance from"),
 )
 
 
@@ -159,6 +160,8 @@ def _summary(t: Target) -> dict[str, Any]:
     p = t.params
     t_asc = t.t_ref + TimeDelta(ascending_node_s(p), format="sec")
     sigmas = {n: float(math.sqrt(t.cov_matrix[i, i])) for i, n in enumerate(t.cov_names)}
+    if t.samples_covariance is not None and t.covariance_source.startswith("samples"):
+        sigmas |= _samples_sigmas(t.covariance)
     return {
         "name": t.name,
         "file": str(t.source.name) if t.source else "",
@@ -173,7 +176,15 @@ def _summary(t: Target) -> dict[str, Any]:
         "sigma_t_asc_s": sigma_ascending_node_s(p, t.covariance),
         "sigma_u_end_mrad": 1e3 * sigma_u_end(t, "quadrature"),
         "sigmas": sigmas,
+        "covariance_from": t.covariance_source,
     }
+
+
+def _samples_sigmas(cov: Any) -> dict[str, float]:
+    """σ of each sampled phase-model parameter from the samples' covariance (SI)."""
+    from ucbplan.core.params import PARAM_NAMES
+
+    return {n: float(math.sqrt(cov[k, k])) for k, n in enumerate(PARAM_NAMES) if cov[k, k] > 0}
 
 
 def _timing_summary(t: Target) -> dict[str, Any]:

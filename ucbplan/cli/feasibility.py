@@ -151,7 +151,7 @@ def feasibility_command(
     tgt = load_target(target)
     compare = compare_strategies or goal is not None or (law is not None and law.follows_exposure)
     optical = optical_ephemeris(
-        tgt.period_s,
+        tgt.params.nodal_period_s,
         sigma_phase_cycles=opt_phase,
         sigma_f_rel=opt_f_rel,
         sigma_fdot_rel_s=opt_fdot_rel,

@@ -338,7 +338,8 @@ def optical_ephemeris(
     Parameters
     ----------
     period_s : float
-        Orbital period P_orb [s] (sets f = 1/P_orb).
+        The ephemeris's own period P_orb [s] (sets f = 1/P_orb): node to node, as eclipses and
+        light curves repeat (``PhaseParams.nodal_period_s`` = 2/f_gw), not the anomalistic P_b.
     sigma_phase_cycles, sigma_f_rel, sigma_fdot_rel_s : float, optional
         Frequency style: σ_φ0 [cycles], σ_f/f [1], σ_ḟ/f [1/s]; missing ones are 0.
     sigma_p_s, sigma_pdot, sigma_t0_s : float, optional

@@ -27,6 +27,7 @@ from ucbplan.errors import SchemaError, TargetFileError, shorten
 from ucbplan.inputs import load_yaml
 from ucbplan.target.covariance import parse_covariance
 from ucbplan.target.model import Spectroscopy, Target
+from ucbplan.target.samples import with_samples_covariance
 from ucbplan.target.schema import EPHEMERIS_KINDS, field, section_fields
 from ucbplan.target.sections import (
     CONTROL,
@@ -121,7 +122,7 @@ def target_from_dict(doc: Any, path: Path | None = None) -> Target:
         references = parse_references(ctx, doc)
     with ctx.reading("masses", "masses"):
         masses = _parse_masses(ctx, doc)
-    return Target(
+    target = Target(
         name=name,
         source=path.resolve() if path is not None else None,
         ra_deg=ra,
@@ -148,6 +149,7 @@ def target_from_dict(doc: Any, path: Path | None = None) -> Target:
         magnitudes=magnitudes,
         references=references,
     )
+    return with_samples_covariance(target)
 
 
 def _ephemeris_kind(ctx: Ctx, doc: Mapping[str, Any]) -> str:
