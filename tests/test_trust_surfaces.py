@@ -4,13 +4,17 @@ and never crash on values JSON cannot spell."""
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
+import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 from typer.testing import CliRunner
 
+from ucbplan.cli import app as app_module
 from ucbplan.cli.app import app
 from ucbplan.io import dumps_json, json_plain
 
@@ -21,6 +25,32 @@ HM = CAT / "hm-cnc-simulated.yaml"
 INJ = CAT / "fiducial-injection.yaml"
 
 
+def cli(*args: str) -> tuple[int, str, str]:
+    """``ucbplan ARGS`` through the real entry point in this process: exit code, stdout, stderr."""
+    err, out = io.StringIO(), io.StringIO()
+    old = sys.argv
+    sys.argv = ["ucbplan", *args]
+    try:
+        with contextlib.redirect_stderr(err), contextlib.redirect_stdout(out):
+            try:
+                app_module.main()
+                code = 0
+            except SystemExit as exc:
+                code = exc.code if isinstance(exc.code, int) else 1
+    finally:
+        sys.argv = old
+    return code, out.getvalue(), err.getvalue()
+
+
+def refused(*args: str) -> str:
+    """Run ``ucbplan ARGS``, check it failed with exit 2 and one error line; return the line."""
+    code, _, err = cli(*args)
+    assert code == 2, err
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert len(lines) == 1 and lines[0].startswith("error: "), err
+    return lines[0]
+
+
 def _strict_json(text: str) -> object:
     """Parse JSON as a strict reader does: the bare tokens NaN/Infinity are errors."""
 
@@ -28,12 +58,6 @@ def _strict_json(text: str) -> object:
         raise AssertionError(f"non-standard JSON token {token}")
 
     return json.loads(text, parse_constant=_refuse)
-
-
-def _one_error_line(output: str) -> str:
-    lines = [ln for ln in output.splitlines() if ln.strip()]
-    assert len(lines) == 1, output
-    return lines[0]
 
 
 def test_json_plain_spells_non_finite_as_null() -> None:
@@ -52,3 +76,48 @@ def test_horizon_of_two_lisa_targets_is_valid_json(tmp_path: Path) -> None:
     res = runner.invoke(app, ["horizon", str(INJ), str(HM), "-o", str(out)])
     assert res.exit_code == 0, res.output
     assert _strict_json(out.read_text()) == doc
+
+
+ECC = CAT / "fiducial-eccentric.yaml"
+TIMES_ROWS = [
+    "bjd_tdb,sigma_s,kind,cycle",
+    "2458305.6827886,2,primary,0",
+    "2458305.6875891,2,primary,1",
+    "2458305.6923896,2,primary,2",
+    "2458305.6971901,2,primary,3",
+]
+
+
+@pytest.fixture
+def times_csv(tmp_path: Path) -> Path:
+    path = tmp_path / "times.csv"
+    path.write_text("\n".join(TIMES_ROWS) + "\n", encoding="utf-8")
+    return path
+
+
+def _plot_cases(times_csv: Path) -> list[list[str]]:
+    return [
+        ["ephemeris", "fit", str(times_csv), "--terms", "2"],
+        ["feasibility", str(ECC)],
+        ["horizon", str(HM)],
+    ]
+
+
+@pytest.mark.parametrize("name", ["oc.txt", "figs", "oc.PNGX"])
+@pytest.mark.parametrize("which", [0, 1, 2])
+def test_plot_to_an_unknown_format_is_refused_before_the_run(
+    tmp_path: Path, times_csv: Path, name: str, which: int
+) -> None:
+    out = tmp_path / "out"
+    out.mkdir()
+    args = [*_plot_cases(times_csv)[which], "--plot", str(out / name), "-o", str(out / "r.json")]
+    line = refused(*args)
+    assert "--plot: expected a .png, .pdf or .svg file name" in line
+    assert list(out.iterdir()) == []
+
+
+def test_plot_and_existing_output_writes_neither(tmp_path: Path) -> None:
+    (tmp_path / "f.json").write_text("keep me\n")
+    args = ["feasibility", str(ECC), "--plot", str(tmp_path / "f.png")]
+    refused(*args, "-o", str(tmp_path / "f.json"))
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["f.json"]

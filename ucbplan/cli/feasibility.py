@@ -14,10 +14,16 @@ from typing import Annotated, Any
 import typer
 from rich.table import Table as RichTable
 
-from ucbplan.cli._console import dump_json, err_console, pick_format, write_output
+from ucbplan.cli._console import (
+    check_output_path,
+    dump_json,
+    err_console,
+    pick_format,
+    write_output,
+)
 from ucbplan.cli._epochs import epoch_option
 from ucbplan.core.constants import DAY_S, MONTH_S, YEAR_S
-from ucbplan.errors import UcbplanError, shorten
+from ucbplan.errors import InputError, UcbplanError, shorten
 
 __all__ = ["feasibility_command", "register"]
 
@@ -88,6 +94,7 @@ def feasibility_command(
 
     fmt = pick_format(output, fmt, ("table", "json"))
     _check_options(n_spectra, m1, m2, sigma_v, m3, a_out)
+    _check_outputs(output, plot, overwrite)
     tgt = load_target(target)
     optical = optical_ephemeris(
         tgt.period_s,
@@ -119,6 +126,18 @@ def feasibility_command(
         write_output(output, lambda h: dump_json(doc, h), overwrite=overwrite)
     else:
         _print_report(report)
+
+
+def _check_outputs(output: Path | None, plot: Path | None, overwrite: bool) -> None:
+    """Refuse a bad figure name or an existing output before any work is done."""
+    if plot is not None:
+        from ucbplan.plotting import check_figure_path
+
+        if output is not None and output.resolve() == plot.resolve():
+            raise InputError(f"-o, --plot: both name {output}; give two different files")
+        check_figure_path(plot, overwrite)
+    if output is not None:
+        check_output_path(output, overwrite)
 
 
 def _check_options(
