@@ -12,17 +12,21 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 from ucbplan.cli import app as app_module
 from ucbplan.cli.app import app
 from ucbplan.io import dumps_json, json_plain
+from ucbplan.observing.sites import east_longitude, site_from_lonlat
 
 runner = CliRunner()
 ROOT = Path(__file__).resolve().parents[1]
 CAT = ROOT / "catalogs"
 HM = CAT / "hm-cnc-simulated.yaml"
 INJ = CAT / "fiducial-injection.yaml"
+POP = CAT / "population" / "ldc-200.ecsv"
 
 
 def cli(*args: str) -> tuple[int, str, str]:
@@ -121,3 +125,41 @@ def test_plot_and_existing_output_writes_neither(tmp_path: Path) -> None:
     args = ["feasibility", str(ECC), "--plot", str(tmp_path / "f.png")]
     refused(*args, "-o", str(tmp_path / "f.json"))
     assert sorted(p.name for p in tmp_path.iterdir()) == ["f.json"]
+
+
+@settings(max_examples=200, deadline=None)
+@given(lon=st.floats(-180.0, 360.0))
+def test_one_longitude_rule_keeps_the_meridian(lon: float) -> None:
+    out = east_longitude(lon)
+    assert -180.0 <= out < 180.0
+    # the same meridian: differs by a whole number of turns (to float rounding, 1e-12 deg)
+    turns = (lon - out) / 360.0
+    assert abs(turns - round(turns)) < 1e-12
+
+
+@pytest.mark.parametrize(("east", "west"), [("200", "-160"), ("360", "0"), ("180", "-180")])
+def test_site_lonlat_above_180_is_the_same_site_as_below(east: str, west: str) -> None:
+    a, b = site_from_lonlat(f"{east},10,0"), site_from_lonlat(f"{west},10,0")
+    assert (a.lon_deg, a.timezone, a.name) == (b.lon_deg, b.timezone, b.name)
+
+
+def test_plan_at_longitude_200_runs(tmp_path: Path) -> None:
+    out = tmp_path / "b.ecsv"
+    code, _, err = cli(
+        "plan", str(HM), "--site-lonlat", "200,19.8,4200", "--night", "2040-02-15", "-o", str(out)
+    )
+    assert code == 0, err
+    assert out.exists()
+
+
+@pytest.mark.parametrize("command", ["plan", "population visibility"])
+def test_site_and_site_lonlat_together_are_refused(tmp_path: Path, command: str) -> None:
+    base = (
+        ["plan", str(HM), "--night", "2040-02-15"]
+        if command == "plan"
+        else ["population", "visibility", str(POP), "--semester", "2041A"]
+    )
+    args = [*base, "--site", "paranal", "--site-lonlat", "-70,-24,2600", "-o", str(tmp_path / "x")]
+    line = refused(*args)
+    assert "--site" in line and "--site-lonlat" in line and "not both" in line
+    assert list(tmp_path.iterdir()) == []
