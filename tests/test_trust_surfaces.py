@@ -18,6 +18,7 @@ from typer.testing import CliRunner
 
 from ucbplan.cli import app as app_module
 from ucbplan.cli.app import app
+from ucbplan.errors import shorten
 from ucbplan.io import dumps_json, json_plain
 from ucbplan.observing.sites import east_longitude, site_from_lonlat
 
@@ -163,3 +164,82 @@ def test_site_and_site_lonlat_together_are_refused(tmp_path: Path, command: str)
     line = refused(*args)
     assert "--site" in line and "--site-lonlat" in line and "not both" in line
     assert list(tmp_path.iterdir()) == []
+
+
+RANK_BAD = [
+    (["--goal", "q=1%,M1=2%"], "one QUANTITY=VALUE per goal"),
+    (["--top", "-1"], "--top"),
+    (["--sigma-ref", "abc"], "--sigma-ref"),
+    (["--readout", "-30"], "--readout"),
+    (["--visit", "0"], "--visit"),
+    (["--overhead", "-1"], "--overhead"),
+    (
+        ["--sigma-ref", "10,17,600", "--visit", "100", "--exptime", "60", "--overhead", "60"],
+        "--visit",
+    ),
+    (["--instruments-file", "missing.yaml"], "--instruments-file"),
+    (["--top", "3"], "nosuch.ecsv"),  # the source itself is missing (see the test)
+]
+
+
+@pytest.mark.parametrize(("extra", "blame"), RANK_BAD)
+def test_population_rank_checks_everything_before_making_its_folder(
+    tmp_path: Path, extra: list[str], blame: str
+) -> None:
+    out = tmp_path / "r" / "deeper"
+    source = str(POP) if blame != "nosuch.ecsv" else str(tmp_path / "nosuch.ecsv")
+    line = refused("population", "rank", source, "--out-dir", str(out), *extra)
+    assert blame in line
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize(
+    ("extra", "blame"),
+    [
+        (["--walkers", "2"], "--walkers: expected a whole number in [12,"),
+        (["--steps", "0"], "--steps"),
+    ],
+)
+def test_population_simulate_option_errors_come_before_the_run(
+    tmp_path: Path, extra: list[str], blame: str
+) -> None:
+    args = ["population", "simulate", str(POP), "-o", str(tmp_path / "s.ecsv")]
+    line = refused(*args, "--out-dir", str(tmp_path / "sd"), *extra)
+    assert blame in line
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_instruments_file_without_instrument_is_refused(tmp_path: Path) -> None:
+    line = refused(
+        "plan", str(HM), "--site", "paranal", "--night", "2040-02-15",
+        "--instruments-file", str(tmp_path / "mine.yaml"),
+    )  # fmt: skip
+    assert "--instruments-file" in line and "--instrument NAME" in line
+
+
+def test_bad_value_in_an_instruments_file_is_named_before_a_missing_one(tmp_path: Path) -> None:
+    path = tmp_path / "inst.yaml"
+    path.write_text(
+        "instruments:\n  myspec:\n    telescope: VLT\n    sites: [paranal]\n    readout_s: -5\n"
+        "    acquisition_s: 300\n    missing: [extinction_k, sigma_ref]\n",
+        encoding="utf-8",
+    )
+    line = refused(
+        "plan", str(HM), "--site", "paranal", "--night", "2040-02-15", "--sigma-v", "10",
+        "--instrument", "myspec", "--instruments-file", str(path),
+    )  # fmt: skip
+    assert "readout_s: expected a number" in line and "got -5" in line
+
+
+@pytest.mark.parametrize("option", ["p", "pdot", "t0", "phase", "f-rel", "fdot-rel"])
+@pytest.mark.parametrize("value", ["-1", "-1e-30", "inf"])
+def test_feasibility_refuses_negative_optical_sigmas(option: str, value: str) -> None:
+    line = refused("feasibility", str(ECC), f"--optical-sigma-{option}", value)
+    assert f"--optical-sigma-{option}: expected a number in [0, inf]" in line
+
+
+def test_numbers_in_messages_are_written_as_users_write_them() -> None:
+    assert shorten(np.float64(-1.0)) == "-1.0"
+    assert shorten(np.str_("abc")) == "'abc'"
+    assert shorten(np.int64(3)) == "3"
+    assert shorten(np.array([1.0])) == repr(np.array([1.0]))  # arrays are not scalars

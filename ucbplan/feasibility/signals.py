@@ -32,6 +32,7 @@ from ucbplan.core.forecast import sigma_u
 from ucbplan.core.params import EphemerisSource
 from ucbplan.core.phase import arg_latitude_rate
 from ucbplan.errors import UcbplanError
+from ucbplan.inputs import check_range
 
 __all__ = [
     "OpticalEphemeris",
@@ -352,10 +353,14 @@ def optical_ephemeris(
     Raises
     ------
     UcbplanError
-        If both styles are given.
+        If both styles are given, or an uncertainty is negative or not finite.
     """
     freq = (sigma_phase_cycles, sigma_f_rel, sigma_fdot_rel_s)
     period = (sigma_p_s, sigma_pdot, sigma_t0_s)
+    names = ("phase", "f-rel", "fdot-rel", "p", "pdot", "t0")
+    for name, value in zip(names, (*freq, *period), strict=True):
+        if value is not None:
+            check_range(f"--optical-sigma-{name}", value, 0.0, math.inf, "", "a 1σ uncertainty")
     freq_style = any(v is not None for v in freq)
     period_style = any(v is not None for v in period)
     if freq_style and period_style:

@@ -288,8 +288,10 @@ def read_catalog(
                 vals[c.field] = None
                 continue
             if not c.lo <= v <= c.hi:
-                problem = f"{c.name}: expected {c.lo:g}..{c.hi:g} {c.unit}, got {v!r}".replace(
-                    "  ", " "
+                problem = (
+                    f"{c.name}: expected {c.lo:g}..{c.hi:g} {c.unit}, got {shorten(v)}".replace(
+                        "  ", " "
+                    )
                 )
                 break
             vals[c.field] = float(v)

@@ -14,7 +14,7 @@ from typing import Any
 
 from ucbplan.errors import InputError
 from ucbplan.observing.blocks import ExposurePlan
-from ucbplan.observing.instruments import check_exptime, get_instrument, instrument_overheads
+from ucbplan.observing.instruments import check_exptime, instrument_or_none, instrument_overheads
 from ucbplan.observing.schedule.settings import PlanSettings, parse_budgets, parse_duration
 
 __all__ = ["DEFAULT_EXPTIME_S", "DEFAULT_OVERHEAD_S", "DEFAULT_READOUT_S", "plan_settings"]
@@ -65,7 +65,7 @@ def plan_settings(
         instrument does not confirm and the user did not give, an exposure below the
         instrument's minimum, a malformed duration: one line each.
     """
-    inst = get_instrument(instrument, instruments_file) if instrument is not None else None
+    inst = instrument_or_none(instrument, instruments_file)
     if inst is not None and sigma_v_kms is None and inst.sigma_ref is None:
         raise InputError(
             f"--instrument {inst.name}: the instrument table has no confirmed RV-precision "
