@@ -243,3 +243,40 @@ def test_numbers_in_messages_are_written_as_users_write_them() -> None:
     assert shorten(np.str_("abc")) == "'abc'"
     assert shorten(np.int64(3)) == "3"
     assert shorten(np.array([1.0])) == repr(np.array([1.0]))  # arrays are not scalars
+
+
+def _renamed(tmp_path: Path, file: str, name: str) -> Path:
+    text = HM.read_text(encoding="utf-8")
+    old = next(ln for ln in text.splitlines() if ln.startswith("name:"))
+    path = tmp_path / file
+    path.write_text(text.replace(old, f"name: {name!r}"), encoding="utf-8")
+    return path
+
+
+def test_plan_refuses_a_target_given_twice_naming_both_files(tmp_path: Path) -> None:
+    copy = _renamed(tmp_path, "copy.yaml", "HM Cnc (simulated)")
+    night = ["--site", "paranal", "--night", "2040-02-15", "-o", str(tmp_path / "b.ecsv")]
+    line = refused("plan", str(HM), str(HM), *night)
+    assert line.count(str(HM)) == 2 and "the same target file twice" in line
+    alias = tmp_path / "sub" / ".." / "copy.yaml"
+    (tmp_path / "sub").mkdir()
+    line = refused("plan", str(copy), str(alias), *night)
+    assert str(copy) in line and str(alias) in line and "same target file" in line
+    line = refused("plan", str(HM), str(copy), *night)
+    assert str(HM) in line and str(copy) in line and "both are target" in line
+    # names that give the same block ids (HM Cnc / HM-Cnc) are the same target to the planner
+    a, b = _renamed(tmp_path, "a.yaml", "HM Cnc"), _renamed(tmp_path, "b.yaml", "HM-Cnc")
+    line = refused("plan", str(a), str(b), *night)
+    assert "'HM Cnc' / 'HM-Cnc'" in line
+    assert not (tmp_path / "b.ecsv").exists()
+
+
+def test_plan_of_two_distinct_targets_still_runs(tmp_path: Path) -> None:
+    other = _renamed(tmp_path, "other.yaml", "HM Cnc twin")
+    out = tmp_path / "b.ecsv"
+    code, _, err = cli(
+        "plan", str(HM), str(other), "--site", "paranal", "--night", "2040-02-15", "-o", str(out)
+    )
+    assert code == 0, err
+    ids = [ln for ln in out.read_text().splitlines() if not ln.startswith("#")][1:]
+    assert len(ids) == len(set(ids)) > 0
