@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from astropy.table import Table
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from typer.testing import CliRunner
@@ -280,3 +281,40 @@ def test_plan_of_two_distinct_targets_still_runs(tmp_path: Path) -> None:
     assert code == 0, err
     ids = [ln for ln in out.read_text().splitlines() if not ln.startswith("#")][1:]
     assert len(ids) == len(set(ids)) > 0
+
+
+def _small_catalog(tmp_path: Path, n: int = 3) -> Table:
+    tab = Table.read(POP)[:n]
+    return tab
+
+
+@pytest.mark.parametrize("command", ["forecast", "visibility", "simulate", "rank"])
+def test_catalog_problems_are_one_line_before_any_output(tmp_path: Path, command: str) -> None:
+    empty = tmp_path / "empty.csv"
+    empty.write_text("\n", encoding="utf-8")
+    tab = _small_catalog(tmp_path)
+    tab.write(tmp_path / "small.csv", format="ascii.csv")
+    head, *rows = (tmp_path / "small.csv").read_text().splitlines()
+    dup = tmp_path / "dup.csv"
+    dup.write_text("\n".join([head.replace("Amplitude", "Frequency"), *rows]) + "\n")
+    kg = tmp_path / "kg.ecsv"
+    tab["Mass1"].unit = "kg"  # the numbers are solar masses: 0.44 kg is no star
+    tab.write(kg)
+    out = tmp_path / "out"
+    out.mkdir()
+    extra = {
+        "forecast": ["-o", str(out / "f.ecsv")],
+        "visibility": ["-o", str(out / "v.ecsv"), "--semester", "2041A", "--site", "paranal"],
+        "simulate": ["-o", str(out / "s.ecsv"), "--out-dir", str(out / "sd")],
+        "rank": ["--out-dir", str(out / "r")],
+    }[command]
+    expect = {
+        empty: "the catalog is empty",
+        dup: "column 'Frequency' appears twice",
+        kg: "Mass1: expected 0.01..1.5 solMass, got",
+    }
+    for path, text in expect.items():
+        line = refused("population", command, str(path), *extra)
+        assert text in line, line
+        assert "Errno" not in line
+        assert list(out.iterdir()) == []
