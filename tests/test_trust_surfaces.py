@@ -318,3 +318,44 @@ def test_catalog_problems_are_one_line_before_any_output(tmp_path: Path, command
         assert text in line, line
         assert "Errno" not in line
         assert list(out.iterdir()) == []
+
+
+@pytest.fixture(scope="module")
+def blocks_table(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    out = tmp_path_factory.mktemp("blocks") / "b.ecsv"
+    code, _, err = cli(
+        "plan", str(HM), "--site", "paranal", "--night", "2040-02-15", "-o", str(out)
+    )
+    assert code == 0, err
+    return out
+
+
+def test_phase_table_needs_the_period_and_names_the_rows(
+    tmp_path: Path, blocks_table: Path
+) -> None:
+    tab = Table.read(blocks_table)
+    assert len(tab) >= 2
+    tab["period_s"][:] = np.nan
+    bad = tmp_path / "nan.ecsv"
+    tab.write(bad)
+    line = refused("export", str(bad), "--to", "phase-table", "-o", str(tmp_path / "p.ecsv"))
+    assert "column period_s" in line and "rows 1, 2" in line
+    assert not (tmp_path / "p.ecsv").exists()
+
+
+def test_an_empty_period_cell_is_estimated_and_the_note_says_so(
+    tmp_path: Path, blocks_table: Path
+) -> None:
+    tab = Table.read(blocks_table)
+    period = float(tab["period_s"][1])
+    tab["period_s"][0] = np.nan
+    one = tmp_path / "one.ecsv"
+    tab.write(one)
+    code, _, err = cli("export", str(one), "--to", "proposal", "-o", str(tmp_path / "p.csv"))
+    assert code == 0, err
+    assert f"period_s empty in 1 of {len(tab)} rows" in err and "no period_s column" not in err
+    code, _, err = cli("export", str(one), "--to", "phase-table", "-o", str(tmp_path / "p.ecsv"))
+    assert code == 0, err
+    out = Table.read(tmp_path / "p.ecsv")
+    # the median of the target's given periods (the estimate is not used by the phase table)
+    assert float(out["period_s"][0]) == pytest.approx(period, rel=1e-12)
