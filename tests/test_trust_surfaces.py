@@ -359,3 +359,14 @@ def test_an_empty_period_cell_is_estimated_and_the_note_says_so(
     out = Table.read(tmp_path / "p.ecsv")
     # the median of the target's given periods (the estimate is not used by the phase table)
     assert float(out["period_s"][0]) == pytest.approx(period, rel=1e-12)
+
+
+def test_nothing_planned_says_why_once(tmp_path: Path) -> None:
+    # HM Cnc (dec +16) in July from Paranal: below airmass 2 all night
+    code, _, err = cli(
+        "plan", str(HM), "--site", "paranal", "--night", "2040-07-15", "-o", str(tmp_path / "b")
+    )
+    assert code == 2
+    lines = [ln for ln in err.splitlines() if ln.strip() and not ln.startswith("warning:")]
+    assert len(lines) == 1 and lines[0].startswith("error: no block could be planned"), err
+    assert lines[0].count("never at airmass") == 1
