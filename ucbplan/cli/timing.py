@@ -42,7 +42,10 @@ PeriodOpt = Annotated[
     str | None,
     typer.Option(
         "--period",
-        help="First period guess for counting cycles, e.g. '414.79 s' (trusted to its last digit).",
+        help=(
+            "First period guess for counting cycles, e.g. '414.79 s' (trusted to its last "
+            "digit); default: from the best-covered night's eclipses."
+        ),
     ),
 ]
 InitialOpt = Annotated[
