@@ -233,10 +233,12 @@ def test_bad_value_in_an_instruments_file_is_named_before_a_missing_one(tmp_path
 
 
 @pytest.mark.parametrize("option", ["p", "pdot", "t0", "phase", "f-rel", "fdot-rel"])
-@pytest.mark.parametrize("value", ["-1", "-1e-30", "inf"])
-def test_feasibility_refuses_negative_optical_sigmas(option: str, value: str) -> None:
+@pytest.mark.parametrize("value", ["-1", "-1e-30", "inf", "1e140"])
+def test_feasibility_refuses_negative_or_meaningless_optical_sigmas(
+    option: str, value: str
+) -> None:
     line = refused("feasibility", str(ECC), f"--optical-sigma-{option}", value)
-    assert f"--optical-sigma-{option}: expected a number in [0, inf]" in line
+    assert f"--optical-sigma-{option}: expected a number in [0, " in line
 
 
 def test_numbers_in_messages_are_written_as_users_write_them() -> None:

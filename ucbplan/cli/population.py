@@ -9,6 +9,7 @@ ECSV table (and figures or target files).
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Annotated, Any
@@ -411,18 +412,18 @@ def simulate(
     configure_offline()
     check_output_path(output, overwrite)
     spec = _spec(workers, scheduler, cluster, jobs)
-    _check_out_dir(out_dir, None, overwrite)
-    cat = _catalog(catalog, columns, hdf5_path, skip_bad)
-    fopts = _forecast_opts(cat, sigma_v, k_eff, t_obs, t_start, n_bins)
-    opts = PopulationSimulateOptions(
+    sampling = PopulationSimulateOptions(  # the options first, then the files, then the work
         seed=seed,
         walkers=walkers,
         steps=steps,
         until_converged=until_converged,
         max_steps=max_steps,
         noise=not no_noise,
-        forecast=fopts,
     )
+    _check_out_dir(out_dir, None, overwrite)
+    cat = _catalog(catalog, columns, hdf5_path, skip_bad)
+    fopts = _forecast_opts(cat, sigma_v, k_eff, t_obs, t_start, n_bins)
+    opts = dataclasses.replace(sampling, forecast=fopts)
     err_console.print(f"{len(cat.sources)} sources from {catalog}; {spec.describe()}")
     parts = parts_folder(output)
     with _made_folder(out_dir):

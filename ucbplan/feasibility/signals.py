@@ -357,10 +357,19 @@ def optical_ephemeris(
     """
     freq = (sigma_phase_cycles, sigma_f_rel, sigma_fdot_rel_s)
     period = (sigma_p_s, sigma_pdot, sigma_t0_s)
-    names = ("phase", "f-rel", "fdot-rel", "p", "pdot", "t0")
-    for name, value in zip(names, (*freq, *period), strict=True):
+    # 1σ bounds beyond which an ephemeris says nothing (and squares overflow): (name, max, unit)
+    limits = (
+        ("phase", 1.0, "cycles"),
+        ("f-rel", 1.0, ""),
+        ("fdot-rel", 1e-6, "1/s"),
+        ("p", period_s, "s"),
+        ("pdot", 1e-3, "s/s"),
+        ("t0", 1e9, "s"),
+    )
+    for (name, high, unit), value in zip(limits, (*freq, *period), strict=True):
         if value is not None:
-            check_range(f"--optical-sigma-{name}", value, 0.0, math.inf, "", "a 1σ uncertainty")
+            why = "a 1σ uncertainty; a larger one carries no phase information"
+            check_range(f"--optical-sigma-{name}", value, 0.0, high, unit, why)
     freq_style = any(v is not None for v in freq)
     period_style = any(v is not None for v in period)
     if freq_style and period_style:
