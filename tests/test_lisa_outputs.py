@@ -8,6 +8,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 from typing import Any
@@ -164,7 +165,11 @@ def test_cli_interrupt_saves_chain_only(tmp_path: Path, monkeypatch: pytest.Monk
     def log_prob(self: Likelihood, theta: np.ndarray) -> np.ndarray:
         calls["n"] += 1
         if calls["n"] == 40:  # 1 + 2 calls per step: inside step 20
-            os.kill(os.getpid(), signal.SIGINT)
+            # To this thread, not the process: os.kill lets the kernel hand the signal to any
+            # thread (pytest-xdist workers have several), and on a busy machine that thread ran
+            # its C handler only steps later (a flaky test). pthread_kill to oneself is
+            # delivered before it returns, and Python runs the handler at the next bytecode.
+            signal.pthread_kill(threading.get_ident(), signal.SIGINT)
         return original(self, theta)
 
     monkeypatch.setattr(Likelihood, "log_prob", log_prob)

@@ -189,3 +189,16 @@ def test_samples_path_survives_writing_elsewhere(tmp_path: Path) -> None:
     assert yaml.safe_load(other_dir.read_text())["lisa"]["samples"] == str(t.samples)
     assert Path(str(t.samples)).is_absolute()
     assert load_target(same_dir).samples == load_target(other_dir).samples == t.samples
+
+
+@pytest.mark.parametrize("bad", [math.nan, math.inf, -math.inf])
+def test_non_finite_samples_are_refused_naming_column_and_row(tmp_path: Path, bad: float) -> None:
+    tab = _table(10)
+    tab["phase"][3] = bad
+    tab["phase"][7] = bad
+    tab.write(tmp_path / "post.ecsv", format="ascii.ecsv")
+    t = load_target(_target(tmp_path, "midpoint"))
+    with pytest.raises(
+        TargetFileError, match=r"post\.ecsv: column phase: data row 4 is .*\(2 such"
+    ):
+        load_samples(t)

@@ -25,7 +25,14 @@ from hypothesis import strategies as st
 from ucbplan.cli import timing as timing_cli
 from ucbplan.errors import InputError, InputFileError, OutputExistsError, UcbplanError
 from ucbplan.inputs import load_yaml
-from ucbplan.timing import count_cycles, fit_times, period_guess, read_initial, read_times
+from ucbplan.timing import (
+    count_cycles,
+    fit_times,
+    period_from_times,
+    period_guess,
+    read_initial,
+    read_times,
+)
 from ucbplan.timing.fit import EphemerisFit
 from ucbplan.timing.times import format_bjd, parse_epoch_label, seconds_to_jd
 
@@ -852,3 +859,96 @@ def test_any_option_value_gives_a_result_or_one_line(
         assert sorted(p.name for p in folder.iterdir()) == ["times.csv"]
     else:
         assert out.exists()
+
+
+# ---------------------------------------------------------------------------------------------
+# counting from the times alone (no cycle column, no --period, no --initial)
+
+
+def _campaign(nights: list[int], per_night: int, seed: int, sigma: float = SIGMA) -> tuple:
+    """Consecutive eclipses on each night (night k starts at cycle nights[k]), noisy BJDs."""
+    rng = np.random.default_rng(seed)
+    cycles = np.array([float(n + j) for n in nights for j in range(per_night)])
+    bjd = [f"{true_time(c) + Decimal(repr(rng.normal(0, sigma))) / DAY:.14f}" for c in cycles]
+    return cycles, bjd
+
+
+#: Nights at days 0, 1, 3, 7, 15, 31 … 1023 (in cycles of 414.79 s): each gap about the
+#: baseline so far, which the period of the nights before predicts to a few seconds.
+DOUBLING = [round((2**k - 1) * 86400 / 414.7915404) for k in range(11)]
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_cycles_counted_from_the_times_alone_when_the_nights_allow_it(
+    tmp_path: Path, seed: int
+) -> None:
+    """One night of 8 consecutive eclipses fixes P to ~0.1 s; it bridges the 1-day gap, and
+    the count grows outward to 3 years: every cycle recovered up to one common offset, and the
+    fit agrees with the exact truth (pulls < 5) as with a given period."""
+    cycles, bjd = _campaign(DOUBLING, 8, seed)
+    times = read_times(write_table(tmp_path / "t.csv", bjd))
+    fit = fit_times(times)
+    offset = np.unique(np.round(count_cycles(times, period_from_times(times)) - cycles, 9))
+    assert offset.size == 1
+    assert np.all(np.abs(pulls_vs_truth(fit)) < 5)
+    assert fit.cycles_origin.startswith("counted from the times (the ")
+
+
+def test_the_longest_period_that_fits_the_night_is_taken(tmp_path: Path) -> None:
+    """Cycles 0, 2, 5 on one night: the closest pair (2 P apart) first suggests 2P, under which
+    cycle 5 sits half a period from an eclipse; P itself fits all three. With only every other
+    eclipse seen (0, 2, 4, 6), 2P fits: times alone cannot tell, and the longest is taken."""
+    bjd = [f"{true_time(c):.14f}" for c in (0.0, 2.0, 5.0)]
+    guess = period_from_times(read_times(write_table(tmp_path / "a.csv", bjd)))
+    assert guess.period_s == pytest.approx(float(P_TRUE), abs=5 * guess.sigma_period_s)
+    bjd = [f"{true_time(c):.14f}" for c in (0.0, 2.0, 4.0, 6.0)]
+    guess = period_from_times(read_times(write_table(tmp_path / "b.csv", bjd)))
+    assert guess.period_s == pytest.approx(2 * float(P_TRUE), abs=5 * guess.sigma_period_s)
+
+
+def test_a_secondary_half_a_period_away_gives_the_period(tmp_path: Path) -> None:
+    cycles = np.array([0.0, 0.5, 1.0, 2.5, 3.0])
+    bjd = [f"{true_time(c):.14f}" for c in cycles]
+    times = read_times(write_table(tmp_path / "t.csv", bjd, secondary=cycles % 1 != 0))
+    guess = period_from_times(times)
+    assert guess.period_s == pytest.approx(float(P_TRUE), abs=5 * guess.sigma_period_s)
+    np.testing.assert_array_equal(count_cycles(times, guess) - cycles, 0.0)
+
+
+def test_times_alone_that_cannot_bridge_a_gap_name_it(tmp_path: Path) -> None:
+    """Nights 20 days apart: one night's period (σ ≈ 0.1 s) cannot bridge 4000 cycles."""
+    _, bjd = _campaign([0, 4000, 8100], 8, 4)
+    times = read_times(write_table(tmp_path / "t.csv", bjd))
+    with pytest.raises(InputFileError, match="ambiguous") as info:
+        fit_times(times)
+    msg = one_line(info.value)
+    assert "the 8 eclipses of BJD_TDB" in msg and "gap between rows 8 and 9" in msg
+    assert "cycle column" in msg and "--initial" in msg
+
+
+def test_no_night_with_three_eclipses_is_an_error_naming_it(tmp_path: Path) -> None:
+    bjd = [f"{true_time(c):.14f}" for c in (0.0, 1.0, 900.0, 901.0, 5000.0)]
+    times = read_times(write_table(tmp_path / "t.csv", bjd))
+    with pytest.raises(InputFileError) as info:
+        fit_times(times)
+    msg = one_line(info.value)
+    assert "no night has 3 or more eclipses" in msg and "--period" in msg
+
+
+def test_times_of_a_night_that_fit_no_period_are_an_error(tmp_path: Path) -> None:
+    """Times 0, 100 and 250 s (σ = 2 s): P = 100 s puts the third half-way between eclipses,
+    and P = 50 s or shorter is within 40σ, where the noise could put a time on any eclipse."""
+    base = true_time(0)
+    bjd = [f"{base + Decimal(s) / DAY:.14f}" for s in (0, 100, 250)]
+    times = read_times(write_table(tmp_path / "t.csv", bjd))
+    with pytest.raises(InputFileError, match="fit no single period") as info:
+        fit_times(times)
+    assert "--period" in one_line(info.value)
+
+
+def test_ephemeris_fit_cli_without_period(tmp_path: Path) -> None:
+    cycles, bjd = _campaign(DOUBLING[:6], 8, 5)
+    path = write_table(tmp_path / "t.csv", bjd)
+    doc = json.loads(run([str(path), "--format", "json"]))
+    assert doc["n_points"] == len(cycles)
+    assert abs(doc["parameters"]["period"]["value"] - float(P_TRUE)) < 1e-3

@@ -35,7 +35,13 @@ MAX_VALUE_CHARS = 200
 
 
 def shorten(value: object, limit: int = MAX_VALUE_CHARS) -> str:
-    """``repr(value)`` cut to ``limit`` characters (with an ellipsis and the full length)."""
+    """``repr(value)`` cut to ``limit`` characters (with an ellipsis and the full length).
+
+    A numpy scalar is shown as the number or text a user writes (``-1.0``, ``'abc'``), not as
+    numpy's ``np.float64(-1.0)``.
+    """
+    if type(value).__module__ == "numpy" and getattr(value, "ndim", None) == 0:
+        value = value.item()  # type: ignore[attr-defined]
     text = repr(value)
     if len(text) <= limit:
         return text

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import errno
 import json
+import math
 import os
 import stat
 import sys
@@ -30,7 +31,9 @@ from ucbplan.errors import InputError, OutputError, OutputExistsError, shorten
 __all__ = [
     "check_output_path",
     "dump_json",
+    "dumps_json",
     "json_default",
+    "json_plain",
     "output_format",
     "write_file_set",
     "write_output",
@@ -240,7 +243,35 @@ def json_default(obj: Any) -> Any:
     raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
 
 
+def json_plain(doc: Any) -> Any:
+    """``doc`` as plain JSON values: the one rule that NaN and infinities become ``null``.
+
+    Mappings (keys as text), lists and tuples are walked; numpy scalars and arrays become Python
+    numbers and lists. JSON has no NaN or infinity, so a value that is not a finite number (a
+    horizon not reached, a column left empty) is written as ``null``, which every JSON reader
+    understands, instead of failing half-way through the document.
+    """
+    import numpy as np
+
+    if isinstance(doc, float):
+        return doc if math.isfinite(doc) else None
+    if isinstance(doc, str | bool | int) or doc is None:
+        return doc
+    if isinstance(doc, Mapping):
+        return {str(k): json_plain(v) for k, v in doc.items()}
+    if isinstance(doc, list | tuple):
+        return [json_plain(v) for v in doc]
+    if isinstance(doc, np.generic | np.ndarray):
+        return json_plain(doc.tolist())
+    return doc
+
+
+def dumps_json(doc: Any, *, indent: int | None = 2) -> str:
+    """One JSON document as text (NaN and infinities → ``null``, see :func:`json_plain`)."""
+    return json.dumps(json_plain(doc), indent=indent, default=json_default, allow_nan=False)
+
+
 def dump_json(doc: Any, handle: IO[str]) -> None:
-    """Write one JSON document (with trailing newline)."""
-    json.dump(doc, handle, indent=2, default=json_default, allow_nan=False)
+    """Write one JSON document (with trailing newline; NaN and infinities → ``null``)."""
+    handle.write(dumps_json(doc))
     handle.write("\n")

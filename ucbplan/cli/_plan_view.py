@@ -138,6 +138,9 @@ def report(run: Any, wide: bool = False, verbose: bool = False) -> None:
     """Warnings and what was not placed (grouped over nights), then one table per night."""
     for w in run.result.warnings:
         err_console.print(f"[yellow]warning:[/] {escape(w)}", soft_wrap=True)
+    failure = run.failure()
+    if failure is not None:  # the error line says what was not placed, once
+        raise UcbplanError(failure)
     grouped: dict[tuple[str, str], list[str]] = {}
     for miss in run.result.unplaced:
         grouped.setdefault((miss.target, miss.reason), []).append(miss.night)
@@ -146,9 +149,6 @@ def report(run: Any, wide: bool = False, verbose: bool = False) -> None:
         err_console.print(
             f"[yellow]not placed:[/] {escape(name)} ({span}): {escape(reason)}", soft_wrap=True
         )
-    failure = run.failure()
-    if failure is not None:
-        raise UcbplanError(failure)
     blocks = run.result.blocks
     nights: dict[str, list[Any]] = {}
     for b in blocks:

@@ -18,6 +18,7 @@ from rich.markup import escape
 
 from ucbplan.cli._console import (
     TABLE_FORMATS,
+    check_output_path,
     dump_json,
     err_console,
     pick_format,
@@ -271,9 +272,15 @@ def horizon(
     for a in alpha:
         check_alpha(a)
     paths = _expand_targets(target)
+    if len(paths) > 1 and plot is not None:
+        raise UcbplanError("--plot takes one target; give a single target file")
+    if plot is not None:
+        from ucbplan.plotting import check_figure_path
+
+        check_figure_path(plot, overwrite)
+        if output is not None:
+            check_output_path(output, overwrite)
     if len(paths) > 1:
-        if plot is not None:
-            raise UcbplanError("--plot takes one target; give a single target file")
         _horizon_many(paths, sigma_v, k_eff, alpha, epochs, anchor, fmt, output, overwrite)
         return
     from ucbplan.core.forecast import horizon_table

@@ -14,11 +14,17 @@ from typing import Annotated, Any
 import typer
 from rich.table import Table as RichTable
 
-from ucbplan.cli._console import dump_json, err_console, pick_format, write_output
+from ucbplan.cli._console import (
+    check_output_path,
+    dump_json,
+    err_console,
+    pick_format,
+    write_output,
+)
 from ucbplan.cli._epochs import epoch_option
 from ucbplan.cli._strategies import print_comparison
 from ucbplan.core.constants import DAY_S, MONTH_S, YEAR_S
-from ucbplan.errors import UcbplanError, shorten
+from ucbplan.errors import InputError, UcbplanError, shorten
 
 __all__ = ["feasibility_command", "register"]
 
@@ -148,6 +154,7 @@ def feasibility_command(
     law = settings.sigma_model
     sigma_ref = law.sigma_kms if law is not None else settings.sigma_v_kms
     _check_options(n_spectra, m1, m2, sigma_ref, m3, a_out)
+    _check_outputs(output, plot, overwrite)
     tgt = load_target(target)
     compare = compare_strategies or goal is not None or (law is not None and law.follows_exposure)
     optical = optical_ephemeris(
@@ -191,6 +198,18 @@ def _comparison(target: Any, settings: Any) -> Any:
     from ucbplan.observing.schedule.compare import compare_target_strategies
 
     return compare_target_strategies(target, settings)
+
+
+def _check_outputs(output: Path | None, plot: Path | None, overwrite: bool) -> None:
+    """Refuse a bad figure name or an existing output before any work is done."""
+    if plot is not None:
+        from ucbplan.plotting import check_figure_path
+
+        if output is not None and output.resolve() == plot.resolve():
+            raise InputError(f"-o, --plot: both name {output}; give two different files")
+        check_figure_path(plot, overwrite)
+    if output is not None:
+        check_output_path(output, overwrite)
 
 
 def _check_options(

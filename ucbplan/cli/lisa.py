@@ -288,7 +288,9 @@ def waveform(
         raise InputError(f"{plot}: --plot and -o name the same file; give each its own name")
     check_output_path(output, overwrite)
     if plot is not None:
-        check_output_path(plot, overwrite)
+        from ucbplan.plotting import check_figure_path
+
+        check_figure_path(plot, overwrite)
     model = _model(target, t_obs, n_bins, False)
     lines = waveform_lines(model)
     write_output(output, lambda h: lines.table.write(h, format="ascii.ecsv"), overwrite=overwrite)

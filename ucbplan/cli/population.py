@@ -8,7 +8,9 @@ ECSV table (and figures or target files).
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import contextlib
+import dataclasses
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -262,6 +264,34 @@ def visibility(
     _finish(run, output, overwrite, keep_parts)
 
 
+def _check_out_dir(out_dir: Path, first: Path | None, overwrite: bool) -> None:
+    """Refuse an ``--out-dir`` that is not a folder, or whose ``first`` file exists, before any
+    work; the folder itself is made only when there is something to write (:func:`_made_folder`).
+    """
+    if out_dir.exists() and not out_dir.is_dir():
+        raise UcbplanError(f"--out-dir {out_dir}: exists and is not a folder; name a folder")
+    if first is not None and out_dir.is_dir():
+        check_output_path(first, overwrite)
+
+
+@contextlib.contextmanager
+def _made_folder(out_dir: Path) -> Iterator[None]:
+    """Make ``out_dir`` (and its parents) for the block; remove it again if the block fails and
+    left it empty, so that a failed run leaves no folder behind."""
+    made = [p for p in (out_dir, *out_dir.parents) if not p.exists()]
+    try:
+        out_dir.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise UcbplanError(f"--out-dir {out_dir}: cannot create it ({exc.strerror})") from None
+    try:
+        yield
+    except BaseException:
+        for folder in made:  # deepest first
+            with contextlib.suppress(OSError):
+                folder.rmdir()  # only if empty
+        raise
+
+
 @population_app.command("rank")
 def rank(
     source: Path = typer.Argument(..., help="Forecast table (ECSV) or an LDC-style catalog."),
@@ -300,9 +330,8 @@ def rank(
     from ucbplan.population.run import parts_folder, run_forecast, write_table
 
     configure_offline()
-    out_dir.mkdir(parents=True, exist_ok=True)
     ranked_path = out_dir / "ranked.ecsv"
-    check_output_path(ranked_path, overwrite)
+    _check_out_dir(out_dir, ranked_path, overwrite)
     spec = _spec(workers, scheduler, cluster, jobs)
     ropts = rk.rank_options(
         top=top,
@@ -319,21 +348,27 @@ def rank(
     if tab is None:
         cat = _catalog(source, columns, hdf5_path, skip_bad)
         fopts = _forecast_opts(cat, sigma_v, k_eff, t_obs, t_start, n_bins)
-        parts = parts_folder(out_dir / "forecast.ecsv")
-        tab = _with_progress(
-            "forecast",
-            len(cat.sources),
-            lambda p: run_forecast(cat, fopts, spec=spec, parts=parts, overwrite=True, progress=p),
-        ).table
-        remove_parts(parts)
+        with _made_folder(out_dir):
+            parts = parts_folder(out_dir / "forecast.ecsv")
+            try:
+                tab = _with_progress(
+                    "forecast",
+                    len(cat.sources),
+                    lambda p: run_forecast(
+                        cat, fopts, spec=spec, parts=parts, overwrite=True, progress=p
+                    ),
+                ).table
+            finally:
+                remove_parts(parts)
     else:
         fopts = rk.forecast_options_of(tab.meta, source)
         cat_path = catalog or Path(str(tab.meta.get("catalog_path", tab.meta.get("catalog"))))
         cat = _catalog(cat_path, columns, hdf5_path, skip_bad)
         rk.check_catalog_of(tab, cat, source)
     ranked = rk.rank_table(tab, cat, ropts)
-    paths = rk.write_top_targets(ranked, cat, fopts, out_dir, top, overwrite)
-    write_table(ranked, ranked_path, overwrite)
+    with _made_folder(out_dir):
+        paths = rk.write_top_targets(ranked, cat, fopts, out_dir, top, overwrite)
+        write_table(ranked, ranked_path, overwrite)
     err_console.print(
         f"wrote {ranked_path} ({ranked.meta['figure_of_merit']}) and {len(paths)} target "
         f"file(s) in {out_dir}"
@@ -377,35 +412,36 @@ def simulate(
     configure_offline()
     check_output_path(output, overwrite)
     spec = _spec(workers, scheduler, cluster, jobs)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    cat = _catalog(catalog, columns, hdf5_path, skip_bad)
-    fopts = _forecast_opts(cat, sigma_v, k_eff, t_obs, t_start, n_bins)
-    opts = PopulationSimulateOptions(
+    sampling = PopulationSimulateOptions(  # the options first, then the files, then the work
         seed=seed,
         walkers=walkers,
         steps=steps,
         until_converged=until_converged,
         max_steps=max_steps,
         noise=not no_noise,
-        forecast=fopts,
     )
+    _check_out_dir(out_dir, None, overwrite)
+    cat = _catalog(catalog, columns, hdf5_path, skip_bad)
+    fopts = _forecast_opts(cat, sigma_v, k_eff, t_obs, t_start, n_bins)
+    opts = dataclasses.replace(sampling, forecast=fopts)
     err_console.print(f"{len(cat.sources)} sources from {catalog}; {spec.describe()}")
     parts = parts_folder(output)
-    run = _with_progress(
-        "simulate",
-        len(cat.sources),
-        lambda p: run_simulate(
-            cat,
-            opts,
-            out_dir=out_dir,
-            spec=spec,
-            parts=parts,
-            chunk=chunk,
-            resume=resume,
-            overwrite=overwrite,
-            progress=p,
-        ),
-    )
+    with _made_folder(out_dir):
+        run = _with_progress(
+            "simulate",
+            len(cat.sources),
+            lambda p: run_simulate(
+                cat,
+                opts,
+                out_dir=out_dir,
+                spec=spec,
+                parts=parts,
+                chunk=chunk,
+                resume=resume,
+                overwrite=overwrite,
+                progress=p,
+            ),
+        )
     _finish(run, output, overwrite, keep_parts)
     for f in run.table.meta["failed"]:
         err_console.print(f"[yellow]failed {escape(f['source_id'])}: {escape(f['error'])}[/yellow]")

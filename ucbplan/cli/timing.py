@@ -42,7 +42,10 @@ PeriodOpt = Annotated[
     str | None,
     typer.Option(
         "--period",
-        help="First period guess for counting cycles, e.g. '414.79 s' (trusted to its last digit).",
+        help=(
+            "First period guess for counting cycles, e.g. '414.79 s' (trusted to its last "
+            "digit); default: from the best-covered night's eclipses."
+        ),
     ),
 ]
 InitialOpt = Annotated[
@@ -144,9 +147,12 @@ def _check_outputs(output: Path | None, plot: Path | None, overwrite: bool) -> N
     """Refuse clashing or existing outputs before any work is done."""
     if output is not None and plot is not None and output.resolve() == plot.resolve():
         raise InputError(f"-o, --plot: both name {output}; give two different files")
-    for path in (output, plot):
-        if path is not None:
-            check_output_path(path, overwrite)
+    if output is not None:
+        check_output_path(output, overwrite)
+    if plot is not None:
+        from ucbplan.plotting import check_figure_path
+
+        check_figure_path(plot, overwrite)
 
 
 def _write(
@@ -176,11 +182,11 @@ def _write(
 
         files[output] = _file
     if plot is not None:
-        from ucbplan.plotting import pyplot
+        from ucbplan.plotting import figure_format, pyplot
         from ucbplan.timing.plots import oc_figure
 
+        fmt = figure_format(plot)
         fig = oc_figure(fit, times)
-        fmt = plot.suffix.lstrip(".").lower() or "png"
 
         def _figure(handle: IO[bytes]) -> None:
             fig.savefig(handle, format=fmt, dpi=120)

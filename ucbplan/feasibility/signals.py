@@ -32,6 +32,7 @@ from ucbplan.core.forecast import sigma_u
 from ucbplan.core.params import EphemerisSource
 from ucbplan.core.phase import arg_latitude_rate
 from ucbplan.errors import UcbplanError
+from ucbplan.inputs import check_range
 
 __all__ = [
     "OpticalEphemeris",
@@ -353,10 +354,23 @@ def optical_ephemeris(
     Raises
     ------
     UcbplanError
-        If both styles are given.
+        If both styles are given, or an uncertainty is negative or not finite.
     """
     freq = (sigma_phase_cycles, sigma_f_rel, sigma_fdot_rel_s)
     period = (sigma_p_s, sigma_pdot, sigma_t0_s)
+    # 1σ bounds beyond which an ephemeris says nothing (and squares overflow): (name, max, unit)
+    limits = (
+        ("phase", 1.0, "cycles"),
+        ("f-rel", 1.0, ""),
+        ("fdot-rel", 1e-6, "1/s"),
+        ("p", period_s, "s"),
+        ("pdot", 1e-3, "s/s"),
+        ("t0", 1e9, "s"),
+    )
+    for (name, high, unit), value in zip(limits, (*freq, *period), strict=True):
+        if value is not None:
+            why = "a 1σ uncertainty; a larger one carries no phase information"
+            check_range(f"--optical-sigma-{name}", value, 0.0, high, unit, why)
     freq_style = any(v is not None for v in freq)
     period_style = any(v is not None for v in period)
     if freq_style and period_style:

@@ -39,6 +39,7 @@ from astropy.time import Time
 
 from ucbplan.errors import InputError, InputFileError, shorten
 from ucbplan.inputs import MAX_ALIASES, read_text
+from ucbplan.io import dump_json
 from ucbplan.observing.blocks import MAX_BLOCK_S, MAX_N_EXP, MAX_READOUT_S, Block
 from ucbplan.observing.timeconv import quiet_erfa
 from ucbplan.target.values import one_line
@@ -760,8 +761,7 @@ def write_table(table: Table, handle: IO[str], fmt: str, *, json_meta: bool = Fa
     elif fmt == "json":
         rows = table_to_json_rows(table)
         doc: Any = {"meta": _plain_meta(dict(table.meta)), "rows": rows} if json_meta else rows
-        json.dump(doc, handle, indent=2, allow_nan=False)
-        handle.write("\n")
+        dump_json(doc, handle)
     else:
         raise InputFileError(f"unknown table format {fmt!r}; expected one of {TABLE_FORMATS}")
 

@@ -161,6 +161,11 @@ def parse_goal(text: str) -> Goal:
         One line naming the accepted forms.
     """
     forms = "expected QUANTITY=VALUE such as sigma_K=2km/s, K1=1%, q=1%, M1=0.01Msun"
+    if str(text).count("=") > 1:  # 'q=1%,M1=2%': name the list, not a unit '%,M1=2%'
+        raise InputError(
+            f"--goal: one QUANTITY=VALUE per goal, got several in {shorten(text, 60)}; "
+            "keep the goal that decides the plan"
+        )
     match = _GOAL_RE.match(str(text))
     if not match:
         raise InputError(f"--goal: {forms}, got {shorten(text, 60)}")

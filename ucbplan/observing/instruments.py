@@ -39,6 +39,7 @@ __all__ = [
     "check_exptime",
     "get_instrument",
     "instrument_magnitude",
+    "instrument_or_none",
     "instrument_overheads",
     "load_instruments",
     "sigma_v_kms",
@@ -182,6 +183,12 @@ def _instrument(name: Any, entry: Any, source: str) -> Instrument:
             f"{where}: missing: expected names among {', '.join(sorted(MISSABLE))}, "
             f"got {shorten(bad[0], 40)}"
         )
+    nums: dict[str, float | None] = {}  # the values given first: a bad one is the news
+    for key in OPTIONAL_NUMBERS:
+        lo, hi = RANGES[key]
+        unit = "mag/airmass" if key == "extinction_k" else "s"
+        nums[key] = _number(where, key, entry[key], lo, hi, unit) if key in entry else None
+    ref = _sigma_ref(where, entry["sigma_ref"]) if "sigma_ref" in entry else None
     for key in sorted(MISSABLE):
         if (key in entry) == (key in missing):
             state = "both given and" if key in entry else "neither given nor"
@@ -189,12 +196,6 @@ def _instrument(name: Any, entry: Any, source: str) -> Instrument:
                 f"{where}: {key}: {state} listed under missing; give it (with its source) "
                 "or name it under missing"
             )
-    nums: dict[str, float | None] = {}
-    for key in OPTIONAL_NUMBERS:
-        lo, hi = RANGES[key]
-        unit = "mag/airmass" if key == "extinction_k" else "s"
-        nums[key] = _number(where, key, entry[key], lo, hi, unit) if key in entry else None
-    ref = _sigma_ref(where, entry["sigma_ref"]) if "sigma_ref" in entry else None
     sources = entry.get("sources", {})
     if not isinstance(sources, dict) or not all(isinstance(v, str) for v in sources.values()):
         raise InputFileError(f"{where}: sources: expected a mapping field: text")
@@ -249,6 +250,27 @@ def load_instruments(path: Path | str | None = None) -> dict[str, Instrument]:
         return _parse(load_yaml(Path(BUNDLED), "instrument table", text=text), BUNDLED)
     path = Path(path)
     return _parse(load_yaml(path, "instrument table"), str(path))
+
+
+def instrument_or_none(
+    name: str | None, instruments_file: Path | str | None = None
+) -> Instrument | None:
+    """:func:`get_instrument` of ``--instrument NAME``, or None without a name.
+
+    Raises
+    ------
+    InputError
+        An instruments file without a name (it would be silently ignored), or as
+        :func:`get_instrument`.
+    """
+    if name is None:
+        if instruments_file is not None:
+            raise InputError(
+                f"--instruments-file {shorten(str(instruments_file), 60)}: read only with "
+                "--instrument NAME; add --instrument or drop the file"
+            )
+        return None
+    return get_instrument(name, instruments_file)
 
 
 def get_instrument(name: str, instruments_file: Path | str | None = None) -> Instrument:

@@ -24,7 +24,7 @@ from astropy.table import Table
 from astropy.time import Time
 from numpy.typing import NDArray
 
-from ucbplan.errors import InputError, shorten
+from ucbplan.errors import InputError
 from ucbplan.io import write_output
 from ucbplan.observing.blocks import Block
 from ucbplan.observing.blocktable import blocks_to_table
@@ -34,7 +34,7 @@ from ucbplan.observing.sites import Site
 from ucbplan.observing.sky import SkyModel
 from ucbplan.observing.timeaxis import TimeAxis
 from ucbplan.observing.timeconv import quiet_erfa
-from ucbplan.plotting import pyplot
+from ucbplan.plotting import FIGURE_FORMATS, figure_format, pyplot
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -69,7 +69,7 @@ _NUMBER_GAP_H = 0.4
 #: Columns a night chart or sheet reads.
 _NEEDED = ("target", "block_id", "ra_deg", "dec_deg", "t_start_utc", "t_mid_utc", "t_end_utc")
 #: Formats of :func:`write_night_charts`, by file suffix.
-CHART_FORMATS = ("png", "pdf", "svg")
+CHART_FORMATS = FIGURE_FORMATS
 #: Most nights a PNG/SVG holds (one panel each); longer plans go to a PDF, a page per night.
 MAX_PANELS = 7
 
@@ -402,13 +402,7 @@ def chart_format(path: Path) -> str:
     InputError
         Any other suffix.
     """
-    fmt = path.suffix.lstrip(".").lower()
-    if fmt not in CHART_FORMATS:
-        raise InputError(
-            f"--plot: expected a .png, .pdf or .svg file, got {shorten(path.name, 60)}; "
-            "name the chart e.g. nights.pdf"
-        )
-    return fmt
+    return figure_format(path)
 
 
 def write_night_charts(

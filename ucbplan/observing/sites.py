@@ -21,7 +21,14 @@ from ucbplan.errors import InputError, SiteError, UcbplanError, shorten
 from ucbplan.inputs import check_range, load_yaml
 from ucbplan.target.values import did_you_mean
 
-__all__ = ["Site", "get_site", "load_sites", "resolve_site", "site_from_lonlat"]
+__all__ = [
+    "Site",
+    "east_longitude",
+    "get_site",
+    "load_sites",
+    "resolve_site",
+    "site_from_lonlat",
+]
 
 
 @dataclass(frozen=True, slots=True)
@@ -97,6 +104,16 @@ _MAX_NAME_CHARS = 100
 _MAX_ALIASES = 100
 
 
+def east_longitude(lon_deg: float) -> float:
+    """The one longitude rule: any east longitude in [−180, 360] deg as its value in [−180, 180).
+
+    Site files and ``--site-lonlat`` accept both conventions (0…360 and ±180); every consumer
+    (the time-zone lookup, astropy's ``EarthLocation``, the local-time columns) then sees the
+    same normalised value.
+    """
+    return (lon_deg + 180.0) % 360.0 - 180.0
+
+
 @functools.lru_cache(maxsize=1)
 def _zone_names() -> frozenset[str]:
     return frozenset(available_timezones())
@@ -168,7 +185,7 @@ def _parse_site(entry: Any, where: str) -> Site:
     }
     return Site(
         name=name,
-        lon_deg=num["lon_deg"],
+        lon_deg=east_longitude(num["lon_deg"]),
         lat_deg=num["lat_deg"],
         height_m=num["height_m"],
         timezone=_check_zone(entry["timezone"], where),
@@ -297,6 +314,7 @@ def site_from_lonlat(text: str, timezone: str | None = None) -> Site:
         check_range(f"--site-lonlat: {k}", v, *_RANGES[k], error=SiteError)
         for k, v in zip(("lon_deg", "lat_deg", "height_m"), numbers, strict=True)
     )
+    lon = east_longitude(lon)
     entry: dict[str, Any] = {"name": f"lon{lon:+.4f} lat{lat:+.4f}", "lon_deg": lon}
     entry.update(lat_deg=lat, height_m=height)
     entry["timezone"] = _zone_at(lon, lat) if timezone is None else timezone
@@ -309,7 +327,7 @@ def _zone_at(lon: float, lat: float) -> str:
 
     zone = TimezoneFinder().timezone_at(lng=lon, lat=lat)
     if zone is None:  # not expected (the data cover the oceans); keep the nautical rule
-        offset = round(((lon + 180.0) % 360.0 - 180.0) / 15.0)
+        offset = round(east_longitude(lon) / 15.0)
         # Etc/GMT signs are inverted (POSIX): Etc/GMT+5 is UTC-5.
         zone = "Etc/UTC" if offset == 0 else f"Etc/GMT{-offset:+d}"
     return str(zone)
@@ -322,14 +340,18 @@ def resolve_site(
     timezone: str | None = None,
 ) -> Site:
     """The site named by ``--site NAME`` (looked up, ``sites_file`` first) or given by
-    ``--site-lonlat LON,LAT,HEIGHT`` (which wins when both are given); ``timezone`` (``--tz``)
-    replaces the site's zone.
+    ``--site-lonlat LON,LAT,HEIGHT``; ``timezone`` (``--tz``) replaces the site's zone.
 
     Raises
     ------
     UcbplanError
-        If neither is given, or the name or coordinates are not valid.
+        If neither or both are given, or the name or coordinates are not valid.
     """
+    if lonlat and name:
+        raise SiteError(
+            f"--site {shorten(name, 40)}, --site-lonlat {shorten(lonlat, 40)}: give one site, "
+            "not both"
+        )
     if lonlat:
         return site_from_lonlat(lonlat, timezone)
     if not name:

@@ -48,6 +48,9 @@ class CatalogColumn:
 
 
 _TWO_PI = 2.0 * math.pi
+#: Lightest star of a catalog binary [M_sun]: ~10 Jupiter masses, below any brown-dwarf donor;
+#: a mass column in the wrong unit (0.44 labelled kg) lands far below it and is refused.
+_MIN_MASS = 0.01
 #: The catalog contract (LDC names). ``field`` is the attribute of :class:`Source`.
 COLUMNS: tuple[CatalogColumn, ...] = (
     CatalogColumn("Frequency", "Hz", 1e-5, 1.0, True, "GW frequency at the start", "f_hz"),
@@ -65,8 +68,8 @@ COLUMNS: tuple[CatalogColumn, ...] = (
     CatalogColumn("Magnitude", "mag", -5.0, 40.0, False, "optical (V or G) magnitude", "vmag"),
     CatalogColumn("Distance", "kpc", 0.0, 1e3, False, "distance", "distance_kpc"),
     CatalogColumn("Eccentricity", "", 0.0, 0.9, False, "orbital eccentricity", "eccentricity"),
-    CatalogColumn("Mass1", "solMass", 0.0, 1.5, False, "mass of star 1", "m1_msun"),
-    CatalogColumn("Mass2", "solMass", 0.0, 1.5, False, "mass of star 2", "m2_msun"),
+    CatalogColumn("Mass1", "solMass", _MIN_MASS, 1.5, False, "mass of star 1", "m1_msun"),
+    CatalogColumn("Mass2", "solMass", _MIN_MASS, 1.5, False, "mass of star 2", "m2_msun"),
 )
 _BY_NAME = {c.name: c for c in COLUMNS}
 #: Optional identifier column (any type); default: the row number.
@@ -174,6 +177,11 @@ def _from_text(path: Path) -> tuple[dict[str, Any], dict[str, str]]:
 
     text = read_text(path, "catalog")
     fmt = "ecsv" if text.lstrip("\ufeff").startswith("# %ECSV") else "csv"
+    if not text.strip("\ufeff \t\r\n"):
+        raise InputFileError(
+            f"{path}: the catalog is empty; expected a header row of LDC column names "
+            "(Frequency, FrequencyDerivative, ...) and one row per source"
+        )
     try:
         tab = asc.read(text, format=fmt, guess=False, fast_reader=False)
     except Exception as exc:  # astropy raises many types for malformed tables
@@ -181,9 +189,27 @@ def _from_text(path: Path) -> tuple[dict[str, Any], dict[str, str]]:
         raise InputFileError(
             f"{path}: not a readable {fmt.upper()} table ({shorten(msg)})"
         ) from None
+    _check_unique_names(path, text, fmt, tab.colnames)
     cols = {n: tab[n] for n in tab.colnames}
     units = {n: str(tab[n].unit) for n in tab.colnames if tab[n].unit is not None}
     return {n: _filled(c) for n, c in cols.items()}, units
+
+
+def _check_unique_names(path: Path, text: str, fmt: str, names: list[str]) -> None:
+    """Refuse a header naming a column twice (astropy would rename the second ``NAME_1``)."""
+    if fmt == "ecsv":
+        header = list(names)
+    else:
+        import csv
+
+        lines = (ln for ln in text.lstrip("\ufeff").splitlines() if ln.strip())
+        lines = (ln for ln in lines if not ln.lstrip().startswith("#"))
+        header = [h.strip() for h in next(csv.reader(lines), [])]
+    seen: set[str] = set()
+    for name in header:
+        if name in seen:
+            raise InputFileError(f"{path}: column {shorten(name)} appears twice; keep one")
+        seen.add(name)
 
 
 def _filled(col: Any) -> np.ndarray:
@@ -288,9 +314,7 @@ def read_catalog(
                 vals[c.field] = None
                 continue
             if not c.lo <= v <= c.hi:
-                problem = f"{c.name}: expected {c.lo:g}..{c.hi:g} {c.unit}, got {v!r}".replace(
-                    "  ", " "
-                )
+                problem = _out_of_range(c, v, raw_of(data, c, i), units.get(c.name))
                 break
             vals[c.field] = float(v)
         if problem is None and vals.get("amplitude") == 0.0:
@@ -313,6 +337,15 @@ def read_catalog(
         seen.add(s.source_id)
     optional = tuple(c.name for c in present if not c.required)
     return Catalog(path.resolve(), tuple(sources), tuple(bad), digest, n_rows, optional)
+
+
+def _out_of_range(col: CatalogColumn, value: float, raw: Any, unit: str | None) -> str:
+    """``COLUMN: expected LO..HI UNIT, got V`` (and the cell in the file's unit, if converted)."""
+    unit_text = f" {col.unit}" if col.unit else ""
+    got = shorten(float(value))
+    if unit and unit != col.unit:
+        got += f" (the file's {shorten(raw)} {unit}; is the column's unit right?)"
+    return f"{col.name}: expected {col.lo:g}..{col.hi:g}{unit_text}, got {got}"
 
 
 def _id_text(value: Any) -> str:

@@ -30,7 +30,8 @@ import numpy as np
 from astropy.table import Column
 
 from ucbplan.errors import InputError, InputFileError, UcbplanError, shorten
-from ucbplan.observing.blocks import ExposurePlan, block_smearing
+from ucbplan.inputs import check_range
+from ucbplan.observing.blocks import MAX_BLOCK_S, ExposurePlan, block_smearing
 from ucbplan.observing.goals import Goal, parse_goal, spectra_for_goal
 from ucbplan.observing.instruments import Instrument, sigma_v_kms
 from ucbplan.observing.schedule.records import slug
@@ -101,7 +102,16 @@ class RankOptions:
         if not isinstance(self.top, int) or self.top < 0:
             raise InputError(f"--top: expected an integer >= 0, got {shorten(self.top)}")
         parse_goal(self.goal)
-        ExposurePlan(exptime_s=self.exptime_s)
+        ExposurePlan(exptime_s=self.exptime_s, readout_s=self.readout_s)
+        check_range("--overhead", self.acquisition_s, 0.0, MAX_BLOCK_S, "s", "per visit")
+        night = "a visit fits in one night"
+        check_range("--visit", self.visit_s, 0.0, MAX_BLOCK_S, "s", night, low_open=True)
+        need = self.acquisition_s + self.exptime_s + self.readout_s
+        if self.visit_s < need:
+            raise InputError(
+                f"--visit: expected at least acquisition + one exposure + readout = {need:g} s, "
+                f"got {self.visit_s:g} s; lengthen --visit or shorten the exposure"
+            )
         if self.instrument is not None and self.instrument.sigma_ref is None:
             raise InputError(
                 f"--instrument {self.instrument.name}: no RV-precision reference (sigma_ref) in "
@@ -292,9 +302,9 @@ def rank_instrument(
     InputError
         Unknown instrument, or a ``--sigma-ref`` that is not three positive numbers.
     """
-    from ucbplan.observing.instruments import SigmaRef, get_instrument
+    from ucbplan.observing.instruments import SigmaRef, instrument_or_none
 
-    inst = get_instrument(name, instruments_file) if name else None
+    inst = instrument_or_none(name or None, instruments_file)
     if sigma_ref is None:
         return inst
     parts = sigma_ref.split(",") if len(sigma_ref) < 100 else []

@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from ucbplan.errors import NumericalError
+from ucbplan.inputs import check_int
 from ucbplan.population.catalog import Catalog, Source
 from ucbplan.population.execute import ExecutorSpec, Progress, source_seed, worker_setup
 from ucbplan.population.forecast import ForecastOptions, icrs_of, k_total_kms, source_target
@@ -92,6 +93,14 @@ class PopulationSimulateOptions:
     max_steps: int = 50000
     noise: bool = True
     forecast: ForecastOptions = field(default_factory=ForecastOptions)
+
+    def __post_init__(self) -> None:
+        # checked once here, before any source runs (the pipeline would fail every source alike)
+        n_params = len(SIMULATED_PARAMETERS)
+        why = f"2 per parameter of the circular {n_params}-parameter model"
+        check_int("--walkers", self.walkers, 2 * n_params, 100_000, why)
+        check_int("--steps", self.steps, 1, 10_000_000, "chain steps")
+        check_int("--max-steps", self.max_steps, 1, 10_000_000, "cap of --until-converged")
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready mapping (fingerprints and meta)."""

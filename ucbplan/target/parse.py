@@ -11,7 +11,7 @@ section (exactly one of the two) is converted to the same phase model at its epo
 from __future__ import annotations
 
 import unicodedata
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -49,7 +49,7 @@ from ucbplan.target.values import (
     parse_epoch,
 )
 
-__all__ = ["load_target", "target_from_dict"]
+__all__ = ["load_target", "load_targets", "target_from_dict"]
 
 FloatArray = NDArray[np.float64]
 
@@ -89,6 +89,60 @@ def load_target(path: Path | str) -> Target:
             one_line(f"{shorten(str(path))}: cannot open; check the path")
         ) from None
     return target_from_dict(doc, path)
+
+
+def _file_key(path: Path) -> tuple[int, int] | str:
+    """What makes two paths the same file: device and inode (links, ``./a`` vs ``a``)."""
+    try:
+        st = path.stat()
+    except OSError:
+        return str(path.absolute())
+    return (st.st_dev, st.st_ino)
+
+
+def load_targets(
+    paths: Sequence[Path | str], ident: Callable[[str], str] = lambda name: name
+) -> list[Target]:
+    """Read several target files, each target once: the one rule for a repeated target.
+
+    Parameters
+    ----------
+    paths : sequence of path
+        Target YAML files, in order.
+    ident : callable, optional
+        Maps a target name to what must be unique (the planner passes its block-id slug, so
+        that ``HM Cnc`` and ``HM-Cnc`` are one target there).
+
+    Raises
+    ------
+    TargetFileError
+        As :func:`load_target`, or a file given twice, or two files naming the same target:
+        one line naming both files.
+    """
+    files: dict[tuple[int, int] | str, Path] = {}
+    names: dict[str, tuple[Path, str]] = {}
+    out = []
+    for raw in paths:
+        path = Path(raw)
+        first = files.setdefault(_file_key(path), path)
+        if first is not path:
+            raise TargetFileError(
+                f"{first}, {path}: the same target file twice; give each target once"
+            )
+        target = load_target(path)
+        key = ident(target.name)
+        if key in names:
+            other, name = names[key]
+            same = shorten(name, 40)
+            if name != target.name:
+                same += f" / {shorten(target.name, 40)}"
+            raise TargetFileError(
+                f"{other}, {path}: both are target {same}; give each target once or rename one "
+                "(name:)"
+            )
+        names[key] = (path, target.name)
+        out.append(target)
+    return out
 
 
 def target_from_dict(doc: Any, path: Path | None = None) -> Target:

@@ -108,7 +108,8 @@ def load_samples(t: Target) -> dict[str, FloatArray]:
     Raises
     ------
     TargetFileError
-        If the file cannot be read, has no rows or lacks parameter columns.
+        If the file cannot be read, has no rows, lacks parameter columns or has a NaN or
+        infinite value in one.
     """
     if t.samples is None:
         return {}
@@ -122,6 +123,14 @@ def load_samples(t: Target) -> dict[str, FloatArray]:
             f"{t.samples.name}: no parameter columns; expected columns named "
             f"{', '.join(PARAM_NAMES)}"
         )
+    for name, values in cols.items():
+        bad = np.flatnonzero(~np.isfinite(values))
+        if bad.size:
+            raise TargetFileError(
+                f"{t.samples.name}: column {name}: data row {int(bad[0]) + 1} is "
+                f"{float(values[bad[0]])!r} ({bad.size} such rows); posterior samples must be "
+                "finite numbers: drop those rows"
+            )
     if t.ref_shift_s:
         base = {n: getattr(t.params, n) for n in PARAM_NAMES}
         cols = shift_columns(cols, t.ref_shift_s, defaults=base)

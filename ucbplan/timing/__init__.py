@@ -3,6 +3,8 @@
 - :mod:`~ucbplan.timing.times`: eclipse-time tables with full-precision epochs;
 - :mod:`~ucbplan.timing.initial`: a first ephemeris (``--period``, ``--initial TARGET.yaml``);
 - :mod:`~ucbplan.timing.cycles`: counting cycles from the times;
+- :mod:`~ucbplan.timing.first_period`: a first period from one night's eclipses, when none is
+  given;
 - :mod:`~ucbplan.timing.fit`: the weighted least-squares fit of T0, P, Ṗ[, P̈];
 - :mod:`~ucbplan.timing.document`: the JSON report and the timing target file;
 - :mod:`~ucbplan.timing.plots`: the O − C figure.
@@ -15,6 +17,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ucbplan.timing.cycles import count_cycles
+from ucbplan.timing.first_period import period_from_times
 from ucbplan.timing.fit import EphemerisFit, fit_ephemeris
 from ucbplan.timing.initial import PeriodGuess, period_guess, read_initial
 from ucbplan.timing.times import EclipseTimes, read_times
@@ -26,6 +29,7 @@ __all__ = [
     "count_cycles",
     "fit_ephemeris",
     "fit_times",
+    "period_from_times",
     "period_guess",
     "read_initial",
     "read_times",
@@ -38,23 +42,20 @@ def fit_times(
     terms: int = 3,
     clip: float | None = None,
 ) -> EphemerisFit:
-    """Fit an ephemeris to ``times``: cycles from the table, else counted from ``guess``.
+    """Fit an ephemeris to ``times``: cycles from the table, else counted from ``guess``, else
+    from the times alone (a first period from the best-covered night,
+    :func:`~ucbplan.timing.first_period.period_from_times`).
 
     Raises
     ------
     InputError
-        No cycle column and no guess, an ambiguous count, too few times; see the parts.
+        No cycle column, no guess and no night that fixes the period; an ambiguous count; too
+        few times; see the parts.
     """
-    from ucbplan.errors import InputFileError
-
     if times.cycle is not None:
         return fit_ephemeris(times, times.cycle, terms, clip, "given in the table")
     if guess is None:
-        raise InputFileError(
-            f"{times.label()}: column 'cycle': missing, so cycles must be counted from the times; "
-            "give a first period guess (--period P) or an earlier ephemeris (--initial "
-            "TARGET.yaml), or add a cycle column"
-        )
+        guess = period_from_times(times)
     cycles = count_cycles(times, guess)
     return fit_ephemeris(times, cycles, terms, clip, f"counted from the times ({guess.origin})")
 

@@ -425,21 +425,28 @@ def coordinates(table: Table) -> tuple[np.ndarray, np.ndarray]:
 
 
 def period_s(table: Table, notes: list[str]) -> np.ndarray:
-    """Orbital period per row [s]: ``period_s`` column, else 4 |t_alt − t_mid|, else NaN."""
-    if has_column(table, "period_s"):
-        values = floats(table, "period_s", unit="s")
-        if np.all(np.isfinite(values)):
-            return values
+    """Orbital period per row [s]: ``period_s``, else (empty cells, no column) 4 |t_alt − t_mid|
+    to a few ms (the times are written to 1 ms), else NaN."""
+    given = has_column(table, "period_s")
+    values = floats(table, "period_s", unit="s") if given else np.full(len(table), math.nan)
+    empty = ~np.isfinite(values)
+    if not np.any(empty):
+        return values
     mids = required_times(table, "t_mid_utc")
     alts = times_utc(table, "t_alt_utc", required=False)
-    out = np.array(
+    estimate = np.array(
         [
             4.0 * abs((a - m).total_seconds()) if a is not None else math.nan
             for a, m in zip(alts, mids, strict=True)
         ]
     )
-    notes.append("no period_s column: P_b estimated as 4|t_alt_utc - t_mid_utc|")
-    return out
+    what = (
+        f"period_s empty in {int(empty.sum())} of {len(table)} rows"
+        if given
+        else "no period_s column"
+    )
+    notes.append(f"{what}: P_b estimated as 4|t_alt_utc - t_mid_utc| (to a few ms)")
+    return np.where(empty, estimate, values)
 
 
 def acquisition_s(table: Table, options: ExportOptions, notes: list[str]) -> np.ndarray:

@@ -7,7 +7,6 @@ on the OB start is rounded outward to whole minutes; windows must not overlap.
 from __future__ import annotations
 
 import hashlib
-import json
 import math
 from dataclasses import dataclass
 from datetime import datetime, timedelta
@@ -17,6 +16,7 @@ import numpy as np
 from astropy.table import Table
 
 from ucbplan.errors import InputFileError, UcbplanError, shorten
+from ucbplan.io import dumps_json
 from ucbplan.observing.exports.base import (
     ExportOptions,
     ExportResult,
@@ -367,5 +367,5 @@ def export_eso_p2(table: Table, options: ExportOptions) -> ExportResult:
         "target_list_csv": _target_list(table, short),
         "obs": [_ob_doc(ob, ctx) for ob in obs],
     }
-    text = json.dumps(doc, indent=2, allow_nan=False) + "\n"
+    text = dumps_json(doc) + "\n"
     return ExportResult(text.encode(), ".json", tuple(dict.fromkeys(notes)))

@@ -9,13 +9,13 @@ minutes for more than a few cycles.
 
 from __future__ import annotations
 
-import json
 import math
 from datetime import datetime, timedelta
 from typing import Any
 
 from astropy.table import Table
 
+from ucbplan.io import dumps_json
 from ucbplan.observing.exports.base import (
     ExportOptions,
     ExportResult,
@@ -104,5 +104,5 @@ def export_gemini(table: Table, options: ExportOptions) -> ExportResult:
         ),
         "observations": gemini_windows(table, options, notes),
     }
-    text = json.dumps(doc, indent=2, allow_nan=False) + "\n"
+    text = dumps_json(doc) + "\n"
     return ExportResult(text.encode(), ".json", tuple(dict.fromkeys(notes)))

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 from datetime import datetime, timedelta
 from typing import Any
@@ -10,6 +9,7 @@ from typing import Any
 from astropy.table import Table
 
 from ucbplan.errors import InputFileError
+from ucbplan.io import dumps_json
 from ucbplan.observing.exports.base import (
     ExportOptions,
     ExportResult,
@@ -174,7 +174,7 @@ def _block_times(table: Table) -> list[dict[str, Any]]:
 
 def lco_json(table: Table, options: ExportOptions) -> str:
     """:func:`lco_requests` as indented JSON text."""
-    return json.dumps(lco_requests(table, options), indent=2, allow_nan=False) + "\n"
+    return dumps_json(lco_requests(table, options)) + "\n"
 
 
 def export_lco(table: Table, options: ExportOptions) -> ExportResult:

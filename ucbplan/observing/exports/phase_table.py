@@ -21,6 +21,7 @@ import numpy as np
 from astropy.table import Table
 from astropy.time import Time, TimeDelta
 
+from ucbplan.errors import InputFileError, shorten
 from ucbplan.observing.exports.base import (
     ExportOptions,
     ExportResult,
@@ -28,7 +29,6 @@ from ucbplan.observing.exports.base import (
     created_utc,
     floats,
     meta,
-    period_s,
     site_name,
     strings,
     version,
@@ -50,6 +50,12 @@ def _phase_ranges(u_star: np.ndarray, half_phase: float) -> str:
     """``a-b`` ranges (phase in [0, 1), wrapping through 1 → 0) of the distinct anchors."""
     centres = sorted({round(float(u) / (2 * math.pi) % 1.0, 9) for u in u_star})
     return "; ".join(f"{(c - half_phase) % 1.0:.4f}-{(c + half_phase) % 1.0:.4f}" for c in centres)
+
+
+def _rows(idx: np.ndarray) -> str:
+    """Row numbers (1 = first data row) for a message, at most five."""
+    rows = [str(int(i) + 1) for i in idx[:5]]
+    return ", ".join(rows) + (", …" if len(idx) > 5 else "")
 
 
 def _target_row(
@@ -92,7 +98,7 @@ def phase_table(table: Table, options: ExportOptions, notes: list[str]) -> Table
     valid = meta(table).get("valid_until_tdb")
     c = {
         "tdb": tdb,
-        "period": period_s(table, notes),
+        "period": floats(table, "period_s", unit="s"),
         "u_star": floats(table, "u_star_rad", unit="rad"),
         "sigma": floats(table, "sigma_t_s", unit="s"),
         "valid_until": valid if isinstance(valid, dict) else {},
@@ -102,8 +108,11 @@ def phase_table(table: Table, options: ExportOptions, notes: list[str]) -> Table
     for name in dict.fromkeys(names):
         idx = np.array([i for i, n in enumerate(names) if n == name])
         if not np.any(np.isfinite(c["period"][idx])):
-            notes.append(f"phase table: {name}: no orbital period in the table; row left out")
-            continue
+            raise InputFileError(
+                f"blocks table: column period_s: empty (NaN) in every row of target "
+                f"{shorten(name, 60)} (rows {_rows(idx)}); a phase table needs the orbital "
+                "period: regenerate the table with `ucbplan plan`"
+            )
         row = _target_row(name, idx, c, options)
         if not row["linear_valid_over_window"]:
             notes.append(

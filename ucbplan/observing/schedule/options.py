@@ -17,7 +17,7 @@ from ucbplan.observing.blocks import ExposurePlan
 from ucbplan.observing.instruments import (
     Instrument,
     check_exptime,
-    get_instrument,
+    instrument_or_none,
     instrument_overheads,
 )
 from ucbplan.observing.schedule.settings import (
@@ -86,7 +86,7 @@ def plan_settings(
         instrument does not confirm and the user did not give, an exposure below the
         instrument's minimum, a malformed duration: one line each.
     """
-    inst = get_instrument(instrument, instruments_file) if instrument is not None else None
+    inst = instrument_or_none(instrument, instruments_file)
     fixed, model = _sigma_v(sigma_v_kms, sigma_floor_kms, extinction_k, inst)
     if inst is not None and sigma_v_kms is None and inst.sigma_ref is None:
         raise InputError(

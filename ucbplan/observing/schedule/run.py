@@ -25,10 +25,11 @@ from ucbplan.observing.schedule.exposure import strategy_facts
 from ucbplan.observing.schedule.goalplan import info_of_blocks
 from ucbplan.observing.schedule.nights import night_dates
 from ucbplan.observing.schedule.planner import PlanResult, plan_nights
+from ucbplan.observing.schedule.records import slug
 from ucbplan.observing.schedule.settings import PlanSettings
 from ucbplan.observing.sites import Site, resolve_site
 from ucbplan.observing.timeconv import quiet_erfa
-from ucbplan.target import Target, load_target
+from ucbplan.target import Target, load_targets
 
 __all__ = ["MAX_PRIORITY", "PlanRun", "parse_priorities", "plan_files", "with_priorities"]
 
@@ -265,7 +266,7 @@ def plan_files(
     if not isinstance(priorities, Mapping):
         parse_priorities(priorities)
     the_site = resolve_site(site, site_lonlat, sites_file, timezone)
-    targets = with_priorities([load_target(p) for p in target_files], priorities)
+    targets = with_priorities(load_targets(target_files, slug), priorities)
     _check_budget_names(targets, settings)
     result = plan_nights(targets, the_site, dates, settings)
     return PlanRun(targets, the_site, dates, settings, result)
