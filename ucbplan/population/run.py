@@ -52,8 +52,9 @@ __all__ = [
     "write_table",
 ]
 
-#: Measured Fisher + horizons per source on one core (issue 13: 12–27 ms) [s].
-FORECAST_SECONDS_PER_SOURCE = 0.02
+#: Measured Fisher + horizons per source on one core (issue 23, batched: 3–5 ms) [s]; chunks
+#: of ~1 s of work also amortise the per-chunk sky conversion and horizon pass.
+FORECAST_SECONDS_PER_SOURCE = 0.004
 
 
 def parts_folder(output: Path) -> Path:
