@@ -22,7 +22,6 @@ from ucbplan.observing.constraints import (
 from ucbplan.observing.sites import get_site
 from ucbplan.observing.sky import SkyModel, airmass_from_alt
 from ucbplan.observing.timeconv import quiet_erfa
-from ucbplan.offline import configure_offline
 
 pytestmark = [
     pytest.mark.filterwarnings("ignore::erfa.ErfaWarning"),
@@ -32,11 +31,6 @@ pytestmark = [
 # HM Cnc, the fiducial source, a zenith-passing star at Paranal, a south-polar star.
 COORDS = SkyCoord([121.5967, 108.318, 0.0, 250.0] * u.deg, [15.4583, -55.652, -24.7, -89.0] * u.deg)
 ORIGIN = "2040-02-01T00:00:00"
-
-
-@pytest.fixture(autouse=True, scope="module")
-def _offline() -> None:
-    configure_offline()
 
 
 @pytest.fixture(scope="module")

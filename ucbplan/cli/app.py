@@ -1,7 +1,7 @@
 """The ``ucbplan`` command line: a thin shell over the library.
 
 Each command family lives in its own ``ucbplan.cli`` module exposing ``register(app)``; this
-module only builds the app, configures astropy for offline use and turns ``UcbplanError`` into
+module only builds the app, runs each command in the offline astropy scope and turns ``UcbplanError`` into
 one line on stderr with exit code 2 (no traceback).
 """
 
@@ -15,7 +15,7 @@ import typer
 from rich.markup import escape
 
 from ucbplan import __version__
-from ucbplan.cli._console import configure_offline, err_console
+from ucbplan.cli._console import err_console
 from ucbplan.errors import UcbplanError
 
 __all__ = ["app", "main"]
@@ -38,6 +38,7 @@ def _version(value: bool) -> None:
 
 @app.callback()
 def _root(
+    ctx: typer.Context,
     version: bool = typer.Option(
         False, "--version", callback=_version, is_eager=True, help="Print the version and exit."
     ),
@@ -48,9 +49,11 @@ def _root(
         False, "--quiet", "-q", help="Print only warnings and errors (no tables or notes)."
     ),
 ) -> None:
-    """Configure offline astropy once, before any command runs."""
+    """Run the command inside the offline astropy scope (restored when the command ends)."""
+    from ucbplan.offline import offline
+
     err_console.quiet_info = quiet
-    configure_offline()
+    ctx.with_resource(offline())
 
 
 def _register_all() -> None:

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 import typer
 from rich.markup import escape
 
-from ucbplan.cli._console import check_output_path, configure_offline, err_console, write_output
+from ucbplan.cli._console import check_output_path, err_console, write_output
 from ucbplan.errors import InputError, UcbplanError
 from ucbplan.io import output_format
 
@@ -71,7 +71,6 @@ def _model(target_path: Path, t_obs: str | None, n_bins: int, circular: bool) ->
     from ucbplan.lisa.pipeline import build_model
     from ucbplan.target import load_target
 
-    configure_offline()
     _check_n_bins(n_bins)
     target = load_target(target_path)
     t_obs_s = _t_obs(t_obs, target.t_obs_s)

@@ -15,7 +15,7 @@ from typing import Annotated, Any
 import typer
 from rich.markup import escape
 
-from ucbplan.cli._console import check_output_path, configure_offline, err_console
+from ucbplan.cli._console import check_output_path, err_console
 from ucbplan.errors import UcbplanError
 
 __all__ = ["register"]
@@ -155,7 +155,6 @@ def forecast(
     from ucbplan.population.plots import forecast_plots
     from ucbplan.population.run import parts_folder, run_forecast
 
-    configure_offline()
     check_output_path(output, overwrite)
     spec = _spec(workers, scheduler, cluster, jobs)
     if plots is not None and not plots.is_dir():
@@ -224,7 +223,6 @@ def visibility(
     from ucbplan.population.run import parts_folder, run_visibility
     from ucbplan.population.visibility import VisibilityOptions
 
-    configure_offline()
     check_output_path(output, overwrite)
     spec = _spec(workers, scheduler, cluster, jobs)
     where = resolve_site(site, site_lonlat, sites_file)
@@ -299,7 +297,6 @@ def rank(
     from ucbplan.population.execute import remove_parts
     from ucbplan.population.run import parts_folder, run_forecast, write_table
 
-    configure_offline()
     out_dir.mkdir(parents=True, exist_ok=True)
     ranked_path = out_dir / "ranked.ecsv"
     check_output_path(ranked_path, overwrite)
@@ -374,7 +371,6 @@ def simulate(
     from ucbplan.population.run import parts_folder
     from ucbplan.population.simulate import PopulationSimulateOptions, run_simulate
 
-    configure_offline()
     check_output_path(output, overwrite)
     spec = _spec(workers, scheduler, cluster, jobs)
     out_dir.mkdir(parents=True, exist_ok=True)
