@@ -1,8 +1,8 @@
 """The ``ucbplan`` command line: a thin shell over the library.
 
 Each command family lives in its own ``ucbplan.cli`` module exposing ``register(app)``; this
-module only builds the app, runs each command in the offline astropy scope and turns ``UcbplanError`` into
-one line on stderr with exit code 2 (no traceback).
+module only builds the app, runs each command in the offline astropy scope and turns
+``UcbplanError`` into one line on stderr with exit code 2 (no traceback).
 """
 
 from __future__ import annotations

@@ -36,11 +36,11 @@ __all__ = [
     "SerialExecutor",
     "default_chunk",
     "jobqueue_cluster_class",
+    "offline_task",
     "open_executor",
     "run_chunks",
     "source_seed",
     "tune_malloc",
-    "offline_task",
     "worker_setup",
 ]
 
