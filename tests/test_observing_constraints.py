@@ -132,9 +132,9 @@ def test_registry_and_errors() -> None:
     assert make_constraint("airmass", max_airmass=1.8).describe() == "airmass <= 1.8"
     with pytest.raises(UcbplanError, match="unknown constraint 'seeing'"):
         make_constraint("seeing")
-    with pytest.raises(UcbplanError, match="--twilight"):
+    with pytest.raises(UcbplanError, match=r"^twilight: "):
         NightConstraint("dusk")
-    with pytest.raises(UcbplanError, match="--airmass-max"):
+    with pytest.raises(UcbplanError, match=r"^max_airmass: "):  # the keyword of the class
         AirmassConstraint(0.5)
 
 
@@ -166,7 +166,7 @@ def test_plan_settings_constraints_follow_site_and_options() -> None:
     got = off.constraints(paranal)
     assert got.zenith_hole is None and got.moon_sep is None
     assert got.moon_illum == MoonIlluminationConstraint(max_fraction=0.5)
-    with pytest.raises(UcbplanError, match="--twilight"):
+    with pytest.raises(UcbplanError, match="twilight"):
         PlanSettings(twilight="dusk").constraints(paranal)
 
 

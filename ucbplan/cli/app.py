@@ -16,6 +16,7 @@ from rich.markup import escape
 
 from ucbplan import __version__
 from ucbplan.cli._console import err_console
+from ucbplan.cli._flags import cli_message
 from ucbplan.errors import UcbplanError
 
 __all__ = ["app", "main"]
@@ -125,7 +126,7 @@ def main() -> None:
     try:
         code = _run()
     except UcbplanError as exc:
-        _fail(f"error: {_one_line(str(exc))}", EXIT_USER)
+        _fail(f"error: {_one_line(cli_message(str(exc)))}", EXIT_USER)
     except (typer.Exit, SystemExit) as exc:
         code = getattr(exc, "exit_code", getattr(exc, "code", 0))
         code = code if isinstance(code, int) else EXIT_BUG
