@@ -33,6 +33,7 @@ FLAGS = {
     "n_epochs": "--epochs",
     "anchor": "--anchor",
     "start": "--start",
+    "max_epochs": "--max-epochs",
     "end": "--end",
     "star": "--star",
     "seed": "--seed",

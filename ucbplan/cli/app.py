@@ -14,7 +14,7 @@ from typing import NoReturn
 import typer
 from rich.markup import escape
 
-from ucbplan import __version__
+from ucbplan._version import __version__
 from ucbplan.cli._console import err_console
 from ucbplan.cli._flags import cli_message
 from ucbplan.errors import UcbplanError

@@ -27,29 +27,12 @@ __all__ = ["register"]
 
 #: Largest band width (memory: templates are walkers × 3 bands × 2 channels × N complex).
 MAX_BINS = 65536
-#: Shortest accepted observation [s] (a day: the response needs a resolved orbit).
-MIN_T_OBS_S = 86400.0
 
 
 def _t_obs(text: str | None, default_s: float) -> float:
-    if text is None:
-        return default_s
-    import astropy.units as u
+    from ucbplan.api.reduction import t_obs_seconds
 
-    from ucbplan.errors import shorten
-
-    try:
-        val = float(u.Quantity(text.replace(" ", "")).to_value(u.s))
-    except (TypeError, ValueError, u.UnitsError):
-        raise InputError(
-            f"--t-obs: expected a duration like '4yr' (Julian) or '126232599.054s', got "
-            f"{shorten(text)}"
-        ) from None
-    if not MIN_T_OBS_S <= val < float("inf"):
-        raise InputError(
-            f"--t-obs: expected a finite duration of at least 1 day, got {shorten(text)}"
-        )
-    return val
+    return t_obs_seconds(text, default_s, "--t-obs")
 
 
 def _check_n_bins(n_bins: int) -> None:
