@@ -2,12 +2,26 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
 from datetime import date
 from typing import Any
 
 from ucbplan.errors import InputError, shorten
 
-__all__ = ["as_date", "as_float", "as_tdb"]
+__all__ = ["as_date", "as_float", "as_tdb", "scope"]
+
+
+@contextmanager
+def scope() -> Iterator[None]:
+    """Where every public function works: the offline astropy scope, with ERFA's "dubious year"
+    and astropy's IERS-range warnings for future dates silenced (ucbplan says the same once, in
+    words a user can act on: :class:`ucbplan.EarthOrientationWarning`)."""
+    from ucbplan.observing.timeconv import quiet_erfa
+    from ucbplan.offline import offline
+
+    with offline(), quiet_erfa():
+        yield
 
 
 def as_float(value: Any, unit: str, parameter: str) -> Any:
@@ -57,11 +71,14 @@ def as_tdb(value: Any, parameter: str) -> Any:
 
 def as_date(value: Any, parameter: str) -> Any:
     """A local evening date: a ``datetime.date``, ``YYYY-MM-DD`` text, or an astropy ``Time``
-    (its UTC calendar date)."""
+    (its calendar date in its own scale)."""
     from astropy.time import Time
 
     if isinstance(value, Time):
         if not value.isscalar:
             raise InputError(f"{parameter}: expected one date, got {value.size}", parameter)
-        return date.fromisoformat(value.utc.isot[:10])
+        from ucbplan.observing.timeconv import quiet_erfa
+
+        with quiet_erfa():
+            return date.fromisoformat(value.isot[:10])
     return value

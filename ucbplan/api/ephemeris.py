@@ -8,9 +8,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ucbplan._version import __version__
-from ucbplan.api._convert import as_float, as_tdb
+from ucbplan.api._convert import as_float, as_tdb, scope
 from ucbplan.errors import InputError, PlanWarning, UcbplanError, emit, shorten
-from ucbplan.offline import offline
 
 if TYPE_CHECKING:
     from astropy.table import Table
@@ -99,7 +98,8 @@ def get_site(site: Any, timezone: str | None = None) -> Site:
         if timezone is None and _is_observer(site) and str(site.timezone) != "UTC":
             timezone = str(site.timezone)
         geo = location.geodetic  # type: ignore[union-attr]
-        text = f"{geo.lon.deg!r},{geo.lat.deg!r},{geo.height.to_value('m')!r}"
+        numbers = (geo.lon.deg, geo.lat.deg, geo.height.to_value("m"))
+        text = ",".join(repr(float(v)) for v in numbers)
         return site_from_lonlat(text, timezone)
     if isinstance(site, str):
         return resolve_site(site, timezone=timezone)
@@ -213,12 +213,14 @@ def ephemeris(
 
     if star not in (1, 2) or isinstance(star, bool):
         raise InputError(f"star: expected 1 or 2, got {shorten(star)}", parameter="star")
-    with offline():
+    with scope():
         t = load_target(target)
         tau0, tau1 = epoch_window(t, start, end, anchor, max_epochs)
         es = find_epochs(t, tau0, tau1, anchor, star)
-        emit(horizon_warnings(t, tau0, tau1), PlanWarning)
-        return epoch_table(t, es)
+        lines = horizon_warnings(t, tau0, tau1)
+        table = epoch_table(t, es)
+    emit(lines, PlanWarning)
+    return table
 
 
 def epoch_table(t: Target, es: EpochSet) -> Table:
@@ -402,7 +404,7 @@ def horizon(
     many = isinstance(targets, Sequence) and not isinstance(targets, str)
     items = list(targets) if many else [targets]
     rows: list[dict[str, Any]] = []
-    with offline():
+    with scope():
         for item in items:
             t = load_target(item)
             sv, k = resolve_k_sigma(t, sigma_v, k_eff)
@@ -451,7 +453,7 @@ def fit_ephemeris(
         raise InputError(f"terms: expected 2, 3 or 4, got {shorten(terms)}", parameter="terms")
     if period is not None and initial is not None:
         raise InputError("period, initial: give one first ephemeris, not both", "period")
-    with offline():
+    with scope():
         guess = read_initial(initial) if initial is not None else None
         if period is not None:
             p = as_float(period, "s", "period")

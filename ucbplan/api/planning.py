@@ -8,10 +8,9 @@ from functools import cached_property
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
 
-from ucbplan.api._convert import as_date, as_float
+from ucbplan.api._convert import as_date, as_float, scope
 from ucbplan.api.ephemeris import TargetLike, get_site, load_target
 from ucbplan.errors import InputError, PlanWarning, emit, shorten
-from ucbplan.offline import offline
 
 if TYPE_CHECKING:
     from astropy.table import Table
@@ -132,7 +131,7 @@ class Plan:
         from ucbplan.observing.nightplot import write_night_charts
 
         constraints = self.run.settings.constraints(self.run.site)
-        with offline():
+        with scope():
             return write_night_charts(
                 self.table, self.run.site, Path(path), constraints=constraints, overwrite=overwrite
             )
@@ -141,7 +140,7 @@ class Plan:
         """The plan as an ``astroplan.Schedule`` (one ``ObservingBlock`` per visit or block)."""
         from ucbplan.observing.astroplan_bridge import to_astroplan
 
-        with offline():
+        with scope():
             return to_astroplan(self.table, self.run.site)
 
 
@@ -202,6 +201,7 @@ def plan(
     from ucbplan.observing.schedule import night_dates, plan_settings
     from ucbplan.observing.schedule.run import plan_targets
 
+    _check_option_names(options)
     for key, unit in _UNITS.items():
         if key in options:
             options[key] = as_float(options[key], unit, key)
@@ -217,7 +217,7 @@ def plan(
             )
         options["custom_constraints"] = _constraint_tuple(constraints)
     many = isinstance(targets, Sequence) and not isinstance(targets, str)
-    with offline():
+    with scope():
         settings = plan_settings(**options)
         dates = night_dates(as_date(night, "night"), nights)
         where = get_site(site, timezone)
@@ -225,6 +225,31 @@ def plan(
         run = plan_targets(loaded, where, dates, settings, dict(priorities or {}))
     emit(list(run.result.warnings), PlanWarning)
     return Plan(run)
+
+
+def _check_option_names(options: Mapping[str, Any]) -> None:
+    """Every keyword is a ``plan`` option (a :class:`PlanSettings` field or a
+    :func:`plan_settings` argument).
+
+    Raises
+    ------
+    InputError
+        For an unknown keyword, with the closest known ones.
+    """
+    import inspect
+
+    from ucbplan.observing.schedule import PlanSettings, plan_settings
+    from ucbplan.target.values import did_you_mean
+
+    known = set(inspect.signature(plan_settings).parameters) | set(PlanSettings.__dataclass_fields__)
+    known -= {"options", "exposure", "exptime_explicit", "custom_constraints"}
+    for key in options:
+        if key not in known:
+            hint = did_you_mean(key, sorted(known))
+            raise InputError(
+                f"{key}: not an option of ucbplan.plan; {hint}see help(ucbplan.plan)",
+                parameter=key,
+            )
 
 
 def _constraint_tuple(constraints: Any) -> tuple[Any, ...]:

@@ -10,10 +10,9 @@ from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ucbplan.api._convert import as_float
+from ucbplan.api._convert import as_float, scope
 from ucbplan.api.ephemeris import TargetLike, get_site, load_target
 from ucbplan.errors import InputError, ReduceWarning, emit, shorten
-from ucbplan.offline import offline
 
 if TYPE_CHECKING:
     from astropy.table import Table
@@ -136,11 +135,12 @@ def reduce(
         mass_radius=mass_radius.lower() if mass_radius else None,
         cos_i_sigma=cos_i_sigma,
     )
-    with offline():
+    with scope():
         tgt = load_target(target)
         table = _velocity_table(velocities, tgt, site)
         report = Report(_reduce(tgt, table, options))
-        emit(report.warnings, ReduceWarning)
+        lines = report.warnings
+    emit(lines, ReduceWarning)
     return report
 
 
@@ -200,7 +200,7 @@ def simulate(
     """
     from ucbplan.lisa import pipeline as lp
 
-    with offline():
+    with scope():
         tgt = load_target(target)
         t_obs_s = t_obs_seconds(t_obs, tgt.t_obs_s)
         model = lp.build_model(tgt, t_obs_s=t_obs_s, n_bins=n_bins, circular=circular)
@@ -297,7 +297,7 @@ def population_forecast(
         t_start=t_start,
         n_bins=n_bins,
     )
-    with offline(), tempfile.TemporaryDirectory(prefix="ucbplan-parts-") as parts:
+    with scope(), tempfile.TemporaryDirectory(prefix="ucbplan-parts-") as parts:
         cat = read_catalog(Path(catalog))
         run = run_forecast(cat, opts, spec=ExecutorSpec(workers=workers), parts=Path(parts))
     return run.table
