@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import os
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 from hypothesis import settings
 
-from ucbplan.offline import configure_offline
+from ucbplan.offline import offline
 
 # CI runs hypothesis derandomized, so a red CI is reproducible; locally the search is random and
 # remembers failing examples in .hypothesis/.
@@ -28,9 +29,11 @@ CATALOGS = ROOT / "catalogs"
 
 
 @pytest.fixture(autouse=True, scope="session")
-def _offline() -> None:
-    """No test may touch the network: configure astropy's IERS/data offline once."""
-    configure_offline()
+def _offline() -> Iterator[None]:
+    """No test may touch the network: astropy's IERS/data offline for the session (a scope,
+    as every public entry point of ucbplan enters it; tests of the lower layers need it too)."""
+    with offline():
+        yield
 
 
 @pytest.fixture

@@ -20,7 +20,6 @@ from ucbplan.observing.blocks import ExposurePlan
 from ucbplan.observing.schedule import PlanSettings, parse_mode, plan_nights
 from ucbplan.observing.sites import Site, get_site
 from ucbplan.observing.timeconv import quiet_erfa, site_utc_to_bary_tdb
-from ucbplan.offline import configure_offline
 from ucbplan.target import Target, load_target
 
 pytestmark = [
@@ -30,11 +29,6 @@ pytestmark = [
 
 REPO = Path(__file__).resolve().parents[1]
 NIGHT = date(2040, 2, 15)  # HM Cnc (RA 8h) culminates near local midnight in February
-
-
-@pytest.fixture(autouse=True, scope="module")
-def _offline() -> None:
-    configure_offline()
 
 
 @pytest.fixture(scope="module")

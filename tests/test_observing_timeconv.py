@@ -19,17 +19,11 @@ from ucbplan.observing.timeconv import (
     quiet_erfa,
     site_utc_to_bary_tdb,
 )
-from ucbplan.offline import configure_offline
 
 HM_CNC = SkyCoord(121.5967 * u.deg, 15.4583 * u.deg)
 
 # Dates past the leap-second table are intended (2040 nights); the planner warns once itself.
 pytestmark = pytest.mark.filterwarnings("ignore::erfa.ErfaWarning")
-
-
-@pytest.fixture(autouse=True, scope="module")
-def _offline() -> None:
-    configure_offline()
 
 
 def _epochs(n: int, start: str, span_d: float, seed: int) -> Time:
@@ -107,7 +101,6 @@ def test_coverage_warnings_for_2040_and_none_for_2026() -> None:
 )
 def test_round_trip_property(day: float, ra: float, dec: float, site_name: str) -> None:
     # Any epoch 2030-2045, any sky position, several sites: TDB -> site UTC -> TDB within 1 us.
-    configure_offline()
     loc = get_site(site_name).location
     coord = SkyCoord(ra * u.deg, dec * u.deg)
     with quiet_erfa():

@@ -13,7 +13,6 @@ from test_reduce_synth import exact_factor, exposure_factor, make_target, sessio
 
 from ucbplan.core import ephemeris
 from ucbplan.core.params import PhaseParams
-from ucbplan.offline import configure_offline
 from ucbplan.reduce import masses as m
 from ucbplan.reduce.pipeline import ReduceOptions, reduce
 from ucbplan.reduce.report import build_report
@@ -21,11 +20,6 @@ from ucbplan.reduce.velocities import VelocityTable
 
 K1, K2, G1, G2 = 585.3, 712.6, 30.0, 10.0
 DAY = 86400.0
-
-
-@pytest.fixture(autouse=True, scope="module")
-def _offline() -> None:
-    configure_offline()
 
 
 def _table(t, tau, window, v, sigma, sessions=None, u_star=None) -> VelocityTable:  # type: ignore[no-untyped-def]

@@ -32,16 +32,10 @@ from ucbplan.observing.blocktable import (
 from ucbplan.observing.schedule import accounting
 from ucbplan.observing.schedule.accounting import visit_summaries
 from ucbplan.observing.timeconv import quiet_erfa
-from ucbplan.offline import configure_offline
 
 pytestmark = pytest.mark.filterwarnings("ignore::erfa.ErfaWarning")
 
 ZONES = ("Europe/Madrid", "America/Santiago", "Pacific/Auckland")
-
-
-@pytest.fixture(autouse=True, scope="module")
-def _offline() -> None:
-    configure_offline()
 
 
 def _transitions(zone: str, year: int) -> list[datetime]:

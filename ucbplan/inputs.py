@@ -213,7 +213,8 @@ def check_range(
         bracket = "(" if low_open else "["
         raise error(
             f"{name}: expected a number in {bracket}{low:g}, {high:g}]{_suffix(unit, why)}, "
-            f"got {shorten(value, 40)}"
+            f"got {shorten(value, 40)}",
+            parameter=name if name.isidentifier() else None,
         )
     return float(value)
 
@@ -238,7 +239,8 @@ def check_int(
     if not (ok and low <= int(value) <= high):
         raise error(
             f"{name}: expected a whole number in [{low}, {high}]{_suffix('', why)}, "
-            f"got {shorten(value, 40)}"
+            f"got {shorten(value, 40)}",
+            parameter=name if name.isidentifier() else None,
         )
     return int(value)
 
@@ -272,4 +274,4 @@ def check_alpha(alpha: object) -> float:
         Otherwise (one line naming the option, the range and the value).
     """
     why = "margin on the phase tolerance: 1 spends all of it"
-    return check_range("--alpha", alpha, 0.0, MAX_ALPHA, "", why, low_open=True)
+    return check_range("alpha", alpha, 0.0, MAX_ALPHA, "", why, low_open=True)

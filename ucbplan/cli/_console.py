@@ -18,12 +18,10 @@ from ucbplan.io import (
     output_format,
     write_output,
 )
-from ucbplan.offline import configure_offline
 
 __all__ = [
     "TABLE_FORMATS",
     "check_output_path",
-    "configure_offline",
     "dump_json",
     "err_console",
     "pick_format",

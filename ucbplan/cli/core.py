@@ -54,29 +54,11 @@ __all__ = ["horizon", "register", "validate"]
 def _resolve_k_sigma(
     target: Target, sigma_v: float | None, k_eff: float | None
 ) -> tuple[float, float]:
-    spec = target.spectroscopy
-    sv = sigma_v if sigma_v is not None else (spec.sigma_v_kms if spec else None)
-    k = k_eff if k_eff is not None else (spec.k_for_tolerance if spec else None)
-    if sv is None:
-        raise UcbplanError(
-            f"{target.name}: no RV precision; pass --sigma-v KM_S or add spectroscopy.sigma_v "
-            "to the target file"
-        )
-    if k is None:
-        raise UcbplanError(
-            f"{target.name}: no semi-amplitude; pass --k-eff KM_S or add spectroscopy.K1/K2 "
-            "(or K_eff) to the target file"
-        )
-    from ucbplan.inputs import check_number
+    """σ_v and K from the options, else the target file (:func:`ucbplan.api.ephemeris.
+    resolve_k_sigma`; its errors name sigma_v / k_eff, printed as --sigma-v / --k-eff)."""
+    from ucbplan.api.ephemeris import resolve_k_sigma
 
-    check_number("--sigma-v", sv, 0.0, 1e4, "km/s")
-    check_number("--k-eff", k, 0.1, 1e4, "km/s", "a binary's velocity semi-amplitude")
-    if sv >= k:
-        raise UcbplanError(
-            f"--sigma-v ({sv:g} km/s) must be smaller than --k-eff ({k:g} km/s): with "
-            "σ_v ≥ K no phase tolerance exists"
-        )
-    return sv, k
+    return resolve_k_sigma(target, sigma_v, k_eff)
 
 
 def validate(targets: TargetsArg, fmt: ValidateFormatOpt = "table") -> None:

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 import typer
 from rich.markup import escape
 
-from ucbplan.cli._console import check_output_path, configure_offline, err_console, write_output
+from ucbplan.cli._console import check_output_path, err_console, write_output
 from ucbplan.errors import InputError, UcbplanError
 from ucbplan.io import output_format
 
@@ -27,29 +27,12 @@ __all__ = ["register"]
 
 #: Largest band width (memory: templates are walkers × 3 bands × 2 channels × N complex).
 MAX_BINS = 65536
-#: Shortest accepted observation [s] (a day: the response needs a resolved orbit).
-MIN_T_OBS_S = 86400.0
 
 
 def _t_obs(text: str | None, default_s: float) -> float:
-    if text is None:
-        return default_s
-    import astropy.units as u
+    from ucbplan.api.reduction import t_obs_seconds
 
-    from ucbplan.errors import shorten
-
-    try:
-        val = float(u.Quantity(text.replace(" ", "")).to_value(u.s))
-    except (TypeError, ValueError, u.UnitsError):
-        raise InputError(
-            f"--t-obs: expected a duration like '4yr' (Julian) or '126232599.054s', got "
-            f"{shorten(text)}"
-        ) from None
-    if not MIN_T_OBS_S <= val < float("inf"):
-        raise InputError(
-            f"--t-obs: expected a finite duration of at least 1 day, got {shorten(text)}"
-        )
-    return val
+    return t_obs_seconds(text, default_s, "--t-obs")
 
 
 def _check_n_bins(n_bins: int) -> None:
@@ -71,7 +54,6 @@ def _model(target_path: Path, t_obs: str | None, n_bins: int, circular: bool) ->
     from ucbplan.lisa.pipeline import build_model
     from ucbplan.target import load_target
 
-    configure_offline()
     _check_n_bins(n_bins)
     target = load_target(target_path)
     t_obs_s = _t_obs(t_obs, target.t_obs_s)

@@ -17,7 +17,7 @@ from typing import Annotated, Any
 import typer
 from rich.markup import escape
 
-from ucbplan.cli._console import check_output_path, configure_offline, err_console
+from ucbplan.cli._console import check_output_path, err_console
 from ucbplan.errors import UcbplanError
 
 __all__ = ["register"]
@@ -157,7 +157,6 @@ def forecast(
     from ucbplan.population.plots import forecast_plots
     from ucbplan.population.run import parts_folder, run_forecast
 
-    configure_offline()
     check_output_path(output, overwrite)
     spec = _spec(workers, scheduler, cluster, jobs)
     if plots is not None and not plots.is_dir():
@@ -226,7 +225,6 @@ def visibility(
     from ucbplan.population.run import parts_folder, run_visibility
     from ucbplan.population.visibility import VisibilityOptions
 
-    configure_offline()
     check_output_path(output, overwrite)
     spec = _spec(workers, scheduler, cluster, jobs)
     where = resolve_site(site, site_lonlat, sites_file)
@@ -329,7 +327,6 @@ def rank(
     from ucbplan.population.execute import remove_parts
     from ucbplan.population.run import parts_folder, run_forecast, write_table
 
-    configure_offline()
     ranked_path = out_dir / "ranked.ecsv"
     _check_out_dir(out_dir, ranked_path, overwrite)
     spec = _spec(workers, scheduler, cluster, jobs)
@@ -409,7 +406,6 @@ def simulate(
     from ucbplan.population.run import parts_folder
     from ucbplan.population.simulate import PopulationSimulateOptions, run_simulate
 
-    configure_offline()
     check_output_path(output, overwrite)
     spec = _spec(workers, scheduler, cluster, jobs)
     sampling = PopulationSimulateOptions(  # the options first, then the files, then the work

@@ -24,6 +24,8 @@ from astropy.coordinates import EarthLocation, SkyCoord
 from astropy.time import Time, TimeDelta
 from scipy.interpolate import CubicSpline
 
+from ucbplan.errors import InputError
+
 __all__ = [
     "DelayInterpolator",
     "SiteTrack",
@@ -257,7 +259,7 @@ def bary_tdb_to_site_utc(
 
     Raises
     ------
-    ValueError
+    InputError
         If ``t_star`` is not in the TDB scale.
 
     Notes
@@ -266,7 +268,9 @@ def bary_tdb_to_site_utc(
     epochs come from Eq. u_precessing_app (Appendix A2).
     """
     if t_star.scale != "tdb":
-        raise ValueError(f"barycentric epochs must be TDB, got scale {t_star.scale!r}")
+        raise InputError(
+            f"t_star: barycentric epochs must be TDB, got scale {t_star.scale!r}; pass t.tdb"
+        )
     scalar = t_star.isscalar
     ts = t_star.reshape(-1) if not scalar else t_star.reshape(1)
     use_fast = fast if fast is not None else len(ts) > FAST_PATH_MIN

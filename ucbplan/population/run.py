@@ -12,7 +12,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
-from ucbplan import __version__
+from ucbplan._version import __version__
 from ucbplan.population.catalog import Catalog
 from ucbplan.population.execute import (
     ExecutorSpec,

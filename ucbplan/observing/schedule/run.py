@@ -31,7 +31,14 @@ from ucbplan.observing.sites import Site, resolve_site
 from ucbplan.observing.timeconv import quiet_erfa
 from ucbplan.target import Target, load_targets
 
-__all__ = ["MAX_PRIORITY", "PlanRun", "parse_priorities", "plan_files", "with_priorities"]
+__all__ = [
+    "MAX_PRIORITY",
+    "PlanRun",
+    "parse_priorities",
+    "plan_files",
+    "plan_targets",
+    "with_priorities",
+]
 
 #: Largest |priority| (priorities only order the targets).
 MAX_PRIORITY = 1.0e9
@@ -266,7 +273,27 @@ def plan_files(
     if not isinstance(priorities, Mapping):
         parse_priorities(priorities)
     the_site = resolve_site(site, site_lonlat, sites_file, timezone)
-    targets = with_priorities(load_targets(target_files, slug), priorities)
-    _check_budget_names(targets, settings)
-    result = plan_nights(targets, the_site, dates, settings)
-    return PlanRun(targets, the_site, dates, settings, result)
+    return plan_targets(
+        load_targets(target_files, slug), the_site, dates, settings, priorities
+    )
+
+
+def plan_targets(
+    targets: Sequence[Target],
+    site: Site,
+    nights: Sequence[date],
+    settings: PlanSettings,
+    priorities: Mapping[str, float] | Sequence[str] = (),
+) -> PlanRun:
+    """Plan loaded targets at a resolved site on the given nights (:func:`plan_files` after
+    reading its inputs; ``ucbplan.plan`` calls it with targets, sites and dates as objects).
+
+    Raises
+    ------
+    UcbplanError
+        For a bad override, a budget naming no target, or a planning input (one line each).
+    """
+    chosen = with_priorities(list(targets), priorities)
+    _check_budget_names(chosen, settings)
+    result = plan_nights(chosen, site, list(nights), settings)
+    return PlanRun(chosen, site, list(nights), settings, result)

@@ -5,19 +5,14 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass, field
+from typing import Any
 
 from ucbplan.core.smearing import parse_smear_budget
 from ucbplan.errors import InputError, UcbplanError, shorten
 from ucbplan.inputs import check_alpha, check_int, check_range
 from ucbplan.observing.blocks import MAX_BLOCK_S, ExposurePlan
-from ucbplan.observing.constraints import (
-    AirmassConstraint,
-    ConstraintSet,
-    MoonIlluminationConstraint,
-    MoonSeparationConstraint,
-    NightConstraint,
-    ZenithHoleConstraint,
-)
+from ucbplan.observing.constraint_objects import constraint_set, default_constraints
+from ucbplan.observing.constraints import ConstraintSet
 from ucbplan.observing.goals import parse_goal
 from ucbplan.observing.instruments import Instrument
 from ucbplan.observing.sigma_model import SigmaVModel
@@ -272,6 +267,10 @@ class PlanSettings:
         Precision goal (``--goal``, e.g. ``sigma_K=2km/s``): plans the spectra that reach it.
     budgets : tuple of (str, float)
         Wall-time budget per target (lower-case name, seconds) over all nights (``--budget``).
+    custom_constraints : tuple or None
+        Constraint objects (ucbplan's, a user's or astroplan's) replacing the set built from
+        ``twilight``, ``airmass_max``, ``moon_sep_deg``, ``moon_illum_max`` and
+        ``zenith_hole_deg`` (see :func:`~ucbplan.observing.constraint_objects.constraint_set`).
 
     Raises
     ------
@@ -307,6 +306,7 @@ class PlanSettings:
     instrument: Instrument | None = None
     goal: str | None = None
     budgets: tuple[tuple[str, float], ...] = ()
+    custom_constraints: tuple[Any, ...] | None = None
 
     def __post_init__(self) -> None:
         parse_mode(self.mode)
@@ -315,13 +315,15 @@ class PlanSettings:
             raise InputError(f"exposure: expected an ExposurePlan, got {shorten(self.exposure)}")
         check_alpha(self.alpha)
         check_int("n_epochs", self.n_epochs, 1, 10**6, "epochs sharing the tolerance")
-        for name, value in (("--sigma-v", self.sigma_v_kms), ("--k-eff", self.k_eff_kms)):
+        for name, value in (("sigma_v_kms", self.sigma_v_kms), ("k_eff_kms", self.k_eff_kms)):
             if value is not None:
                 check_range(name, value, 0.0, MAX_SPEED_KMS, "km/s", "", low_open=True)
         self._check_budgets()
         why = "slew + acquisition before each session; a block must fit in one night"
-        check_range("--overhead", self.overhead_s, 0.0, MAX_BLOCK_S, "s", why)
-        check_int("--sessions", self.sessions_per_night, 1, MAX_SESSIONS, "per target and night")
+        check_range("overhead_s", self.overhead_s, 0.0, MAX_BLOCK_S, "s", why)
+        check_int(
+            "sessions_per_night", self.sessions_per_night, 1, MAX_SESSIONS, "per target and night"
+        )
         why = "longest baseline of a fixed-u pair: a century at most"
         check_range("max_pair_baseline_days", self.max_pair_baseline_days, 0.0, 36525.0, "d", why)
         if self.star not in (1, 2) or isinstance(self.star, bool):
@@ -345,7 +347,7 @@ class PlanSettings:
         parse_duration(self.max_visit_s, "--max-visit")
         if self.cadence not in CADENCES:
             raise InputError(
-                f"--cadence: expected {', '.join(CADENCES)}, got {shorten(self.cadence, 40)}"
+                f"cadence: expected {', '.join(CADENCES)}, got {shorten(self.cadence, 40)}"
             )
         if self.cadence in ("phase-locked", "untargeted"):
             if self.visit_s is None and self.goal is None:
@@ -364,7 +366,7 @@ class PlanSettings:
                 )
         why = "smallest smearing factor of an exposure: 0 = none, 1 = no smearing at all"
         if self.min_lambda_k is not None:
-            check_range("--min-lambda-k", self.min_lambda_k, 0.0, 1.0, "", why)
+            check_range("min_lambda_k", self.min_lambda_k, 0.0, 1.0, "", why)
         parse_budgets(list(self.budgets))
         if self.goal is not None:
             parse_goal(self.goal)
@@ -375,14 +377,12 @@ class PlanSettings:
         """``--max-smear`` (its form, and a positive budget) and ``--max-bin-fraction``."""
         if self.max_bin_fraction is not None:
             why = "largest block span as a fraction of the orbital period"
-            check_range(
-                "--max-bin-fraction", self.max_bin_fraction, 0.0, 1.0, "", why, low_open=True
-            )
+            check_range("max_bin_fraction", self.max_bin_fraction, 0.0, 1.0, "", why, low_open=True)
         if self.max_smear is None:
             return
         if not isinstance(self.max_smear, str) or len(self.max_smear) > _MAX_SMEAR_CHARS:
             raise InputError(
-                "--max-smear: expected e.g. '0.5*sigma_v' or '2 km/s', got "
+                "max_smear: expected e.g. '0.5*sigma_v' or '2 km/s', got "
                 f"{shorten(self.max_smear, 40)}"
             )
         # the form and sign now; a sigma_v budget is scaled by each target's sigma_v later
@@ -392,11 +392,11 @@ class PlanSettings:
             raise
         except ValueError:  # a factor that is not a number, e.g. '..*sigma_v'
             raise InputError(
-                "--max-smear: expected e.g. '0.5*sigma_v' or '2 km/s', got "
+                "max_smear: expected e.g. '0.5*sigma_v' or '2 km/s', got "
                 f"{shorten(self.max_smear, 40)}"
             ) from None
         why = "a velocity, or a multiple of sigma_v"
-        check_range("--max-smear", budget, 0.0, MAX_SPEED_KMS, "km/s", why, low_open=True)
+        check_range("max_smear", budget, 0.0, MAX_SPEED_KMS, "km/s", why, low_open=True)
 
     @property
     def lambda_k_floor(self) -> float:
@@ -431,22 +431,18 @@ class PlanSettings:
         return parse_mode(self.mode)
 
     def constraints(self, site: Site | None) -> ConstraintSet:
-        """The constraints of a run at ``site`` (None: without the site's zenith hole), by name."""
-        hole = self.zenith_hole_deg
-        if hole is None and site is not None:
-            hole = site.zenith_hole_deg
-        # built (and so range-checked) even when 0 switches them off
-        hole_c = ZenithHoleConstraint(radius_deg=hole) if hole is not None else None
-        moon_c = MoonSeparationConstraint(min_deg=self.moon_sep_deg)
-        moon_illum = self.moon_illum_max
-        return ConstraintSet(
-            night=NightConstraint(twilight=self.twilight),
-            airmass=AirmassConstraint(max_airmass=self.airmass_max),
-            zenith_hole=hole_c if hole_c is not None and hole_c.radius_deg > 0 else None,
-            moon_sep=moon_c if moon_c.min_deg > 0 else None,
-            moon_illum=(
-                MoonIlluminationConstraint(max_fraction=moon_illum)
-                if moon_illum is not None
-                else None
-            ),
+        """The constraints of a run at ``site`` (None: without the site's zenith hole), by name:
+        ``custom_constraints`` when given, else the command line's
+        (:func:`~ucbplan.observing.constraint_objects.default_constraints`)."""
+        if self.custom_constraints is not None:
+            return constraint_set(self.custom_constraints)
+        return constraint_set(
+            default_constraints(
+                site,
+                twilight=self.twilight,
+                airmass_max=self.airmass_max,
+                moon_sep_deg=self.moon_sep_deg,
+                moon_illum_max=self.moon_illum_max,
+                zenith_hole_deg=self.zenith_hole_deg,
+            )
         )
