@@ -33,6 +33,20 @@ def _offline() -> None:
     configure_offline()
 
 
+@pytest.fixture(autouse=True)
+def _no_inherited_terminal_size() -> None:
+    """CLI subprocesses get no terminal size the test did not give them.
+
+    readline (imported during the run) exports ``COLUMNS``/``LINES`` into the process's C
+    environment, behind ``os.environ``'s back; a ``ucbplan`` subprocess would inherit them and
+    wrap its messages at that width as on a terminal. A test that wants a width passes
+    ``COLUMNS`` itself (tests/test_screen_100_columns.py).
+    """
+    for name in ("COLUMNS", "LINES"):
+        if name not in os.environ:
+            os.unsetenv(name)
+
+
 @pytest.fixture
 def hm_cnc_path() -> Path:
     return CATALOGS / "hm-cnc-simulated.yaml"

@@ -84,11 +84,24 @@ def test_warnings_wrap_with_a_hanging_indent(tmp_path: Path) -> None:
     assert any("astropy-iers-data" in line for line in lines)
 
 
-@pytest.mark.parametrize("name", ["hmcnc[draft].yaml", "a [b] [/c] ~$x.yaml", "[bold]x[/].yaml"])
+NAMES = ["hmcnc[draft].yaml", "a [b] \\[c] ~$x.yaml", "[bold]x :x: [red].y"]
+
+
+@pytest.mark.parametrize("name", NAMES)
 def test_file_names_are_printed_literally(name: str, tmp_path: Path) -> None:
-    """Rich markup in a file name is text: an error names the file exactly as it is spelled."""
+    """Rich markup (and emoji codes) in a file name is text: an error names the file exactly as
+    it is spelled (the one-line error, wrapped at 100 columns, is joined back)."""
     (tmp_path / name).write_text("bad: [\n", encoding="utf-8")
     out = run_at_100(["validate", name], tmp_path)
     assert out.returncode == 2
-    (line,) = out.stderr.splitlines()
-    assert line.startswith(f"error: {name}: ") and "\\[" not in line
+    line = " ".join(part.strip() for part in out.stderr.splitlines())
+    assert line.startswith(f"error: {name}: not valid YAML")
+    assert line.count("\\") == name.count("\\")  # no escape added
+
+
+def test_written_file_names_are_printed_literally(tmp_path: Path) -> None:
+    """The "wrote FILE" line of a command names a bracketed file as it is spelled."""
+    out = run_at_100(["feasibility", ECC, "--plot", "aps[x].png"], tmp_path)
+    assert out.returncode == 0, out.stderr[-800:]
+    assert "wrote aps[x].png" in out.stderr.splitlines()
+    assert (tmp_path / "aps[x].png").is_file()

@@ -12,7 +12,6 @@ import sys
 from typing import NoReturn
 
 import typer
-from rich.markup import escape
 
 from ucbplan import __version__
 from ucbplan.cli._console import configure_offline, err_console
@@ -87,7 +86,8 @@ def _one_line(text: str) -> str:
 
 
 def _fail(message: str, code: int) -> NoReturn:
-    err_console.print(escape(message), soft_wrap=True, markup=False)
+    # literal text (markup=False): a file name like hmcnc[draft].yaml is printed as it is spelled
+    err_console.print(message, soft_wrap=True, markup=False)
     sys.exit(code)
 
 

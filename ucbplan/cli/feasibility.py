@@ -14,7 +14,7 @@ from typing import Annotated, Any
 import typer
 from rich.table import Table as RichTable
 
-from ucbplan.cli._console import dump_json, err_console, pick_format, write_output
+from ucbplan.cli._console import dump_json, err_console, literal, pick_format, write_output
 from ucbplan.cli._epochs import epoch_option
 from ucbplan.core.constants import DAY_S, MONTH_S, YEAR_S
 from ucbplan.errors import UcbplanError, shorten
@@ -113,7 +113,7 @@ def feasibility_command(
     )
     if plot is not None:
         plot_report(report, plot, overwrite=overwrite)
-        err_console.print(f"wrote {plot}")
+        err_console.print(f"wrote {literal(plot)}")
     if fmt == "json":
         doc = {"units": "SI (m/s, s, rad, rad/s); masses M_sun", **report.to_dict()}
         write_output(output, lambda h: dump_json(doc, h), overwrite=overwrite)
