@@ -55,3 +55,24 @@ def hm_cnc_path() -> Path:
 @pytest.fixture
 def eccentric_path() -> Path:
     return CATALOGS / "fiducial-eccentric.yaml"
+
+
+@pytest.fixture(scope="session")
+def telescope_plan(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The issue-24 plan: HM Cnc and the eccentric dWD at Paranal, two nights of 1-h visits
+    (X-shooter VIS overheads, σ_v = 5 km/s), as ``ucbplan plan -o plan.ecsv`` writes it."""
+    from typer.testing import CliRunner
+
+    from ucbplan.cli.app import app
+
+    out = tmp_path_factory.mktemp("telescope") / "plan.ecsv"
+    args = [
+        "plan",
+        str(CATALOGS / "hm-cnc-simulated.yaml"),
+        str(CATALOGS / "fiducial-eccentric.yaml"),
+        *("--site", "paranal", "--night", "2040-02-15", "--nights", "2"),
+        *("--instrument", "xshooter-vis", "--sigma-v", "5", "--visit", "1h", "-o", str(out)),
+    ]
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 0, result.output
+    return out

@@ -53,9 +53,9 @@ def _root(
 
 
 def _register_all() -> None:
-    from ucbplan.cli import core, export, feasibility, lisa, plan, population, reduce
+    from ucbplan.cli import core, export, feasibility, lisa, now, plan, population, reduce
 
-    for module in (core, plan, export, feasibility, reduce, lisa, population):
+    for module in (core, plan, now, export, feasibility, reduce, lisa, population):
         module.register(app)
 
 
