@@ -12,7 +12,6 @@ import sys
 from typing import NoReturn
 
 import typer
-from rich.markup import escape
 
 from ucbplan._version import __version__
 from ucbplan.cli._console import err_console
@@ -58,9 +57,9 @@ def _root(
 
 
 def _register_all() -> None:
-    from ucbplan.cli import core, export, feasibility, lisa, plan, population, reduce
+    from ucbplan.cli import core, export, feasibility, lisa, now, plan, population, reduce
 
-    for module in (core, plan, export, feasibility, reduce, lisa, population):
+    for module in (core, plan, now, export, feasibility, reduce, lisa, population):
         module.register(app)
 
 
@@ -91,7 +90,8 @@ def _one_line(text: str) -> str:
 
 
 def _fail(message: str, code: int) -> NoReturn:
-    err_console.print(escape(message), soft_wrap=True, markup=False)
+    # literal text (markup=False): a file name like hmcnc[draft].yaml is printed as it is spelled
+    err_console.print(message, soft_wrap=True, markup=False)
     sys.exit(code)
 
 

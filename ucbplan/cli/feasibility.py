@@ -18,6 +18,7 @@ from ucbplan.cli._console import (
     check_output_path,
     dump_json,
     err_console,
+    literal,
     pick_format,
     write_output,
 )
@@ -181,7 +182,7 @@ def feasibility_command(
     )
     if plot is not None:
         plot_report(report, plot, overwrite=overwrite)
-        err_console.print(f"wrote {plot}")
+        err_console.print(f"wrote {literal(plot)}")
     comparison = _comparison(tgt, settings) if compare else None
     if fmt == "json":
         doc = {"units": "SI (m/s, s, rad, rad/s); masses M_sun", **report.to_dict()}

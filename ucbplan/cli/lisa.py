@@ -170,7 +170,7 @@ def simulate(
     _summary(title, result.names, result.injected, sigma, mean, result.fisher_sigma)
     if plots is not None:
         simulation_corner_plots(result, plots, overwrite=overwrite)
-    err_console.print(f"wrote {output}, {files.samples.name}, {files.chain.name}")
+    err_console.print(f"wrote {escape(f'{output}, {files.samples.name}, {files.chain.name}')}")
 
 
 def _save_interrupted(
@@ -250,7 +250,7 @@ def fisher(
     if output is not None:
         header = f"ucbplan fisher: SNR {forecast.snr:.1f}, N={n_bins}"
         write_target(fis, output, overwrite=overwrite, header=header)
-        err_console.print(f"wrote {output}")
+        err_console.print(f"wrote {escape(str(output))}")
 
 
 def waveform(
@@ -280,8 +280,10 @@ def waveform(
         waveform_plot(lines, plot, overwrite=overwrite)
     nb, n = model.model.freqs_hz.shape
     err_console.print(
-        f"{model.base.name}: {nb} bands x {n} bins, optimal SNR {lines.snr:.1f}; wrote {output}"
-        + (f" and {plot}" if plot is not None else "")
+        escape(
+            f"{model.base.name}: {nb} bands x {n} bins, optimal SNR {lines.snr:.1f}; "
+            f"wrote {output}" + (f" and {plot}" if plot is not None else "")
+        )
     )
 
 

@@ -126,7 +126,7 @@ def _finish(run: Any, output: Path, overwrite: bool, keep_parts: bool) -> None:
         remove_parts(parts_folder(output))
     meta = run.table.meta
     err_console.print(
-        f"wrote {output}: {meta['n_ok']} ok, {meta['n_unconstrained']} unconstrained, "
+        f"wrote {escape(str(output))}: {meta['n_ok']} ok, {meta['n_unconstrained']} unconstrained, "
         f"{meta['n_failed']} failed; chunk {run.chunk}, {run.reused}/{run.n_chunks} parts reused"
     )
 
@@ -163,7 +163,7 @@ def forecast(
         raise UcbplanError(f"--plots: folder {plots} does not exist; create it first")
     cat = _catalog(catalog, columns, hdf5_path, skip_bad)
     opts = _forecast_opts(cat, sigma_v, k_eff, t_obs, t_start, n_bins)
-    err_console.print(f"{len(cat.sources)} sources from {catalog}; {spec.describe()}")
+    err_console.print(f"{len(cat.sources)} sources from {escape(str(catalog))}; {spec.describe()}")
     parts = parts_folder(output)
     run = _with_progress(
         "forecast",
@@ -182,7 +182,7 @@ def forecast(
     _finish(run, output, overwrite, keep_parts)
     if plots is not None:
         for path in forecast_plots(run.table, plots, overwrite=overwrite):
-            err_console.print(f"wrote {path}")
+            err_console.print(f"wrote {escape(str(path))}")
 
 
 @population_app.command("visibility")
@@ -241,8 +241,8 @@ def visibility(
         site=where, semester=semester, settings=settings, min_hours=min_hours, forecast=fopts
     )
     err_console.print(
-        f"{len(cat.sources)} sources from {catalog}; {where.name}, {opts.semester.upper()}; "
-        f"{spec.describe()}"
+        f"{len(cat.sources)} sources from {escape(str(catalog))}; {escape(where.name)}, "
+        f"{opts.semester.upper()}; {spec.describe()}"
     )
     parts = parts_folder(output)
     run = _with_progress(
@@ -367,8 +367,8 @@ def rank(
         paths = rk.write_top_targets(ranked, cat, fopts, out_dir, top, overwrite)
         write_table(ranked, ranked_path, overwrite)
     err_console.print(
-        f"wrote {ranked_path} ({ranked.meta['figure_of_merit']}) and {len(paths)} target "
-        f"file(s) in {out_dir}"
+        f"wrote {escape(str(ranked_path))} ({ranked.meta['figure_of_merit']}) and "
+        f"{len(paths)} target file(s) in {escape(str(out_dir))}"
     )
 
 
@@ -420,7 +420,7 @@ def simulate(
     cat = _catalog(catalog, columns, hdf5_path, skip_bad)
     fopts = _forecast_opts(cat, sigma_v, k_eff, t_obs, t_start, n_bins)
     opts = dataclasses.replace(sampling, forecast=fopts)
-    err_console.print(f"{len(cat.sources)} sources from {catalog}; {spec.describe()}")
+    err_console.print(f"{len(cat.sources)} sources from {escape(str(catalog))}; {spec.describe()}")
     parts = parts_folder(output)
     with _made_folder(out_dir):
         run = _with_progress(

@@ -49,7 +49,7 @@ from ucbplan.target.values import (
     parse_epoch,
 )
 
-__all__ = ["load_target_documents", "load_target", "load_targets", "target_from_dict"]
+__all__ = ["load_target", "load_target_documents", "load_targets", "target_from_dict"]
 
 FloatArray = NDArray[np.float64]
 

@@ -273,9 +273,7 @@ def plan_files(
     if not isinstance(priorities, Mapping):
         parse_priorities(priorities)
     the_site = resolve_site(site, site_lonlat, sites_file, timezone)
-    return plan_targets(
-        load_targets(target_files, slug), the_site, dates, settings, priorities
-    )
+    return plan_targets(load_targets(target_files, slug), the_site, dates, settings, priorities)
 
 
 def plan_targets(
