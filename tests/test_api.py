@@ -24,6 +24,8 @@ import pytest
 from astropy import units as u
 from astropy.table import Table
 from astropy.utils import data, iers
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import ucbplan
 from ucbplan.errors import EpochRangeError, InputError, UcbplanError
@@ -359,3 +361,54 @@ def test_sites_from_astropy_and_astroplan() -> None:
     astroplan = pytest.importorskip("astroplan")
     obs = astroplan.Observer(location=EarthLocation.from_geodetic(-17.88, 28.76, 2396))
     assert ucbplan.get_site(obs).timezone == "Atlantic/Canary"
+
+
+# ------------------------------------------------------------------------ any value, one line
+
+_ANY = st.one_of(
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.integers(-(10**12), 10**12),
+    st.text(max_size=12),
+    st.none(),
+    st.booleans(),
+    st.builds(
+        lambda v, unit: v * unit,
+        st.floats(-1e3, 1e3),
+        st.sampled_from([u.deg, u.rad, u.m, u.s, u.one]),
+    ),
+)
+
+_CLASSES = {
+    "max_airmass": ucbplan.AirmassConstraint,
+    "min_deg": ucbplan.MoonSeparationConstraint,
+    "radius_deg": ucbplan.ZenithHoleConstraint,
+    "max_fraction": ucbplan.MoonIlluminationConstraint,
+}
+
+
+@settings(max_examples=150, deadline=None)
+@given(key=st.sampled_from(sorted(_CLASSES)), value=_ANY)
+def test_constraint_classes_take_any_value(key: str, value: Any) -> None:
+    # a constraint is built or refused in one line naming its parameter, never a TypeError
+    try:
+        c = _CLASSES[key](value)
+    except InputError as exc:
+        text = str(exc)
+        assert text.startswith(f"{key}: ") and "\n" not in text and len(text) < 400, text
+        return
+    limit = getattr(c, key)
+    assert isinstance(limit, float) and np.isfinite(limit)
+    if hasattr(value, "unit") and value.unit == u.rad:  # angles convert, not reinterpret
+        assert limit == pytest.approx(float(value.to_value(u.deg)))
+
+
+@settings(max_examples=60, deadline=None)
+@given(key=st.sampled_from(["exptime_s", "overhead_s", "moon_sep_deg", "sigma_v_kms"]), value=_ANY)
+def test_plan_options_take_any_value_before_any_work(key: str, value: Any) -> None:
+    # bad values fail in one line naming the parameter, before the targets are even read
+    try:
+        ucbplan.plan("no-such-target.yaml", "paranal", "2040-02-15", **{key: value})
+    except InputError as exc:
+        text = str(exc)
+        assert "\n" not in text and len(text) < 400, text
+        assert text.startswith(key) or "no-such-target.yaml" in text, text

@@ -92,7 +92,7 @@ def test_plan_settings_ranges(option: str, key: str, bad: list[float], good: lis
 def test_exposure_plan_ranges(option: str, kwargs: dict[str, float]) -> None:
     with pytest.raises(InputError) as info:
         ExposurePlan(**kwargs)  # type: ignore[arg-type]
-    _one_line(info.value, option)
+    _one_line(cli_message(str(info.value)), option)  # the keyword, printed as the flag by the CLI
 
 
 def test_other_plan_options_fail_in_one_line() -> None:

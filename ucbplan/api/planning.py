@@ -241,9 +241,8 @@ def _check_option_names(options: Mapping[str, Any]) -> None:
     from ucbplan.observing.schedule import PlanSettings, plan_settings
     from ucbplan.target.values import did_you_mean
 
-    known = set(inspect.signature(plan_settings).parameters) | set(
-        PlanSettings.__dataclass_fields__
-    )
+    known = set(inspect.signature(plan_settings).parameters)
+    known |= set(PlanSettings.__dataclass_fields__)
     known -= {"options", "exposure", "exptime_explicit", "custom_constraints"}
     for key in options:
         if key not in known:

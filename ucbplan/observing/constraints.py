@@ -220,7 +220,7 @@ class AirmassConstraint(Constraint):
     name: ClassVar[str] = "airmass"
 
     def __post_init__(self) -> None:
-        check_airmass(self.max_airmass, "max_airmass")
+        object.__setattr__(self, "max_airmass", check_airmass(self.max_airmass, "max_airmass"))
 
     def ok(self, sky: SkyModel, i: int, x: FloatArray) -> BoolArray:
         return np.asarray(airmass_from_alt(sky.target_alt_deg(i, x)) <= self.max_airmass)
@@ -241,8 +241,8 @@ class AltitudeConstraint(Constraint):
     name: ClassVar[str] = "altitude"
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "min_deg", _degrees(self.min_deg))
-        check_range("min_deg", self.min_deg, -90.0, 90.0, "deg", "an altitude")
+        limit = check_range("min_deg", _degrees(self.min_deg), -90.0, 90.0, "deg", "an altitude")
+        object.__setattr__(self, "min_deg", limit)
 
     def ok(self, sky: SkyModel, i: int, x: FloatArray) -> BoolArray:
         return np.asarray(sky.target_alt_deg(i, x) >= self.min_deg)
@@ -262,8 +262,8 @@ class ZenithHoleConstraint(Constraint):
     name: ClassVar[str] = "zenith-hole"
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "radius_deg", _degrees(self.radius_deg))
-        check_zenith_hole(self.radius_deg, "radius_deg")
+        radius = check_zenith_hole(_degrees(self.radius_deg), "radius_deg")
+        object.__setattr__(self, "radius_deg", radius)
 
     def ok(self, sky: SkyModel, i: int, x: FloatArray) -> BoolArray:
         return np.asarray(sky.target_alt_deg(i, x) <= 90.0 - self.radius_deg)
@@ -290,8 +290,7 @@ class MoonSeparationConstraint(Constraint):
     name: ClassVar[str] = "moon-sep"
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "min_deg", _degrees(self.min_deg))
-        check_moon_sep(self.min_deg, "min_deg")
+        object.__setattr__(self, "min_deg", check_moon_sep(_degrees(self.min_deg), "min_deg"))
 
     def ok(self, sky: SkyModel, i: int, x: FloatArray) -> BoolArray:
         far = sky.moon_sep_deg(i, x) >= self.min_deg
@@ -321,7 +320,8 @@ class MoonIlluminationConstraint(Constraint):
     name: ClassVar[str] = "moon-illum"
 
     def __post_init__(self) -> None:
-        check_moon_illum(self.max_fraction, "max_fraction")
+        fraction = check_moon_illum(self.max_fraction, "max_fraction")
+        object.__setattr__(self, "max_fraction", fraction)
 
     def ok(self, sky: SkyModel, i: int, x: FloatArray) -> BoolArray:
         return np.asarray((sky.moon_illum(x) <= self.max_fraction) | (sky.moon_alt_deg(x) < 0.0))
