@@ -4,7 +4,8 @@ Measures :func:`ucbplan.reduce.reduce` (ephemeris per spectrum, both regressions
 propagation, WIL41, 10⁵-sample mass Monte Carlo, drifts) with (a) Gaussian samples from the
 target covariance and (b) a 10⁵-row posterior samples ECSV (file read included), against a naive
 peer in the same process: per-spectrum Python loop over the ephemeris, ``numpy.polyfit``
-regressions, and a per-sample Python loop for the masses. Both must agree (K to 1e-9 km/s, median
+regressions on the exact Kepler curve (Gauss–Legendre nodes, a scalar Kepler solution each), and a
+per-sample Python loop for the masses. Both must agree (K to 1e-6 km/s, median
 M1 to 3 MC standard errors). Target: ≤ 1 s for (a) and (b).
 
 Usage: ``python benchmarks/bench_reduce.py [--quick]`` (quick: fewer repeats) or
@@ -61,19 +62,38 @@ def make_table(t: Target, seed: int = 1) -> VelocityTable:
     )
 
 
+def _kepler_h(phi: float, om: float, e: float) -> float:
+    """Exact cos(ω + ν) + e cos ω at Φ_asc = phi (scalar Newton on Kepler's equation)."""
+    mean = phi - om
+    ecc = mean + e * math.sin(mean)
+    for _ in range(50):
+        step = (ecc - e * math.sin(ecc) - mean) / (1 - e * math.cos(ecc))
+        ecc -= step
+        if abs(step) < 1e-15:
+            break
+    nu = 2 * math.atan2(math.sqrt(1 + e) * math.sin(ecc / 2), math.sqrt(1 - e) * math.cos(ecc / 2))
+    return math.cos(om + nu) + e * math.cos(om)
+
+
 def naive(t: Target, tab: VelocityTable, n_samples: int, seed: int) -> tuple[float, float, float]:
-    """Peer: Python loops + numpy.polyfit; returns (K1, K2, median M1)."""
+    """Peer: Python loops + numpy.polyfit; returns (K1, K2, median M1).
+
+    The design is the exact Kepler curve averaged over each exposure by 24-node Gauss–Legendre
+    quadrature, one scalar Kepler solution per node (what reduce computes by its Bessel series).
+    """
     p = t.params
-    nbar = math.pi * p.f_gw
+    e = p.eccentricity
     tau = (tab.time - t.t_ref).to_value("s")
+    nodes, weights = np.polynomial.legendre.leggauss(24)
     G = []
     for i in range(tab.n):  # per-spectrum loop
-        ti = float(tau[i])
-        phi = float(ephemeris.phase_asc(p, ti))
-        eta, kap = (float(x) for x in ephemeris.ll_pair(p, ti))
-        x = 0.5 * nbar * tab.window_s[i]
-        lk, lkap = math.sin(x) / x, math.sin(2 * x) / (2 * x)
-        G.append(lk * math.cos(phi) + lkap * (kap * math.cos(2 * phi) + eta * math.sin(2 * phi)))
+        acc = 0.0
+        for x, w in zip(nodes, weights, strict=True):  # per-node loop
+            ti = float(tau[i]) + 0.5 * float(tab.window_s[i]) * float(x)
+            phi = float(ephemeris.phase_asc(p, ti))
+            eta, kap = (float(v) for v in ephemeris.ll_pair(p, ti))
+            acc += float(w) * _kepler_h(phi, math.atan2(eta, kap), e)
+        G.append(acc / 2)
     Ga = np.array(G)
     c1, cov1 = np.polyfit(Ga, tab.v[0], 1, w=1 / tab.sigma[0], cov="unscaled")
     c2, cov2 = np.polyfit(Ga, tab.v[1], 1, w=1 / tab.sigma[1], cov="unscaled")
@@ -133,7 +153,8 @@ def measure(quick: bool) -> dict[str, float]:
     t0 = time.perf_counter()
     k1, k2, m1_med = naive(t, tab, n_samples, 5)
     t_naive = time.perf_counter() - t0
-    assert abs(k1 - red.fits[0].K) < 1e-9 and abs(k2 - red.fits[1].K) < 1e-9
+    # the peer's unwrapped Φ_asc ~ 1e7 rad rounds at ~2e-9 rad: agreement to 1e-6 km/s
+    assert abs(k1 - red.fits[0].K) < 1e-6 and abs(k2 - red.fits[1].K) < 1e-6
     s = red.summaries["M1"]
     assert abs(m1_med - s.value) < 3 * 1.25 * s.sigma / math.sqrt(n_samples) + 1e-4 * s.value
     return {
@@ -160,7 +181,7 @@ def rows(quick: bool) -> list[dict[str, object]]:
             "peer": f"Python loops + numpy.polyfit ({m['naive']:.2f} s)",
             "goal": f"≤ {LIMIT_S:g} s",
             "met": bool(m["gauss"] <= LIMIT_S),
-            "note": "K agrees with the peer to 1e-9 km/s, median M1 within 3 MC errors",
+            "note": "K agrees with the peer to 1e-6 km/s, median M1 within 3 MC errors",
         },
         {
             "name": f"reduce, {what}, samples ECSV file",

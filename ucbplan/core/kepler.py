@@ -32,6 +32,8 @@ F64 = NDArray[np.float64]
 
 #: Harmonics are kept until the dropped tail is below this fraction of h (K·1e-14 ≪ 1 mm/s).
 _SERIES_TOL = 1e-14
+#: Spectra per chunk of the window-average kernel (its temporaries stay in cache).
+_CHUNK = 8192
 #: Half-window floor [s]: a zero window evaluates as this one (sin x/x = 1 to rounding).
 _HALF_FLOOR_S = 1e-280
 #: Series terms whose coefficient and e-derivative are both below this are skipped [1].
@@ -162,38 +164,78 @@ def window_average(
     om = np.asarray(omega_rad, dtype=np.float64)
     # a zero window is the limit Δt → 0: sin x/x = 1 to rounding with Δt/2 = 1e-280 s
     half = np.maximum(0.5 * np.asarray(window_s, dtype=np.float64), _HALF_FLOOR_S)
-    shape = np.broadcast(phi, om, half, np.asarray(nb_rad_s)).shape
-    a = np.broadcast_to(np.asarray(nb_rad_s, np.float64) * half, shape)  # n_b Δt/2
-    c = np.broadcast_to(omega_dot * half, shape)  # ω̇ Δt/2
-    wk1 = np.broadcast_to(np.exp(1j * (phi - om)), shape)  # e^{iM}
-    ak1 = np.exp(1j * a)  # e^{i n_b Δt/2}
-    co, so = np.cos(om), np.sin(om)
-    cc, sc = np.cos(c), np.sin(c)
+    nb = np.asarray(nb_rad_s, dtype=np.float64)
+    shape = np.broadcast(phi, om, half, nb).shape
+    fphi, fom, fhalf, fnb = (np.broadcast_to(x, shape).ravel() for x in (phi, om, half, nb))
+    terms = _terms(e, derivatives)
+    out = np.zeros((4, fphi.size))
+    for lo in range(0, fphi.size, _CHUNK):  # chunks that stay in cache
+        sl = slice(lo, lo + _CHUNK)
+        chunk = (fphi[sl], fom[sl], fhalf[sl], fnb[sl])
+        _kernel(*chunk, omega_dot=omega_dot, terms=terms, derivatives=derivatives, out=out[:, sl])
+    return WindowedVelocity(*(np.asarray(o.reshape(shape)) for o in out))
+
+
+def _terms(e: float, derivatives: bool) -> list[tuple[int, float, float, float, float]]:
+    """(k, P_k, Q_k, dP_k/de, dQ_k/de) of the harmonics that matter.
+
+    A coefficient is zeroed when it is negligible (Q_k ~ e²P_k): |P_k| below _TERM_FLOOR and,
+    when derivatives are wanted, |e·dP_k/de| too (the same for Q_k).
+    """
     pk, qk, dpk, dqk = harmonics(e)
-    # negligible terms are skipped (Q_k ~ e²P_k): |coefficient| and, for the derivatives,
-    # |e·∂coefficient/∂e| below _TERM_FLOOR
     scale = e if derivatives else 0.0
     keep_p = (np.abs(pk) > _TERM_FLOOR) | (scale * np.abs(dpk) > _TERM_FLOOR)
     keep_q = (np.abs(qk) > _TERM_FLOOR) | (scale * np.abs(dqk) > _TERM_FLOOR)
-    out = [np.zeros(shape) for _ in range(4)]
-    wk, ak = np.ones(shape, complex), np.ones(shape, complex)
-    for k in range(1, pk.size + 1):
-        wk, ak = wk * wk1, ak * ak1
-        wr, wi, ar, ai = wk.real, wk.imag, ak.real, ak.imag
-        for coef, dcoef, m, sign, keep in (
-            (pk[k - 1], dpk[k - 1], k - 1, 1.0, keep_p[k - 1]),
-            (qk[k - 1], dqk[k - 1], k + 1, -1.0, keep_q[k - 1]),
-        ):
-            if not keep:
-                continue
-            # sin x/x, x = k n_b Δt/2 ± ω̇Δt/2: Im(e^{ikа} e^{±ic}) / x
-            sinc = (ai * cc + sign * ar * sc) / (k * a + sign * c)
-            # e^{i(kM ± ω)} = e^{i(kΦ − mω)}
-            cos_t = wr * co - sign * wi * so
-            out[0] += coef * sinc * cos_t
-            if derivatives:
-                sin_t = wi * co + sign * wr * so
-                out[1] -= k * coef * sinc * sin_t
-                out[2] += m * coef * sinc * sin_t
-                out[3] += dcoef * sinc * cos_t
-    return WindowedVelocity(*out)
+    out = []
+    for i in np.flatnonzero(keep_p | keep_q):
+        kp, kq = bool(keep_p[i]), bool(keep_q[i])
+        out.append(
+            (
+                int(i) + 1,
+                float(pk[i]) if kp else 0.0,
+                float(qk[i]) if kq else 0.0,
+                float(dpk[i]) if kp else 0.0,
+                float(dqk[i]) if kq else 0.0,
+            )
+        )
+    return out
+
+
+def _kernel(
+    phi: F64,
+    om: F64,
+    half: F64,
+    nb: F64,
+    omega_dot: float,
+    terms: list[tuple[int, float, float, float, float]],
+    derivatives: bool,
+    out: F64,
+) -> None:
+    """Accumulate ⟨h⟩ (and its partials) of one chunk into ``out`` (4, n).
+
+    Term P_k: angle kM + ω = kΦ − (k−1)ω, window x = k n_bΔt/2 + ω̇Δt/2; term Q_k: kM − ω,
+    x = k n_bΔt/2 − ω̇Δt/2. e^{ikM} and e^{ik n_bΔt/2} by recurrence.
+    """
+    a = nb * half  # n_b Δt/2
+    c = omega_dot * half  # ω̇ Δt/2
+    w1 = np.exp(1j * (phi - om))  # e^{iM}
+    a1 = np.exp(1j * a)
+    co, so, cc, sc = np.cos(om), np.sin(om), np.cos(c), np.sin(c)
+    wk, ak = np.ones_like(w1), np.ones_like(a1)
+    done = 0  # wk = e^{i·done·M}, ak = e^{i·done·a}
+    for k, p, q, dp, dq in terms:
+        for _ in range(k - done):
+            wk *= w1
+            ak *= a1
+        done = k
+        ka = k * a
+        t1, t2 = ak.imag * cc, ak.real * sc  # sin(ka ± c) = t1 ± t2
+        u1, u2 = wk.real * co, wk.imag * so  # cos(kM ± ω) = u1 ∓ u2
+        sinc_p, sinc_q = (t1 + t2) / (ka + c), (t1 - t2) / (ka - c)
+        out[0] += p * sinc_p * (u1 - u2) + q * sinc_q * (u1 + u2)
+        if derivatives:
+            v1, v2 = wk.imag * co, wk.real * so  # sin(kM ± ω) = v1 ± v2
+            sp, sq = p * sinc_p * (v1 + v2), q * sinc_q * (v1 - v2)
+            out[1] -= k * (sp + sq)
+            out[2] += (k - 1) * sp + (k + 1) * sq
+            out[3] += dp * sinc_p * (u1 - u2) + dq * sinc_q * (u1 + u2)
