@@ -21,9 +21,12 @@ from __future__ import annotations
 import importlib
 import sys
 import types
-from typing import TYPE_CHECKING, Any
 
 from ucbplan._version import __version__
+
+# typing is not imported at run time (``import ucbplan`` stays a few modules); annotations are
+# strings (PEP 563) and the TYPE_CHECKING block below is read by type checkers only
+TYPE_CHECKING = False
 
 #: Public name → the module that defines it.
 _PUBLIC = {
@@ -84,6 +87,8 @@ sys.modules[__name__].__class__ = _Package
 
 
 if TYPE_CHECKING:  # the same names for type checkers and IDEs ("as": re-exported)
+    from typing import Any
+
     from ucbplan.api import (
         Plan as Plan,
     )
