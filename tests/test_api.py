@@ -155,6 +155,19 @@ def test_import_is_light() -> None:
     )
     assert out.stdout.strip() == "[]", out.stderr
     assert set(ucbplan.__all__) <= set(dir(ucbplan))
+    # the function, whether or not (and whenever) the subpackage ucbplan.reduce was imported
+    code = (
+        "import ucbplan.reduce.pipeline, ucbplan, ucbplan.api; "
+        "print(ucbplan.reduce is ucbplan.api.reduce)"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, env=_env()
+    )
+    assert out.stdout.strip() == "True", out.stderr
+    from ucbplan.reduce import masses  # binds the subpackage on ucbplan again: reduce() stays
+
+    assert masses.__name__ == "ucbplan.reduce.masses"
+    assert ucbplan.reduce is ucbplan.api.reduce
     with pytest.raises(AttributeError):
         _ = ucbplan.no_such_name  # type: ignore[attr-defined]
 

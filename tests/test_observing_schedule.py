@@ -223,9 +223,11 @@ def test_settings_and_inputs_fail_in_words() -> None:
     from ucbplan.observing.schedule import night_dates
     from ucbplan.observing.sites import resolve_site
 
-    with pytest.raises(UcbplanError, match=r"--alpha: expected a number in \(0, 10\]"):
+    with pytest.raises(UcbplanError, match=r"alpha: expected a number in \(0, 10\]"):
         PlanSettings(alpha=0.0)
-    with pytest.raises(UcbplanError, match=r"--sessions: expected a whole number in \[1, 1000\]"):
+    with pytest.raises(
+        UcbplanError, match=r"sessions_per_night: expected a whole number in \[1, 1000\]"
+    ):
         PlanSettings(sessions_per_night=0)
     assert night_dates("2040-02-28", 3) == [date(2040, 2, 28), date(2040, 2, 29), date(2040, 3, 1)]
     with pytest.raises(UcbplanError, match="YYYY-MM-DD"):

@@ -9,14 +9,24 @@ public API (docs/api.md) is importable from here::
 Names are loaded on first use (PEP 562), so ``import ucbplan`` and ``ucbplan --help`` stay
 cheap: nothing below is imported until a name is asked for. The names and the modules that
 define them are listed once, in :data:`_PUBLIC`.
+
+``ucbplan.reduce`` is the function, also once the subpackage of the same name has been
+imported (Python binds a subpackage to its parent's attribute on import; the package's module
+class keeps the public name instead, so the answer does not depend on import order). Reach the
+subpackage's modules with ``from ucbplan.reduce import pipeline``.
 """
 
 from __future__ import annotations
 
 import importlib
-from typing import TYPE_CHECKING, Any
+import sys
+import types
 
 from ucbplan._version import __version__
+
+# typing is not imported at run time (``import ucbplan`` stays a few modules); annotations are
+# strings (PEP 563) and the TYPE_CHECKING block below is read by type checkers only
+TYPE_CHECKING = False
 
 #: Public name → the module that defines it.
 _PUBLIC = {
@@ -45,7 +55,6 @@ _PUBLIC = {
     "PlanWarning": "ucbplan.errors",
     "ReduceWarning": "ucbplan.errors",
     "EarthOrientationWarning": "ucbplan.errors",
-    "offline": "ucbplan.offline",
 }
 
 __all__ = ["__version__", *_PUBLIC]
@@ -65,7 +74,21 @@ def __dir__() -> list[str]:
     return sorted(__all__)
 
 
+class _Package(types.ModuleType):
+    """The ``ucbplan`` module: a public name is never replaced by a subpackage of that name."""
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        if name in _PUBLIC and isinstance(value, types.ModuleType):
+            return  # the import system binding ucbplan.reduce (the subpackage): keep reduce()
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _Package
+
+
 if TYPE_CHECKING:  # the same names for type checkers and IDEs ("as": re-exported)
+    from typing import Any
+
     from ucbplan.api import (
         Plan as Plan,
     )
@@ -141,4 +164,3 @@ if TYPE_CHECKING:  # the same names for type checkers and IDEs ("as": re-exporte
     from ucbplan.observing.constraints import (
         ZenithHoleConstraint as ZenithHoleConstraint,
     )
-    from ucbplan.offline import offline as offline

@@ -13,8 +13,9 @@ astroplan's own ``AtNightConstraint`` (civil, nautical or astronomical), ``Airma
 ephemeris, are evaluated by ucbplan's vectorised classes with astroplan's meaning (e.g. the
 Moon separation counts while the Moon is down). Any other astroplan constraint, custom
 subclasses included, is evaluated by astroplan itself (:class:`AstroplanConstraint`): one
-astropy ``AltAz`` transformation per target and call, typically 10–100 times the cost of a
-native constraint, and no screening. astroplan is imported only when one of its constraints is
+astropy ``AltAz`` transformation of every sample per target and call, and no screening, so it
+costs more than a native constraint (``benchmarks/bench_plan.py`` measures astroplan's
+cost against ucbplan's kernel). astroplan is imported only when one of its constraints is
 given.
 """
 
