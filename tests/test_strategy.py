@@ -56,7 +56,7 @@ def test_sigma_law_forms() -> None:
 def test_sigma_law_bad_forms(text: str) -> None:
     with pytest.raises(InputError) as err:
         parse_sigma_v(text)
-    assert "--sigma-v" in str(err.value) and "\n" not in str(err.value)
+    assert str(err.value).startswith("sigma_v_kms") and "\n" not in str(err.value)
 
 
 def test_target_without_band_magnitude_refused() -> None:

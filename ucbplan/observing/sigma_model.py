@@ -95,7 +95,7 @@ class SigmaVModel:
     extinction_k : float
         Extinction coefficient k [mag/airmass] in the reference band.
     option : str
-        What the user gave it as (named in error messages).
+        The parameter (or flag) it was given as, named in error messages.
     """
 
     sigma_kms: float
@@ -104,7 +104,7 @@ class SigmaVModel:
     mag: float | None = None
     floor_kms: float = 0.0
     extinction_k: float = 0.0
-    option: str = "--sigma-v"
+    option: str = "sigma_v_kms"
 
     def __post_init__(self) -> None:
         why = "sigma_v of one spectrum"
@@ -120,9 +120,9 @@ class SigmaVModel:
             _check_band(self.option, self.band)
             check_range(self.option, self.mag, *MAG_LIMITS, "mag", "reference magnitude")
         why = "systematic floor added in quadrature"
-        check_range("--sigma-floor", self.floor_kms, 0.0, MAX_SIGMA_KMS, "km/s", why)
+        check_range("sigma_floor_kms", self.floor_kms, 0.0, MAX_SIGMA_KMS, "km/s", why)
         why = "atmospheric extinction"
-        check_range("--extinction", self.extinction_k, 0.0, MAX_EXTINCTION, "mag/airmass", why)
+        check_range("extinction_k", self.extinction_k, 0.0, MAX_EXTINCTION, "mag/airmass", why)
 
     @property
     def follows_exposure(self) -> bool:
@@ -202,7 +202,7 @@ def parse_sigma_v(
     *,
     floor_kms: float = 0.0,
     extinction_k: float = 0.0,
-    option: str = "--sigma-v",
+    option: str = "sigma_v_kms",
 ) -> SigmaVModel:
     """``--sigma-v`` text → :class:`SigmaVModel` (module notes for the forms).
 

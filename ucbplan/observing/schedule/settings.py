@@ -344,7 +344,7 @@ class PlanSettings:
                     f"--n-exp: expected 1 with --visit (each exposure of a visit is centred on "
                     f"its own anchor), got {self.exposure.n_exp}; drop --n-exp"
                 )
-        parse_duration(self.max_visit_s, "--max-visit")
+        parse_duration(self.max_visit_s, "max_visit_s")
         if self.cadence not in CADENCES:
             raise InputError(
                 f"cadence: expected {', '.join(CADENCES)}, got {shorten(self.cadence, 40)}"
