@@ -389,6 +389,11 @@ def _fast_csv(
     non-numeric cell, a non-finite number, a ragged row, an unreadable or non-UTF-8 file) and a
     session label that reads as a number return None, so every error message stays the strict
     reader's, naming the row and column.
+
+    Why astropy's reader: measured on 10⁶ spectra (57 MB), pyarrow's CSV reader parses in 0.43
+    CPU s and astropy's in 0.85 s (both exact; astropy's fast converter, 0.59 s, is off by an
+    ulp at times), but pyarrow would be a new dependency of ~100 MB for 0.4 s of a ~7 s run;
+    astropy is already required.
     """
     import warnings
 
