@@ -37,6 +37,11 @@ GOAL_TARGET_S = 50e-6
 GOAL_REDUCE_X, GOAL_REDUCE_MB = 12.0, 1024.0
 
 
+def _peak_mb() -> float:
+    """Peak resident memory of this process so far [MB]."""
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
 def _at_reference(cpu_s: float, work_s: float) -> float:
     """A CPU time here as the time it takes on the reference machine [s]."""
     return cpu_s / work_s * REFERENCE_S
@@ -68,6 +73,7 @@ def population_row(tmp: Path) -> dict[str, object]:
         "peer": f"numpy workload ({work:.3f} CPU s here; ratio = sources per workload)",
         "goal": f"≤ {1e3 * GOAL_SOURCE_S:g} ms (10⁴ sources ≤ 40 s)",
         "met": bool(per <= GOAL_SOURCE_S),
+        "peak_mb": _peak_mb(),
         "note": f"{1e3 * cpu / n:.2f} CPU ms/source here ({1e3 * wall / n:.2f} ms wall), "
         f"{ok} ok; 10⁴ sources ≈ {1e4 * per:.0f} s at the reference",
     }
@@ -85,11 +91,23 @@ def _target_files(folder: Path, n: int) -> list[Path]:
     return out
 
 
-def _cli_cpu(args: list[str]) -> tuple[float, float]:
-    """(CPU s, wall s) of ``python -m ucbplan ARGS`` in a fresh process."""
+#: Runs ``ucbplan`` as ``python -m ucbplan`` does and prints its own peak resident memory last
+#: (the children's ru_maxrss of the parent would include the forked copy of this process).
+_PEAK = (
+    "import resource, runpy, sys\n"
+    "sys.argv = ['ucbplan', *sys.argv[1:]]\n"
+    "try:\n"
+    "    runpy.run_module('ucbplan', run_name='__main__')\n"
+    "finally:\n"
+    "    print('PEAK-KB', resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, file=sys.stderr)\n"
+)
+
+
+def _cli_cpu(args: list[str]) -> tuple[float, float, float]:
+    """(CPU s, wall s, peak resident MB) of ``python -m ucbplan ARGS`` in a fresh process."""
     c0, w0 = children_cpu_s(), time.perf_counter()
     res = subprocess.run(
-        [sys.executable, "-m", "ucbplan", *args],
+        [sys.executable, "-c", _PEAK, *args],
         capture_output=True,
         text=True,
         cwd=ROOT,
@@ -98,7 +116,8 @@ def _cli_cpu(args: list[str]) -> tuple[float, float]:
     )
     if res.returncode != 0:
         raise RuntimeError(f"ucbplan {args[0]} failed: {res.stderr.strip()[-300:]}")
-    return children_cpu_s() - c0, time.perf_counter() - w0
+    peak = [ln for ln in res.stderr.splitlines() if ln.startswith("PEAK-KB ")]
+    return children_cpu_s() - c0, time.perf_counter() - w0, float(peak[-1].split()[1]) / 1024.0
 
 
 def _horizon_cli(files: list[Path], out: Path) -> tuple[float, float, float]:
@@ -149,6 +168,7 @@ def horizon_row(tmp: Path, n: int) -> dict[str, object]:
         "peer": f"reading one target file ({1e6 * load / n:.0f} CPU µs here)",
         "goal": f"≤ {1e6 * GOAL_TARGET_S:g} µs/target",
         "met": bool(ref <= GOAL_TARGET_S),
+        "peak_mb": _peak_mb(),
         "note": f"the CLI command in this process: {total:.2f} CPU s ({wall:.1f} s wall), "
         f"{load:.2f} of them reading the YAML; {1e6 * per:.0f} CPU µs/target here above it; "
         f"workload {work:.3f} CPU s",
@@ -181,9 +201,8 @@ def reduce_row(tmp: Path, n: int) -> dict[str, object]:
     target = str(ROOT / "catalogs" / "fiducial-eccentric.yaml")
     args = ["reduce", target, str(csv), "--format", "json", "--seed", "1"]
     work = workload_s()
-    cpu, wall = min(_cli_cpu([*args, "-o", str(tmp / f"r{k}.json")]) for k in range(2))
+    cpu, wall, peak = min(_cli_cpu([*args, "-o", str(tmp / f"r{k}.json")]) for k in range(2))
     work = min(work, workload_s())
-    peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0  # the largest child
     x = cpu / work
     scaled = f"; scaled to 10⁶ spectra: {x * 1e6 / n:.1f}×" if n != 1_000_000 else ""
     return {
