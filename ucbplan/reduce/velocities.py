@@ -363,85 +363,14 @@ def read_velocities(path: Path | str) -> VelocityTable:
     )
 
 
-def _header_line(text: str) -> str | None:
-    """The header of a CSV: its first line that is neither blank nor a # comment."""
-    pos = 0
-    while pos < len(text):
-        end = text.find("\n", pos)
-        end = len(text) if end < 0 else end
-        line = text[pos:end]
-        if line.strip() and not line.lstrip().startswith("#"):
-            return line
-        pos = end + 1
-    return None
-
-
 def _fast_csv(
     path: Path,
 ) -> tuple[list[str], dict[str, F64], dict[str, list[object]], Sequence[int]] | None:
-    """Header, numeric columns, session labels and row numbers of a well-formed CSV, read
-    column by column with astropy's C reader; None sends the file to the strict reader.
+    """The columnar reading of a CSV (:func:`ucbplan.reduce.columnar.read_columns`), or None
+    when the strict reader must read it."""
+    from ucbplan.reduce.columnar import read_columns
 
-    The C reader (:func:`astropy.io.ascii.read`, ``fast_reader`` with the exact converter, so
-    every number is the correctly rounded double that ``float()`` gives) holds the file's text
-    and the parsed columns, never a Python object per cell: 10⁶ spectra take ~1 s and a few
-    hundred MB instead of ~40 s and ~1 GB. Anything the strict reader would refuse (a blank or
-    non-numeric cell, a non-finite number, a ragged row, an unreadable or non-UTF-8 file) and a
-    session label that reads as a number return None, so every error message stays the strict
-    reader's, naming the row and column.
-
-    Why astropy's reader: measured on 10⁶ spectra (57 MB), pyarrow's CSV reader parses in 0.43
-    CPU s and astropy's in 0.85 s (both exact; astropy's fast converter, 0.59 s, is off by an
-    ulp at times), but pyarrow would be a new dependency of ~100 MB for 0.4 s of a ~7 s run;
-    astropy is already required.
-    """
-    import warnings
-
-    from astropy.io import ascii as asc
-
-    try:
-        text = read_text(path, "velocity table")
-    except SchemaError:
-        return None
-    line = _header_line(text)
-    if line is None:
-        return None
-    header = [h.strip().lower() for h in next(csv.reader([line]), [])]
-    if len(set(header)) != len(header) or not set(header) <= set(KNOWN_COLUMNS):
-        return None  # the strict reader names the duplicate or unknown column
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # overflow and the like: the strict path says it
-            tab = asc.read(
-                text + "\n",
-                format="csv",
-                guess=False,
-                fast_reader={"use_fast_converter": False},
-                comment="#",
-            )
-    except Exception:  # astropy raises many types for malformed tables; the strict path names it
-        return None
-    del text
-    if len(tab.colnames) != len(header) or len(tab) == 0:
-        return None
-    num: dict[str, F64] = {}
-    colmap: dict[str, list[object]] = {}
-    for name, key in zip(tab.colnames, header, strict=True):
-        col = tab[name]
-        if np.any(getattr(col, "mask", False)):
-            return None  # a blank cell
-        if key == "session":
-            if col.dtype.kind not in "US":
-                return None  # "01" would read as 1: the strict reader keeps the text
-            colmap[key] = np.char.strip(np.asarray(col, dtype=str)).tolist()
-            continue
-        if col.dtype.kind not in "fiu":
-            return None
-        vals = np.asarray(col, dtype=np.float64)
-        if not np.all(np.isfinite(vals)):
-            return None
-        num[key] = vals
-    return header, num, colmap, range(1, len(tab) + 1)
+    return read_columns(path, KNOWN_COLUMNS)
 
 
 def _csv_columns(path: Path) -> tuple[list[str], dict[str, list[object]], list[int]]:
