@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -385,3 +386,32 @@ def test_sb1_mass_function() -> None:
     expect = 0.285**3 * sin3 / (0.347 + 0.285) ** 2
     assert red.summaries["mass_function"].value == pytest.approx(expect, rel=1e-3)
     assert "M1" not in red.summaries
+
+
+def test_terminal_report_lists_at_most_forty_sessions_and_pairs() -> None:
+    """Issue 23: 10⁶ spectra give thousands of sessions and pairs; the terminal names the first
+    40 and says how many more the -o report holds (rendering them all took longer than the
+    reduction). The report document itself keeps every pair."""
+    from rich.console import Console
+
+    from ucbplan.reduce.report import MAX_TERMINAL_ROWS, print_report
+    from ucbplan.reduce.velocities import read_velocities
+    from ucbplan.target import load_target
+
+    root = Path(__file__).resolve().parents[1] / "catalogs"
+    t = load_target(root / "fiducial-eccentric.yaml")
+    red = reduce(
+        t,
+        read_velocities(root / "fiducial-eccentric-velocities.csv"),
+        ReduceOptions(n_samples=500, seed=1),
+    )
+    doc = build_report(red)
+    assert doc["drifts"]["pairs"], "the example has fixed-u pairs"
+    doc["sessions"] = [f"N{k}" for k in range(100)]
+    doc["drifts"]["pairs"] = (doc["drifts"]["pairs"] * 100)[:100]
+    con = Console(record=True, width=200)
+    print_report(doc, con)
+    text = con.export_text()
+    assert "N39," in text and "N40," not in text and "(100 sessions)" in text
+    assert f"… and {100 - MAX_TERMINAL_ROWS} more fixed-u pairs" in text
+    assert len(doc["drifts"]["pairs"]) == 100

@@ -240,3 +240,86 @@ def test_swapped_star_gives_warning_not_nan_masses(tmp_path: Path) -> None:
     red = _reduce(_write(tmp_path, HEADER + "".join(flipped)))
     assert "M1" not in red.summaries  # type: ignore[attr-defined]
     assert any("K =" in w and "not computed" in w for w in red.warnings)  # type: ignore[attr-defined]
+
+
+def _both_readers(path: Path, monkeypatch: pytest.MonkeyPatch) -> tuple[object, object]:
+    """The table read by the columnar reader and by the strict per-cell reader (the reference)."""
+    from ucbplan.reduce import velocities as vel
+
+    fast = read_velocities(path)
+    with monkeypatch.context() as m:
+        m.setattr(vel, "_fast_csv", lambda p: None)
+        strict = read_velocities(path)
+    return fast, strict
+
+
+def _same(a: object, b: object) -> None:
+    """Bit-identical tables: times (jd1, jd2), windows, velocities, σ and session labels."""
+    assert a.time.jd1.tobytes() == b.time.jd1.tobytes()  # type: ignore[attr-defined]
+    assert a.time.jd2.tobytes() == b.time.jd2.tobytes()  # type: ignore[attr-defined]
+    for name in ("window_s", "lambda_k"):
+        assert np.array_equal(getattr(a, name), getattr(b, name), equal_nan=True)
+    for x, y in zip(a.v + a.sigma, b.v + b.sigma, strict=True):  # type: ignore[attr-defined]
+        assert x.tobytes() == y.tobytes()
+    assert a.session == b.session and a.window_column == b.window_column  # type: ignore[attr-defined]
+
+
+def test_columnar_reader_equals_the_strict_reader(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Issue 23: CSVs are read column by column by astropy's C reader with its exact converter;
+    every value must be the strict reader's bit for bit (comments, blank lines, a byte-order
+    mark, CRLF, session labels, auto sessions, SB1 and SB2)."""
+    from ucbplan.reduce import velocities as vel
+
+    rng = np.random.default_rng(3)
+    n = 500
+    jd = JD + np.sort(rng.integers(0, 5, n) + rng.uniform(0, 0.3, n))  # five nights
+    cells = np.column_stack(
+        [jd, rng.uniform(10, 60, n), rng.normal(0, 300, n), rng.uniform(5, 20, n)]
+    )
+    body = "".join(
+        f"{float(a)!r},{b:.3f},{c:.17g},{d:.4e},{'AB'[k % 2]}x\n"
+        for k, (a, b, c, d) in enumerate(cells)
+    )
+    p = tmp_path / "sb1.csv"
+    p.write_bytes(
+        ("\ufeff# measured\n\nbjd_tdb,exptime_s,v,sigma_v,session\n" + body)
+        .replace("\n", "\r\n")
+        .encode()
+    )
+    assert vel._fast_csv(p) is not None  # the columnar path is the one taken
+    _same(*_both_readers(p, monkeypatch))
+    auto = _write(
+        tmp_path,
+        HEADER.replace(",session", "")
+        + "".join(
+            f"{float(j)!r},30,{v},15,{-v},14\n" for j, v in zip(jd, cells[:, 2], strict=True)
+        ),
+    )
+    fast, strict = _both_readers(auto, monkeypatch)
+    _same(fast, strict)
+    assert len(set(fast.session)) > 1  # type: ignore[attr-defined]
+
+
+@pytest.mark.parametrize(
+    ("body", "needle"),
+    [
+        (f"{JD},30,1,15,2,,A\n", "row 1, column 'sigma_v2': blank cell"),
+        (f"{JD},30,1,15,2,14,A\n{JD},30,x,15,2,14,B\n", "row 2, column 'v1': got 'x'"),
+        (f"{JD},30,1,15,2,14,A\n{JD},30,nan,15,2,14,B\n", "row 2, column 'v1'"),
+        (f"{JD},30,1,15,2,14,A\n{JD},30,1,15\n", "row 2 (line 3): has 4 fields, expected 7"),
+        (f"{JD},30,1,15,2,14,01\n{JD + 1},30,1,15,2,14,1\n", None),
+    ],
+)
+def test_columnar_reader_leaves_bad_files_to_the_strict_reader(
+    tmp_path: Path, body: str, needle: str | None
+) -> None:
+    """A file the columnar reader cannot take whole goes to the strict reader: its one-line
+    message names the row and column, and a numeric-looking session label stays text."""
+    p = _write(tmp_path, HEADER + body)
+    if needle is None:
+        assert read_velocities(p).session == ("01", "1")
+        return
+    with pytest.raises(VelocityFileError, match=needle.replace("(", r"\(").replace(")", r"\)")):
+        read_velocities(p)

@@ -4,6 +4,8 @@
 target (tolerance, σ_u at the end of the information, T_valid and δt_u per anchor × α, and for a
 timing ephemeris the same before T0), for arrays of parameters and covariances in one pass: the
 per-target cost is a few array operations (:mod:`ucbplan.core.horizon_poly`), not a Python loop.
+:func:`horizons` takes the targets themselves and returns the long table of ``ucbplan horizon``
+for several targets: a row per target × anchor × α (:data:`HORIZON_COLUMNS`).
 """
 
 from __future__ import annotations
@@ -27,10 +29,10 @@ from ucbplan.core.forecast import (
 )
 from ucbplan.core.horizon_grid import anchor_sigma_batch
 from ucbplan.core.params import PARAM_NAMES, EphemerisSource
+from ucbplan.errors import InputError
 
 if TYPE_CHECKING:
     from astropy.table import Table
-from ucbplan.errors import InputError
 
 __all__ = ["HORIZON_COLUMNS", "horizon_columns", "horizon_rows", "horizons"]
 

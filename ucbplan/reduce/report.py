@@ -385,11 +385,26 @@ def _light_time_line(lt: dict[str, Any]) -> str:
     )
 
 
+#: Most sessions named and fixed-u pairs listed on the terminal; a longer run lists the first
+#: ones and says how many more the JSON/YAML report holds (rendering 10⁴ table rows took longer
+#: than the whole reduction).
+MAX_TERMINAL_ROWS = 40
+
+
+def _more(n: int, what: str) -> str:
+    """The line that stands for the rows not printed."""
+    return f"… and {n - MAX_TERMINAL_ROWS} more {what}: the full list is in the -o JSON/YAML report"
+
+
 def print_report(doc: dict[str, Any], console: Any) -> None:
     """Rich terminal report (to the given console, normally stderr)."""
+    sessions = doc["sessions"]
+    names = ", ".join(sessions[:MAX_TERMINAL_ROWS])
+    if len(sessions) > MAX_TERMINAL_ROWS:
+        names += f", … ({len(sessions)} sessions)"
     console.print(
         f"[bold]{doc['target']}[/] — {doc['n_spectra']} spectra ({doc['lines']}), "
-        f"sessions {', '.join(doc['sessions'])}; times TDB (barycentric)"
+        f"sessions {names}; times TDB (barycentric)"
     )
     console.print(_quantity_table(doc))
     if "wil41" in doc:
@@ -401,7 +416,9 @@ def print_report(doc: dict[str, Any], console: Any) -> None:
     console.print(_light_time_line(doc["light_time"]))
     dr = doc["drifts"]
     if dr["pairs"]:
-        console.print(_pairs_table(dr["pairs"]))
+        console.print(_pairs_table(dr["pairs"][:MAX_TERMINAL_ROWS]))
+        if len(dr["pairs"]) > MAX_TERMINAL_ROWS:
+            console.print(_more(len(dr["pairs"]), "fixed-u pairs"))
     for k in ("a_los", "fdot_acc", "fdot_remainder"):
         if k in dr:
             console.print(f"{k}: {_fmt(dr[k])}")

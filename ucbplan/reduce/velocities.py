@@ -38,6 +38,7 @@ from __future__ import annotations
 import csv
 import dataclasses
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -325,18 +326,25 @@ def read_velocities(path: Path | str) -> VelocityTable:
         non-finite or out-of-range values, no rows; one line naming the row and column.
     """
     path = Path(path)
-    if path.suffix.lower() == ".ecsv":
-        header, colmap, rownums = _read_ecsv(path)
+    fast = None if path.suffix.lower() == ".ecsv" else _fast_csv(path)
+    if fast is not None:
+        header, num, colmap, rownums = fast
+        tcol, comps = _check_header(path, header)
     else:
-        header, colmap, rownums = _csv_columns(path)
-    tcol, comps = _check_header(path, header)
-    if not rownums:
-        raise VelocityFileError(f"{path}: no data rows; add one line per spectrum")
-    num = {
-        h: np.array([_parse_float(path, r, h, x) for r, x in zip(rownums, colmap[h], strict=True)])
-        for h in header
-        if h != "session"
-    }
+        if path.suffix.lower() == ".ecsv":
+            header, colmap, rownums = _read_ecsv(path)
+        else:
+            header, colmap, rownums = _csv_columns(path)
+        tcol, comps = _check_header(path, header)
+        if not rownums:
+            raise VelocityFileError(f"{path}: no data rows; add one line per spectrum")
+        num = {
+            h: np.array(
+                [_parse_float(path, r, h, x) for r, x in zip(rownums, colmap[h], strict=True)]
+            )
+            for h in header
+            if h != "session"
+        }
     _check_ranges(path, num, comps, rownums)
     jd = num[tcol] + _TIME_COLS[tcol]
     scale = "utc" if tcol.endswith("_utc") else "tdb"
@@ -353,6 +361,16 @@ def read_velocities(path: Path | str) -> VelocityTable:
         site_utc=scale == "utc",
         window_column=next(h for h in ("exptime_s", "window_s", "lambda_k") if h in num),
     )
+
+
+def _fast_csv(
+    path: Path,
+) -> tuple[list[str], dict[str, F64], dict[str, list[object]], Sequence[int]] | None:
+    """The columnar reading of a CSV (:func:`ucbplan.reduce.columnar.read_columns`), or None
+    when the strict reader must read it."""
+    from ucbplan.reduce.columnar import read_columns
+
+    return read_columns(path, KNOWN_COLUMNS)
 
 
 def _csv_columns(path: Path) -> tuple[list[str], dict[str, list[object]], list[int]]:
@@ -382,7 +400,7 @@ _WINDOW_RANGES = (
 
 
 def _check_ranges(
-    path: Path, num: dict[str, F64], comps: tuple[str, ...], rownums: list[int]
+    path: Path, num: dict[str, F64], comps: tuple[str, ...], rownums: Sequence[int]
 ) -> None:
     """Times in range, positive σ_v, |v| < c and windows in range; names the first bad row."""
     for h, (lo, hi) in _TIME_RANGE.items():
@@ -425,7 +443,7 @@ def _check_ranges(
 
 
 def _sessions(
-    path: Path, colmap: dict[str, list[object]], rownums: list[int], jd: F64
+    path: Path, colmap: dict[str, list[object]], rownums: Sequence[int], jd: F64
 ) -> tuple[str, ...]:
     """Session labels from the column (non-empty) or from gaps in time (:func:`_auto_sessions`)."""
     if "session" not in colmap:
@@ -442,15 +460,11 @@ def _sessions(
 def _auto_sessions(jd: F64) -> tuple[str, ...]:
     """Label spectra by gaps > :data:`SESSION_GAP_S` in time order ("S1", "S2", …)."""
     order = np.argsort(jd, kind="stable")
-    labels = np.empty(jd.size, dtype=object)
-    k = 1
-    prev = None
-    for i in order:
-        if prev is not None and (jd[i] - prev) * 86400.0 > SESSION_GAP_S:
-            k += 1
-        labels[i] = f"S{k}"
-        prev = jd[i]
-    return tuple(str(s) for s in labels)
+    gaps = np.diff(jd[order]) * 86400.0 > SESSION_GAP_S
+    number = np.empty(jd.size, dtype=np.int64)
+    number[order] = 1 + np.concatenate([[0], np.cumsum(gaps)])
+    names = [f"S{k}" for k in range(1, int(number.max(initial=1)) + 1)]
+    return tuple(names[k - 1] for k in number.tolist())
 
 
 def to_barycentric(table: VelocityTable, coord: SkyCoord, location: EarthLocation) -> VelocityTable:

@@ -1,0 +1,256 @@
+"""Issue 23's throughput rows, each in CPU seconds against the fixed numpy workload.
+
+- population forecast, serial, per source (300 LDC-style sources minus the face-on first one):
+  goal ≤ 4 ms per source at the reference machine (``_workload.REFERENCE_S``), i.e. ≤ 0.0136 ×
+  the workload; 10⁴ sources then take ≤ 40 s there;
+- ``ucbplan horizon`` of many target files with ``--format json``: the marginal cost per target
+  above reading its YAML (two CLI runs of N and N/4 targets, minus the reading of the extra
+  targets timed in this process), goal ≤ 50 µs at the reference machine;
+- ``ucbplan reduce`` of 10⁶ spectra (CSV in, JSON out) through the CLI in a fresh process: goal
+  ≤ 12 × the workload in CPU seconds, and ≤ 1 GB peak resident memory.
+
+CPU seconds, not wall time: the machine is shared by other sessions, and time slices lost to
+them count in neither the path nor the workload (see ``benchmarks/_workload.py``). Wall times
+are in the notes. Usage: ``python benchmarks/throughput.py [--quick]`` or
+``python -m benchmarks --only throughput``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(ROOT))
+
+from _workload import REFERENCE_S, bracketed, children_cpu_s, workload_s  # noqa: E402
+
+GOAL_SOURCE_S = 0.004
+GOAL_TARGET_S = 50e-6
+GOAL_REDUCE_X, GOAL_REDUCE_MB = 12.0, 1024.0
+
+
+def _peak_mb() -> float:
+    """Peak resident memory of this process so far [MB]."""
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
+def _at_reference(cpu_s: float, work_s: float) -> float:
+    """A CPU time here as the time it takes on the reference machine [s]."""
+    return cpu_s / work_s * REFERENCE_S
+
+
+def population_row(tmp: Path) -> dict[str, object]:
+    """Serial population forecast of 299 sources (the face-on first row left out)."""
+    from make_population_catalog import make
+
+    from ucbplan.offline import configure_offline
+    from ucbplan.population.catalog import read_catalog
+    from ucbplan.population.forecast import ForecastOptions, forecast_chunk
+
+    configure_offline()
+    path = tmp / "cat300.ecsv"
+    make(300, 13).write(path, format="ascii.ecsv")
+    sources = read_catalog(path).sources[1:]
+    opts = ForecastOptions(sigma_v_kms=15.0)
+    forecast_chunk(opts, sources[:3])  # imports and caches
+    cpu, wall, work, rows = bracketed(lambda: forecast_chunk(opts, sources), 2)
+    n = len(sources)
+    per = _at_reference(cpu / n, work)
+    ok = sum(r["status"] == "ok" for r in rows)
+    return {
+        "name": f"population forecast, serial, per source ({n} LDC-style sources)",
+        "value": 1e3 * per,
+        "unit": "ms/source at the reference",
+        "ratio": work / (cpu / n),
+        "peer": f"numpy workload ({work:.3f} CPU s here; ratio = sources per workload)",
+        "goal": f"≤ {1e3 * GOAL_SOURCE_S:g} ms (10⁴ sources ≤ 40 s)",
+        "met": bool(per <= GOAL_SOURCE_S),
+        "peak_mb": _peak_mb(),
+        "note": f"{1e3 * cpu / n:.2f} CPU ms/source here ({1e3 * wall / n:.2f} ms wall), "
+        f"{ok} ok; 10⁴ sources ≈ {1e4 * per:.0f} s at the reference",
+    }
+
+
+def _target_files(folder: Path, n: int) -> list[Path]:
+    """``n`` LISA target files (HM Cnc with the name and ṗhase varied so each is its own)."""
+    text = (ROOT / "catalogs" / "hm-cnc-simulated.yaml").read_text(encoding="utf-8")
+    folder.mkdir()
+    out = []
+    for i in range(n):
+        p = folder / f"t{i:05d}.yaml"
+        p.write_text(text.replace("name: HM Cnc (simulated)", f"name: T{i:05d}"), "utf-8")
+        out.append(p)
+    return out
+
+
+#: Runs ``ucbplan`` as ``python -m ucbplan`` does and prints its own peak resident memory last:
+#: VmHWM of its address space, new at exec (ru_maxrss survives exec on Linux, so it would count
+#: the forked copy of this benchmark process).
+_PEAK = (
+    "import runpy, sys\n"
+    "sys.argv = ['ucbplan', *sys.argv[1:]]\n"
+    "try:\n"
+    "    runpy.run_module('ucbplan', run_name='__main__')\n"
+    "finally:\n"
+    "    hwm = [ln for ln in open('/proc/self/status') if ln.startswith('VmHWM')]\n"
+    "    print('PEAK-KB', hwm[0].split()[1], file=sys.stderr)\n"
+)
+
+
+def _cli_cpu(args: list[str]) -> tuple[float, float, float]:
+    """(CPU s, wall s, peak resident MB) of ``python -m ucbplan ARGS`` in a fresh process."""
+    c0, w0 = children_cpu_s(), time.perf_counter()
+    res = subprocess.run(
+        [sys.executable, "-c", _PEAK, *args],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        env=os.environ | {"PYTHONPATH": str(ROOT)},
+        check=False,
+    )
+    if res.returncode != 0:
+        raise RuntimeError(f"ucbplan {args[0]} failed: {res.stderr.strip()[-300:]}")
+    peak = [ln for ln in res.stderr.splitlines() if ln.startswith("PEAK-KB ")]
+    return children_cpu_s() - c0, time.perf_counter() - w0, float(peak[-1].split()[1]) / 1024.0
+
+
+def _horizon_cli(files: list[Path], out: Path) -> tuple[float, float, float]:
+    """(CPU s of the whole command, CPU s inside the YAML reading, wall s) of
+    ``ucbplan horizon FILES… --format json -o OUT`` run in this process."""
+    import ucbplan.target
+    from ucbplan.cli.app import app
+
+    real = ucbplan.target.load_targets
+    spent = [0.0]
+
+    def timed(path: Path) -> object:
+        c0 = time.process_time()
+        try:
+            return real(path)
+        finally:
+            spent[0] += time.process_time() - c0
+
+    ucbplan.target.load_targets = timed  # type: ignore[assignment]
+    try:
+        c0, w0 = time.process_time(), time.perf_counter()
+        app(
+            ["horizon", *map(str, files), "--format", "json", "-o", str(out)], standalone_mode=False
+        )
+        return time.process_time() - c0, spent[0], time.perf_counter() - w0
+    finally:
+        ucbplan.target.load_targets = real  # type: ignore[assignment]
+
+
+def horizon_row(tmp: Path, n: int) -> dict[str, object]:
+    """CPU per target of ``horizon FILES… --format json`` above reading the YAML files."""
+    from ucbplan.offline import configure_offline
+
+    configure_offline()
+    files = _target_files(tmp / "targets", n)
+    _horizon_cli(files[:4], tmp / "warm.json")  # imports
+    work = workload_s()
+    runs = [_horizon_cli(files, tmp / f"h{k}.json") for k in range(2)]
+    work = min(work, workload_s())
+    total, load, wall = min(runs, key=lambda r: r[0] - r[1])
+    per = (total - load) / n
+    ref = _at_reference(per, work)
+    return {
+        "name": f"horizon, {n:,} target files, --format json: per target above reading its YAML",
+        "value": 1e6 * ref,
+        "unit": "µs/target at the reference",
+        "ratio": (load / n) / per,
+        "peer": f"reading one target file ({1e6 * load / n:.0f} CPU µs here)",
+        "goal": f"≤ {1e6 * GOAL_TARGET_S:g} µs/target",
+        "met": bool(ref <= GOAL_TARGET_S),
+        "peak_mb": _peak_mb(),
+        "note": f"the CLI command in this process: {total:.2f} CPU s ({wall:.1f} s wall), "
+        f"{load:.2f} of them reading the YAML; {1e6 * per:.0f} CPU µs/target here above it; "
+        f"workload {work:.3f} CPU s",
+    }
+
+
+def _velocity_csv(path: Path, n: int) -> None:
+    """``n`` exact-Kepler SB2 spectra of the fiducial eccentric target as a CSV file."""
+    import numpy as np
+    from reduce_scaling import make_table
+
+    from ucbplan.target import load_target
+
+    tab = make_table(load_target(ROOT / "catalogs" / "fiducial-eccentric.yaml"), n)
+    jd = tab.time.tdb.jd1 + tab.time.tdb.jd2
+    cols = np.column_stack([jd, tab.window_s, tab.v[0], tab.sigma[0], tab.v[1], tab.sigma[1]])
+    with path.open("w", encoding="utf-8") as fh:
+        fh.write("bjd_tdb,exptime_s,v1,sigma_v1,v2,sigma_v2\n")
+        fmt = ["%.10f", "%.3f", "%.4f", "%.2f", "%.4f", "%.2f"]
+        np.savetxt(fh, cols, fmt=fmt, delimiter=",")
+
+
+def reduce_row(tmp: Path, n: int) -> dict[str, object]:
+    """``ucbplan reduce TARGET CSV --format json -o OUT`` in a fresh process: CPU and peak."""
+    from ucbplan.offline import configure_offline
+
+    configure_offline()
+    csv = tmp / "velocities.csv"
+    _velocity_csv(csv, n)
+    target = str(ROOT / "catalogs" / "fiducial-eccentric.yaml")
+    args = ["reduce", target, str(csv), "--format", "json", "--seed", "1"]
+    work = workload_s()
+    cpu, wall, peak = min(_cli_cpu([*args, "-o", str(tmp / f"r{k}.json")]) for k in range(2))
+    work = min(work, workload_s())
+    x = cpu / work
+    scaled = "" if n == 1_000_000 else "; the goal is judged at 10⁶ spectra (full mode)"
+    return {
+        "name": f"reduce through the CLI, {n:,} spectra (CSV in, JSON out)",
+        "value": x,
+        "unit": "× the workload (CPU)",
+        "ratio": 1.0 / x,
+        "peer": f"numpy workload ({work:.3f} CPU s here)",
+        "goal": f"≤ {GOAL_REDUCE_X:g}× the workload (≈ 3.5 s at the reference), "
+        f"≤ {GOAL_REDUCE_MB / 1024:g} GB",
+        "met": bool(x <= GOAL_REDUCE_X and peak <= GOAL_REDUCE_MB) if n == 1_000_000 else None,
+        "peak_mb": peak,
+        "note": f"{cpu:.2f} CPU s ({wall:.1f} s wall), ≈ {_at_reference(cpu, work):.1f} s at "
+        f"the reference, peak resident memory {peak:.0f} MB (of the CLI process){scaled}",
+    }
+
+
+def rows(quick: bool) -> list[dict[str, object]]:
+    """Population per source, horizons per target, reduce of 10⁶ spectra (10⁵ quick)."""
+    with tempfile.TemporaryDirectory() as d:
+        tmp = Path(d)
+        return [
+            population_row(tmp),
+            horizon_row(tmp, 800 if quick else 2000),
+            reduce_row(tmp, 100_000 if quick else 1_000_000),
+        ]
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="smaller runs, for CI")
+    ap.add_argument("--only", default="population,horizon,reduce", help="rows to run")
+    args = ap.parse_args()
+    with tempfile.TemporaryDirectory() as d:
+        tmp = Path(d)
+        out = []
+        if "population" in args.only:
+            out.append(population_row(tmp))
+        if "horizon" in args.only:
+            out.append(horizon_row(tmp, 800 if args.quick else 2000))
+        if "reduce" in args.only:
+            out.append(reduce_row(tmp, 100_000 if args.quick else 1_000_000))
+    for r in out:
+        print(f"{r['name']}: {r['value']:.4g} {r['unit']}; goal {r['goal']}; met {r['met']}")
+        print(f"    {r['note']}")
+
+
+if __name__ == "__main__":
+    main()
