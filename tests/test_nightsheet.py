@@ -304,7 +304,7 @@ def test_html_sheet_is_self_contained_and_says_what_to_do(
         assert len(tell) == 2
         start = Time(first, scale="utc") + 0.5 * u.s  # HH:MM:SS rounded to the second
         sigma = max(rows["sigma_t_s"])
-        assert tell[0] == f"Acquire by {start.isot[11:19]} UTC, then 2 × 60 s with 0 s readout."
+        assert tell[0] == f"Acquire by {start.isot[11:19]} UTC, then 2 × 60 s."  # no readout
         assert tell[1].startswith(f"Starts are phase-critical ±{sigma:.2g} s: start each exposure")
         assert len(visit["rows"]) == len(rows)  # one row per exposure (n_exp = 1 here)
         for cell_row, row in zip(visit["rows"], rows, strict=True):
@@ -449,3 +449,17 @@ def test_night_without_darkness_spans_the_whole_day() -> None:
     assert "sunset" not in fig.axes[0].get_title()
     assert layout_problems(fig) == []  # 2-hourly ticks over 24 h
     pyplot().close(fig)
+
+
+def test_instruction_of_a_one_hour_visit(telescope_plan: Path, site: Site) -> None:
+    """The issue's plan: 'acquire by, then N × T s with R s readout', N counting exposures."""
+    plan = read_blocks(telescope_plan)
+    visit = group_visits(plan, site)["2040-02-15"][0]
+    rows = plan[plan["visit_id"] == visit.visit_id]
+    t = float(rows["exptime_s"][0])
+    shown = f"{t:.0f}" if abs(t - round(t)) < 1e-3 else f"{t:.1f}"  # whole seconds when whole
+    first, second = nightsheet.visit_instruction(visit_exposures(visit, plan.meta))
+    start = (Time(visit.start_utc, scale="utc") + 0.5 * u.s).isot[11:19]
+    n = int(np.sum(rows["n_exp"]))
+    assert first == f"Acquire by {start} UTC, then {n} × {shown} s with 45 s readout."
+    assert second.startswith(f"Starts are phase-critical ±{max(rows['sigma_t_s']):.2g} s")

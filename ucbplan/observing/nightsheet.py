@@ -119,11 +119,11 @@ def visit_instruction(exposures: Sequence[Exposure]) -> tuple[str, str]:
     first = exposures[0]
     times = sorted({seconds_text(e.exptime_s) for e in exposures}, key=float)
     each = times[0] if len(times) == 1 else f"{times[0]}–{times[-1]}"
-    readout = seconds_text(max(e.readout_s for e in exposures))
+    dead = max(e.readout_s for e in exposures)
+    readout = f" with {seconds_text(dead)} s readout" if dead > 0 else ""
     sigma = max(e.sigma_t_s for e in exposures)
     return (
-        f"Acquire by {hms(first.start)} UTC, then {len(exposures)} × {each} s with {readout} s "
-        "readout.",
+        f"Acquire by {hms(first.start)} UTC, then {len(exposures)} × {each} s{readout}.",
         f"Starts are phase-critical ±{sigma:.2g} s: start each exposure at its UTC time below; "
         "a missed start is skipped, never made up late.",
     )
