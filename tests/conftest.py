@@ -24,6 +24,13 @@ if "UCBPLAN_CACHE_DIR" not in os.environ:
 
     os.environ["UCBPLAN_CACHE_DIR"] = tempfile.mkdtemp(prefix="ucbplan-test-cache-")
 
+# The tests do not depend on the terminal they run in: no inherited width (pytest-xdist workers
+# inherit the COLUMNS/LINES that readline exported in the parent). A test that wants a width sets
+# COLUMNS itself (tests/test_screen_100_columns.py). Done before any test imports the CLI, whose
+# console reads the width once.
+for _name in ("COLUMNS", "LINES"):
+    os.environ.pop(_name, None)
+
 ROOT = Path(__file__).resolve().parents[1]
 CATALOGS = ROOT / "catalogs"
 

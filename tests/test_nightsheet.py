@@ -27,6 +27,7 @@ from ucbplan.errors import InputError, OutputExistsError
 from ucbplan.observing import nightplot, nightsheet
 from ucbplan.observing.blocktable import read_blocks
 from ucbplan.observing.constraints import AirmassConstraint, ConstraintSet
+from ucbplan.observing.countdown import visit_exposures
 from ucbplan.observing.nightplot import (
     chart_figure,
     group_visits,
@@ -180,37 +181,65 @@ def test_too_many_nights_for_one_image(
 
 
 class _Reader(HTMLParser):
-    """Collects tags, attributes and text of each <section>."""
+    """Reads a night sheet (the written file or a browser's DOM dump): per <section> its h2,
+    images and visits (h3, the assistant's lines, rows with their attributes and cells), and the
+    text and attributes of every element with an id (the clock)."""
 
     def __init__(self) -> None:
         super().__init__()
         self.sections: list[dict[str, Any]] = []
         self.urls: list[str] = []
-        self._cell: list[str] | None = None
+        self.ids: dict[str, dict[str, Any]] = {}
+        self._text: list[str] | None = None
+        self._open: list[tuple[str, str | None]] = []
 
     def handle_starttag(self, tag: str, attrs: list[tuple[str, str | None]]) -> None:
-        a = dict(attrs)
+        a = {k: v or "" for k, v in attrs}
+        if tag == "br":
+            if self._text is not None:
+                self._text.append("\n")
+            return
         self.urls += [v or "" for k, v in attrs if k in ("src", "href")]
+        if "id" in a:
+            self.ids[a["id"]] = {"attrs": a, "text": ""}
+        if tag not in ("br", "img", "meta"):
+            self._open.append((tag, a.get("id")))
         if tag == "section":
-            self.sections.append({"h2": "", "img": [], "rows": [], "text": ""})
-        elif tag == "img":
+            self.sections.append({"h2": "", "img": [], "visits": []})
+        elif tag == "img" and self.sections:
             self.sections[-1]["img"].append(a.get("src", ""))
-        elif tag == "tr":
-            self.sections[-1]["rows"].append([])
-        elif tag in ("td", "h2"):
-            self._cell = []
+        elif tag == "h3":
+            self.sections[-1]["visits"].append({"h3": "", "tell": [], "about": "", "rows": []})
+        elif tag == "tr" and "data-start" in a:
+            self.sections[-1]["visits"][-1]["rows"].append({"attrs": a, "cells": []})
+        if tag in ("td", "h2", "h3") or (tag == "p" and self.sections):
+            self._text = []
 
     def handle_endtag(self, tag: str) -> None:
-        if tag == "td" and self._cell is not None:
-            self.sections[-1]["rows"][-1].append("".join(self._cell))
-        if tag == "h2" and self._cell is not None:
-            self.sections[-1]["h2"] = "".join(self._cell)
-        if tag in ("td", "h2"):
-            self._cell = None
+        if self._open and self._open[-1][0] == tag:
+            self._open.pop()
+        if self._text is None:
+            return
+        text = "".join(self._text)
+        visits = self.sections[-1]["visits"] if self.sections else []
+        if tag == "td" and visits and visits[-1]["rows"]:
+            visits[-1]["rows"][-1]["cells"].append(text)
+        elif tag == "h2":
+            self.sections[-1]["h2"] = text
+        elif tag == "h3":
+            visits[-1]["h3"] = text
+        elif tag == "p" and visits:
+            key = "tell" if visits[-1]["about"] else "about"
+            visits[-1][key] = text.split("\n") if key == "tell" else text
+        if tag in ("td", "h2", "h3", "p"):
+            self._text = None
 
     def handle_data(self, data: str) -> None:
-        if self._cell is not None:
-            self._cell.append(data)
+        if self._text is not None:
+            self._text.append(data)
+        for _, ident in self._open:
+            if ident is not None:
+                self.ids[ident]["text"] += data
 
 
 def test_night_events_against_astropy_altaz(table: Table, site: Site) -> None:
@@ -251,30 +280,54 @@ def test_night_events_against_astropy_altaz(table: Table, site: Site) -> None:
 def test_html_sheet_is_self_contained_and_says_what_to_do(
     table: Table, site: Site, tmp_path: Path
 ) -> None:
+    """Per night the chart, per visit a heading, two lines for the assistant and one row per
+    exposure whose start, end and anchor are the blocks table's (read back with html.parser)."""
     path = tmp_path / "night.html"
     assert write_night_sheet(table, site, path) == 3
+    text = path.read_text(encoding="utf-8")
     reader = _Reader()
-    reader.feed(path.read_text(encoding="utf-8"))
+    reader.feed(text)
     assert [s["h2"] for s in reader.sections] == [f"Paranal, night of {n}" for n in NIGHTS]
     assert all(u.startswith("data:image/png;base64,") for u in reader.urls)  # no network
+    assert "<script src" not in text and "http" not in text.split("<body>")[1].split("<img")[0]
     for night, section in zip(NIGHTS, reader.sections, strict=True):
         (img,) = section["img"]
         assert base64.b64decode(img.split(",", 1)[1])[:4] == b"\x89PNG"
-        visits = [r for r in section["rows"] if r]
-        assert len(visits) == 1
-        number, visit_id, target, start, end, sequence, tell = visits[0]
+        (visit,) = section["visits"]
         rows = table[table["night"] == night]
+        first = str(min(rows["t_start_utc"]))
         key = "visit_id" if "visit_id" in rows.colnames else "session_id"  # planner's visit id
-        assert visit_id == rows[key][0] and target == "HM Cnc (simulated)"
-        first, last = str(min(rows["t_start_utc"])), str(max(rows["t_end_utc"]))
-        assert number == "1"
-        assert start == f"{first[:10]} {first[11:19]} UTC"  # date, time and scale
-        assert end == f"{last[:10]} {last[11:19]} UTC"
-        for row in rows:
-            assert f"anchor quadrature (u★ = {row['u_star_rad']:.3f} rad)" in sequence
-            assert str(row["t_mid_utc"])[11:19] in tell
-        assert f"RA {rows['ra_hms'][0]}, Dec {rows['dec_dms'][0]} (ICRS)" in tell
-        assert "1 × 60 s" in tell and f"by {start}" in tell
+        short = str(rows[key][0]).rsplit("-", 1)[-1]
+        assert visit["h3"] == f"Visit 1: HM Cnc (simulated) ({short}), {first[:10]} UTC"
+        assert f"RA {rows['ra_hms'][0]}, Dec {rows['dec_dms'][0]} (ICRS)" in visit["about"]
+        tell = visit["tell"]
+        assert len(tell) == 2
+        start = Time(first, scale="utc") + 0.5 * u.s  # HH:MM:SS rounded to the second
+        sigma = max(rows["sigma_t_s"])
+        assert tell[0] == f"Acquire by {start.isot[11:19]} UTC, then 2 × 60 s."  # no readout
+        assert tell[1].startswith(f"Starts are phase-critical ±{sigma:.2g} s: start each exposure")
+        assert len(visit["rows"]) == len(rows)  # one row per exposure (n_exp = 1 here)
+        for cell_row, row in zip(visit["rows"], rows, strict=True):
+            _, begin, end, anchor, airmass, lam, sig, status = cell_row["cells"]
+            t0 = Time(str(row["t_start_utc"]), scale="utc")
+            assert begin == (t0 + 0.5 * u.s).isot[11:19]
+            assert end == (t0 + (float(row["exptime_s"]) + 0.5) * u.s).isot[11:19]
+            assert anchor.startswith(f"quadrature u★={row['u_star_rad']:.3f} (")
+            assert str(row["t_mid_utc"])[11:19] in anchor
+            assert (airmass, lam) == (f"{row['airmass']:.2f}", f"{row['lambda_k']:.3f}")
+            assert sig == f"{row['sigma_t_s']:.2g}" and status == ""  # filled by the clock
+            assert int(cell_row["attrs"]["data-start"]) == round(t0.unix * 1000)
+
+
+def test_html_sheet_prints_a_page_per_night_in_portrait(
+    table: Table, site: Site, tmp_path: Path
+) -> None:
+    path = tmp_path / "night.html"
+    write_night_sheet(table, site, path)
+    text = path.read_text(encoding="utf-8")
+    assert "@page{size:portrait" in text  # A4 or Letter, whichever the printer has
+    assert "section.night{break-before:page}" in text
+    assert "@media print{#clock,.status{display:none}" in text  # no stale clock on paper
 
 
 def test_pdf_sheet_has_one_page_per_night(table: Table, site: Site, tmp_path: Path) -> None:
@@ -299,10 +352,21 @@ def test_pdf_sheet_continues_a_long_night_on_more_pages(
         head
         + len(nightsheet._wrap(nightsheet.sky_line(c, site)))
         + 1
-        + len(nightsheet._text_lines(c))
+        + len(nightsheet._text_lines(c, table.meta))
         for c in night_chart(table, site)
     ]
     assert _pdf_pages(path) == sum(1 + int(np.ceil((n - 2) / 3)) for n in lines)
+
+
+def test_pdf_text_has_a_row_per_exposure(table: Table, site: Site) -> None:
+    for chart in night_chart(table, site):
+        text = nightsheet._text_lines(chart, table.meta)
+        (visit,) = chart.visits
+        for row in visit.rows:
+            start = (Time(str(row["t_start_utc"]), scale="utc") + 0.5 * u.s).isot[11:19]
+            rows = [line.split() for line in text if re.match(r"^  V\d+/\d+ ", line)]
+            assert sum(1 for cells in rows if cells[1] == start) == 1
+        assert all(len(line) <= nightsheet._WIDTH for line in text)
 
 
 def _crowded(table: Table, n: int) -> Table:
@@ -325,7 +389,7 @@ def test_pdf_pages_of_a_crowded_night_are_laid_out(table: Table, site: Site) -> 
     text of any page overprinting another or leaving the page."""
     crowded = _crowded(table, 12)
     (chart,) = night_chart(crowded, site)
-    pages = nightsheet._pdf_pages(chart, site, None, nightsheet.plan_note(crowded))
+    pages = nightsheet._pdf_pages(chart, site, None, nightsheet.plan_note(crowded), crowded.meta)
     assert len(pages) >= 2
     for fig in pages:
         assert layout_problems(fig) == []
@@ -337,11 +401,14 @@ def test_instruction_with_acquisition_time_and_magnitude(table: Table, site: Sit
     rich["acq_s"] = 300.0
     rich["vmag"] = 13.94
     visit = group_visits(rich, site)[NIGHTS[0]][0]
+    exposures = visit_exposures(visit, rich.meta)
     start = Time(visit.start_utc, scale="utc")
-    acquire = (start - 300 * u.s).isot  # independent: astropy's own time arithmetic
-    text = nightsheet.visit_instruction(visit)
-    assert f"Start acquiring at {acquire[:10]} {acquire[11:19]} UTC (5 min acquisition)" in text
-    assert "V = 13.9 mag" in text
+    acquire = (start - 299.5 * u.s).isot  # independent: astropy's own time arithmetic, rounded
+    about = nightsheet.visit_about(visit, exposures)
+    assert f"acquisition starts {acquire[11:19]} UTC" in about
+    assert "V = 13.9 mag" in about
+    first, _ = nightsheet.visit_instruction(exposures)
+    assert first.startswith(f"Acquire by {(start + 0.5 * u.s).isot[11:19]} UTC, then 2 × 60 s")
 
 
 @pytest.mark.parametrize(
@@ -382,3 +449,17 @@ def test_night_without_darkness_spans_the_whole_day() -> None:
     assert "sunset" not in fig.axes[0].get_title()
     assert layout_problems(fig) == []  # 2-hourly ticks over 24 h
     pyplot().close(fig)
+
+
+def test_instruction_of_a_one_hour_visit(telescope_plan: Path, site: Site) -> None:
+    """The issue's plan: 'acquire by, then N × T s with R s readout', N counting exposures."""
+    plan = read_blocks(telescope_plan)
+    visit = group_visits(plan, site)["2040-02-15"][0]
+    rows = plan[plan["visit_id"] == visit.visit_id]
+    t = float(rows["exptime_s"][0])
+    shown = f"{t:.0f}" if abs(t - round(t)) < 1e-3 else f"{t:.1f}"  # whole seconds when whole
+    first, second = nightsheet.visit_instruction(visit_exposures(visit, plan.meta))
+    start = (Time(visit.start_utc, scale="utc") + 0.5 * u.s).isot[11:19]
+    n = int(np.sum(rows["n_exp"]))
+    assert first == f"Acquire by {start} UTC, then {n} × {shown} s with 45 s readout."
+    assert second.startswith(f"Starts are phase-critical ±{max(rows['sigma_t_s']):.2g} s")

@@ -14,11 +14,12 @@ import time
 from collections.abc import Callable, Sequence
 from datetime import UTC, datetime, timedelta
 from pathlib import Path
-from typing import TextIO
+from typing import TYPE_CHECKING, TextIO
 
 import typer
 
-from ucbplan.observing.countdown import Exposure, countdown_lines, parse_utc, what_next
+if TYPE_CHECKING:
+    from ucbplan.observing.countdown import Exposure
 
 __all__ = ["live", "register"]
 
@@ -44,6 +45,8 @@ def live(
     another stream gets a frame when the next exposure changes. ``monotonic`` and ``sleep``
     default to :mod:`time`'s, looked up at call time (tests replace them).
     """
+    from ucbplan.observing.countdown import countdown_lines, what_next
+
     monotonic = monotonic or time.monotonic
     sleep = sleep or time.sleep
     wall = wall or (lambda: datetime.now(UTC))
@@ -77,12 +80,18 @@ def now(
 ) -> None:
     """At the telescope: the next exposure start (UTC) and the wait, refreshed every second.
 
-    Shows the current UTC, the exposure that should be running, the next one (target, visit/
-    exposure, anchor, start HH:MM:SS UTC and "in 2 min 13 s"), the one after, and what to do
-    if the previous start was missed. After the last exposure it says the plan is over.
+    Shows the current UTC, the exposure that should be running, the next one (target,
+    visit/exposure, anchor, start HH:MM:SS UTC and "in 2 min 13 s"), the one after, and what
+    to do if the previous start was missed. After the last exposure it says the plan is over.
     """
+    # imported here: `ucbplan --help` must not load astropy (tests/test_cli_help_units.py)
     from ucbplan.observing.blocktable import read_blocks
-    from ucbplan.observing.countdown import plan_exposures
+    from ucbplan.observing.countdown import (
+        countdown_lines,
+        parse_utc,
+        plan_exposures,
+        what_next,
+    )
 
     origin = parse_utc(at, "--at") if at is not None else None
     exposures = plan_exposures(read_blocks(plan))

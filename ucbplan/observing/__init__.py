@@ -7,7 +7,9 @@ name), ``blocks`` (exposure plan around an anchor epoch), ``schedule`` (modes, c
 placement, fixed-u pairs: the night schedule), ``blocktable`` (the master blocks table every
 export reads, its columns declared once), ``exports`` (observatory formats), ``instruments`` and
 ``goals`` (overheads, σ_v per exposure, spectra a precision needs), ``semesters``, ``nightplot``
-and ``nightsheet`` (charts and the telescope's night sheet) and ``astroplan_bridge``.
+and ``nightsheet`` with ``sheet_html`` (charts and the telescope's night sheet), ``countdown``
+(every exposure of a plan and what is next at an instant: ``ucbplan now``) and
+``astroplan_bridge``.
 Nothing is imported here so that ``import ucbplan.observing`` stays cheap.
 """
 

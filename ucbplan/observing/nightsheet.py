@@ -80,6 +80,13 @@ def _cell(row: Any, name: str) -> float | None:
     return value if np.isfinite(value) else None
 
 
+def _text(row: Any, name: str) -> str:
+    """A text cell, empty when the column is absent or masked."""
+    if name not in row.colnames or np.ma.is_masked(row[name]):
+        return ""
+    return str(row[name]).strip()
+
+
 def visit_heading(number: int, visit: Visit, exposures: Sequence[Exposure]) -> str:
     """``Visit 1: HM Cnc (V01), 2040-02-16 UTC``: number in the night, target, visit, UTC date."""
     short = exposures[0].label.split("/")[0]
@@ -98,9 +105,11 @@ def visit_about(visit: Visit, exposures: Sequence[Exposure]) -> str:
     first, last = exposures[0], exposures[-1]
     acq = first.acq_start
     acq_text = f"acquisition starts {hms(acq)} UTC; " if acq is not None else ""
+    local = _text(row, "t_start_local")
+    local = f" (local {local[11:16]})" if len(local) >= 16 else ""
     return (
         f"RA {ra}, Dec {dec} (ICRS){mag}; {acq_text}first exposure starts "
-        f"{hms(first.start)} UTC, last ends {hms(last.end)} UTC"
+        f"{hms(first.start)} UTC{local}, last ends {hms(last.end)} UTC"
     )
 
 
@@ -110,11 +119,11 @@ def visit_instruction(exposures: Sequence[Exposure]) -> tuple[str, str]:
     first = exposures[0]
     times = sorted({seconds_text(e.exptime_s) for e in exposures}, key=float)
     each = times[0] if len(times) == 1 else f"{times[0]}–{times[-1]}"
-    readout = seconds_text(max(e.readout_s for e in exposures))
+    dead = max(e.readout_s for e in exposures)
+    readout = f" with {seconds_text(dead)} s readout" if dead > 0 else ""
     sigma = max(e.sigma_t_s for e in exposures)
     return (
-        f"Acquire by {hms(first.start)} UTC, then {len(exposures)} × {each} s with {readout} s "
-        "readout.",
+        f"Acquire by {hms(first.start)} UTC, then {len(exposures)} × {each} s{readout}.",
         f"Starts are phase-critical ±{sigma:.2g} s: start each exposure at its UTC time below; "
         "a missed start is skipped, never made up late.",
     )

@@ -87,7 +87,7 @@ background:#ffd}
 #clock{position:sticky;top:0;background:#fff;border:2px solid #000;padding:4px 8px;
 margin:4px 0;font-size:14pt;z-index:1}
 #utc,#countdown{font-size:20pt;font-weight:bold;font-variant-numeric:tabular-nums}
-#rehearsal{color:#a00;font-weight:bold;margin-right:1em}#advice{font-size:12pt}
+#rehearsal{display:block;color:#a00;font-weight:bold;font-size:11pt}#rehearsal:empty{display:none}#advice{font-size:12pt}
 section.night{break-before:page}section.night:first-of-type{break-before:auto}
 .visit{break-inside:avoid-page}tr{break-inside:avoid}thead{display:table-header-group}
 @page{size:portrait;margin:12mm}
