@@ -16,6 +16,8 @@ from rich.markup import escape
 from ucbplan.cli._console import check_output_path, configure_offline, err_console, write_output
 from ucbplan.errors import InputError, UcbplanError
 from ucbplan.io import output_format
+from ucbplan.lisa import MAX_N_BINS as MAX_BINS
+from ucbplan.lisa import MIN_T_OBS_S
 
 if TYPE_CHECKING:
     from ucbplan.lisa.outputs import SimulationFiles
@@ -23,12 +25,6 @@ if TYPE_CHECKING:
     from ucbplan.lisa.sampler import SamplerInterrupted
 
 __all__ = ["register"]
-
-
-#: Largest band width (memory: templates are walkers × 3 bands × 2 channels × N complex).
-MAX_BINS = 65536
-#: Shortest accepted observation [s] (a day: the response needs a resolved orbit).
-MIN_T_OBS_S = 86400.0
 
 
 def _t_obs(text: str | None, default_s: float) -> float:
