@@ -62,7 +62,7 @@ from ucbplan.observing.sites import get_site
 from ucbplan.observing.sky import SkyModel
 from ucbplan.observing.timeaxis import TimeAxis
 from ucbplan.observing.timeconv import SiteTrack
-from ucbplan.offline import configure_offline
+from ucbplan.offline import offline
 from ucbplan.target import Target, load_target
 from ucbplan.target.write import write_target
 
@@ -258,10 +258,10 @@ def agreement_row(
     }
 
 
+@offline()  # the offline astropy scope for the whole measurement
 def rows(quick: bool) -> list[dict[str, object]]:
     """Kernel epochs/s against astroplan and naive astropy; accepted sets against astroplan;
     the semester via the API and the CLI (issue 14)."""
-    configure_offline()
     warnings.simplefilter("ignore")
     n_nights, n_targets, n_sample = 183, 10, (600 if quick else 3000)  # goal size: ~10 s
     n_edge = 30 if quick else 150  # per target

@@ -28,7 +28,7 @@ sys.path.insert(0, str(ROOT / "tests"))
 
 from test_reduce_synth import exposure_factor, session_times  # noqa: E402
 
-from ucbplan.offline import configure_offline  # noqa: E402
+from ucbplan.offline import offline  # noqa: E402
 from ucbplan.reduce.pipeline import ReduceOptions, reduce  # noqa: E402
 from ucbplan.reduce.velocities import VelocityTable  # noqa: E402
 from ucbplan.target import Target, load_target  # noqa: E402
@@ -116,9 +116,9 @@ def measure_samples(t: Target, sizes: list[int]) -> list[dict[str, object]]:
     return out
 
 
+@offline()  # the offline astropy scope for the whole measurement
 def rows(quick: bool) -> list[dict[str, object]]:
     """O(N) in spectra and bounded memory in samples (quick: 10x-100x smaller sizes)."""
-    configure_offline()
     t = load_target(ROOT / "catalogs" / "fiducial-eccentric.yaml")
     if quick:
         return measure_spectra(t, [10_000, 100_000]) + measure_samples(t, [100_000, 1_000_000])

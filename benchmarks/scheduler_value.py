@@ -39,7 +39,7 @@ from ucbplan.observing.schedule.optimum import (
     optimum,
     random_instance,
 )
-from ucbplan.offline import configure_offline
+from ucbplan.offline import offline
 
 RESULT = Path(__file__).resolve().parent / "results" / "scheduler_value.md"
 #: astroplan's time grid [s] (its default is 20 s).
@@ -180,6 +180,7 @@ def peer_table(n: int) -> list[str]:
     return lines
 
 
+@offline()  # the offline astropy scope for the whole measurement
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="fewer instances (CI)")
@@ -187,7 +188,6 @@ def main() -> None:
         "--output", type=Path, default=None, help=f"Markdown written here (full run: {RESULT})"
     )
     args = ap.parse_args()
-    configure_offline()
     n_value, n_peer = (20, 1) if args.quick else (200, 4)
     head = [
         "# Scheduler value: greedy vs MILP optimum vs astroplan",

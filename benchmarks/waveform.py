@@ -20,6 +20,8 @@ from typing import Any
 
 import numpy as np
 
+from ucbplan.offline import offline
+
 INJECTION = Path(__file__).resolve().parents[1] / "catalogs" / "fiducial-injection.yaml"
 N_BINS = 512
 GOAL = 3.0
@@ -51,6 +53,7 @@ def _round_rates(
     return out
 
 
+@offline()  # the offline astropy scope for the whole measurement
 def setup(n_walkers: int, seed: int = 7) -> tuple[Any, Any, np.ndarray, dict[str, np.ndarray], Any]:
     """Today's model, ours, W walkers from the Fisher ball (sampled coordinates and physical
     parameters) and the zero-noise likelihood."""
@@ -59,10 +62,8 @@ def setup(n_walkers: int, seed: int = 7) -> tuple[Any, Any, np.ndarray, dict[str
     from ucbplan.lisa.likelihood import physical_from_theta, simulate_data
     from ucbplan.lisa.noise import SANGRIA
     from ucbplan.lisa.pipeline import build_model, fisher_forecast
-    from ucbplan.offline import configure_offline
     from ucbplan.target import load_target
 
-    configure_offline()
     lisa = build_model(load_target(INJECTION), n_bins=N_BINS)
     ours = lisa.model
     before = Before(ours.grid, ours.f_center_hz, ours.harmonics)

@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import os
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 from hypothesis import settings
 
-from ucbplan.offline import configure_offline
+from ucbplan.offline import offline
 
 # CI runs hypothesis derandomized, so a red CI is reproducible; locally the search is random and
 # remembers failing examples in .hypothesis/.
@@ -28,9 +29,25 @@ CATALOGS = ROOT / "catalogs"
 
 
 @pytest.fixture(autouse=True, scope="session")
-def _offline() -> None:
-    """No test may touch the network: configure astropy's IERS/data offline once."""
-    configure_offline()
+def _offline() -> Iterator[None]:
+    """No test may touch the network: astropy's IERS/data offline for the session (a scope,
+    as every public entry point of ucbplan enters it; tests of the lower layers need it too)."""
+    with offline():
+        yield
+
+
+@pytest.fixture(autouse=True)
+def _no_inherited_terminal_size() -> None:
+    """CLI subprocesses get no terminal size the test did not give them.
+
+    readline (imported during the run) exports ``COLUMNS``/``LINES`` into the process's C
+    environment, behind ``os.environ``'s back; a ``ucbplan`` subprocess would inherit them and
+    wrap its messages at that width as on a terminal. A test that wants a width passes
+    ``COLUMNS`` itself (tests/test_screen_100_columns.py).
+    """
+    for name in ("COLUMNS", "LINES"):
+        if name not in os.environ:
+            os.unsetenv(name)
 
 
 @pytest.fixture
@@ -41,3 +58,24 @@ def hm_cnc_path() -> Path:
 @pytest.fixture
 def eccentric_path() -> Path:
     return CATALOGS / "fiducial-eccentric.yaml"
+
+
+@pytest.fixture(scope="session")
+def telescope_plan(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The issue-24 plan: HM Cnc and the eccentric dWD at Paranal, two nights of 1-h visits
+    (X-shooter VIS overheads, σ_v = 5 km/s), as ``ucbplan plan -o plan.ecsv`` writes it."""
+    from typer.testing import CliRunner
+
+    from ucbplan.cli.app import app
+
+    out = tmp_path_factory.mktemp("telescope") / "plan.ecsv"
+    args = [
+        "plan",
+        str(CATALOGS / "hm-cnc-simulated.yaml"),
+        str(CATALOGS / "fiducial-eccentric.yaml"),
+        *("--site", "paranal", "--night", "2040-02-15", "--nights", "2"),
+        *("--instrument", "xshooter-vis", "--sigma-v", "5", "--visit", "1h", "-o", str(out)),
+    ]
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 0, result.output
+    return out

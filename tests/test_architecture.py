@@ -2,13 +2,14 @@
 
 Layers, bottom to top (a module may import its own package and any lower layer):
 
-0. ``ucbplan`` (version), ``ucbplan.errors``
+0. ``ucbplan._version``, ``ucbplan.errors``
 1. ``ucbplan.core`` (physics), ``ucbplan.io``/``ucbplan.inputs`` (files), ``ucbplan.offline``
 2. ``ucbplan.target`` (target files)
 3. ``ucbplan.plotting`` (backend, atomic figures, horizon plot)
 4. ``ucbplan.observing``, ``ucbplan.reduce``, ``ucbplan.lisa``, ``ucbplan.feasibility``,
    ``ucbplan.population``
-5. ``ucbplan.cli`` (thin shells), then ``ucbplan.__main__``
+5. ``ucbplan.api`` (the public functions), then ``ucbplan.cli`` (thin shells over them)
+6. ``ucbplan`` itself (its lazy public names come from the API), then ``ucbplan.__main__``
 
 Between packages of one layer only the edges in ``SIBLING_EDGES`` are allowed. Imports inside
 ``if TYPE_CHECKING:`` are annotations only and are not counted; imports inside functions are.
@@ -22,7 +23,7 @@ from pathlib import Path
 PACKAGE = Path(__file__).resolve().parents[1] / "ucbplan"
 
 LAYER = {
-    "": 0,
+    "_version": 0,
     "errors": 0,
     "core": 1,
     "io": 1,
@@ -36,8 +37,10 @@ LAYER = {
     "feasibility": 4,
     "population": 4,
     "timing": 4,
-    "cli": 5,
-    "__main__": 6,
+    "api": 5,
+    "cli": 6,
+    "": 7,
+    "__main__": 8,
 }
 #: reduce converts site-UTC spectrum times to barycentric TDB with the observing time conversion;
 #: population runs the LISA Fisher forecast and the observing visibility per source.

@@ -242,7 +242,8 @@ def test_ephemeris_sub_commands_are_mountable() -> None:
 def test_horizon_many_targets_match_single(
     tmp_path: Path, hm_cnc_path: Path, eccentric_path: Path
 ) -> None:
-    """A directory of targets gives one row each, equal to the one-target command's numbers."""
+    """A directory of targets gives the long table, a row per target × anchor × α, each equal
+    to the one-target command's row (every number, to 1e-12: the same vectorised search)."""
     import shutil
 
     from astropy.table import Table
@@ -255,15 +256,46 @@ def test_horizon_many_targets_match_single(
     )
     assert res.exit_code == 0, res.output
     tab = Table.read(out)
-    assert len(tab) == 2
-    for row in tab:
-        src = hm_cnc_path if row["target"].startswith("HM Cnc") else eccentric_path
+    assert len(tab) == 2 * 2 * 2
+    assert tab["t_valid_days"].unit == "d" and tab["sigma_v_kms"].unit == "km / s"
+    for src in (hm_cnc_path, eccentric_path):
         one = runner.invoke(
             app, ["horizon", str(src), "--sigma-v", "15", "--k-eff", "400", "--format", "json"]
         )
-        for r in json.loads(one.stdout):
-            key = f"t_valid_days_{r['anchor']}_a{r['alpha']:g}"
-            assert row[key] == pytest.approx(r["t_valid_days"], rel=1e-12)
+        single = json.loads(one.stdout)
+        mine = tab[tab["file"] == str(tmp_path / src.name)]
+        assert len(mine) == len(single) == 4
+        for row, r in zip(mine, single, strict=True):
+            assert (row["anchor"], row["alpha"]) == (r["anchor"], r["alpha"])
+            assert row["target"] == r["target"] and row["kind"] == "lisa"
+            for key in ("tolerance_rad", "t_valid_days", "dt_u_s", "sigma_u_end_rad"):
+                assert row[key] == pytest.approx(r[key], rel=1e-12), key
+
+
+def test_horizon_catalog_folder_and_files_agree(
+    tmp_path: Path, hm_cnc_path: Path, eccentric_path: Path
+) -> None:
+    """A catalog (one YAML file, target documents separated by ---) gives the same rows as the
+    files given one by one, in every format; a bad document is named in a one-line error."""
+    text = [p.read_text(encoding="utf-8") for p in (hm_cnc_path, eccentric_path)]
+    cat = tmp_path / "catalog.yaml"
+    cat.write_text(text[0] + "\n---\n" + text[1], encoding="utf-8")
+    files = [str(hm_cnc_path), str(eccentric_path)]
+    by_files = json.loads(runner.invoke(app, ["horizon", *files, "--format", "json"]).stdout)
+    by_cat = json.loads(runner.invoke(app, ["horizon", str(cat), "--format", "json"]).stdout)
+    assert len(by_cat) == len(by_files) == 8
+    for a, b in zip(by_cat, by_files, strict=True):
+        assert a.pop("file") == str(cat)
+        b.pop("file")
+        assert a == b
+    csv = runner.invoke(app, ["horizon", str(cat), "--format", "csv"])
+    assert csv.exit_code == 0 and len(csv.stdout.strip().splitlines()) == 1 + 8
+    table = runner.invoke(app, ["horizon", str(cat)])
+    assert table.exit_code == 0 and "horizons of 2 targets" in table.output
+    cat.write_text(text[0] + "\n---\nname: broken\n", encoding="utf-8")
+    res = _run("horizon", str(cat), "--format", "json")
+    assert res.returncode == 2 and not res.stdout
+    assert "(document 2)" in res.stderr and len(res.stderr.strip().splitlines()) == 1
 
 
 def test_horizon_many_targets_refuse_plot(tmp_path: Path, hm_cnc_path: Path) -> None:
@@ -287,3 +319,20 @@ def test_horizon_alpha_outside_its_range_is_one_line_exit_2(hm_cnc_path: Path, a
     assert res.returncode == 2, res.stderr
     assert "--alpha: expected a number in (0, 10]" in res.stderr
     assert "Traceback" not in res.stderr and len(res.stderr.strip().splitlines()) == 1
+
+
+def test_horizon_many_targets_json_with_a_timing_target(hm_cnc_path: Path) -> None:
+    """Regression (issue 23): several targets with --format json ended in an internal error
+    ("Out of range float values are not JSON compliant: nan"): a LISA posterior has no horizon
+    before its reference, and the wide per-target table carried NaN there."""
+    timing = hm_cnc_path.parent / "examples" / "synthetic-eclipsing.yaml"
+    res = _run("horizon", str(hm_cnc_path), str(timing), "--format", "json")
+    assert res.returncode == 0, res.stderr
+    assert "NaN" not in res.stdout
+    rows = json.loads(res.stdout)
+    assert len(rows) == 2 * 2 * 2  # targets × anchors × α
+    lisa = [r for r in rows if r["kind"] == "lisa"]
+    timed = [r for r in rows if r["kind"] == "timing"]
+    assert len(lisa) == len(timed) == 4
+    assert all("t_valid_before_days" not in r for r in lisa)
+    assert all(r["t_valid_before_days"] > 0 for r in timed)

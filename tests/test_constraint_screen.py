@@ -36,7 +36,6 @@ from ucbplan.observing.constraints import (
 from ucbplan.observing.sites import get_site
 from ucbplan.observing.sky import SkyModel
 from ucbplan.observing.timeconv import quiet_erfa
-from ucbplan.offline import configure_offline
 
 pytestmark = [
     pytest.mark.filterwarnings("ignore::erfa.ErfaWarning"),
@@ -52,7 +51,6 @@ YEAR_S = 365.25 * 86400
 
 @pytest.fixture(scope="module")
 def sky() -> SkyModel:
-    configure_offline()
     site = get_site("paranal")
     with quiet_erfa():
         return SkyModel.build(site.location, Time("2041-03-01", scale="tdb"), (0, YEAR_S), COORDS)

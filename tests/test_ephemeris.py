@@ -260,3 +260,34 @@ def test_details_of_a_subset_equal_those_of_the_whole_set(
                 np.testing.assert_array_equal(getattr(part, field)[idx], getattr(whole, field)[idx])
                 others = np.setdiff1d(np.arange(len(whole)), idx)
                 assert np.all(np.isnan(getattr(part, field)[others]))
+
+
+@settings(max_examples=30, deadline=None)
+@given(p=params_st, start_yr=st.floats(-2.0, 10.0), branch=st.sampled_from(["+", "-"]))
+def test_star2_zero_crossing_is_where_star2_velocity_is_gamma(
+    p: PhaseParams, start_yr: float, branch: str
+) -> None:
+    """Star 2's zero crossings: v₂(t★) = γ₂ from the velocity model (issue 26, item 3).
+
+    Reference: radial_velocity(star=2) = γ₂ − K₂(cos u₁ + κ), evaluated independently of the
+    solver at the returned epochs; |cos u₁ + κ| < 1e-9 (the issue's bound; the Newton floor is
+    1e-12 rad). Star 2's zero crossings are star 1's instants, so the epochs must agree too.
+    """
+    start = start_yr * YEAR
+    k, dt, us, origin = solve_u(p, start, start + 3600.0, f"zero-crossing{branch}", star=2)
+    assert k.size > 0
+    # v₂ − γ₂ = −K₂(cos u₁ + κ) of Eq. v1v2_ecc_rv, u₁ evaluated with the window origin kept
+    # separate and u₁ reduced to whole cycles + g (the unwrapped u ≈ 1e7 rad would cost 1e-9)
+    _, g1 = u_cycles(p, dt, origin, 1)
+    _, kap = ll_pair(p, origin + dt)
+    assert np.max(np.abs(np.cos(2 * math.pi * g1) + kap)) < 1e-9
+    # the velocity model itself (star=2 sign convention) at the returned epochs, 1e-6 of K₂
+    v2 = radial_velocity(p, origin + dt, k=1.0, gamma=0.0, star=2)
+    assert np.max(np.abs(v2)) < 1e-6
+    assert np.max(np.abs(_resid(p, k, dt, us, origin, star=2))) < 1e-10
+    _, dt1, _, o1 = solve_u(p, start, start + 3600.0, "zero-crossing+", star=1)
+    _, dt1m, _, _ = solve_u(p, start, start + 3600.0, "zero-crossing-", star=1)
+    star1 = np.sort(np.concatenate([o1 + dt1, o1 + dt1m]))
+    # every star-2 epoch is one of star 1's (1e-6 s: the Newton floor over a 1-h window)
+    near = np.min(np.abs((origin + dt)[:, None] - star1[None, :]), axis=1)
+    assert np.max(near) < 1e-6

@@ -364,3 +364,33 @@ def test_cli_optical_epoch_shifts_the_optical_baseline(tmp_path: Path) -> None:
     assert doc["optical_timing_s"][0] == pytest.approx(1.79, abs=0.005)
     res = CliRunner().invoke(_app(), [*args[:-1], "someday", "--overwrite"])
     assert isinstance(res.exception, UcbplanError) and "--optical-epoch" in str(res.exception)
+
+
+@pytest.mark.parametrize("style", ["frequency", "period"])
+def test_cli_optical_timing_uses_the_node_to_node_period(tmp_path: Path, style: str) -> None:
+    """An eclipse ephemeris repeats node to node, P = 2/f_gw, not 2π/(πf − ω̇) (issue 26, item 5).
+
+    Reference: Eq. optical_timing_prec evaluated here by hand with P = 2/f_gw (the target schema's
+    ``timing.period`` definition). The fiducial source's ω̇/(πf) = 5.7e-5 is far above the 1e-9
+    relative tolerance (float64 rounding of a few operations).
+    """
+    from ucbplan.target import load_target
+
+    f_gw = load_target(FIDUCIAL).params.f_gw
+    P = 2.0 / f_gw
+    if style == "frequency":
+        opts = ["--optical-sigma-phase", "0.004", "--optical-sigma-f-rel", "9.6e-9"]
+        opts += ["--optical-sigma-fdot-rel", "3.2e-17"]
+        s_phase_s, s_f_rel, s_fdot_rel = 0.004 * P, 9.6e-9, 3.2e-17
+    else:
+        opts = ["--optical-sigma-p", "2e-6", "--optical-sigma-pdot", "1e-13"]
+        opts += ["--optical-sigma-t0", "0.5"]
+        s_phase_s, s_f_rel, s_fdot_rel = 0.5, 2e-6 / P, 1e-13 / P
+    out = tmp_path / "f.json"
+    args = ["feasibility", str(FIDUCIAL), "--format", "json", "-o", str(out), *opts]
+    res = CliRunner().invoke(_app(), args)
+    assert res.exit_code == 0, res.output
+    doc = json.loads(out.read_text())
+    dt = np.asarray(doc["timing_years"]) * YEAR_S
+    expected = np.sqrt(s_phase_s**2 + (s_f_rel * dt) ** 2 + (0.5 * s_fdot_rel * dt**2) ** 2)
+    np.testing.assert_allclose(doc["optical_timing_s"], expected, rtol=1e-9, atol=0.0)

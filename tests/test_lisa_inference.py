@@ -21,15 +21,9 @@ from ucbplan.lisa.likelihood import (
 )
 from ucbplan.lisa.noise import SANGRIA, NoiseModel, psd_a
 from ucbplan.lisa.sampler import run_sampler
-from ucbplan.offline import configure_offline
 from ucbplan.target import load_target
 
 INJECTION = Path(__file__).resolve().parents[1] / "catalogs" / "fiducial-injection.yaml"
-
-
-@pytest.fixture(autouse=True, scope="module")
-def _offline() -> None:
-    configure_offline()
 
 
 @pytest.fixture(scope="module")

@@ -14,7 +14,6 @@ from typer.testing import CliRunner
 from ucbplan.cli.app import app
 from ucbplan.errors import OutputExistsError
 from ucbplan.observing.blocktable import REQUIRED_COLUMNS, file_sha256, read_blocks
-from ucbplan.offline import configure_offline
 
 pytestmark = [
     pytest.mark.filterwarnings("ignore::erfa.ErfaWarning"),
@@ -24,11 +23,6 @@ pytestmark = [
 REPO = Path(__file__).resolve().parents[1]
 HM = str(REPO / "catalogs" / "hm-cnc-simulated.yaml")
 BASE = ["plan", HM, "--site", "paranal", "--night", "2040-02-15"]
-
-
-@pytest.fixture(autouse=True, scope="module")
-def _offline() -> None:
-    configure_offline()
 
 
 def test_plan_writes_ecsv_and_plot(tmp_path: Path) -> None:

@@ -22,7 +22,6 @@ from ucbplan.observing.constraints import (
 from ucbplan.observing.sites import get_site
 from ucbplan.observing.sky import SkyModel, airmass_from_alt
 from ucbplan.observing.timeconv import quiet_erfa
-from ucbplan.offline import configure_offline
 
 pytestmark = [
     pytest.mark.filterwarnings("ignore::erfa.ErfaWarning"),
@@ -32,11 +31,6 @@ pytestmark = [
 # HM Cnc, the fiducial source, a zenith-passing star at Paranal, a south-polar star.
 COORDS = SkyCoord([121.5967, 108.318, 0.0, 250.0] * u.deg, [15.4583, -55.652, -24.7, -89.0] * u.deg)
 ORIGIN = "2040-02-01T00:00:00"
-
-
-@pytest.fixture(autouse=True, scope="module")
-def _offline() -> None:
-    configure_offline()
 
 
 @pytest.fixture(scope="module")
@@ -138,9 +132,9 @@ def test_registry_and_errors() -> None:
     assert make_constraint("airmass", max_airmass=1.8).describe() == "airmass <= 1.8"
     with pytest.raises(UcbplanError, match="unknown constraint 'seeing'"):
         make_constraint("seeing")
-    with pytest.raises(UcbplanError, match="--twilight"):
+    with pytest.raises(UcbplanError, match=r"^twilight: "):
         NightConstraint("dusk")
-    with pytest.raises(UcbplanError, match="--airmass-max"):
+    with pytest.raises(UcbplanError, match=r"^max_airmass: "):  # the keyword of the class
         AirmassConstraint(0.5)
 
 
@@ -172,7 +166,7 @@ def test_plan_settings_constraints_follow_site_and_options() -> None:
     got = off.constraints(paranal)
     assert got.zenith_hole is None and got.moon_sep is None
     assert got.moon_illum == MoonIlluminationConstraint(max_fraction=0.5)
-    with pytest.raises(UcbplanError, match="--twilight"):
+    with pytest.raises(UcbplanError, match="twilight"):
         PlanSettings(twilight="dusk").constraints(paranal)
 
 

@@ -14,6 +14,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from ucbplan.cli._flags import FLAGS, cli_message
 from ucbplan.errors import InputError, UcbplanError
 from ucbplan.observing import constraints as constraints_module
 from ucbplan.observing.blocks import Block, ExposurePlan
@@ -46,7 +47,8 @@ def _one_line(exc: BaseException, *names: str) -> None:
         assert name in text, text
 
 
-# (option as the message names it, keyword of the library object, values to refuse, values to keep)
+# (flag of the CLI, keyword of the library object, values to refuse, values to keep): the library
+# names the keyword, the CLI the flag (ucbplan.cli._flags)
 SETTINGS_CASES = [
     ("--airmass-max", "airmass_max", [0.5, 0.999, 101.0], [1.0, 2.0, 100.0]),
     ("--moon-sep", "moon_sep_deg", [-1.0, 180.5], [0.0, 30.0, 180.0]),
@@ -65,7 +67,8 @@ def test_plan_settings_ranges(option: str, key: str, bad: list[float], good: lis
     for value in [*bad, *BAD]:
         with pytest.raises(InputError) as info:
             PlanSettings(**{key: value})
-        _one_line(info.value, option, "expected a number in")
+        _one_line(info.value, key, "expected a number in")
+        assert cli_message(str(info.value)).startswith(option)
     for value in good:
         PlanSettings(**{key: value})
 
@@ -89,21 +92,21 @@ def test_plan_settings_ranges(option: str, key: str, bad: list[float], good: lis
 def test_exposure_plan_ranges(option: str, kwargs: dict[str, float]) -> None:
     with pytest.raises(InputError) as info:
         ExposurePlan(**kwargs)  # type: ignore[arg-type]
-    _one_line(info.value, option)
+    _one_line(cli_message(str(info.value)), option)  # the keyword, printed as the flag by the CLI
 
 
 def test_other_plan_options_fail_in_one_line() -> None:
     cases: list[tuple[str, object]] = [
-        ("--sessions", lambda: PlanSettings(sessions_per_night=0)),
-        ("--sessions", lambda: PlanSettings(sessions_per_night=10**9)),
-        ("--twilight", lambda: PlanSettings(twilight="foo")),
-        ("--twilight", lambda: PlanSettings(twilight="x" * 5000)),
+        ("sessions_per_night", lambda: PlanSettings(sessions_per_night=0)),
+        ("sessions_per_night", lambda: PlanSettings(sessions_per_night=10**9)),
+        ("twilight", lambda: PlanSettings(twilight="foo")),
+        ("twilight", lambda: PlanSettings(twilight="x" * 5000)),
         ("--mode", lambda: PlanSettings(mode="x" * 5000)),
         ("--mode u=VALUE", lambda: PlanSettings(mode="u=1e300")),
-        ("--max-smear", lambda: PlanSettings(max_smear="..*sigma_v")),  # was a bare ValueError
-        ("--max-smear", lambda: PlanSettings(max_smear="-1")),
-        ("--max-smear", lambda: PlanSettings(max_smear="1e300 km/s")),
-        ("--max-smear", lambda: PlanSettings(max_smear="x" * 5000)),
+        ("max_smear", lambda: PlanSettings(max_smear="..*sigma_v")),  # was a bare ValueError
+        ("max_smear", lambda: PlanSettings(max_smear="-1")),
+        ("max_smear", lambda: PlanSettings(max_smear="1e300 km/s")),
+        ("max_smear", lambda: PlanSettings(max_smear="x" * 5000)),
         ("--nights", lambda: night_dates(NIGHT, 0)),
         ("--nights", lambda: night_dates(NIGHT, 100_000)),
         ("--night", lambda: night_dates("15/02/2040")),
@@ -124,7 +127,7 @@ def test_other_plan_options_fail_in_one_line() -> None:
     for option, make in cases:
         with pytest.raises(UcbplanError) as info:
             make()  # type: ignore[operator]
-        _one_line(info.value, option)
+        _one_line(cli_message(str(info.value)), FLAGS.get(option, option))
     assert night_dates("2100-12-30") == [date(2100, 12, 30)]
     assert parse_priorities(["HM Cnc=2", "a=b=-1.5"]) == {"hm cnc": 2.0, "a=b": -1.5}
 

@@ -21,15 +21,9 @@ from ucbplan.observing.blocktable import (
     write_table,
 )
 from ucbplan.observing.timeconv import quiet_erfa
-from ucbplan.offline import configure_offline
 
 # Dates past the leap-second table are intended (2040 nights); the planner warns once itself.
 pytestmark = pytest.mark.filterwarnings("ignore::erfa.ErfaWarning")
-
-
-@pytest.fixture(autouse=True, scope="module")
-def _offline() -> None:
-    configure_offline()
 
 
 def _block(i: int, alt: bool = True) -> Block:

@@ -10,14 +10,8 @@ from astropy.time import Time, TimeDelta
 from ucbplan.observing.sites import get_site
 from ucbplan.observing.timeaxis import TimeAxis, elapsed
 from ucbplan.observing.timeconv import quiet_erfa
-from ucbplan.offline import configure_offline
 
 pytestmark = pytest.mark.filterwarnings("ignore::erfa.ErfaWarning")
-
-
-@pytest.fixture(autouse=True, scope="module")
-def _offline() -> None:
-    configure_offline()
 
 
 @pytest.fixture(scope="module")

@@ -329,7 +329,10 @@ def test_sigma_v_per_exposure_scales_with_instrument(tmp_path: Path) -> None:
         "    extinction_band: V\n"
         "    sigma_ref: {sigma_v_kms: 10, mag: 20, band: V, exptime_s: 600}\n"
     )
-    settings = plan_settings(instrument="testspec", instruments_file=table, visit="1h")
+    # the law is checked at a given exposure time (without one, the time is chosen)
+    settings = plan_settings(
+        instrument="testspec", instruments_file=table, visit="1h", exptime_s=60.0
+    )
     run = plan_files([HM], first_night="2040-02-15", site="paranal", settings=settings)
     for b in run.result.blocks:
         # V = 21.1, 60 s: 10 km/s x 10^(0.2 x 1.1) x sqrt(10) x 10^(0.2 x 0.2 (X - 1))
@@ -410,7 +413,10 @@ def test_json_plan_reads_back(tmp_path: Path) -> None:
     assert len(table) == 20 and "visit_id" in table.colnames
 
 
-def test_goal_with_instrument_sigma_at_the_airmass_limit(tmp_path: Path) -> None:
+def test_goal_with_instrument_sigma_per_exposure(tmp_path: Path) -> None:
+    """A goal counts each exposure's own σ_v (airmass, exposure time) in its Fisher sum
+    (issue 20): the planned information reaches the goal, and one anchor pattern fewer would
+    not."""
     table = tmp_path / "inst.yaml"
     table.write_text(
         "instruments:\n"
@@ -425,16 +431,19 @@ def test_goal_with_instrument_sigma_at_the_airmass_limit(tmp_path: Path) -> None
         "    sigma_ref: {sigma_v_kms: 3, mag: 20, band: V, exptime_s: 600}\n"
     )
     settings = plan_settings(
-        instrument="testspec", instruments_file=table, visit="1h", goal="sigma_K=3km/s"
-    )
+        instrument="testspec", instruments_file=table, visit="1h", goal="sigma_K=3km/s",
+        exptime_s=60.0,
+    )  # fmt: skip
     run = plan_files([HM], first_night="2040-02-15", n_nights=2, site="paranal", settings=settings)
-    # σ_v at airmass 2 (the limit): 3 km/s x 10^0.22 x sqrt(10) x 10^0.04 = 17.2 km/s
-    sigma_v = 3 * 10 ** (0.2 * 1.1) * math.sqrt(10.0) * 10 ** (0.2 * 0.2)
-    lam = run.result.blocks[0].lambda_k
-    n = len(run.result.blocks)
-    assert n == 2 * math.ceil(sigma_v**2 / (3**2 * lam**2) / 2)
-    # every exposure is at least as precise as the σ_v the goal was computed with
-    assert max(b.sigma_v_kms for b in run.result.blocks) <= sigma_v
+    blocks = run.result.blocks
+    for b in blocks:  # V = 21.1, 60 s, extinction 0.2 mag/airmass at the block's airmass
+        want = 3 * 10 ** (0.2 * 1.1) * math.sqrt(10.0) * 10 ** (0.04 * (b.airmass - 1))
+        assert b.sigma_v_kms == pytest.approx(want, rel=1e-9)
+    info = sum((b.lambda_k * math.cos(b.u_star_rad) / b.sigma_v_kms) ** 2 for b in blocks)
+    assert info >= 1 / 3.0**2 * (1 - 1e-9)
+    by_time = sorted(blocks, key=lambda b: b.t_mid_utc.jd)
+    short = sum((b.lambda_k / b.sigma_v_kms) ** 2 for b in by_time[:-2])
+    assert short < 1 / 3.0**2
 
 
 @pytest.mark.slow

@@ -12,17 +12,11 @@ import yaml
 from typer.testing import CliRunner
 
 from ucbplan.cli.app import app
-from ucbplan.offline import configure_offline
 
 ROOT = Path(__file__).resolve().parents[1]
 TARGET = ROOT / "catalogs" / "fiducial-eccentric.yaml"
 VELS = ROOT / "catalogs" / "fiducial-eccentric-velocities.csv"
 TRUTH = {"K1": 585.293, "K2": 712.620, "gamma1": 41.640, "gamma2": 39.197}
-
-
-@pytest.fixture(autouse=True, scope="module")
-def _offline() -> None:
-    configure_offline()
 
 
 def _run(*args: str) -> object:

@@ -13,7 +13,6 @@ from test_reduce_synth import exact_factor, exposure_factor, make_target, sessio
 
 from ucbplan.core import ephemeris
 from ucbplan.core.params import PhaseParams
-from ucbplan.offline import configure_offline
 from ucbplan.reduce import masses as m
 from ucbplan.reduce.pipeline import ReduceOptions, reduce
 from ucbplan.reduce.report import build_report
@@ -21,11 +20,6 @@ from ucbplan.reduce.velocities import VelocityTable
 
 K1, K2, G1, G2 = 585.3, 712.6, 30.0, 10.0
 DAY = 86400.0
-
-
-@pytest.fixture(autouse=True, scope="module")
-def _offline() -> None:
-    configure_offline()
 
 
 def _table(t, tau, window, v, sigma, sessions=None, u_star=None) -> VelocityTable:  # type: ignore[no-untyped-def]
@@ -100,29 +94,59 @@ def test_pull_distribution_exact_kepler(circular: bool) -> None:
         assert 0.65 < np.abs(a).mean() < 0.95, (k, np.abs(a).mean())
 
 
-def test_model_error_is_second_order() -> None:
-    """Noise-free exact-Kepler data: |K̂ − K|, |γ̂ − γ| ≤ 3e²K (the documented O(e²K) model error).
+@pytest.mark.parametrize("ecc", [0.0096, 0.04, 0.099])
+@pytest.mark.parametrize("per_orbit", [8, 3])
+def test_exact_kepler_design_recovers_k_and_gamma(ecc: float, per_orbit: int) -> None:
+    """Noise-free exact-Kepler data (24-node Gauss–Legendre windows of P_b/8 or P_b/3, e up to
+    just inside the allowed e < 0.1): K_j and γ_j recovered to 1e-9 relative (issue 26, item 1).
 
-    At e = 0.0096 that is 0.08 km/s (K1); at e = 0.04 (η = κ = 0.0283) the bound 2.8 km/s is still
-    met, and the error grows ∝ e² (ratio of errors ≥ 4, i.e. not O(e)).
+    The first-order design of Eq. vbar_master left ≈ −e²K (−0.58/−0.73 km/s at e = 0.03);
+    the exact design's error is the series cut (1e-14) and the generator's quadrature (1e-12).
     """
-    errs = []
-    for ecc in (0.0096, 0.04):
-        t = make_target(eta=ecc / math.sqrt(2), kappa=ecc / math.sqrt(2))
+    t = make_target(eta=ecc * math.sin(1.1), kappa=ecc * math.cos(1.1))
+    p = t.params
+    tau, dt = session_times(p, 0.5 * t.t_obs_s + 30 * DAY, n_orbits=10, per_orbit=per_orbit)
+    Fx = exposure_factor(p, tau, dt)
+    red = reduce(
+        t,
+        _table(t, tau, dt, (G1 + K1 * Fx, G2 - K2 * Fx), (15.0, 15.0)),
+        ReduceOptions(n_samples=200, seed=1),
+    )
+    f1, f2 = red.fits
+    assert f1.K == pytest.approx(K1, rel=1e-9) and f2.K == pytest.approx(K2, rel=1e-9)
+    assert f1.gamma == pytest.approx(G1, abs=1e-9 * K1)
+    assert f2.gamma == pytest.approx(G2, abs=1e-9 * K2)
+
+
+def test_k_unbiased_over_noise_realisations_at_e_01() -> None:
+    """300 spectra of P_b/3 at σ_v = 10 km/s, e = 0.099 (just inside e < 0.1) and 0.03, 1600
+    seeded re-noisings of exact-Kepler data: mean(K̂_j − K_j) < 0.1σ_K (issue 26, item 1).
+
+    σ_K is the scatter of K̂ over the realisations; the Monte-Carlo error of the mean is
+    σ_K/40, so 0.1σ_K is a 4σ bound. The first-order design was low by ≈ 5–9 standard errors
+    at e = 0.03 (≈ 0.7σ_K) and several σ_K near e = 0.1. The reduction is linear in the velocities,
+    so the realisations are fitted on the pipeline's design (checked to be the one reduce
+    uses) rather than by 1600 full reduce runs; ~1 s.
+    """
+    from ucbplan.reduce.design import designs
+    from ucbplan.reduce.regression import fit_component
+
+    for ecc in (0.03, 0.099):
+        t = make_target(eta=ecc * math.sin(2.0), kappa=ecc * math.cos(2.0))
         p = t.params
-        tau, dt = session_times(p, 0.5 * t.t_obs_s + 30 * DAY, n_orbits=10)
+        tau, dt = session_times(p, 0.5 * t.t_obs_s + 30 * DAY, n_orbits=100, per_orbit=3)
         Fx = exposure_factor(p, tau, dt)
-        red = reduce(
-            t,
-            _table(t, tau, dt, (G1 + K1 * Fx, G2 - K2 * Fx), (15.0, 15.0)),
-            ReduceOptions(n_samples=200, seed=1),
-        )
-        f1, f2 = red.fits
-        bound = 3 * ecc**2
-        assert abs(f1.K - K1) < bound * K1 and abs(f2.K - K2) < bound * K2
-        assert abs(f1.gamma - G1) < bound * K1 and abs(f2.gamma - G2) < bound * K2
-        errs.append(max(abs(f1.K - K1), abs(f1.gamma - G1), abs(f2.K - K2), abs(f2.gamma - G2)))
-    assert errs[1] / errs[0] > 4.0
+        G = designs(p, tau, np.full(tau.size, dt), 1, None)[0]
+        tab = _table(t, tau, dt, (G1 + K1 * Fx, G2 - K2 * Fx), (10.0, 10.0))
+        # reduce's τ is the table's times read back (1e-9 s): the same design to 1e-9
+        red = reduce(t, tab, ReduceOptions(n_samples=200, seed=1))
+        np.testing.assert_allclose(red.design[0], G, rtol=0, atol=1e-9)
+        rng = np.random.default_rng(2601)
+        noise = rng.normal(0.0, 10.0, (1600, 2, tau.size))
+        k1 = [fit_component(G, G1 + K1 * Fx + n[0], np.full(tau.size, 10.0), 1).K for n in noise]
+        k2 = [fit_component(G, G2 - K2 * Fx + n[1], np.full(tau.size, 10.0), 2).K for n in noise]
+        for k, truth in ((np.asarray(k1), K1), (np.asarray(k2), K2)):
+            assert abs(k.mean() - truth) < 0.1 * k.std(), (ecc, k.mean() - truth, k.std())
 
 
 def test_coadded_third_orbit_windows_unbiased() -> None:

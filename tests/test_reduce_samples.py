@@ -123,8 +123,8 @@ def test_bad_samples_file_is_one_line_error(tmp_path: Path, text: str) -> None:
     """A samples file without rows or parameter columns: one line naming the file."""
     bad = tmp_path / "bad.ecsv"
     bad.write_text(text, encoding="utf-8")
-    t = _target_with_samples(tmp_path, bad)
+    # the injection target has no lisa.covariance: the samples are read when it is loaded
     with pytest.raises(UcbplanError) as err:
-        reduce(t, read_velocities(VELS), ReduceOptions(n_samples=200, seed=1))
+        _target_with_samples(tmp_path, bad)
     msg = str(err.value)
     assert "bad.ecsv" in msg and "\n" not in msg and len(msg) < 400

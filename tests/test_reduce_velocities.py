@@ -9,16 +9,10 @@ import pytest
 from test_reduce_synth import make_target
 
 from ucbplan.errors import VelocityFileError
-from ucbplan.offline import configure_offline
 from ucbplan.reduce.velocities import check_validity, read_velocities
 
 HEADER = "bjd_tdb,exptime_s,v1,sigma_v1,v2,sigma_v2,session\n"
 JD = 2465800.0  # 2039-12 TDB: after the fiducial LISA observation (ends 2039-01-01)
-
-
-@pytest.fixture(autouse=True, scope="module")
-def _offline() -> None:
-    configure_offline()
 
 
 def _write(tmp_path: Path, text: str, name: str = "v.csv") -> Path:

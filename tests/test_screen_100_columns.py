@@ -1,7 +1,9 @@
-"""Screen test (issue 15): at 100 columns no command's default table is cut.
+"""Screen tests (issues 15 and 24): at 100 columns nothing is cut, no line is wider, and file
+names are printed literally.
 
 Rich marks a cell it had to cut with "…"; each command runs in a fresh process with
-``COLUMNS=100`` (the terminal width rich reads), as a user's terminal would run it.
+``COLUMNS=100`` (the terminal width rich reads), as a user's terminal would run it. Widths are
+counted in terminal cells (``rich.cells.cell_len``: a wide character takes two).
 """
 
 from __future__ import annotations
@@ -12,10 +14,14 @@ import sys
 from pathlib import Path
 
 import pytest
+from rich.cells import cell_len
 
 CAT = Path(__file__).resolve().parents[1] / "catalogs"
 HM, ECC = str(CAT / "hm-cnc-simulated.yaml"), str(CAT / "fiducial-eccentric.yaml")
 SYN = str(CAT / "examples" / "synthetic-eclipsing.yaml")
+
+#: The terminal width of these tests [columns].
+WIDTH = 100
 
 COMMANDS = [
     ["validate", HM],
@@ -43,11 +49,59 @@ COMMANDS = [
 ]
 
 
+def run_at_100(args: list[str], cwd: Path) -> subprocess.CompletedProcess[str]:
+    """``python -m ucbplan ARGS`` in a fresh process whose terminal is ``WIDTH`` columns."""
+    env = {**os.environ, "COLUMNS": str(WIDTH), "LINES": "50"}
+    cmd = [sys.executable, "-m", "ucbplan", *args]
+    return subprocess.run(cmd, capture_output=True, text=True, env=env, cwd=cwd, timeout=120)
+
+
+def too_wide(text: str) -> list[str]:
+    """Lines of ``text`` wider than ``WIDTH`` terminal cells."""
+    return [line for line in text.splitlines() if cell_len(line) > WIDTH]
+
+
 @pytest.mark.parametrize("args", COMMANDS, ids=lambda a: " ".join(Path(x).name for x in a)[:60])
 def test_default_output_fits_100_columns(args: list[str], tmp_path: Path) -> None:
-    env = {**os.environ, "COLUMNS": "100", "LINES": "50"}
-    cmd = [sys.executable, "-m", "ucbplan", *args]
-    out = subprocess.run(cmd, capture_output=True, text=True, env=env, cwd=tmp_path, timeout=120)
+    out = run_at_100(args, tmp_path)
     assert out.returncode == 0, out.stderr[-800:]
     cut = [line for line in out.stderr.splitlines() if "…" in line and "│" in line]
     assert not cut, "\n".join(cut[:5])
+    wide = too_wide(out.stderr) + too_wide(out.stdout)
+    assert not wide, "\n".join(wide[:5])
+
+
+def test_warnings_wrap_with_a_hanging_indent(tmp_path: Path) -> None:
+    """The planner's warnings (IERS, leap seconds, smearing) are longer than 100 columns in a
+    run past 2027: each wraps at a word, its continuation lines indented under the first."""
+    out = run_at_100(["plan", HM, ECC, "--site", "paranal", "--night", "2040-02-15"], tmp_path)
+    assert out.returncode == 0, out.stderr[-800:]
+    lines = out.stderr.splitlines()
+    starts = [k for k, line in enumerate(lines) if line.startswith("warning: ")]
+    assert len(starts) >= 3  # smearing, IERS-A, leap seconds
+    assert not too_wide(out.stderr)
+    assert any(lines[k + 1].startswith("  ") and lines[k + 1].strip() for k in starts)
+    assert any("astropy-iers-data" in line for line in lines)
+
+
+NAMES = ["hmcnc[draft].yaml", "a [b] \\[c] ~$x.yaml", "[bold]x :x: [red].y"]
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_file_names_are_printed_literally(name: str, tmp_path: Path) -> None:
+    """Rich markup (and emoji codes) in a file name is text: an error names the file exactly as
+    it is spelled (the one-line error, wrapped at 100 columns, is joined back)."""
+    (tmp_path / name).write_text("bad: [\n", encoding="utf-8")
+    out = run_at_100(["validate", name], tmp_path)
+    assert out.returncode == 2
+    line = " ".join(part.strip() for part in out.stderr.splitlines())
+    assert line.startswith(f"error: {name}: not valid YAML")
+    assert line.count("\\") == name.count("\\")  # no escape added
+
+
+def test_written_file_names_are_printed_literally(tmp_path: Path) -> None:
+    """The "wrote FILE" line of a command names a bracketed file as it is spelled."""
+    out = run_at_100(["feasibility", ECC, "--plot", "aps[x].png"], tmp_path)
+    assert out.returncode == 0, out.stderr[-800:]
+    assert "wrote aps[x].png" in out.stderr.splitlines()
+    assert (tmp_path / "aps[x].png").is_file()

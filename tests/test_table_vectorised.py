@@ -32,16 +32,10 @@ from ucbplan.observing.blocktable import (
 from ucbplan.observing.schedule import accounting
 from ucbplan.observing.schedule.accounting import visit_summaries
 from ucbplan.observing.timeconv import quiet_erfa
-from ucbplan.offline import configure_offline
 
 pytestmark = pytest.mark.filterwarnings("ignore::erfa.ErfaWarning")
 
 ZONES = ("Europe/Madrid", "America/Santiago", "Pacific/Auckland")
-
-
-@pytest.fixture(autouse=True, scope="module")
-def _offline() -> None:
-    configure_offline()
 
 
 def _transitions(zone: str, year: int) -> list[datetime]:
@@ -255,7 +249,7 @@ def test_plan_run_computes_visits_once(monkeypatch: pytest.MonkeyPatch) -> None:
         return accounting.visit_summaries(*args)  # type: ignore[arg-type]
 
     monkeypatch.setattr(run_module, "visit_summaries", counting)
-    settings = type("S", (), {"visit_s": None, "overhead_s": 300.0})()
+    settings = type("S", (), {"visit_s": None, "overhead_s": 300.0, "plans_visits": False})()
     result = type("R", (), {"blocks": _visit_blocks()})()
     run = PlanRun([], None, [], settings, result)  # type: ignore[arg-type]
     first = run.visits()

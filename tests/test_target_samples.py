@@ -161,12 +161,18 @@ def test_load_samples_of_a_midpoint_file_are_returned_as_read(tmp_path: Path) ->
 
 def test_load_samples_errors(tmp_path: Path) -> None:
     Table({"x": [1.0, 2.0]}).write(tmp_path / "post.ecsv", format="ascii.ecsv")
-    t = load_target(_target(tmp_path, "midpoint"))
+    # the target has no lisa.covariance: its covariance comes from the samples, read at load
     with pytest.raises(TargetFileError, match=r"post\.ecsv: no parameter columns"):
-        load_samples(t)
+        load_target(_target(tmp_path, "midpoint"))
     (tmp_path / "post.ecsv").write_text("%ECSV 1.0\n# ---\nnot: [a table\n")
     with pytest.raises(TargetFileError, match="cannot read posterior samples"):
-        load_samples(t)
+        load_target(_target(tmp_path, "midpoint"))
+    Table({"f_gw": [F0]}).write(tmp_path / "post.ecsv", format="ascii.ecsv", overwrite=True)
+    with pytest.raises(TargetFileError, match=r"post\.ecsv: 1 row; a covariance needs at least 2"):
+        load_target(_target(tmp_path, "midpoint"))
+    Table({"f_gw": [F0, np.nan]}).write(tmp_path / "post.ecsv", format="ascii.ecsv", overwrite=True)
+    with pytest.raises(TargetFileError, match=r"post\.ecsv: posterior samples contain NaN"):
+        load_target(_target(tmp_path, "midpoint"))
 
 
 def test_samples_path_survives_writing_elsewhere(tmp_path: Path) -> None:

@@ -169,7 +169,8 @@ def _delete(doc: dict[str, Any], path: str) -> None:
 
 @pytest.fixture
 def load(tmp_path: Path) -> Any:
-    (tmp_path / "post.ecsv").write_text("# samples\n")
+    # a readable samples file: a target without lisa.covariance takes its covariance from it
+    (tmp_path / "post.ecsv").write_text("# %ECSV 1.0\n# ---\nf_gw\n6.22e-3\n6.23e-3\n")
 
     def _load(doc: dict[str, Any]) -> Target:
         return target_from_dict(doc, tmp_path / "t.yaml")

@@ -1,8 +1,144 @@
 """ucbplan: phase-targeted spectroscopy of ultracompact binaries from LISA ephemerides.
 
-The method is that of the paper bundled with the project (see README, "How to cite").
+The method is that of the paper bundled with the project (see README, "How to cite"). The
+public API (docs/api.md) is importable from here::
+
+    import ucbplan
+    run = ucbplan.plan("hm-cnc.yaml", site="paranal", night="2040-02-15")
+
+Names are loaded on first use (PEP 562), so ``import ucbplan`` and ``ucbplan --help`` stay
+cheap: nothing below is imported until a name is asked for. The names and the modules that
+define them are listed once, in :data:`_PUBLIC`.
 """
 
-__all__ = ["__version__"]
+from __future__ import annotations
 
-__version__ = "0.1.0"
+import importlib
+from typing import TYPE_CHECKING, Any
+
+from ucbplan._version import __version__
+
+#: Public name → the module that defines it.
+_PUBLIC = {
+    "load_target": "ucbplan.api",
+    "get_site": "ucbplan.api",
+    "ephemeris": "ucbplan.api",
+    "horizon": "ucbplan.api",
+    "plan": "ucbplan.api",
+    "Plan": "ucbplan.api",
+    "default_constraints": "ucbplan.api",
+    "reduce": "ucbplan.api",
+    "Report": "ucbplan.api",
+    "fit_ephemeris": "ucbplan.api",
+    "simulate": "ucbplan.api",
+    "population_forecast": "ucbplan.api",
+    "Constraint": "ucbplan.observing.constraints",
+    "AirmassConstraint": "ucbplan.observing.constraints",
+    "AltitudeConstraint": "ucbplan.observing.constraints",
+    "AtNightConstraint": "ucbplan.observing.constraints",
+    "MoonIlluminationConstraint": "ucbplan.observing.constraints",
+    "MoonSeparationConstraint": "ucbplan.observing.constraints",
+    "ZenithHoleConstraint": "ucbplan.observing.constraints",
+    "UcbplanError": "ucbplan.errors",
+    "InputError": "ucbplan.errors",
+    "UcbplanWarning": "ucbplan.errors",
+    "PlanWarning": "ucbplan.errors",
+    "ReduceWarning": "ucbplan.errors",
+    "EarthOrientationWarning": "ucbplan.errors",
+    "offline": "ucbplan.offline",
+}
+
+__all__ = ["__version__", *_PUBLIC]
+
+
+def __getattr__(name: str) -> Any:
+    """Load a public name from its module on first use (module docstring)."""
+    module = _PUBLIC.get(name)
+    if module is None:
+        raise AttributeError(f"module 'ucbplan' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value  # later look-ups skip this function
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(__all__)
+
+
+if TYPE_CHECKING:  # the same names for type checkers and IDEs ("as": re-exported)
+    from ucbplan.api import (
+        Plan as Plan,
+    )
+    from ucbplan.api import (
+        Report as Report,
+    )
+    from ucbplan.api import (
+        default_constraints as default_constraints,
+    )
+    from ucbplan.api import (
+        ephemeris as ephemeris,
+    )
+    from ucbplan.api import (
+        fit_ephemeris as fit_ephemeris,
+    )
+    from ucbplan.api import (
+        get_site as get_site,
+    )
+    from ucbplan.api import (
+        horizon as horizon,
+    )
+    from ucbplan.api import (
+        load_target as load_target,
+    )
+    from ucbplan.api import (
+        plan as plan,
+    )
+    from ucbplan.api import (
+        population_forecast as population_forecast,
+    )
+    from ucbplan.api import (
+        reduce as reduce,
+    )
+    from ucbplan.api import (
+        simulate as simulate,
+    )
+    from ucbplan.errors import (
+        EarthOrientationWarning as EarthOrientationWarning,
+    )
+    from ucbplan.errors import (
+        InputError as InputError,
+    )
+    from ucbplan.errors import (
+        PlanWarning as PlanWarning,
+    )
+    from ucbplan.errors import (
+        ReduceWarning as ReduceWarning,
+    )
+    from ucbplan.errors import (
+        UcbplanError as UcbplanError,
+    )
+    from ucbplan.errors import (
+        UcbplanWarning as UcbplanWarning,
+    )
+    from ucbplan.observing.constraints import (
+        AirmassConstraint as AirmassConstraint,
+    )
+    from ucbplan.observing.constraints import (
+        AltitudeConstraint as AltitudeConstraint,
+    )
+    from ucbplan.observing.constraints import (
+        AtNightConstraint as AtNightConstraint,
+    )
+    from ucbplan.observing.constraints import (
+        Constraint as Constraint,
+    )
+    from ucbplan.observing.constraints import (
+        MoonIlluminationConstraint as MoonIlluminationConstraint,
+    )
+    from ucbplan.observing.constraints import (
+        MoonSeparationConstraint as MoonSeparationConstraint,
+    )
+    from ucbplan.observing.constraints import (
+        ZenithHoleConstraint as ZenithHoleConstraint,
+    )
+    from ucbplan.offline import offline as offline

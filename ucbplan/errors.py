@@ -10,23 +10,38 @@ Four kinds, each also inheriting the matching built-in so callers can catch eith
   (:class:`ConvergenceError`).
 
 Messages are one line: ``FILE: field: expected …, got …`` and how to fix it. Quote input values
-with :func:`shorten` so a huge value never makes a huge message.
+with :func:`shorten` so a huge value never makes a huge message. A library error about an
+argument names the parameter (``airmass_max: expected …``) and may carry it in
+:attr:`InputError.parameter`; the command line maps parameter names to its flags in one place
+(``ucbplan.cli._flags``).
+
+Warnings a user must act on are emitted through :func:`warnings.warn` with a category of the
+:class:`UcbplanWarning` tree (so a script can filter or escalate them) as well as returned in
+the results' ``warnings`` lists; :func:`emit` does both kinds of call with one line.
 """
 
 from __future__ import annotations
 
+import warnings
+
 __all__ = [
     "ConvergenceError",
+    "EarthOrientationWarning",
+    "EpochRangeError",
     "InputError",
     "InputFileError",
     "NumericalError",
     "OutputError",
     "OutputExistsError",
+    "PlanWarning",
+    "ReduceWarning",
     "SchemaError",
     "SiteError",
     "TargetFileError",
     "UcbplanError",
+    "UcbplanWarning",
     "VelocityFileError",
+    "emit",
     "shorten",
 ]
 
@@ -53,7 +68,24 @@ class UcbplanError(Exception):
 
 
 class InputError(UcbplanError, ValueError):
-    """An option value or input value is invalid."""
+    """An option value or input value is invalid.
+
+    Parameters
+    ----------
+    message : str
+        One line: what is wrong, what was expected and how to fix it.
+    parameter : str, optional
+        The library parameter at fault (``airmass_max``), when one is; the command line names
+        its flag instead (``--airmass-max``).
+    """
+
+    def __init__(self, message: str = "", parameter: str | None = None) -> None:
+        super().__init__(message)
+        self.parameter = parameter
+
+
+class EpochRangeError(InputError):
+    """An epoch that parses but lies outside the supported years (``YEAR_RANGE``)."""
 
 
 class SchemaError(InputError):
@@ -90,3 +122,41 @@ class NumericalError(UcbplanError, ArithmeticError):
 
 class ConvergenceError(NumericalError, RuntimeError):
     """A numerical solver did not converge."""
+
+
+class UcbplanWarning(UserWarning):
+    """Base class of the warnings ucbplan emits: something the user must act on.
+
+    Silence all of them with ``warnings.simplefilter("ignore", ucbplan.UcbplanWarning)`` or
+    turn them into errors with ``"error"``.
+    """
+
+
+class EarthOrientationWarning(UcbplanWarning):
+    """Times past the bundled IERS Earth-orientation predictions or leap-second table."""
+
+
+class PlanWarning(UcbplanWarning):
+    """A plan was made but something in it needs attention (smearing, horizons, budgets)."""
+
+
+class ReduceWarning(UcbplanWarning):
+    """A reduction finished but something in its input or result needs attention."""
+
+
+#: Words that mark a warning line as being about the bundled IERS / leap-second tables.
+_EARTH_WORDS = ("IERS", "leap-second", "leap second", "UT1")
+
+
+def warning_category(text: str, default: type[UcbplanWarning]) -> type[UcbplanWarning]:
+    """The category of a warning line: :class:`EarthOrientationWarning` for one about the
+    bundled time tables, else ``default``."""
+    return EarthOrientationWarning if any(w in text for w in _EARTH_WORDS) else default
+
+
+def emit(lines: list[str], default: type[UcbplanWarning], stacklevel: int = 3) -> list[str]:
+    """Emit each warning line through :func:`warnings.warn` (category by
+    :func:`warning_category`) and return the lines unchanged (they also go into the result)."""
+    for line in lines:
+        warnings.warn(line, warning_category(line, default), stacklevel=stacklevel)
+    return lines

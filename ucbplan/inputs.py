@@ -135,8 +135,13 @@ def read_text(path: Path, what: str = "text table", limit: int = MAX_TEXT_BYTES)
     return _decode(_read_bytes(path, limit, what), path)
 
 
-def load_yaml(path: Path, what: str = "YAML file", text: str | None = None) -> Any:
+def load_yaml(
+    path: Path, what: str = "YAML file", text: str | None = None, *, documents: bool = False
+) -> Any:
     """Parse a YAML file (or ``text`` read from it) strictly; see the module notes.
+
+    ``documents``: return the list of every document of a multi-document file (``---``
+    separated) instead of requiring exactly one.
 
     Raises
     ------
@@ -153,7 +158,12 @@ def load_yaml(path: Path, what: str = "YAML file", text: str | None = None) -> A
     except yaml.YAMLError as exc:  # the reader checks characters on construction
         raise SchemaError(f"{path}: not valid YAML: {' '.join(str(exc).split())}") from None
     try:
-        return loader.get_single_data()
+        if not documents:
+            return loader.get_single_data()
+        docs = []
+        while loader.check_data():
+            docs.append(loader.get_data())
+        return docs
     except yaml.MarkedYAMLError as exc:
         mark = exc.problem_mark
         where = f"line {mark.line + 1}, column {mark.column + 1}: " if mark else ""
@@ -203,7 +213,8 @@ def check_range(
         bracket = "(" if low_open else "["
         raise error(
             f"{name}: expected a number in {bracket}{low:g}, {high:g}]{_suffix(unit, why)}, "
-            f"got {shorten(value, 40)}"
+            f"got {shorten(value, 40)}",
+            parameter=name if name.isidentifier() else None,
         )
     return float(value)
 
@@ -228,7 +239,8 @@ def check_int(
     if not (ok and low <= int(value) <= high):
         raise error(
             f"{name}: expected a whole number in [{low}, {high}]{_suffix('', why)}, "
-            f"got {shorten(value, 40)}"
+            f"got {shorten(value, 40)}",
+            parameter=name if name.isidentifier() else None,
         )
     return int(value)
 
@@ -262,4 +274,4 @@ def check_alpha(alpha: object) -> float:
         Otherwise (one line naming the option, the range and the value).
     """
     why = "margin on the phase tolerance: 1 spends all of it"
-    return check_range("--alpha", alpha, 0.0, MAX_ALPHA, "", why, low_open=True)
+    return check_range("alpha", alpha, 0.0, MAX_ALPHA, "", why, low_open=True)

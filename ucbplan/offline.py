@@ -1,14 +1,19 @@
-"""Offline astropy: the bundled IERS and leap-second tables, never the network.
+"""Offline astropy, in a scope: the bundled IERS and leap-second tables, never the network.
 
-Call :func:`configure_offline` before any time or coordinate work, in the CLI and in every worker
-process. It changes astropy's configuration, once per process, and makes the IERS Earth-rotation
-table load lazily from a parsed cache: astropy opens the table only when a conversion first needs
-UT1 or polar motion (so ``--help`` or a horizon never pays for it), and that first open then reads
-a pickle of the parsed table (~5 ms) instead of parsing the IERS-A and -B text files (~0.5 s).
-The cache lives in ``$UCBPLAN_CACHE_DIR`` (default ``$XDG_CACHE_HOME/ucbplan`` or
-``~/.cache/ucbplan``; an empty value disables it) and is keyed by the astropy and
-astropy-iers-data versions and the bundled files' size and modification time, so an update of
+Every public entry point (the functions of :mod:`ucbplan.api`, the command line, each
+population task) runs inside :func:`offline`. On entry it sets astropy's IERS and data
+configuration with ``conf.set_temp`` (no downloads, no age limit on the bundled predictions, no
+internet) and, unless the caller has chosen an Earth-orientation table of their own
+(``astropy.utils.iers.earth_orientation_table.set``), installs the bundled IERS-A/B table as an
+explicit table for the scope. On exit everything is as it was: astropy's configuration, its
+``IERS_Auto`` class and its default table are never replaced or filled by ucbplan.
+
+The bundled table is read once per process, from a pickle of the parsed table (~10 ms) instead
+of parsing the IERS-A and -B text files (~0.5 s). The cache lives in ``$UCBPLAN_CACHE_DIR``
+(default ``$XDG_CACHE_HOME/ucbplan`` or ``~/.cache/ucbplan``; an empty value disables it) and is
+keyed by the astropy version and the bundled files' size and modification time, so an update of
 either package is picked up. A missing, stale or unreadable cache falls back to astropy's parser.
+Times past the bundled tables are warned about by the planner (docs/method.md, time scales).
 """
 
 from __future__ import annotations
@@ -17,31 +22,67 @@ import hashlib
 import os
 import pickle
 import tempfile
+from collections.abc import Iterator
+from contextlib import ExitStack, contextmanager
 from pathlib import Path
 from typing import Any
 
-__all__ = ["configure_offline", "iers_cache_path"]
+__all__ = ["bundled_iers_table", "iers_cache_path", "offline"]
 
-_OFFLINE_DONE = False
+#: The bundled IERS table once read in this process (an explicit cache: see :func:`offline`).
+_TABLE: dict[str, Any] = {}
 
 
-def configure_offline() -> None:
-    """Configure astropy so that nothing ever touches the network (docs/method.md, time scales).
+@contextmanager
+def offline() -> Iterator[None]:
+    """A scope in which astropy never touches the network, restored on exit.
 
-    Called once at CLI start, never on import. Uses the IERS-A/B tables and leap seconds bundled
-    with ``astropy-iers-data``; nights past their coverage are warned about by the planner. The
-    IERS table is loaded on first use, from the parsed cache when there is one (module docstring).
+    Nested scopes are cheap (the inner one finds the table in place). Use it around any time or
+    coordinate work done outside ucbplan's own entry points, e.g. in a worker process::
+
+        with offline():
+            t.ut1
+
+    Notes
+    -----
+    Sets, for the scope only: ``iers.conf.auto_download = False``, ``iers.conf.auto_max_age =
+    None`` (the bundled IERS-A predictions are used however old, and nights past them are warned
+    about, never refused) and ``data.conf.allow_internet = False``; and the bundled IERS table
+    as ``iers.earth_orientation_table`` unless one was set by the caller.
     """
-    global _OFFLINE_DONE
-    if _OFFLINE_DONE:
-        return
     from astropy.utils import data, iers
 
-    iers.conf.auto_download = False
-    iers.conf.auto_max_age = None
-    data.conf.allow_internet = False
-    iers.IERS_Auto.open = classmethod(_open_cached)
-    _OFFLINE_DONE = True
+    with ExitStack() as stack:
+        stack.enter_context(iers.conf.set_temp("auto_download", False))
+        stack.enter_context(iers.conf.set_temp("auto_max_age", None))
+        stack.enter_context(data.conf.set_temp("allow_internet", False))
+        # ScienceState keeps the caller's choice in ``_value`` (None: astropy's default table)
+        if iers.earth_orientation_table._value is None:
+            stack.enter_context(iers.earth_orientation_table.set(bundled_iers_table()))
+        yield
+
+
+def bundled_iers_table() -> Any:
+    """The IERS-A/B table bundled with astropy, read once per process (from the cache if any).
+
+    Must be called with downloads off (inside :func:`offline`): the table is an
+    ``IERS_Auto`` instance, as astropy's own default would be offline.
+    """
+    table = _TABLE.get("iers")
+    if table is None:
+        from astropy.utils import iers
+
+        try:
+            path = iers_cache_path()
+        except OSError:
+            path = None
+        table = _read_cache(path, iers.IERS_Auto) if path is not None else None
+        if table is None:
+            table = iers.IERS_Auto.read()
+            if path is not None:
+                _write_cache(path, table)
+        _TABLE["iers"] = table
+    return table
 
 
 def iers_cache_path() -> Path | None:
@@ -61,23 +102,6 @@ def iers_cache_path() -> Path | None:
         key += [str(name), str(st.st_size), str(st.st_mtime_ns)]
     digest = hashlib.sha256("\0".join(key).encode()).hexdigest()[:16]
     return Path(root) / f"iers-auto-{digest}.pickle"
-
-
-def _open_cached(cls: Any) -> Any:
-    """``IERS_Auto.open`` that reads the parsed table from the cache (and fills the cache)."""
-    if cls.iers_table is not None:
-        return cls.iers_table
-    try:
-        path = iers_cache_path()
-    except OSError:
-        path = None
-    table = _read_cache(path, cls) if path is not None else None
-    if table is None:
-        table = cls.read()
-        if path is not None:
-            _write_cache(path, table)
-    cls.iers_table = table
-    return table
 
 
 def _read_cache(path: Path, cls: type) -> Any:

@@ -10,6 +10,7 @@ from typing import IO, Any
 from rich.console import Console
 from rich.markup import escape
 from rich.table import Table as RichTable
+from rich.text import Text
 
 from ucbplan.errors import InputError
 from ucbplan.io import (
@@ -18,14 +19,13 @@ from ucbplan.io import (
     output_format,
     write_output,
 )
-from ucbplan.offline import configure_offline
 
 __all__ = [
     "TABLE_FORMATS",
     "check_output_path",
-    "configure_offline",
     "dump_json",
     "err_console",
+    "literal",
     "pick_format",
     "rich_table",
     "write_output",
@@ -39,30 +39,69 @@ _TAG = re.compile(r"\[/?[a-z #]*\]")
 ALERTS = ("warning", "error", "interrupted")
 
 
+#: Indent [columns] of the continuation lines of a message wrapped at the terminal width.
+HANGING_INDENT = 2
+
+
 class _Console(Console):
-    """A rich console that, with ``quiet_info`` set (``ucbplan --quiet``), prints only warnings
-    and errors: tables, notes and "wrote …" lines are left out; machine output on stdout is not
-    affected."""
+    """A rich console for the messages of the CLI.
+
+    With ``quiet_info`` set (``ucbplan --quiet``) it prints only warnings and errors: tables,
+    notes and "wrote …" lines are left out; machine output on stdout is not affected. With
+    ``fold`` set (a terminal, or ``COLUMNS`` given), a message printed with ``soft_wrap=True``
+    (one logical line: a warning, an error, a note) is wrapped at a word to the terminal width,
+    its continuation lines indented by :data:`HANGING_INDENT`; without it (pipes and logs) it
+    stays on one line, so that ``grep`` finds it whole.
+    """
 
     quiet_info = False
+    fold = True
 
     def print(self, *objects: Any, **kwargs: Any) -> None:
         if self.quiet_info and not _is_alert(objects):
             return
+        if self.fold and kwargs.get("soft_wrap") and len(objects) == 1:
+            if isinstance(objects[0], str):
+                objects = (self._hanging(objects[0], kwargs.pop("markup", None)),)
         super().print(*objects, **kwargs)
+
+    def _hanging(self, message: str, markup: bool | None) -> Text:
+        """``message`` as text wrapped to the console width, with a hanging indent."""
+        text = self.render_str(message, markup=markup, emoji=False, highlight=False)
+        first = text.wrap(self, self.width)
+        if len(first) <= 1:
+            return text
+        rest = text.divide([len(first[0].plain)])[1]
+        out = first[0]
+        for line in rest.wrap(self, max(self.width - HANGING_INDENT, 20)):
+            out.rstrip()
+            out.append("\n" + " " * HANGING_INDENT)
+            out.append_text(line)
+        out.rstrip()
+        return out
 
 
 def _is_alert(objects: tuple[Any, ...]) -> bool:
     first = objects[0] if objects else ""
+    if isinstance(first, Text):
+        first = first.plain
     return isinstance(first, str) and _TAG.sub("", first).lstrip().startswith(ALERTS)
 
 
 def _make_console() -> _Console:
-    console = _Console(stderr=True, highlight=False)
-    if not console.is_terminal and "COLUMNS" not in os.environ:
-        # pipes and CI logs: wide enough that ISO times with microseconds are never cut
-        console = _Console(stderr=True, highlight=False, width=180)
+    console = _Console(stderr=True, highlight=False, emoji=False)
+    if not console.is_terminal and not os.environ.get("COLUMNS", "").strip():
+        # pipes and CI logs: wide enough that ISO times with microseconds are never cut, and
+        # one line per message
+        console = _Console(stderr=True, highlight=False, emoji=False, width=180)
+        console.fold = False
     return console
+
+
+def literal(text: object) -> str:
+    """``text`` (a file name, a target name) escaped so that rich prints it as it is spelled:
+    ``hmcnc[draft].yaml`` stays ``hmcnc[draft].yaml``, never a style tag."""
+    return escape(str(text))
 
 
 #: Console for humans: rich tables and warnings go to stderr so stdout stays machine-readable.

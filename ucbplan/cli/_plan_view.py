@@ -3,6 +3,7 @@ summary of long plans, visits, time accounting and the reasons anchors were not 
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 from rich.markup import escape
@@ -223,6 +224,7 @@ def _print_accounting(run: Any, verbose: bool = False) -> None:
             f"{e['efficiency']:.1%}",
         )
     err_console.print(table)
+    _print_strategies(run)
     _print_reasons(run)
     for name, goal in run.result.goals.items():
         at: dict[float, int] = {}
@@ -230,11 +232,57 @@ def _print_accounting(run: Any, verbose: bool = False) -> None:
             if b.target == name:
                 at[round(b.u_star_rad, 4)] = at.get(round(b.u_star_rad, 4), 0) + b.n_exp
         split = ", ".join(f"{k} at u★ = {u:.4f}" for u, k in sorted(at.items()))
+        if len(at) > 4:
+            split = "untargeted phases"
+        spent = acc["targets"].get(name, {})
+        wall = sum(spent.get(k, 0.0) for k in ("shutter_s", "overhead_s", "idle_s"))
         err_console.print(
-            f"goal {escape(goal.goal.describe())}: {escape(name)}: {goal.n_spectra} spectra "
-            f"planned ({split}), expected {escape(_expected(goal))}",
+            f"goal {escape(goal.goal.describe())}: {escape(name)}: {sum(at.values())} spectra "
+            f"in {spent.get('visits', 0)} visit(s), {_hours(wall)} "
+            f"({split}), expected {escape(_expected(goal))}",
             soft_wrap=True,
         )
+
+
+def _print_strategies(run: Any) -> None:
+    """Per target whose exposure time was chosen: every strategy's best exposure time and the
+    information on K it buys per visit, the chosen one marked, and what the plan collects."""
+    chosen = {n: te for n, te in run.result.exposures.items() if te.results}
+    if not chosen:
+        return
+    goal = any(te.goal_hours for te in chosen.values())
+    last = "hours to goal" if goal else "of best"
+    table = rich_table(
+        "Exposure strategy — information on K per full visit, * = planned",
+        ["target", "strategy", "exp. [s]", "Λ_K", "exp./visit", "info [km⁻²s²]", last],
+    )
+    for name, te in chosen.items():
+        top = max((r.info_per_visit for r in te.results), default=0.0)
+        hours = te.goal_hours or (math.nan,) * len(te.results)
+        for r, h in zip(te.results, hours, strict=True):
+            mark = "*" if r.name == te.strategy else ""
+            share = f"{r.info_per_visit / top:.0%}" if top > 0 and r.possible else "-"
+            table.add_row(
+                escape(name),
+                f"{r.name}{mark}",
+                f"{r.exptime_s:.0f}" if r.possible else "-",
+                f"{r.lambda_k:.3f}" if r.possible else "-",
+                str(r.n_exposures) if r.possible else "-",
+                f"{r.info_per_visit:.4g}" if r.possible else "-",
+                (f"{h:.2f} h" if math.isfinite(h) else "-") if goal else share,
+            )
+    err_console.print(table)
+    for name, te in chosen.items():
+        for r in te.results:
+            if not r.possible and r.note:
+                err_console.print(f"{escape(name)}: {r.name}: {escape(r.note)}", soft_wrap=True)
+    for name, info in run.collected_info().items():
+        if name in chosen and info > 0:
+            err_console.print(
+                f"{escape(name)}: the planned spectra collect {info:.4g} (km/s)^-2 of information "
+                f"on K (σ_K ≥ {info**-0.5:.3g} km/s)",
+                soft_wrap=True,
+            )
 
 
 def _expected(goal: Any) -> str:

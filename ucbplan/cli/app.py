@@ -1,8 +1,8 @@
 """The ``ucbplan`` command line: a thin shell over the library.
 
 Each command family lives in its own ``ucbplan.cli`` module exposing ``register(app)``; this
-module only builds the app, configures astropy for offline use and turns ``UcbplanError`` into
-one line on stderr with exit code 2 (no traceback).
+module only builds the app, runs each command in the offline astropy scope and turns
+``UcbplanError`` into one line on stderr with exit code 2 (no traceback).
 """
 
 from __future__ import annotations
@@ -12,10 +12,10 @@ import sys
 from typing import NoReturn
 
 import typer
-from rich.markup import escape
 
-from ucbplan import __version__
-from ucbplan.cli._console import configure_offline, err_console
+from ucbplan._version import __version__
+from ucbplan.cli._console import err_console
+from ucbplan.cli._flags import cli_message
 from ucbplan.errors import UcbplanError
 
 __all__ = ["app", "main"]
@@ -38,6 +38,7 @@ def _version(value: bool) -> None:
 
 @app.callback()
 def _root(
+    ctx: typer.Context,
     version: bool = typer.Option(
         False, "--version", callback=_version, is_eager=True, help="Print the version and exit."
     ),
@@ -48,15 +49,17 @@ def _root(
         False, "--quiet", "-q", help="Print only warnings and errors (no tables or notes)."
     ),
 ) -> None:
-    """Configure offline astropy once, before any command runs."""
+    """Run the command inside the offline astropy scope (restored when the command ends)."""
+    from ucbplan.offline import offline
+
     err_console.quiet_info = quiet
-    configure_offline()
+    ctx.with_resource(offline())
 
 
 def _register_all() -> None:
-    from ucbplan.cli import core, export, feasibility, lisa, plan, population, reduce
+    from ucbplan.cli import core, export, feasibility, lisa, now, plan, population, reduce
 
-    for module in (core, plan, export, feasibility, reduce, lisa, population):
+    for module in (core, plan, now, export, feasibility, reduce, lisa, population):
         module.register(app)
 
 
@@ -87,7 +90,8 @@ def _one_line(text: str) -> str:
 
 
 def _fail(message: str, code: int) -> NoReturn:
-    err_console.print(escape(message), soft_wrap=True, markup=False)
+    # literal text (markup=False): a file name like hmcnc[draft].yaml is printed as it is spelled
+    err_console.print(message, soft_wrap=True, markup=False)
     sys.exit(code)
 
 
@@ -122,7 +126,7 @@ def main() -> None:
     try:
         code = _run()
     except UcbplanError as exc:
-        _fail(f"error: {_one_line(str(exc))}", EXIT_USER)
+        _fail(f"error: {_one_line(cli_message(str(exc)))}", EXIT_USER)
     except (typer.Exit, SystemExit) as exc:
         code = getattr(exc, "exit_code", getattr(exc, "code", 0))
         code = code if isinstance(code, int) else EXIT_BUG

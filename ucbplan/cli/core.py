@@ -54,29 +54,11 @@ __all__ = ["horizon", "register", "validate"]
 def _resolve_k_sigma(
     target: Target, sigma_v: float | None, k_eff: float | None
 ) -> tuple[float, float]:
-    spec = target.spectroscopy
-    sv = sigma_v if sigma_v is not None else (spec.sigma_v_kms if spec else None)
-    k = k_eff if k_eff is not None else (spec.k_for_tolerance if spec else None)
-    if sv is None:
-        raise UcbplanError(
-            f"{target.name}: no RV precision; pass --sigma-v KM_S or add spectroscopy.sigma_v "
-            "to the target file"
-        )
-    if k is None:
-        raise UcbplanError(
-            f"{target.name}: no semi-amplitude; pass --k-eff KM_S or add spectroscopy.K1/K2 "
-            "(or K_eff) to the target file"
-        )
-    from ucbplan.inputs import check_number
+    """σ_v and K from the options, else the target file (:func:`ucbplan.api.ephemeris.
+    resolve_k_sigma`; its errors name sigma_v / k_eff, printed as --sigma-v / --k-eff)."""
+    from ucbplan.api.ephemeris import resolve_k_sigma
 
-    check_number("--sigma-v", sv, 0.0, 1e4, "km/s")
-    check_number("--k-eff", k, 0.1, 1e4, "km/s", "a binary's velocity semi-amplitude")
-    if sv >= k:
-        raise UcbplanError(
-            f"--sigma-v ({sv:g} km/s) must be smaller than --k-eff ({k:g} km/s): with "
-            "σ_v ≥ K no phase tolerance exists"
-        )
-    return sv, k
+    return resolve_k_sigma(target, sigma_v, k_eff)
 
 
 def validate(targets: TargetsArg, fmt: ValidateFormatOpt = "table") -> None:
@@ -112,6 +94,7 @@ _SUMMARY_LABELS = (
     ("sigma_t_asc_s", "σ(T_asc) [s]"),
     ("sigma_u_end_mrad", "σ_u at end of LISA obs. [mrad]"),
     ("sigmas", "σ's (SI)"),
+    ("covariance_from", "covariance from"),
 )
 
 
@@ -160,6 +143,8 @@ def _summary(t: Target) -> dict[str, Any]:
     p = t.params
     t_asc = t.t_ref + TimeDelta(ascending_node_s(p), format="sec")
     sigmas = {n: float(math.sqrt(t.cov_matrix[i, i])) for i, n in enumerate(t.cov_names)}
+    if t.samples_covariance is not None and t.covariance_source.startswith("samples"):
+        sigmas |= _samples_sigmas(t.covariance)
     return {
         "name": t.name,
         "file": str(t.source.name) if t.source else "",
@@ -174,7 +159,15 @@ def _summary(t: Target) -> dict[str, Any]:
         "sigma_t_asc_s": sigma_ascending_node_s(p, t.covariance),
         "sigma_u_end_mrad": 1e3 * sigma_u_end(t, "quadrature"),
         "sigmas": sigmas,
+        "covariance_from": t.covariance_source,
     }
+
+
+def _samples_sigmas(cov: Any) -> dict[str, float]:
+    """σ of each sampled phase-model parameter from the samples' covariance (SI)."""
+    from ucbplan.core.params import PARAM_NAMES
+
+    return {n: float(math.sqrt(cov[k, k])) for k, n in enumerate(PARAM_NAMES) if cov[k, k] > 0}
 
 
 def _timing_summary(t: Target) -> dict[str, Any]:
@@ -220,7 +213,10 @@ def _timing_summary(t: Target) -> dict[str, Any]:
 
 HorizonTargetsArg = Annotated[
     list[Path],
-    typer.Argument(help="Target YAML file(s), or directories of them (*.yaml, *.yml)."),
+    typer.Argument(
+        help="Target YAML file(s), folders of them (*.yaml, *.yml), or a catalog: one YAML "
+        "file of several target documents separated by '---' lines."
+    ),
 ]
 
 
@@ -252,30 +248,32 @@ def horizon(
 ) -> None:
     """Phase-coherence horizons T_valid (paper Tables 4 and 7) and σ_u at the end of LISA.
 
-    For a timing ephemeris: T_valid before and after T0, separately. Several targets (files or
-    directories) give one row per target, computed in one vectorised pass.
+    For a timing ephemeris: T_valid before and after T0, separately. Several targets (files,
+    folders or a catalog) give one table, a row per target × anchor × α, computed in one
+    vectorised pass.
     """
     fmt = pick_format(output, fmt, TABLE_FORMATS)
     from ucbplan.inputs import check_alpha
+    from ucbplan.target import load_target_documents
 
     for a in alpha:
         check_alpha(a)
     paths = _expand_targets(target)
-    if len(paths) > 1 and plot is not None:
-        raise UcbplanError("--plot takes one target; give a single target file")
     if plot is not None:
         from ucbplan.plotting import check_figure_path
 
         check_figure_path(plot, overwrite)
         if output is not None:
             check_output_path(output, overwrite)
-    if len(paths) > 1:
-        _horizon_many(paths, sigma_v, k_eff, alpha, epochs, anchor, fmt, output, overwrite)
+    targets = [t for p in paths for t in load_target_documents(p)]
+    if len(targets) > 1:
+        if plot is not None:
+            raise UcbplanError("--plot takes one target; give a single target file")
+        _horizon_many(targets, sigma_v, k_eff, alpha, epochs, anchor, fmt, output, overwrite)
         return
     from ucbplan.core.forecast import horizon_table
-    from ucbplan.target import load_target
 
-    t = load_target(paths[0])
+    t = targets[0]
     sv, k = _resolve_k_sigma(t, sigma_v, k_eff)
     rows = horizon_table(t, sv, k, alphas=alpha, anchors=anchor, n_epochs=epochs)
     if plot is not None:
@@ -296,7 +294,7 @@ _MANY_ROWS = 40
 
 
 def _horizon_many(
-    paths: list[Path],
+    targets: list[Target],
     sigma_v: float | None,
     k_eff: float | None,
     alpha: list[float],
@@ -306,60 +304,61 @@ def _horizon_many(
     output: Path | None,
     overwrite: bool,
 ) -> None:
-    """One row per target: horizon_columns over all targets at once."""
-    import numpy as np
-    from astropy.table import Table
+    """The long horizon table of many targets (:func:`ucbplan.core.horizon_batch.horizons`)."""
+    from ucbplan.core.horizon_batch import horizon_rows, horizons
 
-    from ucbplan.core.forecast import two_sided
-    from ucbplan.core.horizon_batch import horizon_columns
-    from ucbplan.target import load_target
-
-    targets = [load_target(p) for p in paths]
-    sk = np.array([_resolve_k_sigma(t, sigma_v, k_eff) for t in targets])
-    cols = horizon_columns(
-        np.array([t.params.as_array() for t in targets]),
-        np.array([t.covariance for t in targets]),
-        np.array([t.t_obs_s for t in targets]),
-        sk[:, 0],
-        sk[:, 1],
-        alphas=alpha,
-        anchors=anchor,
-        n_epochs=epochs,
-        two_sided=[two_sided(t) for t in targets],
-    )
-    tab = Table()
-    tab["target"] = [t.name for t in targets]
-    tab["sigma_v_kms"], tab["k_eff_kms"] = sk[:, 0], sk[:, 1]
-    for key, values in cols.items():  # "field:anchor[:alpha]" → field_anchor[_aALPHA]
-        field, *rest = key.split(":")
-        tab["_".join([field, rest[0], *(f"a{x}" for x in rest[1:])])] = values
-    tab.meta.update({"n_epochs": epochs})
+    for t in targets:  # one-line errors naming the option (the library names its parameter)
+        _resolve_k_sigma(t, sigma_v, k_eff)
+    tab = horizons(targets, sigma_v, k_eff, alphas=alpha, anchors=anchor, n_epochs=epochs)
     if fmt == "json":
-        doc = [dict(zip(tab.colnames, row, strict=True)) for row in tab.iterrows()]
-        write_output(output, lambda h: dump_json(doc, h), overwrite=overwrite)
+        rows = horizon_rows(tab)
+        write_output(output, lambda h: _dump_rows(rows, h), overwrite=overwrite)
     elif fmt != "table":
         write_table_output(tab, fmt, output, overwrite)
     else:
         _print_many(tab)
 
 
+def _dump_rows(rows: list[dict[str, Any]], handle: Any) -> None:
+    """A JSON array with one row per line, encoded in one call (numbers are NaN-free).
+
+    Every row starts with its ``target`` key, and inside an encoded string a quote is always
+    escaped, so ``}, {"target": `` occurs only between rows: splitting there is exact.
+    """
+    import json
+
+    text = json.dumps(rows, allow_nan=False, ensure_ascii=False)
+    text = text.replace('}, {"target": ', '},\n{"target": ')
+    handle.write("[\n" + text[1:-1] + "\n]\n")
+
+
 def _print_many(tab: Any) -> None:
-    """The per-target table on the terminal, or a summary of it when it is long."""
+    """The long table on the terminal (T_valid per target, anchor and α), or a summary of it."""
     import numpy as np
 
-    shown = [c for c in tab.colnames if c == "target" or c.startswith("t_valid_days")]
-    if len(tab) <= _MANY_ROWS:
-        rt = rich_table(f"horizons of {len(tab)} targets [d]", shown)
-        for row in tab.iterrows(*shown):
-            rt.add_row(row[0], *(f"{v:.0f}" for v in row[1:]))
+    n = len(set(tab["target"]))
+    if n <= _MANY_ROWS:
+        heads = ["target", "anchor", "α", "T_valid [d]", "T_valid before T0 [d]"]
+        two = bool(np.any(tab["kind"] == "timing"))  # the before column only if a row has it
+        rt = rich_table(
+            f"horizons of {n} targets (after the end of the information)", heads[: 4 + two]
+        )
+        cols = ("target", "anchor", "alpha", "t_valid_days", "t_valid_before_days")
+        for row in tab.iterrows(*cols):
+            before = [f"{row[4]:.0f}" if np.isfinite(row[4]) else "—"] if two else []
+            rt.add_row(row[0], row[1], f"{row[2]:g}", f"{row[3]:.0f}", *before)
         err_console.print(rt)
         return
-    for c in shown[1:]:
-        v = np.asarray(tab[c])
-        err_console.print(
-            escape(f"{c}: median {np.median(v):.0f} d, min {v.min():.0f} d, max {v.max():.0f} d")
-        )
-    err_console.print(f"{len(tab)} targets: write the full table with -o FILE.ecsv")
+    for a in dict.fromkeys(tab["anchor"]):
+        for al in dict.fromkeys(tab["alpha"]):
+            v = np.asarray(tab["t_valid_days"][(tab["anchor"] == a) & (tab["alpha"] == al)])
+            err_console.print(
+                escape(
+                    f"T_valid {a}, α={al:g}: median {np.median(v):.0f} d, min {v.min():.0f} d, "
+                    f"max {v.max():.0f} d"
+                )
+            )
+    err_console.print(f"{n} targets: write the full table with -o FILE.ecsv")
 
 
 def _horizon_table(t: Target, rows: list[Any], sv: float, k: float, epochs: int) -> Any:

@@ -9,14 +9,12 @@
 
 from __future__ import annotations
 
-import math
 from typing import TYPE_CHECKING, Any
 
 import typer
 import typer.core
 from rich.markup import escape
 
-from ucbplan import __version__
 from ucbplan.cli._console import (
     TABLE_FORMATS,
     dump_json,
@@ -43,8 +41,7 @@ from ucbplan.cli._options import (
     TargetArg,
 )
 from ucbplan.cli.timing import ephemeris_fit
-from ucbplan.core.constants import DAY_S
-from ucbplan.errors import UcbplanError, shorten
+from ucbplan.errors import UcbplanError
 
 if TYPE_CHECKING:  # ucbplan.target pulls in astropy: imported inside the commands
     from ucbplan.target import Target
@@ -68,6 +65,7 @@ def ephemeris(
     A timing ephemeris has no π mode; its epochs carry the cycle number n of its polynomial.
     `--anchor eclipse` gives primary and secondary eclipses.
     """
+    from ucbplan.api.ephemeris import epoch_table, epoch_window, horizon_warnings
     from ucbplan.core.ephemeris import find_epochs
 
     fmt = pick_format(output, fmt, TABLE_FORMATS)
@@ -76,156 +74,15 @@ def ephemeris(
     from ucbplan.target import load_target
 
     t = load_target(target)
-    tau0, tau1 = _window(t, start, end, anchor, max_epochs)
+    tau0, tau1 = epoch_window(t, start, end, anchor, max_epochs)
     es = find_epochs(t, tau0, tau1, anchor, star)
-    if t.kind == "timing":
-        _warn_timing_horizon(t, tau0, tau1)
-    elif tau1 > t.t_obs_s / 2:
-        _warn_horizon(t, tau1)
-    table = _epoch_table(t, es)
+    for line in horizon_warnings(t, tau0, tau1):
+        err_console.print(f"[yellow]warning:[/] {escape(line)}")
+    table = epoch_table(t, es)
     if fmt == "table":
         _print_epochs(t, table)
         return
     write_table_output(table, fmt, output, overwrite)
-
-
-def _window(t: Target, start: str, end: str, anchor: str, max_epochs: int) -> tuple[float, float]:
-    """--start/--end as TDB seconds since the target's t_ref; refuse empty or huge windows."""
-    from ucbplan.core.timescale import parse_tdb
-
-    t0 = parse_tdb(start, "--start")
-    t1 = parse_tdb(end, "--end")
-    tau0, tau1 = float(t.tau(t0)), float(t.tau(t1))
-    if tau1 <= tau0:
-        raise UcbplanError(
-            f"--end ({shorten(end, 60)}) must be after --start ({shorten(start, 60)})"
-        )
-    expected = (tau1 - tau0) / t.period_s * (2 if anchor != "u" else 1)
-    if expected > max_epochs:
-        raise UcbplanError(
-            f"window holds ~{expected:.3g} epochs (> --max-epochs {max_epochs}); shorten it"
-        )
-    return tau0, tau1
-
-
-def _warn_horizon(t: Target, tau_end: float) -> None:
-    """Warn when the window reaches past T_valid(quadrature, α = 1) of the target file's σ_v, K."""
-    spec = t.spectroscopy
-    if spec is None or spec.sigma_v_kms is None or spec.k_for_tolerance is None:
-        return
-    from ucbplan.core.forecast import horizon_s
-
-    tv = horizon_s(t, spec.sigma_v_kms, spec.k_for_tolerance, "quadrature")
-    if tau_end > t.t_obs_s / 2 + tv:
-        err_console.print(
-            f"[yellow]warning:[/] epochs after T_valid(quadrature, α=1) = {tv / DAY_S:.0f} d past "
-            "the LISA observation have σ_u above the phase tolerance; check σ_t before "
-            "scheduling them (see `ucbplan horizon`)"
-        )
-
-
-def _warn_timing_horizon(t: Target, tau0: float, tau1: float) -> None:
-    """Warn when the window reaches past T_valid(quadrature, α = 1) before or after T0."""
-    spec = t.spectroscopy
-    if spec is None or spec.sigma_v_kms is None or spec.k_for_tolerance is None:
-        return
-    from ucbplan.core.forecast import tolerance, valid_window_s
-
-    tol = tolerance("quadrature", spec.sigma_v_kms, spec.k_for_tolerance)
-    lo, hi = valid_window_s(t, tol, (0.0, math.pi))
-    for outside, side, span in ((tau0 < lo, "before", -lo), (tau1 > hi, "after", hi)):
-        if outside:
-            err_console.print(
-                f"[yellow]warning:[/] epochs more than T_valid(quadrature, α=1) = "
-                f"{span / DAY_S:.0f} d {side} T0 have σ_u above the phase tolerance; check σ_t "
-                "before scheduling them (see `ucbplan horizon`)"
-            )
-
-
-def _epoch_table(t: Target, es: Any) -> Any:
-    from astropy.table import Table
-    from astropy.time import TimeDelta
-
-    from ucbplan.core.ephemeris import eclipse_kind
-
-    t_star = t.t_ref + TimeDelta(es.origin_s, format="sec") + TimeDelta(es.dt_s, format="sec")
-    tab = Table()
-    tab["k"] = es.k
-    if t.kind == "timing":
-        tab["cycle"] = _cycles(t, es)
-    tab["anchor"] = [es.anchor] * len(es)
-    if es.anchor == "eclipse":
-        tab["eclipse"] = eclipse_kind(es.u_star_rad, es.star) if len(es) else []
-    tab["u_star_rad"] = es.u_star_rad
-    tab["t_star_tdb"] = _iso_us(t_star)
-    if t.kind == "timing":
-        from ucbplan.core.timescale import bjd_tdb_numbers
-
-        tab["t_star_bjd_tdb"] = bjd_tdb_numbers(t_star)
-    tab["tau_s"] = es.tau_s
-    tab["sigma_t_s"] = es.sigma_t_s
-    tab["sigma_u_rad"] = es.sigma_u_rad
-    units = [("u_star_rad", "rad"), ("tau_s", "s"), ("sigma_t_s", "s"), ("sigma_u_rad", "rad")]
-    if t.has_pi_mode:
-        t_alt = t.t_ref + TimeDelta(es.tau_alt_s, format="sec")
-        tab["t_alt_tdb"] = _iso_us(t_alt)
-        tab["tau_alt_s"] = es.tau_alt_s
-        units.append(("tau_alt_s", "s"))
-    for col, unit in units:
-        tab[col].unit = unit
-    tab.meta.update(
-        {
-            "ucbplan_version": __version__,
-            "target": t.name,
-            "target_file": str(t.source) if t.source else "",
-            "target_sha256": t.sha256 or "",
-            "time_scale": "TDB at the solar-system barycentre",
-            "t_ref_tdb": t.t_ref.tdb.isot,
-            "tau_origin": "seconds since t_ref (TDB)",
-            "phase_convention": (
-                "u = Phi_GW/2 + eps_j + 2 kappa sin Phi_asc - 2 eta cos Phi_asc; "
-                "eps_1=0, eps_2=pi; u=0 ascending node (max recession of star 1)"
-            ),
-            "star": es.star,
-        }
-    )
-    if t.has_pi_mode:
-        tab.meta["alt_epoch"] = "solution of the phi_ref + pi posterior mode (about P_b/4 earlier)"
-    if t.kind == "timing" and t.timing is not None:
-        from ucbplan.core.timescale import format_bjd_tdb
-
-        tab.meta.update(
-            {
-                "ephemeris": "timing",
-                "t0_bjd_tdb": format_bjd_tdb(t.t_ref).split()[1],
-                "t0_marks": t.timing.ephemeris.mark,
-                "cycle": "ephemeris cycle n of t(n) = T0 + P n + P Pdot n^2/2 (+ P^2 Pddot n^3/6)"
-                " for star 1: (u_1 - u_1(T0))/2pi, half-integer at the other conjunction",
-                "source": t.timing.source,
-            }
-        )
-    return tab
-
-
-def _cycles(t: Target, es: Any) -> Any:
-    """Ephemeris cycle number n of each epoch: (u₁ − u₁(T0))/2π (u₁ = u★ − ε of the star)."""
-    import numpy as np
-
-    from ucbplan.core.phase import u_cycles
-
-    m0, g0 = u_cycles(t.params, np.array([0.0]))
-    eps = 0.0 if es.star == 1 else 0.5
-    cycles = es.k + (es.u_star_rad / (2 * math.pi) - eps) - (m0[0] + g0[0])
-    return np.round(cycles, 9)
-
-
-def _iso_us(t: Any) -> list[str]:
-    """TDB ISO strings with microseconds."""
-    import numpy as np
-
-    tdb = t.tdb
-    tdb.precision = 6
-    return [str(x) for x in np.atleast_1d(tdb.isot)]
 
 
 def _print_epochs(t: Target, tab: Any) -> None:

@@ -18,10 +18,12 @@ from ucbplan.cli._console import (
     check_output_path,
     dump_json,
     err_console,
+    literal,
     pick_format,
     write_output,
 )
 from ucbplan.cli._epochs import epoch_option
+from ucbplan.cli._strategies import print_comparison
 from ucbplan.core.constants import DAY_S, MONTH_S, YEAR_S
 from ucbplan.errors import InputError, UcbplanError, shorten
 
@@ -32,8 +34,42 @@ TargetArg = Annotated[Path, typer.Argument(help="Target YAML file.")]
 M1Opt = Annotated[_OptFloat, typer.Option("--m1", help="Mass of star 1 (M_sun) (else file).")]
 M2Opt = Annotated[_OptFloat, typer.Option("--m2", help="Mass of star 2 (M_sun) (else file).")]
 SigmaVOpt = Annotated[
-    _OptFloat,
-    typer.Option("--sigma-v", help="Velocity precision per spectrum (km/s) (else file, else 15)."),
+    str | None,
+    typer.Option(
+        "--sigma-v",
+        help="Velocity precision per spectrum: km/s (else file, else 15), or of one spectrum "
+        "of T_ref seconds (30km/s@300s[,V=20.0]): then the strategies are compared.",
+    ),
+]
+SigmaFloorOpt = Annotated[
+    float, typer.Option("--sigma-floor", help="Systematic σ_v floor in quadrature (km/s).")
+]
+ExtinctionOpt = Annotated[
+    _OptFloat, typer.Option("--extinction", help="Extinction k of the σ_v law (mag/airmass).")
+]
+ReadoutOpt = Annotated[float, typer.Option("--readout", help="Readout per exposure (s).")]
+OverheadOpt = Annotated[float, typer.Option("--overhead", help="Acquisition per visit (s).")]
+VisitOpt = Annotated[
+    str | None, typer.Option("--visit", help="Visit length (1h); default --max-visit.")
+]
+MaxVisitOpt = Annotated[str, typer.Option("--max-visit", help="Longest visit (default 2h).")]
+GoalOpt = Annotated[
+    str | None,
+    typer.Option("--goal", help="Precision goal (sigma_K=2km/s, K1=1%, q=1%): hours to reach it."),
+]
+MinLambdaOpt = Annotated[
+    _OptFloat, typer.Option("--min-lambda-k", help="Smallest Λ_K of an exposure (0.9).")
+]
+SmearedOpt = Annotated[
+    bool, typer.Option("--allow-smeared", help="Allow exposures below the Λ_K floor.")
+]
+CompareOpt = Annotated[
+    bool,
+    typer.Option(
+        "--compare-strategies",
+        help="Compare targeted, phase-locked and untargeted exposures (implied by a law "
+        "--sigma-v T@REF or --goal).",
+    ),
 ]
 NSpectraOpt = Annotated[int, typer.Option("--n-spectra", help="Spectra co-added per epoch.")]
 BaselineOpt = Annotated[str, typer.Option("--baseline", help="Baseline ΔT ('30 d', '1 yr', days).")]
@@ -86,18 +122,44 @@ def feasibility_command(
     fmt: FormatOpt = None,
     output: OutputOpt = None,
     overwrite: OverwriteOpt = False,
+    sigma_floor: SigmaFloorOpt = 0.0,
+    extinction: ExtinctionOpt = None,
+    readout: ReadoutOpt = 0.0,
+    overhead: OverheadOpt = 300.0,
+    visit: VisitOpt = None,
+    max_visit: MaxVisitOpt = "2h",
+    goal: GoalOpt = None,
+    min_lambda_k: MinLambdaOpt = None,
+    allow_smeared: SmearedOpt = False,
+    compare_strategies: CompareOpt = False,
 ) -> None:
     """Expected signal sizes (paper Section 3): K_j, apsidal rates, ΔK, Δv_aps, e floor, Δv_CM,
     and GW vs optical timing errors."""
     from ucbplan.feasibility import optical_ephemeris, plot_report, report_for_target
+    from ucbplan.observing.schedule.options import plan_settings
     from ucbplan.target import load_target
 
     fmt = pick_format(output, fmt, ("table", "json"))
-    _check_options(n_spectra, m1, m2, sigma_v, m3, a_out)
+    settings = plan_settings(
+        sigma_v_kms=sigma_v,
+        sigma_floor_kms=sigma_floor,
+        extinction_k=extinction,
+        readout_s=readout,
+        overhead_s=overhead,
+        visit=visit,
+        max_visit=max_visit,
+        goal=goal,
+        min_lambda_k=min_lambda_k,
+        allow_smeared=allow_smeared,
+    )
+    law = settings.sigma_model
+    sigma_ref = law.sigma_kms if law is not None else settings.sigma_v_kms
+    _check_options(n_spectra, m1, m2, sigma_ref, m3, a_out)
     _check_outputs(output, plot, overwrite)
     tgt = load_target(target)
+    compare = compare_strategies or goal is not None or (law is not None and law.follows_exposure)
     optical = optical_ephemeris(
-        tgt.period_s,
+        tgt.params.nodal_period_s,
         sigma_phase_cycles=opt_phase,
         sigma_f_rel=opt_f_rel,
         sigma_fdot_rel_s=opt_fdot_rel,
@@ -110,7 +172,7 @@ def feasibility_command(
         tgt,
         m1_msun=m1,
         m2_msun=m2,
-        sigma_v_m_s=sigma_v * 1e3 if sigma_v is not None else None,
+        sigma_v_m_s=sigma_ref * 1e3 if sigma_ref is not None else None,
         n_spectra=n_spectra,
         baseline_s=_parse_baseline(baseline),
         m3_msun=m3,
@@ -120,12 +182,23 @@ def feasibility_command(
     )
     if plot is not None:
         plot_report(report, plot, overwrite=overwrite)
-        err_console.print(f"wrote {plot}")
+        err_console.print(f"wrote {literal(plot)}")
+    comparison = _comparison(tgt, settings) if compare else None
     if fmt == "json":
         doc = {"units": "SI (m/s, s, rad, rad/s); masses M_sun", **report.to_dict()}
+        if comparison is not None:
+            doc["strategies"] = comparison.to_dict()
         write_output(output, lambda h: dump_json(doc, h), overwrite=overwrite)
     else:
         _print_report(report)
+        if comparison is not None:
+            print_comparison(comparison)
+
+
+def _comparison(target: Any, settings: Any) -> Any:
+    from ucbplan.observing.schedule.compare import compare_target_strategies
+
+    return compare_target_strategies(target, settings)
 
 
 def _check_outputs(output: Path | None, plot: Path | None, overwrite: bool) -> None:

@@ -13,11 +13,10 @@ from typing import TYPE_CHECKING
 import typer
 from rich.markup import escape
 
-from ucbplan.cli._console import check_output_path, configure_offline, err_console, write_output
+from ucbplan.cli._console import check_output_path, err_console, write_output
 from ucbplan.errors import InputError, UcbplanError
 from ucbplan.io import output_format
 from ucbplan.lisa import MAX_N_BINS as MAX_BINS
-from ucbplan.lisa import MIN_T_OBS_S
 
 if TYPE_CHECKING:
     from ucbplan.lisa.outputs import SimulationFiles
@@ -28,24 +27,9 @@ __all__ = ["register"]
 
 
 def _t_obs(text: str | None, default_s: float) -> float:
-    if text is None:
-        return default_s
-    import astropy.units as u
+    from ucbplan.api.reduction import t_obs_seconds
 
-    from ucbplan.errors import shorten
-
-    try:
-        val = float(u.Quantity(text.replace(" ", "")).to_value(u.s))
-    except (TypeError, ValueError, u.UnitsError):
-        raise InputError(
-            f"--t-obs: expected a duration like '4yr' (Julian) or '126232599.054s', got "
-            f"{shorten(text)}"
-        ) from None
-    if not MIN_T_OBS_S <= val < float("inf"):
-        raise InputError(
-            f"--t-obs: expected a finite duration of at least 1 day, got {shorten(text)}"
-        )
-    return val
+    return t_obs_seconds(text, default_s, "--t-obs")
 
 
 def _check_n_bins(n_bins: int) -> None:
@@ -67,7 +51,6 @@ def _model(target_path: Path, t_obs: str | None, n_bins: int, circular: bool) ->
     from ucbplan.lisa.pipeline import build_model
     from ucbplan.target import load_target
 
-    configure_offline()
     _check_n_bins(n_bins)
     target = load_target(target_path)
     t_obs_s = _t_obs(t_obs, target.t_obs_s)
@@ -184,7 +167,7 @@ def simulate(
     _summary(title, result.names, result.injected, sigma, mean, result.fisher_sigma)
     if plots is not None:
         simulation_corner_plots(result, plots, overwrite=overwrite)
-    err_console.print(f"wrote {output}, {files.samples.name}, {files.chain.name}")
+    err_console.print(f"wrote {escape(f'{output}, {files.samples.name}, {files.chain.name}')}")
 
 
 def _save_interrupted(
@@ -264,7 +247,7 @@ def fisher(
     if output is not None:
         header = f"ucbplan fisher: SNR {forecast.snr:.1f}, N={n_bins}"
         write_target(fis, output, overwrite=overwrite, header=header)
-        err_console.print(f"wrote {output}")
+        err_console.print(f"wrote {escape(str(output))}")
 
 
 def waveform(
@@ -294,8 +277,10 @@ def waveform(
         waveform_plot(lines, plot, overwrite=overwrite)
     nb, n = model.model.freqs_hz.shape
     err_console.print(
-        f"{model.base.name}: {nb} bands x {n} bins, optimal SNR {lines.snr:.1f}; wrote {output}"
-        + (f" and {plot}" if plot is not None else "")
+        escape(
+            f"{model.base.name}: {nb} bands x {n} bins, optimal SNR {lines.snr:.1f}; "
+            f"wrote {output}" + (f" and {plot}" if plot is not None else "")
+        )
     )
 
 

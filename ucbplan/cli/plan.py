@@ -71,7 +71,29 @@ _Readout = Annotated[
     ),
 ]
 _Alpha = Annotated[float, typer.Option("--alpha", help="Planning margin α of T_valid.")]
-_SigmaV = Annotated[float | None, typer.Option("--sigma-v", help="RV precision σ_v [km/s].")]
+_SigmaV = Annotated[
+    str | None,
+    typer.Option(
+        "--sigma-v",
+        help="RV precision: km/s fixed per exposure (30), or of one spectrum of T_ref seconds "
+        "(30km/s@600s; ,V=20.0 at that magnitude): then exposure time and cadence are chosen.",
+    ),
+]
+_SigmaFloor = Annotated[
+    float,
+    typer.Option("--sigma-floor", help="Systematic σ_v floor added in quadrature [km/s]."),
+]
+_Extinction = Annotated[
+    float | None,
+    typer.Option(
+        "--extinction",
+        help="Extinction k [mag/airmass] of the σ_v law (default: the instrument's, else 0).",
+    ),
+]
+_MaxVisit = Annotated[
+    str | None,
+    typer.Option("--max-visit", help="Longest visit a --goal plans (default 2h)."),
+]
 _KEff = Annotated[float | None, typer.Option("--k-eff", help="Semi-amplitude K_eff [km/s].")]
 _MaxSmear = Annotated[
     str | None,
@@ -101,8 +123,8 @@ _Cadence = Annotated[
     str,
     typer.Option(
         "--cadence",
-        help="anchor (wait for the next anchor) | phase-locked (exposure + readout = anchor "
-        "spacing, no waiting).",
+        help="auto (most information per visit) | targeted (each exposure on an anchor) | "
+        "phase-locked (exposure + readout = anchor spacing) | untargeted (back to back).",
     ),
 ]
 _Instrument = Annotated[
@@ -230,13 +252,16 @@ def plan(
     readout: _Readout = None,
     alpha: _Alpha = 1.0,
     sigma_v: _SigmaV = None,
+    sigma_floor: _SigmaFloor = 0.0,
+    extinction: _Extinction = None,
     k_eff: _KEff = None,
     max_smear: _MaxSmear = None,
     max_bin_fraction: _MaxBinFraction = None,
     overhead: _Overhead = None,
     sessions: _Sessions = 1,
     visit: _Visit = None,
-    cadence: _Cadence = "anchor",
+    max_visit: _MaxVisit = None,
+    cadence: _Cadence = "auto",
     instrument: _Instrument = None,
     instruments_file: _InstrumentsFile = None,
     goal: _Goal = None,
@@ -277,7 +302,10 @@ def plan(
             readout_s=readout,
             overhead_s=overhead,
             visit=visit,
+            max_visit=max_visit,
             sigma_v_kms=sigma_v,
+            sigma_floor_kms=sigma_floor,
+            extinction_k=extinction,
             cadence=cadence,
             goal=goal,
             min_lambda_k=min_lambda_k,

@@ -17,7 +17,7 @@ from typing import Annotated, Any
 import typer
 from rich.markup import escape
 
-from ucbplan.cli._console import check_output_path, configure_offline, err_console
+from ucbplan.cli._console import check_output_path, err_console
 from ucbplan.errors import UcbplanError
 
 __all__ = ["register"]
@@ -126,7 +126,7 @@ def _finish(run: Any, output: Path, overwrite: bool, keep_parts: bool) -> None:
         remove_parts(parts_folder(output))
     meta = run.table.meta
     err_console.print(
-        f"wrote {output}: {meta['n_ok']} ok, {meta['n_unconstrained']} unconstrained, "
+        f"wrote {escape(str(output))}: {meta['n_ok']} ok, {meta['n_unconstrained']} unconstrained, "
         f"{meta['n_failed']} failed; chunk {run.chunk}, {run.reused}/{run.n_chunks} parts reused"
     )
 
@@ -157,14 +157,13 @@ def forecast(
     from ucbplan.population.plots import forecast_plots
     from ucbplan.population.run import parts_folder, run_forecast
 
-    configure_offline()
     check_output_path(output, overwrite)
     spec = _spec(workers, scheduler, cluster, jobs)
     if plots is not None and not plots.is_dir():
         raise UcbplanError(f"--plots: folder {plots} does not exist; create it first")
     cat = _catalog(catalog, columns, hdf5_path, skip_bad)
     opts = _forecast_opts(cat, sigma_v, k_eff, t_obs, t_start, n_bins)
-    err_console.print(f"{len(cat.sources)} sources from {catalog}; {spec.describe()}")
+    err_console.print(f"{len(cat.sources)} sources from {escape(str(catalog))}; {spec.describe()}")
     parts = parts_folder(output)
     run = _with_progress(
         "forecast",
@@ -183,7 +182,7 @@ def forecast(
     _finish(run, output, overwrite, keep_parts)
     if plots is not None:
         for path in forecast_plots(run.table, plots, overwrite=overwrite):
-            err_console.print(f"wrote {path}")
+            err_console.print(f"wrote {escape(str(path))}")
 
 
 @population_app.command("visibility")
@@ -226,7 +225,6 @@ def visibility(
     from ucbplan.population.run import parts_folder, run_visibility
     from ucbplan.population.visibility import VisibilityOptions
 
-    configure_offline()
     check_output_path(output, overwrite)
     spec = _spec(workers, scheduler, cluster, jobs)
     where = resolve_site(site, site_lonlat, sites_file)
@@ -243,8 +241,8 @@ def visibility(
         site=where, semester=semester, settings=settings, min_hours=min_hours, forecast=fopts
     )
     err_console.print(
-        f"{len(cat.sources)} sources from {catalog}; {where.name}, {opts.semester.upper()}; "
-        f"{spec.describe()}"
+        f"{len(cat.sources)} sources from {escape(str(catalog))}; {escape(where.name)}, "
+        f"{opts.semester.upper()}; {spec.describe()}"
     )
     parts = parts_folder(output)
     run = _with_progress(
@@ -329,7 +327,6 @@ def rank(
     from ucbplan.population.execute import remove_parts
     from ucbplan.population.run import parts_folder, run_forecast, write_table
 
-    configure_offline()
     ranked_path = out_dir / "ranked.ecsv"
     _check_out_dir(out_dir, ranked_path, overwrite)
     spec = _spec(workers, scheduler, cluster, jobs)
@@ -370,8 +367,8 @@ def rank(
         paths = rk.write_top_targets(ranked, cat, fopts, out_dir, top, overwrite)
         write_table(ranked, ranked_path, overwrite)
     err_console.print(
-        f"wrote {ranked_path} ({ranked.meta['figure_of_merit']}) and {len(paths)} target "
-        f"file(s) in {out_dir}"
+        f"wrote {escape(str(ranked_path))} ({ranked.meta['figure_of_merit']}) and "
+        f"{len(paths)} target file(s) in {escape(str(out_dir))}"
     )
 
 
@@ -409,7 +406,6 @@ def simulate(
     from ucbplan.population.run import parts_folder
     from ucbplan.population.simulate import PopulationSimulateOptions, run_simulate
 
-    configure_offline()
     check_output_path(output, overwrite)
     spec = _spec(workers, scheduler, cluster, jobs)
     sampling = PopulationSimulateOptions(  # the options first, then the files, then the work
@@ -424,7 +420,7 @@ def simulate(
     cat = _catalog(catalog, columns, hdf5_path, skip_bad)
     fopts = _forecast_opts(cat, sigma_v, k_eff, t_obs, t_start, n_bins)
     opts = dataclasses.replace(sampling, forecast=fopts)
-    err_console.print(f"{len(cat.sources)} sources from {catalog}; {spec.describe()}")
+    err_console.print(f"{len(cat.sources)} sources from {escape(str(catalog))}; {spec.describe()}")
     parts = parts_folder(output)
     with _made_folder(out_dir):
         run = _with_progress(

@@ -8,7 +8,7 @@ from typing import IO, TYPE_CHECKING, Any
 
 import typer
 
-from ucbplan.cli._console import check_output_path, err_console, pick_format, write_output
+from ucbplan.cli._console import check_output_path, err_console, literal, pick_format, write_output
 from ucbplan.errors import InputError, UcbplanError, shorten
 from ucbplan.io import write_file_set
 
@@ -95,12 +95,12 @@ def reduce_cmd(
     if files:
         write_file_set(files, overwrite=overwrite)  # the report and EM prior: both or neither
     if em_prior is not None:
-        err_console.print(f"EM prior written to {em_prior}")
+        err_console.print(f"EM prior written to {literal(em_prior)}")
     if plots is not None:
         from ucbplan.reduce.plots import plot_all
 
         for p in plot_all(red, plots, overwrite=overwrite):
-            err_console.print(f"figure: {p}")
+            err_console.print(f"figure: {literal(p)}")
 
 
 def _check_cos_i_sigma(value: float) -> None:

@@ -52,7 +52,8 @@ __all__ = [
 
 FloatArray = NDArray[np.float64]
 
-#: Named anchors → the u★ values they stand for [rad]; "zero-crossing" is solved from cos u = −κ(t).
+#: Named anchors → the u★ values they stand for [rad]; "zero-crossing" is solved from cos u₁ = −κ(t)
+#: (for star 2, in its own u₂ = u₁ + π: cos u₂ = +κ, the same instants).
 #: "eclipse" is the conjunctions labelled by which star is behind: star 1 (the star eclipsed at
 #: primary eclipse) at u₁ = π/2 is the primary eclipse, u₁ = 3π/2 the secondary.
 ANCHORS: dict[str, tuple[float, ...]] = {
@@ -73,13 +74,19 @@ def eclipse_kind(u_star_rad: FloatArray, star: int = 1) -> list[str]:
 
 
 def _zero_crossing_target(
-    p: PhaseParams, tau: FloatArray, branch: FloatArray
+    p: PhaseParams, tau: FloatArray, branch: FloatArray, star: int = 1
 ) -> tuple[FloatArray, FloatArray]:
-    """u★(τ) and du★/dτ for the RV zero crossing cos u = −κ(τ) (branch 0: u≈π/2+κ, 1: 3π/2−κ)."""
+    """u★(τ) and du★/dτ of the RV zero crossing of ``star``, in that star's own u.
+
+    Both velocities vanish (relative to γ_j) where cos u₁ = −κ(τ) (Eq. v1v2_ecc_rv: v₂ = γ₂ −
+    K₂(cos u₁ + κ)), so star 2's zero crossings are star 1's instants: in u₂ = u₁ + π that is
+    cos u₂ = +κ. Branch 0: u_j ≈ π/2 ± κ (star 1: +, star 2: −); branch 1: 3π/2 ∓ κ.
+    """
+    sign = 1.0 if star == 1 else -1.0
     eta, kap = ll_pair(p, tau)
-    base = np.arccos(np.clip(-kap, -1.0, 1.0))
+    base = np.arccos(np.clip(-sign * kap, -1.0, 1.0))
     dkap = -p.omega_dot * eta
-    dbase = dkap / np.sqrt(1.0 - kap * kap)
+    dbase = sign * dkap / np.sqrt(1.0 - kap * kap)
     ustar = np.where(branch == 0, base, TWO_PI - base)
     dustar = np.where(branch == 0, dbase, -dbase)
     return ustar, dustar
@@ -102,7 +109,7 @@ def _newton(
     floor = np.full_like(dt, tol_rad)
     for _ in range(max_iter):
         if zero_branch is not None:
-            ustar, dustar = _zero_crossing_target(p, origin_s + dt, zero_branch)
+            ustar, dustar = _zero_crossing_target(p, origin_s + dt, zero_branch, star)
         else:
             dustar = np.zeros_like(dt)
         m, g, rate = u_state(p, dt, origin_s, star)
@@ -119,7 +126,7 @@ def _newton(
             "check that e < 0.1 and the frequency model is physical"
         )
     if zero_branch is not None:
-        ustar, _ = _zero_crossing_target(p, origin_s + dt, zero_branch)
+        ustar, _ = _zero_crossing_target(p, origin_s + dt, zero_branch, star)
     return dt, np.broadcast_to(ustar, dt.shape).astype(np.float64)
 
 
@@ -156,7 +163,8 @@ def solve_u(
     tau_start_s, tau_end_s : float
         Window (TDB seconds since the reference epoch).
     u_star : float or "zero-crossing+" / "zero-crossing-"
-        Target argument of latitude [rad] or one branch of the RV zero crossing cos u = −κ(t).
+        Target argument of latitude [rad] or one branch of the RV zero crossing cos u₁ = −κ(t)
+        (star 2: cos u₂ = +κ(t), the same instants; u★ is returned in ``star``'s u).
     star : {1, 2}
         Whose argument of latitude.
 
@@ -291,7 +299,7 @@ def find_epochs(
         Window in TDB seconds since the target's reference epoch ``t_ref``.
     anchor : str or float
         ``quadrature`` (u★ = 0, π), ``conjunction`` or ``eclipse`` (π/2, 3π/2),
-        ``zero-crossing`` (cos u = −κ), or a numeric u★ [rad].
+        ``zero-crossing`` (v_j = γ_j: cos u₁ = −κ), or a numeric u★ [rad].
     star : {1, 2}
         Component whose argument of latitude is targeted.
     pi_mode : bool, optional

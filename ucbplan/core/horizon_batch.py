@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -22,10 +23,16 @@ from ucbplan.core.forecast import (
     anchor_u_values,
     t_valid_batch,
     tolerance,
+    two_sided,
 )
 from ucbplan.core.horizon_grid import anchor_sigma_batch
+from ucbplan.core.params import PARAM_NAMES, EphemerisSource
 
-__all__ = ["horizon_columns"]
+if TYPE_CHECKING:
+    from astropy.table import Table
+from ucbplan.errors import InputError
+
+__all__ = ["HORIZON_COLUMNS", "horizon_columns", "horizon_rows", "horizons"]
 
 FloatArray = NDArray[np.float64]
 
@@ -107,4 +114,218 @@ def horizon_columns(
                 dtb[back] = _timing_error(pb, cb, -ob / 2.0 - tb[back], us, star)
             out[f"t_valid_before_days:{key}"] = tb / DAY_S
             out[f"dt_u_before_s:{key}"] = dtb
+    return out
+
+
+#: The horizon table of many targets, declared once: (name, unit, dtype, description). One row
+#: per target × anchor × α, in that order; a one-target call of :func:`~ucbplan.core.forecast.
+#: horizon_table` gives the same numbers for its rows.
+HORIZON_COLUMNS: tuple[tuple[str, str, str, str], ...] = (
+    ("target", "", "str", "target name"),
+    ("file", "", "str", "target file ('' for a target built in memory)"),
+    ("kind", "", "str", "lisa: horizons after the end of LISA | timing: before and after T0"),
+    ("anchor", "", "str", "anchor (conjunction, quadrature, zero-crossing or u★)"),
+    ("alpha", "", "f8", "planning margin α"),
+    ("sigma_v_kms", "km / s", "f8", "RV precision σ_v of the tolerance"),
+    ("k_eff_kms", "km / s", "f8", "semi-amplitude K of the tolerance"),
+    ("n_epochs", "", "i8", "tolerance form (2: two-epoch difference, 1: single epoch)"),
+    ("tolerance_rad", "rad", "f8", "α·δu_tol"),
+    ("delta_u_tol_rad", "rad", "f8", "δu_tol"),
+    ("t_valid_days", "d", "f8", "T_valid after the end of the information (T0 for timing)"),
+    ("dt_u_s", "s", "f8", "δt_u = σ_u/|u̇| at T_valid"),
+    ("sigma_u_end_rad", "rad", "f8", "σ_u at the end of the information (at T0 for timing)"),
+    ("t_valid_before_days", "d", "f8", "T_valid before T0 (timing; NaN for a LISA posterior)"),
+    ("dt_u_before_s", "s", "f8", "δt_u before T0 (timing; NaN for a LISA posterior)"),
+)
+#: Columns that only a two-sided (timing) row has: JSON rows of one-sided targets omit them.
+TWO_SIDED_COLUMNS = ("t_valid_before_days", "dt_u_before_s")
+
+
+def _spectroscopy(
+    t: EphemerisSource, name: str, sigma_v: float | None, k_eff: float | None
+) -> tuple[float, float]:
+    """σ_v and K [km/s] of one target: the arguments, else its ``spectroscopy`` record."""
+    spec = getattr(t, "spectroscopy", None)
+    sv = sigma_v if sigma_v is not None else getattr(spec, "sigma_v_kms", None)
+    k = k_eff if k_eff is not None else getattr(spec, "k_for_tolerance", None)
+    if sv is None:
+        raise InputError(
+            f"{name}: no RV precision; give sigma_v (km/s) or add spectroscopy.sigma_v to the "
+            "target file"
+        )
+    if k is None:
+        raise InputError(
+            f"{name}: no semi-amplitude; give k_eff (km/s) or add spectroscopy.K1/K2 (or K_eff) "
+            "to the target file"
+        )
+    for what, v, low in (("sigma_v", sv, 0.0), ("k_eff", k, 0.1)):
+        if not low < v <= 1e4:
+            raise InputError(f"{name}: {what}: expected a number in ({low:g}, 1e4] km/s, got {v!r}")
+    if sv >= k:
+        raise InputError(
+            f"{name}: sigma_v ({sv:g} km/s) must be smaller than k_eff ({k:g} km/s): with "
+            "σ_v ≥ K no phase tolerance exists"
+        )
+    return float(sv), float(k)
+
+
+def horizons(
+    targets: Sequence[EphemerisSource],
+    sigma_v: float | None = None,
+    k_eff: float | None = None,
+    alphas: Sequence[float] = (0.5, 1.0),
+    anchors: Sequence[str | float] = ("conjunction", "quadrature"),
+    n_epochs: int = 2,
+    star: int = 1,
+) -> Table:
+    """The horizon table of many targets in one vectorised pass (:data:`HORIZON_COLUMNS`).
+
+    Parameters
+    ----------
+    targets : sequence of EphemerisSource
+        Targets (e.g. :class:`ucbplan.target.Target`); ``name``, ``source`` (its file),
+        ``kind`` and ``spectroscopy`` are read when present.
+    sigma_v, k_eff : float, optional
+        RV precision and semi-amplitude [km/s] for every target (default: each target's
+        ``spectroscopy``).
+    alphas, anchors, n_epochs, star
+        As :func:`ucbplan.core.forecast.horizon_table`.
+
+    Returns
+    -------
+    astropy.table.Table
+        One row per target × anchor × α (target-major). The before-T0 columns are NaN for a
+        LISA posterior (one-sided); ``meta`` holds ``n_epochs`` and ``star``.
+
+    Raises
+    ------
+    InputError
+        No targets, or a target without σ_v or K (one line naming it), or σ_v ≥ K.
+
+    Notes
+    -----
+    The same numbers as :func:`ucbplan.core.forecast.horizon_table` per target (Eqs.
+    T_valid_alpha, timing_unc), from :func:`horizon_columns`.
+    """
+    if not targets:
+        raise InputError("targets: expected at least one target, got none")
+    names = [str(getattr(t, "name", f"target {i + 1}")) for i, t in enumerate(targets)]
+    files = [str(getattr(t, "source", None) or "") for t in targets]
+    sk = np.array(
+        [_spectroscopy(t, n, sigma_v, k_eff) for t, n in zip(targets, names, strict=True)]
+    )
+    both = np.array([two_sided(t) for t in targets], dtype=bool)
+    cols = horizon_columns(
+        np.array([t.params.as_array() for t in targets]),
+        _covariances(targets),
+        np.array([t.t_obs_s for t in targets]),
+        sk[:, 0],
+        sk[:, 1],
+        alphas=alphas,
+        anchors=anchors,
+        n_epochs=n_epochs,
+        star=star,
+        two_sided=both,
+    )
+    return _long_table(cols, names, files, both, sk, alphas, anchors, n_epochs, star)
+
+
+def _covariances(targets: Sequence[EphemerisSource]) -> FloatArray:
+    """The (n, 7, 7) covariances: targets that name their covariance's parameters
+    (``cov_names``, ``cov_matrix``, as :class:`ucbplan.target.Target`) are scattered into
+    :data:`~ucbplan.core.params.PARAM_NAMES` order one group of equal names at a time; any other
+    source gives its ``covariance``."""
+    out = np.zeros((len(targets), 7, 7))
+    groups: dict[tuple[str, ...], list[int]] = {}
+    for i, t in enumerate(targets):
+        names = getattr(t, "cov_names", None)
+        if isinstance(names, tuple) and isinstance(getattr(t, "cov_matrix", None), np.ndarray):
+            groups.setdefault(names, []).append(i)
+        else:
+            out[i] = t.covariance
+    for names, rows in groups.items():
+        sub = [k for k, n in enumerate(names) if n in PARAM_NAMES]
+        idx = [PARAM_NAMES.index(names[k]) for k in sub]
+        mats = np.array([targets[i].cov_matrix for i in rows])  # type: ignore[attr-defined]
+        out[np.ix_(rows, idx, idx)] = mats[np.ix_(range(len(rows)), sub, sub)]
+    return out
+
+
+def _long_table(
+    cols: dict[str, FloatArray],
+    names: list[str],
+    files: list[str],
+    both: NDArray[np.bool_],
+    sk: FloatArray,
+    alphas: Sequence[float],
+    anchors: Sequence[str | float],
+    n_epochs: int,
+    star: int,
+) -> Table:
+    """:func:`horizon_columns`' per-target columns as the long table (target × anchor × α)."""
+    from astropy.table import Table
+
+    labels = [anchor_u_values(a)[0] for a in anchors]
+    n, per = len(names), len(labels) * len(alphas)
+
+    def grid(field: str, with_alpha: bool = True) -> FloatArray:
+        """(n, anchors, α) values of a column, flattened target-major."""
+        out = np.empty((n, len(labels), len(alphas)))
+        for i, lab in enumerate(labels):
+            for j, al in enumerate(alphas):
+                out[:, i, j] = cols[f"{field}:{lab}:{al:g}" if with_alpha else f"{field}:{lab}"]
+        return out.reshape(-1)
+
+    tol = grid("delta_u_tol_rad", with_alpha=False)
+    values: dict[str, Any] = {
+        "target": np.repeat(np.array(names, dtype=str), per),
+        "file": np.repeat(np.array(files, dtype=str), per),
+        "kind": np.repeat(np.where(both, "timing", "lisa"), per),
+        "anchor": np.tile(np.repeat(np.array(labels, dtype=str), len(alphas)), n),
+        "alpha": np.tile(np.asarray(alphas, dtype=np.float64), n * len(labels)),
+        "sigma_v_kms": np.repeat(sk[:, 0], per),
+        "k_eff_kms": np.repeat(sk[:, 1], per),
+        "n_epochs": np.full(n * per, n_epochs, dtype=np.int64),
+        "delta_u_tol_rad": tol,
+        "t_valid_days": grid("t_valid_days"),
+        "dt_u_s": grid("dt_u_s"),
+        "sigma_u_end_rad": grid("sigma_u_end_rad", with_alpha=False),
+        "t_valid_before_days": grid("t_valid_before_days"),
+        "dt_u_before_s": grid("dt_u_before_s"),
+    }
+    values["tolerance_rad"] = values["alpha"] * tol
+    tab = Table()
+    for name, unit, _, desc in HORIZON_COLUMNS:
+        tab[name] = values[name]
+        tab[name].description = desc
+        if unit:
+            tab[name].unit = unit
+    tab.meta.update({"n_epochs": n_epochs, "star": star})
+    return tab
+
+
+def horizon_rows(tab: Table) -> list[dict[str, Any]]:
+    """The table's rows as JSON-ready dicts: plain Python values, NaN as None, and a one-sided
+    (LISA) row without the before-T0 keys (as :meth:`ucbplan.core.forecast.HorizonRow.as_dict`)."""
+    names = list(tab.colnames)
+    lists = [np.asarray(tab[c]).tolist() for c in names]
+    numeric = [c for c in names if np.asarray(tab[c]).dtype.kind == "f"]
+    nan = np.zeros(len(tab), dtype=bool)
+    for c in numeric:
+        if c not in TWO_SIDED_COLUMNS:
+            nan |= np.isnan(np.asarray(tab[c]))
+    one_sided = np.asarray(tab["kind"]) != "timing"
+    keep = [c not in TWO_SIDED_COLUMNS for c in names]
+    short = [n for n, k in zip(names, keep, strict=True) if k]
+    out: list[dict[str, Any]] = []
+    for i, values in enumerate(zip(*lists, strict=True)):
+        if one_sided[i]:
+            row = dict(zip(short, (v for v, k in zip(values, keep, strict=True) if k), strict=True))
+        else:
+            row = dict(zip(names, values, strict=True))
+        if nan[i] or not one_sided[i]:
+            row = {
+                k: (None if isinstance(v, float) and math.isnan(v) else v) for k, v in row.items()
+            }
+        out.append(row)
     return out

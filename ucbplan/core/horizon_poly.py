@@ -137,23 +137,28 @@ def _monotone_root(coef: FloatArray) -> FloatArray:
     """The root in (0, 1) of polynomials monotone on [0, 1] with a sign change there.
 
     Safeguarded Newton: the bracket [lo, hi] always holds the root; a Newton step that leaves it
-    is replaced by bisection. Converges to the last bit of x in ~10 iterations.
+    is replaced by bisection. Converges to the last bit of x in ~10 iterations. Each row stops
+    at its own convergence, so a row's root does not depend on the other rows of the batch
+    (a population forecast's table is the same whatever the chunking).
     """
     lo, hi = np.zeros(coef.shape[0]), np.ones(coef.shape[0])
     rising = coef.sum(axis=1) > coef[:, 0]  # P(1) > P(0)
     x = np.full(coef.shape[0], 0.5)
+    live = np.arange(coef.shape[0])
     for _ in range(100):
-        val, der = horner(coef, x[:, None])
+        xl, ll, hl = x[live], lo[live], hi[live]
+        val, der = horner(coef[live], xl[:, None])
         val, der = val[:, 0], der[:, 0]
-        above = (val > 0.0) == rising  # the root is below x
-        hi, lo = np.where(above, x, hi), np.where(above, lo, x)
+        above = (val > 0.0) == rising[live]  # the root is below x
+        hl, ll = np.where(above, xl, hl), np.where(above, ll, xl)
         with np.errstate(divide="ignore", invalid="ignore"):
-            newton = x - val / der
-        new = np.where((newton > lo) & (newton < hi), newton, 0.5 * (lo + hi))
-        new = np.where(val == 0.0, x, new)
-        done = np.all(new == x) or np.all(hi - lo <= 4e-16)
-        x = new
-        if done:
+            newton = xl - val / der
+        new = np.where((newton > ll) & (newton < hl), newton, 0.5 * (ll + hl))
+        new = np.where(val == 0.0, xl, new)
+        done = (new == xl) | (hl - ll <= 4e-16)
+        x[live], lo[live], hi[live] = new, ll, hl
+        live = live[~done]
+        if not live.size:
             break
     return x
 

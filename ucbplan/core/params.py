@@ -104,6 +104,15 @@ class PhaseParams:
         """Anomalistic orbital period P_b = 2π/n_b [s]."""
         return 2 * math.pi / self.n_b
 
+    @property
+    def nodal_period_s(self) -> float:
+        """Node-to-node period 2π/n̄_b = 2/f [s]: what an eclipse or light-curve ephemeris repeats.
+
+        Eclipses recur at fixed u (u₁ = π/2, 3π/2), whose mean rate is n̄_b = πf, not the
+        anomalistic n_b (``timing.period`` of a target file is this period).
+        """
+        return 2.0 / self.f_gw
+
 
 class EphemerisSource(Protocol):
     """What the core needs of a target: its phase model, covariance and observation length.

@@ -31,6 +31,7 @@ __all__ = [
     "ll_pair",
     "orbit_state",
     "phase_asc",
+    "phase_asc_mod",
     "radial_velocity",
     "sigma_ascending_node_s",
     "sigma_u_from_jacobian",
@@ -99,6 +100,18 @@ def gw_phase(p: PhaseParams, tau_s: ArrayLike) -> FloatArray:
 def phase_asc(p: PhaseParams, tau_s: ArrayLike) -> FloatArray:
     """Mean orbital phase from the ascending node Φ_asc = Φ_GW/2 [rad] (Eq. app:PhiGW)."""
     return 0.5 * gw_phase(p, tau_s)
+
+
+def phase_asc_mod(p: PhaseParams, tau_s: ArrayLike) -> FloatArray:
+    """Φ_asc modulo 2π [rad], in [0, 2π), without the rounding of the unwrapped phase.
+
+    At τ ~ 1e8 s the unwrapped Φ_asc ~ 1e7 rad carries 2e-9 rad of float64 rounding; the cycle
+    split of the GW phase keeps ~1e-15 cycle here.
+    """
+    n, f = _gw_cycles(p, tau_s)
+    half = np.floor(n / 2.0)
+    out: FloatArray = TWO_PI * ((n - 2.0 * half + f) / 2.0)
+    return out
 
 
 def ascending_node_s(p: PhaseParams) -> float:

@@ -14,7 +14,7 @@ import warnings
 from astropy.time import Time
 from erfa import ErfaWarning
 
-from ucbplan.errors import InputError, shorten
+from ucbplan.errors import EpochRangeError, InputError, shorten
 
 __all__ = [
     "MAX_EPOCH_CHARS",
@@ -60,10 +60,6 @@ def split_scale_label(text: str) -> tuple[str, str | None]:
     elif before and (before[-1].isalnum() or before[-1] == "_"):
         return t, None  # "…00UTC": not a separate word
     return before.strip(), word
-
-
-class EpochRangeError(ValueError):
-    """An epoch that parses but lies outside :data:`YEAR_RANGE`."""
 
 
 def _year(t: Time) -> float:

@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 
 from ucbplan.core.constants import DAY_S
-from ucbplan.errors import UcbplanError
+from ucbplan.errors import InputError, UcbplanError
 from ucbplan.feasibility.report import FeasibilityReport
 from ucbplan.feasibility.signals import apsidal_period_s, delta_v_aps
 from ucbplan.plotting import pyplot, save_figure
@@ -39,13 +39,13 @@ def plot_apsidal_signal(
 
     Raises
     ------
-    ValueError
+    InputError
         If ω̇ = 0 (no apsidal signal to plot).
     OutputExistsError
         If ``path`` exists and ``overwrite`` is false.
     """
     if omega_dot_rad_s == 0:
-        raise ValueError(
+        raise InputError(
             "omega_dot is 0: no apsidal signal; give masses or a target with omega_dot"
         )
     plt = pyplot()

@@ -31,7 +31,7 @@ from ucbplan.core.constants import RSUN_M as _RSUN
 from ucbplan.core.forecast import sigma_u
 from ucbplan.core.params import EphemerisSource
 from ucbplan.core.phase import arg_latitude_rate
-from ucbplan.errors import UcbplanError
+from ucbplan.errors import InputError, UcbplanError
 from ucbplan.inputs import check_range
 
 __all__ = [
@@ -56,12 +56,12 @@ __all__ = [
 def _check_positive(**values: float) -> None:
     for name, value in values.items():
         if not (np.all(np.isfinite(value)) and np.all(np.asarray(value) > 0)):
-            raise ValueError(f"{name} must be finite and > 0, got {value!r}")
+            raise InputError(f"{name} must be finite and > 0, got {value!r}", parameter=name)
 
 
 def _check_ecc(e: float) -> None:
     if not 0.0 <= e < 1.0:
-        raise ValueError(f"eccentricity must be in [0, 1), got {e!r}")
+        raise InputError(f"eccentricity must be in [0, 1), got {e!r}", parameter="eccentricity")
 
 
 def semi_amplitudes(
@@ -88,7 +88,7 @@ def semi_amplitudes(
 
     Raises
     ------
-    ValueError
+    InputError
         For non-positive masses or period, or e outside [0, 1).
 
     Notes
@@ -339,7 +339,8 @@ def optical_ephemeris(
     Parameters
     ----------
     period_s : float
-        Orbital period P_orb [s] (sets f = 1/P_orb).
+        The ephemeris's own period P_orb [s] (sets f = 1/P_orb): node to node, as eclipses and
+        light curves repeat (``PhaseParams.nodal_period_s`` = 2/f_gw), not the anomalistic P_b.
     sigma_phase_cycles, sigma_f_rel, sigma_fdot_rel_s : float, optional
         Frequency style: σ_φ0 [cycles], σ_f/f [1], σ_ḟ/f [1/s]; missing ones are 0.
     sigma_p_s, sigma_pdot, sigma_t0_s : float, optional

@@ -23,7 +23,9 @@ from ucbplan.lisa.likelihood import Likelihood
 __all__ = [
     "STEPS",
     "fisher_covariance",
+    "fisher_from_templates",
     "fisher_matrix",
+    "fisher_points",
     "prior_excess",
     "unwhiten",
     "whitening",
@@ -52,6 +54,39 @@ STEPS: dict[str, float] = {
 }
 
 
+def fisher_points(
+    names: tuple[str, ...], t_obs_s: float, theta0: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The central-difference points (2D, D) around ``theta0`` and their steps (D,).
+
+    Rows 2i and 2i + 1 are ``theta0`` ± step i (sampled coordinates, :data:`STEPS`; f_gw in
+    units of 1/T and a linear fdot in units of 1/T², scaled by ``t_obs_s`` here).
+    """
+    steps = np.array([STEPS[n] for n in names])
+    steps[names.index("f_gw")] /= t_obs_s
+    if "fdot" in names:
+        steps[names.index("fdot")] /= t_obs_s * t_obs_s
+    d = len(names)
+    pts = np.repeat(theta0[None, :], 2 * d, axis=0)
+    for i in range(d):
+        pts[2 * i, i] += steps[i]
+        pts[2 * i + 1, i] -= steps[i]
+    return pts, steps
+
+
+def fisher_from_templates(
+    like: Likelihood, h: NDArray[np.complex128], steps: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """Fisher information (D, D) from the templates ``h`` (2D, bands, 2, N) at the points of
+    :func:`fisher_points` and their ``steps``, with the likelihood's inner product."""
+    d = steps.size
+    deriv = (h[0::2] - h[1::2]) / (2.0 * steps[:, None, None, None])
+    fis = np.empty((d, d))
+    for i in range(d):
+        fis[i] = like.inner(deriv[i][None], deriv)
+    return np.asarray(0.5 * (fis + fis.T), dtype=np.float64)
+
+
 def fisher_matrix(like: Likelihood, theta0: NDArray[np.float64]) -> NDArray[np.float64]:
     """Fisher information (D, D) at ``theta0`` in sampled coordinates.
 
@@ -62,23 +97,8 @@ def fisher_matrix(like: Likelihood, theta0: NDArray[np.float64]) -> NDArray[np.f
     theta0 : numpy.ndarray
         Sampled parameters (D,) (start epoch).
     """
-    names = like.prior.names
-    steps = np.array([STEPS[n] for n in names])
-    t_obs = like.model.grid.t_obs_s
-    steps[names.index("f_gw")] /= t_obs
-    if "fdot" in names:
-        steps[names.index("fdot")] /= t_obs * t_obs
-    d = len(names)
-    pts = np.repeat(theta0[None, :], 2 * d, axis=0)
-    for i in range(d):
-        pts[2 * i, i] += steps[i]
-        pts[2 * i + 1, i] -= steps[i]
-    h = like.templates(pts)
-    deriv = (h[0::2] - h[1::2]) / (2.0 * steps[:, None, None, None])
-    fis = np.empty((d, d))
-    for i in range(d):
-        fis[i] = like.inner(deriv[i][None], deriv)
-    return 0.5 * (fis + fis.T)
+    pts, steps = fisher_points(like.prior.names, like.model.grid.t_obs_s, theta0)
+    return fisher_from_templates(like, like.templates(pts), steps)
 
 
 def fisher_covariance(
@@ -87,6 +107,7 @@ def fisher_covariance(
     where: str = "source",
     *,
     within_prior: bool = True,
+    fisher: NDArray[np.float64] | None = None,
 ) -> NDArray[np.float64]:
     """Inverse Fisher matrix at ``theta0`` (sampled coordinates), checked.
 
@@ -101,6 +122,8 @@ def fisher_covariance(
     within_prior : bool
         Also require every 1σ to be narrower than the parameter's prior (the sampler's whitening
         needs it; a forecast reports it with :func:`prior_excess` instead).
+    fisher : numpy.ndarray, optional
+        The Fisher matrix at ``theta0`` if already computed (default: :func:`fisher_matrix`).
 
     Raises
     ------
@@ -110,7 +133,7 @@ def fisher_covariance(
         wider than its prior.
     """
     names = like.prior.names
-    fis = fisher_matrix(like, theta0)
+    fis = fisher_matrix(like, theta0) if fisher is None else fisher
     if not np.all(np.isfinite(fis)):
         raise _unconstrained(where, names, np.flatnonzero(~np.isfinite(np.diag(fis))), like, theta0)
     zero = np.flatnonzero(~(np.diag(fis) > 0))

@@ -328,17 +328,23 @@ def model_for_target(
     *,
     fdot_ref: float = 0.0,
     omega_dot_ref: float = 0.0,
+    ecliptic_rad: tuple[float, float] | None = None,
 ) -> FourLineModel:
     """Four-line model for the target's (fixed) sky and an observation of ``t_obs_s``.
 
     ``f_center_hz`` fixes the bands; with ``fdot_ref`` [Hz/s] and ``omega_dot_ref`` [rad/s]
     (the search values) it is the reference track that makes templates near it cheap
-    (:class:`~ucbplan.lisa.waveform.FourLineModel`).
+    (:class:`~ucbplan.lisa.waveform.FourLineModel`). ``ecliptic_rad``: the target's
+    (λ, β) [rad] when the caller has already converted it (a population converts a whole
+    chunk in one call); default: :func:`~ucbplan.lisa.response.ecliptic_from_icrs`.
     """
     from ucbplan.lisa.orbits import EqualArmOrbits
     from ucbplan.lisa.response import ecliptic_from_icrs, response_grid, sky_frame
 
-    lon, lat = ecliptic_from_icrs(target.ra_deg, target.dec_deg)
+    if ecliptic_rad is None:
+        lon, lat = ecliptic_from_icrs(target.ra_deg, target.dec_deg)
+    else:
+        lon, lat = ecliptic_rad
     grid = response_grid(EqualArmOrbits(), sky_frame(lon, lat), t_obs_s, n)
     harmonics = (1, 2, 3) if eccentric else (2,)
     return FourLineModel(

@@ -28,11 +28,17 @@ from numpy.typing import NDArray
 
 from ucbplan.errors import InputError
 from ucbplan.lisa import posterior as post
-from ucbplan.lisa.fisher import fisher_covariance, prior_excess
+from ucbplan.lisa.fisher import (
+    fisher_covariance,
+    fisher_from_templates,
+    fisher_points,
+    prior_excess,
+)
 from ucbplan.lisa.likelihood import (
     Likelihood,
     Prior,
     model_for_target,
+    physical_from_theta,
     simulate_data,
     source_from_target,
     theta_from_source,
@@ -109,6 +115,7 @@ def build_model(
     n_bins: int = 512,
     circular: bool = False,
     where: str | None = None,
+    ecliptic_rad: tuple[float, float] | None = None,
 ) -> LisaModel:
     """Injection model of ``target`` (needs lisa.amplitude, cos_inclination, psi).
 
@@ -124,6 +131,9 @@ def build_model(
         Fit the 6-parameter circular model even if the target is eccentric.
     where : str, optional
         Prefix of error messages (default: the target's file).
+    ecliptic_rad : (float, float), optional
+        The target's barycentric mean ecliptic (λ, β) [rad] if already converted (default:
+        converted from its ICRS position here).
 
     Raises
     ------
@@ -159,6 +169,7 @@ def build_model(
         truth.f_gw,
         fdot_ref=truth.fdot,
         omega_dot_ref=truth.omega_dot,
+        ecliptic_rad=ecliptic_rad,
     )
     return LisaModel(base=base, truth=truth, model=model, eccentric=eccentric, n_bins=n_bins)
 
@@ -217,11 +228,23 @@ def fisher_forecast(model: LisaModel) -> FisherForecast:
         A singular Fisher matrix: parameters the data cannot separate, e.g. phase and psi of a
         face-on source (:func:`ucbplan.lisa.fisher.fisher_covariance`). A 1σ wider than the
         prior is a warning of the forecast instead.
+
+    Notes
+    -----
+    The zero-noise data (the injection at ``theta0``), the SNR and the central-difference
+    points of the Fisher matrix are one batch of templates (one waveform call per source).
     """
     theta0 = model.theta0()
-    like = model.likelihood(simulate_data(model.model, model.truth, SANGRIA, None))
-    snr = float(like.snr(theta0[None])[0])
-    cov = fisher_covariance(like, theta0, _where(model), within_prior=False)
+    prior = Prior.paper(model.truth, model.t_obs_s, model.eccentric)
+    pts, steps = fisher_points(prior.names, model.t_obs_s, theta0)
+    # one batch of templates: the injection at theta0 (zero-noise data) and the Fisher points
+    h = model.model.bands(
+        **physical_from_theta(np.vstack([theta0, pts]), model.t_obs_s, prior.names)
+    )
+    like = Likelihood(model.model, h[0], prior, SANGRIA)
+    snr = float(np.sqrt(like.inner(h[:1], h[:1])[0]))
+    info = fisher_from_templates(like, h[1:], steps)
+    cov = fisher_covariance(like, theta0, _where(model), within_prior=False, fisher=info)
     excess = prior_excess(like, theta0, cov, _where(model))
     warnings = () if excess is None else (f"{excess}; its forecast σ is not meaningful",)
     fis = post.gaussian_target(model.base, theta0, cov, model.t_obs_s, like.prior.names)

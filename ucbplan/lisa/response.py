@@ -19,6 +19,7 @@ start of the observation (as FastGB / GBGPU), on the bins f = (q_b + k) / T, k =
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -33,6 +34,7 @@ __all__ = [
     "band_transform",
     "band_weights",
     "ecliptic_from_icrs",
+    "ecliptic_from_icrs_batch",
     "response_grid",
     "sky_frame",
     "tdi_coefficients",
@@ -79,12 +81,21 @@ def sky_frame(ecl_lon_rad: float, ecl_lat_rad: float) -> SkyFrame:
 
 def ecliptic_from_icrs(ra_deg: float, dec_deg: float) -> tuple[float, float]:
     """Convert ICRS (ra, dec) [deg] to barycentric mean ecliptic (J2000) (lambda, beta) [rad]."""
+    lon, lat = ecliptic_from_icrs_batch(np.array([ra_deg]), np.array([dec_deg]))
+    return float(lon[0]), float(lat[0])
+
+
+def ecliptic_from_icrs_batch(
+    ra_deg: NDArray[np.float64], dec_deg: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """:func:`ecliptic_from_icrs` for arrays of positions in one astropy call, (λ, β) [rad]."""
     import astropy.units as u
     from astropy.coordinates import BarycentricMeanEcliptic, SkyCoord
 
-    c = SkyCoord(ra=ra_deg * u.deg, dec=dec_deg * u.deg, frame="icrs")
+    c = SkyCoord(ra=np.asarray(ra_deg) * u.deg, dec=np.asarray(dec_deg) * u.deg, frame="icrs")
     e = c.transform_to(BarycentricMeanEcliptic())
-    return float(e.lon.to_value(u.rad)), float(e.lat.to_value(u.rad))
+    lon = np.asarray(e.lon.to_value(u.rad), dtype=np.float64)
+    return lon, np.asarray(e.lat.to_value(u.rad), dtype=np.float64)
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -132,14 +143,11 @@ def response_grid(orbits: EqualArmOrbits, sky: SkyFrame, t_obs_s: float, n: int)
     """
     if n < 8 or n % 2:
         raise ValueError(f"slow-part length N must be an even integer >= 8, got {n}")
-    t = np.linspace(0.0, t_obs_s, n + 1)
-    x = orbits.positions(t)  # (3, 3, M)
+    t, x, links = _link_geometry(orbits, float(t_obs_s), int(n))
     delay = np.einsum("a,jam->jm", sky.k, x) / C_M_S
     proj_p = np.empty((len(LINKS), t.size))
     proj_c = np.empty((len(LINKS), t.size))
-    for li, (s, r) in enumerate(LINKS):
-        d = x[r] - x[s]
-        nvec = d / np.linalg.norm(d, axis=0)
+    for li, nvec in enumerate(links):
         kn = np.einsum("a,am->m", sky.k, nvec)
         denom = 2.0 * (1.0 - kn)
         proj_p[li] = np.einsum("am,ab,bm->m", nvec, sky.e_plus, nvec) / denom
@@ -153,6 +161,26 @@ def response_grid(orbits: EqualArmOrbits, sky: SkyFrame, t_obs_s: float, n: int)
         proj_plus=proj_p,
         proj_cross=proj_c,
     )
+
+
+@functools.lru_cache(maxsize=4)
+def _link_geometry(
+    orbits: EqualArmOrbits, t_obs_s: float, n: int
+) -> tuple[NDArray[np.float64], NDArray[np.float64], tuple[NDArray[np.float64], ...]]:
+    """Slow-time grid (M,), spacecraft positions (3, 3, M) and link unit vectors (3, M) each.
+
+    They do not depend on the sky, so a population of sources on one grid shares them: cached
+    (a few grids at most; read-only arrays).
+    """
+    t = np.linspace(0.0, t_obs_s, n + 1)
+    x = orbits.positions(t)
+    links = []
+    for s, r in LINKS:
+        d = x[r] - x[s]
+        links.append(d / np.linalg.norm(d, axis=0))
+    for a in (t, x, *links):
+        a.flags.writeable = False
+    return t, x, tuple(links)
 
 
 def tdi_coefficients(f_hz: float, arm_s: float) -> NDArray[np.complex128]:

@@ -157,6 +157,10 @@ _TAYLOR_TOL = 1e-13
 #: Most Taylor terms of the walker-dependent link phase (enough for |beta delay| <= 1.5 rad).
 _K_MAX = 24
 
+#: Fewest Taylor orders of the link moments computed at once (templates near the reference
+#: track need two; computing all :data:`_K_MAX` up front was most of a Fisher forecast's cost).
+_MIN_ORDERS = 2
+
 #: Largest m n k of one real matrix product. OpenBLAS runs dgemm on one thread up to
 #: 65536 x GEMM_MULTITHREAD_THRESHOLD (4 in numpy's builds) and threads above it; threaded, the
 #: link sums were 5-10x slower on a shared two-core machine, so products are split into column
@@ -330,7 +334,7 @@ class FourLineModel:
         self.omega_dot_ref = float(omega_dot_ref)
         self._f_het = round(f_center_hz * t_obs) / (2.0 * t_obs)  # c1 heterodyne [Hz]
         self._delay_max = float(np.max(np.abs(grid.delay_s)) + grid.arm_s)
-        self._moments = self._link_moments()
+        self._moments = np.empty((len(LINES), 4, 0, 2, 2 * grid.t_s.size))
         weights = [band_weights(t_obs, f, grid.arm_s) for f in self.freqs_hz]
         self._dft_w = np.stack([w[0] for w in weights])[:, None, :]  # (n_bands, 1, N)
         self._jump_w = np.stack([w[1] for w in weights])[:, None, :]
@@ -356,8 +360,21 @@ class FourLineModel:
                         recv[b, 2 * ch + pol, r] += w[ch, li] * proj[li]
         return emit, recv
 
-    def _link_moments(self) -> NDArray[np.float64]:
-        """Source-independent Taylor moments of the link phases, (line, 4, K, channel, 2M) real.
+    def _moments_upto(self, n_terms: int) -> NDArray[np.float64]:
+        """The link moments with at least ``n_terms`` Taylor orders (computed on first need).
+
+        Templates near the reference track need two orders (a Fisher forecast), a sampler's
+        wide prior up to :data:`_K_MAX`: orders are computed when first asked for, at least
+        :data:`_MIN_ORDERS` at a time (each order's values do not depend on how many are kept).
+        """
+        if self._moments.shape[2] < n_terms:
+            have = self._moments.shape[2]
+            self._moments = self._link_moments(min(_K_MAX, max(n_terms, 2 * have, _MIN_ORDERS)))
+        return self._moments
+
+    def _link_moments(self, n_orders: int) -> NDArray[np.float64]:
+        """Source-independent Taylor moments of the link phases, (line, 4, K, channel, 2M) real,
+        for the orders K < ``n_orders``.
 
         Every link factor exp(-2 pi i f_p(t) delay) of line p (2 pi f_p = n pi f(t) + s wdot)
         is split into a fixed part on the reference track (f_ref(t) = f_c + fdot_ref t,
@@ -375,7 +392,8 @@ class FourLineModel:
         emit, recv = self._link_weights()
         sign = np.where(np.arange(g.t_s.size) % 2 == 0, 1.0, -1.0)
         het = round(self.f_center_hz * t_obs) / 2.0
-        moments = np.zeros((len(LINES), _K_MAX, 4, g.t_s.size), dtype=complex)
+        moments = np.zeros((len(LINES), n_orders, 4, g.t_s.size), dtype=complex)
+        used = sorted(li for li, _ in self.lines)
         for li, b in self.lines:
             h, s = LINES[li].harmonic, LINES[li].shift
             rot = np.exp(2j * np.pi * (h * het - self.band_bins[b]) * g.t_s / t_obs) * sign
@@ -383,7 +401,7 @@ class FourLineModel:
             dop0 = np.exp(-1j * rate * d)  # (3, M)
             e_w = emit[b] * (dop0 * np.exp(-1j * rate * arm) * rot)[None]
             r_w = recv[b] * (dop0 * rot)[None]
-            for order in range(_K_MAX):
+            for order in range(n_orders):
                 fac = (-1j) ** order / math.factorial(order)
                 moments[li, order] = fac * (
                     np.einsum("cjm,jm->cm", e_w, (d + arm) ** order)
@@ -393,9 +411,12 @@ class FourLineModel:
         # re/im floats, so that [Re a_+, Re a_x, Im a_+, Im a_x] @ rows is the complex product
         # a . MOM; moments[p, :, :K] reshaped to (4, K * channel * 2M) is a strided matrix for
         # one real BLAS product (faster than the complex one at this inner size) with the walkers
-        by_pol = moments.reshape(len(LINES), _K_MAX, 2, 2, -1).transpose(0, 3, 1, 2, 4)
-        rows = np.concatenate([by_pol, 1j * by_pol], axis=1)
-        return np.ascontiguousarray(rows).view(np.float64)
+        # (lines that are not modelled stay zero: only the modelled ones are filled)
+        by_pol = moments[used].reshape(len(used), n_orders, 2, 2, -1).transpose(0, 3, 1, 2, 4)
+        rows = np.zeros((len(LINES), 4, n_orders, 2, g.t_s.size), dtype=complex)
+        rows[used, :2] = by_pol
+        rows[used, 2:] = 1j * by_pol
+        return rows.view(np.float64)
 
     @property
     def n_bands(self) -> int:
@@ -673,7 +694,9 @@ class FourLineModel:
         series, where the polynomial rows of :meth:`_poly_basis` would be too many).
         """
         n_walk = coef.shape[0]
-        mom = self._moments[line, :, :n_terms].reshape(4, -1)  # (4, K * ch * 2M), a view
+        mom = self._moments_upto(n_terms)[line, :, :n_terms].reshape(
+            4, -1
+        )  # (4, K * ch * 2M), a view
         flat = np.empty((n_walk, mom.shape[1]))
         _gemm(coef, mom, flat)
         terms = flat.reshape(n_walk, n_terms, -1)
@@ -692,7 +715,7 @@ class FourLineModel:
         """
         key = (line, n_terms, degree)
         if key not in self._bases:
-            mom = self._moments[line, :, :n_terms]  # (4, K, ch, 2M)
+            mom = self._moments_upto(n_terms)[line, :, :n_terms]  # (4, K, ch, 2M)
             tau2 = np.repeat(self._tau, 2)
             rows = [
                 mom[:, k] * tau2**e for k in range(n_terms) for e in range(k * degree + 1)

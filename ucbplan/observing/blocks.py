@@ -95,10 +95,10 @@ class ExposurePlan:
 
     def __post_init__(self) -> None:
         night = "12 h: a block must fit in one night"
-        check_range("--exptime", self.exptime_s, 0.0, MAX_BLOCK_S, "s", night, low_open=True)
-        check_int("--n-exp", self.n_exp, 1, MAX_N_EXP, "exposures co-added in one block")
+        check_range("exptime_s", self.exptime_s, 0.0, MAX_BLOCK_S, "s", night, low_open=True)
+        check_int("n_exp", self.n_exp, 1, MAX_N_EXP, "exposures co-added in one block")
         check_range(
-            "--readout", self.readout_s, 0.0, MAX_READOUT_S, "s", "dead time between exposures"
+            "readout_s", self.readout_s, 0.0, MAX_READOUT_S, "s", "dead time between exposures"
         )
         if self.span_s > MAX_BLOCK_S:
             raise InputError(

@@ -591,7 +591,7 @@ def make_meta(
     extra : mapping, optional
         Further keys (alpha, nights, exposure plan, warnings ...).
     """
-    from ucbplan import __version__
+    from ucbplan._version import __version__
 
     meta: dict[str, Any] = {
         "ucbplan_version": __version__,

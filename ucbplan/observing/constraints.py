@@ -4,8 +4,10 @@ Each constraint returns a boolean mask over times of a :class:`~ucbplan.observin
 and a short reason; they are registered by name in :data:`CONSTRAINTS` (like astroplan's
 composable constraints). A run's constraints form a :class:`ConstraintSet`, whose fields name
 them (``night``, ``airmass``, ``zenith_hole`` ...) so that no code reads a constraint by its
-position. :func:`evaluate_window` checks a block at start, middle, end and every ≤ 5 min in
-between.
+position; constraints of the user's own (a :class:`Constraint` subclass with one vectorised
+method, ``ok``, or an astroplan constraint: :mod:`ucbplan.observing.constraint_objects`) go into
+its ``extra`` field. :func:`evaluate_window` checks a block at start, middle, end and every
+≤ 5 min in between.
 """
 
 from __future__ import annotations
@@ -18,7 +20,7 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
-from ucbplan.errors import InputError, UcbplanError, shorten
+from ucbplan.errors import InputError, shorten
 from ucbplan.inputs import check_range
 from ucbplan.observing.sky import SkyModel, airmass_from_alt
 
@@ -27,6 +29,7 @@ __all__ = [
     "TWILIGHT_SUN_ALT_DEG",
     "AirmassConstraint",
     "AltitudeConstraint",
+    "AtNightConstraint",
     "Constraint",
     "ConstraintSet",
     "MoonIlluminationConstraint",
@@ -90,18 +93,65 @@ def _either(a: Int8Array, b: Int8Array) -> Int8Array:
     return out
 
 
+def _degrees(value: Any) -> Any:
+    """An angle given as an astropy ``Quantity`` → degrees (float); anything else unchanged
+    (the range check then judges it)."""
+    to_value = getattr(value, "to_value", None)
+    if to_value is None:
+        return value
+    from astropy import units as u
+
+    try:
+        return float(to_value(u.deg))
+    except (u.UnitsError, TypeError, ValueError):
+        return value
+
+
 class Constraint:
-    """Base class: ``ok(sky, i, x)`` → boolean mask over times ``x`` for target ``i``."""
+    """Base class of the observability constraints; subclass it for a constraint of your own.
+
+    A constraint needs one vectorised method, :meth:`ok`: given the run's sky model, the target
+    index and an array of times, return a boolean array of the same shape, True where the
+    constraint holds. A block is planned only if every constraint holds at all its samples
+    (start, middle, end and every ≤ 5 min). :meth:`describe` and :meth:`reason` have defaults;
+    :meth:`screen` is an optional speed-up.
+
+    Examples
+    --------
+    No observing while the telescope is closed for maintenance, 02:00–04:00 UTC:
+
+    >>> class Closed(Constraint):
+    ...     def ok(self, sky, i, x):
+    ...         hour = (sky.time(x).utc.mjd % 1.0) * 24.0
+    ...         return (hour < 2.0) | (hour >= 4.0)
+    """
 
     name: ClassVar[str] = ""
 
     def ok(self, sky: SkyModel, i: int, x: FloatArray) -> BoolArray:
-        """True where the constraint holds."""
+        """True where the constraint holds.
+
+        Parameters
+        ----------
+        sky : SkyModel
+            The run's sky: ``sky.time(x)`` (astropy ``Time``), ``sky.target_alt_deg(i, x)``,
+            ``sky.sun_alt_deg(x)``, ``sky.moon_alt_deg(x)``, ``sky.moon_sep_deg(i, x)``,
+            ``sky.moon_illum(x)``, ``sky.coords[i]`` (``SkyCoord``) and ``sky.location``.
+        i : int
+            Index of the target in ``sky.coords``.
+        x : ndarray of float
+            Times [s after ``sky.origin``, TDB], any shape.
+
+        Returns
+        -------
+        ndarray of bool
+            ``x.shape``.
+        """
         raise NotImplementedError
 
     def describe(self) -> str:
         """One-line human description (goes into the table provenance)."""
-        raise NotImplementedError
+        return type(self).__name__
 
     def screen(self, sky: SkyModel, i: int, x: FloatArray, slack_s: float) -> Int8Array:
         """Where the answer is certain near ``x``: +1 if ``ok`` holds at every time within
@@ -124,9 +174,25 @@ class NightConstraint(Constraint):
     def __post_init__(self) -> None:
         if not isinstance(self.twilight, str) or self.twilight not in TWILIGHT_SUN_ALT_DEG:
             raise InputError(
-                f"--twilight: expected {', '.join(TWILIGHT_SUN_ALT_DEG)} (Sun below -6, -12 or "
-                f"-18 deg), got {shorten(self.twilight, 40)}"
+                f"twilight: expected {', '.join(TWILIGHT_SUN_ALT_DEG)} (Sun below -6, -12 or "
+                f"-18 deg), got {shorten(self.twilight, 40)}",
+                parameter="twilight",
             )
+
+    @classmethod
+    def twilight_civil(cls) -> NightConstraint:
+        """Sun below −6° (astroplan's ``AtNightConstraint.twilight_civil()``)."""
+        return cls("civil")
+
+    @classmethod
+    def twilight_nautical(cls) -> NightConstraint:
+        """Sun below −12° (the default)."""
+        return cls("nautical")
+
+    @classmethod
+    def twilight_astronomical(cls) -> NightConstraint:
+        """Sun below −18°."""
+        return cls("astronomical")
 
     @property
     def sun_alt_max_deg(self) -> float:
@@ -154,8 +220,7 @@ class AirmassConstraint(Constraint):
     name: ClassVar[str] = "airmass"
 
     def __post_init__(self) -> None:
-        why = "sec z: 1 at the zenith, 100 at 0.6 deg altitude"
-        check_range("--airmass-max", self.max_airmass, 1.0, MAX_AIRMASS, "", why)
+        object.__setattr__(self, "max_airmass", check_airmass(self.max_airmass, "max_airmass"))
 
     def ok(self, sky: SkyModel, i: int, x: FloatArray) -> BoolArray:
         return np.asarray(airmass_from_alt(sky.target_alt_deg(i, x)) <= self.max_airmass)
@@ -176,7 +241,8 @@ class AltitudeConstraint(Constraint):
     name: ClassVar[str] = "altitude"
 
     def __post_init__(self) -> None:
-        check_range("altitude limit", self.min_deg, -90.0, 90.0, "deg", "an altitude")
+        limit = check_range("min_deg", _degrees(self.min_deg), -90.0, 90.0, "deg", "an altitude")
+        object.__setattr__(self, "min_deg", limit)
 
     def ok(self, sky: SkyModel, i: int, x: FloatArray) -> BoolArray:
         return np.asarray(sky.target_alt_deg(i, x) >= self.min_deg)
@@ -196,8 +262,8 @@ class ZenithHoleConstraint(Constraint):
     name: ClassVar[str] = "zenith-hole"
 
     def __post_init__(self) -> None:
-        why = "radius around the zenith; alt-az telescopes have a few degrees, 0 = none"
-        check_range("--zenith-hole", self.radius_deg, 0.0, MAX_ZENITH_HOLE_DEG, "deg", why)
+        radius = check_zenith_hole(_degrees(self.radius_deg), "radius_deg")
+        object.__setattr__(self, "radius_deg", radius)
 
     def ok(self, sky: SkyModel, i: int, x: FloatArray) -> BoolArray:
         return np.asarray(sky.target_alt_deg(i, x) <= 90.0 - self.radius_deg)
@@ -215,24 +281,32 @@ class ZenithHoleConstraint(Constraint):
 
 @dataclass(frozen=True)
 class MoonSeparationConstraint(Constraint):
-    """Target at least ``min_deg`` from the Moon (always satisfied when the Moon is down)."""
+    """Target at least ``min_deg`` from the Moon; with ``moon_down_ok`` (the default) always
+    satisfied while the Moon is below the horizon (astroplan's counts the Moon down too:
+    ``moon_down_ok=False``)."""
 
     min_deg: float = 30.0
+    moon_down_ok: bool = True
     name: ClassVar[str] = "moon-sep"
 
     def __post_init__(self) -> None:
-        why = "an angle on the sky; 0 = no limit"
-        check_range("--moon-sep", self.min_deg, 0.0, 180.0, "deg", why)
+        object.__setattr__(self, "min_deg", check_moon_sep(_degrees(self.min_deg), "min_deg"))
 
     def ok(self, sky: SkyModel, i: int, x: FloatArray) -> BoolArray:
-        return np.asarray((sky.moon_sep_deg(i, x) >= self.min_deg) | (sky.moon_alt_deg(x) < 0.0))
+        far = sky.moon_sep_deg(i, x) >= self.min_deg
+        if not self.moon_down_ok:
+            return np.asarray(far)
+        return np.asarray(far | (sky.moon_alt_deg(x) < 0.0))
 
     def screen(self, sky: SkyModel, i: int, x: FloatArray, slack_s: float) -> Int8Array:
         far = _certain(sky.moon_sep_deg(i, x) - self.min_deg, MOON_SEP_RATE_DEG_S, slack_s)
+        if not self.moon_down_ok:
+            return far
         return _either(far, _certain(-sky.moon_alt_deg(x), MOON_ALT_RATE_DEG_S, slack_s))
 
     def describe(self) -> str:
-        return f"Moon separation >= {self.min_deg:g} deg (or Moon down)"
+        down = " (or Moon down)" if self.moon_down_ok else ""
+        return f"Moon separation >= {self.min_deg:g} deg{down}"
 
     def reason(self) -> str:
         return f"closer than {self.min_deg:g} deg to the Moon"
@@ -246,8 +320,8 @@ class MoonIlluminationConstraint(Constraint):
     name: ClassVar[str] = "moon-illum"
 
     def __post_init__(self) -> None:
-        why = "illuminated fraction: 0 new Moon, 1 full Moon"
-        check_range("--moon-illum", self.max_fraction, 0.0, 1.0, "", why)
+        fraction = check_moon_illum(self.max_fraction, "max_fraction")
+        object.__setattr__(self, "max_fraction", fraction)
 
     def ok(self, sky: SkyModel, i: int, x: FloatArray) -> BoolArray:
         return np.asarray((sky.moon_illum(x) <= self.max_fraction) | (sky.moon_alt_deg(x) < 0.0))
@@ -261,6 +335,33 @@ class MoonIlluminationConstraint(Constraint):
 
     def reason(self) -> str:
         return f"Moon up and more than {self.max_fraction:g} illuminated"
+
+
+#: astroplan's name for the night constraint (same class).
+AtNightConstraint = NightConstraint
+
+
+def check_airmass(value: Any, parameter: str) -> float:
+    """An airmass limit in [1, :data:`MAX_AIRMASS`] (error names ``parameter``)."""
+    why = "sec z: 1 at the zenith, 100 at 0.6 deg altitude"
+    return check_range(parameter, value, 1.0, MAX_AIRMASS, "", why)
+
+
+def check_moon_sep(value: Any, parameter: str) -> float:
+    """A Moon separation in [0, 180] deg."""
+    return check_range(parameter, value, 0.0, 180.0, "deg", "an angle on the sky; 0 = no limit")
+
+
+def check_moon_illum(value: Any, parameter: str) -> float:
+    """A Moon illuminated fraction in [0, 1]."""
+    why = "illuminated fraction: 0 new Moon, 1 full Moon"
+    return check_range(parameter, value, 0.0, 1.0, "", why)
+
+
+def check_zenith_hole(value: Any, parameter: str) -> float:
+    """A zenith-hole radius in [0, :data:`MAX_ZENITH_HOLE_DEG`] deg."""
+    why = "radius around the zenith; alt-az telescopes have a few degrees, 0 = none"
+    return check_range(parameter, value, 0.0, MAX_ZENITH_HOLE_DEG, "deg", why)
 
 
 #: Constraint classes by name; :func:`make_constraint` builds one from its name.
@@ -282,13 +383,13 @@ def make_constraint(name: str, **kwargs: Any) -> Constraint:
 
     Raises
     ------
-    UcbplanError
+    InputError
         For an unknown name (lists the known ones).
     """
     try:
         cls = CONSTRAINTS[name]
     except KeyError:
-        raise UcbplanError(
+        raise InputError(
             f"unknown constraint {name!r}; known: {', '.join(sorted(CONSTRAINTS))}"
         ) from None
     return cls(**kwargs)
@@ -311,6 +412,9 @@ class ConstraintSet:
         Largest airmass.
     altitude, zenith_hole, moon_sep, moon_illum : Constraint or None
         Optional constraints (None: not applied).
+    extra : tuple of Constraint
+        Further constraints (the user's own, astroplan's, a second one of a kind), after the
+        named ones.
     """
 
     night: NightConstraint = field(default_factory=NightConstraint)
@@ -319,10 +423,11 @@ class ConstraintSet:
     zenith_hole: ZenithHoleConstraint | None = None
     moon_sep: MoonSeparationConstraint | None = None
     moon_illum: MoonIlluminationConstraint | None = None
+    extra: tuple[Constraint, ...] = ()
 
     @property
     def active(self) -> tuple[Constraint, ...]:
-        """The applied constraints, in evaluation order."""
+        """The applied constraints, in evaluation order (the user's own last)."""
         named = (
             self.night,
             self.airmass,
@@ -331,7 +436,7 @@ class ConstraintSet:
             self.moon_sep,
             self.moon_illum,
         )
-        return tuple(c for c in named if c is not None)
+        return tuple(c for c in named if c is not None) + tuple(self.extra)
 
     def __iter__(self) -> Iterator[Constraint]:
         return iter(self.active)

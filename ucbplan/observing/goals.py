@@ -33,6 +33,7 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -41,6 +42,9 @@ from ucbplan.core.constants import MSUN_KG
 from ucbplan.core.mvnormal import inverse_scaled
 from ucbplan.errors import InputError, shorten
 
+if TYPE_CHECKING:
+    from ucbplan.target import Target
+
 __all__ = [
     "GOAL_QUANTITIES",
     "Goal",
@@ -48,10 +52,13 @@ __all__ = [
     "Shortfall",
     "TimeBudget",
     "anchor_phases",
+    "goal_info_needed",
+    "goal_sigma",
     "parse_goal",
     "shortfall",
     "sigma_k_per_pattern",
     "spectra_for_goal",
+    "target_k",
     "time_budget",
 ]
 
@@ -120,6 +127,8 @@ class GoalPlan:
     sigma_K2_kms: float | None
     time: TimeBudget | None
     cycles: int = 1
+    info_needed: float | None = None
+    visit_s: float | None = None
 
 
 @dataclass(frozen=True)
@@ -264,7 +273,7 @@ def _positive(name: str, value: float | None, high: float = math.inf) -> float:
     return float(value)
 
 
-def _goal_sigma(
+def goal_sigma(
     goal: Goal,
     s1: float,
     s2: float | None,
@@ -274,7 +283,8 @@ def _goal_sigma(
     sin_i: float | None,
     e: float,
 ) -> float:
-    """σ of the goal quantity (absolute or relative as the goal) for per-star σ_K1, σ_K2."""
+    """σ of the goal quantity (absolute or relative as the goal) for per-star σ_K1, σ_K2 [km/s]
+    (module notes)."""
     q = goal.quantity
     if q in ("q", "M1", "M2", "K2") and (k2 is None or s2 is None):
         raise InputError(
@@ -376,7 +386,7 @@ def spectra_for_goal(
     pattern = anchor_phases(anchors)
     unit = sigma_k_per_pattern([u for _, u in pattern], lam)  # σ_K per pattern for σ_v = 1
     s1, s2 = sv1 * unit, (sv2 * unit if k2 is not None else None)
-    per_pattern = _goal_sigma(goal, s1, s2, k1, k2, period_s, sin_i, e)
+    per_pattern = goal_sigma(goal, s1, s2, k1, k2, period_s, sin_i, e)
     ratio = (per_pattern / goal.value) ** 2
     if not math.isfinite(ratio) or ratio * len(pattern) > MAX_SPECTRA:
         raise InputError(
@@ -523,3 +533,46 @@ def shortfall(
     cycles = available_spectra // m
     reach = plan.expected * math.sqrt(cycles_needed / cycles) if cycles else math.inf
     return Shortfall(plan.goal, plan.n_spectra, available_spectra, reach)
+
+
+def target_k(target: Target) -> tuple[float, float | None, float | None]:
+    """(K1, K2 or None, sin i or None) of a goal's target [km/s].
+
+    Raises
+    ------
+    InputError
+        The target file has no K1 (or K_eff).
+    """
+    spec = target.spectroscopy
+    k1 = (spec.K1_kms or spec.K_eff_kms) if spec is not None else None
+    if k1 is None:
+        raise InputError(
+            f"--goal: {target.name}: expected spectroscopy.K1 (or K_eff) in the target file, "
+            "got none; add it or plan without --goal"
+        )
+    k2 = spec.K2_kms if spec is not None and spec.lines == "SB2" else None
+    sin_i = None
+    cos_i = target.cos_inclination
+    if cos_i is not None and math.isfinite(cos_i):
+        sin_i = math.sqrt(max(0.0, 1.0 - cos_i**2)) or None
+    return float(k1), k2, sin_i
+
+
+def goal_info_needed(goal: Goal, target: Target) -> float:
+    """Information on K [(km/s)⁻²] that reaches ``goal`` for ``target``.
+
+    Every goal quantity's σ scales as I^{-½} with the information I = Σ w_i of the spectra
+    (σ_K1 = I^{-½}; star 2's lines, measured in the same spectra, with the same σ_v), so the
+    goal needs I = (σ_goal(I = 1)/goal)².
+
+    Raises
+    ------
+    InputError
+        No K1, or no K2 for a goal on K2, q or a mass.
+    """
+    k1, k2, sin_i = target_k(target)
+    unit = goal_sigma(
+        goal, 1.0, 1.0 if k2 is not None else None, k1, k2, target.period_s, sin_i,
+        target.params.eccentricity,
+    )  # fmt: skip
+    return (unit / goal.value) ** 2

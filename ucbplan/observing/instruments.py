@@ -69,8 +69,12 @@ KNOWN_KEYS = frozenset(
         "missing",
         "notes",
         "sources",
+        "exptime_step_s",
     }
 )
+#: Range of the optional exposure-time granularity ``exptime_step_s`` (exposure times the
+#: instrument accepts are its multiples; 1 s when absent) [s].
+EXPTIME_STEP_RANGE = (0.0, 600.0)
 #: Largest airmass σ_v is scaled to (beyond, the plane-parallel extinction law is meaningless).
 MAX_AIRMASS = 40.0
 #: Open range of target magnitudes accepted [mag].
@@ -106,6 +110,7 @@ class Instrument:
     readout_mode: str | None = None
     missing: tuple[str, ...] = ()
     sources: Mapping[str, str] = field(default_factory=dict, hash=False, compare=False)
+    exptime_step_s: float | None = None
 
 
 def _is_number(value: Any) -> bool:
@@ -196,6 +201,9 @@ def _instrument(name: Any, entry: Any, source: str) -> Instrument:
         raise InputFileError(f"{where}: sources: expected a mapping field: text")
     band = entry.get("extinction_band")
     mode = entry.get("readout_mode")
+    step = entry.get("exptime_step_s")
+    if step is not None:
+        step = _number(where, "exptime_step_s", step, *EXPTIME_STEP_RANGE, "s")
     return Instrument(
         name=name,
         telescope=telescope.strip(),
@@ -209,6 +217,7 @@ def _instrument(name: Any, entry: Any, source: str) -> Instrument:
         readout_mode=str(mode) if mode is not None else None,
         missing=tuple(missing),
         sources=MappingProxyType({str(k): v for k, v in sources.items()}),
+        exptime_step_s=step,
     )
 
 

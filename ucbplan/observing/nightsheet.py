@@ -1,20 +1,20 @@
-"""The night sheet for the telescope: per night, the chart and what to tell the night assistant.
+"""The night sheet for the telescope: per night the chart, then per visit what to do, exposure by
+exposure, in UTC.
 
-:func:`write_night_sheet` writes a PDF (one page per night; a night with many visits continues
-on further pages) or a self-contained HTML file (charts embedded as base64 PNG, no links, no
-scripts, no network). Each night lists its visits in time order with UTC start and end (date and
-time, scale stated), the exposure sequence of every block and a plain instruction: target,
-ICRS coordinates, when to be acquired, exposure time × number, and the anchor epochs.
+:func:`write_night_sheet` writes a PDF (A4 portrait, a page per night; a long night continues on
+further pages) or a self-contained HTML page (:mod:`ucbplan.observing.sheet_html`: charts
+embedded as base64 PNG, its own CSS and a live clock in plain JavaScript, no network). Each visit
+has a short header — target, ICRS position, acquisition start — two lines for the night
+assistant ("acquire by HH:MM:SS UTC, then N × T s with R s readout; starts are phase-critical
+±σ s") and one row per exposure (:data:`ucbplan.observing.sheet_html.EXPOSURE_COLUMNS`): UTC
+start and end (HH:MM:SS, rounded to the second), anchor and its epoch, airmass, Λ_K and σ_t.
 """
 
 from __future__ import annotations
 
 import base64
-import html
 import io
-import math
 from collections.abc import Sequence
-from datetime import datetime, timedelta
 from pathlib import Path
 from typing import IO, Any
 
@@ -26,6 +26,7 @@ from astropy.table import Table
 from ucbplan.errors import InputError, shorten
 from ucbplan.io import write_output
 from ucbplan.observing.constraints import ConstraintSet
+from ucbplan.observing.countdown import Exposure, hms, seconds_text, visit_exposures
 from ucbplan.observing.nightplot import (
     NightChart,
     Visit,
@@ -33,6 +34,13 @@ from ucbplan.observing.nightplot import (
     hhmm,
     level_crossings,
     night_chart,
+)
+from ucbplan.observing.sheet_html import (
+    EXPOSURE_COLUMNS,
+    SheetNight,
+    SheetVisit,
+    exposure_cells,
+    render_html,
 )
 from ucbplan.observing.sites import Site
 from ucbplan.observing.sky import SkyModel
@@ -45,25 +53,23 @@ __all__ = [
     "night_events",
     "plan_note",
     "sheet_format",
+    "sheet_nights",
     "sky_line",
+    "visit_about",
+    "visit_heading",
     "visit_instruction",
-    "visit_lines",
     "write_night_sheet",
 ]
 
 #: Formats of :func:`write_night_sheet`, by file suffix.
 SHEET_FORMATS = ("pdf", "html")
-#: Text lines of the visit list on one PDF page (below the chart).
-_LINES_PER_PAGE = 19
-#: Text lines on a continuation page (no chart).
-_LINES_PER_CONTINUATION = 50
-#: Characters per line and font size [pt] of the PDF visit list (fills an A4 landscape page).
-_WIDTH, _FONT_PT = 140, 8.5
-
-
-def _utc(iso: str) -> str:
-    """``YYYY-MM-DD HH:MM:SS UTC`` of an ISO UTC string (rounded down to the second)."""
-    return f"{iso[:10]} {iso[11:19]} UTC"
+#: The PDF page [inch]: A4 portrait.
+_PAGE_IN = (8.27, 11.69)
+#: Text lines below the chart on a night's first PDF page, and on a continuation page.
+_LINES_PER_PAGE = 40
+_LINES_PER_CONTINUATION = 72
+#: Characters per line and font size [pt] of the PDF text (fits the A4 portrait width).
+_WIDTH, _FONT_PT = 92, 8.5
 
 
 def _cell(row: Any, name: str) -> float | None:
@@ -71,66 +77,46 @@ def _cell(row: Any, name: str) -> float | None:
     if name not in row.colnames or np.ma.is_masked(row[name]):
         return None
     value = float(row[name])
-    return value if math.isfinite(value) else None
+    return value if np.isfinite(value) else None
 
 
-def _exposures(row: Any) -> str:
-    readout = _cell(row, "readout_s")
-    dead = f", {readout:g} s between" if readout else ""
-    return f"{int(row['n_exp'])} × {float(row['exptime_s']):g} s{dead}"
+def visit_heading(number: int, visit: Visit, exposures: Sequence[Exposure]) -> str:
+    """``Visit 1: HM Cnc (V01), 2040-02-16 UTC``: number in the night, target, visit, UTC date."""
+    short = exposures[0].label.split("/")[0]
+    return f"Visit {number}: {visit.target} ({short}), {exposures[0].start.date()} UTC"
 
 
-def visit_lines(visit: Visit) -> list[str]:
-    """The exposure sequence of a visit, one line per block: UTC start–end, exposures, anchor
-    (u★ [rad]) and its epoch (block centre, UTC) ± σ_t [s], airmass at the centre."""
-    out = []
-    for row in visit.rows:
-        start, end, mid = str(row["t_start_utc"]), str(row["t_end_utc"]), str(row["t_mid_utc"])
-        out.append(
-            f"{row['block_id']}: {_utc(start)} to {end[11:19]} UTC, {_exposures(row)}; anchor "
-            f"{row['anchor']} (u★ = {float(row['u_star_rad']):.3f} rad) at {mid[11:23]} UTC "
-            f"± {float(row['sigma_t_s']):.2g} s; airmass {float(row['airmass']):.2f}"
-        )
-    return out
-
-
-def _local(row: Any, name: str) -> str:
-    """`` (local HH:MM)`` from a ``t_*_local`` cell, empty when the table has none."""
-    text = str(row[name]).strip() if name in row.colnames and not np.ma.is_masked(row[name]) else ""
-    return f" (local {text[11:16]})" if len(text) >= 16 else ""
-
-
-def _minus(iso: str, seconds: float) -> str:
-    """``_utc`` of an ISO UTC string moved back by ``seconds``."""
-    t = datetime.fromisoformat(iso[:19]) - timedelta(seconds=seconds)
-    return _utc(t.isoformat())
-
-
-def visit_instruction(visit: Visit) -> str:
-    """What to tell the night assistant about a visit, in one paragraph: target, ICRS position,
-    magnitude (if the table has ``vmag``), when to be on target, the exposures and the anchors."""
+def visit_about(visit: Visit, exposures: Sequence[Exposure]) -> str:
+    """One line on the target of a visit: ICRS position, magnitude (if the table has ``vmag``),
+    acquisition start (UTC), first start and last end."""
     row = visit.rows[0]
     names = visit.rows.colnames
     ra = str(row["ra_hms"]) if "ra_hms" in names else f"{float(row['ra_deg']):.5f}°"
     dec = str(row["dec_dms"]) if "dec_dms" in names else f"{float(row['dec_deg']):+.5f}°"
     vmag = _cell(row, "vmag")
     mag = f", V = {vmag:.1f} mag" if vmag is not None else ""
-    acq = _cell(row, "acq_s")
-    start = f"{_utc(visit.start_utc)}{_local(row, 't_start_local')}"
-    ready = (
-        f"Start acquiring at {_minus(visit.start_utc, acq)} ({acq / 60:.0f} min acquisition) so "
-        f"that the first exposure starts at {start}"
-        if acq
-        else f"Be on target and guiding by {start}, when the first exposure starts"
-    )
-    n_blocks = len(visit.rows)
-    seq = "; ".join(f"{_exposures(r)} from {str(r['t_start_utc'])[11:19]} UTC" for r in visit.rows)
-    anchors = ", ".join(f"{r['anchor']} at {str(r['t_mid_utc'])[11:19]} UTC" for r in visit.rows)
+    first, last = exposures[0], exposures[-1]
+    acq = first.acq_start
+    acq_text = f"acquisition starts {hms(acq)} UTC; " if acq is not None else ""
     return (
-        f"{visit.target}: RA {ra}, Dec {dec} (ICRS){mag}. {ready}. "
-        f"{n_blocks} block{'s' if n_blocks > 1 else ''}: {seq}. The exposure start times are "
-        f"fixed (phase-critical): the anchor epochs are {anchors}. Finished at "
-        f"{_utc(visit.end_utc)}."
+        f"RA {ra}, Dec {dec} (ICRS){mag}; {acq_text}first exposure starts "
+        f"{hms(first.start)} UTC, last ends {hms(last.end)} UTC"
+    )
+
+
+def visit_instruction(exposures: Sequence[Exposure]) -> tuple[str, str]:
+    """What to tell the night assistant about a visit, in two lines: when to be acquired and the
+    exposures, then that the starts are phase-critical and what to do about a missed one."""
+    first = exposures[0]
+    times = sorted({seconds_text(e.exptime_s) for e in exposures}, key=float)
+    each = times[0] if len(times) == 1 else f"{times[0]}–{times[-1]}"
+    readout = seconds_text(max(e.readout_s for e in exposures))
+    sigma = max(e.sigma_t_s for e in exposures)
+    return (
+        f"Acquire by {hms(first.start)} UTC, then {len(exposures)} × {each} s with {readout} s "
+        "readout.",
+        f"Starts are phase-critical ±{sigma:.2g} s: start each exposure at its UTC time below; "
+        "a missed start is skipped, never made up late.",
     )
 
 
@@ -190,8 +176,8 @@ def plan_note(table: Table) -> str:
     return "; ".join(parts) + "."
 
 
-def _night_rows(chart: NightChart) -> list[tuple[str, Visit]]:
-    return [(f"{k + 1}", v) for k, v in enumerate(chart.visits)]
+def _visits(chart: NightChart, meta: Any) -> list[tuple[Visit, list[Exposure]]]:
+    return [(v, visit_exposures(v, meta)) for v in chart.visits]
 
 
 # -- PDF ------------------------------------------------------------------------------------------
@@ -200,64 +186,78 @@ def _night_rows(chart: NightChart) -> list[tuple[str, Visit]]:
 def _wrap(text: str, width: int = _WIDTH) -> list[str]:
     import textwrap
 
-    return textwrap.wrap(text, width=width, subsequent_indent="      ") or [""]
+    return textwrap.wrap(text, width=width, subsequent_indent="    ") or [""]
 
 
-def _text_lines(chart: NightChart) -> list[str]:
+def _table_lines(exposures: Sequence[Exposure]) -> list[str]:
+    """The exposure table as fixed-width text (one line per exposure)."""
+    rows = [EXPOSURE_COLUMNS, *(exposure_cells(e) for e in exposures)]
+    widths = [max(len(r[k]) for r in rows) for k in range(len(EXPOSURE_COLUMNS))]
+    return ["  " + "  ".join(_aligned(r, widths)) for r in rows]
+
+
+def _aligned(cells: Sequence[str], widths: Sequence[int]) -> list[str]:
+    """Cells padded to their column width: the anchor left-aligned, numbers right-aligned."""
+    return [
+        c.ljust(w) if k == 3 else c.rjust(w)
+        for k, (c, w) in enumerate(zip(cells, widths, strict=True))
+    ]
+
+
+def _text_lines(chart: NightChart, meta: Any) -> list[str]:
     lines: list[str] = []
-    for number, v in _night_rows(chart):
-        lines += _wrap(f"Visit {number} ({v.visit_id}): {_utc(v.start_utc)} to {_utc(v.end_utc)}")
-        for line in visit_lines(v):
-            lines += _wrap(f"   {line}")
-        lines += _wrap(f"   Tell the night assistant: {visit_instruction(v)}")
+    for k, (v, exposures) in enumerate(_visits(chart, meta), start=1):
+        lines += _wrap(visit_heading(k, v, exposures))
+        lines += _wrap(f"  {visit_about(v, exposures)}")
+        for line in visit_instruction(exposures):
+            lines += _wrap(f"  > {line}")
+        lines += [*_table_lines(exposures), ""]
     return lines
 
 
 def _pdf_pages(
-    chart: NightChart, site: Site, constraints: ConstraintSet | None, note: str = ""
+    chart: NightChart,
+    site: Site,
+    constraints: ConstraintSet | None,
+    note: str = "",
+    meta: Any = None,
 ) -> list[Any]:
-    """The figures of one night: chart and first lines, then continuation pages."""
+    """The figures of one night (A4 portrait): chart and first lines, then continuation pages."""
     plt = pyplot()
     lines = [*_wrap(note), ""] if note else []
     lines += [*_wrap(sky_line(chart, site)), ""]
-    lines += _text_lines(chart)
+    lines += _text_lines(chart, meta or {})
     first = chart_figure([chart], site, constraints)
-    first.set_size_inches(11.69, 8.27)
+    first.set_size_inches(*_PAGE_IN)
     engine: Any = first.get_layout_engine()
-    engine.set(rect=(0.0, 0.42, 1.0, 0.58))
+    engine.set(rect=(0.0, 0.6, 1.0, 0.4))
     pages = [first]
     chunk, rest = lines[:_LINES_PER_PAGE], lines[_LINES_PER_PAGE:]
-    first.text(0.02, 0.40, "\n".join(chunk), family="monospace", fontsize=_FONT_PT, va="top")
+    first.text(0.04, 0.585, "\n".join(chunk), family="monospace", fontsize=_FONT_PT, va="top")
     while rest:
-        fig = plt.figure(figsize=(11.69, 8.27))
-        head = f"{site.name}, night of {chart.window.label} (continued)"
-        fig.text(0.02, 0.97, head, fontsize=10, va="top")
+        fig = plt.figure(figsize=_PAGE_IN)
+        head = f"{site.name}, night of {chart.window.label} (continued; times UTC)"
+        fig.text(0.04, 0.97, head, fontsize=10, va="top")
         body, rest = rest[:_LINES_PER_CONTINUATION], rest[_LINES_PER_CONTINUATION:]
-        fig.text(0.02, 0.93, "\n".join(body), family="monospace", fontsize=_FONT_PT, va="top")
+        fig.text(0.04, 0.945, "\n".join(body), family="monospace", fontsize=_FONT_PT, va="top")
         pages.append(fig)
     return pages
 
 
 def _write_pdf(
-    handle: IO[Any], charts: Sequence[NightChart], site: Site, cs: Any, note: str
+    handle: IO[Any], charts: Sequence[NightChart], site: Site, cs: Any, note: str, meta: Any
 ) -> None:
     from matplotlib.backends.backend_pdf import PdfPages
 
     plt = pyplot()
     with PdfPages(handle) as pdf:
         for chart in charts:
-            for fig in _pdf_pages(chart, site, cs, note):
+            for fig in _pdf_pages(chart, site, cs, note, meta):
                 pdf.savefig(fig)
                 plt.close(fig)
 
 
 # -- HTML -----------------------------------------------------------------------------------------
-
-_STYLE = (
-    "body{font-family:sans-serif;max-width:1100px;margin:1em auto}"
-    "table{border-collapse:collapse;font-size:90%}td,th{border:1px solid #999;padding:2px 6px;"
-    "vertical-align:top}section{page-break-after:always}img{max-width:100%}"
-)
 
 
 def _png(chart: NightChart, site: Site, constraints: ConstraintSet | None) -> str:
@@ -270,40 +270,26 @@ def _png(chart: NightChart, site: Site, constraints: ConstraintSet | None) -> st
     return base64.b64encode(buf.getvalue()).decode("ascii")
 
 
-def _html_night(chart: NightChart, site: Site, constraints: ConstraintSet | None) -> str:
-    e = html.escape
-    rows = []
-    for number, v in _night_rows(chart):
-        blocks = "<br>".join(e(line) for line in visit_lines(v))
-        rows.append(
-            f"<tr><td>{number}</td><td>{e(v.visit_id)}</td><td>{e(v.target)}</td>"
-            f"<td>{e(_utc(v.start_utc))}</td><td>{e(_utc(v.end_utc))}</td><td>{blocks}</td>"
-            f"<td>{e(visit_instruction(v))}</td></tr>"
+def sheet_nights(
+    charts: Sequence[NightChart], site: Site, constraints: ConstraintSet | None, meta: Any
+) -> list[SheetNight]:
+    """What the HTML sheet shows, night by night (``meta``: the blocks table's)."""
+    out = []
+    for chart in charts:
+        visits = tuple(
+            SheetVisit(
+                heading=visit_heading(k, v, exposures),
+                about=visit_about(v, exposures),
+                tell=visit_instruction(exposures),
+                exposures=tuple(exposures),
+            )
+            for k, (v, exposures) in enumerate(_visits(chart, meta), start=1)
         )
-    head = (
-        "<tr><th>#</th><th>visit</th><th>target</th><th>start (UTC)</th><th>end (UTC)</th>"
-        "<th>exposure sequence</th><th>tell the night assistant</th></tr>"
-    )
-    return (
-        f"<section><h2>{e(site.name)}, night of {e(chart.window.label)}</h2>"
-        f"<p>{e(sky_line(chart, site))}</p>"
-        f'<img alt="altitude chart of the night of {e(chart.window.label)}" '
-        f'src="data:image/png;base64,{_png(chart, site, constraints)}">'
-        f"<table>{head}{''.join(rows)}</table></section>"
-    )
-
-
-def _html(
-    charts: Sequence[NightChart], site: Site, constraints: ConstraintSet | None, note: str
-) -> str:
-    body = "".join(_html_night(c, site, constraints) for c in charts)
-    return (
-        '<!DOCTYPE html><html lang="en"><head><meta charset="utf-8">'
-        f"<title>Night sheet: {html.escape(site.name)}</title><style>{_STYLE}</style></head>"
-        f"<body><h1>Night sheet: {html.escape(site.name)}, {len(charts)} night(s)</h1>"
-        f"<p>{html.escape(note)}</p>"
-        f"{body}</body></html>\n"
-    )
+        heading = f"{site.name}, night of {chart.window.label}"
+        out.append(
+            SheetNight(heading, sky_line(chart, site), _png(chart, site, constraints), visits)
+        )
+    return out
 
 
 def sheet_format(path: Path) -> str:
@@ -360,15 +346,18 @@ def write_night_sheet(
     charts = night_chart(table, site)
     if not charts:
         raise InputError("--sheet: the plan has no blocks; nothing to put on a night sheet")
+    note, meta = plan_note(table), table.meta
     if fmt == "pdf":
         write_output(
             path,
-            lambda h: _write_pdf(h, charts, site, constraints, plan_note(table)),
+            lambda h: _write_pdf(h, charts, site, constraints, note, meta),
             overwrite=overwrite,
             binary=True,
         )
     else:
-        text = _html(charts, site, constraints, plan_note(table))
+        nights = sheet_nights(charts, site, constraints, meta)
+        title = f"Night sheet: {site.name}, {len(charts)} night(s)"
+        text = render_html(title, note, nights)
 
         def _write_html(handle: IO[str]) -> None:
             handle.write(text)

@@ -141,6 +141,10 @@ class SkyModel:
             up_itrs=up,
         )
 
+    def time(self, x: FloatArray) -> Time:
+        """The instants ``x`` [s after the origin] as astropy ``Time`` (TDB at the site)."""
+        return TimeAxis(self.origin).tdb(np.asarray(x, dtype=np.float64))
+
     @property
     def n_targets(self) -> int:
         """Number of targets in the model."""

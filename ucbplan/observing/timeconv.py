@@ -24,6 +24,8 @@ from astropy.coordinates import EarthLocation, SkyCoord
 from astropy.time import Time, TimeDelta
 from scipy.interpolate import CubicSpline
 
+from ucbplan.errors import InputError
+
 __all__ = [
     "DelayInterpolator",
     "SiteTrack",
@@ -257,7 +259,7 @@ def bary_tdb_to_site_utc(
 
     Raises
     ------
-    ValueError
+    InputError
         If ``t_star`` is not in the TDB scale.
 
     Notes
@@ -266,7 +268,9 @@ def bary_tdb_to_site_utc(
     epochs come from Eq. u_precessing_app (Appendix A2).
     """
     if t_star.scale != "tdb":
-        raise ValueError(f"barycentric epochs must be TDB, got scale {t_star.scale!r}")
+        raise InputError(
+            f"t_star: barycentric epochs must be TDB, got scale {t_star.scale!r}; pass t.tdb"
+        )
     scalar = t_star.isscalar
     ts = t_star.reshape(-1) if not scalar else t_star.reshape(1)
     use_fast = fast if fast is not None else len(ts) > FAST_PATH_MIN
@@ -322,24 +326,23 @@ def coverage_warnings(t_first: Time, t_last: Time) -> list[str]:
     Returns
     -------
     list of str
-        Zero, one or two one-line warnings (< 200 characters each) telling the user the impact
-        and what to do; docs/method.md ("Barycentric and site time") explains them in full.
+        Zero, one or two one-line warnings (at most 91 characters each, so that a terminal line
+        ``warning: …`` fits 100 columns) telling the user the impact and what to do;
+        docs/method.md ("Barycentric and site time") explains them in full (block times are
+        not affected by IERS-A; re-plan after updating the leap-second table).
     """
     iers_end, expires = _table_ends()
     out: list[str] = []
     with quiet_erfa():
+        # each fits one 100-column line after "warning: " (issue 24)
         if t_last > iers_end:
-            first = max(t_first, iers_end)
             out.append(
-                f"nights from {first.utc.iso[:10]} are past the bundled IERS-A predictions "
-                f"(end {iers_end.iso[:10]}): altitudes may be off by ~15 arcsec, block "
-                "times are not; pip install -U astropy-iers-data before observing"
+                f"IERS-A ends {iers_end.iso[:10]}: altitudes after it ~15 arcsec off; "
+                "pip install -U astropy-iers-data"
             )
         if t_last > expires:
-            first = max(t_first, expires)
             out.append(
-                f"nights from {first.utc.iso[:10]} are past the leap-second table (expires "
-                f"{expires.iso[:10]}): a later leap second moves all UTC times by 1 s (TDB "
-                "is exact); pip install -U astropy-iers-data, re-plan before observing"
+                f"leap-second table ends {expires.iso[:10]}: UTC may be 1 s off; "
+                "pip install -U astropy-iers-data"
             )
     return out

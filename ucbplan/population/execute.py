@@ -5,9 +5,9 @@ file (atomically, named by chunk number) as soon as it arrives, and merges the p
 order at the end, so the output does not depend on which worker ran what or when. A rerun with
 ``resume`` reuses every part whose fingerprint (options, catalog, chunk contents) matches.
 
-Every task first calls :func:`worker_setup` (offline astropy, malloc tuning) in its own process:
-this works the same for a pool initializer, a Dask worker and the serial path, and never
-downloads anything.
+Every task first calls :func:`worker_setup` (malloc tuning) in its own process and runs in the
+offline astropy scope (:func:`offline_task`): this works the same for a pool, a Dask worker and
+the serial path, never downloads anything and leaves the worker's astropy set-up as it was.
 """
 
 from __future__ import annotations
@@ -29,7 +29,6 @@ from typing import Any, TypeVar
 
 from ucbplan.errors import InputError, OutputExistsError, UcbplanError, shorten
 from ucbplan.io import write_output
-from ucbplan.offline import configure_offline
 
 __all__ = [
     "CLUSTERS",
@@ -37,6 +36,7 @@ __all__ = [
     "SerialExecutor",
     "default_chunk",
     "jobqueue_cluster_class",
+    "offline_task",
     "open_executor",
     "run_chunks",
     "source_seed",
@@ -80,14 +80,22 @@ def tune_malloc() -> bool:
 
 
 def worker_setup() -> None:
-    """Per-process set-up before any work: offline astropy (never download), malloc tuning."""
+    """Per-process set-up before any work: malloc tuning (each task enters the offline astropy
+    scope itself, :func:`ucbplan.offline.offline`)."""
     global _SETUP_DONE
     if _SETUP_DONE:
         return
-    configure_offline()
     if "MALLOC_TRIM_THRESHOLD_" in os.environ:
         tune_malloc()
     _SETUP_DONE = True
+
+
+def offline_task(task: Callable[[list[Any]], T], items: list[Any]) -> T:
+    """``task(items)`` in the offline astropy scope, wherever it runs (pool, Dask, serial)."""
+    from ucbplan.offline import offline
+
+    with offline():
+        return task(items)
 
 
 def source_seed(global_seed: int, source_id: str) -> int:
@@ -382,7 +390,7 @@ def run_chunks(
                 if nxt is None:
                     break
                 a, b = bounds[nxt]
-                pending[executor.submit(task, list(items[a:b]))] = nxt
+                pending[executor.submit(offline_task, task, list(items[a:b]))] = nxt
             if not pending:
                 break
             finished, _ = wait(list(pending), return_when=FIRST_COMPLETED)

@@ -37,6 +37,7 @@ __all__ = [
     "ForecastOptions",
     "forecast_chunk",
     "forecast_options",
+    "forecast_rows",
     "forecast_source",
     "forecast_with_target",
     "icrs_of",
@@ -133,21 +134,28 @@ def k_total_kms(m1_msun: float, m2_msun: float, f_gw_hz: float, cos_i: float) ->
     return v * math.sqrt(max(0.0, 1.0 - cos_i * cos_i)) / 1e3
 
 
-def source_target(src: Source, ra_deg: float, dec_deg: float, opts: ForecastOptions) -> Any:
-    """The catalog row as a :class:`ucbplan.target.Target` at the midpoint (no covariance)."""
+def source_target(
+    src: Source, ra_deg: float, dec_deg: float, opts: ForecastOptions, t_ref: Any = None
+) -> Any:
+    """The catalog row as a :class:`ucbplan.target.Target` at the midpoint (no covariance).
+
+    ``t_ref``: the LISA midpoint (TDB :class:`~astropy.time.Time`) if the caller has it (a
+    chunk shares one); default: ``opts.t_start_tdb`` + T_obs/2.
+    """
     from astropy.time import Time, TimeDelta
 
     from ucbplan.target import Target
 
     p0 = PhaseParams(phase=src.phase_rad % (2 * math.pi), f_gw=src.f_hz, fdot=src.fdot_hz_s)
     mid, _ = shift_reference(p0, np.zeros((7, 7)), 0.5 * opts.t_obs_s)
-    t0 = Time(opts.t_start_tdb, scale="tdb")
+    if t_ref is None:
+        t_ref = Time(opts.t_start_tdb, scale="tdb") + TimeDelta(0.5 * opts.t_obs_s, format="sec")
     return Target(
         name=f"population source {src.source_id}",
         source=None,
         ra_deg=ra_deg,
         dec_deg=dec_deg,
-        t_ref=t0 + TimeDelta(0.5 * opts.t_obs_s, format="sec"),
+        t_ref=t_ref,
         t_obs_s=opts.t_obs_s,
         params=mid,
         cov_names=(),
@@ -213,14 +221,59 @@ def forecast_with_target(
 ) -> tuple[dict[str, Any], Any]:
     """The forecast row and, when its status is ``ok``, the Fisher target (midpoint, full
     covariance, ``spectroscopy`` carrying σ_v and the K of the tolerance); else None."""
+    return forecast_rows([src], np.array([ra_deg]), np.array([dec_deg]), opts)[0]
+
+
+def forecast_rows(
+    sources: Sequence[Source], ra_deg: np.ndarray, dec_deg: np.ndarray, opts: ForecastOptions
+) -> list[tuple[dict[str, Any], Any]]:
+    """Forecast rows (and Fisher targets, None unless ``ok``) of a chunk of sources, in order.
+
+    What the sources share is done once for the chunk: the sky conversion to the ecliptic
+    frame of the LISA response (one astropy call), the LISA midpoint, and the horizons of
+    every constrained source (one vectorised :func:`~ucbplan.core.horizon_batch.
+    horizon_columns` pass instead of a horizon table per source). The Fisher matrix of each
+    source is its own (its band, sky and reference track differ).
+    """
+    from astropy.time import Time, TimeDelta
+
+    from ucbplan.lisa.response import ecliptic_from_icrs_batch
+
+    lon, lat = ecliptic_from_icrs_batch(np.asarray(ra_deg), np.asarray(dec_deg))
+    t_ref = Time(opts.t_start_tdb, scale="tdb") + TimeDelta(0.5 * opts.t_obs_s, format="sec")
+    staged = [
+        _fisher_stage(s, float(r), float(d), (float(lo), float(la)), opts, t_ref)
+        for s, r, d, lo, la in zip(sources, ra_deg, dec_deg, lon, lat, strict=True)
+    ]
+    _horizon_stage([(row, fc) for row, fc in staged if fc is not None], opts)
+    out: list[tuple[dict[str, Any], Any]] = []
+    for row, fc in staged:
+        if fc is None or row["status"] != "ok":
+            out.append((row, None))
+            continue
+        spec = Spectroscopy(K_eff_kms=row["k_eff"], sigma_v_kms=opts.sigma_v_kms)
+        out.append((row, dataclasses.replace(fc, spectroscopy=spec)))
+    return out
+
+
+def _fisher_stage(
+    src: Source,
+    ra_deg: float,
+    dec_deg: float,
+    ecliptic_rad: tuple[float, float],
+    opts: ForecastOptions,
+    t_ref: Any,
+) -> tuple[dict[str, Any], Any]:
+    """The row up to its horizons and the Fisher target (None when the row is not ``ok``)."""
     row = _nan_row(src, "ok")
     row.update(ra=ra_deg, dec=dec_deg)
     try:
         from ucbplan.lisa.pipeline import build_model, fisher_forecast
 
-        target = source_target(src, ra_deg, dec_deg, opts)
+        target = source_target(src, ra_deg, dec_deg, opts, t_ref)
         row["f_gw"], row["fdot"] = target.params.f_gw, target.params.fdot
-        fc = fisher_forecast(build_model(target, n_bins=opts.n_bins, circular=True))
+        model = build_model(target, n_bins=opts.n_bins, circular=True, ecliptic_rad=ecliptic_rad)
+        fc = fisher_forecast(model)
     except NumericalError as exc:
         msg = " ".join(str(exc).split())
         row["status"] = "unconstrained" if "unconstrained" in msg else f"failed: {msg}"
@@ -252,29 +305,66 @@ def forecast_with_target(
     if not k > 0:
         row["status"] = "failed: K = 0 (sin ι = 0): give --k-eff"
         return row, None
+    return row, fc.target
+
+
+def _horizon_stage(staged: list[tuple[dict[str, Any], Any]], opts: ForecastOptions) -> None:
+    """σ_u at the end, δu_tol and T_valid of every staged row, in one vectorised pass.
+
+    A pass that fails (a :class:`UcbplanError`) is redone source by source, so that only the
+    sources that cause it get ``failed: <message>``.
+    """
+    from ucbplan.core.horizon_batch import horizon_columns
+
+    if not staged:
+        return
+    targets = [t for _, t in staged]
+    try:
+        cols = horizon_columns(
+            np.array([t.params.as_array() for t in targets]),
+            np.array([t.covariance for t in targets]),
+            np.array([t.t_obs_s for t in targets]),
+            opts.sigma_v_kms,
+            np.array([row["k_eff"] for row, _ in staged]),
+            ALPHAS,
+            ANCHORS,
+            n_epochs=opts.n_epochs,
+        )
+    except UcbplanError:
+        if len(staged) == 1:
+            _horizons_one(*staged[0], opts)
+        else:
+            for item in staged:
+                _horizon_stage([item], opts)
+        return
+    for i, (row, _) in enumerate(staged):
+        for a in ANCHORS:
+            row[f"sigma_u_end_{a}"] = float(cols[f"sigma_u_end_rad:{a}"][i])
+            row[f"tol_{a}"] = float(cols[f"delta_u_tol_rad:{a}"][i])
+            for al in ALPHAS:
+                row[f"t_valid_{a}_a{al:g}"] = float(cols[f"t_valid_days:{a}:{al:g}"][i])
+
+
+def _horizons_one(row: dict[str, Any], target: Any, opts: ForecastOptions) -> None:
+    """The horizons of one source with :func:`horizon_table` (its error becomes the status)."""
     try:
         rows = horizon_table(
-            fc.target, opts.sigma_v_kms, k, ALPHAS, ANCHORS, n_epochs=opts.n_epochs
+            target, opts.sigma_v_kms, row["k_eff"], ALPHAS, ANCHORS, n_epochs=opts.n_epochs
         )
     except UcbplanError as exc:
         row["status"] = f"failed: {' '.join(str(exc).split())}"
-        return row, None
+        return
     for hr in rows:
         row[f"sigma_u_end_{hr.anchor}"] = hr.sigma_u_end_rad
         row[f"tol_{hr.anchor}"] = hr.delta_u_tol_rad
         row[f"t_valid_{hr.anchor}_a{hr.alpha:g}"] = hr.t_valid_days
-    spec = Spectroscopy(K_eff_kms=k, sigma_v_kms=opts.sigma_v_kms)
-    return row, dataclasses.replace(fc.target, spectroscopy=spec)
 
 
 def forecast_chunk(opts: ForecastOptions, sources: Sequence[Source]) -> list[dict[str, Any]]:
     """Rows of ``sources`` in order (a picklable task for any executor)."""
     worker_setup()
     ra, dec = icrs_of(sources)
-    return [
-        forecast_source(s, float(r), float(d), opts)
-        for s, r, d in zip(sources, ra, dec, strict=True)
-    ]
+    return [row for row, _ in forecast_rows(sources, ra, dec, opts)]
 
 
 #: T_valid cap in days (horizons are searched up to 300 years).

@@ -1,9 +1,14 @@
 """The regression's design variable per spectrum, from the LISA ephemeris (paper Sec. 3.1).
 
-Window factors Λ_K, Λ_κ of each exposure, the orbit (Φ, η, κ, u) at mid-exposure, the
-window-averaged orbital factor G (:func:`~ucbplan.reduce.regression.binned_design`) per component
-(optionally at the emission time, for the light travel time across the orbit) and its analytic
-Jacobian ∂G/∂θ for the phase-error propagation.
+Window factors Λ_K, Λ_κ and lengths Δt of each exposure, the orbit (Φ, η, κ, u) at mid-exposure,
+the window-averaged orbital factor G per component (optionally at the emission time, for the
+light travel time across the orbit) and its Jacobian ∂G/∂θ for the phase-error propagation.
+
+G is the exposure average of the *exact* Keplerian velocity curve, cos(ω + ν) + e cos ω, with e,
+ω and the mean anomaly M = Φ_asc − ω from the phase model (:func:`ucbplan.core.kepler.
+window_average`; beyond the paper). The paper's Eq. vbar_master
+(:func:`~ucbplan.reduce.regression.binned_design`) is its first order in e; its O(e²) remainder
+biased K_j by ≈ −e²K_j (docs/method.md, "Reduction").
 """
 
 from __future__ import annotations
@@ -15,14 +20,19 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ucbplan.core.constants import C_KM_S
+from ucbplan.core.kepler import WindowedVelocity, window_average
 from ucbplan.core.smearing import lambda_k, lambda_kappa
-from ucbplan.reduce.regression import binned_design, lambda_k_to_x
+from ucbplan.reduce.regression import lambda_k_to_x
 
 if TYPE_CHECKING:
     from ucbplan.core.params import PhaseParams
     from ucbplan.reduce.velocities import VelocityTable
 
-__all__ = ["design_jacobian", "designs", "orbit", "window_factors"]
+__all__ = ["design_jacobian", "designs", "orbit", "window_durations", "window_factors"]
+
+#: Below this eccentricity the Jacobian uses Eq. vbar_master's (exact at e = 0; the O(e²)
+#: remainder is < 1e-16) instead of dividing ∂G/∂ω by e.
+_E_FIRST_ORDER = 1e-8
 
 F64 = NDArray[np.float64]
 
@@ -72,6 +82,24 @@ def _check_windows(table: VelocityTable, period_s: float) -> None:
         )
 
 
+def window_durations(table: VelocityTable, f_hz: float) -> F64:
+    """Window length Δt per spectrum [s]: the given width, or 2x/n̄_b with sin x/x = Λ_K.
+
+    Raises
+    ------
+    VelocityFileError
+        A window as long as the orbital period or longer (:func:`window_factors`).
+    """
+    nbar = math.pi * f_hz
+    w = table.window_s
+    _check_windows(table, 2.0 * math.pi / nbar)
+    given = ~np.isfinite(w)
+    out = np.where(given, 0.0, np.nan_to_num(w))
+    if np.any(given):
+        out[given] = 2.0 * lambda_k_to_x(table.lambda_k[given]) / nbar
+    return np.asarray(out, dtype=np.float64)
+
+
 def orbit(p: PhaseParams, tau: F64) -> tuple[F64, F64, F64, F64]:
     """(Φ_asc, η, κ, u of star 1) at ``tau`` [s since t_ref]."""
     from ucbplan.core.phase import orbit_state
@@ -80,19 +108,60 @@ def orbit(p: PhaseParams, tau: F64) -> tuple[F64, F64, F64, F64]:
     return phi, eta, kap, u
 
 
-def design_jacobian(p: PhaseParams, tau: F64, lam_k: F64, lam_kap: F64) -> F64:
-    """∂G_i/∂θ for θ in PARAM_NAMES order, shape (n, 7) (analytic, Eq. vbar_master).
+def _windowed(
+    p: PhaseParams, tau: F64, window_s: F64, derivatives: bool = True
+) -> tuple[WindowedVelocity, F64, F64]:
+    """The exact window average at ``tau`` and ω, Φ_asc there."""
+    from ucbplan.core.phase import ll_pair, phase_asc_mod
+
+    phi = phase_asc_mod(p, tau)
+    eta, kap = ll_pair(p, tau)
+    om = np.arctan2(eta, kap)
+    nb = math.pi * (p.f_gw + p.fdot * tau + p.fddot * tau**2 / 2.0) - p.omega_dot
+    wv = window_average(phi, om, p.eccentricity, nb, p.omega_dot, window_s, derivatives)
+    return wv, om, phi
+
+
+def design_jacobian(p: PhaseParams, tau: F64, window_s: F64) -> F64:
+    """∂G_i/∂θ for θ in PARAM_NAMES order, shape (n, 7), at fixed windows.
 
     Notes
     -----
-    Φ = φ_ref/2 + π(fτ + ḟτ²/2 + f̈τ³/6); (η, κ)(τ) rotated at ω̇ (Eq. kappa_lisa_prediction).
+    Φ = φ_ref/2 + π(fτ + ḟτ²/2 + f̈τ³/6); (η, κ)(τ) rotated at ω̇ (Eq. kappa_lisa_prediction);
+    ∂G/∂(Φ, ω, e) of :func:`ucbplan.core.kepler.window_average`, with ∂e/∂η = sin ω,
+    ∂ω/∂η = cos ω/e, ∂e/∂κ = cos ω, ∂ω/∂κ = −sin ω/e. The window rates' own dependence on f
+    and ω̇ (a relative 1e-5 of Λ) is not differentiated.
     """
+    e = p.eccentricity
+    if e < _E_FIRST_ORDER:
+        return _first_order_jacobian(p, tau, window_s)
+    wv, om, _ = _windowed(p, tau, window_s)
+    so, co = np.sin(om), np.cos(om)
+    dG_dphi = wv.d_phase
+    dG_deta = so * wv.d_e + co / e * wv.d_omega
+    dG_dkap = co * wv.d_e - so / e * wv.d_omega
+    _, eta, kap, _ = orbit(p, tau)
+    return _chain(p, tau, dG_dphi, dG_deta, dG_dkap, eta, kap)
+
+
+def _first_order_jacobian(p: PhaseParams, tau: F64, window_s: F64) -> F64:
+    """∂G/∂θ of Eq. vbar_master (exact at e = 0), with the window rates of the exact design:
+    n̄(τ) for the cos Φ term and 2n̄(τ) − ω̇ for the (η, κ) term."""
+    nbar = math.pi * (p.f_gw + p.fdot * tau + p.fddot * tau**2 / 2.0)
+    half = 0.5 * window_s
+    lam_k = np.sinc(nbar * half / math.pi)
+    lam_kap = np.sinc((2.0 * nbar - p.omega_dot) * half / math.pi)
     phi, eta, kap, _ = orbit(p, tau)
     dG_dphi = -lam_k * np.sin(phi) + 2.0 * lam_kap * (
         -kap * np.sin(2 * phi) + eta * np.cos(2 * phi)
     )
-    dG_deta = lam_kap * np.sin(2 * phi)
-    dG_dkap = lam_kap * np.cos(2 * phi)
+    return _chain(p, tau, dG_dphi, lam_kap * np.sin(2 * phi), lam_kap * np.cos(2 * phi), eta, kap)
+
+
+def _chain(
+    p: PhaseParams, tau: F64, dG_dphi: F64, dG_deta: F64, dG_dkap: F64, eta: F64, kap: F64
+) -> F64:
+    """∂G/∂θ from ∂G/∂(Φ, η(τ), κ(τ)) through the phase model and the apsidal rotation."""
     w = p.omega_dot * tau
     c, s = np.cos(w), np.sin(w)
     jac = np.empty((tau.size, 7))
@@ -107,17 +176,19 @@ def design_jacobian(p: PhaseParams, tau: F64, lam_k: F64, lam_kap: F64) -> F64:
 
 
 def designs(
-    p: PhaseParams, tau: F64, lam_k: F64, lam_kap: F64, ncomp: int, K: tuple[float, ...] | None
+    p: PhaseParams, tau: F64, window_s: F64, ncomp: int, K: tuple[float, ...] | None
 ) -> tuple[F64, ...]:
-    """Design G per component; with K given, evaluated at the emission time τ − ΔR_j."""
+    """Design G per component; with K given, evaluated at the emission time τ − ΔR_j.
+
+    G is the exact Keplerian velocity factor averaged over each window (module docstring).
+    """
+    if K is None:  # both stars see the same G at mid-exposure
+        return (_windowed(p, tau, window_s, derivatives=False)[0].h,) * ncomp
     out = []
-    u = orbit(p, tau)[3] if K is not None else tau
+    u = orbit(p, tau)[3]
     for j in range(ncomp):
-        t = tau
-        if K is not None:
-            nb = math.pi * p.f_gw - p.omega_dot
-            sign = 1.0 if j == 0 else -1.0
-            t = tau - sign * K[j] / (C_KM_S * nb) * np.sin(u)
-        phi, eta, kap, _ = orbit(p, t)
-        out.append(binned_design(phi, eta, kap, lam_k, lam_kap))
+        nb = math.pi * p.f_gw - p.omega_dot
+        sign = 1.0 if j == 0 else -1.0
+        t = tau - sign * K[j] / (C_KM_S * nb) * np.sin(u)
+        out.append(_windowed(p, t, window_s, derivatives=False)[0].h)
     return tuple(out)

@@ -4,7 +4,8 @@ Data flow: :mod:`~ucbplan.reduce.velocities` (read, validate) → this module's 
 which runs the steps in order:
 
 1. :mod:`~ucbplan.reduce.design` — window factors and the design variable G per spectrum from the
-   LISA ephemeris (also at the emission time, for the light travel time);
+   LISA ephemeris: the exact Keplerian velocity curve averaged over each exposure (also at the
+   emission time, for the light travel time);
 2. :mod:`~ucbplan.reduce.regression` — the intra-session fits v_j = γ_j ± K_j G, WIL41, and the
    phase sensitivity ∂(K_j, γ_j)/∂θ of the LISA ephemeris error;
 3. :mod:`~ucbplan.reduce.montecarlo` — the joint Monte Carlo to masses
@@ -28,7 +29,13 @@ from ucbplan.core.constants import C_KM_S
 from ucbplan.errors import VelocityFileError
 from ucbplan.reduce import drifts as _drifts
 from ucbplan.reduce import masses as _masses
-from ucbplan.reduce.design import design_jacobian, designs, orbit, window_factors
+from ucbplan.reduce.design import (
+    design_jacobian,
+    designs,
+    orbit,
+    window_durations,
+    window_factors,
+)
 from ucbplan.reduce.groups import Group, assign_anchors, group_spectra
 from ucbplan.reduce.montecarlo import monte_carlo
 from ucbplan.reduce.regression import (
@@ -154,16 +161,16 @@ class _IntraSession:
 
 
 def _intra_session(
-    p: PhaseParams, table: VelocityTable, tau: F64, lam_k: F64, lam_kap: F64, apply_lt: bool
+    p: PhaseParams, table: VelocityTable, tau: F64, window_s: F64, apply_lt: bool
 ) -> _IntraSession:
     """Fits on G at mid-exposure and at the emission time (K from two fixed-point passes)."""
     n = len(table.v)
-    plain = designs(p, tau, lam_k, lam_kap, n, None)
+    plain = designs(p, tau, window_s, n, None)
     fits0 = _fit_all(table, plain)
     K0 = tuple(f.K for f in fits0)
-    lt_design = designs(p, tau, lam_k, lam_kap, n, K0)
+    lt_design = designs(p, tau, window_s, n, K0)
     K_lt = tuple(f.K for f in _fit_all(table, lt_design))
-    lt_design = designs(p, tau, lam_k, lam_kap, n, K_lt)
+    lt_design = designs(p, tau, window_s, n, K_lt)
     fits_lt = _fit_all(table, lt_design)
     nb = math.pi * p.f_gw - p.omega_dot
     light = {
@@ -190,13 +197,13 @@ class _PhaseErrors:
 
 
 def _phase_errors(
-    target: Target, table: VelocityTable, tau: F64, lam: tuple[F64, F64], intra: _IntraSession
+    target: Target, table: VelocityTable, tau: F64, window_s: F64, intra: _IntraSession
 ) -> _PhaseErrors:
     """σ_u per spectrum, ∂(K_j, γ_j)/∂θ, their σ from the covariance, and the K attenuation."""
     from ucbplan.core import ephemeris
 
     p, cov7 = target.params, target.covariance
-    jacG = design_jacobian(p, tau, *lam)
+    jacG = design_jacobian(p, tau, window_s)
     ju = np.asarray(ephemeris.u_jacobian(p, tau), float)
     sigma_u = np.sqrt(np.clip(np.einsum("ni,ij,nj->n", ju, cov7, ju), 0.0, None))
     dK, dg, sKp, sgp, att = [], [], [], [], []
@@ -292,10 +299,11 @@ def reduce(target: Target, table: VelocityTable, options: ReduceOptions | None =
             f"{MIN_SPECTRA} spectra at different orbital phases — add one line per spectrum"
         )
     lam_k, lam_kap = window_factors(table, p.f_gw)
+    window_s = window_durations(table, p.f_gw)
     _, _, kap, u = orbit(p, tau)
-    intra = _intra_session(p, table, tau, lam_k, lam_kap, opts.light_time)
+    intra = _intra_session(p, table, tau, window_s, opts.light_time)
     fits = intra.fits
-    phase = _phase_errors(target, table, tau, (lam_k, lam_kap), intra)
+    phase = _phase_errors(target, table, tau, window_s, intra)
     mc = monte_carlo(
         target,
         fits,

@@ -12,7 +12,10 @@ mid-time, the phase-averaged velocity is (Eq. vbar_master)
 
 with Φ_c = Φ_asc at mid-exposure, Λ_K = sin x / x, Λ_κ = sin 2x / 2x, x = n̄_b Δt / 2
 (Eqs. Lambda_K, Lambda_kappa). For Λ = 1 the bracket equals F = cos u + κ (Eq. F_definition) to
-O(e²), so regressing on the bracket ``G`` gives slope K_j and intercept γ_j directly. For a common
+O(e²), so regressing on the bracket ``G`` gives slope K_j and intercept γ_j directly, up to its
+O(e²) remainder (≈ −e²K_j in K_j). ``ucbplan reduce`` therefore regresses on the exposure average
+of the exact Kepler curve instead (:mod:`ucbplan.reduce.design`, :mod:`ucbplan.core.kepler`);
+:func:`binned_design` is the paper's first-order form, kept for cross-checks. For a common
 window this is the paper's recipe (slope on F divided by Λ_K, intercept with the Λ_κ κ_s K_j
 term, Eq. sb2_half_sum_ecc) plus the O(e(1−Λ)) term ∝ (Λ_K − Λ_κ) sin u that the F regression
 leaves in the residuals; see :func:`paper_recipe` for the literal form used as a cross-check.
@@ -344,7 +347,7 @@ class WilsonFit:
     intercept, sigma_intercept : float
         γ1 + qγ2 [km/s] and 1σ.
     chi2 : float
-        χ² with effective variance σ1² + q²σ2².
+        χ² with effective variance σ1² + q²σ2² at the fitted q.
     dof : int
         n − 2.
     """
@@ -360,7 +363,7 @@ class WilsonFit:
 def wilson_fit(
     v1: ArrayLike, s1: ArrayLike, v2: ArrayLike, s2: ArrayLike, q0: float = 1.0
 ) -> WilsonFit:
-    """Fit the WIL41 line with errors on both velocities (effective-variance iteration).
+    """Fit the WIL41 line with errors on both velocities (maximum likelihood, York 2004).
 
     Parameters
     ----------
@@ -373,30 +376,63 @@ def wilson_fit(
     -------
     WilsonFit
 
+    Raises
+    ------
+    ValueError
+        Fewer than two pairs, non-positive σ, or all v2 equal.
+
     Notes
     -----
-    Eq. wilson_line_general; the weight of each point is 1/(σ1² + q²σ2²), iterated to convergence
-    (the maximum-likelihood line for Gaussian errors in both coordinates).
+    Eq. wilson_line_general. The line minimises χ² = Σ (v1 − a + q v2)²/(σ1² + q²σ2²), with q in
+    the denominator too (the maximum-likelihood line for Gaussian errors in both coordinates:
+    Deming/York). A regression of v1 on v2 with weights 1/(σ1² + q²σ2²) alone is not: its slope
+    is diluted by Var(v2)/(Var(v2) + σ2²). Solved by York et al. (2004, Am. J. Phys. 72, 367)
+    fixed-point iteration for uncorrelated errors; σ_q and σ_a are York's first-order errors.
     """
-    v1a, v2a = np.asarray(v1, float), np.asarray(v2, float)
-    s1a, s2a = np.asarray(s1, float), np.asarray(s2, float)
-    q = q0
-    line = weighted_line(v2a, v1a, np.sqrt(s1a**2 + q * q * s2a**2), scale=False)
-    for _ in range(50):
-        q_new = -line.slope
-        line = weighted_line(v2a, v1a, np.sqrt(s1a**2 + q_new * q_new * s2a**2), scale=False)
-        if abs(-line.slope - q) < 1e-12 * max(1.0, abs(q)):
-            q = -line.slope
+    x, y = np.asarray(v2, float), np.asarray(v1, float)
+    wx, wy = 1.0 / np.asarray(s2, float) ** 2, 1.0 / np.asarray(s1, float) ** 2
+    if x.size < 2:
+        raise ValueError("need at least two velocity pairs for the WIL41 line")
+    if not (
+        np.all(np.isfinite(wx)) and np.all(np.isfinite(wy)) and np.all(wx > 0) and np.all(wy > 0)
+    ):
+        raise ValueError("sigma must be positive and finite")
+    if not np.ptp(x) > 0.0:
+        raise ValueError("all v2 are equal: the WIL41 slope is undetermined")
+    b = -float(q0)
+    for _ in range(200):
+        W, xm, U, V, beta = _york_terms(x, y, wx, wy, b)
+        b_new = float((W * beta * V).sum() / (W * beta * U).sum())
+        done = abs(b_new - b) <= 1e-13 * max(1.0, abs(b_new))
+        b = b_new
+        if done:
             break
-        q = -line.slope
+    W, xm, U, V, beta = _york_terms(x, y, wx, wy, b)
+    ym = float((W * y).sum() / W.sum())
+    a = ym - b * xm
+    xa = xm + beta  # York's adjusted abscissae
+    ua = xa - float((W * xa).sum() / W.sum())
+    var_b = 1.0 / float((W * ua * ua).sum())
+    var_a = 1.0 / float(W.sum()) + float((W * xa).sum() / W.sum()) ** 2 * var_b
+    res = y - a - b * x
     return WilsonFit(
-        q=q,
-        sigma_q=line.sigma_slope,
-        intercept=line.intercept,
-        sigma_intercept=line.sigma_intercept,
-        chi2=line.chi2,
-        dof=line.dof,
+        q=-b,
+        sigma_q=math.sqrt(var_b),
+        intercept=a,
+        sigma_intercept=math.sqrt(var_a),
+        chi2=float((W * res * res).sum()),
+        dof=x.size - 2,
     )
+
+
+def _york_terms(x: F64, y: F64, wx: F64, wy: F64, b: float) -> tuple[F64, float, F64, F64, F64]:
+    """York's W_i, x̄, U_i, V_i and β_i at slope ``b`` (uncorrelated errors)."""
+    W = wx * wy / (wx + b * b * wy)
+    xm = float((W * x).sum() / W.sum())
+    ym = float((W * y).sum() / W.sum())
+    U, V = x - xm, y - ym
+    beta = W * (U / wy + b * V / wx)
+    return W, xm, U, V, beta
 
 
 def phase_sensitivity(

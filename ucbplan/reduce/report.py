@@ -12,7 +12,7 @@ from typing import IO, TYPE_CHECKING, Any
 
 import numpy as np
 
-from ucbplan import __version__
+from ucbplan._version import __version__
 from ucbplan.core.constants import DAY_S, RSUN_M
 
 if TYPE_CHECKING:

@@ -130,6 +130,10 @@ class Target:
         Tolerance defaults.
     samples : Path or None
         Posterior-samples file (absolute); see :func:`~ucbplan.target.samples.load_samples`.
+    samples_covariance : ndarray or None
+        (7, 7) covariance of the samples in PARAM_NAMES order, moved to the midpoint; derived at
+        load when ``cov_matrix`` names no phase-model parameter
+        (:func:`~ucbplan.target.samples.with_samples_covariance`), else None.
     priority : float
         Weight in night schedules (> 0).
     vmag : float or None
@@ -165,6 +169,7 @@ class Target:
     distance_kpc: float | None = None
     spectroscopy: Spectroscopy | None = None
     samples: Path | None = None
+    samples_covariance: FloatArray | None = None
     priority: float = 1.0
     vmag: float | None = None
     m1_msun: float | None = None
@@ -186,12 +191,32 @@ class Target:
 
     @property
     def covariance(self) -> FloatArray:
-        """Covariance (7, 7) in PARAM_NAMES order; parameters without uncertainty are zero."""
+        """Covariance (7, 7) in PARAM_NAMES order; parameters without uncertainty are zero.
+
+        ``lisa.covariance`` (or the timing covariance) when it names a phase-model parameter,
+        else that of the posterior samples (:attr:`samples_covariance`);
+        :attr:`covariance_source` says which.
+        """
+        if self.samples_covariance is not None and not self._has_phase_covariance:
+            return self.samples_covariance.copy()
         full = np.zeros((7, 7))
         idx = [PARAM_NAMES.index(n) for n in self.cov_names if n in PARAM_NAMES]
         sub = [i for i, n in enumerate(self.cov_names) if n in PARAM_NAMES]
         full[np.ix_(idx, idx)] = self.cov_matrix[np.ix_(sub, sub)]
         return full
+
+    @property
+    def _has_phase_covariance(self) -> bool:
+        return any(n in PARAM_NAMES for n in self.cov_names)
+
+    @property
+    def covariance_source(self) -> str:
+        """Where :attr:`covariance` comes from: the file's covariance, the samples, or none."""
+        if self._has_phase_covariance:
+            return f"{self.kind}.covariance"
+        if self.samples_covariance is not None and self.samples is not None:
+            return f"samples file {self.samples.name} (moved to the midpoint)"
+        return "none (the ephemeris is treated as exact)"
 
     @property
     def coord(self) -> SkyCoord:

@@ -27,6 +27,7 @@ from ucbplan.errors import SchemaError, TargetFileError, shorten
 from ucbplan.inputs import load_yaml
 from ucbplan.target.covariance import parse_covariance
 from ucbplan.target.model import Spectroscopy, Target
+from ucbplan.target.samples import with_samples_covariance
 from ucbplan.target.schema import EPHEMERIS_KINDS, field, section_fields
 from ucbplan.target.sections import (
     CONTROL,
@@ -48,7 +49,7 @@ from ucbplan.target.values import (
     parse_epoch,
 )
 
-__all__ = ["load_target", "load_targets", "target_from_dict"]
+__all__ = ["load_target", "load_target_documents", "load_targets", "target_from_dict"]
 
 FloatArray = NDArray[np.float64]
 
@@ -175,7 +176,7 @@ def target_from_dict(doc: Any, path: Path | None = None) -> Target:
         references = parse_references(ctx, doc)
     with ctx.reading("masses", "masses"):
         masses = _parse_masses(ctx, doc)
-    return Target(
+    target = Target(
         name=name,
         source=path.resolve() if path is not None else None,
         ra_deg=ra,
@@ -202,6 +203,7 @@ def target_from_dict(doc: Any, path: Path | None = None) -> Target:
         magnitudes=magnitudes,
         references=references,
     )
+    return with_samples_covariance(target)
 
 
 def _ephemeris_kind(ctx: Ctx, doc: Mapping[str, Any]) -> str:
@@ -427,3 +429,49 @@ def _shift_named(
     # parameters absent from the covariance are exact: their columns do not matter
     new = j @ mat @ j.T
     return new_p, 0.5 * (new + new.T)
+
+
+def load_target_documents(path: Path | str) -> list[Target]:
+    """Every target of a YAML file: one target file, or a catalog of several target documents
+    separated by ``---`` lines (each validated as :func:`load_target` does one).
+
+    Raises
+    ------
+    TargetFileError
+        One line naming the file, the document (``document 3``) of a catalog, the field path,
+        what was expected and how to fix it; a file with no document.
+    """
+    path = Path(path)
+    try:
+        docs = load_yaml(path, "target file", documents=True)
+    except SchemaError as exc:
+        msg = str(exc)
+        if len(msg) > 300 and msg.startswith(str(path)):  # a long path: its name is enough
+            msg = Ctx(path).label + msg[len(str(path)) :]
+        raise TargetFileError(one_line(msg)) from None
+    except RecursionError:
+        raise TargetFileError(
+            one_line(
+                f"{Ctx(path).label}: <top>: nested too deeply to be a target file; "
+                "check the brackets"
+            )
+        ) from None
+    except (OSError, ValueError, UnicodeError):
+        raise TargetFileError(
+            one_line(f"{shorten(str(path))}: cannot open; check the path")
+        ) from None
+    docs = [d for d in docs if d is not None]
+    if not docs:
+        raise TargetFileError(one_line(f"{Ctx(path).label}: no target in this file; add one"))
+    if len(docs) == 1:
+        return [target_from_dict(docs[0], path)]
+    out = []
+    for k, doc in enumerate(docs, start=1):
+        try:
+            out.append(target_from_dict(doc, path))
+        except TargetFileError as exc:
+            label = Ctx(path).label
+            msg = str(exc)
+            msg = msg[len(label) :] if msg.startswith(label) else ": " + msg
+            raise TargetFileError(one_line(f"{label} (document {k}){msg}")) from None
+    return out

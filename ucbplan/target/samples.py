@@ -8,6 +8,7 @@ SI values, referenced to the same epoch as the target file's ``t_ref`` as writte
 from __future__ import annotations
 
 import warnings
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -18,7 +19,7 @@ from ucbplan.errors import InputFileError, TargetFileError
 from ucbplan.target.model import Target
 from ucbplan.target.schema import COVARIANCE_PARAMETERS
 
-__all__ = ["load_samples", "read_samples_file"]
+__all__ = ["load_samples", "read_samples_file", "samples_covariance", "with_samples_covariance"]
 
 FloatArray = NDArray[np.float64]
 
@@ -134,3 +135,51 @@ def load_samples(t: Target) -> dict[str, FloatArray]:
         base = {n: getattr(t.params, n) for n in PARAM_NAMES}
         cols = shift_columns(cols, t.ref_shift_s, defaults=base)
     return cols
+
+
+def samples_covariance(t: Target) -> FloatArray:
+    """(7, 7) covariance in PARAM_NAMES order of the target's samples, moved to the midpoint.
+
+    Parameters absent from the file are held fixed (zero rows and columns). φ_ref is taken as
+    its circular difference from the target's φ_ref, wrapped to (−π, π], so samples on both
+    sides of 0 = 2π count as neighbours.
+
+    Raises
+    ------
+    TargetFileError
+        Unreadable file, no parameter columns (:func:`load_samples`), fewer than two rows, or
+        values that are not finite.
+    """
+    cols = load_samples(t)
+    assert t.samples is not None  # load_samples returned columns
+    n = len(next(iter(cols.values())))
+    if n < 2:
+        raise TargetFileError(
+            f"{t.samples.name}: {n} row; a covariance needs at least 2 posterior samples — "
+            "add samples or give lisa.covariance"
+        )
+    names = [name for name in PARAM_NAMES if name in cols]
+    data = np.column_stack([np.asarray(cols[name], float) for name in names])
+    if "phase" in cols:
+        k = names.index("phase")
+        data[:, k] = np.angle(np.exp(1j * (data[:, k] - t.params.phase)))
+    if not np.all(np.isfinite(data)):
+        raise TargetFileError(
+            f"{t.samples.name}: posterior samples contain NaN or infinite values; remove those rows"
+        )
+    idx = [PARAM_NAMES.index(name) for name in names]
+    full = np.zeros((7, 7))
+    full[np.ix_(idx, idx)] = np.atleast_2d(np.cov(data, rowvar=False))
+    return full
+
+
+def with_samples_covariance(t: Target) -> Target:
+    """``t`` with :attr:`~Target.samples_covariance` when its posterior is only a samples file.
+
+    A target whose covariance names no phase-model parameter but which has samples would
+    otherwise be treated as exact (σ_u = 0, T_valid at the search cap) by the forecast, the
+    planner and validate; its covariance is taken from the samples instead.
+    """
+    if t.samples is None or any(n in PARAM_NAMES for n in t.cov_names):
+        return t
+    return replace(t, samples_covariance=samples_covariance(t))

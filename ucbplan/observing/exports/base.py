@@ -637,7 +637,7 @@ def site_name(table: Table) -> str:
 
 def version() -> str:
     """The ucbplan version written into every export."""
-    from ucbplan import __version__
+    from ucbplan._version import __version__
 
     return __version__
 

@@ -10,6 +10,7 @@ RV zero crossings, or single blocks). All times are on one :class:`TimeAxis`.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
@@ -20,24 +21,33 @@ from astropy.time import Time, TimeDelta
 from numpy.typing import NDArray
 
 from ucbplan.core.constants import TWO_PI
-from ucbplan.core.ephemeris import EpochSet, find_epochs, with_details
+from ucbplan.core.ephemeris import EpochSet, arg_latitude, find_epochs, with_details
 from ucbplan.core.forecast import tolerance, valid_window_s
 from ucbplan.core.smearing import parse_smear_budget
 from ucbplan.errors import UcbplanError
 from ucbplan.observing.blocks import ExposurePlan, Smearing, block_smearing, check_smear_budget
 from ucbplan.observing.constraints import ConstraintSet, evaluate_window
+from ucbplan.observing.instruments import MAX_AIRMASS
 from ucbplan.observing.schedule.exposure import TargetExposure, exposure_sigma_v, target_exposure
 from ucbplan.observing.schedule.nights import NightWindow
 from ucbplan.observing.schedule.settings import ModeSpec, PlanSettings
 from ucbplan.observing.sites import Site
 from ucbplan.observing.sky import SkyModel, airmass_from_alt
+from ucbplan.observing.strategy import constrains_k
 from ucbplan.observing.timeaxis import EpochAxis, TimeAxis
 from ucbplan.observing.timeconv import DelayInterpolator, SiteTrack, quiet_erfa
 
 if TYPE_CHECKING:
     from ucbplan.target import Target
 
-__all__ = ["Candidates", "PlanFrame", "TargetRun", "candidate_blocks", "prepare_runs"]
+__all__ = [
+    "Candidates",
+    "PlanFrame",
+    "TargetRun",
+    "candidate_blocks",
+    "grid_epochs",
+    "prepare_runs",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -105,6 +115,23 @@ def _find_epochs(
     )
 
 
+def grid_epochs(target: Target, tau_lo: float, tau_hi: float, step_s: float, star: int) -> EpochSet:
+    """Epochs every ``step_s`` seconds (barycentric TDB) with their u for back-to-back exposures
+    (the ``untargeted`` strategy): the exposures fall at whatever phase they do, and each is
+    assigned its u from the phase model (Eq. u_precessing_app).
+
+    The grid is anchored on whole multiples of ``step_s`` since the reference epoch, so every
+    span of a run sees the same grid.
+    """
+    k0, k1 = math.ceil(tau_lo / step_s), math.floor(tau_hi / step_s)
+    k = np.arange(k0, max(k0, k1 + 1), dtype=np.int64)
+    origin = float(k0 * step_s)
+    dt = np.asarray((k - k0) * step_s, dtype=np.float64)
+    nan = np.full(dt.shape, np.nan)
+    u = np.mod(arg_latitude(target.params, dt, star, origin), TWO_PI)
+    return EpochSet("untargeted", star, u, k, origin, dt, nan, nan.copy(), nan.copy(), nan.copy())
+
+
 def _combined(anchor: str | float) -> bool:
     """Whether ``anchor`` combines several (``quadrature+conjunction``)."""
     return isinstance(anchor, str) and "+" in anchor
@@ -121,8 +148,10 @@ def candidate_blocks(
     constraints: ConstraintSet,
     plan: ExposurePlan,
     star: int = 1,
+    grid_step_s: float | None = None,
 ) -> Candidates:
-    """Every anchor epoch whose block centre lies in ``span_x`` (s on ``axis``).
+    """Every anchor epoch whose block centre lies in ``span_x`` (s on ``axis``); with
+    ``grid_step_s``, every epoch of a back-to-back grid instead (:func:`grid_epochs`).
 
     Notes
     -----
@@ -132,13 +161,18 @@ def candidate_blocks(
     epochs = axis.epoch_axis(target.t_ref)
     lo, hi = span_x
     tau_lo, tau_hi = epochs.from_x(lo) - _EPOCH_PAD_S, epochs.from_x(hi) + _EPOCH_PAD_S
-    es = _find_epochs(target, tau_lo, tau_hi, mode.anchor, star)
+    if grid_step_s is not None:
+        es = grid_epochs(target, tau_lo, tau_hi, grid_step_s, star)
+    else:
+        es = _find_epochs(target, tau_lo, tau_hi, mode.anchor, star)
     x_mid = interp.site_x(epochs.to_x(es.origin_s, es.dt_s))
     keep = (x_mid >= lo) & (x_mid < hi)
     half = plan.span_s / 2.0
     x_mid = x_mid[keep]
     ok, first = evaluate_window(constraints, sky, i, x_mid - half, x_mid + half)
-    if not _combined(mode.anchor):  # σ_t and the π-mode alternative of usable blocks only
+    if grid_step_s is not None:  # σ_t of usable exposures; no π-mode twin without an anchor
+        es = with_details(target, es, np.flatnonzero(keep)[ok], pi_mode=False)
+    elif not _combined(mode.anchor):  # σ_t and the π-mode alternative of usable blocks only
         es = with_details(target, es, np.flatnonzero(keep)[ok])
     x_alt = np.full(es.tau_alt_s.shape, np.nan)
     has_alt = np.isfinite(es.tau_alt_s)
@@ -223,6 +257,9 @@ class TargetRun:
         ephemeris.
     exposure : TargetExposure
         The target's exposure plan and visit cadence (smearing floor applied).
+    weight : ndarray of float
+        Fisher information on K of each block's exposure, (Λ_K cos u)²/σ_v² [(km/s)⁻²] (γ's,
+        1/σ_v², for anchors at cos u = 0); NaN where σ_v is unknown.
     """
 
     target: Target
@@ -236,6 +273,20 @@ class TargetRun:
     smearing: Smearing
     since: Time
     exposure: TargetExposure
+    weight: FloatArray
+
+
+def _weights(
+    target: Target, cand: Candidates, settings: PlanSettings, te: TargetExposure
+) -> FloatArray:
+    """Information of each candidate's exposure (see :class:`TargetRun`), σ_v at its airmass."""
+    x = np.clip(np.where(np.isfinite(cand.airmass_mid), cand.airmass_mid, 1.0), 1.0, MAX_AIRMASS)
+    sig = exposure_sigma_v(target, settings, te.plan.exptime_s, x)
+    if constrains_k(settings.spec.u_values) or te.strategy == "untargeted":
+        g = te.lambda_k * np.cos(cand.u_star)
+    else:
+        g = np.ones_like(cand.u_star)
+    return np.asarray((g / sig) ** 2, dtype=np.float64)
 
 
 def _tolerance_and_validity(
@@ -300,15 +351,18 @@ def _target_run(
         frame.constraints,
         te.plan,
         settings.star,
+        te.step_s if te.strategy == "untargeted" else None,
     )
     tau = cand.tau_origin_s + cand.dt_s
     valid = (tau >= cand.epochs.tau(since)) & (tau <= cand.epochs.tau(until))
-    paired = frame.mode.paired and settings.visit_s is None
+    paired = frame.mode.paired and not settings.plans_visits
     partner, ok, score = session_partners(cand, paired)
     if not te.floor_ok:
         ok = np.zeros_like(ok)  # no exposure keeps the smearing floor
     valid = valid & ((partner < 0) | valid[np.maximum(partner, 0)])
-    return TargetRun(target, i, cand, partner, ok, score, valid, until, sm, since, te), warns
+    weight = _weights(target, cand, settings, te)
+    run = TargetRun(target, i, cand, partner, ok, score, valid, until, sm, since, te, weight)
+    return run, warns
 
 
 def prepare_runs(

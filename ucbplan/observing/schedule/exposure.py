@@ -12,16 +12,22 @@ Every target of a run gets its own exposure plan, because the smearing factor Λ
   one waits for the next anchor it can reach: step = ⌈cost/(P_b/m)⌉·P_b/m. With ``phase-locked``
   exptime = step − readout, so consecutive exposures centre on consecutive anchors with no wait;
   the duty cycle is exptime/step.
-- **σ_v per exposure** (:func:`exposure_sigma_v`): ``--sigma-v``, else the instrument's σ_ref
-  scaled with magnitude, exposure time and airmass (:func:`ucbplan.observing.instruments.
-  sigma_v_kms`), else the target file's σ_v.
+- **Chosen for information per hour** (:func:`optimised_exposure`): when σ_v follows the
+  exposure time (``--sigma-v 30km/s@600s``, or an instrument's σ_ref) and no ``--exptime`` is
+  given, the exposure time and the strategy (targeted, phase-locked, untargeted) are those with
+  the most information on K per visit (:mod:`ucbplan.observing.strategy`); ``--cadence`` may
+  force a strategy. Sessions (no visits) take the exposure time with the most information per
+  hour of a session.
+- **σ_v per exposure** (:func:`exposure_sigma_v`): the exposure-time law of ``--sigma-v``, else a
+  fixed ``--sigma-v``, else the instrument's σ_ref scaled with magnitude, exposure time and
+  airmass (:func:`ucbplan.observing.instruments.sigma_v_kms`), else the target file's σ_v.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -29,13 +35,33 @@ from numpy.typing import ArrayLike, NDArray
 from ucbplan.core.smearing import comb_attenuation
 from ucbplan.errors import InputError
 from ucbplan.observing.blocks import ExposurePlan
+from ucbplan.observing.goals import goal_info_needed, parse_goal
 from ucbplan.observing.instruments import instrument_magnitude, sigma_v_kms
 from ucbplan.observing.schedule.settings import PlanSettings
+from ucbplan.observing.sigma_model import SigmaVModel
+from ucbplan.observing.strategy import (
+    STRATEGIES,
+    StrategyResult,
+    VisitShape,
+    best_strategy,
+    compare_strategies,
+    goal_time,
+    session_result,
+)
 
 if TYPE_CHECKING:
     from ucbplan.target import Target
 
-__all__ = ["TargetExposure", "exposure_sigma_v", "floor_exptime", "target_exposure"]
+__all__ = [
+    "TargetExposure",
+    "exposure_sigma_v",
+    "floor_exptime",
+    "optimised_exposure",
+    "sigma_law",
+    "strategy_facts",
+    "target_exposure",
+    "visit_shape",
+]
 
 #: Time kept free in each step of a phase-locked cadence besides the readout [s].
 _LOCK_MARGIN_S = 0.2
@@ -63,6 +89,16 @@ class TargetExposure:
         One-line notes (exposure capped at the floor, phase-locked duty cycle).
     floor_ok : bool
         False when no exposure of the target keeps the smearing floor (nothing is planned).
+    strategy : str
+        ``targeted``, ``phase-locked`` or ``untargeted`` (back-to-back, any phase).
+    results : tuple of StrategyResult
+        Every strategy's best exposure time when it was chosen for information per hour (the
+        chosen one among them); empty otherwise.
+    visit_s : float or None
+        Longest visit of this target, acquisition included [s] (None: sessions).
+    goal_hours : tuple of float
+        With a goal: the hours each of ``results`` needs to reach it (the exposure time of each
+        is then the one with the fewest hours).
     """
 
     plan: ExposurePlan
@@ -71,6 +107,26 @@ class TargetExposure:
     lambda_k: float
     notes: tuple[str, ...] = ()
     floor_ok: bool = True
+    strategy: str = "targeted"
+    results: tuple[StrategyResult, ...] = ()
+    visit_s: float | None = None
+    goal_hours: tuple[float, ...] = ()
+
+    @property
+    def chosen(self) -> StrategyResult | None:
+        """The chosen strategy's result (None when the exposure time was not optimised)."""
+        return next((r for r in self.results if r.name == self.strategy), None)
+
+    @property
+    def optimum(self) -> StrategyResult | None:
+        """The best strategy: the fewest hours to the goal, else the most information per
+        visit (None: not optimised)."""
+        possible = [r for r in self.results if r.possible]
+        if not possible:
+            return None
+        if self.goal_hours:
+            return min(zip(self.results, self.goal_hours, strict=True), key=lambda p: p[1])[0]
+        return max(possible, key=lambda r: r.info_per_visit)
 
     @property
     def duty_cycle(self) -> float:
@@ -115,12 +171,12 @@ def _capped(
     period = f"P_b = {target.period_s:.1f} s"
     if best is not None and best < _SHORTEST_S:
         best = None  # only a vanishing exposure would keep the floor
-    if not settings.exptime_explicit and best is None:
+    if not settings.exptime_given and best is None:
         return plan, [
             f"{target.name}: no exposure keeps Lambda_K >= {floor:g} ({period}): not planned; "
             "lower --min-lambda-k or pass --allow-smeared"
         ]
-    if settings.exptime_explicit or best is None:
+    if settings.exptime_given or best is None:
         fix = f"use --exptime <= {math.floor(best * 10) / 10:g} s" if best else "fewer --n-exp"
         raise InputError(
             f"--exptime: {target.name}: {plan.exptime_s:g} s gives Lambda_K = {lam:.3f} "
@@ -156,6 +212,26 @@ def _phase_locked(target: Target, settings: PlanSettings, spacing: float) -> Exp
     return replace(plan, exptime_s=exptime)
 
 
+def _visit_length(settings: PlanSettings) -> float | None:
+    """Longest visit [s]: ``--visit``, else ``--max-visit`` for a goal, else None (sessions)."""
+    if settings.visit_s is not None:
+        return settings.visit_s
+    return settings.max_visit_s if settings.goal is not None else None
+
+
+def _check_visit(target: Target, settings: PlanSettings, plan: ExposurePlan) -> None:
+    """A visit must hold acquisition + one exposure + readout."""
+    visit = _visit_length(settings)
+    cost = plan.exptime_s + plan.readout_s
+    if visit is not None and settings.overhead_s + cost > visit:
+        option = "--visit" if settings.visit_s is not None else "--max-visit"
+        raise InputError(
+            f"{option}: expected at least acquisition + one exposure + readout = "
+            f"{(settings.overhead_s + cost) / 60:.1f} min, got {visit / 60:.1f} min; "
+            f"lengthen {option} or shorten the exposure"
+        )
+
+
 def target_exposure(target: Target, settings: PlanSettings) -> TargetExposure:
     """Exposure plan and cadence of ``target`` (module notes).
 
@@ -165,23 +241,23 @@ def target_exposure(target: Target, settings: PlanSettings) -> TargetExposure:
         An explicit exposure below the smearing floor; a visit shorter than acquisition + one
         exposure + readout (one line each, naming the option to change).
     """
+    if settings.optimises_exposure and settings.spec.label != "fixed-u-pairs":
+        return optimised_exposure(target, settings)
     m = len(settings.spec.u_values)
     spacing = target.period_s / m
     if settings.cadence == "phase-locked":
         plan, why = _phase_locked(target, settings, spacing), "phase-locked"
     else:
-        plan, why = settings.exposure, "default" if not settings.exptime_explicit else "given"
+        plan, why = settings.exposure, "default" if not settings.exptime_given else "given"
     plan, notes = _capped(target, plan, settings, why)
     lam = _lambda_k(plan, target.params.n_bar)
     floor_ok = settings.allow_smeared or (lam >= settings.lambda_k_floor and lam > 0)
     cost = plan.exptime_s + plan.readout_s
     step = math.ceil(cost / spacing * (1.0 - 1e-12)) * spacing
-    if settings.visit_s is not None and settings.overhead_s + cost > settings.visit_s:
-        raise InputError(
-            f"--visit: expected at least acquisition + one exposure + readout = "
-            f"{(settings.overhead_s + cost) / 60:.1f} min, got {settings.visit_s / 60:.1f} min; "
-            "lengthen --visit or shorten the exposure"
-        )
+    _check_visit(target, settings, plan)
+    strategy = "phase-locked" if settings.cadence == "phase-locked" else "targeted"
+    if settings.cadence == "untargeted":
+        strategy, spacing, step = "untargeted", cost, cost
     if settings.cadence == "phase-locked":
         wait = step - cost
         notes.append(
@@ -190,14 +266,135 @@ def target_exposure(target: Target, settings: PlanSettings) -> TargetExposure:
             f"{plan.exptime_s / step:.1%}"
             + (f"; the OB must wait {wait:.1f} s after each readout" if wait > 1.0 else "")
         )
-    return TargetExposure(plan, spacing, step, lam, tuple(notes), floor_ok)
+    if settings.sigma_v_kms is not None and settings.sigma_model is None:
+        notes.append(
+            f"{target.name}: sigma_v {settings.sigma_v_kms:g} km/s fixed per exposure: exposure "
+            f"time not optimised (--sigma-v {settings.sigma_v_kms:g}km/s@600s would)"
+        )
+    visit = _visit_length(settings)
+    return TargetExposure(plan, spacing, step, lam, tuple(notes), floor_ok, strategy, (), visit)
+
+
+def sigma_law(target: Target, settings: PlanSettings) -> SigmaVModel | None:
+    """The σ_v law that follows the exposure time: ``--sigma-v …@…``, else the instrument's
+    σ_ref (with its extinction) unless a fixed ``--sigma-v`` overrides it; None otherwise."""
+    if settings.sigma_model is not None:
+        return settings.sigma_model if settings.sigma_model.follows_exposure else None
+    inst = settings.instrument
+    if settings.sigma_v_kms is not None or inst is None or inst.sigma_ref is None:
+        return None
+    ref = inst.sigma_ref
+    return SigmaVModel(
+        ref.sigma_v_kms,
+        ref.exptime_s,
+        ref.band,
+        ref.mag,
+        extinction_k=inst.extinction_k or 0.0,
+        option=f"--instrument {inst.name}",
+    )
+
+
+def visit_shape(target: Target, settings: PlanSettings, visit_s: float) -> VisitShape:
+    """What one visit of ``visit_s`` allows ``target`` under ``settings``."""
+    inst = settings.instrument
+    low = inst.min_exptime_s if inst is not None and inst.min_exptime_s is not None else 1.0
+    step = inst.exptime_step_s if inst is not None and inst.exptime_step_s is not None else 1.0
+    return VisitShape(
+        period_s=target.period_s,
+        n_bar=target.params.n_bar,
+        pattern_u=settings.spec.u_values,
+        readout_s=settings.exposure.readout_s,
+        acquisition_s=settings.overhead_s,
+        visit_s=visit_s,
+        min_lambda_k=0.0 if settings.allow_smeared else settings.lambda_k_floor,
+        min_exptime_s=max(low, step),
+        granularity_s=step,
+        eccentricity=target.params.eccentricity,
+    )
+
+
+def _forced(
+    results: tuple[StrategyResult, ...], cadence: str, hours: tuple[float, ...] = ()
+) -> StrategyResult:
+    """The strategy ``--cadence`` names, or the best (``auto``): the fewest ``hours`` to a
+    goal when given, else the most information per visit.
+
+    Raises
+    ------
+    InputError
+        The forced strategy plans nothing (its reason); no strategy plans anything.
+    """
+    if cadence == "auto":
+        best = best_strategy(results)
+        if hours:
+            best = min(zip(results, hours, strict=True), key=lambda p: p[1])[0]
+        return best
+    name = "targeted" if cadence == "anchor" else cadence
+    pick = next(r for r in results if r.name == name)
+    if not pick.possible:
+        raise InputError(f"--cadence {cadence}: {pick.note or 'no exposure fits'}; use another")
+    return pick
+
+
+def optimised_exposure(target: Target, settings: PlanSettings) -> TargetExposure:
+    """Exposure time and cadence with the most information on K per visit (module notes).
+
+    The σ_v law is evaluated at airmass 1; per-exposure airmasses enter the planned σ_v.
+
+    Raises
+    ------
+    InputError
+        No strategy plans an exposure in the visit; the forced ``--cadence`` plans none; the
+        target has no magnitude in the band of the σ_v reference.
+    """
+    law = sigma_law(target, settings)
+    assert law is not None  # settings.optimises_exposure
+    mag = law.target_mag(target.magnitudes, target.name)
+
+    def sigma(t: NDArray[np.float64]) -> NDArray[np.float64]:
+        return law.sigma(t, 1.0, mag)
+
+    visit = _visit_length(settings)
+    hours: tuple[float, ...] = ()
+    shortest = replace(
+        settings.exposure, exptime_s=visit_shape(target, settings, 0.0).min_exptime_s
+    )
+    _check_visit(target, settings, shortest)
+    if visit is None:  # sessions: the pattern's blocks after one acquisition
+        n = len(settings.spec.u_values) if settings.spec.paired else 1
+        shape = visit_shape(target, settings, settings.overhead_s + 43200.0)
+        results: tuple[StrategyResult, ...] = (session_result(shape, sigma, n),)
+    elif settings.goal is not None:
+        need = goal_info_needed(parse_goal(settings.goal), target)
+        shape = visit_shape(target, settings, visit)
+        times = [goal_time(need, shape, sigma, name) for name in STRATEGIES]
+        results, hours = tuple(g.strategy for g in times), tuple(g.hours for g in times)
+    else:
+        results = tuple(compare_strategies(visit_shape(target, settings, visit), sigma))
+    pick = _forced(results, settings.cadence, hours)
+    plan = replace(settings.exposure, exptime_s=pick.exptime_s)
+    spacing = target.period_s / len(settings.spec.u_values)
+    if pick.name == "untargeted":
+        spacing = pick.step_s
+    return TargetExposure(
+        plan,
+        spacing,
+        pick.step_s,
+        _lambda_k(plan, target.params.n_bar),
+        (),
+        True,
+        pick.name,
+        results,
+        visit,
+        hours,
+    )
 
 
 def exposure_sigma_v(
     target: Target, settings: PlanSettings, exptime_s: float, airmass: ArrayLike
 ) -> NDArray[np.float64]:
-    """σ_v per exposure [km/s]: ``--sigma-v``, else the instrument's scaling, else the target
-    file's σ_v (NaN if none of them is known).
+    """σ_v per exposure [km/s]: the exposure-time law (:func:`sigma_law`), else ``--sigma-v``,
+    else the instrument's scaling, else the target file's σ_v (NaN if none of them is known).
 
     Raises
     ------
@@ -206,6 +403,9 @@ def exposure_sigma_v(
         band.
     """
     x = np.asarray(airmass, dtype=np.float64)
+    law = sigma_law(target, settings)
+    if law is not None and settings.sigma_model is not None:
+        return law.sigma(exptime_s, x, law.target_mag(target.magnitudes, target.name))
     inst = settings.instrument
     if settings.sigma_v_kms is None and inst is not None:
         mag = instrument_magnitude(inst, target.magnitudes)
@@ -213,3 +413,25 @@ def exposure_sigma_v(
     spec = target.spectroscopy
     value = settings.sigma_v_kms or (spec.sigma_v_kms if spec else None)
     return np.full(x.shape, np.nan if value is None else float(value))
+
+
+def strategy_facts(te: TargetExposure, collected: float) -> dict[str, Any]:
+    """The exposure-strategy choice of a target as plain values (table meta, reports, JSON):
+    every strategy's exposure time, Λ_K, exposures and information per visit and per hour,
+    the chosen one's fraction of the best, and the information the plan's rows collect."""
+    top = max((r.info_per_visit for r in te.results), default=0.0)
+    rows = {
+        r.name: {
+            "exptime_s": r.exptime_s if r.possible else None,
+            "lambda_k": round(r.lambda_k, 6) if r.possible else None,
+            "exposures_per_visit": r.n_exposures,
+            "info_per_visit": r.info_per_visit,
+            "info_per_hour": r.info_per_hour,
+            "fraction_of_best": r.info_per_visit / top if top > 0 else 0.0,
+            "note": r.note,
+        }
+        for r in te.results
+    }
+    for row, hours in zip(rows.values(), te.goal_hours, strict=False):
+        row["goal_hours"] = hours if math.isfinite(hours) else None
+    return {"chosen": te.strategy, "strategies": rows, "collected_info": collected}

@@ -1,40 +1,123 @@
-"""Goal-driven plans: how many exposures each target needs for a ``--goal``, and the shortfall.
+"""Goal-driven plans: the information on K each target needs for a ``--goal``, in balanced visits.
 
-For each target :func:`~ucbplan.observing.goals.spectra_for_goal` turns the goal into N spectra
-from the regression's Fisher matrix with the target's Λ_K (of its exposure plan) and one σ_v per
-exposure: ``--sigma-v``, else the instrument's σ_v at the airmass limit (every planned exposure
-is at least as good, so the goal is reached), else the target file's σ_v. The visit planner then
-plans exactly N exposures (:mod:`.visits`); if the nights given hold fewer, planning fails with
-one line saying how far they fall short.
+A goal on σ_K, K1, K2, q or a mass is a goal on the information I = Σ_i w_i on K of the spectra,
+w_i = (Λ_K,i cos u_i)²/σ_v,i² (γ's, 1/σ_v,i², for anchors at cos u = 0): every goal quantity's σ
+scales as I^{-½} (:mod:`ucbplan.observing.goals`), so the goal needs I = (σ_goal(I = 1)/goal)².
+Each exposure's σ_v at its own airmass and exposure time enters its w_i exactly; the visit
+planner (:mod:`.visits`) plans visits until the information is collected.
+
+Visits are balanced: the spectra a goal is expected to need (at the mean information of the
+target's usable exposures) are split as evenly as whole anchor patterns allow over the fewest
+visits of at most ``--visit`` (else ``--max-visit``), and each visit is given the length its
+share needs. If the nights given hold less, planning fails with one line saying how far short
+they fall.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
+from dataclasses import replace
 
 import numpy as np
 
 from ucbplan.errors import InputError
 from ucbplan.observing.blocks import Block
-from ucbplan.observing.goals import GoalPlan, Shortfall, parse_goal, spectra_for_goal
-from ucbplan.observing.instruments import MAX_AIRMASS
+from ucbplan.observing.goals import (
+    Goal,
+    GoalPlan,
+    Shortfall,
+    TimeBudget,
+    goal_info_needed,
+    parse_goal,
+    target_k,
+)
 from ucbplan.observing.schedule.candidates import TargetRun
-from ucbplan.observing.schedule.exposure import exposure_sigma_v
 from ucbplan.observing.schedule.settings import PlanSettings
+from ucbplan.observing.strategy import constrains_k, information
 
-__all__ = ["check_goals", "goal_plans"]
+__all__ = ["balanced_runs", "check_goals", "goal_plans", "info_of_blocks"]
+
+#: Time added to a balanced visit so that the light-time drift of its anchors (≤ 0.02 s/min)
+#: never drops its last exposure [s].
+_VISIT_SLACK_S = 1.0
 
 
-def _goal_sigma_v(run: TargetRun, settings: PlanSettings) -> float:
-    """σ_v per exposure the goal is computed with [km/s] (module notes)."""
-    x = min(settings.airmass_max, MAX_AIRMASS)
-    value = float(exposure_sigma_v(run.target, settings, run.exposure.plan.exptime_s, x))
-    if not np.isfinite(value):
+def _per_spectrum(run: TargetRun) -> float:
+    """Mean information of one of the target's usable exposures [(km/s)⁻²].
+
+    Raises
+    ------
+    InputError
+        σ_v is unknown (no --sigma-v, instrument reference or target-file σ_v).
+    """
+    usable = (run.ok > 0) & run.valid & np.isfinite(run.weight)
+    w = run.weight[usable] if np.any(usable) else run.weight
+    value = float(np.nanmean(w)) if np.any(np.isfinite(w)) else math.nan
+    if not math.isfinite(value) or value <= 0:
         raise InputError(
             f"--goal: {run.target.name}: sigma_v is unknown; pass --sigma-v KM_S, or an "
             "--instrument with sigma_ref and a magnitude in the target file"
         )
     return value
+
+
+def _max_per_visit(run: TargetRun, settings: PlanSettings) -> tuple[int, float]:
+    """(most exposures one visit holds, step between them [s])."""
+    te = run.exposure
+    visit = te.visit_s if te.visit_s is not None else settings.max_visit_s
+    cost = te.plan.exptime_s + te.plan.readout_s
+    science = visit - settings.overhead_s - cost
+    return max(1, int(science // te.step_s + 1e-9) + 1), te.step_s
+
+
+def _balanced(n: int, n_max: int, pattern: int) -> tuple[int, ...]:
+    """``n`` spectra in the fewest visits of at most ``n_max``, whole patterns, evenly split."""
+    unit = pattern if n_max >= pattern else 1
+    groups, per_max = math.ceil(n / unit), max(1, n_max // unit)
+    visits = math.ceil(groups / per_max)
+    base, extra = divmod(groups, visits)
+    return tuple(unit * (base + (1 if v < extra else 0)) for v in range(visits))
+
+
+def _goal_plan(goal: Goal, run: TargetRun, settings: PlanSettings) -> GoalPlan:
+    """Spectra, balanced visits and time of one target's goal."""
+    need = goal_info_needed(goal, run.target)
+    w = _per_spectrum(run)
+    te = run.exposure
+    pattern = len(settings.spec.u_values) if te.strategy != "untargeted" else 1
+    n = max(1, math.ceil(need / w * (1.0 - 1e-12)))
+    n_max, step = _max_per_visit(run, settings)
+    counts = _balanced(n, n_max, pattern)
+    n = sum(counts)
+    cost = te.plan.exptime_s + te.plan.readout_s
+    walls = [settings.overhead_s + (c - 1) * step + cost for c in counts]
+    shutter, readout = n * te.plan.exptime_s, n * te.plan.readout_s
+    overhead = len(counts) * settings.overhead_s + readout
+    total = sum(walls)
+    time = TimeBudget(
+        n_visits=len(counts),
+        spectra_per_visit=max(counts),
+        step_s=step,
+        shutter_h=shutter / 3600.0,
+        overhead_h=overhead / 3600.0,
+        idle_h=(total - shutter - overhead) / 3600.0,
+        total_h=total / 3600.0,
+    )
+    sigma_k = 1.0 / math.sqrt(n * w)
+    _, k2, _ = target_k(run.target)
+    return GoalPlan(
+        goal=goal,
+        n_spectra=n,
+        per_anchor=((settings.spec.label if pattern > 1 else te.strategy, n),),
+        expected=math.sqrt(need) * goal.value * sigma_k,
+        sigma_K1_kms=sigma_k,
+        sigma_K2_kms=sigma_k if k2 is not None else None,
+        time=time,
+        cycles=max(1, n // pattern),
+        info_needed=need,
+        visit_s=min(max(walls) + _VISIT_SLACK_S, te.visit_s or settings.max_visit_s),
+    )
 
 
 def goal_plans(runs: Sequence[TargetRun], settings: PlanSettings) -> dict[int, GoalPlan]:
@@ -44,64 +127,63 @@ def goal_plans(runs: Sequence[TargetRun], settings: PlanSettings) -> dict[int, G
     Raises
     ------
     InputError
-        A target without K1 (or K2 for a goal on q or the masses), unknown σ_v, or a mode
-        whose anchors do not constrain K.
+        A target without K1 (or K2 for a goal on q or the masses), unknown σ_v.
     """
     if settings.goal is None:
         return {}
     goal = parse_goal(settings.goal)
-    out: dict[int, GoalPlan] = {}
-    for run in runs:
-        t, spec = run.target, run.target.spectroscopy
-        k1 = (spec.K1_kms or spec.K_eff_kms) if spec is not None else None
-        if k1 is None:
-            raise InputError(
-                f"--goal: {t.name}: expected spectroscopy.K1 (or K_eff) in the target file, "
-                "got none; add it or plan without --goal"
-            )
-        k2 = spec.K2_kms if spec is not None and spec.lines == "SB2" else None
-        sin_i = None
-        cos_i = t.cos_inclination
-        if cos_i is not None and np.isfinite(cos_i):
-            sin_i = float(np.sqrt(max(0.0, 1.0 - cos_i**2))) or None
-        out[run.index] = spectra_for_goal(
-            goal,
-            K1=k1,
-            K2=k2,
-            sigma_v_kms=_goal_sigma_v(run, settings),
-            lambda_k=run.exposure.lambda_k,
-            anchors=tuple(settings.spec.label.split("+")),
-            period_s=t.period_s,
-            sin_i=sin_i,
-            e=t.params.eccentricity,
-            exptime_s=run.exposure.plan.exptime_s,
-            readout_s=run.exposure.plan.readout_s,
-            acquisition_s=settings.overhead_s,
-            visit_s=settings.visit_s,
+    if not constrains_k(settings.spec.u_values):
+        raise InputError(
+            f"--goal: the anchors of --mode {settings.spec.label} do not constrain K "
+            "(cos u = 0); use --mode quadrature"
         )
+    return {run.index: _goal_plan(goal, run, settings) for run in runs}
+
+
+def balanced_runs(runs: Sequence[TargetRun], plans: dict[int, GoalPlan]) -> list[TargetRun]:
+    """``runs`` with each goal target's visit length set to its balanced visit."""
+    out = []
+    for run in runs:
+        plan = plans.get(run.index)
+        if plan is not None and plan.visit_s is not None:
+            run = replace(run, exposure=replace(run.exposure, visit_s=plan.visit_s))
+        out.append(run)
     return out
 
 
+def info_of_blocks(blocks: Sequence[Block], pattern_u: Sequence[float]) -> float:
+    """Information on K of planned blocks, Σ (Λ_K cos u)²/σ_v² (γ's, Σ 1/σ_v², for anchors at
+    cos u = 0) [(km/s)⁻²]."""
+    lam = np.array([b.lambda_k for b in blocks], dtype=np.float64)
+    u = np.array([b.u_star_rad for b in blocks], dtype=np.float64)
+    sig = np.array([b.sigma_v_kms for b in blocks], dtype=np.float64)
+    untargeted = any(b.anchor == "untargeted" for b in blocks)
+    if not constrains_k(pattern_u) and not untargeted:
+        return float(np.nansum(1.0 / sig**2))
+    return information(lam, u, sig)
+
+
 def check_goals(
-    plans: dict[int, GoalPlan], runs: Sequence[TargetRun], blocks: Sequence[Block]
+    plans: dict[int, GoalPlan],
+    runs: Sequence[TargetRun],
+    blocks: Sequence[Block],
+    pattern_u: Sequence[float],
 ) -> None:
     """Refuse a plan that does not reach a target's goal (one line: the shortfall).
 
     Raises
     ------
     InputError
-        Fewer exposures fit in the nights given than the goal needs.
+        The exposures that fit in the nights given collect less information than the goal needs.
     """
     for run in runs:
         plan = plans.get(run.index)
-        if plan is None:
+        if plan is None or plan.info_needed is None:
             continue
-        got = sum(b.n_exp for b in blocks if b.target == run.target.name)
-        if got < plan.n_spectra:
-            short = Shortfall(plan.goal, plan.n_spectra, got, _reach(plan, got))
+        mine = [b for b in blocks if b.target == run.target.name]
+        got = info_of_blocks(mine, pattern_u)
+        if got < plan.info_needed * (1.0 - 1e-9):
+            reach = plan.expected * math.sqrt(plan.info_needed / got) if got > 0 else math.inf
+            available = math.floor(plan.n_spectra * got / plan.info_needed)
+            short = Shortfall(plan.goal, plan.n_spectra, min(available, len(mine)), reach)
             raise InputError(f"{run.target.name}: {short.message()}")
-
-
-def _reach(plan: GoalPlan, got: int) -> float:
-    """σ of the goal quantity with ``got`` spectra (σ ∝ N^{-1/2})."""
-    return plan.expected * float(np.sqrt(plan.n_spectra / got)) if got else float("inf")

@@ -14,8 +14,19 @@ from typing import Any
 
 from ucbplan.errors import InputError
 from ucbplan.observing.blocks import ExposurePlan
-from ucbplan.observing.instruments import check_exptime, instrument_or_none, instrument_overheads
-from ucbplan.observing.schedule.settings import PlanSettings, parse_budgets, parse_duration
+from ucbplan.observing.instruments import (
+    Instrument,
+    check_exptime,
+    instrument_or_none,
+    instrument_overheads,
+)
+from ucbplan.observing.schedule.settings import (
+    DEFAULT_MAX_VISIT_S,
+    PlanSettings,
+    parse_budgets,
+    parse_duration,
+)
+from ucbplan.observing.sigma_model import SigmaVModel, parse_sigma_v
 
 __all__ = ["DEFAULT_EXPTIME_S", "DEFAULT_OVERHEAD_S", "DEFAULT_READOUT_S", "plan_settings"]
 
@@ -36,7 +47,10 @@ def plan_settings(
     readout_s: float | None = None,
     overhead_s: float | None = None,
     visit: str | float | None = None,
-    sigma_v_kms: float | None = None,
+    max_visit: str | float | None = None,
+    sigma_v_kms: str | float | None = None,
+    sigma_floor_kms: float = 0.0,
+    extinction_k: float | None = None,
     budgets: Sequence[str] = (),
     **options: Any,
 ) -> PlanSettings:
@@ -49,10 +63,17 @@ def plan_settings(
     exptime_s, n_exp, readout_s, overhead_s : optional
         Exposure time, exposures per block, readout and acquisition [s]; None takes the
         instrument's or the default.
-    visit : str or float, optional
-        ``--visit`` duration (``1h``, ``45min``, ``3600s`` or seconds).
-    sigma_v_kms : float, optional
-        ``--sigma-v``; required with an instrument that has no σ reference.
+    visit, max_visit : str or float, optional
+        ``--visit`` duration (``1h``, ``45min``, ``3600s`` or seconds); ``--max-visit``, the
+        longest visit a goal plans (default 2 h).
+    sigma_v_kms : str or float, optional
+        ``--sigma-v``: a number (km/s, fixed per exposure) or a law that follows the exposure
+        time, ``30km/s@600s[,V=20.0]`` (:func:`~ucbplan.observing.sigma_model.parse_sigma_v`);
+        required with an instrument that has no σ reference.
+    sigma_floor_kms : float
+        ``--sigma-floor``: systematic floor added in quadrature [km/s].
+    extinction_k : float, optional
+        ``--extinction`` [mag/airmass] of the σ_v law; default the instrument's, else 0.
     budgets : sequence of str
         ``--budget NAME=DURATION`` items: wall time per target over all nights.
     **options
@@ -66,6 +87,7 @@ def plan_settings(
         instrument's minimum, a malformed duration: one line each.
     """
     inst = instrument_or_none(instrument, instruments_file)
+    fixed, model = _sigma_v(sigma_v_kms, sigma_floor_kms, extinction_k, inst)
     if inst is not None and sigma_v_kms is None and inst.sigma_ref is None:
         raise InputError(
             f"--instrument {inst.name}: the instrument table has no confirmed RV-precision "
@@ -86,7 +108,34 @@ def plan_settings(
         exptime_explicit=exptime_s is not None,
         instrument=inst,
         visit_s=parse_duration(visit) if visit is not None else None,
-        sigma_v_kms=sigma_v_kms,
+        max_visit_s=parse_duration(max_visit, "--max-visit") if max_visit else DEFAULT_MAX_VISIT_S,
+        sigma_v_kms=fixed,
+        sigma_model=model,
         budgets=parse_budgets(list(budgets)),
         **options,
     )
+
+
+def _sigma_v(
+    text: str | float | None, floor_kms: float, extinction_k: float | None, inst: Instrument | None
+) -> tuple[float | None, SigmaVModel | None]:
+    """``--sigma-v`` as (fixed σ_v [km/s], exposure-time law): a bare number is the fixed σ_v it
+    always was (with a floor in quadrature); a law is a :class:`SigmaVModel`."""
+    if text is None:
+        if floor_kms:
+            raise InputError("--sigma-floor: expected --sigma-v as well (a floor of what?)")
+        if extinction_k is not None:
+            raise InputError("--extinction: expected --sigma-v 30km/s@600s as well")
+        return None, None
+    k = extinction_k
+    if k is None:
+        k = inst.extinction_k if inst is not None and inst.extinction_k is not None else 0.0
+    model = parse_sigma_v(text, floor_kms=floor_kms, extinction_k=k)
+    if not model.follows_exposure:
+        if extinction_k is not None:
+            raise InputError(
+                "--extinction: a fixed --sigma-v does not scale with airmass; give a reference "
+                "exposure (30km/s@600s)"
+            )
+        return float(model.sigma(1.0)), None  # (σ_v² + σ_sys²)^½, fixed per exposure
+    return None, model

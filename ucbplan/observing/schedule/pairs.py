@@ -128,7 +128,7 @@ def _pair(
     pair = f"{slug(t.name)}-P{n + 1:02d}"
     if offered.size == 0:
         why = "no later night among the nights given inside T_valid for the second epoch"
-        return [replace(first, pair_id=pair)], [Unplaced(t.name, first.night, why)], None
+        return [], [_dropped(pair, first, why)], None
     order, best = _ranked(eta_a, kappa_a, p.omega_dot, max_days, offered)
     second = next(
         (
@@ -140,7 +140,7 @@ def _pair(
     )
     if second is None:
         why = f"no observable second epoch on the {order.size} best later nights given"
-        return [replace(first, pair_id=pair)], [Unplaced(t.name, first.night, why)], None
+        return [], [_dropped(pair, first, why)], None
     dt = elapsed(first.t_mid_tdb_bary, second.t_mid_tdb_bary)
     dk = float(delta_kappa(eta_a, kappa_a, np.array([p.omega_dot * dt]))[0])
     blocks = [
@@ -148,6 +148,16 @@ def _pair(
         replace(second, anchor="fixed-u-pairs", pair_id=pair, delta_kappa=dk),
     ]
     return blocks, [], abs(dk) / best if best > 0.0 else None
+
+
+def _dropped(pair: str, first: Block, why: str) -> Unplaced:
+    """A pair left out whole: a fixed-u pair needs both epochs (Δκ is their difference)."""
+    when = first.t_mid_utc.isot[:19].replace("T", " ")
+    return Unplaced(
+        first.target,
+        first.night,
+        f"pair {pair} dropped (first epoch {when} UTC not planned alone): {why}",
+    )
 
 
 def _fraction_notes(fractions: dict[tuple[str, str], list[float]]) -> list[Unplaced]:
@@ -207,11 +217,12 @@ def pair_blocks(
     -------
     blocks : list of Block
         Pairs (first, second) sharing a ``pair_id`` and their ``delta_kappa``; a first block
-        without a partner stays alone. Block and session ids are unique.
+        without a partner is dropped with its pair (both epochs or neither). Block and session
+        ids are unique.
     unplaced : list of Unplaced
-        First blocks without a second epoch and why, targets without apsidal signal, and
-        (per target and first night) pairs whose |Δκ_LISA| is below :data:`DK_FRACTION` of the
-        optimum inside T_valid, with that fraction.
+        Pairs dropped for want of a second epoch (which, and why), targets without apsidal
+        signal, and (per target and first night) pairs whose |Δκ_LISA| is below
+        :data:`DK_FRACTION` of the optimum inside T_valid, with that fraction.
     """
     requested = list(nights) if nights is not None else _requested(firsts)
     by_name = {r.target.name: r for r in runs}

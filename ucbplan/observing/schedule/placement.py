@@ -9,6 +9,7 @@ gets fewer is reported as :class:`Unplaced` with the reason in words a user can 
 from __future__ import annotations
 
 import bisect
+import math
 from collections import Counter
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -49,19 +50,37 @@ class Session:
 
 @dataclass
 class Allowance:
-    """What a target may still be given over the run: exposures (a ``--goal``) and wall time
-    (``--budget``) [s]; None = no limit. ``smallest_s`` is the wall time of the shortest visit
-    or session (acquisition + one exposure): a budget with less left is spent."""
+    """What a target may still be given over the run: information on K (a ``--goal``)
+    [(km/s)⁻²] and wall time (``--budget``) [s]; None = no limit. ``smallest_s`` is the wall
+    time of the shortest visit or session (acquisition + one exposure): a budget with less left
+    is spent. ``exposures`` limits the number of exposures (library callers)."""
 
     exposures: int | None = None
     seconds: float | None = None
     smallest_s: float = 0.0
+    info: float | None = None
+    per_spectrum: float = 0.0
+    visits_left: int = 1
+
+    def __post_init__(self) -> None:
+        self.info_asked = self.info or 0.0
+
+    def share(self, pattern: int) -> int | None:
+        """Exposures the next visit of a goal should hold so that the visits left share the
+        spectra still needed evenly (whole anchor patterns); None without a goal estimate."""
+        if self.info is None or self.per_spectrum <= 0:
+            return None
+        need = math.ceil(self.info / self.per_spectrum * (1.0 - 1e-12))
+        groups = math.ceil(need / pattern)
+        return pattern * math.ceil(groups / max(1, self.visits_left))
 
     @property
     def spent(self) -> bool:
         """Nothing more may be planned (less time left than the shortest visit/session)."""
-        return (self.exposures is not None and self.exposures <= 0) or (
-            self.seconds is not None and self.seconds < max(self.smallest_s, 1e-9)
+        return (
+            (self.exposures is not None and self.exposures <= 0)
+            or (self.info is not None and self.info <= 0)
+            or (self.seconds is not None and self.seconds < max(self.smallest_s, 1e-9))
         )
 
     def fits(self, n_exposures: int, wall_s: float) -> bool:
@@ -70,12 +89,21 @@ class Allowance:
             self.seconds is None or wall_s <= self.seconds + 1e-6
         )
 
-    def charge(self, n_exposures: int, wall_s: float) -> None:
-        """Spend a placed visit or session."""
+    def charge(self, n_exposures: int, wall_s: float, info: float = 0.0) -> None:
+        """Spend a placed visit or session (``info``: the information it collects)."""
         if self.exposures is not None:
             self.exposures -= n_exposures
         if self.seconds is not None:
             self.seconds -= wall_s
+        if self.info is not None:
+            self.visits_left = max(1, self.visits_left - 1)
+            self.info -= info
+            if self.info <= INFO_RTOL * self.info_asked:
+                self.info = 0.0
+
+
+#: Relative shortfall of a goal's information counted as reached (rounding of the sums).
+INFO_RTOL = 1e-9
 
 
 @dataclass

@@ -26,7 +26,7 @@ from ucbplan.observing.blocks import Block
 from ucbplan.observing.goals import GoalPlan
 from ucbplan.observing.schedule.candidates import TargetRun, prepare_runs
 from ucbplan.observing.schedule.exposure import TargetExposure
-from ucbplan.observing.schedule.goalplan import check_goals, goal_plans
+from ucbplan.observing.schedule.goalplan import balanced_runs, check_goals, goal_plans
 from ucbplan.observing.schedule.nights import night_spans, night_windows
 from ucbplan.observing.schedule.pairs import SecondEpoch, pair_blocks, pair_targets
 from ucbplan.observing.schedule.placement import Allowance, Unplaced, place_sessions
@@ -119,7 +119,7 @@ def _busy_x(axis: TimeAxis, busy: Sequence[Block]) -> list[tuple[float, float]]:
 def _allowances(
     runs: Sequence[TargetRun], settings: PlanSettings, goals: dict[int, GoalPlan]
 ) -> dict[int, Allowance]:
-    """Exposures (``--goal``) and wall time (``--budget``) each target may be given."""
+    """Information (``--goal``) and wall time (``--budget``) each target may be given."""
     budgets = dict(settings.budgets)
     out = {}
     for r in runs:
@@ -128,9 +128,14 @@ def _allowances(
         if goal is not None or seconds is not None:
             plan = r.exposure.plan
             smallest = settings.overhead_s + plan.span_s
-            if settings.visit_s is not None:
+            if settings.plans_visits:
                 smallest += plan.readout_s
-            out[r.index] = Allowance(goal.n_spectra if goal else None, seconds, smallest)
+            if goal is None:
+                out[r.index] = Allowance(None, seconds, smallest)
+                continue
+            per = goal.info_needed / goal.n_spectra if goal.info_needed else 0.0
+            visits = goal.time.n_visits if goal.time is not None else 1
+            out[r.index] = Allowance(None, seconds, smallest, goal.info_needed, per, visits)
     return out
 
 
@@ -184,12 +189,13 @@ def plan_nights(
     spans = night_spans(windows, frame.axis)
     busy_x = _busy_x(frame.axis, busy)
     goals = goal_plans(runs, settings)
+    runs = balanced_runs(runs, goals)
     allowances = _allowances(runs, settings, goals)
-    if settings.visit_s is not None:
+    if settings.plans_visits:
         placed, unplaced = place_visits(runs, spans, frame, settings, busy_x, allowances)
     else:
         placed, unplaced = place_sessions(runs, spans, frame, settings, busy_x, allowances)
-    gap = 0.0 if settings.visit_s is not None else settings.overhead_s
+    gap = 0.0 if settings.plans_visits else settings.overhead_s
     reasons = not_planned(runs, spans, frame, placed, unplaced, gap)
     blocks = block_records(placed, runs, spans, frame, site, settings)
     if frame.mode.label == "fixed-u-pairs":
@@ -199,7 +205,7 @@ def plan_nights(
         )
         unplaced += more + infeasible
     blocks.sort(key=lambda b: (b.t_mid_utc.jd1, b.t_mid_utc.jd2))
-    check_goals(goals, runs, blocks)
+    check_goals(goals, runs, blocks, frame.mode.u_values)
     return PlanResult(
         blocks=blocks,
         unplaced=unplaced,

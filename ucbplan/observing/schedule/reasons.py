@@ -7,7 +7,8 @@ first reason that applies, in this order:
 1. ``outside validity`` — σ_u(t) > α·δu_tol at its own epoch (before or after the reference);
 2. ``smearing floor`` — no exposure of the target keeps Λ_K ≥ the floor;
 3. the first constraint it fails over its exposure: ``daylight/twilight`` (it runs into
-   twilight), ``altitude/airmass``, ``zenith hole``, ``Moon separation``, ``Moon illumination``;
+   twilight), ``altitude/airmass``, ``zenith hole``, ``Moon separation``, ``Moon illumination``,
+   ``other constraint`` (one of the user's own or astroplan's);
 4. ``taken by a higher-priority target`` — it overlaps a visit or session of another target
    (with the acquisition before it);
 5. ``time budget spent`` — the target's ``--budget`` was used up;
@@ -37,6 +38,7 @@ REASONS = (
     "zenith hole",
     "Moon separation",
     "Moon illumination",
+    "other constraint",
     "taken by a higher-priority target",
     "time budget spent",
     "not needed",
@@ -73,7 +75,7 @@ def _reason_codes(run: TargetRun, frame: PlanFrame) -> NDArray[np.int64]:
     valid = (tau >= c.epochs.tau(run.since)) & (tau <= c.epochs.tau(run.until))
     names = [con.name for con in frame.constraints.active]
     by_index = np.array(
-        [REASONS.index(_BY_CONSTRAINT.get(n, "altitude/airmass")) for n in names] or [-1],
+        [REASONS.index(_BY_CONSTRAINT.get(n, "other constraint")) for n in names] or [-1],
         dtype=np.int64,
     )
     code = np.where(c.ok, -1, by_index[np.maximum(c.first_failed, 0)])

@@ -171,8 +171,10 @@ def block_records(
     for i, (idx, labels) in _labels(placed, runs, spans).items():
         js = np.asarray(idx, dtype=np.int64)
         g = _geometry(runs[i], js, frame, settings)
+        untargeted = runs[i].exposure.strategy == "untargeted"
+        anchor = "untargeted" if untargeted else frame.mode.label
         out += [
-            _block(runs[i], g, k, int(j), labels[k], frame.mode.label, site, settings)
+            _block(runs[i], g, k, int(j), labels[k], anchor, site, settings)
             for k, j in enumerate(js)
         ]
     return out

@@ -21,6 +21,8 @@ from ucbplan.errors import InputError, shorten
 from ucbplan.inputs import check_range
 from ucbplan.observing.blocktable import blocks_to_table, make_meta
 from ucbplan.observing.schedule.accounting import VisitSummary, time_accounting, visit_summaries
+from ucbplan.observing.schedule.exposure import strategy_facts
+from ucbplan.observing.schedule.goalplan import info_of_blocks
 from ucbplan.observing.schedule.nights import night_dates
 from ucbplan.observing.schedule.planner import PlanResult, plan_nights
 from ucbplan.observing.schedule.records import slug
@@ -29,7 +31,14 @@ from ucbplan.observing.sites import Site, resolve_site
 from ucbplan.observing.timeconv import quiet_erfa
 from ucbplan.target import Target, load_targets
 
-__all__ = ["MAX_PRIORITY", "PlanRun", "parse_priorities", "plan_files", "with_priorities"]
+__all__ = [
+    "MAX_PRIORITY",
+    "PlanRun",
+    "parse_priorities",
+    "plan_files",
+    "plan_targets",
+    "with_priorities",
+]
 
 #: Largest |priority| (priorities only order the targets).
 MAX_PRIORITY = 1.0e9
@@ -121,7 +130,7 @@ class PlanRun:
     def _visits(self) -> tuple[VisitSummary, ...]:
         """The visits, computed once per run (the table meta, the accounting and the terminal
         report all read them)."""
-        trailing = self.settings.visit_s is not None
+        trailing = self.settings.plans_visits
         return tuple(visit_summaries(self.result.blocks, self.settings.overhead_s, trailing))
 
     def visits(self) -> list[VisitSummary]:
@@ -157,9 +166,19 @@ class PlanRun:
             if goal is not None:
                 entry["goal_spectra"] = goal.n_spectra
                 entry["goal_expected"] = goal.expected
+            if te.results:
+                entry["strategy"] = strategy_facts(te, self.collected_info().get(name, 0.0))
             per_target[name] = entry
         out["targets"] = per_target
         return out
+
+    def collected_info(self) -> dict[str, float]:
+        """Information on K each target's planned spectra collect [(km/s)⁻²], from the rows
+        (Σ (Λ_K cos u)²/σ_v²)."""
+        out: dict[str, list[Any]] = {}
+        for b in self.result.blocks:
+            out.setdefault(b.target, []).append(b)
+        return {k: info_of_blocks(v, self.settings.spec.u_values) for k, v in out.items()}
 
     def meta(self) -> dict[str, Any]:
         """Provenance of the run for the table ``meta`` (see :func:`make_meta`)."""
@@ -254,7 +273,25 @@ def plan_files(
     if not isinstance(priorities, Mapping):
         parse_priorities(priorities)
     the_site = resolve_site(site, site_lonlat, sites_file, timezone)
-    targets = with_priorities(load_targets(target_files, slug), priorities)
-    _check_budget_names(targets, settings)
-    result = plan_nights(targets, the_site, dates, settings)
-    return PlanRun(targets, the_site, dates, settings, result)
+    return plan_targets(load_targets(target_files, slug), the_site, dates, settings, priorities)
+
+
+def plan_targets(
+    targets: Sequence[Target],
+    site: Site,
+    nights: Sequence[date],
+    settings: PlanSettings,
+    priorities: Mapping[str, float] | Sequence[str] = (),
+) -> PlanRun:
+    """Plan loaded targets at a resolved site on the given nights (:func:`plan_files` after
+    reading its inputs; ``ucbplan.plan`` calls it with targets, sites and dates as objects).
+
+    Raises
+    ------
+    UcbplanError
+        For a bad override, a budget naming no target, or a planning input (one line each).
+    """
+    chosen = with_priorities(list(targets), priorities)
+    _check_budget_names(chosen, settings)
+    result = plan_nights(chosen, site, list(nights), settings)
+    return PlanRun(chosen, site, list(nights), settings, result)

@@ -5,21 +5,17 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass, field
+from typing import Any
 
 from ucbplan.core.smearing import parse_smear_budget
 from ucbplan.errors import InputError, UcbplanError, shorten
 from ucbplan.inputs import check_alpha, check_int, check_range
 from ucbplan.observing.blocks import MAX_BLOCK_S, ExposurePlan
-from ucbplan.observing.constraints import (
-    AirmassConstraint,
-    ConstraintSet,
-    MoonIlluminationConstraint,
-    MoonSeparationConstraint,
-    NightConstraint,
-    ZenithHoleConstraint,
-)
+from ucbplan.observing.constraint_objects import constraint_set, default_constraints
+from ucbplan.observing.constraints import ConstraintSet
 from ucbplan.observing.goals import parse_goal
 from ucbplan.observing.instruments import Instrument
+from ucbplan.observing.sigma_model import SigmaVModel
 from ucbplan.observing.sites import Site
 
 __all__ = [
@@ -32,12 +28,17 @@ __all__ = [
     "parse_mode",
 ]
 
-#: Exposure cadences inside a visit (``--cadence``): ``anchor`` centres every exposure on an
-#: anchor and waits for the next one it can reach; ``phase-locked`` sets exposure + readout to
-#: the anchor spacing, so consecutive exposures centre on consecutive anchors without waiting.
-CADENCES = ("anchor", "phase-locked")
-#: Default smallest smearing factor Λ_K of a planned exposure (``--min-lambda-k``).
+#: Exposure cadences inside a visit (``--cadence``): ``auto`` takes the strategy with the most
+#: information per visit when σ_v follows the exposure time (:mod:`ucbplan.observing.strategy`),
+#: else ``targeted``; ``targeted`` (or ``anchor``) centres every exposure on an anchor and waits
+#: for the next one it can reach; ``phase-locked`` sets exposure + readout to the anchor spacing,
+#: so consecutive exposures centre on consecutive anchors without waiting; ``untargeted`` takes
+#: back-to-back exposures at whatever phase they fall.
+CADENCES = ("auto", "targeted", "anchor", "phase-locked", "untargeted")
+#: Default smallest smearing factor Λ_K of a planned exposure (``--min-lambda-k``), in every mode.
 DEFAULT_MIN_LAMBDA_K = 0.9
+#: Longest visit a goal plans without ``--visit`` (``--max-visit``) [s].
+DEFAULT_MAX_VISIT_S = 7200.0
 #: Longest per-target time budget [s] (a year of nights).
 MAX_BUDGET_S = 366 * 86400.0
 #: Seconds per unit of a ``--visit`` duration.
@@ -227,7 +228,11 @@ class PlanSettings:
     n_epochs : int
         Number of epochs the tolerance is shared between.
     sigma_v_kms, k_eff_kms : float or None
-        RV precision σ_v and semi-amplitude K_eff [km/s]; None takes the target file's.
+        RV precision σ_v of every exposure and semi-amplitude K_eff [km/s]; None takes the
+        target file's.
+    sigma_model : SigmaVModel or None
+        σ_v that follows the exposure time, magnitude and airmass (``--sigma-v 30km/s@600s``);
+        the exposure time and cadence are then chosen for information per hour.
     max_smear : str or None
         Smearing budget (``0.5*sigma_v`` or km/s); exceeding it is an error.
     max_bin_fraction : float or None
@@ -241,24 +246,31 @@ class PlanSettings:
     star : int
         Component whose argument of latitude is targeted (1 or 2).
     visit_s : float or None
-        Visit length, acquisition included [s] (``--visit``); None plans sessions as before.
+        Visit length, acquisition included [s] (``--visit``); None plans sessions (or, with a
+        goal, visits of up to ``max_visit_s``).
+    max_visit_s : float
+        Longest visit a goal plans (``--max-visit``) [s]; visits are balanced below it.
     cadence : str
         Exposure cadence inside a visit (see :data:`CADENCES`).
     min_lambda_k : float or None
         Smallest smearing factor Λ_K of a planned block (``--min-lambda-k``). None: 0.9
-        (:data:`DEFAULT_MIN_LAMBDA_K`) with visits; without, only Λ_K > 0 (the signal is not
-        averaged away or inverted), as sessions of co-added blocks always were planned.
+        (:data:`DEFAULT_MIN_LAMBDA_K`), in every mode.
     allow_smeared : bool
         Plan exposures below ``min_lambda_k`` (``--allow-smeared``).
-    exptime_explicit : bool
-        The exposure time was chosen by the user (the default for library calls): below the
-        floor it is refused, not capped; the CLI sets False when ``--exptime`` is not given.
+    exptime_explicit : bool or None
+        The exposure time was chosen by the user: below the floor it is refused, not capped,
+        and it is not optimised. None (library calls): chosen unless ``exposure`` keeps the
+        default 60 s. The CLI sets it from whether ``--exptime`` was given.
     instrument : Instrument or None
         Spectrograph whose σ_ref scales σ_v per exposure (overheads are resolved already).
     goal : str or None
         Precision goal (``--goal``, e.g. ``sigma_K=2km/s``): plans the spectra that reach it.
     budgets : tuple of (str, float)
         Wall-time budget per target (lower-case name, seconds) over all nights (``--budget``).
+    custom_constraints : tuple or None
+        Constraint objects (ucbplan's, a user's or astroplan's) replacing the set built from
+        ``twilight``, ``airmass_max``, ``moon_sep_deg``, ``moon_illum_max`` and
+        ``zenith_hole_deg`` (see :func:`~ucbplan.observing.constraint_objects.constraint_set`).
 
     Raises
     ------
@@ -277,6 +289,7 @@ class PlanSettings:
     alpha: float = 1.0
     n_epochs: int = 2
     sigma_v_kms: float | None = None
+    sigma_model: SigmaVModel | None = None
     k_eff_kms: float | None = None
     max_smear: str | None = None
     max_bin_fraction: float | None = None
@@ -285,13 +298,15 @@ class PlanSettings:
     max_pair_baseline_days: float = 365.0
     star: int = 1
     visit_s: float | None = None
-    cadence: str = "anchor"
+    max_visit_s: float = DEFAULT_MAX_VISIT_S
+    cadence: str = "auto"
     min_lambda_k: float | None = None
     allow_smeared: bool = False
-    exptime_explicit: bool = True
+    exptime_explicit: bool | None = None
     instrument: Instrument | None = None
     goal: str | None = None
     budgets: tuple[tuple[str, float], ...] = ()
+    custom_constraints: tuple[Any, ...] | None = None
 
     def __post_init__(self) -> None:
         parse_mode(self.mode)
@@ -300,13 +315,15 @@ class PlanSettings:
             raise InputError(f"exposure: expected an ExposurePlan, got {shorten(self.exposure)}")
         check_alpha(self.alpha)
         check_int("n_epochs", self.n_epochs, 1, 10**6, "epochs sharing the tolerance")
-        for name, value in (("--sigma-v", self.sigma_v_kms), ("--k-eff", self.k_eff_kms)):
+        for name, value in (("sigma_v_kms", self.sigma_v_kms), ("k_eff_kms", self.k_eff_kms)):
             if value is not None:
                 check_range(name, value, 0.0, MAX_SPEED_KMS, "km/s", "", low_open=True)
         self._check_budgets()
         why = "slew + acquisition before each session; a block must fit in one night"
-        check_range("--overhead", self.overhead_s, 0.0, MAX_BLOCK_S, "s", why)
-        check_int("--sessions", self.sessions_per_night, 1, MAX_SESSIONS, "per target and night")
+        check_range("overhead_s", self.overhead_s, 0.0, MAX_BLOCK_S, "s", why)
+        check_int(
+            "sessions_per_night", self.sessions_per_night, 1, MAX_SESSIONS, "per target and night"
+        )
         why = "longest baseline of a fixed-u pair: a century at most"
         check_range("max_pair_baseline_days", self.max_pair_baseline_days, 0.0, 36525.0, "d", why)
         if self.star not in (1, 2) or isinstance(self.star, bool):
@@ -327,39 +344,45 @@ class PlanSettings:
                     f"--n-exp: expected 1 with --visit (each exposure of a visit is centred on "
                     f"its own anchor), got {self.exposure.n_exp}; drop --n-exp"
                 )
+        parse_duration(self.max_visit_s, "--max-visit")
         if self.cadence not in CADENCES:
             raise InputError(
-                f"--cadence: expected {' or '.join(CADENCES)}, got {shorten(self.cadence, 40)}"
+                f"cadence: expected {', '.join(CADENCES)}, got {shorten(self.cadence, 40)}"
             )
+        if self.cadence in ("phase-locked", "untargeted"):
+            if self.visit_s is None and self.goal is None:
+                raise InputError(
+                    f"--cadence {self.cadence}: expected --visit DURATION (or --goal) as well"
+                )
+            if self.spec.label == "fixed-u-pairs":
+                raise InputError(
+                    f"--cadence {self.cadence}: fixed-u pairs are single blocks; drop --cadence"
+                )
         if self.cadence == "phase-locked":
-            if self.visit_s is None:
-                raise InputError("--cadence phase-locked: expected --visit DURATION as well")
-            if self.exptime_explicit:
+            if self.exptime_given:
                 raise InputError(
                     "--cadence phase-locked sets exposure + readout to the anchor spacing; "
                     "drop --exptime (or use --cadence anchor)"
                 )
         why = "smallest smearing factor of an exposure: 0 = none, 1 = no smearing at all"
         if self.min_lambda_k is not None:
-            check_range("--min-lambda-k", self.min_lambda_k, 0.0, 1.0, "", why)
+            check_range("min_lambda_k", self.min_lambda_k, 0.0, 1.0, "", why)
         parse_budgets(list(self.budgets))
         if self.goal is not None:
             parse_goal(self.goal)
-            if self.visit_s is None:
-                raise InputError("--goal: expected --visit DURATION as well (goals plan visits)")
+            if self.spec.label == "fixed-u-pairs":
+                raise InputError("--goal: fixed-u pairs plan two blocks each; drop --goal")
 
     def _check_budgets(self) -> None:
         """``--max-smear`` (its form, and a positive budget) and ``--max-bin-fraction``."""
         if self.max_bin_fraction is not None:
             why = "largest block span as a fraction of the orbital period"
-            check_range(
-                "--max-bin-fraction", self.max_bin_fraction, 0.0, 1.0, "", why, low_open=True
-            )
+            check_range("max_bin_fraction", self.max_bin_fraction, 0.0, 1.0, "", why, low_open=True)
         if self.max_smear is None:
             return
         if not isinstance(self.max_smear, str) or len(self.max_smear) > _MAX_SMEAR_CHARS:
             raise InputError(
-                "--max-smear: expected e.g. '0.5*sigma_v' or '2 km/s', got "
+                "max_smear: expected e.g. '0.5*sigma_v' or '2 km/s', got "
                 f"{shorten(self.max_smear, 40)}"
             )
         # the form and sign now; a sigma_v budget is scaled by each target's sigma_v later
@@ -369,18 +392,38 @@ class PlanSettings:
             raise
         except ValueError:  # a factor that is not a number, e.g. '..*sigma_v'
             raise InputError(
-                "--max-smear: expected e.g. '0.5*sigma_v' or '2 km/s', got "
+                "max_smear: expected e.g. '0.5*sigma_v' or '2 km/s', got "
                 f"{shorten(self.max_smear, 40)}"
             ) from None
         why = "a velocity, or a multiple of sigma_v"
-        check_range("--max-smear", budget, 0.0, MAX_SPEED_KMS, "km/s", why, low_open=True)
+        check_range("max_smear", budget, 0.0, MAX_SPEED_KMS, "km/s", why, low_open=True)
 
     @property
     def lambda_k_floor(self) -> float:
         """The smearing floor in force (see ``min_lambda_k``)."""
-        if self.min_lambda_k is not None:
-            return self.min_lambda_k
-        return DEFAULT_MIN_LAMBDA_K if self.visit_s is not None else 0.0
+        return DEFAULT_MIN_LAMBDA_K if self.min_lambda_k is None else self.min_lambda_k
+
+    @property
+    def plans_visits(self) -> bool:
+        """Whether the run plans visits (``--visit``, or a goal, which chooses their length)."""
+        return self.visit_s is not None or self.goal is not None
+
+    @property
+    def optimises_exposure(self) -> bool:
+        """Whether the exposure time is chosen for information per hour: σ_v follows the
+        exposure time and the user gave none."""
+        law = self.sigma_model is not None and self.sigma_model.follows_exposure
+        inst = self.instrument is not None and self.instrument.sigma_ref is not None
+        fixed = self.sigma_v_kms is not None and self.sigma_model is None
+        return (law or (inst and not fixed)) and not self.exptime_given
+
+    @property
+    def exptime_given(self) -> bool:
+        """Whether the exposure time was chosen by the user (``exptime_explicit``; None: an
+        ``exposure`` other than the default :class:`ExposurePlan`)."""
+        if self.exptime_explicit is not None:
+            return self.exptime_explicit
+        return self.exposure.exptime_s != ExposurePlan().exptime_s
 
     @property
     def spec(self) -> ModeSpec:
@@ -388,22 +431,18 @@ class PlanSettings:
         return parse_mode(self.mode)
 
     def constraints(self, site: Site | None) -> ConstraintSet:
-        """The constraints of a run at ``site`` (None: without the site's zenith hole), by name."""
-        hole = self.zenith_hole_deg
-        if hole is None and site is not None:
-            hole = site.zenith_hole_deg
-        # built (and so range-checked) even when 0 switches them off
-        hole_c = ZenithHoleConstraint(radius_deg=hole) if hole is not None else None
-        moon_c = MoonSeparationConstraint(min_deg=self.moon_sep_deg)
-        moon_illum = self.moon_illum_max
-        return ConstraintSet(
-            night=NightConstraint(twilight=self.twilight),
-            airmass=AirmassConstraint(max_airmass=self.airmass_max),
-            zenith_hole=hole_c if hole_c is not None and hole_c.radius_deg > 0 else None,
-            moon_sep=moon_c if moon_c.min_deg > 0 else None,
-            moon_illum=(
-                MoonIlluminationConstraint(max_fraction=moon_illum)
-                if moon_illum is not None
-                else None
-            ),
+        """The constraints of a run at ``site`` (None: without the site's zenith hole), by name:
+        ``custom_constraints`` when given, else the command line's
+        (:func:`~ucbplan.observing.constraint_objects.default_constraints`)."""
+        if self.custom_constraints is not None:
+            return constraint_set(self.custom_constraints)
+        return constraint_set(
+            default_constraints(
+                site,
+                twilight=self.twilight,
+                airmass_max=self.airmass_max,
+                moon_sep_deg=self.moon_sep_deg,
+                moon_illum_max=self.moon_illum_max,
+                zenith_hole_deg=self.zenith_hole_deg,
+            )
         )

@@ -24,6 +24,7 @@ from ucbplan.observing.constraints import evaluate_window
 from ucbplan.observing.schedule.candidates import PlanFrame, TargetRun
 from ucbplan.observing.schedule.nights import NightSpan
 from ucbplan.observing.schedule.placement import (
+    INFO_RTOL,
     Allowance,
     Session,
     Timeline,
@@ -60,6 +61,25 @@ def _chain(
     return out
 
 
+def _goal_cut(exps: list[int], weight: NDArray[np.float64], need: float, pattern: int) -> None:
+    """Drop the exposures a goal does not need: keep the fewest whose information reaches
+    ``need``, in whole anchor patterns (``pattern`` > 1) when the visit has that many."""
+    cum = np.cumsum(np.nan_to_num(weight[exps]))
+    keep = int(np.searchsorted(cum, need * (1.0 - INFO_RTOL))) + 1
+    if pattern > 1 and keep % pattern:
+        keep += pattern - keep % pattern
+    del exps[keep:]
+
+
+def _visit_key(run: TargetRun, exps: list[int]) -> tuple[float, float]:
+    """How good a visit is: its information for back-to-back exposures (their phases differ),
+    else its number of exposures; then the lower mean airmass."""
+    airmass = -float(np.mean(run.cand.airmass_mid[exps]))
+    if run.exposure.strategy == "untargeted":
+        return round(float(np.nansum(run.weight[exps])), 12), airmass
+    return float(len(exps)), airmass
+
+
 def _best_visit(
     run: TargetRun,
     span: NightSpan,
@@ -71,7 +91,7 @@ def _best_visit(
     """The best free visit of ``run`` in a night within its allowance: (exposures, start,
     end) or None."""
     c, te = run.cand, run.exposure
-    acq, r, visit_s = settings.overhead_s, te.plan.readout_s, float(settings.visit_s or 0.0)
+    acq, r, visit_s = settings.overhead_s, te.plan.readout_s, float(te.visit_s or 0.0)
     j0, j1 = np.searchsorted(c.x_mid, [span.x0, span.x1])
     if j1 == j0:
         return None
@@ -82,9 +102,10 @@ def _best_visit(
     starts = js[good[js] & acq_ok]
     nxt = np.searchsorted(c.x_start, c.x_end + r - _READOUT_SLACK_S, side="left")
     best: tuple[tuple[int, ...], float, float] | None = None
-    best_key = (0, 0.0)
+    best_key = (0.0, 0.0)
+    pattern = len(settings.spec.u_values) if te.strategy != "untargeted" else 1
     cap = c.x_mid.size if allowance.exposures is None else allowance.exposures
-    pattern = len(settings.spec.u_values)
+    cap = min(cap, allowance.share(pattern) or cap)
     length = visit_s if allowance.seconds is None else min(visit_s, allowance.seconds)
     for j in starts:
         x0 = float(c.x_start[j]) - acq
@@ -93,11 +114,13 @@ def _best_visit(
             exps = []  # not even one exposure fits the time budget left
         while exps and not timeline.free(x0, float(c.x_end[exps[-1]]) + r):
             exps.pop()
-        if allowance.exposures is not None and len(exps) > pattern:
+        if allowance.info is not None and exps:
+            _goal_cut(exps, run.weight, allowance.info, pattern)
+        elif allowance.exposures is not None and len(exps) > pattern:
             del exps[len(exps) - len(exps) % pattern :]  # whole anchor patterns for a goal
         if not exps:
             continue
-        key = (len(exps), -float(np.mean(c.airmass_mid[exps])))
+        key = _visit_key(run, exps)
         if best is None or key > best_key:
             best, best_key = (tuple(exps), x0, float(c.x_end[exps[-1]]) + r), key
     return best
@@ -123,9 +146,9 @@ def _place_night(
             break
         idx, x0, x1 = pick
         timeline.add(Session(run.index, n, idx, x0, x1))
-        allowance.charge(len(idx), x1 - x0)
+        allowance.charge(len(idx), x1 - x0, float(np.nansum(run.weight[list(idx)])))
         placed += 1
-    if allowance.spent and allowance.exposures is not None:
+    if allowance.spent and (allowance.exposures is not None or allowance.info is not None):
         return None  # the goal is planned
     if allowance.spent or (placed < wanted and allowance.seconds is not None and placed > 0):
         return f"time budget spent after {placed} visit(s)"
@@ -169,7 +192,7 @@ def place_visits(
         allowance = (allowances or {}).get(run.index) or Allowance()
         for n, span in enumerate(spans):
             if allowance.spent:
-                if allowance.exposures is None:  # a time budget, not a goal
+                if allowance.exposures is None and allowance.info is None:  # a time budget
                     unplaced.append(Unplaced(run.target.name, span.label, "time budget spent"))
                 continue
             reason = _place_night(run, n, span, timeline, frame, settings, allowance)

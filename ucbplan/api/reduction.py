@@ -1,0 +1,300 @@
+"""``ucbplan.reduce``, ``ucbplan.simulate`` and ``ucbplan.population_forecast``: the
+measuring half of the public API (each the library behind one command)."""
+
+from __future__ import annotations
+
+import io
+import json
+from dataclasses import dataclass
+from functools import cached_property
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from ucbplan.api._convert import as_float, scope
+from ucbplan.api.ephemeris import TargetLike, get_site, load_target
+from ucbplan.errors import InputError, ReduceWarning, emit, shorten
+from ucbplan.lisa import MIN_T_OBS_S  # shortest LISA observation [s] (t_obs, --t-obs)
+
+if TYPE_CHECKING:
+    from astropy.table import Table
+
+    from ucbplan.lisa.pipeline import SimulationResult
+    from ucbplan.reduce.pipeline import Reduction
+
+__all__ = ["MIN_T_OBS_S", "Report", "population_forecast", "reduce", "simulate", "t_obs_seconds"]
+
+
+@dataclass(frozen=True)
+class Report:
+    """A finished reduction: K_j, γ_j, masses, Δκ and Δv_CM with their uncertainties.
+
+    Attributes
+    ----------
+    reduction : Reduction
+        Everything the reduction found (fits, Monte-Carlo samples …).
+    """
+
+    reduction: Reduction
+
+    @cached_property
+    def _doc(self) -> dict[str, Any]:
+        from ucbplan.reduce.report import build_report
+
+        return build_report(self.reduction)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The report exactly as ``ucbplan reduce --format json`` writes it, parsed: plain
+        floats (km/s, M_sun …, units named in each entry), lists and dicts; NaN as None."""
+        from ucbplan.io import dump_json
+
+        buf = io.StringIO()
+        dump_json(self._doc, buf)
+        return dict(json.loads(buf.getvalue()))
+
+    @property
+    def warnings(self) -> list[str]:
+        """What the reduction warns about (also emitted as :class:`ucbplan.ReduceWarning`)."""
+        return [str(w) for w in self._doc.get("warnings", [])]
+
+    def em_prior(self) -> dict[str, Any]:
+        """The EM prior for a later LISA analysis (``reduce --em-prior``)."""
+        from ucbplan.reduce.report import em_prior
+
+        return em_prior(self.reduction)
+
+    def plot(self, folder: str | Path, overwrite: bool = False) -> list[Path]:
+        """The reduction's PNG figures in ``folder`` (``reduce --plots``); their paths."""
+        from ucbplan.reduce.plots import plot_all
+
+        return list(plot_all(self.reduction, Path(folder), overwrite=overwrite))
+
+
+def reduce(
+    target: TargetLike,
+    velocities: Any,
+    seed: int | None = None,
+    *,
+    samples: int = 20_000,
+    light_time: bool = False,
+    mass_radius: str | None = None,
+    cos_i_sigma: float = 0.0,
+    site: Any = None,
+) -> Report:
+    """Reduce measured velocities against a target (``ucbplan reduce``; paper Secs. 3–5).
+
+    Parameters
+    ----------
+    target : str, Path, dict or Target
+        LISA ephemeris and posterior (see :func:`ucbplan.load_target`).
+    velocities : str, Path or VelocityTable
+        Velocity table (CSV or ECSV): ``bjd_tdb``, ``exptime_s``, ``v1``, ``sigma_v1`` … [km/s].
+    seed : int, optional
+        Seed of the Monte-Carlo draws (None: fresh entropy, reported in the report).
+    samples : int
+        Monte-Carlo samples.
+    light_time : bool
+        Correct for the light travel time across the orbit.
+    mass_radius : str, optional
+        WD mass–radius relation for the redshift check (``eggleton``, ``nauenberg``).
+    cos_i_sigma : float
+        1σ of cos ι if neither the covariance nor the samples carry it.
+    site : str, EarthLocation or astroplan Observer, optional
+        Telescope, when the table's times are UTC at the site.
+
+    Returns
+    -------
+    Report
+
+    Raises
+    ------
+    InputError
+        Bad options (naming the parameter); VelocityFileError, TargetFileError for the files.
+
+    Warns
+    -----
+    ReduceWarning
+        What the report's ``warnings`` hold.
+    """
+    from ucbplan.reduce.masses import MASS_RADIUS_MODELS
+    from ucbplan.reduce.pipeline import ReduceOptions
+    from ucbplan.reduce.pipeline import reduce as _reduce
+
+    if mass_radius is not None and str(mass_radius).lower() not in MASS_RADIUS_MODELS:
+        raise InputError(
+            f"mass_radius: got {shorten(mass_radius)}, expected one of "
+            f"{', '.join(MASS_RADIUS_MODELS)}",
+            parameter="mass_radius",
+        )
+    if not 0.0 <= cos_i_sigma <= 2.0:
+        raise InputError(
+            f"cos_i_sigma: expected a 1σ of cos ι in [0, 2], got {cos_i_sigma}", "cos_i_sigma"
+        )
+    options = ReduceOptions(
+        n_samples=samples,
+        seed=seed,
+        light_time=light_time,
+        mass_radius=mass_radius.lower() if mass_radius else None,
+        cos_i_sigma=cos_i_sigma,
+    )
+    with scope():
+        tgt = load_target(target)
+        table = _velocity_table(velocities, tgt, site)
+        report = Report(_reduce(tgt, table, options))
+        lines = report.warnings
+    emit(lines, ReduceWarning)
+    return report
+
+
+def _velocity_table(velocities: Any, tgt: Any, site: Any) -> Any:
+    """The velocity table, site-UTC times converted to barycentric TDB at ``site``."""
+    from ucbplan.reduce.velocities import VelocityTable, read_velocities, to_barycentric
+
+    table = velocities if isinstance(velocities, VelocityTable) else read_velocities(velocities)
+    if table.site_utc:
+        if site is None:
+            raise InputError(
+                f"site: {table.source}: times are UTC at the telescope; pass site=NAME to "
+                "convert them",
+                parameter="site",
+            )
+        table = to_barycentric(table, tgt.coord, get_site(site).location)
+    return table
+
+
+def simulate(
+    target: TargetLike,
+    seed: int = 0,
+    *,
+    t_obs: Any = None,
+    n_bins: int = 512,
+    circular: bool = False,
+    walkers: int = 32,
+    steps: int = 2000,
+    until_converged: bool = False,
+    max_steps: int = 50_000,
+    noise: bool = True,
+) -> SimulationResult:
+    """Simulate a LISA observation and sample the targeted-search posterior (``ucbplan
+    simulate``).
+
+    Parameters
+    ----------
+    target : str, Path, dict or Target
+        Target or injection (needs ``lisa.amplitude``, ``cos_inclination``, ``psi``).
+    seed : int
+        Seed of the noise draw and the sampler.
+    t_obs : str, float or Quantity, optional
+        Observation length (``"4yr"``, seconds or a time Quantity; default: the target's).
+    n_bins, circular, walkers, steps, until_converged, max_steps, noise
+        As the ``simulate`` options.
+
+    Returns
+    -------
+    SimulationResult
+        Posterior samples, mean, σ and the Fisher σ; write it with
+        :func:`ucbplan.lisa.outputs.write_simulation`.
+
+    Raises
+    ------
+    InputError
+        Bad options (one line each).
+    """
+    from ucbplan.lisa import pipeline as lp
+
+    with scope():
+        tgt = load_target(target)
+        t_obs_s = t_obs_seconds(t_obs, tgt.t_obs_s)
+        model = lp.build_model(tgt, t_obs_s=t_obs_s, n_bins=n_bins, circular=circular)
+        options = lp.SimulateOptions(
+            seed=seed,
+            walkers=walkers,
+            steps=steps,
+            until_converged=until_converged,
+            max_steps=max_steps,
+            noise=noise,
+        )
+        result = lp.simulate(model, options)
+    emit(list(result.warnings), ReduceWarning)
+    return result
+
+
+def t_obs_seconds(t_obs: Any, default_s: float, parameter: str = "t_obs") -> float:
+    """An observation length [s] from text (``4yr``, Julian years), seconds or a Quantity.
+
+    Raises
+    ------
+    InputError
+        Not a duration of at least a day (naming ``parameter``).
+    """
+    if t_obs is None:
+        return default_s
+    import astropy.units as u
+
+    value = as_float(t_obs, "s", parameter)
+    if isinstance(value, str):
+        try:
+            value = float(u.Quantity(value.replace(" ", "")).to_value(u.s))
+        except (TypeError, ValueError, u.UnitsError):
+            raise InputError(
+                f"{parameter}: expected a duration like '4yr' (Julian) or '126232599.054s', "
+                f"got {shorten(t_obs)}",
+                parameter=parameter,
+            ) from None
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise InputError(f"{parameter}: expected a duration, got {shorten(t_obs)}", parameter)
+    if not MIN_T_OBS_S <= value < float("inf"):
+        raise InputError(
+            f"{parameter}: expected a finite duration of at least 1 day, got {shorten(t_obs)}",
+            parameter=parameter,
+        )
+    return float(value)
+
+
+def population_forecast(
+    catalog: str | Path,
+    sigma_v: Any = 15.0,
+    k_eff: Any = None,
+    *,
+    t_obs: str | None = None,
+    t_start: str = "2035-01-01T00:00:00",
+    n_bins: int = 512,
+    workers: int = 1,
+) -> Table:
+    """Per-source Fisher forecast of an LDC catalog (``ucbplan population forecast``).
+
+    Parameters
+    ----------
+    catalog : str or Path
+        LDC catalog (CSV, ECSV or HDF5).
+    sigma_v, k_eff : float or Quantity
+        RV precision [km/s]; semi-amplitude [km/s] (None: from the catalog's masses).
+    t_obs, t_start : str, optional
+        LISA observation length (``4yr``) and start (ISO, TDB).
+    n_bins : int
+        Band width N in frequency bins.
+    workers : int
+        Local processes (1 = serial); the table does not depend on it.
+
+    Returns
+    -------
+    astropy.table.Table
+        One row per source: σ_u at the end, T_valid, SNR, status (docs/population.md).
+    """
+    import tempfile
+
+    from ucbplan.population.catalog import read_catalog
+    from ucbplan.population.execute import ExecutorSpec
+    from ucbplan.population.forecast import forecast_options
+    from ucbplan.population.run import run_forecast
+
+    opts = forecast_options(
+        sigma_v_kms=as_float(sigma_v, "km/s", "sigma_v"),
+        k_eff_kms=as_float(k_eff, "km/s", "k_eff"),
+        t_obs=t_obs,
+        t_start=t_start,
+        n_bins=n_bins,
+    )
+    with scope(), tempfile.TemporaryDirectory(prefix="ucbplan-parts-") as parts:
+        cat = read_catalog(Path(catalog))
+        run = run_forecast(cat, opts, spec=ExecutorSpec(workers=workers), parts=Path(parts))
+    return run.table

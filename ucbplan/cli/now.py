@@ -1,0 +1,102 @@
+"""``ucbplan now``: at the telescope, the next exposure start and the wait, refreshed live.
+
+A thin shell over :func:`ucbplan.observing.countdown.what_next`: read the blocks table, list its
+exposures, and print :func:`~ucbplan.observing.countdown.countdown_lines` for the current UTC
+(or ``--at``, a rehearsal clock that runs on from that instant). The frame goes to stdout: on a
+terminal it is redrawn every second; in a pipe a new frame is printed only when the next
+exposure changes. ``--once`` prints one frame and exits. Ctrl-C exits with code 130.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from collections.abc import Callable, Sequence
+from datetime import UTC, datetime, timedelta
+from pathlib import Path
+from typing import TextIO
+
+import typer
+
+from ucbplan.observing.countdown import Exposure, countdown_lines, parse_utc, what_next
+
+__all__ = ["live", "register"]
+
+#: Clears a terminal and puts the cursor top left (ANSI).
+_CLEAR = "\x1b[H\x1b[2J"
+#: Exit code of Ctrl-C (as :data:`ucbplan.cli.app.EXIT_INTERRUPTED`).
+_INTERRUPTED = 130
+
+
+def live(
+    exposures: Sequence[Exposure],
+    origin: datetime | None,
+    out: TextIO,
+    *,
+    monotonic: Callable[[], float] | None = None,
+    sleep: Callable[[float], None] | None = None,
+    wall: Callable[[], datetime] | None = None,
+) -> None:
+    """Print countdown frames until the plan is over (the clock and sleep are injectable).
+
+    ``origin`` starts a rehearsal clock at that UTC instant, running on by ``monotonic``; None
+    uses ``wall`` (default: the computer's UTC). A terminal ``out`` is redrawn every second;
+    another stream gets a frame when the next exposure changes. ``monotonic`` and ``sleep``
+    default to :mod:`time`'s, looked up at call time (tests replace them).
+    """
+    monotonic = monotonic or time.monotonic
+    sleep = sleep or time.sleep
+    wall = wall or (lambda: datetime.now(UTC))
+    tty = out.isatty()
+    t0, shown = monotonic(), object()
+    while True:
+        now = origin + timedelta(seconds=monotonic() - t0) if origin is not None else wall()
+        c = what_next(exposures, now)
+        key = None if c.next is None else (c.next.target, c.next.label, c.next.start)
+        if tty or key != shown:
+            out.write((_CLEAR if tty else "") + "\n".join(countdown_lines(c)) + "\n")
+            out.write("" if tty else "\n")
+            out.flush()
+            shown = key
+        if c.next is None and c.running is None:
+            return
+        sleep(1.0 - (now.timestamp() % 1.0))  # redraw on the next whole second
+
+
+def now(
+    plan: Path = typer.Argument(
+        ..., help="Blocks table written by `ucbplan plan -o` (ECSV, CSV or JSON)."
+    ),
+    at: str | None = typer.Option(
+        None,
+        "--at",
+        help="Run the clock from this UTC instant, ISO (2040-02-16T01:40:00Z), not from the "
+        "computer's clock: a rehearsal.",
+    ),
+    once: bool = typer.Option(False, "--once", help="Print one frame and exit (for scripts)."),
+) -> None:
+    """At the telescope: the next exposure start (UTC) and the wait, refreshed every second.
+
+    Shows the current UTC, the exposure that should be running, the next one (target, visit/
+    exposure, anchor, start HH:MM:SS UTC and "in 2 min 13 s"), the one after, and what to do
+    if the previous start was missed. After the last exposure it says the plan is over.
+    """
+    from ucbplan.observing.blocktable import read_blocks
+    from ucbplan.observing.countdown import plan_exposures
+
+    origin = parse_utc(at, "--at") if at is not None else None
+    exposures = plan_exposures(read_blocks(plan))
+    if once:
+        instant = origin if origin is not None else datetime.now(UTC)
+        typer.echo("\n".join(countdown_lines(what_next(exposures, instant))))
+        return
+    try:
+        live(exposures, origin, sys.stdout)
+    except KeyboardInterrupt:
+        sys.stdout.write("\n")
+        raise typer.Exit(_INTERRUPTED) from None
+
+
+def register(app: typer.Typer) -> None:
+    """Add ``now`` to the ucbplan app."""
+    app.command("now")(now)
