@@ -1,10 +1,12 @@
 """Run an independent corpus of bad inputs through the real CLI and count what went wrong.
 
-Each case runs ``python -m ucbplan …`` in a subprocess (30 s limit) in a fresh folder that holds
-one pre-existing output file. A case fails the contract when the CLI prints a traceback, hangs,
-exits with a code other than 0/2/130, changes or leaves files on failure, or prints an error that
-is not one line of < 400 characters. The corpus is built here from mutations unlike the in-repo
-hypothesis strategies (byte-level damage, whole-file swaps, option permutations).
+Each case runs ``python -m ucbplan …`` in a subprocess (30 s limit, 120 s for population) in
+a fresh folder that holds one pre-existing output file. A case fails the contract when the CLI
+prints a traceback, hangs, exits with a code other than 0/2/130, changes or leaves files or
+folders on failure, or prints an error that is not one message of < 400 characters (a long
+message may wrap with a hanging indent on a terminal) as its last output. The corpus is built
+here from mutations unlike the in-repo hypothesis strategies (byte-level damage, whole-file
+swaps, option permutations).
 
     python benchmarks/bad_input_corpus.py [--n 200] [--seed 1] [--surface core|new|all]
 
@@ -311,7 +313,7 @@ def _run(case: tuple[str, list[str]]) -> str | None:
             [sys.executable, "-m", "ucbplan", *cmd],
             capture_output=True,
             text=True,
-            timeout=30,
+            timeout=120 if cmd[0] == "population" else 30,  # per-source work: minutes, not s
             cwd=folder,
             env=env,
         )
@@ -326,7 +328,7 @@ def _run(case: tuple[str, list[str]]) -> str | None:
         after = _snapshot(folder)
         if after != before:
             return f"files changed on failure: {cmd[:3]}: {sorted(set(after) ^ set(before))}"
-        lines = [ln for ln in err.splitlines() if ln.strip()]
+        lines = _messages(err)
         errors = [ln for ln in lines if ln.startswith("error:")]
         if len(errors) != 1 or lines[-1] != errors[0] or len(errors[0]) >= 400:
             return f"error not one short line: {cmd[:3]}: {err.strip()[-200:]}"
@@ -336,6 +338,18 @@ def _run(case: tuple[str, list[str]]) -> str | None:
         except ValueError as exc:
             return f"invalid JSON on stdout: {cmd[:3]}: {exc}"
     return None
+
+
+def _messages(err: str) -> list[str]:
+    """Stderr as messages: a line indented under the one before (the terminal's hanging indent
+    of a long message) continues it."""
+    out: list[str] = []
+    for line in err.splitlines():
+        if line.startswith(" ") and line.strip() and out:
+            out[-1] += " " + line.strip()
+        elif line.strip():
+            out.append(line)
+    return out
 
 
 def _no_constant(token: str) -> None:
