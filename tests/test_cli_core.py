@@ -298,8 +298,10 @@ def test_horizon_catalog_folder_and_files_agree(
     assert "(document 2)" in res.stderr and len(res.stderr.strip().splitlines()) == 1
 
 
-def test_horizon_many_targets_refuse_plot(tmp_path: Path, hm_cnc_path: Path) -> None:
-    res = _run("horizon", str(hm_cnc_path), str(hm_cnc_path), "--plot", str(tmp_path / "x.png"))
+def test_horizon_many_targets_refuse_plot(
+    tmp_path: Path, hm_cnc_path: Path, eccentric_path: Path
+) -> None:
+    res = _run("horizon", str(hm_cnc_path), str(eccentric_path), "--plot", str(tmp_path / "x.png"))
     assert res.returncode == 2
     assert "--plot takes one target" in res.stderr
     assert not (tmp_path / "x.png").exists()

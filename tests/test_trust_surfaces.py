@@ -75,9 +75,8 @@ def test_json_plain_spells_non_finite_as_null() -> None:
 def test_horizon_of_two_lisa_targets_is_valid_json(tmp_path: Path) -> None:
     res = runner.invoke(app, ["horizon", str(INJ), str(HM), "--format", "json"])
     assert res.exit_code == 0, res.output
-    doc = _strict_json(res.stdout)
-    text = json.dumps(doc)
-    assert "null" in text  # the LISA targets' "before" horizons are NaN in the table
+    doc = _strict_json(res.stdout)  # NaN "before" horizons once crashed the writer half-way
+    assert isinstance(doc, list) and {r["target"] for r in doc} >= {"HM Cnc (simulated)"}
     out = tmp_path / "h.json"
     res = runner.invoke(app, ["horizon", str(INJ), str(HM), "-o", str(out)])
     assert res.exit_code == 0, res.output
@@ -372,3 +371,14 @@ def test_nothing_planned_says_why_once(tmp_path: Path) -> None:
     lines = [ln for ln in err.splitlines() if ln.strip() and not ln.startswith("warning:")]
     assert len(lines) == 1 and lines[0].startswith("error: no block could be planned"), err
     assert lines[0].count("never at airmass") == 1
+
+
+def test_horizon_refuses_a_target_file_given_twice(tmp_path: Path) -> None:
+    line = refused("horizon", str(HM), str(INJ), str(HM), "--format", "json")
+    assert line.count(str(HM)) == 2 and "the same target file twice" in line
+    folder = tmp_path / "targets"
+    folder.mkdir()
+    (folder / "hm.yaml").write_bytes(HM.read_bytes())
+    line = refused("horizon", str(folder), str(folder / "hm.yaml"), "-o", str(tmp_path / "h.json"))
+    assert "the same target file twice" in line
+    assert not (tmp_path / "h.json").exists()

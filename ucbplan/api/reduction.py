@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Any
 from ucbplan.api._convert import as_float, scope
 from ucbplan.api.ephemeris import TargetLike, get_site, load_target
 from ucbplan.errors import InputError, ReduceWarning, emit, shorten
+from ucbplan.lisa import MIN_T_OBS_S  # shortest LISA observation [s] (t_obs, --t-obs)
 
 if TYPE_CHECKING:
     from astropy.table import Table
@@ -215,10 +216,6 @@ def simulate(
         result = lp.simulate(model, options)
     emit(list(result.warnings), ReduceWarning)
     return result
-
-
-#: Shortest LISA observation [s] (``t_obs``, ``--t-obs``).
-MIN_T_OBS_S = 86400.0
 
 
 def t_obs_seconds(t_obs: Any, default_s: float, parameter: str = "t_obs") -> float:

@@ -258,11 +258,12 @@ def horizon(
     """
     fmt = pick_format(output, fmt, TABLE_FORMATS)
     from ucbplan.inputs import check_alpha
-    from ucbplan.target import load_target_documents
+    from ucbplan.target import check_distinct_files, load_target_documents
 
     for a in alpha:
         check_alpha(a)
     paths = _expand_targets(target)
+    check_distinct_files(paths)  # one rule for a repeated target (as plan)
     if plot is not None:
         from ucbplan.plotting import check_figure_path
 

@@ -16,6 +16,7 @@ from rich.markup import escape
 from ucbplan.cli._console import check_output_path, err_console, write_output
 from ucbplan.errors import InputError, UcbplanError
 from ucbplan.io import output_format
+from ucbplan.lisa import MAX_N_BINS as MAX_BINS
 
 if TYPE_CHECKING:
     from ucbplan.lisa.outputs import SimulationFiles
@@ -23,10 +24,6 @@ if TYPE_CHECKING:
     from ucbplan.lisa.sampler import SamplerInterrupted
 
 __all__ = ["register"]
-
-
-#: Largest band width (memory: templates are walkers × 3 bands × 2 channels × N complex).
-MAX_BINS = 65536
 
 
 def _t_obs(text: str | None, default_s: float) -> float:

@@ -12,4 +12,10 @@ Modules: :mod:`~ucbplan.lisa.pipeline` (the library behind ``ucbplan simulate | 
 :mod:`~ucbplan.lisa.posterior` (start → midpoint, π-mode fold); figures :mod:`~ucbplan.lisa.plots`.
 """
 
-__all__: list[str] = []
+__all__ = ["MAX_N_BINS", "MIN_T_OBS_S"]
+
+#: Largest band width N of the model (memory: templates are walkers × 3 bands × 2 channels × N
+#: complex numbers); every command that takes ``--n-bins`` checks it.
+MAX_N_BINS = 65536
+#: Shortest accepted observation [s] (a day: the response needs a resolved orbit).
+MIN_T_OBS_S = 86400.0

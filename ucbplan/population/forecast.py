@@ -20,10 +20,12 @@ from typing import Any
 
 import numpy as np
 
-from ucbplan.core.constants import DAY_S, G_SI, MSUN_KG
+from ucbplan.core.constants import DAY_S, G_SI, MSUN_KG, YEAR_S
 from ucbplan.core.forecast import HORIZON_CAP_S, horizon_table
 from ucbplan.core.params import PhaseParams, shift_reference
 from ucbplan.errors import InputError, NumericalError, UcbplanError, shorten
+from ucbplan.inputs import check_number
+from ucbplan.lisa import MAX_N_BINS, MIN_T_OBS_S
 from ucbplan.population.catalog import Source
 from ucbplan.population.execute import worker_setup
 from ucbplan.target.model import Spectroscopy
@@ -388,12 +390,13 @@ def forecast_options(
     import astropy.units as u
     from astropy.time import Time
 
-    if not sigma_v_kms > 0:
-        raise InputError(f"--sigma-v: expected > 0 km/s, got {sigma_v_kms}")
-    if k_eff_kms is not None and not k_eff_kms > 0:
-        raise InputError(f"--k-eff: expected > 0 km/s, got {k_eff_kms}")
-    if n_bins < 16 or n_bins % 2:
-        raise InputError(f"--n-bins: expected an even number >= 16, got {n_bins}")
+    # the ranges of the single-target commands (horizon, simulate): one rule per option
+    check_number("--sigma-v", sigma_v_kms, 0.0, 1e4, "km/s")
+    check_number("--k-eff", k_eff_kms, 0.1, 1e4, "km/s", "a binary's velocity semi-amplitude")
+    if not (16 <= n_bins <= MAX_N_BINS and n_bins % 2 == 0):
+        raise InputError(
+            f"--n-bins: expected an even number of bins in [16, {MAX_N_BINS}], got {n_bins}"
+        )
     try:
         t0 = Time(t_start, scale="tdb").isot
     except ValueError:
@@ -406,8 +409,10 @@ def forecast_options(
             raise InputError(
                 f"--t-obs: expected a duration like '4yr' or '1.2e8 s', got {shorten(t_obs)}"
             ) from None
-        if not t_obs_s > 0:
-            raise InputError(f"--t-obs: must be positive, got {shorten(t_obs)}")
+        if not MIN_T_OBS_S <= t_obs_s <= 100 * YEAR_S:
+            raise InputError(
+                f"--t-obs: expected a duration from 1 day to 100 yr, got {shorten(t_obs)}"
+            )
     return ForecastOptions(
         sigma_v_kms=sigma_v_kms, k_eff_kms=k_eff_kms, t_obs_s=t_obs_s, t_start_tdb=t0, n_bins=n_bins
     )

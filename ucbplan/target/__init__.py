@@ -9,7 +9,13 @@ files), ``write`` (:func:`write_target`).
 """
 
 from ucbplan.target.model import Spectroscopy, Target, TimingSection
-from ucbplan.target.parse import load_target, load_target_documents, load_targets, target_from_dict
+from ucbplan.target.parse import (
+    check_distinct_files,
+    load_target,
+    load_target_documents,
+    load_targets,
+    target_from_dict,
+)
 from ucbplan.target.samples import load_samples, read_samples_file
 from ucbplan.target.write import target_to_dict, write_target
 
@@ -17,6 +23,7 @@ __all__ = [
     "Spectroscopy",
     "Target",
     "TimingSection",
+    "check_distinct_files",
     "load_samples",
     "load_target",
     "load_target_documents",

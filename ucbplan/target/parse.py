@@ -49,7 +49,13 @@ from ucbplan.target.values import (
     parse_epoch,
 )
 
-__all__ = ["load_target", "load_target_documents", "load_targets", "target_from_dict"]
+__all__ = [
+    "check_distinct_files",
+    "load_target",
+    "load_target_documents",
+    "load_targets",
+    "target_from_dict",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -100,6 +106,25 @@ def _file_key(path: Path) -> tuple[int, int] | str:
     return (st.st_dev, st.st_ino)
 
 
+def check_distinct_files(paths: Sequence[Path | str]) -> None:
+    """Refuse a target file given twice (also through another path to it): the first half of
+    the one rule for a repeated target (:func:`load_targets`).
+
+    Raises
+    ------
+    TargetFileError
+        One line naming both paths.
+    """
+    files: dict[tuple[int, int] | str, Path] = {}
+    for raw in paths:
+        path = Path(raw)
+        first = files.setdefault(_file_key(path), path)
+        if first is not path:
+            raise TargetFileError(
+                f"{first}, {path}: the same target file twice; give each target once"
+            )
+
+
 def load_targets(
     paths: Sequence[Path | str], ident: Callable[[str], str] = lambda name: name
 ) -> list[Target]:
@@ -119,16 +144,11 @@ def load_targets(
         As :func:`load_target`, or a file given twice, or two files naming the same target:
         one line naming both files.
     """
-    files: dict[tuple[int, int] | str, Path] = {}
+    check_distinct_files(paths)
     names: dict[str, tuple[Path, str]] = {}
     out = []
     for raw in paths:
         path = Path(raw)
-        first = files.setdefault(_file_key(path), path)
-        if first is not path:
-            raise TargetFileError(
-                f"{first}, {path}: the same target file twice; give each target once"
-            )
         target = load_target(path)
         key = ident(target.name)
         if key in names:
