@@ -23,6 +23,7 @@ from ucbplan.cli._console import (
     write_output,
 )
 from ucbplan.cli._epochs import epoch_option
+from ucbplan.cli._options import ExtinctionOpt, MaxVisitOpt, SigmaFloorOpt, SigmaLawOpt
 from ucbplan.cli._strategies import print_comparison
 from ucbplan.core.constants import DAY_S, MONTH_S, YEAR_S
 from ucbplan.errors import InputError, UcbplanError, shorten
@@ -33,26 +34,11 @@ _OptFloat = float | None
 TargetArg = Annotated[Path, typer.Argument(help="Target YAML file.")]
 M1Opt = Annotated[_OptFloat, typer.Option("--m1", help="Mass of star 1 (M_sun) (else file).")]
 M2Opt = Annotated[_OptFloat, typer.Option("--m2", help="Mass of star 2 (M_sun) (else file).")]
-SigmaVOpt = Annotated[
-    str | None,
-    typer.Option(
-        "--sigma-v",
-        help="Velocity precision per spectrum: km/s (else file, else 15), or of one spectrum "
-        "of T_ref seconds (30km/s@300s[,V=20.0]): then the strategies are compared.",
-    ),
-]
-SigmaFloorOpt = Annotated[
-    float, typer.Option("--sigma-floor", help="Systematic σ_v floor in quadrature (km/s).")
-]
-ExtinctionOpt = Annotated[
-    _OptFloat, typer.Option("--extinction", help="Extinction k of the σ_v law (mag/airmass).")
-]
 ReadoutOpt = Annotated[float, typer.Option("--readout", help="Readout per exposure (s).")]
 OverheadOpt = Annotated[float, typer.Option("--overhead", help="Acquisition per visit (s).")]
 VisitOpt = Annotated[
     str | None, typer.Option("--visit", help="Visit length (1h); default --max-visit.")
 ]
-MaxVisitOpt = Annotated[str, typer.Option("--max-visit", help="Longest visit (default 2h).")]
 GoalOpt = Annotated[
     str | None,
     typer.Option("--goal", help="Precision goal (sigma_K=2km/s, K1=1%, q=1%): hours to reach it."),
@@ -106,7 +92,7 @@ def feasibility_command(
     target: TargetArg,
     m1: M1Opt = None,
     m2: M2Opt = None,
-    sigma_v: SigmaVOpt = None,
+    sigma_v: SigmaLawOpt = None,
     n_spectra: NSpectraOpt = 1,
     baseline: BaselineOpt = "1 yr",
     m3: M3Opt = 1.0,
@@ -127,7 +113,7 @@ def feasibility_command(
     readout: ReadoutOpt = 0.0,
     overhead: OverheadOpt = 300.0,
     visit: VisitOpt = None,
-    max_visit: MaxVisitOpt = "2h",
+    max_visit: MaxVisitOpt = None,
     goal: GoalOpt = None,
     min_lambda_k: MinLambdaOpt = None,
     allow_smeared: SmearedOpt = False,

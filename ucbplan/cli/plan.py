@@ -19,6 +19,7 @@ from ucbplan.cli._console import (
     pick_format,
     write_output,
 )
+from ucbplan.cli._options import ExtinctionOpt, MaxVisitOpt, SigmaFloorOpt, SigmaLawOpt
 from ucbplan.cli._plan_view import report
 
 __all__ = ["register"]
@@ -71,29 +72,6 @@ _Readout = Annotated[
     ),
 ]
 _Alpha = Annotated[float, typer.Option("--alpha", help="Planning margin α of T_valid.")]
-_SigmaV = Annotated[
-    str | None,
-    typer.Option(
-        "--sigma-v",
-        help="RV precision: km/s fixed per exposure (30), or of one spectrum of T_ref seconds "
-        "(30km/s@600s; ,V=20.0 at that magnitude): then exposure time and cadence are chosen.",
-    ),
-]
-_SigmaFloor = Annotated[
-    float,
-    typer.Option("--sigma-floor", help="Systematic σ_v floor added in quadrature [km/s]."),
-]
-_Extinction = Annotated[
-    float | None,
-    typer.Option(
-        "--extinction",
-        help="Extinction k [mag/airmass] of the σ_v law (default: the instrument's, else 0).",
-    ),
-]
-_MaxVisit = Annotated[
-    str | None,
-    typer.Option("--max-visit", help="Longest visit a --goal plans (default 2h)."),
-]
 _KEff = Annotated[float | None, typer.Option("--k-eff", help="Semi-amplitude K_eff [km/s].")]
 _MaxSmear = Annotated[
     str | None,
@@ -251,16 +229,16 @@ def plan(
     n_exp: _NExp = 1,
     readout: _Readout = None,
     alpha: _Alpha = 1.0,
-    sigma_v: _SigmaV = None,
-    sigma_floor: _SigmaFloor = 0.0,
-    extinction: _Extinction = None,
+    sigma_v: SigmaLawOpt = None,
+    sigma_floor: SigmaFloorOpt = 0.0,
+    extinction: ExtinctionOpt = None,
     k_eff: _KEff = None,
     max_smear: _MaxSmear = None,
     max_bin_fraction: _MaxBinFraction = None,
     overhead: _Overhead = None,
     sessions: _Sessions = 1,
     visit: _Visit = None,
-    max_visit: _MaxVisit = None,
+    max_visit: MaxVisitOpt = None,
     cadence: _Cadence = "auto",
     instrument: _Instrument = None,
     instruments_file: _InstrumentsFile = None,
