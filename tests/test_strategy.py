@@ -331,3 +331,11 @@ def test_feasibility_compares_strategies_json(tmp_path) -> None:  # type: ignore
     ratio = rows["untargeted"]["hours"] / rows["targeted"]["hours"]
     assert doc["targeted_over_untargeted"] == pytest.approx(ratio)
     assert rows["phase-locked"]["hours"] is None  # Λ_K 0.80 below the floor
+
+
+def test_no_readout_warns_that_the_shortest_exposure_wins() -> None:
+    """Without a readout (and no read noise in the law) 1-s exposures carry the most
+    information; the plan says why in one line instead of planning them silently."""
+    run = _plan(visit="1h", sigma_v_kms="30km/s@300s")
+    notes = [w for w in run.result.warnings if "shortest exposure" in w]
+    assert len(notes) == 1 and len(notes[0]) <= 200 and "--readout" in notes[0]

@@ -376,12 +376,18 @@ def optimised_exposure(target: Target, settings: PlanSettings) -> TargetExposure
     spacing = target.period_s / len(settings.spec.u_values)
     if pick.name == "untargeted":
         spacing = pick.step_s
+    notes: tuple[str, ...] = ()
+    if pick.exptime_s <= shortest.exptime_s and plan.readout_s == 0:
+        notes = (
+            f"{target.name}: with no readout the shortest exposure ({pick.exptime_s:g} s) wins "
+            "(the σ_v law has no read noise); give --readout or an --instrument",
+        )
     return TargetExposure(
         plan,
         spacing,
         pick.step_s,
         _lambda_k(plan, target.params.n_bar),
-        (),
+        notes,
         True,
         pick.name,
         results,
