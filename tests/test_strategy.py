@@ -333,6 +333,7 @@ def test_feasibility_compares_strategies_json(tmp_path) -> None:  # type: ignore
     assert rows["phase-locked"]["hours"] is None  # Λ_K 0.80 below the floor
 
 
+@pytest.mark.slow  # plans ~3000 one-second exposures
 def test_no_readout_warns_that_the_shortest_exposure_wins() -> None:
     """Without a readout (and no read noise in the law) 1-s exposures carry the most
     information; the plan says why in one line instead of planning them silently."""
