@@ -163,10 +163,6 @@ def samples_covariance(t: Target) -> FloatArray:
     if "phase" in cols:
         k = names.index("phase")
         data[:, k] = np.angle(np.exp(1j * (data[:, k] - t.params.phase)))
-    if not np.all(np.isfinite(data)):
-        raise TargetFileError(
-            f"{t.samples.name}: posterior samples contain NaN or infinite values; remove those rows"
-        )
     idx = [PARAM_NAMES.index(name) for name in names]
     full = np.zeros((7, 7))
     full[np.ix_(idx, idx)] = np.atleast_2d(np.cov(data, rowvar=False))
