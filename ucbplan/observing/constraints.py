@@ -501,7 +501,8 @@ def _maybe_dark(night: NightConstraint, sky: SkyModel, xs: FloatArray, xe: Float
     are never evaluated further; issue 23)."""
     lo = float(np.min(xs))
     n = math.ceil((float(np.max(xe)) - lo) / DARK_STEP_S) + 2
-    day = night.screen(sky, 0, lo + DARK_STEP_S * np.arange(n), DARK_STEP_S) == -1
+    nodes = np.asarray(lo + DARK_STEP_S * np.arange(n), dtype=np.float64)
+    day = night.screen(sky, 0, nodes, DARK_STEP_S) == -1
     count = np.concatenate([[0], np.cumsum(~day)])
     j0 = np.floor((xs - lo) / DARK_STEP_S).astype(np.int64)
     j1 = np.minimum(np.ceil((xe - lo) / DARK_STEP_S).astype(np.int64), n - 1)
