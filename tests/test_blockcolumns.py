@@ -167,3 +167,38 @@ def test_time_order_is_the_stable_sort_of_the_records() -> None:
         got = BlockList(cols.take(cols.time_order()))
         ref = sorted(blocks, key=lambda b: (b.t_mid_utc.jd1, b.t_mid_utc.jd2))
     assert [b.block_id for b in got] == [b.block_id for b in ref]
+
+
+WORDS = ["HM", "Cnc", "(simulated)", "UCB03", "a.b", "x/y", "V01", "1.5", "2040-01-01", "true"]
+
+
+def _random_visits(rng: random.Random, n: int) -> list[dict[str, object]]:
+    """Visits as a plan's meta holds them, with names of random words (spaces, dates, numbers,
+    booleans) and lengths that put breaks anywhere near the 130th column."""
+    out = []
+    for k in range(n):
+        name = " ".join(rng.choice(WORDS) for _ in range(rng.randint(1, 12)))
+        out.append(
+            {
+                "visit_id": f"{name.replace(' ', '_')}-V{k:02d}",
+                "target": name,
+                "night": "2040-01-01",
+                "acq_start_utc": "2040-01-02T00:55:37",
+                "start_utc": "2040-01-02T01:02:37",
+                "end_utc": "2040-01-02T01:03:37",
+                "exposures": rng.choice([1, 20, 10**12]),
+                "shutter_s": rng.choice([60.0, 1e17, 1e-5, 123.456, -0.0]),
+                "overhead_s": round(rng.uniform(0, 1e5), 3),
+                "idle_s": _random_float(rng) if rng.random() < 0.2 else 0.0,
+            }
+        )
+    return out
+
+
+@pytest.mark.parametrize("seed", range(25))
+def test_ecsv_header_visits_as_libyaml_writes_them(seed: int) -> None:
+    rng = random.Random(seed)
+    table = _random_table(seed)
+    table.meta = {"site": {"name": "x"}, "visits": _random_visits(rng, 30), "after": [1, 2]}
+    assert _ours(table, "ecsv") == _astropy_ecsv(table)
+    assert table.meta["visits"] and "after" in table.meta  # the caller's meta is kept

@@ -14,6 +14,7 @@ the table ``meta`` and is preserved by ECSV.
 from __future__ import annotations
 
 import csv
+import functools
 import hashlib
 import io
 import itertools
@@ -49,7 +50,7 @@ from ucbplan.observing.blockcolumns import (
     time_array,
 )
 from ucbplan.observing.blocks import MAX_BLOCK_S, MAX_N_EXP, MAX_READOUT_S, Block
-from ucbplan.observing.tablewrite import ecsv_data_lines, json_rows_text
+from ucbplan.observing.tablewrite import ecsv_data_lines, json_rows_text, yaml_flow_items
 from ucbplan.observing.timeconv import quiet_erfa
 from ucbplan.target.values import one_line
 
@@ -800,15 +801,57 @@ def write_table(table: Table, handle: IO[str], fmt: str, *, json_meta: bool = Fa
 
 def _write_ecsv(table: Table, handle: IO[str]) -> None:
     """ECSV as astropy writes it: its header (made from the columns and meta alone, so written
-    for no rows), then the rows column by column (:func:`.tablewrite.ecsv_data_lines`); for
-    tables of other columns, astropy's whole writer."""
+    for no rows; a plan's ``visits`` list written by :func:`.tablewrite.yaml_flow_items` when
+    it can), then the rows column by column (:func:`.tablewrite.ecsv_data_lines`); for tables
+    of other columns, astropy's whole writer."""
     lines = ecsv_data_lines(table)
-    with _libyaml_header(_header_safe(table)):
+    safe = _header_safe(table)
+    with _libyaml_header(safe):
         if lines is None:
             table.write(handle, format="ascii.ecsv")
             return
-        table[:0].write(handle, format="ascii.ecsv")
+        handle.write(_ecsv_header(table, safe))
     handle.write("".join(line + os.linesep for line in lines))
+
+
+#: The ``visits`` entry of a plan's ECSV header while its items are written apart.
+_NO_VISITS = f"{os.linesep}# - visits: []{os.linesep}"
+
+
+def _ecsv_header(table: Table, libyaml: bool) -> str:
+    """The ECSV header of ``table`` (for no rows), as astropy writes it."""
+    visits = table.meta.get("visits") if libyaml else None
+    items = None
+    if isinstance(visits, list) and visits and all(isinstance(v, dict) for v in visits):
+        items = yaml_flow_items(visits, _yaml_tag)
+    buf = io.StringIO()
+    if items is None:
+        table[:0].write(buf, format="ascii.ecsv")
+        return buf.getvalue()
+    table.meta["visits"] = []  # written apart below (not copied with the table)
+    try:
+        empty = table[:0]
+    finally:
+        table.meta["visits"] = visits
+    empty.write(buf, format="ascii.ecsv")
+    text = buf.getvalue()
+    if text.count(_NO_VISITS) != 1:  # never: meta keys are unique
+        buf = io.StringIO()
+        table[:0].write(buf, format="ascii.ecsv")
+        return buf.getvalue()
+    listed = "".join(f"# {line}{os.linesep}" for line in items)
+    return text.replace(_NO_VISITS, f"{os.linesep}# - visits:{os.linesep}{listed}")
+
+
+@functools.lru_cache(maxsize=4096)
+def _yaml_tag(text: str) -> str:
+    """PyYAML's implicit tag of a plain scalar: ``str``, ``int``, ``float``, ``bool`` ..."""
+    return str(yaml.SafeDumper.resolve(_RESOLVER, yaml.ScalarNode, text, (True, False))).rsplit(
+        ":", 1
+    )[-1]
+
+
+_RESOLVER = yaml.resolver.Resolver()
 
 
 def _write_json(table: Table, handle: IO[str], json_meta: bool) -> None:

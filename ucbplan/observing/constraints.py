@@ -485,7 +485,8 @@ def evaluate_window(
         maybe = _maybe_dark(active[0], sky, xs, xe)
         if not maybe.all():  # the others certainly fail the night, the first constraint
             ok, first = np.zeros(xs.shape, dtype=bool), np.zeros(xs.shape, dtype=np.int64)
-            ok[maybe], first[maybe] = _evaluate_screened(active, sky, i, xs[maybe], xe[maybe])
+            if maybe.any():
+                ok[maybe], first[maybe] = _evaluate_screened(active, sky, i, xs[maybe], xe[maybe])
             return ok, first
     return _evaluate_screened(active, sky, i, xs, xe)
 

@@ -109,3 +109,82 @@ def json_rows_text(table: Table, level: int) -> str | None:
         for row in zip(*cells, strict=True)
     ]
     return f"[\n{pad}  " + f"\n{pad}  }},\n{pad}  ".join(rows) + f"\n{pad}  }}\n{pad}]"
+
+
+#: Characters of a text value the fast ECSV header path writes itself (others: PyYAML's path).
+_YAML_TEXT = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_.()/+- :")
+#: The column after which libyaml breaks a line (astropy writes ECSV headers at width 130).
+_YAML_WIDTH = 130
+#: Indentation of a flow mapping's continuation lines in the ``visits`` list: before a key,
+#: and inside a scalar (libyaml indents a scalar one step, 2, deeper).
+_YAML_INDENT, _YAML_SCALAR_INDENT = 4, 6
+
+
+def _yaml_scalar(value: Any, tags: Callable[[str], str]) -> tuple[str, bool] | None:
+    """(text, breakable at spaces) of one scalar of a flow mapping as libyaml emits PyYAML's
+    node for it, or None where this path does not know (the caller takes PyYAML's)."""
+    if isinstance(value, bool) or value is None:
+        return None
+    if isinstance(value, int):
+        text = str(value)
+        return (text, False) if tags(text) == "int" else None
+    if isinstance(value, float):
+        if not math.isfinite(value):
+            return None
+        text = repr(value).lower()
+        if "." not in text and "e" in text:
+            text = text.replace("e", ".0e", 1)
+        return (text, False) if tags(text) == "float" else None
+    if not isinstance(value, str) or not value or not _YAML_TEXT.issuperset(value):
+        return None
+    if not (value[0].isalnum() or value[0] in "_(") or value[-1] == " " or "  " in value:
+        return None
+    if tags(value) != "str":  # a date, a number, true/null ...: single-quoted, if unbroken
+        return None if " " in value else (f"'{value}'", False)
+    if ":" in value:  # a plain ':' is a flow indicator for libyaml
+        return None
+    return value, True
+
+
+def yaml_flow_items(items: list[dict[str, Any]], tags: Callable[[str], str]) -> list[str] | None:
+    """Lines of a block sequence (indent 2) of flow mappings with sorted keys, as astropy's ECSV
+    header writer emits them through libyaml (:mod:`ucbplan.observing.blocktable`); None if
+    any key or value is of a kind this path does not write (the caller then takes PyYAML's).
+    ``tags(text)``: PyYAML's implicit tag of a plain scalar (``str``, ``int``, ``float``, ...).
+
+    libyaml breaks a flow mapping before a key once the column passes the width, and a plain
+    value at a space once the column passes it; the tests compare with libyaml's own output."""
+    lines: list[str] = []
+    for item in items:
+        line, col = "  - {", 5
+        for k, key in enumerate(sorted(item)):
+            if not isinstance(key, str) or _yaml_scalar(key, tags) != (key, True) or " " in key:
+                return None
+            got = _yaml_scalar(item[key], tags)
+            if got is None:
+                return None
+            text, breakable = got
+            if k:
+                line += ","
+                col += 1
+                if col > _YAML_WIDTH:
+                    lines.append(line)
+                    line, col = " " * _YAML_INDENT, _YAML_INDENT
+                else:
+                    line += " "
+                    col += 1
+            line += f"{key}: "
+            col += len(key) + 2
+            words = text.split(" ") if breakable else [text]
+            for w, word in enumerate(words):
+                if w:
+                    if col > _YAML_WIDTH:
+                        lines.append(line)
+                        line, col = " " * _YAML_SCALAR_INDENT, _YAML_SCALAR_INDENT
+                    else:
+                        line += " "
+                        col += 1
+                line += word
+                col += len(word)
+        lines.append(line + "}")
+    return lines
