@@ -132,9 +132,11 @@ class BlockColumns:
         for name, scale in TIME_FIELDS.items():
             jd1 = np.concatenate([p.times[name].jd1 for p in parts])
             jd2 = np.concatenate([p.times[name].jd2 for p in parts])
-            joined = Time(jd1, jd2, format="jd", scale=scale)
-            if not (np.array_equal(joined.jd1, jd1) and np.array_equal(joined.jd2, jd2)):
-                joined = Time([p.times[name] for p in parts])  # keeps every stored split
+            where = parts[0].times[name].location  # the site's, shared by a plan's times
+            same = all(p.times[name].location is where for p in parts)
+            joined = Time(jd1, jd2, format="jd", scale=scale, location=where if same else None)
+            if not (same and np.array_equal(joined.jd1, jd1) and np.array_equal(joined.jd2, jd2)):
+                joined = Time([p.times[name] for p in parts])  # keeps every split and location
             times[name] = joined
         return cls(values, times, np.concatenate([p.has_alt for p in parts]))
 
