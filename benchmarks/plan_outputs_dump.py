@@ -65,7 +65,7 @@ def dump(out: Path, name: str, paths: list[str], opts: list[str], fmt: str) -> N
     (out / f"{name}.{fmt}.log").write_text(log, encoding="utf-8")
     if dest.exists():
         text = dest.read_text(encoding="utf-8")
-        text = re.sub(r"created_utc[\"']?: [\"']?[0-9T:+-]+", "created_utc: X", text)
+        text = re.sub(r"(created_utc[\"']?: [\"']?)[0-9T:+-]+", r"\g<1>X", text)
         dest.write_text(text, encoding="utf-8")
 
 
