@@ -149,13 +149,16 @@ def report(run: Any, wide: bool = False, verbose: bool = False) -> None:
         err_console.print(
             f"[yellow]not placed:[/] {escape(name)} ({span}): {escape(reason)}", soft_wrap=True
         )
+    from ucbplan.observing.blockcolumns import block_columns
+
     blocks = run.result.blocks
-    nights: dict[str, list[Any]] = {}
-    for b in blocks:
-        nights.setdefault(b.night, []).append(b)
-    if not verbose and (len(nights) > SUMMARY_NIGHTS or len(blocks) > SUMMARY_ROWS):
+    labels = block_columns(blocks).values["night"]
+    if not verbose and (len(set(labels.tolist())) > SUMMARY_NIGHTS or len(blocks) > SUMMARY_ROWS):
         _print_summary(run)
     else:
+        nights: dict[str, list[Any]] = {}
+        for b in blocks:
+            nights.setdefault(b.night, []).append(b)
         show = _print_night if wide else _print_compact
         for label, night_blocks in nights.items():
             show(night_blocks, label, run.site)
@@ -226,11 +229,16 @@ def _print_accounting(run: Any, verbose: bool = False) -> None:
     err_console.print(table)
     _print_strategies(run)
     _print_reasons(run)
+    from ucbplan.observing.blockcolumns import block_columns
+
+    cols = block_columns(run.result.blocks) if run.result.goals else None
     for name, goal in run.result.goals.items():
         at: dict[float, int] = {}
-        for b in run.result.blocks:
-            if b.target == name:
-                at[round(b.u_star_rad, 4)] = at.get(round(b.u_star_rad, 4), 0) + b.n_exp
+        assert cols is not None
+        targets, u_stars, n_exps = cols.lists("target", "u_star_rad", "n_exp")
+        for target, u_star, n_exp in zip(targets, u_stars, n_exps, strict=True):
+            if target == name:
+                at[round(u_star, 4)] = at.get(round(u_star, 4), 0) + n_exp
         split = ", ".join(f"{k} at u★ = {u:.4f}" for u, k in sorted(at.items()))
         if len(at) > 4:
             split = "untargeted phases"

@@ -14,11 +14,13 @@ the table ``meta`` and is preserved by ECSV.
 from __future__ import annotations
 
 import csv
+import functools
 import hashlib
 import io
 import itertools
 import json
 import math
+import os
 import threading
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
@@ -39,8 +41,16 @@ from astropy.time import Time
 
 from ucbplan.errors import InputError, InputFileError, shorten
 from ucbplan.inputs import MAX_ALIASES, read_text
-from ucbplan.io import dump_json
+from ucbplan.io import dump_json, dumps_json
+from ucbplan.observing.blockcolumns import (
+    BlockColumns,
+    block_columns,
+    isot,
+    jd_parts,
+    time_array,
+)
 from ucbplan.observing.blocks import MAX_BLOCK_S, MAX_N_EXP, MAX_READOUT_S, Block
+from ucbplan.observing.tablewrite import ecsv_data_lines, json_rows_text, yaml_flow_items
 from ucbplan.observing.timeconv import quiet_erfa
 from ucbplan.target.values import one_line
 
@@ -425,41 +435,30 @@ EXTRA_COLUMNS: tuple[str, ...] = tuple(c.name for c in COLUMNS if not c.required
 TABLE_FORMATS = ("ecsv", "csv", "json")
 
 
-def jd_parts(times: Sequence[Time], scale: str | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Two-part Julian dates of scalar Times as stored, in ``scale`` (None: each in its own).
-
-    Read from astropy's format object (``Time._time``) when there is one: ``Time.jd1`` costs
-    ~10 µs a call in shape handling, ~2 s for the times of a semester's blocks table."""
-    scaled = [t if scale is None or t.scale == scale else getattr(t, scale) for t in times]
-    stored = [getattr(t, "_time", t) for t in scaled]
-    return (
-        np.array([t.jd1 for t in stored], dtype=float),
-        np.array([t.jd2 for t in stored], dtype=float),
-    )
-
-
-def time_array(times: Sequence[Time], scale: str) -> Time:
-    """Scalar Times as one array Time in ``scale`` with exactly their two-part Julian dates.
-
-    Arithmetic and formatting of the array then give, element by element, what the scalars
-    give, at the cost of one attribute read per time instead of one astropy operation."""
-    jd1, jd2 = jd_parts(times, scale)
-    out = Time(jd1, jd2, format="jd", scale=scale)
-    if np.array_equal(out.jd1, jd1) and np.array_equal(out.jd2, jd2):
-        return out
-    # Time() re-split some date: concatenate the scalars as they are (slower, same values)
-    return Time([t if t.scale == scale else getattr(t, scale) for t in times])
-
-
 def _iso(times: Sequence[Time | None], precision: int, scale: str) -> np.ndarray:
     """ISO strings of scalar Times (empty string for None) in ``scale``."""
     out = np.full(len(times), "", dtype=object)
     idx = [i for i, t in enumerate(times) if t is not None]
     if idx:
-        jd1, jd2 = jd_parts([times[i] for i in idx], scale)
-        t = Time(jd1, jd2, format="jd", scale=scale, precision=precision)
-        out[idx] = t.isot
+        out[idx] = _iso_of(time_array([times[i] for i in idx], scale), precision)
     return out.astype(str) if len(out) else np.array([], dtype="U1")
+
+
+def _iso_of(times: Time, precision: int) -> np.ndarray:
+    """ISO strings of an array Time, from its Julian dates as stored."""
+    return np.array(isot(times, precision), dtype=str)
+
+
+def _iso_column(times: Time, has: np.ndarray | None, precision: int) -> np.ndarray:
+    """ISO strings of an array Time; empty where ``has`` is False."""
+    if not len(times):
+        return np.array([], dtype="U1")
+    if has is None or bool(np.all(has)):
+        return _iso_of(times, precision).astype(str)
+    out = np.full(len(times), "", dtype=object)
+    if np.any(has):
+        out[has] = _iso_of(times[has], precision)
+    return out.astype(str)
 
 
 def local_datetimes(times: Sequence[Time], zones: Sequence[str]) -> list[datetime]:
@@ -470,12 +469,16 @@ def local_datetimes(times: Sequence[Time], zones: Sequence[str]) -> list[datetim
     time inside a leap second takes astropy's own path (which refuses it)."""
     if not len(times):
         return []
-    utc = time_array(times, "utc")
+    return _local_of(time_array(times, "utc"), zones)
+
+
+def _local_of(utc: Time, zones: Sequence[str]) -> list[datetime]:
+    """:func:`local_datetimes` of an array UTC Time (the Julian dates as stored)."""
     year, month, day, hmsf = erfa.d2dtf(b"UTC", 6, utc.jd1, utc.jd2)
     if np.any(hmsf["s"] >= 60):  # datetime has no leap second: astropy raises, as it always did
         return [
             t.utc.to_datetime(timezone=UTC).astimezone(ZoneInfo(z))
-            for t, z in zip(times, zones, strict=True)
+            for t, z in zip(utc, zones, strict=True)
         ]
     tz = {z: ZoneInfo(z) for z in dict.fromkeys(zones)}
     fields = zip(
@@ -495,10 +498,13 @@ def local_datetimes(times: Sequence[Time], zones: Sequence[str]) -> list[datetim
     ]
 
 
-def _local_iso(times: Sequence[Time], zones: Sequence[str]) -> np.ndarray:
-    """Local civil time strings with UTC offset, second precision."""
-    out = [dt.isoformat(timespec="seconds") for dt in local_datetimes(times, zones)]
-    return np.array(out, dtype=str) if out else np.array([], dtype="U1")
+def _local_iso(times: Time | Sequence[Time], zones: Sequence[str]) -> np.ndarray:
+    """Local civil time strings with UTC offset, second precision (of an array UTC Time or
+    of scalar Times)."""
+    if not len(times):
+        return np.array([], dtype="U1")
+    utc = times if isinstance(times, Time) else time_array(times, "utc")
+    return np.array([dt.isoformat(timespec="seconds") for dt in _local_of(utc, zones)], dtype=str)
 
 
 def _per_distinct(values: np.ndarray, fmt: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
@@ -531,34 +537,33 @@ def _dec_dms(dec_deg: np.ndarray) -> np.ndarray:
     return _per_distinct(dec_deg, _dms)
 
 
-def _attribute(column: Column, blocks: list[Block]) -> list[Any]:
-    return [getattr(b, column.attribute) for b in blocks]
+def _plain_values(column: Column, cols: BlockColumns) -> np.ndarray:
+    values = cols.values[column.attribute]
+    if column.dtype == "str":
+        return values.astype(str) if len(values) else np.array([], dtype="U1")
+    return np.asarray(values, dtype=column.dtype)
 
 
-def _plain_values(column: Column, blocks: list[Block]) -> np.ndarray:
-    if column.dtype == "str" and not blocks:
-        return np.array([], dtype="U1")
-    return np.array(
-        _attribute(column, blocks), dtype=str if column.dtype == "str" else column.dtype
-    )
-
-
-def _width_s(column: Column, blocks: list[Block]) -> np.ndarray:
-    if not blocks:
+def _width_s(column: Column, cols: BlockColumns) -> np.ndarray:
+    if not len(cols):
         return np.round(np.array([], dtype=float), 6)
-    start = time_array([b.t_start_utc for b in blocks], "utc")
-    end = time_array([b.t_end_utc for b in blocks], "utc")
+    start, end = cols.times["t_start_utc"], cols.times["t_end_utc"]
     return np.round(np.asarray((end - start).to_value("s"), dtype=float), 6)
 
 
-#: How each kind of column is made from the blocks (see :attr:`Column.kind`).
-_MAKERS: dict[str, Callable[[Column, list[Block]], np.ndarray]] = {
+def _time_column(column: Column, cols: BlockColumns, precision: int) -> np.ndarray:
+    has = cols.has_alt if column.attribute == "t_alt_utc" else None
+    return _iso_column(cols.times[column.attribute], has, precision)
+
+
+#: How each kind of column is made from the blocks' columns (see :attr:`Column.kind`).
+_MAKERS: dict[str, Callable[[Column, BlockColumns], np.ndarray]] = {
     "value": _plain_values,
-    "utc": lambda c, b: _iso(_attribute(c, b), 3, "utc"),
-    "tdb": lambda c, b: _iso(_attribute(c, b), 6, "tdb"),
-    "local": lambda c, b: _local_iso(_attribute(c, b), [x.timezone for x in b]),
-    "hms": lambda c, b: _ra_hms(np.array([x.ra_deg for x in b], dtype=float)),
-    "dms": lambda c, b: _dec_dms(np.array([x.dec_deg for x in b], dtype=float)),
+    "utc": lambda c, b: _time_column(c, b, 3),
+    "tdb": lambda c, b: _time_column(c, b, 6),
+    "local": lambda c, b: _local_iso(b.times[c.attribute], b.values["timezone"].tolist()),
+    "hms": lambda c, b: _ra_hms(np.asarray(b.values["ra_deg"], dtype=float)),
+    "dms": lambda c, b: _dec_dms(np.asarray(b.values["dec_deg"], dtype=float)),
     "width": _width_s,
 }
 
@@ -631,11 +636,11 @@ def blocks_to_table(blocks: Sequence[Block], meta: Mapping[str, Any]) -> Table:
         One row per block; ISO time strings, SI-ish floats with units.
     """
     with quiet_erfa():
-        return _blocks_to_table(list(blocks), meta)
+        return _blocks_to_table(block_columns(blocks), meta)
 
 
-def _blocks_to_table(blocks: list[Block], meta: Mapping[str, Any]) -> Table:
-    table = Table({c.name: _MAKERS[c.kind](c, blocks) for c in COLUMNS}, meta=dict(meta))
+def _blocks_to_table(cols: BlockColumns, meta: Mapping[str, Any]) -> Table:
+    table = Table({c.name: _MAKERS[c.kind](c, cols) for c in COLUMNS}, meta=dict(meta))
     for c in COLUMNS:
         if c.unit is not None:
             table[c.name].unit = c.unit
@@ -720,6 +725,32 @@ def _header_safe(table: Table) -> bool:
 _LIBYAML_LOCK = threading.Lock()
 
 
+def _represent_data(dumper: Any, data: Any) -> Any:
+    """``represent_data`` of the libyaml dumper: a ``str`` becomes the node PyYAML's
+    ``represent_str`` makes (no alias, default style) without the generic dispatch; the
+    header of a long plan holds tens of thousands of strings."""
+    if type(data) is str and dumper.yaml_representers.get(str) is _REPRESENT_STR:
+        dumper.alias_key = None
+        return yaml.ScalarNode("tag:yaml.org,2002:str", data, style=dumper.default_style)
+    return yaml.representer.BaseRepresenter.represent_data(dumper, data)
+
+
+def _resolve(dumper: Any, kind: Any, value: Any, implicit: Any) -> Any:
+    """``resolve`` of the libyaml dumper, remembered per scalar text (the tag of a plain
+    scalar depends on its text alone; a header repeats the same texts)."""
+    if kind is not yaml.ScalarNode:
+        return yaml.resolver.BaseResolver.resolve(dumper, kind, value, implicit)
+    cache = dumper.__dict__.setdefault("_ucbplan_resolved", {})
+    key = (value, implicit)
+    if key not in cache:
+        cache[key] = yaml.resolver.BaseResolver.resolve(dumper, kind, value, implicit)
+    return cache[key]
+
+
+#: PyYAML's representer of ``str`` (the one :func:`_represent_data` stands in for).
+_REPRESENT_STR = yaml.representer.SafeRepresenter.represent_str
+
+
 @contextmanager
 def _libyaml_header(enabled: bool) -> Iterator[None]:
     """While active, astropy emits ECSV headers with libyaml (C) instead of PyYAML's emitter.
@@ -736,7 +767,12 @@ def _libyaml_header(enabled: bool) -> Iterator[None]:
     from yaml.cyaml import CSafeDumper
 
     base = astropy_yaml.AstropyDumper
-    fast = type("LibyamlAstropyDumper", (CEmitter, base), {"__init__": CSafeDumper.__init__})
+    methods = {
+        "__init__": CSafeDumper.__init__,
+        "represent_data": _represent_data,
+        "resolve": _resolve,
+    }
+    fast = type("LibyamlAstropyDumper", (CEmitter, base), methods)
     with _LIBYAML_LOCK:
         astropy_yaml.AstropyDumper = fast
         try:
@@ -752,18 +788,89 @@ def write_table(table: Table, handle: IO[str], fmt: str, *, json_meta: bool = Fa
     every command's JSON (``plan --format json``: the meta holds ``visits`` and
     ``time_accounting``). :func:`read_blocks` reads both."""
     if fmt == "ecsv":
-        with _libyaml_header(_header_safe(table)):
-            table.write(handle, format="ascii.ecsv")
+        _write_ecsv(table, handle)
     elif fmt == "csv":
         plain = table.copy(copy_data=False)
         plain.meta = {}
         plain.write(handle, format="ascii.csv")
     elif fmt == "json":
-        rows = table_to_json_rows(table)
-        doc: Any = {"meta": _plain_meta(dict(table.meta)), "rows": rows} if json_meta else rows
-        dump_json(doc, handle)
+        _write_json(table, handle, json_meta)
     else:
         raise InputFileError(f"unknown table format {fmt!r}; expected one of {TABLE_FORMATS}")
+
+
+def _write_ecsv(table: Table, handle: IO[str]) -> None:
+    """ECSV as astropy writes it: its header (made from the columns and meta alone, so written
+    for no rows; a plan's ``visits`` list written by :func:`.tablewrite.yaml_flow_items` when
+    it can), then the rows column by column (:func:`.tablewrite.ecsv_data_lines`); for tables
+    of other columns, astropy's whole writer."""
+    lines = ecsv_data_lines(table)
+    safe = _header_safe(table)
+    with _libyaml_header(safe):
+        if lines is None:
+            table.write(handle, format="ascii.ecsv")
+            return
+        handle.write(_ecsv_header(table, safe))
+    handle.write("".join(line + os.linesep for line in lines))
+
+
+#: The ``visits`` entry of a plan's ECSV header while its items are written apart.
+_NO_VISITS = f"{os.linesep}# - visits: []{os.linesep}"
+
+
+def _ecsv_header(table: Table, libyaml: bool) -> str:
+    """The ECSV header of ``table`` (for no rows), as astropy writes it."""
+    visits = table.meta.get("visits") if libyaml else None
+    items = None
+    if isinstance(visits, list) and visits and all(isinstance(v, dict) for v in visits):
+        items = yaml_flow_items(visits, _yaml_tag)
+    buf = io.StringIO()
+    if items is None:
+        table[:0].write(buf, format="ascii.ecsv")
+        return buf.getvalue()
+    table.meta["visits"] = []  # written apart below (not copied with the table)
+    try:
+        empty = table[:0]
+    finally:
+        table.meta["visits"] = visits
+    empty.write(buf, format="ascii.ecsv")
+    text = buf.getvalue()
+    if text.count(_NO_VISITS) != 1:  # never: meta keys are unique
+        buf = io.StringIO()
+        table[:0].write(buf, format="ascii.ecsv")
+        return buf.getvalue()
+    listed = "".join(f"# {line}{os.linesep}" for line in items)
+    return text.replace(_NO_VISITS, f"{os.linesep}# - visits:{os.linesep}{listed}")
+
+
+@functools.lru_cache(maxsize=4096)
+def _yaml_tag(text: str) -> str:
+    """PyYAML's implicit tag of a plain scalar: ``str``, ``int``, ``float``, ``bool`` ..."""
+    return str(yaml.SafeDumper.resolve(_RESOLVER, yaml.ScalarNode, text, (True, False))).rsplit(
+        ":", 1
+    )[-1]
+
+
+_RESOLVER = yaml.resolver.Resolver()
+
+
+def _write_json(table: Table, handle: IO[str], json_meta: bool) -> None:
+    """The rows (with ``json_meta``: ``{"meta": ..., "rows": [...]}``) as :func:`dump_json`
+    writes them, encoded column by column when the columns allow
+    (:func:`.tablewrite.json_rows_text`)."""
+    rows = json_rows_text(table, 1 if json_meta else 0)
+    meta = {"meta": _plain_meta(dict(table.meta))} if json_meta else None
+    if rows is None:
+        listed = table_to_json_rows(table)
+        dump_json(listed if meta is None else {**meta, "rows": listed}, handle)
+        return
+    if meta is None:
+        handle.write(rows + "\n")
+        return
+    head, tail = dumps_json({**meta, "rows": []}), '"rows": []\n}'
+    if not head.endswith(tail):  # never: the rows are the document's last value
+        raise AssertionError(f"unexpected JSON layout: {head[-40:]!r}")
+    handle.write(head[: -len("[]\n}")] + rows + "\n}\n")
 
 
 def _bad_cell(where: str, row: int, column: str, expected: str, value: Any) -> InputFileError:

@@ -481,6 +481,39 @@ def evaluate_window(
     xe = np.asarray(x_end, dtype=np.float64)
     if not active or xs.size == 0:
         return np.ones(xs.shape, dtype=bool), np.full(xs.shape, -1, dtype=np.int64)
+    if isinstance(active[0], NightConstraint) and xs.ndim == 1:
+        maybe = _maybe_dark(active[0], sky, xs, xe)
+        if not maybe.all():  # the others certainly fail the night, the first constraint
+            ok, first = np.zeros(xs.shape, dtype=bool), np.zeros(xs.shape, dtype=np.int64)
+            if maybe.any():
+                ok[maybe], first[maybe] = _evaluate_screened(active, sky, i, xs[maybe], xe[maybe])
+            return ok, first
+    return _evaluate_screened(active, sky, i, xs, xe)
+
+
+#: Node spacing of the Sun's altitude in :func:`_maybe_dark` [s].
+DARK_STEP_S = 600.0
+
+
+def _maybe_dark(night: NightConstraint, sky: SkyModel, xs: FloatArray, xe: FloatArray) -> BoolArray:
+    """Blocks [xs, xe] that may touch the night: not every node from the one at or before
+    ``xs`` to the one at or after ``xe`` is certainly in daylight (its screen over ±one node
+    spacing), so a block outside it fails the night at every instant (anchor epochs in the day
+    are never evaluated further; issue 23)."""
+    lo = float(np.min(xs))
+    n = math.ceil((float(np.max(xe)) - lo) / DARK_STEP_S) + 2
+    nodes = np.asarray(lo + DARK_STEP_S * np.arange(n), dtype=np.float64)
+    day = night.screen(sky, 0, nodes, DARK_STEP_S) == -1
+    count = np.concatenate([[0], np.cumsum(~day)])
+    j0 = np.floor((xs - lo) / DARK_STEP_S).astype(np.int64)
+    j1 = np.minimum(np.ceil((xe - lo) / DARK_STEP_S).astype(np.int64), n - 1)
+    return np.asarray(count[j1 + 1] - count[j0] > 0)
+
+
+def _evaluate_screened(
+    active: list[Constraint], sky: SkyModel, i: int, xs: FloatArray, xe: FloatArray
+) -> tuple[BoolArray, NDArray[np.int64]]:
+    """:func:`evaluate_window` without the daylight shortcut."""
     frac = _sample_fractions(xs, xe)
     lo, hi = float(np.min(xs)), float(np.max(xe))
     n_nodes = math.ceil((hi - lo) / SCREEN_STEP_S) + 1

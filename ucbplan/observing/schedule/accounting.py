@@ -17,13 +17,13 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
-from astropy.time import Time, TimeDelta
+from astropy.time import TimeDelta
 
+from ucbplan.observing.blockcolumns import BlockColumns, block_columns, isot
 from ucbplan.observing.blocks import Block
-from ucbplan.observing.blocktable import jd_parts, time_array
 from ucbplan.observing.timeconv import quiet_erfa
 
 __all__ = ["ACCOUNT_KEYS", "VisitSummary", "time_accounting", "visit_summaries"]
@@ -68,14 +68,15 @@ class VisitSummary:
         }
 
 
-def _groups(blocks: Sequence[Block]) -> dict[tuple[str, str], list[int]]:
+def _groups(cols: BlockColumns) -> dict[tuple[str, str], list[int]]:
     """Block indices per visit (``(target, visit_id)``; a block without one is its own visit),
     each in time order of the block starts (the Julian dates of the times as stored)."""
     groups: dict[tuple[str, str], list[int]] = {}
-    for k, b in enumerate(blocks):
-        groups.setdefault((b.target, b.visit_id or f"#{k}"), []).append(k)
-    jd1, jd2 = jd_parts([b.t_start_utc for b in blocks])
-    keys = list(zip(jd1.tolist(), jd2.tolist(), strict=True))
+    targets, visits = cols.lists("target", "visit_id")
+    for k, (target, visit) in enumerate(zip(targets, visits, strict=True)):
+        groups.setdefault((target, visit or f"#{k}"), []).append(k)
+    start = cols.times["t_start_utc"]
+    keys = list(zip(start.jd1.tolist(), start.jd2.tolist(), strict=True))
     return {g: sorted(ks, key=keys.__getitem__) for g, ks in groups.items()}
 
 
@@ -89,53 +90,63 @@ def visit_summaries(
     visit); sums over a visit's blocks run in time order, as they always did."""
     if not blocks:
         return []
-    groups = _groups(blocks)
+    cols = block_columns(blocks)
+    groups = _groups(cols)
     with quiet_erfa():
-        starts = time_array([b.t_start_utc for b in blocks], "utc")
-        ends = time_array([b.t_end_utc for b in blocks], "utc")
+        starts, ends = cols.times["t_start_utc"], cols.times["t_end_utc"]
         end_jd = ends.jd
         first = [ks[0] for ks in groups.values()]
         # the latest end (the first of equal ones, in time order of the starts)
         last = [max(ks, key=end_jd.__getitem__) for ks in groups.values()]
         start, end = starts[first], ends[last]
-        spans = np.atleast_1d((end - start).to_value("s"))
+        spans = np.atleast_1d((end - start).to_value("s")).tolist()
         acq = start - TimeDelta(acquisition_s, format="sec")
-        iso = [np.atleast_1d(Time(t, precision=0).utc.isot) for t in (acq, start, end)]
+        iso = [isot(t.utc, 0) for t in (acq, start, end)]
+    cells = _VisitCells(*cols.lists("target", "night", "n_exp", "exptime_s", "readout_s"))
     out = [
-        _summary(
-            [blocks[k] for k in ks], vid, float(span), (a, s, e), acquisition_s, trailing_readout
-        )
+        _summary(cells, ks, vid, span, (a, s, e), acquisition_s, trailing_readout)
         for ((_, vid), ks), span, a, s, e in zip(groups.items(), spans, *iso, strict=True)
     ]
     out.sort(key=lambda v: v.acq_start_utc)
     return out
 
 
+class _VisitCells(NamedTuple):
+    """The block columns a visit summary reads, as lists of plain values."""
+
+    target: list[str]
+    night: list[str]
+    n_exp: list[int]
+    exptime_s: list[float]
+    readout_s: list[float]
+
+
 def _summary(
-    bs: list[Block],
+    c: _VisitCells,
+    ks: list[int],
     vid: str,
     span_s: float,
     iso: tuple[str, str, str],
     acquisition_s: float,
     trailing_readout: bool,
 ) -> VisitSummary:
-    """One visit from its blocks (in time order), first start to latest end [s] and the ISO
-    times of its acquisition start, first start and latest end."""
+    """One visit from its blocks ``ks`` (in time order), first start to latest end [s] and the
+    ISO times of its acquisition start, first start and latest end."""
     drop = 0 if trailing_readout else 1
-    readout = float(sum((b.n_exp - drop) * b.readout_s for b in bs))
-    last_readout = bs[-1].readout_s if trailing_readout else 0.0
+    readout = float(sum((c.n_exp[k] - drop) * c.readout_s[k] for k in ks))
+    last_readout = c.readout_s[ks[-1]] if trailing_readout else 0.0
     span = span_s + last_readout
-    shutter = float(sum(b.n_exp * b.exptime_s for b in bs))
+    shutter = float(sum(c.n_exp[k] * c.exptime_s[k] for k in ks))
     overhead = acquisition_s + readout
     wall = acquisition_s + span
     return VisitSummary(
         visit_id=vid if not vid.startswith("#") else "",
-        target=bs[0].target,
-        night=bs[0].night,
+        target=c.target[ks[0]],
+        night=c.night[ks[0]],
         acq_start_utc=str(iso[0]),
         start_utc=str(iso[1]),
         end_utc=str(iso[2]),
-        exposures=sum(b.n_exp for b in bs),
+        exposures=sum(c.n_exp[k] for k in ks),
         shutter_s=shutter,
         overhead_s=overhead,
         idle_s=max(0.0, wall - shutter - overhead),

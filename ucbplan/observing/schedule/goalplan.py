@@ -20,8 +20,10 @@ from collections.abc import Sequence
 from dataclasses import replace
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ucbplan.errors import InputError
+from ucbplan.observing.blockcolumns import BlockColumns, block_columns
 from ucbplan.observing.blocks import Block
 from ucbplan.observing.goals import (
     Goal,
@@ -154,10 +156,18 @@ def balanced_runs(runs: Sequence[TargetRun], plans: dict[int, GoalPlan]) -> list
 def info_of_blocks(blocks: Sequence[Block], pattern_u: Sequence[float]) -> float:
     """Information on K of planned blocks, Σ (Λ_K cos u)²/σ_v² (γ's, Σ 1/σ_v², for anchors at
     cos u = 0) [(km/s)⁻²]."""
-    lam = np.array([b.lambda_k for b in blocks], dtype=np.float64)
-    u = np.array([b.u_star_rad for b in blocks], dtype=np.float64)
-    sig = np.array([b.sigma_v_kms for b in blocks], dtype=np.float64)
-    untargeted = any(b.anchor == "untargeted" for b in blocks)
+    return info_of_columns(block_columns(blocks), pattern_u)
+
+
+def info_of_columns(
+    cols: BlockColumns, pattern_u: Sequence[float], rows: NDArray[np.bool_] | None = None
+) -> float:
+    """:func:`info_of_blocks` of the blocks' columns (``rows``: of those rows only)."""
+    pick = slice(None) if rows is None else rows
+    lam = np.asarray(cols.values["lambda_k"][pick], dtype=np.float64)
+    u = np.asarray(cols.values["u_star_rad"][pick], dtype=np.float64)
+    sig = np.asarray(cols.values["sigma_v_kms"][pick], dtype=np.float64)
+    untargeted = bool(np.any(cols.values["anchor"][pick] == "untargeted"))
     if not constrains_k(pattern_u) and not untargeted:
         return float(np.nansum(1.0 / sig**2))
     return information(lam, u, sig)
@@ -176,14 +186,15 @@ def check_goals(
     InputError
         The exposures that fit in the nights given collect less information than the goal needs.
     """
+    cols = block_columns(blocks) if plans else None
     for run in runs:
         plan = plans.get(run.index)
-        if plan is None or plan.info_needed is None:
+        if plan is None or plan.info_needed is None or cols is None:
             continue
-        mine = [b for b in blocks if b.target == run.target.name]
-        got = info_of_blocks(mine, pattern_u)
+        mine = cols.values["target"] == run.target.name
+        got = info_of_columns(cols, pattern_u, mine)
         if got < plan.info_needed * (1.0 - 1e-9):
             reach = plan.expected * math.sqrt(plan.info_needed / got) if got > 0 else math.inf
             available = math.floor(plan.n_spectra * got / plan.info_needed)
-            short = Shortfall(plan.goal, plan.n_spectra, min(available, len(mine)), reach)
+            short = Shortfall(plan.goal, plan.n_spectra, min(available, int(np.sum(mine))), reach)
             raise InputError(f"{run.target.name}: {short.message()}")

@@ -22,6 +22,7 @@ import numpy as np
 from astropy.time import Time
 
 from ucbplan.errors import UcbplanError
+from ucbplan.observing.blockcolumns import BlockList
 from ucbplan.observing.blocks import Block
 from ucbplan.observing.goals import GoalPlan
 from ucbplan.observing.schedule.candidates import TargetRun, prepare_runs
@@ -50,8 +51,9 @@ class PlanResult:
 
     Attributes
     ----------
-    blocks : list of Block
-        Planned blocks in time order.
+    blocks : sequence of Block
+        Planned blocks in time order (a :class:`~ucbplan.observing.blockcolumns.BlockList`:
+        columns, with the records made on first access).
     unplaced : list of Unplaced
         Target/nights with fewer sessions than asked, and why.
     warnings : list of str
@@ -69,7 +71,7 @@ class PlanResult:
         (:mod:`.reasons`).
     """
 
-    blocks: list[Block]
+    blocks: Sequence[Block]
     unplaced: list[Unplaced]
     warnings: list[str]
     constraints: list[str]
@@ -197,14 +199,17 @@ def plan_nights(
         placed, unplaced = place_sessions(runs, spans, frame, settings, busy_x, allowances)
     gap = 0.0 if settings.plans_visits else settings.overhead_s
     reasons = not_planned(runs, spans, frame, placed, unplaced, gap)
-    blocks = block_records(placed, runs, spans, frame, site, settings)
+    records = block_records(placed, runs, spans, frame, site, settings)
+    blocks: Sequence[Block]
     if frame.mode.label == "fixed-u-pairs":
         second = _second_epoch(site, settings)
-        blocks, more = pair_blocks(
-            blocks, runs, settings.max_pair_baseline_days, second, nights=nights
+        pairs, more = pair_blocks(
+            list(records), runs, settings.max_pair_baseline_days, second, nights=nights
         )
         unplaced += more + infeasible
-    blocks.sort(key=lambda b: (b.t_mid_utc.jd1, b.t_mid_utc.jd2))
+        blocks = sorted(pairs, key=lambda b: (b.t_mid_utc.jd1, b.t_mid_utc.jd2))
+    else:  # the same order, sorted on the columns
+        blocks = BlockList(records.columns.take(records.columns.time_order()))
     check_goals(goals, runs, blocks, frame.mode.u_values)
     return PlanResult(
         blocks=blocks,

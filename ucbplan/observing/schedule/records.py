@@ -11,14 +11,14 @@ import math
 import re
 from collections import Counter
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from astropy.time import Time
 from numpy.typing import NDArray
 
 from ucbplan.core.constants import TWO_PI
-from ucbplan.observing.blocks import Block
+from ucbplan.observing.blockcolumns import BlockColumns, BlockList
 from ucbplan.observing.constraints import SAMPLE_STEP_S
 from ucbplan.observing.instruments import MAX_AIRMASS
 from ucbplan.observing.schedule.candidates import PlanFrame, TargetRun
@@ -109,53 +109,66 @@ def _geometry(
     )
 
 
-def _block(
+def _columns(
     run: TargetRun,
     g: _Geometry,
-    k: int,
-    j: int,
-    label: BlockLabel,
+    js: NDArray[np.int64],
+    labels: list[BlockLabel],
     anchor: str,
     site: Site,
-    settings: PlanSettings,
-) -> Block:
-    """Block ``k`` (candidate ``j``) of a target's placed blocks."""
+) -> BlockColumns:
+    """The placed blocks ``js`` of one target as columns (one array per Block field)."""
     t, sm, c, plan = run.target, run.smearing, run.cand, run.exposure.plan
-    return Block(
-        target=t.name,
-        block_id=label.block_id,
-        anchor=anchor,
-        u_star_rad=float(np.mod(c.u_star[j], TWO_PI)),
-        t_mid_utc=g.utc[k, 1],
-        t_start_utc=g.utc[k, 0],
-        t_end_utc=g.utc[k, 2],
-        t_mid_tdb_bary=g.tdb[k],
-        sigma_t_s=float(c.sigma_t_s[j]),
-        t_alt_utc=g.utc[k, 3] if np.isfinite(c.x_alt[j]) else None,
-        exptime_s=plan.exptime_s,
-        n_exp=plan.n_exp,
-        readout_s=plan.readout_s,
-        lambda_k=sm.lambda_k,
-        lambda_kappa=sm.lambda_kappa,
-        smear_kms=sm.smear_kms,
-        alt_start_deg=float(g.alt[k, 0]),
-        altitude_deg=float(g.alt[k, 1]),
-        alt_end_deg=float(g.alt[k, 2]),
-        airmass_start=float(g.airmass[k, 0]),
-        airmass=float(g.airmass[k, 1]),
-        airmass_end=float(g.airmass[k, 2]),
-        moon_sep_deg=float(g.moon_sep[k]),
-        moon_illum=float(g.moon_illum[k]),
-        ra_deg=t.ra_deg,
-        dec_deg=t.dec_deg,
-        night=label.night,
-        timezone=site.timezone,
-        period_s=t.period_s,
-        priority=t.priority,
-        session_id=label.session_id,
-        visit_id=label.visit_id,
-        sigma_v_kms=float(g.sigma_v[k]),
-    )
+    n = js.size
+
+    def full(value: object, kind: type = float) -> NDArray[Any]:
+        if kind is str:  # the string's own length (dtype=str would cut it to one character)
+            return np.full(n, str(value))
+        return np.full(n, value, dtype=kind)
+
+    empty = np.array([], dtype="U1")
+    texts = [np.array(v, dtype=str) for v in zip(*labels, strict=True)] if n else [empty] * 4
+    night, block_id, session_id, visit_id = texts
+    values: dict[str, NDArray[Any]] = {
+        "target": full(t.name, str),
+        "block_id": block_id,
+        "anchor": full(anchor, str),
+        "u_star_rad": np.mod(c.u_star[js], TWO_PI),
+        "sigma_t_s": np.asarray(c.sigma_t_s[js], dtype=float),
+        "exptime_s": full(plan.exptime_s),
+        "n_exp": full(plan.n_exp, int),
+        "readout_s": full(plan.readout_s),
+        "lambda_k": full(sm.lambda_k),
+        "lambda_kappa": full(sm.lambda_kappa),
+        "smear_kms": full(sm.smear_kms),
+        "alt_start_deg": g.alt[:, 0],
+        "altitude_deg": g.alt[:, 1],
+        "alt_end_deg": g.alt[:, 2],
+        "airmass_start": g.airmass[:, 0],
+        "airmass": g.airmass[:, 1],
+        "airmass_end": g.airmass[:, 2],
+        "moon_sep_deg": np.asarray(g.moon_sep, dtype=float),
+        "moon_illum": np.asarray(g.moon_illum, dtype=float),
+        "ra_deg": full(t.ra_deg),
+        "dec_deg": full(t.dec_deg),
+        "night": night,
+        "timezone": full(site.timezone, str),
+        "period_s": full(t.period_s),
+        "priority": full(t.priority),
+        "session_id": session_id,
+        "pair_id": full("", str),
+        "delta_kappa": full(np.nan),
+        "visit_id": visit_id,
+        "sigma_v_kms": np.broadcast_to(np.asarray(g.sigma_v, dtype=float), (n,)).copy(),
+    }
+    times = {
+        "t_mid_utc": g.utc[:, 1],
+        "t_start_utc": g.utc[:, 0],
+        "t_end_utc": g.utc[:, 2],
+        "t_mid_tdb_bary": g.tdb,
+        "t_alt_utc": g.utc[:, 3],
+    }
+    return BlockColumns(values, times, np.isfinite(c.x_alt[js]))
 
 
 def block_records(
@@ -165,16 +178,14 @@ def block_records(
     frame: PlanFrame,
     site: Site,
     settings: PlanSettings,
-) -> list[Block]:
-    """:class:`Block` records of the placed sessions, grouped by target (in target order)."""
-    out: list[Block] = []
+) -> BlockList:
+    """Block records of the placed sessions, grouped by target (in target order), as columns
+    (:class:`~ucbplan.observing.blockcolumns.BlockList`)."""
+    parts: list[BlockColumns] = []
     for i, (idx, labels) in _labels(placed, runs, spans).items():
         js = np.asarray(idx, dtype=np.int64)
         g = _geometry(runs[i], js, frame, settings)
         untargeted = runs[i].exposure.strategy == "untargeted"
         anchor = "untargeted" if untargeted else frame.mode.label
-        out += [
-            _block(runs[i], g, k, int(j), labels[k], anchor, site, settings)
-            for k, j in enumerate(js)
-        ]
-    return out
+        parts.append(_columns(runs[i], g, js, labels, anchor, site))
+    return BlockList(BlockColumns.concat(parts))

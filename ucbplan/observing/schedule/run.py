@@ -19,10 +19,11 @@ from astropy.table import Table
 
 from ucbplan.errors import InputError, shorten
 from ucbplan.inputs import check_range
+from ucbplan.observing.blockcolumns import block_columns
 from ucbplan.observing.blocktable import blocks_to_table, make_meta
 from ucbplan.observing.schedule.accounting import VisitSummary, time_accounting, visit_summaries
 from ucbplan.observing.schedule.exposure import strategy_facts
-from ucbplan.observing.schedule.goalplan import info_of_blocks
+from ucbplan.observing.schedule.goalplan import info_of_columns
 from ucbplan.observing.schedule.nights import night_dates
 from ucbplan.observing.schedule.planner import PlanResult, plan_nights
 from ucbplan.observing.schedule.records import slug
@@ -175,10 +176,12 @@ class PlanRun:
     def collected_info(self) -> dict[str, float]:
         """Information on K each target's planned spectra collect [(km/s)⁻²], from the rows
         (Σ (Λ_K cos u)²/σ_v²)."""
-        out: dict[str, list[Any]] = {}
-        for b in self.result.blocks:
-            out.setdefault(b.target, []).append(b)
-        return {k: info_of_blocks(v, self.settings.spec.u_values) for k, v in out.items()}
+        cols = block_columns(self.result.blocks)
+        names = cols.values["target"]
+        return {
+            k: info_of_columns(cols, self.settings.spec.u_values, names == k)
+            for k in dict.fromkeys(names.tolist())
+        }
 
     def meta(self) -> dict[str, Any]:
         """Provenance of the run for the table ``meta`` (see :func:`make_meta`)."""
