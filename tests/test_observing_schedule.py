@@ -235,7 +235,8 @@ def test_settings_and_inputs_fail_in_words() -> None:
     with pytest.raises(UcbplanError, match=r"--nights: expected a whole number in \[1, 366\]"):
         night_dates(NIGHT, 0)
     assert resolve_site("vlt").name == "Paranal"
-    with pytest.raises(UcbplanError, match="give one site, not both"):  # issue 22
+    assert resolve_site(lonlat="10,20,30").lat_deg == 20.0
+    with pytest.raises(UcbplanError, match="give one site, not both"):  # none silently wins
         resolve_site("vlt", lonlat="10,20,30")
     with pytest.raises(UcbplanError, match="no site"):
         resolve_site()

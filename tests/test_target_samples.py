@@ -171,7 +171,6 @@ def test_load_samples_errors(tmp_path: Path) -> None:
     with pytest.raises(TargetFileError, match=r"post\.ecsv: 1 row; a covariance needs at least 2"):
         load_target(_target(tmp_path, "midpoint"))
     Table({"f_gw": [F0, np.nan]}).write(tmp_path / "post.ecsv", format="ascii.ecsv", overwrite=True)
-    # load_samples names the column and the first row (the one check of non-finite samples)
     with pytest.raises(TargetFileError, match=r"post\.ecsv: column f_gw: data row 2 is nan"):
         load_target(_target(tmp_path, "midpoint"))
 
@@ -198,8 +197,7 @@ def test_non_finite_samples_are_refused_naming_column_and_row(tmp_path: Path, ba
     tab["phase"][3] = bad
     tab["phase"][7] = bad
     tab.write(tmp_path / "post.ecsv", format="ascii.ecsv")
-    # a samples-only target reads its samples when it is loaded (its covariance comes from them)
     with pytest.raises(
         TargetFileError, match=r"post\.ecsv: column phase: data row 4 is .*\(2 such"
     ):
-        load_target(_target(tmp_path, "midpoint"))
+        load_samples(load_target(_target(tmp_path, "midpoint")))  # the target reads them too
