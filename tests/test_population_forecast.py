@@ -240,13 +240,27 @@ def test_200_sources_serial_pool_and_dask_are_byte_identical(tmp_path: Path) -> 
 
 @pytest.mark.slow
 def test_cli_run_killed_then_resumed(tmp_path: Path) -> None:
+    """A run killed after its third part file resumes from the parts to the same table.
+
+    The kill is deterministic: the child process ends itself with ``os._exit`` (no clean-up,
+    like SIGKILL) right after writing its third part, instead of being killed on a timer that a
+    fast or a busy machine turns into a different state (the batched forecast can finish first).
+    """
     import os
-    import signal
     import subprocess
     import sys
-    import time
 
     out = tmp_path / "f.ecsv"
+    killer = (
+        "import os, sys, typer; import ucbplan.population.execute as ex; "
+        "real = ex.write_output; n = [0]\n"
+        "def write(path, *a, **k):\n"
+        "    real(path, *a, **k)\n"
+        "    if path.name.startswith('part-'):\n"
+        "        n[0] += 1\n"
+        "        if n[0] == 3: os._exit(137)\n"
+        "ex.write_output = write\n"
+    )
     code = (
         "import sys, typer; from ucbplan.cli import population as p; app = typer.Typer(); "
         "p.register(app); app(['population', *sys.argv[1:]])"
@@ -254,15 +268,15 @@ def test_cli_run_killed_then_resumed(tmp_path: Path) -> None:
     args = [sys.executable, "-c", code, "forecast", str(CATALOG), "-o", str(out), "--chunk", "5"]
     args += ["--n-bins", "64"]
     env = dict(os.environ, PYTHONPATH=str(ROOT))
-    proc = subprocess.Popen(args, env=env, stderr=subprocess.DEVNULL)
+    killed = subprocess.run(
+        [sys.executable, "-c", killer + code.replace("import sys, typer; ", ""), *args[3:]],
+        env=env,
+        stderr=subprocess.DEVNULL,
+        check=False,
+    )
     parts = tmp_path / "f.ecsv.parts"
-    deadline = time.time() + 60
-    while time.time() < deadline and len(list(parts.glob("part-*.json"))) < 3:
-        time.sleep(0.05)
-    proc.send_signal(signal.SIGKILL)
-    proc.wait()
-    n_done = len(list(parts.glob("part-*.json")))
-    assert 3 <= n_done < 40 and not out.exists()
+    assert killed.returncode == 137
+    assert len(list(parts.glob("part-*.json"))) == 3 and not out.exists()
     subprocess.run([*args, "--resume"], env=env, check=True, stderr=subprocess.DEVNULL)
     ref = tmp_path / "ref.ecsv"
     ref_args = [*args[:6], str(ref), *args[7:]]

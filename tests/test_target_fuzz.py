@@ -36,16 +36,19 @@ CATALOGS = Path(__file__).resolve().parents[1] / "catalogs"
 CATALOG_NAMES = ("hm-cnc-simulated.yaml", "fiducial-eccentric.yaml", "fiducial-injection.yaml")
 DOCS = {name: yaml.safe_load((CATALOGS / name).read_text()) for name in CATALOG_NAMES}
 
+# No per-example deadline: under load one example took 2.6 s against the old 2-s deadline (a
+# timing-dependent failure); both profiles are derandomized, so every run checks the same cases.
 QUICK = settings(
     max_examples=100,
-    deadline=2000,
+    deadline=None,
     suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
     derandomize=True,
 )
 THOROUGH = settings(
     max_examples=1500,
-    deadline=2000,
+    deadline=None,
     suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
+    derandomize=True,
 )
 
 # ------------------------------------------------------------------ arbitrary YAML values
