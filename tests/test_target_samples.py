@@ -201,3 +201,22 @@ def test_non_finite_samples_are_refused_naming_column_and_row(tmp_path: Path, ba
         TargetFileError, match=r"post\.ecsv: column phase: data row 4 is .*\(2 such"
     ):
         load_samples(load_target(_target(tmp_path, "midpoint")))  # the target reads them too
+
+
+def test_horizon_says_the_covariance_came_from_the_samples(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Issue 26 item 4: the command says which covariance it used (one line)."""
+    import sys
+
+    from ucbplan.cli import app as app_module
+
+    _table(40).write(tmp_path / "post.ecsv", format="ascii.ecsv")
+    path = _target(tmp_path, "midpoint")
+    argv = ["ucbplan", "horizon", str(path), "--sigma-v", "15", "--k-eff", "500"]
+    monkeypatch.setattr(sys, "argv", argv)
+    with pytest.raises(SystemExit) as exit_:
+        app_module.main()
+    err = capsys.readouterr().err
+    assert exit_.value.code == 0, err
+    assert "S: covariance from the samples file post.ecsv" in err

@@ -136,6 +136,9 @@ def _print_night(blocks: list[Any], night: str, site: Any) -> None:
 
 def report(run: Any, wide: bool = False, verbose: bool = False) -> None:
     """Warnings and what was not placed (grouped over nights), then one table per night."""
+    for t in run.targets:
+        if t.covariance_source.startswith("samples"):
+            err_console.print(f"{t.name}: covariance from the {t.covariance_source}", markup=False)
     for w in run.result.warnings:
         err_console.print(f"[yellow]warning:[/] {escape(w)}", soft_wrap=True)
     failure = run.failure()

@@ -399,6 +399,13 @@ def _print_horizon(t: Target, rows: list[Any], sv: float, k: float, epochs: int)
         f"{a}: {1e3 * s:.2f} mrad (±{s / (math.pi * t.params.f_gw):.2f} s)" for a, s in ends.items()
     )
     err_console.print(escape(f"σ_u at the end of the LISA observation — {txt}"))
+    _say_samples_covariance(t)
+
+
+def _say_samples_covariance(t: Target) -> None:
+    """One line when the covariance came from a samples file (issue 26: say which was used)."""
+    if t.covariance_source.startswith("samples"):
+        err_console.print(f"{t.name}: covariance from the {t.covariance_source}", markup=False)
 
 
 def _print_two_sided_horizon(t: Target, rows: list[Any], sv: float, k: float, epochs: int) -> None:
