@@ -26,6 +26,7 @@ Every target of a run gets its own exposure plan, because the smearing factor Λ
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
@@ -336,6 +337,27 @@ def _forced(
     return pick
 
 
+def _strategy_results(
+    target: Target,
+    settings: PlanSettings,
+    sigma: Callable[[NDArray[np.float64]], NDArray[np.float64]],
+    visit: float | None,
+) -> tuple[tuple[StrategyResult, ...], tuple[float, ...]]:
+    """Every strategy's best exposure time, and with a goal the hours each needs: sessions
+    (no visit) take the pattern's blocks after one acquisition; a goal minimises hours; visits
+    otherwise maximise the information per visit."""
+    if visit is None:
+        n = len(settings.spec.u_values) if settings.spec.paired else 1
+        shape = visit_shape(target, settings, settings.overhead_s + 43200.0)
+        return (session_result(shape, sigma, n),), ()
+    shape = visit_shape(target, settings, visit)
+    if settings.goal is None:
+        return tuple(compare_strategies(shape, sigma)), ()
+    need = goal_info_needed(parse_goal(settings.goal), target)
+    times = [goal_time(need, shape, sigma, name) for name in STRATEGIES]
+    return tuple(g.strategy for g in times), tuple(g.hours for g in times)
+
+
 def optimised_exposure(target: Target, settings: PlanSettings) -> TargetExposure:
     """Exposure time and cadence with the most information on K per visit (module notes).
 
@@ -355,22 +377,11 @@ def optimised_exposure(target: Target, settings: PlanSettings) -> TargetExposure
         return law.sigma(t, 1.0, mag)
 
     visit = _visit_length(settings)
-    hours: tuple[float, ...] = ()
     shortest = replace(
         settings.exposure, exptime_s=visit_shape(target, settings, 0.0).min_exptime_s
     )
     _check_visit(target, settings, shortest)
-    if visit is None:  # sessions: the pattern's blocks after one acquisition
-        n = len(settings.spec.u_values) if settings.spec.paired else 1
-        shape = visit_shape(target, settings, settings.overhead_s + 43200.0)
-        results: tuple[StrategyResult, ...] = (session_result(shape, sigma, n),)
-    elif settings.goal is not None:
-        need = goal_info_needed(parse_goal(settings.goal), target)
-        shape = visit_shape(target, settings, visit)
-        times = [goal_time(need, shape, sigma, name) for name in STRATEGIES]
-        results, hours = tuple(g.strategy for g in times), tuple(g.hours for g in times)
-    else:
-        results = tuple(compare_strategies(visit_shape(target, settings, visit), sigma))
+    results, hours = _strategy_results(target, settings, sigma, visit)
     pick = _forced(results, settings.cadence, hours)
     plan = replace(settings.exposure, exptime_s=pick.exptime_s)
     spacing = target.period_s / len(settings.spec.u_values)
