@@ -32,6 +32,8 @@ sys.path.insert(0, str(ROOT))
 
 from _workload import REFERENCE_S, bracketed, children_cpu_s, workload_s  # noqa: E402
 
+from ucbplan.offline import offline  # noqa: E402
+
 GOAL_SOURCE_S = 0.004
 GOAL_TARGET_S = 50e-6
 GOAL_REDUCE_X, GOAL_REDUCE_MB = 12.0, 1024.0
@@ -47,15 +49,14 @@ def _at_reference(cpu_s: float, work_s: float) -> float:
     return cpu_s / work_s * REFERENCE_S
 
 
+@offline()  # the offline astropy scope for the whole measurement
 def population_row(tmp: Path) -> dict[str, object]:
     """Serial population forecast of 299 sources (the face-on first row left out)."""
     from make_population_catalog import make
 
-    from ucbplan.offline import configure_offline
     from ucbplan.population.catalog import read_catalog
     from ucbplan.population.forecast import ForecastOptions, forecast_chunk
 
-    configure_offline()
     path = tmp / "cat300.ecsv"
     make(300, 13).write(path, format="ascii.ecsv")
     sources = read_catalog(path).sources[1:]
@@ -128,7 +129,7 @@ def _horizon_cli(files: list[Path], out: Path) -> tuple[float, float, float]:
     import ucbplan.target
     from ucbplan.cli.app import app
 
-    real = ucbplan.target.load_targets
+    real = ucbplan.target.load_target_documents
     spent = [0.0]
 
     def timed(path: Path) -> object:
@@ -138,7 +139,7 @@ def _horizon_cli(files: list[Path], out: Path) -> tuple[float, float, float]:
         finally:
             spent[0] += time.process_time() - c0
 
-    ucbplan.target.load_targets = timed  # type: ignore[assignment]
+    ucbplan.target.load_target_documents = timed  # type: ignore[assignment]
     try:
         c0, w0 = time.process_time(), time.perf_counter()
         app(
@@ -146,14 +147,12 @@ def _horizon_cli(files: list[Path], out: Path) -> tuple[float, float, float]:
         )
         return time.process_time() - c0, spent[0], time.perf_counter() - w0
     finally:
-        ucbplan.target.load_targets = real  # type: ignore[assignment]
+        ucbplan.target.load_target_documents = real  # type: ignore[assignment]
 
 
+@offline()
 def horizon_row(tmp: Path, n: int) -> dict[str, object]:
     """CPU per target of ``horizon FILES… --format json`` above reading the YAML files."""
-    from ucbplan.offline import configure_offline
-
-    configure_offline()
     files = _target_files(tmp / "targets", n)
     _horizon_cli(files[:4], tmp / "warm.json")  # imports
     work = workload_s()
@@ -193,11 +192,9 @@ def _velocity_csv(path: Path, n: int) -> None:
         np.savetxt(fh, cols, fmt=fmt, delimiter=",")
 
 
+@offline()
 def reduce_row(tmp: Path, n: int) -> dict[str, object]:
     """``ucbplan reduce TARGET CSV --format json -o OUT`` in a fresh process: CPU and peak."""
-    from ucbplan.offline import configure_offline
-
-    configure_offline()
     csv = tmp / "velocities.csv"
     _velocity_csv(csv, n)
     target = str(ROOT / "catalogs" / "fiducial-eccentric.yaml")
