@@ -44,6 +44,7 @@ __all__ = [
     "STRATEGIES",
     "StrategyResult",
     "VisitShape",
+    "balanced_counts",
     "best_strategy",
     "compare_strategies",
     "constrains_k",
@@ -419,15 +420,24 @@ class GoalTime:
 
 def _goal_counts(
     info_needed: float, per_spectrum: F64, n_max: NDArray[np.int64], unit: F64
-) -> tuple[F64, F64, F64]:
-    """(spectra, visits, spectra in the fullest visit) of a goal, vectorised: ⌈I/w⌉ spectra
-    in whole ``unit`` groups, in the fewest visits of at most ``n_max`` (module notes)."""
+) -> tuple[F64, F64]:
+    """(spectra, visits) of a goal, vectorised: ⌈I/w⌉ spectra in whole ``unit`` groups, in the
+    fewest visits of at most ``n_max`` (the arithmetic of :func:`balanced_counts`)."""
     n = np.maximum(1.0, np.ceil(info_needed / per_spectrum * (1.0 - 1e-12)))
     unit = np.where(n_max >= unit, unit, 1.0)
     groups = np.ceil(n / unit)
     per_max = np.maximum(1.0, np.floor(n_max / unit))
-    visits = np.ceil(groups / per_max)
-    return groups * unit, visits, np.ceil(groups / visits) * unit
+    return groups * unit, np.ceil(groups / per_max)
+
+
+def balanced_counts(n: int, n_max: int, pattern: int) -> tuple[int, ...]:
+    """``n`` spectra in the fewest visits of at most ``n_max``, in whole anchor patterns when a
+    visit holds one, split as evenly as whole patterns allow (the fuller visits first)."""
+    unit = pattern if n_max >= pattern else 1
+    groups, per_max = math.ceil(n / unit), max(1, n_max // unit)
+    visits = math.ceil(groups / per_max)
+    base, extra = divmod(groups, visits)
+    return tuple(unit * (base + (1 if v < extra else 0)) for v in range(visits))
 
 
 def goal_time(
@@ -447,15 +457,14 @@ def goal_time(
         return GoalTime(scan.result(shape, None), info_needed, 0, 0, (), math.inf)
     w = np.where(ok, scan.info / np.maximum(scan.n, 1), np.nan)
     unit = np.full(w.shape, 1.0 if name == "untargeted" else float(len(shape.pattern_u)))
-    n, visits, _ = _goal_counts(info_needed, w, scan.n, unit)
+    n, visits = _goal_counts(info_needed, w, scan.n, unit)
     wall = visits * (shape.acquisition_s + scan.t + shape.readout_s - scan.step) + n * scan.step
     wall = np.where(ok, wall, np.inf)
     i = int(np.lexsort((scan.t, np.round(wall, 6)))[0])
-    n_i, v_i = int(n[i]), int(visits[i])
-    u = int(unit[i]) if scan.n[i] >= unit[i] else 1
-    base, extra = divmod(n_i // u, v_i)
-    counts = tuple(u * (base + (1 if v < extra else 0)) for v in range(v_i))
-    return GoalTime(scan.result(shape, i), info_needed, n_i, v_i, counts, float(wall[i]) / 3600)
+    counts = balanced_counts(int(n[i]), int(scan.n[i]), int(unit[i]))
+    return GoalTime(
+        scan.result(shape, i), info_needed, int(n[i]), len(counts), counts, float(wall[i]) / 3600
+    )
 
 
 def information(lambda_k_rows: ArrayLike, u_rad: ArrayLike, sigma_v_kms: ArrayLike) -> float:

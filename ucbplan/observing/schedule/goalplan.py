@@ -36,7 +36,7 @@ from ucbplan.observing.goals import (
 )
 from ucbplan.observing.schedule.candidates import TargetRun
 from ucbplan.observing.schedule.settings import PlanSettings
-from ucbplan.observing.strategy import constrains_k, information
+from ucbplan.observing.strategy import balanced_counts, constrains_k, information
 
 __all__ = ["balanced_runs", "check_goals", "goal_plans", "info_of_blocks"]
 
@@ -73,15 +73,6 @@ def _max_per_visit(run: TargetRun, settings: PlanSettings) -> tuple[int, float]:
     return max(1, int(science // te.step_s + 1e-9) + 1), te.step_s
 
 
-def _balanced(n: int, n_max: int, pattern: int) -> tuple[int, ...]:
-    """``n`` spectra in the fewest visits of at most ``n_max``, whole patterns, evenly split."""
-    unit = pattern if n_max >= pattern else 1
-    groups, per_max = math.ceil(n / unit), max(1, n_max // unit)
-    visits = math.ceil(groups / per_max)
-    base, extra = divmod(groups, visits)
-    return tuple(unit * (base + (1 if v < extra else 0)) for v in range(visits))
-
-
 def _goal_plan(goal: Goal, run: TargetRun, settings: PlanSettings) -> GoalPlan:
     """Spectra, balanced visits and time of one target's goal."""
     need = goal_info_needed(goal, run.target)
@@ -90,7 +81,7 @@ def _goal_plan(goal: Goal, run: TargetRun, settings: PlanSettings) -> GoalPlan:
     pattern = len(settings.spec.u_values) if te.strategy != "untargeted" else 1
     n = max(1, math.ceil(need / w * (1.0 - 1e-12)))
     n_max, step = _max_per_visit(run, settings)
-    counts = _balanced(n, n_max, pattern)
+    counts = balanced_counts(n, n_max, pattern)
     n = sum(counts)
     cost = te.plan.exptime_s + te.plan.readout_s
     walls = [settings.overhead_s + (c - 1) * step + cost for c in counts]

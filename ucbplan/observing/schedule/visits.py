@@ -117,7 +117,7 @@ def _best_visit(
         if allowance.info is not None and exps:
             _goal_cut(exps, run.weight, allowance.info, pattern)
         elif allowance.exposures is not None and len(exps) > pattern:
-            del exps[len(exps) - len(exps) % pattern :]  # whole anchor patterns for a goal
+            del exps[len(exps) - len(exps) % pattern :]  # an exposure cap: whole patterns
         if not exps:
             continue
         key = _visit_key(run, exps)
