@@ -259,7 +259,8 @@ class TargetRun:
         The target's exposure plan and visit cadence (smearing floor applied).
     weight : ndarray of float
         Fisher information on K of each block's exposure, (Λ_K cos u)²/σ_v² [(km/s)⁻²] (γ's,
-        1/σ_v², for anchors at cos u = 0); NaN where σ_v is unknown.
+        1/σ_v², for anchors at cos u = 0); NaN where σ_v is unknown, and for sessions (no
+        visits: nothing reads it there).
     """
 
     target: Target
@@ -360,7 +361,8 @@ def _target_run(
     if not te.floor_ok:
         ok = np.zeros_like(ok)  # no exposure keeps the smearing floor
     valid = valid & ((partner < 0) | valid[np.maximum(partner, 0)])
-    weight = _weights(target, cand, settings, te)
+    # only visits read the information of an exposure (goals, back-to-back visits)
+    weight = _weights(target, cand, settings, te) if settings.plans_visits else cand.u_star * np.nan
     run = TargetRun(target, i, cand, partner, ok, score, valid, until, sm, since, te, weight)
     return run, warns
 
