@@ -41,6 +41,7 @@ from ucbplan.observing.instruments import instrument_magnitude, sigma_v_kms
 from ucbplan.observing.schedule.settings import PlanSettings
 from ucbplan.observing.sigma_model import SigmaVModel
 from ucbplan.observing.strategy import (
+    LOCK_MARGIN_S,
     STRATEGIES,
     StrategyResult,
     VisitShape,
@@ -64,8 +65,6 @@ __all__ = [
     "visit_shape",
 ]
 
-#: Time kept free in each step of a phase-locked cadence besides the readout [s].
-_LOCK_MARGIN_S = 0.2
 #: Shortest exposure the smearing floor may cap to [s].
 _SHORTEST_S = 0.1
 #: Relative precision of the floor exposure time found by bisection.
@@ -197,12 +196,12 @@ def _phase_locked(target: Target, settings: PlanSettings, spacing: float) -> Exp
 
     The anchors of an eccentric orbit are not evenly spaced (to first order in e the shortest
     gap is ≥ (1 − 2e)·P_b/m) and the light time moves them by ≤ 0.02 s per minute, so the
-    exposure is shortened by that much (and :data:`_LOCK_MARGIN_S`) to keep every readout.
+    exposure is shortened by that much (and :data:`LOCK_MARGIN_S`) to keep every readout.
     """
     plan = settings.exposure
     inst = settings.instrument
     low = inst.min_exptime_s if inst is not None and inst.min_exptime_s is not None else 0.0
-    short = spacing * (1.0 - 2.0 * target.params.eccentricity) - _LOCK_MARGIN_S
+    short = spacing * (1.0 - 2.0 * target.params.eccentricity) - LOCK_MARGIN_S
     k = max(1, math.ceil((plan.readout_s + max(low, 1e-3)) / short * (1 - 1e-12)))
     exptime = math.floor((k * short - plan.readout_s) * 10) / 10
     if exptime <= 0:
