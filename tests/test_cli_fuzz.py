@@ -94,8 +94,9 @@ CASES = [
 ]
 
 
-def run_cli(args: list[str]) -> tuple[int, str]:
-    """Run ``ucbplan ARGS`` through the real entry point in this process."""
+def run_main(args: list[str]) -> tuple[int, str, str]:
+    """Run ``ucbplan ARGS`` through the real entry point in this process: exit code, stdout,
+    stderr (the one in-process runner of the CLI fuzz tests)."""
     err, out = io.StringIO(), io.StringIO()
     old = sys.argv
     sys.argv = ["ucbplan", *args]
@@ -108,7 +109,13 @@ def run_cli(args: list[str]) -> tuple[int, str]:
                 code = exc.code if isinstance(exc.code, int) else 1
     finally:
         sys.argv = old
-    return code, err.getvalue()
+    return code, out.getvalue(), err.getvalue()
+
+
+def run_cli(args: list[str]) -> tuple[int, str]:
+    """Run ``ucbplan ARGS`` through the real entry point in this process: exit code, stderr."""
+    code, _, err = run_main(args)
+    return code, err
 
 
 def check_outcome(code: int, err: str) -> None:

@@ -14,19 +14,15 @@ checked before that refusal and no chain ever runs.
 from __future__ import annotations
 
 import contextlib
-import io
 import json
 import os
-import sys
 from pathlib import Path
 
 import pytest
 from astropy.table import Table
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from test_cli_fuzz import VALUES, check_outcome, run_cli
-
-from ucbplan.cli import app as app_module
+from test_cli_fuzz import VALUES, check_outcome, run_cli, run_main
 
 ROOT = Path(__file__).resolve().parents[1]
 CAT = ROOT / "catalogs"
@@ -218,19 +214,8 @@ def _refuse_constant(token: str) -> None:
 
 def _run(args: list[str]) -> tuple[int, str, str]:
     """``ucbplan ARGS`` in this process: exit code, stderr and stdout."""
-    err, out = io.StringIO(), io.StringIO()
-    old = sys.argv
-    sys.argv = ["ucbplan", *args]
-    try:
-        with contextlib.redirect_stderr(err), contextlib.redirect_stdout(out):
-            try:
-                app_module.main()
-                code = 0
-            except SystemExit as exc:
-                code = exc.code if isinstance(exc.code, int) else 1
-    finally:
-        sys.argv = old
-    return code, err.getvalue(), out.getvalue()
+    code, out, err = run_main(args)
+    return code, err, out
 
 
 def _clear(folder: Path) -> None:

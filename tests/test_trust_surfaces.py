@@ -4,10 +4,7 @@ and never crash on values JSON cannot spell."""
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -15,9 +12,9 @@ import pytest
 from astropy.table import Table
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from test_cli_fuzz import run_main
 from typer.testing import CliRunner
 
-from ucbplan.cli import app as app_module
 from ucbplan.cli.app import app
 from ucbplan.errors import shorten
 from ucbplan.io import dumps_json, json_plain
@@ -33,19 +30,7 @@ POP = CAT / "population" / "ldc-200.ecsv"
 
 def cli(*args: str) -> tuple[int, str, str]:
     """``ucbplan ARGS`` through the real entry point in this process: exit code, stdout, stderr."""
-    err, out = io.StringIO(), io.StringIO()
-    old = sys.argv
-    sys.argv = ["ucbplan", *args]
-    try:
-        with contextlib.redirect_stderr(err), contextlib.redirect_stdout(out):
-            try:
-                app_module.main()
-                code = 0
-            except SystemExit as exc:
-                code = exc.code if isinstance(exc.code, int) else 1
-    finally:
-        sys.argv = old
-    return code, out.getvalue(), err.getvalue()
+    return run_main(list(args))
 
 
 def refused(*args: str) -> str:
