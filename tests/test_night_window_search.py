@@ -123,6 +123,8 @@ def _seconds(a: Time, b: Time) -> float:
             ),
             500,
         ),
+        ("paranal", date(2040, 3, 1), PlanSettings(mode="quadrature+conjunction"), 10),
+        ("paranal", date(2040, 3, 1), PlanSettings(mode="zero-crossing"), 10),
         ("18.9,69.6,0", date(2040, 4, 10), PlanSettings(twilight="civil"), 5),  # short nights
         ("18.9,69.6,0", date(2040, 5, 10), PlanSettings(twilight="civil"), 0),  # no night
     ],
