@@ -148,3 +148,21 @@ def test_plan_is_the_whole_span_plan(
             assert abs(getattr(f, name) - getattr(e, name)) * 3600.0 < 0.1, name
     assert fast.reasons == whole.reasons  # type: ignore[attr-defined]
     assert fast.unplaced == whole.unplaced  # type: ignore[attr-defined]
+
+
+def test_night_windows_are_the_one_by_one_conversions() -> None:
+    # One vectorised Time for all edges gives the same UTC instants, bit for bit, as one Time
+    # per edge (the conversion of each datetime is element-wise), across a DST change.
+    from datetime import datetime, time
+
+    from ucbplan.observing.schedule import night_windows
+
+    site = site_from_lonlat("-3.7,40.4,650", "Europe/Madrid")
+    nights = [date(2040, 3, 20) + timedelta(days=k) for k in range(20)]
+    got = night_windows(site, nights)
+    assert [w.label for w in got] == [d.isoformat() for d in nights]
+    for w, d in zip(got, nights, strict=True):
+        for t, day in ((w.start, d), (w.end, d + timedelta(days=1))):
+            one = Time(datetime.combine(day, time(12, 0), tzinfo=site.zone), scale="utc")
+            assert (t.jd1, t.jd2, t.scale, t.format) == (one.jd1, one.jd2, "utc", one.format)
+    assert night_windows(site, []) == []
