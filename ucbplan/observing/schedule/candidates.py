@@ -1,4 +1,6 @@
-"""Candidate blocks: every anchor epoch of a target in the run, as a block on the plan's axis.
+"""Candidate blocks: every anchor epoch of a target in the run's nights, as a block on the plan's
+axis (epochs are solved only where the Sun may be below the twilight limit, widened by a block
+and two orbits: daytime epochs would all fail the night, :func:`night_search_x`).
 
 For each target (vectorised over epochs): the anchor epochs t★ with σ_t and the φ_ref π-mode
 alternative (:func:`ucbplan.core.ephemeris.find_epochs`, Appendix A2), their site arrival times
