@@ -153,6 +153,7 @@ def solve_u(
     tau_end_s: float,
     u_star: float | str,
     star: int = 1,
+    windows: FloatArray | None = None,
 ) -> tuple[NDArray[np.int64], FloatArray, FloatArray, float]:
     """All epochs in [start, end] (seconds from t_ref) where u(τ) = u★ (mod 2π).
 
@@ -167,6 +168,11 @@ def solve_u(
         (star 2: cos u₂ = +κ(t), the same instants; u★ is returned in ``star``'s u).
     star : {1, 2}
         Whose argument of latitude.
+    windows : ndarray, shape (m, 2), optional
+        Only epochs inside these sub-windows of [start, end] (TDB s since the reference,
+        sorted, disjoint): the orbits between them are never solved (a plan's nights). The
+        origin stays ``tau_start_s`` and each epoch gets the value the whole window would
+        give it, up to the rounding of Newton's last step (≤ 2 ulp of dt; tests compare).
 
     Returns
     -------
@@ -189,13 +195,26 @@ def solve_u(
     origin = float(tau_start_s)
     span = float(tau_end_s - tau_start_s)
     zero_branch, ustar_nominal = _nominal_target(u_star)
-    ks, c0 = _passages(p, origin, span, ustar_nominal, star)
+    rel = None if windows is None else _relative_windows(windows, origin, span)
+    ks, c0 = _passages(p, origin, span, ustar_nominal, star, rel)
     # mean-phase seeds: orbit cycles from the origin's u
     seeds = _mean_seeds(p, origin, ks - c0)
     branch = None if zero_branch is None else np.full(ks.shape, zero_branch, dtype=np.float64)
     dt, ustar_arr = _newton(p, origin, seeds, ks, np.full(ks.shape, ustar_nominal), star, branch)
     keep = (dt >= 0.0) & (dt <= span)
+    if rel is not None:
+        j = np.searchsorted(rel[:, 0], dt, side="right") - 1
+        keep &= (j >= 0) & (dt <= rel[np.maximum(j, 0), 1])
     return ks[keep].astype(np.int64), dt[keep], ustar_arr[keep], origin
+
+
+def _relative_windows(windows: FloatArray, origin: float, span: float) -> FloatArray:
+    """Sub-windows as offsets from ``origin``, clipped to [0, span], sorted, empty ones
+    dropped (m, 2)."""
+    w = np.asarray(windows, dtype=np.float64).reshape(-1, 2) - origin
+    w = np.clip(w, 0.0, span)
+    w = w[w[:, 1] > w[:, 0]]
+    return np.asarray(w[np.argsort(w[:, 0], kind="stable")], dtype=np.float64)
 
 
 def _nominal_target(u_star: float | str) -> tuple[int | None, float]:
@@ -207,18 +226,32 @@ def _nominal_target(u_star: float | str) -> tuple[int | None, float]:
 
 
 def _passages(
-    p: PhaseParams, origin: float, span: float, ustar: float, star: int
+    p: PhaseParams,
+    origin: float,
+    span: float,
+    ustar: float,
+    star: int,
+    rel: FloatArray | None = None,
 ) -> tuple[FloatArray, float]:
-    """Candidate orbit counts k (one spare at each end) and (u/2π − u★/2π) at the window start.
+    """Candidate orbit counts k (one spare at each end) and (u/2π − u★/2π) at the window start;
+    with ``rel`` (sub-windows, offsets from the origin), only the counts of those.
 
     First order in e is enough to count passages; Newton refines the edges.
     """
-    m0, g0 = u_cycles(p, np.array([0.0, span]), origin, star)
-    c0 = (m0[0] + g0[0]) - ustar / TWO_PI
-    c1 = (m0[1] + g0[1]) - ustar / TWO_PI
-    k_lo = math.ceil(c0) - 1
-    k_hi = math.floor(c1) + 1
-    return np.arange(k_lo, k_hi + 1, dtype=np.float64), float(c0)
+    edges = np.array([span]) if rel is None else rel.ravel()
+    m0, g0 = u_cycles(p, np.concatenate([[0.0], edges]), origin, star)
+    c = (m0 + g0) - ustar / TWO_PI
+    c0 = float(c[0])
+    if rel is None:
+        return np.arange(math.ceil(c0) - 1, math.floor(c[1]) + 2, dtype=np.float64), c0
+    lo = np.ceil(c[1::2]).astype(np.int64) - 1
+    hi = np.floor(c[2::2]).astype(np.int64) + 1
+    if lo.size == 0:
+        return np.zeros(0), c0
+    count = hi - lo + 1
+    start = np.repeat(lo - np.concatenate([[0], np.cumsum(count)[:-1]]), count)
+    ks = np.unique(start + np.arange(int(count.sum()), dtype=np.int64))
+    return ks.astype(np.float64), c0
 
 
 def resolve_anchor(anchor: str | float) -> tuple[str, list[float | str]]:
@@ -288,6 +321,7 @@ def find_epochs(
     star: int = 1,
     pi_mode: bool | None = None,
     details: bool = True,
+    windows: FloatArray | None = None,
 ) -> EpochSet:
     """All anchor epochs of a target in a window, with σ_t and the φ_ref π-mode alternative.
 
@@ -309,6 +343,8 @@ def find_epochs(
     details : bool
         Compute σ_t, σ_u, u̇ and the π-mode alternative of every epoch. False leaves them NaN,
         for a caller that needs them for a few epochs only (:func:`with_details`).
+    windows : ndarray, shape (m, 2), optional
+        Only the epochs inside these sorted, disjoint sub-windows (:func:`solve_u`).
 
     Returns
     -------
@@ -320,7 +356,7 @@ def find_epochs(
     same u★ with φ_ref + π (Appendix A1: the GW phase posterior's second mode), ≈ P_b/4 earlier.
     """
     label, targets = resolve_anchor(anchor)
-    k, dt, us, origin = _solve_sorted(source.params, tau_start_s, tau_end_s, targets, star)
+    k, dt, us, origin = _solve_sorted(source.params, tau_start_s, tau_end_s, targets, star, windows)
     es = EpochSet(
         anchor=label,
         star=star,
@@ -373,12 +409,13 @@ def _solve_sorted(
     tau_end_s: float,
     targets: list[float | str],
     star: int,
+    windows: FloatArray | None = None,
 ) -> tuple[NDArray[np.int64], FloatArray, FloatArray, float]:
     """:func:`solve_u` for every u★ of an anchor, merged in time order: (k, dt, u★, origin)."""
     parts: list[tuple[NDArray[np.int64], FloatArray, FloatArray]] = []
     origin = float(tau_start_s)
     for tgt in targets:
-        k, dt, us, origin = solve_u(p, tau_start_s, tau_end_s, tgt, star)
+        k, dt, us, origin = solve_u(p, tau_start_s, tau_end_s, tgt, star, windows)
         parts.append((k, dt, us))
     k = np.concatenate([x[0] for x in parts]) if parts else np.zeros(0, np.int64)
     dt = np.concatenate([x[1] for x in parts]) if parts else np.zeros(0)

@@ -1,4 +1,6 @@
-"""Candidate blocks: every anchor epoch of a target in the run, as a block on the plan's axis.
+"""Candidate blocks: every anchor epoch of a target in the run's nights, as a block on the plan's
+axis (epochs are solved only where the Sun may be below the twilight limit, widened by a block
+and two orbits: daytime epochs would all fail the night, :func:`night_search_x`).
 
 For each target (vectorised over epochs): the anchor epochs t★ with σ_t and the φ_ref π-mode
 alternative (:func:`ucbplan.core.ephemeris.find_epochs`, Appendix A2), their site arrival times
@@ -26,7 +28,12 @@ from ucbplan.core.forecast import tolerance, valid_window_s
 from ucbplan.core.smearing import parse_smear_budget
 from ucbplan.errors import UcbplanError
 from ucbplan.observing.blocks import ExposurePlan, Smearing, block_smearing, check_smear_budget
-from ucbplan.observing.constraints import ConstraintSet, evaluate_window
+from ucbplan.observing.constraints import (
+    DARK_STEP_S,
+    ConstraintSet,
+    NightConstraint,
+    evaluate_window,
+)
 from ucbplan.observing.instruments import MAX_AIRMASS
 from ucbplan.observing.schedule.exposure import TargetExposure, exposure_sigma_v, target_exposure
 from ucbplan.observing.schedule.nights import NightWindow
@@ -46,6 +53,7 @@ __all__ = [
     "TargetRun",
     "candidate_blocks",
     "grid_epochs",
+    "night_search_x",
     "prepare_runs",
 ]
 
@@ -82,7 +90,12 @@ class Candidates:
 
 
 def _find_epochs(
-    target: Target, tau_lo: float, tau_hi: float, anchor: str | float, star: int
+    target: Target,
+    tau_lo: float,
+    tau_hi: float,
+    anchor: str | float,
+    star: int,
+    windows: FloatArray | None = None,
 ) -> EpochSet:
     """:func:`~ucbplan.core.ephemeris.find_epochs`, also for combined anchors such as
     ``quadrature+conjunction``: each anchor solved on its own, merged on one origin in time
@@ -93,8 +106,10 @@ def _find_epochs(
     anchor's are computed here, for every epoch.
     """
     if not isinstance(anchor, str) or not _combined(anchor):
-        return find_epochs(target, tau_lo, tau_hi, anchor, star, details=False)
-    sets = [find_epochs(target, tau_lo, tau_hi, a, star) for a in anchor.split("+")]
+        return find_epochs(target, tau_lo, tau_hi, anchor, star, details=False, windows=windows)
+    sets = [
+        find_epochs(target, tau_lo, tau_hi, a, star, windows=windows) for a in anchor.split("+")
+    ]
     origin = sets[0].origin_s
     dt = np.concatenate([e.dt_s + (e.origin_s - origin) for e in sets])
     order = np.argsort(dt, kind="stable")
@@ -115,21 +130,83 @@ def _find_epochs(
     )
 
 
-def grid_epochs(target: Target, tau_lo: float, tau_hi: float, step_s: float, star: int) -> EpochSet:
+def grid_epochs(
+    target: Target,
+    tau_lo: float,
+    tau_hi: float,
+    step_s: float,
+    star: int,
+    windows: FloatArray | None = None,
+) -> EpochSet:
     """Epochs every ``step_s`` seconds (barycentric TDB) with their u for back-to-back exposures
     (the ``untargeted`` strategy): the exposures fall at whatever phase they do, and each is
     assigned its u from the phase model (Eq. u_precessing_app).
 
     The grid is anchored on whole multiples of ``step_s`` since the reference epoch, so every
-    span of a run sees the same grid.
+    span of a run sees the same grid; ``windows`` (sorted, disjoint, TDB s since the reference)
+    keeps only its epochs inside them, with the values the whole grid gives them.
     """
     k0, k1 = math.ceil(tau_lo / step_s), math.floor(tau_hi / step_s)
     k = np.arange(k0, max(k0, k1 + 1), dtype=np.int64)
+    if windows is not None:
+        k = k[_inside(np.asarray(k * step_s, dtype=np.float64), windows)]
     origin = float(k0 * step_s)
     dt = np.asarray((k - k0) * step_s, dtype=np.float64)
     nan = np.full(dt.shape, np.nan)
     u = np.mod(arg_latitude(target.params, dt, star, origin), TWO_PI)
     return EpochSet("untargeted", star, u, k, origin, dt, nan, nan.copy(), nan.copy(), nan.copy())
+
+
+def _inside(tau: FloatArray, windows: FloatArray) -> NDArray[np.bool_]:
+    """Whether each ``tau`` lies in one of the sorted, disjoint ``windows`` (m, 2)."""
+    if windows.size == 0:
+        return np.zeros(tau.shape, dtype=bool)
+    j = np.searchsorted(windows[:, 0], tau, side="right") - 1
+    return np.asarray((j >= 0) & (tau <= windows[np.maximum(j, 0), 1]))
+
+
+def _merged(w: FloatArray) -> FloatArray:
+    """Intervals (m, 2) merged where they overlap or touch: sorted and disjoint."""
+    if w.size == 0:
+        return np.zeros((0, 2))
+    w = w[np.argsort(w[:, 0], kind="stable")]
+    ends = np.maximum.accumulate(w[:, 1])
+    first = np.flatnonzero(np.concatenate([[True], w[1:, 0] > ends[:-1]]))
+    last = np.concatenate([first[1:] - 1, [w.shape[0] - 1]])
+    return np.stack([w[first, 0], ends[last]], axis=1)
+
+
+def night_search_x(
+    night: NightConstraint, sky: SkyModel, span_x: tuple[float, float]
+) -> FloatArray:
+    """Intervals (m, 2) [s on the plan's axis] that hold every instant of ``span_x`` at which
+    the Sun may be below the ``night`` limit.
+
+    The Sun's altitude is screened on nodes :data:`~ucbplan.observing.constraints.DARK_STEP_S`
+    apart with the rate bound of the constraints (a node certainly in daylight is in daylight
+    for one node spacing either side); each run of the other nodes, widened by one spacing,
+    is an interval. An instant at night has its nearest node (≤ half a spacing away) in a run.
+    """
+    lo, hi = float(span_x[0]), float(span_x[1])
+    n = math.ceil((hi - lo) / DARK_STEP_S) + 1
+    nodes = np.asarray(lo + DARK_STEP_S * np.arange(n), dtype=np.float64)
+    maybe = np.concatenate([[False], night.screen(sky, 0, nodes, DARK_STEP_S) != -1, [False]])
+    edge = np.flatnonzero(np.diff(maybe.astype(np.int8)))
+    first, last = edge[0::2], edge[1::2] - 1
+    return np.stack([nodes[first] - DARK_STEP_S, nodes[last] + DARK_STEP_S], axis=1)
+
+
+def _epoch_windows(
+    target: Target, epochs: EpochAxis, search_x: FloatArray, plan: ExposurePlan
+) -> FloatArray:
+    """The night intervals ``search_x`` as epoch windows (TDB s since the target's reference):
+    widened by a block and two orbits (a block that touches the night, and the second block
+    of its session) and by the light time (:data:`_EPOCH_PAD_S`), merged."""
+    f = abs(float(target.params.f_gw))
+    orbit = 2.0 / f if f > 0 else math.inf
+    pad = 1.5 * plan.span_s + 2.0 * orbit + _EPOCH_PAD_S
+    lag = epochs.from_x(0.0)
+    return _merged(np.asarray(search_x + lag + np.array([-pad, pad]), dtype=np.float64))
 
 
 def _combined(anchor: str | float) -> bool:
@@ -149,9 +226,15 @@ def candidate_blocks(
     plan: ExposurePlan,
     star: int = 1,
     grid_step_s: float | None = None,
+    search_x: FloatArray | None = None,
 ) -> Candidates:
     """Every anchor epoch whose block centre lies in ``span_x`` (s on ``axis``); with
     ``grid_step_s``, every epoch of a back-to-back grid instead (:func:`grid_epochs`).
+
+    With ``search_x`` (the nights, :func:`night_search_x`), epochs are searched only there,
+    widened by a block and two orbits: every block that may touch the night, and the second
+    block of its session, is found with the values the whole span gives it (≤ 2 ulp of its
+    epoch); daytime epochs, which fail the night, are never solved (issue 23).
 
     Notes
     -----
@@ -161,10 +244,11 @@ def candidate_blocks(
     epochs = axis.epoch_axis(target.t_ref)
     lo, hi = span_x
     tau_lo, tau_hi = epochs.from_x(lo) - _EPOCH_PAD_S, epochs.from_x(hi) + _EPOCH_PAD_S
+    windows = None if search_x is None else _epoch_windows(target, epochs, search_x, plan)
     if grid_step_s is not None:
-        es = grid_epochs(target, tau_lo, tau_hi, grid_step_s, star)
+        es = grid_epochs(target, tau_lo, tau_hi, grid_step_s, star, windows)
     else:
-        es = _find_epochs(target, tau_lo, tau_hi, mode.anchor, star)
+        es = _find_epochs(target, tau_lo, tau_hi, mode.anchor, star, windows)
     x_mid = interp.site_x(epochs.to_x(es.origin_s, es.dt_s))
     keep = (x_mid >= lo) & (x_mid < hi)
     half = plan.span_s / 2.0
@@ -234,6 +318,8 @@ class PlanFrame:
     sky: SkyModel
     track: SiteTrack
     constraints: ConstraintSet
+    #: Where anchor epochs are searched (:func:`night_search_x`); None: the whole span.
+    search_x: FloatArray | None = None
 
 
 @dataclass(frozen=True)
@@ -353,6 +439,7 @@ def _target_run(
         te.plan,
         settings.star,
         te.step_s if te.strategy == "untargeted" else None,
+        frame.search_x,
     )
     tau = cand.tau_origin_s + cand.dt_s
     valid = (tau >= cand.epochs.tau(since)) & (tau <= cand.epochs.tau(until))
@@ -389,13 +476,15 @@ def prepare_runs(
     axis = TimeAxis.starting_at(windows[0].start, site.location)
     span_x = (0.0, axis.x(windows[-1].end))
     coords = SkyCoord([t.ra_deg for t in targets] * u.deg, [t.dec_deg for t in targets] * u.deg)
+    sky = SkyModel.build(site.location, axis.origin, span_x, coords)
     frame = PlanFrame(
         mode=mode,
         axis=axis,
         span_x=span_x,
-        sky=SkyModel.build(site.location, axis.origin, span_x, coords),
+        sky=sky,
         track=SiteTrack.build(axis.origin, span_x, site.location),
         constraints=constraints,
+        search_x=night_search_x(constraints.night, sky, span_x),
     )
     runs, warns = [], []
     for i, t in enumerate(targets):

@@ -84,15 +84,21 @@ def night_dates(first: str | date, count: int = 1) -> list[date]:
 
 
 def night_windows(site: Site, nights: Sequence[date]) -> list[NightWindow]:
-    """UTC windows from local noon of each date to local noon the next day at ``site``."""
+    """UTC windows from local noon of each date to local noon the next day at ``site``.
+
+    All edges are converted in one vectorised ``Time`` (the same values as one by one).
+    """
+    if not nights:
+        return []
     zone = site.zone
-    out = []
-    for d in nights:
-        start = datetime.combine(d, time(12, 0), tzinfo=zone)
-        end = datetime.combine(d + timedelta(days=1), time(12, 0), tzinfo=zone)
-        with quiet_erfa():
-            out.append(NightWindow(d.isoformat(), Time(start, scale="utc"), Time(end, scale="utc")))
-    return out
+    edges = [
+        datetime.combine(d + timedelta(days=j), time(12, 0), tzinfo=zone)
+        for d in nights
+        for j in (0, 1)
+    ]
+    with quiet_erfa():
+        t = Time(edges, scale="utc")
+    return [NightWindow(d.isoformat(), t[2 * k], t[2 * k + 1]) for k, d in enumerate(nights)]
 
 
 def night_spans(windows: Sequence[NightWindow], axis: TimeAxis) -> list[NightSpan]:

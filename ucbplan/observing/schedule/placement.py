@@ -170,7 +170,11 @@ def _no_session_reason(run: TargetRun, frame: PlanFrame, window: tuple[float, fl
             f"never at airmass <= {limit.max_airmass:g} during {night.twilight} night "
             f"(highest altitude {alt.max():.1f} deg)"
         )
-    in_win = (c.x_mid >= window[0]) & (c.x_mid < window[1])
+    # blocks centred at night: the same whether epochs were searched at night or all day
+    in_win = np.flatnonzero((c.x_mid >= window[0]) & (c.x_mid < window[1]))
+    in_win = in_win[night.ok(frame.sky, run.index, c.x_mid[in_win])]
+    if not in_win.size:
+        return "no anchor epoch in the night window"
     fails = Counter(int(f) for f in c.first_failed[in_win] if f >= 0)
     if not fails:
         return "no session fits: the second block of each pair fails the constraints"
@@ -187,7 +191,7 @@ def unusable_reason(
             f"smearing floor: no exposure keeps Lambda_K >= {settings.lambda_k_floor:g}; lower "
             "--min-lambda-k or pass --allow-smeared"
         )
-    if not np.any(run.valid[js]):
+    if js.size and not np.any(run.valid[js]):
         if span.x1 <= frame.axis.x(run.since) and run.target.kind != "timing":
             return (
                 f"before the LISA observation starts ({run.since.tdb.iso[:10]} TDB): a LISA "
@@ -212,8 +216,6 @@ def night_usable(
 ) -> NDArray[np.int64] | str:
     """Indices of ``run``'s usable candidates in the night ``span``, or why there are none."""
     j0, j1 = np.searchsorted(run.cand.x_mid, [span.x0, span.x1])
-    if j1 == j0:
-        return "no anchor epoch in the night window"
     js = np.arange(j0, j1)
     usable = js[(run.ok[js] > 0) & run.valid[js]]
     if usable.size == 0:
