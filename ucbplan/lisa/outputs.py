@@ -1,6 +1,6 @@
 """Files of a LISA simulation: posterior target YAML, samples ECSV, chain .npz.
 
-:func:`write_simulation` writes a :class:`~ucbplan.lisa.pipeline.SimulationResult` as one file
+:func:`write_simulation` writes a :class:`~ucbplan.lisa.simulation.SimulationResult` as one file
 set (:func:`ucbplan.io.write_file_set`: all three files or none, temporaries that never block a
 rerun); :func:`save_interrupted` keeps the chain of a run stopped by Ctrl-C; :func:`load_resume`
 reads a chain back to continue it with the same data.
@@ -22,7 +22,7 @@ from ucbplan.lisa import posterior as post
 from ucbplan.lisa.sampler import SamplerResult, chain_writer, save_chain
 
 if TYPE_CHECKING:
-    from ucbplan.lisa.pipeline import SimulationProblem, SimulationResult
+    from ucbplan.lisa.simulation import SimulationProblem, SimulationResult
     from ucbplan.target import Target
 
 __all__ = [
