@@ -19,13 +19,14 @@ import typer
 from rich.markup import escape
 
 from ucbplan.cli._console import (
-    check_output_path,
+    check_output_and_plot,
     dump_json,
     err_console,
     pick_format,
     rich_table,
     write_output,
 )
+from ucbplan.cli._options import OverwriteAllOpt
 from ucbplan.errors import InputError
 
 __all__ = ["ephemeris_fit"]
@@ -69,7 +70,6 @@ OutputOpt = Annotated[
     Path | None,
     typer.Option("-o", "--output", help="Write the timing target (.yaml) or report (.json) here."),
 ]
-OverwriteOpt = Annotated[bool, typer.Option("--overwrite", help="Replace existing output files.")]
 PlotOpt = Annotated[Path | None, typer.Option("--plot", help="Write the O-C figure (.png/.pdf).")]
 LikeOpt = Annotated[
     Path | None,
@@ -93,7 +93,7 @@ def ephemeris_fit(
     clip: ClipOpt = None,
     fmt: FormatOpt = None,
     output: OutputOpt = None,
-    overwrite: OverwriteOpt = False,
+    overwrite: OverwriteAllOpt = False,
     plot: PlotOpt = None,
     like: LikeOpt = None,
     name: NameOpt = None,
@@ -118,7 +118,7 @@ def ephemeris_fit(
             "--format yaml); ignored",
             markup=False,
         )
-    _check_outputs(output, plot, overwrite)
+    check_output_and_plot(output, plot, overwrite)
     guess = read_initial(initial) if initial is not None else None
     if period is not None:
         guess = period_guess(period)
@@ -141,18 +141,6 @@ def ephemeris_fit(
         write_yaml(target_document(fit, ident, times_path.name), buf)
         text = buf.getvalue()
     _write(text, output, plot, fit, times, overwrite)
-
-
-def _check_outputs(output: Path | None, plot: Path | None, overwrite: bool) -> None:
-    """Refuse clashing or existing outputs before any work is done."""
-    if output is not None and plot is not None and output.resolve() == plot.resolve():
-        raise InputError(f"-o, --plot: both name {output}; give two different files")
-    if output is not None:
-        check_output_path(output, overwrite)
-    if plot is not None:
-        from ucbplan.plotting import check_figure_path
-
-        check_figure_path(plot, overwrite)
 
 
 def _write(
