@@ -55,7 +55,8 @@ from ucbplan.lisa.simulation import (
 )
 
 if TYPE_CHECKING:
-    from ucbplan.lisa.waveform import FourLineModel, SourceParams
+    from ucbplan.lisa.source import SourceParams
+    from ucbplan.lisa.waveform import FourLineModel
     from ucbplan.target import Target
 
 __all__ = [

@@ -161,7 +161,7 @@ def waveform_plot(lines: WaveformLines, path: Path, *, overwrite: bool = False) 
     """:func:`asd_plot` of ``ucbplan waveform``: the bands with instrument-only noise and the
     line positions with and without the apsidal shift."""
     from ucbplan.lisa.noise import NoiseModel, psd_a
-    from ucbplan.lisa.waveform import line_frequencies
+    from ucbplan.lisa.source import line_frequencies
 
     fm, t_obs_s = lines.model.model, lines.model.t_obs_s
     inst = psd_a(fm.freqs_hz, t_obs_s, NoiseModel(foreground=False))

@@ -19,7 +19,8 @@ from ucbplan.lisa.noise import SANGRIA
 from ucbplan.lisa.sampler import SamplerResult
 
 if TYPE_CHECKING:
-    from ucbplan.lisa.waveform import FourLineModel, SourceParams
+    from ucbplan.lisa.source import SourceParams
+    from ucbplan.lisa.waveform import FourLineModel
     from ucbplan.target import Target
 
 __all__ = [
