@@ -27,7 +27,7 @@ TABLE_Q = 32
 
 #: Largest m n k of one real matrix product. OpenBLAS runs dgemm on one thread up to
 #: 65536 x GEMM_MULTITHREAD_THRESHOLD (4 in numpy's builds) and threads above it; threaded, the
-#: link sums were 5-10x slower on a shared two-core machine, so products are split into column
+#: link sums run 5-10x slower on a shared two-core machine, so products are split into column
 #: blocks below this size.
 GEMM_SERIAL = 65536 * 4
 

@@ -4,7 +4,7 @@ The JSON report gives each parameter as ``{value, sigma, unit}`` (T0's value a f
 ``"BJD_TDB …"`` string, its σ in seconds), the covariance (T0 in seconds), χ², dof, the
 reference, outliers, clipped rows, notes and every point's O − C.
 
-The target file is the ``timing:`` kind of target (issue 10):
+The target file is the ``timing:`` kind of target:
 
     name: …
     sky: {ra: "…", dec: "…"}
