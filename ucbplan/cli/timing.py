@@ -103,7 +103,7 @@ def ephemeris_fit(
     """Fit T0, P, Pdot (--terms) to eclipse times; write a timing target, report and O-C plot."""
     from ucbplan.inputs import check_number
     from ucbplan.timing import fit_times, period_guess, read_initial, read_times
-    from ucbplan.timing.document import fit_report, identity, target_document, write_yaml
+    from ucbplan.timing.document import fit_report, target_document, write_yaml
 
     fmt = pick_format(output, fmt, _FORMATS)
     if terms not in (2, 3, 4):
@@ -111,13 +111,7 @@ def ephemeris_fit(
     check_number("--clip", clip, 1.0, 1e6, "σ", "times within 1σ are never outliers")
     if period is not None and initial is not None:
         raise InputError("--period, --initial: give one first ephemeris, not both")
-    ident = identity(like, name, ra, dec) if fmt == "yaml" else None
-    if ident is None and any(x is not None for x in (like, name, ra, dec)):
-        err_console.print(
-            "note: --like/--name/--ra/--dec only shape the timing target (-o FILE.yaml or "
-            "--format yaml); ignored",
-            markup=False,
-        )
+    ident = _identity(fmt, like, name, ra, dec)
     check_output_and_plot(output, plot, overwrite)
     guess = read_initial(initial) if initial is not None else None
     if period is not None:
@@ -141,6 +135,22 @@ def ephemeris_fit(
         write_yaml(target_document(fit, ident, times_path.name), buf)
         text = buf.getvalue()
     _write(text, output, plot, fit, times, overwrite)
+
+
+def _identity(
+    fmt: str, like: Path | None, name: str | None, ra: str | None, dec: str | None
+) -> Any:
+    """Name and sky of the timing target (``--format yaml`` only; else a note if given)."""
+    from ucbplan.timing.document import identity
+
+    ident = identity(like, name, ra, dec) if fmt == "yaml" else None
+    if ident is None and any(x is not None for x in (like, name, ra, dec)):
+        err_console.print(
+            "note: --like/--name/--ra/--dec only shape the timing target (-o FILE.yaml or "
+            "--format yaml); ignored",
+            markup=False,
+        )
+    return ident
 
 
 def _write(

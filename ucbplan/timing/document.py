@@ -71,19 +71,7 @@ def fit_report(fit: EphemerisFit, times: EclipseTimes) -> dict[str, Any]:
             "sigma": float(sig[i]),
             "unit": UNITS[i],
         }
-    points = [
-        {
-            "row": int(times.rows[i]),
-            "bjd_tdb": str(times.jd[i]),
-            "kind": "secondary" if times.secondary[i] else "primary",
-            "cycle": float(fit.nu[i]),
-            "o_minus_c_s": float(fit.o_minus_c_s[i]),
-            "sigma_s": float(times.sigma_s[i]),
-            "z": float(fit.z[i]),
-            "used": bool(fit.used[i]),
-        }
-        for i in range(times.n)
-    ]
+    points = _points(fit, times)
     by_row = {p["row"]: p for p in points}
     return {
         "source": fit.source,
@@ -115,6 +103,23 @@ def fit_report(fit: EphemerisFit, times: EclipseTimes) -> dict[str, Any]:
         "notes": list(fit.notes),
         "points": points,
     }
+
+
+def _points(fit: EphemerisFit, times: EclipseTimes) -> list[dict[str, Any]]:
+    """One JSON record per measured time: row, epoch, kind, cycle, O − C, σ, z, used."""
+    return [
+        {
+            "row": int(times.rows[i]),
+            "bjd_tdb": str(times.jd[i]),
+            "kind": "secondary" if times.secondary[i] else "primary",
+            "cycle": float(fit.nu[i]),
+            "o_minus_c_s": float(fit.o_minus_c_s[i]),
+            "sigma_s": float(times.sigma_s[i]),
+            "z": float(fit.z[i]),
+            "used": bool(fit.used[i]),
+        }
+        for i in range(times.n)
+    ]
 
 
 def identity(
