@@ -25,12 +25,8 @@ import pytest
 from ucbplan.lisa.noise import NoiseModel, psd_a
 from ucbplan.lisa.orbits import C_M_S, EqualArmOrbits
 from ucbplan.lisa.response import response_grid, sky_frame
-from ucbplan.lisa.waveform import (
-    FourLineModel,
-    SourceParams,
-    line_amplitudes,
-    line_frequencies,
-)
+from ucbplan.lisa.source import SourceParams, line_amplitudes, line_frequencies
+from ucbplan.lisa.waveform import FourLineModel
 
 T_4YR = 4 * 31558149.7635
 # Fiducial source, Eq. ecc_mcmc_inj; ecliptic sky of (l, b) = (-93.56, -19.19) deg.

@@ -22,6 +22,7 @@ from ucbplan.io import (
 
 __all__ = [
     "TABLE_FORMATS",
+    "check_output_and_plot",
     "check_output_path",
     "dump_json",
     "err_console",
@@ -115,6 +116,18 @@ def rich_table(title: str, columns: list[str], **kwargs: Any) -> RichTable:
     for name in columns:
         table.add_column(escape(name), justify="right")
     return table
+
+
+def check_output_and_plot(output: Path | None, plot: Path | None, overwrite: bool) -> None:
+    """Refuse an -o and a --plot naming one file, or either existing, before any work is done."""
+    if output is not None and plot is not None and output.resolve() == plot.resolve():
+        raise InputError(f"-o, --plot: both name {output}; give two different files")
+    if output is not None:
+        check_output_path(output, overwrite)
+    if plot is not None:
+        from ucbplan.plotting import check_figure_path
+
+        check_figure_path(plot, overwrite)
 
 
 def pick_format(output: Path | None, fmt: str | None, formats: tuple[str, ...]) -> str:

@@ -15,7 +15,7 @@ import typer
 from rich.table import Table as RichTable
 
 from ucbplan.cli._console import (
-    check_output_path,
+    check_output_and_plot,
     dump_json,
     err_console,
     literal,
@@ -23,15 +23,21 @@ from ucbplan.cli._console import (
     write_output,
 )
 from ucbplan.cli._epochs import epoch_option
-from ucbplan.cli._options import ExtinctionOpt, MaxVisitOpt, SigmaFloorOpt, SigmaLawOpt
+from ucbplan.cli._options import (
+    ExtinctionOpt,
+    MaxVisitOpt,
+    OverwriteAllOpt,
+    SigmaFloorOpt,
+    SigmaLawOpt,
+    TargetArg,
+)
 from ucbplan.cli._strategies import print_comparison
 from ucbplan.core.constants import DAY_S, MONTH_S, YEAR_S
-from ucbplan.errors import InputError, UcbplanError, shorten
+from ucbplan.errors import UcbplanError, shorten
 
 __all__ = ["feasibility_command", "register"]
 
 _OptFloat = float | None
-TargetArg = Annotated[Path, typer.Argument(help="Target YAML file.")]
 M1Opt = Annotated[_OptFloat, typer.Option("--m1", help="Mass of star 1 (M_sun) (else file).")]
 M2Opt = Annotated[_OptFloat, typer.Option("--m2", help="Mass of star 2 (M_sun) (else file).")]
 ReadoutOpt = Annotated[float, typer.Option("--readout", help="Readout per exposure (s).")]
@@ -85,7 +91,6 @@ FormatOpt = Annotated[
     typer.Option("--format", help="table (stderr) | json (stdout or -o; default with -o)."),
 ]
 OutputOpt = Annotated[Path | None, typer.Option("-o", "--output", help="JSON output file.")]
-OverwriteOpt = Annotated[bool, typer.Option("--overwrite", help="Replace existing output files.")]
 
 
 def feasibility_command(
@@ -107,7 +112,7 @@ def feasibility_command(
     plot: PlotOpt = None,
     fmt: FormatOpt = None,
     output: OutputOpt = None,
-    overwrite: OverwriteOpt = False,
+    overwrite: OverwriteAllOpt = False,
     sigma_floor: SigmaFloorOpt = 0.0,
     extinction: ExtinctionOpt = None,
     readout: ReadoutOpt = 0.0,
@@ -121,7 +126,6 @@ def feasibility_command(
 ) -> None:
     """Expected signal sizes (paper Section 3): K_j, apsidal rates, ΔK, Δv_aps, e floor, Δv_CM,
     and GW vs optical timing errors."""
-    from ucbplan.feasibility import optical_ephemeris, plot_report, report_for_target
     from ucbplan.observing.schedule.options import plan_settings
     from ucbplan.target import load_target
 
@@ -138,38 +142,86 @@ def feasibility_command(
         min_lambda_k=min_lambda_k,
         allow_smeared=allow_smeared,
     )
-    law = settings.sigma_model
-    sigma_ref = law.sigma_kms if law is not None else settings.sigma_v_kms
-    _check_options(n_spectra, m1, m2, sigma_ref, m3, a_out)
-    _check_outputs(output, plot, overwrite)
+    sigma_ref = _checked_options(settings, n_spectra, m1, m2, m3, a_out)
+    check_output_and_plot(output, plot, overwrite)
     tgt = load_target(target)
+    law = settings.sigma_model
     compare = compare_strategies or goal is not None or (law is not None and law.follows_exposure)
-    optical = optical_ephemeris(
-        tgt.params.nodal_period_s,
-        sigma_phase_cycles=opt_phase,
-        sigma_f_rel=opt_f_rel,
-        sigma_fdot_rel_s=opt_fdot_rel,
-        sigma_p_s=opt_p,
-        sigma_pdot=opt_pdot,
-        sigma_t0_s=opt_t0,
-    )
+    optical = _optical(tgt, opt_phase, opt_f_rel, opt_fdot_rel, opt_p, opt_pdot, opt_t0)
     offset = _optical_offset(opt_epoch, tgt.t_ref) if opt_epoch else 0.0
-    report = report_for_target(
+    report = _report(tgt, m1, m2, sigma_ref, n_spectra, baseline, m3, a_out, optical, offset)
+    _emit(report, tgt, settings if compare else None, fmt, output, plot, overwrite)
+
+
+def _optical(
+    tgt: Any,
+    sigma_phase: float | None,
+    sigma_f_rel: float | None,
+    sigma_fdot_rel: float | None,
+    sigma_p: float | None,
+    sigma_pdot: float | None,
+    sigma_t0: float | None,
+) -> Any:
+    """The optical ephemeris of the ``--optical-sigma-*`` options, at the target's period."""
+    from ucbplan.feasibility import optical_ephemeris
+
+    return optical_ephemeris(
+        tgt.params.nodal_period_s,
+        sigma_phase_cycles=sigma_phase,
+        sigma_f_rel=sigma_f_rel,
+        sigma_fdot_rel_s=sigma_fdot_rel,
+        sigma_p_s=sigma_p,
+        sigma_pdot=sigma_pdot,
+        sigma_t0_s=sigma_t0,
+    )
+
+
+def _report(
+    tgt: Any,
+    m1: float | None,
+    m2: float | None,
+    sigma_kms: float | None,
+    n_spectra: int,
+    baseline: str,
+    m3: float,
+    a_out: float,
+    optical: Any,
+    offset_s: float,
+) -> Any:
+    """:func:`ucbplan.feasibility.report_for_target` in SI units from the options."""
+    from ucbplan.feasibility import report_for_target
+
+    return report_for_target(
         tgt,
         m1_msun=m1,
         m2_msun=m2,
-        sigma_v_m_s=sigma_ref * 1e3 if sigma_ref is not None else None,
+        sigma_v_m_s=sigma_kms * 1e3 if sigma_kms is not None else None,
         n_spectra=n_spectra,
         baseline_s=_parse_baseline(baseline),
         m3_msun=m3,
         a_out_au=a_out,
         optical=optical,
-        optical_offset_s=offset,
+        optical_offset_s=offset_s,
     )
+
+
+def _emit(
+    report: Any,
+    tgt: Any,
+    compare: Any,
+    fmt: str,
+    output: Path | None,
+    plot: Path | None,
+    overwrite: bool,
+) -> None:
+    """The figure (--plot), then the report and, with the plan settings ``compare``, the
+    comparison of exposure strategies, as JSON or tables."""
+    from ucbplan.feasibility import plot_report
+
     if plot is not None:
         plot_report(report, plot, overwrite=overwrite)
         err_console.print(f"wrote {literal(plot)}")
-    comparison = _comparison(tgt, settings) if compare else None
+    comparison = _comparison(tgt, compare) if compare is not None else None
     if fmt == "json":
         doc = {"units": "SI (m/s, s, rad, rad/s); masses M_sun", **report.to_dict()}
         if comparison is not None:
@@ -187,27 +239,20 @@ def _comparison(target: Any, settings: Any) -> Any:
     return compare_target_strategies(target, settings)
 
 
-def _check_outputs(output: Path | None, plot: Path | None, overwrite: bool) -> None:
-    """Refuse a bad figure name or an existing output before any work is done."""
-    if plot is not None:
-        from ucbplan.plotting import check_figure_path
-
-        if output is not None and output.resolve() == plot.resolve():
-            raise InputError(f"-o, --plot: both name {output}; give two different files")
-        check_figure_path(plot, overwrite)
-    if output is not None:
-        check_output_path(output, overwrite)
-
-
-def _check_options(
+def _checked_options(
+    settings: Any,
     n_spectra: int,
     m1: float | None,
     m2: float | None,
-    sigma_v: float | None,
     m3: float,
     a_out: float,
-) -> None:
-    """Reject bad option values with the option's name (before any file is read)."""
+) -> float | None:
+    """Reject bad option values with the option's name (before any file is read).
+
+    Returns the reference σ_v [km/s]: the σ_v law's at its reference exposure, else --sigma-v.
+    """
+    law = settings.sigma_model
+    sigma_v = law.sigma_kms if law is not None else settings.sigma_v_kms
     check_number("--n-spectra", n_spectra, 0, 1e9, "spectra")
     wd = "white dwarfs weigh between ~0.05 M_sun and the Chandrasekhar mass"
     check_number("--m1", m1, 0.05, 1.5, "M_sun", wd)
@@ -215,6 +260,7 @@ def _check_options(
     check_number("--sigma-v", sigma_v, 0.0, 1e4, "km/s")
     check_number("--m3", m3, 0.0, 1e3, "M_sun")
     check_number("--a-out", a_out, 0.0, 1e6, "AU")
+    return sigma_v
 
 
 def _parse_baseline(text: str) -> float:

@@ -2,28 +2,73 @@
 
 A thin shell: parse options, build the model from the target file, call
 :mod:`ucbplan.lisa.pipeline` (or :mod:`ucbplan.lisa.lines`), print. Human-readable summaries go to
-stderr.
+stderr. The option types are module-level aliases so each command reads as its parameter list.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 from rich.markup import escape
 
 from ucbplan.cli._console import check_output_path, err_console, write_output
+from ucbplan.cli._options import OverwriteAllOpt
 from ucbplan.errors import InputError, UcbplanError
 from ucbplan.io import output_format
 from ucbplan.lisa import MAX_N_BINS as MAX_BINS
 
 if TYPE_CHECKING:
     from ucbplan.lisa.outputs import SimulationFiles
-    from ucbplan.lisa.pipeline import LisaModel, SimulationProblem, SimulationResult
     from ucbplan.lisa.sampler import SamplerInterrupted
+    from ucbplan.lisa.simulation import LisaModel, SimulationProblem, SimulationResult
 
 __all__ = ["register"]
+
+InjectionArg = Annotated[
+    Path, typer.Argument(help="Target or injection YAML (needs amplitude, psi).")
+]
+TObsOpt = Annotated[str | None, typer.Option("--t-obs", help="Observation length, e.g. '4yr'.")]
+BinsOpt = Annotated[int, typer.Option("--n-bins", help="Band width N in bins.")]
+# simulate
+PosteriorOutputOpt = Annotated[
+    Path, typer.Option("-o", "--output", help="Posterior target YAML to write.")
+]
+SeedOpt = Annotated[int, typer.Option("--seed", min=0, help="Seed for the noise and the sampler.")]
+WalkersOpt = Annotated[int, typer.Option("--walkers", help="emcee walkers (>= 2 x parameters).")]
+StepsOpt = Annotated[
+    int, typer.Option("--steps", min=1, help="Steps (minimum with --until-converged).")
+]
+UntilConvergedOpt = Annotated[
+    bool, typer.Option("--until-converged", help="Extend the chain until it is >= 50 τ long.")
+]
+MaxStepsOpt = Annotated[int, typer.Option("--max-steps", min=1, help="Cap for --until-converged.")]
+NoiseOpt = Annotated[bool, typer.Option("--noise/--no-noise", help="Add a Gaussian noise draw.")]
+SimulateBinsOpt = Annotated[
+    int, typer.Option("--n-bins", help="Band width N in bins (injection = templates).")
+]
+CircularFitOpt = Annotated[
+    bool, typer.Option("--circular", help="Fit the 6-parameter circular model.")
+]
+ChainOpt = Annotated[Path | None, typer.Option("--chain", help="Chain .npz (default: next to -o).")]
+PlotsOpt = Annotated[Path | None, typer.Option("--plots", help="Folder for corner plots.")]
+ResumeOpt = Annotated[
+    Path | None,
+    typer.Option("--resume", help="Continue a saved chain (.npz) of a run with the same options."),
+]
+# fisher
+ForecastOutputOpt = Annotated[
+    Path | None, typer.Option("-o", "--output", help="Forecast target YAML.")
+]
+CircularOpt = Annotated[bool, typer.Option("--circular", help="6-parameter circular model.")]
+OverwriteForecastOpt = Annotated[
+    bool, typer.Option("--overwrite", help="Replace an existing output.")
+]
+# waveform
+LinesOutputOpt = Annotated[Path, typer.Option("-o", "--output", help="Lines table (ECSV).")]
+AsdPlotOpt = Annotated[Path | None, typer.Option("--plot", help="ASD figure of the three bands.")]
+OverwritesOpt = Annotated[bool, typer.Option("--overwrite", help="Replace existing outputs.")]
 
 
 def _t_obs(text: str | None, default_s: float) -> float:
@@ -90,36 +135,56 @@ def _summary(
 
 
 def simulate(
-    target: Path = typer.Argument(..., help="Target or injection YAML (needs amplitude, psi)."),
-    output: Path = typer.Option(..., "-o", "--output", help="Posterior target YAML to write."),
-    t_obs: str | None = typer.Option(None, "--t-obs", help="Observation length, e.g. '4yr'."),
-    seed: int = typer.Option(0, "--seed", min=0, help="Seed for the noise and the sampler."),
-    walkers: int = typer.Option(32, "--walkers", help="emcee walkers (>= 2 x parameters)."),
-    steps: int = typer.Option(
-        2000, "--steps", min=1, help="Steps (minimum with --until-converged)."
-    ),
-    until_converged: bool = typer.Option(
-        False, "--until-converged", help="Extend the chain until it is >= 50 τ long."
-    ),
-    max_steps: int = typer.Option(50000, "--max-steps", min=1, help="Cap for --until-converged."),
-    noise: bool = typer.Option(True, "--noise/--no-noise", help="Add a Gaussian noise draw."),
-    n_bins: int = typer.Option(
-        512, "--n-bins", help="Band width N in bins (injection = templates)."
-    ),
-    circular: bool = typer.Option(False, "--circular", help="Fit the 6-parameter circular model."),
-    chain: Path | None = typer.Option(None, "--chain", help="Chain .npz (default: next to -o)."),
-    plots: Path | None = typer.Option(None, "--plots", help="Folder for corner plots."),
-    resume: Path | None = typer.Option(
-        None, "--resume", help="Continue a saved chain (.npz) of a run with the same options."
-    ),
-    overwrite: bool = typer.Option(False, "--overwrite", help="Replace existing output files."),
+    target: InjectionArg,
+    output: PosteriorOutputOpt,
+    t_obs: TObsOpt = None,
+    seed: SeedOpt = 0,
+    walkers: WalkersOpt = 32,
+    steps: StepsOpt = 2000,
+    until_converged: UntilConvergedOpt = False,
+    max_steps: MaxStepsOpt = 50000,
+    noise: NoiseOpt = True,
+    n_bins: SimulateBinsOpt = 512,
+    circular: CircularFitOpt = False,
+    chain: ChainOpt = None,
+    plots: PlotsOpt = None,
+    resume: ResumeOpt = None,
+    overwrite: OverwriteAllOpt = False,
 ) -> None:
     """Simulate a LISA observation and sample the targeted-search posterior → target YAML."""
-    # Long only by its option declarations: parse, call ucbplan.lisa.pipeline, print.
-    from ucbplan.lisa import pipeline as lp
-    from ucbplan.lisa.outputs import simulation_files, write_simulation
-    from ucbplan.lisa.plots import simulation_corner_plots
+    from ucbplan.lisa.pipeline import SimulateOptions, prepare_simulation
     from ucbplan.lisa.sampler import SamplerInterrupted
+
+    files = _simulation_files(output, chain, plots, overwrite)
+    model = _model(target, t_obs, n_bins, circular)
+    options = SimulateOptions(
+        seed=seed,
+        walkers=walkers,
+        steps=steps,
+        until_converged=until_converged,
+        max_steps=max_steps,
+        noise=noise,
+        resume=resume,
+    )
+    problem = prepare_simulation(model, options)
+    err_console.print(
+        f"{model.base.name}: optimal SNR {problem.snr:.1f}, T_obs = {model.t_obs_s:.6f} s, "
+        f"N = {n_bins} bins, {problem.theta0.size} parameters, noise {'on' if noise else 'off'}, "
+        f"seed {seed}"
+    )
+    try:
+        result = _run_with_progress(problem, steps)
+    except SamplerInterrupted as stop:
+        _save_interrupted(problem, stop, files, target, overwrite)
+        raise
+    _write_simulation(result, files, target, plots, overwrite)
+
+
+def _simulation_files(
+    output: Path, chain: Path | None, plots: Path | None, overwrite: bool
+) -> SimulationFiles:
+    """The files ``simulate`` writes, each checked before any work is done."""
+    from ucbplan.lisa.outputs import simulation_files
 
     _require_suffix(output, "yaml", "-o", "the posterior target file")
     files = simulation_files(output, chain)
@@ -132,42 +197,30 @@ def simulate(
             raise UcbplanError(f"--plots: folder {plots} does not exist; create it first")
         for name in CORNER_NAMES:  # before sampling, not after it
             check_output_path(plots / name, overwrite)
-    model = _model(target, t_obs, n_bins, circular)
-    dim = model.theta0().size
-    if walkers < 2 * dim:
-        raise InputError(
-            f"--walkers: expected at least {2 * dim} (2 per parameter, {dim} parameters), "
-            f"got {walkers}"
-        )
-    options = lp.SimulateOptions(
-        seed=seed,
-        walkers=walkers,
-        steps=steps,
-        until_converged=until_converged,
-        max_steps=max_steps,
-        noise=noise,
-        resume=resume,
-    )
-    problem = lp.prepare_simulation(model, options)
-    err_console.print(
-        f"{model.base.name}: optimal SNR {problem.snr:.1f}, T_obs = {model.t_obs_s:.6f} s, "
-        f"N = {n_bins} bins, {problem.theta0.size} parameters, noise {'on' if noise else 'off'}, "
-        f"seed {seed}"
-    )
-    try:
-        result = _run_with_progress(problem, steps)
-    except SamplerInterrupted as stop:
-        _save_interrupted(problem, stop, files, target, overwrite)
-        raise
+    return files
+
+
+def _write_simulation(
+    result: SimulationResult,
+    files: SimulationFiles,
+    target: Path,
+    plots: Path | None,
+    overwrite: bool,
+) -> None:
+    """Warnings, the posterior file set, the summary table and the corner plots."""
+    from ucbplan.lisa.outputs import write_simulation
+    from ucbplan.lisa.plots import simulation_corner_plots
+
     for warning in result.warnings:
         err_console.print(f"[yellow]warning: {escape(warning)}[/yellow]")
     write_simulation(result, files, overwrite=overwrite, source_name=target.name)
-    title = f"{model.base.name} (posterior): posterior vs injection"
+    title = f"{result.model.base.name} (posterior): posterior vs injection"
     sigma, mean = result.posterior_sigma, result.posterior_mean
     _summary(title, result.names, result.injected, sigma, mean, result.fisher_sigma)
     if plots is not None:
         simulation_corner_plots(result, plots, overwrite=overwrite)
-    err_console.print(f"wrote {escape(f'{output}, {files.samples.name}, {files.chain.name}')}")
+    written = f"{files.target}, {files.samples.name}, {files.chain.name}"
+    err_console.print(f"wrote {escape(written)}")
 
 
 def _save_interrupted(
@@ -224,12 +277,12 @@ def _run_with_progress(problem: SimulationProblem, steps: int) -> SimulationResu
 
 
 def fisher(
-    target: Path = typer.Argument(..., help="Target or injection YAML (needs amplitude, psi)."),
-    output: Path | None = typer.Option(None, "-o", "--output", help="Forecast target YAML."),
-    t_obs: str | None = typer.Option(None, "--t-obs", help="Observation length, e.g. '4yr'."),
-    n_bins: int = typer.Option(512, "--n-bins", help="Band width N in bins."),
-    circular: bool = typer.Option(False, "--circular", help="6-parameter circular model."),
-    overwrite: bool = typer.Option(False, "--overwrite", help="Replace an existing output."),
+    target: InjectionArg,
+    output: ForecastOutputOpt = None,
+    t_obs: TObsOpt = None,
+    n_bins: BinsOpt = 512,
+    circular: CircularOpt = False,
+    overwrite: OverwriteForecastOpt = False,
 ) -> None:
     """Fisher-matrix forecast of the targeted-search parameters → target YAML (midpoint)."""
     from ucbplan.lisa.pipeline import fisher_forecast
@@ -251,12 +304,12 @@ def fisher(
 
 
 def waveform(
-    target: Path = typer.Argument(..., help="Target or injection YAML (needs amplitude, psi)."),
-    output: Path = typer.Option(..., "-o", "--output", help="Lines table (ECSV)."),
-    plot: Path | None = typer.Option(None, "--plot", help="ASD figure of the three bands."),
-    t_obs: str | None = typer.Option(None, "--t-obs", help="Observation length, e.g. '4yr'."),
-    n_bins: int = typer.Option(512, "--n-bins", help="Band width N in bins."),
-    overwrite: bool = typer.Option(False, "--overwrite", help="Replace existing outputs."),
+    target: InjectionArg,
+    output: LinesOutputOpt,
+    plot: AsdPlotOpt = None,
+    t_obs: TObsOpt = None,
+    n_bins: BinsOpt = 512,
+    overwrite: OverwritesOpt = False,
 ) -> None:
     """Injected TDI A, E per band (ECSV: band, freq_hz, A_re, A_im, E_re, E_im, psd_a)."""
     from ucbplan.lisa.lines import waveform_lines

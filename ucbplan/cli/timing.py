@@ -19,13 +19,14 @@ import typer
 from rich.markup import escape
 
 from ucbplan.cli._console import (
-    check_output_path,
+    check_output_and_plot,
     dump_json,
     err_console,
     pick_format,
     rich_table,
     write_output,
 )
+from ucbplan.cli._options import OverwriteAllOpt
 from ucbplan.errors import InputError
 
 __all__ = ["ephemeris_fit"]
@@ -69,7 +70,6 @@ OutputOpt = Annotated[
     Path | None,
     typer.Option("-o", "--output", help="Write the timing target (.yaml) or report (.json) here."),
 ]
-OverwriteOpt = Annotated[bool, typer.Option("--overwrite", help="Replace existing output files.")]
 PlotOpt = Annotated[Path | None, typer.Option("--plot", help="Write the O-C figure (.png/.pdf).")]
 LikeOpt = Annotated[
     Path | None,
@@ -93,7 +93,7 @@ def ephemeris_fit(
     clip: ClipOpt = None,
     fmt: FormatOpt = None,
     output: OutputOpt = None,
-    overwrite: OverwriteOpt = False,
+    overwrite: OverwriteAllOpt = False,
     plot: PlotOpt = None,
     like: LikeOpt = None,
     name: NameOpt = None,
@@ -103,7 +103,7 @@ def ephemeris_fit(
     """Fit T0, P, Pdot (--terms) to eclipse times; write a timing target, report and O-C plot."""
     from ucbplan.inputs import check_number
     from ucbplan.timing import fit_times, period_guess, read_initial, read_times
-    from ucbplan.timing.document import fit_report, identity, target_document, write_yaml
+    from ucbplan.timing.document import fit_report, target_document, write_yaml
 
     fmt = pick_format(output, fmt, _FORMATS)
     if terms not in (2, 3, 4):
@@ -111,14 +111,8 @@ def ephemeris_fit(
     check_number("--clip", clip, 1.0, 1e6, "σ", "times within 1σ are never outliers")
     if period is not None and initial is not None:
         raise InputError("--period, --initial: give one first ephemeris, not both")
-    ident = identity(like, name, ra, dec) if fmt == "yaml" else None
-    if ident is None and any(x is not None for x in (like, name, ra, dec)):
-        err_console.print(
-            "note: --like/--name/--ra/--dec only shape the timing target (-o FILE.yaml or "
-            "--format yaml); ignored",
-            markup=False,
-        )
-    _check_outputs(output, plot, overwrite)
+    ident = _identity(fmt, like, name, ra, dec)
+    check_output_and_plot(output, plot, overwrite)
     guess = read_initial(initial) if initial is not None else None
     if period is not None:
         guess = period_guess(period)
@@ -143,16 +137,20 @@ def ephemeris_fit(
     _write(text, output, plot, fit, times, overwrite)
 
 
-def _check_outputs(output: Path | None, plot: Path | None, overwrite: bool) -> None:
-    """Refuse clashing or existing outputs before any work is done."""
-    if output is not None and plot is not None and output.resolve() == plot.resolve():
-        raise InputError(f"-o, --plot: both name {output}; give two different files")
-    if output is not None:
-        check_output_path(output, overwrite)
-    if plot is not None:
-        from ucbplan.plotting import check_figure_path
+def _identity(
+    fmt: str, like: Path | None, name: str | None, ra: str | None, dec: str | None
+) -> Any:
+    """Name and sky of the timing target (``--format yaml`` only; else a note if given)."""
+    from ucbplan.timing.document import identity
 
-        check_figure_path(plot, overwrite)
+    ident = identity(like, name, ra, dec) if fmt == "yaml" else None
+    if ident is None and any(x is not None for x in (like, name, ra, dec)):
+        err_console.print(
+            "note: --like/--name/--ra/--dec only shape the timing target (-o FILE.yaml or "
+            "--format yaml); ignored",
+            markup=False,
+        )
+    return ident
 
 
 def _write(

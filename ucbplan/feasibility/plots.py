@@ -54,6 +54,27 @@ def plot_apsidal_signal(
     days = baseline / DAY_S
     fig, ax = plt.subplots(figsize=(9, 4.5), layout="constrained")
     colours = plt.get_cmap("viridis")(np.linspace(0, 0.9, len(omega1_values)))
+    _plot_grid(ax, baseline, k1_m_s, omega_dot_rad_s, e_values, omega1_values, colours)
+    if target_e is not None and target_omega1 is not None:
+        dv = delta_v_aps(k1_m_s, target_e, target_omega1, omega_dot_rad_s, baseline) / 1e3
+        label = f"target e={target_e:.3g}, ω₁={target_omega1:.2f} rad"
+        ax.plot(days, dv, color="k", lw=2.2, label=label)
+    _decorate(ax, t_aps, k1_m_s, title)
+    save_figure(fig, Path(path), overwrite=overwrite, dpi=120)
+
+
+def _plot_grid(
+    ax: Any,
+    baseline: Any,
+    k1_m_s: float,
+    omega_dot_rad_s: float,
+    e_values: tuple[float, ...],
+    omega1_values: tuple[float, ...],
+    colours: Any,
+) -> None:
+    """Δv_aps [km/s] against the baseline [d] for each (ω_1, e): a colour per ω_1, a line style
+    per e (with grey legend entries for the styles)."""
+    days = baseline / DAY_S
     for j, w1 in enumerate(omega1_values):
         for i, e in enumerate(e_values):
             dv = delta_v_aps(k1_m_s, e, w1, omega_dot_rad_s, baseline) / 1e3
@@ -68,12 +89,6 @@ def plot_apsidal_signal(
             )
     for i, e in enumerate(e_values):
         ax.plot([], [], color="grey", ls=_LINESTYLES[i % len(_LINESTYLES)], label=f"e={e:g}")
-    if target_e is not None and target_omega1 is not None:
-        dv = delta_v_aps(k1_m_s, target_e, target_omega1, omega_dot_rad_s, baseline) / 1e3
-        label = f"target e={target_e:.3g}, ω₁={target_omega1:.2f} rad"
-        ax.plot(days, dv, color="k", lw=2.2, label=label)
-    _decorate(ax, t_aps, k1_m_s, title)
-    save_figure(fig, Path(path), overwrite=overwrite, dpi=120)
 
 
 def _decorate(ax: Any, t_aps: float, k1_m_s: float, title: str) -> None:

@@ -358,19 +358,7 @@ def optical_ephemeris(
     """
     freq = (sigma_phase_cycles, sigma_f_rel, sigma_fdot_rel_s)
     period = (sigma_p_s, sigma_pdot, sigma_t0_s)
-    # 1σ bounds beyond which an ephemeris says nothing (and squares overflow): (name, max, unit)
-    limits = (
-        ("phase", 1.0, "cycles"),
-        ("f-rel", 1.0, ""),
-        ("fdot-rel", 1e-6, "1/s"),
-        ("p", period_s, "s"),
-        ("pdot", 1e-3, "s/s"),
-        ("t0", 1e9, "s"),
-    )
-    for (name, high, unit), value in zip(limits, (*freq, *period), strict=True):
-        if value is not None:
-            why = "a 1σ uncertainty; a larger one carries no phase information"
-            check_range(f"--optical-sigma-{name}", value, 0.0, high, unit, why)
+    _check_optical_sigmas(period_s, (*freq, *period))
     freq_style = any(v is not None for v in freq)
     period_style = any(v is not None for v in period)
     if freq_style and period_style:
@@ -386,6 +374,23 @@ def optical_ephemeris(
         phase, f_rel, fdot_rel = (v or 0.0 for v in freq)
         return OpticalEphemeris(phase, f_rel, fdot_rel, 1.0 / period_s)
     return None
+
+
+def _check_optical_sigmas(period_s: float, values: tuple[float | None, ...]) -> None:
+    """Each given σ of :func:`optical_ephemeris` (frequency style, then period style) is finite,
+    ≥ 0 and below the 1σ bound beyond which an ephemeris says nothing (and squares overflow)."""
+    limits = (  # (name, max, unit)
+        ("phase", 1.0, "cycles"),
+        ("f-rel", 1.0, ""),
+        ("fdot-rel", 1e-6, "1/s"),
+        ("p", period_s, "s"),
+        ("pdot", 1e-3, "s/s"),
+        ("t0", 1e9, "s"),
+    )
+    for (name, high, unit), value in zip(limits, values, strict=True):
+        if value is not None:
+            why = "a 1σ uncertainty; a larger one carries no phase information"
+            check_range(f"--optical-sigma-{name}", value, 0.0, high, unit, why)
 
 
 def optical_timing_s(eph: OpticalEphemeris, baseline_s: ArrayLike) -> NDArray[np.float64]:

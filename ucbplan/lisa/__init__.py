@@ -5,8 +5,10 @@ Appendices D and E). Import the submodules directly; nothing is loaded on packag
 
 Modules: :mod:`~ucbplan.lisa.pipeline` (the library behind ``ucbplan simulate | fisher``:
 :func:`~ucbplan.lisa.pipeline.build_model`, :func:`~ucbplan.lisa.pipeline.fisher_forecast`,
-:func:`~ucbplan.lisa.pipeline.simulate`), :mod:`~ucbplan.lisa.lines` (``ucbplan waveform``),
-:mod:`~ucbplan.lisa.outputs` (the simulation's files); kernels :mod:`~ucbplan.lisa.waveform`,
+:func:`~ucbplan.lisa.pipeline.simulate`), :mod:`~ucbplan.lisa.simulation` (the records it passes
+along: model, options, problem, result), :mod:`~ucbplan.lisa.lines` (``ucbplan waveform``),
+:mod:`~ucbplan.lisa.outputs` (the simulation's files); the source model :mod:`~ucbplan.lisa.source`;
+kernels :mod:`~ucbplan.lisa.waveform` (with :mod:`~ucbplan.lisa.numerics`),
 :mod:`~ucbplan.lisa.response`, :mod:`~ucbplan.lisa.orbits`, :mod:`~ucbplan.lisa.noise`,
 :mod:`~ucbplan.lisa.likelihood`, :mod:`~ucbplan.lisa.fisher`, :mod:`~ucbplan.lisa.sampler`,
 :mod:`~ucbplan.lisa.posterior` (start → midpoint, π-mode fold); figures :mod:`~ucbplan.lisa.plots`.

@@ -72,7 +72,7 @@ def _assemble(
     apsidal sign s of each. tables (W, 5, >= P, Q) holds, for m = n_q p + q, the orbital carrier
     c1 = exp(i theta_2 / 2) = A_p B_q D_q^p and the apsidal rotation exp(i wdot t) = H_p G_q
     as rows A (first P entries), B, D, H (first P entries), G (see
-    :func:`ucbplan.lisa.waveform._quadratic_cis`); D_q^p is kept by one product per row.
+    :func:`ucbplan.lisa.numerics.quadratic_cis`); D_q^p is kept by one product per row.
     The carrier of a line is c1^n exp(i s wdot t). Writes samples m < N into x
     (W, bands, 2, N) and Y(T) - Y(0) into jump (W, bands, 2), overwriting both (lines of one
     band must be adjacent; every band must have a line).

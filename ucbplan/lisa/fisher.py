@@ -134,6 +134,29 @@ def fisher_covariance(
     """
     names = like.prior.names
     fis = fisher_matrix(like, theta0) if fisher is None else fisher
+    _check_conditioned(fis, like, theta0, where)
+    try:
+        cov = inverse_scaled(fis)
+    except np.linalg.LinAlgError:
+        raise _unconstrained(where, names, np.arange(len(names)), like, theta0) from None
+    if within_prior:
+        excess = prior_excess(like, theta0, cov, where)
+        if excess is not None:
+            raise excess
+    return cov
+
+
+def _check_conditioned(
+    fis: NDArray[np.float64], like: Likelihood, theta0: NDArray[np.float64], where: str
+) -> None:
+    """The Fisher matrix is finite, positive on its diagonal and not near-singular.
+
+    Raises
+    ------
+    NumericalError
+        "unconstrained", naming the parameters concerned.
+    """
+    names = like.prior.names
     if not np.all(np.isfinite(fis)):
         raise _unconstrained(where, names, np.flatnonzero(~np.isfinite(np.diag(fis))), like, theta0)
     zero = np.flatnonzero(~(np.diag(fis) > 0))
@@ -146,15 +169,6 @@ def fisher_covariance(
         weak = np.argsort(-np.abs(vecs[:, 0]))
         weak = weak[np.abs(vecs[weak, 0]) > 0.3]
         raise _unconstrained(where, names, weak, like, theta0)
-    try:
-        cov = inverse_scaled(fis)
-    except np.linalg.LinAlgError:
-        raise _unconstrained(where, names, np.arange(len(names)), like, theta0) from None
-    if within_prior:
-        excess = prior_excess(like, theta0, cov, where)
-        if excess is not None:
-            raise excess
-    return cov
 
 
 def prior_excess(

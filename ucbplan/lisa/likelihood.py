@@ -33,7 +33,8 @@ from numpy.typing import NDArray
 
 from ucbplan.core.constants import E_MAX
 from ucbplan.lisa.noise import NoiseModel, psd_a
-from ucbplan.lisa.waveform import FourLineModel, SourceParams
+from ucbplan.lisa.source import SourceParams
+from ucbplan.lisa.waveform import FourLineModel
 
 if TYPE_CHECKING:
     from ucbplan.target import Target

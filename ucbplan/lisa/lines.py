@@ -12,7 +12,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ucbplan.lisa.noise import SANGRIA, psd_a
-from ucbplan.lisa.waveform import LINES, line_frequencies
+from ucbplan.lisa.source import LINES, line_frequencies
 
 if TYPE_CHECKING:
     from astropy.table import Table

@@ -1,6 +1,6 @@
 """Files of a LISA simulation: posterior target YAML, samples ECSV, chain .npz.
 
-:func:`write_simulation` writes a :class:`~ucbplan.lisa.pipeline.SimulationResult` as one file
+:func:`write_simulation` writes a :class:`~ucbplan.lisa.simulation.SimulationResult` as one file
 set (:func:`ucbplan.io.write_file_set`: all three files or none, temporaries that never block a
 rerun); :func:`save_interrupted` keeps the chain of a run stopped by Ctrl-C; :func:`load_resume`
 reads a chain back to continue it with the same data.
@@ -22,7 +22,7 @@ from ucbplan.lisa import posterior as post
 from ucbplan.lisa.sampler import SamplerResult, chain_writer, save_chain
 
 if TYPE_CHECKING:
-    from ucbplan.lisa.pipeline import SimulationProblem, SimulationResult
+    from ucbplan.lisa.simulation import SimulationProblem, SimulationResult
     from ucbplan.target import Target
 
 __all__ = [
@@ -199,6 +199,23 @@ def _read_npz(path: Path) -> dict[str, F64]:
         raise bad from None
 
 
+def _check_same_data(path: Path, saved: dict[str, F64], want: dict[str, Any]) -> None:
+    """The saved chain's data set (seed, noise, N, T) is this run's.
+
+    Raises
+    ------
+    InputFileError
+        A value differs or is missing.
+    """
+    for key, val in want.items():
+        got = saved[key].item() if key in saved and saved[key].size == 1 else "missing"
+        if not isinstance(got, (bool, int, float)) or not np.isclose(got, val, rtol=1e-12):
+            raise InputFileError(
+                f"{path}: {key} = {got}, this run has {val}; resume with the same "
+                "--seed/--noise/--n-bins/--t-obs (the data must be identical)"
+            )
+
+
 def load_resume(
     path: Path,
     theta0: F64,
@@ -222,14 +239,9 @@ def load_resume(
         Unreadable chain, or one of another data set (seed, noise, N, T) or target/walkers.
     """
     saved = _read_npz(path)
-    want = {"seed": seed, "noise": noise, "n_bins": n_bins, "t_obs_s": t_obs_s}
-    for key, val in want.items():
-        got = saved[key].item() if key in saved and saved[key].size == 1 else "missing"
-        if not isinstance(got, (bool, int, float)) or not np.isclose(got, val, rtol=1e-12):
-            raise InputFileError(
-                f"{path}: {key} = {got}, this run has {val}; resume with the same "
-                "--seed/--noise/--n-bins/--t-obs (the data must be identical)"
-            )
+    _check_same_data(
+        path, saved, {"seed": seed, "noise": noise, "n_bins": n_bins, "t_obs_s": t_obs_s}
+    )
     missing = [k for k in ("theta", "log_prob", "theta0", "fisher_cov") if k not in saved]
     if missing:
         raise InputFileError(

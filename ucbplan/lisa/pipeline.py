@@ -11,16 +11,17 @@ they return records and never print, so a notebook or a Dask worker can call the
 Data flow: :func:`build_model` (start-epoch truth, four-line model, midpoint target) →
 :func:`prepare_simulation` (noise draw, likelihood, SNR, Fisher covariance) →
 :func:`run_simulation` (emcee, midpoint transform, π-mode fold) →
-:func:`ucbplan.lisa.outputs.write_simulation`.
+:func:`ucbplan.lisa.outputs.write_simulation`. The records it passes along (:class:`LisaModel`,
+:class:`SimulateOptions`, :class:`SimulationProblem`, :class:`SimulationResult`) are declared in
+:mod:`ucbplan.lisa.simulation` and importable from here.
 """
 
 from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable
-from dataclasses import dataclass, field
-from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from astropy.time import TimeDelta
@@ -41,14 +42,21 @@ from ucbplan.lisa.likelihood import (
     physical_from_theta,
     simulate_data,
     source_from_target,
-    theta_from_source,
 )
 from ucbplan.lisa.noise import SANGRIA
 from ucbplan.lisa.outputs import load_resume
 from ucbplan.lisa.sampler import CONVERGENCE_FACTOR, SamplerResult, run_sampler
+from ucbplan.lisa.simulation import (
+    LisaModel,
+    SimulateOptions,
+    SimulationProblem,
+    SimulationResult,
+    parameter_sigmas,
+)
 
 if TYPE_CHECKING:
-    from ucbplan.lisa.waveform import FourLineModel, SourceParams
+    from ucbplan.lisa.source import SourceParams
+    from ucbplan.lisa.waveform import FourLineModel
     from ucbplan.target import Target
 
 __all__ = [
@@ -67,45 +75,6 @@ __all__ = [
 F64 = NDArray[np.float64]
 #: ``progress(step, total, tau_max)``, called every few sampler steps.
 Progress = Callable[[int, int, float], None]
-
-
-@dataclass(frozen=True, slots=True, eq=False)
-class LisaModel:
-    """Injection and search set-up built from a target file.
-
-    Attributes
-    ----------
-    base : Target
-        The target referenced to the midpoint of an observation of ``t_obs_s`` (t_ref moved).
-    truth : SourceParams
-        Injected waveform parameters at the start of the observation (e = 0 if circular).
-    model : FourLineModel
-        Templates on the band grid (N = ``n_bins`` per band).
-    eccentric : bool
-        Whether the 9-parameter eccentric model is used (else the 6-parameter circular one).
-    n_bins : int
-        Band width N in Fourier bins.
-    """
-
-    base: Target
-    truth: SourceParams
-    model: FourLineModel
-    eccentric: bool
-    n_bins: int
-
-    @property
-    def t_obs_s(self) -> float:
-        """Observation length T [s]."""
-        return float(self.model.grid.t_obs_s)
-
-    def theta0(self) -> F64:
-        """Injected parameters in sampled coordinates (start epoch)."""
-        return np.asarray(theta_from_source(self.truth, self.t_obs_s, self.eccentric), dtype=float)
-
-    def likelihood(self, data: NDArray[np.complex128]) -> Likelihood:
-        """Whittle likelihood of ``data`` with the paper's priors around the injection."""
-        prior = Prior.paper(self.truth, self.t_obs_s, self.eccentric)
-        return Likelihood(self.model, data, prior, SANGRIA)
 
 
 def build_model(
@@ -138,16 +107,31 @@ def build_model(
     Raises
     ------
     InputError
-        ``n_bins`` odd or below 16.
+        ``n_bins`` odd or below 16, or ω̇ puts z_ω = ω̇T/2π outside the prior [0, 50] bins.
     TargetFileError
         The target lacks the GW-only fields (amplitude, cos_inclination, psi).
-    InputError
-        ω̇ puts z_ω = ω̇T/2π outside the prior [0, 50] bins.
     """
     if n_bins < 16 or n_bins % 2:
         raise InputError(f"n_bins: expected an even number >= 16, got {n_bins}")
-    truth = source_from_target(target)
     t_obs = target.t_obs_s if t_obs_s is None else t_obs_s
+    truth, eccentric = _injection(target, t_obs, circular, where)
+    mid = target.t_start + TimeDelta(0.5 * t_obs, format="sec")
+    base = dataclasses.replace(target, t_ref=mid, t_obs_s=t_obs)
+    model = _templates(target, truth, t_obs, n_bins, eccentric, ecliptic_rad)
+    return LisaModel(base=base, truth=truth, model=model, eccentric=eccentric, n_bins=n_bins)
+
+
+def _injection(
+    target: Target, t_obs: float, circular: bool, where: str | None
+) -> tuple[SourceParams, bool]:
+    """Injected parameters of ``target`` and whether the eccentric model fits them.
+
+    Raises
+    ------
+    InputError
+        ω̇ puts z_ω = ω̇T/2π outside the prior [0, 50] bins.
+    """
+    truth = source_from_target(target)
     eccentric = (not circular) and (truth.eta != 0.0 or truth.kappa != 0.0)
     if not eccentric:
         truth = dataclasses.replace(truth, eta=0.0, kappa=0.0, omega_dot=0.0)
@@ -156,12 +140,19 @@ def build_model(
             f"{where or target.source or target.name}: omega_dot gives z_omega outside the prior "
             f"[0, 50] bins for T = {t_obs:.6g} s; use a shorter --t-obs or --circular"
         )
-    base = dataclasses.replace(
-        target,
-        t_ref=target.t_start + TimeDelta(0.5 * t_obs, format="sec"),
-        t_obs_s=t_obs,
-    )
-    model = model_for_target(
+    return truth, eccentric
+
+
+def _templates(
+    target: Target,
+    truth: SourceParams,
+    t_obs: float,
+    n_bins: int,
+    eccentric: bool,
+    ecliptic_rad: tuple[float, float] | None,
+) -> FourLineModel:
+    """Four-line templates of ``target`` on the band grid around the injection ``truth``."""
+    return model_for_target(
         target,
         t_obs,
         n_bins,
@@ -171,18 +162,12 @@ def build_model(
         omega_dot_ref=truth.omega_dot,
         ecliptic_rad=ecliptic_rad,
     )
-    return LisaModel(base=base, truth=truth, model=model, eccentric=eccentric, n_bins=n_bins)
 
 
 def _where(model: LisaModel) -> str:
     """Prefix of error messages: the target file (or the target's name)."""
     src = model.base.source
     return str(src) if src is not None else model.base.name
-
-
-def _sigmas(t: Target) -> dict[str, float]:
-    """1σ of each covariance entry of ``t``."""
-    return {n: float(np.sqrt(t.cov_matrix[i, i])) for i, n in enumerate(t.cov_names)}
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -210,7 +195,7 @@ class FisherForecast:
     @property
     def sigmas(self) -> dict[str, float]:
         """Forecast 1σ per parameter (covariance order)."""
-        return _sigmas(self.target)
+        return parameter_sigmas(self.target)
 
     @property
     def values(self) -> dict[str, float]:
@@ -252,52 +237,6 @@ def fisher_forecast(model: LisaModel) -> FisherForecast:
     return FisherForecast(target=fis, snr=snr, theta0=theta0, cov_theta=cov, warnings=warnings)
 
 
-@dataclass(frozen=True, slots=True)
-class SimulateOptions:
-    """Options of :func:`simulate` (noise draw and emcee run).
-
-    Attributes
-    ----------
-    seed : int
-        Seed of the noise draw and the sampler.
-    walkers, steps : int
-        emcee ensemble size (≥ 2 × parameters) and steps (the minimum with ``until_converged``).
-    until_converged : bool
-        Extend the chain until it is ≥ 50 τ long or ``max_steps``.
-    max_steps : int
-        Cap for ``until_converged``.
-    noise : bool
-        Add a Gaussian noise draw (else zero-noise data).
-    resume : Path, optional
-        Chain (.npz) of an earlier run with the same options to continue.
-    """
-
-    seed: int = 0
-    walkers: int = 32
-    steps: int = 2000
-    until_converged: bool = False
-    max_steps: int = 50000
-    noise: bool = True
-    resume: Path | None = None
-
-
-@dataclass(frozen=True, slots=True, eq=False)
-class SimulationProblem:
-    """Data, likelihood and start point of one simulation, before sampling.
-
-    ``fisher_cov`` whitens the sampler (the saved one when resuming); ``previous`` is the resumed
-    (theta chain, log_prob) or None.
-    """
-
-    model: LisaModel
-    options: SimulateOptions
-    theta0: F64
-    likelihood: Likelihood
-    snr: float
-    fisher_cov: F64
-    previous: tuple[F64, F64] | None = None
-
-
 def prepare_simulation(model: LisaModel, options: SimulateOptions) -> SimulationProblem:
     """Draw the data (seeded), build the likelihood, its SNR and the Fisher covariance.
 
@@ -337,94 +276,6 @@ def prepare_simulation(model: LisaModel, options: SimulateOptions) -> Simulation
             walkers=options.walkers,
         )
     return SimulationProblem(model, options, theta0, like, snr, cov, previous)
-
-
-@dataclass(frozen=True, slots=True, eq=False)
-class SimulationResult:
-    """Posterior of one simulation, at the midpoint, with the Fisher forecast beside it.
-
-    Attributes
-    ----------
-    problem : SimulationProblem
-        Data, likelihood and start point.
-    chain : SamplerResult
-        emcee chain (sampled coordinates, start epoch) and convergence diagnostics.
-    samples : numpy.ndarray
-        Burnt-in, thinned chain (S, D) in sampled coordinates (start epoch).
-    columns : dict of numpy.ndarray
-        Physical samples at the midpoint after folding the π mode.
-    injected : dict of float
-        Injection at the midpoint (same keys as ``columns``).
-    n_folded : int
-        Samples moved from the π mode onto the injected branch.
-    fisher : Target
-        Gaussian forecast from the whitening covariance (same names as the posterior).
-    warnings : tuple of str
-        E.g. a chain shorter than 50 τ.
-    """
-
-    problem: SimulationProblem
-    chain: SamplerResult
-    samples: F64
-    columns: dict[str, F64]
-    injected: dict[str, float]
-    n_folded: int
-    fisher: Target
-    warnings: tuple[str, ...] = field(default_factory=tuple)
-
-    @property
-    def model(self) -> LisaModel:
-        """The injection model."""
-        return self.problem.model
-
-    @property
-    def n_steps(self) -> int:
-        """Chain length in steps (including a resumed part)."""
-        return int(self.chain.theta.shape[0])
-
-    @property
-    def tau_max(self) -> float:
-        """Largest integrated autocorrelation time [steps]."""
-        return float(np.max(self.chain.tau))
-
-    def posterior(self, samples_path: Path | None = None) -> Target:
-        """Posterior target (means, sample covariance); ``samples_path`` is recorded in it."""
-        base = self.model.base
-        name = f"{base.name} (posterior)"
-        return post.posterior_target(base, self.columns, samples_path, name=name)
-
-    @property
-    def names(self) -> tuple[str, ...]:
-        """Physical parameter names of the posterior (covariance order)."""
-        return self.fisher.cov_names
-
-    @property
-    def posterior_mean(self) -> dict[str, float]:
-        """Posterior mean per parameter (midpoint)."""
-        return {n: float(np.mean(self.columns[n])) for n in self.names}
-
-    @property
-    def posterior_sigma(self) -> dict[str, float]:
-        """Posterior standard deviation per parameter (midpoint)."""
-        return {n: float(np.std(self.columns[n])) for n in self.names}
-
-    @property
-    def fisher_sigma(self) -> dict[str, float]:
-        """Fisher 1σ per parameter (midpoint)."""
-        return _sigmas(self.fisher)
-
-    def samples_meta(self) -> dict[str, Any]:
-        """Metadata of the samples ECSV (reference epoch, seed, convergence, SNR)."""
-        return {
-            "reference": "midpoint of the LISA observation (t_ref of the target YAML, TDB)",
-            "t_ref_tdb": self.model.base.t_ref.tdb.isot,
-            "seed": self.problem.options.seed,
-            "n_steps": self.n_steps,
-            "tau_max_steps": self.tau_max,
-            "converged": self.chain.converged,
-            "folded_pi_mode_samples": self.n_folded,
-            "snr": self.problem.snr,
-        }
 
 
 def _convergence_warnings(chain: SamplerResult) -> tuple[str, ...]:

@@ -6,7 +6,7 @@ Every figure is written atomically through :func:`ucbplan.plotting.save_figure` 
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -74,7 +74,7 @@ def corner_plot(
     for ax in fig.axes:
         ax.tick_params(labelsize=7)
     if title:
-        # in the empty upper triangle: centred, it sat on the first panel's title
+        # in the empty upper triangle, clear of the first panel's title
         fig.suptitle(title, x=0.97, y=0.97, ha="right", va="top")
     save_figure(fig, path, overwrite=overwrite, dpi=_DPI)
 
@@ -105,10 +105,7 @@ def asd_plot(
     line_freqs_hz, unshifted_hz : dict
         Line positions with and without the apsidal shift (dashed red / black).
     """
-    plt = pyplot()
-    from matplotlib.ticker import MaxNLocator
-
-    fig, axes = plt.subplots(
+    fig, axes = pyplot().subplots(
         len(harmonics), 1, figsize=(7, 2.9 * len(harmonics)), squeeze=False, layout="constrained"
     )
     for b, ax in enumerate(axes[:, 0]):
@@ -119,39 +116,52 @@ def asd_plot(
         ax.semilogy(f, np.sqrt(psd[b]), color="k", lw=1, label="noise (incl. foreground)")
         if psd_instrument is not None:
             ax.semilogy(f, np.sqrt(psd_instrument[b]), "k--", lw=0.8, label="instrument")
-        lo, hi = freqs_hz[b, 0], freqs_hz[b, -1]
-        for fl in unshifted_hz.values():
-            if lo <= fl <= hi:
-                ax.axvline(fl * 1e3, color="k", ls="--", lw=0.7)
-        for name, fl in line_freqs_hz.items():
-            if lo <= fl <= hi:
-                ax.axvline(fl * 1e3, color="r", ls="--", lw=0.7)
-                ax.annotate(
-                    name,
-                    (fl * 1e3, 0.97),
-                    xycoords=("data", "axes fraction"),
-                    fontsize=7,
-                    ha="left",
-                    va="top",
-                    color="r",
-                )
-        ax.set_ylabel("ASD [1/√Hz]")
-        ax.set_title(f"n = {harmonics[b]} band ({freqs_hz.shape[1]} bins)", fontsize=9)
-        ax.set_xlabel("frequency [mHz]", fontsize=8)
-        # plain frequencies: an offset ("+1.2609e1") is easy to misread
-        ax.ticklabel_format(axis="x", useOffset=False)
-        ax.xaxis.set_major_locator(MaxNLocator(5))
-    # one legend above the panels: inside a panel it covered the lines
+        _mark_lines(ax, freqs_hz[b, 0], freqs_hz[b, -1], line_freqs_hz, unshifted_hz)
+        _label_band(ax, harmonics[b], freqs_hz.shape[1])
+    # one legend above the panels, clear of the lines
     handles, labels = axes[0, 0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="outside upper center", ncol=len(labels), fontsize=8)
     save_figure(fig, path, overwrite=overwrite, dpi=_DPI)
+
+
+def _label_band(ax: Any, harmonic: int, n_bins: int) -> None:
+    """Axis labels, title and plain frequency ticks of the band of harmonic ``harmonic``."""
+    from matplotlib.ticker import MaxNLocator
+
+    ax.set_ylabel("ASD [1/√Hz]")
+    ax.set_title(f"n = {harmonic} band ({n_bins} bins)", fontsize=9)
+    ax.set_xlabel("frequency [mHz]", fontsize=8)
+    # plain frequencies: an offset ("+1.2609e1") is easy to misread
+    ax.ticklabel_format(axis="x", useOffset=False)
+    ax.xaxis.set_major_locator(MaxNLocator(5))
+
+
+def _mark_lines(
+    ax: Any, lo: float, hi: float, line_freqs_hz: dict[str, float], unshifted_hz: dict[str, float]
+) -> None:
+    """Dashed lines at the line positions in [lo, hi] Hz: unshifted black, shifted red, named."""
+    for fl in unshifted_hz.values():
+        if lo <= fl <= hi:
+            ax.axvline(fl * 1e3, color="k", ls="--", lw=0.7)
+    for name, fl in line_freqs_hz.items():
+        if lo <= fl <= hi:
+            ax.axvline(fl * 1e3, color="r", ls="--", lw=0.7)
+            ax.annotate(
+                name,
+                (fl * 1e3, 0.97),
+                xycoords=("data", "axes fraction"),
+                fontsize=7,
+                ha="left",
+                va="top",
+                color="r",
+            )
 
 
 def waveform_plot(lines: WaveformLines, path: Path, *, overwrite: bool = False) -> None:
     """:func:`asd_plot` of ``ucbplan waveform``: the bands with instrument-only noise and the
     line positions with and without the apsidal shift."""
     from ucbplan.lisa.noise import NoiseModel, psd_a
-    from ucbplan.lisa.waveform import line_frequencies
+    from ucbplan.lisa.source import line_frequencies
 
     fm, t_obs_s = lines.model.model, lines.model.t_obs_s
     inst = psd_a(fm.freqs_hz, t_obs_s, NoiseModel(foreground=False))

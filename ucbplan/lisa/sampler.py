@@ -30,6 +30,7 @@ __all__ = [
     "save_chain",
 ]
 
+F64 = NDArray[np.float64]
 #: Required chain length in units of the integrated autocorrelation time.
 CONVERGENCE_FACTOR = 50.0
 
@@ -148,68 +149,106 @@ def run_sampler(
         returned chain includes it and tau / convergence refer to the whole chain; ``n_steps``
         counts new steps.
     """
+    run = _begin(like, theta0, cov, n_walkers, seed, start_scale, previous)
+    return run.sample(n_steps, until_converged, max_steps, check_every, progress)
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class _Run:
+    """One emcee run in whitened x (theta = theta0 + chol x) and the earlier chain it continues."""
+
+    like: Likelihood
+    theta0: F64
+    chol: F64
+    seed: int
+    sampler: Any
+    state: object
+    x_prev: F64
+    lp_prev: F64
+    theta_prev: F64
+
+    def sample(
+        self,
+        n_steps: int,
+        until_converged: bool,
+        max_steps: int,
+        check_every: int,
+        progress: Callable[[int, int, float], None] | None,
+    ) -> SamplerResult:
+        """Advance the chain (:func:`_advance`); Ctrl-C raises :class:`SamplerInterrupted`."""
+        try:
+            with _DeferredInterrupt() as stop:
+                chain_x, tau, converged = _advance(
+                    self.sampler,
+                    self.state,
+                    self.x_prev,
+                    n_steps=n_steps,
+                    until_converged=until_converged,
+                    max_steps=max_steps,
+                    check_every=check_every,
+                    progress=progress,
+                    stop=stop,
+                )
+        except KeyboardInterrupt:
+            raise SamplerInterrupted(self._partial()) from None
+        log_prob = np.concatenate([self.lp_prev, self.sampler.get_log_prob()])
+        return self._result(chain_x, log_prob, tau, converged)
+
+    def _partial(self) -> SamplerResult | None:
+        """The chain of every completed step (None before the first), not converged."""
+        if self.x_prev.shape[0] + self.sampler.iteration == 0:
+            return None
+        chain_x, log_prob = _chain_so_far(self.sampler, self.x_prev, self.lp_prev)
+        return self._result(chain_x, log_prob, np.full(self.theta0.size, np.inf), False)
+
+    def _result(self, chain_x: F64, log_prob: F64, tau: F64, converged: bool) -> SamplerResult:
+        """The chain mapped back to theta, with its diagnostics."""
+        sampler = self.sampler
+        acceptance = float(np.mean(sampler.acceptance_fraction)) if sampler.iteration else 0.0
+        # the resumed part is kept bit for bit; only new steps are mapped back from x
+        new = self.theta0 + chain_x[self.theta_prev.shape[0] :] @ self.chol.T
+        theta = np.asarray(np.concatenate([self.theta_prev, new]), dtype=np.float64)
+        return SamplerResult(
+            theta=theta,
+            log_prob=log_prob,
+            tau=tau,
+            converged=converged,
+            acceptance=acceptance,
+            seed=self.seed,
+            names=self.like.prior.names,
+        )
+
+
+def _begin(
+    like: Likelihood,
+    theta0: F64,
+    cov: F64,
+    n_walkers: int,
+    seed: int,
+    start_scale: float,
+    previous: tuple[F64, F64] | None,
+) -> _Run:
+    """The seeded sampler and its start: the Fisher ball, or the last state of ``previous``."""
     from ucbplan.lisa.fisher import whitening
 
     rng = np.random.default_rng(seed)
     chol = whitening(cov)  # A with A A^T = cov (not triangular)
     d = theta0.size
 
-    def log_prob(x: NDArray[np.float64]) -> NDArray[np.float64]:
+    def log_prob(x: F64) -> F64:
         return like.log_prob(theta0 + np.atleast_2d(x) @ chol.T)
 
     n_before = 0 if previous is None else int(previous[0].shape[0])
     sampler = _seeded_sampler(log_prob, n_walkers, d, seed, n_before)
     if previous is not None:
         state, x_prev, lp_prev = _resume_state(previous, theta0, cov, chol, n_walkers)
+        theta_prev = previous[0]
     else:
         x_prev = np.empty((0, n_walkers, d))
         lp_prev = np.empty((0, n_walkers))
         state = _start(like, theta0, chol, n_walkers, start_scale, rng)
-    theta_prev = previous[0] if previous is not None else np.empty((0, n_walkers, d))
-
-    def to_theta(chain_x: NDArray[np.float64]) -> NDArray[np.float64]:
-        # the resumed part is kept bit for bit; only new steps are mapped back from x
-        new = theta0 + chain_x[theta_prev.shape[0] :] @ chol.T
-        return np.asarray(np.concatenate([theta_prev, new]), dtype=np.float64)
-
-    try:
-        with _DeferredInterrupt() as stop:
-            chain_x, tau, converged = _advance(
-                sampler,
-                state,
-                x_prev,
-                n_steps=n_steps,
-                until_converged=until_converged,
-                max_steps=max_steps,
-                check_every=check_every,
-                progress=progress,
-                stop=stop,
-            )
-    except KeyboardInterrupt:
-        partial = None
-        if x_prev.shape[0] + sampler.iteration > 0:
-            chain_x, lp = _chain_so_far(sampler, x_prev, lp_prev)
-            partial = SamplerResult(
-                theta=to_theta(chain_x),
-                log_prob=lp,
-                tau=np.full(d, np.inf),
-                converged=False,
-                acceptance=float(np.mean(sampler.acceptance_fraction))
-                if sampler.iteration
-                else 0.0,
-                seed=seed,
-                names=like.prior.names,
-            )
-        raise SamplerInterrupted(partial) from None
-    return SamplerResult(
-        theta=to_theta(chain_x),
-        log_prob=np.concatenate([lp_prev, sampler.get_log_prob()]),
-        tau=tau,
-        converged=converged,
-        acceptance=float(np.mean(sampler.acceptance_fraction)),
-        seed=seed,
-        names=like.prior.names,
-    )
+        theta_prev = np.empty((0, n_walkers, d))
+    return _Run(like, theta0, chol, seed, sampler, state, x_prev, lp_prev, theta_prev)
 
 
 class _DeferredInterrupt:
@@ -272,8 +311,8 @@ def _seeded_sampler(
     Differential-evolution moves (ter Braak 2006; emcee's ``DEMove``): in the Fisher-whitened
     coordinates the posterior is close to N(0, I), where their autocorrelation time is ~3x
     shorter than the stretch move's (~31 instead of ~100 steps for 9 parameters and 32
-    walkers), so 50 tau cost 3x fewer steps. (Mixing in emcee's DE snooker move was tried and
-    dropped: on N(0, I) in 9 dimensions its samples' σ came out 6 % low.)
+    walkers), so 50 tau cost 3x fewer steps. emcee's DE snooker move is not mixed in: on N(0, I)
+    in 9 dimensions its samples' σ come out 6 % low.
     """
     import emcee
 

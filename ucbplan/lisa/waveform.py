@@ -1,144 +1,36 @@
-"""Small-eccentricity four-line waveform through the LISA response, batched over parameter sets.
+"""The four-line source through the LISA response, batched over parameter sets.
 
-Source model (docs/method.md, "Waveform and noise"; paper Eqs. app:final_form_h_plus,
-app:final_form_h_cross, Appendix apsidal_mcmc). With A+ = A(1 + cos^2 i), Ax = 2 A cos i,
-b1 = sin^2 i / (2 (1 + cos^2 i)), each line is h = Re[H exp(i theta)],
-theta = phi_p + 2 pi f_p t + pi fdot_p t^2 (t = chi, the wave variable):
-
-=======  =====================  ========  ========  =======================  ======================
-line     f_p                    fdot_p    phi_p     H+                       Hx
-=======  =====================  ========  ========  =======================  ======================
-n=2      f0                     fdot      phi0      -A+                      +i Ax
-n=3      3 f0/2 - wdot/2pi      3fdot/2   3phi0/2   -A+ (9/4)(k0 - i e0)     +i Ax (9/4)(k0 - i e0)
-n=1 (+)  f0/2 + wdot/2pi        fdot/2    phi0/2    -A+ (-3/4)(k0 + i e0)    +i Ax (-3/4)(k0 + i e0)
-n=1 (-)  f0/2 - wdot/2pi        fdot/2    phi0/2    -A+ (-b1)(k0 - i e0)     0
-=======  =====================  ========  ========  =======================  ======================
-
-(e0, k0) = (eta, kappa) at the start of the observation (t = 0), where all parameters of this
-module are referenced. The polarization angle rotates (H+, Hx) by 2 psi (FastGB convention).
-All lines share one orbital phase: theta_p = (n/2) theta_2 + s wdot t with s = 0, -1, +1, -1.
+:class:`FourLineModel` gives the TDI A, E of the lines of :mod:`ucbplan.lisa.source`
+(docs/method.md, "Waveform and noise"; paper Eqs. app:final_form_h_plus, app:final_form_h_cross,
+Appendix apsidal_mcmc) in fixed heterodyned bands, one per harmonic, for many parameter sets at
+once; its numerical building blocks are in :mod:`ucbplan.lisa.numerics` and its optional compiled
+loops in :mod:`ucbplan.lisa._fused`. All parameters are referenced to the start of the
+observation (t = 0).
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ucbplan.lisa import _fused
-from ucbplan.lisa.response import LINKS, ResponseGrid, band_weights, tdi_coefficients
-
-__all__ = [
-    "LINES",
-    "FourLineModel",
-    "Line",
-    "SourceParams",
-    "line_amplitudes",
-    "line_frequencies",
-]
-
-
-@dataclass(frozen=True, slots=True)
-class Line:
-    """One spectral line: harmonic n, apsidal shift sign s (f_p = n f0/2 + s wdot/2pi)."""
-
-    name: str
-    harmonic: int
-    shift: int
-
-
-LINES: tuple[Line, ...] = (
-    Line("n=1+", 1, +1),
-    Line("n=1-", 1, -1),
-    Line("n=2", 2, 0),
-    Line("n=3", 3, -1),
+from ucbplan.lisa.numerics import (
+    TABLE_Q,
+    beta_powers,
+    cis,
+    gemm,
+    n_monomials,
+    quadratic_cis,
+    quadratic_tables,
 )
+from ucbplan.lisa.response import LINKS, ResponseGrid, band_weights, tdi_coefficients
+from ucbplan.lisa.source import LINES, SourceParams, line_amplitudes, line_frequencies
 
-
-@dataclass(frozen=True, slots=True)
-class SourceParams:
-    """Waveform parameters referenced to the START of the LISA observation (SI units).
-
-    Attributes
-    ----------
-    amplitude : float
-        Strain amplitude A (paper Eq. f_amp).
-    f_gw : float
-        n = 2 frequency f0 [Hz].
-    fdot : float
-        Frequency derivative [Hz/s].
-    cos_inclination : float
-        cos(iota).
-    psi : float
-        Polarization angle [rad] (FastGB convention).
-    phase : float
-        n = 2 phase phi0 at t = 0 [rad].
-    eta, kappa : float
-        Laplace-Lagrange pair at t = 0 (e sin w, e cos w).
-    omega_dot : float
-        Apsidal advance rate [rad/s].
-    fddot : float
-        Second frequency derivative [Hz/s^2].
-    """
-
-    amplitude: float
-    f_gw: float
-    fdot: float
-    cos_inclination: float
-    psi: float
-    phase: float
-    eta: float = 0.0
-    kappa: float = 0.0
-    omega_dot: float = 0.0
-    fddot: float = 0.0
-
-
-def line_frequencies(f_gw: ArrayLike, omega_dot: ArrayLike) -> NDArray[np.float64]:
-    """Line frequencies at t = 0 [Hz], shape (4, ...) in the order of LINES.
-
-    Notes
-    -----
-    Appendix apsidal_mcmc: f0/2 +- wdot/2pi and 3 f0/2 - wdot/2pi; the carrier is unshifted.
-    """
-    f = np.asarray(f_gw, dtype=float)
-    w = np.asarray(omega_dot, dtype=float) / (2.0 * np.pi)
-    return np.stack([0.5 * line.harmonic * f + line.shift * w for line in LINES])
-
-
-def line_amplitudes(
-    amplitude: ArrayLike, cos_inclination: ArrayLike, eta: ArrayLike, kappa: ArrayLike
-) -> NDArray[np.complex128]:
-    """Source-frame complex amplitudes (H+, Hx) of the four lines.
-
-    Returns
-    -------
-    numpy.ndarray
-        Shape (4, 2, ...): line (order of LINES), polarization (+, x).
-
-    Notes
-    -----
-    The four-line table of docs/method.md ("Waveform and noise"), equivalent to paper Eqs.
-    app:final_form_h_plus and app:final_form_h_cross (not Appendix E's C_lm, whose conjugation
-    convention differs).
-    """
-    a = np.asarray(amplitude, dtype=float)
-    c = np.asarray(cos_inclination, dtype=float)
-    et = np.asarray(eta, dtype=float)
-    ka = np.asarray(kappa, dtype=float)
-    a_plus = a * (1.0 + c * c)
-    a_cross = 2.0 * a * c
-    b1 = (1.0 - c * c) / (2.0 * (1.0 + c * c))
-    minus = ka - 1j * et
-    plus = ka + 1j * et
-    h = np.empty((4, 2, *np.broadcast(a, c, et, ka).shape), dtype=complex)
-    h[0, 0], h[0, 1] = -a_plus * (-0.75) * plus, 1j * a_cross * (-0.75) * plus
-    h[1, 0], h[1, 1] = -a_plus * (-b1) * minus, 0.0
-    h[2, 0], h[2, 1] = -a_plus, 1j * a_cross
-    h[3, 0], h[3, 1] = -a_plus * 2.25 * minus, 1j * a_cross * 2.25 * minus
-    return h
+#: ``LINES`` and ``line_frequencies`` are the source model's (:mod:`ucbplan.lisa.source`).
+__all__ = ["LINES", "FourLineModel", "line_frequencies"]
 
 
 #: Walkers per internal block of :meth:`FourLineModel.bands`: a sampler batch in one block (with
@@ -146,26 +38,16 @@ def line_amplitudes(
 #: work outweighs the cache misses of the larger arrays).
 _CHUNK = 64
 
-#: Table length of the block split k = Q p + q of the slow-time index (the orbital carrier and the
-#: apsidal rotation, :func:`_quadratic_cis`).
-_Q = 32
-
-#: Relative truncation error of the Taylor series of the link phases (was 1e-10 before the
-#: reference track made the series short).
+#: Relative truncation error of the Taylor series of the link phases.
 _TAYLOR_TOL = 1e-13
 
 #: Most Taylor terms of the walker-dependent link phase (enough for |beta delay| <= 1.5 rad).
 _K_MAX = 24
 
 #: Fewest Taylor orders of the link moments computed at once (templates near the reference
-#: track need two; computing all :data:`_K_MAX` up front was most of a Fisher forecast's cost).
+#: track need two; computing all :data:`_K_MAX` up front would be most of a Fisher forecast's
+#: cost).
 _MIN_ORDERS = 2
-
-#: Largest m n k of one real matrix product. OpenBLAS runs dgemm on one thread up to
-#: 65536 x GEMM_MULTITHREAD_THRESHOLD (4 in numpy's builds) and threads above it; threaded, the
-#: link sums were 5-10x slower on a shared two-core machine, so products are split into column
-#: blocks below this size.
-_GEMM_SERIAL = 65536 * 4
 
 #: Most rows (4 amplitude parts x monomials in beta) of the polynomial link sum; sources that
 #: need more Taylor terms use Horner's rule (:meth:`FourLineModel._horner_sum`).
@@ -184,96 +66,6 @@ def _taylor_terms(x: float) -> int:
                 "the source is outside the targeted prior (|f - f_c| or fdot too large)"
             )
     return k
-
-
-def _cis(x: NDArray[np.float64]) -> NDArray[np.complex128]:
-    """exp(i x) for real x (cos/sin written into a complex buffer; faster than np.exp(1j x))."""
-    out = np.empty(x.shape, dtype=complex)
-    np.cos(x, out=out.real)
-    np.sin(x, out=out.imag)
-    return out
-
-
-def _gemm(a: NDArray[np.float64], b: NDArray[np.float64], out: NDArray[np.float64]) -> None:
-    """out = a @ b in column blocks of at most _GEMM_SERIAL multiply-adds (one BLAS thread)."""
-    width = max(1, _GEMM_SERIAL // (a.shape[0] * a.shape[1]))
-    for j in range(0, b.shape[1], width):
-        np.matmul(a, b[:, j : j + width], out=out[:, j : j + width])
-
-
-def _quadratic_tables(
-    a: NDArray[np.float64] | None,
-    b: NDArray[np.float64],
-    c: NDArray[np.float64] | None,
-    m: int,
-) -> tuple[NDArray[np.complex128], NDArray[np.complex128], NDArray[np.complex128] | None]:
-    """Tables of exp(i (a + b k + c k^2)), k = Q p + q < m: (A_p, B_q, D_q), each (W, .).
-
-    The phase is (a + b Q p + c Q^2 p^2) + (b q + c q^2) + 2 c Q p q, so the value is
-    A_p B_q D_q^p with A_p = exp(i (a + b Q p + c Q^2 p^2)), B_q = exp(i (b q + c q^2)) and
-    D_q = exp(2 i c Q q): P + 2Q sines and cosines per walker instead of m. ``a``, ``c`` None:
-    zero (then D is None: a plain outer product).
-    """
-    n_p = -(-m // _Q)
-    p, q = np.arange(n_p, dtype=float), np.arange(_Q, dtype=float)
-    b = b[:, None]
-    rows = (_Q * b) * p if a is None else a[:, None] + (_Q * b) * p
-    if c is None:
-        return _cis(rows), _cis(b * q), None
-    c = c[:, None]
-    rows += (_Q * _Q) * c * p * p
-    return _cis(rows), _cis(b * q + c * q * q), _cis((2.0 * _Q) * c * q)
-
-
-def _quadratic_cis(
-    a: NDArray[np.float64] | None,
-    b: NDArray[np.float64],
-    c: NDArray[np.float64] | None,
-    m: int,
-) -> NDArray[np.complex128]:
-    """exp(i (a + b k + c k^2)) for k = 0 .. m - 1, shape (W, m), from :func:`_quadratic_tables`.
-
-    The powers D_q^p are built by doubling (D^(2j) from D^j squared, the block p + j from the
-    block p times D^j), so each value is a product of at most ~2 log2(P) rounded factors: a few
-    1e-15 relative.
-    """
-    rows, cols, step = _quadratic_tables(a, b, c, m)
-    if step is None:
-        return (rows[:, :, None] * cols[:, None, :]).reshape(b.shape[0], -1)[:, :m]
-    n_p = rows.shape[1]
-    out = np.empty((b.shape[0], n_p, _Q), dtype=complex)
-    out[:, 0] = cols
-    done = 1
-    while done < n_p:
-        size = min(done, n_p - done)
-        np.multiply(out[:, :size], step[:, None, :], out=out[:, done : done + size])
-        done += size
-        if done < n_p:
-            step *= step
-    out *= rows[:, :, None]
-    return out.reshape(b.shape[0], -1)[:, :m]
-
-
-def _n_monomials(n_terms: int, degree: int) -> int:
-    """Coefficients of beta^0 .. beta^(n_terms - 1) for beta(tau) of the given degree."""
-    return n_terms + degree * n_terms * (n_terms - 1) // 2
-
-
-def _beta_powers(coeffs: NDArray[np.float64], n_terms: int) -> NDArray[np.float64]:
-    """Coefficients of beta^k, k < n_terms, in powers of tau: (W, monomials), k-major.
-
-    ``coeffs`` (W, d + 1) holds beta(tau) = sum_j coeffs[:, j] tau^j; beta^k has k d + 1
-    coefficients (order of :meth:`FourLineModel._poly_basis`).
-    """
-    cur = np.ones((coeffs.shape[0], 1))
-    out = [cur]
-    for _ in range(1, n_terms):
-        nxt = np.zeros((cur.shape[0], cur.shape[1] + coeffs.shape[1] - 1))
-        for j in range(coeffs.shape[1]):
-            nxt[:, j : j + cur.shape[1]] += coeffs[:, j : j + 1] * cur
-        out.append(nxt)
-        cur = nxt
-    return np.concatenate(out, axis=1)
 
 
 class FourLineModel:
@@ -483,9 +275,9 @@ class FourLineModel:
         # beta_p(tau) = n pi (f(t) - f_ref(t)) + s (wdot - wdot_ref) of each modelled line
         beta = np.stack([LINES[li].harmonic * df_tau for li, _ in self.lines])
         beta[:, :, 0] += np.array([LINES[li].shift for li, _ in self.lines])[:, None] * dwd
-        poly = 4 * _n_monomials(n_terms, df_tau.shape[1] - 1) <= _POLY_ROWS
+        poly = 4 * n_monomials(n_terms, df_tau.shape[1] - 1) <= _POLY_ROWS
         if poly:  # walker rows of the polynomial link sums: amplitude part x monomial
-            powers = _beta_powers(beta.reshape(-1, beta.shape[-1]), n_terms)
+            powers = beta_powers(beta.reshape(-1, beta.shape[-1]), n_terms)
             coef = (coef[..., None] * powers.reshape(*beta.shape[:2], 1, -1)).reshape(
                 *beta.shape[:2], -1
             )
@@ -575,9 +367,9 @@ class FourLineModel:
         assemble, weigh = fused
         f0, fd, ph, wd = (source[i] for i in (1, 2, 5, 8))
         n_walk, n = f0.size, self.grid.n
-        orbit = _quadratic_tables(*self._orbit_phase(f0, fd, ph), n + 1)
-        apsis = _quadratic_tables(None, wd * (self.grid.t_obs_s / n), None, n + 1)
-        tables = np.zeros((n_walk, 5, max(_Q, orbit[0].shape[1])), dtype=complex)
+        orbit = quadratic_tables(*self._orbit_phase(f0, fd, ph), n + 1)
+        apsis = quadratic_tables(None, wd * (self.grid.t_obs_s / n), None, n + 1)
+        tables = np.zeros((n_walk, 5, max(TABLE_Q, orbit[0].shape[1])), dtype=complex)
         for row, table in enumerate((*orbit, *apsis[:2])):
             assert table is not None
             tables[:, row, : table.shape[1]] = table
@@ -587,7 +379,7 @@ class FourLineModel:
             self._link_sum(coef[i], beta_i, li, n_terms, 1, sums[i])
         x = np.empty((n_walk, self.n_bands, 2, n), dtype=complex)
         jump = np.empty((n_walk, self.n_bands, 2), dtype=complex)
-        assemble(sums, self._line_table[:, 1:], tables, _Q, x, jump)
+        assemble(sums, self._line_table[:, 1:], tables, TABLE_Q, x, jump)
         spec = np.fft.fft(x, axis=-1, out=x)  # fftshifted by the (-1)^m in the moments
         weigh(spec, jump, self._dft_w[:, 0], self._jump_w[:, 0])
         return spec
@@ -625,16 +417,16 @@ class FourLineModel:
         """c1 = exp(i theta_2 / 2) heterodyned at f_het on the grid, (W, M).
 
         Without fddot its phase is quadratic in the sample index (:meth:`_orbit_phase`,
-        :func:`_quadratic_cis`); with it, phi0/2 + 2 pi (f0/2 - f_het) t + pi/2 (fdot t^2 +
+        :func:`quadratic_cis`); with it, phi0/2 + 2 pi (f0/2 - f_het) t + pi/2 (fdot t^2 +
         fddot t^3 / 3) is evaluated per sample.
         """
         if not cubic:
-            return _quadratic_cis(*self._orbit_phase(f0, fd, ph), self.grid.n + 1)
+            return quadratic_cis(*self._orbit_phase(f0, fd, ph), self.grid.n + 1)
         t = self.grid.t_s[None, :]
         chirp = fd[:, None] * (t * t) + fdd[:, None] * self._t3
         chirp *= 0.5 * np.pi
         chirp += 0.5 * ph[:, None] + 2.0 * np.pi * (0.5 * f0 - self._f_het)[:, None] * t
-        return _cis(chirp)
+        return cis(chirp)
 
     def _carriers(
         self, c1: NDArray[np.complex128], wd: NDArray[np.float64]
@@ -650,8 +442,8 @@ class FourLineModel:
             c2 = c1 * c1
             out[2] = c2
         if need & {0, 1, 3}:
-            # exp(i wdot t_m), t_m = m T / N: two short tables (:func:`_quadratic_cis`)
-            apsis = _quadratic_cis(None, wd * (self.grid.t_obs_s / self.grid.n), None, c1.shape[1])
+            # exp(i wdot t_m), t_m = m T / N: two short tables (:func:`quadratic_cis`)
+            apsis = quadratic_cis(None, wd * (self.grid.t_obs_s / self.grid.n), None, c1.shape[1])
             out[0] = c1 * apsis
             np.conjugate(apsis, out=apsis)
             minus = c1 * apsis
@@ -674,7 +466,7 @@ class FourLineModel:
         (:meth:`_horner_sum`)."""
         acc = out.view(np.float64).reshape(out.shape[0], -1)  # (W, ch * 2M) view
         if beta is None:
-            _gemm(coef, self._poly_basis(line, n_terms, degree), acc)
+            gemm(coef, self._poly_basis(line, n_terms, degree), acc)
         else:
             self._horner_sum(coef, beta, line, n_terms, acc)
 
@@ -698,7 +490,7 @@ class FourLineModel:
             4, -1
         )  # (4, K * ch * 2M), a view
         flat = np.empty((n_walk, mom.shape[1]))
-        _gemm(coef, mom, flat)
+        gemm(coef, mom, flat)
         terms = flat.reshape(n_walk, n_terms, -1)
         beta_t = np.polynomial.polynomial.polyval(self._tau, beta.T)  # (W, M)
         beta2 = np.tile(np.repeat(beta_t, 2, axis=-1), (1, 2))  # re, im of both channels
@@ -711,7 +503,7 @@ class FourLineModel:
     def _poly_basis(self, line: int, n_terms: int, degree: int) -> NDArray[np.float64]:
         """Rows tau^e MOM[line, r, k] (r amplitude part, k < n_terms, e <= k degree), cached.
 
-        Shape (4 x monomials, ch * 2M), r-major then k, e as in :func:`_beta_powers`.
+        Shape (4 x monomials, ch * 2M), r-major then k, e as in :func:`beta_powers`.
         """
         key = (line, n_terms, degree)
         if key not in self._bases:

@@ -17,10 +17,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ucbplan.errors import shorten
+from ucbplan.target.fieldtypes import Field
 from ucbplan.target.schema import (
     COVARIANCE_PARAMETERS,
     TIMING_COVARIANCE_PARAMETERS,
-    Field,
     field,
     section_fields,
     timing_parameter_field,

@@ -181,12 +181,7 @@ def target_from_dict(doc: Any, path: Path | None = None) -> Target:
     with ctx.reading("sky", "a sky position"):
         ra, dec = _parse_sky(ctx, doc)
     kind = _ephemeris_kind(ctx, doc)
-    if kind == "lisa":
-        with ctx.reading("lisa", "the LISA posterior summary"):
-            eph = _parse_lisa(ctx, doc.get("lisa"), path)
-    else:
-        with ctx.reading("timing", "a timing ephemeris"):
-            eph = parse_timing(ctx, doc["timing"])
+    eph = _parse_ephemeris(ctx, doc, kind, path)
     with ctx.reading("spectroscopy", "spectroscopy defaults"):
         spectroscopy = _parse_spectroscopy(ctx, doc.get("spectroscopy"))
     priority = number(ctx, doc, field("priority"))
@@ -224,6 +219,15 @@ def target_from_dict(doc: Any, path: Path | None = None) -> Target:
         references=references,
     )
     return with_samples_covariance(target)
+
+
+def _parse_ephemeris(ctx: Ctx, doc: Mapping[str, Any], kind: str, path: Path | None) -> Ephemeris:
+    """The ``lisa`` or ``timing`` section (``kind``), read."""
+    if kind == "lisa":
+        with ctx.reading("lisa", "the LISA posterior summary"):
+            return _parse_lisa(ctx, doc.get("lisa"), path)
+    with ctx.reading("timing", "a timing ephemeris"):
+        return parse_timing(ctx, doc["timing"])
 
 
 def _ephemeris_kind(ctx: Ctx, doc: Mapping[str, Any]) -> str:

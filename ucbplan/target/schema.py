@@ -3,18 +3,24 @@
 :data:`FIELDS` is a plain tuple of frozen :class:`Field` records in document order. The parser
 (:mod:`ucbplan.target.parse`), the writer (:mod:`ucbplan.target.write`) and the target-file
 reference in the docs all read it, so a field cannot be accepted, written or documented in one
-place and forgotten in another. Look a field up with :func:`field`.
+place and forgotten in another. Look a field up with :func:`field`. The records
+(:class:`Field`, :class:`Range`) are declared in :mod:`ucbplan.target.fieldtypes` and the families
+of fields that share a shape are built by :mod:`ucbplan.target.fieldgroups`.
 """
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass
-from typing import Any, Literal
-
-from ucbplan.core.constants import C_KM_S, E_MAX
-from ucbplan.core.params import PARAM_NAMES, PARAM_UNITS
+from ucbplan.core.params import PARAM_NAMES
 from ucbplan.core.timing import MARKS, TIMING_NAMES
+from ucbplan.target.fieldgroups import (
+    TIME_SCALES,
+    covariance_fields,
+    eccentricity_fields,
+    phase_field,
+    positive,
+    velocity_field,
+)
+from ucbplan.target.fieldtypes import Field, Kind, Range
 
 __all__ = [
     "COVARIANCE_EXTRAS",
@@ -30,257 +36,6 @@ __all__ = [
     "section_fields",
     "timing_parameter_field",
 ]
-
-#: How a field's value is read: a number with a unit, a plain number, an angle, an epoch, one of
-#: ``choices``, free text, a file name, a nested mapping (a section), a list, or anything.
-Kind = Literal[
-    "quantity", "number", "angle", "epoch", "choice", "text", "file", "mapping", "list", "any"
-]
-
-
-@dataclass(frozen=True, slots=True)
-class Range:
-    """Allowed interval of a value (in the field's unit) and why.
-
-    Attributes
-    ----------
-    low, high : float
-        Interval ends (±inf when unbounded).
-    low_open, high_open : bool
-        Whether the end itself is excluded.
-    reason : str
-        The physical reason for the bound (for the docs).
-    error : str
-        Message after ``file: field:`` when a value falls outside; ``{raw}`` is the value as
-        written (quoted and shortened), ``{value}`` the parsed number. The parser appends the
-        reason in parentheses.
-    """
-
-    low: float = -math.inf
-    high: float = math.inf
-    low_open: bool = False
-    high_open: bool = False
-    reason: str = ""
-    error: str = "must be positive, got {raw}"
-
-    def contains(self, x: float) -> bool:
-        """Whether ``x`` lies inside the interval."""
-        above = x > self.low if self.low_open else x >= self.low
-        below = x < self.high if self.high_open else x <= self.high
-        return above and below
-
-    def __str__(self) -> str:
-        """Interval notation, e.g. ``(0, inf)`` or ``[-1, 1]`` (infinite ends are open)."""
-        left = "(" if self.low_open or math.isinf(self.low) else "["
-        right = ")" if self.high_open or math.isinf(self.high) else "]"
-        return f"{left}{self.low:g}, {self.high:g}{right}"
-
-
-def _positive(reason: str) -> Range:
-    return Range(low=0.0, low_open=True, reason=reason)
-
-
-@dataclass(frozen=True, slots=True)
-class Field:
-    """One field of a target file.
-
-    Attributes
-    ----------
-    path : str
-        Dotted path in the document, e.g. ``"lisa.f_gw"`` (also the path in error messages).
-    kind : Kind
-        How the value is read.
-    what : str
-        What the value is, as in "expected a frequency like …".
-    example : str
-        A valid value as written in a target file (with its unit where it has one).
-    unit : str or None
-        Astropy unit string of the value inside ucbplan; a bare number in the file is taken in
-        this unit (``""`` dimensionless; None for values without a unit).
-    required : bool
-        Whether the field must be present (inside its section, if that section is given).
-    default : object
-        Value used when the field is absent (None: stays unset).
-    bounds : Range or None
-        Allowed interval after conversion to ``unit``.
-    choices : tuple of str
-        Allowed values of a ``choice`` field.
-    doc : str
-        One line for the target-file reference.
-    dimension_hint : str
-        How to fix a quantity given with the wrong dimension (e.g. ``give Hz (f = ω/2π)``);
-        empty: "give <unit>".
-    cosine_of : str
-        For a cosine (dimensionless): the angle it is the cosine of; an angle given instead is
-        refused with the cosine to write.
-    unit_required : bool
-        A bare number is refused: the value must carry its unit (a period or a σ of T0 is
-        published in seconds or in days; guessing would be off by 86400).
-    """
-
-    path: str
-    kind: Kind
-    what: str
-    example: str
-    unit: str | None = None
-    required: bool = False
-    default: Any = None
-    bounds: Range | None = None
-    choices: tuple[str, ...] = ()
-    doc: str = ""
-    dimension_hint: str = ""
-    cosine_of: str = ""
-    unit_required: bool = False
-
-    @property
-    def name(self) -> str:
-        """Last component of the path (the key in its mapping)."""
-        return self.path.rpartition(".")[2]
-
-    @property
-    def section(self) -> str:
-        """Path of the mapping that holds the field (``""`` for the top level)."""
-        return self.path.rpartition(".")[0]
-
-
-_TIME_SCALES = ("tdb", "tcb", "tt", "utc", "tai")
-_ECC_NOTE = f"e = |η + iκ| < {E_MAX} (the paper's first-order small-e model)"
-
-
-def _phase(
-    name: str,
-    what: str,
-    example: str,
-    doc: str,
-    required: bool = False,
-    bounds: Range | None = None,
-    dimension_hint: str = "",
-    section: str = "lisa",
-) -> Field:
-    """A phase-model parameter ``<section>.<name>`` in its core unit; optional ones default to 0."""
-    return Field(
-        f"{section}.{name}",
-        "quantity",
-        what,
-        example,
-        unit=PARAM_UNITS[name],
-        required=required,
-        default=None if required else 0.0,
-        bounds=bounds,
-        doc=doc,
-        dimension_hint=dimension_hint,
-    )
-
-
-def _velocity(name: str, example: str, doc: str, reason: str) -> Field:
-    """A spectroscopy velocity ``spectroscopy.<name>`` in km/s, positive and below c."""
-    return Field(
-        f"spectroscopy.{name}",
-        "quantity",
-        "a velocity",
-        example,
-        unit="km / s",
-        bounds=Range(
-            0.0,
-            C_KM_S,
-            low_open=True,
-            high_open=True,
-            reason=f"{reason}, below the speed of light",
-            error=f"must be in (0, {C_KM_S:g}) km/s, got {{raw}}",
-        ),
-        doc=doc,
-    )
-
-
-def _eccentricity(section: str, epoch: str) -> tuple[Field, Field, Field]:
-    """η, κ (of star 1 at ``epoch``) and ω̇ of ``section``, as in the paper's LISA model."""
-    return (
-        _phase(
-            "eta",
-            "a dimensionless number",
-            "0.0068 (dimensionless)",
-            f"η = e sin ω of star 1 at {epoch}; {_ECC_NOTE}",
-            dimension_hint="η = e sin ω is dimensionless: give a plain number",
-            section=section,
-        ),
-        _phase(
-            "kappa",
-            "a dimensionless number",
-            "0.0068 (dimensionless)",
-            f"κ = e cos ω of star 1 at {epoch}; {_ECC_NOTE}",
-            dimension_hint="κ = e cos ω is dimensionless: give a plain number",
-            section=section,
-        ),
-        _phase(
-            "omega_dot",
-            "an angular rate",
-            '"1.498e-6 rad / s"',
-            "apsidal advance rate ω̇",
-            dimension_hint="give rad/s (ω̇ = 2π rad × the rate in Hz)",
-            section=section,
-        ),
-    )
-
-
-def _covariance(
-    section: str, names: str, example: str, sigma_example: str, required: bool = False
-) -> tuple[Field, ...]:
-    """The covariance mapping of ``section`` (two forms, as ``lisa.covariance``)."""
-    path = f"{section}.covariance"
-    return (
-        Field(
-            path,
-            "mapping",
-            "a mapping",
-            example,
-            required=required,
-            doc="covariance: parameters + matrix, or sigma (+ correlation)"
-            + ("; required (horizons and σ_t need it)" if required else ""),
-        ),
-        Field(
-            f"{path}.parameters",
-            "list",
-            "a list of parameter names",
-            names,
-            doc="names of the matrix rows, in the units of the parameters above",
-        ),
-        Field(
-            f"{path}.matrix",
-            "list",
-            "a square list of lists of numbers",
-            "[[5.29e-4, 0, 0], [0, 5.93e-23, 0], [0, 0, 2.17e-37]]",
-            doc="symmetric positive semi-definite covariance matrix",
-        ),
-        Field(
-            f"{path}.sigma",
-            "mapping",
-            "a mapping parameter: sigma",
-            sigma_example,
-            bounds=Range(
-                0.0,
-                low_open=True,
-                reason="a standard deviation is positive; leave out a parameter known exactly",
-                error="must be > 0, got {raw}",
-            ),
-            doc="marginal standard deviations, each in its parameter's unit",
-        ),
-        Field(
-            f"{path}.correlation",
-            "mapping",
-            "a mapping of parameter pairs to ρ",
-            '{"phase,fdot": -0.7} or [[phase, fdot, -0.7]]'
-            if section == "lisa"
-            else '{"period,pdot": -0.9} or [[period, pdot, -0.9]]',
-            bounds=Range(
-                -1.0,
-                1.0,
-                reason="a correlation coefficient",
-                error="expected ρ in [-1, 1], got {raw}",
-            ),
-            doc="correlation coefficients between parameters of sigma (default 0)",
-        ),
-    )
-
 
 #: Kinds of ephemeris a target file gives: exactly one of these sections.
 EPHEMERIS_KINDS: tuple[str, ...] = ("lisa", "timing")
@@ -376,7 +131,7 @@ FIELDS: tuple[Field, ...] = (
         "choice",
         "a time scale",
         "utc",
-        choices=_TIME_SCALES,
+        choices=TIME_SCALES,
         doc="only if t_ref is not TDB: converted explicitly (TCB also rescales the rates)",
     ),
     Field(
@@ -404,7 +159,7 @@ FIELDS: tuple[Field, ...] = (
         choices=("midpoint", "start"),
         doc="where t_ref lies in the observation; start-referenced inputs move to the midpoint",
     ),
-    _phase(
+    phase_field(
         "phase",
         "a phase",
         '5.500397 (rad) or "5.5 rad"',
@@ -412,7 +167,7 @@ FIELDS: tuple[Field, ...] = (
         required=True,
         dimension_hint="give rad (or deg, cycle)",
     ),
-    _phase(
+    phase_field(
         "f_gw",
         "a frequency",
         '"6.2204944286e-3 Hz"',
@@ -428,7 +183,7 @@ FIELDS: tuple[Field, ...] = (
         ),
         dimension_hint="give Hz (f = ω/2π)",
     ),
-    _phase(
+    phase_field(
         "fdot",
         "a frequency derivative",
         '"7.07e-16 Hz / s"',
@@ -436,14 +191,14 @@ FIELDS: tuple[Field, ...] = (
         required=True,
         dimension_hint="give Hz / s (ḟ = ω̇_GW/2π)",
     ),
-    _phase(
+    phase_field(
         "fddot",
         "a second frequency derivative",
         '"-1.07e-26 Hz / s2"',
         "d²f/dt² at t_ref",
         dimension_hint="give Hz / s2 (f̈ = ω̈_GW/2π)",
     ),
-    *_eccentricity("lisa", "t_ref"),
+    *eccentricity_fields("lisa", "t_ref"),
     Field(
         "lisa.cos_inclination",
         "quantity",
@@ -466,7 +221,7 @@ FIELDS: tuple[Field, ...] = (
         "a dimensionless strain",
         "4.9e-22 (dimensionless strain)",
         unit="",
-        bounds=_positive("a strain amplitude is positive"),
+        bounds=positive("a strain amplitude is positive"),
         doc="GW strain amplitude",
         dimension_hint="a strain is dimensionless: give a plain number",
     ),
@@ -484,10 +239,10 @@ FIELDS: tuple[Field, ...] = (
         "a distance",
         '"2.0 kpc"',
         unit="kpc",
-        bounds=_positive("a distance is positive"),
+        bounds=positive("a distance is positive"),
         doc="distance to the binary",
     ),
-    *_covariance(
+    *covariance_fields(
         "lisa",
         "[phase, f_gw, fdot]",
         '{sigma: {phase: 0.023, f_gw: "7.7e-12 Hz"}}',
@@ -535,7 +290,7 @@ FIELDS: tuple[Field, ...] = (
         '"414.7915404 s"',
         unit="s",
         required=True,
-        bounds=_positive("an orbital period is positive"),
+        bounds=positive("an orbital period is positive"),
         doc="P at T0 (from node to node, f_gw = 2/P); the unit is required (s or d)",
         dimension_hint="give a time, e.g. s or d",
         unit_required=True,
@@ -567,7 +322,7 @@ FIELDS: tuple[Field, ...] = (
         '{eta: 0.0, kappa: 0.002, omega_dot: "1e-6 rad / s"}',
         doc="small eccentricity (first order, as in lisa): η, κ of star 1 at T0 and ω̇",
     ),
-    *_eccentricity("timing.eccentricity", "T0"),
+    *eccentricity_fields("timing.eccentricity", "T0"),
     Field(
         "timing.inclination",
         "angle",
@@ -588,10 +343,10 @@ FIELDS: tuple[Field, ...] = (
         "a distance",
         '"2.34 kpc"',
         unit="kpc",
-        bounds=_positive("a distance is positive"),
+        bounds=positive("a distance is positive"),
         doc="distance to the binary",
     ),
-    *_covariance(
+    *covariance_fields(
         "timing",
         "[t0, period, pdot]",
         '{sigma: {t0: "8.4e-6 d", period: "2.9e-6 s", pdot: 5.0e-14}}',
@@ -612,7 +367,7 @@ FIELDS: tuple[Field, ...] = (
         "a number",
         "1.0",
         default=1.0,
-        bounds=_positive("a weight; higher is scheduled first"),
+        bounds=positive("a weight; higher is scheduled first"),
         doc="weight in night schedules",
     ),
     Field(
@@ -662,7 +417,7 @@ FIELDS: tuple[Field, ...] = (
         "a mass",
         '"0.347 solMass"',
         unit="solMass",
-        bounds=_positive("a mass is positive"),
+        bounds=positive("a mass is positive"),
         doc="mass of star 1",
     ),
     Field(
@@ -671,7 +426,7 @@ FIELDS: tuple[Field, ...] = (
         "a mass",
         '"0.285 solMass"',
         unit="solMass",
-        bounds=_positive("a mass is positive"),
+        bounds=positive("a mass is positive"),
         doc="mass of star 2",
     ),
     Field(
@@ -690,19 +445,19 @@ FIELDS: tuple[Field, ...] = (
         choices=("SB1", "SB2"),
         doc="one (SB1) or both (SB2) stars' lines are measured",
     ),
-    _velocity(
+    velocity_field(
         "K1", '"585 km/s"', "velocity semi-amplitude of star 1", "a semi-amplitude is positive"
     ),
-    _velocity(
+    velocity_field(
         "K2", '"713 km/s"', "velocity semi-amplitude of star 2", "a semi-amplitude is positive"
     ),
-    _velocity(
+    velocity_field(
         "K_eff",
         '"390 km/s"',
         "K for tolerances; default K1 + K2 (SB2) or K1 (SB1)",
         "a semi-amplitude is positive",
     ),
-    _velocity(
+    velocity_field(
         "sigma_v", '"15 km/s"', "velocity error of one spectrum", "a velocity error is positive"
     ),
     Field("notes", "any", "anything", '"free text"', doc="free-form notes; ucbplan ignores them"),

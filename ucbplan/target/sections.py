@@ -20,8 +20,9 @@ from numpy.typing import NDArray
 from ucbplan.core.constants import E_MAX
 from ucbplan.core.params import PhaseParams
 from ucbplan.errors import shorten
+from ucbplan.target.fieldtypes import Field
 from ucbplan.target.model import TimingSection
-from ucbplan.target.schema import Field, field, section_fields
+from ucbplan.target.schema import field, section_fields
 from ucbplan.target.values import (
     Ctx,
     check_keys,

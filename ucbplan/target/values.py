@@ -1,6 +1,6 @@
 """Scalar values of a target file: quantities with units, plain numbers, angles and epochs.
 
-Each reader takes the schema :class:`~ucbplan.target.schema.Field` it reads (unit, example,
+Each reader takes the schema :class:`~ucbplan.target.fieldtypes.Field` it reads (unit, example,
 allowed range) and fails with a one-line :class:`~ucbplan.errors.TargetFileError`
 ``file: field: expected …, got …``. Values are quoted with :func:`~ucbplan.errors.shorten`, text
 longer than any valid value is refused before it is parsed, and a unit of the wrong dimension is
@@ -30,7 +30,8 @@ from ucbplan.core.timescale import (
     split_scale_label,
 )
 from ucbplan.errors import TargetFileError, shorten
-from ucbplan.target.schema import Field, field
+from ucbplan.target.fieldtypes import Field
+from ucbplan.target.schema import field
 
 __all__ = [
     "MALFORMED",

@@ -4,7 +4,7 @@ The JSON report gives each parameter as ``{value, sigma, unit}`` (T0's value a f
 ``"BJD_TDB …"`` string, its σ in seconds), the covariance (T0 in seconds), χ², dof, the
 reference, outliers, clipped rows, notes and every point's O − C.
 
-The target file is the ``timing:`` kind of target (issue 10):
+The target file is the ``timing:`` kind of target:
 
     name: …
     sky: {ra: "…", dec: "…"}
@@ -71,19 +71,7 @@ def fit_report(fit: EphemerisFit, times: EclipseTimes) -> dict[str, Any]:
             "sigma": float(sig[i]),
             "unit": UNITS[i],
         }
-    points = [
-        {
-            "row": int(times.rows[i]),
-            "bjd_tdb": str(times.jd[i]),
-            "kind": "secondary" if times.secondary[i] else "primary",
-            "cycle": float(fit.nu[i]),
-            "o_minus_c_s": float(fit.o_minus_c_s[i]),
-            "sigma_s": float(times.sigma_s[i]),
-            "z": float(fit.z[i]),
-            "used": bool(fit.used[i]),
-        }
-        for i in range(times.n)
-    ]
+    points = _points(fit, times)
     by_row = {p["row"]: p for p in points}
     return {
         "source": fit.source,
@@ -115,6 +103,23 @@ def fit_report(fit: EphemerisFit, times: EclipseTimes) -> dict[str, Any]:
         "notes": list(fit.notes),
         "points": points,
     }
+
+
+def _points(fit: EphemerisFit, times: EclipseTimes) -> list[dict[str, Any]]:
+    """One JSON record per measured time: row, epoch, kind, cycle, O − C, σ, z, used."""
+    return [
+        {
+            "row": int(times.rows[i]),
+            "bjd_tdb": str(times.jd[i]),
+            "kind": "secondary" if times.secondary[i] else "primary",
+            "cycle": float(fit.nu[i]),
+            "o_minus_c_s": float(fit.o_minus_c_s[i]),
+            "sigma_s": float(times.sigma_s[i]),
+            "z": float(fit.z[i]),
+            "used": bool(fit.used[i]),
+        }
+        for i in range(times.n)
+    ]
 
 
 def identity(

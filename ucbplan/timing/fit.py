@@ -291,9 +291,70 @@ def fit_ephemeris(
         raise InputError(f"--terms: expected 2, 3 or 4, got {terms}")
     cycles = np.asarray(cycles, dtype=np.float64)
     label = times.label()
-    used = np.ones(times.n, dtype=bool)
-    _check_counts(times, cycles, used, terms, "")
+    _check_counts(times, cycles, np.ones(times.n, dtype=bool), terms, "")
     base, y = _base(times, cycles, terms)
+    fit = _clipped_fit(times, cycles, y, terms, clip, label)
+    t0_s, values, cov = _parameters(base, fit.core, fit.scale, label)
+    t0_jd = _DEC.add(times.ref_jd, _DEC.divide(t0_s, _DAY))
+    return _assemble(times, cycles, terms, fit, t0_jd, values, cov, clip, cycles_origin)
+
+
+@dataclass(frozen=True)
+class _Clipped:
+    """A fit after clipping: the fit, its σ scale √(χ²/dof) (1 unless above 1), O − C [s],
+    O − C in scaled σ's, the times used and the rows dropped."""
+
+    core: _Core
+    scale: float
+    oc: F64
+    z: F64
+    used: NDArray[np.bool_]
+    clipped: tuple[int, ...]
+
+
+def _assemble(
+    times: EclipseTimes,
+    cycles: F64,
+    terms: int,
+    fit: _Clipped,
+    t0_jd: Decimal,
+    values: F64,
+    cov: F64,
+    clip: float | None,
+    cycles_origin: str,
+) -> EphemerisFit:
+    """The :class:`EphemerisFit` record, with its outliers and notes."""
+    core, used, z = fit.core, fit.used, fit.z
+    outliers = tuple(int(r) for r in times.rows[used & (np.abs(z) > OUTLIER_SIGMA)])
+    notes = _notes(core, fit.scale, outliers, fit.clipped, clip)
+    return EphemerisFit(
+        source=times.label(),
+        terms=terms,
+        ref_jd=times.ref_jd,
+        t0_jd=t0_jd,
+        values=values,
+        cov=cov,
+        t0_cycle=core.m,
+        weighted_mean_cycle=core.wmean,
+        nu=cycles - core.m,
+        o_minus_c_s=fit.oc,
+        z=z,
+        used=used,
+        chi2=core.chi2,
+        dof=core.dof,
+        sigma_scale=fit.scale,
+        outliers=outliers,
+        clipped=fit.clipped,
+        cycles_origin=cycles_origin,
+        notes=notes,
+    )
+
+
+def _clipped_fit(
+    times: EclipseTimes, cycles: F64, y: F64, terms: int, clip: float | None, label: str
+) -> _Clipped:
+    """The fit of ``y`` after dropping, one round at a time, the times beyond ``clip`` σ."""
+    used = np.ones(times.n, dtype=bool)
     clipped: list[int] = []
     for _ in range(times.n):
         core = _fit_core(y[used], times.sigma_s[used], cycles[used], terms, label)
@@ -309,6 +370,17 @@ def fit_ephemeris(
         clipped.extend(int(r) for r in times.rows[drop])
         used = used & ~drop
         _check_counts(times, cycles, used, terms, f"--clip {clip:g} leaves ")
+    return _Clipped(core, scale, oc, z, used, tuple(clipped))
+
+
+def _parameters(base: _Base, core: _Core, scale: float, label: str) -> tuple[Decimal, F64, F64]:
+    """T0 [s since the reference epoch, exact], the parameters and their (scaled) covariance.
+
+    Raises
+    ------
+    NumericalError
+        The fitted period is not positive.
+    """
     t0_s = _DEC.add(base.at(core.m), Decimal(float(core.coef[0])))
     coef = core.coef.copy()
     coef[0] = float(t0_s)
@@ -317,30 +389,7 @@ def fit_ephemeris(
     if values[1] <= 0:
         raise NumericalError(f"{label}: the fitted period is not positive; check the cycle numbers")
     cov = jac @ core.cov_c @ jac.T * scale**2
-    cov = 0.5 * (cov + cov.T)
-    outliers = tuple(int(r) for r in times.rows[used & (np.abs(z) > OUTLIER_SIGMA)])
-    notes = _notes(core, scale, outliers, tuple(clipped), clip)
-    return EphemerisFit(
-        source=label,
-        terms=terms,
-        ref_jd=times.ref_jd,
-        t0_jd=_DEC.add(times.ref_jd, _DEC.divide(t0_s, _DAY)),
-        values=values,
-        cov=cov,
-        t0_cycle=core.m,
-        weighted_mean_cycle=core.wmean,
-        nu=cycles - core.m,
-        o_minus_c_s=oc,
-        z=z,
-        used=used,
-        chi2=core.chi2,
-        dof=core.dof,
-        sigma_scale=scale,
-        outliers=outliers,
-        clipped=tuple(clipped),
-        cycles_origin=cycles_origin,
-        notes=notes,
-    )
+    return t0_s, values, 0.5 * (cov + cov.T)
 
 
 def _notes(

@@ -129,39 +129,8 @@ def read_initial(path: Path | str) -> PeriodGuess:
         period, sigma_p = parse_period(timing["period"], f"{label}: timing.period")
     except InputError as exc:
         raise InputFileError(str(exc)) from None
-    t0_jd: Decimal | None = None
-    sigma_t0 = 0.0
-    raw_t0 = timing.get("t0")
-    if raw_t0 is not None:
-        if not isinstance(raw_t0, str):
-            raise InputFileError(
-                f'{label}: timing.t0: expected a labelled epoch like "BJD_TDB 2458305.6827886", '
-                f"got {shorten(raw_t0, 60)}"
-            )
-        try:
-            t0_jd = parse_epoch_label(raw_t0, f"{label}: timing.t0")
-        except InputError as exc:
-            raise InputFileError(str(exc)) from None
-        sigma_t0 = _t0_digits_s(raw_t0)
-    pdot, sigma_pdot = 0.0, PDOT_PRIOR_SIGMA
-    raw_pdot = timing.get("pdot")
-    if raw_pdot is not None:
-        try:
-            if isinstance(raw_pdot, bool):
-                raise ValueError
-            pdot_dec = parse_decimal(
-                repr(raw_pdot) if isinstance(raw_pdot, float) else str(raw_pdot)
-            )
-            pdot, sigma_pdot = float(pdot_dec), float(_last_digit(pdot_dec))
-        except (ValueError, ArithmeticError):
-            raise InputFileError(
-                f"{label}: timing.pdot: expected a number (s/s) like -2.373e-11, got "
-                f"{shorten(raw_pdot, 60)}"
-            ) from None
-        if not (math.isfinite(pdot) and abs(pdot) < 1e-3):
-            raise InputFileError(
-                f"{label}: timing.pdot: expected |Ṗ| < 1e-3 s/s, got {shorten(raw_pdot, 60)}"
-            )
+    t0_jd, sigma_t0 = _initial_t0(timing.get("t0"), label)
+    pdot, sigma_pdot = _initial_pdot(timing.get("pdot"), label)
     return PeriodGuess(
         period_s=period,
         sigma_period_s=sigma_p,
@@ -171,6 +140,55 @@ def read_initial(path: Path | str) -> PeriodGuess:
         sigma_pdot=sigma_pdot,
         origin=f"--initial {label}",
     )
+
+
+def _initial_t0(raw_t0: Any, label: str) -> tuple[Decimal | None, float]:
+    """T0 [JD, exact] and one unit in its last digit [s] of ``timing.t0`` (None, 0 if absent).
+
+    Raises
+    ------
+    InputFileError
+        ``timing.t0`` is not a labelled epoch.
+    """
+    if raw_t0 is None:
+        return None, 0.0
+    if not isinstance(raw_t0, str):
+        raise InputFileError(
+            f'{label}: timing.t0: expected a labelled epoch like "BJD_TDB 2458305.6827886", '
+            f"got {shorten(raw_t0, 60)}"
+        )
+    try:
+        t0_jd = parse_epoch_label(raw_t0, f"{label}: timing.t0")
+    except InputError as exc:
+        raise InputFileError(str(exc)) from None
+    return t0_jd, _t0_digits_s(raw_t0)
+
+
+def _initial_pdot(raw_pdot: Any, label: str) -> tuple[float, float]:
+    """Ṗ and one unit in its last digit of ``timing.pdot`` (0 and the prior σ if absent).
+
+    Raises
+    ------
+    InputFileError
+        ``timing.pdot`` is not a number, or |Ṗ| ≥ 1e-3 s/s.
+    """
+    if raw_pdot is None:
+        return 0.0, PDOT_PRIOR_SIGMA
+    try:
+        if isinstance(raw_pdot, bool):
+            raise ValueError
+        pdot_dec = parse_decimal(repr(raw_pdot) if isinstance(raw_pdot, float) else str(raw_pdot))
+        pdot, sigma_pdot = float(pdot_dec), float(_last_digit(pdot_dec))
+    except (ValueError, ArithmeticError):
+        raise InputFileError(
+            f"{label}: timing.pdot: expected a number (s/s) like -2.373e-11, got "
+            f"{shorten(raw_pdot, 60)}"
+        ) from None
+    if not (math.isfinite(pdot) and abs(pdot) < 1e-3):
+        raise InputFileError(
+            f"{label}: timing.pdot: expected |Ṗ| < 1e-3 s/s, got {shorten(raw_pdot, 60)}"
+        )
+    return pdot, sigma_pdot
 
 
 def _t0_digits_s(text: str) -> float:

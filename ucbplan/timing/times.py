@@ -240,7 +240,6 @@ def _ecsv_rows(
     that an epoch with more digits than a float64 keeps them.
     """
     from astropy.table import Table
-    from astropy.time import Time
 
     _check_ecsv_header(r, text)
     try:
@@ -248,6 +247,36 @@ def _ecsv_rows(
     except Exception as exc:  # astropy raises many types for malformed ECSV
         msg = " ".join(str(exc).split())[:200]
         raise r.fail("table", f"not a readable ECSV table ({msg}); check the header") from None
+    meta, time_cols = _ecsv_columns(r, tab)
+    header, body = _ecsv_cells(text)
+    names = [c.strip().lower() for c in tab.colnames]
+    if header != names:  # Time columns serialised as jd1/jd2: take the exact two parts
+        return names, _ecsv_time_rows(tab, names, time_cols), meta
+    if len(body) != len(tab):
+        raise r.fail("table", "the ECSV data lines do not match its header; check the file")
+    for k, cells in body:
+        if len(cells) != len(header):
+            raise r.fail(f"row {k}", f"has {len(cells)} fields, expected {len(header)}")
+    native = {"bjd_tdb": "jd", "bmjd_tdb": "mjd"}
+    for key, col in time_cols.items():
+        if col.format != native[key]:  # e.g. ISO text: the exact two parts, not the text
+            i = header.index(key)
+            exact = _ecsv_time_rows(tab, names, {key: col})
+            for (_, cells), (_, ex) in zip(body, exact, strict=True):
+                cells[i] = ex[i]
+    return header, body, meta
+
+
+def _ecsv_columns(r: _Reader, tab: Any) -> tuple[dict[str, Any], dict[str, Any]]:
+    """Unit per column (None for Time columns) and the Time columns of an astropy table.
+
+    Raises
+    ------
+    InputFileError
+        A Time column not named bjd_tdb/bmjd_tdb or not in TDB, or a blank cell.
+    """
+    from astropy.time import Time
+
     meta: dict[str, Any] = {}
     time_cols: dict[str, Any] = {}
     for name in tab.colnames:
@@ -269,6 +298,11 @@ def _ecsv_rows(
         if mask is not None and np.any(mask):
             k = int(np.flatnonzero(np.asarray(mask))[0]) + 1
             raise r.fail(f"row {k}, column {name!r}", "blank cell; every row needs a value")
+    return meta, time_cols
+
+
+def _ecsv_cells(text: str) -> tuple[list[str], list[tuple[int, list[str]]]]:
+    """Header and raw cells per row (row number from 1) of the data lines of an ECSV text."""
     delim = " "
     m = re.search(r"^#\s*delimiter:\s*['\"]?(,|\s)['\"]?\s*$", text, flags=re.MULTILINE)
     if m and m.group(1) == ",":
@@ -279,22 +313,7 @@ def _ecsv_rows(
     parsed = list(csv.reader(lines, delimiter=delim, quotechar='"', skipinitialspace=True))
     header = [h.strip().lower() for h in parsed[0]] if parsed else []
     body = [(k, [c.strip() for c in cells]) for k, cells in enumerate(parsed[1:], start=1)]
-    names = [c.strip().lower() for c in tab.colnames]
-    if header != names:  # Time columns serialised as jd1/jd2: take the exact two parts
-        return names, _ecsv_time_rows(tab, names, time_cols), meta
-    if len(body) != len(tab):
-        raise r.fail("table", "the ECSV data lines do not match its header; check the file")
-    for k, cells in body:
-        if len(cells) != len(header):
-            raise r.fail(f"row {k}", f"has {len(cells)} fields, expected {len(header)}")
-    native = {"bjd_tdb": "jd", "bmjd_tdb": "mjd"}
-    for key, col in time_cols.items():
-        if col.format != native[key]:  # e.g. ISO text: the exact two parts, not the text
-            i = header.index(key)
-            exact = _ecsv_time_rows(tab, names, {key: col})
-            for (_, cells), (_, ex) in zip(body, exact, strict=True):
-                cells[i] = ex[i]
-    return header, body, meta
+    return header, body
 
 
 def _check_ecsv_header(r: _Reader, text: str) -> None:
