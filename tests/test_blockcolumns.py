@@ -172,12 +172,12 @@ def test_time_order_is_the_stable_sort_of_the_records() -> None:
 WORDS = ["HM", "Cnc", "(simulated)", "UCB03", "a.b", "x/y", "V01", "1.5", "2040-01-01", "true"]
 
 
-def _random_visits(rng: random.Random, n: int) -> list[dict[str, object]]:
+def _random_visits(rng: random.Random, n: int, sep: str = " ") -> list[dict[str, object]]:
     """Visits as a plan's meta holds them, with names of random words (spaces, dates, numbers,
-    booleans) and lengths that put breaks anywhere near the 130th column."""
+    booleans) joined by ``sep`` and lengths that put breaks anywhere near the 130th column."""
     out = []
     for k in range(n):
-        name = " ".join(rng.choice(WORDS) for _ in range(rng.randint(1, 12)))
+        name = sep.join(rng.choice(WORDS) for _ in range(rng.randint(1, 12)))
         out.append(
             {
                 "visit_id": f"{name.replace(' ', '_')}-V{k:02d}",
@@ -202,3 +202,13 @@ def test_ecsv_header_visits_as_libyaml_writes_them(seed: int) -> None:
     table.meta = {"site": {"name": "x"}, "visits": _random_visits(rng, 30), "after": [1, 2]}
     assert _ours(table, "ecsv") == _astropy_ecsv(table)
     assert table.meta["visits"] and "after" in table.meta  # the caller's meta is kept
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_ecsv_header_visits_without_spaces_as_libyaml_writes_them(seed: int) -> None:
+    """Names without spaces: every mapping from the templates of its texts' widths (lines
+    breaking before any key, near the 130th column), as libyaml writes it."""
+    rng = random.Random(seed)
+    table = _random_table(seed)
+    table.meta = {"visits": _random_visits(rng, 60, sep=rng.choice("_-.")), "after": [1]}
+    assert _ours(table, "ecsv") == _astropy_ecsv(table)

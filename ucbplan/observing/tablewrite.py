@@ -153,38 +153,127 @@ def yaml_flow_items(items: list[dict[str, Any]], tags: Callable[[str], str]) -> 
     ``tags(text)``: PyYAML's implicit tag of a plain scalar (``str``, ``int``, ``float``, ...).
 
     libyaml breaks a flow mapping before a key once the column passes the width, and a plain
-    value at a space once the column passes it; the tests compare with libyaml's own output."""
+    value at a space once the column passes it; the tests compare with libyaml's own output.
+    Items of the same keys are written key by key: each distinct value's text found once, and
+    each mapping made from a ``%`` template of its texts' lengths (where the lines break)."""
+    keys = sorted(items[0]) if items else []
+    if any(item.keys() != items[0].keys() for item in items) or not all(
+        isinstance(key, str) and " " not in key and _yaml_scalar(key, tags) == (key, True)
+        for key in keys
+    ):
+        return _flow_items_one_by_one(items, tags)
+    columns = []
+    for key in keys:
+        texts = _column_texts([item[key] for item in items], tags)
+        if texts is None:
+            return None
+        columns.append(texts)
+    templates: dict[tuple[int, ...], str] = {}
     lines: list[str] = []
-    for item in items:
-        line, col = "  - {", 5
-        for k, key in enumerate(sorted(item)):
-            if not isinstance(key, str) or _yaml_scalar(key, tags) != (key, True) or " " in key:
-                return None
-            got = _yaml_scalar(item[key], tags)
+    for item, texts in zip(items, zip(*columns, strict=True), strict=True):
+        if any(type(t) is _Words for t in texts):  # a value that may break at its spaces
+            lines += _flow_item(item, tags) or []
+            continue
+        widths = tuple(map(len, texts))
+        template = templates.get(widths)
+        if template is None:
+            template = templates[widths] = _template(keys, widths)
+        lines += (template % texts).split("\n")
+    return lines
+
+
+#: Kinds of value whose text :func:`_column_texts` remembers by value.
+_KNOWN = frozenset((str, int, float))
+
+
+class _Words(str):
+    """A value's text that libyaml may break at its spaces (a plain string with spaces)."""
+
+
+def _column_texts(values: list[Any], tags: Callable[[str], str]) -> list[str] | None:
+    """Each value's text (a :class:`_Words` where it may break), each distinct value found
+    once; None if one is of a kind this path does not write."""
+    known: dict[tuple[type, Any], str] = {}
+    out = []
+    for v in values:
+        kind = type(v)
+        # -0.0 == 0.0 but is written otherwise; other kinds (unhashable too) are not remembered
+        key = (kind, repr(v) if kind is float and v == 0.0 else v) if kind in _KNOWN else None
+        text = None if key is None else known.get(key)
+        if text is None:
+            got = _yaml_scalar(v, tags)
             if got is None:
                 return None
-            text, breakable = got
-            if k:
-                line += ","
+            text = _Words(got[0]) if got[1] and " " in got[0] else got[0]
+            if key is not None:
+                known[key] = text
+        out.append(text)
+    return out
+
+
+def _template(keys: list[str], widths: tuple[int, ...]) -> str:
+    """The ``%`` template of a flow mapping of ``keys`` whose value texts have ``widths`` (none
+    breakable), its lines joined by newlines: a line breaks before a key past the width."""
+    parts, col = ["  - {"], 5
+    for k, (key, width) in enumerate(zip(keys, widths, strict=True)):
+        if k:
+            col += 1
+            if col > _YAML_WIDTH:
+                parts.append(",\n" + " " * _YAML_INDENT)
+                col = _YAML_INDENT
+            else:
+                parts.append(", ")
                 col += 1
+        parts.append(f"{key}: %s")
+        col += len(key) + 2 + width
+    return "".join(parts) + "}"
+
+
+def _flow_items_one_by_one(
+    items: list[dict[str, Any]], tags: Callable[[str], str]
+) -> list[str] | None:
+    """:func:`yaml_flow_items` of mappings of differing keys, one mapping at a time."""
+    lines: list[str] = []
+    for item in items:
+        got = _flow_item(item, tags)
+        if got is None:
+            return None
+        lines += got
+    return lines
+
+
+def _flow_item(item: dict[str, Any], tags: Callable[[str], str]) -> list[str] | None:
+    """The lines of one flow mapping (see :func:`yaml_flow_items`), or None."""
+    lines: list[str] = []
+    line, col = "  - {", 5
+    for k, key in enumerate(sorted(item)):
+        if not isinstance(key, str) or _yaml_scalar(key, tags) != (key, True) or " " in key:
+            return None
+        got = _yaml_scalar(item[key], tags)
+        if got is None:
+            return None
+        text, breakable = got
+        if k:
+            line += ","
+            col += 1
+            if col > _YAML_WIDTH:
+                lines.append(line)
+                line, col = " " * _YAML_INDENT, _YAML_INDENT
+            else:
+                line += " "
+                col += 1
+        line += f"{key}: "
+        col += len(key) + 2
+        words = text.split(" ") if breakable else [text]
+        for w, word in enumerate(words):
+            if w:
                 if col > _YAML_WIDTH:
                     lines.append(line)
-                    line, col = " " * _YAML_INDENT, _YAML_INDENT
+                    line, col = " " * _YAML_SCALAR_INDENT, _YAML_SCALAR_INDENT
                 else:
                     line += " "
                     col += 1
-            line += f"{key}: "
-            col += len(key) + 2
-            words = text.split(" ") if breakable else [text]
-            for w, word in enumerate(words):
-                if w:
-                    if col > _YAML_WIDTH:
-                        lines.append(line)
-                        line, col = " " * _YAML_SCALAR_INDENT, _YAML_SCALAR_INDENT
-                    else:
-                        line += " "
-                        col += 1
-                line += word
-                col += len(word)
-        lines.append(line + "}")
+            line += word
+            col += len(word)
+    lines.append(line + "}")
     return lines
