@@ -85,6 +85,17 @@ def test_ecsv_rows_as_astropy_writes_them(seed: int) -> None:
     assert _ours(table, "ecsv") == _astropy_ecsv(table)
 
 
+@pytest.mark.parametrize("value", [0.0, -0.0, float("nan"), 1e-5, 7, True, "", " x", 'a"b', "σ"])
+def test_ecsv_rows_of_one_value_columns_as_astropy_writes_them(value: object) -> None:
+    """A column of one value is formatted once: bit for bit one value (0.0 beside -0.0 is
+    two), text cells quoted as the csv writer does."""
+    table = _random_table(7)
+    table["one"] = [value] * len(table)
+    table["mixed"] = [value, -0.0, *[value] * (len(table) - 2)]
+    assert ecsv_data_lines(table) is not None
+    assert _ours(table, "ecsv") == _astropy_ecsv(table)
+
+
 @pytest.mark.parametrize("seed", range(30))
 def test_json_rows_as_json_writes_them(seed: int) -> None:
     table = _random_table(seed)

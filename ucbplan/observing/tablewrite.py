@@ -39,11 +39,27 @@ def _plain_columns(table: Table) -> bool:
 
 def _strs(col: Column) -> list[str]:
     """Each cell as astropy's ECSV writer formats it (``str`` of the cell), stripped of spaces
-    and tabs at both ends as its writer's splitter does."""
+    and tabs at both ends as its writer's splitter does; a column of one value (bit for bit)
+    formatted once."""
+    n = len(col)
+    if n and col.dtype.kind != "U":
+        data = col.data
+        bits = data.view(f"u{data.itemsize}") if data.dtype.kind == "f" else data
+        if bool((bits == bits[0]).all()):
+            return [str(data[:1].tolist()[0])] * n
     values = col.tolist()
     if col.dtype.kind == "U":
-        return [v.strip(" \t") for v in values]
+        joined = "".join(values)
+        if " " in joined or "\t" in joined:
+            return [v.strip(" \t") for v in values]
+        return values
     return list(map(str, values))
+
+
+def _needs_csv(values: list[str]) -> bool:
+    """Whether some cell of a text column is empty or one the ``csv`` writer may quote."""
+    joined = "".join(values)
+    return "" in values or not joined.isprintable() or " " in joined or '"' in joined
 
 
 class _Lines:
@@ -56,25 +72,27 @@ class _Lines:
         self.lines.append(text)
 
 
-def ecsv_data_lines(table: Table) -> list[str] | None:
-    """The data lines of ``table`` as astropy's ECSV writer writes them (without line ends), or
-    None for a table with other than plain 1-d columns."""
-    if not _plain_columns(table):
-        return None
-    cells = [_strs(col) for col in table.itercols()]
-    empty = [False] * len(table)
-    for values in cells:
-        for i, v in enumerate(values):
-            if not v:
-                values[i] = _SENTINEL
-                empty[i] = True
+def _csv_cells(values: list[str]) -> list[str]:
+    """Each cell as astropy's writer puts it on a line: an empty one as ``""``, others as the
+    ``csv`` writer quotes a field (on its own: its quoting depends on the field alone)."""
     sink = _Lines()
     writer = csv.writer(sink, delimiter=" ", quotechar='"', doublequote=True, escapechar=None)
-    writer.writerows(zip(*cells, strict=True))
-    return [
-        (line.replace(_SENTINEL, '""') if has else line).rstrip("\r\n")
-        for line, has in zip(sink.lines, empty, strict=True)
-    ]
+    writer.writerows([v or _SENTINEL] for v in values)
+    return [line.rstrip("\r\n").replace(_SENTINEL, '""') for line in sink.lines]
+
+
+def ecsv_data_lines(table: Table) -> list[str] | None:
+    """The data lines of ``table`` as astropy's ECSV writer writes them (without line ends), or
+    None for a table with other than plain 1-d columns. Column by column: a text column with a
+    cell to quote goes through the ``csv`` writer alone, the rest are joined as they are."""
+    if not _plain_columns(table):
+        return None
+    cells = []
+    for col in table.itercols():
+        values = _strs(col)
+        text = col.dtype.kind == "U"
+        cells.append(_csv_cells(values) if text and _needs_csv(values) else values)
+    return list(map(" ".join, zip(*cells, strict=True)))
 
 
 def _float_text(v: float) -> str:
