@@ -24,7 +24,7 @@ from astropy.time import Time
 from test_observing_table import _block, _meta  # tests/ is on sys.path (no __init__.py)
 
 from ucbplan.io import dump_json
-from ucbplan.observing import blocktable
+from ucbplan.observing import blocktable, tablewrite
 from ucbplan.observing.blockcolumns import BlockColumns, BlockList, block_columns, isot
 from ucbplan.observing.blocks import Block
 from ucbplan.observing.blocktable import blocks_to_table, table_to_json_rows, write_table
@@ -213,6 +213,25 @@ def test_ecsv_header_visits_as_libyaml_writes_them(seed: int) -> None:
     table.meta = {"site": {"name": "x"}, "visits": _random_visits(rng, 30), "after": [1, 2]}
     assert _ours(table, "ecsv") == _astropy_ecsv(table)
     assert table.meta["visits"] and "after" in table.meta  # the caller's meta is kept
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_a_text_and_its_shape_are_written_alike(seed: int) -> None:
+    """Texts of digits and the characters of numbers, times and ids: each one's text as the
+    column path finds it (by shape, each style once) equals its own, value by value."""
+    rng = random.Random(seed)
+    chars = "0123456789" * 3 + "-:._+eExbTtV Z/"
+    texts = ["".join(rng.choice(chars) for _ in range(rng.randint(1, 12))) for _ in range(400)]
+    texts += ["2040-01-02T00:55:37", "08", "012", "1_0", "0b10", "1:30", "0x1f", "1e5"]
+    for column in (texts, [*texts, 5, 1.5, -0.0]):
+        ours = tablewrite._column_texts(column, blocktable._yaml_tag)
+        one_by_one = [tablewrite._yaml_scalar(t, blocktable._yaml_tag) for t in column]
+        if None in one_by_one:
+            assert ours is None
+            column = [t for t, got in zip(column, one_by_one, strict=True) if got is not None]
+            ours = tablewrite._column_texts(column, blocktable._yaml_tag)
+            one_by_one = [tablewrite._yaml_scalar(t, blocktable._yaml_tag) for t in column]
+        assert ours == [got[0] for got in one_by_one if got is not None]
 
 
 @pytest.mark.parametrize("seed", range(10))

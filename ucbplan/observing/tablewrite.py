@@ -15,6 +15,7 @@ from __future__ import annotations
 import csv
 import json
 import math
+import operator
 from collections.abc import Callable
 from typing import Any
 
@@ -175,9 +176,13 @@ def yaml_flow_items(items: list[dict[str, Any]], tags: Callable[[str], str]) -> 
     Items of the same keys are written key by key: each distinct value's text found once, and
     each mapping made from a ``%`` template of its texts' lengths (where the lines break)."""
     keys = sorted(items[0]) if items else []
-    if any(item.keys() != items[0].keys() for item in items) or not all(
-        isinstance(key, str) and " " not in key and _yaml_scalar(key, tags) == (key, True)
-        for key in keys
+    if (
+        not keys
+        or any(item.keys() != items[0].keys() for item in items)
+        or not all(
+            isinstance(key, str) and " " not in key and _yaml_scalar(key, tags) == (key, True)
+            for key in keys
+        )
     ):
         return _flow_items_one_by_one(items, tags)
     columns = []
@@ -186,22 +191,18 @@ def yaml_flow_items(items: list[dict[str, Any]], tags: Callable[[str], str]) -> 
         if texts is None:
             return None
         columns.append(texts)
-    templates: dict[tuple[int, ...], str] = {}
+    rows = list(zip(*columns, strict=True))
+    widths = list(zip(*(list(map(len, col)) for col in columns), strict=True))
+    templates = {w: _template(keys, w) for w in set(widths)}
+    if not any(_Words in map(type, col) for col in columns):
+        return "\n".join(map(operator.mod, map(templates.__getitem__, widths), rows)).split("\n")
     lines: list[str] = []
-    for item, texts in zip(items, zip(*columns, strict=True), strict=True):
-        if any(type(t) is _Words for t in texts):  # a value that may break at its spaces
+    for item, row, width in zip(items, rows, widths, strict=True):
+        if _Words in map(type, row):  # a value that may break at its spaces
             lines += _flow_item(item, tags) or []
-            continue
-        widths = tuple(map(len, texts))
-        template = templates.get(widths)
-        if template is None:
-            template = templates[widths] = _template(keys, widths)
-        lines += (template % texts).split("\n")
+        else:
+            lines += (templates[width] % row).split("\n")
     return lines
-
-
-#: Kinds of value whose text :func:`_column_texts` remembers by value.
-_KNOWN = frozenset((str, int, float))
 
 
 class _Words(str):
@@ -209,24 +210,80 @@ class _Words(str):
 
 
 def _column_texts(values: list[Any], tags: Callable[[str], str]) -> list[str] | None:
-    """Each value's text (a :class:`_Words` where it may break), each distinct value found
-    once; None if one is of a kind this path does not write."""
-    known: dict[tuple[type, Any], str] = {}
-    out = []
-    for v in values:
-        kind = type(v)
-        # -0.0 == 0.0 but is written otherwise; other kinds (unhashable too) are not remembered
-        key = (kind, repr(v) if kind is float and v == 0.0 else v) if kind in _KNOWN else None
-        text = None if key is None else known.get(key)
-        if text is None:
-            got = _yaml_scalar(v, tags)
-            if got is None:
-                return None
-            text = _Words(got[0]) if got[1] and " " in got[0] else got[0]
-            if key is not None:
-                known[key] = text
-        out.append(text)
-    return out
+    """Each value's text (a :class:`_Words` where it may break): in a column of one kind, each
+    distinct number's text (a function of its ``repr``) found once and each string's style once
+    per :func:`_shapes`; None if a value is of a kind this path does not write."""
+    kinds = set(map(type, values))
+    if kinds == {str}:
+        return _text_column(values, _shapes(values), tags)
+    if kinds != {int} and kinds != {float}:
+        # one by one: a string's text (its own shape), a number's (never breakable)
+        each = [
+            _text_column([v], [v], tags) if type(v) is str else _yaml_scalar(v, tags)
+            for v in values
+        ]
+        return None if None in each else [got[0] for got in each if got is not None]
+    reprs = list(map(repr, values))
+    known = {}
+    for text, v in dict(zip(reprs, values, strict=True)).items():
+        got = _yaml_scalar(v, tags)
+        if got is None:
+            return None
+        known[text] = got[0]
+    return list(map(known.__getitem__, reprs))
+
+
+def _text_column(
+    values: list[str], shapes: list[str], tags: Callable[[str], str]
+) -> list[str] | None:
+    """The texts of strings (see :func:`_column_texts`), each style found once per shape."""
+    styles = {}
+    for shape, v in dict(zip(shapes, values, strict=True)).items():
+        style = styles[shape] = _style(v, tags)
+        if style is None:
+            return None
+    if len(set(styles.values())) == 1 and style != "words":  # one style: the column at once
+        return list(values) if style == "plain" else list(map("'{}'".format, values))
+    return [
+        v if s == "plain" else f"'{v}'" if s == "quoted" else _Words(v)
+        for v, s in zip(values, map(styles.__getitem__, shapes), strict=True)
+    ]
+
+
+#: Every character of PyYAML's implicit ``int`` and ``float`` patterns (digits, signs, ``_.:``,
+#: hexadecimal letters, ``0b``/``0x``, ``inf``/``nan`` in their cases).
+_NUMBER_CHARS = frozenset("0123456789_+-.:xXbBaAcCdDeEfFiInN")
+#: Every ASCII digit as ``0`` (in UTF-8, whose other characters hold no ASCII byte).
+_DIGITS_AS_0 = bytes.maketrans(b"123456789", b"000000000")
+
+
+def _shapes(values: list[str]) -> list[str]:
+    """Per string, the text whose :func:`_style` is its own: itself if it might be a number,
+    else with every digit as ``0``. A text with a character outside :data:`_NUMBER_CHARS`
+    cannot be an ``int`` or a ``float``, and PyYAML's other patterns (timestamps) take any
+    digit alike, as every digit starts the same resolvers: a header's times and visit ids share
+    a handful of shapes."""
+    joined = "\x00".join(values)
+    if joined.count("\x00") != len(values) - 1:  # a NUL inside a value
+        return list(values)
+    coarse_bytes = joined.encode("utf-8", "surrogatepass").translate(_DIGITS_AS_0)
+    coarse = coarse_bytes.decode("utf-8", "surrogatepass").split("\x00")
+    # digits map to digits: a text and its shape are alike made of :data:`_NUMBER_CHARS` or not
+    numeric = {c for c in set(coarse) if _NUMBER_CHARS.issuperset(c)}
+    if not numeric:
+        return coarse
+    return [v if c in numeric else c for v, c in zip(values, coarse, strict=True)]
+
+
+def _style(text: str, tags: Callable[[str], str]) -> str | None:
+    """How :func:`_yaml_scalar` writes the string ``text``: ``plain``, ``quoted`` (in single
+    quotes), ``words`` (plain, breakable at its spaces), or None (not by this path)."""
+    got = _yaml_scalar(text, tags)
+    if got is None:
+        return None
+    if got[0] != text:
+        return "quoted"
+    return "words" if got[1] and " " in text else "plain"
 
 
 def _template(keys: list[str], widths: tuple[int, ...]) -> str:
