@@ -303,6 +303,50 @@ def test_ecsv_header_bytes_as_astropy_writes_them(seed: int) -> None:
     assert _ours(table) == _pyyaml_ecsv(table)
 
 
+@pytest.mark.parametrize("seed", range(20))
+def test_visit_lists_checked_at_once_as_one_by_one(seed: int) -> None:
+    """A list of flat records (a plan's visits) is checked joined: the same answer as the
+    recursive check of each record."""
+    rng = random.Random(seed)
+    alphabet = "abcXYZ019 _-.:" + ("" if seed % 3 else "é\n\x85")
+    records = [
+        {
+            rng.choice(["a", "b", "key c", "" if seed % 5 == 0 else "d"]): rng.choice(
+                [1, 2.5, None, True, "".join(rng.choice(alphabet) for _ in range(5))]
+            )
+            for _ in range(rng.randint(1, 4))
+        }
+        for _ in range(rng.randint(1, 30))
+    ]
+    expected = all(blocktable._libyaml_safe(r) for r in records)
+    assert blocktable._flat_records_safe(records) is expected
+    assert blocktable._libyaml_safe({"visits": records}) is expected
+
+
+def test_meta_copied_as_deepcopy_copies_it() -> None:
+    """The table's meta copy: equal, independent, and an object met twice still one object (the
+    YAML header writes it once, with an alias), as ``copy.deepcopy`` makes it."""
+    import copy
+
+    shared, record = {"x": [1, 2]}, {"a": 1, "b": "t"}
+    meta = {
+        "one": shared,
+        "two": shared,
+        "visits": [record, {"a": 2, "b": None}, record],
+        "other": (np.float64(1.5), [shared]),
+        "nested": [[1.0, float("nan")], {"k": -0.0}],
+    }
+    ours, reference = blocktable._copy_meta(meta), copy.deepcopy(meta)
+    assert repr(ours) == repr(reference)
+    assert ours["one"] is ours["two"] is ours["other"][1][0] and ours["one"] is not shared
+    assert ours["visits"][0] is ours["visits"][2] and ours["visits"][0] is not record
+    table = Table({"a": [1.5]})
+    table.meta = ours
+    assert _ours(table) == _pyyaml_ecsv(Table({"a": [1.5]}, meta=meta))
+    ours["visits"][1]["a"] = 5
+    assert meta["visits"][1]["a"] == 2
+
+
 def test_plan_table_header_uses_libyaml_when_safe(monkeypatch: pytest.MonkeyPatch) -> None:
     import yaml
     from test_observing_table import _block, _meta  # tests/ is on sys.path (no __init__.py)

@@ -13,6 +13,7 @@ the table ``meta`` and is preserved by ECSV.
 
 from __future__ import annotations
 
+import copy
 import csv
 import functools
 import hashlib
@@ -640,13 +641,47 @@ def blocks_to_table(blocks: Sequence[Block], meta: Mapping[str, Any]) -> Table:
 
 
 def _blocks_to_table(cols: BlockColumns, meta: Mapping[str, Any]) -> Table:
-    table = Table({c.name: _MAKERS[c.kind](c, cols) for c in COLUMNS}, meta=dict(meta))
+    table = Table({c.name: _MAKERS[c.kind](c, cols) for c in COLUMNS})
+    table.meta = _copy_meta(dict(meta))  # as Table(meta=...) would deep-copy it, but faster
     for c in COLUMNS:
         if c.unit is not None:
             table[c.name].unit = c.unit
         if c.in_header:
             table[c.name].description = c.description
     return table
+
+
+def _copy_meta(value: Any, memo: dict[int, Any] | None = None) -> Any:
+    """:func:`copy.deepcopy` of table meta, faster: dicts and lists copied level by level (a
+    list of flat records of plain scalars, like a plan's visits, record by record), plain
+    scalars kept (immutable), anything else by ``deepcopy``; an object met twice is copied once
+    (``memo``, shared with ``deepcopy``), as the YAML header writes such an object once."""
+    kind = type(value)
+    if kind in _SCALARS:
+        return value
+    memo = {} if memo is None else memo
+    if id(value) in memo:
+        return memo[id(value)]
+    out: Any
+    if kind is dict:
+        out = memo[id(value)] = {}
+        out.update((k, _copy_meta(v, memo)) for k, v in value.items())
+    elif kind is list:
+        out = memo[id(value)] = []
+        flat = itertools.chain.from_iterable(map(dict.values, value))
+        if all(type(r) is dict for r in value) and _SCALARS.issuperset(map(type, flat)):
+            out += [memo[id(r)] if id(r) in memo else _remember(memo, r, r.copy()) for r in value]
+        else:
+            out += [_copy_meta(v, memo) for v in value]
+    else:
+        return copy.deepcopy(value, memo)
+    memo.setdefault(id(memo), []).append(value)  # the original kept alive, as deepcopy does
+    return out
+
+
+def _remember(memo: dict[int, Any], original: Any, copied: Any) -> Any:
+    memo[id(original)] = copied
+    return copied
 
 
 def _plain(value: Any) -> Any:
@@ -704,8 +739,28 @@ def _libyaml_safe(value: Any) -> bool:
             for k, v in value.items()
         )
     if isinstance(value, list | tuple):
-        return all(_libyaml_safe(v) for v in value)
+        flat = _flat_records_safe(value)
+        return flat if flat is not None else all(_libyaml_safe(v) for v in value)
     return isinstance(value, int | float | np.number | np.bool_ | type(None))
+
+
+#: Kinds of value :func:`_flat_records_safe` checks at once (always safe but for ``str``).
+_SCALARS = frozenset((str, int, float, bool, type(None)))
+
+
+def _flat_records_safe(records: list[Any] | tuple[Any, ...]) -> bool | None:
+    """:func:`_libyaml_safe` of a list of plain dicts of plain scalars (a plan's ``visits``),
+    their keys and texts checked joined, or None for any other list."""
+    if not records or any(type(r) is not dict for r in records):
+        return None
+    values = list(itertools.chain.from_iterable(map(dict.values, records)))
+    if not _SCALARS.issuperset(map(type, values)):
+        return None
+    keys = set(itertools.chain.from_iterable(records))
+    if not all(type(k) is str and k != "" for k in keys):
+        return False
+    texts = itertools.chain(keys, (v for v in values if type(v) is str))
+    return _LIBYAML_SAFE.issuperset("".join(texts))
 
 
 def _header_safe(table: Table) -> bool:
