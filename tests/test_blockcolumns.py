@@ -135,6 +135,10 @@ def test_isot_as_astropy_formats_it(precision: int, scale: str) -> None:
         times = getattr(_odd_times(), scale)
         ref = list(Time(times.jd1, times.jd2, format="jd", scale=scale, precision=precision).isot)
         assert isot(times, precision) == ref
+        early = Time(["0999-12-31T23:59:59.5", "2040-01-01T00:00:00"], scale=scale)
+        ref = list(Time(early.jd1, early.jd2, format="jd", scale=scale, precision=precision).isot)
+        assert isot(early, precision) == ref  # a year of three digits: time by time
+        assert isot(times[:0], precision) == []
 
 
 def _cells(block: Block) -> list[object]:

@@ -46,7 +46,7 @@ from ucbplan.io import dump_json, dumps_json
 from ucbplan.observing.blockcolumns import (
     BlockColumns,
     block_columns,
-    isot,
+    isot_array,
     jd_parts,
     time_array,
 )
@@ -447,7 +447,7 @@ def _iso(times: Sequence[Time | None], precision: int, scale: str) -> np.ndarray
 
 def _iso_of(times: Time, precision: int) -> np.ndarray:
     """ISO strings of an array Time, from its Julian dates as stored."""
-    return np.array(isot(times, precision), dtype=str)
+    return isot_array(times, precision)
 
 
 def _iso_column(times: Time, has: np.ndarray | None, precision: int) -> np.ndarray:
