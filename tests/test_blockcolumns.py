@@ -97,6 +97,21 @@ def test_ecsv_rows_of_one_value_columns_as_astropy_writes_them(value: object) ->
 
 
 @pytest.mark.parametrize("seed", range(30))
+def test_csv_rows_as_astropy_writes_them(seed: int) -> None:
+    """CSV column by column (texts with commas, quotes, spaces, empty cells, non-ASCII), and a
+    table of one text column (astropy's whole writer), byte for byte as astropy writes them."""
+    table = _random_table(seed)
+    table["t"] = [
+        TEXTS[(seed + k) % len(TEXTS)] + ("a,b" if k % 3 else "") for k in range(len(table))
+    ]
+    for t in (table, table[["s"]]):
+        buf = io.StringIO()
+        Table(t, meta={}).write(buf, format="ascii.csv")
+        assert _ours(t, "csv") == buf.getvalue()
+    assert len(table.colnames) < 2 or ecsv_data_lines(table, ",") is not None
+
+
+@pytest.mark.parametrize("seed", range(30))
 def test_json_rows_as_json_writes_them(seed: int) -> None:
     table = _random_table(seed)
     for json_meta in (False, True):

@@ -845,13 +845,25 @@ def write_table(table: Table, handle: IO[str], fmt: str, *, json_meta: bool = Fa
     if fmt == "ecsv":
         _write_ecsv(table, handle)
     elif fmt == "csv":
-        plain = table.copy(copy_data=False)
-        plain.meta = {}
-        plain.write(handle, format="ascii.csv")
+        _write_csv(table, handle)
     elif fmt == "json":
         _write_json(table, handle, json_meta)
     else:
         raise InputFileError(f"unknown table format {fmt!r}; expected one of {TABLE_FORMATS}")
+
+
+def _write_csv(table: Table, handle: IO[str]) -> None:
+    """CSV without meta as astropy writes it: its header line (written for no rows), then the
+    rows column by column (:func:`.tablewrite.ecsv_data_lines`); for tables of other columns,
+    astropy's whole writer."""
+    plain = table.copy(copy_data=False)
+    plain.meta = {}
+    lines = ecsv_data_lines(plain, ",")
+    if lines is None:
+        plain.write(handle, format="ascii.csv")
+        return
+    plain[:0].write(handle, format="ascii.csv")
+    handle.write("".join(line + os.linesep for line in lines))
 
 
 def _write_ecsv(table: Table, handle: IO[str]) -> None:

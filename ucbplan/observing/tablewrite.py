@@ -57,10 +57,11 @@ def _strs(col: Column) -> list[str]:
     return list(map(str, values))
 
 
-def _needs_csv(values: list[str]) -> bool:
+def _needs_csv(values: list[str], delimiter: str) -> bool:
     """Whether some cell of a text column is empty or one the ``csv`` writer may quote."""
     joined = "".join(values)
-    return "" in values or not joined.isprintable() or " " in joined or '"' in joined
+    odd = not joined.isprintable() or " " in joined or '"' in joined or delimiter in joined
+    return odd or "" in values
 
 
 class _Lines:
@@ -73,27 +74,32 @@ class _Lines:
         self.lines.append(text)
 
 
-def _csv_cells(values: list[str]) -> list[str]:
-    """Each cell as astropy's writer puts it on a line: an empty one as ``""``, others as the
-    ``csv`` writer quotes a field (on its own: its quoting depends on the field alone)."""
+def _csv_cells(values: list[str], delimiter: str) -> list[str]:
+    """Each cell as astropy's writer puts it on a line: an empty one as ``""`` (space-delimited)
+    or nothing (else), others as the ``csv`` writer quotes a field (on its own: its quoting
+    depends on the field alone)."""
     sink = _Lines()
-    writer = csv.writer(sink, delimiter=" ", quotechar='"', doublequote=True, escapechar=None)
+    writer = csv.writer(sink, delimiter=delimiter, quotechar='"', doublequote=True, escapechar=None)
     writer.writerows([v or _SENTINEL] for v in values)
-    return [line.rstrip("\r\n").replace(_SENTINEL, '""') for line in sink.lines]
+    empty = '""' if delimiter == " " else ""
+    return [line.rstrip("\r\n").replace(_SENTINEL, empty) for line in sink.lines]
 
 
-def ecsv_data_lines(table: Table) -> list[str] | None:
-    """The data lines of ``table`` as astropy's ECSV writer writes them (without line ends), or
-    None for a table with other than plain 1-d columns. Column by column: a text column with a
-    cell to quote goes through the ``csv`` writer alone, the rest are joined as they are."""
-    if not _plain_columns(table):
+def ecsv_data_lines(table: Table, delimiter: str = " ") -> list[str] | None:
+    """The data lines of ``table`` as astropy's ECSV writer (or, ``delimiter=","``, its CSV
+    writer) writes them, without line ends; None for a table with other than plain 1-d columns
+    (or a CSV table of one column: the ``csv`` writer quotes a row of one empty field). Column
+    by column: a text column with a cell to quote goes through the ``csv`` writer alone, the
+    rest are joined as they are."""
+    if not _plain_columns(table) or (delimiter != " " and len(table.colnames) < 2):
         return None
     cells = []
     for col in table.itercols():
         values = _strs(col)
         text = col.dtype.kind == "U"
-        cells.append(_csv_cells(values) if text and _needs_csv(values) else values)
-    return list(map(" ".join, zip(*cells, strict=True)))
+        odd = text and _needs_csv(values, delimiter)
+        cells.append(_csv_cells(values, delimiter) if odd else values)
+    return list(map(delimiter.join, zip(*cells, strict=True)))
 
 
 def _float_text(v: float) -> str:
