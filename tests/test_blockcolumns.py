@@ -234,6 +234,28 @@ def test_ecsv_header_visits_as_libyaml_writes_them(seed: int) -> None:
     assert table.meta["visits"] and "after" in table.meta  # the caller's meta is kept
 
 
+@pytest.mark.parametrize("seed", range(12))
+def test_json_meta_visits_as_json_writes_them(seed: int) -> None:
+    """A plan's visits in the JSON meta written key by key: the bytes ``json`` writes for the
+    whole document (NaN as null: those visits take the whole-document path), and a valid
+    document."""
+    rng = random.Random(seed)
+    table = _random_table(seed)
+    visits = _random_visits(rng, 20)
+    if seed % 3 == 0:
+        visits[rng.randrange(20)]["idle_s"] = float("nan")
+    if seed % 4 == 1:
+        visits[0]["note"] = 'é ★ "q"'  # other keys: the whole-document path
+    if seed % 4 == 2:
+        for v in visits:
+            v["flag"] = rng.choice([True, None, "é ★", 3])
+    table.meta = {"site": {"name": "x"}, "visits": visits, "after": [1.5, float("inf")]}
+    buf = io.StringIO()
+    dump_json({"meta": table.meta, "rows": table_to_json_rows(table)}, buf)
+    assert _ours(table, "json", True) == buf.getvalue()
+    assert len(json.loads(_ours(table, "json", True))["meta"]["visits"]) == 20
+
+
 @pytest.mark.parametrize("seed", range(10))
 def test_a_text_and_its_shape_are_written_alike(seed: int) -> None:
     """Texts of digits and the characters of numbers, times and ids: each one's text as the

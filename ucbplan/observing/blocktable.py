@@ -51,7 +51,12 @@ from ucbplan.observing.blockcolumns import (
     time_array,
 )
 from ucbplan.observing.blocks import MAX_BLOCK_S, MAX_N_EXP, MAX_READOUT_S, Block
-from ucbplan.observing.tablewrite import ecsv_data_lines, json_rows_text, yaml_flow_items
+from ucbplan.observing.tablewrite import (
+    ecsv_data_lines,
+    json_records_text,
+    json_rows_text,
+    yaml_flow_items,
+)
 from ucbplan.observing.timeconv import quiet_erfa
 from ucbplan.target.values import one_line
 
@@ -706,6 +711,12 @@ def table_to_json_rows(table: Table) -> list[dict[str, Any]]:
     return rows
 
 
+def _finite(records: Any) -> bool:
+    """Whether every float of a list of flat records is finite."""
+    flat = itertools.chain.from_iterable(map(dict.values, records))
+    return all(math.isfinite(v) for v in flat if type(v) is float)
+
+
 def _plain_column(col: Any) -> bool:
     """A 1-d unmasked column of numbers or text: ``tolist()`` gives its cells as ``item()``
     does, one by one."""
@@ -717,6 +728,8 @@ def _plain_meta(value: Any) -> Any:
     if isinstance(value, Mapping):
         return {str(k): _plain_meta(v) for k, v in value.items()}
     if isinstance(value, list | tuple):
+        if _flat_records_safe(value) is not None and _finite(value):  # plain already: copied
+            return [dict(zip(map(str, r), r.values(), strict=True)) for r in value]
         return [_plain_meta(v) for v in value]
     value = _plain(value)
     return value if isinstance(value, str | int | float | bool | type(None)) else str(value)
@@ -934,10 +947,32 @@ def _write_json(table: Table, handle: IO[str], json_meta: bool) -> None:
     if meta is None:
         handle.write(rows + "\n")
         return
-    head, tail = dumps_json({**meta, "rows": []}), '"rows": []\n}'
+    head, tail = _json_head(meta["meta"]), '"rows": []\n}'
     if not head.endswith(tail):  # never: the rows are the document's last value
         raise AssertionError(f"unexpected JSON layout: {head[-40:]!r}")
     handle.write(head[: -len("[]\n}")] + rows + "\n}\n")
+
+
+#: Stands in for a plan's ``visits`` in the JSON meta while they are written apart.
+_VISITS_MARK = "\x00ucbplan visits\x00"
+
+
+def _json_head(meta: dict[str, Any]) -> str:
+    """``{"meta": meta, "rows": []}`` as :func:`dumps_json` writes it, the meta's ``visits``
+    written key by key (:func:`.tablewrite.json_records_text`) where they allow."""
+    visits = meta.get("visits")
+    listed = json_records_text(visits, 2)
+    if listed is None:
+        return dumps_json({"meta": meta, "rows": []})
+    meta["visits"] = _VISITS_MARK
+    try:
+        head = dumps_json({"meta": meta, "rows": []})
+    finally:
+        meta["visits"] = visits
+    mark = json.dumps(_VISITS_MARK)
+    if head.count(mark) != 1:  # never: the mark is no text of a plan
+        return dumps_json({"meta": meta, "rows": []})
+    return head.replace(mark, listed)
 
 
 def _bad_cell(where: str, row: int, column: str, expected: str, value: Any) -> InputFileError:

@@ -21,7 +21,7 @@ from typing import Any
 
 from astropy.table import Column, Table
 
-__all__ = ["ecsv_data_lines", "json_rows_text"]
+__all__ = ["ecsv_data_lines", "json_records_text", "json_rows_text"]
 
 #: Column dtype kinds the fast paths take (bool, integers, floats, Unicode text).
 _PLAIN_KINDS = "biufU"
@@ -123,17 +123,59 @@ def json_rows_text(table: Table, level: int) -> str | None:
     other than plain 1-d columns."""
     if not _plain_columns(table) or not table.colnames:
         return None
-    if not len(table):
+    cells = [list(map(_encoder(col.dtype.kind), col.tolist())) for col in table.itercols()]
+    return _records_text([str(name) for name in table.colnames], cells, len(table), level)
+
+
+def _records_text(names: list[str], cells: list[list[str]], n: int, level: int) -> str:
+    """``n`` objects of the keys ``names`` (each key's encoded values in ``cells``) as
+    ``json.dumps(..., indent=2)`` writes their list at nesting ``level``."""
+    if not n:
         return "[]"
     pad = "  " * level
-    keys = [json.dumps(str(name)) for name in table.colnames]
-    cells = [list(map(_encoder(col.dtype.kind), col.tolist())) for col in table.itercols()]
+    keys = [json.encoder.encode_basestring_ascii(name) + ": " for name in names]
     inner = f",\n{pad}    "
     rows = [
-        "{\n" + pad + "    " + inner.join(f"{k}: {v}" for k, v in zip(keys, row, strict=True))
+        "{\n" + pad + "    " + inner.join(map(operator.add, keys, row))
         for row in zip(*cells, strict=True)
     ]
     return f"[\n{pad}  " + f"\n{pad}  }},\n{pad}  ".join(rows) + f"\n{pad}  }}\n{pad}]"
+
+
+#: JSON text of a plain value, by its exact type (a float here is finite).
+_JSON_TEXT: dict[type, Callable[[Any], str]] = {
+    str: json.encoder.encode_basestring_ascii,
+    int: int.__repr__,
+    float: _float_text,
+    bool: lambda v: "true" if v else "false",
+    type(None): lambda v: "null",
+}
+
+
+def json_records_text(records: Any, level: int) -> str | None:
+    """A list of flat records (a plan's ``visits``) as ``json.dumps(records, indent=2)`` writes
+    it at nesting ``level``, key by key; None unless every record is a dict of the same text
+    keys in the same order, of strings, integers, finite floats, booleans and None."""
+    if not isinstance(records, list) or not records or any(type(r) is not dict for r in records):
+        return None
+    names = list(records[0])
+    if (
+        not names
+        or any(type(k) is not str for k in names)
+        or any(list(r) != names for r in records)
+    ):
+        return None
+    cells = []
+    for name in names:
+        column = [r[name] for r in records]
+        kinds = set(map(type, column))
+        if not kinds.issubset(_JSON_TEXT):
+            return None
+        if float in kinds and not all(math.isfinite(v) for v in column if type(v) is float):
+            return None
+        one = _JSON_TEXT[kinds.pop()] if len(kinds) == 1 else None
+        cells.append(list(map(one, column)) if one else [_JSON_TEXT[type(v)](v) for v in column])
+    return _records_text(names, cells, len(records), level)
 
 
 #: Characters of a text value the fast ECSV header path writes itself (others: PyYAML's path).
