@@ -405,3 +405,33 @@ def test_sexagesimal_columns_match_per_element() -> None:
     assert (got_dec[1], got_dec[2]) == ("-00:00:00.00", "+00:00:00.00")  # -0.0 on its own
     assert got_ra.dtype == blocktable._hms(ra).dtype  # the table column's width unchanged
     assert len(blocktable._ra_hms(np.array([]))) == 0
+
+
+@pytest.mark.parametrize(
+    ("zone", "year"),
+    [
+        ("America/Santiago", 2040),
+        ("Europe/London", 2031),
+        ("Australia/Lord_Howe", 2026),  # a half-hour change
+        ("Africa/Monrovia", 1972),  # from an offset of whole seconds (-00:44:30) to GMT
+        ("Asia/Kolkata", 2040),
+        ("UTC", 2040),
+    ],
+)
+def test_local_times_as_datetime_makes_them(zone: str, year: int) -> None:
+    """Local ISO times (offsets found per instant, text made by arrays): as ``datetime`` and
+    :mod:`zoneinfo` make them one by one, a second either side of each change of offset."""
+    start = datetime(year, 1, 1, tzinfo=UTC)
+    found = _transitions(zone, year)
+    assert found or zone in ("Asia/Kolkata", "UTC")
+    when = [start + timedelta(hours=7.2 * k, microseconds=k * 37_001) for k in range(1300)]
+    for t in found:
+        when += [t + timedelta(seconds=s) for s in (-1.5, -1, -0.25, 0, 0.5, 1)]
+    with quiet_erfa():
+        utc = Time(when, scale="utc")
+        ours = blocktable._local_iso(utc, [zone] * len(when)).tolist()
+        ref = [
+            d.isoformat(timespec="seconds") for d in blocktable._local_of(utc, [zone] * len(when))
+        ]
+    assert ours == ref
+    assert len(set(o[19:] for o in ours)) == (1 if zone in ("Asia/Kolkata", "UTC") else 2)

@@ -21,12 +21,13 @@ import io
 import itertools
 import json
 import math
+import operator
 import os
 import threading
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
-from datetime import UTC, datetime
+from datetime import UTC, datetime, timedelta, timezone
 from pathlib import Path
 from typing import IO, Any
 from zoneinfo import ZoneInfo
@@ -510,7 +511,36 @@ def _local_iso(times: Time | Sequence[Time], zones: Sequence[str]) -> np.ndarray
     if not len(times):
         return np.array([], dtype="U1")
     utc = times if isinstance(times, Time) else time_array(times, "utc")
-    return np.array([dt.isoformat(timespec="seconds") for dt in _local_of(utc, zones)], dtype=str)
+    year, month, day, hmsf = erfa.d2dtf(b"UTC", 6, utc.jd1, utc.jd2)
+    if np.any(hmsf["s"] >= 60) or np.any(year < 1970):  # a leap second (astropy's path refuses
+        # it, as it always did) or a time before 1970 (not a POSIX time everywhere): time by time
+        return np.array([dt.isoformat(timespec="seconds") for dt in _local_of(utc, zones)])
+    # whole POSIX seconds: the seconds' fraction is cut by the format, and zones change their
+    # offsets at whole seconds, so the zone's offset is that of the instant itself
+    months = (year - 1970) * 12 + (month - 1)
+    days = months.astype("datetime64[M]").astype("datetime64[D]").astype(np.int64) + (day - 1)
+    posix = days * 86400 + hmsf["h"] * 3600 + hmsf["m"] * 60 + hmsf["s"]
+    tz = {z: ZoneInfo(z) for z in dict.fromkeys(zones)}
+    offsets = [
+        datetime.fromtimestamp(t, tz[z]).utcoffset()
+        for t, z in zip(posix.tolist(), zones, strict=True)
+    ]
+    found = {off: _offset_text(off) for off in dict.fromkeys(offsets)}
+    text = {off: got for off, got in found.items() if got is not None}
+    if len(text) < len(found):
+        return np.array([dt.isoformat(timespec="seconds") for dt in _local_of(utc, zones)])
+    shift = np.array([text[off][0] for off in offsets], dtype=np.int64)
+    wall = np.datetime_as_string((posix + shift).astype("datetime64[s]"), unit="s").tolist()
+    local = list(map(operator.add, wall, (text[off][1] for off in offsets)))
+    return np.array(local, dtype=str)
+
+
+def _offset_text(offset: timedelta | None) -> tuple[int, str] | None:
+    """(seconds, ``+HH:MM`` as ``isoformat`` writes it) of a UTC offset of whole seconds."""
+    if offset is None or offset.microseconds:
+        return None
+    zone = timezone(offset)
+    return offset.days * 86400 + offset.seconds, datetime(2000, 1, 1, tzinfo=zone).isoformat()[19:]
 
 
 def _per_distinct(values: np.ndarray, fmt: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
