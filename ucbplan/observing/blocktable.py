@@ -802,7 +802,7 @@ def _flat_records_safe(records: list[Any] | tuple[Any, ...]) -> bool | None:
     keys = set(itertools.chain.from_iterable(records))
     if not all(type(k) is str and k != "" for k in keys):
         return False
-    texts = itertools.chain(keys, (v for v in values if type(v) is str))
+    texts = itertools.chain(keys, filter(str.__instancecheck__, values))
     return _LIBYAML_SAFE.issuperset("".join(texts))
 
 
@@ -949,7 +949,7 @@ def _ecsv_header(table: Table, libyaml: bool) -> str:
         buf = io.StringIO()
         table[:0].write(buf, format="ascii.ecsv")
         return buf.getvalue()
-    listed = "".join(f"# {line}{os.linesep}" for line in items)
+    listed = "# " + f"{os.linesep}# ".join(items) + os.linesep
     return text.replace(_NO_VISITS, f"{os.linesep}# - visits:{os.linesep}{listed}")
 
 

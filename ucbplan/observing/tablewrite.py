@@ -77,11 +77,14 @@ class _Lines:
 def _csv_cells(values: list[str], delimiter: str) -> list[str]:
     """Each cell as astropy's writer puts it on a line: an empty one as ``""`` (space-delimited)
     or nothing (else), others as the ``csv`` writer quotes a field (on its own: its quoting
-    depends on the field alone)."""
+    depends on the field alone; a column whose only odd cells are empty, without it)."""
+    empty = '""' if delimiter == " " else ""
+    full = [v for v in values if v]
+    if not _needs_csv(full, delimiter):
+        return [v or empty for v in values]
     sink = _Lines()
     writer = csv.writer(sink, delimiter=delimiter, quotechar='"', doublequote=True, escapechar=None)
     writer.writerows([v or _SENTINEL] for v in values)
-    empty = '""' if delimiter == " " else ""
     return [line.rstrip("\r\n").replace(_SENTINEL, empty) for line in sink.lines]
 
 
@@ -97,8 +100,9 @@ def ecsv_data_lines(table: Table, delimiter: str = " ") -> list[str] | None:
     for col in table.itercols():
         values = _strs(col)
         text = col.dtype.kind == "U"
-        odd = text and _needs_csv(values, delimiter)
-        cells.append(_csv_cells(values, delimiter) if odd else values)
+        if text and _needs_csv(values, delimiter):
+            values = _csv_cells(values, delimiter)
+        cells.append(values)
     return list(map(delimiter.join, zip(*cells, strict=True)))
 
 
@@ -226,7 +230,7 @@ def yaml_flow_items(items: list[dict[str, Any]], tags: Callable[[str], str]) -> 
     keys = sorted(items[0]) if items else []
     if (
         not keys
-        or any(item.keys() != items[0].keys() for item in items)
+        or any(map(items[0].keys().__ne__, map(dict.keys, items)))
         or not all(
             isinstance(key, str) and " " not in key and _yaml_scalar(key, tags) == (key, True)
             for key in keys
