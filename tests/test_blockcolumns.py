@@ -94,6 +94,7 @@ def test_ecsv_rows_of_one_value_columns_as_astropy_writes_them(value: object) ->
     table["mixed"] = [value, -0.0, *[value] * (len(table) - 2)]
     assert ecsv_data_lines(table) is not None
     assert _ours(table, "ecsv") == _astropy_ecsv(table)
+    assert _ours(table, "json") == _reference_json(table, False)
 
 
 @pytest.mark.parametrize("seed", range(30))

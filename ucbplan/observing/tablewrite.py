@@ -38,16 +38,21 @@ def _plain_columns(table: Table) -> bool:
     )
 
 
+def _one_value(col: Column) -> bool:
+    """Whether a non-empty column of numbers holds one value, bit for bit (-0.0 is not 0.0)."""
+    if not len(col) or col.dtype.kind not in "biuf":
+        return False
+    data = col.data
+    bits = data.view(f"u{data.itemsize}") if data.dtype.kind == "f" else data
+    return bool((bits == bits[0]).all())
+
+
 def _strs(col: Column) -> list[str]:
     """Each cell as astropy's ECSV writer formats it (``str`` of the cell), stripped of spaces
     and tabs at both ends as its writer's splitter does; a column of one value (bit for bit)
     formatted once."""
-    n = len(col)
-    if n and col.dtype.kind != "U":
-        data = col.data
-        bits = data.view(f"u{data.itemsize}") if data.dtype.kind == "f" else data
-        if bool((bits == bits[0]).all()):
-            return [str(data[:1].tolist()[0])] * n
+    if _one_value(col):
+        return [str(col.data[:1].tolist()[0])] * len(col)
     values = col.tolist()
     if col.dtype.kind == "U":
         joined = "".join(values)
@@ -127,7 +132,12 @@ def json_rows_text(table: Table, level: int) -> str | None:
     other than plain 1-d columns."""
     if not _plain_columns(table) or not table.colnames:
         return None
-    cells = [list(map(_encoder(col.dtype.kind), col.tolist())) for col in table.itercols()]
+    cells = [
+        [_encoder(col.dtype.kind)(col.data[:1].tolist()[0])] * len(col)
+        if _one_value(col)
+        else list(map(_encoder(col.dtype.kind), col.tolist()))
+        for col in table.itercols()
+    ]
     return _records_text([str(name) for name in table.colnames], cells, len(table), level)
 
 
