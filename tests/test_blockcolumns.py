@@ -24,7 +24,7 @@ from astropy.time import Time
 from test_observing_table import _block, _meta  # tests/ is on sys.path (no __init__.py)
 
 from ucbplan.io import dump_json
-from ucbplan.observing import blocktable
+from ucbplan.observing import blocktable, tablewrite
 from ucbplan.observing.blockcolumns import BlockColumns, BlockList, block_columns, isot
 from ucbplan.observing.blocks import Block
 from ucbplan.observing.blocktable import blocks_to_table, table_to_json_rows, write_table
@@ -85,6 +85,33 @@ def test_ecsv_rows_as_astropy_writes_them(seed: int) -> None:
     assert _ours(table, "ecsv") == _astropy_ecsv(table)
 
 
+@pytest.mark.parametrize("value", [0.0, -0.0, float("nan"), 1e-5, 7, True, "", " x", 'a"b', "σ"])
+def test_ecsv_rows_of_one_value_columns_as_astropy_writes_them(value: object) -> None:
+    """A column of one value is formatted once: bit for bit one value (0.0 beside -0.0 is
+    two), text cells quoted as the csv writer does."""
+    table = _random_table(7)
+    table["one"] = [value] * len(table)
+    table["mixed"] = [value, -0.0, *[value] * (len(table) - 2)]
+    assert ecsv_data_lines(table) is not None
+    assert _ours(table, "ecsv") == _astropy_ecsv(table)
+    assert _ours(table, "json") == _reference_json(table, False)
+
+
+@pytest.mark.parametrize("seed", range(30))
+def test_csv_rows_as_astropy_writes_them(seed: int) -> None:
+    """CSV column by column (texts with commas, quotes, spaces, empty cells, non-ASCII), and a
+    table of one text column (astropy's whole writer), byte for byte as astropy writes them."""
+    table = _random_table(seed)
+    table["t"] = [
+        TEXTS[(seed + k) % len(TEXTS)] + ("a,b" if k % 3 else "") for k in range(len(table))
+    ]
+    for t in (table, table[["s"]]):
+        buf = io.StringIO()
+        Table(t, meta={}).write(buf, format="ascii.csv")
+        assert _ours(t, "csv") == buf.getvalue()
+    assert len(table.colnames) < 2 or ecsv_data_lines(table, ",") is not None
+
+
 @pytest.mark.parametrize("seed", range(30))
 def test_json_rows_as_json_writes_them(seed: int) -> None:
     table = _random_table(seed)
@@ -124,6 +151,10 @@ def test_isot_as_astropy_formats_it(precision: int, scale: str) -> None:
         times = getattr(_odd_times(), scale)
         ref = list(Time(times.jd1, times.jd2, format="jd", scale=scale, precision=precision).isot)
         assert isot(times, precision) == ref
+        early = Time(["0999-12-31T23:59:59.5", "2040-01-01T00:00:00"], scale=scale)
+        ref = list(Time(early.jd1, early.jd2, format="jd", scale=scale, precision=precision).isot)
+        assert isot(early, precision) == ref  # a year of three digits: time by time
+        assert isot(times[:0], precision) == []
 
 
 def _cells(block: Block) -> list[object]:
@@ -172,12 +203,12 @@ def test_time_order_is_the_stable_sort_of_the_records() -> None:
 WORDS = ["HM", "Cnc", "(simulated)", "UCB03", "a.b", "x/y", "V01", "1.5", "2040-01-01", "true"]
 
 
-def _random_visits(rng: random.Random, n: int) -> list[dict[str, object]]:
+def _random_visits(rng: random.Random, n: int, sep: str = " ") -> list[dict[str, object]]:
     """Visits as a plan's meta holds them, with names of random words (spaces, dates, numbers,
-    booleans) and lengths that put breaks anywhere near the 130th column."""
+    booleans) joined by ``sep`` and lengths that put breaks anywhere near the 130th column."""
     out = []
     for k in range(n):
-        name = " ".join(rng.choice(WORDS) for _ in range(rng.randint(1, 12)))
+        name = sep.join(rng.choice(WORDS) for _ in range(rng.randint(1, 12)))
         out.append(
             {
                 "visit_id": f"{name.replace(' ', '_')}-V{k:02d}",
@@ -202,3 +233,54 @@ def test_ecsv_header_visits_as_libyaml_writes_them(seed: int) -> None:
     table.meta = {"site": {"name": "x"}, "visits": _random_visits(rng, 30), "after": [1, 2]}
     assert _ours(table, "ecsv") == _astropy_ecsv(table)
     assert table.meta["visits"] and "after" in table.meta  # the caller's meta is kept
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_json_meta_visits_as_json_writes_them(seed: int) -> None:
+    """A plan's visits in the JSON meta written key by key: the bytes ``json`` writes for the
+    whole document (NaN as null: those visits take the whole-document path), and a valid
+    document."""
+    rng = random.Random(seed)
+    table = _random_table(seed)
+    visits = _random_visits(rng, 20)
+    if seed % 3 == 0:
+        visits[rng.randrange(20)]["idle_s"] = float("nan")
+    if seed % 4 == 1:
+        visits[0]["note"] = 'é ★ "q"'  # other keys: the whole-document path
+    if seed % 4 == 2:
+        for v in visits:
+            v["flag"] = rng.choice([True, None, "é ★", 3])
+    table.meta = {"site": {"name": "x"}, "visits": visits, "after": [1.5, float("inf")]}
+    buf = io.StringIO()
+    dump_json({"meta": table.meta, "rows": table_to_json_rows(table)}, buf)
+    assert _ours(table, "json", True) == buf.getvalue()
+    assert len(json.loads(_ours(table, "json", True))["meta"]["visits"]) == 20
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_a_text_and_its_shape_are_written_alike(seed: int) -> None:
+    """Texts of digits and the characters of numbers, times and ids: each one's text as the
+    column path finds it (by shape, each style once) equals its own, value by value."""
+    rng = random.Random(seed)
+    chars = "0123456789" * 3 + "-:._+eExbTtV Z/"
+    texts = ["".join(rng.choice(chars) for _ in range(rng.randint(1, 12))) for _ in range(400)]
+    texts += ["2040-01-02T00:55:37", "08", "012", "1_0", "0b10", "1:30", "0x1f", "1e5"]
+    for column in (texts, [*texts, 5, 1.5, -0.0]):
+        ours = tablewrite._column_texts(column, blocktable._yaml_tag)
+        one_by_one = [tablewrite._yaml_scalar(t, blocktable._yaml_tag) for t in column]
+        if None in one_by_one:
+            assert ours is None
+            column = [t for t, got in zip(column, one_by_one, strict=True) if got is not None]
+            ours = tablewrite._column_texts(column, blocktable._yaml_tag)
+            one_by_one = [tablewrite._yaml_scalar(t, blocktable._yaml_tag) for t in column]
+        assert ours == [got[0] for got in one_by_one if got is not None]
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_ecsv_header_visits_without_spaces_as_libyaml_writes_them(seed: int) -> None:
+    """Names without spaces: every mapping from the templates of its texts' widths (lines
+    breaking before any key, near the 130th column), as libyaml writes it."""
+    rng = random.Random(seed)
+    table = _random_table(seed)
+    table.meta = {"visits": _random_visits(rng, 60, sep=rng.choice("_-.")), "after": [1]}
+    assert _ours(table, "ecsv") == _astropy_ecsv(table)

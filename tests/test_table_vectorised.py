@@ -303,6 +303,50 @@ def test_ecsv_header_bytes_as_astropy_writes_them(seed: int) -> None:
     assert _ours(table) == _pyyaml_ecsv(table)
 
 
+@pytest.mark.parametrize("seed", range(20))
+def test_visit_lists_checked_at_once_as_one_by_one(seed: int) -> None:
+    """A list of flat records (a plan's visits) is checked joined: the same answer as the
+    recursive check of each record."""
+    rng = random.Random(seed)
+    alphabet = "abcXYZ019 _-.:" + ("" if seed % 3 else "é\n\x85")
+    records = [
+        {
+            rng.choice(["a", "b", "key c", "" if seed % 5 == 0 else "d"]): rng.choice(
+                [1, 2.5, None, True, "".join(rng.choice(alphabet) for _ in range(5))]
+            )
+            for _ in range(rng.randint(1, 4))
+        }
+        for _ in range(rng.randint(1, 30))
+    ]
+    expected = all(blocktable._libyaml_safe(r) for r in records)
+    assert blocktable._flat_records_safe(records) is expected
+    assert blocktable._libyaml_safe({"visits": records}) is expected
+
+
+def test_meta_copied_as_deepcopy_copies_it() -> None:
+    """The table's meta copy: equal, independent, and an object met twice still one object (the
+    YAML header writes it once, with an alias), as ``copy.deepcopy`` makes it."""
+    import copy
+
+    shared, record = {"x": [1, 2]}, {"a": 1, "b": "t"}
+    meta = {
+        "one": shared,
+        "two": shared,
+        "visits": [record, {"a": 2, "b": None}, record],
+        "other": (np.float64(1.5), [shared]),
+        "nested": [[1.0, float("nan")], {"k": -0.0}],
+    }
+    ours, reference = blocktable._copy_meta(meta), copy.deepcopy(meta)
+    assert repr(ours) == repr(reference)
+    assert ours["one"] is ours["two"] is ours["other"][1][0] and ours["one"] is not shared
+    assert ours["visits"][0] is ours["visits"][2] and ours["visits"][0] is not record
+    table = Table({"a": [1.5]})
+    table.meta = ours
+    assert _ours(table) == _pyyaml_ecsv(Table({"a": [1.5]}, meta=meta))
+    ours["visits"][1]["a"] = 5
+    assert meta["visits"][1]["a"] == 2
+
+
 def test_plan_table_header_uses_libyaml_when_safe(monkeypatch: pytest.MonkeyPatch) -> None:
     import yaml
     from test_observing_table import _block, _meta  # tests/ is on sys.path (no __init__.py)
@@ -361,3 +405,33 @@ def test_sexagesimal_columns_match_per_element() -> None:
     assert (got_dec[1], got_dec[2]) == ("-00:00:00.00", "+00:00:00.00")  # -0.0 on its own
     assert got_ra.dtype == blocktable._hms(ra).dtype  # the table column's width unchanged
     assert len(blocktable._ra_hms(np.array([]))) == 0
+
+
+@pytest.mark.parametrize(
+    ("zone", "year"),
+    [
+        ("America/Santiago", 2040),
+        ("Europe/London", 2031),
+        ("Australia/Lord_Howe", 2026),  # a half-hour change
+        ("Africa/Monrovia", 1972),  # from an offset of whole seconds (-00:44:30) to GMT
+        ("Asia/Kolkata", 2040),
+        ("UTC", 2040),
+    ],
+)
+def test_local_times_as_datetime_makes_them(zone: str, year: int) -> None:
+    """Local ISO times (offsets found per instant, text made by arrays): as ``datetime`` and
+    :mod:`zoneinfo` make them one by one, a second either side of each change of offset."""
+    start = datetime(year, 1, 1, tzinfo=UTC)
+    found = _transitions(zone, year)
+    assert found or zone in ("Asia/Kolkata", "UTC")
+    when = [start + timedelta(hours=7.2 * k, microseconds=k * 37_001) for k in range(1300)]
+    for t in found:
+        when += [t + timedelta(seconds=s) for s in (-1.5, -1, -0.25, 0, 0.5, 1)]
+    with quiet_erfa():
+        utc = Time(when, scale="utc")
+        ours = blocktable._local_iso(utc, [zone] * len(when)).tolist()
+        ref = [
+            d.isoformat(timespec="seconds") for d in blocktable._local_of(utc, [zone] * len(when))
+        ]
+    assert ours == ref
+    assert len(set(o[19:] for o in ours)) == (1 if zone in ("Asia/Kolkata", "UTC") else 2)

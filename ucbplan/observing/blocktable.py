@@ -13,6 +13,7 @@ the table ``meta`` and is preserved by ECSV.
 
 from __future__ import annotations
 
+import copy
 import csv
 import functools
 import hashlib
@@ -20,12 +21,13 @@ import io
 import itertools
 import json
 import math
+import operator
 import os
 import threading
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
-from datetime import UTC, datetime
+from datetime import UTC, datetime, timedelta, timezone
 from pathlib import Path
 from typing import IO, Any
 from zoneinfo import ZoneInfo
@@ -45,12 +47,17 @@ from ucbplan.io import dump_json, dumps_json
 from ucbplan.observing.blockcolumns import (
     BlockColumns,
     block_columns,
-    isot,
+    isot_array,
     jd_parts,
     time_array,
 )
 from ucbplan.observing.blocks import MAX_BLOCK_S, MAX_N_EXP, MAX_READOUT_S, Block
-from ucbplan.observing.tablewrite import ecsv_data_lines, json_rows_text, yaml_flow_items
+from ucbplan.observing.tablewrite import (
+    ecsv_data_lines,
+    json_records_text,
+    json_rows_text,
+    yaml_flow_items,
+)
 from ucbplan.observing.timeconv import quiet_erfa
 from ucbplan.target.values import one_line
 
@@ -446,7 +453,7 @@ def _iso(times: Sequence[Time | None], precision: int, scale: str) -> np.ndarray
 
 def _iso_of(times: Time, precision: int) -> np.ndarray:
     """ISO strings of an array Time, from its Julian dates as stored."""
-    return np.array(isot(times, precision), dtype=str)
+    return isot_array(times, precision)
 
 
 def _iso_column(times: Time, has: np.ndarray | None, precision: int) -> np.ndarray:
@@ -504,7 +511,36 @@ def _local_iso(times: Time | Sequence[Time], zones: Sequence[str]) -> np.ndarray
     if not len(times):
         return np.array([], dtype="U1")
     utc = times if isinstance(times, Time) else time_array(times, "utc")
-    return np.array([dt.isoformat(timespec="seconds") for dt in _local_of(utc, zones)], dtype=str)
+    year, month, day, hmsf = erfa.d2dtf(b"UTC", 6, utc.jd1, utc.jd2)
+    if np.any(hmsf["s"] >= 60) or np.any(year < 1970):  # a leap second (astropy's path refuses
+        # it, as it always did) or a time before 1970 (not a POSIX time everywhere): time by time
+        return np.array([dt.isoformat(timespec="seconds") for dt in _local_of(utc, zones)])
+    # whole POSIX seconds: the seconds' fraction is cut by the format, and zones change their
+    # offsets at whole seconds, so the zone's offset is that of the instant itself
+    months = (year - 1970) * 12 + (month - 1)
+    days = months.astype("datetime64[M]").astype("datetime64[D]").astype(np.int64) + (day - 1)
+    posix = days * 86400 + hmsf["h"] * 3600 + hmsf["m"] * 60 + hmsf["s"]
+    tz = {z: ZoneInfo(z) for z in dict.fromkeys(zones)}
+    offsets = [
+        datetime.fromtimestamp(t, tz[z]).utcoffset()
+        for t, z in zip(posix.tolist(), zones, strict=True)
+    ]
+    found = {off: _offset_text(off) for off in dict.fromkeys(offsets)}
+    text = {off: got for off, got in found.items() if got is not None}
+    if len(text) < len(found):
+        return np.array([dt.isoformat(timespec="seconds") for dt in _local_of(utc, zones)])
+    shift = np.array([text[off][0] for off in offsets], dtype=np.int64)
+    wall = np.datetime_as_string((posix + shift).astype("datetime64[s]"), unit="s").tolist()
+    local = list(map(operator.add, wall, (text[off][1] for off in offsets)))
+    return np.array(local, dtype=str)
+
+
+def _offset_text(offset: timedelta | None) -> tuple[int, str] | None:
+    """(seconds, ``+HH:MM`` as ``isoformat`` writes it) of a UTC offset of whole seconds."""
+    if offset is None or offset.microseconds:
+        return None
+    zone = timezone(offset)
+    return offset.days * 86400 + offset.seconds, datetime(2000, 1, 1, tzinfo=zone).isoformat()[19:]
 
 
 def _per_distinct(values: np.ndarray, fmt: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
@@ -640,13 +676,47 @@ def blocks_to_table(blocks: Sequence[Block], meta: Mapping[str, Any]) -> Table:
 
 
 def _blocks_to_table(cols: BlockColumns, meta: Mapping[str, Any]) -> Table:
-    table = Table({c.name: _MAKERS[c.kind](c, cols) for c in COLUMNS}, meta=dict(meta))
+    table = Table({c.name: _MAKERS[c.kind](c, cols) for c in COLUMNS})
+    table.meta = _copy_meta(dict(meta))  # as Table(meta=...) would deep-copy it, but faster
     for c in COLUMNS:
         if c.unit is not None:
             table[c.name].unit = c.unit
         if c.in_header:
             table[c.name].description = c.description
     return table
+
+
+def _copy_meta(value: Any, memo: dict[int, Any] | None = None) -> Any:
+    """:func:`copy.deepcopy` of table meta, faster: dicts and lists copied level by level (a
+    list of flat records of plain scalars, like a plan's visits, record by record), plain
+    scalars kept (immutable), anything else by ``deepcopy``; an object met twice is copied once
+    (``memo``, shared with ``deepcopy``), as the YAML header writes such an object once."""
+    kind = type(value)
+    if kind in _SCALARS:
+        return value
+    memo = {} if memo is None else memo
+    if id(value) in memo:
+        return memo[id(value)]
+    out: Any
+    if kind is dict:
+        out = memo[id(value)] = {}
+        out.update((k, _copy_meta(v, memo)) for k, v in value.items())
+    elif kind is list:
+        out = memo[id(value)] = []
+        flat = itertools.chain.from_iterable(map(dict.values, value))
+        if all(type(r) is dict for r in value) and _SCALARS.issuperset(map(type, flat)):
+            out += [memo[id(r)] if id(r) in memo else _remember(memo, r, r.copy()) for r in value]
+        else:
+            out += [_copy_meta(v, memo) for v in value]
+    else:
+        return copy.deepcopy(value, memo)
+    memo.setdefault(id(memo), []).append(value)  # the original kept alive, as deepcopy does
+    return out
+
+
+def _remember(memo: dict[int, Any], original: Any, copied: Any) -> Any:
+    memo[id(original)] = copied
+    return copied
 
 
 def _plain(value: Any) -> Any:
@@ -671,6 +741,12 @@ def table_to_json_rows(table: Table) -> list[dict[str, Any]]:
     return rows
 
 
+def _finite(records: Any) -> bool:
+    """Whether every float of a list of flat records is finite."""
+    flat = itertools.chain.from_iterable(map(dict.values, records))
+    return all(math.isfinite(v) for v in flat if type(v) is float)
+
+
 def _plain_column(col: Any) -> bool:
     """A 1-d unmasked column of numbers or text: ``tolist()`` gives its cells as ``item()``
     does, one by one."""
@@ -682,6 +758,8 @@ def _plain_meta(value: Any) -> Any:
     if isinstance(value, Mapping):
         return {str(k): _plain_meta(v) for k, v in value.items()}
     if isinstance(value, list | tuple):
+        if _flat_records_safe(value) is not None and _finite(value):  # plain already: copied
+            return [dict(zip(map(str, r), r.values(), strict=True)) for r in value]
         return [_plain_meta(v) for v in value]
     value = _plain(value)
     return value if isinstance(value, str | int | float | bool | type(None)) else str(value)
@@ -704,8 +782,28 @@ def _libyaml_safe(value: Any) -> bool:
             for k, v in value.items()
         )
     if isinstance(value, list | tuple):
-        return all(_libyaml_safe(v) for v in value)
+        flat = _flat_records_safe(value)
+        return flat if flat is not None else all(_libyaml_safe(v) for v in value)
     return isinstance(value, int | float | np.number | np.bool_ | type(None))
+
+
+#: Kinds of value :func:`_flat_records_safe` checks at once (always safe but for ``str``).
+_SCALARS = frozenset((str, int, float, bool, type(None)))
+
+
+def _flat_records_safe(records: list[Any] | tuple[Any, ...]) -> bool | None:
+    """:func:`_libyaml_safe` of a list of plain dicts of plain scalars (a plan's ``visits``),
+    their keys and texts checked joined, or None for any other list."""
+    if not records or any(type(r) is not dict for r in records):
+        return None
+    values = list(itertools.chain.from_iterable(map(dict.values, records)))
+    if not _SCALARS.issuperset(map(type, values)):
+        return None
+    keys = set(itertools.chain.from_iterable(records))
+    if not all(type(k) is str and k != "" for k in keys):
+        return False
+    texts = itertools.chain(keys, filter(str.__instancecheck__, values))
+    return _LIBYAML_SAFE.issuperset("".join(texts))
 
 
 def _header_safe(table: Table) -> bool:
@@ -790,13 +888,25 @@ def write_table(table: Table, handle: IO[str], fmt: str, *, json_meta: bool = Fa
     if fmt == "ecsv":
         _write_ecsv(table, handle)
     elif fmt == "csv":
-        plain = table.copy(copy_data=False)
-        plain.meta = {}
-        plain.write(handle, format="ascii.csv")
+        _write_csv(table, handle)
     elif fmt == "json":
         _write_json(table, handle, json_meta)
     else:
         raise InputFileError(f"unknown table format {fmt!r}; expected one of {TABLE_FORMATS}")
+
+
+def _write_csv(table: Table, handle: IO[str]) -> None:
+    """CSV without meta as astropy writes it: its header line (written for no rows), then the
+    rows column by column (:func:`.tablewrite.ecsv_data_lines`); for tables of other columns,
+    astropy's whole writer."""
+    plain = table.copy(copy_data=False)
+    plain.meta = {}
+    lines = ecsv_data_lines(plain, ",")
+    if lines is None:
+        plain.write(handle, format="ascii.csv")
+        return
+    plain[:0].write(handle, format="ascii.csv")
+    handle.write("".join(line + os.linesep for line in lines))
 
 
 def _write_ecsv(table: Table, handle: IO[str]) -> None:
@@ -839,7 +949,7 @@ def _ecsv_header(table: Table, libyaml: bool) -> str:
         buf = io.StringIO()
         table[:0].write(buf, format="ascii.ecsv")
         return buf.getvalue()
-    listed = "".join(f"# {line}{os.linesep}" for line in items)
+    listed = "# " + f"{os.linesep}# ".join(items) + os.linesep
     return text.replace(_NO_VISITS, f"{os.linesep}# - visits:{os.linesep}{listed}")
 
 
@@ -867,10 +977,32 @@ def _write_json(table: Table, handle: IO[str], json_meta: bool) -> None:
     if meta is None:
         handle.write(rows + "\n")
         return
-    head, tail = dumps_json({**meta, "rows": []}), '"rows": []\n}'
+    head, tail = _json_head(meta["meta"]), '"rows": []\n}'
     if not head.endswith(tail):  # never: the rows are the document's last value
         raise AssertionError(f"unexpected JSON layout: {head[-40:]!r}")
     handle.write(head[: -len("[]\n}")] + rows + "\n}\n")
+
+
+#: Stands in for a plan's ``visits`` in the JSON meta while they are written apart.
+_VISITS_MARK = "\x00ucbplan visits\x00"
+
+
+def _json_head(meta: dict[str, Any]) -> str:
+    """``{"meta": meta, "rows": []}`` as :func:`dumps_json` writes it, the meta's ``visits``
+    written key by key (:func:`.tablewrite.json_records_text`) where they allow."""
+    visits = meta.get("visits")
+    listed = json_records_text(visits, 2)
+    if listed is None:
+        return dumps_json({"meta": meta, "rows": []})
+    meta["visits"] = _VISITS_MARK
+    try:
+        head = dumps_json({"meta": meta, "rows": []})
+    finally:
+        meta["visits"] = visits
+    mark = json.dumps(_VISITS_MARK)
+    if head.count(mark) != 1:  # never: the mark is no text of a plan
+        return dumps_json({"meta": meta, "rows": []})
+    return head.replace(mark, listed)
 
 
 def _bad_cell(where: str, row: int, column: str, expected: str, value: Any) -> InputFileError:

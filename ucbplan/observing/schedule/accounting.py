@@ -133,10 +133,15 @@ def _summary(
     """One visit from its blocks ``ks`` (in time order), first start to latest end [s] and the
     ISO times of its acquisition start, first start and latest end."""
     drop = 0 if trailing_readout else 1
-    readout = float(sum((c.n_exp[k] - drop) * c.readout_s[k] for k in ks))
+    if len(ks) == 1:  # the sums of one block, as sum() makes them (0 + x: -0.0 becomes 0.0)
+        k = ks[0]
+        readout = float(0 + (c.n_exp[k] - drop) * c.readout_s[k])
+        shutter = float(0 + c.n_exp[k] * c.exptime_s[k])
+    else:
+        readout = float(sum((c.n_exp[k] - drop) * c.readout_s[k] for k in ks))
+        shutter = float(sum(c.n_exp[k] * c.exptime_s[k] for k in ks))
     last_readout = c.readout_s[ks[-1]] if trailing_readout else 0.0
     span = span_s + last_readout
-    shutter = float(sum(c.n_exp[k] * c.exptime_s[k] for k in ks))
     overhead = acquisition_s + readout
     wall = acquisition_s + span
     return VisitSummary(
@@ -146,7 +151,7 @@ def _summary(
         acq_start_utc=str(iso[0]),
         start_utc=str(iso[1]),
         end_utc=str(iso[2]),
-        exposures=sum(c.n_exp[k] for k in ks),
+        exposures=sum(c.n_exp[k] for k in ks) if len(ks) > 1 else c.n_exp[ks[0]],
         shutter_s=shutter,
         overhead_s=overhead,
         idle_s=max(0.0, wall - shutter - overhead),

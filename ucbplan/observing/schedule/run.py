@@ -7,6 +7,7 @@ returns a :class:`PlanRun` that builds the master blocks table with its provenan
 
 from __future__ import annotations
 
+import copy
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
@@ -138,10 +139,15 @@ class PlanRun:
         """One summary per visit (acquisition + exposures), in time order."""
         return list(self._visits)
 
+    @cached_property
+    def _accounting(self) -> dict[str, Any]:
+        """The time accounting, summed once per run (the table meta and the report read it)."""
+        return time_accounting(self._visits)
+
     def accounting(self) -> dict[str, Any]:
         """Time accounting, ``{"total": {...}, "targets": {NAME: {...}}}`` (see
-        :func:`~ucbplan.observing.schedule.accounting.time_accounting`)."""
-        return time_accounting(self.visits())
+        :func:`~ucbplan.observing.schedule.accounting.time_accounting`); a copy of its own."""
+        return copy.deepcopy(self._accounting)
 
     def _planning(self) -> dict[str, Any]:
         """Visit, instrument, cadence and goal facts of the run, per target."""
