@@ -17,28 +17,21 @@ from astropy.table import Table
 
 from ucbplan.errors import InputFileError, UcbplanError, shorten
 from ucbplan.io import dumps_json
-from ucbplan.observing.exports.base import (
-    ExportOptions,
-    ExportResult,
+from ucbplan.observing.exports.columns import (
     acquisition_s,
-    ascii_names,
     coordinates,
-    created_utc,
     floats,
-    iso_minute,
-    iso_ms,
-    meta,
-    ob_start_window,
     period_s,
     required_times,
-    sexagesimal,
-    site_name,
     strings,
     time_order,
-    version,
 )
 from ucbplan.observing.exports.eso_ob import eso_constraints, instrument_for, ob_body
 from ucbplan.observing.exports.eso_templates import EsoTemplates, load_eso_templates
+from ucbplan.observing.exports.options import ExportOptions, ExportResult
+from ucbplan.observing.exports.provenance import created_utc, meta, site_name, version
+from ucbplan.observing.exports.text import ascii_names, iso_minute, iso_ms, sexagesimal
+from ucbplan.observing.exports.windows import ob_start_window
 
 __all__ = ["ESO_NAME_MAX", "export_eso_p2"]
 

@@ -16,21 +16,18 @@ from typing import Any
 from astropy.table import Table
 
 from ucbplan.io import dumps_json
-from ucbplan.observing.exports.base import (
-    ExportOptions,
-    ExportResult,
+from ucbplan.observing.exports.columns import (
     acquisition_s,
-    created_utc,
     floats,
-    iso_ms,
-    ob_start_window,
     period_s,
     required_times,
-    site_name,
     strings,
     time_order,
-    version,
 )
+from ucbplan.observing.exports.options import ExportOptions, ExportResult
+from ucbplan.observing.exports.provenance import created_utc, site_name, version
+from ucbplan.observing.exports.text import iso_ms
+from ucbplan.observing.exports.windows import ob_start_window
 
 __all__ = ["export_gemini", "gemini_windows"]
 
