@@ -55,3 +55,14 @@ def ob_start_window(
         lo=ob_start - timedelta(seconds=half),
         hi=ob_start + timedelta(seconds=half),
     )
+
+
+def floor_minute(t: datetime) -> datetime:
+    """``t`` rounded down to the whole minute (windows written to the minute widen outwards)."""
+    return t.replace(second=0, microsecond=0)
+
+
+def ceil_minute(t: datetime) -> datetime:
+    """``t`` rounded up to the whole minute."""
+    base = floor_minute(t)
+    return base if base == t else base + timedelta(minutes=1)
