@@ -93,12 +93,7 @@ def plan_settings(
             f"--instrument {inst.name}: the instrument table has no confirmed RV-precision "
             "reference (sigma_ref); pass --sigma-v KM_S (sigma_v per exposure)"
         )
-    if inst is not None:
-        over = instrument_overheads(inst, acquisition_s=overhead_s, readout_s=readout_s)
-        acq, readout = over.acquisition_s, over.readout_s
-    else:
-        acq = DEFAULT_OVERHEAD_S if overhead_s is None else overhead_s
-        readout = DEFAULT_READOUT_S if readout_s is None else readout_s
+    acq, readout = _overheads(inst, overhead_s, readout_s)
     exptime = DEFAULT_EXPTIME_S if exptime_s is None else exptime_s
     if inst is not None:
         check_exptime(inst, exptime)
@@ -114,6 +109,17 @@ def plan_settings(
         budgets=parse_budgets(list(budgets)),
         **options,
     )
+
+
+def _overheads(
+    inst: Instrument | None, overhead_s: float | None, readout_s: float | None
+) -> tuple[float, float]:
+    """Acquisition and readout [s]: the given ones, else the instrument's, else the defaults."""
+    if inst is not None:
+        over = instrument_overheads(inst, acquisition_s=overhead_s, readout_s=readout_s)
+        return over.acquisition_s, over.readout_s
+    acq = DEFAULT_OVERHEAD_S if overhead_s is None else overhead_s
+    return acq, DEFAULT_READOUT_S if readout_s is None else readout_s
 
 
 def _sigma_v(
