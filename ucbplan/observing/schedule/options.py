@@ -56,35 +56,20 @@ def plan_settings(
 ) -> PlanSettings:
     """:class:`PlanSettings` from the ``plan`` options (module notes).
 
-    Parameters
-    ----------
-    instrument, instruments_file : str, path, optional
-        ``--instrument NAME`` looked up in the bundled table (a user file searched first).
-    exptime_s, n_exp, readout_s, overhead_s : optional
-        Exposure time, exposures per block, readout and acquisition [s]; None takes the
-        instrument's or the default.
-    visit, max_visit : str or float, optional
-        ``--visit`` duration (``1h``, ``45min``, ``3600s`` or seconds); ``--max-visit``, the
-        longest visit a goal plans (default 2 h).
-    sigma_v_kms : str or float, optional
-        ``--sigma-v``: a number (km/s, fixed per exposure) or a law that follows the exposure
-        time, ``30km/s@600s[,V=20.0]`` (:func:`~ucbplan.observing.sigma_model.parse_sigma_v`);
-        required with an instrument that has no σ reference.
-    sigma_floor_kms : float
-        ``--sigma-floor``: systematic floor added in quadrature [km/s].
-    extinction_k : float, optional
-        ``--extinction`` [mag/airmass] of the σ_v law; default the instrument's, else 0.
-    budgets : sequence of str
-        ``--budget NAME=DURATION`` items: wall time per target over all nights.
-    **options
-        Every other :class:`PlanSettings` field by name.
+    ``instrument`` (``--instrument NAME``) is looked up in the bundled table, a user's
+    ``instruments_file`` first. ``exptime_s``, ``n_exp``, ``readout_s``, ``overhead_s``: exposure
+    time, exposures per block, readout and acquisition [s] (None: the instrument's, else the
+    default). ``visit``, ``max_visit``: ``--visit`` and ``--max-visit`` durations (``1h``,
+    ``45min``, ``3600s`` or seconds; a goal's longest visit defaults to 2 h). ``sigma_v_kms``:
+    a number (km/s per exposure) or a law ``30km/s@600s[,V=20.0]``
+    (:func:`~ucbplan.observing.sigma_model.parse_sigma_v`), required with an instrument without
+    a σ reference; ``sigma_floor_kms``: a floor in quadrature [km/s]; ``extinction_k``
+    [mag/airmass]: the instrument's, else 0. ``budgets``: ``NAME=DURATION`` wall time per target.
+    Every other :class:`PlanSettings` field comes by name in ``options``.
 
-    Raises
-    ------
-    InputError
-        Unknown instrument, an instrument without σ_ref and no ``--sigma-v``, an overhead the
-        instrument does not confirm and the user did not give, an exposure below the
-        instrument's minimum, a malformed duration: one line each.
+    Raises :class:`InputError` (one line each) for an unknown instrument, an instrument without
+    σ_ref and no ``--sigma-v``, an overhead the instrument does not confirm and the user did not
+    give, an exposure below the instrument's minimum, or a malformed duration.
     """
     inst = instrument_or_none(instrument, instruments_file)
     fixed, model = _sigma_v(sigma_v_kms, sigma_floor_kms, extinction_k, inst)
