@@ -164,3 +164,167 @@ def test_relative_and_lazy_imports_are_seen() -> None:
     code = "def f():\n    from ucbplan.cli import app\nif TYPE_CHECKING:\n    import ucbplan.x\n"
     found = _imports(ast.parse(code), {"ucbplan.cli", "ucbplan.cli.app"}, "ucbplan.core.a", False)
     assert found == {"ucbplan.cli.app"}
+
+
+# --- the house rules of issue 25: no cycle even in annotations, short functions and modules,
+# --- one owner per concern, no twins, ERFA's warnings silenced at the edges only
+
+
+def _graph_with_annotations() -> dict[str, set[str]]:
+    """The import graph counting ``if TYPE_CHECKING:`` imports too (a cycle of types is a cycle)."""
+    files = {_module_name(p): p for p in PACKAGE.rglob("*.py")}
+    modules = set(files)
+    graph: dict[str, set[str]] = {}
+    for name, path in files.items():
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        is_pkg = path.name == "__init__.py"
+        deps = _imports(_without_type_checking_guards(tree), modules, name, is_pkg)
+        graph[name] = {d for d in deps if d != name}
+    return graph
+
+
+def _without_type_checking_guards(tree: ast.Module) -> ast.Module:
+    """``tree`` with each ``if TYPE_CHECKING:`` block's body lifted out of its guard."""
+
+    class Lift(ast.NodeTransformer):
+        def visit_If(self, node: ast.If) -> ast.AST | list[ast.stmt]:
+            self.generic_visit(node)
+            return [*node.body, *node.orelse] if _is_type_checking(node) else node
+
+    return ast.fix_missing_locations(Lift().visit(tree))
+
+
+def test_no_import_cycles_even_between_annotations() -> None:
+    cycle = _find_cycle(_graph_with_annotations())
+    assert cycle is None, "import cycle (annotations counted): " + " -> ".join(cycle or [])
+
+
+def test_annotation_imports_are_counted_by_the_cycle_check() -> None:
+    code = "if TYPE_CHECKING:\n    from ucbplan.b import X\n"
+    tree = _without_type_checking_guards(ast.parse(code))
+    assert _imports(tree, {"ucbplan.b"}, "ucbplan.a", False) == {"ucbplan.b"}
+
+
+#: The longest a function may be (``def`` to its last line, decorators aside, signature counted),
+#: and how many may be longer. A long function is read as a whole before it can be changed.
+MAX_FUNCTION_LINES = 60
+MAX_LONG_FUNCTIONS = 5
+
+
+def _long_functions(root: Path = PACKAGE) -> list[tuple[int, str]]:
+    found = []
+    for path in sorted(root.rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
+                n = (node.end_lineno or node.lineno) - node.lineno + 1
+                if n > MAX_FUNCTION_LINES:
+                    found.append((n, f"{path.relative_to(PACKAGE.parent)}:{node.name}"))
+    return sorted(found, reverse=True)
+
+
+def test_at_most_five_functions_are_long() -> None:
+    long = _long_functions()
+    listing = "\n".join(f"{n} lines  {name}" for n, name in long)
+    assert len(long) <= MAX_LONG_FUNCTIONS, f"functions over {MAX_FUNCTION_LINES} lines:\n{listing}"
+
+
+#: The longest a module may be, and the modules allowed past it because each is one cohesive
+#: declaration (docs/architecture.md names them and says why).
+MAX_MODULE_LINES = 600
+COHESIVE_DECLARATIONS: dict[str, str] = {}
+
+
+def test_modules_are_short_or_declared_cohesive() -> None:
+    long = {
+        str(p.relative_to(PACKAGE.parent)): n
+        for p in sorted(PACKAGE.rglob("*.py"))
+        if (n := len(p.read_text(encoding="utf-8").splitlines())) > MAX_MODULE_LINES
+    }
+    undeclared = {m: n for m, n in long.items() if m not in COHESIVE_DECLARATIONS}
+    assert not undeclared, f"modules over {MAX_MODULE_LINES} lines: {undeclared}"
+    doc = (PACKAGE.parent / "docs" / "architecture.md").read_text(encoding="utf-8")
+    missing = [m for m in COHESIVE_DECLARATIONS if m not in doc]
+    assert not missing, f"docs/architecture.md does not name the long modules {missing}"
+
+
+#: Module names that stand in several packages on purpose: each stage has its plots, and the
+#: layers of one command family mirror each other (cli/X shells api/X, which calls core/X).
+SHARED_MODULE_NAMES = {"__init__", "plots", "ephemeris", "timing", "report", "pipeline"}
+
+
+def test_each_module_name_has_one_owner() -> None:
+    owners: dict[str, list[str]] = {}
+    for path in PACKAGE.rglob("*.py"):
+        owners.setdefault(path.stem, []).append(str(path.relative_to(PACKAGE.parent)))
+    twins = {k: sorted(v) for k, v in owners.items() if len(v) > 1 and k not in SHARED_MODULE_NAMES}
+    assert not twins, f"one module name, several packages (rename by what each does): {twins}"
+
+
+#: Lines of the same logic two places may share; the next one makes them twins.
+MAX_SHARED_LINES = 10
+
+
+def _logic_lines(path: Path) -> list[tuple[int, str]]:
+    """(line, text) of the lines that carry logic: no blanks, comments, imports, docstrings."""
+    text = path.read_text(encoding="utf-8")
+    skip: set[int] = set()
+    for node in ast.walk(ast.parse(text)):
+        body = getattr(node, "body", None)
+        if isinstance(body, list) and body and isinstance(body[0], ast.Expr):
+            value = body[0].value
+            if isinstance(value, ast.Constant) and isinstance(value.value, str):
+                skip.update(range(body[0].lineno, (body[0].end_lineno or body[0].lineno) + 1))
+    out = []
+    for i, raw in enumerate(text.splitlines(), start=1):
+        line = " ".join(raw.split())
+        if i in skip or not line or line.startswith(("#", "import ", "from ", "@")):
+            continue
+        if line in {")", "]", "}", "),", "],", "},", "else:", "try:", "finally:", '"""'}:
+            continue
+        out.append((i, line))
+    return out
+
+
+def _twins(files: dict[str, list[tuple[int, str]]], run: int) -> list[str]:
+    """Places where ``run`` consecutive logic lines stand again elsewhere (or in the same file)."""
+    seen: dict[tuple[str, ...], tuple[str, int]] = {}
+    found = []
+    for name, lines in sorted(files.items()):
+        texts = [t for _, t in lines]
+        last_hit = -run
+        for k in range(len(texts) - run + 1):
+            key = tuple(texts[k : k + run])
+            here = (name, lines[k][0])
+            first = seen.setdefault(key, here)
+            if first != here and k >= last_hit + run:
+                found.append(f"{first[0]}:{first[1]} ~ {name}:{here[1]}")
+                last_hit = k
+    return found
+
+
+def test_no_two_places_share_more_than_ten_lines() -> None:
+    files = {
+        str(p.relative_to(PACKAGE.parent)): _logic_lines(p) for p in sorted(PACKAGE.rglob("*.py"))
+    }
+    twins = _twins(files, MAX_SHARED_LINES + 1)
+    assert not twins, "the same logic in two places (make it one function):\n" + "\n".join(twins)
+
+
+def test_the_twin_finder_finds_a_planted_twin() -> None:
+    block = [(i, f"x{i} = f(x{i - 1})") for i in range(1, 13)]
+    assert _twins({"a.py": block, "b.py": block}, 11) == ["a.py:1 ~ b.py:1"]
+    assert _twins({"a.py": block, "b.py": block[:10]}, 11) == []
+
+
+#: Where ERFA's "dubious year" warnings may be silenced: the edges (the offline scope every API
+#: function, the CLI entry and each population task enter), and the module that declares the filter.
+ERFA_EDGES = {"ucbplan/offline.py"}
+
+
+def test_erfa_warnings_are_silenced_at_the_edges_only() -> None:
+    users = sorted(
+        str(p.relative_to(PACKAGE.parent))
+        for p in PACKAGE.rglob("*.py")
+        if "ErfaWarning" in p.read_text(encoding="utf-8") or "quiet_erfa" in p.read_text("utf-8")
+    )
+    assert set(users) <= ERFA_EDGES, f"ERFA warnings handled away from the edges: {users}"

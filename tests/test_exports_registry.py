@@ -29,7 +29,8 @@ from ucbplan.observing.exports import (
     ExportOptions,
     export_blocks,
 )
-from ucbplan.observing.exports.base import floats, iso_ms
+from ucbplan.observing.exports.columns import floats
+from ucbplan.observing.exports.text import iso_ms
 from ucbplan.observing.timeconv import quiet_erfa
 
 

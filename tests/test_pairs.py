@@ -14,7 +14,7 @@ from astropy import units as u
 from ucbplan.core.constants import DAY_S
 from ucbplan.core.ephemeris import ll_pair
 from ucbplan.observing.blocks import ExposurePlan
-from ucbplan.observing.exports.base import safe_name
+from ucbplan.observing.exports.text import safe_name
 from ucbplan.observing.schedule import PlanSettings, plan_nights
 from ucbplan.observing.schedule.pairs import DK_FRACTION, pair_infeasible_reason, pair_targets
 from ucbplan.observing.sites import get_site

@@ -11,36 +11,26 @@ stderr) may be wider than 100 terminal cells.
 
 from __future__ import annotations
 
-import re
-import shlex
+import importlib.util
 from pathlib import Path
 
 import pytest
 from test_screen_100_columns import WIDTH, run_at_100, too_wide
 
 ROOT = Path(__file__).resolve().parents[1]
+_SPEC = importlib.util.spec_from_file_location(
+    "readme_outputs", ROOT / "benchmarks" / "readme_outputs.py"
+)
+assert _SPEC is not None and _SPEC.loader is not None
+_README = importlib.util.module_from_spec(_SPEC)
+_SPEC.loader.exec_module(_README)
+#: The README's ``ucbplan`` examples, parsed once (benchmarks/readme_outputs.py runs them all).
+readme_commands = _README.readme_commands
 
 #: Command families not run here (minutes each, or a network service).
 SLOW = {"simulate", "fisher", "waveform", "population"}
 #: Input-file suffixes (a positional argument with one must exist before the example runs).
 INPUTS = (".yaml", ".csv", ".ecsv", ".h5", ".json")
-
-
-def readme_commands() -> list[list[str]]:
-    """The ``ucbplan`` examples of README.md, as argument lists, in order."""
-    text = (ROOT / "README.md").read_text(encoding="utf-8")
-    out: list[list[str]] = []
-    for block in re.findall(r"```[a-z]*\n(.*?)```", text, flags=re.S):
-        joined = re.sub(r"\\\n\s*", " ", block)
-        for line in joined.splitlines():
-            line = line.split("&& ", 1)[-1].strip()
-            if not line.startswith("ucbplan "):
-                continue
-            line = re.sub(r"\s#\s.*$", "", line)
-            if "…" in line or "[" in line or re.search(r"\b[A-Z]{3,}\b", line):
-                continue  # a usage synopsis, not an example
-            out.append(shlex.split(line)[1:])
-    return out
 
 
 def _inputs(args: list[str]) -> list[str]:

@@ -14,6 +14,11 @@ of parsing the IERS-A and -B text files (~0.5 s). The cache lives in ``$UCBPLAN_
 keyed by the astropy version and the bundled files' size and modification time, so an update of
 either package is picked up. A missing, stale or unreadable cache falls back to astropy's parser.
 Times past the bundled tables are warned about by the planner (docs/method.md, time scales).
+
+The scope also silences ERFA's "dubious year" warnings and astropy's IERS-range warnings, which
+every conversion of a future date raises: ucbplan reports the tables' coverage itself, once per
+run, in words a user can act on (:class:`ucbplan.EarthOrientationWarning`). The edges enter the
+scope (the public API, the command line, each population task), so no inner function needs to.
 """
 
 from __future__ import annotations
@@ -22,6 +27,7 @@ import hashlib
 import os
 import pickle
 import tempfile
+import warnings
 from collections.abc import Iterator
 from contextlib import ExitStack, contextmanager
 from pathlib import Path
@@ -48,7 +54,10 @@ def offline() -> Iterator[None]:
     Sets, for the scope only: ``iers.conf.auto_download = False``, ``iers.conf.auto_max_age =
     None`` (the bundled IERS-A predictions are used however old, and nights past them are warned
     about, never refused) and ``data.conf.allow_internet = False``; and the bundled IERS table
-    as ``iers.earth_orientation_table`` unless one was set by the caller.
+    as ``iers.earth_orientation_table`` unless one was set by the caller; and a warnings filter
+    for ERFA's "dubious year" and astropy's IERS-range warnings (``warnings.catch_warnings``,
+    which is per process, not per thread: enter the scope once per task, not in threads that
+    share one).
     """
     from astropy.utils import data, iers
 
@@ -59,6 +68,20 @@ def offline() -> Iterator[None]:
         # ScienceState keeps the caller's choice in ``_value`` (None: astropy's default table)
         if iers.earth_orientation_table._value is None:
             stack.enter_context(iers.earth_orientation_table.set(bundled_iers_table()))
+        stack.enter_context(_quiet_future_dates())
+        yield
+
+
+@contextmanager
+def _quiet_future_dates() -> Iterator[None]:
+    """ERFA's "dubious year" and astropy's IERS-range warnings silenced (see the module notes)."""
+    from astropy.utils.exceptions import AstropyWarning
+    from erfa import ErfaWarning
+
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", category=ErfaWarning)
+        for text in (".*polar motion.*", ".*IERS.*", ".*leap.second.*"):
+            warnings.filterwarnings("ignore", message=text, category=AstropyWarning)
         yield
 
 

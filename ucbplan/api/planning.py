@@ -201,6 +201,21 @@ def plan(
     from ucbplan.observing.schedule import night_dates, plan_settings
     from ucbplan.observing.schedule.run import plan_targets
 
+    _settings_options(options, constraints)
+    many = isinstance(targets, Sequence) and not isinstance(targets, str)
+    with scope():
+        settings = plan_settings(**options)
+        dates = night_dates(as_date(night, "night"), nights)
+        where = get_site(site, timezone)
+        loaded = [load_target(t) for t in (targets if many else [targets])]
+        run = plan_targets(loaded, where, dates, settings, dict(priorities or {}))
+    emit(list(run.result.warnings), PlanWarning)
+    return Plan(run)
+
+
+def _settings_options(options: dict[str, Any], constraints: Sequence[Any] | None) -> None:
+    """``options`` made the keywords of ``plan_settings``: names checked, quantities in SI, and
+    ``constraints`` (which replace the default set, so no constraint option may come too)."""
     _check_option_names(options)
     for key, unit in _UNITS.items():
         if key in options:
@@ -216,15 +231,6 @@ def plan(
                 parameter=given[0],
             )
         options["custom_constraints"] = _constraint_tuple(constraints)
-    many = isinstance(targets, Sequence) and not isinstance(targets, str)
-    with scope():
-        settings = plan_settings(**options)
-        dates = night_dates(as_date(night, "night"), nights)
-        where = get_site(site, timezone)
-        loaded = [load_target(t) for t in (targets if many else [targets])]
-        run = plan_targets(loaded, where, dates, settings, dict(priorities or {}))
-    emit(list(run.result.warnings), PlanWarning)
-    return Plan(run)
 
 
 def _check_option_names(options: Mapping[str, Any]) -> None:

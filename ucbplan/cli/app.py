@@ -25,7 +25,7 @@ app = typer.Typer(
     help="Phase-targeted spectroscopy of ultracompact binaries from LISA ephemerides.",
     no_args_is_help=True,
     add_completion=True,
-    rich_markup_mode=None,  # plain help: rich markup ate "[deg]"-style units (issue 15)
+    rich_markup_mode=None,  # plain help: rich markup would eat "[deg]"-style units
     pretty_exceptions_enable=False,
 )
 

@@ -247,8 +247,8 @@ def _print_comparison(doc: dict[str, Any]) -> None:
 class EphemerisGroup(typer.core.TyperGroup):
     """A command group whose first argument, when it is not a sub-command, goes to ``predict``.
 
-    ``ucbplan ephemeris TARGET --start … --end …`` therefore keeps working exactly as before
-    the group existed; ``ucbplan ephemeris predict TARGET …`` is the same command.
+    ``ucbplan ephemeris TARGET --start … --end …`` and ``ucbplan ephemeris predict TARGET …``
+    are therefore the same command.
     """
 
     default_command = "predict"

@@ -229,20 +229,23 @@ def export_command(
     result = export_blocks(table, to, options)
     for note in result.notes:
         err_console.print(f"[yellow]note:[/] {escape(note)}", soft_wrap=True)
-
-    def writer(handle: IO[bytes]) -> None:
-        handle.write(result.content)
-
     if create:
         p2 = {"container": container, "dry_run": dry_run, "environment": p2_environment}
         _create(result.content, {**p2, "user": p2_user})
         if output is None:
             return
+    _write(result.content, output, overwrite, f"{to} export of {len(table)} blocks")
+
+
+def _write(content: bytes, output: Path | None, overwrite: bool, what: str) -> None:
+    """``content`` to ``output`` (standard output without -o), and a line saying so."""
+
+    def writer(handle: IO[bytes]) -> None:
+        handle.write(content)
+
     write_output(output, writer, overwrite=overwrite, binary=True)
     if output is not None:
-        err_console.print(
-            f"wrote {to} export of {len(table)} blocks to {escape(str(output))}", soft_wrap=True
-        )
+        err_console.print(f"wrote {what} to {escape(str(output))}", soft_wrap=True)
 
 
 def register(app: typer.Typer) -> None:

@@ -209,19 +209,7 @@ def parse_timing_epoch(text: object) -> Time:
         One line (without the file name): what is wrong and how to fix it.
     """
     expect = f"expected an epoch like {TIMING_EPOCH_EXAMPLE} (or an ISO epoch labelled TDB)"
-    if isinstance(text, bool) or isinstance(text, int | float):
-        raise ValueError(
-            f"{expect}, got the bare number {shorten(text)}; quote it and state the scale, e.g. "
-            f'"BJD_TDB {text}" (one float64 of a JD loses up to ~20 µs)'
-        )
-    if isinstance(text, _dt.date):
-        raise ValueError(
-            f"{expect}, got the unquoted date {shorten(str(text))}; quote it and label the "
-            'scale, e.g. "2018-07-06T04:23:12.93 TDB"'
-        )
-    if not isinstance(text, str) or len(text) > MAX_TIMING_EPOCH_CHARS:
-        raise ValueError(f"{expect}, got {shorten(text)}")
-    raw = text.strip()
+    raw = _epoch_text(text, expect)
     body, label = split_scale_label(raw)
     head, _, number = body.partition(" ")
     word = head.upper().replace("-", "_")
@@ -246,6 +234,23 @@ def parse_timing_epoch(text: object) -> Time:
             f"number, e.g. {TIMING_EPOCH_EXAMPLE}"
         )
     return _iso_epoch(raw, body, label, expect)
+
+
+def _epoch_text(text: object, expect: str) -> str:
+    """The epoch's text, stripped; bare numbers, YAML dates and over-long text refused."""
+    if isinstance(text, bool) or isinstance(text, int | float):
+        raise ValueError(
+            f"{expect}, got the bare number {shorten(text)}; quote it and state the scale, e.g. "
+            f'"BJD_TDB {text}" (one float64 of a JD loses up to ~20 µs)'
+        )
+    if isinstance(text, _dt.date):
+        raise ValueError(
+            f"{expect}, got the unquoted date {shorten(str(text))}; quote it and label the "
+            'scale, e.g. "2018-07-06T04:23:12.93 TDB"'
+        )
+    if not isinstance(text, str) or len(text) > MAX_TIMING_EPOCH_CHARS:
+        raise ValueError(f"{expect}, got {shorten(text)}")
+    return text.strip()
 
 
 def _word_epoch(fmt: str, number: str, raw: str, expect: str) -> Time:

@@ -40,6 +40,21 @@ def _groups(table: Table) -> list[np.ndarray]:
     return [np.flatnonzero(ids == v) for v in dict.fromkeys(ids)]
 
 
+def _spans(table: Table, start: Time, end: Time, ids: list[str]) -> list[tuple[Time, Time, int]]:
+    """(first start, last end, first row) of each visit or lone block, in time order."""
+    units = []
+    for rows in _groups(table):
+        t0, t1 = start[rows].min(), end[rows].max()
+        if t1 <= t0:
+            raise InputError(
+                f"to_astroplan: block {shorten(ids[rows[0]], 60)} ends before it starts; "
+                "check t_start_utc and t_end_utc"
+            )
+        units.append((t0, t1, rows[0]))
+    units.sort(key=lambda un: float(un[0].jd))
+    return units
+
+
 def to_astroplan(table: Table, site: Site) -> Any:
     """The planned blocks (or visits) of ``table`` as an astroplan ``Schedule`` at ``site``.
 
@@ -84,16 +99,7 @@ def to_astroplan(table: Table, site: Site) -> Any:
         end = Time(np.asarray(table["t_end_utc"]).astype(str), scale="utc")
     id_col = next((c for c in ("visit_id", "block_id") if c in table.colnames), None)
     ids = [str(v) for v in table[id_col]] if id_col else [str(i) for i in range(len(table))]
-    units = []
-    for rows in _groups(table):
-        t0, t1 = start[rows].min(), end[rows].max()
-        if t1 <= t0:
-            raise InputError(
-                f"to_astroplan: block {shorten(ids[rows[0]], 60)} ends before it starts; "
-                "check t_start_utc and t_end_utc"
-            )
-        units.append((t0, t1, rows[0]))
-    units.sort(key=lambda un: float(un[0].jd))
+    units = _spans(table, start, end, ids)
     schedule = Schedule(start.min(), end.max())
     schedule.observer = Observer(location=site.location, name=site.name, timezone="UTC")
     for t0, t1, i in units:

@@ -338,47 +338,21 @@ def spectra_for_goal(
 ) -> GoalPlan:
     """Spectra (and, given ``exptime_s`` and ``period_s``, wall time) that reach ``goal``.
 
-    Parameters
-    ----------
-    goal : Goal
-        From :func:`parse_goal`. ``sigma_K`` bounds σ_K of every star measured (both for SB2).
-    K1, K2 : float
-        Semi-amplitudes [km/s]; ``K2=None`` for a single-lined (SB1) target.
-    sigma_v_kms, sigma_v2_kms : float
-        σ_v per exposure of star 1 and star 2 [km/s] (star 2 defaults to star 1's).
-    lambda_k : float
-        Smearing attenuation Λ_K of one exposure, in (0, 1].
-    anchors : tuple of str
-        Anchor names of one pattern (:func:`anchor_phases`); spectra are split over the
-        pattern in equal numbers, so N is a multiple of its length (even for quadratures).
-    period_s, sin_i, e : float
-        P_b [s], sin ι and e: needed for absolute mass goals and (P_b) the time budget.
-    exptime_s, readout_s, acquisition_s, visit_s : float
-        Per-exposure cost (exposure + readout), acquisition per visit and visit length
-        (acquisition included; ``None`` = one visit); see :func:`time_budget`.
+    ``goal`` comes from :func:`parse_goal` (``sigma_K`` bounds σ_K of every star measured).
+    ``K1``, ``K2``: semi-amplitudes [km/s] (``K2=None``: single-lined); ``sigma_v_kms``,
+    ``sigma_v2_kms``: σ_v per exposure of star 1 and 2 [km/s] (star 2's defaults to star 1's);
+    ``lambda_k``: the smearing attenuation Λ_K of one exposure, in (0, 1]; ``anchors``: one
+    pattern (:func:`anchor_phases`), over which spectra are split in equal numbers; ``period_s``,
+    ``sin_i``, ``e``: P_b [s], sin ι and e, for absolute mass goals and (P_b) the time budget;
+    ``exptime_s``, ``readout_s``, ``acquisition_s``, ``visit_s``: the costs of
+    :func:`time_budget`.
 
-    Returns
-    -------
-    GoalPlan
-        N = m·c with c = ⌈(σ_goal(1 pattern)/goal)²⌉; ``expected`` is σ of the goal quantity with
-        N spectra (a fraction for a relative goal).
-
-    Raises
-    ------
-    InputError
-        Bad numbers, a goal needing K2 for an SB1 target, anchors that do not constrain K,
-        a goal needing more than MAX_SPECTRA spectra.
+    Returns N = m·c spectra, c = ⌈(σ_goal(1 pattern)/goal)²⌉ patterns of m, and ``expected``,
+    σ of the goal quantity with N spectra (a fraction for a relative goal). Raises
+    :class:`InputError` for bad numbers, a goal needing K2 of a single-lined target, anchors
+    that do not constrain K, or a goal needing more than ``MAX_SPECTRA`` spectra.
     """
-    k1 = _positive("K1", K1)
-    k2 = _positive("K2", K2) if K2 is not None else None
-    sv1 = _positive("--sigma-v", sigma_v_kms)
-    sv2 = _positive("--sigma-v (star 2)", sigma_v2_kms) if sigma_v2_kms is not None else sv1
-    lam = _positive("lambda_k", lambda_k, 1.0)
-    if lam < LAMBDA_K_MIN:
-        raise InputError(
-            f"lambda_k: {lam:.3g} is below {LAMBDA_K_MIN}: the exposure averages the orbit away "
-            "(shorten the exposures)"
-        )
+    k1, k2, sv1, sv2, lam = _goal_inputs(K1, K2, sigma_v_kms, sigma_v2_kms, lambda_k)
     if period_s is not None:
         _positive("P_b", period_s)
     if sin_i is not None:
@@ -387,21 +361,11 @@ def spectra_for_goal(
     unit = sigma_k_per_pattern([u for _, u in pattern], lam)  # σ_K per pattern for σ_v = 1
     s1, s2 = sv1 * unit, (sv2 * unit if k2 is not None else None)
     per_pattern = goal_sigma(goal, s1, s2, k1, k2, period_s, sin_i, e)
-    ratio = (per_pattern / goal.value) ** 2
-    if not math.isfinite(ratio) or ratio * len(pattern) > MAX_SPECTRA:
-        raise InputError(
-            f"--goal {goal.text}: would need more than {MAX_SPECTRA} spectra; relax the goal"
-        )
-    cycles = max(1, math.ceil(ratio * (1.0 - 1e-12)))
-    n = cycles * len(pattern)
-    counts: dict[str, int] = {}
-    for name, _ in pattern:
-        counts[name] = counts.get(name, 0) + cycles
-    root = math.sqrt(cycles)
+    cycles = _cycles_to_goal(goal, per_pattern, len(pattern))
     time = None
     if exptime_s is not None and period_s is not None:
         time = time_budget(
-            n,
+            cycles * len(pattern),
             period_s=period_s,
             exptime_s=exptime_s,
             readout_s=readout_s,
@@ -409,9 +373,26 @@ def spectra_for_goal(
             visit_s=visit_s,
             anchors_per_orbit=len(pattern),
         )
+    return _goal_plan(goal, [name for name, _ in pattern], cycles, per_pattern, s1, s2, time)
+
+
+def _goal_plan(
+    goal: Goal,
+    pattern: list[str],
+    cycles: int,
+    per_pattern: float,
+    s1: float,
+    s2: float | None,
+    time: TimeBudget | None,
+) -> GoalPlan:
+    """``cycles`` whole patterns of spectra, and the σ's they reach (σ per pattern / √cycles)."""
+    counts: dict[str, int] = {}
+    for name in pattern:
+        counts[name] = counts.get(name, 0) + cycles
+    root = math.sqrt(cycles)
     return GoalPlan(
         goal=goal,
-        n_spectra=n,
+        n_spectra=cycles * len(pattern),
         per_anchor=tuple(counts.items()),
         expected=per_pattern / root,
         sigma_K1_kms=s1 / root,
@@ -419,6 +400,33 @@ def spectra_for_goal(
         time=time,
         cycles=cycles,
     )
+
+
+def _goal_inputs(
+    K1: float, K2: float | None, sv: float, sv2: float | None, lambda_k: float
+) -> tuple[float, float | None, float, float, float]:
+    """K1, K2, σ_v of star 1 and star 2 [km/s] and Λ_K, checked (star 2's σ_v: star 1's)."""
+    k1 = _positive("K1", K1)
+    k2 = _positive("K2", K2) if K2 is not None else None
+    sv1 = _positive("--sigma-v", sv)
+    sv2_ = _positive("--sigma-v (star 2)", sv2) if sv2 is not None else sv1
+    lam = _positive("lambda_k", lambda_k, 1.0)
+    if lam < LAMBDA_K_MIN:
+        raise InputError(
+            f"lambda_k: {lam:.3g} is below {LAMBDA_K_MIN}: the exposure averages the orbit away "
+            "(shorten the exposures)"
+        )
+    return k1, k2, sv1, sv2_, lam
+
+
+def _cycles_to_goal(goal: Goal, per_pattern: float, pattern_len: int) -> int:
+    """Whole patterns c = ⌈(σ_goal(1 pattern)/goal)²⌉ that reach ``goal`` (at least one)."""
+    ratio = (per_pattern / goal.value) ** 2
+    if not math.isfinite(ratio) or ratio * pattern_len > MAX_SPECTRA:
+        raise InputError(
+            f"--goal {goal.text}: would need more than {MAX_SPECTRA} spectra; relax the goal"
+        )
+    return max(1, math.ceil(ratio * (1.0 - 1e-12)))
 
 
 def time_budget(
@@ -457,17 +465,7 @@ def time_budget(
     cost = t + readout_s
     spacing = pb / max(1, anchors_per_orbit)
     step = math.ceil(cost / spacing * (1.0 - 1e-12)) * spacing
-    if visit_s is None:
-        per_visit = max(1, n_spectra)
-    else:
-        usable = _positive("--visit", visit_s) - acquisition_s
-        if usable < cost:
-            raise InputError(
-                f"--visit: expected at least acquisition + one exposure + readout = "
-                f"{(acquisition_s + cost) / 60:.1f} min, got {visit_s / 60:.1f} min; "
-                "lengthen --visit or shorten the exposure"
-            )
-        per_visit = int((usable - cost) // step) + 1
+    per_visit = _spectra_per_visit(n_spectra, cost, step, acquisition_s, visit_s)
     n_visits = math.ceil(n_spectra / per_visit) if n_spectra else 0
     full, last = divmod(n_spectra, per_visit)
     gaps = full * (per_visit - 1) + (last - 1 if last else 0)
@@ -483,6 +481,22 @@ def time_budget(
         idle_h=idle / 3600.0,
         total_h=(shutter + overhead + idle) / 3600.0,
     )
+
+
+def _spectra_per_visit(
+    n_spectra: int, cost: float, step: float, acquisition_s: float, visit_s: float | None
+) -> int:
+    """Exposures one visit holds: the first after the acquisition, then one per ``step``."""
+    if visit_s is None:
+        return max(1, n_spectra)
+    usable = _positive("--visit", visit_s) - acquisition_s
+    if usable < cost:
+        raise InputError(
+            f"--visit: expected at least acquisition + one exposure + readout = "
+            f"{(acquisition_s + cost) / 60:.1f} min, got {visit_s / 60:.1f} min; "
+            "lengthen --visit or shorten the exposure"
+        )
+    return int((usable - cost) // step) + 1
 
 
 def shortfall(

@@ -165,6 +165,41 @@ def _instrument(name: Any, entry: Any, source: str) -> Instrument:
             f"{where}: unknown field {shorten(unknown[0], 40)}; known fields: "
             f"{', '.join(sorted(KNOWN_KEYS))}"
         )
+    telescope, sites = _telescope_sites(where, entry)
+    missing = _missing(where, entry)
+    nums: dict[str, float | None] = {}  # the values given first: a bad one is the news
+    for key in OPTIONAL_NUMBERS:
+        lo, hi = RANGES[key]
+        unit = "mag/airmass" if key == "extinction_k" else "s"
+        nums[key] = _number(where, key, entry[key], lo, hi, unit) if key in entry else None
+    ref = _sigma_ref(where, entry["sigma_ref"]) if "sigma_ref" in entry else None
+    _check_missable(where, entry, missing)
+    sources = entry.get("sources", {})
+    if not isinstance(sources, dict) or not all(isinstance(v, str) for v in sources.values()):
+        raise InputFileError(f"{where}: sources: expected a mapping field: text")
+    band, mode = entry.get("extinction_band"), entry.get("readout_mode")
+    step = entry.get("exptime_step_s")
+    if step is not None:
+        step = _number(where, "exptime_step_s", step, *EXPTIME_STEP_RANGE, "s")
+    return Instrument(
+        name=name,
+        telescope=telescope,
+        sites=sites,
+        acquisition_s=nums["acquisition_s"],
+        readout_s=nums["readout_s"],
+        min_exptime_s=nums["min_exptime_s"],
+        extinction_k=nums["extinction_k"],
+        sigma_ref=ref,
+        extinction_band=str(band) if band is not None else None,
+        readout_mode=str(mode) if mode is not None else None,
+        missing=missing,
+        sources=MappingProxyType({str(k): v for k, v in sources.items()}),
+        exptime_step_s=step,
+    )
+
+
+def _telescope_sites(where: str, entry: dict[str, Any]) -> tuple[str, tuple[str, ...]]:
+    """The entry's telescope name (stripped) and its site names."""
     telescope = entry.get("telescope")
     if not isinstance(telescope, str) or not telescope.strip():
         raise InputFileError(f"{where}: telescope: expected a name, got {shorten(telescope, 60)}")
@@ -174,6 +209,11 @@ def _instrument(name: Any, entry: Any, source: str) -> Instrument:
             f"{where}: sites: expected a list of site names such as [paranal], "
             f"got {shorten(sites, 60)}"
         )
+    return telescope.strip(), tuple(sites)
+
+
+def _missing(where: str, entry: dict[str, Any]) -> tuple[str, ...]:
+    """The fields the entry names under ``missing`` (each one of :data:`MISSABLE`)."""
     missing = entry.get("missing", [])
     if not isinstance(missing, list) or not all(isinstance(m, str) for m in missing):
         raise InputFileError(f"{where}: missing: expected a list of field names")
@@ -183,12 +223,11 @@ def _instrument(name: Any, entry: Any, source: str) -> Instrument:
             f"{where}: missing: expected names among {', '.join(sorted(MISSABLE))}, "
             f"got {shorten(bad[0], 40)}"
         )
-    nums: dict[str, float | None] = {}  # the values given first: a bad one is the news
-    for key in OPTIONAL_NUMBERS:
-        lo, hi = RANGES[key]
-        unit = "mag/airmass" if key == "extinction_k" else "s"
-        nums[key] = _number(where, key, entry[key], lo, hi, unit) if key in entry else None
-    ref = _sigma_ref(where, entry["sigma_ref"]) if "sigma_ref" in entry else None
+    return tuple(missing)
+
+
+def _check_missable(where: str, entry: dict[str, Any], missing: tuple[str, ...]) -> None:
+    """Each missable field is given or listed under ``missing``, never both, never neither."""
     for key in sorted(MISSABLE):
         if (key in entry) == (key in missing):
             state = "both given and" if key in entry else "neither given nor"
@@ -196,29 +235,6 @@ def _instrument(name: Any, entry: Any, source: str) -> Instrument:
                 f"{where}: {key}: {state} listed under missing; give it (with its source) "
                 "or name it under missing"
             )
-    sources = entry.get("sources", {})
-    if not isinstance(sources, dict) or not all(isinstance(v, str) for v in sources.values()):
-        raise InputFileError(f"{where}: sources: expected a mapping field: text")
-    band = entry.get("extinction_band")
-    mode = entry.get("readout_mode")
-    step = entry.get("exptime_step_s")
-    if step is not None:
-        step = _number(where, "exptime_step_s", step, *EXPTIME_STEP_RANGE, "s")
-    return Instrument(
-        name=name,
-        telescope=telescope.strip(),
-        sites=tuple(sites),
-        acquisition_s=nums["acquisition_s"],
-        readout_s=nums["readout_s"],
-        min_exptime_s=nums["min_exptime_s"],
-        extinction_k=nums["extinction_k"],
-        sigma_ref=ref,
-        extinction_band=str(band) if band is not None else None,
-        readout_mode=str(mode) if mode is not None else None,
-        missing=tuple(missing),
-        sources=MappingProxyType({str(k): v for k, v in sources.items()}),
-        exptime_step_s=step,
-    )
 
 
 def _parse(doc: Any, source: str) -> dict[str, Instrument]:

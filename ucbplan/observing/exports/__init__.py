@@ -3,9 +3,12 @@
 Each format is a function ``(table, options) -> ExportResult`` in its own module
 (:mod:`.eso_p2`, :mod:`.keck`, :mod:`.ics`, :mod:`.ing`, :mod:`.lco`, :mod:`.proposal`,
 :mod:`.gemini`, :mod:`.phase_table`), built
-on the shared helpers of :mod:`.base`, and registered here by name in :data:`EXPORTERS`;
+on the shared helpers, grouped by what they serve (:mod:`.options`: the options, result and
+signature; :mod:`.columns`: reading the blocks table, with documented defaults; :mod:`.text`:
+times, angles and names as text; :mod:`.provenance`: the plan's meta; :mod:`.windows`: the
+window on an observation's start), and registered here by name in :data:`EXPORTERS`;
 :func:`export_blocks` looks the name up and fails with the list of known names. Imports point one
-way: this registry → format modules → base. Formats are described in docs/exports.md.
+way: this registry → format modules → shared helpers. Formats are described in docs/exports.md.
 """
 
 from __future__ import annotations
@@ -16,21 +19,21 @@ from astropy.table import Table
 
 from ucbplan.errors import InputError, InputFileError, shorten
 from ucbplan.observing.blocktable import check_blocks
-from ucbplan.observing.exports.base import (
-    DEFAULT_ACQUISITION_S,
-    Exporter,
-    ExportOptions,
-    ExportResult,
-    meta,
-)
 from ucbplan.observing.exports.eso_p2 import export_eso_p2
 from ucbplan.observing.exports.gemini import export_gemini
 from ucbplan.observing.exports.ics import export_ics
 from ucbplan.observing.exports.ing import export_ing_cat
 from ucbplan.observing.exports.keck import export_keck_starlist
 from ucbplan.observing.exports.lco import export_lco
+from ucbplan.observing.exports.options import (
+    DEFAULT_ACQUISITION_S,
+    Exporter,
+    ExportOptions,
+    ExportResult,
+)
 from ucbplan.observing.exports.phase_table import export_phase_table
 from ucbplan.observing.exports.proposal import PROPOSAL_FORMATS, export_proposal
+from ucbplan.observing.exports.provenance import meta
 from ucbplan.observing.exports.sites import check_site
 
 __all__ = [

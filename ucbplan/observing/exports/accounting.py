@@ -29,15 +29,15 @@ from astropy.table import Table
 
 from ucbplan.errors import InputFileError, shorten
 from ucbplan.inputs import is_number
-from ucbplan.observing.exports.base import (
-    ExportOptions,
+from ucbplan.observing.exports.columns import (
     acquisition_s,
     floats,
-    meta,
     readout_total_s,
     required_times,
     strings,
 )
+from ucbplan.observing.exports.options import ExportOptions
+from ucbplan.observing.exports.provenance import meta
 
 __all__ = ["ACCOUNTING_KEYS", "TimeAccount", "accounting_from_blocks", "plan_accounting"]
 

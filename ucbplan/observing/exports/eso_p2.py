@@ -9,7 +9,7 @@ from __future__ import annotations
 import hashlib
 import math
 from dataclasses import dataclass
-from datetime import datetime, timedelta
+from datetime import datetime
 from typing import Any
 
 import numpy as np
@@ -17,42 +17,26 @@ from astropy.table import Table
 
 from ucbplan.errors import InputFileError, UcbplanError, shorten
 from ucbplan.io import dumps_json
-from ucbplan.observing.exports.base import (
-    ExportOptions,
-    ExportResult,
+from ucbplan.observing.exports.columns import (
     acquisition_s,
-    ascii_names,
     coordinates,
-    created_utc,
     floats,
-    iso_minute,
-    iso_ms,
-    meta,
-    ob_start_window,
     period_s,
     required_times,
-    sexagesimal,
-    site_name,
     strings,
     time_order,
-    version,
 )
 from ucbplan.observing.exports.eso_ob import eso_constraints, instrument_for, ob_body
 from ucbplan.observing.exports.eso_templates import EsoTemplates, load_eso_templates
+from ucbplan.observing.exports.options import ExportOptions, ExportResult
+from ucbplan.observing.exports.provenance import created_utc, meta, site_name, version
+from ucbplan.observing.exports.text import ascii_names, iso_minute, iso_ms, sexagesimal
+from ucbplan.observing.exports.windows import ceil_minute, floor_minute, ob_start_window
 
 __all__ = ["ESO_NAME_MAX", "export_eso_p2"]
 
 #: Longest OB name p2 accepts.
 ESO_NAME_MAX = 32
-
-
-def _floor_minute(t: datetime) -> datetime:
-    return t.replace(second=0, microsecond=0)
-
-
-def _ceil_minute(t: datetime) -> datetime:
-    base = _floor_minute(t)
-    return base if base == t else base + timedelta(minutes=1)
 
 
 @dataclass(frozen=True, slots=True)
@@ -122,7 +106,7 @@ def _block_ob(c: _Columns, i: int, options: ExportOptions, ob_names: dict[str, s
     """The OB of block ``i`` alone: window on its start, rounded outward to whole minutes."""
     mid, sigma = c.mids[i], float(c.sigma[i])
     w = ob_start_window(c.starts[i], float(c.acq[i]), sigma, options)
-    lo_min, hi_min = _floor_minute(w.lo), _ceil_minute(w.hi)
+    lo_min, hi_min = floor_minute(w.lo), ceil_minute(w.hi)
     widening = (w.lo - lo_min).total_seconds() + (hi_min - w.hi).total_seconds()
     doc = {
         "name": ob_names[c.blocks[i]],

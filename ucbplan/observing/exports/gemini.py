@@ -10,38 +10,26 @@ minutes for more than a few cycles.
 from __future__ import annotations
 
 import math
-from datetime import datetime, timedelta
+from datetime import datetime
 from typing import Any
 
 from astropy.table import Table
 
 from ucbplan.io import dumps_json
-from ucbplan.observing.exports.base import (
-    ExportOptions,
-    ExportResult,
+from ucbplan.observing.exports.columns import (
     acquisition_s,
-    created_utc,
     floats,
-    iso_ms,
-    ob_start_window,
     period_s,
     required_times,
-    site_name,
     strings,
     time_order,
-    version,
 )
+from ucbplan.observing.exports.options import ExportOptions, ExportResult
+from ucbplan.observing.exports.provenance import created_utc, site_name, version
+from ucbplan.observing.exports.text import iso_ms
+from ucbplan.observing.exports.windows import ceil_minute, floor_minute, ob_start_window
 
 __all__ = ["export_gemini", "gemini_windows"]
-
-
-def _floor_minute(t: datetime) -> datetime:
-    return t.replace(second=0, microsecond=0)
-
-
-def _ceil_minute(t: datetime) -> datetime:
-    base = _floor_minute(t)
-    return base if base == t else base + timedelta(minutes=1)
 
 
 def _window(lo: datetime, hi: datetime) -> dict[str, Any]:
@@ -65,7 +53,7 @@ def gemini_windows(table: Table, options: ExportOptions, notes: list[str]) -> li
     out = []
     for i in time_order(table):
         w = ob_start_window(starts[i], float(acq[i]), float(sigma[i]), options)
-        lo, hi = _floor_minute(w.lo), _ceil_minute(w.hi)
+        lo, hi = floor_minute(w.lo), ceil_minute(w.hi)
         widening = (hi - lo).total_seconds() - 2 * w.half_width_s
         if math.isfinite(period[i]) and widening > options.rounding_warn_fraction * period[i]:
             notes.append(

@@ -10,22 +10,17 @@ import numpy as np
 from astropy.table import Table
 
 from ucbplan.errors import InputFileError, shorten
-from ucbplan.observing.exports.base import (
-    ExportOptions,
-    ExportResult,
-    created_utc,
+from ucbplan.observing.exports.columns import (
     floats,
-    fmt_sigma,
-    iso_ms,
     parse_utc,
     required_times,
-    safe_name,
-    site_name,
     strings,
     time_order,
     times_utc,
-    version,
 )
+from ucbplan.observing.exports.options import ExportOptions, ExportResult
+from ucbplan.observing.exports.provenance import created_utc, site_name, version
+from ucbplan.observing.exports.text import fmt_sigma, iso_ms, safe_name
 
 __all__ = ["export_ics", "ics_escape", "ics_fold"]
 

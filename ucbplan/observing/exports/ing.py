@@ -4,19 +4,15 @@ from __future__ import annotations
 
 from astropy.table import Table
 
-from ucbplan.observing.exports.base import (
-    ExportOptions,
-    ExportResult,
-    ascii_names,
+from ucbplan.observing.exports.columns import (
     coordinates,
     floats,
-    fmt_sigma,
-    iso_ms,
     required_times,
-    sexagesimal,
     strings,
     time_order,
 )
+from ucbplan.observing.exports.options import ExportOptions, ExportResult
+from ucbplan.observing.exports.text import ascii_names, fmt_sigma, iso_ms, sexagesimal
 
 __all__ = ["export_ing_cat", "ing_catalogue"]
 
@@ -28,7 +24,7 @@ def ing_catalogue(table: Table, notes: list[str] | None = None) -> str:
     """ING (WHT/ISIS) catalogue: ``NAME hh mm ss.ss ±dd mm ss.s J2000 ! comment`` per target.
 
     Names are ≤ 20 ASCII characters without spaces, colons or tabs (transliterated with a note,
-    see :func:`~ucbplan.observing.exports.base.ascii_names`); the comment gives the first block's
+    see :func:`~ucbplan.observing.exports.text.ascii_names`); the comment gives the first block's
     UTC mid-time and σ. Save under a lower-case name ending ``.cat``.
 
     Raises

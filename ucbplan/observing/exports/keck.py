@@ -7,23 +7,17 @@ import math
 import numpy as np
 from astropy.table import Table
 
-from ucbplan.observing.exports.base import (
-    ExportOptions,
-    ExportResult,
-    ascii_names,
-    ascii_text,
+from ucbplan.observing.exports.columns import (
     coordinates,
     floats,
-    fmt_sigma,
-    iso_ms,
     required_times,
-    sexagesimal,
-    site_name,
     strings,
     time_order,
-    version,
     vmags,
 )
+from ucbplan.observing.exports.options import ExportOptions, ExportResult
+from ucbplan.observing.exports.provenance import site_name, version
+from ucbplan.observing.exports.text import ascii_names, ascii_text, fmt_sigma, iso_ms, sexagesimal
 
 __all__ = ["export_keck_starlist"]
 
@@ -77,7 +71,7 @@ def export_keck_starlist(table: Table, options: ExportOptions) -> ExportResult:
     ``vmag`` column exists, ``rotmode=``).
 
     Names are ASCII (transliterated with a note, see
-    :func:`~ucbplan.observing.exports.base.ascii_names`).
+    :func:`~ucbplan.observing.exports.text.ascii_names`).
 
     Raises
     ------

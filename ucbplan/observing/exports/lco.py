@@ -10,18 +10,16 @@ from astropy.table import Table
 
 from ucbplan.errors import InputFileError
 from ucbplan.io import dumps_json
-from ucbplan.observing.exports.base import (
-    ExportOptions,
-    ExportResult,
+from ucbplan.observing.exports.columns import (
     acquisition_s,
     coordinates,
     floats,
-    iso_ms,
-    ob_start_window,
     required_times,
-    safe_name,
     strings,
 )
+from ucbplan.observing.exports.options import ExportOptions, ExportResult
+from ucbplan.observing.exports.text import iso_ms, safe_name
+from ucbplan.observing.exports.windows import ob_start_window
 
 __all__ = ["export_lco", "lco_json", "lco_requests", "request_window"]
 

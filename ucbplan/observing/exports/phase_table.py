@@ -22,17 +22,9 @@ from astropy.table import Table
 from astropy.time import Time, TimeDelta
 
 from ucbplan.errors import InputFileError, shorten
-from ucbplan.observing.exports.base import (
-    ExportOptions,
-    ExportResult,
-    clean_meta,
-    created_utc,
-    floats,
-    meta,
-    site_name,
-    strings,
-    version,
-)
+from ucbplan.observing.exports.columns import floats, strings
+from ucbplan.observing.exports.options import ExportOptions, ExportResult
+from ucbplan.observing.exports.provenance import clean_meta, created_utc, meta, site_name, version
 from ucbplan.observing.timeconv import quiet_erfa
 
 __all__ = ["export_phase_table", "phase_table"]

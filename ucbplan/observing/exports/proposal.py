@@ -31,24 +31,19 @@ from astropy.table import MaskedColumn, Table
 
 from ucbplan.errors import InputFileError
 from ucbplan.observing.exports.accounting import TimeAccount, plan_accounting
-from ucbplan.observing.exports.base import (
-    ExportOptions,
-    ExportResult,
-    clean_meta,
+from ucbplan.observing.exports.columns import (
     coordinates,
-    created_utc,
     floats,
-    iso_ms,
-    meta,
     period_s,
     required_times,
-    sexagesimal,
     strings,
-    version,
     vmags,
 )
+from ucbplan.observing.exports.options import ExportOptions, ExportResult
 from ucbplan.observing.exports.proposal_latex import proposal_latex
+from ucbplan.observing.exports.provenance import clean_meta, created_utc, meta, version
 from ucbplan.observing.exports.sites import serves_site
+from ucbplan.observing.exports.text import iso_ms, sexagesimal
 from ucbplan.observing.semesters import semester_dates, semester_label
 
 __all__ = [

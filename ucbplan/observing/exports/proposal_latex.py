@@ -15,7 +15,7 @@ import math
 import numpy as np
 from astropy.table import Table
 
-from ucbplan.observing.exports.base import fmt_sigma
+from ucbplan.observing.exports.text import fmt_sigma
 
 __all__ = ["FONT_PT", "TEXTWIDTH_PT", "latex_width_pt", "proposal_latex"]
 

@@ -56,35 +56,20 @@ def plan_settings(
 ) -> PlanSettings:
     """:class:`PlanSettings` from the ``plan`` options (module notes).
 
-    Parameters
-    ----------
-    instrument, instruments_file : str, path, optional
-        ``--instrument NAME`` looked up in the bundled table (a user file searched first).
-    exptime_s, n_exp, readout_s, overhead_s : optional
-        Exposure time, exposures per block, readout and acquisition [s]; None takes the
-        instrument's or the default.
-    visit, max_visit : str or float, optional
-        ``--visit`` duration (``1h``, ``45min``, ``3600s`` or seconds); ``--max-visit``, the
-        longest visit a goal plans (default 2 h).
-    sigma_v_kms : str or float, optional
-        ``--sigma-v``: a number (km/s, fixed per exposure) or a law that follows the exposure
-        time, ``30km/s@600s[,V=20.0]`` (:func:`~ucbplan.observing.sigma_model.parse_sigma_v`);
-        required with an instrument that has no σ reference.
-    sigma_floor_kms : float
-        ``--sigma-floor``: systematic floor added in quadrature [km/s].
-    extinction_k : float, optional
-        ``--extinction`` [mag/airmass] of the σ_v law; default the instrument's, else 0.
-    budgets : sequence of str
-        ``--budget NAME=DURATION`` items: wall time per target over all nights.
-    **options
-        Every other :class:`PlanSettings` field by name.
+    ``instrument`` (``--instrument NAME``) is looked up in the bundled table, a user's
+    ``instruments_file`` first. ``exptime_s``, ``n_exp``, ``readout_s``, ``overhead_s``: exposure
+    time, exposures per block, readout and acquisition [s] (None: the instrument's, else the
+    default). ``visit``, ``max_visit``: ``--visit`` and ``--max-visit`` durations (``1h``,
+    ``45min``, ``3600s`` or seconds; a goal's longest visit defaults to 2 h). ``sigma_v_kms``:
+    a number (km/s per exposure) or a law ``30km/s@600s[,V=20.0]``
+    (:func:`~ucbplan.observing.sigma_model.parse_sigma_v`), required with an instrument without
+    a σ reference; ``sigma_floor_kms``: a floor in quadrature [km/s]; ``extinction_k``
+    [mag/airmass]: the instrument's, else 0. ``budgets``: ``NAME=DURATION`` wall time per target.
+    Every other :class:`PlanSettings` field comes by name in ``options``.
 
-    Raises
-    ------
-    InputError
-        Unknown instrument, an instrument without σ_ref and no ``--sigma-v``, an overhead the
-        instrument does not confirm and the user did not give, an exposure below the
-        instrument's minimum, a malformed duration: one line each.
+    Raises :class:`InputError` (one line each) for an unknown instrument, an instrument without
+    σ_ref and no ``--sigma-v``, an overhead the instrument does not confirm and the user did not
+    give, an exposure below the instrument's minimum, or a malformed duration.
     """
     inst = instrument_or_none(instrument, instruments_file)
     fixed, model = _sigma_v(sigma_v_kms, sigma_floor_kms, extinction_k, inst)
@@ -93,12 +78,7 @@ def plan_settings(
             f"--instrument {inst.name}: the instrument table has no confirmed RV-precision "
             "reference (sigma_ref); pass --sigma-v KM_S (sigma_v per exposure)"
         )
-    if inst is not None:
-        over = instrument_overheads(inst, acquisition_s=overhead_s, readout_s=readout_s)
-        acq, readout = over.acquisition_s, over.readout_s
-    else:
-        acq = DEFAULT_OVERHEAD_S if overhead_s is None else overhead_s
-        readout = DEFAULT_READOUT_S if readout_s is None else readout_s
+    acq, readout = _overheads(inst, overhead_s, readout_s)
     exptime = DEFAULT_EXPTIME_S if exptime_s is None else exptime_s
     if inst is not None:
         check_exptime(inst, exptime)
@@ -114,6 +94,17 @@ def plan_settings(
         budgets=parse_budgets(list(budgets)),
         **options,
     )
+
+
+def _overheads(
+    inst: Instrument | None, overhead_s: float | None, readout_s: float | None
+) -> tuple[float, float]:
+    """Acquisition and readout [s]: the given ones, else the instrument's, else the defaults."""
+    if inst is not None:
+        over = instrument_overheads(inst, acquisition_s=overhead_s, readout_s=readout_s)
+        return over.acquisition_s, over.readout_s
+    acq = DEFAULT_OVERHEAD_S if overhead_s is None else overhead_s
+    return acq, DEFAULT_READOUT_S if readout_s is None else readout_s
 
 
 def _sigma_v(
