@@ -19,7 +19,7 @@ with our accept/reject decision (the candidates' ``ok``).
   Decisions must be identical except for blocks where a decisive quantity lies within the
   accuracy of our sky model of its limit (:data:`SKY_TOL_ARCSEC`, stated in
   :mod:`ucbplan.observing.sky`), judged with astropy's values at the block's start, middle and
-  end (the samples of a 60 s block in :func:`ucbplan.observing.constraints.evaluate_window`).
+  end (the samples of a 60 s block in :func:`ucbplan.observing.constraint_checks.evaluate_window`).
 """
 
 from __future__ import annotations

@@ -18,6 +18,7 @@ from astropy import units as u
 from astropy.coordinates import SkyCoord
 from astropy.time import Time
 
+from ucbplan.observing.constraint_checks import evaluate_window, evaluate_window_exact
 from ucbplan.observing.constraints import (
     ALT_RATE_DEG_S,
     MOON_ALT_RATE_DEG_S,
@@ -30,8 +31,6 @@ from ucbplan.observing.constraints import (
     MoonSeparationConstraint,
     NightConstraint,
     ZenithHoleConstraint,
-    evaluate_window,
-    evaluate_window_exact,
 )
 from ucbplan.observing.sites import get_site
 from ucbplan.observing.sky import SkyModel

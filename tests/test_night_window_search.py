@@ -18,7 +18,8 @@ from astropy.time import Time
 
 from ucbplan.core.ephemeris import find_epochs
 from ucbplan.observing.blocks import ExposurePlan
-from ucbplan.observing.constraints import ALT_RATE_DEG_S, DARK_STEP_S, NightConstraint
+from ucbplan.observing.constraint_checks import DARK_STEP_S
+from ucbplan.observing.constraints import ALT_RATE_DEG_S, NightConstraint
 from ucbplan.observing.schedule import PlanSettings, candidates, plan_nights
 from ucbplan.observing.sites import get_site, site_from_lonlat
 from ucbplan.observing.sky import SkyModel

@@ -9,6 +9,7 @@ from astropy.coordinates import AltAz, SkyCoord, get_body, get_sun
 from astropy.time import Time, TimeDelta
 
 from ucbplan.errors import UcbplanError
+from ucbplan.observing.constraint_checks import evaluate_window
 from ucbplan.observing.constraints import (
     CONSTRAINTS,
     AirmassConstraint,
@@ -16,7 +17,6 @@ from ucbplan.observing.constraints import (
     MoonSeparationConstraint,
     NightConstraint,
     ZenithHoleConstraint,
-    evaluate_window,
     make_constraint,
 )
 from ucbplan.observing.sites import get_site

@@ -16,9 +16,10 @@ from hypothesis import strategies as st
 
 from ucbplan.cli._flags import FLAGS, cli_message
 from ucbplan.errors import InputError, UcbplanError
-from ucbplan.observing import constraints as constraints_module
+from ucbplan.observing import constraint_checks as constraints_module
 from ucbplan.observing.blocks import Block, ExposurePlan
-from ucbplan.observing.constraints import ConstraintSet, evaluate_window
+from ucbplan.observing.constraint_checks import evaluate_window
+from ucbplan.observing.constraints import ConstraintSet
 from ucbplan.observing.schedule import PlanSettings, night_dates, plan_nights
 from ucbplan.observing.schedule.run import parse_priorities
 from ucbplan.observing.sites import get_site, site_from_lonlat

@@ -4,8 +4,8 @@ Promised: epochs and UTC times within 1 µs, altitudes within 0.1″, accepted s
 from 1 s of a constraint edge. Three shortcuts are pinned here, each against the exact chain:
 the site's barycentric track between Earth-orientation nodes (:data:`ORIENTATION_STEP_S`), the
 TDB − TT spline of :meth:`TimeAxis.utc`, and the daylight shortcut of
-:func:`~ucbplan.observing.constraints.evaluate_window` (exact: never skips a block that touches
-the night). End to end, a plan is compared with the same plan through the exact conversions.
+:func:`~ucbplan.observing.constraint_checks.evaluate_window` (exact: never skips a block that
+touches the night). End to end, a plan is compared with the same plan through the exact conversions.
 """
 
 from __future__ import annotations
@@ -20,7 +20,8 @@ from astropy.time import Time, TimeDelta
 
 from ucbplan.observing import timeaxis, timeconv
 from ucbplan.observing.blocks import ExposurePlan
-from ucbplan.observing.constraints import DARK_STEP_S, NightConstraint, _maybe_dark
+from ucbplan.observing.constraint_checks import DARK_STEP_S, _maybe_dark
+from ucbplan.observing.constraints import NightConstraint
 from ucbplan.observing.schedule import PlanSettings, plan_nights
 from ucbplan.observing.sites import get_site
 from ucbplan.observing.sky import SkyModel

@@ -143,24 +143,12 @@ if TYPE_CHECKING:  # the same names for type checkers and IDEs ("as": re-exporte
     from ucbplan.errors import (
         UcbplanWarning as UcbplanWarning,
     )
-    from ucbplan.observing.constraints import (
-        AirmassConstraint as AirmassConstraint,
-    )
-    from ucbplan.observing.constraints import (
-        AltitudeConstraint as AltitudeConstraint,
-    )
-    from ucbplan.observing.constraints import (
-        AtNightConstraint as AtNightConstraint,
-    )
-    from ucbplan.observing.constraints import (
-        Constraint as Constraint,
-    )
+    from ucbplan.observing.constraints import AirmassConstraint as AirmassConstraint
+    from ucbplan.observing.constraints import AltitudeConstraint as AltitudeConstraint
+    from ucbplan.observing.constraints import AtNightConstraint as AtNightConstraint
+    from ucbplan.observing.constraints import Constraint as Constraint
     from ucbplan.observing.constraints import (
         MoonIlluminationConstraint as MoonIlluminationConstraint,
     )
-    from ucbplan.observing.constraints import (
-        MoonSeparationConstraint as MoonSeparationConstraint,
-    )
-    from ucbplan.observing.constraints import (
-        ZenithHoleConstraint as ZenithHoleConstraint,
-    )
+    from ucbplan.observing.constraints import MoonSeparationConstraint as MoonSeparationConstraint
+    from ucbplan.observing.constraints import ZenithHoleConstraint as ZenithHoleConstraint

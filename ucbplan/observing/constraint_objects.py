@@ -28,14 +28,13 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numpy as np
 
 from ucbplan.errors import InputError, shorten
+from ucbplan.observing.constraint_checks import BoolArray, FloatArray
 from ucbplan.observing.constraints import (
     TWILIGHT_SUN_ALT_DEG,
     AirmassConstraint,
     AltitudeConstraint,
-    BoolArray,
     Constraint,
     ConstraintSet,
-    FloatArray,
     MoonIlluminationConstraint,
     MoonSeparationConstraint,
     NightConstraint,

@@ -28,12 +28,8 @@ from ucbplan.core.forecast import tolerance, valid_window_s
 from ucbplan.core.smearing import parse_smear_budget
 from ucbplan.errors import UcbplanError
 from ucbplan.observing.blocks import ExposurePlan, Smearing, block_smearing, check_smear_budget
-from ucbplan.observing.constraints import (
-    DARK_STEP_S,
-    ConstraintSet,
-    NightConstraint,
-    evaluate_window,
-)
+from ucbplan.observing.constraint_checks import DARK_STEP_S, evaluate_window
+from ucbplan.observing.constraints import ConstraintSet, NightConstraint
 from ucbplan.observing.instruments import MAX_AIRMASS
 from ucbplan.observing.schedule.exposure import TargetExposure, exposure_sigma_v, target_exposure
 from ucbplan.observing.schedule.nights import NightWindow
@@ -182,7 +178,7 @@ def night_search_x(
     """Intervals (m, 2) [s on the plan's axis] that hold every instant of ``span_x`` at which
     the Sun may be below the ``night`` limit.
 
-    The Sun's altitude is screened on nodes :data:`~ucbplan.observing.constraints.DARK_STEP_S`
+    The Sun's altitude is screened on nodes :data:`~ucbplan.observing.constraint_checks.DARK_STEP_S`
     apart with the rate bound of the constraints (a node certainly in daylight is in daylight
     for one node spacing either side); each run of the other nodes, widened by one spacing,
     is an interval. An instant at night has its nearest node (≤ half a spacing away) in a run.

@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 
 from ucbplan.core.constants import TWO_PI
 from ucbplan.observing.blockcolumns import BlockColumns, BlockList
-from ucbplan.observing.constraints import SAMPLE_STEP_S
+from ucbplan.observing.constraint_checks import SAMPLE_STEP_S
 from ucbplan.observing.instruments import MAX_AIRMASS
 from ucbplan.observing.schedule.candidates import PlanFrame, TargetRun
 from ucbplan.observing.schedule.exposure import exposure_sigma_v
