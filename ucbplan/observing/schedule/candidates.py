@@ -230,7 +230,7 @@ def candidate_blocks(
     With ``search_x`` (the nights, :func:`night_search_x`), epochs are searched only there,
     widened by a block and two orbits: every block that may touch the night, and the second
     block of its session, is found with the values the whole span gives it (≤ 2 ulp of its
-    epoch); daytime epochs, which fail the night, are never solved (issue 23).
+    epoch); daytime epochs, which fail the night, are never solved.
 
     Notes
     -----
@@ -239,12 +239,7 @@ def candidate_blocks(
     """
     epochs = axis.epoch_axis(target.t_ref)
     lo, hi = span_x
-    tau_lo, tau_hi = epochs.from_x(lo) - _EPOCH_PAD_S, epochs.from_x(hi) + _EPOCH_PAD_S
-    windows = None if search_x is None else _epoch_windows(target, epochs, search_x, plan)
-    if grid_step_s is not None:
-        es = grid_epochs(target, tau_lo, tau_hi, grid_step_s, star, windows)
-    else:
-        es = _find_epochs(target, tau_lo, tau_hi, mode.anchor, star, windows)
+    es = _span_epochs(target, epochs, span_x, mode, plan, star, grid_step_s, search_x)
     x_mid = interp.site_x(epochs.to_x(es.origin_s, es.dt_s))
     keep = (x_mid >= lo) & (x_mid < hi)
     half = plan.span_s / 2.0
@@ -271,6 +266,26 @@ def candidate_blocks(
         first_failed=first,
         airmass_mid=_airmass_where(ok, sky, i, x_mid),
     )
+
+
+def _span_epochs(
+    target: Target,
+    epochs: EpochAxis,
+    span_x: tuple[float, float],
+    mode: ModeSpec,
+    plan: ExposurePlan,
+    star: int,
+    grid_step_s: float | None,
+    search_x: FloatArray | None,
+) -> EpochSet:
+    """The anchor (or grid) epochs of ``span_x`` padded by :data:`_EPOCH_PAD_S`, searched only
+    inside ``search_x`` when given."""
+    tau_lo = epochs.from_x(span_x[0]) - _EPOCH_PAD_S
+    tau_hi = epochs.from_x(span_x[1]) + _EPOCH_PAD_S
+    windows = None if search_x is None else _epoch_windows(target, epochs, search_x, plan)
+    if grid_step_s is not None:
+        return grid_epochs(target, tau_lo, tau_hi, grid_step_s, star, windows)
+    return _find_epochs(target, tau_lo, tau_hi, mode.anchor, star, windows)
 
 
 def _airmass_where(ok: NDArray[np.bool_], sky: SkyModel, i: int, x: FloatArray) -> FloatArray:
