@@ -14,13 +14,13 @@ __all__ = ["as_date", "as_float", "as_tdb", "scope"]
 
 @contextmanager
 def scope() -> Iterator[None]:
-    """Where every public function works: the offline astropy scope, with ERFA's "dubious year"
-    and astropy's IERS-range warnings for future dates silenced (ucbplan says the same once, in
-    words a user can act on: :class:`ucbplan.EarthOrientationWarning`)."""
-    from ucbplan.observing.timeconv import quiet_erfa
+    """Where every public function works: the offline astropy scope (:func:`~ucbplan.offline`),
+    which also silences ERFA's "dubious year" and astropy's IERS-range warnings for future
+    dates (ucbplan says the same once, in words a user can act on:
+    :class:`ucbplan.EarthOrientationWarning`)."""
     from ucbplan.offline import offline
 
-    with offline(), quiet_erfa():
+    with offline():
         yield
 
 
@@ -59,12 +59,11 @@ def as_tdb(value: Any, parameter: str) -> Any:
     from astropy.time import Time
 
     from ucbplan.core.timescale import parse_tdb
-    from ucbplan.observing.timeconv import quiet_erfa
 
     if isinstance(value, Time):
         if not value.isscalar:
             raise InputError(f"{parameter}: expected one epoch, got {value.size}", parameter)
-        with quiet_erfa():
+        with scope():
             return value.tdb
     return parse_tdb(value, parameter)
 
@@ -77,8 +76,6 @@ def as_date(value: Any, parameter: str) -> Any:
     if isinstance(value, Time):
         if not value.isscalar:
             raise InputError(f"{parameter}: expected one date, got {value.size}", parameter)
-        from ucbplan.observing.timeconv import quiet_erfa
-
-        with quiet_erfa():
+        with scope():
             return date.fromisoformat(value.isot[:10])
     return value

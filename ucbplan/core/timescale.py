@@ -9,10 +9,8 @@ from __future__ import annotations
 
 import datetime as _dt
 import math
-import warnings
 
 from astropy.time import Time
-from erfa import ErfaWarning
 
 from ucbplan.errors import EpochRangeError, InputError, shorten
 
@@ -81,23 +79,21 @@ def epoch_in_scale(text: str, scale: str, isot_if_t: bool = False) -> Time:
     if not raw or len(raw) > MAX_EPOCH_CHARS:
         raise ValueError("not an epoch")
     upper = raw.upper()
-    with warnings.catch_warnings():
-        # future UTC: leap seconds after the bundled table are unknown (TDB − UTC kept at the
-        # last value); the user stated the scale, so convert with that caveat
-        warnings.simplefilter("ignore", ErfaWarning)
-        try:
-            if upper.startswith(("MJD", "JD")):
-                fmt = "mjd" if upper.startswith("MJD") else "jd"
-                number = float(raw[len(fmt) :])
-                if not math.isfinite(number):
-                    raise ValueError("not finite")
-                t = Time(number, format=fmt, scale=scale)
-            else:
-                t = Time(raw, scale=scale, format="isot" if isot_if_t and "T" in raw else None)
-            year = _year(t)
-            tdb = t.tdb if YEAR_RANGE[0] <= year <= YEAR_RANGE[1] else None
-        except (ValueError, TypeError, OverflowError, KeyError, IndexError, UnicodeError):
-            raise ValueError("not an epoch") from None
+    # future UTC: leap seconds after the bundled table are unknown (TDB − UTC kept at the
+    # last value); the user stated the scale, so convert with that caveat
+    try:
+        if upper.startswith(("MJD", "JD")):
+            fmt = "mjd" if upper.startswith("MJD") else "jd"
+            number = float(raw[len(fmt) :])
+            if not math.isfinite(number):
+                raise ValueError("not finite")
+            t = Time(number, format=fmt, scale=scale)
+        else:
+            t = Time(raw, scale=scale, format="isot" if isot_if_t and "T" in raw else None)
+        year = _year(t)
+        tdb = t.tdb if YEAR_RANGE[0] <= year <= YEAR_RANGE[1] else None
+    except (ValueError, TypeError, OverflowError, KeyError, IndexError, UnicodeError):
+        raise ValueError("not an epoch") from None
     if tdb is None:
         raise EpochRangeError(
             f"lies in the year {year:.6g}; expected an epoch in the years "
@@ -257,9 +253,7 @@ def _word_epoch(fmt: str, number: str, raw: str, expect: str) -> Time:
     parts = _split_decimal(number)
     if parts is None:
         raise ValueError(f"{expect}, got {shorten(raw)} (write the number as plain decimals)")
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", ErfaWarning)
-        t = Time(parts[0], parts[1], format=fmt, scale="tdb")
+    t = Time(parts[0], parts[1], format=fmt, scale="tdb")
     _check_year(t, raw)
     return t
 
@@ -280,9 +274,7 @@ def _iso_epoch(raw: str, body: str, label: str | None, expect: str) -> Time:
             f"{_HOW_TO_CONVERT}"
         )
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", ErfaWarning)
-            t = Time(body, scale="tdb", format="isot" if "T" in body else "iso")
+        t = Time(body, scale="tdb", format="isot" if "T" in body else "iso")
     except (ValueError, TypeError, OverflowError, KeyError, IndexError, UnicodeError):
         raise ValueError(f"{expect}, got {shorten(raw)}") from None
     _check_year(t, raw)

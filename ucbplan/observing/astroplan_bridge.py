@@ -19,7 +19,6 @@ from astropy.coordinates import SkyCoord
 from astropy.time import Time
 
 from ucbplan.errors import InputError, shorten
-from ucbplan.observing.timeconv import quiet_erfa
 
 if TYPE_CHECKING:
     from astropy.table import Table
@@ -94,9 +93,8 @@ def to_astroplan(table: Table, site: Site) -> Any:
             f"to_astroplan: expected a blocks table with columns {', '.join(REQUIRED)}, "
             f"missing {shorten(', '.join(missing), 80)} (write one with ucbplan plan -o plan.ecsv)"
         )
-    with quiet_erfa():
-        start = Time(np.asarray(table["t_start_utc"]).astype(str), scale="utc")
-        end = Time(np.asarray(table["t_end_utc"]).astype(str), scale="utc")
+    start = Time(np.asarray(table["t_start_utc"]).astype(str), scale="utc")
+    end = Time(np.asarray(table["t_end_utc"]).astype(str), scale="utc")
     id_col = next((c for c in ("visit_id", "block_id") if c in table.colnames), None)
     ids = [str(v) for v in table[id_col]] if id_col else [str(i) for i in range(len(table))]
     units = _spans(table, start, end, ids)

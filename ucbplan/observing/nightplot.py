@@ -33,7 +33,6 @@ from ucbplan.observing.schedule.nights import NightWindow, night_windows
 from ucbplan.observing.sites import Site
 from ucbplan.observing.sky import SkyModel
 from ucbplan.observing.timeaxis import TimeAxis
-from ucbplan.observing.timeconv import quiet_erfa
 from ucbplan.plotting import FIGURE_FORMATS, figure_format, pyplot
 
 if TYPE_CHECKING:
@@ -125,8 +124,7 @@ def _night_of(row: Any, site: Site) -> str:
     night = _text(row, "night")
     if night:
         return night
-    with quiet_erfa():
-        start = Time(str(row["t_start_utc"]), scale="utc").to_datetime(timezone=site.zone)
+    start = Time(str(row["t_start_utc"]), scale="utc").to_datetime(timezone=site.zone)
     return (start - timedelta(hours=12)).date().isoformat()
 
 
@@ -187,9 +185,8 @@ def _seconds(axis: TimeAxis, iso: Sequence[str]) -> FloatArray:
     """Axis coordinates [s] of ISO UTC strings."""
     if len(iso) == 0:
         return np.zeros(0)
-    with quiet_erfa():
-        t = Time(list(iso), scale="utc", location=axis.location)
-        return np.asarray((t.tdb - axis.origin).to_value(u.s), dtype=np.float64)
+    t = Time(list(iso), scale="utc", location=axis.location)
+    return np.asarray((t.tdb - axis.origin).to_value(u.s), dtype=np.float64)
 
 
 def _span(sky: SkyModel, visits: Sequence[Visit], axis: TimeAxis) -> tuple[float, float]:
@@ -250,8 +247,7 @@ def _draw_visits(ax: Any, axis: TimeAxis, chart: NightChart, colours: Any) -> No
 
 def _utc_ticks(ax: Any, axis: TimeAxis, span: tuple[float, float]) -> None:
     """Ticks on whole UTC hours (every 1 h up to 12 h of span, else 2 h), labelled hh:mm."""
-    with quiet_erfa():
-        utc0 = axis.utc(0.0).datetime
+    utc0 = axis.utc(0.0).datetime
     past = utc0.minute * 60 + utc0.second + utc0.microsecond / 1e6
     step = 1 if span[1] - span[0] <= 12 * 3600 else 2
     first = 3600.0 - past
@@ -281,8 +277,7 @@ def hhmm(iso: str) -> str:
 def _label(ax: Any, axis: TimeAxis, chart: NightChart, site_name: str, sky: SkyModel) -> None:
     """Axis labels and a title with the UTC date, sunset/sunrise and the Moon's illumination."""
     night = chart.window.label
-    with quiet_erfa():
-        start = axis.utc(ax.get_xlim()[0] * 3600.0).iso[:16]
+    start = axis.utc(ax.get_xlim()[0] * 3600.0).iso[:16]
     x = np.linspace(0.0, 86400.0, 1441)
     illum = float(sky.moon_illum(np.array([43200.0]))[0])
     sun = sky.sun_alt_deg(x)

@@ -45,7 +45,6 @@ from ucbplan.observing.sheet_html import (
 from ucbplan.observing.sites import Site
 from ucbplan.observing.sky import SkyModel
 from ucbplan.observing.timeaxis import TimeAxis
-from ucbplan.observing.timeconv import quiet_erfa
 from ucbplan.plotting import pyplot
 
 __all__ = [
@@ -158,8 +157,7 @@ def night_events(chart: NightChart, site: Site) -> tuple[list[tuple[str, str]], 
     found += [(xc, "moonset" if down else "moonrise") for xc, down in moon if lo <= xc <= hi]
     found.sort()
     times = axis.utc([xc for xc, _ in found]) if found else []
-    with quiet_erfa():
-        events = [(name, t.isot) for (_, name), t in zip(found, times, strict=True)]
+    events = [(name, t.isot) for (_, name), t in zip(found, times, strict=True)]
     return events, float(sky.moon_illum(np.array([43200.0]))[0])
 
 

@@ -27,7 +27,7 @@ from numpy.typing import NDArray
 from scipy.interpolate import CubicSpline
 
 from ucbplan.observing.timeaxis import TimeAxis
-from ucbplan.observing.timeconv import astropy_rotations, quiet_erfa
+from ucbplan.observing.timeconv import astropy_rotations
 
 __all__ = ["SLOW_STEP_S", "SkyModel", "airmass_from_alt", "sun_cirs_frames"]
 
@@ -112,18 +112,17 @@ class SkyModel:
         x = np.linspace(lo, hi, n)
         coords = coords.reshape(-1) if not coords.isscalar else coords.reshape(1)
         origin = Time(origin, scale="tdb", location=location)
-        with quiet_erfa():
-            import erfa
+        import erfa
 
-            t = TimeAxis(origin).tdb(x)
-            ut1 = t.ut1
-            era = np.unwrap(erfa.era00(ut1.jd1, ut1.jd2))
-            frame = CIRS(obstime=t)
-            sun = _sun_cirs_m(t)
-            # the Moon seen from the site (t has its location), then geocentric CIRS
-            moon = get_body("moon", t).transform_to(frame).cartesian.xyz.to_value(u.m).T
-            tgt = coords[:, None].transform_to(CIRS(obstime=t[None, :]))
-            tvec = tgt.cartesian.xyz.value  # (3, n_targets, n_nodes), unit vectors
+        t = TimeAxis(origin).tdb(x)
+        ut1 = t.ut1
+        era = np.unwrap(erfa.era00(ut1.jd1, ut1.jd2))
+        frame = CIRS(obstime=t)
+        sun = _sun_cirs_m(t)
+        # the Moon seen from the site (t has its location), then geocentric CIRS
+        moon = get_body("moon", t).transform_to(frame).cartesian.xyz.to_value(u.m).T
+        tgt = coords[:, None].transform_to(CIRS(obstime=t[None, :]))
+        tvec = tgt.cartesian.xyz.value  # (3, n_targets, n_nodes), unit vectors
         tvec = np.moveaxis(tvec, 0, -1)  # (n_targets, n_nodes, 3)
         geo = location.geodetic
         lon, lat = float(geo.lon.to_value(u.rad)), float(geo.lat.to_value(u.rad))

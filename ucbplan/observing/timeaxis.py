@@ -20,8 +20,6 @@ from astropy.time import Time, TimeDelta
 from numpy.typing import ArrayLike, NDArray
 from scipy.interpolate import CubicSpline
 
-from ucbplan.observing.timeconv import quiet_erfa
-
 __all__ = ["TDB_TT_STEP_S", "EpochAxis", "TimeAxis", "elapsed"]
 
 FloatArray = NDArray[np.float64]
@@ -42,8 +40,7 @@ def _n_nodes(lo: float, hi: float) -> int:
 
 def elapsed(start: Time, end: Time, unit: u.UnitBase = u.s) -> float:
     """Time from ``start`` to ``end`` in ``unit`` (negative if ``end`` is earlier)."""
-    with quiet_erfa():
-        return float((end - start).to_value(unit))
+    return float((end - start).to_value(unit))
 
 
 @dataclass(frozen=True)
@@ -62,9 +59,8 @@ class TimeAxis:
     @classmethod
     def starting_at(cls, start: Time, location: EarthLocation) -> TimeAxis:
         """The axis whose origin is the instant ``start`` (any scale), as TDB at ``location``."""
-        with quiet_erfa():
-            at_site = Time(start, location=location)
-            return cls(Time(at_site.tdb, location=location))
+        at_site = Time(start, location=location)
+        return cls(Time(at_site.tdb, location=location))
 
     @property
     def location(self) -> EarthLocation:
@@ -83,8 +79,7 @@ class TimeAxis:
 
     def tdb(self, x: ArrayLike) -> Time:
         """``Time`` (TDB, with location) of axis coordinates ``x`` [s]."""
-        with quiet_erfa():
-            return self.origin + TimeDelta(np.asarray(x, dtype=np.float64) * u.s)
+        return self.origin + TimeDelta(np.asarray(x, dtype=np.float64) * u.s)
 
     def utc(self, x: ArrayLike) -> Time:
         """``Time`` (UTC, with location) of axis coordinates ``x`` [s].
@@ -93,22 +88,21 @@ class TimeAxis:
         evaluated every :data:`TDB_TT_STEP_S` and splined (module notes); a few times, exactly.
         """
         x = np.asarray(x, dtype=np.float64)
-        with quiet_erfa():
-            tdb = self.tdb(x)
-            if x.size < TDB_TT_MIN:
-                return tdb.utc
-            flat = x.ravel()
-            lo, hi = float(np.min(flat)), float(np.max(flat))
-            nodes = np.linspace(lo - TDB_TT_STEP_S, hi + TDB_TT_STEP_S, _n_nodes(lo, hi))
-            if 4 * nodes.size > flat.size:
-                return tdb.utc
-            exact = self.tdb(nodes)
-            tt = exact.tt
-            lag_d = (exact.jd1 - tt.jd1) + (exact.jd2 - tt.jd2)  # TDB − TT [d], < 2 ms
-            lag = CubicSpline(nodes, lag_d)(flat).reshape(x.shape)
-            out = Time(tdb.jd1, tdb.jd2 - lag, format="jd", scale="tt", location=self.location)
-            out.format = tdb.format
-            return out.utc
+        tdb = self.tdb(x)
+        if x.size < TDB_TT_MIN:
+            return tdb.utc
+        flat = x.ravel()
+        lo, hi = float(np.min(flat)), float(np.max(flat))
+        nodes = np.linspace(lo - TDB_TT_STEP_S, hi + TDB_TT_STEP_S, _n_nodes(lo, hi))
+        if 4 * nodes.size > flat.size:
+            return tdb.utc
+        exact = self.tdb(nodes)
+        tt = exact.tt
+        lag_d = (exact.jd1 - tt.jd1) + (exact.jd2 - tt.jd2)  # TDB − TT [d], < 2 ms
+        lag = CubicSpline(nodes, lag_d)(flat).reshape(x.shape)
+        out = Time(tdb.jd1, tdb.jd2 - lag, format="jd", scale="tt", location=self.location)
+        out.format = tdb.format
+        return out.utc
 
     def epoch_axis(self, epoch: Time) -> EpochAxis:
         """The axis of seconds after ``epoch`` (e.g. a target's ``t_ref``), tied to this one."""
@@ -151,5 +145,4 @@ class EpochAxis:
     def time(self, whole_s: float, dt_s: ArrayLike) -> Time:
         """``Time`` (TDB) of epochs ``whole_s + dt_s`` [s after ``epoch``]."""
         dt = np.asarray(dt_s, dtype=np.float64)
-        with quiet_erfa():
-            return self.epoch + TimeDelta(whole_s * u.s) + TimeDelta(dt * u.s)
+        return self.epoch + TimeDelta(whole_s * u.s) + TimeDelta(dt * u.s)

@@ -33,7 +33,6 @@ __all__ = [
     "bary_tdb_to_site_utc",
     "coverage_warnings",
     "light_time_s",
-    "quiet_erfa",
     "site_icrs_frames",
     "site_utc_to_bary_tdb",
 ]
@@ -60,19 +59,11 @@ ORIENTATION_STEP_S = 2 * 3600.0
 
 @contextmanager
 def quiet_erfa() -> Iterator[None]:
-    """Silence ERFA "dubious year" and astropy IERS-range warnings for future dates.
+    """Transitional: the warnings filter of :func:`ucbplan.offline.offline` (removed once no
+    module uses it)."""
+    from ucbplan.offline import _quiet_future_dates
 
-    The planner reports table coverage itself (:func:`coverage_warnings`) once per run, in words a
-    user can act on, instead of one library warning per call.
-    """
-    from astropy.utils.exceptions import AstropyWarning
-    from erfa import ErfaWarning
-
-    with warnings.catch_warnings():
-        warnings.filterwarnings("ignore", category=ErfaWarning)
-        warnings.filterwarnings("ignore", message=".*polar motion.*", category=AstropyWarning)
-        warnings.filterwarnings("ignore", message=".*IERS.*", category=AstropyWarning)
-        warnings.filterwarnings("ignore", message=".*leap.second.*", category=AstropyWarning)
+    with _quiet_future_dates():
         yield
 
 
@@ -81,8 +72,7 @@ def light_time_s(t: Time, coord: SkyCoord, location: EarthLocation) -> np.ndarra
 
     ``t_bary = t.tdb + Δ`` (astropy convention, builtin ephemeris).
     """
-    with quiet_erfa():
-        ltt = t.light_travel_time(coord, "barycentric", location=location, ephemeris="builtin")
+    ltt = t.light_travel_time(coord, "barycentric", location=location, ephemeris="builtin")
     return np.asarray(ltt.to_value(u.s), dtype=float)
 
 
@@ -208,7 +198,7 @@ class SiteTrack:
         n = max(int(np.ceil((hi - lo) / step_s)) + 1, 4)
         x = np.linspace(lo, hi, n)
         origin = Time(origin, scale="tdb", location=location)
-        with quiet_erfa(), solar_system_ephemeris.set("builtin"):
+        with solar_system_ephemeris.set("builtin"):
             r = _site_icrs_interpolated(location, origin, x)
         return cls(origin=origin, x_s=x, r_m=np.ascontiguousarray(r), location=location)
 
@@ -264,9 +254,8 @@ class DelayInterpolator:
 
     def site_utc(self, tau_s: np.ndarray) -> Time:
         """UTC at the site (Time with ``location``) of barycentric TDB epochs ``t0 + tau_s``."""
-        with quiet_erfa():
-            t_site = Time(self.t0, location=self.location) + TimeDelta(self.site_x(tau_s) * u.s)
-            return t_site.utc
+        t_site = Time(self.t0, location=self.location) + TimeDelta(self.site_x(tau_s) * u.s)
+        return t_site.utc
 
 
 def bary_tdb_to_site_utc(
@@ -315,18 +304,17 @@ def bary_tdb_to_site_utc(
     scalar = t_star.isscalar
     ts = t_star.reshape(-1) if not scalar else t_star.reshape(1)
     use_fast = fast if fast is not None else len(ts) > FAST_PATH_MIN
-    with quiet_erfa():
-        if use_fast:
-            t0 = ts[0]
-            tau = (ts - t0).to_value(u.s)
-            interp = DelayInterpolator.build(
-                t0, (float(np.min(tau)), float(np.max(tau))), coord, location, step_s
-            )
-            out = interp.site_utc(tau)
-        else:
-            delay = _invert_exact(ts, coord, location)
-            t_site = Time(ts, location=location) - TimeDelta(delay * u.s)
-            out = t_site.utc
+    if use_fast:
+        t0 = ts[0]
+        tau = (ts - t0).to_value(u.s)
+        interp = DelayInterpolator.build(
+            t0, (float(np.min(tau)), float(np.max(tau))), coord, location, step_s
+        )
+        out = interp.site_utc(tau)
+    else:
+        delay = _invert_exact(ts, coord, location)
+        t_site = Time(ts, location=location) - TimeDelta(delay * u.s)
+        out = t_site.utc
     return out[0] if scalar else out.reshape(t_star.shape)
 
 
@@ -339,15 +327,14 @@ def site_utc_to_bary_tdb(t_utc: Time, coord: SkyCoord, location: EarthLocation) 
     :func:`bary_tdb_to_site_utc`.
     """
     t = Time(t_utc, location=location)
-    with quiet_erfa():
-        return t.tdb + TimeDelta(light_time_s(t, coord, location) * u.s)
+    return t.tdb + TimeDelta(light_time_s(t, coord, location) * u.s)
 
 
 def _table_ends() -> tuple[Time, Time]:
     """(end of IERS-A UT1/polar-motion predictions, leap-second table expiry), offline."""
     from astropy.utils import iers
 
-    with quiet_erfa(), warnings.catch_warnings():
+    with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         eop = iers.earth_orientation_table.get()
         iers_end = Time(float(np.max(eop["MJD"].to_value(u.d))), format="mjd", scale="utc")
@@ -374,16 +361,15 @@ def coverage_warnings(t_first: Time, t_last: Time) -> list[str]:
     """
     iers_end, expires = _table_ends()
     out: list[str] = []
-    with quiet_erfa():
-        # each fits one 100-column line after "warning: " (issue 24)
-        if t_last > iers_end:
-            out.append(
-                f"IERS-A ends {iers_end.iso[:10]}: altitudes after it ~15 arcsec off; "
-                "pip install -U astropy-iers-data"
-            )
-        if t_last > expires:
-            out.append(
-                f"leap-second table ends {expires.iso[:10]}: UTC may be 1 s off; "
-                "pip install -U astropy-iers-data"
-            )
+    # each fits one 100-column line after "warning: " (issue 24)
+    if t_last > iers_end:
+        out.append(
+            f"IERS-A ends {iers_end.iso[:10]}: altitudes after it ~15 arcsec off; "
+            "pip install -U astropy-iers-data"
+        )
+    if t_last > expires:
+        out.append(
+            f"leap-second table ends {expires.iso[:10]}: UTC may be 1 s off; "
+            "pip install -U astropy-iers-data"
+        )
     return out

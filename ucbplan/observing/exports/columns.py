@@ -35,7 +35,6 @@ from ucbplan.observing.blocktable import EXTRA_COLUMNS, REQUIRED_COLUMNS
 from ucbplan.observing.blocktable import USER_COLUMNS as USER_COLUMN_DECLS
 from ucbplan.observing.exports.options import DEFAULT_ACQUISITION_S, ExportOptions
 from ucbplan.observing.exports.provenance import meta
-from ucbplan.observing.timeconv import quiet_erfa
 from ucbplan.target import target_from_dict
 
 #: Optional columns the planner does not write but the exports read when a user adds them:
@@ -79,8 +78,7 @@ def parse_utc(text: str, column: str, row: int) -> datetime:
 def _time_texts(table: Table, column: str) -> list[str]:
     col = table[column]
     if isinstance(col, Time):
-        with quiet_erfa():  # future dates: ERFA's "dubious year" is about leap seconds only
-            return list(np.atleast_1d(col.utc.isot))
+        return list(np.atleast_1d(col.utc.isot))
     return [str(v) if v is not np.ma.masked else "" for v in col]
 
 

@@ -25,7 +25,6 @@ from ucbplan.errors import InputFileError, shorten
 from ucbplan.observing.exports.columns import floats, strings
 from ucbplan.observing.exports.options import ExportOptions, ExportResult
 from ucbplan.observing.exports.provenance import clean_meta, created_utc, meta, site_name, version
-from ucbplan.observing.timeconv import quiet_erfa
 
 __all__ = ["export_phase_table", "phase_table"]
 
@@ -85,8 +84,7 @@ def _target_row(
 
 def phase_table(table: Table, options: ExportOptions, notes: list[str]) -> Table:
     """Per-target linear phase ephemeris at the planning epoch (see the module docstring)."""
-    with quiet_erfa():
-        tdb = Time(strings(table, "t_mid_tdb_bary"), scale="tdb", precision=3)
+    tdb = Time(strings(table, "t_mid_tdb_bary"), scale="tdb", precision=3)
     valid = meta(table).get("valid_until_tdb")
     c = {
         "tdb": tdb,

@@ -38,7 +38,7 @@ from ucbplan.observing.sites import Site
 from ucbplan.observing.sky import SkyModel, airmass_from_alt
 from ucbplan.observing.strategy import constrains_k
 from ucbplan.observing.timeaxis import EpochAxis, TimeAxis
-from ucbplan.observing.timeconv import DelayInterpolator, SiteTrack, quiet_erfa
+from ucbplan.observing.timeconv import DelayInterpolator, SiteTrack
 
 if TYPE_CHECKING:
     from ucbplan.target import Target
@@ -407,9 +407,8 @@ def _tolerance_and_validity(
     u_star = mode.u_values[0] if mode.tol_kind == "generic" else None
     tol = tolerance(mode.tol_kind, sigma_v, k, settings.n_epochs, u_star)
     first, last = valid_window_s(target, tol, mode.u_values, settings.alpha, settings.star)
-    with quiet_erfa():
-        since = target.t_ref + TimeDelta(first * u.s)
-        until = target.t_ref + TimeDelta(last * u.s)
+    since = target.t_ref + TimeDelta(first * u.s)
+    until = target.t_ref + TimeDelta(last * u.s)
     return since, until, sigma_v, k
 
 

@@ -14,7 +14,6 @@ from ucbplan.errors import InputError, shorten
 from ucbplan.inputs import check_int
 from ucbplan.observing.sites import Site
 from ucbplan.observing.timeaxis import TimeAxis
-from ucbplan.observing.timeconv import quiet_erfa
 
 __all__ = [
     "MAX_NIGHTS",
@@ -96,8 +95,7 @@ def night_windows(site: Site, nights: Sequence[date]) -> list[NightWindow]:
         for d in nights
         for j in (0, 1)
     ]
-    with quiet_erfa():
-        t = Time(edges, scale="utc")
+    t = Time(edges, scale="utc")
     return [NightWindow(d.isoformat(), t[2 * k], t[2 * k + 1]) for k, d in enumerate(nights)]
 
 
@@ -106,7 +104,6 @@ def night_spans(windows: Sequence[NightWindow], axis: TimeAxis) -> list[NightSpa
     if not windows:
         return []
     n = len(windows)
-    with quiet_erfa():  # one vectorised interval for all edges (TimeAxis.x, element by element)
-        edges = Time([w.start for w in windows] + [w.end for w in windows])
-        x = np.atleast_1d((edges - axis.origin).to_value(u.s))
+    edges = Time([w.start for w in windows] + [w.end for w in windows])
+    x = np.atleast_1d((edges - axis.origin).to_value(u.s))
     return [NightSpan(w.label, float(x[k]), float(x[n + k])) for k, w in enumerate(windows)]
