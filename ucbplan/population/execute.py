@@ -16,6 +16,7 @@ import ctypes
 import ctypes.util
 import functools
 import hashlib
+import itertools
 import json
 import math
 import os
@@ -23,7 +24,7 @@ import time
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Executor, Future, ProcessPoolExecutor, wait
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -33,6 +34,7 @@ from ucbplan.io import write_output
 __all__ = [
     "CLUSTERS",
     "ExecutorSpec",
+    "RunControl",
     "SerialExecutor",
     "default_chunk",
     "jobqueue_cluster_class",
@@ -161,6 +163,36 @@ class ExecutorSpec:
         if self.scheduler:
             return f"Dask cluster at {self.scheduler}"
         return "serial" if self.workers <= 1 else f"{self.workers}-process pool"
+
+
+@dataclass(frozen=True, slots=True)
+class RunControl:
+    """How a whole-catalog run runs, whatever it computes: where, in what chunks, with which
+    part files, and whom to tell about progress.
+
+    Attributes
+    ----------
+    parts : Path
+        Folder of the part files (remove them with :func:`remove_parts` once the table is
+        written).
+    executor : ExecutorSpec
+        Serial, local processes or Dask.
+    chunk : int or None
+        Sources per task (None: :func:`default_chunk`).
+    resume : bool
+        Reuse the part files of an earlier run with the same fingerprint.
+    overwrite : bool
+        Replace earlier part files (and, for ``simulate``, target files) instead of refusing.
+    progress : callable or None
+        ``progress(sources_done, sources_total)`` after each chunk.
+    """
+
+    parts: Path
+    executor: ExecutorSpec = field(default_factory=ExecutorSpec)
+    chunk: int | None = None
+    resume: bool = False
+    overwrite: bool = False
+    progress: Progress | None = field(default=None, compare=False, repr=False)
 
 
 @contextmanager
@@ -325,6 +357,74 @@ def prepare_parts(folder: Path, *, resume: bool, overwrite: bool) -> None:
             p.unlink()
 
 
+class _Parts:
+    """The chunks of one run: their bounds, the run's fingerprint and the part file of each."""
+
+    def __init__(self, folder: Path, fingerprint: str, ids: Sequence[str], chunk: int) -> None:
+        n = len(ids)
+        self.folder, self.fingerprint, self.ids = folder, fingerprint, ids
+        self.bounds = [(s, min(s + chunk, n)) for s in range(0, n, chunk)]
+
+    def ids_of(self, k: int) -> list[str]:
+        a, b = self.bounds[k]
+        return list(self.ids[a:b])
+
+    def reuse(self) -> dict[int, list[dict[str, Any]]]:
+        """Rows of every chunk whose part file matches this run (``resume``)."""
+        found = {}
+        for k, (a, b) in enumerate(self.bounds):
+            rows = _load_part(_part_path(self.folder, k), self.fingerprint, self.ids_of(k))
+            if rows is not None and len(rows) == b - a:
+                found[k] = rows
+        return found
+
+    def save(self, k: int, rows: list[dict[str, Any]]) -> None:
+        """Check the rows of chunk ``k`` and write them as its part file (atomic)."""
+        a, b = self.bounds[k]
+        if len(rows) != b - a:
+            raise UcbplanError(f"chunk {k}: {len(rows)} rows for {b - a} sources")
+        doc = {"fingerprint": self.fingerprint, "ids": self.ids_of(k), "rows": rows}
+        write_output(_part_path(self.folder, k), functools.partial(_dump, doc), overwrite=True)
+
+
+def _stream(
+    task: Callable[[Sequence[Any]], list[dict[str, Any]]],
+    items: Sequence[Any],
+    chunks: _Parts,
+    results: dict[int, list[dict[str, Any]]],
+    executor: Executor,
+    window: int,
+    progress: Progress | None,
+) -> None:
+    """Run the chunks not in ``results`` with at most ``window`` in flight; save each part as
+    it arrives and add its rows to ``results``."""
+    n = len(items)
+    done = sum(len(rows) for rows in results.values())
+    if progress is not None:
+        progress(done, n)
+    it = iter([k for k in range(len(chunks.bounds)) if k not in results])
+    pending: dict[Future[list[dict[str, Any]]], int] = {}
+    try:
+        while True:
+            for k in itertools.islice(it, max(0, window - len(pending))):
+                a, b = chunks.bounds[k]
+                pending[executor.submit(offline_task, task, list(items[a:b]))] = k
+            if not pending:
+                break
+            finished, _ = wait(list(pending), return_when=FIRST_COMPLETED)
+            for fut in finished:
+                k = pending.pop(fut)
+                rows = fut.result()
+                chunks.save(k, rows)
+                results[k] = rows
+                done += len(rows)
+                if progress is not None:
+                    progress(done, n)
+    finally:
+        for fut in pending:
+            fut.cancel()
+
+
 def run_chunks(
     task: Callable[[Sequence[Any]], list[dict[str, Any]]],
     items: Sequence[Any],
@@ -365,54 +465,11 @@ def run_chunks(
     """
     if chunk < 1:
         raise InputError(f"--chunk: expected >= 1, got {chunk}")
-    fp = _fingerprint(kind, options, catalog_sha256, chunk)
-    n = len(items)
-    bounds = [(s, min(s + chunk, n)) for s in range(0, n, chunk)]
-    results: dict[int, list[dict[str, Any]]] = {}
-    done = 0
-    if resume:
-        for k, (a, b) in enumerate(bounds):
-            rows = _load_part(_part_path(parts, k), fp, list(ids[a:b]))
-            if rows is not None and len(rows) == b - a:
-                results[k] = rows
-                done += b - a
+    chunks = _Parts(parts, _fingerprint(kind, options, catalog_sha256, chunk), ids, chunk)
+    results = chunks.reuse() if resume else {}
     reused = len(results)
-    if progress is not None:
-        progress(done, n)
-    todo = [k for k in range(len(bounds)) if k not in results]
-    pending: dict[Future[list[dict[str, Any]]], int] = {}
-    window = max(2, 2 * slots)
-    it = iter(todo)
-    try:
-        while True:
-            while len(pending) < window:
-                nxt = next(it, None)
-                if nxt is None:
-                    break
-                a, b = bounds[nxt]
-                pending[executor.submit(offline_task, task, list(items[a:b]))] = nxt
-            if not pending:
-                break
-            finished, _ = wait(list(pending), return_when=FIRST_COMPLETED)
-            for fut in finished:
-                k = pending.pop(fut)
-                rows = fut.result()
-                a, b = bounds[k]
-                if len(rows) != b - a:
-                    raise UcbplanError(f"chunk {k}: {len(rows)} rows for {b - a} sources")
-                doc = {"fingerprint": fp, "ids": list(ids[a:b]), "rows": rows}
-                write_output(_part_path(parts, k), functools.partial(_dump, doc), overwrite=True)
-                results[k] = rows
-                done += b - a
-                if progress is not None:
-                    progress(done, n)
-    finally:
-        for fut in pending:
-            fut.cancel()
-    out: list[dict[str, Any]] = []
-    for k in range(len(bounds)):
-        out.extend(results[k])
-    return out, reused
+    _stream(task, items, chunks, results, executor, max(2, 2 * slots), progress)
+    return [row for k in range(len(chunks.bounds)) for row in results[k]], reused
 
 
 def remove_parts(folder: Path) -> None:

@@ -9,14 +9,14 @@ from __future__ import annotations
 import functools
 import math
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from ucbplan._version import __version__
 from ucbplan.population.catalog import Catalog
 from ucbplan.population.execute import (
-    ExecutorSpec,
-    Progress,
+    RunControl,
     default_chunk,
     open_executor,
     prepare_parts,
@@ -40,6 +40,7 @@ from ucbplan.population.visibility import (
 )
 
 __all__ = [
+    "CatalogJob",
     "ForecastRun",
     "columns_table",
     "forecast_table",
@@ -108,121 +109,87 @@ class ForecastRun:
         self.table, self.chunk, self.reused, self.n_chunks = table, chunk, reused, n_chunks
 
 
-def run_catalog(
-    catalog: Catalog,
-    task: Callable[[Sequence[Any]], list[dict[str, Any]]],
-    *,
-    kind: str,
-    options: dict[str, Any],
-    seconds_per_source: float,
-    spec: ExecutorSpec,
-    parts: Path,
-    chunk: int | None = None,
-    resume: bool = False,
-    overwrite: bool = False,
-    progress: Progress | None = None,
-) -> tuple[list[dict[str, Any]], int, int]:
-    """Run the picklable ``task`` over the catalog's sources in chunks through the seam.
+@dataclass(frozen=True)
+class CatalogJob:
+    """What a whole-catalog run computes: one picklable ``task`` per chunk of sources, and the
+    ``table`` of all rows.
 
-    Returns
-    -------
-    rows, chunk, reused
-        Rows in source order, the chunk size used and the number of parts reused.
+    Attributes
+    ----------
+    kind : str
+        ``forecast``, ``visibility``, ``simulate`` (part fingerprints).
+    task : callable
+        ``task(sources) -> rows`` (one dict per source, in order), picklable.
+    options : dict
+        JSON-ready options of the run (part fingerprints).
+    seconds_per_source : float
+        Work per source on one core [s] (the default chunk size).
+    table : callable
+        ``table(rows) -> astropy Table``, called once with all rows in catalog order.
+    """
+
+    kind: str
+    task: Callable[[Sequence[Any]], list[dict[str, Any]]]
+    options: dict[str, Any]
+    seconds_per_source: float
+    table: Callable[[list[dict[str, Any]]], Any]
+
+
+def run_catalog(catalog: Catalog, job: CatalogJob, control: RunControl) -> ForecastRun:
+    """Run ``job`` over the catalog's sources in chunks through the seam; its merged table.
 
     Raises
     ------
     OutputExistsError
-        ``parts`` holds parts of an earlier run and neither ``resume`` nor ``overwrite``.
+        ``control.parts`` holds parts of an earlier run and neither ``resume`` nor
+        ``overwrite``.
     InputError
         Bad ``--workers``/``--chunk``/``--scheduler``/``--cluster``.
     """
-    prepare_parts(parts, resume=resume, overwrite=overwrite)
+    prepare_parts(control.parts, resume=control.resume, overwrite=control.overwrite)
     sources = catalog.sources
-    ids = [s.source_id for s in sources]
-    with open_executor(spec) as (executor, slots):
-        size = (
-            chunk if chunk is not None else default_chunk(len(sources), slots, seconds_per_source)
-        )
+    with open_executor(control.executor) as (executor, slots):
+        size = control.chunk
+        if size is None:
+            size = default_chunk(len(sources), slots, job.seconds_per_source)
         rows, reused = run_chunks(
-            task,
+            job.task,
             sources,
-            ids,
+            [s.source_id for s in sources],
             chunk=size,
             executor=executor,
             slots=slots,
-            parts=parts,
-            kind=kind,
-            options=options,
+            parts=control.parts,
+            kind=job.kind,
+            options=job.options,
             catalog_sha256=catalog.sha256,
-            resume=resume,
-            progress=progress,
+            resume=control.resume,
+            progress=control.progress,
         )
-    return rows, size, reused
+    return ForecastRun(job.table(rows), size, reused, math.ceil(len(sources) / size))
 
 
-def run_forecast(
-    catalog: Catalog,
-    opts: ForecastOptions,
-    *,
-    spec: ExecutorSpec,
-    parts: Path,
-    chunk: int | None = None,
-    resume: bool = False,
-    overwrite: bool = False,
-    progress: Progress | None = None,
-) -> ForecastRun:
-    """Forecast every source of ``catalog``; part files stay in ``parts``.
+def run_forecast(catalog: Catalog, opts: ForecastOptions, control: RunControl) -> ForecastRun:
+    """Forecast every source of ``catalog``; part files stay in ``control.parts``.
 
     Remove them with :func:`ucbplan.population.execute.remove_parts` once the table is written.
     Raises as :func:`run_catalog`.
     """
-    rows, size, reused = run_catalog(
-        catalog,
-        functools.partial(forecast_chunk, opts),
-        kind="forecast",
-        options=opts.as_dict(),
-        seconds_per_source=FORECAST_SECONDS_PER_SOURCE,
-        spec=spec,
-        parts=parts,
-        chunk=chunk,
-        resume=resume,
-        overwrite=overwrite,
-        progress=progress,
-    )
-    tab = forecast_table(rows, catalog, opts)
-    return ForecastRun(tab, size, reused, math.ceil(len(catalog.sources) / size))
+    task = functools.partial(forecast_chunk, opts)
+    table = functools.partial(forecast_table, catalog=catalog, opts=opts)
+    job = CatalogJob("forecast", task, opts.as_dict(), FORECAST_SECONDS_PER_SOURCE, table)
+    return run_catalog(catalog, job, control)
 
 
-def run_visibility(
-    catalog: Catalog,
-    opts: VisibilityOptions,
-    *,
-    spec: ExecutorSpec,
-    parts: Path,
-    chunk: int | None = None,
-    resume: bool = False,
-    overwrite: bool = False,
-    progress: Progress | None = None,
-) -> ForecastRun:
+def run_visibility(catalog: Catalog, opts: VisibilityOptions, control: RunControl) -> ForecastRun:
     """Visibility of every source of ``catalog`` at one site in one semester (ECSV table).
 
-    Part files stay in ``parts``; raises as :func:`run_catalog`.
+    Part files stay in ``control.parts``; raises as :func:`run_catalog`.
     """
-    rows, size, reused = run_catalog(
-        catalog,
-        functools.partial(visibility_chunk, opts),
-        kind="visibility",
-        options=opts.as_dict(),
-        seconds_per_source=VISIBILITY_SECONDS_PER_SOURCE,
-        spec=spec,
-        parts=parts,
-        chunk=chunk,
-        resume=resume,
-        overwrite=overwrite,
-        progress=progress,
-    )
-    tab = visibility_table(rows, catalog, opts)
-    return ForecastRun(tab, size, reused, math.ceil(len(catalog.sources) / size))
+    task = functools.partial(visibility_chunk, opts)
+    table = functools.partial(visibility_table, catalog=catalog, opts=opts)
+    job = CatalogJob("visibility", task, opts.as_dict(), VISIBILITY_SECONDS_PER_SOURCE, table)
+    return run_catalog(catalog, job, control)
 
 
 def columns_table(rows: list[dict[str, Any]], columns: Sequence[tuple[str, str, str, str]]) -> Any:

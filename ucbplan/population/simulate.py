@@ -21,7 +21,7 @@ from typing import Any
 from ucbplan.errors import NumericalError
 from ucbplan.inputs import check_int
 from ucbplan.population.catalog import Catalog, Source
-from ucbplan.population.execute import ExecutorSpec, Progress, source_seed, worker_setup
+from ucbplan.population.execute import RunControl, source_seed, worker_setup
 from ucbplan.population.forecast import ForecastOptions, icrs_of, k_total_kms, source_target
 
 __all__ = [
@@ -262,45 +262,28 @@ def simulate_table(
 
 
 def run_simulate(
-    catalog: Catalog,
-    opts: PopulationSimulateOptions,
-    *,
-    out_dir: Path,
-    spec: ExecutorSpec,
-    parts: Path,
-    chunk: int | None = None,
-    resume: bool = False,
-    overwrite: bool = False,
-    progress: Progress | None = None,
+    catalog: Catalog, opts: PopulationSimulateOptions, out_dir: Path, control: RunControl
 ) -> Any:
     """Simulate every source; posterior target files in ``out_dir``; the summary table.
 
-    Part files stay in ``parts`` (remove them once the table is written). Raises as
+    Part files stay in ``control.parts`` (remove them once the table is written). Raises as
     :func:`ucbplan.population.run.run_catalog`, and OutputExistsError for an existing target
-    file without ``overwrite``.
+    file without ``control.overwrite``.
     """
     import functools
 
     from ucbplan.io import check_output_path
     from ucbplan.observing.schedule.records import slug
-    from ucbplan.population.run import ForecastRun, run_catalog
+    from ucbplan.population.run import CatalogJob, run_catalog
 
     out_dir.mkdir(parents=True, exist_ok=True)
     for src in catalog.sources:  # refuse before hours of sampling, not after
-        check_output_path(out_dir / f"{slug(src.source_id)}.yaml", overwrite)
-    rows, size, reused = run_catalog(
-        catalog,
-        functools.partial(simulate_chunk, opts),
-        kind="simulate",
-        options=opts.as_dict(),
-        seconds_per_source=SIMULATE_SECONDS_PER_SOURCE,
-        spec=spec,
-        parts=parts,
-        chunk=chunk,
-        resume=resume,
-        overwrite=overwrite,
-        progress=progress,
-    )
-    write_posterior_targets(rows, out_dir, overwrite)
-    tab = simulate_table(rows, catalog, opts)
-    return ForecastRun(tab, size, reused, math.ceil(len(catalog.sources) / size))
+        check_output_path(out_dir / f"{slug(src.source_id)}.yaml", control.overwrite)
+
+    def table(rows: list[dict[str, Any]]) -> Any:
+        write_posterior_targets(rows, out_dir, control.overwrite)
+        return simulate_table(rows, catalog, opts)
+
+    task = functools.partial(simulate_chunk, opts)
+    job = CatalogJob("simulate", task, opts.as_dict(), SIMULATE_SECONDS_PER_SOURCE, table)
+    return run_catalog(catalog, job, control)
