@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from ucbplan._version import __version__
+from ucbplan.observing.semesters import semester_dates
 from ucbplan.population.catalog import Catalog
 from ucbplan.population.execute import (
     RunControl,
@@ -30,7 +31,6 @@ from ucbplan.population.forecast import (
     ForecastOptions,
     forecast_chunk,
 )
-from ucbplan.population.semesters import semester_dates
 from ucbplan.population.visibility import (
     GRID_STEP_S,
     VISIBILITY_COLUMNS,
