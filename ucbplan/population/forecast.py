@@ -26,7 +26,7 @@ from ucbplan.core.params import PhaseParams, shift_reference
 from ucbplan.errors import InputError, NumericalError, UcbplanError, shorten
 from ucbplan.inputs import check_number
 from ucbplan.lisa import MAX_N_BINS, MIN_T_OBS_S
-from ucbplan.population.catalog import Source
+from ucbplan.population.catalog import SOURCE_COLUMNS, Source
 from ucbplan.population.execute import worker_setup
 from ucbplan.target.model import Spectroscopy
 
@@ -85,6 +85,10 @@ class ForecastOptions:
         """JSON-ready mapping (fingerprints and meta)."""
         return asdict(self)
 
+    def k_eff_meta(self) -> float | str:
+        """``k_eff_kms`` as the tables' meta states it (the rule when it is per source)."""
+        return self.k_eff_kms if self.k_eff_kms is not None else "per source: K1+K2"
+
 
 def _t_cols() -> list[tuple[str, str, str, str]]:
     cols = []
@@ -105,8 +109,7 @@ def _t_cols() -> list[tuple[str, str, str, str]]:
 
 #: The forecast table, declared once: (name, unit, dtype, description).
 FORECAST_COLUMNS: tuple[tuple[str, str, str, str], ...] = (
-    ("source_id", "", "str", "catalog Name (or row number)"),
-    ("row", "", "i8", "catalog row (1 = first data row)"),
+    *SOURCE_COLUMNS,
     ("status", "", "str", "ok | unconstrained | failed: <error>"),
     ("f_gw", "Hz", "f8", "GW frequency at the midpoint"),
     ("fdot", "Hz / s", "f8", "ḟ at the midpoint"),

@@ -35,7 +35,7 @@ from ucbplan.observing.blocks import MAX_BLOCK_S, ExposurePlan, block_smearing
 from ucbplan.observing.goals import Goal, parse_goal, spectra_for_goal
 from ucbplan.observing.instruments import Instrument, sigma_v_kms
 from ucbplan.observing.schedule.records import slug
-from ucbplan.population.catalog import Catalog, Source
+from ucbplan.population.catalog import SOURCE_COLUMNS, Catalog, Source
 from ucbplan.population.forecast import (
     ForecastOptions,
     forecast_with_target,
@@ -61,8 +61,7 @@ T_VALID_COLUMN = "t_valid_quadrature_a1"
 #: The ranked table, declared once: (name, unit, dtype, description).
 RANK_COLUMNS: tuple[tuple[str, str, str, str], ...] = (
     ("rank", "", "i8", "1 = best"),
-    ("source_id", "", "str", "catalog Name (or row number)"),
-    ("row", "", "i8", "catalog row (1 = first data row)"),
+    *SOURCE_COLUMNS,
     ("status", "", "str", "forecast status"),
     ("merit", "", "f8", "figure of merit (meta: figure_of_merit; NaN: none, ranked last)"),
     ("t_valid_quadrature", "d", "f8", "T_valid after LISA, quadrature, α=1"),

@@ -49,6 +49,7 @@ __all__ = [
     "run_catalog",
     "run_forecast",
     "run_visibility",
+    "status_counts",
     "visibility_table",
     "write_table",
 ]
@@ -70,12 +71,11 @@ def forecast_table(rows: list[dict[str, Any]], catalog: Catalog, opts: ForecastO
     tab = columns_table(rows, FORECAST_COLUMNS)
     t0 = Time(opts.t_start_tdb, scale="tdb")
     t_ref = t0 + TimeDelta(0.5 * opts.t_obs_s, format="sec")
-    status = [r["status"] for r in rows]
     tab.meta.update(provenance("ucbplan population forecast", catalog))
     tab.meta.update(
         {
             "sigma_v_kms": opts.sigma_v_kms,
-            "k_eff_kms": opts.k_eff_kms if opts.k_eff_kms is not None else "per source: K1+K2",
+            "k_eff_kms": opts.k_eff_meta(),
             "t_obs_s": opts.t_obs_s,
             "t_start_tdb": t0.isot,
             "reference_epoch_tdb": t_ref.isot,
@@ -87,9 +87,7 @@ def forecast_table(rows: list[dict[str, Any]], catalog: Catalog, opts: ForecastO
             "alphas": list(ALPHAS),
             "t_valid_cap_days": HORIZON_CAP_DAYS,
             "catalog_convention": "LDC: Frequency, FrequencyDerivative, InitialPhase at t_start",
-            "n_ok": status.count("ok"),
-            "n_unconstrained": status.count("unconstrained"),
-            "n_failed": sum(s.startswith("failed") for s in status),
+            **status_counts(rows),
         }
     )
     return tab
@@ -218,11 +216,20 @@ def provenance(command: str, catalog: Catalog) -> dict[str, Any]:
     }
 
 
+def status_counts(rows: list[dict[str, Any]]) -> dict[str, int]:
+    """``n_ok``, ``n_unconstrained``, ``n_failed`` of a table's rows (the meta's tally)."""
+    status = [r["status"] for r in rows]
+    return {
+        "n_ok": status.count("ok"),
+        "n_unconstrained": status.count("unconstrained"),
+        "n_failed": sum(s.startswith("failed") for s in status),
+    }
+
+
 def visibility_table(rows: list[dict[str, Any]], catalog: Catalog, opts: VisibilityOptions) -> Any:
     """Astropy table of visibility rows with units, descriptions and provenance meta."""
     first, end = semester_dates(opts.semester)
     tab = columns_table(rows, VISIBILITY_COLUMNS)
-    status = [r["status"] for r in rows]
     tab.meta.update(provenance("ucbplan population visibility", catalog))
     tab.meta.update(
         {
@@ -237,16 +244,12 @@ def visibility_table(rows: list[dict[str, Any]], catalog: Catalog, opts: Visibil
             "alpha": opts.settings.alpha,
             "n_epochs": opts.settings.n_epochs,
             "sigma_v_kms": opts.forecast.sigma_v_kms,
-            "k_eff_kms": opts.forecast.k_eff_kms
-            if opts.forecast.k_eff_kms is not None
-            else "per source: K1+K2",
+            "k_eff_kms": opts.forecast.k_eff_meta(),
             "t_obs_s": opts.forecast.t_obs_s,
             "t_start_tdb": opts.forecast.t_start_tdb,
             "validity": "epochs_* counts blocks inside sigma_u <= alpha * delta_u_tol "
             "(Fisher forecast, circular model)",
-            "n_ok": status.count("ok"),
-            "n_unconstrained": status.count("unconstrained"),
-            "n_failed": sum(s.startswith("failed") for s in status),
+            **status_counts(rows),
         }
     )
     return tab

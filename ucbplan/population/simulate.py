@@ -20,7 +20,7 @@ from typing import Any
 
 from ucbplan.errors import NumericalError
 from ucbplan.inputs import check_int
-from ucbplan.population.catalog import Catalog, Source
+from ucbplan.population.catalog import SOURCE_COLUMNS, Catalog, Source
 from ucbplan.population.execute import RunControl, source_seed, worker_setup
 from ucbplan.population.forecast import ForecastOptions, icrs_of, k_total_kms, source_target
 
@@ -57,8 +57,7 @@ def _param_cols() -> list[tuple[str, str, str, str]]:
 
 #: The simulate summary table, declared once: (name, unit, dtype, description).
 SIMULATE_COLUMNS: tuple[tuple[str, str, str, str], ...] = (
-    ("source_id", "", "str", "catalog Name (or row number)"),
-    ("row", "", "i8", "catalog row (1 = first data row)"),
+    *SOURCE_COLUMNS,
     ("status", "", "str", "ok | unconstrained | failed: <error>"),
     ("seed", "", "i8", "seed of the noise draw and chain: source_seed(--seed, source_id)"),
     ("snr", "", "f8", "optimal LISA SNR"),
@@ -226,10 +225,9 @@ def simulate_table(
     rows: list[dict[str, Any]], catalog: Catalog, opts: PopulationSimulateOptions
 ) -> Any:
     """Astropy summary table of simulate rows with units, descriptions and provenance meta."""
-    from ucbplan.population.run import columns_table, provenance
+    from ucbplan.population.run import columns_table, provenance, status_counts
 
     tab = columns_table(rows, SIMULATE_COLUMNS)
-    status = [r["status"] for r in rows]
     tab.meta.update(provenance("ucbplan population simulate", catalog))
     f = opts.forecast
     tab.meta.update(
@@ -247,10 +245,8 @@ def simulate_table(
             "t_start_tdb": f.t_start_tdb,
             "reference": "midpoint of the LISA observation (means and sigmas)",
             "sigma_v_kms": f.sigma_v_kms,
-            "k_eff_kms": f.k_eff_kms if f.k_eff_kms is not None else "per source: K1+K2",
-            "n_ok": status.count("ok"),
-            "n_unconstrained": status.count("unconstrained"),
-            "n_failed": sum(s.startswith("failed") for s in status),
+            "k_eff_kms": f.k_eff_meta(),
+            **status_counts(rows),
             "failed": [
                 {"source_id": r["source_id"], "error": r["status"]}
                 for r in rows

@@ -33,7 +33,7 @@ from ucbplan.observing.schedule.nights import NightWindow, night_windows
 from ucbplan.observing.schedule.settings import PlanSettings, parse_mode
 from ucbplan.observing.semesters import semester_dates
 from ucbplan.observing.sites import Site
-from ucbplan.population.catalog import Source
+from ucbplan.population.catalog import SOURCE_COLUMNS, Source
 from ucbplan.population.execute import worker_setup
 from ucbplan.population.forecast import ANCHORS, ForecastOptions, forecast_with_target, icrs_of
 
@@ -110,8 +110,7 @@ def _anchor_cols() -> list[tuple[str, str, str, str]]:
 
 #: The visibility table, declared once: (name, unit, dtype, description).
 VISIBILITY_COLUMNS: tuple[tuple[str, str, str, str], ...] = (
-    ("source_id", "", "str", "catalog Name (or row number)"),
-    ("row", "", "i8", "catalog row (1 = first data row)"),
+    *SOURCE_COLUMNS,
     ("status", "", "str", "ok | unconstrained | failed: <error> (of the Fisher forecast)"),
     ("ra", "deg", "f8", "ICRS right ascension"),
     ("dec", "deg", "f8", "ICRS declination"),
