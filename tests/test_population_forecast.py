@@ -14,13 +14,12 @@ from ucbplan.population import execute
 from ucbplan.population.catalog import Catalog, read_catalog
 from ucbplan.population.execute import (
     ExecutorSpec,
-    RunControl,
     SerialExecutor,
     run_chunks,
     source_seed,
 )
 from ucbplan.population.forecast import ForecastOptions
-from ucbplan.population.run import run_forecast, write_table
+from ucbplan.population.run import RunControl, run_forecast, write_table
 
 ROOT = Path(__file__).resolve().parents[1]
 CATALOG = ROOT / "catalogs" / "population" / "ldc-200.ecsv"

@@ -10,9 +10,8 @@ import pytest
 from astropy.table import Table
 
 from ucbplan.population.catalog import Catalog, read_catalog
-from ucbplan.population.execute import RunControl
 from ucbplan.population.forecast import ForecastOptions
-from ucbplan.population.run import write_table
+from ucbplan.population.run import RunControl, write_table
 from ucbplan.population.simulate import PopulationSimulateOptions, run_simulate
 from ucbplan.target import load_target
 

@@ -18,7 +18,8 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 if TYPE_CHECKING:
-    from ucbplan.population.execute import ExecutorSpec, RunControl
+    from ucbplan.population.execute import ExecutorSpec
+    from ucbplan.population.run import RunControl
 
 __all__ = ["PopulationArgs", "population_options"]
 
@@ -106,7 +107,7 @@ class PopulationArgs:
 
     def control(self, parts: Path, overwrite: bool) -> RunControl:
         """The run control of these options with part files in ``parts``."""
-        from ucbplan.population.execute import RunControl
+        from ucbplan.population.run import RunControl
 
         return RunControl(parts, self.executor(), self.chunk, self.resume, overwrite)
 

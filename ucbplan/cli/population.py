@@ -231,8 +231,8 @@ def _ranked_source(
     """(forecast table, catalog, forecast options) of ``rank``'s SOURCE: a forecast table
     (checked against its catalog), or a catalog forecast here (its parts removed after)."""
     from ucbplan.population import rank as rk
-    from ucbplan.population.execute import RunControl, remove_parts
-    from ucbplan.population.run import parts_folder, run_forecast
+    from ucbplan.population.execute import remove_parts
+    from ucbplan.population.run import RunControl, parts_folder, run_forecast
 
     tab = rk.read_forecast_table(source)
     if tab is not None:

@@ -24,7 +24,7 @@ import time
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Executor, Future, ProcessPoolExecutor, wait
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -34,7 +34,6 @@ from ucbplan.io import write_output
 __all__ = [
     "CLUSTERS",
     "ExecutorSpec",
-    "RunControl",
     "SerialExecutor",
     "default_chunk",
     "jobqueue_cluster_class",
@@ -163,36 +162,6 @@ class ExecutorSpec:
         if self.scheduler:
             return f"Dask cluster at {self.scheduler}"
         return "serial" if self.workers <= 1 else f"{self.workers}-process pool"
-
-
-@dataclass(frozen=True, slots=True)
-class RunControl:
-    """How a whole-catalog run runs, whatever it computes: where, in what chunks, with which
-    part files, and whom to tell about progress.
-
-    Attributes
-    ----------
-    parts : Path
-        Folder of the part files (remove them with :func:`remove_parts` once the table is
-        written).
-    executor : ExecutorSpec
-        Serial, local processes or Dask.
-    chunk : int or None
-        Sources per task (None: :func:`default_chunk`).
-    resume : bool
-        Reuse the part files of an earlier run with the same fingerprint.
-    overwrite : bool
-        Replace earlier part files (and, for ``simulate``, target files) instead of refusing.
-    progress : callable or None
-        ``progress(sources_done, sources_total)`` after each chunk.
-    """
-
-    parts: Path
-    executor: ExecutorSpec = field(default_factory=ExecutorSpec)
-    chunk: int | None = None
-    resume: bool = False
-    overwrite: bool = False
-    progress: Progress | None = field(default=None, compare=False, repr=False)
 
 
 @contextmanager

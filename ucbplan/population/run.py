@@ -9,7 +9,7 @@ from __future__ import annotations
 import functools
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -17,7 +17,8 @@ from ucbplan._version import __version__
 from ucbplan.observing.semesters import semester_dates
 from ucbplan.population.catalog import Catalog
 from ucbplan.population.execute import (
-    RunControl,
+    ExecutorSpec,
+    Progress,
     default_chunk,
     open_executor,
     prepare_parts,
@@ -42,6 +43,7 @@ from ucbplan.population.visibility import (
 __all__ = [
     "CatalogJob",
     "ForecastRun",
+    "RunControl",
     "columns_table",
     "forecast_table",
     "parts_folder",
@@ -105,6 +107,37 @@ class ForecastRun:
 
     def __init__(self, table: Any, chunk: int, reused: int, n_chunks: int) -> None:
         self.table, self.chunk, self.reused, self.n_chunks = table, chunk, reused, n_chunks
+
+
+@dataclass(frozen=True, slots=True)
+class RunControl:
+    """How a whole-catalog run runs, whatever it computes: where, in what chunks, with which
+    part files, and whom to tell about progress.
+
+    Attributes
+    ----------
+    parts : Path
+        Folder of the part files (remove them with
+        :func:`~ucbplan.population.execute.remove_parts` once the table is
+        written).
+    executor : ExecutorSpec
+        Serial, local processes or Dask.
+    chunk : int or None
+        Sources per task (None: :func:`~ucbplan.population.execute.default_chunk`).
+    resume : bool
+        Reuse the part files of an earlier run with the same fingerprint.
+    overwrite : bool
+        Replace earlier part files (and, for ``simulate``, target files) instead of refusing.
+    progress : callable or None
+        ``progress(sources_done, sources_total)`` after each chunk.
+    """
+
+    parts: Path
+    executor: ExecutorSpec = field(default_factory=ExecutorSpec)
+    chunk: int | None = None
+    resume: bool = False
+    overwrite: bool = False
+    progress: Progress | None = field(default=None, compare=False, repr=False)
 
 
 @dataclass(frozen=True)

@@ -16,13 +16,16 @@ import math
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ucbplan.errors import NumericalError
 from ucbplan.inputs import check_int
 from ucbplan.population.catalog import SOURCE_COLUMNS, Catalog, Source
-from ucbplan.population.execute import RunControl, source_seed, worker_setup
+from ucbplan.population.execute import source_seed, worker_setup
 from ucbplan.population.forecast import ForecastOptions, icrs_of, k_total_kms, source_target
+
+if TYPE_CHECKING:
+    from ucbplan.population.run import RunControl
 
 __all__ = [
     "SIMULATED_PARAMETERS",
