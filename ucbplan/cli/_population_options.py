@@ -119,8 +119,11 @@ def population_options(*, parts: bool = True) -> Callable[[Callable[..., Any]], 
     kind = inspect.Parameter.KEYWORD_ONLY  # typer passes every value by name
 
     def decorate(func: Callable[..., Any]) -> Any:
+        signature = inspect.signature(func, eval_str=True)
+        if "shared" not in signature.parameters:
+            raise TypeError(f"{func.__name__}: no 'shared' parameter to put the options in")
         params: list[inspect.Parameter] = []
-        for p in inspect.signature(func, eval_str=True).parameters.values():
+        for p in signature.parameters.values():
             if p.name != "shared":
                 params.append(p.replace(kind=kind))
                 continue

@@ -14,7 +14,7 @@ import contextlib
 import dataclasses
 from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import typer
 from rich.markup import escape
@@ -29,6 +29,12 @@ from ucbplan.cli._population_options import (
 )
 from ucbplan.errors import UcbplanError
 
+if TYPE_CHECKING:
+    from ucbplan.population.catalog import Catalog
+    from ucbplan.population.execute import ExecutorSpec
+    from ucbplan.population.forecast import ForecastOptions
+    from ucbplan.population.run import ForecastRun, RunControl
+
 __all__ = ["register"]
 
 population_app = typer.Typer(
@@ -37,7 +43,7 @@ population_app = typer.Typer(
 )
 
 
-def _catalog(path: Path, shared: PopulationArgs) -> Any:
+def _catalog(path: Path, shared: PopulationArgs) -> Catalog:
     """The catalog, with its skipped rows printed (one yellow line each)."""
     from ucbplan.population.catalog import parse_column_map, read_catalog
 
@@ -52,7 +58,7 @@ def _catalog(path: Path, shared: PopulationArgs) -> Any:
     return cat
 
 
-def _inputs(path: Path, shared: PopulationArgs) -> tuple[Any, Any]:
+def _inputs(path: Path, shared: PopulationArgs) -> tuple[Catalog, ForecastOptions]:
     """The catalog and the checked forecast options (``--k-eff`` needed without masses)."""
     from ucbplan.population.forecast import forecast_options
 
@@ -69,7 +75,7 @@ def _inputs(path: Path, shared: PopulationArgs) -> tuple[Any, Any]:
     return cat, opts
 
 
-def _control(output: Path, overwrite: bool, shared: PopulationArgs) -> Any:
+def _control(output: Path, overwrite: bool, shared: PopulationArgs) -> RunControl:
     """Refuse an existing ``output`` (without ``--overwrite``), then the run control (checked)
     with the part files next to ``output``."""
     from ucbplan.population.run import parts_folder
@@ -78,13 +84,15 @@ def _control(output: Path, overwrite: bool, shared: PopulationArgs) -> Any:
     return shared.control(parts_folder(output), overwrite)
 
 
-def _announce(cat: Any, path: Path, control: Any, where: str = "") -> None:
+def _announce(cat: Catalog, path: Path, control: RunControl, where: str = "") -> None:
     err_console.print(
         f"{len(cat.sources)} sources from {escape(str(path))}; {where}{control.executor.describe()}"
     )
 
 
-def _run(label: str, cat: Any, control: Any, call: Callable[[Any], Any]) -> Any:
+def _run(
+    label: str, cat: Catalog, control: RunControl, call: Callable[[RunControl], ForecastRun]
+) -> ForecastRun:
     """``call(control)`` under a progress line on stderr (sources done, rate, ETA)."""
     from rich.progress import BarColumn, Progress, TextColumn
 
@@ -110,7 +118,7 @@ def _run(label: str, cat: Any, control: Any, call: Callable[[Any], Any]) -> Any:
         return call(dataclasses.replace(control, progress=_progress))
 
 
-def _finish(run: Any, output: Path, control: Any, keep_parts: bool) -> None:
+def _finish(run: ForecastRun, output: Path, control: RunControl, keep_parts: bool) -> None:
     """Write the merged table, remove the parts (unless kept), print the summary line."""
     from ucbplan.population.execute import remove_parts
     from ucbplan.population.run import write_table
@@ -226,8 +234,12 @@ def _made_folder(out_dir: Path) -> Iterator[None]:
 
 
 def _ranked_source(
-    source: Path, catalog: Path | None, out_dir: Path, shared: PopulationArgs, executor: Any
-) -> tuple[Any, Any, Any]:
+    source: Path,
+    catalog: Path | None,
+    out_dir: Path,
+    shared: PopulationArgs,
+    executor: ExecutorSpec,
+) -> tuple[Any, Catalog, ForecastOptions]:
     """(forecast table, catalog, forecast options) of ``rank``'s SOURCE: a forecast table
     (checked against its catalog), or a catalog forecast here (its parts removed after)."""
     from ucbplan.population import rank as rk

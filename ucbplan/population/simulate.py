@@ -25,7 +25,7 @@ from ucbplan.population.execute import source_seed, worker_setup
 from ucbplan.population.forecast import ForecastOptions, icrs_of, k_total_kms, source_target
 
 if TYPE_CHECKING:
-    from ucbplan.population.run import RunControl
+    from ucbplan.population.run import ForecastRun, RunControl
 
 __all__ = [
     "SIMULATED_PARAMETERS",
@@ -262,7 +262,7 @@ def simulate_table(
 
 def run_simulate(
     catalog: Catalog, opts: PopulationSimulateOptions, out_dir: Path, control: RunControl
-) -> Any:
+) -> ForecastRun:
     """Simulate every source; posterior target files in ``out_dir``; the summary table.
 
     Part files stay in ``control.parts`` (remove them once the table is written). Raises as
