@@ -19,7 +19,8 @@ from ucbplan.population.execute import (
     source_seed,
 )
 from ucbplan.population.forecast import ForecastOptions
-from ucbplan.population.run import RunControl, run_forecast, write_table
+from ucbplan.population.run import RunControl, run_forecast
+from ucbplan.population.tables import write_table
 
 ROOT = Path(__file__).resolve().parents[1]
 CATALOG = ROOT / "catalogs" / "population" / "ldc-200.ecsv"

@@ -121,7 +121,7 @@ def _run(
 def _finish(run: ForecastRun, output: Path, control: RunControl, keep_parts: bool) -> None:
     """Write the merged table, remove the parts (unless kept), print the summary line."""
     from ucbplan.population.execute import remove_parts
-    from ucbplan.population.run import write_table
+    from ucbplan.population.tables import write_table
 
     write_table(run.table, output, control.overwrite)
     if not keep_parts:
@@ -288,7 +288,7 @@ def rank(
 ) -> None:
     """Order sources by a stated figure of merit; target files for the top N (for `plan`)."""
     from ucbplan.population import rank as rk
-    from ucbplan.population.run import write_table
+    from ucbplan.population.tables import write_table
 
     ranked_path = out_dir / "ranked.ecsv"
     _check_out_dir(out_dir, ranked_path, overwrite)

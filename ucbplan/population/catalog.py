@@ -26,7 +26,6 @@ from ucbplan.inputs import read_text
 
 __all__ = [
     "COLUMNS",
-    "SOURCE_COLUMNS",
     "Catalog",
     "CatalogColumn",
     "Source",
@@ -75,11 +74,6 @@ COLUMNS: tuple[CatalogColumn, ...] = (
 _BY_NAME = {c.name: c for c in COLUMNS}
 #: Optional identifier column (any type); default: the row number.
 ID_COLUMN = "Name"
-#: The first columns of every population table (name, unit, dtype, description): which source.
-SOURCE_COLUMNS: tuple[tuple[str, str, str, str], ...] = (
-    ("source_id", "", "str", "catalog Name (or row number)"),
-    ("row", "", "i8", "catalog row (1 = first data row)"),
-)
 
 
 @dataclass(frozen=True, slots=True)

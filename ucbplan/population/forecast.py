@@ -26,8 +26,9 @@ from ucbplan.core.params import PhaseParams, shift_reference
 from ucbplan.errors import InputError, NumericalError, UcbplanError, shorten
 from ucbplan.inputs import check_number
 from ucbplan.lisa import MAX_N_BINS, MIN_T_OBS_S
-from ucbplan.population.catalog import SOURCE_COLUMNS, Source
+from ucbplan.population.catalog import Source
 from ucbplan.population.execute import worker_setup
+from ucbplan.population.tables import SOURCE_COLUMNS, blank_row
 from ucbplan.target.model import Spectroscopy
 
 __all__ = [
@@ -185,9 +186,7 @@ def icrs_of(sources: Sequence[Source]) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _nan_row(src: Source, status: str) -> dict[str, Any]:
-    row: dict[str, Any] = {}
-    for name, _, dtype, _ in FORECAST_COLUMNS:
-        row[name] = "" if dtype == "str" else (0 if dtype == "i8" else math.nan)
+    row = blank_row(FORECAST_COLUMNS, 0)
     row.update(source_id=src.source_id, row=src.row, status=status[:300])
     row["vmag"] = math.nan if src.vmag is None else src.vmag
     row["distance"] = math.nan if src.distance_kpc is None else src.distance_kpc

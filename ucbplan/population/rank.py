@@ -35,13 +35,14 @@ from ucbplan.observing.blocks import MAX_BLOCK_S, ExposurePlan, block_smearing
 from ucbplan.observing.goals import Goal, parse_goal, spectra_for_goal
 from ucbplan.observing.instruments import Instrument, sigma_v_kms
 from ucbplan.observing.schedule.records import slug
-from ucbplan.population.catalog import SOURCE_COLUMNS, Catalog, Source
+from ucbplan.population.catalog import Catalog, Source
 from ucbplan.population.forecast import (
     ForecastOptions,
     forecast_with_target,
     icrs_of,
     k_total_kms,
 )
+from ucbplan.population.tables import SOURCE_COLUMNS, columns_table, provenance
 
 __all__ = [
     "RANK_COLUMNS",
@@ -189,8 +190,6 @@ def goal_hours(src: Source, f_gw: float, k_eff: float, goal: Goal, opts: RankOpt
 
 def rank_table(forecast: Any, catalog: Catalog, opts: RankOptions) -> Any:
     """The ranked table (best first) of a forecast table; ``target_file`` still empty."""
-    from ucbplan.population.run import columns_table, provenance
-
     by_id = {s.source_id: s for s in catalog.sources}
     goal = parse_goal(opts.goal)
     rows = []

@@ -13,7 +13,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ucbplan._version import __version__
 from ucbplan.observing.semesters import semester_dates
 from ucbplan.population.catalog import Catalog
 from ucbplan.population.execute import (
@@ -32,6 +31,7 @@ from ucbplan.population.forecast import (
     ForecastOptions,
     forecast_chunk,
 )
+from ucbplan.population.tables import columns_table, provenance, status_counts
 from ucbplan.population.visibility import (
     GRID_STEP_S,
     VISIBILITY_COLUMNS,
@@ -44,16 +44,12 @@ __all__ = [
     "CatalogJob",
     "ForecastRun",
     "RunControl",
-    "columns_table",
     "forecast_table",
     "parts_folder",
-    "provenance",
     "run_catalog",
     "run_forecast",
     "run_visibility",
-    "status_counts",
     "visibility_table",
-    "write_table",
 ]
 
 #: Measured Fisher + horizons per source on one core (issue 23, batched: 3–5 ms) [s]; chunks
@@ -93,13 +89,6 @@ def forecast_table(rows: list[dict[str, Any]], catalog: Catalog, opts: ForecastO
         }
     )
     return tab
-
-
-def write_table(tab: Any, path: Path | None, overwrite: bool) -> None:
-    """Write the table as ECSV (atomic; stdout when ``path`` is None)."""
-    from ucbplan.io import write_output
-
-    write_output(path, lambda h: tab.write(h, format="ascii.ecsv"), overwrite=overwrite)
 
 
 class ForecastRun:
@@ -221,42 +210,6 @@ def run_visibility(catalog: Catalog, opts: VisibilityOptions, control: RunContro
     table = functools.partial(visibility_table, catalog=catalog, opts=opts)
     job = CatalogJob("visibility", task, opts.as_dict(), VISIBILITY_SECONDS_PER_SOURCE, table)
     return run_catalog(catalog, job, control)
-
-
-def columns_table(rows: list[dict[str, Any]], columns: Sequence[tuple[str, str, str, str]]) -> Any:
-    """Astropy table of ``rows`` with the declared (name, unit, dtype, description) columns."""
-    import numpy as np
-    from astropy.table import Column, Table
-
-    cols = []
-    for name, unit, dtype, desc in columns:
-        vals = [r[name] for r in rows]
-        data = np.array(vals, dtype=str if dtype == "str" else dtype)
-        cols.append(Column(data, name=name, unit=unit or None, description=desc))
-    return Table(cols)
-
-
-def provenance(command: str, catalog: Catalog) -> dict[str, Any]:
-    """Meta every population table starts with: version, command, catalog and its bad rows."""
-    return {
-        "ucbplan_version": __version__,
-        "command": command,
-        "catalog": catalog.path.name,
-        "catalog_path": str(catalog.path),
-        "catalog_sha256": catalog.sha256,
-        "catalog_rows": catalog.n_rows,
-        "bad_rows": [{"row": r, "error": m} for r, m in catalog.bad],
-    }
-
-
-def status_counts(rows: list[dict[str, Any]]) -> dict[str, int]:
-    """``n_ok``, ``n_unconstrained``, ``n_failed`` of a table's rows (the meta's tally)."""
-    status = [r["status"] for r in rows]
-    return {
-        "n_ok": status.count("ok"),
-        "n_unconstrained": status.count("unconstrained"),
-        "n_failed": sum(s.startswith("failed") for s in status),
-    }
 
 
 def visibility_table(rows: list[dict[str, Any]], catalog: Catalog, opts: VisibilityOptions) -> Any:

@@ -20,9 +20,16 @@ from typing import TYPE_CHECKING, Any
 
 from ucbplan.errors import NumericalError
 from ucbplan.inputs import check_int
-from ucbplan.population.catalog import SOURCE_COLUMNS, Catalog, Source
+from ucbplan.population.catalog import Catalog, Source
 from ucbplan.population.execute import source_seed, worker_setup
 from ucbplan.population.forecast import ForecastOptions, icrs_of, k_total_kms, source_target
+from ucbplan.population.tables import (
+    SOURCE_COLUMNS,
+    blank_row,
+    columns_table,
+    provenance,
+    status_counts,
+)
 
 if TYPE_CHECKING:
     from ucbplan.population.run import ForecastRun, RunControl
@@ -110,9 +117,7 @@ class PopulationSimulateOptions:
 
 
 def _nan_row(src: Source, seed: int) -> dict[str, Any]:
-    row: dict[str, Any] = {}
-    for name, _, dtype, _ in SIMULATE_COLUMNS:
-        row[name] = "" if dtype == "str" else (-1 if dtype == "i8" else math.nan)
+    row = blank_row(SIMULATE_COLUMNS, -1)
     row.update(source_id=src.source_id, row=src.row, status="ok", seed=seed, target_doc=None)
     row["error"] = ""
     return row
@@ -228,8 +233,6 @@ def simulate_table(
     rows: list[dict[str, Any]], catalog: Catalog, opts: PopulationSimulateOptions
 ) -> Any:
     """Astropy summary table of simulate rows with units, descriptions and provenance meta."""
-    from ucbplan.population.run import columns_table, provenance, status_counts
-
     tab = columns_table(rows, SIMULATE_COLUMNS)
     tab.meta.update(provenance("ucbplan population simulate", catalog))
     f = opts.forecast

@@ -33,9 +33,10 @@ from ucbplan.observing.schedule.nights import NightWindow, night_windows
 from ucbplan.observing.schedule.settings import PlanSettings, parse_mode
 from ucbplan.observing.semesters import semester_dates
 from ucbplan.observing.sites import Site
-from ucbplan.population.catalog import SOURCE_COLUMNS, Source
+from ucbplan.population.catalog import Source
 from ucbplan.population.execute import worker_setup
 from ucbplan.population.forecast import ANCHORS, ForecastOptions, forecast_with_target, icrs_of
+from ucbplan.population.tables import SOURCE_COLUMNS
 
 __all__ = [
     "VISIBILITY_COLUMNS",
