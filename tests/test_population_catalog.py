@@ -13,8 +13,8 @@ from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 from ucbplan.errors import InputError, InputFileError, UcbplanError
+from ucbplan.observing.semesters import semester_dates
 from ucbplan.population.catalog import parse_column_map, read_catalog
-from ucbplan.population.semesters import semester_dates
 
 ROOT = Path(__file__).resolve().parents[1]
 CATALOG = ROOT / "catalogs" / "population" / "ldc-200.ecsv"

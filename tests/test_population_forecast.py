@@ -12,9 +12,15 @@ import pytest
 from ucbplan.errors import NumericalError, OutputExistsError, UcbplanError
 from ucbplan.population import execute
 from ucbplan.population.catalog import Catalog, read_catalog
-from ucbplan.population.execute import ExecutorSpec, SerialExecutor, run_chunks, source_seed
+from ucbplan.population.execute import (
+    ExecutorSpec,
+    SerialExecutor,
+    run_chunks,
+    source_seed,
+)
 from ucbplan.population.forecast import ForecastOptions
-from ucbplan.population.run import run_forecast, write_table
+from ucbplan.population.run import RunControl, run_forecast
+from ucbplan.population.tables import write_table
 
 ROOT = Path(__file__).resolve().parents[1]
 CATALOG = ROOT / "catalogs" / "population" / "ldc-200.ecsv"
@@ -27,7 +33,7 @@ def _subset(n: int) -> Catalog:
 
 
 def _table_bytes(tmp: Path, cat: Catalog, name: str, **kw: object) -> bytes:
-    run = run_forecast(cat, OPTS, parts=tmp / f"{name}.parts", **kw)  # type: ignore[arg-type]
+    run = run_forecast(cat, OPTS, RunControl(tmp / f"{name}.parts", **kw))  # type: ignore[arg-type]
     out = tmp / f"{name}.ecsv"
     write_table(run.table, out, overwrite=False)
     return out.read_bytes()
@@ -40,19 +46,19 @@ def cat40() -> Catalog:
 
 @pytest.fixture(scope="module")
 def serial40(tmp_path_factory: pytest.TempPathFactory, cat40: Catalog) -> bytes:
-    return _table_bytes(tmp_path_factory.mktemp("serial"), cat40, "serial", spec=ExecutorSpec())
+    return _table_bytes(tmp_path_factory.mktemp("serial"), cat40, "serial", executor=ExecutorSpec())
 
 
 def test_pool_is_byte_identical_to_serial(tmp_path: Path, cat40: Catalog, serial40: bytes) -> None:
-    pool = _table_bytes(tmp_path, cat40, "pool", spec=ExecutorSpec(workers=2))
+    pool = _table_bytes(tmp_path, cat40, "pool", executor=ExecutorSpec(workers=2))
     assert pool == serial40
 
 
 def test_chunking_does_not_change_the_table(
     tmp_path: Path, cat40: Catalog, serial40: bytes
 ) -> None:
-    assert _table_bytes(tmp_path, cat40, "c7", spec=ExecutorSpec(), chunk=7) == serial40
-    assert _table_bytes(tmp_path, cat40, "c1", spec=ExecutorSpec(), chunk=40) == serial40
+    assert _table_bytes(tmp_path, cat40, "c7", executor=ExecutorSpec(), chunk=7) == serial40
+    assert _table_bytes(tmp_path, cat40, "c1", executor=ExecutorSpec(), chunk=40) == serial40
 
 
 def test_table_has_provenance_and_statuses(cat40: Catalog, serial40: bytes) -> None:
@@ -106,7 +112,7 @@ def test_numerical_error_and_other_errors_are_per_source(
         return real(model)
 
     monkeypatch.setattr(pipeline, "fisher_forecast", fake)
-    run = run_forecast(cat, OPTS, spec=ExecutorSpec(), parts=tmp_path / "p")
+    run = run_forecast(cat, OPTS, RunControl(tmp_path / "p"))
     status = list(run.table["status"])
     assert status[1] == "unconstrained"
     assert status[2] == "failed: something else went wrong"
@@ -116,9 +122,7 @@ def test_numerical_error_and_other_errors_are_per_source(
 def test_no_k_fails_the_source_not_the_run(tmp_path: Path) -> None:
     cat = _subset(3)
     srcs = tuple(dataclasses.replace(s, m1_msun=None, m2_msun=None) for s in cat.sources[1:3])
-    run = run_forecast(
-        dataclasses.replace(cat, sources=srcs), OPTS, spec=ExecutorSpec(), parts=tmp_path / "p"
-    )
+    run = run_forecast(dataclasses.replace(cat, sources=srcs), OPTS, RunControl(tmp_path / "p"))
     assert all(s.startswith("failed: no K") for s in run.table["status"])
 
 
@@ -126,21 +130,21 @@ def test_resume_reuses_parts_and_recomputes_deleted_or_corrupt(
     tmp_path: Path, cat40: Catalog, serial40: bytes
 ) -> None:
     parts = tmp_path / "out.parts"
-    first = run_forecast(cat40, OPTS, spec=ExecutorSpec(), parts=parts, chunk=10)
+    first = run_forecast(cat40, OPTS, RunControl(parts, chunk=10))
     files = sorted(parts.glob("part-*.json"))
     assert len(files) == 4
     files[1].unlink()
     files[2].write_text("{not json", encoding="utf-8")
     with pytest.raises(OutputExistsError, match="--resume"):
-        run_forecast(cat40, OPTS, spec=ExecutorSpec(), parts=parts, chunk=10)
-    again = run_forecast(cat40, OPTS, spec=ExecutorSpec(), parts=parts, chunk=10, resume=True)
+        run_forecast(cat40, OPTS, RunControl(parts, chunk=10))
+    again = run_forecast(cat40, OPTS, RunControl(parts, chunk=10, resume=True))
     assert again.reused == 2
     out = tmp_path / "resumed.ecsv"
     write_table(again.table, out, overwrite=False)
     assert out.read_bytes() == serial40
     # other options: parts are not reused
     other = dataclasses.replace(OPTS, sigma_v_kms=10.0)
-    third = run_forecast(cat40, other, spec=ExecutorSpec(), parts=parts, chunk=10, resume=True)
+    third = run_forecast(cat40, other, RunControl(parts, chunk=10, resume=True))
     assert third.reused == 0
     assert first.n_chunks == 4
 
@@ -206,11 +210,11 @@ def test_worker_setup_is_offline() -> None:
 
 def test_bad_executor_options(tmp_path: Path, cat40: Catalog) -> None:
     with pytest.raises(UcbplanError, match="--workers"):
-        run_forecast(cat40, OPTS, spec=ExecutorSpec(workers=0), parts=tmp_path / "a")
+        run_forecast(cat40, OPTS, RunControl(tmp_path / "a", ExecutorSpec(workers=0)))
     with pytest.raises(UcbplanError, match="--scheduler"):
-        run_forecast(cat40, OPTS, spec=ExecutorSpec(scheduler="localhost"), parts=tmp_path / "b")
+        run_forecast(cat40, OPTS, RunControl(tmp_path / "b", ExecutorSpec(scheduler="localhost")))
     with pytest.raises(UcbplanError, match="--chunk"):
-        run_forecast(cat40, OPTS, spec=ExecutorSpec(), parts=tmp_path / "c", chunk=0)
+        run_forecast(cat40, OPTS, RunControl(tmp_path / "c", chunk=0))
 
 
 #: The CI identity check: all 200 sources on a narrow band (N = 64 bins) — the same code path
@@ -224,7 +228,7 @@ def test_200_sources_serial_pool_and_dask_are_byte_identical(tmp_path: Path) -> 
     assert len(cat.sources) == 200
 
     def table(name: str, spec: ExecutorSpec) -> bytes:
-        run = run_forecast(cat, CHEAP, spec=spec, parts=tmp_path / f"{name}.parts")
+        run = run_forecast(cat, CHEAP, RunControl(tmp_path / f"{name}.parts", spec))
         write_table(run.table, tmp_path / f"{name}.ecsv", overwrite=False)
         return (tmp_path / f"{name}.ecsv").read_bytes()
 

@@ -10,10 +10,10 @@ import pytest
 from astropy.table import Table
 
 from ucbplan.population.catalog import Catalog, read_catalog
-from ucbplan.population.execute import ExecutorSpec
 from ucbplan.population.forecast import ForecastOptions
-from ucbplan.population.run import write_table
+from ucbplan.population.run import RunControl
 from ucbplan.population.simulate import PopulationSimulateOptions, run_simulate
+from ucbplan.population.tables import write_table
 from ucbplan.target import load_target
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -37,14 +37,8 @@ def catalog(tmp_path_factory: pytest.TempPathFactory) -> Catalog:
 
 
 def _run(tmp: Path, cat: Catalog, name: str, **kw: object) -> tuple[object, bytes]:
-    run = run_simulate(
-        cat,
-        OPTS,
-        out_dir=tmp / f"{name}-targets",
-        spec=ExecutorSpec(),
-        parts=tmp / f"{name}.p",
-        **kw,  # type: ignore[arg-type]
-    )
+    control = RunControl(tmp / f"{name}.p", **kw)  # type: ignore[arg-type]
+    run = run_simulate(cat, OPTS, tmp / f"{name}-targets", control)
     write_table(run.table, tmp / f"{name}.ecsv", overwrite=False)
     return run, (tmp / f"{name}.ecsv").read_bytes()
 
@@ -113,15 +107,7 @@ def test_failed_source_is_listed_and_resume_reuses_parts(
     monkeypatch.setattr(pipeline, "simulate", real)
     parts = tmp_path / "d.p"
     (parts / "part-000002.json").unlink()
-    again = run_simulate(
-        catalog,
-        OPTS,
-        out_dir=tmp_path / "e",
-        spec=ExecutorSpec(),
-        parts=parts,
-        chunk=1,
-        resume=True,
-    )
+    again = run_simulate(catalog, OPTS, tmp_path / "e", RunControl(parts, chunk=1, resume=True))
     assert again.reused == 4
     assert list(again.table["mean_phase"][:4]) == pytest.approx(
         list(tab["mean_phase"][:4]), nan_ok=True

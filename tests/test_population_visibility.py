@@ -13,8 +13,8 @@ from ucbplan.errors import InputError
 from ucbplan.observing.schedule.settings import PlanSettings
 from ucbplan.observing.sites import get_site
 from ucbplan.population.catalog import Catalog, read_catalog
-from ucbplan.population.execute import ExecutorSpec
-from ucbplan.population.run import run_visibility, write_table
+from ucbplan.population.run import RunControl, run_visibility
+from ucbplan.population.tables import write_table
 from ucbplan.population.visibility import VisibilityOptions
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -32,7 +32,7 @@ def _subset(idx: list[int]) -> Catalog:
 def vis(tmp_path_factory: pytest.TempPathFactory) -> tuple[object, bytes]:
     tmp = tmp_path_factory.mktemp("vis")
     opts = VisibilityOptions(site=get_site("paranal"), semester="P145", settings=PLAIN)
-    run = run_visibility(_subset([0, 2, 3]), opts, spec=ExecutorSpec(), parts=tmp / "p", chunk=2)
+    run = run_visibility(_subset([0, 2, 3]), opts, RunControl(tmp / "p", chunk=2))
     write_table(run.table, tmp / "v.ecsv", overwrite=False)
     return run.table, (tmp / "v.ecsv").read_bytes()
 
@@ -97,9 +97,9 @@ def test_table_meta_and_resume(tmp_path: Path, vis: tuple[object, bytes]) -> Non
     opts = VisibilityOptions(site=get_site("paranal"), semester="P145", settings=PLAIN)
     parts = tmp_path / "p"
     cat = _subset([0, 2, 3])
-    run_visibility(cat, opts, spec=ExecutorSpec(), parts=parts, chunk=2)
+    run_visibility(cat, opts, RunControl(parts, chunk=2))
     (parts / "part-000001.json").unlink()
-    again = run_visibility(cat, opts, spec=ExecutorSpec(), parts=parts, chunk=2, resume=True)
+    again = run_visibility(cat, opts, RunControl(parts, chunk=2, resume=True))
     assert again.reused == 1
     write_table(again.table, tmp_path / "r.ecsv", overwrite=False)
     assert (tmp_path / "r.ecsv").read_bytes() == vis[1]

@@ -9,7 +9,6 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from ucbplan.observing.semesters import semester_dates, semester_label
-from ucbplan.population.semesters import semester_dates as population_semester_dates
 
 
 @given(st.dates(dt.date(1990, 1, 1), dt.date(2200, 12, 31)), st.booleans())
@@ -34,7 +33,3 @@ def test_the_semester_of_a_night_contains_it(night: dt.date, eso: bool) -> None:
 )
 def test_semester_boundaries(night: dt.date, eso: bool, label: str) -> None:
     assert semester_label(night, eso) == label
-
-
-def test_population_keeps_its_import() -> None:
-    assert population_semester_dates is semester_dates

@@ -285,7 +285,7 @@ def population_forecast(
     from ucbplan.population.catalog import read_catalog
     from ucbplan.population.execute import ExecutorSpec
     from ucbplan.population.forecast import forecast_options
-    from ucbplan.population.run import run_forecast
+    from ucbplan.population.run import RunControl, run_forecast
 
     opts = forecast_options(
         sigma_v_kms=as_float(sigma_v, "km/s", "sigma_v"),
@@ -296,5 +296,5 @@ def population_forecast(
     )
     with scope(), tempfile.TemporaryDirectory(prefix="ucbplan-parts-") as parts:
         cat = read_catalog(Path(catalog))
-        run = run_forecast(cat, opts, spec=ExecutorSpec(workers=workers), parts=Path(parts))
+        run = run_forecast(cat, opts, RunControl(Path(parts), ExecutorSpec(workers=workers)))
     return run.table

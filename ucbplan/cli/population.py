@@ -3,7 +3,9 @@
 Thin shells: read the catalog, run one library function of :mod:`ucbplan.population` through
 the executor seam (serial, ``--workers N`` processes, ``--scheduler tcp://HOST:PORT`` Dask, or a
 ``--cluster slurm|pbs`` started with dask-jobqueue), show a progress line on stderr, write the
-ECSV table (and figures or target files).
+ECSV table (and figures or target files). The options the commands share are declared once in
+:mod:`ucbplan.cli._population_options` and reach the library as one
+:class:`~ucbplan.population.execute.RunControl`.
 """
 
 from __future__ import annotations
@@ -12,13 +14,26 @@ import contextlib
 import dataclasses
 from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Any
 
 import typer
 from rich.markup import escape
 
 from ucbplan.cli._console import check_output_path, err_console
+from ucbplan.cli._population_options import (
+    CatalogArg,
+    Overwrite,
+    PopulationArgs,
+    TableOut,
+    population_options,
+)
 from ucbplan.errors import UcbplanError
+
+if TYPE_CHECKING:
+    from ucbplan.population.catalog import Catalog
+    from ucbplan.population.execute import ExecutorSpec
+    from ucbplan.population.forecast import ForecastOptions
+    from ucbplan.population.run import ForecastRun, RunControl
 
 __all__ = ["register"]
 
@@ -27,71 +42,58 @@ population_app = typer.Typer(
     no_args_is_help=True,
 )
 
-CatalogArg = Annotated[Path, typer.Argument(help="LDC-style catalog: ECSV, CSV or HDF5 (.h5).")]
-TableOut = Annotated[Path, typer.Option("-o", "--output", help="Output table (ECSV).")]
-SigmaV = Annotated[float, typer.Option("--sigma-v", help="RV precision per epoch [km/s].")]
-KEff = Annotated[
-    float | None,
-    typer.Option("--k-eff", help="K for the tolerance [km/s] (default: K1+K2 from Mass1, Mass2)."),
-]
-TObs = Annotated[str | None, typer.Option("--t-obs", help="LISA observation, e.g. '4yr'.")]
-TStart = Annotated[str, typer.Option("--t-start", help="LISA start (TDB): the catalog's t = 0.")]
-NBins = Annotated[int, typer.Option("--n-bins", help="Band width N of the Fisher model.")]
-Columns = Annotated[
-    str | None, typer.Option("--columns", help="Column map old=new,... onto the LDC names.")
-]
-Hdf5Path = Annotated[str | None, typer.Option("--hdf5-path", help="Table inside an HDF5 file.")]
-SkipBad = Annotated[bool, typer.Option("--skip-bad", help="Skip bad rows (listed in meta).")]
-Workers = Annotated[int, typer.Option("--workers", help="Local processes (1 = serial).")]
-Scheduler = Annotated[
-    str | None,
-    typer.Option("--scheduler", help="Existing Dask scheduler, tcp://HOST:PORT (ucbplan[dask])."),
-]
-Cluster = Annotated[
-    str | None,
-    typer.Option(
-        "--cluster", help="Start Dask workers on a batch system: slurm | pbs (dask-jobqueue)."
-    ),
-]
-Jobs = Annotated[int, typer.Option("--jobs", help="Batch jobs to start with --cluster.")]
-Chunk = Annotated[int | None, typer.Option("--chunk", help="Sources per task (default ≥ ~1 s).")]
-Resume = Annotated[bool, typer.Option("--resume", help="Reuse finished part files.")]
-KeepParts = Annotated[bool, typer.Option("--keep-parts", help="Keep part files after merging.")]
-Overwrite = Annotated[bool, typer.Option("--overwrite", help="Replace existing outputs.")]
-DEFAULT_T_START = "2035-01-01T00:00:00"
 
-
-def _catalog(path: Path, columns: str | None, hdf5_path: str | None, skip_bad: bool) -> Any:
+def _catalog(path: Path, shared: PopulationArgs) -> Catalog:
     """The catalog, with its skipped rows printed (one yellow line each)."""
     from ucbplan.population.catalog import parse_column_map, read_catalog
 
-    cat = read_catalog(path, parse_column_map(columns), skip_bad=skip_bad, hdf5_path=hdf5_path)
+    cat = read_catalog(
+        path,
+        parse_column_map(shared.columns),
+        skip_bad=shared.skip_bad,
+        hdf5_path=shared.hdf5_path,
+    )
     for row, msg in cat.bad:
         err_console.print(f"[yellow]skipped row {row}: {escape(msg)}[/yellow]")
     return cat
 
 
-def _spec(workers: int, scheduler: str | None, cluster: str | None, jobs: int) -> Any:
-    from ucbplan.population.execute import ExecutorSpec
-
-    return ExecutorSpec(workers=workers, scheduler=scheduler, cluster=cluster, jobs=jobs)
-
-
-def _forecast_opts(
-    cat: Any, sigma_v: float, k_eff: float | None, t_obs: str | None, t_start: str, n_bins: int
-) -> Any:
+def _inputs(path: Path, shared: PopulationArgs) -> tuple[Catalog, ForecastOptions]:
+    """The catalog and the checked forecast options (``--k-eff`` needed without masses)."""
     from ucbplan.population.forecast import forecast_options
 
+    cat = _catalog(path, shared)
     opts = forecast_options(
-        sigma_v_kms=sigma_v, k_eff_kms=k_eff, t_obs=t_obs, t_start=t_start, n_bins=n_bins
+        sigma_v_kms=shared.sigma_v,
+        k_eff_kms=shared.k_eff,
+        t_obs=shared.t_obs,
+        t_start=shared.t_start,
+        n_bins=shared.n_bins,
     )
-    if k_eff is None and not {"Mass1", "Mass2"} <= set(cat.optional):
+    if shared.k_eff is None and not {"Mass1", "Mass2"} <= set(cat.optional):
         raise UcbplanError(f"--k-eff: needed: {cat.path.name} has no Mass1 and Mass2 columns")
-    return opts
+    return cat, opts
 
 
-def _with_progress(label: str, total: int, run: Callable[[Any], Any]) -> Any:
-    """``run(progress)`` under a progress line on stderr (sources done, rate, ETA)."""
+def _control(output: Path, overwrite: bool, shared: PopulationArgs) -> RunControl:
+    """Refuse an existing ``output`` (without ``--overwrite``), then the run control (checked)
+    with the part files next to ``output``."""
+    from ucbplan.population.run import parts_folder
+
+    check_output_path(output, overwrite)
+    return shared.control(parts_folder(output), overwrite)
+
+
+def _announce(cat: Catalog, path: Path, control: RunControl, where: str = "") -> None:
+    err_console.print(
+        f"{len(cat.sources)} sources from {escape(str(path))}; {where}{control.executor.describe()}"
+    )
+
+
+def _run(
+    label: str, cat: Catalog, control: RunControl, call: Callable[[RunControl], ForecastRun]
+) -> ForecastRun:
+    """``call(control)`` under a progress line on stderr (sources done, rate, ETA)."""
     from rich.progress import BarColumn, Progress, TextColumn
 
     from ucbplan.population.execute import Rate
@@ -106,24 +108,24 @@ def _with_progress(label: str, total: int, run: Callable[[Any], Any]) -> Any:
         console=err_console,
         transient=True,
     ) as prog:
-        task = prog.add_task(label, total=total, rate="", eta="?")
+        task = prog.add_task(label, total=len(cat.sources), rate="", eta="?")
 
         def _progress(done: int, n: int) -> None:
             r, eta = rate.eta(done, n)
             eta_text = "?" if eta != eta else f"{eta:.0f} s"
             prog.update(task, completed=done, rate=f"{r:.1f}/s", eta=eta_text)
 
-        return run(_progress)
+        return call(dataclasses.replace(control, progress=_progress))
 
 
-def _finish(run: Any, output: Path, overwrite: bool, keep_parts: bool) -> None:
+def _finish(run: ForecastRun, output: Path, control: RunControl, keep_parts: bool) -> None:
     """Write the merged table, remove the parts (unless kept), print the summary line."""
     from ucbplan.population.execute import remove_parts
-    from ucbplan.population.run import parts_folder, write_table
+    from ucbplan.population.tables import write_table
 
-    write_table(run.table, output, overwrite)
+    write_table(run.table, output, control.overwrite)
     if not keep_parts:
-        remove_parts(parts_folder(output))
+        remove_parts(control.parts)
     meta = run.table.meta
     err_console.print(
         f"wrote {escape(str(output))}: {meta['n_ok']} ok, {meta['n_unconstrained']} unconstrained, "
@@ -132,60 +134,33 @@ def _finish(run: Any, output: Path, overwrite: bool, keep_parts: bool) -> None:
 
 
 @population_app.command("forecast")
+@population_options()
 def forecast(
     catalog: CatalogArg,
     output: TableOut,
-    sigma_v: SigmaV = 15.0,
-    k_eff: KEff = None,
-    t_obs: TObs = None,
-    t_start: TStart = DEFAULT_T_START,
-    n_bins: NBins = 512,
-    columns: Columns = None,
-    hdf5_path: Hdf5Path = None,
-    skip_bad: SkipBad = False,
-    workers: Workers = 1,
-    scheduler: Scheduler = None,
-    cluster: Cluster = None,
-    jobs: Jobs = 2,
-    chunk: Chunk = None,
-    resume: Resume = False,
-    keep_parts: KeepParts = False,
+    *,
+    shared: PopulationArgs,
     plots: Path | None = typer.Option(None, "--plots", help="Folder for the summary plots."),
     overwrite: Overwrite = False,
 ) -> None:
     """Per-source Fisher forecast of a catalog → ECSV (σ_u at the end, T_valid, SNR, status)."""
     from ucbplan.population.plots import forecast_plots
-    from ucbplan.population.run import parts_folder, run_forecast
+    from ucbplan.population.run import run_forecast
 
-    check_output_path(output, overwrite)
-    spec = _spec(workers, scheduler, cluster, jobs)
+    control = _control(output, overwrite, shared)
     if plots is not None and not plots.is_dir():
         raise UcbplanError(f"--plots: folder {plots} does not exist; create it first")
-    cat = _catalog(catalog, columns, hdf5_path, skip_bad)
-    opts = _forecast_opts(cat, sigma_v, k_eff, t_obs, t_start, n_bins)
-    err_console.print(f"{len(cat.sources)} sources from {escape(str(catalog))}; {spec.describe()}")
-    parts = parts_folder(output)
-    run = _with_progress(
-        "forecast",
-        len(cat.sources),
-        lambda p: run_forecast(
-            cat,
-            opts,
-            spec=spec,
-            parts=parts,
-            chunk=chunk,
-            resume=resume,
-            overwrite=overwrite,
-            progress=p,
-        ),
-    )
-    _finish(run, output, overwrite, keep_parts)
+    cat, opts = _inputs(catalog, shared)
+    _announce(cat, catalog, control)
+    run = _run("forecast", cat, control, lambda c: run_forecast(cat, opts, c))
+    _finish(run, output, control, shared.keep_parts)
     if plots is not None:
         for path in forecast_plots(run.table, plots, overwrite=overwrite):
             err_console.print(f"wrote {escape(str(path))}")
 
 
 @population_app.command("visibility")
+@population_options()
 def visibility(
     catalog: CatalogArg,
     output: TableOut,
@@ -201,32 +176,18 @@ def visibility(
     min_hours: float = typer.Option(1.0, "--min-hours", help="Usable hours of a usable night."),
     exptime: float = typer.Option(60.0, "--exptime", help="Block (exposure) length [s]."),
     alpha: float = typer.Option(1.0, "--alpha", help="Planning margin α of T_valid."),
-    sigma_v: SigmaV = 15.0,
-    k_eff: KEff = None,
-    t_obs: TObs = None,
-    t_start: TStart = DEFAULT_T_START,
-    n_bins: NBins = 512,
-    columns: Columns = None,
-    hdf5_path: Hdf5Path = None,
-    skip_bad: SkipBad = False,
-    workers: Workers = 1,
-    scheduler: Scheduler = None,
-    cluster: Cluster = None,
-    jobs: Jobs = 2,
-    chunk: Chunk = None,
-    resume: Resume = False,
-    keep_parts: KeepParts = False,
+    *,
+    shared: PopulationArgs,
     overwrite: Overwrite = False,
 ) -> None:
     """Per source: usable nights, hours at airmass < X, anchor epochs inside T_valid → ECSV."""
     from ucbplan.observing.blocks import ExposurePlan
     from ucbplan.observing.schedule.settings import PlanSettings
     from ucbplan.observing.sites import resolve_site
-    from ucbplan.population.run import parts_folder, run_visibility
+    from ucbplan.population.run import run_visibility
     from ucbplan.population.visibility import VisibilityOptions
 
-    check_output_path(output, overwrite)
-    spec = _spec(workers, scheduler, cluster, jobs)
+    control = _control(output, overwrite, shared)
     where = resolve_site(site, site_lonlat, sites_file)
     settings = PlanSettings(
         twilight=twilight,
@@ -235,31 +196,13 @@ def visibility(
         exposure=ExposurePlan(exptime_s=exptime),
         alpha=alpha,
     )
-    cat = _catalog(catalog, columns, hdf5_path, skip_bad)
-    fopts = _forecast_opts(cat, sigma_v, k_eff, t_obs, t_start, n_bins)
+    cat, fopts = _inputs(catalog, shared)
     opts = VisibilityOptions(
         site=where, semester=semester, settings=settings, min_hours=min_hours, forecast=fopts
     )
-    err_console.print(
-        f"{len(cat.sources)} sources from {escape(str(catalog))}; {escape(where.name)}, "
-        f"{opts.semester.upper()}; {spec.describe()}"
-    )
-    parts = parts_folder(output)
-    run = _with_progress(
-        "visibility",
-        len(cat.sources),
-        lambda p: run_visibility(
-            cat,
-            opts,
-            spec=spec,
-            parts=parts,
-            chunk=chunk,
-            resume=resume,
-            overwrite=overwrite,
-            progress=p,
-        ),
-    )
-    _finish(run, output, overwrite, keep_parts)
+    _announce(cat, catalog, control, f"{escape(where.name)}, {opts.semester.upper()}; ")
+    run = _run("visibility", cat, control, lambda c: run_visibility(cat, opts, c))
+    _finish(run, output, control, shared.keep_parts)
 
 
 def _check_out_dir(out_dir: Path, first: Path | None, overwrite: bool) -> None:
@@ -290,7 +233,38 @@ def _made_folder(out_dir: Path) -> Iterator[None]:
         raise
 
 
+def _ranked_source(
+    source: Path,
+    catalog: Path | None,
+    out_dir: Path,
+    shared: PopulationArgs,
+    executor: ExecutorSpec,
+) -> tuple[Any, Catalog, ForecastOptions]:
+    """(forecast table, catalog, forecast options) of ``rank``'s SOURCE: a forecast table
+    (checked against its catalog), or a catalog forecast here (its parts removed after)."""
+    from ucbplan.population import rank as rk
+    from ucbplan.population.execute import remove_parts
+    from ucbplan.population.run import RunControl, parts_folder, run_forecast
+
+    tab = rk.read_forecast_table(source)
+    if tab is not None:
+        fopts = rk.forecast_options_of(tab.meta, source)
+        cat_path = catalog or Path(str(tab.meta.get("catalog_path", tab.meta.get("catalog"))))
+        cat = _catalog(cat_path, shared)
+        rk.check_catalog_of(tab, cat, source)
+        return tab, cat, fopts
+    cat, fopts = _inputs(source, shared)
+    with _made_folder(out_dir):
+        control = RunControl(parts_folder(out_dir / "forecast.ecsv"), executor, overwrite=True)
+        try:
+            tab = _run("forecast", cat, control, lambda c: run_forecast(cat, fopts, c)).table
+        finally:
+            remove_parts(control.parts)
+    return tab, cat, fopts
+
+
 @population_app.command("rank")
+@population_options(parts=False)
 def rank(
     source: Path = typer.Argument(..., help="Forecast table (ECSV) or an LDC-style catalog."),
     out_dir: Path = typer.Option(..., "--out-dir", help="Folder for ranked.ecsv and targets."),
@@ -308,28 +282,17 @@ def rank(
     catalog: Path | None = typer.Option(
         None, "--catalog", help="The forecast's catalog (default: the path in its meta)."
     ),
-    sigma_v: SigmaV = 15.0,
-    k_eff: KEff = None,
-    t_obs: TObs = None,
-    t_start: TStart = DEFAULT_T_START,
-    n_bins: NBins = 512,
-    columns: Columns = None,
-    hdf5_path: Hdf5Path = None,
-    skip_bad: SkipBad = False,
-    workers: Workers = 1,
-    scheduler: Scheduler = None,
-    cluster: Cluster = None,
-    jobs: Jobs = 2,
+    *,
+    shared: PopulationArgs,
     overwrite: Overwrite = False,
 ) -> None:
     """Order sources by a stated figure of merit; target files for the top N (for `plan`)."""
     from ucbplan.population import rank as rk
-    from ucbplan.population.execute import remove_parts
-    from ucbplan.population.run import parts_folder, run_forecast, write_table
+    from ucbplan.population.tables import write_table
 
     ranked_path = out_dir / "ranked.ecsv"
     _check_out_dir(out_dir, ranked_path, overwrite)
-    spec = _spec(workers, scheduler, cluster, jobs)
+    executor = shared.executor()
     ropts = rk.rank_options(
         top=top,
         goal=goal,
@@ -341,27 +304,7 @@ def rank(
         acquisition_s=overhead,
         visit_s=visit,
     )
-    tab = rk.read_forecast_table(source)
-    if tab is None:
-        cat = _catalog(source, columns, hdf5_path, skip_bad)
-        fopts = _forecast_opts(cat, sigma_v, k_eff, t_obs, t_start, n_bins)
-        with _made_folder(out_dir):
-            parts = parts_folder(out_dir / "forecast.ecsv")
-            try:
-                tab = _with_progress(
-                    "forecast",
-                    len(cat.sources),
-                    lambda p: run_forecast(
-                        cat, fopts, spec=spec, parts=parts, overwrite=True, progress=p
-                    ),
-                ).table
-            finally:
-                remove_parts(parts)
-    else:
-        fopts = rk.forecast_options_of(tab.meta, source)
-        cat_path = catalog or Path(str(tab.meta.get("catalog_path", tab.meta.get("catalog"))))
-        cat = _catalog(cat_path, columns, hdf5_path, skip_bad)
-        rk.check_catalog_of(tab, cat, source)
+    tab, cat, fopts = _ranked_source(source, catalog, out_dir, shared, executor)
     ranked = rk.rank_table(tab, cat, ropts)
     with _made_folder(out_dir):
         paths = rk.write_top_targets(ranked, cat, fopts, out_dir, top, overwrite)
@@ -373,6 +316,7 @@ def rank(
 
 
 @population_app.command("simulate")
+@population_options()
 def simulate(
     catalog: CatalogArg,
     output: TableOut,
@@ -385,29 +329,14 @@ def simulate(
     ),
     max_steps: int = typer.Option(50000, "--max-steps", help="Cap for --until-converged."),
     no_noise: bool = typer.Option(False, "--no-noise", help="Zero-noise data."),
-    sigma_v: SigmaV = 15.0,
-    k_eff: KEff = None,
-    t_obs: TObs = None,
-    t_start: TStart = DEFAULT_T_START,
-    n_bins: NBins = 512,
-    columns: Columns = None,
-    hdf5_path: Hdf5Path = None,
-    skip_bad: SkipBad = False,
-    workers: Workers = 1,
-    scheduler: Scheduler = None,
-    cluster: Cluster = None,
-    jobs: Jobs = 2,
-    chunk: Chunk = None,
-    resume: Resume = False,
-    keep_parts: KeepParts = False,
+    *,
+    shared: PopulationArgs,
     overwrite: Overwrite = False,
 ) -> None:
     """Simulate LISA per source → summary ECSV (posterior vs Fisher σ) + a target file each."""
-    from ucbplan.population.run import parts_folder
     from ucbplan.population.simulate import PopulationSimulateOptions, run_simulate
 
-    check_output_path(output, overwrite)
-    spec = _spec(workers, scheduler, cluster, jobs)
+    control = _control(output, overwrite, shared)
     sampling = PopulationSimulateOptions(  # the options first, then the files, then the work
         seed=seed,
         walkers=walkers,
@@ -417,28 +346,12 @@ def simulate(
         noise=not no_noise,
     )
     _check_out_dir(out_dir, None, overwrite)
-    cat = _catalog(catalog, columns, hdf5_path, skip_bad)
-    fopts = _forecast_opts(cat, sigma_v, k_eff, t_obs, t_start, n_bins)
+    cat, fopts = _inputs(catalog, shared)
     opts = dataclasses.replace(sampling, forecast=fopts)
-    err_console.print(f"{len(cat.sources)} sources from {escape(str(catalog))}; {spec.describe()}")
-    parts = parts_folder(output)
+    _announce(cat, catalog, control)
     with _made_folder(out_dir):
-        run = _with_progress(
-            "simulate",
-            len(cat.sources),
-            lambda p: run_simulate(
-                cat,
-                opts,
-                out_dir=out_dir,
-                spec=spec,
-                parts=parts,
-                chunk=chunk,
-                resume=resume,
-                overwrite=overwrite,
-                progress=p,
-            ),
-        )
-    _finish(run, output, overwrite, keep_parts)
+        run = _run("simulate", cat, control, lambda c: run_simulate(cat, opts, out_dir, c))
+    _finish(run, output, control, shared.keep_parts)
     for f in run.table.meta["failed"]:
         err_console.print(f"[yellow]failed {escape(f['source_id'])}: {escape(f['error'])}[/yellow]")
 
@@ -448,7 +361,7 @@ def semester(
     name: str = typer.Argument(..., help="2041A, 2041B or an ESO period like P147."),
 ) -> None:
     """Print the dates of a semester (A: Feb–Jul, B: Aug–Jan) or ESO period (P110 = 2022-10)."""
-    from ucbplan.population.semesters import semester_dates
+    from ucbplan.observing.semesters import semester_dates
 
     first, end = semester_dates(name)
     typer.echo(f"{name.strip().upper()}: {first.isoformat()} .. {end.isoformat()} (end exclusive)")

@@ -3,10 +3,12 @@
 Modules: :mod:`~ucbplan.population.catalog` (LDC-style catalogs from ECSV, CSV, HDF5),
 :mod:`~ucbplan.population.forecast` (per-source Fisher forecast, σ_u, T_valid, SNR),
 :mod:`~ucbplan.population.execute` (the executor seam: serial, process pool, Dask; part files,
-resume), :mod:`~ucbplan.population.run` (whole-catalog runs and the merged table),
-:mod:`~ucbplan.population.plots` (summary figures), :mod:`~ucbplan.population.semesters`
-(observatory semesters and ESO periods), :mod:`~ucbplan.population.visibility` (usable hours,
-nights and anchor epochs at a site in a semester), :mod:`~ucbplan.population.rank` (figures of
+resume), :mod:`~ucbplan.population.run` (whole-catalog runs: a job, its run control, the
+merged table), :mod:`~ucbplan.population.tables` (what every population table shares: source
+columns, blank rows, provenance, status tally, the ECSV writer),
+:mod:`~ucbplan.population.plots` (summary figures), :mod:`~ucbplan.population.visibility`
+(usable hours, nights and anchor epochs at a site in a semester; semesters and ESO periods come
+from :mod:`ucbplan.observing.semesters`), :mod:`~ucbplan.population.rank` (figures of
 merit, target files for the best sources), :mod:`~ucbplan.population.simulate` (the simulate
 pipeline per source). Nothing is loaded on package import.
 """

@@ -274,6 +274,32 @@ def read_catalog(
     if not path.is_file():
         raise InputFileError(f"{path}: catalog: no such file")
     digest = hashlib.sha256(path.read_bytes()).hexdigest()
+    data, units = _columns_of(path, columns, hdf5_path)
+    present = [c for c in COLUMNS if c.name in data]
+    conv = {c.name: _convert_column(data[c.name], units.get(c.name), c, path) for c in present}
+    ids, n_rows = data.get(ID_COLUMN), len(data["Frequency"])
+    sources: list[Source] = []
+    bad: list[tuple[int, str]] = []
+    for i in range(n_rows):
+        row = i + 1
+        vals, problem = _row_values(data, units, present, conv, i)
+        if problem is not None:
+            if not skip_bad:
+                raise InputFileError(f"{path}: row {row}: {problem} (or use --skip-bad)")
+            bad.append((row, problem))
+            continue
+        sid = str(_id_text(ids[i])) if ids is not None else str(row)
+        sources.append(Source(row=row, source_id=sid, **vals))  # type: ignore[arg-type]
+    _check_sources(path, sources, len(bad))
+    optional = tuple(c.name for c in present if not c.required)
+    return Catalog(path.resolve(), tuple(sources), tuple(bad), digest, n_rows, optional)
+
+
+def _columns_of(
+    path: Path, columns: Mapping[str, str] | None, hdf5_path: str | None
+) -> tuple[dict[str, Any], dict[str, str]]:
+    """The file's columns under their LDC names and their units; every required one present,
+    at least one row."""
     units: dict[str, str] = {}
     if path.suffix.lower() in (".h5", ".hdf5", ".hdf"):
         raw = _from_hdf5(path, hdf5_path)
@@ -291,43 +317,42 @@ def read_catalog(
             f"{path}: missing column(s) {', '.join(missing)}; map other names with "
             "--columns old=new"
         )
-    n_rows = len(data["Frequency"])
-    if n_rows == 0:
+    if len(data["Frequency"]) == 0:
         raise InputFileError(f"{path}: catalog has no rows")
-    present = [c for c in COLUMNS if c.name in data]
-    conv = {c.name: _convert_column(data[c.name], units.get(c.name), c, path) for c in present}
-    ids = data.get(ID_COLUMN)
-    sources: list[Source] = []
-    bad: list[tuple[int, str]] = []
-    for i in range(n_rows):
-        row = i + 1
-        vals: dict[str, float | None] = {}
-        problem = None
-        for c in present:
-            v = conv[c.name][i]
-            if not math.isfinite(v):
-                if c.required:
-                    problem = (
-                        f"{c.name}: expected a finite number, got {shorten(raw_of(data, c, i))}"
-                    )
-                    break
-                vals[c.field] = None
-                continue
-            if not c.lo <= v <= c.hi:
-                problem = _out_of_range(c, v, raw_of(data, c, i), units.get(c.name))
-                break
-            vals[c.field] = float(v)
-        if problem is None and vals.get("amplitude") == 0.0:
-            problem = "Amplitude: expected > 0, got 0.0"
-        if problem is not None:
-            if not skip_bad:
-                raise InputFileError(f"{path}: row {row}: {problem} (or use --skip-bad)")
-            bad.append((row, problem))
+    return data, units
+
+
+def _row_values(
+    data: Mapping[str, Any],
+    units: Mapping[str, str],
+    present: list[CatalogColumn],
+    conv: Mapping[str, np.ndarray],
+    i: int,
+) -> tuple[dict[str, float | None], str | None]:
+    """The :class:`Source` fields of row index ``i``, or what is wrong with the row."""
+    vals: dict[str, float | None] = {}
+    for c in present:
+        v = conv[c.name][i]
+        if not math.isfinite(v):
+            if c.required:
+                return (
+                    vals,
+                    f"{c.name}: expected a finite number, got {shorten(raw_of(data, c, i))}",
+                )
+            vals[c.field] = None
             continue
-        sid = str(_id_text(ids[i])) if ids is not None else str(row)
-        sources.append(Source(row=row, source_id=sid, **vals))  # type: ignore[arg-type]
+        if not c.lo <= v <= c.hi:
+            return vals, _out_of_range(c, v, raw_of(data, c, i), units.get(c.name))
+        vals[c.field] = float(v)
+    if vals.get("amplitude") == 0.0:
+        return vals, "Amplitude: expected > 0, got 0.0"
+    return vals, None
+
+
+def _check_sources(path: Path, sources: list[Source], n_bad: int) -> None:
+    """Refuse a catalog without usable rows or with an identifier twice."""
     if not sources:
-        raise InputFileError(f"{path}: no usable rows ({len(bad)} bad)")
+        raise InputFileError(f"{path}: no usable rows ({n_bad} bad)")
     seen: set[str] = set()
     for s in sources:
         if s.source_id in seen:
@@ -335,8 +360,6 @@ def read_catalog(
                 f"{path}: row {s.row}: {ID_COLUMN}: duplicate {shorten(s.source_id)}"
             )
         seen.add(s.source_id)
-    optional = tuple(c.name for c in present if not c.required)
-    return Catalog(path.resolve(), tuple(sources), tuple(bad), digest, n_rows, optional)
 
 
 def _out_of_range(col: CatalogColumn, value: float, raw: Any, unit: str | None) -> str:

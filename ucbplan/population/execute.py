@@ -16,6 +16,7 @@ import ctypes
 import ctypes.util
 import functools
 import hashlib
+import itertools
 import json
 import math
 import os
@@ -325,6 +326,74 @@ def prepare_parts(folder: Path, *, resume: bool, overwrite: bool) -> None:
             p.unlink()
 
 
+class _Parts:
+    """The chunks of one run: their bounds, the run's fingerprint and the part file of each."""
+
+    def __init__(self, folder: Path, fingerprint: str, ids: Sequence[str], chunk: int) -> None:
+        n = len(ids)
+        self.folder, self.fingerprint, self.ids = folder, fingerprint, ids
+        self.bounds = [(s, min(s + chunk, n)) for s in range(0, n, chunk)]
+
+    def ids_of(self, k: int) -> list[str]:
+        a, b = self.bounds[k]
+        return list(self.ids[a:b])
+
+    def reuse(self) -> dict[int, list[dict[str, Any]]]:
+        """Rows of every chunk whose part file matches this run (``resume``)."""
+        found = {}
+        for k, (a, b) in enumerate(self.bounds):
+            rows = _load_part(_part_path(self.folder, k), self.fingerprint, self.ids_of(k))
+            if rows is not None and len(rows) == b - a:
+                found[k] = rows
+        return found
+
+    def save(self, k: int, rows: list[dict[str, Any]]) -> None:
+        """Check the rows of chunk ``k`` and write them as its part file (atomic)."""
+        a, b = self.bounds[k]
+        if len(rows) != b - a:
+            raise UcbplanError(f"chunk {k}: {len(rows)} rows for {b - a} sources")
+        doc = {"fingerprint": self.fingerprint, "ids": self.ids_of(k), "rows": rows}
+        write_output(_part_path(self.folder, k), functools.partial(_dump, doc), overwrite=True)
+
+
+def _stream(
+    task: Callable[[Sequence[Any]], list[dict[str, Any]]],
+    items: Sequence[Any],
+    chunks: _Parts,
+    results: dict[int, list[dict[str, Any]]],
+    executor: Executor,
+    window: int,
+    progress: Progress | None,
+) -> None:
+    """Run the chunks not in ``results`` with at most ``window`` in flight; save each part as
+    it arrives and add its rows to ``results``."""
+    n = len(items)
+    done = sum(len(rows) for rows in results.values())
+    if progress is not None:
+        progress(done, n)
+    it = iter([k for k in range(len(chunks.bounds)) if k not in results])
+    pending: dict[Future[list[dict[str, Any]]], int] = {}
+    try:
+        while True:
+            for k in itertools.islice(it, max(0, window - len(pending))):
+                a, b = chunks.bounds[k]
+                pending[executor.submit(offline_task, task, list(items[a:b]))] = k
+            if not pending:
+                break
+            finished, _ = wait(list(pending), return_when=FIRST_COMPLETED)
+            for fut in finished:
+                k = pending.pop(fut)
+                rows = fut.result()
+                chunks.save(k, rows)
+                results[k] = rows
+                done += len(rows)
+                if progress is not None:
+                    progress(done, n)
+    finally:
+        for fut in pending:
+            fut.cancel()
+
+
 def run_chunks(
     task: Callable[[Sequence[Any]], list[dict[str, Any]]],
     items: Sequence[Any],
@@ -365,54 +434,11 @@ def run_chunks(
     """
     if chunk < 1:
         raise InputError(f"--chunk: expected >= 1, got {chunk}")
-    fp = _fingerprint(kind, options, catalog_sha256, chunk)
-    n = len(items)
-    bounds = [(s, min(s + chunk, n)) for s in range(0, n, chunk)]
-    results: dict[int, list[dict[str, Any]]] = {}
-    done = 0
-    if resume:
-        for k, (a, b) in enumerate(bounds):
-            rows = _load_part(_part_path(parts, k), fp, list(ids[a:b]))
-            if rows is not None and len(rows) == b - a:
-                results[k] = rows
-                done += b - a
+    chunks = _Parts(parts, _fingerprint(kind, options, catalog_sha256, chunk), ids, chunk)
+    results = chunks.reuse() if resume else {}
     reused = len(results)
-    if progress is not None:
-        progress(done, n)
-    todo = [k for k in range(len(bounds)) if k not in results]
-    pending: dict[Future[list[dict[str, Any]]], int] = {}
-    window = max(2, 2 * slots)
-    it = iter(todo)
-    try:
-        while True:
-            while len(pending) < window:
-                nxt = next(it, None)
-                if nxt is None:
-                    break
-                a, b = bounds[nxt]
-                pending[executor.submit(offline_task, task, list(items[a:b]))] = nxt
-            if not pending:
-                break
-            finished, _ = wait(list(pending), return_when=FIRST_COMPLETED)
-            for fut in finished:
-                k = pending.pop(fut)
-                rows = fut.result()
-                a, b = bounds[k]
-                if len(rows) != b - a:
-                    raise UcbplanError(f"chunk {k}: {len(rows)} rows for {b - a} sources")
-                doc = {"fingerprint": fp, "ids": list(ids[a:b]), "rows": rows}
-                write_output(_part_path(parts, k), functools.partial(_dump, doc), overwrite=True)
-                results[k] = rows
-                done += b - a
-                if progress is not None:
-                    progress(done, n)
-    finally:
-        for fut in pending:
-            fut.cancel()
-    out: list[dict[str, Any]] = []
-    for k in range(len(bounds)):
-        out.extend(results[k])
-    return out, reused
+    _stream(task, items, chunks, results, executor, max(2, 2 * slots), progress)
+    return [row for k in range(len(chunks.bounds)) for row in results[k]], reused
 
 
 def remove_parts(folder: Path) -> None:

@@ -28,6 +28,7 @@ from ucbplan.inputs import check_number
 from ucbplan.lisa import MAX_N_BINS, MIN_T_OBS_S
 from ucbplan.population.catalog import Source
 from ucbplan.population.execute import worker_setup
+from ucbplan.population.tables import SOURCE_COLUMNS, blank_row
 from ucbplan.target.model import Spectroscopy
 
 __all__ = [
@@ -85,6 +86,10 @@ class ForecastOptions:
         """JSON-ready mapping (fingerprints and meta)."""
         return asdict(self)
 
+    def k_eff_meta(self) -> float | str:
+        """``k_eff_kms`` as the tables' meta states it (the rule when it is per source)."""
+        return self.k_eff_kms if self.k_eff_kms is not None else "per source: K1+K2"
+
 
 def _t_cols() -> list[tuple[str, str, str, str]]:
     cols = []
@@ -105,8 +110,7 @@ def _t_cols() -> list[tuple[str, str, str, str]]:
 
 #: The forecast table, declared once: (name, unit, dtype, description).
 FORECAST_COLUMNS: tuple[tuple[str, str, str, str], ...] = (
-    ("source_id", "", "str", "catalog Name (or row number)"),
-    ("row", "", "i8", "catalog row (1 = first data row)"),
+    *SOURCE_COLUMNS,
     ("status", "", "str", "ok | unconstrained | failed: <error>"),
     ("f_gw", "Hz", "f8", "GW frequency at the midpoint"),
     ("fdot", "Hz / s", "f8", "ḟ at the midpoint"),
@@ -182,9 +186,7 @@ def icrs_of(sources: Sequence[Source]) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _nan_row(src: Source, status: str) -> dict[str, Any]:
-    row: dict[str, Any] = {}
-    for name, _, dtype, _ in FORECAST_COLUMNS:
-        row[name] = "" if dtype == "str" else (0 if dtype == "i8" else math.nan)
+    row = blank_row(FORECAST_COLUMNS, 0)
     row.update(source_id=src.source_id, row=src.row, status=status[:300])
     row["vmag"] = math.nan if src.vmag is None else src.vmag
     row["distance"] = math.nan if src.distance_kpc is None else src.distance_kpc

@@ -42,6 +42,7 @@ from ucbplan.population.forecast import (
     icrs_of,
     k_total_kms,
 )
+from ucbplan.population.tables import SOURCE_COLUMNS, columns_table, provenance
 
 __all__ = [
     "RANK_COLUMNS",
@@ -61,8 +62,7 @@ T_VALID_COLUMN = "t_valid_quadrature_a1"
 #: The ranked table, declared once: (name, unit, dtype, description).
 RANK_COLUMNS: tuple[tuple[str, str, str, str], ...] = (
     ("rank", "", "i8", "1 = best"),
-    ("source_id", "", "str", "catalog Name (or row number)"),
-    ("row", "", "i8", "catalog row (1 = first data row)"),
+    *SOURCE_COLUMNS,
     ("status", "", "str", "forecast status"),
     ("merit", "", "f8", "figure of merit (meta: figure_of_merit; NaN: none, ranked last)"),
     ("t_valid_quadrature", "d", "f8", "T_valid after LISA, quadrature, α=1"),
@@ -190,8 +190,6 @@ def goal_hours(src: Source, f_gw: float, k_eff: float, goal: Goal, opts: RankOpt
 
 def rank_table(forecast: Any, catalog: Catalog, opts: RankOptions) -> Any:
     """The ranked table (best first) of a forecast table; ``target_file`` still empty."""
-    from ucbplan.population.run import columns_table, provenance
-
     by_id = {s.source_id: s for s in catalog.sources}
     goal = parse_goal(opts.goal)
     rows = []

@@ -9,10 +9,11 @@ from __future__ import annotations
 import functools
 import math
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ucbplan._version import __version__
+from ucbplan.observing.semesters import semester_dates
 from ucbplan.population.catalog import Catalog
 from ucbplan.population.execute import (
     ExecutorSpec,
@@ -30,7 +31,7 @@ from ucbplan.population.forecast import (
     ForecastOptions,
     forecast_chunk,
 )
-from ucbplan.population.semesters import semester_dates
+from ucbplan.population.tables import columns_table, provenance, status_counts
 from ucbplan.population.visibility import (
     GRID_STEP_S,
     VISIBILITY_COLUMNS,
@@ -40,16 +41,15 @@ from ucbplan.population.visibility import (
 )
 
 __all__ = [
+    "CatalogJob",
     "ForecastRun",
-    "columns_table",
+    "RunControl",
     "forecast_table",
     "parts_folder",
-    "provenance",
     "run_catalog",
     "run_forecast",
     "run_visibility",
     "visibility_table",
-    "write_table",
 ]
 
 #: Measured Fisher + horizons per source on one core (issue 23, batched: 3–5 ms) [s]; chunks
@@ -69,12 +69,11 @@ def forecast_table(rows: list[dict[str, Any]], catalog: Catalog, opts: ForecastO
     tab = columns_table(rows, FORECAST_COLUMNS)
     t0 = Time(opts.t_start_tdb, scale="tdb")
     t_ref = t0 + TimeDelta(0.5 * opts.t_obs_s, format="sec")
-    status = [r["status"] for r in rows]
     tab.meta.update(provenance("ucbplan population forecast", catalog))
     tab.meta.update(
         {
             "sigma_v_kms": opts.sigma_v_kms,
-            "k_eff_kms": opts.k_eff_kms if opts.k_eff_kms is not None else "per source: K1+K2",
+            "k_eff_kms": opts.k_eff_meta(),
             "t_obs_s": opts.t_obs_s,
             "t_start_tdb": t0.isot,
             "reference_epoch_tdb": t_ref.isot,
@@ -86,19 +85,10 @@ def forecast_table(rows: list[dict[str, Any]], catalog: Catalog, opts: ForecastO
             "alphas": list(ALPHAS),
             "t_valid_cap_days": HORIZON_CAP_DAYS,
             "catalog_convention": "LDC: Frequency, FrequencyDerivative, InitialPhase at t_start",
-            "n_ok": status.count("ok"),
-            "n_unconstrained": status.count("unconstrained"),
-            "n_failed": sum(s.startswith("failed") for s in status),
+            **status_counts(rows),
         }
     )
     return tab
-
-
-def write_table(tab: Any, path: Path | None, overwrite: bool) -> None:
-    """Write the table as ECSV (atomic; stdout when ``path`` is None)."""
-    from ucbplan.io import write_output
-
-    write_output(path, lambda h: tab.write(h, format="ascii.ecsv"), overwrite=overwrite)
 
 
 class ForecastRun:
@@ -108,154 +98,124 @@ class ForecastRun:
         self.table, self.chunk, self.reused, self.n_chunks = table, chunk, reused, n_chunks
 
 
-def run_catalog(
-    catalog: Catalog,
-    task: Callable[[Sequence[Any]], list[dict[str, Any]]],
-    *,
-    kind: str,
-    options: dict[str, Any],
-    seconds_per_source: float,
-    spec: ExecutorSpec,
-    parts: Path,
-    chunk: int | None = None,
-    resume: bool = False,
-    overwrite: bool = False,
-    progress: Progress | None = None,
-) -> tuple[list[dict[str, Any]], int, int]:
-    """Run the picklable ``task`` over the catalog's sources in chunks through the seam.
+@dataclass(frozen=True, slots=True)
+class RunControl:
+    """How a whole-catalog run runs, whatever it computes: where, in what chunks, with which
+    part files, and whom to tell about progress.
 
-    Returns
-    -------
-    rows, chunk, reused
-        Rows in source order, the chunk size used and the number of parts reused.
+    Attributes
+    ----------
+    parts : Path
+        Folder of the part files (remove them with
+        :func:`~ucbplan.population.execute.remove_parts` once the table is
+        written).
+    executor : ExecutorSpec
+        Serial, local processes or Dask.
+    chunk : int or None
+        Sources per task (None: :func:`~ucbplan.population.execute.default_chunk`).
+    resume : bool
+        Reuse the part files of an earlier run with the same fingerprint.
+    overwrite : bool
+        Replace earlier part files (and, for ``simulate``, target files) instead of refusing.
+    progress : callable or None
+        ``progress(sources_done, sources_total)`` after each chunk.
+    """
+
+    parts: Path
+    executor: ExecutorSpec = field(default_factory=ExecutorSpec)
+    chunk: int | None = None
+    resume: bool = False
+    overwrite: bool = False
+    progress: Progress | None = field(default=None, compare=False, repr=False)
+
+
+@dataclass(frozen=True)
+class CatalogJob:
+    """What a whole-catalog run computes: one picklable ``task`` per chunk of sources, and the
+    ``table`` of all rows.
+
+    Attributes
+    ----------
+    kind : str
+        ``forecast``, ``visibility``, ``simulate`` (part fingerprints).
+    task : callable
+        ``task(sources) -> rows`` (one dict per source, in order), picklable.
+    options : dict
+        JSON-ready options of the run (part fingerprints).
+    seconds_per_source : float
+        Work per source on one core [s] (the default chunk size).
+    table : callable
+        ``table(rows) -> astropy Table``, called once with all rows in catalog order.
+    """
+
+    kind: str
+    task: Callable[[Sequence[Any]], list[dict[str, Any]]]
+    options: dict[str, Any]
+    seconds_per_source: float
+    table: Callable[[list[dict[str, Any]]], Any]
+
+
+def run_catalog(catalog: Catalog, job: CatalogJob, control: RunControl) -> ForecastRun:
+    """Run ``job`` over the catalog's sources in chunks through the seam; its merged table.
 
     Raises
     ------
     OutputExistsError
-        ``parts`` holds parts of an earlier run and neither ``resume`` nor ``overwrite``.
+        ``control.parts`` holds parts of an earlier run and neither ``resume`` nor
+        ``overwrite``.
     InputError
         Bad ``--workers``/``--chunk``/``--scheduler``/``--cluster``.
     """
-    prepare_parts(parts, resume=resume, overwrite=overwrite)
+    prepare_parts(control.parts, resume=control.resume, overwrite=control.overwrite)
     sources = catalog.sources
-    ids = [s.source_id for s in sources]
-    with open_executor(spec) as (executor, slots):
-        size = (
-            chunk if chunk is not None else default_chunk(len(sources), slots, seconds_per_source)
-        )
+    with open_executor(control.executor) as (executor, slots):
+        size = control.chunk
+        if size is None:
+            size = default_chunk(len(sources), slots, job.seconds_per_source)
         rows, reused = run_chunks(
-            task,
+            job.task,
             sources,
-            ids,
+            [s.source_id for s in sources],
             chunk=size,
             executor=executor,
             slots=slots,
-            parts=parts,
-            kind=kind,
-            options=options,
+            parts=control.parts,
+            kind=job.kind,
+            options=job.options,
             catalog_sha256=catalog.sha256,
-            resume=resume,
-            progress=progress,
+            resume=control.resume,
+            progress=control.progress,
         )
-    return rows, size, reused
+    return ForecastRun(job.table(rows), size, reused, math.ceil(len(sources) / size))
 
 
-def run_forecast(
-    catalog: Catalog,
-    opts: ForecastOptions,
-    *,
-    spec: ExecutorSpec,
-    parts: Path,
-    chunk: int | None = None,
-    resume: bool = False,
-    overwrite: bool = False,
-    progress: Progress | None = None,
-) -> ForecastRun:
-    """Forecast every source of ``catalog``; part files stay in ``parts``.
+def run_forecast(catalog: Catalog, opts: ForecastOptions, control: RunControl) -> ForecastRun:
+    """Forecast every source of ``catalog``; part files stay in ``control.parts``.
 
     Remove them with :func:`ucbplan.population.execute.remove_parts` once the table is written.
     Raises as :func:`run_catalog`.
     """
-    rows, size, reused = run_catalog(
-        catalog,
-        functools.partial(forecast_chunk, opts),
-        kind="forecast",
-        options=opts.as_dict(),
-        seconds_per_source=FORECAST_SECONDS_PER_SOURCE,
-        spec=spec,
-        parts=parts,
-        chunk=chunk,
-        resume=resume,
-        overwrite=overwrite,
-        progress=progress,
-    )
-    tab = forecast_table(rows, catalog, opts)
-    return ForecastRun(tab, size, reused, math.ceil(len(catalog.sources) / size))
+    task = functools.partial(forecast_chunk, opts)
+    table = functools.partial(forecast_table, catalog=catalog, opts=opts)
+    job = CatalogJob("forecast", task, opts.as_dict(), FORECAST_SECONDS_PER_SOURCE, table)
+    return run_catalog(catalog, job, control)
 
 
-def run_visibility(
-    catalog: Catalog,
-    opts: VisibilityOptions,
-    *,
-    spec: ExecutorSpec,
-    parts: Path,
-    chunk: int | None = None,
-    resume: bool = False,
-    overwrite: bool = False,
-    progress: Progress | None = None,
-) -> ForecastRun:
+def run_visibility(catalog: Catalog, opts: VisibilityOptions, control: RunControl) -> ForecastRun:
     """Visibility of every source of ``catalog`` at one site in one semester (ECSV table).
 
-    Part files stay in ``parts``; raises as :func:`run_catalog`.
+    Part files stay in ``control.parts``; raises as :func:`run_catalog`.
     """
-    rows, size, reused = run_catalog(
-        catalog,
-        functools.partial(visibility_chunk, opts),
-        kind="visibility",
-        options=opts.as_dict(),
-        seconds_per_source=VISIBILITY_SECONDS_PER_SOURCE,
-        spec=spec,
-        parts=parts,
-        chunk=chunk,
-        resume=resume,
-        overwrite=overwrite,
-        progress=progress,
-    )
-    tab = visibility_table(rows, catalog, opts)
-    return ForecastRun(tab, size, reused, math.ceil(len(catalog.sources) / size))
-
-
-def columns_table(rows: list[dict[str, Any]], columns: Sequence[tuple[str, str, str, str]]) -> Any:
-    """Astropy table of ``rows`` with the declared (name, unit, dtype, description) columns."""
-    import numpy as np
-    from astropy.table import Column, Table
-
-    cols = []
-    for name, unit, dtype, desc in columns:
-        vals = [r[name] for r in rows]
-        data = np.array(vals, dtype=str if dtype == "str" else dtype)
-        cols.append(Column(data, name=name, unit=unit or None, description=desc))
-    return Table(cols)
-
-
-def provenance(command: str, catalog: Catalog) -> dict[str, Any]:
-    """Meta every population table starts with: version, command, catalog and its bad rows."""
-    return {
-        "ucbplan_version": __version__,
-        "command": command,
-        "catalog": catalog.path.name,
-        "catalog_path": str(catalog.path),
-        "catalog_sha256": catalog.sha256,
-        "catalog_rows": catalog.n_rows,
-        "bad_rows": [{"row": r, "error": m} for r, m in catalog.bad],
-    }
+    task = functools.partial(visibility_chunk, opts)
+    table = functools.partial(visibility_table, catalog=catalog, opts=opts)
+    job = CatalogJob("visibility", task, opts.as_dict(), VISIBILITY_SECONDS_PER_SOURCE, table)
+    return run_catalog(catalog, job, control)
 
 
 def visibility_table(rows: list[dict[str, Any]], catalog: Catalog, opts: VisibilityOptions) -> Any:
     """Astropy table of visibility rows with units, descriptions and provenance meta."""
     first, end = semester_dates(opts.semester)
     tab = columns_table(rows, VISIBILITY_COLUMNS)
-    status = [r["status"] for r in rows]
     tab.meta.update(provenance("ucbplan population visibility", catalog))
     tab.meta.update(
         {
@@ -270,16 +230,12 @@ def visibility_table(rows: list[dict[str, Any]], catalog: Catalog, opts: Visibil
             "alpha": opts.settings.alpha,
             "n_epochs": opts.settings.n_epochs,
             "sigma_v_kms": opts.forecast.sigma_v_kms,
-            "k_eff_kms": opts.forecast.k_eff_kms
-            if opts.forecast.k_eff_kms is not None
-            else "per source: K1+K2",
+            "k_eff_kms": opts.forecast.k_eff_meta(),
             "t_obs_s": opts.forecast.t_obs_s,
             "t_start_tdb": opts.forecast.t_start_tdb,
             "validity": "epochs_* counts blocks inside sigma_u <= alpha * delta_u_tol "
             "(Fisher forecast, circular model)",
-            "n_ok": status.count("ok"),
-            "n_unconstrained": status.count("unconstrained"),
-            "n_failed": sum(s.startswith("failed") for s in status),
+            **status_counts(rows),
         }
     )
     return tab

@@ -16,13 +16,23 @@ import math
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ucbplan.errors import NumericalError
 from ucbplan.inputs import check_int
 from ucbplan.population.catalog import Catalog, Source
-from ucbplan.population.execute import ExecutorSpec, Progress, source_seed, worker_setup
+from ucbplan.population.execute import source_seed, worker_setup
 from ucbplan.population.forecast import ForecastOptions, icrs_of, k_total_kms, source_target
+from ucbplan.population.tables import (
+    SOURCE_COLUMNS,
+    blank_row,
+    columns_table,
+    provenance,
+    status_counts,
+)
+
+if TYPE_CHECKING:
+    from ucbplan.population.run import ForecastRun, RunControl
 
 __all__ = [
     "SIMULATED_PARAMETERS",
@@ -57,8 +67,7 @@ def _param_cols() -> list[tuple[str, str, str, str]]:
 
 #: The simulate summary table, declared once: (name, unit, dtype, description).
 SIMULATE_COLUMNS: tuple[tuple[str, str, str, str], ...] = (
-    ("source_id", "", "str", "catalog Name (or row number)"),
-    ("row", "", "i8", "catalog row (1 = first data row)"),
+    *SOURCE_COLUMNS,
     ("status", "", "str", "ok | unconstrained | failed: <error>"),
     ("seed", "", "i8", "seed of the noise draw and chain: source_seed(--seed, source_id)"),
     ("snr", "", "f8", "optimal LISA SNR"),
@@ -108,9 +117,7 @@ class PopulationSimulateOptions:
 
 
 def _nan_row(src: Source, seed: int) -> dict[str, Any]:
-    row: dict[str, Any] = {}
-    for name, _, dtype, _ in SIMULATE_COLUMNS:
-        row[name] = "" if dtype == "str" else (-1 if dtype == "i8" else math.nan)
+    row = blank_row(SIMULATE_COLUMNS, -1)
     row.update(source_id=src.source_id, row=src.row, status="ok", seed=seed, target_doc=None)
     row["error"] = ""
     return row
@@ -226,10 +233,7 @@ def simulate_table(
     rows: list[dict[str, Any]], catalog: Catalog, opts: PopulationSimulateOptions
 ) -> Any:
     """Astropy summary table of simulate rows with units, descriptions and provenance meta."""
-    from ucbplan.population.run import columns_table, provenance
-
     tab = columns_table(rows, SIMULATE_COLUMNS)
-    status = [r["status"] for r in rows]
     tab.meta.update(provenance("ucbplan population simulate", catalog))
     f = opts.forecast
     tab.meta.update(
@@ -247,10 +251,8 @@ def simulate_table(
             "t_start_tdb": f.t_start_tdb,
             "reference": "midpoint of the LISA observation (means and sigmas)",
             "sigma_v_kms": f.sigma_v_kms,
-            "k_eff_kms": f.k_eff_kms if f.k_eff_kms is not None else "per source: K1+K2",
-            "n_ok": status.count("ok"),
-            "n_unconstrained": status.count("unconstrained"),
-            "n_failed": sum(s.startswith("failed") for s in status),
+            "k_eff_kms": f.k_eff_meta(),
+            **status_counts(rows),
             "failed": [
                 {"source_id": r["source_id"], "error": r["status"]}
                 for r in rows
@@ -262,45 +264,28 @@ def simulate_table(
 
 
 def run_simulate(
-    catalog: Catalog,
-    opts: PopulationSimulateOptions,
-    *,
-    out_dir: Path,
-    spec: ExecutorSpec,
-    parts: Path,
-    chunk: int | None = None,
-    resume: bool = False,
-    overwrite: bool = False,
-    progress: Progress | None = None,
-) -> Any:
+    catalog: Catalog, opts: PopulationSimulateOptions, out_dir: Path, control: RunControl
+) -> ForecastRun:
     """Simulate every source; posterior target files in ``out_dir``; the summary table.
 
-    Part files stay in ``parts`` (remove them once the table is written). Raises as
+    Part files stay in ``control.parts`` (remove them once the table is written). Raises as
     :func:`ucbplan.population.run.run_catalog`, and OutputExistsError for an existing target
-    file without ``overwrite``.
+    file without ``control.overwrite``.
     """
     import functools
 
     from ucbplan.io import check_output_path
     from ucbplan.observing.schedule.records import slug
-    from ucbplan.population.run import ForecastRun, run_catalog
+    from ucbplan.population.run import CatalogJob, run_catalog
 
     out_dir.mkdir(parents=True, exist_ok=True)
     for src in catalog.sources:  # refuse before hours of sampling, not after
-        check_output_path(out_dir / f"{slug(src.source_id)}.yaml", overwrite)
-    rows, size, reused = run_catalog(
-        catalog,
-        functools.partial(simulate_chunk, opts),
-        kind="simulate",
-        options=opts.as_dict(),
-        seconds_per_source=SIMULATE_SECONDS_PER_SOURCE,
-        spec=spec,
-        parts=parts,
-        chunk=chunk,
-        resume=resume,
-        overwrite=overwrite,
-        progress=progress,
-    )
-    write_posterior_targets(rows, out_dir, overwrite)
-    tab = simulate_table(rows, catalog, opts)
-    return ForecastRun(tab, size, reused, math.ceil(len(catalog.sources) / size))
+        check_output_path(out_dir / f"{slug(src.source_id)}.yaml", control.overwrite)
+
+    def table(rows: list[dict[str, Any]]) -> Any:
+        write_posterior_targets(rows, out_dir, control.overwrite)
+        return simulate_table(rows, catalog, opts)
+
+    task = functools.partial(simulate_chunk, opts)
+    job = CatalogJob("simulate", task, opts.as_dict(), SIMULATE_SECONDS_PER_SOURCE, table)
+    return run_catalog(catalog, job, control)

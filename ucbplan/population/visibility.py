@@ -31,11 +31,12 @@ from ucbplan.observing.constraints import ConstraintSet
 from ucbplan.observing.schedule.candidates import candidate_blocks
 from ucbplan.observing.schedule.nights import NightWindow, night_windows
 from ucbplan.observing.schedule.settings import PlanSettings, parse_mode
+from ucbplan.observing.semesters import semester_dates
 from ucbplan.observing.sites import Site
 from ucbplan.population.catalog import Source
 from ucbplan.population.execute import worker_setup
 from ucbplan.population.forecast import ANCHORS, ForecastOptions, forecast_with_target, icrs_of
-from ucbplan.population.semesters import semester_dates
+from ucbplan.population.tables import SOURCE_COLUMNS
 
 __all__ = [
     "VISIBILITY_COLUMNS",
@@ -56,7 +57,7 @@ class VisibilityOptions:
     site : Site
         Observatory.
     semester : str
-        ``2041A``, ``2041B`` or an ESO period ``P147`` (:mod:`ucbplan.population.semesters`).
+        ``2041A``, ``2041B`` or an ESO period ``P147`` (:mod:`ucbplan.observing.semesters`).
     settings : PlanSettings
         Constraints (twilight, airmass, Moon, zenith hole), the exposure plan (block length),
         α and the tolerance form, as ``ucbplan plan`` takes them.
@@ -110,8 +111,7 @@ def _anchor_cols() -> list[tuple[str, str, str, str]]:
 
 #: The visibility table, declared once: (name, unit, dtype, description).
 VISIBILITY_COLUMNS: tuple[tuple[str, str, str, str], ...] = (
-    ("source_id", "", "str", "catalog Name (or row number)"),
-    ("row", "", "i8", "catalog row (1 = first data row)"),
+    *SOURCE_COLUMNS,
     ("status", "", "str", "ok | unconstrained | failed: <error> (of the Fisher forecast)"),
     ("ra", "deg", "f8", "ICRS right ascension"),
     ("dec", "deg", "f8", "ICRS declination"),
