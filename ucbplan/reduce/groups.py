@@ -135,23 +135,28 @@ def group_spectra(
         )
         for j, (v, sg) in enumerate(zip(velocities, sigmas, strict=True))
     ]
-    tau_mean = _group_mean(tau[rows], gid, counts)
-    lk_mean = _group_mean(lk[rows], gid, counts)
-    lkap_mean = _group_mean(lkap[rows], gid, counts)
+    tau_mean = _group_mean(tau[rows], gid, counts).tolist()
+    lk_mean = _group_mean(lk[rows], gid, counts).tolist()
+    lkap_mean = _group_mean(lkap[rows], gid, counts).tolist()
+    # Python lists of the per-group values: one conversion per array, not per element
+    means, sigmas_, gammas = (
+        list(zip(*(c[m].tolist() for c in comps), strict=True)) for m in range(3)
+    )
+    labels, u_first, n_rows = names[key_s[starts]].tolist(), key_u[starts].tolist(), counts.tolist()
     groups = [
         Group(
-            session=str(names[key_s[i]]),
-            u_star=float(key_u[i]),
-            tau_s=float(tau_mean[g]),
-            n=int(counts[g]),
-            v=tuple(float(c[0][g]) for c in comps),
-            sigma=tuple(float(c[1][g]) for c in comps),
-            gamma_est=tuple(float(c[2][g]) for c in comps),
-            gamma_sigma=tuple(float(c[1][g]) for c in comps),
-            lam_k=float(lk_mean[g]),
-            lam_kappa=float(lkap_mean[g]),
+            session=str(labels[g]),
+            u_star=u_first[g],
+            tau_s=tau_mean[g],
+            n=n_rows[g],
+            v=means[g],
+            sigma=sigmas_[g],
+            gamma_est=gammas[g],
+            gamma_sigma=sigmas_[g],
+            lam_k=lk_mean[g],
+            lam_kappa=lkap_mean[g],
         )
-        for g, i in enumerate(starts)
+        for g in range(starts.size)
     ]
     groups.sort(key=lambda g: g.tau_s)
     return groups
