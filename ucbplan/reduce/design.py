@@ -33,6 +33,7 @@ __all__ = [
     "OrbitTrack",
     "design_jacobian",
     "designs",
+    "mid_exposure",
     "orbit",
     "track",
     "window_durations",
@@ -167,10 +168,27 @@ def _windowed(
     return wv, om, phi
 
 
-def design_jacobian(p: PhaseParams, tau: F64, window_s: F64, at: OrbitTrack | None = None) -> F64:
+def mid_exposure(
+    p: PhaseParams, tau: F64, window_s: F64, at: OrbitTrack
+) -> tuple[WindowedVelocity, F64]:
+    """The window average at mid-exposure and ω there, with the partial derivatives when
+    :func:`design_jacobian` uses them: one pass for the plain design (its ``h``, the same with
+    or without derivatives) and the Jacobian."""
+    wv, om, _ = _windowed(p, tau, window_s, p.eccentricity >= _E_FIRST_ORDER, at)
+    return wv, om
+
+
+def design_jacobian(
+    p: PhaseParams,
+    tau: F64,
+    window_s: F64,
+    at: OrbitTrack | None = None,
+    mid: tuple[WindowedVelocity, F64] | None = None,
+) -> F64:
     """∂G_i/∂θ for θ in PARAM_NAMES order, shape (n, 7), at fixed windows.
 
-    ``at``: the orbit at ``tau`` (:func:`track`) if the caller has it already.
+    ``at``, ``mid``: the orbit at ``tau`` (:func:`track`) and :func:`mid_exposure` if the caller
+    has them already.
 
     Notes
     -----
@@ -183,7 +201,7 @@ def design_jacobian(p: PhaseParams, tau: F64, window_s: F64, at: OrbitTrack | No
     at = track(p, tau) if at is None else at
     if e < _E_FIRST_ORDER:
         return _first_order_jacobian(p, tau, window_s, at)
-    wv, om, _ = _windowed(p, tau, window_s, at=at)
+    wv, om = _windowed(p, tau, window_s, at=at)[:2] if mid is None else mid
     so, co = np.sin(om), np.cos(om)
     dG_dphi = wv.d_phase
     dG_deta = so * wv.d_e + co / e * wv.d_omega

@@ -33,6 +33,7 @@ from ucbplan.reduce.design import (
     OrbitTrack,
     design_jacobian,
     designs,
+    mid_exposure,
     track,
     window_durations,
     window_factors,
@@ -55,6 +56,7 @@ from ucbplan.reduce.velocities import (
 from ucbplan.target import load_samples
 
 if TYPE_CHECKING:
+    from ucbplan.core.kepler import WindowedVelocity
     from ucbplan.core.params import PhaseParams
     from ucbplan.target import Target
 
@@ -162,11 +164,18 @@ class _IntraSession:
 
 
 def _intra_session(
-    p: PhaseParams, table: VelocityTable, at: OrbitTrack, tau: F64, window_s: F64, apply_lt: bool
+    p: PhaseParams,
+    table: VelocityTable,
+    at: OrbitTrack,
+    tau: F64,
+    window_s: F64,
+    mid_h: F64,
+    apply_lt: bool,
 ) -> _IntraSession:
-    """Fits on G at mid-exposure and at the emission time (K from two fixed-point passes)."""
+    """Fits on G at mid-exposure (``mid_h``) and at the emission time (K from two fixed-point
+    passes)."""
     n = len(table.v)
-    plain = designs(p, tau, window_s, n, None, at)
+    plain = (mid_h,) * n  # both stars see the same G at mid-exposure
     fits0 = _fit_all(table, plain)
     K0 = tuple(f.K for f in fits0)
     lt_design = designs(p, tau, window_s, n, K0, at)
@@ -203,13 +212,14 @@ def _phase_errors(
     at: OrbitTrack,
     tau: F64,
     window_s: F64,
+    mid: tuple[WindowedVelocity, F64],
     intra: _IntraSession,
 ) -> _PhaseErrors:
     """σ_u per spectrum, ∂(K_j, γ_j)/∂θ, their σ from the covariance, and the K attenuation."""
     from ucbplan.core.phase import jacobian_kernel
 
     p, cov7 = target.params, target.covariance
-    jacG = design_jacobian(p, tau, window_s, at)
+    jacG = design_jacobian(p, tau, window_s, at, mid)
     # ∂u/∂θ (ucbplan.core.phase.u_jacobian) from the shared orbit: its Φ_asc mod 2π is
     # π·(cycles mod 2) there, the same double as 2π·(cycles mod 2)/2
     s, c = np.sin(at.phase_mod), np.cos(at.phase_mod)
@@ -311,9 +321,10 @@ def reduce(target: Target, table: VelocityTable, options: ReduceOptions | None =
     window_s = window_durations(table, p.f_gw)
     at = track(p, tau)  # the orbit at mid-exposure, once for every design there
     kap, u = at.kap, at.u
-    intra = _intra_session(p, table, at, tau, window_s, opts.light_time)
+    mid = mid_exposure(p, tau, window_s, at)  # the plain design and its Jacobian, one pass
+    intra = _intra_session(p, table, at, tau, window_s, mid[0].h, opts.light_time)
     fits = intra.fits
-    phase = _phase_errors(target, table, at, tau, window_s, intra)
+    phase = _phase_errors(target, table, at, tau, window_s, mid, intra)
     mc = monte_carlo(
         target,
         fits,
