@@ -138,3 +138,25 @@ def test_design_jacobian_matches_finite_differences_of_the_design(ecc: float) ->
         # + the rounding floor of G (a few ulp) over the step, where the derivative is ~0
         floor = 4e-16 / h
         np.testing.assert_allclose(jac[:, k], fd, rtol=0, atol=1e-6 * np.max(np.abs(fd)) + floor)
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.sampled_from([0.0, 1e-9, 0.0094, 0.05, 0.3, 0.7]), st.integers(0, 2**32 - 1))
+def test_h_is_the_same_with_and_without_derivatives(e: float, seed: int) -> None:
+    """Issue 23: reduce takes the plain design G from the derivative pass of the Jacobian, so
+    ⟨h⟩ must not depend on ``derivatives`` by a single bit (the derivative-only terms, whose
+    coefficient is below 1e-15, stay out of it)."""
+    rng = np.random.default_rng(seed)
+    n = 300
+    args = (
+        rng.uniform(0, 2 * math.pi, n),
+        rng.uniform(0, 2 * math.pi, n),
+        e,
+        rng.uniform(0.01, 0.03, n),
+        1.5e-6,
+        rng.uniform(0.0, 60.0, n),
+    )
+    with_d = window_average(*args, derivatives=True)
+    plain = window_average(*args, derivatives=False)
+    assert with_d.h.tobytes() == plain.h.tobytes()
+    assert not np.any(plain.d_phase)

@@ -147,7 +147,9 @@ def window_average(
     window_s : array_like
         Exposure (or co-add window) length Δt [s]; 0 gives h at mid-exposure.
     derivatives : bool
-        Also compute the partial derivatives (else they are zero arrays).
+        Also compute the partial derivatives (else they are zero arrays). ⟨h⟩ is the same
+        either way, bit for bit: the terms kept for the derivatives only (coefficient below
+        1e-15, its e-derivative not) do not enter it.
 
     Returns
     -------
@@ -176,28 +178,30 @@ def window_average(
     return WindowedVelocity(*(np.asarray(o.reshape(shape)) for o in out))
 
 
-def _terms(e: float, derivatives: bool) -> list[tuple[int, float, float, float, float]]:
-    """(k, P_k, Q_k, dP_k/de, dQ_k/de) of the harmonics that matter.
+#: One harmonic of the kernel: k, (P_k, Q_k) of ⟨h⟩ (None: the term is not in ⟨h⟩), and
+#: (P_k, Q_k, dP_k/de, dQ_k/de) of the derivatives.
+_Term = tuple[int, tuple[float, float] | None, tuple[float, float, float, float]]
 
-    A coefficient is zeroed when it is negligible (Q_k ~ e²P_k): |P_k| below _TERM_FLOOR and,
-    when derivatives are wanted, |e·dP_k/de| too (the same for Q_k).
+
+def _terms(e: float, derivatives: bool) -> list[_Term]:
+    """The harmonics that matter, in increasing k.
+
+    A coefficient is zeroed when it is negligible (Q_k ~ e²P_k): for ⟨h⟩ when |P_k| is below
+    _TERM_FLOOR; for the derivatives when |e·dP_k/de| is too (the same for Q_k). ⟨h⟩ takes the
+    same terms with and without derivatives.
     """
     pk, qk, dpk, dqk = harmonics(e)
     scale = e if derivatives else 0.0
-    keep_p = (np.abs(pk) > _TERM_FLOOR) | (scale * np.abs(dpk) > _TERM_FLOOR)
-    keep_q = (np.abs(qk) > _TERM_FLOOR) | (scale * np.abs(dqk) > _TERM_FLOOR)
-    out = []
+    h_p, h_q = np.abs(pk) > _TERM_FLOOR, np.abs(qk) > _TERM_FLOOR
+    keep_p = h_p | (scale * np.abs(dpk) > _TERM_FLOOR)
+    keep_q = h_q | (scale * np.abs(dqk) > _TERM_FLOOR)
+    out: list[_Term] = []
     for i in np.flatnonzero(keep_p | keep_q):
+        p, q = float(pk[i]), float(qk[i])
         kp, kq = bool(keep_p[i]), bool(keep_q[i])
-        out.append(
-            (
-                int(i) + 1,
-                float(pk[i]) if kp else 0.0,
-                float(qk[i]) if kq else 0.0,
-                float(dpk[i]) if kp else 0.0,
-                float(dqk[i]) if kq else 0.0,
-            )
-        )
+        h = (p if h_p[i] else 0.0, q if h_q[i] else 0.0) if h_p[i] or h_q[i] else None
+        d = (p if kp else 0.0, q if kq else 0.0, float(dpk[i]) if kp else 0.0)
+        out.append((int(i) + 1, h, (*d, float(dqk[i]) if kq else 0.0)))
     return out
 
 
@@ -207,7 +211,7 @@ def _kernel(
     half: F64,
     nb: F64,
     omega_dot: float,
-    terms: list[tuple[int, float, float, float, float]],
+    terms: list[_Term],
     derivatives: bool,
     out: F64,
 ) -> None:
@@ -223,7 +227,7 @@ def _kernel(
     co, so, cc, sc = np.cos(om), np.sin(om), np.cos(c), np.sin(c)
     wk, ak = np.ones_like(w1), np.ones_like(a1)
     done = 0  # wk = e^{i·done·M}, ak = e^{i·done·a}
-    for k, p, q, dp, dq in terms:
+    for k, h, (p, q, dp, dq) in terms:
         for _ in range(k - done):
             wk *= w1
             ak *= a1
@@ -232,7 +236,8 @@ def _kernel(
         t1, t2 = ak.imag * cc, ak.real * sc  # sin(ka ± c) = t1 ± t2
         u1, u2 = wk.real * co, wk.imag * so  # cos(kM ± ω) = u1 ∓ u2
         sinc_p, sinc_q = (t1 + t2) / (ka + c), (t1 - t2) / (ka - c)
-        out[0] += p * sinc_p * (u1 - u2) + q * sinc_q * (u1 + u2)
+        if h is not None:
+            out[0] += h[0] * sinc_p * (u1 - u2) + h[1] * sinc_q * (u1 + u2)
         if derivatives:
             v1, v2 = wk.imag * co, wk.real * so  # sin(kM ± ω) = v1 ± v2
             sp, sq = p * sinc_p * (v1 + v2), q * sinc_q * (v1 - v2)

@@ -14,6 +14,7 @@ biased K_j by ≈ −e²K_j (docs/method.md, "Reduction").
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -28,7 +29,16 @@ if TYPE_CHECKING:
     from ucbplan.core.params import PhaseParams
     from ucbplan.reduce.velocities import VelocityTable
 
-__all__ = ["design_jacobian", "designs", "orbit", "window_durations", "window_factors"]
+__all__ = [
+    "OrbitTrack",
+    "design_jacobian",
+    "designs",
+    "mid_exposure",
+    "orbit",
+    "track",
+    "window_durations",
+    "window_factors",
+]
 
 #: Below this eccentricity the Jacobian uses Eq. vbar_master's (exact at e = 0; the O(e²)
 #: remainder is < 1e-16) instead of dividing ∂G/∂ω by e.
@@ -108,22 +118,77 @@ def orbit(p: PhaseParams, tau: F64) -> tuple[F64, F64, F64, F64]:
     return phi, eta, kap, u
 
 
+@dataclass(frozen=True)
+class OrbitTrack:
+    """The orbit at the mid-exposure times, evaluated once and shared by every design there.
+
+    Attributes
+    ----------
+    phase, phase_mod : ndarray
+        Φ_asc [rad], unwrapped and modulo 2π (:func:`ucbplan.core.phase.phase_asc_mod`).
+    eta, kap : ndarray
+        (η, κ) rotated to the times [1].
+    u : ndarray
+        Star 1's argument of latitude [rad] (unwrapped).
+    """
+
+    phase: F64
+    phase_mod: F64
+    eta: F64
+    kap: F64
+    u: F64
+
+
+def track(p: PhaseParams, tau: F64) -> OrbitTrack:
+    """The orbit at ``tau``, bit-identical to :func:`orbit` and ``phase_asc_mod`` there."""
+    from ucbplan.core.phase import phase_asc_mod
+
+    phi, eta, kap, u = orbit(p, tau)
+    return OrbitTrack(phi, phase_asc_mod(p, tau), eta, kap, u)
+
+
 def _windowed(
-    p: PhaseParams, tau: F64, window_s: F64, derivatives: bool = True
+    p: PhaseParams,
+    tau: F64,
+    window_s: F64,
+    derivatives: bool = True,
+    at: OrbitTrack | None = None,
 ) -> tuple[WindowedVelocity, F64, F64]:
-    """The exact window average at ``tau`` and ω, Φ_asc there."""
+    """The exact window average at ``tau`` and ω, Φ_asc there (from ``at`` when given)."""
     from ucbplan.core.phase import ll_pair, phase_asc_mod
 
-    phi = phase_asc_mod(p, tau)
-    eta, kap = ll_pair(p, tau)
+    if at is None:
+        phi = phase_asc_mod(p, tau)
+        eta, kap = ll_pair(p, tau)
+    else:  # orbit_state's (η, κ) are ll_pair's bit for bit
+        phi, eta, kap = at.phase_mod, at.eta, at.kap
     om = np.arctan2(eta, kap)
     nb = math.pi * (p.f_gw + p.fdot * tau + p.fddot * tau**2 / 2.0) - p.omega_dot
     wv = window_average(phi, om, p.eccentricity, nb, p.omega_dot, window_s, derivatives)
     return wv, om, phi
 
 
-def design_jacobian(p: PhaseParams, tau: F64, window_s: F64) -> F64:
+def mid_exposure(
+    p: PhaseParams, tau: F64, window_s: F64, at: OrbitTrack
+) -> tuple[WindowedVelocity, F64]:
+    """The window average at mid-exposure and ω there, with the partial derivatives when
+    :func:`design_jacobian` uses them: one pass for the plain design (its ``h``, the same with
+    or without derivatives) and the Jacobian."""
+    wv, om, _ = _windowed(p, tau, window_s, p.eccentricity >= _E_FIRST_ORDER, at)
+    return wv, om
+
+
+def design_jacobian(
+    p: PhaseParams,
+    tau: F64,
+    window_s: F64,
+    at: OrbitTrack | None = None,
+    mid: tuple[WindowedVelocity, F64] | None = None,
+) -> F64:
     """∂G_i/∂θ for θ in PARAM_NAMES order, shape (n, 7), at fixed windows.
+
+    ``at``, ``mid``: the orbit at ``tau`` (:func:`track`) and :func:`mid_exposure` if the caller
+    has them already.
 
     Notes
     -----
@@ -133,25 +198,25 @@ def design_jacobian(p: PhaseParams, tau: F64, window_s: F64) -> F64:
     and ω̇ (a relative 1e-5 of Λ) is not differentiated.
     """
     e = p.eccentricity
+    at = track(p, tau) if at is None else at
     if e < _E_FIRST_ORDER:
-        return _first_order_jacobian(p, tau, window_s)
-    wv, om, _ = _windowed(p, tau, window_s)
+        return _first_order_jacobian(p, tau, window_s, at)
+    wv, om = _windowed(p, tau, window_s, at=at)[:2] if mid is None else mid
     so, co = np.sin(om), np.cos(om)
     dG_dphi = wv.d_phase
     dG_deta = so * wv.d_e + co / e * wv.d_omega
     dG_dkap = co * wv.d_e - so / e * wv.d_omega
-    _, eta, kap, _ = orbit(p, tau)
-    return _chain(p, tau, dG_dphi, dG_deta, dG_dkap, eta, kap)
+    return _chain(p, tau, dG_dphi, dG_deta, dG_dkap, at.eta, at.kap)
 
 
-def _first_order_jacobian(p: PhaseParams, tau: F64, window_s: F64) -> F64:
+def _first_order_jacobian(p: PhaseParams, tau: F64, window_s: F64, at: OrbitTrack) -> F64:
     """∂G/∂θ of Eq. vbar_master (exact at e = 0), with the window rates of the exact design:
     n̄(τ) for the cos Φ term and 2n̄(τ) − ω̇ for the (η, κ) term."""
     nbar = math.pi * (p.f_gw + p.fdot * tau + p.fddot * tau**2 / 2.0)
     half = 0.5 * window_s
     lam_k = np.sinc(nbar * half / math.pi)
     lam_kap = np.sinc((2.0 * nbar - p.omega_dot) * half / math.pi)
-    phi, eta, kap, _ = orbit(p, tau)
+    phi, eta, kap = at.phase, at.eta, at.kap
     dG_dphi = -lam_k * np.sin(phi) + 2.0 * lam_kap * (
         -kap * np.sin(2 * phi) + eta * np.cos(2 * phi)
     )
@@ -176,16 +241,22 @@ def _chain(
 
 
 def designs(
-    p: PhaseParams, tau: F64, window_s: F64, ncomp: int, K: tuple[float, ...] | None
+    p: PhaseParams,
+    tau: F64,
+    window_s: F64,
+    ncomp: int,
+    K: tuple[float, ...] | None,
+    at: OrbitTrack | None = None,
 ) -> tuple[F64, ...]:
     """Design G per component; with K given, evaluated at the emission time τ − ΔR_j.
 
     G is the exact Keplerian velocity factor averaged over each window (module docstring).
+    ``at``: the orbit at ``tau`` (:func:`track`) if the caller has it already.
     """
     if K is None:  # both stars see the same G at mid-exposure
-        return (_windowed(p, tau, window_s, derivatives=False)[0].h,) * ncomp
+        return (_windowed(p, tau, window_s, derivatives=False, at=at)[0].h,) * ncomp
     out = []
-    u = orbit(p, tau)[3]
+    u = orbit(p, tau)[3] if at is None else at.u
     for j in range(ncomp):
         nb = math.pi * p.f_gw - p.omega_dot
         sign = 1.0 if j == 0 else -1.0

@@ -135,26 +135,39 @@ def group_spectra(
         )
         for j, (v, sg) in enumerate(zip(velocities, sigmas, strict=True))
     ]
-    tau_mean = _group_mean(tau[rows], gid, counts)
-    lk_mean = _group_mean(lk[rows], gid, counts)
-    lkap_mean = _group_mean(lkap[rows], gid, counts)
-    groups = [
-        Group(
-            session=str(names[key_s[i]]),
-            u_star=float(key_u[i]),
-            tau_s=float(tau_mean[g]),
-            n=int(counts[g]),
-            v=tuple(float(c[0][g]) for c in comps),
-            sigma=tuple(float(c[1][g]) for c in comps),
-            gamma_est=tuple(float(c[2][g]) for c in comps),
-            gamma_sigma=tuple(float(c[1][g]) for c in comps),
-            lam_k=float(lk_mean[g]),
-            lam_kappa=float(lkap_mean[g]),
-        )
-        for g, i in enumerate(starts)
-    ]
+    means = [_group_mean(x[rows], gid, counts) for x in (tau, lk, lkap)]
+    groups = _build_groups(names[key_s[starts]], key_u[starts], counts, comps, means)
     groups.sort(key=lambda g: g.tau_s)
     return groups
+
+
+def _build_groups(
+    labels: NDArray[np.str_],
+    u_star: F64,
+    counts: NDArray[np.intp],
+    comps: list[tuple[F64, F64, F64]],
+    means: list[F64],
+) -> list[Group]:
+    """One Group per group: label, u★, count, the components' (mean, σ, γ estimate) and the
+    (τ, Λ_K, Λ_κ) means, through Python lists (one conversion per array, not per element)."""
+    tau, lk, lkap = (m.tolist() for m in means)
+    v, sigma, gamma = (list(zip(*(c[m].tolist() for c in comps), strict=True)) for m in range(3))
+    heads = zip(labels.tolist(), u_star.tolist(), counts.tolist(), strict=True)
+    return [
+        Group(
+            session=str(label),
+            u_star=u,
+            tau_s=tau[g],
+            n=n,
+            v=v[g],
+            sigma=sigma[g],
+            gamma_est=gamma[g],
+            gamma_sigma=sigma[g],
+            lam_k=lk[g],
+            lam_kappa=lkap[g],
+        )
+        for g, (label, u, n) in enumerate(heads)
+    ]
 
 
 def _group_mean(x: F64, gid: NDArray[np.intp], counts: NDArray[np.intp]) -> F64:

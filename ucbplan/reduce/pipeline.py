@@ -30,9 +30,11 @@ from ucbplan.errors import VelocityFileError
 from ucbplan.reduce import drifts as _drifts
 from ucbplan.reduce import masses as _masses
 from ucbplan.reduce.design import (
+    OrbitTrack,
     design_jacobian,
     designs,
-    orbit,
+    mid_exposure,
+    track,
     window_durations,
     window_factors,
 )
@@ -54,6 +56,7 @@ from ucbplan.reduce.velocities import (
 from ucbplan.target import load_samples
 
 if TYPE_CHECKING:
+    from ucbplan.core.kepler import WindowedVelocity
     from ucbplan.core.params import PhaseParams
     from ucbplan.target import Target
 
@@ -161,16 +164,23 @@ class _IntraSession:
 
 
 def _intra_session(
-    p: PhaseParams, table: VelocityTable, tau: F64, window_s: F64, apply_lt: bool
+    p: PhaseParams,
+    table: VelocityTable,
+    at: OrbitTrack,
+    tau: F64,
+    window_s: F64,
+    mid_h: F64,
+    apply_lt: bool,
 ) -> _IntraSession:
-    """Fits on G at mid-exposure and at the emission time (K from two fixed-point passes)."""
+    """Fits on G at mid-exposure (``mid_h``) and at the emission time (K from two fixed-point
+    passes)."""
     n = len(table.v)
-    plain = designs(p, tau, window_s, n, None)
+    plain = (mid_h,) * n  # both stars see the same G at mid-exposure
     fits0 = _fit_all(table, plain)
     K0 = tuple(f.K for f in fits0)
-    lt_design = designs(p, tau, window_s, n, K0)
+    lt_design = designs(p, tau, window_s, n, K0, at)
     K_lt = tuple(f.K for f in _fit_all(table, lt_design))
-    lt_design = designs(p, tau, window_s, n, K_lt)
+    lt_design = designs(p, tau, window_s, n, K_lt, at)
     fits_lt = _fit_all(table, lt_design)
     nb = math.pi * p.f_gw - p.omega_dot
     light = {
@@ -197,14 +207,23 @@ class _PhaseErrors:
 
 
 def _phase_errors(
-    target: Target, table: VelocityTable, tau: F64, window_s: F64, intra: _IntraSession
+    target: Target,
+    table: VelocityTable,
+    at: OrbitTrack,
+    tau: F64,
+    window_s: F64,
+    mid: tuple[WindowedVelocity, F64],
+    intra: _IntraSession,
 ) -> _PhaseErrors:
     """σ_u per spectrum, ∂(K_j, γ_j)/∂θ, their σ from the covariance, and the K attenuation."""
-    from ucbplan.core import ephemeris
+    from ucbplan.core.phase import jacobian_kernel
 
     p, cov7 = target.params, target.covariance
-    jacG = design_jacobian(p, tau, window_s)
-    ju = np.asarray(ephemeris.u_jacobian(p, tau), float)
+    jacG = design_jacobian(p, tau, window_s, at, mid)
+    # ∂u/∂θ (ucbplan.core.phase.u_jacobian) from the shared orbit: its Φ_asc mod 2π is
+    # π·(cycles mod 2) there, the same double as 2π·(cycles mod 2)/2
+    s, c = np.sin(at.phase_mod), np.cos(at.phase_mod)
+    ju = np.asarray(jacobian_kernel(p.eta, p.kappa, p.omega_dot, tau, s, c), float)
     sigma_u = np.sqrt(np.clip(np.einsum("ni,ij,nj->n", ju, cov7, ju), 0.0, None))
     dK, dg, sKp, sgp, att = [], [], [], [], []
     for j, f in enumerate(intra.fits):
@@ -300,10 +319,12 @@ def reduce(target: Target, table: VelocityTable, options: ReduceOptions | None =
         )
     lam_k, lam_kap = window_factors(table, p.f_gw)
     window_s = window_durations(table, p.f_gw)
-    _, _, kap, u = orbit(p, tau)
-    intra = _intra_session(p, table, tau, window_s, opts.light_time)
+    at = track(p, tau)  # the orbit at mid-exposure, once for every design there
+    kap, u = at.kap, at.u
+    mid = mid_exposure(p, tau, window_s, at)  # the plain design and its Jacobian, one pass
+    intra = _intra_session(p, table, at, tau, window_s, mid[0].h, opts.light_time)
     fits = intra.fits
-    phase = _phase_errors(target, table, tau, window_s, intra)
+    phase = _phase_errors(target, table, at, tau, window_s, mid, intra)
     mc = monte_carlo(
         target,
         fits,

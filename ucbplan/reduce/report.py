@@ -283,10 +283,11 @@ def em_prior(red: Reduction) -> dict[str, Any]:
 
 
 def write_json(doc: dict[str, Any], handle: IO[str]) -> None:
-    """Write ``doc`` as indented JSON (NaN-free)."""
-    from ucbplan.io import dump_json
+    """Write ``doc`` as indented JSON (NaN-free), the text of :func:`ucbplan.io.dump_json`."""
+    from ucbplan.reduce.jsontext import dumps_report
 
-    dump_json(doc, handle)
+    handle.write(dumps_report(doc))
+    handle.write("\n")
 
 
 def write_yaml(doc: dict[str, Any], handle: IO[str]) -> None:

@@ -463,8 +463,8 @@ def _auto_sessions(jd: F64) -> tuple[str, ...]:
     gaps = np.diff(jd[order]) * 86400.0 > SESSION_GAP_S
     number = np.empty(jd.size, dtype=np.int64)
     number[order] = 1 + np.concatenate([[0], np.cumsum(gaps)])
-    names = [f"S{k}" for k in range(1, int(number.max(initial=1)) + 1)]
-    return tuple(names[k - 1] for k in number.tolist())
+    names = np.array([f"S{k}" for k in range(1, int(number.max(initial=1)) + 1)], dtype=object)
+    return tuple(names[number - 1].tolist())  # one str object per session, gathered in C
 
 
 def to_barycentric(table: VelocityTable, coord: SkyCoord, location: EarthLocation) -> VelocityTable:

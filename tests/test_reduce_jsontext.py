@@ -1,0 +1,64 @@
+"""The reduce report's JSON writer: the text of ucbplan.io.dumps_json byte for byte.
+
+The reference is the library's one JSON rule (json.dumps(indent=2) after json_plain), so every
+test compares the two texts exactly: any difference, a space, a digit or a ``null``, fails.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from ucbplan.io import dumps_json
+from ucbplan.reduce.jsontext import dumps_report
+
+_scalars = st.one_of(
+    st.none(),
+    st.booleans(),
+    st.integers(min_value=-(2**70), max_value=2**70),
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.text(max_size=8),  # unicode, quotes, control characters: escaped to ASCII
+    st.floats(allow_nan=True, allow_infinity=True).map(np.float64),
+    st.integers(min_value=-(2**62), max_value=2**62).map(np.int64),
+    st.booleans().map(np.bool_),
+)
+_keys = st.one_of(st.text(max_size=6), st.integers(-5, 5), st.floats(allow_nan=False))
+_docs = st.recursive(
+    _scalars,
+    lambda inner: st.one_of(
+        st.lists(inner, max_size=4),
+        st.lists(inner, max_size=4).map(tuple),
+        st.dictionaries(_keys, inner, max_size=4),
+    ),
+    max_leaves=30,
+)
+
+
+@settings(max_examples=300, deadline=None)
+@given(_docs)
+def test_same_text_as_dumps_json(doc: object) -> None:
+    assert dumps_report(doc) == dumps_json(doc)
+
+
+def test_numpy_arrays_and_non_finite_values() -> None:
+    doc = {
+        "a": np.array([1.5, np.nan, -np.inf]),
+        "b": np.arange(3),
+        "c": {"d": [], "e": {}, "f": (math.inf, np.float32(0.1))},
+        1: np.array([[1.0, 2.0], [3.0, 4.0]]),
+    }
+    text = dumps_report(doc)
+    assert text == dumps_json(doc)
+    assert json.loads(text)["a"] == [1.5, None, None]
+
+
+def test_unsupported_value_is_the_reference_error() -> None:
+    """A value json_default refuses: the same error as the reference, nothing written."""
+    with pytest.raises(TypeError, match="not JSON serialisable: PosixPath"):
+        dumps_report({"path": Path("x")})
