@@ -82,17 +82,20 @@ class Plan:
     def table(self) -> Table:
         """The blocks table, identical to ``ucbplan plan -o plan.ecsv`` (times UTC at the site
         and TDB at the barycentre; columns in docs/blocks-table.md)."""
-        return self.run.table()
+        with scope():
+            return self.run.table()
 
     @property
     def visits(self) -> list[VisitSummary]:
         """One summary per visit (acquisition + exposures), in time order."""
-        return self.run.visits()
+        with scope():
+            return self.run.visits()
 
     @property
     def accounting(self) -> dict[str, Any]:
         """Time accounting: ``{"total": {...}, "targets": {NAME: {...}}}`` [h]."""
-        return self.run.accounting()
+        with scope():
+            return self.run.accounting()
 
     @property
     def not_planned(self) -> dict[str, dict[str, dict[str, int]]]:
@@ -122,7 +125,8 @@ class Plan:
         def _write(handle: IO[str]) -> None:
             write_table(table, handle, kind, json_meta=True)
 
-        write_output(out, _write, overwrite=overwrite)
+        with scope():
+            write_output(out, _write, overwrite=overwrite)
         return out
 
     def plot(self, path: str | Path, overwrite: bool = False) -> int:
