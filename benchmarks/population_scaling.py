@@ -34,9 +34,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from make_population_catalog import make
 
 from ucbplan.population.catalog import read_catalog
+from ucbplan.population.catalog_forecast import ForecastOptions, forecast_chunk
 from ucbplan.population.execute import ExecutorSpec, default_chunk, open_executor, run_chunks
-from ucbplan.population.forecast import ForecastOptions, forecast_chunk
-from ucbplan.population.run import FORECAST_SECONDS_PER_SOURCE, forecast_table
+from ucbplan.population.runner import FORECAST_SECONDS_PER_SOURCE, forecast_table
 
 OPTS = ForecastOptions(sigma_v_kms=15.0)
 GOAL_POOL, GOAL_DASK = 1.3, 1.2

@@ -55,7 +55,7 @@ def population_row(tmp: Path) -> dict[str, object]:
     from make_population_catalog import make
 
     from ucbplan.population.catalog import read_catalog
-    from ucbplan.population.forecast import ForecastOptions, forecast_chunk
+    from ucbplan.population.catalog_forecast import ForecastOptions, forecast_chunk
 
     path = tmp / "cat300.ecsv"
     make(300, 13).write(path, format="ascii.ecsv")

@@ -17,7 +17,7 @@ from ucbplan.cli._population_options import (
 )
 from ucbplan.errors import InputError
 from ucbplan.population.execute import ExecutorSpec
-from ucbplan.population.run import RunControl
+from ucbplan.population.runner import RunControl
 
 SHARED = [name for name, _, _ in SHARED_OPTIONS]
 PARTS = [name for name, _, _ in PARTS_OPTIONS]

@@ -12,14 +12,14 @@ import pytest
 from ucbplan.errors import NumericalError, OutputExistsError, UcbplanError
 from ucbplan.population import execute
 from ucbplan.population.catalog import Catalog, read_catalog
+from ucbplan.population.catalog_forecast import ForecastOptions
 from ucbplan.population.execute import (
     ExecutorSpec,
     SerialExecutor,
     run_chunks,
     source_seed,
 )
-from ucbplan.population.forecast import ForecastOptions
-from ucbplan.population.run import RunControl, run_forecast
+from ucbplan.population.runner import RunControl, run_forecast
 from ucbplan.population.tables import write_table
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -300,7 +300,7 @@ def _per_source_reference(src: object, ra: float, dec: float) -> dict[str, float
     from ucbplan.lisa.noise import SANGRIA
     from ucbplan.lisa.pipeline import build_model
     from ucbplan.lisa.posterior import gaussian_target
-    from ucbplan.population.forecast import ALPHAS, ANCHORS, k_total_kms, source_target
+    from ucbplan.population.catalog_forecast import ALPHAS, ANCHORS, k_total_kms, source_target
 
     target = source_target(src, ra, dec, OPTS)  # type: ignore[arg-type]
     model = build_model(target, n_bins=OPTS.n_bins, circular=True)
@@ -331,7 +331,7 @@ def test_batched_chunk_matches_the_per_source_path() -> None:
     SNR and Fisher points) and one vectorised horizon pass; each row must equal the per-source
     path to 1e-9 relative (issue 23: tables unchanged). Measured: ~1e-15 (the template batch's
     round-off; the horizons are bit-identical)."""
-    from ucbplan.population.forecast import forecast_chunk, icrs_of
+    from ucbplan.population.catalog_forecast import forecast_chunk, icrs_of
 
     cat = _subset(12)
     rows = forecast_chunk(OPTS, cat.sources)

@@ -10,8 +10,8 @@ import pytest
 from astropy.table import Table
 
 from ucbplan.population.catalog import Catalog, read_catalog
-from ucbplan.population.forecast import ForecastOptions
-from ucbplan.population.run import RunControl
+from ucbplan.population.catalog_forecast import ForecastOptions
+from ucbplan.population.runner import RunControl
 from ucbplan.population.simulate import PopulationSimulateOptions, run_simulate
 from ucbplan.population.tables import write_table
 from ucbplan.target import load_target

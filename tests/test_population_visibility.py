@@ -13,7 +13,7 @@ from ucbplan.errors import InputError
 from ucbplan.observing.schedule.settings import PlanSettings
 from ucbplan.observing.sites import get_site
 from ucbplan.population.catalog import Catalog, read_catalog
-from ucbplan.population.run import RunControl, run_visibility
+from ucbplan.population.runner import RunControl, run_visibility
 from ucbplan.population.tables import write_table
 from ucbplan.population.visibility import VisibilityOptions
 

@@ -283,9 +283,9 @@ def population_forecast(
     import tempfile
 
     from ucbplan.population.catalog import read_catalog
+    from ucbplan.population.catalog_forecast import forecast_options
     from ucbplan.population.execute import ExecutorSpec
-    from ucbplan.population.forecast import forecast_options
-    from ucbplan.population.run import RunControl, run_forecast
+    from ucbplan.population.runner import RunControl, run_forecast
 
     opts = forecast_options(
         sigma_v_kms=as_float(sigma_v, "km/s", "sigma_v"),

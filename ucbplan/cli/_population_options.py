@@ -19,7 +19,7 @@ import typer
 
 if TYPE_CHECKING:
     from ucbplan.population.execute import ExecutorSpec
-    from ucbplan.population.run import RunControl
+    from ucbplan.population.runner import RunControl
 
 __all__ = ["PopulationArgs", "population_options"]
 
@@ -107,7 +107,7 @@ class PopulationArgs:
 
     def control(self, parts: Path, overwrite: bool) -> RunControl:
         """The run control of these options with part files in ``parts``."""
-        from ucbplan.population.run import RunControl
+        from ucbplan.population.runner import RunControl
 
         return RunControl(parts, self.executor(), self.chunk, self.resume, overwrite)
 

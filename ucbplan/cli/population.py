@@ -31,9 +31,9 @@ from ucbplan.errors import UcbplanError
 
 if TYPE_CHECKING:
     from ucbplan.population.catalog import Catalog
+    from ucbplan.population.catalog_forecast import ForecastOptions
     from ucbplan.population.execute import ExecutorSpec
-    from ucbplan.population.forecast import ForecastOptions
-    from ucbplan.population.run import ForecastRun, RunControl
+    from ucbplan.population.runner import ForecastRun, RunControl
 
 __all__ = ["register"]
 
@@ -60,7 +60,7 @@ def _catalog(path: Path, shared: PopulationArgs) -> Catalog:
 
 def _inputs(path: Path, shared: PopulationArgs) -> tuple[Catalog, ForecastOptions]:
     """The catalog and the checked forecast options (``--k-eff`` needed without masses)."""
-    from ucbplan.population.forecast import forecast_options
+    from ucbplan.population.catalog_forecast import forecast_options
 
     cat = _catalog(path, shared)
     opts = forecast_options(
@@ -78,7 +78,7 @@ def _inputs(path: Path, shared: PopulationArgs) -> tuple[Catalog, ForecastOption
 def _control(output: Path, overwrite: bool, shared: PopulationArgs) -> RunControl:
     """Refuse an existing ``output`` (without ``--overwrite``), then the run control (checked)
     with the part files next to ``output``."""
-    from ucbplan.population.run import parts_folder
+    from ucbplan.population.runner import parts_folder
 
     check_output_path(output, overwrite)
     return shared.control(parts_folder(output), overwrite)
@@ -145,7 +145,7 @@ def forecast(
 ) -> None:
     """Per-source Fisher forecast of a catalog → ECSV (σ_u at the end, T_valid, SNR, status)."""
     from ucbplan.population.plots import forecast_plots
-    from ucbplan.population.run import run_forecast
+    from ucbplan.population.runner import run_forecast
 
     control = _control(output, overwrite, shared)
     if plots is not None and not plots.is_dir():
@@ -184,7 +184,7 @@ def visibility(
     from ucbplan.observing.blocks import ExposurePlan
     from ucbplan.observing.schedule.settings import PlanSettings
     from ucbplan.observing.sites import resolve_site
-    from ucbplan.population.run import run_visibility
+    from ucbplan.population.runner import run_visibility
     from ucbplan.population.visibility import VisibilityOptions
 
     control = _control(output, overwrite, shared)
@@ -244,7 +244,7 @@ def _ranked_source(
     (checked against its catalog), or a catalog forecast here (its parts removed after)."""
     from ucbplan.population import rank as rk
     from ucbplan.population.execute import remove_parts
-    from ucbplan.population.run import RunControl, parts_folder, run_forecast
+    from ucbplan.population.runner import RunControl, parts_folder, run_forecast
 
     tab = rk.read_forecast_table(source)
     if tab is not None:

@@ -1,9 +1,9 @@
 """Whole LISA catalogs: population forecasts, visibility and target selection (issue 13).
 
 Modules: :mod:`~ucbplan.population.catalog` (LDC-style catalogs from ECSV, CSV, HDF5),
-:mod:`~ucbplan.population.forecast` (per-source Fisher forecast, σ_u, T_valid, SNR),
+:mod:`~ucbplan.population.catalog_forecast` (per-source Fisher forecast, σ_u, T_valid, SNR),
 :mod:`~ucbplan.population.execute` (the executor seam: serial, process pool, Dask; part files,
-resume), :mod:`~ucbplan.population.run` (whole-catalog runs: a job, its run control, the
+resume), :mod:`~ucbplan.population.runner` (whole-catalog runs: a job, its run control, the
 merged table), :mod:`~ucbplan.population.tables` (what every population table shares: source
 columns, blank rows, provenance, status tally, the ECSV writer),
 :mod:`~ucbplan.population.plots` (summary figures), :mod:`~ucbplan.population.visibility`

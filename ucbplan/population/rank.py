@@ -36,7 +36,7 @@ from ucbplan.observing.goals import Goal, parse_goal, spectra_for_goal
 from ucbplan.observing.instruments import Instrument, sigma_v_kms
 from ucbplan.observing.schedule.records import slug
 from ucbplan.population.catalog import Catalog, Source
-from ucbplan.population.forecast import (
+from ucbplan.population.catalog_forecast import (
     ForecastOptions,
     forecast_with_target,
     icrs_of,

@@ -1,6 +1,6 @@
 """Population simulate: the LISA simulate pipeline per source (posterior summary, target file).
 
-Each catalog row becomes a target at the LISA midpoint (:func:`~ucbplan.population.forecast.
+Each catalog row becomes a target at the LISA midpoint (:func:`~ucbplan.population.catalog_forecast.
 source_target`), simulated with :func:`ucbplan.lisa.pipeline.simulate` (circular 6-parameter
 model, a noise draw and an emcee chain) seeded by :func:`~ucbplan.population.execute.
 source_seed` ``(seed, source id)``: the same source gives the same posterior whatever the chunk,
@@ -21,8 +21,8 @@ from typing import TYPE_CHECKING, Any
 from ucbplan.errors import NumericalError
 from ucbplan.inputs import check_int
 from ucbplan.population.catalog import Catalog, Source
+from ucbplan.population.catalog_forecast import ForecastOptions, icrs_of, k_total_kms, source_target
 from ucbplan.population.execute import source_seed, worker_setup
-from ucbplan.population.forecast import ForecastOptions, icrs_of, k_total_kms, source_target
 from ucbplan.population.tables import (
     SOURCE_COLUMNS,
     blank_row,
@@ -32,7 +32,7 @@ from ucbplan.population.tables import (
 )
 
 if TYPE_CHECKING:
-    from ucbplan.population.run import ForecastRun, RunControl
+    from ucbplan.population.runner import ForecastRun, RunControl
 
 __all__ = [
     "SIMULATED_PARAMETERS",
@@ -269,14 +269,14 @@ def run_simulate(
     """Simulate every source; posterior target files in ``out_dir``; the summary table.
 
     Part files stay in ``control.parts`` (remove them once the table is written). Raises as
-    :func:`ucbplan.population.run.run_catalog`, and OutputExistsError for an existing target
+    :func:`ucbplan.population.runner.run_catalog`, and OutputExistsError for an existing target
     file without ``control.overwrite``.
     """
     import functools
 
     from ucbplan.io import check_output_path
     from ucbplan.observing.schedule.records import slug
-    from ucbplan.population.run import CatalogJob, run_catalog
+    from ucbplan.population.runner import CatalogJob, run_catalog
 
     out_dir.mkdir(parents=True, exist_ok=True)
     for src in catalog.sources:  # refuse before hours of sampling, not after

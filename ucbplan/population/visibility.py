@@ -11,7 +11,7 @@ All of it reuses the planner: one :class:`~ucbplan.observing.sky.SkyModel` and o
 :func:`~ucbplan.observing.schedule.nights.night_windows`, anchor epochs and their constraint check
 from :func:`~ucbplan.observing.schedule.candidates.candidate_blocks`, and the validity window
 from :func:`ucbplan.core.forecast.valid_window_s` with the per-source Fisher target of
-:func:`ucbplan.population.forecast.forecast_with_target`.
+:func:`ucbplan.population.catalog_forecast.forecast_with_target`.
 """
 
 from __future__ import annotations
@@ -34,8 +34,13 @@ from ucbplan.observing.schedule.settings import PlanSettings, parse_mode
 from ucbplan.observing.semesters import semester_dates
 from ucbplan.observing.sites import Site
 from ucbplan.population.catalog import Source
+from ucbplan.population.catalog_forecast import (
+    ANCHORS,
+    ForecastOptions,
+    forecast_with_target,
+    icrs_of,
+)
 from ucbplan.population.execute import worker_setup
-from ucbplan.population.forecast import ANCHORS, ForecastOptions, forecast_with_target, icrs_of
 from ucbplan.population.tables import SOURCE_COLUMNS
 
 __all__ = [

@@ -15,6 +15,14 @@ from typing import Any
 
 from ucbplan.observing.semesters import semester_dates
 from ucbplan.population.catalog import Catalog
+from ucbplan.population.catalog_forecast import (
+    ALPHAS,
+    ANCHORS,
+    FORECAST_COLUMNS,
+    HORIZON_CAP_DAYS,
+    ForecastOptions,
+    forecast_chunk,
+)
 from ucbplan.population.execute import (
     ExecutorSpec,
     Progress,
@@ -22,14 +30,6 @@ from ucbplan.population.execute import (
     open_executor,
     prepare_parts,
     run_chunks,
-)
-from ucbplan.population.forecast import (
-    ALPHAS,
-    ANCHORS,
-    FORECAST_COLUMNS,
-    HORIZON_CAP_DAYS,
-    ForecastOptions,
-    forecast_chunk,
 )
 from ucbplan.population.tables import columns_table, provenance, status_counts
 from ucbplan.population.visibility import (
