@@ -19,7 +19,7 @@ from test_exports_fixture import fixture_table
 
 from ucbplan.errors import SiteError
 from ucbplan.observing.exports import EXPORT_FORMATS, ExportOptions, export_blocks
-from ucbplan.observing.exports.sites import (
+from ucbplan.observing.exports.format_sites import (
     FORMAT_SITES,
     SITE_MATCH_KM,
     _distance_km,

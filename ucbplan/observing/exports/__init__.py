@@ -3,7 +3,7 @@
 Each format is a function ``(table, options) -> ExportResult`` in its own module
 (:mod:`.eso_p2`, :mod:`.keck`, :mod:`.ics`, :mod:`.ing`, :mod:`.lco`, :mod:`.proposal`,
 :mod:`.gemini`, :mod:`.phase_table`), built
-on the shared helpers, grouped by what they serve (:mod:`.options`: the options, result and
+on the shared helpers, grouped by what they serve (:mod:`.interface`: the options, result and
 signature; :mod:`.columns`: reading the blocks table, with documented defaults; :mod:`.text`:
 times, angles and names as text; :mod:`.provenance`: the plan's meta; :mod:`.windows`: the
 window on an observation's start), and registered here by name in :data:`EXPORTERS`;
@@ -20,21 +20,21 @@ from astropy.table import Table
 from ucbplan.errors import InputError, InputFileError, shorten
 from ucbplan.observing.blocktable import check_blocks
 from ucbplan.observing.exports.eso_p2 import export_eso_p2
+from ucbplan.observing.exports.format_sites import check_site
 from ucbplan.observing.exports.gemini import export_gemini
 from ucbplan.observing.exports.ics import export_ics
 from ucbplan.observing.exports.ing import export_ing_cat
-from ucbplan.observing.exports.keck import export_keck_starlist
-from ucbplan.observing.exports.lco import export_lco
-from ucbplan.observing.exports.options import (
+from ucbplan.observing.exports.interface import (
     DEFAULT_ACQUISITION_S,
     Exporter,
     ExportOptions,
     ExportResult,
 )
+from ucbplan.observing.exports.keck import export_keck_starlist
+from ucbplan.observing.exports.lco import export_lco
 from ucbplan.observing.exports.phase_table import export_phase_table
 from ucbplan.observing.exports.proposal import PROPOSAL_FORMATS, export_proposal
 from ucbplan.observing.exports.provenance import meta
-from ucbplan.observing.exports.sites import check_site
 
 __all__ = [
     "DEFAULT_ACQUISITION_S",
@@ -95,7 +95,7 @@ def export_blocks(table: Table, to: str, options: ExportOptions | None = None) -
         cell (:func:`~ucbplan.observing.blocktable.check_blocks`).
     SiteError
         The plan's site is not one of the format's observatory sites and ``options.force`` is
-        False (:func:`~ucbplan.observing.exports.sites.check_site`).
+        False (:func:`~ucbplan.observing.exports.format_sites.check_site`).
     """
     exporter = EXPORTERS.get(to) if isinstance(to, str) else None
     if exporter is None:

@@ -36,7 +36,7 @@ from ucbplan.observing.exports.columns import (
     required_times,
     strings,
 )
-from ucbplan.observing.exports.options import ExportOptions
+from ucbplan.observing.exports.interface import ExportOptions
 from ucbplan.observing.exports.provenance import meta
 
 __all__ = ["ACCOUNTING_KEYS", "TimeAccount", "accounting_from_blocks", "plan_accounting"]

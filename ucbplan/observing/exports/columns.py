@@ -33,7 +33,7 @@ from ucbplan.inputs import MAX_YAML_BYTES, is_number, load_yaml
 from ucbplan.observing.blocks import MAX_BLOCK_S
 from ucbplan.observing.blocktable import EXTRA_COLUMNS, REQUIRED_COLUMNS
 from ucbplan.observing.blocktable import USER_COLUMNS as USER_COLUMN_DECLS
-from ucbplan.observing.exports.options import DEFAULT_ACQUISITION_S, ExportOptions
+from ucbplan.observing.exports.interface import DEFAULT_ACQUISITION_S, ExportOptions
 from ucbplan.observing.exports.provenance import meta
 from ucbplan.target import target_from_dict
 

@@ -24,7 +24,7 @@ from ucbplan.observing.exports.columns import (
     strings,
     time_order,
 )
-from ucbplan.observing.exports.options import ExportOptions, ExportResult
+from ucbplan.observing.exports.interface import ExportOptions, ExportResult
 from ucbplan.observing.exports.provenance import created_utc, site_name, version
 from ucbplan.observing.exports.text import iso_ms
 from ucbplan.observing.exports.windows import ceil_minute, floor_minute, ob_start_window

@@ -18,7 +18,7 @@ from ucbplan.observing.exports.columns import (
     time_order,
     times_utc,
 )
-from ucbplan.observing.exports.options import ExportOptions, ExportResult
+from ucbplan.observing.exports.interface import ExportOptions, ExportResult
 from ucbplan.observing.exports.provenance import created_utc, site_name, version
 from ucbplan.observing.exports.text import fmt_sigma, iso_ms, safe_name
 

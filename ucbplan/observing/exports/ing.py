@@ -11,7 +11,7 @@ from ucbplan.observing.exports.columns import (
     strings,
     time_order,
 )
-from ucbplan.observing.exports.options import ExportOptions, ExportResult
+from ucbplan.observing.exports.interface import ExportOptions, ExportResult
 from ucbplan.observing.exports.text import ascii_names, fmt_sigma, iso_ms, sexagesimal
 
 __all__ = ["export_ing_cat", "ing_catalogue"]

@@ -15,7 +15,7 @@ from ucbplan.observing.exports.columns import (
     time_order,
     vmags,
 )
-from ucbplan.observing.exports.options import ExportOptions, ExportResult
+from ucbplan.observing.exports.interface import ExportOptions, ExportResult
 from ucbplan.observing.exports.provenance import site_name, version
 from ucbplan.observing.exports.text import ascii_names, ascii_text, fmt_sigma, iso_ms, sexagesimal
 

@@ -17,7 +17,7 @@ from ucbplan.observing.exports.columns import (
     required_times,
     strings,
 )
-from ucbplan.observing.exports.options import ExportOptions, ExportResult
+from ucbplan.observing.exports.interface import ExportOptions, ExportResult
 from ucbplan.observing.exports.text import iso_ms, safe_name
 from ucbplan.observing.exports.windows import ob_start_window
 

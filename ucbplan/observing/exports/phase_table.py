@@ -23,7 +23,7 @@ from astropy.time import Time, TimeDelta
 
 from ucbplan.errors import InputFileError, shorten
 from ucbplan.observing.exports.columns import floats, strings
-from ucbplan.observing.exports.options import ExportOptions, ExportResult
+from ucbplan.observing.exports.interface import ExportOptions, ExportResult
 from ucbplan.observing.exports.provenance import clean_meta, created_utc, meta, site_name, version
 
 __all__ = ["export_phase_table", "phase_table"]

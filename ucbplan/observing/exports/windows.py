@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from datetime import datetime, timedelta
 
-from ucbplan.observing.exports.options import ExportOptions
+from ucbplan.observing.exports.interface import ExportOptions
 
 # Time window on the OB start (ESO p2, LCO)
 # --------------------------------------------------------------------------------------------
