@@ -7,8 +7,8 @@
 
 Ranges are half-open in dates: ``[first, end)``, the nights starting on those local dates.
 
-Declared here, below both users: :mod:`ucbplan.population` (``--semester`` of ``population``,
-re-exported by :mod:`ucbplan.population.semesters`) and the proposal export.
+Declared here, below both users: :mod:`ucbplan.population` (``--semester`` of ``population``)
+and the proposal export.
 """
 
 from __future__ import annotations
