@@ -1,4 +1,4 @@
-"""The options the ``population`` commands share, declared once (issue 25).
+"""The options the ``population`` commands share, declared once.
 
 Each shared option is a typer ``Annotated`` alias with its default in :data:`SHARED_OPTIONS`;
 :func:`population_options` puts them into a command's signature in place of its ``shared``

@@ -1,4 +1,4 @@
-"""``ucbplan population …``: whole LISA catalogs (issue 13).
+"""``ucbplan population …``: whole LISA catalogs.
 
 Thin shells: read the catalog, run one library function of :mod:`ucbplan.population` through
 the executor seam (serial, ``--workers N`` processes, ``--scheduler tcp://HOST:PORT`` Dask, or a

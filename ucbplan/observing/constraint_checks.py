@@ -92,7 +92,7 @@ def _maybe_dark(night: NightConstraint, sky: SkyModel, xs: FloatArray, xe: Float
     """Blocks [xs, xe] that may touch the night: not every node from the one at or before
     ``xs`` to the one at or after ``xe`` is certainly in daylight (its screen over ±one node
     spacing), so a block outside it fails the night at every instant (anchor epochs in the day
-    are never evaluated further; issue 23)."""
+    are never evaluated further)."""
     lo = float(np.min(xs))
     n = math.ceil((float(np.max(xe)) - lo) / DARK_STEP_S) + 2
     nodes = np.asarray(lo + DARK_STEP_S * np.arange(n), dtype=np.float64)

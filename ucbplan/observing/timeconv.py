@@ -361,7 +361,7 @@ def coverage_warnings(t_first: Time, t_last: Time) -> list[str]:
     """
     iers_end, expires = _table_ends()
     out: list[str] = []
-    # each fits one 100-column line after "warning: " (issue 24)
+    # each fits one 100-column line after "warning: "
     if t_last > iers_end:
         out.append(
             f"IERS-A ends {iers_end.iso[:10]}: altitudes after it ~15 arcsec off; "

@@ -1,4 +1,4 @@
-"""Whole LISA catalogs: population forecasts, visibility and target selection (issue 13).
+"""Whole LISA catalogs: population forecasts, visibility and target selection.
 
 Modules: :mod:`~ucbplan.population.catalog` (LDC-style catalogs from ECSV, CSV, HDF5),
 :mod:`~ucbplan.population.catalog_forecast` (per-source Fisher forecast, σ_u, T_valid, SNR),

@@ -52,7 +52,7 @@ __all__ = [
     "visibility_table",
 ]
 
-#: Measured Fisher + horizons per source on one core (issue 23, batched: 3–5 ms) [s]; chunks
+#: Measured Fisher + horizons per source on one core (batched: 3–5 ms) [s]; chunks
 #: of ~1 s of work also amortise the per-chunk sky conversion and horizon pass.
 FORECAST_SECONDS_PER_SOURCE = 0.004
 

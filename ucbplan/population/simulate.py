@@ -225,7 +225,7 @@ def write_posterior_targets(
     return list(todo.values())
 
 
-#: Simulate with a short chain is ~1 s per source, to convergence 20–40 s (issue 13) [s].
+#: Simulate with a short chain is ~1 s per source, to convergence 20–40 s [s].
 SIMULATE_SECONDS_PER_SOURCE = 20.0
 
 
