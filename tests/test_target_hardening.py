@@ -16,7 +16,7 @@ import pytest
 import yaml
 from astropy import units as u
 
-from ucbplan.core.timescale import parse_tdb
+from ucbplan.core.epochs import parse_tdb
 from ucbplan.errors import InputError, TargetFileError
 from ucbplan.target import load_target, target_from_dict
 

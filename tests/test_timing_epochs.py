@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from ucbplan.core.timescale import format_bjd_tdb, parse_timing_epoch
+from ucbplan.core.timing_epochs import format_bjd_tdb, parse_timing_epoch
 
 DAY = Decimal(86400)
 
@@ -142,7 +142,7 @@ def test_bjd_numbers_of_an_array_keep_full_precision() -> None:
     """bjd_tdb_numbers (the ephemeris table's t_star_bjd_tdb) from two-part JDs, 12 decimals."""
     from astropy.time import Time
 
-    from ucbplan.core.timescale import bjd_tdb_numbers
+    from ucbplan.core.timing_epochs import bjd_tdb_numbers
 
     rng = random.Random(3)
     texts = [

@@ -23,6 +23,7 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 from ucbplan.cli import timing as timing_cli
+from ucbplan.core.timing_epochs import format_bjd, parse_epoch_label, seconds_to_jd
 from ucbplan.errors import InputError, InputFileError, OutputExistsError, UcbplanError
 from ucbplan.inputs import load_yaml
 from ucbplan.timing import (
@@ -34,7 +35,6 @@ from ucbplan.timing import (
     read_times,
 )
 from ucbplan.timing.fit import EphemerisFit
-from ucbplan.timing.times import format_bjd, parse_epoch_label, seconds_to_jd
 
 P_TRUE = Decimal("414.7915404")
 PDOT_TRUE = Decimal("-2.373e-11")

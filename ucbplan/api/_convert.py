@@ -58,7 +58,7 @@ def as_tdb(value: Any, parameter: str) -> Any:
     """
     from astropy.time import Time
 
-    from ucbplan.core.timescale import parse_tdb
+    from ucbplan.core.epochs import parse_tdb
 
     if isinstance(value, Time):
         if not value.isscalar:

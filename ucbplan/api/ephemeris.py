@@ -241,7 +241,7 @@ def epoch_table(t: Target, es: EpochSet) -> Table:
     tab["u_star_rad"] = es.u_star_rad
     tab["t_star_tdb"] = _iso_us(t_star)
     if t.kind == "timing":
-        from ucbplan.core.timescale import bjd_tdb_numbers
+        from ucbplan.core.timing_epochs import bjd_tdb_numbers
 
         tab["t_star_bjd_tdb"] = bjd_tdb_numbers(t_star)
     tab["tau_s"] = es.tau_s
@@ -278,7 +278,7 @@ def _epoch_meta(t: Target, es: EpochSet) -> dict[str, Any]:
     if t.has_pi_mode:
         meta["alt_epoch"] = "solution of the phi_ref + pi posterior mode (about P_b/4 earlier)"
     if t.kind == "timing" and t.timing is not None:
-        from ucbplan.core.timescale import format_bjd_tdb
+        from ucbplan.core.timing_epochs import format_bjd_tdb
 
         meta.update(
             {

@@ -12,9 +12,10 @@ def epoch_option(text: str, what: str) -> Any:
 
     ``"BJD_TDB …"``/``"BMJD_TDB …"`` keep full precision (two-part JD; HJD and UTC-based words
     are refused with how to convert); anything else is ISO/MJD/JD TDB, or UTC when labelled so
-    (:func:`ucbplan.core.timescale.parse_tdb`).
+    (:func:`ucbplan.core.epochs.parse_tdb`).
     """
-    from ucbplan.core.timescale import TIMING_EPOCH_WORDS, parse_tdb, parse_timing_epoch
+    from ucbplan.core.epochs import parse_tdb
+    from ucbplan.core.timing_epochs import TIMING_EPOCH_WORDS, parse_timing_epoch
     from ucbplan.errors import InputError
 
     word = text.strip().split(" ", 1)[0].upper().replace("-", "_")

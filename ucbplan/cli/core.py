@@ -176,7 +176,7 @@ def _timing_summary(t: Target) -> dict[str, Any]:
 
     from ucbplan.core.constants import YEAR_S
     from ucbplan.core.forecast import anchor_sigma_u
-    from ucbplan.core.timescale import format_bjd_tdb
+    from ucbplan.core.timing_epochs import format_bjd_tdb
 
     assert t.timing is not None  # kind == "timing" guarantees the section
     sec, e, p = t.timing, t.timing.ephemeris, t.params

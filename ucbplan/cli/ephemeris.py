@@ -175,7 +175,7 @@ def _warn_different_systems(ta: Target, tb: Target) -> None:
 
 def _comparison_doc(ta: Target, tb: Target, report: Any) -> dict[str, Any]:
     """JSON-ready comparison: the two files, the epoch, the offset (and π-mode alternatives)."""
-    from ucbplan.core.timescale import format_bjd_tdb
+    from ucbplan.core.timing_epochs import format_bjd_tdb
 
     def side(t: Target) -> dict[str, Any]:
         return {

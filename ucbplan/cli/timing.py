@@ -201,8 +201,8 @@ def _write(
 
 
 def _print_summary(fit: Any) -> None:
+    from ucbplan.core.timing_epochs import format_bjd
     from ucbplan.timing.fit import UNITS
-    from ucbplan.timing.times import format_bjd
 
     sig = fit.sigmas
     ratio = f"{fit.chi2 / fit.dof:.3g}" if fit.dof > 0 else "n/a"

@@ -10,6 +10,7 @@ target is anything shaped like :class:`~ucbplan.core.params.EphemerisSource`).
   after a timing ephemeris' T0);
 - :mod:`.timing`: timing ephemerides (T0, P, Ṗ, P̈) as the phase model, and the comparison of two
   ephemerides;
-- :mod:`.timescale`: time-scale guards and full-precision BJD_TDB epochs;
+- :mod:`.epochs`: epochs and their time scales (TDB unless stated otherwise);
+- :mod:`.timing_epochs`: timing-ephemeris epochs as text, ``BJD_TDB …`` at full precision;
 - :mod:`.smearing`, :mod:`.binary`, :mod:`.constants`.
 """

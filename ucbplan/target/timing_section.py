@@ -17,7 +17,6 @@ from numpy.typing import NDArray
 
 from ucbplan.core.constants import YEAR_S
 from ucbplan.core.params import PARAM_NAMES
-from ucbplan.core.timescale import parse_timing_epoch
 from ucbplan.core.timing import (
     SIGN_SPAN_S,
     TIMING_NAMES,
@@ -26,6 +25,7 @@ from ucbplan.core.timing import (
     phase_covariance,
     to_phase_params,
 )
+from ucbplan.core.timing_epochs import parse_timing_epoch
 from ucbplan.errors import shorten
 from ucbplan.target.covariance import parse_covariance
 from ucbplan.target.model import TimingSection

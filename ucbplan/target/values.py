@@ -23,13 +23,8 @@ from astropy import units as u
 from astropy.coordinates import Angle
 from astropy.time import Time
 
-from ucbplan.core.timescale import (
-    MAX_EPOCH_CHARS,
-    EpochRangeError,
-    epoch_in_scale,
-    split_scale_label,
-)
-from ucbplan.errors import TargetFileError, shorten
+from ucbplan.core.epochs import MAX_EPOCH_CHARS, epoch_in_scale, split_scale_label
+from ucbplan.errors import EpochRangeError, TargetFileError, shorten
 from ucbplan.target.fieldtypes import Field
 from ucbplan.target.schema import field
 

@@ -1,6 +1,6 @@
 """Timing ephemerides from measured eclipse times: read, count cycles, fit, report, plot.
 
-- :mod:`~ucbplan.timing.times`: eclipse-time tables with full-precision epochs;
+- :mod:`~ucbplan.timing.eclipse_table`: eclipse-time tables with full-precision epochs;
 - :mod:`~ucbplan.timing.initial`: a first ephemeris (``--period``, ``--initial TARGET.yaml``);
 - :mod:`~ucbplan.timing.cycles`: counting cycles from the times;
 - :mod:`~ucbplan.timing.first_period`: a first period from one night's eclipses, when none is
@@ -17,10 +17,10 @@ from __future__ import annotations
 from pathlib import Path
 
 from ucbplan.timing.cycles import count_cycles
+from ucbplan.timing.eclipse_table import EclipseTimes, read_times
 from ucbplan.timing.first_period import period_from_times
 from ucbplan.timing.fit import EphemerisFit, fit_ephemeris
 from ucbplan.timing.initial import PeriodGuess, period_guess, read_initial
-from ucbplan.timing.times import EclipseTimes, read_times
 
 __all__ = [
     "EclipseTimes",

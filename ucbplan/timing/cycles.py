@@ -23,10 +23,11 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from ucbplan.core.timing_epochs import jd_to_seconds
 from ucbplan.errors import InputFileError
+from ucbplan.timing.eclipse_table import EclipseTimes, check_monotonic
 from ucbplan.timing.fit import solve_wls
 from ucbplan.timing.initial import PeriodGuess
-from ucbplan.timing.times import EclipseTimes, check_monotonic, jd_to_seconds
 
 __all__ = ["AMBIGUITY_FRACTION", "count_cycles"]
 

@@ -29,10 +29,11 @@ from typing import IO, Any
 
 import yaml
 
+from ucbplan.core.timing_epochs import format_bjd
 from ucbplan.errors import InputError, InputFileError, shorten
 from ucbplan.inputs import load_yaml
+from ucbplan.timing.eclipse_table import EclipseTimes
 from ucbplan.timing.fit import COV_UNITS, UNITS, EphemerisFit
-from ucbplan.timing.times import EclipseTimes, format_bjd
 
 __all__ = [
     "COPIED_FIELDS",

@@ -28,9 +28,9 @@ from numpy.typing import NDArray
 
 from ucbplan.errors import InputFileError
 from ucbplan.timing.cycles import AMBIGUITY_FRACTION, count_cycles
+from ucbplan.timing.eclipse_table import EclipseTimes
 from ucbplan.timing.fit import solve_wls
 from ucbplan.timing.initial import PeriodGuess
-from ucbplan.timing.times import EclipseTimes
 
 __all__ = ["MIN_ECLIPSES", "NIGHT_GAP_S", "period_from_times"]
 

@@ -30,8 +30,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ucbplan.core.mvnormal import inverse_scaled
+from ucbplan.core.timing_epochs import DAY_S
 from ucbplan.errors import InputError, NumericalError
-from ucbplan.timing.times import DAY_S, EclipseTimes
+from ucbplan.timing.eclipse_table import EclipseTimes
 
 __all__ = [
     "OUTLIER_SIGMA",

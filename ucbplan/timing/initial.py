@@ -21,9 +21,9 @@ from decimal import Decimal
 from pathlib import Path
 from typing import Any
 
+from ucbplan.core.timing_epochs import DAY_S, parse_decimal, parse_epoch_label
 from ucbplan.errors import InputError, InputFileError, shorten
 from ucbplan.inputs import load_yaml
-from ucbplan.timing.times import DAY_S, parse_decimal, parse_epoch_label
 
 __all__ = ["PDOT_PRIOR_SIGMA", "PeriodGuess", "parse_period", "read_initial"]
 

@@ -14,8 +14,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ucbplan.plotting import pyplot, save_figure
+from ucbplan.timing.eclipse_table import EclipseTimes
 from ucbplan.timing.fit import EphemerisFit
-from ucbplan.timing.times import EclipseTimes
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -63,7 +63,7 @@ def oc_figure(fit: EphemerisFit, times: EclipseTimes, title: str | None = None) 
 
 
 def _t0_label(fit: EphemerisFit) -> str:
-    from ucbplan.timing.times import format_bjd
+    from ucbplan.core.timing_epochs import format_bjd
 
     return format_bjd(fit.t0_jd, decimals=7)
 

@@ -32,33 +32,26 @@ import numpy as np
 import yaml
 from numpy.typing import NDArray
 
-from ucbplan.errors import InputError, InputFileError, shorten
+from ucbplan.core.timing_epochs import (
+    DECIMAL_CONTEXT,
+    JD_RANGE,
+    MJD_OFFSET,
+    jd_to_seconds,
+    parse_decimal,
+)
+from ucbplan.errors import InputFileError, shorten
 from ucbplan.inputs import MAX_ALIASES, MAX_YAML_BYTES, read_text
 
 __all__ = [
-    "DAY_S",
-    "MJD_OFFSET",
     "EclipseTimes",
-    "format_bjd",
-    "jd_to_seconds",
-    "parse_decimal",
-    "parse_epoch_label",
     "read_times",
 ]
 
 F64 = NDArray[np.float64]
 
-#: Seconds per day (exact).
-DAY_S = 86400
-#: JD − MJD (exact).
-MJD_OFFSET = Decimal("2400000.5")
-#: Decimal context wide enough for every epoch arithmetic here (JDs with 20+ digits, times 86400).
-_CTX = decimal.Context(prec=60)
 
 #: Time columns and the offset that turns them into a JD.
 TIME_COLUMNS = {"bjd_tdb": Decimal(0), "bmjd_tdb": MJD_OFFSET}
-#: Plausible JD range of an eclipse time (1758 … 2501); outside it the column is misread.
-JD_RANGE = (Decimal(2_363_000), Decimal(2_635_000))
 #: Text columns that may be present and are ignored.
 TEXT_COLUMNS = ("instrument", "reference", "note")
 KNOWN_COLUMNS = (*TIME_COLUMNS, "sigma_s", "kind", "cycle", *TEXT_COLUMNS)
@@ -67,92 +60,6 @@ MIN_SIGMA_S = 1e-9
 MAX_SIGMA_S = 86400.0
 #: Largest |cycle| accepted.
 MAX_CYCLE = 1e12
-
-_NUMBER = re.compile(r"^[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d{1,4})?$")
-_LABELLED = re.compile(r"^\s*([A-Za-z_]+)\s+(\S+)\s*$")
-_LABEL_OFFSETS = {
-    "BJD_TDB": Decimal(0),
-    "JD_TDB": Decimal(0),
-    "BMJD_TDB": MJD_OFFSET,
-    "MJD_TDB": MJD_OFFSET,
-}
-
-
-def parse_decimal(text: str) -> Decimal:
-    """An exact decimal from a plain number text (``ValueError`` for anything else)."""
-    s = text.strip()
-    if len(s) > 60 or not _NUMBER.match(s):
-        raise ValueError(f"not a plain number: {text!r}")
-    return _CTX.create_decimal(s)
-
-
-def parse_epoch_label(text: str, what: str) -> Decimal:
-    """A labelled TDB epoch as an exact JD: ``BJD_TDB x``, ``BMJD_TDB x``, ``JD_TDB x``,
-    ``MJD_TDB x`` or an ISO date ending in ``TDB``.
-
-    Raises
-    ------
-    InputError
-        Unlabelled, another time scale (HJD, UTC: convert to BJD_TDB first) or not a number.
-    """
-    s = str(text).strip()
-    m = _LABELLED.match(s)
-    if m and m.group(1).upper() in _LABEL_OFFSETS:
-        try:
-            jd = parse_decimal(m.group(2)) + _LABEL_OFFSETS[m.group(1).upper()]
-        except ValueError:
-            raise InputError(
-                f'{what}: expected "BJD_TDB 2458305.6827886", got {shorten(text, 80)}'
-            ) from None
-        return _check_jd(jd, what, text)
-    upper = s.upper()
-    if "HJD" in upper or "UTC" in upper:
-        raise InputError(
-            f"{what}: {shorten(text, 80)} is not a barycentric TDB epoch; convert it to BJD_TDB "
-            "first (e.g. astropy Time(...).tdb with the light-travel time to the barycentre) and "
-            'write "BJD_TDB …"'
-        )
-    if upper.endswith("TDB") and re.match(r"^\d{4}-\d\d-\d\d[T ]", s):
-        from astropy.time import Time
-
-        try:
-            t = Time(re.sub(r"\s*\(?TDB\)?$", "", s, flags=re.IGNORECASE), scale="tdb")
-        except ValueError:
-            raise InputError(
-                f'{what}: expected an ISO epoch like "2018-07-03T04:23:12.93 TDB", got '
-                f"{shorten(text, 80)}"
-            ) from None
-        jd = _CTX.add(Decimal(float(t.jd1)), Decimal(float(t.jd2)))
-        return _check_jd(jd, what, text)
-    raise InputError(
-        f'{what}: expected a labelled TDB epoch like "BJD_TDB 2458305.6827886" (or BMJD_TDB, '
-        f"MJD_TDB, ISO … TDB), got {shorten(text, 80)}"
-    )
-
-
-def _check_jd(jd: Decimal, what: str, text: object) -> Decimal:
-    if not (JD_RANGE[0] <= jd <= JD_RANGE[1]):
-        raise InputError(
-            f"{what}: expected an epoch between JD {JD_RANGE[0]} and {JD_RANGE[1]}, got "
-            f"{shorten(text, 80)}"
-        )
-    return jd
-
-
-def format_bjd(jd: Decimal, decimals: int = 12) -> str:
-    """``"BJD_TDB 2458305.682788600000"``: ``decimals`` = 12 resolves 0.1 µs."""
-    q = Decimal(1).scaleb(-decimals)
-    return f"BJD_TDB {jd.quantize(q, rounding=decimal.ROUND_HALF_EVEN, context=_CTX)}"
-
-
-def jd_to_seconds(jd: Decimal, ref: Decimal) -> float:
-    """``(jd − ref)`` in seconds as float64, the subtraction exact."""
-    return float(_CTX.multiply(_CTX.subtract(jd, ref), Decimal(DAY_S)))
-
-
-def seconds_to_jd(t_s: float, ref: Decimal) -> Decimal:
-    """``ref + t_s`` (seconds, float64 taken exactly) as an exact JD."""
-    return _CTX.add(ref, _CTX.divide(Decimal(t_s), Decimal(DAY_S)))
 
 
 @dataclass(frozen=True)
@@ -352,9 +259,11 @@ def _ecsv_time_rows(
         for name, key in zip(tab.colnames, names, strict=True):
             if key in time_cols:
                 col = time_cols[key]
-                jd = _CTX.add(Decimal(float(col.jd1[k])), Decimal(float(col.jd2[k])))
-                rel = _CTX.subtract(jd, TIME_COLUMNS[key])  # 1e-18 d = 1e-13 s resolution
-                cells.append(str(rel.quantize(Decimal("1e-18"), context=_CTX)))
+                jd = DECIMAL_CONTEXT.add(Decimal(float(col.jd1[k])), Decimal(float(col.jd2[k])))
+                rel = DECIMAL_CONTEXT.subtract(
+                    jd, TIME_COLUMNS[key]
+                )  # 1e-18 d = 1e-13 s resolution
+                cells.append(str(rel.quantize(Decimal("1e-18"), context=DECIMAL_CONTEXT)))
             else:
                 cells.append(str(tab[name][k]).strip())
         body.append((k + 1, cells))

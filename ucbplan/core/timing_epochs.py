@@ -1,136 +1,43 @@
-"""Time-scale guards: epochs are TDB at the barycentre unless the user states otherwise.
+"""Timing-ephemeris epochs as text, at full precision: ``"BJD_TDB 2458305.6827886"``.
 
-Epoch text is read in linear time: the optional scale label is split off by scanning from the
-end (no backtracking regex, which was quadratic on padded strings), and text longer than
-:data:`MAX_EPOCH_CHARS` is refused before any parsing.
+Two readings of the same strings: as an astropy ``Time`` whose two-part JD holds the decimal
+value (:func:`parse_timing_epoch`, target files' ``t0``), and as an exact ``Decimal`` JD
+(:func:`parse_epoch_label`, eclipse-time tables and initial ephemerides, whose arithmetic is done
+in decimals: :func:`jd_to_seconds`, :func:`seconds_to_jd`). Written back by
+:func:`format_bjd_tdb` (a ``Time``), :func:`format_bjd` (a ``Decimal``) and
+:func:`bjd_tdb_numbers` (arrays of ``Time``). HJD, UTC-, TT- or TCB-based epochs and unlabelled
+numbers are refused with a message saying how to convert.
 """
 
 from __future__ import annotations
 
 import datetime as _dt
-import math
+import decimal
+import re
+from decimal import Decimal
 
 from astropy.time import Time
 
-from ucbplan.errors import EpochRangeError, InputError, shorten
+from ucbplan.core.epochs import YEAR_RANGE, split_scale_label, year_of
+from ucbplan.errors import InputError, shorten
 
 __all__ = [
-    "MAX_EPOCH_CHARS",
-    "SCALES",
+    "DAY_S",
+    "DECIMAL_CONTEXT",
+    "JD_RANGE",
+    "MAX_TIMING_EPOCH_CHARS",
+    "MJD_OFFSET",
+    "TIMING_EPOCH_EXAMPLE",
     "TIMING_EPOCH_WORDS",
-    "EpochRangeError",
     "bjd_tdb_numbers",
-    "epoch_in_scale",
+    "format_bjd",
     "format_bjd_tdb",
-    "parse_tdb",
+    "jd_to_seconds",
+    "parse_decimal",
+    "parse_epoch_label",
     "parse_timing_epoch",
-    "split_scale_label",
+    "seconds_to_jd",
 ]
-
-#: Time scales an epoch may be labelled with (lower case).
-SCALES: tuple[str, ...] = ("tdb", "tcb", "tt", "utc", "tai")
-#: Longest epoch text [characters]: "MJD 65059.123456789012345 (TDB)" is 31.
-MAX_EPOCH_CHARS = 64
-#: Epochs must lie in these years (catches a JD given as an MJD, and garbage numbers).
-YEAR_RANGE = (1000.0, 3000.0)
-
-_LETTERS = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz")
-
-
-def split_scale_label(text: str) -> tuple[str, str | None]:
-    """``(epoch text, scale)`` of ``text`` with an optional trailing scale label removed.
-
-    Accepted labels: ``"… UTC"``, ``"… (UTC)"``, ``"…(UTC)"`` (any case, any of :data:`SCALES`);
-    the label must be a separate word. Without a label the scale is None. Linear in
-    ``len(text)``.
-    """
-    t = text.strip()
-    core = t[:-1] if t.endswith(")") else t
-    i = len(core)
-    while i > 0 and core[i - 1] in _LETTERS:
-        i -= 1
-    word = core[i:].lower()
-    if word not in SCALES:
-        return t, None
-    before = core[:i]
-    if before.endswith("("):
-        before = before[:-1]
-    elif before and (before[-1].isalnum() or before[-1] == "_"):
-        return t, None  # "…00UTC": not a separate word
-    return before.strip(), word
-
-
-def _year(t: Time) -> float:
-    return 2000.0 + (float(t.jd1) - 2451545.0 + float(t.jd2)) / 365.25
-
-
-def epoch_in_scale(text: str, scale: str, isot_if_t: bool = False) -> Time:
-    """Unlabelled epoch text (ISO, ``"MJD x"`` or ``"JD x"``) in ``scale``, converted to TDB.
-
-    ``isot_if_t`` reads text containing ``T`` strictly as ISO ``YYYY-MM-DDThh:mm:ss``.
-
-    Raises
-    ------
-    ValueError
-        Not an epoch, not finite, or outside the years of :data:`YEAR_RANGE` (the message says
-        which).
-    """
-    raw = text.strip()
-    if not raw or len(raw) > MAX_EPOCH_CHARS:
-        raise ValueError("not an epoch")
-    upper = raw.upper()
-    # future UTC: leap seconds after the bundled table are unknown (TDB − UTC kept at the
-    # last value); the user stated the scale, so convert with that caveat
-    try:
-        if upper.startswith(("MJD", "JD")):
-            fmt = "mjd" if upper.startswith("MJD") else "jd"
-            number = float(raw[len(fmt) :])
-            if not math.isfinite(number):
-                raise ValueError("not finite")
-            t = Time(number, format=fmt, scale=scale)
-        else:
-            t = Time(raw, scale=scale, format="isot" if isot_if_t and "T" in raw else None)
-        year = _year(t)
-        tdb = t.tdb if YEAR_RANGE[0] <= year <= YEAR_RANGE[1] else None
-    except (ValueError, TypeError, OverflowError, KeyError, IndexError, UnicodeError):
-        raise ValueError("not an epoch") from None
-    if tdb is None:
-        raise EpochRangeError(
-            f"lies in the year {year:.6g}; expected an epoch in the years "
-            f"{YEAR_RANGE[0]:.0f}–{YEAR_RANGE[1]:.0f} (a JD given as an MJD?)"
-        )
-    return tdb
-
-
-def parse_tdb(text: str, what: str = "epoch") -> Time:
-    """Parse an ISO epoch (or ``MJD x`` / ``JD x``) as TDB.
-
-    A trailing scale label (``UTC``, ``TT``, ``TCB``, ``TAI``) is an explicit statement of the
-    scale, and the epoch is converted to TDB; an unlabelled epoch is taken as TDB.
-
-    Raises
-    ------
-    InputError
-        If the text is not an epoch (one line, the value cut to 200 characters).
-    """
-    expected = (
-        f'{what}: expected an ISO epoch like "2040-01-15T00:00:00" (TDB; append UTC to give '
-        f"UTC), got {shorten(text)}"
-    )
-    if not isinstance(text, str) or len(text.strip()) > MAX_EPOCH_CHARS + 8:
-        raise InputError(expected)
-    raw, label = split_scale_label(text)
-    try:
-        return epoch_in_scale(raw, label or "tdb")
-    except EpochRangeError as exc:
-        raise InputError(f"{what}: {shorten(text)} {exc}") from None
-    except ValueError:
-        raise InputError(expected) from None
-
-
-# ---------------------------------------------------------------------------------------------
-# timing epochs: "BJD_TDB 2458305.6827886" with full precision
-# ---------------------------------------------------------------------------------------------
 
 #: Scale words of a timing epoch → astropy format of the number that follows (all TDB at the
 #: solar-system barycentre).
@@ -282,7 +189,7 @@ def _iso_epoch(raw: str, body: str, label: str | None, expect: str) -> Time:
 
 
 def _check_year(t: Time, raw: str) -> None:
-    year = _year(t)
+    year = year_of(t)
     if not YEAR_RANGE[0] <= year <= YEAR_RANGE[1]:
         raise ValueError(
             f"{shorten(raw)} lies in the year {year:.6g}; expected an epoch in the years "
@@ -327,3 +234,102 @@ def bjd_tdb_numbers(t: Time, decimals: int = 12) -> list[str]:
             day, text = day + 1, zero
         out.append(f"{day}{text[1:]}")
     return out
+
+
+# exact decimals (eclipse-time tables, initial ephemerides)
+
+#: Seconds per day (exact).
+DAY_S = 86400
+#: JD − MJD (exact).
+MJD_OFFSET = Decimal("2400000.5")
+#: Decimal context wide enough for every epoch arithmetic here (JDs with 20+ digits, times 86400).
+DECIMAL_CONTEXT = decimal.Context(prec=60)
+
+#: Plausible JD range of an eclipse time (1758 … 2501); outside it the column is misread.
+JD_RANGE = (Decimal(2_363_000), Decimal(2_635_000))
+
+_NUMBER = re.compile(r"^[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d{1,4})?$")
+_LABELLED = re.compile(r"^\s*([A-Za-z_]+)\s+(\S+)\s*$")
+_LABEL_OFFSETS = {
+    "BJD_TDB": Decimal(0),
+    "JD_TDB": Decimal(0),
+    "BMJD_TDB": MJD_OFFSET,
+    "MJD_TDB": MJD_OFFSET,
+}
+
+
+def parse_decimal(text: str) -> Decimal:
+    """An exact decimal from a plain number text (``ValueError`` for anything else)."""
+    s = text.strip()
+    if len(s) > 60 or not _NUMBER.match(s):
+        raise ValueError(f"not a plain number: {text!r}")
+    return DECIMAL_CONTEXT.create_decimal(s)
+
+
+def parse_epoch_label(text: str, what: str) -> Decimal:
+    """A labelled TDB epoch as an exact JD: ``BJD_TDB x``, ``BMJD_TDB x``, ``JD_TDB x``,
+    ``MJD_TDB x`` or an ISO date ending in ``TDB``.
+
+    Raises
+    ------
+    InputError
+        Unlabelled, another time scale (HJD, UTC: convert to BJD_TDB first) or not a number.
+    """
+    s = str(text).strip()
+    m = _LABELLED.match(s)
+    if m and m.group(1).upper() in _LABEL_OFFSETS:
+        try:
+            jd = parse_decimal(m.group(2)) + _LABEL_OFFSETS[m.group(1).upper()]
+        except ValueError:
+            raise InputError(
+                f'{what}: expected "BJD_TDB 2458305.6827886", got {shorten(text, 80)}'
+            ) from None
+        return _check_jd(jd, what, text)
+    upper = s.upper()
+    if "HJD" in upper or "UTC" in upper:
+        raise InputError(
+            f"{what}: {shorten(text, 80)} is not a barycentric TDB epoch; convert it to BJD_TDB "
+            "first (e.g. astropy Time(...).tdb with the light-travel time to the barycentre) and "
+            'write "BJD_TDB …"'
+        )
+    if upper.endswith("TDB") and re.match(r"^\d{4}-\d\d-\d\d[T ]", s):
+        from astropy.time import Time
+
+        try:
+            t = Time(re.sub(r"\s*\(?TDB\)?$", "", s, flags=re.IGNORECASE), scale="tdb")
+        except ValueError:
+            raise InputError(
+                f'{what}: expected an ISO epoch like "2018-07-03T04:23:12.93 TDB", got '
+                f"{shorten(text, 80)}"
+            ) from None
+        jd = DECIMAL_CONTEXT.add(Decimal(float(t.jd1)), Decimal(float(t.jd2)))
+        return _check_jd(jd, what, text)
+    raise InputError(
+        f'{what}: expected a labelled TDB epoch like "BJD_TDB 2458305.6827886" (or BMJD_TDB, '
+        f"MJD_TDB, ISO … TDB), got {shorten(text, 80)}"
+    )
+
+
+def _check_jd(jd: Decimal, what: str, text: object) -> Decimal:
+    if not (JD_RANGE[0] <= jd <= JD_RANGE[1]):
+        raise InputError(
+            f"{what}: expected an epoch between JD {JD_RANGE[0]} and {JD_RANGE[1]}, got "
+            f"{shorten(text, 80)}"
+        )
+    return jd
+
+
+def format_bjd(jd: Decimal, decimals: int = 12) -> str:
+    """``"BJD_TDB 2458305.682788600000"``: ``decimals`` = 12 resolves 0.1 µs."""
+    q = Decimal(1).scaleb(-decimals)
+    return f"BJD_TDB {jd.quantize(q, rounding=decimal.ROUND_HALF_EVEN, context=DECIMAL_CONTEXT)}"
+
+
+def jd_to_seconds(jd: Decimal, ref: Decimal) -> float:
+    """``(jd − ref)`` in seconds as float64, the subtraction exact."""
+    return float(DECIMAL_CONTEXT.multiply(DECIMAL_CONTEXT.subtract(jd, ref), Decimal(DAY_S)))
+
+
+def seconds_to_jd(t_s: float, ref: Decimal) -> Decimal:
+    """``ref + t_s`` (seconds, float64 taken exactly) as an exact JD."""
+    return DECIMAL_CONTEXT.add(ref, DECIMAL_CONTEXT.divide(Decimal(t_s), Decimal(DAY_S)))
