@@ -20,21 +20,22 @@ from numpy.typing import ArrayLike, NDArray
 from ucbplan.core.constants import DAY_S
 from ucbplan.core.forecast import (
     AFTER,
-    BEFORE,
     anchor_kind,
     anchor_u_values,
     t_valid_batch,
+    time_reversed,
     tolerance,
     two_sided,
 )
-from ucbplan.core.horizon_grid import anchor_sigma_batch
+from ucbplan.core.horizon_grid import HORIZON_CAP_S, anchor_sigma_batch, oscillating
+from ucbplan.core.horizon_poly import sigma2_polys, t_valid_from_sigma2
 from ucbplan.core.params import PARAM_NAMES, EphemerisSource
 from ucbplan.errors import InputError
 
 if TYPE_CHECKING:
     from astropy.table import Table
 
-__all__ = ["HORIZON_COLUMNS", "horizon_columns", "horizon_rows", "horizons"]
+__all__ = ["HORIZON_COLUMNS", "horizon_columns", "horizon_json", "horizon_rows", "horizons"]
 
 FloatArray = NDArray[np.float64]
 
@@ -54,6 +55,35 @@ def _timing_error(
     """δt_u = σ_u/Φ̇_asc at τ per target (Eq. timing_unc) [s]."""
     rate = math.pi * (pars[:, 1] + pars[:, 2] * tau + pars[:, 3] * tau**2 / 2)
     out: FloatArray = _max_sigma(pars, covs, tau, us, star) / np.abs(rate)
+    return out
+
+
+def _t_valid_alphas(
+    pars: FloatArray,
+    covs: FloatArray,
+    t_obs: FloatArray,
+    thrs: Sequence[FloatArray],
+    us: Sequence[float],
+    star: int,
+) -> list[FloatArray]:
+    """``t_valid_batch(pars, covs, t_obs, thr, us, star)`` for each threshold array of ``thrs``
+    (one per α) [s]: the σ_u² polynomials of the non-oscillating rows are built once and the
+    roots of all thresholds found in one stacked pass (each row's root is its own, so the numbers
+    are those of one call per α); oscillating rows go to :func:`t_valid_batch` as they are."""
+    out = [np.zeros(pars.shape[0]) for _ in thrs]
+    osc = oscillating(pars, covs)
+    flat, prec = np.nonzero(~osc)[0], np.nonzero(osc)[0]
+    if flat.size:
+        polys = sigma2_polys(pars[flat], covs[flat], t_obs[flat], us, star, HORIZON_CAP_S)
+        stacked = [np.tile(q, (len(thrs), 1)) for q in polys]
+        thr = np.concatenate([t[flat] for t in thrs])
+        tv = t_valid_from_sigma2(stacked, thr, HORIZON_CAP_S).reshape(len(thrs), -1)
+        for o, row in zip(out, tv, strict=True):
+            o[flat] = row
+    if prec.size:
+        p, c, o = pars[prec], covs[prec], t_obs[prec]
+        for res, t in zip(out, thrs, strict=True):
+            res[prec] = t_valid_batch(p, c, o, t[prec], us, star, AFTER)
     return out
 
 
@@ -103,16 +133,21 @@ def horizon_columns(
         tol = tol[which.reshape(-1)]
         out[f"delta_u_tol_rad:{label}"] = tol
         out[f"sigma_u_end_rad:{label}"] = _max_sigma(p, c, t_obs / 2.0, us, star)
-        for alpha in alphas:
+        thrs = [alpha * tol for alpha in alphas]
+        after = _t_valid_alphas(p, c, t_obs, thrs, us, star)
+        if back.size:  # BEFORE: the time-reversed rows' horizons after (as t_valid_batch)
+            pb, cb, ob = p[back], c[back], t_obs[back]
+            pr, cr = time_reversed(pb, cb)
+            before = _t_valid_alphas(pr, cr, ob, [t[back] for t in thrs], us, star)
+        for j, alpha in enumerate(alphas):
             key = f"{label}:{alpha:g}"
-            tv = t_valid_batch(p, c, t_obs, alpha * tol, us, star, AFTER)
+            tv = after[j]
             out[f"t_valid_days:{key}"] = tv / DAY_S
             out[f"dt_u_s:{key}"] = _timing_error(p, c, t_obs / 2.0 + tv, us, star)
             tb = np.full(n, np.nan)
             dtb = np.full(n, np.nan)
             if back.size:
-                pb, cb, ob = p[back], c[back], t_obs[back]
-                tb[back] = t_valid_batch(pb, cb, ob, alpha * tol[back], us, star, BEFORE)
+                tb[back] = before[j]
                 dtb[back] = _timing_error(pb, cb, -ob / 2.0 - tb[back], us, star)
             out[f"t_valid_before_days:{key}"] = tb / DAY_S
             out[f"dt_u_before_s:{key}"] = dtb
@@ -331,3 +366,62 @@ def horizon_rows(tab: Table) -> list[dict[str, Any]]:
             }
         out.append(row)
     return out
+
+
+def horizon_json(tab: Table) -> str:
+    """The JSON text of :func:`horizon_rows`: an array with one row per line, as
+    ``json.dumps(horizon_rows(tab), allow_nan=False, ensure_ascii=False)`` would write each row,
+    built by column (each column's values encoded in one pass, each row filled into a template of
+    its keys) instead of row by row. NaN is ``null``; a table with an infinite value takes the
+    row-by-row path, whose error says so."""
+    import json
+    from json.encoder import encode_basestring  # the string encoder of ensure_ascii=False
+
+    names = list(tab.colnames)
+    cols: dict[str, list[str]] = {}
+    for name in names:
+        col = np.asarray(tab[name])
+        if col.dtype.kind == "f":
+            if np.isinf(col).any():
+                return _rows_text(
+                    json.dumps(horizon_rows(tab), allow_nan=False, ensure_ascii=False)
+                )
+            vals = _float_texts(col)
+        elif col.dtype.kind in "iu":
+            vals = list(map(int.__repr__, col.tolist()))
+        else:
+            vals = list(map(encode_basestring, map(str, col.tolist())))
+        cols[name] = vals
+    one_sided = np.asarray(tab["kind"]) != "timing"
+    text = [""] * len(tab)
+    for keys, rows in (
+        ([c for c in names if c not in TWO_SIDED_COLUMNS], np.flatnonzero(one_sided)),
+        (names, np.flatnonzero(~one_sided)),
+    ):
+        if not rows.size:
+            continue
+        template = "{" + ", ".join(f"{encode_basestring(k)}: %s" for k in keys) + "}"
+        if rows.size == len(tab):  # one kind of target: no scatter
+            text = list(map(template.__mod__, zip(*[cols[k] for k in keys], strict=True)))
+            break
+        take = rows.tolist()
+        values = [[cols[k][i] for i in take] for k in keys]
+        for i, row in zip(take, map(template.__mod__, zip(*values, strict=True)), strict=True):
+            text[i] = row
+    return "[\n" + ",\n".join(text) + "\n]\n"
+
+
+def _float_texts(col: FloatArray) -> list[str]:
+    """``repr`` of each float of a column (as ``json`` writes it), NaN as ``null``: each distinct
+    value (bit pattern, so 0.0 and -0.0 stay apart) formatted once; α, σ_v, K, the tolerances
+    and σ_u at the end repeat over a target's rows or over the targets."""
+    bits = np.ascontiguousarray(col, dtype=np.float64).view(np.int64)
+    uniq, inverse = np.unique(bits, return_inverse=True)
+    texts = ["null" if v != v else repr(v) for v in uniq.view(np.float64).tolist()]
+    return list(map(texts.__getitem__, inverse.reshape(-1).tolist()))
+
+
+def _rows_text(array: str) -> str:
+    """A JSON array of rows (each starting with its ``target`` key) one row per line: inside an
+    encoded string a quote is always escaped, so ``}, {"target": `` occurs only between rows."""
+    return "[\n" + array[1:-1].replace('}, {"target": ', '},\n{"target": ') + "\n]\n"
