@@ -310,31 +310,29 @@ def _horizon_many(
     overwrite: bool,
 ) -> None:
     """The long horizon table of many targets (:func:`ucbplan.core.horizon_batch.horizons`)."""
-    from ucbplan.core.horizon_batch import horizon_rows, horizons
+    from ucbplan.core.horizon_batch import horizon_json, horizons
 
-    for t in targets:  # one-line errors naming the option (the library names its parameter)
-        _resolve_k_sigma(t, sigma_v, k_eff)
+    checked: set[tuple[float | None, float | None] | None] = (
+        set()
+    )  # one-line errors naming the option (the library names its parameter)
+    for t in targets:  # once per distinct spectroscopy: its result depends on nothing else
+        spec = t.spectroscopy
+        key = (spec.sigma_v_kms, spec.k_for_tolerance) if spec is not None else None
+        if key not in checked:
+            checked.add(key)
+            _resolve_k_sigma(t, sigma_v, k_eff)
     tab = horizons(targets, sigma_v, k_eff, alphas=alpha, anchors=anchor, n_epochs=epochs)
     if fmt == "json":
-        rows = horizon_rows(tab)
-        write_output(output, lambda h: _dump_rows(rows, h), overwrite=overwrite)
+        text = horizon_json(tab)
+
+        def write(handle: Any) -> None:
+            handle.write(text)
+
+        write_output(output, write, overwrite=overwrite)
     elif fmt != "table":
         write_table_output(tab, fmt, output, overwrite)
     else:
         _print_many(tab)
-
-
-def _dump_rows(rows: list[dict[str, Any]], handle: Any) -> None:
-    """A JSON array with one row per line, encoded in one call (numbers are NaN-free).
-
-    Every row starts with its ``target`` key, and inside an encoded string a quote is always
-    escaped, so ``}, {"target": `` occurs only between rows: splitting there is exact.
-    """
-    import json
-
-    text = json.dumps(rows, allow_nan=False, ensure_ascii=False)
-    text = text.replace('}, {"target": ', '},\n{"target": ')
-    handle.write("[\n" + text[1:-1] + "\n]\n")
 
 
 def _print_many(tab: Any) -> None:

@@ -117,7 +117,7 @@ def check_distinct_files(paths: Sequence[Path | str]) -> None:
     """
     files: dict[tuple[int, int] | str, Path] = {}
     for raw in paths:
-        path = Path(raw)
+        path = raw if isinstance(raw, Path) else Path(raw)  # a Path is not parsed again
         first = files.setdefault(_file_key(path), path)
         if first is not path:
             raise TargetFileError(
@@ -148,7 +148,7 @@ def load_targets(
     names: dict[str, tuple[Path, str]] = {}
     out = []
     for raw in paths:
-        path = Path(raw)
+        path = raw if isinstance(raw, Path) else Path(raw)  # a Path is not parsed again
         target = load_target(path)
         key = ident(target.name)
         if key in names:
