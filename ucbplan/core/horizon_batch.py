@@ -11,6 +11,7 @@ for several targets: a row per target × anchor × α (:data:`HORIZON_COLUMNS`).
 from __future__ import annotations
 
 import math
+import operator
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -38,6 +39,8 @@ if TYPE_CHECKING:
 __all__ = ["HORIZON_COLUMNS", "horizon_columns", "horizon_json", "horizon_rows", "horizons"]
 
 FloatArray = NDArray[np.float64]
+#: A target's parameters as a tuple in PARAM_NAMES order (PhaseParams.as_array without the array).
+_PARAMS = operator.attrgetter(*PARAM_NAMES)
 
 
 def _max_sigma(
@@ -253,7 +256,7 @@ def horizons(
     )
     both = np.array([two_sided(t) for t in targets], dtype=bool)
     cols = horizon_columns(
-        np.array([t.params.as_array() for t in targets]),
+        np.array(list(map(_PARAMS, (t.params for t in targets))), dtype=np.float64),
         _covariances(targets),
         np.array([t.t_obs_s for t in targets]),
         sk[:, 0],

@@ -153,26 +153,44 @@ def _monotone_root(coef: FloatArray) -> FloatArray:
     at its own convergence, so a row's root does not depend on the other rows of the batch
     (a population forecast's table is the same whatever the chunking).
     """
-    lo, hi = np.zeros(coef.shape[0]), np.ones(coef.shape[0])
+    n = coef.shape[0]
+    x = np.full(n, 0.5)
+    rows = np.arange(n)  # the live rows' indices, in step with the arrays below
+    cols = np.ascontiguousarray(coef.T)  # (D+1, live): one contiguous row per power
     rising = coef.sum(axis=1) > coef[:, 0]  # P(1) > P(0)
-    x = np.full(coef.shape[0], 0.5)
-    live = np.arange(coef.shape[0])
+    xl, ll, hl = x.copy(), np.zeros(n), np.ones(n)
     for _ in range(100):
-        xl, ll, hl = x[live], lo[live], hi[live]
-        val, der = horner(coef[live], xl[:, None])
-        val, der = val[:, 0], der[:, 0]
-        above = (val > 0.0) == rising[live]  # the root is below x
+        val, der = _horner_1d(cols, xl)
+        above = (val > 0.0) == rising  # the root is below x
         hl, ll = np.where(above, xl, hl), np.where(above, ll, xl)
         with np.errstate(divide="ignore", invalid="ignore"):
             newton = xl - val / der
         new = np.where((newton > ll) & (newton < hl), newton, 0.5 * (ll + hl))
         new = np.where(val == 0.0, xl, new)
         done = (new == xl) | (hl - ll <= 4e-16)
-        x[live], lo[live], hi[live] = new, ll, hl
-        live = live[~done]
-        if not live.size:
-            break
+        xl = new
+        if done.any():  # the finished rows leave the arrays (each row stops on its own)
+            x[rows[done]] = xl[done]
+            keep = ~done
+            if not keep.any():
+                return x
+            rows, xl, ll, hl, rising = rows[keep], xl[keep], ll[keep], hl[keep], rising[keep]
+            cols = cols[:, keep]
+    x[rows] = xl
     return x
+
+
+def _horner_1d(cols: FloatArray, x: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """:func:`horner` for one point per polynomial, coefficients by power ``cols`` (D+1, n):
+    the same operations in the same order, on contiguous 1-d arrays and in place."""
+    val = np.zeros_like(x) + cols[-1]
+    der = np.zeros_like(x)
+    for k in range(cols.shape[0] - 2, -1, -1):
+        der *= x
+        der += val
+        val *= x
+        val += cols[k]
+    return val, der
 
 
 def roots_01(coef: FloatArray) -> FloatArray:
