@@ -284,6 +284,9 @@ def t_valid_from_sigma2(sigma2: Sequence[FloatArray], thr: FloatArray, cap_s: fl
             new &= ~np.all(p == q, axis=1)
         roots[new, 6 * j : 6 * j + 6] = roots_01(p[new])
     pts = np.sort(np.concatenate([np.zeros((n, 1)), roots, np.ones((n, 1))], axis=1), axis=1)
+    # NaN (no root) sorts last, after the closing 1: its zero-length segments at x = 1 would only
+    # repeat the state of the segment ending there, so the columns no row needs are dropped
+    pts = pts[:, : 2 + int(np.max(np.sum(~np.isnan(roots), axis=1), initial=0))]
     pts = np.where(np.isnan(pts), 1.0, pts)
     mid = 0.5 * (pts[:, :-1] + pts[:, 1:])
     worst = np.max([horner(p, mid)[0] for p in polys], axis=0)
