@@ -41,6 +41,7 @@ __all__ = ["HORIZON_COLUMNS", "horizon_columns", "horizon_json", "horizon_rows",
 FloatArray = NDArray[np.float64]
 #: A target's parameters as a tuple in PARAM_NAMES order (PhaseParams.as_array without the array).
 _PARAMS = operator.attrgetter(*PARAM_NAMES)
+_UNNAMED = object()
 
 
 def _max_sigma(
@@ -249,7 +250,10 @@ def horizons(
     """
     if not targets:
         raise InputError("targets: expected at least one target, got none")
-    names = [str(getattr(t, "name", f"target {i + 1}")) for i, t in enumerate(targets)]
+    names = [  # the fallback name formatted only for a target without one
+        f"target {i + 1}" if (v := getattr(t, "name", _UNNAMED)) is _UNNAMED else str(v)
+        for i, t in enumerate(targets)
+    ]
     files = [str(getattr(t, "source", None) or "") for t in targets]
     sk = np.array(
         [_spectroscopy(t, n, sigma_v, k_eff) for t, n in zip(targets, names, strict=True)]
