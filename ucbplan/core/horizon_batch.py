@@ -396,8 +396,10 @@ def horizon_json(tab: Table) -> str:
             vals = _float_texts(col)
         elif col.dtype.kind in "iu":
             vals = list(map(int.__repr__, col.tolist()))
-        else:
-            vals = list(map(encode_basestring, map(str, col.tolist())))
+        else:  # each distinct text encoded once (names repeat over a target's rows)
+            texts = col.tolist()
+            codes = {v: encode_basestring(v) for v in dict.fromkeys(texts)}
+            vals = list(map(codes.__getitem__, texts))
         cols[name] = vals
     one_sided = np.asarray(tab["kind"]) != "timing"
     text = [""] * len(tab)
