@@ -316,15 +316,7 @@ def _horizon_many(
     """The long horizon table of many targets (:func:`ucbplan.core.horizon_batch.horizons`)."""
     from ucbplan.core.horizon_batch import horizon_json, horizons
 
-    checked: set[tuple[float | None, float | None] | None] = (
-        set()
-    )  # one-line errors naming the option (the library names its parameter)
-    for t in targets:  # once per distinct spectroscopy: its result depends on nothing else
-        spec = t.spectroscopy
-        key = (spec.sigma_v_kms, spec.k_for_tolerance) if spec is not None else None
-        if key not in checked:
-            checked.add(key)
-            _resolve_k_sigma(t, sigma_v, k_eff)
+    _check_k_sigma(targets, sigma_v, k_eff)
     tab = horizons(targets, sigma_v, k_eff, alphas=alpha, anchors=anchor, n_epochs=epochs)
     if fmt == "json":
         text = horizon_json(tab)
@@ -337,6 +329,23 @@ def _horizon_many(
         write_table_output(tab, fmt, output, overwrite)
     else:
         _print_many(tab)
+
+
+def _check_k_sigma(targets: list[Target], sigma_v: float | None, k_eff: float | None) -> None:
+    """:func:`_resolve_k_sigma` of every target (one-line errors naming the option; the library
+    names its parameter), once per distinct (σ_v, K) a target would use, on which alone its
+    outcome depends, and only where a plain float pair is not plainly in range: the first
+    target that fails is still the one named."""
+    pairs: dict[tuple[Any, Any], Target] = {}
+    for t in targets:
+        spec = t.spectroscopy
+        sv = sigma_v if sigma_v is not None else (spec.sigma_v_kms if spec else None)
+        k = k_eff if k_eff is not None else (spec.k_for_tolerance if spec else None)
+        pairs.setdefault((sv, k), t)
+    for (sv, k), t in pairs.items():
+        plain = type(sv) is float and type(k) is float
+        if not (plain and 0.0 < sv <= 1e4 and 0.1 < k <= 1e4 and sv < k):
+            _resolve_k_sigma(t, sigma_v, k_eff)
 
 
 def _print_many(tab: Any) -> None:

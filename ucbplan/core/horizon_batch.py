@@ -62,6 +62,30 @@ def _timing_error(
     return out
 
 
+def _tolerances(kind: str, pair: FloatArray, n_epochs: int, u_star: float) -> FloatArray:
+    """:func:`~ucbplan.core.forecast.tolerance` of each (σ_v, K) row of ``pair`` (n, 2) [rad]:
+    the same operations on arrays (so the same bits); any input it refuses goes to it, one
+    distinct pair at a time, for its error."""
+    sv, k = pair[:, 0], pair[:, 1]
+    valid = (sv > 0) & (k > 0) & np.isfinite(sv) & np.isfinite(k)
+    if not valid.all() or n_epochs not in (1, 2) or kind not in _TOLERANCE_KINDS:
+        pairs, which = np.unique(pair, axis=0, return_inverse=True)
+        tol = np.array([tolerance(kind, a, b, n_epochs, u_star) for a, b in pairs])
+        out: FloatArray = tol[which.reshape(-1)]
+        return out
+    quad = np.sqrt((2.0 if n_epochs == 1 else math.sqrt(2.0)) * sv / k)
+    if kind in ("conjunction", "zero-crossing"):
+        return sv / k
+    if kind == "quadrature":
+        return quad
+    s = abs(math.sin(u_star))  # generic
+    return quad if s == 0 else np.minimum(sv / (k * s), quad)
+
+
+#: The kinds :func:`_tolerances` computes itself (any other goes to ``tolerance`` for its error).
+_TOLERANCE_KINDS = ("conjunction", "zero-crossing", "quadrature", "generic")
+
+
 def _t_valid_alphas(
     pars: FloatArray,
     covs: FloatArray,
@@ -126,15 +150,13 @@ def horizon_columns(
     pair = np.column_stack(
         [np.broadcast_to(np.asarray(v, dtype=np.float64), (n,)) for v in (sigma_v, k_eff)]
     )
-    pairs, which = np.unique(pair, axis=0, return_inverse=True)
     both = np.broadcast_to(np.asarray(two_sided, dtype=bool), (n,))
     back = np.nonzero(both)[0]
     out: dict[str, FloatArray] = {}
     for anchor in anchors:
         label, us = anchor_u_values(anchor)
         kind = anchor_kind(label, us)
-        tol = np.array([tolerance(kind, sv, kk, n_epochs, us[0]) for sv, kk in pairs])
-        tol = tol[which.reshape(-1)]
+        tol = _tolerances(kind, pair, n_epochs, us[0])
         out[f"delta_u_tol_rad:{label}"] = tol
         out[f"sigma_u_end_rad:{label}"] = _max_sigma(p, c, t_obs / 2.0, us, star)
         thrs = [alpha * tol for alpha in alphas]
