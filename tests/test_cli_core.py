@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from test_cli_fuzz import run_main
 from typer.testing import CliRunner
 
 from ucbplan.cli.app import app
@@ -338,3 +339,25 @@ def test_horizon_many_targets_json_with_a_timing_target(hm_cnc_path: Path) -> No
     assert len(lisa) == len(timed) == 4
     assert all("t_valid_before_days" not in r for r in lisa)
     assert all(r["t_valid_before_days"] > 0 for r in timed)
+
+
+def test_horizon_many_targets_name_the_first_that_fails_sigma_k(
+    tmp_path: Path, hm_cnc_path: Path
+) -> None:
+    """σ_v and K are checked once per distinct pair: the error still names the first target in
+    the given order that fails, and the option it needs (issue 23)."""
+    text = hm_cnc_path.read_text(encoding="utf-8")
+    bare = tmp_path / "bare.yaml"
+    bare.write_text(text.split("\nspectroscopy:")[0].replace("HM Cnc (simulated)", "bare") + "\n")
+    big = tmp_path / "big.yaml"
+    big.write_text(text.replace('"390 km/s"', '"50 km/s"').replace("HM Cnc (simulated)", "big"))
+    good = str(hm_cnc_path)
+    code, _, err = run_main(["horizon", good, str(bare), str(big), "--format", "json"])
+    assert code == 2 and err.startswith("error: --sigma-v: bare has no RV precision")
+    code, _, err = run_main(["horizon", good, str(big), str(bare), "--format", "json"])
+    assert code == 2 and "(56.5685 km/s) must be smaller than k_eff (50 km/s)" in err
+    code, _, err = run_main(["horizon", good, str(bare), "--sigma-v", "20", "--format", "json"])
+    assert code == 2 and err.startswith("error: --k-eff: bare has no semi-amplitude")
+    ok = ["horizon", good, str(bare), str(big), "--sigma-v", "20", "--k-eff", "300"]
+    code, out, err = run_main([*ok, "--format", "json"])
+    assert code == 0 and len(json.loads(out)) == 3 * 2 * 2, err

@@ -15,7 +15,7 @@ from test_horizon_poly import _random_targets
 
 import ucbplan.core.horizon_apsidal as ha
 from ucbplan.core.constants import DAY_S, YEAR_S
-from ucbplan.core.forecast import AFTER, BEFORE, HORIZON_CAP_S, _time_reversed, t_valid_batch
+from ucbplan.core.forecast import AFTER, BEFORE, HORIZON_CAP_S, t_valid_batch, time_reversed
 from ucbplan.core.horizon_grid import anchor_sigma_batch, oscillating
 from ucbplan.core.horizon_poly import horner
 
@@ -89,7 +89,7 @@ def test_matches_brute_force() -> None:
     where the grid search misses a brief early crossing (seed 2, row 70, before T0)."""
     pars, covs, t_obs, thr = _precessing(300, seed=2, e_max=0.4)
     rows = [70, *range(0, 300, 10)]
-    p, c = _time_reversed(pars[rows], covs[rows])
+    p, c = time_reversed(pars[rows], covs[rows])
     us = (math.pi / 2,)
     got = t_valid_batch(p, c, t_obs[rows], thr[rows], us)  # BEFORE of the originals
     checked = 0

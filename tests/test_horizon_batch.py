@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from test_horizon_poly import _random_targets
 
 from ucbplan.core.forecast import horizon_table, two_sided
 from ucbplan.core.horizon_batch import horizon_columns
@@ -57,3 +58,21 @@ def test_columns_equal_table(anchors: tuple[str | float, ...]) -> None:
                 assert row.t_valid_before_days > 0
             else:
                 assert math.isnan(cols[f"t_valid_before_days:{key}"][i])
+
+
+def test_a_row_is_the_same_alone_or_in_a_batch() -> None:
+    """Each target's columns do not depend on the other rows of the batch, to the last bit: the
+    roots of all α are found in one stacked pass, the Newton rows leave as they converge and the
+    window search keeps only the points some row needs (random circular, eccentric, timing-like
+    targets and thresholds from tests/test_horizon_poly.py, one call each vs one batch)."""
+    pars, covs, t_obs, thr = _random_targets(40, 7)
+    k_eff = 15.0 / thr  # a spread of tolerances, a few above π (no window)
+    kw = {"alphas": (0.3, 1.0, 2.0), "anchors": ("quadrature", "zero-crossing")}
+    batch = horizon_columns(pars, covs, t_obs, 15.0, k_eff, two_sided=t_obs == 0, **kw)
+    for i in range(len(pars)):
+        row = slice(i, i + 1)
+        one = horizon_columns(
+            pars[row], covs[row], t_obs[row], 15.0, k_eff[row], two_sided=t_obs[row] == 0, **kw
+        )
+        for key, col in batch.items():
+            assert np.array_equal(col[i : i + 1], one[key], equal_nan=True), (i, key)

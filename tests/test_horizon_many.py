@@ -3,17 +3,24 @@
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 from pathlib import Path
+from typing import TYPE_CHECKING
 
+import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from hypothesis.extra import numpy as hnp
 
 from ucbplan.core.forecast import horizon_table
-from ucbplan.core.horizon_batch import HORIZON_COLUMNS, horizon_rows, horizons
+from ucbplan.core.horizon_batch import HORIZON_COLUMNS, horizon_json, horizon_rows, horizons
 from ucbplan.errors import InputError, TargetFileError
 from ucbplan.target import load_target, load_target_documents
+
+if TYPE_CHECKING:
+    from astropy.table import Table
 
 CATALOGS = Path(__file__).resolve().parents[1] / "catalogs"
 TIMING = CATALOGS / "examples" / "synthetic-eclipsing.yaml"
@@ -91,3 +98,47 @@ def test_fuzzed_catalogs_load_or_fail_in_one_line(tmp_path: Path, docs: list[str
         assert "\n" not in str(exc) and "fuzz.yaml" in str(exc)
     else:
         assert 1 <= len(got) <= len(docs)
+
+
+def _row_by_row(tab: Table) -> str:
+    """The JSON text the row-by-row way: ``json.dumps`` of :func:`horizon_rows`, a row a line."""
+    rows = [json.dumps(r, allow_nan=False, ensure_ascii=False) for r in horizon_rows(tab)]
+    return "[\n" + ",\n".join(rows) + "\n]\n"
+
+
+@pytest.fixture(scope="module")
+def mixed_table() -> Table:
+    """LISA and timing targets, one with quotes, a backslash and non-ASCII in its name."""
+    t = load_target(CATALOGS / "hm-cnc-simulated.yaml")
+    odd = dataclasses.replace(t, name='Qé "x" \\ ☃')
+    return horizons([t, load_target(TIMING), odd], sigma_v=20.0, k_eff=300.0)
+
+
+def test_columnar_json_is_the_row_by_row_json(mixed_table: Table) -> None:
+    """:func:`horizon_json` (built by column) is byte for byte ``json.dumps`` of the rows, and
+    reads back as them (NaN as null, a LISA row without the before-T0 keys)."""
+    text = horizon_json(mixed_table)
+    assert text == _row_by_row(mixed_table)
+    assert json.loads(text) == horizon_rows(mixed_table)
+    lisa = mixed_table[mixed_table["kind"] == "lisa"]
+    assert horizon_json(lisa) == _row_by_row(lisa)  # one kind of target only
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    hnp.arrays(
+        np.float64,
+        (12, 2),
+        elements=st.one_of(
+            st.floats(allow_infinity=False),
+            st.sampled_from([0.0, -0.0, 0.5, 1.0, float("nan"), 1e-300, 5e-324]),
+        ),
+    )
+)
+def test_columnar_json_floats_any_value(mixed_table: Table, values: np.ndarray) -> None:
+    """Any finite float, NaN, 0.0 and -0.0 (which compare equal but print apart) and repeats:
+    each column's values are written exactly as ``json`` writes them."""
+    tab = mixed_table.copy()
+    tab["t_valid_days"] = values[:, 0]
+    tab["dt_u_before_s"] = values[:, 1]
+    assert horizon_json(tab) == _row_by_row(tab)

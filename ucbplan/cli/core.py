@@ -224,17 +224,21 @@ HorizonTargetsArg = Annotated[
 ]
 
 
-def _expand_targets(names: list[str]) -> list[Path]:
-    """Files as given; a directory contributes its *.yaml and *.yml files, sorted."""
-    out: list[Path] = []
-    for path in map(Path, names):
-        if path.is_dir():
+def _expand_targets(names: list[str]) -> list[Path | str]:
+    """Files as given (text: the reader makes the path, ~2 µs each); a directory contributes its
+    *.yaml and *.yml files, sorted."""
+    import os
+
+    out: list[Path | str] = []
+    for name in names:
+        if os.path.isdir(name or "."):  # Path("") is ".", as before
+            path = Path(name)
             found = sorted([*path.glob("*.yaml"), *path.glob("*.yml")])
             if not found:
                 raise UcbplanError(f"{path}: no *.yaml target files in this directory")
             out.extend(found)
         else:
-            out.append(path)
+            out.append(name)
     return out
 
 
@@ -310,31 +314,38 @@ def _horizon_many(
     overwrite: bool,
 ) -> None:
     """The long horizon table of many targets (:func:`ucbplan.core.horizon_batch.horizons`)."""
-    from ucbplan.core.horizon_batch import horizon_rows, horizons
+    from ucbplan.core.horizon_batch import horizon_json, horizons
 
-    for t in targets:  # one-line errors naming the option (the library names its parameter)
-        _resolve_k_sigma(t, sigma_v, k_eff)
+    _check_k_sigma(targets, sigma_v, k_eff)
     tab = horizons(targets, sigma_v, k_eff, alphas=alpha, anchors=anchor, n_epochs=epochs)
     if fmt == "json":
-        rows = horizon_rows(tab)
-        write_output(output, lambda h: _dump_rows(rows, h), overwrite=overwrite)
+        text = horizon_json(tab)
+
+        def write(handle: Any) -> None:
+            handle.write(text)
+
+        write_output(output, write, overwrite=overwrite)
     elif fmt != "table":
         write_table_output(tab, fmt, output, overwrite)
     else:
         _print_many(tab)
 
 
-def _dump_rows(rows: list[dict[str, Any]], handle: Any) -> None:
-    """A JSON array with one row per line, encoded in one call (numbers are NaN-free).
-
-    Every row starts with its ``target`` key, and inside an encoded string a quote is always
-    escaped, so ``}, {"target": `` occurs only between rows: splitting there is exact.
-    """
-    import json
-
-    text = json.dumps(rows, allow_nan=False, ensure_ascii=False)
-    text = text.replace('}, {"target": ', '},\n{"target": ')
-    handle.write("[\n" + text[1:-1] + "\n]\n")
+def _check_k_sigma(targets: list[Target], sigma_v: float | None, k_eff: float | None) -> None:
+    """:func:`_resolve_k_sigma` of every target (one-line errors naming the option; the library
+    names its parameter), once per distinct (σ_v, K) a target would use, on which alone its
+    outcome depends, and only where a plain float pair is not plainly in range: the first
+    target that fails is still the one named."""
+    pairs: dict[tuple[Any, Any], Target] = {}
+    for t in targets:
+        spec = t.spectroscopy
+        sv = sigma_v if sigma_v is not None else (spec.sigma_v_kms if spec else None)
+        k = k_eff if k_eff is not None else (spec.k_for_tolerance if spec else None)
+        pairs.setdefault((sv, k), t)
+    for (sv, k), t in pairs.items():
+        plain = type(sv) is float and type(k) is float
+        if not (plain and 0.0 < sv <= 1e4 and 0.1 < k <= 1e4 and sv < k):
+            _resolve_k_sigma(t, sigma_v, k_eff)
 
 
 def _print_many(tab: Any) -> None:

@@ -43,6 +43,7 @@ __all__ = [
     "sigma_u_from_jacobian",
     "t_valid",
     "t_valid_batch",
+    "time_reversed",
     "tolerance",
     "two_sided",
     "u_jacobian",
@@ -188,7 +189,7 @@ def t_valid_batch(
     pars = np.atleast_2d(np.asarray(pars, dtype=np.float64))
     covs = np.asarray(covs, dtype=np.float64).reshape(-1, 7, 7)
     if direction == BEFORE:
-        pars, covs = _time_reversed(pars, covs)
+        pars, covs = time_reversed(pars, covs)
     elif direction != AFTER:
         raise UcbplanError(f"direction must be +1 (after) or -1 (before), got {direction!r}")
     t_obs = np.broadcast_to(np.asarray(t_obs_s, dtype=np.float64), (pars.shape[0],))
@@ -238,7 +239,7 @@ def _analytic(
     return left
 
 
-def _time_reversed(pars: FloatArray, covs: FloatArray) -> tuple[FloatArray, FloatArray]:
+def time_reversed(pars: FloatArray, covs: FloatArray) -> tuple[FloatArray, FloatArray]:
     """Parameters and covariances whose σ_u at +τ is the original's at −τ (exactly)."""
     rev = pars.copy()
     rev[:, 6] = -rev[:, 6]

@@ -11,6 +11,7 @@ for several targets: a row per target × anchor × α (:data:`HORIZON_COLUMNS`).
 from __future__ import annotations
 
 import math
+import operator
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -20,23 +21,27 @@ from numpy.typing import ArrayLike, NDArray
 from ucbplan.core.constants import DAY_S
 from ucbplan.core.forecast import (
     AFTER,
-    BEFORE,
     anchor_kind,
     anchor_u_values,
     t_valid_batch,
+    time_reversed,
     tolerance,
     two_sided,
 )
-from ucbplan.core.horizon_grid import anchor_sigma_batch
+from ucbplan.core.horizon_grid import HORIZON_CAP_S, anchor_sigma_batch, oscillating
+from ucbplan.core.horizon_poly import sigma2_polys, t_valid_from_sigma2
 from ucbplan.core.params import PARAM_NAMES, EphemerisSource
 from ucbplan.errors import InputError
 
 if TYPE_CHECKING:
     from astropy.table import Table
 
-__all__ = ["HORIZON_COLUMNS", "horizon_columns", "horizon_rows", "horizons"]
+__all__ = ["HORIZON_COLUMNS", "horizon_columns", "horizon_json", "horizon_rows", "horizons"]
 
 FloatArray = NDArray[np.float64]
+#: A target's parameters as a tuple in PARAM_NAMES order (PhaseParams.as_array without the array).
+_PARAMS = operator.attrgetter(*PARAM_NAMES)
+_UNNAMED = object()
 
 
 def _max_sigma(
@@ -54,6 +59,59 @@ def _timing_error(
     """δt_u = σ_u/Φ̇_asc at τ per target (Eq. timing_unc) [s]."""
     rate = math.pi * (pars[:, 1] + pars[:, 2] * tau + pars[:, 3] * tau**2 / 2)
     out: FloatArray = _max_sigma(pars, covs, tau, us, star) / np.abs(rate)
+    return out
+
+
+def _tolerances(kind: str, pair: FloatArray, n_epochs: int, u_star: float) -> FloatArray:
+    """:func:`~ucbplan.core.forecast.tolerance` of each (σ_v, K) row of ``pair`` (n, 2) [rad]:
+    the same operations on arrays (so the same bits); any input it refuses goes to it, one
+    distinct pair at a time, for its error."""
+    sv, k = pair[:, 0], pair[:, 1]
+    valid = (sv > 0) & (k > 0) & np.isfinite(sv) & np.isfinite(k)
+    if not valid.all() or n_epochs not in (1, 2) or kind not in _TOLERANCE_KINDS:
+        pairs, which = np.unique(pair, axis=0, return_inverse=True)
+        tol = np.array([tolerance(kind, a, b, n_epochs, u_star) for a, b in pairs])
+        out: FloatArray = tol[which.reshape(-1)]
+        return out
+    quad = np.sqrt((2.0 if n_epochs == 1 else math.sqrt(2.0)) * sv / k)
+    if kind in ("conjunction", "zero-crossing"):
+        return sv / k
+    if kind == "quadrature":
+        return quad
+    s = abs(math.sin(u_star))  # generic
+    return quad if s == 0 else np.minimum(sv / (k * s), quad)
+
+
+#: The kinds :func:`_tolerances` computes itself (any other goes to ``tolerance`` for its error).
+_TOLERANCE_KINDS = ("conjunction", "zero-crossing", "quadrature", "generic")
+
+
+def _t_valid_alphas(
+    pars: FloatArray,
+    covs: FloatArray,
+    t_obs: FloatArray,
+    thrs: Sequence[FloatArray],
+    us: Sequence[float],
+    star: int,
+) -> list[FloatArray]:
+    """``t_valid_batch(pars, covs, t_obs, thr, us, star)`` for each threshold array of ``thrs``
+    (one per α) [s]: the σ_u² polynomials of the non-oscillating rows are built once and the
+    roots of all thresholds found in one stacked pass (each row's root is its own, so the numbers
+    are those of one call per α); oscillating rows go to :func:`t_valid_batch` as they are."""
+    out = [np.zeros(pars.shape[0]) for _ in thrs]
+    osc = oscillating(pars, covs)
+    flat, prec = np.nonzero(~osc)[0], np.nonzero(osc)[0]
+    if flat.size:
+        polys = sigma2_polys(pars[flat], covs[flat], t_obs[flat], us, star, HORIZON_CAP_S)
+        stacked = [np.tile(q, (len(thrs), 1)) for q in polys]
+        thr = np.concatenate([t[flat] for t in thrs])
+        tv = t_valid_from_sigma2(stacked, thr, HORIZON_CAP_S).reshape(len(thrs), -1)
+        for o, row in zip(out, tv, strict=True):
+            o[flat] = row
+    if prec.size:
+        p, c, o = pars[prec], covs[prec], t_obs[prec]
+        for res, t in zip(out, thrs, strict=True):
+            res[prec] = t_valid_batch(p, c, o, t[prec], us, star, AFTER)
     return out
 
 
@@ -92,27 +150,30 @@ def horizon_columns(
     pair = np.column_stack(
         [np.broadcast_to(np.asarray(v, dtype=np.float64), (n,)) for v in (sigma_v, k_eff)]
     )
-    pairs, which = np.unique(pair, axis=0, return_inverse=True)
     both = np.broadcast_to(np.asarray(two_sided, dtype=bool), (n,))
     back = np.nonzero(both)[0]
     out: dict[str, FloatArray] = {}
     for anchor in anchors:
         label, us = anchor_u_values(anchor)
         kind = anchor_kind(label, us)
-        tol = np.array([tolerance(kind, sv, kk, n_epochs, us[0]) for sv, kk in pairs])
-        tol = tol[which.reshape(-1)]
+        tol = _tolerances(kind, pair, n_epochs, us[0])
         out[f"delta_u_tol_rad:{label}"] = tol
         out[f"sigma_u_end_rad:{label}"] = _max_sigma(p, c, t_obs / 2.0, us, star)
-        for alpha in alphas:
+        thrs = [alpha * tol for alpha in alphas]
+        after = _t_valid_alphas(p, c, t_obs, thrs, us, star)
+        if back.size:  # BEFORE: the time-reversed rows' horizons after (as t_valid_batch)
+            pb, cb, ob = p[back], c[back], t_obs[back]
+            pr, cr = time_reversed(pb, cb)
+            before = _t_valid_alphas(pr, cr, ob, [t[back] for t in thrs], us, star)
+        for j, alpha in enumerate(alphas):
             key = f"{label}:{alpha:g}"
-            tv = t_valid_batch(p, c, t_obs, alpha * tol, us, star, AFTER)
+            tv = after[j]
             out[f"t_valid_days:{key}"] = tv / DAY_S
             out[f"dt_u_s:{key}"] = _timing_error(p, c, t_obs / 2.0 + tv, us, star)
             tb = np.full(n, np.nan)
             dtb = np.full(n, np.nan)
             if back.size:
-                pb, cb, ob = p[back], c[back], t_obs[back]
-                tb[back] = t_valid_batch(pb, cb, ob, alpha * tol[back], us, star, BEFORE)
+                tb[back] = before[j]
                 dtb[back] = _timing_error(pb, cb, -ob / 2.0 - tb[back], us, star)
             out[f"t_valid_before_days:{key}"] = tb / DAY_S
             out[f"dt_u_before_s:{key}"] = dtb
@@ -211,14 +272,17 @@ def horizons(
     """
     if not targets:
         raise InputError("targets: expected at least one target, got none")
-    names = [str(getattr(t, "name", f"target {i + 1}")) for i, t in enumerate(targets)]
+    names = [  # the fallback name formatted only for a target without one
+        f"target {i + 1}" if (v := getattr(t, "name", _UNNAMED)) is _UNNAMED else str(v)
+        for i, t in enumerate(targets)
+    ]
     files = [str(getattr(t, "source", None) or "") for t in targets]
     sk = np.array(
         [_spectroscopy(t, n, sigma_v, k_eff) for t, n in zip(targets, names, strict=True)]
     )
     both = np.array([two_sided(t) for t in targets], dtype=bool)
     cols = horizon_columns(
-        np.array([t.params.as_array() for t in targets]),
+        np.array(list(map(_PARAMS, (t.params for t in targets))), dtype=np.float64),
         _covariances(targets),
         np.array([t.t_obs_s for t in targets]),
         sk[:, 0],
@@ -331,3 +395,64 @@ def horizon_rows(tab: Table) -> list[dict[str, Any]]:
             }
         out.append(row)
     return out
+
+
+def horizon_json(tab: Table) -> str:
+    """The JSON text of :func:`horizon_rows`: an array with one row per line, as
+    ``json.dumps(horizon_rows(tab), allow_nan=False, ensure_ascii=False)`` would write each row,
+    built by column (each column's values encoded in one pass, each row filled into a template of
+    its keys) instead of row by row. NaN is ``null``; a table with an infinite value takes the
+    row-by-row path, whose error says so."""
+    import json
+    from json.encoder import encode_basestring  # the string encoder of ensure_ascii=False
+
+    names = list(tab.colnames)
+    cols: dict[str, list[str]] = {}
+    for name in names:
+        col = np.asarray(tab[name])
+        if col.dtype.kind == "f":
+            if np.isinf(col).any():
+                return _rows_text(
+                    json.dumps(horizon_rows(tab), allow_nan=False, ensure_ascii=False)
+                )
+            vals = _float_texts(col)
+        elif col.dtype.kind in "iu":
+            vals = list(map(int.__repr__, col.tolist()))
+        else:  # each distinct text encoded once (names repeat over a target's rows)
+            texts = col.tolist()
+            codes = {v: encode_basestring(v) for v in dict.fromkeys(texts)}
+            vals = list(map(codes.__getitem__, texts))
+        cols[name] = vals
+    one_sided = np.asarray(tab["kind"]) != "timing"
+    text = [""] * len(tab)
+    for keys, rows in (
+        ([c for c in names if c not in TWO_SIDED_COLUMNS], np.flatnonzero(one_sided)),
+        (names, np.flatnonzero(~one_sided)),
+    ):
+        if not rows.size:
+            continue
+        template = "{" + ", ".join(f"{encode_basestring(k)}: %s" for k in keys) + "}"
+        if rows.size == len(tab):  # one kind of target: no scatter
+            text = list(map(template.__mod__, zip(*[cols[k] for k in keys], strict=True)))
+            break
+        take = rows.tolist()
+        values = [[cols[k][i] for i in take] for k in keys]
+        for i, row in zip(take, map(template.__mod__, zip(*values, strict=True)), strict=True):
+            text[i] = row
+    return "[\n" + ",\n".join(text) + "\n]\n"
+
+
+def _float_texts(col: FloatArray) -> list[str]:
+    """``repr`` of each float of a column (as ``json`` writes it), NaN as ``null``: each distinct
+    value (bit pattern, so 0.0 and -0.0 stay apart) formatted once; α, σ_v, K, the tolerances
+    and σ_u at the end repeat over a target's rows or over the targets."""
+    bits = np.ascontiguousarray(col, dtype=np.float64).view(np.int64)
+    uniq, inverse = np.unique(bits, return_inverse=True)
+    texts = ["null" if v != v else repr(v) for v in uniq.view(np.float64).tolist()]
+    return list(map(texts.__getitem__, inverse.reshape(-1).tolist()))
+
+
+def _rows_text(array: str) -> str:
+    """A JSON array of rows (each starting with its ``target`` key) one row per line: inside an
+    encoded string a quote is always escaped, so ``}, {"target": `` occurs only between rows."""
+    return "[\n" + array[1:-1].replace('}, {"target": ', '},\n{"target": ') + "\n]\n"

@@ -10,6 +10,7 @@ section (exactly one of the two) is converted to the same phase model at its epo
 
 from __future__ import annotations
 
+import os
 import unicodedata
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
@@ -97,12 +98,12 @@ def load_target(path: Path | str) -> Target:
     return target_from_dict(doc, path)
 
 
-def _file_key(path: Path) -> tuple[int, int] | str:
+def _file_key(path: Path | str) -> tuple[int, int] | str:
     """What makes two paths the same file: device and inode (links, ``./a`` vs ``a``)."""
     try:
-        st = path.stat()
+        st = os.stat(path)
     except OSError:
-        return str(path.absolute())
+        return str(Path(path).absolute())
     return (st.st_dev, st.st_ino)
 
 
@@ -115,13 +116,13 @@ def check_distinct_files(paths: Sequence[Path | str]) -> None:
     TargetFileError
         One line naming both paths.
     """
-    files: dict[tuple[int, int] | str, Path] = {}
-    for raw in paths:
-        path = Path(raw)
-        first = files.setdefault(_file_key(path), path)
-        if first is not path:
+    files: dict[tuple[int, int] | str, int] = {}
+    for k, path in enumerate(paths):  # as given: a Path is built only for the message
+        first = files.setdefault(_file_key(path), k)
+        if first != k:
             raise TargetFileError(
-                f"{first}, {path}: the same target file twice; give each target once"
+                f"{Path(paths[first])}, {Path(path)}: the same target file twice; give each "
+                "target once"
             )
 
 
@@ -148,7 +149,7 @@ def load_targets(
     names: dict[str, tuple[Path, str]] = {}
     out = []
     for raw in paths:
-        path = Path(raw)
+        path = raw if isinstance(raw, Path) else Path(raw)  # a Path is not parsed again
         target = load_target(path)
         key = ident(target.name)
         if key in names:
