@@ -1,0 +1,142 @@
+"""The one coordinate formatter (:func:`ucbplan.observing.tableformat.sexagesimal`): its
+``astropy`` rounding writes the blocks table's ``ra_hms``/``dec_dms`` exactly as astropy's
+``Angle.to_string`` did, its ``once`` rounding what the exports always wrote, and the two differ
+only where these tests say (a one-off run over 1.4 million values found no other difference)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from astropy.coordinates import Angle
+
+from ucbplan.observing.tableformat import dec_dms_column, ra_hms_column, sexagesimal
+
+#: Values per sample: enough to meet every kind of rounding case (a tie within a few ulps
+#: differs in ~1 of 7), few enough to stay well under a second per test.
+N = 20_000
+
+
+def _astropy_ra(ra_deg: np.ndarray) -> list[str]:
+    text = Angle(ra_deg, unit="deg").to_string(unit="hourangle", sep=":", precision=3, pad=True)
+    return np.atleast_1d(text).astype(str).tolist()
+
+
+def _astropy_dec(dec_deg: np.ndarray) -> list[str]:
+    text = Angle(dec_deg, unit="deg").to_string(
+        unit="deg", sep=":", precision=2, pad=True, alwayssign=True
+    )
+    return np.atleast_1d(text).astype(str).tolist()
+
+
+def _near_ties(rng: np.random.Generator, units_per: float, top: float, scale: float) -> np.ndarray:
+    """Values within 4 ulps of a rounding tie of the last decimal (``units_per`` per hour or
+    degree), where floating-point steps decide the last digit."""
+    k = rng.integers(0, int(top * units_per), N)
+    value = (k + 0.5) / units_per * scale
+    return value + rng.integers(-4, 5, N) * np.spacing(value)
+
+
+def _ra_sample(rng: np.random.Generator) -> np.ndarray:
+    edges = [0.0, -0.0, 360.0, np.nextafter(360.0, 0.0), 360 - 1e-9, 5e-324, 15.0, -1e-9]
+    return np.concatenate(
+        [
+            rng.uniform(0.0, 360.0, N),
+            _near_ties(rng, 3600 * 1000, 24, 15.0),
+            np.nextafter(360.0, 0.0) - rng.uniform(0.0, 1e-5, N // 10),  # 23:59:59.9995+
+            np.array([*edges, np.nan, np.inf]),
+        ]
+    )
+
+
+def _dec_sample(rng: np.random.Generator) -> np.ndarray:
+    edges = [0.0, -0.0, 90.0, -90.0, np.nextafter(90.0, 0.0), -5e-324, -1e-7, 1e-7]
+    return np.concatenate(
+        [
+            rng.uniform(-90.0, 90.0, N),
+            _near_ties(rng, 3600 * 100, 90, 1.0) * rng.choice([-1.0, 1.0], N),
+            -rng.uniform(0.0, 1e-5, N // 10),  # tiny negatives
+            np.array([*edges, np.nan, -np.inf]),
+        ]
+    )
+
+
+def test_table_columns_are_astropys_text() -> None:
+    rng = np.random.default_rng(25)
+    ra, dec = _ra_sample(rng), _dec_sample(rng)
+    assert ra_hms_column(ra).tolist() == _astropy_ra(ra)
+    assert dec_dms_column(dec).tolist() == _astropy_dec(dec)
+
+
+def _units(text: str) -> int:
+    """Sexagesimal text as a whole number of its last decimal (the sign aside)."""
+    head, minutes, seconds = text.lstrip("+-").split(":")
+    whole, _, frac = seconds.partition(".")
+    scale = 10 ** len(frac)
+    return ((int(head) * 60 + int(minutes)) * 60 + int(whole)) * scale + int(frac or 0)
+
+
+def _last_digit_apart(a: str, b: str) -> bool:
+    """One unit of the last decimal apart (a carry may change more digits), same sign."""
+    return a[0] == b[0] and abs(_units(a) - _units(b)) == 1
+
+
+def test_the_two_roundings_differ_only_at_the_named_edges() -> None:
+    rng = np.random.default_rng(2025)
+    ra = _ra_sample(rng)
+    ra = ra[np.isfinite(ra) & ~np.signbit(ra)]  # the exports drop an RA's sign
+    hours = ra * (Angle(1.0, unit="deg").hourangle)  # astropy's scale, as the table converts
+    kinds: dict[str, int] = {"wrap": 0, "tie": 0, "zero": 0}
+    for value, h in zip(ra.tolist(), hours.tolist(), strict=True):
+        table = sexagesimal(h, 3, ":", False, rounding="astropy")
+        export = sexagesimal(value / 15.0, 3, ":", False)
+        if table != export:
+            kind = "wrap" if (table[:3], export[:3]) == ("24:", "00:") else "tie"
+            assert kind == "wrap" or _last_digit_apart(table, export), (value, table, export)
+            kinds[kind] += 1
+    dec = _dec_sample(rng)
+    for value in dec[np.isfinite(dec)].tolist():
+        table = sexagesimal(value, 2, ":", True, rounding="astropy")
+        export = sexagesimal(value, 2, ":", True)
+        if table != export:
+            zero = value <= 0 and (table, export) == ("-00:00:00.00", "+00:00:00.00")
+            kind = "zero" if zero else "tie"
+            assert zero or _last_digit_apart(table, export), (value, table, export)
+            kinds[kind] += 1
+    assert min(kinds.values()) > 0, kinds  # the samples meet every kind of difference
+
+
+def test_the_two_roundings_agree_away_from_ties() -> None:
+    # random values and catalogue grids (1 ms of RA, 0.01" of Dec) are never near a tie
+    rng = np.random.default_rng(3)
+    ra = np.concatenate([rng.uniform(0, 360, N), rng.integers(0, 86_400_000, N) / 3.6e6 * 15])
+    hours = ra * Angle(1.0, unit="deg").hourangle
+    table = [sexagesimal(h, 3, ":", False, rounding="astropy") for h in hours.tolist()]
+    assert table == [sexagesimal(v / 15.0, 3, ":", False) for v in ra.tolist()]
+    dec = np.concatenate(
+        [rng.uniform(-90, 90, N), rng.integers(-32_400_000, 32_400_000, N) / 3.6e5]
+    )
+    table = [sexagesimal(d, 2, ":", True, rounding="astropy") for d in dec.tolist()]
+    assert table == [sexagesimal(d, 2, ":", True) for d in dec.tolist()]
+
+
+@pytest.mark.parametrize(
+    ("value", "decimals", "signed", "astropy", "once"),
+    [
+        (23.99999999999, 3, False, "24:00:00.000", "00:00:00.000"),  # 24 h: wrap or not
+        (-0.0, 2, True, "-00:00:00.00", "+00:00:00.00"),  # the sign of zero
+        (-1e-9, 2, True, "-00:00:00.00", "+00:00:00.00"),  # a negative rounding to zero
+        (-1.5, 1, False, "-01:30:00.0", "01:30:00.0"),  # unsigned: the sign dropped or kept
+        (12.5, 2, True, "+12:30:00.00", "+12:30:00.00"),
+        (59.99999999, 2, True, "+60:00:00.00", "+60:00:00.00"),  # the carry, both ways
+    ],
+)
+def test_named_differences(
+    value: float, decimals: int, signed: bool, astropy: str, once: str
+) -> None:
+    assert sexagesimal(value, decimals, ":", signed, rounding="astropy") == astropy
+    assert sexagesimal(value, decimals, ":", signed) == once
+
+
+def test_unknown_rounding_is_refused() -> None:
+    with pytest.raises(ValueError, match="rounding"):
+        sexagesimal(1.0, 2, ":", True, rounding="half-up")
