@@ -17,7 +17,6 @@ from zoneinfo import ZoneInfo
 import astropy.units as u
 import numpy as np
 import pytest
-from astropy.coordinates import Angle
 from astropy.table import MaskedColumn, Table
 from astropy.time import Time, TimeDelta
 
@@ -391,30 +390,6 @@ def test_json_rows_match_row_by_row() -> None:
     masked["m"] = MaskedColumn([1.0, 2.0, 3.0, 4.0], mask=[False, True, False, False])
     assert table_to_json_rows(masked) == _reference_rows(masked)  # row by row (masked)
     assert table_to_json_rows(table[:0]) == []
-
-
-def test_sexagesimal_columns_match_per_element() -> None:
-    # repeated (a target's blocks), signed zero, rounding carries, the poles and NaN
-    ra = np.array([121.5967, 121.5967, 0.0, -0.0, 359.99999999, 15.0, 121.5967, np.nan])
-    dec = np.array([15.4583, -0.0, 0.0, -0.0000001, 89.9999999999, -90.0, 15.4583, np.nan])
-    got_ra, got_dec = tableformat.ra_hms_column(ra), tableformat.dec_dms_column(dec)
-    ref_ra, ref_dec = _astropy_hms(ra), _astropy_dms(dec)  # what the columns were made with
-    assert list(got_ra) == list(ref_ra) and list(got_dec) == list(ref_dec)
-    assert (got_dec[1], got_dec[2]) == ("-00:00:00.00", "+00:00:00.00")  # -0.0 on its own
-    assert got_ra.dtype == ref_ra.dtype  # the table column's width unchanged
-    assert len(tableformat.ra_hms_column(np.array([]))) == 0
-
-
-def _astropy_hms(ra_deg: np.ndarray) -> np.ndarray:
-    ra = Angle(ra_deg, unit="deg").to_string(unit="hourangle", sep=":", precision=3, pad=True)
-    return np.atleast_1d(ra).astype(str)
-
-
-def _astropy_dms(dec_deg: np.ndarray) -> np.ndarray:
-    dec = Angle(dec_deg, unit="deg").to_string(
-        unit="deg", sep=":", precision=2, pad=True, alwayssign=True
-    )
-    return np.atleast_1d(dec).astype(str)
 
 
 @pytest.mark.parametrize(

@@ -16,16 +16,18 @@ from ucbplan.observing.tableformat import dec_dms_column, ra_hms_column, sexages
 N = 20_000
 
 
-def _astropy_ra(ra_deg: np.ndarray) -> list[str]:
+def _astropy_ra(ra_deg: np.ndarray) -> np.ndarray:
+    """``ra_hms`` as the table made it up to issue 25 (astropy's text)."""
     text = Angle(ra_deg, unit="deg").to_string(unit="hourangle", sep=":", precision=3, pad=True)
-    return np.atleast_1d(text).astype(str).tolist()
+    return np.atleast_1d(text).astype(str)
 
 
-def _astropy_dec(dec_deg: np.ndarray) -> list[str]:
+def _astropy_dec(dec_deg: np.ndarray) -> np.ndarray:
+    """``dec_dms`` as the table made it up to issue 25 (astropy's text)."""
     text = Angle(dec_deg, unit="deg").to_string(
         unit="deg", sep=":", precision=2, pad=True, alwayssign=True
     )
-    return np.atleast_1d(text).astype(str).tolist()
+    return np.atleast_1d(text).astype(str)
 
 
 def _near_ties(rng: np.random.Generator, units_per: float, top: float, scale: float) -> np.ndarray:
@@ -63,8 +65,21 @@ def _dec_sample(rng: np.random.Generator) -> np.ndarray:
 def test_table_columns_are_astropys_text() -> None:
     rng = np.random.default_rng(25)
     ra, dec = _ra_sample(rng), _dec_sample(rng)
-    assert ra_hms_column(ra).tolist() == _astropy_ra(ra)
-    assert dec_dms_column(dec).tolist() == _astropy_dec(dec)
+    assert ra_hms_column(ra).tolist() == _astropy_ra(ra).tolist()
+    assert dec_dms_column(dec).tolist() == _astropy_dec(dec).tolist()
+
+
+def test_sexagesimal_columns_match_per_element() -> None:
+    # repeated (a target's blocks), signed zero, rounding carries, the poles and NaN
+    ra = np.array([121.5967, 121.5967, 0.0, -0.0, 359.99999999, 15.0, 121.5967, np.nan])
+    dec = np.array([15.4583, -0.0, 0.0, -0.0000001, 89.9999999999, -90.0, 15.4583, np.nan])
+    got_ra, got_dec = ra_hms_column(ra), dec_dms_column(dec)
+    ref_ra = [_astropy_ra(np.array([x]))[0] for x in ra]  # one by one
+    ref_dec = [_astropy_dec(np.array([x]))[0] for x in dec]
+    assert list(got_ra) == ref_ra and list(got_dec) == ref_dec
+    assert (got_dec[1], got_dec[2]) == ("-00:00:00.00", "+00:00:00.00")  # -0.0 on its own
+    assert got_ra.dtype == _astropy_ra(ra).dtype  # the table column's width unchanged
+    assert len(ra_hms_column(np.array([]))) == 0
 
 
 def _units(text: str) -> int:
