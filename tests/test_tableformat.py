@@ -8,6 +8,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from astropy.coordinates import Angle
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from ucbplan.observing.tableformat import dec_dms_column, ra_hms_column, sexagesimal
 
@@ -155,3 +157,17 @@ def test_named_differences(
 def test_unknown_rounding_is_refused() -> None:
     with pytest.raises(ValueError, match="rounding"):
         sexagesimal(1.0, 2, ":", True, rounding="half-up")
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    value=st.floats(allow_nan=True, allow_infinity=True, width=64),
+    decimals=st.integers(0, 4),
+    signed=st.booleans(),
+)
+def test_astropy_rounding_is_astropys_text(value: float, decimals: int, signed: bool) -> None:
+    # any float, any precision: the text astropy's Angle.to_string writes (degrees as the unit)
+    ref = Angle(value, unit="deg").to_string(
+        unit="deg", sep=":", precision=decimals, pad=True, alwayssign=signed
+    )
+    assert sexagesimal(value, decimals, ":", signed, rounding="astropy") == str(ref)
