@@ -24,11 +24,16 @@ from astropy.time import Time
 from test_observing_table import _block, _meta  # tests/ is on sys.path (no __init__.py)
 
 from ucbplan.io import dump_json
-from ucbplan.observing import blocktable, tablewrite
+from ucbplan.observing import ecsvheader, tablewrite
 from ucbplan.observing.blockcolumns import BlockColumns, BlockList, block_columns, isot
 from ucbplan.observing.blocks import Block
-from ucbplan.observing.blocktable import blocks_to_table, table_to_json_rows, write_table
-from ucbplan.observing.tablewrite import ecsv_data_lines, json_rows_text
+from ucbplan.observing.tablemake import blocks_to_table
+from ucbplan.observing.tablewrite import (
+    ecsv_data_lines,
+    json_rows_text,
+    table_to_json_rows,
+    write_table,
+)
 from ucbplan.observing.timeconv import quiet_erfa
 
 pytestmark = pytest.mark.filterwarnings("ignore::erfa.ErfaWarning")
@@ -72,7 +77,7 @@ def _ours(table: Table, fmt: str, json_meta: bool = False) -> str:
 def _reference_json(table: Table, json_meta: bool) -> str:
     """The row-by-row way: the rows as dicts, dumped by ``json`` with indent 2."""
     rows = table_to_json_rows(table)
-    meta = blocktable._plain_meta(dict(table.meta))
+    meta = tablewrite._plain_meta(dict(table.meta))
     buf = io.StringIO()
     dump_json({"meta": meta, "rows": rows} if json_meta else rows, buf)
     return buf.getvalue()
@@ -266,13 +271,13 @@ def test_a_text_and_its_shape_are_written_alike(seed: int) -> None:
     texts = ["".join(rng.choice(chars) for _ in range(rng.randint(1, 12))) for _ in range(400)]
     texts += ["2040-01-02T00:55:37", "08", "012", "1_0", "0b10", "1:30", "0x1f", "1e5"]
     for column in (texts, [*texts, 5, 1.5, -0.0]):
-        ours = tablewrite._column_texts(column, blocktable._yaml_tag)
-        one_by_one = [tablewrite._yaml_scalar(t, blocktable._yaml_tag) for t in column]
+        ours = ecsvheader._column_texts(column, ecsvheader._yaml_tag)
+        one_by_one = [ecsvheader._yaml_scalar(t, ecsvheader._yaml_tag) for t in column]
         if None in one_by_one:
             assert ours is None
             column = [t for t, got in zip(column, one_by_one, strict=True) if got is not None]
-            ours = tablewrite._column_texts(column, blocktable._yaml_tag)
-            one_by_one = [tablewrite._yaml_scalar(t, blocktable._yaml_tag) for t in column]
+            ours = ecsvheader._column_texts(column, ecsvheader._yaml_tag)
+            one_by_one = [ecsvheader._yaml_scalar(t, ecsvheader._yaml_tag) for t in column]
         assert ours == [got[0] for got in one_by_one if got is not None]
 
 

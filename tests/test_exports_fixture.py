@@ -19,14 +19,10 @@ from astropy.table import Table
 from astropy.time import Time
 
 from ucbplan.observing.blocks import Block
-from ucbplan.observing.blocktable import (
-    EXTRA_COLUMNS,
-    REQUIRED_COLUMNS,
-    blocks_to_table,
-    make_meta,
-    read_blocks,
-)
+from ucbplan.observing.blocktable import EXTRA_COLUMNS, REQUIRED_COLUMNS
 from ucbplan.observing.exports import ExportOptions, export_blocks
+from ucbplan.observing.tablemake import blocks_to_table, make_meta
+from ucbplan.observing.tableread import read_blocks
 from ucbplan.observing.timeconv import quiet_erfa
 
 GOLDEN = Path(__file__).parent / "golden"

@@ -25,10 +25,10 @@ from typer.testing import CliRunner
 
 from ucbplan.cli.app import app
 from ucbplan.core.ephemeris import arg_latitude
-from ucbplan.observing.blocktable import read_blocks
 from ucbplan.observing.goals import time_budget
 from ucbplan.observing.schedule import plan_files, plan_settings
 from ucbplan.observing.sites import get_site
+from ucbplan.observing.tableread import read_blocks
 from ucbplan.observing.timeconv import quiet_erfa, site_utc_to_bary_tdb
 from ucbplan.target import Target, load_target
 

@@ -116,7 +116,7 @@ class Plan:
             ``path`` exists and ``overwrite`` is false.
         """
         from ucbplan.io import output_format, write_output
-        from ucbplan.observing.blocktable import write_table
+        from ucbplan.observing.tablewrite import write_table
 
         out = Path(path)
         kind = output_format(out, fmt, ("ecsv", "csv", "json"), "ecsv")

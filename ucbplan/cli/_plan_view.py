@@ -16,7 +16,7 @@ __all__ = ["SUMMARY_NIGHTS", "SUMMARY_ROWS", "report"]
 
 def _local(blocks: list[Any]) -> list[str]:
     """Local civil time of each block centre, ``HH:MM:SS TZ`` (one conversion for the night)."""
-    from ucbplan.observing.blocktable import local_datetimes
+    from ucbplan.observing.tableformat import local_datetimes
 
     times = local_datetimes([b.t_mid_utc for b in blocks], [b.timezone for b in blocks])
     return [dt.strftime("%H:%M:%S %Z") for dt in times]

@@ -189,7 +189,7 @@ def _write(
     if fmt in _MACHINE or plot is not None or sheet is not None:
         table = run.table()
     if fmt in _MACHINE:
-        from ucbplan.observing.blocktable import write_table
+        from ucbplan.observing.tablewrite import write_table
 
         def _write_table(handle: IO[str]) -> None:
             write_table(table, handle, fmt, json_meta=True)

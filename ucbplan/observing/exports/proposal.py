@@ -43,8 +43,9 @@ from ucbplan.observing.exports.format_sites import serves_site
 from ucbplan.observing.exports.interface import ExportOptions, ExportResult
 from ucbplan.observing.exports.proposal_latex import proposal_latex
 from ucbplan.observing.exports.provenance import clean_meta, created_utc, meta, version
-from ucbplan.observing.exports.text import iso_ms, sexagesimal
+from ucbplan.observing.exports.text import iso_ms
 from ucbplan.observing.semesters import semester_dates, semester_label
+from ucbplan.observing.tableformat import sexagesimal
 
 __all__ = [
     "PROPOSAL_FORMATS",

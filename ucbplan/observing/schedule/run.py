@@ -21,7 +21,6 @@ from astropy.table import Table
 from ucbplan.errors import InputError, shorten
 from ucbplan.inputs import check_range
 from ucbplan.observing.blockcolumns import block_columns
-from ucbplan.observing.blocktable import blocks_to_table, make_meta
 from ucbplan.observing.schedule.accounting import VisitSummary, time_accounting, visit_summaries
 from ucbplan.observing.schedule.exposure import strategy_facts
 from ucbplan.observing.schedule.goalplan import info_of_columns
@@ -30,6 +29,7 @@ from ucbplan.observing.schedule.planner import PlanResult, plan_nights
 from ucbplan.observing.schedule.records import slug
 from ucbplan.observing.schedule.settings import PlanSettings
 from ucbplan.observing.sites import Site, resolve_site
+from ucbplan.observing.tablemake import blocks_to_table, make_meta
 from ucbplan.observing.timeconv import quiet_erfa
 from ucbplan.target import Target, load_targets
 
