@@ -20,7 +20,8 @@ import pytest
 from astropy.table import MaskedColumn, Table
 from astropy.time import Time, TimeDelta
 
-from ucbplan.observing import blocktable
+from ucbplan.observing import accounting, blocktable
+from ucbplan.observing.accounting import visit_summaries
 from ucbplan.observing.blocks import Block
 from ucbplan.observing.blocktable import (
     jd_parts,
@@ -29,8 +30,6 @@ from ucbplan.observing.blocktable import (
     time_array,
     write_table,
 )
-from ucbplan.observing.schedule import accounting
-from ucbplan.observing.schedule.accounting import visit_summaries
 from ucbplan.observing.timeconv import quiet_erfa
 
 pytestmark = pytest.mark.filterwarnings("ignore::erfa.ErfaWarning")

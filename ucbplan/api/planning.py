@@ -15,9 +15,9 @@ from ucbplan.errors import InputError, PlanWarning, emit, shorten
 if TYPE_CHECKING:
     from astropy.table import Table
 
+    from ucbplan.observing.accounting import VisitSummary
     from ucbplan.observing.constraints import Constraint
     from ucbplan.observing.schedule import PlanRun
-    from ucbplan.observing.schedule.accounting import VisitSummary
 
 __all__ = ["Plan", "default_constraints", "plan"]
 
