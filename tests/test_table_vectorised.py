@@ -20,11 +20,10 @@ import pytest
 from astropy.table import MaskedColumn, Table
 from astropy.time import Time, TimeDelta
 
-from ucbplan.observing import ecsvheader, tableformat, tablemake, tablewrite
+from ucbplan.observing import accounting, ecsvheader, tableformat, tablemake, tablewrite
+from ucbplan.observing.accounting import visit_summaries
 from ucbplan.observing.blockcolumns import jd_parts, time_array
 from ucbplan.observing.blocks import Block
-from ucbplan.observing.schedule import accounting
-from ucbplan.observing.schedule.accounting import visit_summaries
 from ucbplan.observing.tableformat import local_datetimes
 from ucbplan.observing.tablewrite import table_to_json_rows, write_table
 from ucbplan.observing.timeconv import quiet_erfa

@@ -25,10 +25,10 @@ from ucbplan.errors import UcbplanError
 from ucbplan.observing.blockcolumns import BlockList
 from ucbplan.observing.blocks import Block
 from ucbplan.observing.goals import GoalPlan
-from ucbplan.observing.schedule.candidates import TargetRun, prepare_runs
+from ucbplan.observing.schedule.candidates import PlanFrame, TargetRun, prepare_runs
 from ucbplan.observing.schedule.exposure import TargetExposure
 from ucbplan.observing.schedule.goalplan import balanced_runs, check_goals, goal_plans
-from ucbplan.observing.schedule.nights import night_spans, night_windows
+from ucbplan.observing.schedule.nights import NightWindow, night_spans, night_windows
 from ucbplan.observing.schedule.pairs import SecondEpoch, pair_blocks, pair_targets
 from ucbplan.observing.schedule.placement import Allowance, Unplaced, place_sessions
 from ucbplan.observing.schedule.reasons import not_planned
@@ -181,22 +181,45 @@ def plan_nights(
     T_valid_alpha; smearing: Eqs. Lambda_K, Lambda_kappa; fixed-u pairs: Eq. delta_kappa_rewrite.
     """
     _check_inputs(targets, nights, settings)
+    targets, infeasible = _plannable(targets, nights, settings)
+    windows = night_windows(site, nights)
+    frame, runs, warns = prepare_runs(targets, site, windows, settings)
+    return _schedule(runs, frame, windows, warns, site, nights, settings, busy, infeasible)
+
+
+def _plannable(
+    targets: list[Target], nights: list[date], settings: PlanSettings
+) -> tuple[list[Target], list[Unplaced]]:
+    """The targets that can be planned, and the reasons the others cannot (fixed-u pairs
+    report a circular target instead of failing on it)."""
     infeasible: list[Unplaced] = []
-    if settings.spec.label == "fixed-u-pairs":  # a circular target is reported, not fatal
+    if settings.spec.label == "fixed-u-pairs":
         targets, infeasible = pair_targets(targets, nights[0].isoformat())
         if not targets:
             raise UcbplanError(f"fixed-u pairs: no target can be planned: {infeasible[0].reason}")
-    windows = night_windows(site, nights)
-    frame, runs, warns = prepare_runs(targets, site, windows, settings)
+    return targets, infeasible
+
+
+def _schedule(
+    runs: list[TargetRun],
+    frame: PlanFrame,
+    windows: list[NightWindow],
+    warns: list[str],
+    site: Site,
+    nights: list[date],
+    settings: PlanSettings,
+    busy: Sequence[Block],
+    infeasible: list[Unplaced],
+) -> PlanResult:
+    """Goals, then sessions or visits placed night by night, then the block records in time
+    order (fixed-u pairs with their second epochs), as a :class:`PlanResult`."""
     spans = night_spans(windows, frame.axis)
     busy_x = _busy_x(frame.axis, busy)
     goals = goal_plans(runs, settings)
     runs = balanced_runs(runs, goals)
     allowances = _allowances(runs, settings, goals)
-    if settings.plans_visits:
-        placed, unplaced = place_visits(runs, spans, frame, settings, busy_x, allowances)
-    else:
-        placed, unplaced = place_sessions(runs, spans, frame, settings, busy_x, allowances)
+    place = place_visits if settings.plans_visits else place_sessions
+    placed, unplaced = place(runs, spans, frame, settings, busy_x, allowances)
     gap = 0.0 if settings.plans_visits else settings.overhead_s
     reasons = not_planned(runs, spans, frame, placed, unplaced, gap)
     records = block_records(placed, runs, spans, frame, site, settings)
