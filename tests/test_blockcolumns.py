@@ -34,7 +34,7 @@ from ucbplan.observing.tablewrite import (
     table_to_json_rows,
     write_table,
 )
-from ucbplan.observing.timeconv import quiet_erfa
+from ucbplan.offline import offline
 
 pytestmark = pytest.mark.filterwarnings("ignore::erfa.ErfaWarning")
 
@@ -143,7 +143,7 @@ def _odd_times() -> Time:
         "1900-01-01T00:00:00",
         "2100-12-31T23:59:59.123456789",
     ]
-    with quiet_erfa():
+    with offline():
         base = Time(iso, scale="utc")
         odd = Time(np.array([2466000.0, 2466001.0]), np.array([0.75, -0.7]), format="jd")
         return Time([*base, *odd])
@@ -152,7 +152,7 @@ def _odd_times() -> Time:
 @pytest.mark.parametrize("precision", [0, 3, 6, 9])
 @pytest.mark.parametrize("scale", ["utc", "tdb"])
 def test_isot_as_astropy_formats_it(precision: int, scale: str) -> None:
-    with quiet_erfa():
+    with offline():
         times = getattr(_odd_times(), scale)
         ref = list(Time(times.jd1, times.jd2, format="jd", scale=scale, precision=precision).isot)
         assert isot(times, precision) == ref
@@ -179,7 +179,7 @@ def test_columns_round_trip_to_the_same_records_and_table() -> None:
     blocks = [_block(i, alt=i % 3 != 0) for i in range(7)]
     for k in range(0, 7, 2):  # a block with every number known compares equal as a whole
         blocks[k] = replace(blocks[k], smear_kms=1.25, delta_kappa=0.1, sigma_v_kms=3.0)
-    with quiet_erfa():
+    with offline():
         cols = BlockColumns.from_blocks(blocks)
         listed = BlockList(cols)
         assert [_cells(b) for b in listed] == [_cells(b) for b in blocks] and len(listed) == 7
@@ -198,7 +198,7 @@ def test_columns_round_trip_to_the_same_records_and_table() -> None:
 
 def test_time_order_is_the_stable_sort_of_the_records() -> None:
     blocks = [_block(i) for i in (3, 1, 2, 1, 0)]
-    with quiet_erfa():
+    with offline():
         cols = BlockColumns.from_blocks(blocks)
         got = BlockList(cols.take(cols.time_order()))
         ref = sorted(blocks, key=lambda b: (b.t_mid_utc.jd1, b.t_mid_utc.jd2))

@@ -26,7 +26,7 @@ from ucbplan.observing.blockcolumns import jd_parts, time_array
 from ucbplan.observing.blocks import Block
 from ucbplan.observing.tableformat import local_datetimes
 from ucbplan.observing.tablewrite import table_to_json_rows, write_table
-from ucbplan.observing.timeconv import quiet_erfa
+from ucbplan.offline import offline
 
 pytestmark = pytest.mark.filterwarnings("ignore::erfa.ErfaWarning")
 
@@ -53,7 +53,7 @@ def _transitions(zone: str, year: int) -> list[datetime]:
 
 def _scalars(iso: list[str], scale: str = "utc") -> list[Time]:
     """Scalar Times cut from one array Time, as the planner makes the blocks' times."""
-    with quiet_erfa():
+    with offline():
         times = Time(iso, scale=scale)
     return [times[i] for i in range(len(times))]
 
@@ -91,7 +91,7 @@ def test_dst_changes_found_in_each_zone() -> None:
 def test_local_times_across_dst_match_per_element(zone: str) -> None:
     times = _dst_times(zone)
     zones = [zone] * len(times)
-    with quiet_erfa():
+    with offline():
         got = local_datetimes(times, zones)
         ref = _reference_local(times, zones)
         got_iso = tableformat.local_iso(times, zones)
@@ -104,7 +104,7 @@ def test_local_times_across_dst_match_per_element(zone: str) -> None:
 def test_local_times_known_madrid_offsets() -> None:
     # 2040-03-25 01:00 UTC: CET (+01:00) becomes CEST (+02:00); independent of astropy
     times = _scalars(["2040-03-25T00:59:59", "2040-03-25T01:00:00"])
-    with quiet_erfa():
+    with offline():
         got = tableformat.local_iso(times, ["Europe/Madrid"] * 2)
     assert list(got) == ["2040-03-25T01:59:59+01:00", "2040-03-25T03:00:00+02:00"]
 
@@ -114,7 +114,7 @@ def test_local_times_mixed_zones_and_rounding_carry() -> None:
     iso = ["2040-12-31T23:59:59.9999996", "2040-06-30T11:59:59.9999994", "2040-01-01T12:00:00"]
     times = _scalars(iso)
     zones = ["Pacific/Auckland", "America/Santiago", "Europe/Madrid"]
-    with quiet_erfa():
+    with offline():
         assert local_datetimes(times, zones) == _reference_local(times, zones)
     assert local_datetimes([], []) == []
 
@@ -122,7 +122,7 @@ def test_local_times_mixed_zones_and_rounding_carry() -> None:
 def _unnormalised() -> list[Time]:
     """UTC times stored with jd1 one day early and jd2 > 1 (the same instants, not the split
     ``Time(jd1, jd2)`` makes; astropy itself always re-splits, a future version might not)."""
-    with quiet_erfa():
+    with offline():
         utc = Time(
             np.full(4, 2465000.0), np.array([-0.49999, 0.1, 0.4999, 0.5]), format="jd", scale="utc"
         )
@@ -135,7 +135,7 @@ def test_time_array_keeps_the_stored_split() -> None:
     times = _unnormalised()
     jd1, jd2 = jd_parts(times)
     assert np.all(np.abs(jd2) > 0.5)  # the case the fallback exists for
-    with quiet_erfa():
+    with offline():
         arr = time_array(times, "utc")
         assert np.array_equal(arr.jd1, jd1) and np.array_equal(arr.jd2, jd2)
         assert list(arr.isot) == [t.isot for t in times]
@@ -148,14 +148,14 @@ def test_time_array_keeps_the_stored_split() -> None:
 
 def test_leap_second_is_refused_as_before() -> None:
     times = _scalars(["2016-12-31T23:59:60.5"])
-    with quiet_erfa(), pytest.raises(ValueError, match="leap second"):
+    with offline(), pytest.raises(ValueError, match="leap second"):
         local_datetimes(times, ["UTC"])
 
 
 def test_iso_columns_match_per_element() -> None:
     times = [*_dst_times("Europe/Madrid")[:10], *_unnormalised(), None]
     has = np.array([t is not None for t in times])
-    with quiet_erfa():
+    with offline():
         filled = [t if t is not None else times[0] for t in times]
         got = tableformat.iso_column(time_array(filled, "utc"), has, 3)
         ref = [
@@ -168,7 +168,7 @@ def test_iso_columns_match_per_element() -> None:
 
 
 def _visit_block(target: str, visit: str, start: Time, n_exp: int, k: int) -> Block:
-    with quiet_erfa():
+    with offline():
         end = start + (n_exp * 60.0 + (n_exp - 1) * 7.5) * u.s
         mid = start + (end - start) / 2
     return Block(
@@ -223,7 +223,7 @@ def _reference_visits(blocks: list[Block], acq_s: float, trailing: bool) -> list
 @pytest.mark.parametrize("trailing", [False, True])
 def test_visit_summaries_match_per_visit_reference(trailing: bool) -> None:
     blocks = _visit_blocks()
-    with quiet_erfa():
+    with offline():
         got = visit_summaries(blocks, 300.0, trailing)
         ref = _reference_visits(blocks, 300.0, trailing)
     fields = [
@@ -349,7 +349,7 @@ def test_plan_table_header_uses_libyaml_when_safe(monkeypatch: pytest.MonkeyPatc
     from test_observing_table import _block, _meta  # tests/ is on sys.path (no __init__.py)
     from yaml._yaml import CEmitter
 
-    with quiet_erfa():
+    with offline():
         table = tablemake.blocks_to_table([_block(i) for i in range(5)], _meta())
     assert ecsvheader.header_safe(table)
     expected = _pyyaml_ecsv(table)
@@ -411,7 +411,7 @@ def test_local_times_as_datetime_makes_them(zone: str, year: int) -> None:
     when = [start + timedelta(hours=7.2 * k, microseconds=k * 37_001) for k in range(1300)]
     for t in found:
         when += [t + timedelta(seconds=s) for s in (-1.5, -1, -0.25, 0, 0.5, 1)]
-    with quiet_erfa():
+    with offline():
         utc = Time(when, scale="utc")
         ours = tableformat.local_iso(utc, [zone] * len(when)).tolist()
         ref = [

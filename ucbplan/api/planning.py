@@ -95,7 +95,8 @@ class Plan:
     def time_account(self) -> PlanAccount:
         """Time accounting, typed: the total and per target (visits, exposures, shutter,
         overheads, idle [s]; efficiency)."""
-        return self.run.time_account
+        with scope():
+            return self.run.time_account
 
     @property
     def accounting(self) -> dict[str, Any]:

@@ -268,23 +268,21 @@ def _plan_command(ctx: typer.Context, o: dict[str, Any]) -> None:
     """``plan`` with its parameters ``o`` by name: check the outputs, plan (one library call),
     print the nights and write the files."""
     from ucbplan.observing.schedule import plan_files
-    from ucbplan.observing.timeconv import quiet_erfa
 
     fmt = _check_outputs(o["output"], o["fmt"], (o["plot"], o["sheet"]), o["overwrite"])
-    with quiet_erfa():
-        run = plan_files(
-            o["targets"],
-            first_night=o["night"],
-            n_nights=o["nights"],
-            site=o["site"],
-            site_lonlat=o["site_lonlat"],
-            sites_file=o["sites_file"],
-            settings=_settings(ctx, o),
-            priorities=o["priority"],
-            timezone=o["tz"],
-        )
-        report(run, o["wide"], o["verbose"])
-        _write(run, fmt, o["output"], (o["plot"], o["sheet"]), o["overwrite"])
+    run = plan_files(
+        o["targets"],
+        first_night=o["night"],
+        n_nights=o["nights"],
+        site=o["site"],
+        site_lonlat=o["site_lonlat"],
+        sites_file=o["sites_file"],
+        settings=_settings(ctx, o),
+        priorities=o["priority"],
+        timezone=o["tz"],
+    )
+    report(run, o["wide"], o["verbose"])
+    _write(run, fmt, o["output"], (o["plot"], o["sheet"]), o["overwrite"])
 
 
 def _check_outputs(

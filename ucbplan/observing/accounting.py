@@ -47,7 +47,6 @@ from ucbplan.errors import InputFileError, shorten
 from ucbplan.inputs import is_number
 from ucbplan.observing.blockcolumns import BlockColumns, block_columns, isot
 from ucbplan.observing.blocks import Block
-from ucbplan.observing.timeconv import quiet_erfa
 
 __all__ = [
     "ACCOUNT_KEYS",
@@ -228,16 +227,15 @@ def visit_summaries(
         return []
     cols = block_columns(blocks)
     groups = _groups(cols)
-    with quiet_erfa():
-        starts, ends = cols.times["t_start_utc"], cols.times["t_end_utc"]
-        end_jd = ends.jd
-        first = [ks[0] for ks in groups.values()]
-        # the latest end (the first of equal ones, in time order of the starts)
-        last = [max(ks, key=end_jd.__getitem__) for ks in groups.values()]
-        start, end = starts[first], ends[last]
-        spans = np.atleast_1d((end - start).to_value("s")).tolist()
-        acq = start - TimeDelta(acquisition_s, format="sec")
-        iso = [isot(t.utc, 0) for t in (acq, start, end)]
+    starts, ends = cols.times["t_start_utc"], cols.times["t_end_utc"]
+    end_jd = ends.jd
+    first = [ks[0] for ks in groups.values()]
+    # the latest end (the first of equal ones, in time order of the starts)
+    last = [max(ks, key=end_jd.__getitem__) for ks in groups.values()]
+    start, end = starts[first], ends[last]
+    spans = np.atleast_1d((end - start).to_value("s")).tolist()
+    acq = start - TimeDelta(acquisition_s, format="sec")
+    iso = [isot(t.utc, 0) for t in (acq, start, end)]
     cells = _VisitCells(*cols.lists("target", "night", "n_exp", "exptime_s", "readout_s"))
     out = [
         _summary(cells, ks, vid, span, (a, s, e), acquisition_s, trailing_readout)

@@ -23,7 +23,6 @@ from ucbplan.observing.blockcolumns import BlockColumns, block_columns
 from ucbplan.observing.blocks import Block
 from ucbplan.observing.blocktable import COLUMNS, META_SCALARS, Column
 from ucbplan.observing.tableformat import dec_dms_column, iso_column, local_iso, ra_hms_column
-from ucbplan.observing.timeconv import quiet_erfa
 
 __all__ = ["blocks_to_table", "file_sha256", "make_meta"]
 
@@ -126,8 +125,7 @@ def blocks_to_table(blocks: Sequence[Block], meta: Mapping[str, Any]) -> Table:
     astropy.table.Table
         One row per block; ISO time strings, SI-ish floats with units.
     """
-    with quiet_erfa():
-        return _blocks_to_table(block_columns(blocks), meta)
+    return _blocks_to_table(block_columns(blocks), meta)
 
 
 def _blocks_to_table(cols: BlockColumns, meta: Mapping[str, Any]) -> Table:

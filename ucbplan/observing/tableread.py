@@ -33,7 +33,6 @@ from ucbplan.observing.blocktable import (
     TIME_YEARS,
     Column,
 )
-from ucbplan.observing.timeconv import quiet_erfa
 from ucbplan.target.values import one_line
 
 __all__ = ["check_blocks", "read_blocks"]
@@ -55,8 +54,7 @@ def _cells(col: Any) -> list[Any]:
 
 def _time_strings(col: Time, kind: str) -> list[str]:
     """ISO strings of an astropy Time column, in the scale of the column's kind."""
-    with quiet_erfa():
-        return list(np.atleast_1d(getattr(col, "tdb" if kind == "tdb" else "utc").isot))
+    return list(np.atleast_1d(getattr(col, "tdb" if kind == "tdb" else "utc").isot))
 
 
 def _check_time(text: str, where: str, row: int, name: str) -> None:

@@ -37,7 +37,7 @@ from ucbplan.observing.schedule.settings import PlanSettings
 from ucbplan.observing.schedule.visits import place_visits
 from ucbplan.observing.sites import Site
 from ucbplan.observing.timeaxis import TimeAxis
-from ucbplan.observing.timeconv import coverage_warnings, quiet_erfa
+from ucbplan.observing.timeconv import coverage_warnings
 
 if TYPE_CHECKING:
     from ucbplan.target import Target
@@ -109,9 +109,8 @@ def _busy_x(axis: TimeAxis, busy: Sequence[Block]) -> list[tuple[float, float]]:
     """Blocks planned earlier as intervals on ``axis`` [s], padded by :data:`_BUSY_PAD_S`."""
     if not busy:
         return []
-    with quiet_erfa():
-        x0 = (Time([b.t_start_utc for b in busy]) - axis.origin).to_value("s")
-        x1 = (Time([b.t_end_utc for b in busy]) - axis.origin).to_value("s")
+    x0 = (Time([b.t_start_utc for b in busy]) - axis.origin).to_value("s")
+    x1 = (Time([b.t_end_utc for b in busy]) - axis.origin).to_value("s")
     return [
         (float(a) - _BUSY_PAD_S, float(b) + _BUSY_PAD_S)
         for a, b in zip(np.atleast_1d(x0), np.atleast_1d(x1), strict=True)

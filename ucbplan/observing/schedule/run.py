@@ -34,7 +34,6 @@ from ucbplan.observing.schedule.records import slug
 from ucbplan.observing.schedule.settings import PlanSettings
 from ucbplan.observing.sites import Site, resolve_site
 from ucbplan.observing.tablemake import blocks_to_table, make_meta
-from ucbplan.observing.timeconv import quiet_erfa
 from ucbplan.target import Target, load_targets
 
 __all__ = [
@@ -196,8 +195,7 @@ class PlanRun:
     def meta(self) -> dict[str, Any]:
         """Provenance of the run for the table ``meta`` (see :func:`make_meta`)."""
         res, plan = self.result, self.settings.exposure
-        with quiet_erfa():
-            valid_until = {k: v.tdb.isot for k, v in res.valid_until.items()}
+        valid_until = {k: v.tdb.isot for k, v in res.valid_until.items()}
         return make_meta(
             site=self.site.as_dict(),
             targets=[
