@@ -16,10 +16,10 @@ from astropy.time import Time
 
 from ucbplan.core.ephemeris import arg_latitude, ll_pair
 from ucbplan.errors import UcbplanError
+from ucbplan.observing.barycentric_time import site_utc_to_bary_tdb
 from ucbplan.observing.blocks import ExposurePlan
 from ucbplan.observing.schedule import PlanSettings, parse_mode, plan_nights
 from ucbplan.observing.sites import Site, get_site
-from ucbplan.observing.timeconv import site_utc_to_bary_tdb
 from ucbplan.offline import offline
 from ucbplan.target import Target, load_target
 

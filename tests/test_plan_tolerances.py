@@ -18,15 +18,15 @@ from astropy import units as u
 from astropy.coordinates import SkyCoord, solar_system_ephemeris
 from astropy.time import Time, TimeDelta
 
-from ucbplan.observing import timeaxis, timeconv
+from ucbplan.observing import barycentric_time, site_time_axis
+from ucbplan.observing.barycentric_time import SiteTrack, site_icrs_frames
 from ucbplan.observing.blocks import ExposurePlan
 from ucbplan.observing.constraint_checks import DARK_STEP_S, _maybe_dark
 from ucbplan.observing.constraints import NightConstraint
 from ucbplan.observing.schedule import PlanSettings, plan_nights
+from ucbplan.observing.site_time_axis import TimeAxis
 from ucbplan.observing.sites import get_site
 from ucbplan.observing.sky import SkyModel
-from ucbplan.observing.timeaxis import TimeAxis
-from ucbplan.observing.timeconv import SiteTrack, site_icrs_frames
 from ucbplan.offline import offline
 from ucbplan.target import load_target
 
@@ -118,11 +118,11 @@ def test_plan_matches_the_exact_conversions(monkeypatch: pytest.MonkeyPatch) -> 
     )
     fast = _plan(6, settings)
     monkeypatch.setattr(
-        timeconv, "_site_icrs_interpolated", lambda loc, origin, x, step_s=1.0: (
-            timeconv._site_icrs_m(loc, origin + TimeDelta(x * u.s))
+        barycentric_time, "_site_icrs_interpolated", lambda loc, origin, x, step_s=1.0: (
+            barycentric_time._site_icrs_m(loc, origin + TimeDelta(x * u.s))
         )
     )  # fmt: skip
-    monkeypatch.setattr(timeaxis, "TDB_TT_MIN", 10**12)
+    monkeypatch.setattr(site_time_axis, "TDB_TT_MIN", 10**12)
     exact = _plan(6, settings)
     assert len(fast) > 200
     assert [b.block_id for b in fast] == [b.block_id for b in exact]

@@ -25,11 +25,11 @@ from typer.testing import CliRunner
 
 from ucbplan.cli.app import app
 from ucbplan.core.ephemeris import arg_latitude
+from ucbplan.observing.barycentric_time import site_utc_to_bary_tdb
 from ucbplan.observing.goals import time_budget
 from ucbplan.observing.schedule import plan_files, plan_settings
 from ucbplan.observing.sites import get_site
 from ucbplan.observing.tableread import read_blocks
-from ucbplan.observing.timeconv import site_utc_to_bary_tdb
 from ucbplan.offline import offline
 from ucbplan.target import Target, load_target
 

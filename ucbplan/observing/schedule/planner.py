@@ -1,15 +1,14 @@
 """Night schedules: anchor epochs → site UTC → constraint-checked blocks → sessions per night.
 
-Pipeline for every target (all vectorised over epochs; :mod:`.candidates`): the planning modes
-name the anchors (Appendix A2); :func:`~ucbplan.core.ephemeris.find_epochs` gives the barycentric
-epochs t★ with σ_t and the φ_ref π-mode alternative; the light time is removed with one shared
-site track (:mod:`ucbplan.observing.timeconv`); blocks are checked against every constraint over
-their whole length (:mod:`ucbplan.observing.constraints`). Sessions (a u = 0 / π pair, both RV
-zero crossings, or single blocks) are then placed night by night in priority order without
-overlaps, with a slew/acquisition overhead before each session (:mod:`.placement`), and become
-block records (:mod:`.records`); fixed-u pairs get their second epoch (:mod:`.pairs`). Whatever
-could not be placed is reported with the reason.
-"""
+Pipeline for every target (all vectorised over epochs; :mod:`.candidates`): the planning modes name
+the anchors (Appendix A2); :func:`~ucbplan.core.ephemeris.find_epochs` gives the barycentric epochs
+t★ with σ_t and the φ_ref π-mode alternative; the light time is removed with one shared site track
+(:mod:`ucbplan.observing.barycentric_time`); blocks are checked against every constraint over their
+whole length (:mod:`ucbplan.observing.constraint_checks`). Sessions (a u = 0 / π pair, both RV zero
+crossings, or single blocks) are then placed night by night in priority order without overlaps, with
+a slew/acquisition overhead before each session (:mod:`.placement`), and become block records
+(:mod:`.records`); fixed-u pairs get their second epoch (:mod:`.pairs`). Whatever could not be
+placed is reported with the reason."""
 
 from __future__ import annotations
 
@@ -22,6 +21,7 @@ import numpy as np
 from astropy.time import Time
 
 from ucbplan.errors import UcbplanError
+from ucbplan.observing.barycentric_time import coverage_warnings
 from ucbplan.observing.blockcolumns import BlockList
 from ucbplan.observing.blocks import Block
 from ucbplan.observing.goals import GoalPlan
@@ -35,9 +35,8 @@ from ucbplan.observing.schedule.reasons import not_planned
 from ucbplan.observing.schedule.records import block_records
 from ucbplan.observing.schedule.settings import PlanSettings
 from ucbplan.observing.schedule.visits import place_visits
+from ucbplan.observing.site_time_axis import TimeAxis
 from ucbplan.observing.sites import Site
-from ucbplan.observing.timeaxis import TimeAxis
-from ucbplan.observing.timeconv import coverage_warnings
 
 if TYPE_CHECKING:
     from ucbplan.target import Target
