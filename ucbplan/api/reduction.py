@@ -18,7 +18,7 @@ from ucbplan.lisa import MIN_T_OBS_S  # shortest LISA observation [s] (t_obs, --
 if TYPE_CHECKING:
     from astropy.table import Table
 
-    from ucbplan.lisa.pipeline import SimulationResult
+    from ucbplan.lisa.simulation import SimulationResult
     from ucbplan.reduce.pipeline import Reduction
 
 __all__ = ["MIN_T_OBS_S", "Report", "population_forecast", "reduce", "simulate", "t_obs_seconds"]
@@ -199,13 +199,15 @@ def simulate(
     InputError
         Bad options (one line each).
     """
-    from ucbplan.lisa import pipeline as lp
+    from ucbplan.lisa.pipeline import run_simulation, setup_simulation
 
     with scope():
         tgt = load_target(target)
-        t_obs_s = t_obs_seconds(t_obs, tgt.t_obs_s)
-        model = lp.build_model(tgt, t_obs_s=t_obs_s, n_bins=n_bins, circular=circular)
-        options = lp.SimulateOptions(
+        problem = setup_simulation(
+            tgt,
+            t_obs_s=t_obs_seconds(t_obs, tgt.t_obs_s),
+            n_bins=n_bins,
+            circular=circular,
             seed=seed,
             walkers=walkers,
             steps=steps,
@@ -213,7 +215,7 @@ def simulate(
             max_steps=max_steps,
             noise=noise,
         )
-        result = lp.simulate(model, options)
+        result = run_simulation(problem)
     emit(list(result.warnings), ReduceWarning)
     return result
 
