@@ -193,7 +193,9 @@ def test_output_format_follows_the_one_rule(tmp_path: Path, args: list[str], fmt
     ],
 )
 def test_bad_output_and_option_values(tmp_path: Path, args: list[str], needle: str) -> None:
-    """One UcbplanError line naming the option; the folder is left as it was."""
+    """One UcbplanError line naming the option as the command line prints it (library parameter
+    names become flags there, ucbplan.cli._flags); the folder is left as it was."""
+    from ucbplan.cli._flags import cli_message
     from ucbplan.errors import UcbplanError
 
     (tmp_path / "keep.txt").write_text("x")
@@ -204,7 +206,7 @@ def test_bad_output_and_option_values(tmp_path: Path, args: list[str], needle: s
         assert res.exit_code == 0  # type: ignore[attr-defined]
         return
     assert isinstance(exc, UcbplanError), (exc, res.output)  # type: ignore[attr-defined]
-    msg = str(exc)
+    msg = cli_message(str(exc))
     assert needle in msg and "\n" not in msg and len(msg) < 400, msg
     assert [p.name for p in tmp_path.iterdir()] == ["keep.txt"]
 
