@@ -48,12 +48,7 @@ from ucbplan.reduce.regression import (
     phase_sensitivity,
     wilson_fit,
 )
-from ucbplan.reduce.velocities import (
-    MIN_SPECTRA,
-    VelocityTable,
-    check_validity,
-    read_velocities,
-)
+from ucbplan.reduce.velocities import MIN_SPECTRA, VelocityTable, check_validity
 from ucbplan.target import load_samples
 
 if TYPE_CHECKING:
@@ -61,15 +56,7 @@ if TYPE_CHECKING:
     from ucbplan.core.params import PhaseParams
     from ucbplan.target import Target
 
-__all__ = [
-    "ReduceOptions",
-    "Reduction",
-    "design_jacobian",
-    "read_velocities",
-    "reduce",
-    "reduce_options",
-    "window_factors",
-]
+__all__ = ["ReduceOptions", "Reduction", "reduce", "reduce_options"]
 
 F64 = NDArray[np.float64]
 
@@ -325,7 +312,8 @@ def reduce(target: Target, table: VelocityTable, options: ReduceOptions | None =
     target : Target
         LISA ephemeris and posterior.
     table : VelocityTable
-        Measured velocities [km/s] at barycentric TDB times (:func:`read_velocities`).
+        Measured velocities [km/s] at barycentric TDB times
+        (:func:`~ucbplan.reduce.velocities.read_velocities`).
     options : ReduceOptions, optional
         Monte-Carlo size, seed, light-time correction, mass–radius relation.
 
