@@ -91,14 +91,11 @@ def group_spectra(
     tau_s, u_rad, u_star : array_like
         Mid-exposure time [s since t_ref], star-1 argument of latitude and assigned u★ [rad]
         (NaN: unassigned).
-    velocities, sigmas : sequence of array_like
-        Per component (v1[, v2]) velocities and errors [km/s].
-    K : sequence of float
-        Fitted semi-amplitude per component [km/s].
-    design : array_like
-        Window-averaged orbital factor G (for the zero-crossing γ estimates) [1].
-    lam_k, lam_kappa : array_like
-        Window factors per spectrum.
+    velocities, sigmas, K : sequence
+        Per component (v1[, v2]): velocities and errors per spectrum, fitted semi-amplitude [km/s].
+    design, lam_k, lam_kappa : array_like
+        Window-averaged orbital factor G (for the zero-crossing γ estimates) and the window
+        factors Λ_K, Λ_κ per spectrum [1].
 
     Returns
     -------
