@@ -246,3 +246,27 @@ def test_report_and_em_prior_are_written_together(
     assert res.exit_code != 0  # type: ignore[attr-defined]
     assert "no space left" in str(res.exception)  # type: ignore[attr-defined]
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "parameter", "flag"),
+    [
+        ({"mass_radius": "x"}, "mass_radius", "--mass-radius"),
+        ({"cos_i_sigma": 2.5}, "cos_i_sigma", "--cos-i-sigma"),
+    ],
+)
+def test_reduce_options_name_the_parameter_and_the_flag(
+    kwargs: dict[str, object], parameter: str, flag: str
+) -> None:
+    """One check for the command and ucbplan.reduce: the library error names the parameter,
+    the command line prints its flag; a valid relation is stored lower case."""
+    from ucbplan.cli._flags import cli_message
+    from ucbplan.errors import InputError
+    from ucbplan.reduce.pipeline import reduce_options
+
+    with pytest.raises(InputError) as info:
+        reduce_options(**kwargs)  # type: ignore[arg-type]
+    assert info.value.parameter == parameter
+    assert str(info.value).startswith(f"{parameter}: ")
+    assert cli_message(str(info.value)).startswith(f"{flag}: ")
+    assert reduce_options(mass_radius="Eggleton", cos_i_sigma=2.0).mass_radius == "eggleton"
