@@ -23,7 +23,7 @@ def _gbgpu_call(model: Any, params: dict[str, np.ndarray], lon: float, lat: floa
     """GBGPU's batched run_wave over the 4 lines of every source, as circular sources."""
     from gbgpu.gbgpu import GBGPU
 
-    from ucbplan.lisa.waveform import LINES, line_frequencies
+    from ucbplan.lisa.source import LINES, line_frequencies
 
     gb = GBGPU(force_backend="cpu")
     t_obs = model.grid.t_obs_s

@@ -24,8 +24,7 @@ sys.path.insert(0, str(ROOT / "tests"))
 
 from test_reduce_synth import exposure_factor  # noqa: E402
 
-from ucbplan.core import ephemeris  # noqa: E402
-from ucbplan.reduce import masses  # noqa: E402
+from ucbplan.core import binary, constants, ephemeris  # noqa: E402
 from ucbplan.target import Target, load_target  # noqa: E402
 
 M1, M2 = 0.347, 0.285
@@ -40,21 +39,21 @@ def true_k_gamma(t: Target, m1: float = M1, m2: float = M2) -> tuple[float, floa
     e = p.eccentricity
     assert t.cos_inclination is not None
     sin_i = math.sqrt(1 - t.cos_inclination**2)
-    mt = (m1 + m2) * masses.MSUN_KG
-    a = (masses.G_SI * mt / nb**2) ** (1 / 3)
+    mt = (m1 + m2) * constants.MSUN_KG
+    a = (constants.G_SI * mt / nb**2) ** (1 / 3)
     k_tot = nb * a * sin_i / math.sqrt(1 - e * e) / 1e3
     k1, k2 = k_tot * m2 / (m1 + m2), k_tot * m1 / (m1 + m2)
-    r1 = float(masses.radius_eggleton(m1)) * masses.RSUN_M
-    r2 = float(masses.radius_eggleton(m2)) * masses.RSUN_M
-    G, c = masses.G_SI, masses.C_M_S
-    z1 = G * m1 * masses.MSUN_KG / (r1 * c) / 1e3
-    z2 = G * m2 * masses.MSUN_KG / (r2 * c) / 1e3
+    r1 = float(binary.radius_eggleton(m1)) * constants.RSUN_M
+    r2 = float(binary.radius_eggleton(m2)) * constants.RSUN_M
+    G, c = constants.G_SI, constants.C_M_S
+    z1 = G * m1 * constants.MSUN_KG / (r1 * c) / 1e3
+    z2 = G * m2 * constants.MSUN_KG / (r2 * c) / 1e3
     # companion potential + transverse Doppler: G M_other/(ac) + v_j²/(2c) (Sec. 3.1.2)
     o1 = (
-        G * m2 * masses.MSUN_KG / (a * c) + G * (m2 * masses.MSUN_KG) ** 2 / (mt * a * 2 * c)
+        G * m2 * constants.MSUN_KG / (a * c) + G * (m2 * constants.MSUN_KG) ** 2 / (mt * a * 2 * c)
     ) / 1e3
     o2 = (
-        G * m1 * masses.MSUN_KG / (a * c) + G * (m1 * masses.MSUN_KG) ** 2 / (mt * a * 2 * c)
+        G * m1 * constants.MSUN_KG / (a * c) + G * (m1 * constants.MSUN_KG) ** 2 / (mt * a * 2 * c)
     ) / 1e3
     return k1, k2, V_CM + z1 + o1, V_CM + z2 + o2
 

@@ -21,7 +21,8 @@ GOAL_S = 30.0
 @offline()  # the offline astropy scope for the whole measurement
 def rows(quick: bool) -> list[dict[str, object]]:
     """Converged posterior: wall time, and its σ's against the Fisher forecast."""
-    from ucbplan.lisa.pipeline import SimulateOptions, build_model, simulate
+    from ucbplan.lisa.pipeline import build_model, simulate
+    from ucbplan.lisa.simulation import SimulateOptions
     from ucbplan.target import load_target
 
     seeds = (1,) if quick else (1, 2, 3)

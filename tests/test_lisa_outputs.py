@@ -26,14 +26,9 @@ from ucbplan.lisa.outputs import (
     simulation_files,
     write_simulation,
 )
-from ucbplan.lisa.pipeline import (
-    SimulateOptions,
-    SimulationResult,
-    build_model,
-    prepare_simulation,
-    run_simulation,
-)
+from ucbplan.lisa.pipeline import build_model, prepare_simulation, run_simulation
 from ucbplan.lisa.sampler import SamplerInterrupted
+from ucbplan.lisa.simulation import SimulateOptions, SimulationResult
 from ucbplan.target import load_target
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -193,7 +193,9 @@ def test_output_format_follows_the_one_rule(tmp_path: Path, args: list[str], fmt
     ],
 )
 def test_bad_output_and_option_values(tmp_path: Path, args: list[str], needle: str) -> None:
-    """One UcbplanError line naming the option; the folder is left as it was."""
+    """One UcbplanError line naming the option as the command line prints it (library parameter
+    names become flags there, ucbplan.cli._flags); the folder is left as it was."""
+    from ucbplan.cli._flags import cli_message
     from ucbplan.errors import UcbplanError
 
     (tmp_path / "keep.txt").write_text("x")
@@ -204,7 +206,7 @@ def test_bad_output_and_option_values(tmp_path: Path, args: list[str], needle: s
         assert res.exit_code == 0  # type: ignore[attr-defined]
         return
     assert isinstance(exc, UcbplanError), (exc, res.output)  # type: ignore[attr-defined]
-    msg = str(exc)
+    msg = cli_message(str(exc))
     assert needle in msg and "\n" not in msg and len(msg) < 400, msg
     assert [p.name for p in tmp_path.iterdir()] == ["keep.txt"]
 
@@ -244,3 +246,27 @@ def test_report_and_em_prior_are_written_together(
     assert res.exit_code != 0  # type: ignore[attr-defined]
     assert "no space left" in str(res.exception)  # type: ignore[attr-defined]
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "parameter", "flag"),
+    [
+        ({"mass_radius": "x"}, "mass_radius", "--mass-radius"),
+        ({"cos_i_sigma": 2.5}, "cos_i_sigma", "--cos-i-sigma"),
+    ],
+)
+def test_reduce_options_name_the_parameter_and_the_flag(
+    kwargs: dict[str, object], parameter: str, flag: str
+) -> None:
+    """One check for the command and ucbplan.reduce: the library error names the parameter,
+    the command line prints its flag; a valid relation is stored lower case."""
+    from ucbplan.cli._flags import cli_message
+    from ucbplan.errors import InputError
+    from ucbplan.reduce.pipeline import reduce_options
+
+    with pytest.raises(InputError) as info:
+        reduce_options(**kwargs)  # type: ignore[arg-type]
+    assert info.value.parameter == parameter
+    assert str(info.value).startswith(f"{parameter}: ")
+    assert cli_message(str(info.value)).startswith(f"{flag}: ")
+    assert reduce_options(mass_radius="Eggleton", cos_i_sigma=2.0).mass_radius == "eggleton"

@@ -9,6 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from ucbplan.core import binary, constants
 from ucbplan.reduce import masses as m
 
 F_FID = 8.4062899940e-3  # Hz (Table 3, f_mid)
@@ -21,8 +22,8 @@ COS_I = math.cos(1.4775)
 def _k_from_masses(m1: float, m2: float, f: float, od: float, e: float, cos_i: float):  # type: ignore[no-untyped-def]
     """Independent forward model: Kepler's third law → a, then K_j = n_b a_j sin ι/√(1−e²)."""
     nb = math.pi * f - od
-    mt = (m1 + m2) * m.MSUN_KG
-    a = (m.G_SI * mt / nb**2) ** (1 / 3)
+    mt = (m1 + m2) * constants.MSUN_KG
+    a = (constants.G_SI * mt / nb**2) ** (1 / 3)
     k = nb * a * math.sqrt(1 - cos_i**2) / math.sqrt(1 - e * e)
     return k * m2 / (m1 + m2) / 1e3, k * m1 / (m1 + m2) / 1e3
 
@@ -81,30 +82,32 @@ def test_omega_dot_gr_paper_value() -> None:
     assert float(d["omega_dot_GR"]) == pytest.approx(1.498e-6, rel=5e-4)
     assert float(d["M_tot_omega_dot"]) == pytest.approx(M1_FID + M2_FID, rel=2e-3)
     # inverse relation is exact
-    assert float(m.mass_from_omega_dot(d["omega_dot_GR"], d["P_b"], d["e"])) / m.MSUN_KG == (
-        pytest.approx(float(d["M_tot"]), rel=1e-12)
-    )
+    assert float(
+        binary.mass_from_omega_dot(d["omega_dot_GR"], d["P_b"], d["e"])
+    ) / constants.MSUN_KG == (pytest.approx(float(d["M_tot"]), rel=1e-12))
 
 
 def test_fdot_gw_only_matches_injection() -> None:
     """Eq. ecc_mcmc_inj: log10 ḟ = −14.7850265 at f0 = 8.406186457145e-3 Hz for the fiducial
     chirp mass (circular quadrupole formula; the paper's injection has no F(e) factor, so e = 0
     here; 2e-3 relative covers the three-digit masses)."""
-    mc = float(m.chirp_mass(M1_FID * m.MSUN_KG, M2_FID * m.MSUN_KG))
-    fd = float(m.fdot_gw_only(mc, 8.406186457145e-3, 0.0))
+    mc = float(binary.chirp_mass(M1_FID * constants.MSUN_KG, M2_FID * constants.MSUN_KG))
+    fd = float(binary.fdot_gw_only(mc, 8.406186457145e-3, 0.0))
     assert math.log10(fd) == pytest.approx(-14.7850265, abs=1e-3)
-    back = float(m.chirp_mass_from_fdot(fd, 8.406186457145e-3, 0.0))
+    back = float(binary.chirp_mass_from_fdot(fd, 8.406186457145e-3, 0.0))
     assert back == pytest.approx(mc, rel=1e-12)
-    assert np.isnan(m.chirp_mass_from_fdot(-1e-15, 8.4e-3))
+    assert np.isnan(binary.chirp_mass_from_fdot(-1e-15, 8.4e-3))
 
 
 def test_distance_from_amplitude_round_trip_and_fiducial() -> None:
     """Eq. GW_amplitude: log10 𝒜 = −21.309 with the fiducial M_c and f gives d ≈ 0.577 kpc (the
     catalog distance; 2 % covers the 3-digit masses) and d → 𝒜 → M_c round-trips to 1e-12."""
-    mc = float(m.chirp_mass(M1_FID * m.MSUN_KG, M2_FID * m.MSUN_KG))
-    d = float(m.distance_from_amplitude_m(mc, F_FID, 10**-21.309))
+    mc = float(binary.chirp_mass(M1_FID * constants.MSUN_KG, M2_FID * constants.MSUN_KG))
+    d = float(binary.distance_from_amplitude_m(mc, F_FID, 10**-21.309))
     assert d / 3.0856775814913673e19 == pytest.approx(0.577, rel=0.02)
-    assert float(m.chirp_mass_from_amplitude(10**-21.309, F_FID, d)) == pytest.approx(mc, rel=1e-12)
+    assert float(binary.chirp_mass_from_amplitude(10**-21.309, F_FID, d)) == pytest.approx(
+        mc, rel=1e-12
+    )
 
 
 def test_white_dwarf_radii() -> None:
@@ -112,13 +115,13 @@ def test_white_dwarf_radii() -> None:
     Nauenberg at high masses", Verbunt & Rappaport 1988); the 0.6 M☉ surface redshift
     GM/(Rc) ≈ 30 km/s (the well-known WD value, 27–34 km/s)."""
     for mm in (0.6, 0.8, 1.0):
-        assert float(m.radius_eggleton(mm)) == pytest.approx(
-            float(m.radius_nauenberg(mm)), rel=0.05
+        assert float(binary.radius_eggleton(mm)) == pytest.approx(
+            float(binary.radius_nauenberg(mm)), rel=0.05
         )
-    assert float(m.radius_eggleton(1.4399)) < 0.002
-    assert np.isnan(m.radius_eggleton(1.5)) and np.isnan(m.radius_nauenberg(0.0))
-    r = float(m.radius_eggleton(0.6)) * m.RSUN_M
-    z = m.G_SI * 0.6 * m.MSUN_KG / (r * m.C_M_S) / 1e3
+    assert float(binary.radius_eggleton(1.4399)) < 0.002
+    assert np.isnan(binary.radius_eggleton(1.5)) and np.isnan(binary.radius_nauenberg(0.0))
+    r = float(binary.radius_eggleton(0.6)) * constants.RSUN_M
+    z = constants.G_SI * 0.6 * constants.MSUN_KG / (r * constants.C_M_S) / 1e3
     assert 27.0 < z < 34.0
 
 
@@ -126,9 +129,18 @@ def test_redshift_orbital_term_paper_fraction() -> None:
     """Sec. 3.1.2: at P_b ≃ 5 min the radius-independent terms reach ~20 % of the differential
     surface redshift for unequal masses, one third of it from the second-order Doppler. Check the
     1/3 split exactly and the sign: 3G(M2−M1)/(2ac) < 0 for M1 > M2."""
-    a = 0.07 * m.RSUN_M
-    tot = float(m.redshift_difference_orbital(M1_FID * m.MSUN_KG, M2_FID * m.MSUN_KG, a))
-    doppler = m.G_SI * (M2_FID**2 - M1_FID**2) * m.MSUN_KG / ((M1_FID + M2_FID) * 2 * a * m.C_M_S)
+    a = 0.07 * constants.RSUN_M
+    tot = float(
+        binary.redshift_difference_orbital(
+            M1_FID * constants.MSUN_KG, M2_FID * constants.MSUN_KG, a
+        )
+    )
+    doppler = (
+        constants.G_SI
+        * (M2_FID**2 - M1_FID**2)
+        * constants.MSUN_KG
+        / ((M1_FID + M2_FID) * 2 * a * constants.C_M_S)
+    )
     assert doppler / tot == pytest.approx(1 / 3, rel=1e-12)
     assert tot < 0
 

@@ -18,7 +18,8 @@ import pytest
 
 from ucbplan.errors import TargetFileError
 from ucbplan.target import Target, target_from_dict, target_to_dict
-from ucbplan.target.schema import FIELDS, SECTIONS, Field, field
+from ucbplan.target.fieldtypes import Field
+from ucbplan.target.schema import FIELDS, SECTIONS, field
 
 FULL: dict[str, Any] = {
     "name": "Full",

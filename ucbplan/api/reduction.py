@@ -18,8 +18,8 @@ from ucbplan.lisa import MIN_T_OBS_S  # shortest LISA observation [s] (t_obs, --
 if TYPE_CHECKING:
     from astropy.table import Table
 
-    from ucbplan.lisa.pipeline import SimulationResult
-    from ucbplan.reduce.pipeline import Reduction
+    from ucbplan.lisa.simulation import SimulationResult
+    from ucbplan.reduce.pipeline import ReduceOptions, Reduction
 
 __all__ = ["MIN_T_OBS_S", "Report", "population_forecast", "reduce", "simulate", "t_obs_seconds"]
 
@@ -88,61 +88,51 @@ def reduce(
         LISA ephemeris and posterior (see :func:`ucbplan.load_target`).
     velocities : str, Path or VelocityTable
         Velocity table (CSV or ECSV): ``bjd_tdb``, ``exptime_s``, ``v1``, ``sigma_v1`` … [km/s].
-    seed : int, optional
-        Seed of the Monte-Carlo draws (None: fresh entropy, reported in the report).
-    samples : int
-        Monte-Carlo samples.
-    light_time : bool
-        Correct for the light travel time across the orbit.
-    mass_radius : str, optional
-        WD mass–radius relation for the redshift check (``eggleton``, ``nauenberg``).
-    cos_i_sigma : float
-        1σ of cos ι if neither the covariance nor the samples carry it.
+    seed, samples : int, optional
+        Seed of the Monte-Carlo draws (None: fresh entropy, reported in the report); their number.
+    light_time, mass_radius, cos_i_sigma : bool, str, float, optional
+        Correct for the light travel time across the orbit; WD mass–radius relation for the
+        redshift check (``eggleton``, ``nauenberg``); 1σ of cos ι [1] if neither the covariance
+        nor the samples carry it.
     site : str, EarthLocation or astroplan Observer, optional
         Telescope, when the table's times are UTC at the site.
 
     Returns
     -------
     Report
+        K_j, γ_j [km/s], masses [M_sun], Δκ, Δv_CM; ``warnings`` also emitted as ReduceWarning.
 
     Raises
     ------
     InputError
         Bad options (naming the parameter); VelocityFileError, TargetFileError for the files.
-
-    Warns
-    -----
-    ReduceWarning
-        What the report's ``warnings`` hold.
     """
-    from ucbplan.reduce.masses import MASS_RADIUS_MODELS
-    from ucbplan.reduce.pipeline import ReduceOptions
-    from ucbplan.reduce.pipeline import reduce as _reduce
+    from ucbplan.reduce.pipeline import reduce_options
 
-    if mass_radius is not None and str(mass_radius).lower() not in MASS_RADIUS_MODELS:
-        raise InputError(
-            f"mass_radius: got {shorten(mass_radius)}, expected one of "
-            f"{', '.join(MASS_RADIUS_MODELS)}",
-            parameter="mass_radius",
-        )
-    if not 0.0 <= cos_i_sigma <= 2.0:
-        raise InputError(
-            f"cos_i_sigma: expected a 1σ of cos ι in [0, 2], got {cos_i_sigma}", "cos_i_sigma"
-        )
-    options = ReduceOptions(
-        n_samples=samples,
+    options = reduce_options(
+        samples=samples,
         seed=seed,
         light_time=light_time,
-        mass_radius=mass_radius.lower() if mass_radius else None,
+        mass_radius=mass_radius,
         cos_i_sigma=cos_i_sigma,
     )
+    report, lines = _report(target, velocities, site, options)
+    emit(lines, ReduceWarning)
+    return report
+
+
+def _report(
+    target: TargetLike, velocities: Any, site: Any, options: ReduceOptions
+) -> tuple[Report, list[str]]:
+    """Load the target and the velocities, reduce; the report and its warnings, both built
+    inside the API's astropy scope."""
+    from ucbplan.reduce.pipeline import reduce as _reduce
+
     with scope():
         tgt = load_target(target)
         table = _velocity_table(velocities, tgt, site)
         report = Report(_reduce(tgt, table, options))
-        lines = report.warnings
-    emit(lines, ReduceWarning)
-    return report
+        return report, report.warnings
 
 
 def _velocity_table(velocities: Any, tgt: Any, site: Any) -> Any:
@@ -199,13 +189,15 @@ def simulate(
     InputError
         Bad options (one line each).
     """
-    from ucbplan.lisa import pipeline as lp
+    from ucbplan.lisa.pipeline import run_simulation, setup_simulation
 
     with scope():
         tgt = load_target(target)
-        t_obs_s = t_obs_seconds(t_obs, tgt.t_obs_s)
-        model = lp.build_model(tgt, t_obs_s=t_obs_s, n_bins=n_bins, circular=circular)
-        options = lp.SimulateOptions(
+        problem = setup_simulation(
+            tgt,
+            t_obs_s=t_obs_seconds(t_obs, tgt.t_obs_s),
+            n_bins=n_bins,
+            circular=circular,
             seed=seed,
             walkers=walkers,
             steps=steps,
@@ -213,7 +205,7 @@ def simulate(
             max_steps=max_steps,
             noise=noise,
         )
-        result = lp.simulate(model, options)
+        result = run_simulation(problem)
     emit(list(result.warnings), ReduceWarning)
     return result
 

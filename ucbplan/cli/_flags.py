@@ -28,6 +28,8 @@ FLAGS = {
     "max_visit": "--max-visit",
     "k_eff_kms": "--k-eff",
     "k_eff": "--k-eff",
+    "mass_radius": "--mass-radius",
+    "cos_i_sigma": "--cos-i-sigma",
     "overhead_s": "--overhead",
     "exptime_s": "--exptime",
     "n_exp": "--n-exp",

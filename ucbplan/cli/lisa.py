@@ -23,6 +23,7 @@ if TYPE_CHECKING:
     from ucbplan.lisa.outputs import SimulationFiles
     from ucbplan.lisa.sampler import SamplerInterrupted
     from ucbplan.lisa.simulation import LisaModel, SimulationProblem, SimulationResult
+    from ucbplan.target import Target
 
 __all__ = ["register"]
 
@@ -91,14 +92,20 @@ def _require_suffix(path: Path, fmt: str, option: str, what: str) -> None:
         raise InputError(f"{option} {path}: {what} is {fmt.upper()}; give the file a .{fmt} name")
 
 
-def _model(target_path: Path, t_obs: str | None, n_bins: int, circular: bool) -> LisaModel:
-    """Parse the shared options and build the injection model from the target file."""
-    from ucbplan.lisa.pipeline import build_model
+def _target(target_path: Path, t_obs: str | None, n_bins: int) -> tuple[Target, float]:
+    """Parse the shared options: the target file and the observation length [s]."""
     from ucbplan.target import load_target
 
     _check_n_bins(n_bins)
     target = load_target(target_path)
-    t_obs_s = _t_obs(t_obs, target.t_obs_s)
+    return target, _t_obs(t_obs, target.t_obs_s)
+
+
+def _model(target_path: Path, t_obs: str | None, n_bins: int, circular: bool) -> LisaModel:
+    """Parse the shared options and build the injection model from the target file."""
+    from ucbplan.lisa.pipeline import build_model
+
+    target, t_obs_s = _target(target_path, t_obs, n_bins)
     return build_model(
         target, t_obs_s=t_obs_s, n_bins=n_bins, circular=circular, where=str(target_path)
     )
@@ -152,12 +159,16 @@ def simulate(
     overwrite: OverwriteAllOpt = False,
 ) -> None:
     """Simulate a LISA observation and sample the targeted-search posterior → target YAML."""
-    from ucbplan.lisa.pipeline import SimulateOptions, prepare_simulation
+    from ucbplan.lisa.pipeline import setup_simulation
     from ucbplan.lisa.sampler import SamplerInterrupted
 
     files = _simulation_files(output, chain, plots, overwrite)
-    model = _model(target, t_obs, n_bins, circular)
-    options = SimulateOptions(
+    tgt, t_obs_s = _target(target, t_obs, n_bins)
+    problem = setup_simulation(
+        tgt,
+        t_obs_s=t_obs_s,
+        n_bins=n_bins,
+        circular=circular,
         seed=seed,
         walkers=walkers,
         steps=steps,
@@ -165,8 +176,9 @@ def simulate(
         max_steps=max_steps,
         noise=noise,
         resume=resume,
+        where=str(target),
     )
-    problem = prepare_simulation(model, options)
+    model = problem.model
     err_console.print(
         f"{model.base.name}: optimal SNR {problem.snr:.1f}, T_obs = {model.t_obs_s:.6f} s, "
         f"N = {n_bins} bins, {problem.theta0.size} parameters, noise {'on' if noise else 'off'}, "

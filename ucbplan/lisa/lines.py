@@ -17,7 +17,7 @@ from ucbplan.lisa.source import LINES, line_frequencies
 if TYPE_CHECKING:
     from astropy.table import Table
 
-    from ucbplan.lisa.pipeline import LisaModel
+    from ucbplan.lisa.simulation import LisaModel
 
 __all__ = ["CONVENTION", "LINE_COLUMNS", "WaveformLines", "waveform_lines"]
 

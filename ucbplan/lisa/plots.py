@@ -16,7 +16,7 @@ from ucbplan.plotting import pyplot, save_figure
 
 if TYPE_CHECKING:
     from ucbplan.lisa.lines import WaveformLines
-    from ucbplan.lisa.pipeline import SimulationResult
+    from ucbplan.lisa.simulation import SimulationResult
 
 __all__ = ["CORNER_NAMES", "asd_plot", "corner_plot", "simulation_corner_plots", "waveform_plot"]
 

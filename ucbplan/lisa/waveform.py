@@ -27,10 +27,9 @@ from ucbplan.lisa.numerics import (
     quadratic_tables,
 )
 from ucbplan.lisa.response import LINKS, ResponseGrid, band_weights, tdi_coefficients
-from ucbplan.lisa.source import LINES, SourceParams, line_amplitudes, line_frequencies
+from ucbplan.lisa.source import LINES, SourceParams, line_amplitudes
 
-#: ``LINES`` and ``line_frequencies`` are the source model's (:mod:`ucbplan.lisa.source`).
-__all__ = ["LINES", "FourLineModel", "line_frequencies"]
+__all__ = ["FourLineModel"]
 
 
 #: Walkers per internal block of :meth:`FourLineModel.bands`: a sampler batch in one block (with

@@ -90,7 +90,7 @@ class PopulationSimulateOptions:
     seed : int
         Global seed; each source gets ``source_seed(seed, source_id)``.
     walkers, steps, until_converged, max_steps, noise
-        As ``ucbplan simulate`` (:class:`ucbplan.lisa.pipeline.SimulateOptions`).
+        As ``ucbplan simulate`` (:class:`ucbplan.lisa.simulation.SimulateOptions`).
     forecast : ForecastOptions
         T_obs, LISA start and band width; σ_v and K written into each target's spectroscopy.
     """
@@ -138,7 +138,8 @@ def simulate_source(
     """One summary row (and ``target_doc``, the posterior target document) of one source."""
     import dataclasses
 
-    from ucbplan.lisa.pipeline import SimulateOptions, build_model, simulate
+    from ucbplan.lisa.pipeline import build_model, simulate
+    from ucbplan.lisa.simulation import SimulateOptions
     from ucbplan.target.write import target_to_dict
 
     seed = source_seed(opts.seed, src.source_id)

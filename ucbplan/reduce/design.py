@@ -76,7 +76,7 @@ def _check_windows(table: VelocityTable, period_s: float) -> None:
     """Every window shorter than the orbital period: Λ_K = sin x/x > 0 (x = πΔt/P_b < π).
 
     A window of one period averages the velocity curve to zero (Λ_K = 0) and a longer one flips
-    its sign: K = slope/Λ_K would blow up or change sign (K1 = −1e7 km/s was reported).
+    its sign: K = slope/Λ_K would blow up or change sign (K1 of order −1e7 km/s).
     """
     from ucbplan.errors import VelocityFileError
 

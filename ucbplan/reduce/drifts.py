@@ -33,20 +33,15 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ucbplan.core.constants import C_M_S
-from ucbplan.reduce.groups import ANCHOR_U, MATCH_TOL_RAD, Group, assign_anchors, group_spectra
+from ucbplan.reduce.groups import MATCH_TOL_RAD, Group
 from ucbplan.reduce.regression import LineFit, weighted_line
 
 __all__ = [
-    "ANCHOR_U",
-    "MATCH_TOL_RAD",
     "UPPER_LIMIT_NSIGMA",
     "DriftResult",
-    "Group",
     "LLPredictor",
     "Pair",
-    "assign_anchors",
     "combine",
-    "group_spectra",
     "make_pairs",
 ]
 

@@ -91,14 +91,11 @@ def group_spectra(
     tau_s, u_rad, u_star : array_like
         Mid-exposure time [s since t_ref], star-1 argument of latitude and assigned u★ [rad]
         (NaN: unassigned).
-    velocities, sigmas : sequence of array_like
-        Per component (v1[, v2]) velocities and errors [km/s].
-    K : sequence of float
-        Fitted semi-amplitude per component [km/s].
-    design : array_like
-        Window-averaged orbital factor G (for the zero-crossing γ estimates) [1].
-    lam_k, lam_kappa : array_like
-        Window factors per spectrum.
+    velocities, sigmas, K : sequence
+        Per component (v1[, v2]): velocities and errors per spectrum, fitted semi-amplitude [km/s].
+    design, lam_k, lam_kappa : array_like
+        Window-averaged orbital factor G (for the zero-crossing γ estimates) and the window
+        factors Λ_K, Λ_κ per spectrum [1].
 
     Returns
     -------
@@ -111,9 +108,36 @@ def group_spectra(
     lk = np.broadcast_to(np.asarray(lam_k, float), tau.shape)
     lkap = np.broadcast_to(np.asarray(lam_kappa, float), tau.shape)
     G = np.asarray(design, float)
+    k = _group_keys(sessions, us)
+    rows = k.rows
+    at = (lk[rows], u[rows], k.u_star, G[rows], k.gid)
+    comps = [
+        _component_means(np.asarray(v, float)[rows], np.asarray(sg, float)[rows], sK, *at)
+        for v, sg, sK in zip(velocities, sigmas, _signed(K), strict=True)
+    ]
+    means = [_group_mean(x[rows], k.gid, k.counts) for x in (tau, lk, lkap)]
+    groups = _build_groups(k.labels, k.u_star[k.starts], k.counts, comps, means)
+    groups.sort(key=lambda g: g.tau_s)
+    return groups
+
+
+@dataclass(frozen=True)
+class _Keys:
+    """The assigned spectra sorted by (session, u★): their rows in the table, each row's u★ and
+    group id, and per group its session label, first sorted position and count."""
+
+    rows: NDArray[np.intp]
+    u_star: F64
+    gid: NDArray[np.intp]
+    labels: NDArray[np.str_]
+    starts: NDArray[np.intp]
+    counts: NDArray[np.intp]
+
+
+def _group_keys(sessions: Sequence[str], us: F64) -> _Keys:
+    """Sort the spectra with a u★ (finite ``us``) by (session, u★) and number the groups."""
     keep = np.nonzero(np.isfinite(us))[0]
     names, code = np.unique(np.asarray([str(x) for x in sessions])[keep], return_inverse=True)
-    # one pass: groups sorted by (session, u★), as the former per-key masks were
     order = np.lexsort((us[keep], code.reshape(-1)))
     rows = keep[order]
     key_s, key_u = code.reshape(-1)[order], us[rows]
@@ -122,23 +146,7 @@ def group_spectra(
     starts = np.nonzero(new)[0]
     counts = np.diff(np.append(starts, rows.size))
     gid = np.cumsum(new) - 1
-    comps = [
-        _component_means(
-            np.asarray(v, float)[rows],
-            np.asarray(sg, float)[rows],
-            (1.0 if j == 0 else -1.0) * K[j],
-            lk[rows],
-            u[rows],
-            key_u,
-            G[rows],
-            gid,
-        )
-        for j, (v, sg) in enumerate(zip(velocities, sigmas, strict=True))
-    ]
-    means = [_group_mean(x[rows], gid, counts) for x in (tau, lk, lkap)]
-    groups = _build_groups(names[key_s[starts]], key_u[starts], counts, comps, means)
-    groups.sort(key=lambda g: g.tau_s)
-    return groups
+    return _Keys(rows, key_u, gid, names[key_s[starts]], starts, counts)
 
 
 def _build_groups(
@@ -168,6 +176,11 @@ def _build_groups(
         )
         for g, (label, u, n) in enumerate(heads)
     ]
+
+
+def _signed(K: Sequence[float]) -> list[float]:
+    """±K_j: star 1 moves with +K_1 G, star 2 with −K_2 G."""
+    return [(1.0 if j == 0 else -1.0) * k for j, k in enumerate(K)]
 
 
 def _group_mean(x: F64, gid: NDArray[np.intp], counts: NDArray[np.intp]) -> F64:

@@ -2,7 +2,8 @@
 
 :func:`derive` evaluates the whole chain of :mod:`ucbplan.core.binary` relations for arrays of
 Monte-Carlo samples (SI inside); :func:`summarize` turns sample arrays into median and 16/84 %
-percentiles. The single relations are re-exported here for convenience.
+percentiles. The single relations and constants live in :mod:`ucbplan.core.binary` and
+:mod:`ucbplan.core.constants`.
 """
 
 from __future__ import annotations
@@ -17,43 +18,17 @@ from ucbplan.core.binary import (
     MASS_RADIUS_MODELS,
     a_total_m,
     chirp_mass,
-    chirp_mass_from_amplitude,
     chirp_mass_from_fdot,
     distance_from_amplitude_m,
     fdot_gw_only,
     kepler_total_mass,
     mass_from_omega_dot,
     omega_dot_gr,
-    peters_mathews_enhancement,
-    radius_eggleton,
-    radius_nauenberg,
     redshift_difference_orbital,
 )
 from ucbplan.core.constants import C_M_S, G_SI, KPC_M, MSUN_KG, RSUN_M
 
-__all__ = [
-    "C_M_S",
-    "G_SI",
-    "MASS_RADIUS_MODELS",
-    "MSUN_KG",
-    "RSUN_M",
-    "Summary",
-    "a_total_m",
-    "chirp_mass",
-    "chirp_mass_from_amplitude",
-    "chirp_mass_from_fdot",
-    "derive",
-    "distance_from_amplitude_m",
-    "fdot_gw_only",
-    "kepler_total_mass",
-    "mass_from_omega_dot",
-    "omega_dot_gr",
-    "peters_mathews_enhancement",
-    "radius_eggleton",
-    "radius_nauenberg",
-    "redshift_difference_orbital",
-    "summarize",
-]
+__all__ = ["Summary", "derive", "summarize"]
 
 
 F64 = NDArray[np.float64]
@@ -82,18 +57,13 @@ def derive(
 
     Parameters
     ----------
-    K1_km_s, K2_km_s : ndarray
-        Finite-window-corrected semi-amplitudes [km/s].
-    gamma1_km_s, gamma2_km_s : ndarray or None
-        Intercepts [km/s] (None: no redshift quantities).
-    f_hz, fdot_hz_s, eta, kappa, omega_dot : ndarray
-        LISA parameters at the reference epoch [Hz, Hz/s, 1, 1, rad/s].
-    cos_i : ndarray
-        cos ι [1].
-    amplitude : ndarray or None
-        GW strain amplitude 𝒜 (Eq. GW_amplitude) for the distance.
-    mass_radius : str or None
-        Key of :data:`MASS_RADIUS_MODELS` for the predicted redshift difference.
+    K1_km_s, K2_km_s, gamma1_km_s, gamma2_km_s : ndarray
+        Finite-window-corrected semi-amplitudes and intercepts [km/s] (γ None: no redshifts).
+    f_hz, fdot_hz_s, eta, kappa, omega_dot, cos_i : ndarray
+        LISA parameters at the reference epoch [Hz, Hz/s, 1, 1, rad/s] and cos ι [1].
+    amplitude, mass_radius : ndarray or None, str or None
+        GW strain amplitude 𝒜 for the distance; key of ``MASS_RADIUS_MODELS`` for the
+        predicted redshift difference.
 
     Returns
     -------
@@ -102,13 +72,37 @@ def derive(
         q (1), omega_dot_GR, omega_dot_remainder (rad/s), M_tot_omega_dot, M_c_fdot (Msun),
         fdot_GW_only, fdot_minus_GW_only (Hz/s), distance (kpc, if amplitude), gamma_diff,
         redshift_orbital, redshift_grav (km/s, if γ), R1, R2 (R_sun), redshift_grav_model and
-        redshift_grav_minus_model (km/s, if model).
-
-    Notes
-    -----
-    Eqs. semimajor_axis_j, Kepler_mtot, M1M2_cir_and_ecc, omega_dot_GR, omega_dot_full,
-    GW_amplitude, M_c_q; n_b = πf − ω̇ (anomalistic).
+        redshift_grav_minus_model (km/s, if model). Eqs. semimajor_axis_j, Kepler_mtot,
+        M1M2_cir_and_ecc, omega_dot_GR, omega_dot_full, GW_amplitude, M_c_q; n_b = πf − ω̇.
     """
+    out, m = _orbit(K1_km_s, K2_km_s, f_hz, omega_dot, eta, kappa, cos_i)
+    out |= _gr_checks(m.mtot, m.mc, m.pb, out["e"], _f(omega_dot), fdot_hz_s, f_hz)
+    if amplitude is not None:
+        out["distance"] = distance_from_amplitude_m(m.mc, f_hz, amplitude) / KPC_M
+    if gamma1_km_s is not None and gamma2_km_s is not None:
+        out |= _redshifts(_f(gamma1_km_s) - _f(gamma2_km_s), m.m1, m.m2, m.a)
+    if mass_radius is not None:
+        out |= _model_redshift(mass_radius, m.m1, m.m2, out.get("redshift_grav"))
+    return out
+
+
+@dataclass(frozen=True, slots=True)
+class _Masses:
+    """The SI values the later steps of :func:`derive` use: P_b [s], a [m], M_tot, M1, M2 and
+    M_c [kg]."""
+
+    pb: F64
+    a: F64
+    mtot: F64
+    m1: F64
+    m2: F64
+    mc: F64
+
+
+def _orbit(
+    K1_km_s: F64, K2_km_s: F64, f_hz: F64, omega_dot: F64, eta: F64, kappa: F64, cos_i: F64
+) -> tuple[dict[str, F64], _Masses]:
+    """n_b, P_b, e, sin ι, a and the dynamical masses (Msun in the dict, SI in ``_Masses``)."""
     k1 = _f(K1_km_s) * 1e3
     k2 = _f(K2_km_s) * 1e3
     nb = math.pi * _f(f_hz) - _f(omega_dot)
@@ -124,14 +118,7 @@ def derive(
     out: dict[str, F64] = {"n_b": nb, "P_b": pb, "e": e, "sin_i": sin_i, "a": a}
     out |= {"M_tot": mtot / MSUN_KG, "q": q, "M1": m1 / MSUN_KG, "M2": m2 / MSUN_KG}
     out["M_c"] = mc / MSUN_KG
-    out |= _gr_checks(mtot, mc, pb, e, _f(omega_dot), fdot_hz_s, f_hz)
-    if amplitude is not None:
-        out["distance"] = distance_from_amplitude_m(mc, f_hz, amplitude) / KPC_M
-    if gamma1_km_s is not None and gamma2_km_s is not None:
-        out |= _redshifts(_f(gamma1_km_s) - _f(gamma2_km_s), m1, m2, a)
-    if mass_radius is not None:
-        out |= _model_redshift(mass_radius, m1, m2, out.get("redshift_grav"))
-    return out
+    return out, _Masses(pb, a, mtot, m1, m2, mc)
 
 
 def _gr_checks(

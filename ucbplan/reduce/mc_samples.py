@@ -99,7 +99,7 @@ def posterior_samples(
         cov[_COS_I, _COS_I] = cos_i_sigma**2
         if cos_i_sigma == 0.0:
             warn.append(_COS_I_FIXED)
-    # Correlation-scaled draw: σ's span ~40 orders of magnitude (issue 11).
+    # Correlation-scaled draw (core.mvnormal): the σ's span ~40 orders of magnitude.
     out = sample_normal(mean, cov, n, rng)
     if columns is not None:
         size = len(next(iter(columns.values())))

@@ -25,8 +25,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
+from ucbplan.core.binary import MASS_RADIUS_MODELS
 from ucbplan.core.constants import C_KM_S
-from ucbplan.errors import VelocityFileError
+from ucbplan.errors import InputError, VelocityFileError, shorten
 from ucbplan.reduce import drifts as _drifts
 from ucbplan.reduce import masses as _masses
 from ucbplan.reduce.design import (
@@ -39,7 +40,7 @@ from ucbplan.reduce.design import (
     window_factors,
 )
 from ucbplan.reduce.groups import Group, assign_anchors, group_spectra
-from ucbplan.reduce.montecarlo import monte_carlo
+from ucbplan.reduce.montecarlo import MonteCarlo, monte_carlo
 from ucbplan.reduce.regression import (
     ComponentFit,
     WilsonFit,
@@ -47,12 +48,7 @@ from ucbplan.reduce.regression import (
     phase_sensitivity,
     wilson_fit,
 )
-from ucbplan.reduce.velocities import (
-    MIN_SPECTRA,
-    VelocityTable,
-    check_validity,
-    read_velocities,
-)
+from ucbplan.reduce.velocities import MIN_SPECTRA, VelocityTable, check_validity
 from ucbplan.target import load_samples
 
 if TYPE_CHECKING:
@@ -60,14 +56,7 @@ if TYPE_CHECKING:
     from ucbplan.core.params import PhaseParams
     from ucbplan.target import Target
 
-__all__ = [
-    "ReduceOptions",
-    "Reduction",
-    "design_jacobian",
-    "read_velocities",
-    "reduce",
-    "window_factors",
-]
+__all__ = ["ReduceOptions", "Reduction", "reduce", "reduce_options"]
 
 F64 = NDArray[np.float64]
 
@@ -132,6 +121,44 @@ class Reduction:
     def eccentric(self) -> bool:
         """Whether the target has e > 0 or ω̇ ≠ 0."""
         return self.target.params.is_eccentric
+
+
+def reduce_options(
+    *,
+    samples: int = 20_000,
+    seed: int | None = None,
+    light_time: bool = False,
+    mass_radius: str | None = None,
+    cos_i_sigma: float = 0.0,
+) -> ReduceOptions:
+    """Checked :class:`ReduceOptions` (``ucbplan reduce`` and :func:`ucbplan.reduce`).
+
+    ``samples`` is the Monte-Carlo size, ``cos_i_sigma`` the 1σ of cos ι [1] and
+    ``mass_radius`` a key of ``MASS_RADIUS_MODELS`` in any case (stored lower case).
+
+    Raises
+    ------
+    InputError
+        An unknown mass–radius relation, or a cos ι spread outside [0, 2] (naming the
+        parameter; the command line prints its flag).
+    """
+    if mass_radius is not None and str(mass_radius).lower() not in MASS_RADIUS_MODELS:
+        raise InputError(
+            f"mass_radius: got {shorten(mass_radius)}, expected one of "
+            f"{', '.join(MASS_RADIUS_MODELS)}",
+            parameter="mass_radius",
+        )
+    if not 0.0 <= cos_i_sigma <= 2.0:
+        raise InputError(
+            f"cos_i_sigma: expected a 1σ of cos ι in [0, 2], got {cos_i_sigma}", "cos_i_sigma"
+        )
+    return ReduceOptions(
+        n_samples=samples,
+        seed=seed,
+        light_time=light_time,
+        mass_radius=mass_radius.lower() if mass_radius else None,
+        cos_i_sigma=cos_i_sigma,
+    )
 
 
 def _fit_all(table: VelocityTable, design: tuple[F64, ...]) -> tuple[ComponentFit, ...]:
@@ -285,13 +312,15 @@ def reduce(target: Target, table: VelocityTable, options: ReduceOptions | None =
     target : Target
         LISA ephemeris and posterior.
     table : VelocityTable
-        Measured velocities (:func:`read_velocities`).
+        Measured velocities [km/s] at barycentric TDB times
+        (:func:`~ucbplan.reduce.velocities.read_velocities`).
     options : ReduceOptions, optional
         Monte-Carlo size, seed, light-time correction, mass–radius relation.
 
     Returns
     -------
     Reduction
+        Fits, phase-error propagation, Monte-Carlo masses, groups and drifts.
 
     Raises
     ------
@@ -312,20 +341,36 @@ def reduce(target: Target, table: VelocityTable, options: ReduceOptions | None =
     seed = _resolve_seed(opts.seed)
     p = target.params
     tau = check_validity(table, target)
+    _require_spectra(table)
+    lam = window_factors(table, p.f_gw)
+    window_s = window_durations(table, p.f_gw)
+    at = track(p, tau)  # the orbit at mid-exposure, once for every design there
+    mid = mid_exposure(p, tau, window_s, at)  # the plain design and its Jacobian, one pass
+    intra = _intra_session(p, table, at, tau, window_s, mid[0].h, opts.light_time)
+    phase = _phase_errors(target, table, at, tau, window_s, mid, intra)
+    mc = _monte_carlo(target, intra.fits, phase, opts, seed)
+    groups, drift = _inter_session(target, table, tau, at.u, intra, *lam)
+    return _reduction(target, table, opts, seed, (tau, at), lam, intra, phase, mc, (groups, drift))
+
+
+def _require_spectra(table: VelocityTable) -> None:
+    """Raise VelocityFileError when the table has fewer than ``MIN_SPECTRA`` spectra."""
     if table.n < MIN_SPECTRA:
         raise VelocityFileError(
             f"{table.source}: {table.n} spectrum; the fit of γ and K needs at least "
             f"{MIN_SPECTRA} spectra at different orbital phases — add one line per spectrum"
         )
-    lam_k, lam_kap = window_factors(table, p.f_gw)
-    window_s = window_durations(table, p.f_gw)
-    at = track(p, tau)  # the orbit at mid-exposure, once for every design there
-    kap, u = at.kap, at.u
-    mid = mid_exposure(p, tau, window_s, at)  # the plain design and its Jacobian, one pass
-    intra = _intra_session(p, table, at, tau, window_s, mid[0].h, opts.light_time)
-    fits = intra.fits
-    phase = _phase_errors(target, table, at, tau, window_s, mid, intra)
-    mc = monte_carlo(
+
+
+def _monte_carlo(
+    target: Target,
+    fits: tuple[ComponentFit, ...],
+    phase: _PhaseErrors,
+    opts: ReduceOptions,
+    seed: int,
+) -> MonteCarlo:
+    """The joint Monte Carlo to masses, seeded with ``seed`` (the target's samples if any)."""
+    return monte_carlo(
         target,
         fits,
         phase.dK,
@@ -336,18 +381,33 @@ def reduce(target: Target, table: VelocityTable, options: ReduceOptions | None =
         rng=np.random.default_rng(seed),
         columns=load_samples(target) if target.samples is not None else None,
     )
-    groups, drift = _inter_session(target, table, tau, u, intra, lam_k, lam_kap)
+
+
+def _reduction(
+    target: Target,
+    table: VelocityTable,
+    opts: ReduceOptions,
+    seed: int,
+    orbit: tuple[F64, OrbitTrack],
+    lam: tuple[F64, F64],
+    intra: _IntraSession,
+    phase: _PhaseErrors,
+    mc: MonteCarlo,
+    inter: tuple[list[Group], _drifts.DriftResult],
+) -> Reduction:
+    """The :class:`Reduction` record of the steps' results (``orbit``: τ and the track there)."""
+    fits, (tau, at) = intra.fits, orbit
     return Reduction(
         target=target,
         table=table,
         options=opts,
         seed=seed,
         tau_s=tau,
-        u_rad=u,
-        F=np.cos(u) + kap,
+        u_rad=at.u,
+        F=np.cos(at.u) + at.kap,
         design=intra.design,
-        lam_k=lam_k,
-        lam_kappa=lam_kap,
+        lam_k=lam[0],
+        lam_kappa=lam[1],
         fits=fits,
         dK=phase.dK,
         dgamma=phase.dgamma,
@@ -359,8 +419,8 @@ def reduce(target: Target, table: VelocityTable, options: ReduceOptions | None =
         light_time=intra.light_time,
         samples=mc.samples,
         summaries=mc.summaries,
-        groups=tuple(groups),
-        drift=drift,
+        groups=tuple(inter[0]),
+        drift=inter[1],
         warnings=(*_fit_warnings(fits), *mc.warnings),
     )
 

@@ -391,23 +391,9 @@ def wilson_fit(
     """
     x, y = np.asarray(v2, float), np.asarray(v1, float)
     wx, wy = 1.0 / np.asarray(s2, float) ** 2, 1.0 / np.asarray(s1, float) ** 2
-    if x.size < 2:
-        raise ValueError("need at least two velocity pairs for the WIL41 line")
-    if not (
-        np.all(np.isfinite(wx)) and np.all(np.isfinite(wy)) and np.all(wx > 0) and np.all(wy > 0)
-    ):
-        raise ValueError("sigma must be positive and finite")
-    if not np.ptp(x) > 0.0:
-        raise ValueError("all v2 are equal: the WIL41 slope is undetermined")
-    b = -float(q0)
-    for _ in range(200):
-        W, xm, U, V, beta = _york_terms(x, y, wx, wy, b)
-        b_new = float((W * beta * V).sum() / (W * beta * U).sum())
-        done = abs(b_new - b) <= 1e-13 * max(1.0, abs(b_new))
-        b = b_new
-        if done:
-            break
-    W, xm, U, V, beta = _york_terms(x, y, wx, wy, b)
+    _check_wilson_inputs(x, wx, wy)
+    b = _york_slope(x, y, wx, wy, -float(q0))
+    W, xm, _U, _V, beta = _york_terms(x, y, wx, wy, b)
     ym = float((W * y).sum() / W.sum())
     a = ym - b * xm
     xa = xm + beta  # York's adjusted abscissae
@@ -423,6 +409,32 @@ def wilson_fit(
         chi2=float((W * res * res).sum()),
         dof=x.size - 2,
     )
+
+
+def _check_wilson_inputs(x: F64, wx: F64, wy: F64) -> None:
+    """Raise ValueError for fewer than two pairs, a weight that is not positive and finite, or
+    a constant v2 (``x``)."""
+    if x.size < 2:
+        raise ValueError("need at least two velocity pairs for the WIL41 line")
+    if not (
+        np.all(np.isfinite(wx)) and np.all(np.isfinite(wy)) and np.all(wx > 0) and np.all(wy > 0)
+    ):
+        raise ValueError("sigma must be positive and finite")
+    if not np.ptp(x) > 0.0:
+        raise ValueError("all v2 are equal: the WIL41 slope is undetermined")
+
+
+def _york_slope(x: F64, y: F64, wx: F64, wy: F64, b: float) -> float:
+    """York's fixed-point iteration for the slope, from ``b`` (at most 200 steps, relative
+    tolerance 1e-13)."""
+    for _ in range(200):
+        W, _xm, U, V, beta = _york_terms(x, y, wx, wy, b)
+        b_new = float((W * beta * V).sum() / (W * beta * U).sum())
+        done = abs(b_new - b) <= 1e-13 * max(1.0, abs(b_new))
+        b = b_new
+        if done:
+            break
+    return b
 
 
 def _york_terms(x: F64, y: F64, wx: F64, wy: F64, b: float) -> tuple[F64, float, F64, F64, F64]:

@@ -387,7 +387,7 @@ def _light_time_line(lt: dict[str, Any]) -> str:
 
 
 #: Most sessions named and fixed-u pairs listed on the terminal; a longer run lists the first
-#: ones and says how many more the JSON/YAML report holds (rendering 10⁴ table rows took longer
+#: ones and says how many more the JSON/YAML report holds (rendering 10⁴ table rows takes longer
 #: than the whole reduction).
 MAX_TERMINAL_ROWS = 40
 

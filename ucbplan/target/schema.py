@@ -1,11 +1,11 @@
 """The target file, declared once: every field's path, unit, allowed range, example and default.
 
-:data:`FIELDS` is a plain tuple of frozen :class:`Field` records in document order. The parser
+:data:`FIELDS` is a plain tuple of frozen ``Field`` records in document order. The parser
 (:mod:`ucbplan.target.parse`), the writer (:mod:`ucbplan.target.write`) and the target-file
 reference in the docs all read it, so a field cannot be accepted, written or documented in one
-place and forgotten in another. Look a field up with :func:`field`. The records
-(:class:`Field`, :class:`Range`) are declared in :mod:`ucbplan.target.fieldtypes` and the families
-of fields that share a shape are built by :mod:`ucbplan.target.fieldgroups`.
+place and forgotten in another. Look a field up with :func:`field`. The records (``Field``,
+``Range``, ``Kind``) are declared in :mod:`ucbplan.target.fieldtypes`; import them from there.
+The families of fields that share a shape are built by :mod:`ucbplan.target.fieldgroups`.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from ucbplan.target.fieldgroups import (
     positive,
     velocity_field,
 )
-from ucbplan.target.fieldtypes import Field, Kind, Range
+from ucbplan.target.fieldtypes import Field, Range
 
 __all__ = [
     "COVARIANCE_EXTRAS",
@@ -29,9 +29,6 @@ __all__ = [
     "FIELDS",
     "SECTIONS",
     "TIMING_COVARIANCE_PARAMETERS",
-    "Field",
-    "Kind",
-    "Range",
     "field",
     "section_fields",
     "timing_parameter_field",
