@@ -49,6 +49,7 @@ from plan_peers import (
     random_picks,
 )
 
+from ucbplan.observing.barycentric_time import SiteTrack
 from ucbplan.observing.blocks import ExposurePlan
 from ucbplan.observing.constraints import ConstraintSet
 from ucbplan.observing.schedule import (
@@ -58,10 +59,9 @@ from ucbplan.observing.schedule import (
     parse_mode,
     plan_nights,
 )
+from ucbplan.observing.site_time_axis import TimeAxis
 from ucbplan.observing.sites import get_site
 from ucbplan.observing.sky import SkyModel
-from ucbplan.observing.timeaxis import TimeAxis
-from ucbplan.observing.timeconv import SiteTrack
 from ucbplan.offline import offline
 from ucbplan.target import Target, load_target
 from ucbplan.target.write import write_target

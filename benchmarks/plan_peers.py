@@ -36,7 +36,7 @@ from astropy.time import Time
 from numpy.typing import NDArray
 
 from ucbplan.observing.constraints import ConstraintSet
-from ucbplan.observing.timeconv import quiet_erfa
+from ucbplan.offline import offline
 
 BoolArray = NDArray[np.bool_]
 FloatArray = NDArray[np.float64]
@@ -65,14 +65,14 @@ class Sample:
 
     def pairs(self) -> Time:
         """(n, 2) start/end times, the ``times_ingress_egress`` of astroplan."""
-        with quiet_erfa():
+        with offline():
             jd1 = np.stack([self.start.jd1, self.end.jd1], axis=1)
             jd2 = np.stack([self.start.jd2, self.end.jd2], axis=1)
             return Time(jd1, jd2, format="jd", scale="utc")
 
     def ends(self) -> Time:
         """All start times, then all end times (one flat array)."""
-        with quiet_erfa():
+        with offline():
             jd1 = np.concatenate([self.start.jd1, self.end.jd1])
             jd2 = np.concatenate([self.start.jd2, self.end.jd2])
             return Time(jd1, jd2, format="jd", scale="utc")
@@ -130,7 +130,7 @@ def naive_quantities(
 ) -> dict[str, FloatArray]:
     """Sun and target altitude, Moon altitude and Moon–target separation [deg] at ``times``:
     one ``AltAz`` frame (pressure 0: geometric), three transforms."""
-    with quiet_erfa():
+    with offline():
         frame = AltAz(obstime=times, location=location)
         target = coord.transform_to(frame)
         sun = get_sun(times).transform_to(frame)
@@ -208,7 +208,7 @@ def peer_rates(
         naive_blocks(location, s, cs)
         t1 = clock()
         if is_event_observable is not None:
-            with quiet_erfa():
+            with offline():
                 is_event_observable(cons, observer, s.coord, times_ingress_egress=pairs)
         t2 = clock()
         naive_s, astroplan_s, n = naive_s + t1 - t0, astroplan_s + t2 - t1, n + s.size
@@ -227,7 +227,7 @@ def astroplan_blocks(observer: Any, s: Sample, cs: ConstraintSet) -> tuple[BoolA
 
     night, air, sep = astroplan_constraints(cs)
     pairs = s.pairs()
-    with quiet_erfa():
+    with offline():
         plain = np.asarray(
             is_event_observable([night, air, sep], observer, s.coord, times_ingress_egress=pairs)
         ).ravel()
@@ -247,7 +247,7 @@ def astroplan_blocks(observer: Any, s: Sample, cs: ConstraintSet) -> tuple[BoolA
 
 def three_point_quantities(location: EarthLocation, s: Sample) -> dict[str, FloatArray]:
     """:func:`naive_quantities` at each block's start, middle and end, shape (3, n)."""
-    with quiet_erfa():
+    with offline():
         times = Time(
             np.concatenate([s.start.jd1, s.mid.jd1, s.end.jd1]),
             np.concatenate([s.start.jd2, s.mid.jd2, s.end.jd2]),

@@ -425,3 +425,13 @@ def test_plan_options_take_any_value_before_any_work(key: str, value: Any) -> No
         text = str(exc)
         assert "\n" not in text and len(text) < 400, text
         assert text.startswith(key) or "no-such-target.yaml" in text, text
+
+
+def test_plan_time_account_is_what_the_table_records(three_nights: dict[str, Any]) -> None:
+    plan = ucbplan.plan(**three_nights)
+    account = plan.time_account
+    assert account.as_meta() == plan.accounting == dict(plan.table.meta["time_accounting"])
+    # the total is the sum of the targets' accounts; one target here, so they are equal
+    assert list(account.targets) == [plan.table["target"][0]]
+    assert account.total == account.targets[plan.table["target"][0]]
+    assert account.total.exposures == int(sum(plan.table["n_exp"]))

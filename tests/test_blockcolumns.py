@@ -24,12 +24,17 @@ from astropy.time import Time
 from test_observing_table import _block, _meta  # tests/ is on sys.path (no __init__.py)
 
 from ucbplan.io import dump_json
-from ucbplan.observing import blocktable, tablewrite
+from ucbplan.observing import ecsvheader, tablewrite
 from ucbplan.observing.blockcolumns import BlockColumns, BlockList, block_columns, isot
 from ucbplan.observing.blocks import Block
-from ucbplan.observing.blocktable import blocks_to_table, table_to_json_rows, write_table
-from ucbplan.observing.tablewrite import ecsv_data_lines, json_rows_text
-from ucbplan.observing.timeconv import quiet_erfa
+from ucbplan.observing.tablemake import blocks_to_table
+from ucbplan.observing.tablewrite import (
+    ecsv_data_lines,
+    json_rows_text,
+    table_to_json_rows,
+    write_table,
+)
+from ucbplan.offline import offline
 
 pytestmark = pytest.mark.filterwarnings("ignore::erfa.ErfaWarning")
 
@@ -72,7 +77,7 @@ def _ours(table: Table, fmt: str, json_meta: bool = False) -> str:
 def _reference_json(table: Table, json_meta: bool) -> str:
     """The row-by-row way: the rows as dicts, dumped by ``json`` with indent 2."""
     rows = table_to_json_rows(table)
-    meta = blocktable._plain_meta(dict(table.meta))
+    meta = tablewrite._plain_meta(dict(table.meta))
     buf = io.StringIO()
     dump_json({"meta": meta, "rows": rows} if json_meta else rows, buf)
     return buf.getvalue()
@@ -138,7 +143,7 @@ def _odd_times() -> Time:
         "1900-01-01T00:00:00",
         "2100-12-31T23:59:59.123456789",
     ]
-    with quiet_erfa():
+    with offline():
         base = Time(iso, scale="utc")
         odd = Time(np.array([2466000.0, 2466001.0]), np.array([0.75, -0.7]), format="jd")
         return Time([*base, *odd])
@@ -147,7 +152,7 @@ def _odd_times() -> Time:
 @pytest.mark.parametrize("precision", [0, 3, 6, 9])
 @pytest.mark.parametrize("scale", ["utc", "tdb"])
 def test_isot_as_astropy_formats_it(precision: int, scale: str) -> None:
-    with quiet_erfa():
+    with offline():
         times = getattr(_odd_times(), scale)
         ref = list(Time(times.jd1, times.jd2, format="jd", scale=scale, precision=precision).isot)
         assert isot(times, precision) == ref
@@ -174,7 +179,7 @@ def test_columns_round_trip_to_the_same_records_and_table() -> None:
     blocks = [_block(i, alt=i % 3 != 0) for i in range(7)]
     for k in range(0, 7, 2):  # a block with every number known compares equal as a whole
         blocks[k] = replace(blocks[k], smear_kms=1.25, delta_kappa=0.1, sigma_v_kms=3.0)
-    with quiet_erfa():
+    with offline():
         cols = BlockColumns.from_blocks(blocks)
         listed = BlockList(cols)
         assert [_cells(b) for b in listed] == [_cells(b) for b in blocks] and len(listed) == 7
@@ -193,7 +198,7 @@ def test_columns_round_trip_to_the_same_records_and_table() -> None:
 
 def test_time_order_is_the_stable_sort_of_the_records() -> None:
     blocks = [_block(i) for i in (3, 1, 2, 1, 0)]
-    with quiet_erfa():
+    with offline():
         cols = BlockColumns.from_blocks(blocks)
         got = BlockList(cols.take(cols.time_order()))
         ref = sorted(blocks, key=lambda b: (b.t_mid_utc.jd1, b.t_mid_utc.jd2))
@@ -266,13 +271,13 @@ def test_a_text_and_its_shape_are_written_alike(seed: int) -> None:
     texts = ["".join(rng.choice(chars) for _ in range(rng.randint(1, 12))) for _ in range(400)]
     texts += ["2040-01-02T00:55:37", "08", "012", "1_0", "0b10", "1:30", "0x1f", "1e5"]
     for column in (texts, [*texts, 5, 1.5, -0.0]):
-        ours = tablewrite._column_texts(column, blocktable._yaml_tag)
-        one_by_one = [tablewrite._yaml_scalar(t, blocktable._yaml_tag) for t in column]
+        ours = ecsvheader._column_texts(column, ecsvheader._yaml_tag)
+        one_by_one = [ecsvheader._yaml_scalar(t, ecsvheader._yaml_tag) for t in column]
         if None in one_by_one:
             assert ours is None
             column = [t for t, got in zip(column, one_by_one, strict=True) if got is not None]
-            ours = tablewrite._column_texts(column, blocktable._yaml_tag)
-            one_by_one = [tablewrite._yaml_scalar(t, blocktable._yaml_tag) for t in column]
+            ours = ecsvheader._column_texts(column, ecsvheader._yaml_tag)
+            one_by_one = [ecsvheader._yaml_scalar(t, ecsvheader._yaml_tag) for t in column]
         assert ours == [got[0] for got in one_by_one if got is not None]
 
 

@@ -34,7 +34,7 @@ from ucbplan.observing.constraints import (
 )
 from ucbplan.observing.sites import get_site
 from ucbplan.observing.sky import SkyModel
-from ucbplan.observing.timeconv import quiet_erfa
+from ucbplan.offline import offline
 
 pytestmark = [
     pytest.mark.filterwarnings("ignore::erfa.ErfaWarning"),
@@ -51,7 +51,7 @@ YEAR_S = 365.25 * 86400
 @pytest.fixture(scope="module")
 def sky() -> SkyModel:
     site = get_site("paranal")
-    with quiet_erfa():
+    with offline():
         return SkyModel.build(site.location, Time("2041-03-01", scale="tdb"), (0, YEAR_S), COORDS)
 
 

@@ -33,7 +33,6 @@ from typer.testing import CliRunner
 from ucbplan.cli import now as now_cli
 from ucbplan.cli.app import app, main
 from ucbplan.errors import InputError
-from ucbplan.observing.blocktable import read_blocks
 from ucbplan.observing.countdown import (
     countdown_lines,
     parse_utc,
@@ -41,6 +40,7 @@ from ucbplan.observing.countdown import (
     wait_text,
     what_next,
 )
+from ucbplan.observing.tableread import read_blocks
 
 pytestmark = [
     pytest.mark.filterwarnings("ignore::erfa.ErfaWarning"),

@@ -27,7 +27,7 @@ from test_exports_fixture import (
 from ucbplan.errors import UcbplanError
 from ucbplan.observing.exports import ExportOptions, export_blocks
 from ucbplan.observing.exports.eso_p2 import ESO_NAME_MAX, _ob_names
-from ucbplan.observing.timeconv import quiet_erfa
+from ucbplan.offline import offline
 
 NAME = "exports_eso_p2.json"
 P2_MINUTE = re.compile(r"\d{4}-\d\d-\d\dT\d\d:\d\d")  # p2 absolute times: UTC, whole minutes
@@ -135,7 +135,7 @@ def _pair_table(table: Table, gap_s: float) -> Table:
     pair.add_row(rows[0])
     pair["block_id"][1] = "HM_Cnc-001b"
     for col in ("t_mid_utc", "t_start_utc", "t_end_utc", "t_alt_utc"):
-        with quiet_erfa():
+        with offline():
             shifted = Time(pair[col][0], scale="utc", precision=3) + gap_s * u.s
             pair[col] = [pair[col][0], shifted.isot]
     return pair

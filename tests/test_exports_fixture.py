@@ -19,15 +19,11 @@ from astropy.table import Table
 from astropy.time import Time
 
 from ucbplan.observing.blocks import Block
-from ucbplan.observing.blocktable import (
-    EXTRA_COLUMNS,
-    REQUIRED_COLUMNS,
-    blocks_to_table,
-    make_meta,
-    read_blocks,
-)
+from ucbplan.observing.blocktable import EXTRA_COLUMNS, REQUIRED_COLUMNS
 from ucbplan.observing.exports import ExportOptions, export_blocks
-from ucbplan.observing.timeconv import quiet_erfa
+from ucbplan.observing.tablemake import blocks_to_table, make_meta
+from ucbplan.observing.tableread import read_blocks
+from ucbplan.offline import offline
 
 GOLDEN = Path(__file__).parent / "golden"
 REGEN = os.environ.get("UCBPLAN_REGEN_GOLDEN") == "1"
@@ -148,7 +144,7 @@ def _blocks() -> list[Block]:
 
 def fixture_table() -> Table:
     """Fixed two-target blocks table (the source of every golden file)."""
-    with quiet_erfa():
+    with offline():
         meta = make_meta(
             site={"name": "Paranal", "lon_deg": -70.4045, "lat_deg": -24.6272, "height_m": 2635},
             targets=[

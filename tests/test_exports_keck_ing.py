@@ -15,7 +15,7 @@ from test_exports_fixture import SDSS, SDSS_VMAG_META, golden, golden_export, ms
 
 from ucbplan.errors import InputFileError
 from ucbplan.observing.exports import ExportOptions, export_blocks
-from ucbplan.observing.exports.text import sexagesimal
+from ucbplan.observing.tableformat import sexagesimal
 
 KECK = "exports_keck_starlist.txt"
 ING = "exports_ing.cat"

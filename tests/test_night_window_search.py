@@ -23,7 +23,7 @@ from ucbplan.observing.constraints import ALT_RATE_DEG_S, NightConstraint
 from ucbplan.observing.schedule import PlanSettings, candidates, plan_nights
 from ucbplan.observing.sites import get_site, site_from_lonlat
 from ucbplan.observing.sky import SkyModel
-from ucbplan.observing.timeconv import quiet_erfa
+from ucbplan.offline import offline
 from ucbplan.target import load_target
 
 pytestmark = [
@@ -85,7 +85,7 @@ def test_night_intervals_hold_every_dark_instant(site: object, first: str, twili
     loc = site.location  # type: ignore[attr-defined]
     night = NightConstraint(twilight)
     span = (0.0, 20 * 86400.0)
-    with quiet_erfa():
+    with offline():
         sky = SkyModel.build(loc, Time(first, scale="tdb"), span, SkyCoord(0, 0, unit="deg"))
     w = candidates.night_search_x(night, sky, span)
     x = np.arange(0.0, span[1], 10.0)
@@ -104,7 +104,7 @@ def _plan(site_name: str, first: date, nights: int, settings: PlanSettings) -> o
     targets = [load_target(HM), load_target(ECC)]
     site = site_from_lonlat(site_name, "UTC") if "," in site_name else get_site(site_name)
     days = [first + timedelta(days=k) for k in range(nights)]
-    with quiet_erfa():
+    with offline():
         return plan_nights(targets, site, days, settings)
 
 

@@ -25,7 +25,6 @@ from typer.testing import CliRunner
 from ucbplan.cli.app import app
 from ucbplan.errors import InputError, OutputExistsError
 from ucbplan.observing import nightplot, nightsheet
-from ucbplan.observing.blocktable import read_blocks
 from ucbplan.observing.constraints import AirmassConstraint, ConstraintSet
 from ucbplan.observing.countdown import visit_exposures
 from ucbplan.observing.nightplot import (
@@ -36,6 +35,7 @@ from ucbplan.observing.nightplot import (
 )
 from ucbplan.observing.nightsheet import write_night_sheet
 from ucbplan.observing.sites import Site, get_site
+from ucbplan.observing.tableread import read_blocks
 from ucbplan.plotting import pyplot
 from ucbplan.plotting.layout import layout_problems
 

@@ -24,9 +24,9 @@ from astropy.time import Time
 from test_countdown import expected, instants, table_starts
 from test_nightsheet import _Reader
 
-from ucbplan.observing.blocktable import read_blocks
 from ucbplan.observing.nightsheet import write_night_sheet
 from ucbplan.observing.sites import get_site
+from ucbplan.observing.tableread import read_blocks
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 

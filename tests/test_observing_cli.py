@@ -13,7 +13,9 @@ from typer.testing import CliRunner
 
 from ucbplan.cli.app import app
 from ucbplan.errors import OutputExistsError
-from ucbplan.observing.blocktable import REQUIRED_COLUMNS, file_sha256, read_blocks
+from ucbplan.observing.blocktable import REQUIRED_COLUMNS
+from ucbplan.observing.tablemake import file_sha256
+from ucbplan.observing.tableread import read_blocks
 
 pytestmark = [
     pytest.mark.filterwarnings("ignore::erfa.ErfaWarning"),

@@ -21,7 +21,7 @@ from ucbplan.observing.constraints import (
 )
 from ucbplan.observing.sites import get_site
 from ucbplan.observing.sky import SkyModel, airmass_from_alt
-from ucbplan.observing.timeconv import quiet_erfa
+from ucbplan.offline import offline
 
 pytestmark = [
     pytest.mark.filterwarnings("ignore::erfa.ErfaWarning"),
@@ -36,7 +36,7 @@ ORIGIN = "2040-02-01T00:00:00"
 @pytest.fixture(scope="module")
 def sky() -> SkyModel:
     site = get_site("paranal")
-    with quiet_erfa():
+    with offline():
         return SkyModel.build(site.location, Time(ORIGIN, scale="tdb"), (0, 20 * 86400), COORDS)
 
 
@@ -45,7 +45,7 @@ def reference(sky: SkyModel) -> dict:
     """astropy AltAz (pressure 0, like the model) at 120 random times over 20 days."""
     rng = np.random.default_rng(7)
     x = np.sort(rng.uniform(0, 20 * 86400, 120))
-    with quiet_erfa():
+    with offline():
         t = Time(ORIGIN, scale="tdb", location=sky.location) + TimeDelta(x * u.s)
         frame = AltAz(obstime=t, location=sky.location)
         moon = get_body("moon", t, location=sky.location)
@@ -75,7 +75,7 @@ def test_altitudes_match_astropy(sky: SkyModel, reference: dict) -> None:
 def test_moon_illumination_matches_astroplan(sky: SkyModel, reference: dict) -> None:
     from astroplan import moon_illumination
 
-    with quiet_erfa():
+    with offline():
         ref = moon_illumination(reference["t"])
     # Same geocentric phase-angle formula; 1e-3 absorbs the spline (measured 2e-5).
     assert np.abs(sky.moon_illum(reference["x"]) - ref).max() < 1e-3
@@ -175,6 +175,6 @@ def test_sun_direct_rotation_equals_astropys_frames() -> None:
     transformation's positions bit for bit."""
     from ucbplan.observing.sky import _sun_cirs_m, sun_cirs_frames
 
-    with quiet_erfa():
+    with offline():
         t = Time(ORIGIN, scale="tdb") + TimeDelta(np.linspace(0.0, 200.0, 300) * u.d)
         np.testing.assert_array_equal(_sun_cirs_m(t), sun_cirs_frames(t))

@@ -159,8 +159,8 @@ def test_plan_cli_refuses_before_any_work(tmp_path: Path, args: list[str]) -> No
 
 def test_evaluate_window_in_chunks_is_exact(monkeypatch: pytest.MonkeyPatch) -> None:
     # The night pre-check at start/middle/end and the chunking must not change any answer.
+    from ucbplan.observing.site_time_axis import TimeAxis
     from ucbplan.observing.sky import SkyModel
-    from ucbplan.observing.timeaxis import TimeAxis
 
     site, target = get_site("paranal"), load_target(HM)
     from astropy.coordinates import SkyCoord

@@ -16,10 +16,11 @@ from astropy.time import Time
 
 from ucbplan.core.ephemeris import arg_latitude, ll_pair
 from ucbplan.errors import UcbplanError
+from ucbplan.observing.barycentric_time import site_utc_to_bary_tdb
 from ucbplan.observing.blocks import ExposurePlan
 from ucbplan.observing.schedule import PlanSettings, parse_mode, plan_nights
 from ucbplan.observing.sites import Site, get_site
-from ucbplan.observing.timeconv import quiet_erfa, site_utc_to_bary_tdb
+from ucbplan.offline import offline
 from ucbplan.target import Target, load_target
 
 pytestmark = [
@@ -54,7 +55,7 @@ def result(hm: Target, fid: Target):  # type: ignore[no-untyped-def]
 def _u_back(target: Target, t_utc: Time, site: Site) -> float:
     """u at a UTC instant, converted to the barycentre with astropy's own light time."""
     bary = site_utc_to_bary_tdb(t_utc, target.coord, site.location)
-    with quiet_erfa():
+    with offline():
         whole = float(np.floor((bary - target.t_ref).to_value(u.s)))
         frac = float((bary - (target.t_ref + whole * u.s)).to_value(u.s))
     return float(arg_latitude(target.params, np.array([frac]), 1, origin_s=whole)[0])
@@ -80,7 +81,7 @@ def test_every_block_satisfies_every_constraint_per_astropy(result) -> None:  # 
     # Margin 1e-3 deg (3.6") covers the model-vs-astropy difference (< 2", see constraints tests).
     site = get_site("paranal")
     for b in result.blocks:
-        with quiet_erfa():
+        with offline():
             t = Time([b.t_start_utc, b.t_mid_utc, b.t_end_utc], location=site.location)
             frame = AltAz(obstime=t, location=site.location)
             from astropy.coordinates import SkyCoord

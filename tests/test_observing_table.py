@@ -13,21 +13,18 @@ from astropy.time import Time
 
 from ucbplan.errors import InputFileError
 from ucbplan.observing.blocks import Block
-from ucbplan.observing.blocktable import (
-    REQUIRED_COLUMNS,
-    blocks_to_table,
-    make_meta,
-    read_blocks,
-    write_table,
-)
-from ucbplan.observing.timeconv import quiet_erfa
+from ucbplan.observing.blocktable import REQUIRED_COLUMNS
+from ucbplan.observing.tablemake import blocks_to_table, make_meta
+from ucbplan.observing.tableread import read_blocks
+from ucbplan.observing.tablewrite import write_table
+from ucbplan.offline import offline
 
 # Dates past the leap-second table are intended (2040 nights); the planner warns once itself.
 pytestmark = pytest.mark.filterwarnings("ignore::erfa.ErfaWarning")
 
 
 def _block(i: int, alt: bool = True) -> Block:
-    with quiet_erfa():
+    with offline():
         return _make_block(i, alt)
 
 

@@ -18,15 +18,16 @@ from astropy import units as u
 from astropy.coordinates import SkyCoord, solar_system_ephemeris
 from astropy.time import Time, TimeDelta
 
-from ucbplan.observing import timeaxis, timeconv
+from ucbplan.observing import barycentric_time, site_time_axis
+from ucbplan.observing.barycentric_time import SiteTrack, site_icrs_frames
 from ucbplan.observing.blocks import ExposurePlan
 from ucbplan.observing.constraint_checks import DARK_STEP_S, _maybe_dark
 from ucbplan.observing.constraints import NightConstraint
 from ucbplan.observing.schedule import PlanSettings, plan_nights
+from ucbplan.observing.site_time_axis import TimeAxis
 from ucbplan.observing.sites import get_site
 from ucbplan.observing.sky import SkyModel
-from ucbplan.observing.timeaxis import TimeAxis
-from ucbplan.observing.timeconv import SiteTrack, quiet_erfa, site_icrs_frames
+from ucbplan.offline import offline
 from ucbplan.target import load_target
 
 pytestmark = [
@@ -44,7 +45,7 @@ def test_site_track_within_30_m_of_astropys_chain() -> None:
     # every node. Measured ≤ 18 m (diurnal aberration of the geocentric vector, ∝ h⁴); 30 m is
     # 0.1 µs of light time, a tenth of the promise.
     loc = get_site("paranal").location
-    with quiet_erfa(), solar_system_ephemeris.set("builtin"):
+    with offline(), solar_system_ephemeris.set("builtin"):
         origin = Time("2040-03-01", scale="tdb", location=loc)
         track = SiteTrack.build(origin, (0.0, 120 * 86400.0), loc)
         exact = site_icrs_frames(loc, origin + TimeDelta(track.x_s * u.s))
@@ -58,7 +59,7 @@ def test_site_track_within_30_m_of_astropys_chain() -> None:
 
 def test_axis_utc_within_1_ns_of_astropy() -> None:
     loc = get_site("la silla").location
-    with quiet_erfa():
+    with offline():
         axis = TimeAxis.starting_at(Time("2040-01-01T15:00", scale="utc"), loc)
         x = np.sort(np.random.default_rng(5).uniform(-3600.0, 183 * 86400.0, 5000))
         for shape in ((5000,), (1250, 4)):
@@ -75,7 +76,7 @@ def test_daylight_shortcut_never_skips_a_block_that_touches_the_night() -> None:
     # and it does skip the day (the point of it).
     loc = get_site("paranal").location
     night = NightConstraint("civil")
-    with quiet_erfa():
+    with offline():
         sky = SkyModel.build(
             loc, Time("2040-06-01", scale="tdb"), (0.0, 20 * 86400.0), SkyCoord(0, 0, unit="deg")
         )
@@ -104,7 +105,7 @@ def _plan(nights: int, settings: PlanSettings) -> list:  # type: ignore[type-arg
     hm = load_target("catalogs/hm-cnc-simulated.yaml")
     far = load_target("catalogs/fiducial-eccentric.yaml")
     days = [date(2040, 2, 15) + timedelta(days=k) for k in range(nights)]
-    with quiet_erfa():
+    with offline():
         res = plan_nights([hm, far], get_site("paranal"), days, settings)
     return list(res.blocks)
 
@@ -117,11 +118,11 @@ def test_plan_matches_the_exact_conversions(monkeypatch: pytest.MonkeyPatch) -> 
     )
     fast = _plan(6, settings)
     monkeypatch.setattr(
-        timeconv, "_site_icrs_interpolated", lambda loc, origin, x, step_s=1.0: (
-            timeconv._site_icrs_m(loc, origin + TimeDelta(x * u.s))
+        barycentric_time, "_site_icrs_interpolated", lambda loc, origin, x, step_s=1.0: (
+            barycentric_time._site_icrs_m(loc, origin + TimeDelta(x * u.s))
         )
     )  # fmt: skip
-    monkeypatch.setattr(timeaxis, "TDB_TT_MIN", 10**12)
+    monkeypatch.setattr(site_time_axis, "TDB_TT_MIN", 10**12)
     exact = _plan(6, settings)
     assert len(fast) > 200
     assert [b.block_id for b in fast] == [b.block_id for b in exact]

@@ -25,11 +25,12 @@ from typer.testing import CliRunner
 
 from ucbplan.cli.app import app
 from ucbplan.core.ephemeris import arg_latitude
-from ucbplan.observing.blocktable import read_blocks
+from ucbplan.observing.barycentric_time import site_utc_to_bary_tdb
 from ucbplan.observing.goals import time_budget
 from ucbplan.observing.schedule import plan_files, plan_settings
 from ucbplan.observing.sites import get_site
-from ucbplan.observing.timeconv import quiet_erfa, site_utc_to_bary_tdb
+from ucbplan.observing.tableread import read_blocks
+from ucbplan.offline import offline
 from ucbplan.target import Target, load_target
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -61,7 +62,7 @@ def _u_back(target: Target, t_utc: Time) -> float:
     """u at a UTC instant at Paranal, through astropy's own light time."""
     site = get_site("paranal")
     bary = site_utc_to_bary_tdb(t_utc, target.coord, site.location)
-    with quiet_erfa():
+    with offline():
         whole = float(np.floor((bary - target.t_ref).to_value(u.s)))
         frac = float((bary - (target.t_ref + whole * u.s)).to_value(u.s))
     return float(arg_latitude(target.params, np.array([frac]), 1, origin_s=whole)[0])
@@ -84,7 +85,7 @@ def test_done_when_exposures_centred_on_anchors(done_when: Table) -> None:
     assert len(done_when) >= 15
     for row in done_when:
         # the written barycentric epoch (us precision: 2e-8 rad) is the anchor ...
-        with quiet_erfa():
+        with offline():
             tdb = Time(str(row["t_mid_tdb_bary"]), scale="tdb")
             whole = float(np.floor((tdb - hm.t_ref).to_value(u.s)))
             frac = float((tdb - (hm.t_ref + whole * u.s)).to_value(u.s))
@@ -120,7 +121,7 @@ def test_done_when_one_acquisition_per_visit_no_overlap(done_when: Table) -> Non
 def test_done_when_inside_night_and_airmass(done_when: Table) -> None:
     site = get_site("paranal")
     coord = SkyCoord(done_when["ra_deg"][0] * u.deg, done_when["dec_deg"][0] * u.deg)
-    with quiet_erfa():
+    with offline():
         for row in done_when:
             t = Time([row["t_start_utc"], row["t_mid_utc"], row["t_end_utc"]], scale="utc")
             frame = AltAz(obstime=t, location=site.location)

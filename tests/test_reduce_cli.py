@@ -110,8 +110,8 @@ def test_site_utc_times_are_converted(tmp_path: Path) -> None:
     import numpy as np
     from astropy.time import Time
 
+    from ucbplan.observing.barycentric_time import bary_tdb_to_site_utc
     from ucbplan.observing.sites import get_site
-    from ucbplan.observing.timeconv import bary_tdb_to_site_utc
     from ucbplan.target import load_target
 
     t = load_target(TARGET)

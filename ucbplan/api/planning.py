@@ -15,9 +15,9 @@ from ucbplan.errors import InputError, PlanWarning, emit, shorten
 if TYPE_CHECKING:
     from astropy.table import Table
 
+    from ucbplan.observing.accounting import PlanAccount, VisitSummary
     from ucbplan.observing.constraints import Constraint
     from ucbplan.observing.schedule import PlanRun
-    from ucbplan.observing.schedule.accounting import VisitSummary
 
 __all__ = ["Plan", "default_constraints", "plan"]
 
@@ -92,8 +92,16 @@ class Plan:
             return self.run.visits()
 
     @property
+    def time_account(self) -> PlanAccount:
+        """Time accounting, typed: the total and per target (visits, exposures, shutter,
+        overheads, idle [s]; efficiency)."""
+        with scope():
+            return self.run.time_account
+
+    @property
     def accounting(self) -> dict[str, Any]:
-        """Time accounting: ``{"total": {...}, "targets": {NAME: {...}}}`` [h]."""
+        """Time accounting as the table meta holds it: ``{"total": {...}, "targets": {NAME:
+        {...}}}`` [s] (:attr:`time_account` as a dict)."""
         with scope():
             return self.run.accounting()
 
@@ -116,7 +124,7 @@ class Plan:
             ``path`` exists and ``overwrite`` is false.
         """
         from ucbplan.io import output_format, write_output
-        from ucbplan.observing.blocktable import write_table
+        from ucbplan.observing.tablewrite import write_table
 
         out = Path(path)
         kind = output_format(out, fmt, ("ecsv", "csv", "json"), "ecsv")

@@ -4,19 +4,22 @@ summary of long plans, visits, time accounting and the reasons anchors were not 
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from rich.markup import escape
 
 from ucbplan.cli._console import err_console, rich_table
 from ucbplan.errors import UcbplanError
 
+if TYPE_CHECKING:
+    from ucbplan.observing.accounting import PlanAccount, VisitSummary
+
 __all__ = ["SUMMARY_NIGHTS", "SUMMARY_ROWS", "report"]
 
 
 def _local(blocks: list[Any]) -> list[str]:
     """Local civil time of each block centre, ``HH:MM:SS TZ`` (one conversion for the night)."""
-    from ucbplan.observing.blocktable import local_datetimes
+    from ucbplan.observing.tableformat import local_datetimes
 
     times = local_datetimes([b.t_mid_utc for b in blocks], [b.timezone for b in blocks])
     return [dt.strftime("%H:%M:%S %Z") for dt in times]
@@ -191,39 +194,26 @@ def _hours(seconds: float) -> str:
 
 
 def _print_accounting(run: Any, verbose: bool = False) -> None:
-    """Visits (with --visit) and the time accounting, per target and in total."""
+    """Visits (with --visit) and the time accounting, per target and in total; then the
+    strategies, the anchors not planned and the goals."""
     visits = run.visits()
     if run.settings.visit_s is not None and (verbose or len(visits) <= SUMMARY_ROWS):
-        table_v = rich_table(
-            "Visits — one acquisition, then exposures centred on anchors (UTC at the site)",
-            ["visit", "target", "acq. start UTC", "last end UTC", "exp.", "idle [s]"],
-        )
-        for v in visits:
-            table_v.add_row(
-                escape("-".join(v.visit_id.rsplit("-", 2)[-2:])),
-                escape(v.target),
-                v.acq_start_utc[:19].replace("T", " "),  # its UTC date: the night label is local
-                v.end_utc[11:19],
-                str(v.exposures),
-                f"{v.idle_s:.0f}",
-            )
-        for i, column in enumerate(table_v.columns):
-            column.no_wrap = i != 1  # a long target name wraps; times are never cut
-        err_console.print(table_v)
-    acc = run.accounting()
+        _print_visits(visits)
+    account: PlanAccount = run.time_account
     table = rich_table(
         "Time accounting — efficiency = shutter / (shutter + overheads + idle)",
         ["target", "visits", "exposures", "shutter", "overheads", "idle", "efficiency"],
     )
     rows = [
-        *acc["targets"].items(),
-        *([("total", acc["total"])] if len(acc["targets"]) > 1 else []),
+        *account.targets.items(),
+        *([("total", account.total)] if len(account.targets) > 1 else []),
     ]
-    for name, e in rows:
+    for name, a in rows:
+        e = a.as_meta()  # the figures as the table meta records them (1 ms; efficiency 1e-6)
         table.add_row(
             escape(name),
-            str(e["visits"]),
-            str(e["exposures"]),
+            str(a.visits),
+            str(a.exposures),
             _hours(e["shutter_s"]),
             _hours(e["overhead_s"]),
             _hours(e["idle_s"]),
@@ -232,24 +222,53 @@ def _print_accounting(run: Any, verbose: bool = False) -> None:
     err_console.print(table)
     _print_strategies(run)
     _print_reasons(run)
+    _print_goals(run, account)
+
+
+def _print_visits(visits: list[VisitSummary]) -> None:
+    """One row per visit: its acquisition start and last end (UTC at the site), exposures, idle."""
+    table_v = rich_table(
+        "Visits — one acquisition, then exposures centred on anchors (UTC at the site)",
+        ["visit", "target", "acq. start UTC", "last end UTC", "exp.", "idle [s]"],
+    )
+    for v in visits:
+        table_v.add_row(
+            escape("-".join(v.visit_id.rsplit("-", 2)[-2:])),
+            escape(v.target),
+            v.acq_start_utc[:19].replace("T", " "),  # its UTC date: the night label is local
+            v.end_utc[11:19],
+            str(v.exposures),
+            f"{v.idle_s:.0f}",
+        )
+    for i, column in enumerate(table_v.columns):
+        column.no_wrap = i != 1  # a long target name wraps; times are never cut
+    err_console.print(table_v)
+
+
+def _print_goals(run: Any, account: PlanAccount) -> None:
+    """Per goal: the spectra planned, at which phases, the visits and hours they take, and the
+    σ the goal plan expects."""
     from ucbplan.observing.blockcolumns import block_columns
 
-    cols = block_columns(run.result.blocks) if run.result.goals else None
+    if not run.result.goals:
+        return
+    targets, u_stars, n_exps = block_columns(run.result.blocks).lists(
+        "target", "u_star_rad", "n_exp"
+    )
     for name, goal in run.result.goals.items():
         at: dict[float, int] = {}
-        assert cols is not None
-        targets, u_stars, n_exps = cols.lists("target", "u_star_rad", "n_exp")
         for target, u_star, n_exp in zip(targets, u_stars, n_exps, strict=True):
             if target == name:
                 at[round(u_star, 4)] = at.get(round(u_star, 4), 0) + n_exp
         split = ", ".join(f"{k} at u★ = {u:.4f}" for u, k in sorted(at.items()))
         if len(at) > 4:
             split = "untargeted phases"
-        spent = acc["targets"].get(name, {})
-        wall = sum(spent.get(k, 0.0) for k in ("shutter_s", "overhead_s", "idle_s"))
+        spent = account.targets.get(name)
+        recorded = spent.as_meta() if spent is not None else {}  # as the table meta records it
+        wall = sum(recorded.get(k, 0.0) for k in ("shutter_s", "overhead_s", "idle_s"))
         err_console.print(
             f"goal {escape(goal.goal.describe())}: {escape(name)}: {sum(at.values())} spectra "
-            f"in {spent.get('visits', 0)} visit(s), {_hours(wall)} "
+            f"in {recorded.get('visits', 0)} visit(s), {_hours(wall)} "
             f"({split}), expected {escape(_expected(goal))}",
             soft_wrap=True,
         )

@@ -204,8 +204,8 @@ def export_command(
     All times are UTC at the site with their 1σ uncertainty; notes go to stderr. With --create
     (ESO p2), the OBs are listed (dry run) or created in p2 and the file is written only with -o.
     """
-    from ucbplan.observing.blocktable import read_blocks
     from ucbplan.observing.exports import PROPOSAL_FORMATS, ExportOptions, export_blocks
+    from ucbplan.observing.tableread import read_blocks
 
     fmt = _proposal_format(to, output, fmt, semester)
     eso_only = {"--create": create, "--instrument": instrument is not None}

@@ -85,13 +85,13 @@ def now(
     to do if the previous start was missed. After the last exposure it says the plan is over.
     """
     # imported here: `ucbplan --help` must not load astropy (tests/test_cli_help_units.py)
-    from ucbplan.observing.blocktable import read_blocks
     from ucbplan.observing.countdown import (
         countdown_lines,
         parse_utc,
         plan_exposures,
         what_next,
     )
+    from ucbplan.observing.tableread import read_blocks
 
     origin = parse_utc(at, "--at") if at is not None else None
     exposures = plan_exposures(read_blocks(plan))

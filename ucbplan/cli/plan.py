@@ -8,7 +8,7 @@ the night chart.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import IO, Annotated, Any
+from typing import IO, TYPE_CHECKING, Annotated, Any
 
 import typer
 from rich.markup import escape
@@ -21,6 +21,9 @@ from ucbplan.cli._console import (
 )
 from ucbplan.cli._options import ExtinctionOpt, MaxVisitOpt, SigmaFloorOpt, SigmaLawOpt
 from ucbplan.cli._plan_view import report
+
+if TYPE_CHECKING:
+    from ucbplan.observing.schedule import PlanSettings
 
 __all__ = ["register"]
 
@@ -189,7 +192,7 @@ def _write(
     if fmt in _MACHINE or plot is not None or sheet is not None:
         table = run.table()
     if fmt in _MACHINE:
-        from ucbplan.observing.blocktable import write_table
+        from ucbplan.observing.tablewrite import write_table
 
         def _write_table(handle: IO[str]) -> None:
             write_table(table, handle, fmt, json_meta=True)
@@ -210,7 +213,8 @@ def _write(
         err_console.print(f"wrote the night sheet of {n} night(s) to {escape(str(sheet))}")
 
 
-# ``plan`` is long only by its 27 options and their one-to-one mapping into PlanSettings.
+# ``plan`` is long only by its parameters, one line each (their help in the aliases above);
+# the work is in :func:`_plan_command`.
 def plan(
     ctx: typer.Context,
     targets: _Targets,
@@ -257,63 +261,87 @@ def plan(
     overwrite: _Overwrite = False,
 ) -> None:
     """Plan phase-targeted observing blocks (UTC at the site) for one or more nights."""
+    _plan_command(ctx, dict(locals()))
+
+
+def _plan_command(ctx: typer.Context, o: dict[str, Any]) -> None:
+    """``plan`` with its parameters ``o`` by name: check the outputs, plan (one library call),
+    print the nights and write the files."""
+    from ucbplan.observing.schedule import plan_files
+
+    fmt = _check_outputs(o["output"], o["fmt"], (o["plot"], o["sheet"]), o["overwrite"])
+    run = plan_files(
+        o["targets"],
+        first_night=o["night"],
+        n_nights=o["nights"],
+        site=o["site"],
+        site_lonlat=o["site_lonlat"],
+        sites_file=o["sites_file"],
+        settings=_settings(ctx, o),
+        priorities=o["priority"],
+        timezone=o["tz"],
+    )
+    report(run, o["wide"], o["verbose"])
+    _write(run, fmt, o["output"], (o["plot"], o["sheet"]), o["overwrite"])
+
+
+def _check_outputs(
+    output: Path | None,
+    fmt: str | None,
+    figures: tuple[Path | None, Path | None],
+    overwrite: bool,
+) -> str:
+    """The output format; every output path writable and every figure suffix known, before
+    the planning rather than after it."""
     from ucbplan.observing.nightplot import chart_format
     from ucbplan.observing.nightsheet import sheet_format
-    from ucbplan.observing.schedule import plan_files, plan_settings
-    from ucbplan.observing.timeconv import quiet_erfa
 
-    fmt = pick_format(output, fmt, ("table", *_MACHINE))
+    picked = pick_format(output, fmt, ("table", *_MACHINE))
+    plot, sheet = figures
     for path in (output, plot, sheet):
         if path is not None:
             check_output_path(path, overwrite)
     if plot is not None:
-        chart_format(plot)  # a wrong suffix fails before the planning, not after
+        chart_format(plot)
     if sheet is not None:
         sheet_format(sheet)
-    with quiet_erfa():
-        settings = plan_settings(
-            instrument=instrument,
-            instruments_file=instruments_file,
-            # a default exposure is capped at the smearing floor, a given one refused below it
-            exptime_s=exptime if _given(ctx, "exptime") else None,
-            n_exp=n_exp,
-            readout_s=readout,
-            overhead_s=overhead,
-            visit=visit,
-            max_visit=max_visit,
-            sigma_v_kms=sigma_v,
-            sigma_floor_kms=sigma_floor,
-            extinction_k=extinction,
-            cadence=cadence,
-            goal=goal,
-            min_lambda_k=min_lambda_k,
-            allow_smeared=allow_smeared,
-            budgets=budget,
-            mode=mode,
-            twilight=twilight,
-            airmass_max=airmass_max,
-            moon_sep_deg=moon_sep,
-            moon_illum_max=moon_illum,
-            zenith_hole_deg=zenith_hole,
-            alpha=alpha,
-            k_eff_kms=k_eff,
-            max_smear=max_smear,
-            max_bin_fraction=max_bin_fraction,
-            sessions_per_night=sessions,
-        )
-        run = plan_files(
-            targets,
-            first_night=night,
-            n_nights=nights,
-            site=site,
-            site_lonlat=site_lonlat,
-            sites_file=sites_file,
-            settings=settings,
-            priorities=priority,
-            timezone=tz,
-        )
-        report(run, wide, verbose)
-        _write(run, fmt, output, (plot, sheet), overwrite)
+    return picked
+
+
+def _settings(ctx: typer.Context, o: dict[str, Any]) -> PlanSettings:
+    """:class:`PlanSettings` from the ``plan`` parameters ``o`` (flags → library names)."""
+    from ucbplan.observing.schedule import plan_settings
+
+    return plan_settings(
+        instrument=o["instrument"],
+        instruments_file=o["instruments_file"],
+        # a default exposure is capped at the smearing floor, a given one refused below it
+        exptime_s=o["exptime"] if _given(ctx, "exptime") else None,
+        n_exp=o["n_exp"],
+        readout_s=o["readout"],
+        overhead_s=o["overhead"],
+        visit=o["visit"],
+        max_visit=o["max_visit"],
+        sigma_v_kms=o["sigma_v"],
+        sigma_floor_kms=o["sigma_floor"],
+        extinction_k=o["extinction"],
+        cadence=o["cadence"],
+        goal=o["goal"],
+        min_lambda_k=o["min_lambda_k"],
+        allow_smeared=o["allow_smeared"],
+        budgets=o["budget"],
+        mode=o["mode"],
+        twilight=o["twilight"],
+        airmass_max=o["airmass_max"],
+        moon_sep_deg=o["moon_sep"],
+        moon_illum_max=o["moon_illum"],
+        zenith_hole_deg=o["zenith_hole"],
+        alpha=o["alpha"],
+        k_eff_kms=o["k_eff"],
+        max_smear=o["max_smear"],
+        max_bin_fraction=o["max_bin_fraction"],
+        sessions_per_night=o["sessions"],
+    )
 
 
 def register(app: typer.Typer) -> None:

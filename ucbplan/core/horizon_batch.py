@@ -154,29 +154,47 @@ def horizon_columns(
     back = np.nonzero(both)[0]
     out: dict[str, FloatArray] = {}
     for anchor in anchors:
-        label, us = anchor_u_values(anchor)
-        kind = anchor_kind(label, us)
-        tol = _tolerances(kind, pair, n_epochs, us[0])
-        out[f"delta_u_tol_rad:{label}"] = tol
-        out[f"sigma_u_end_rad:{label}"] = _max_sigma(p, c, t_obs / 2.0, us, star)
-        thrs = [alpha * tol for alpha in alphas]
-        after = _t_valid_alphas(p, c, t_obs, thrs, us, star)
-        if back.size:  # BEFORE: the time-reversed rows' horizons after (as t_valid_batch)
-            pb, cb, ob = p[back], c[back], t_obs[back]
-            pr, cr = time_reversed(pb, cb)
-            before = _t_valid_alphas(pr, cr, ob, [t[back] for t in thrs], us, star)
-        for j, alpha in enumerate(alphas):
-            key = f"{label}:{alpha:g}"
-            tv = after[j]
-            out[f"t_valid_days:{key}"] = tv / DAY_S
-            out[f"dt_u_s:{key}"] = _timing_error(p, c, t_obs / 2.0 + tv, us, star)
-            tb = np.full(n, np.nan)
-            dtb = np.full(n, np.nan)
-            if back.size:
-                tb[back] = before[j]
-                dtb[back] = _timing_error(pb, cb, -ob / 2.0 - tb[back], us, star)
-            out[f"t_valid_before_days:{key}"] = tb / DAY_S
-            out[f"dt_u_before_s:{key}"] = dtb
+        out.update(_anchor_columns(p, c, t_obs, pair, back, anchor, alphas, n_epochs, star))
+    return out
+
+
+def _anchor_columns(
+    p: FloatArray,
+    c: FloatArray,
+    t_obs: FloatArray,
+    pair: FloatArray,
+    back: NDArray[np.intp],
+    anchor: str | float,
+    alphas: Sequence[float],
+    n_epochs: int,
+    star: int,
+) -> dict[str, FloatArray]:
+    """The columns of one anchor (:func:`horizon_columns`); ``back``: the two-sided rows."""
+    n = p.shape[0]
+    label, us = anchor_u_values(anchor)
+    tol = _tolerances(anchor_kind(label, us), pair, n_epochs, us[0])
+    out = {
+        f"delta_u_tol_rad:{label}": tol,
+        f"sigma_u_end_rad:{label}": _max_sigma(p, c, t_obs / 2.0, us, star),
+    }
+    thrs = [alpha * tol for alpha in alphas]
+    after = _t_valid_alphas(p, c, t_obs, thrs, us, star)
+    if back.size:  # BEFORE: the time-reversed rows' horizons after (as t_valid_batch)
+        pb, cb, ob = p[back], c[back], t_obs[back]
+        pr, cr = time_reversed(pb, cb)
+        before = _t_valid_alphas(pr, cr, ob, [t[back] for t in thrs], us, star)
+    for j, alpha in enumerate(alphas):
+        key = f"{label}:{alpha:g}"
+        tv = after[j]
+        out[f"t_valid_days:{key}"] = tv / DAY_S
+        out[f"dt_u_s:{key}"] = _timing_error(p, c, t_obs / 2.0 + tv, us, star)
+        tb = np.full(n, np.nan)
+        dtb = np.full(n, np.nan)
+        if back.size:
+            tb[back] = before[j]
+            dtb[back] = _timing_error(pb, cb, -ob / 2.0 - tb[back], us, star)
+        out[f"t_valid_before_days:{key}"] = tb / DAY_S
+        out[f"dt_u_before_s:{key}"] = dtb
     return out
 
 
@@ -270,13 +288,7 @@ def horizons(
     The same numbers as :func:`ucbplan.core.forecast.horizon_table` per target (Eqs.
     T_valid_alpha, timing_unc), from :func:`horizon_columns`.
     """
-    if not targets:
-        raise InputError("targets: expected at least one target, got none")
-    names = [  # the fallback name formatted only for a target without one
-        f"target {i + 1}" if (v := getattr(t, "name", _UNNAMED)) is _UNNAMED else str(v)
-        for i, t in enumerate(targets)
-    ]
-    files = [str(getattr(t, "source", None) or "") for t in targets]
+    names, files = _names_files(targets)
     sk = np.array(
         [_spectroscopy(t, n, sigma_v, k_eff) for t, n in zip(targets, names, strict=True)]
     )
@@ -294,6 +306,17 @@ def horizons(
         two_sided=both,
     )
     return _long_table(cols, names, files, both, sk, alphas, anchors, n_epochs, star)
+
+
+def _names_files(targets: Sequence[EphemerisSource]) -> tuple[list[str], list[str]]:
+    """Each target's name (``target N`` for one without) and file ('' for one in memory)."""
+    if not targets:
+        raise InputError("targets: expected at least one target, got none")
+    names = [  # the fallback name formatted only for a target without one
+        f"target {i + 1}" if (v := getattr(t, "name", _UNNAMED)) is _UNNAMED else str(v)
+        for i, t in enumerate(targets)
+    ]
+    return names, [str(getattr(t, "source", None) or "") for t in targets]
 
 
 def _covariances(targets: Sequence[EphemerisSource]) -> FloatArray:

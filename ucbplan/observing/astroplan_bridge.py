@@ -61,7 +61,7 @@ def to_astroplan(table: Table, site: Site) -> Any:
     ----------
     table : astropy.table.Table
         A blocks table (``ucbplan plan -o plan.ecsv``, or
-        :func:`~ucbplan.observing.blocktable.blocks_to_table`): one row per block or exposure,
+        :func:`~ucbplan.observing.tablemake.blocks_to_table`): one row per block or exposure,
         with ``target``, ``t_start_utc``, ``t_end_utc`` (UTC ISO), ``ra_deg``, ``dec_deg``
         and optionally ``priority`` and ``visit_id``.
     site : Site

@@ -2,7 +2,7 @@
 
 A block is the unit every export works from: a window of UTC at the site centred on the epoch at
 which the argument of latitude reaches the anchor value ``u_star`` (barycentric TDB converted to
-site UTC by :mod:`ucbplan.observing.timeconv`).
+site UTC by :mod:`ucbplan.observing.barycentric_time`).
 """
 
 from __future__ import annotations

@@ -258,7 +258,7 @@ def plan_exposures(table: Table, site: Site | None = None) -> list[Exposure]:
     Parameters
     ----------
     table : astropy.table.Table
-        A blocks table (:func:`ucbplan.observing.blocktable.read_blocks`).
+        A blocks table (:func:`ucbplan.observing.tableread.read_blocks`).
     site : Site, optional
         The plan's site (default: the table's ``meta['site']``).
     """

@@ -27,12 +27,12 @@ from numpy.typing import NDArray
 from ucbplan.errors import InputError
 from ucbplan.io import write_output
 from ucbplan.observing.blocks import Block
-from ucbplan.observing.blocktable import blocks_to_table
 from ucbplan.observing.constraints import TWILIGHT_SUN_ALT_DEG, ConstraintSet
 from ucbplan.observing.schedule.nights import NightWindow, night_windows
+from ucbplan.observing.site_time_axis import TimeAxis
 from ucbplan.observing.sites import Site
 from ucbplan.observing.sky import SkyModel
-from ucbplan.observing.timeaxis import TimeAxis
+from ucbplan.observing.tablemake import blocks_to_table
 from ucbplan.plotting import FIGURE_FORMATS, figure_format, pyplot
 
 if TYPE_CHECKING:

@@ -42,9 +42,9 @@ from ucbplan.observing.sheet_html import (
     exposure_cells,
     render_html,
 )
+from ucbplan.observing.site_time_axis import TimeAxis
 from ucbplan.observing.sites import Site
 from ucbplan.observing.sky import SkyModel
-from ucbplan.observing.timeaxis import TimeAxis
 from ucbplan.plotting import pyplot
 
 __all__ = [

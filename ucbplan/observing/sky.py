@@ -11,7 +11,7 @@ neglected; the test suite compares against astropy ``AltAz`` (errors < 2″ for 
 Sun, < 10″ for the Moon).
 
 Times are ``x`` = TDB seconds after the model's origin (see
-:class:`ucbplan.observing.timeconv.TimeAxis`).
+:class:`ucbplan.observing.barycentric_time.TimeAxis`).
 """
 
 from __future__ import annotations
@@ -26,8 +26,8 @@ from astropy.time import Time
 from numpy.typing import NDArray
 from scipy.interpolate import CubicSpline
 
-from ucbplan.observing.timeaxis import TimeAxis
-from ucbplan.observing.timeconv import astropy_rotations
+from ucbplan.observing.barycentric_time import astropy_rotations
+from ucbplan.observing.site_time_axis import TimeAxis
 
 __all__ = ["SLOW_STEP_S", "SkyModel", "airmass_from_alt", "sun_cirs_frames"]
 
@@ -70,7 +70,7 @@ class SkyModel:
     """Sun, Moon and target geometry at one site over a span of time.
 
     Times are ``x`` = TDB seconds after ``origin`` (the site-arrival axis used by
-    :class:`ucbplan.observing.timeconv.DelayInterpolator`).
+    :class:`ucbplan.observing.barycentric_time.DelayInterpolator`).
     """
 
     origin: Time

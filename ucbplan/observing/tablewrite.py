@@ -1,25 +1,179 @@
-"""Column-by-column text of a table's rows, byte for byte as astropy's ECSV and ``json``'s
-indented writers make it.
+"""Writing the blocks table: ECSV, CSV or JSON (:func:`write_table`), byte for byte as astropy's
+ECSV/CSV writers and ``json``'s indented writer make it, only faster.
 
 astropy's ECSV writer formats each cell on its own (``str(col[i])``, one numpy scalar each) and
 ``json.dumps(..., indent=2)`` encodes in pure Python: ~60 µs per row of the blocks table's 42
 columns. Here each column is formatted at once (``str`` of the Python values of ``tolist()``,
 which equals ``str`` of the numpy scalar for 1-d bool, integer, float and text columns) and the
 rows are joined by the C ``csv`` writer and the C JSON string/number encoders. Tables with any
-other kind of column (masked, multidimensional, object, bytes, mixins) return None: the caller
-takes astropy's or ``json``'s own path.
+other kind of column (masked, multidimensional, object, bytes, mixins) take astropy's or
+``json``'s own path. The ECSV header is :mod:`ucbplan.observing.ecsvheader`'s.
 """
 
 from __future__ import annotations
 
 import csv
+import itertools
 import json
 import math
 import operator
-from collections.abc import Callable
-from typing import Any
+import os
+from collections.abc import Callable, Mapping
+from typing import IO, Any
 
+import numpy as np
 from astropy.table import Column, Table
+
+from ucbplan.errors import InputFileError
+from ucbplan.io import dump_json, dumps_json
+from ucbplan.observing.blocktable import TABLE_FORMATS
+from ucbplan.observing.ecsvheader import (
+    ecsv_header,
+    flat_records_safe,
+    header_safe,
+    libyaml_header,
+)
+
+__all__ = [
+    "ecsv_data_lines",
+    "json_records_text",
+    "json_rows_text",
+    "table_to_json_rows",
+    "write_table",
+]
+
+
+def _plain(value: Any) -> Any:
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, float) and not np.isfinite(value):
+        return None
+    return value
+
+
+def table_to_json_rows(table: Table) -> list[dict[str, Any]]:
+    """Rows as plain dicts (NaN -> null) for ``--format json``."""
+    names = table.colnames
+    if all(_plain_column(table[n]) for n in names):  # column by column: same values, faster
+        cells = [[_plain(v) for v in table[n].tolist()] for n in names]
+        return [dict(zip(names, row, strict=True)) for row in zip(*cells, strict=True)]
+    rows = []
+    for row in table:
+        rows.append(
+            {n: _plain(row[n].item() if hasattr(row[n], "item") else row[n]) for n in names}
+        )
+    return rows
+
+
+def _finite(records: Any) -> bool:
+    """Whether every float of a list of flat records is finite."""
+    flat = itertools.chain.from_iterable(map(dict.values, records))
+    return all(math.isfinite(v) for v in flat if type(v) is float)
+
+
+def _plain_column(col: Any) -> bool:
+    """A 1-d unmasked column of numbers or text: ``tolist()`` gives its cells as ``item()``
+    does, one by one."""
+    return type(col) is Column and col.ndim == 1 and col.dtype.kind in "biufUS"
+
+
+def _plain_meta(value: Any) -> Any:
+    """Table meta as plain JSON values (NaN and infinities → null), recursively."""
+    if isinstance(value, Mapping):
+        return {str(k): _plain_meta(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        if flat_records_safe(value) is not None and _finite(value):  # plain already: copied
+            return [dict(zip(map(str, r), r.values(), strict=True)) for r in value]
+        return [_plain_meta(v) for v in value]
+    value = _plain(value)
+    return value if isinstance(value, str | int | float | bool | type(None)) else str(value)
+
+
+def write_table(table: Table, handle: IO[str], fmt: str, *, json_meta: bool = False) -> None:
+    """Write ``table`` to an open text handle as ``ecsv``, ``csv`` or ``json``.
+
+    JSON is the list of rows, or with ``json_meta`` ``{"meta": {...}, "rows": [...]}`` like
+    every command's JSON (``plan --format json``: the meta holds ``visits`` and
+    ``time_accounting``). :func:`read_blocks` reads both."""
+    if fmt == "ecsv":
+        _write_ecsv(table, handle)
+    elif fmt == "csv":
+        _write_csv(table, handle)
+    elif fmt == "json":
+        _write_json(table, handle, json_meta)
+    else:
+        raise InputFileError(f"unknown table format {fmt!r}; expected one of {TABLE_FORMATS}")
+
+
+def _write_csv(table: Table, handle: IO[str]) -> None:
+    """CSV without meta as astropy writes it: its header line (written for no rows), then the
+    rows column by column (:func:`ecsv_data_lines`); for tables of other columns,
+    astropy's whole writer."""
+    plain = table.copy(copy_data=False)
+    plain.meta = {}
+    lines = ecsv_data_lines(plain, ",")
+    if lines is None:
+        plain.write(handle, format="ascii.csv")
+        return
+    plain[:0].write(handle, format="ascii.csv")
+    handle.write("".join(line + os.linesep for line in lines))
+
+
+def _write_ecsv(table: Table, handle: IO[str]) -> None:
+    """ECSV as astropy writes it: its header (made from the columns and meta alone, so written
+    for no rows; a plan's ``visits`` list written by :func:`.ecsvheader.yaml_flow_items` when
+    it can), then the rows column by column (:func:`ecsv_data_lines`); for tables
+    of other columns, astropy's whole writer."""
+    lines = ecsv_data_lines(table)
+    safe = header_safe(table)
+    with libyaml_header(safe):
+        if lines is None:
+            table.write(handle, format="ascii.ecsv")
+            return
+        handle.write(ecsv_header(table, safe))
+    handle.write("".join(line + os.linesep for line in lines))
+
+
+def _write_json(table: Table, handle: IO[str], json_meta: bool) -> None:
+    """The rows (with ``json_meta``: ``{"meta": ..., "rows": [...]}``) as :func:`dump_json`
+    writes them, encoded column by column when the columns allow
+    (:func:`json_rows_text`)."""
+    rows = json_rows_text(table, 1 if json_meta else 0)
+    meta = {"meta": _plain_meta(dict(table.meta))} if json_meta else None
+    if rows is None:
+        listed = table_to_json_rows(table)
+        dump_json(listed if meta is None else {**meta, "rows": listed}, handle)
+        return
+    if meta is None:
+        handle.write(rows + "\n")
+        return
+    head, tail = _json_head(meta["meta"]), '"rows": []\n}'
+    if not head.endswith(tail):  # never: the rows are the document's last value
+        raise AssertionError(f"unexpected JSON layout: {head[-40:]!r}")
+    handle.write(head[: -len("[]\n}")] + rows + "\n}\n")
+
+
+#: Stands in for a plan's ``visits`` in the JSON meta while they are written apart.
+_VISITS_MARK = "\x00ucbplan visits\x00"
+
+
+def _json_head(meta: dict[str, Any]) -> str:
+    """``{"meta": meta, "rows": []}`` as :func:`dumps_json` writes it, the meta's ``visits``
+    written key by key (:func:`json_records_text`) where they allow."""
+    visits = meta.get("visits")
+    listed = json_records_text(visits, 2)
+    if listed is None:
+        return dumps_json({"meta": meta, "rows": []})
+    meta["visits"] = _VISITS_MARK
+    try:
+        head = dumps_json({"meta": meta, "rows": []})
+    finally:
+        meta["visits"] = visits
+    mark = json.dumps(_VISITS_MARK)
+    if head.count(mark) != 1:  # never: the mark is no text of a plan
+        return dumps_json({"meta": meta, "rows": []})
+    return head.replace(mark, listed)
+
 
 __all__ = ["ecsv_data_lines", "json_records_text", "json_rows_text"]
 
@@ -190,227 +344,3 @@ def json_records_text(records: Any, level: int) -> str | None:
         one = _JSON_TEXT[kinds.pop()] if len(kinds) == 1 else None
         cells.append(list(map(one, column)) if one else [_JSON_TEXT[type(v)](v) for v in column])
     return _records_text(names, cells, len(records), level)
-
-
-#: Characters of a text value the fast ECSV header path writes itself (others: PyYAML's path).
-_YAML_TEXT = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_.()/+- :")
-#: The column after which libyaml breaks a line (astropy writes ECSV headers at width 130).
-_YAML_WIDTH = 130
-#: Indentation of a flow mapping's continuation lines in the ``visits`` list: before a key,
-#: and inside a scalar (libyaml indents a scalar one step, 2, deeper).
-_YAML_INDENT, _YAML_SCALAR_INDENT = 4, 6
-
-
-def _yaml_scalar(value: Any, tags: Callable[[str], str]) -> tuple[str, bool] | None:
-    """(text, breakable at spaces) of one scalar of a flow mapping as libyaml emits PyYAML's
-    node for it, or None where this path does not know (the caller takes PyYAML's)."""
-    if isinstance(value, bool) or value is None:
-        return None
-    if isinstance(value, int):
-        text = str(value)
-        return (text, False) if tags(text) == "int" else None
-    if isinstance(value, float):
-        if not math.isfinite(value):
-            return None
-        text = repr(value).lower()
-        if "." not in text and "e" in text:
-            text = text.replace("e", ".0e", 1)
-        return (text, False) if tags(text) == "float" else None
-    if not isinstance(value, str) or not value or not _YAML_TEXT.issuperset(value):
-        return None
-    if not (value[0].isalnum() or value[0] in "_(") or value[-1] == " " or "  " in value:
-        return None
-    if tags(value) != "str":  # a date, a number, true/null ...: single-quoted, if unbroken
-        return None if " " in value else (f"'{value}'", False)
-    if ":" in value:  # a plain ':' is a flow indicator for libyaml
-        return None
-    return value, True
-
-
-def yaml_flow_items(items: list[dict[str, Any]], tags: Callable[[str], str]) -> list[str] | None:
-    """Lines of a block sequence (indent 2) of flow mappings with sorted keys, as astropy's ECSV
-    header writer emits them through libyaml (:mod:`ucbplan.observing.blocktable`); None if
-    any key or value is of a kind this path does not write (the caller then takes PyYAML's).
-    ``tags(text)``: PyYAML's implicit tag of a plain scalar (``str``, ``int``, ``float``, ...).
-
-    libyaml breaks a flow mapping before a key once the column passes the width, and a plain
-    value at a space once the column passes it; the tests compare with libyaml's own output.
-    Items of the same keys are written key by key: each distinct value's text found once, and
-    each mapping made from a ``%`` template of its texts' lengths (where the lines break)."""
-    keys = sorted(items[0]) if items else []
-    if (
-        not keys
-        or any(map(items[0].keys().__ne__, map(dict.keys, items)))
-        or not all(
-            isinstance(key, str) and " " not in key and _yaml_scalar(key, tags) == (key, True)
-            for key in keys
-        )
-    ):
-        return _flow_items_one_by_one(items, tags)
-    columns = []
-    for key in keys:
-        texts = _column_texts([item[key] for item in items], tags)
-        if texts is None:
-            return None
-        columns.append(texts)
-    rows = list(zip(*columns, strict=True))
-    widths = list(zip(*(list(map(len, col)) for col in columns), strict=True))
-    templates = {w: _template(keys, w) for w in set(widths)}
-    if not any(_Words in map(type, col) for col in columns):
-        return "\n".join(map(operator.mod, map(templates.__getitem__, widths), rows)).split("\n")
-    lines: list[str] = []
-    for item, row, width in zip(items, rows, widths, strict=True):
-        if _Words in map(type, row):  # a value that may break at its spaces
-            lines += _flow_item(item, tags) or []
-        else:
-            lines += (templates[width] % row).split("\n")
-    return lines
-
-
-class _Words(str):
-    """A value's text that libyaml may break at its spaces (a plain string with spaces)."""
-
-
-def _column_texts(values: list[Any], tags: Callable[[str], str]) -> list[str] | None:
-    """Each value's text (a :class:`_Words` where it may break): in a column of one kind, each
-    distinct number's text (a function of its ``repr``) found once and each string's style once
-    per :func:`_shapes`; None if a value is of a kind this path does not write."""
-    kinds = set(map(type, values))
-    if kinds == {str}:
-        return _text_column(values, _shapes(values), tags)
-    if kinds != {int} and kinds != {float}:
-        # one by one: a string's text (its own shape), a number's (never breakable)
-        each = [
-            _text_column([v], [v], tags) if type(v) is str else _yaml_scalar(v, tags)
-            for v in values
-        ]
-        return None if None in each else [got[0] for got in each if got is not None]
-    reprs = list(map(repr, values))
-    known = {}
-    for text, v in dict(zip(reprs, values, strict=True)).items():
-        got = _yaml_scalar(v, tags)
-        if got is None:
-            return None
-        known[text] = got[0]
-    return list(map(known.__getitem__, reprs))
-
-
-def _text_column(
-    values: list[str], shapes: list[str], tags: Callable[[str], str]
-) -> list[str] | None:
-    """The texts of strings (see :func:`_column_texts`), each style found once per shape."""
-    styles = {}
-    for shape, v in dict(zip(shapes, values, strict=True)).items():
-        style = styles[shape] = _style(v, tags)
-        if style is None:
-            return None
-    if len(set(styles.values())) == 1 and style != "words":  # one style: the column at once
-        return list(values) if style == "plain" else list(map("'{}'".format, values))
-    return [
-        v if s == "plain" else f"'{v}'" if s == "quoted" else _Words(v)
-        for v, s in zip(values, map(styles.__getitem__, shapes), strict=True)
-    ]
-
-
-#: Every character of PyYAML's implicit ``int`` and ``float`` patterns (digits, signs, ``_.:``,
-#: hexadecimal letters, ``0b``/``0x``, ``inf``/``nan`` in their cases).
-_NUMBER_CHARS = frozenset("0123456789_+-.:xXbBaAcCdDeEfFiInN")
-#: Every ASCII digit as ``0`` (in UTF-8, whose other characters hold no ASCII byte).
-_DIGITS_AS_0 = bytes.maketrans(b"123456789", b"000000000")
-
-
-def _shapes(values: list[str]) -> list[str]:
-    """Per string, the text whose :func:`_style` is its own: itself if it might be a number,
-    else with every digit as ``0``. A text with a character outside :data:`_NUMBER_CHARS`
-    cannot be an ``int`` or a ``float``, and PyYAML's other patterns (timestamps) take any
-    digit alike, as every digit starts the same resolvers: a header's times and visit ids share
-    a handful of shapes."""
-    joined = "\x00".join(values)
-    if joined.count("\x00") != len(values) - 1:  # a NUL inside a value
-        return list(values)
-    coarse_bytes = joined.encode("utf-8", "surrogatepass").translate(_DIGITS_AS_0)
-    coarse = coarse_bytes.decode("utf-8", "surrogatepass").split("\x00")
-    # digits map to digits: a text and its shape are alike made of :data:`_NUMBER_CHARS` or not
-    numeric = {c for c in set(coarse) if _NUMBER_CHARS.issuperset(c)}
-    if not numeric:
-        return coarse
-    return [v if c in numeric else c for v, c in zip(values, coarse, strict=True)]
-
-
-def _style(text: str, tags: Callable[[str], str]) -> str | None:
-    """How :func:`_yaml_scalar` writes the string ``text``: ``plain``, ``quoted`` (in single
-    quotes), ``words`` (plain, breakable at its spaces), or None (not by this path)."""
-    got = _yaml_scalar(text, tags)
-    if got is None:
-        return None
-    if got[0] != text:
-        return "quoted"
-    return "words" if got[1] and " " in text else "plain"
-
-
-def _template(keys: list[str], widths: tuple[int, ...]) -> str:
-    """The ``%`` template of a flow mapping of ``keys`` whose value texts have ``widths`` (none
-    breakable), its lines joined by newlines: a line breaks before a key past the width."""
-    parts, col = ["  - {"], 5
-    for k, (key, width) in enumerate(zip(keys, widths, strict=True)):
-        if k:
-            col += 1
-            if col > _YAML_WIDTH:
-                parts.append(",\n" + " " * _YAML_INDENT)
-                col = _YAML_INDENT
-            else:
-                parts.append(", ")
-                col += 1
-        parts.append(f"{key}: %s")
-        col += len(key) + 2 + width
-    return "".join(parts) + "}"
-
-
-def _flow_items_one_by_one(
-    items: list[dict[str, Any]], tags: Callable[[str], str]
-) -> list[str] | None:
-    """:func:`yaml_flow_items` of mappings of differing keys, one mapping at a time."""
-    lines: list[str] = []
-    for item in items:
-        got = _flow_item(item, tags)
-        if got is None:
-            return None
-        lines += got
-    return lines
-
-
-def _flow_item(item: dict[str, Any], tags: Callable[[str], str]) -> list[str] | None:
-    """The lines of one flow mapping (see :func:`yaml_flow_items`), or None."""
-    lines: list[str] = []
-    line, col = "  - {", 5
-    for k, key in enumerate(sorted(item)):
-        if not isinstance(key, str) or _yaml_scalar(key, tags) != (key, True) or " " in key:
-            return None
-        got = _yaml_scalar(item[key], tags)
-        if got is None:
-            return None
-        text, breakable = got
-        if k:
-            line += ","
-            col += 1
-            if col > _YAML_WIDTH:
-                lines.append(line)
-                line, col = " " * _YAML_INDENT, _YAML_INDENT
-            else:
-                line += " "
-                col += 1
-        line += f"{key}: "
-        col += len(key) + 2
-        words = text.split(" ") if breakable else [text]
-        for w, word in enumerate(words):
-            if w:
-                if col > _YAML_WIDTH:
-                    lines.append(line)
-                    line, col = " " * _YAML_SCALAR_INDENT, _YAML_SCALAR_INDENT
-                else:
-                    line += " "
-                    col += 1
-            line += word
-            col += len(word)
-    lines.append(line + "}")
-    return lines

@@ -7,7 +7,7 @@ airmass ≤ X, Moon separation, zenith hole: the ``plan`` constraints of
 (``observable_*``) and those of them inside the validity window σ_u ≤ α·δu_tol (``epochs_*``).
 
 All of it reuses the planner: one :class:`~ucbplan.observing.sky.SkyModel` and one light-time
-:class:`~ucbplan.observing.timeconv.SiteTrack` per chunk of sources, night windows from
+:class:`~ucbplan.observing.barycentric_time.SiteTrack` per chunk of sources, night windows from
 :func:`~ucbplan.observing.schedule.nights.night_windows`, anchor epochs and their constraint check
 from :func:`~ucbplan.observing.schedule.candidates.candidate_blocks`, and the validity window
 from :func:`ucbplan.core.forecast.valid_window_s` with the per-source Fisher target of
@@ -147,9 +147,9 @@ def _frame(opts: VisibilityOptions, ra: np.ndarray, dec: np.ndarray) -> _Frame:
     import astropy.units as u
     from astropy.coordinates import SkyCoord
 
+    from ucbplan.observing.barycentric_time import SiteTrack
+    from ucbplan.observing.site_time_axis import TimeAxis
     from ucbplan.observing.sky import SkyModel
-    from ucbplan.observing.timeaxis import TimeAxis
-    from ucbplan.observing.timeconv import SiteTrack
 
     site = opts.site
     windows = night_windows(site, opts.dates())

@@ -26,8 +26,9 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from ucbplan.observing.exports.eso_templates import EsoTemplate, EsoTemplates
-from ucbplan.observing.exports.text import fmt_sigma, sexagesimal
+from ucbplan.observing.exports.text import fmt_sigma
 from ucbplan.observing.instruments import Instrument, get_instrument
+from ucbplan.observing.tableformat import sexagesimal
 
 __all__ = ["DEFAULT_MAX_AIRMASS", "DEFAULT_MOON_DISTANCE_DEG", "eso_constraints", "ob_body"]
 

@@ -30,8 +30,9 @@ from ucbplan.observing.exports.eso_ob import eso_constraints, instrument_for, ob
 from ucbplan.observing.exports.eso_templates import EsoTemplates, load_eso_templates
 from ucbplan.observing.exports.interface import ExportOptions, ExportResult
 from ucbplan.observing.exports.provenance import created_utc, meta, site_name, version
-from ucbplan.observing.exports.text import ascii_names, iso_minute, iso_ms, sexagesimal
+from ucbplan.observing.exports.text import ascii_names, iso_minute, iso_ms
 from ucbplan.observing.exports.windows import ceil_minute, floor_minute, ob_start_window
+from ucbplan.observing.tableformat import sexagesimal
 
 __all__ = ["ESO_NAME_MAX", "export_eso_p2"]
 

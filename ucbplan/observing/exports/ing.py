@@ -12,7 +12,8 @@ from ucbplan.observing.exports.columns import (
     time_order,
 )
 from ucbplan.observing.exports.interface import ExportOptions, ExportResult
-from ucbplan.observing.exports.text import ascii_names, fmt_sigma, iso_ms, sexagesimal
+from ucbplan.observing.exports.text import ascii_names, fmt_sigma, iso_ms
+from ucbplan.observing.tableformat import sexagesimal
 
 __all__ = ["export_ing_cat", "ing_catalogue"]
 

@@ -17,7 +17,8 @@ from ucbplan.observing.exports.columns import (
 )
 from ucbplan.observing.exports.interface import ExportOptions, ExportResult
 from ucbplan.observing.exports.provenance import site_name, version
-from ucbplan.observing.exports.text import ascii_names, ascii_text, fmt_sigma, iso_ms, sexagesimal
+from ucbplan.observing.exports.text import ascii_names, ascii_text, fmt_sigma, iso_ms
+from ucbplan.observing.tableformat import sexagesimal
 
 __all__ = ["export_keck_starlist"]
 

@@ -3,8 +3,8 @@
 One row per target: coordinates, magnitude, P_orb, the ephemeris file, σ_T at the semester
 midpoint, the anchor phases and their tolerance, windows per month, visits and exposures, shutter,
 overheads and idle time (from the plan's own time accounting, else from the blocks:
-:mod:`.accounting`), efficiency, the time-critical flag and the constraints. The LaTeX form is
-written by :mod:`.proposal_latex`.
+:mod:`ucbplan.observing.accounting`), efficiency, the time-critical flag and the constraints. The
+LaTeX form is written by :mod:`.proposal_latex`.
 
 Decisions where the issue is silent: the semester is the observatory's own (``--semester 2041A``
 or ``P147``; default: the one containing the plan's first night, an ESO period for a plan made
@@ -21,6 +21,7 @@ import datetime as dt
 import io
 import math
 from collections import Counter
+from collections.abc import Mapping
 from dataclasses import dataclass
 from datetime import UTC, datetime, timedelta
 from typing import Any
@@ -29,12 +30,14 @@ from zoneinfo import ZoneInfo
 import numpy as np
 from astropy.table import MaskedColumn, Table
 
-from ucbplan.errors import InputFileError
-from ucbplan.observing.exports.accounting import TimeAccount, plan_accounting
+from ucbplan.errors import InputFileError, shorten
+from ucbplan.observing.accounting import BlockRows, TimeAccount, accounts_from_blocks
 from ucbplan.observing.exports.columns import (
+    acquisition_s,
     coordinates,
     floats,
     period_s,
+    readout_total_s,
     required_times,
     strings,
     vmags,
@@ -43,8 +46,9 @@ from ucbplan.observing.exports.format_sites import serves_site
 from ucbplan.observing.exports.interface import ExportOptions, ExportResult
 from ucbplan.observing.exports.proposal_latex import proposal_latex
 from ucbplan.observing.exports.provenance import clean_meta, created_utc, meta, version
-from ucbplan.observing.exports.text import iso_ms, sexagesimal
+from ucbplan.observing.exports.text import iso_ms
 from ucbplan.observing.semesters import semester_dates, semester_label
+from ucbplan.observing.tableformat import sexagesimal
 
 __all__ = [
     "PROPOSAL_FORMATS",
@@ -249,7 +253,7 @@ def proposal_table(table: Table, options: ExportOptions, notes: list[str]) -> Ta
         Every number is finite; an unknown magnitude, period or tolerance is blank (masked).
     """
     c = _columns(table, notes)
-    accounts, source = plan_accounting(table, options, notes)
+    accounts, source = _plan_accounting(table, options, notes)
     label, first, end = _semester(table, c.starts, options, notes)
     sem_mid = datetime.combine(first + (end - first) / 2, dt.time(), tzinfo=UTC)
     t_mid_sem = float(_seconds([sem_mid])[0])
@@ -358,3 +362,57 @@ def export_proposal(table: Table, options: ExportOptions) -> ExportResult:
     text = write_proposal(summary, options.proposal_format)
     suffix = PROPOSAL_SUFFIXES[options.proposal_format]
     return ExportResult(text.encode("utf-8"), suffix, tuple(dict.fromkeys(notes)))
+
+
+def _block_rows(table: Table, options: ExportOptions, notes: list[str]) -> BlockRows:
+    """The columns the accounting from the blocks reads (documented defaults noted)."""
+    n_exp = floats(table, "n_exp")
+    return BlockRows(
+        strings(table, "target"),
+        strings(table, "session_id"),
+        strings(table, "block_id"),
+        required_times(table, "t_start_utc"),
+        required_times(table, "t_end_utc"),
+        n_exp,
+        n_exp * floats(table, "exptime_s", unit="s"),
+        readout_total_s(table, notes),
+        acquisition_s(table, options, notes),
+    )
+
+
+def _plan_accounting(
+    table: Table, options: ExportOptions, notes: list[str]
+) -> tuple[dict[str, TimeAccount], str]:
+    """Per-target accounts and where they come from (``"plan"`` or ``"blocks"``).
+
+    The plan's own ``meta['time_accounting']`` when it covers every target of the table, else
+    :func:`~ucbplan.observing.accounting.accounts_from_blocks` (with a note). A plan account whose
+    shutter time differs from the blocks' by more than 1 % gets a note (the table was edited
+    after planning).
+
+    Raises
+    ------
+    InputFileError
+        A ``time_accounting`` entry that is not a mapping of non-negative numbers.
+    """
+    from_blocks = accounts_from_blocks(_block_rows(table, options, notes))
+    given = meta(table).get("time_accounting")
+    targets = given.get("targets") if isinstance(given, Mapping) else None
+    if not isinstance(targets, Mapping) or not set(from_blocks) <= set(map(str, targets)):
+        notes.append(
+            "proposal: no time_accounting for every target in the plan's metadata: time "
+            "computed from the blocks (idle gaps within a visit included; docs/exports.md)"
+        )
+        return from_blocks, "blocks"
+    out = {
+        name: TimeAccount.from_meta(f"targets.{shorten(name, 40)}", targets[name])
+        for name in from_blocks
+    }
+    for name, account in out.items():
+        ref = from_blocks[name].shutter_s
+        if abs(account.shutter_s - ref) > 0.01 * max(ref, 1.0):
+            notes.append(
+                f"proposal: {shorten(name, 40)}: the plan accounts {account.shutter_s:.0f} s "
+                f"shutter time but its blocks hold {ref:.0f} s (table edited after planning?)"
+            )
+    return out, "plan"

@@ -1,4 +1,5 @@
-"""Text the export formats write: ISO times, sexagesimal angles, safe names, short σ's."""
+"""Text the export formats write: ISO times, safe names, short σ's (sexagesimal angles:
+:func:`ucbplan.observing.tableformat.sexagesimal`, the blocks table's own)."""
 
 from __future__ import annotations
 
@@ -27,24 +28,6 @@ def iso_ms(t: datetime, decimals: int = 3) -> str:
     if decimals > 0:
         text += f".{t.microsecond:06d}"[: decimals + 1]
     return text
-
-
-def sexagesimal(value: float, decimals: int, sep: str, signed: bool, width: int = 2) -> str:
-    """Sexagesimal string with correct carry (never ``60.00``) and ``-00`` for small negatives.
-
-    ``value`` is in hours (RA) or degrees (Dec).
-    """
-    scale = 10**decimals
-    total = round(abs(value) * 3600.0 * scale)
-    if not signed:
-        total %= 24 * 3600 * scale  # RA: 23 59 59.999 rounds to 00 00 00.00, not 24
-    sign = "-" if (value < 0 and total > 0) else "+"
-    whole, frac = divmod(total, scale)
-    minutes_total, seconds = divmod(whole, 60)
-    units, minutes = divmod(minutes_total, 60)
-    sec = f"{seconds:02d}" + (f".{frac:0{decimals}d}" if decimals else "")
-    head = f"{units:0{width}d}"
-    return (sign if signed else "") + sep.join([head, f"{minutes:02d}", sec])
 
 
 def safe_name(name: str, max_len: int | None = None) -> str:

@@ -3,12 +3,11 @@ axis (epochs are solved only where the Sun may be below the twilight limit, wide
 and two orbits: daytime epochs would all fail the night, :func:`night_search_x`).
 
 For each target (vectorised over epochs): the anchor epochs t★ with σ_t and the φ_ref π-mode
-alternative (:func:`ucbplan.core.ephemeris.find_epochs`, Appendix A2), their site arrival times
-from one shared light-time track (:mod:`ucbplan.observing.timeconv`), every constraint checked
-over the whole block (:mod:`ucbplan.observing.constraints`), the validity limit T_valid, the
-smearing of the exposure plan, and the grouping of blocks into sessions (a u = 0 / π pair, both
-RV zero crossings, or single blocks). All times are on one :class:`TimeAxis`.
-"""
+alternative (:func:`ucbplan.core.ephemeris.find_epochs`, Appendix A2), their site arrival times from
+one shared light-time track (:mod:`ucbplan.observing.barycentric_time`), every constraint checked
+over the whole block (:mod:`ucbplan.observing.constraint_checks`), the validity limit T_valid, the
+smearing of the exposure plan, and the grouping of blocks into sessions (a u = 0 / π pair, both RV
+zero crossings, or single blocks). All times are on one :class:`TimeAxis`."""
 
 from __future__ import annotations
 
@@ -27,6 +26,7 @@ from ucbplan.core.ephemeris import EpochSet, arg_latitude, find_epochs, with_det
 from ucbplan.core.forecast import tolerance, valid_window_s
 from ucbplan.core.smearing import parse_smear_budget
 from ucbplan.errors import UcbplanError
+from ucbplan.observing.barycentric_time import DelayInterpolator, SiteTrack
 from ucbplan.observing.blocks import ExposurePlan, Smearing, block_smearing, check_smear_budget
 from ucbplan.observing.constraint_checks import DARK_STEP_S, evaluate_window
 from ucbplan.observing.constraints import ConstraintSet, NightConstraint
@@ -34,11 +34,10 @@ from ucbplan.observing.instruments import MAX_AIRMASS
 from ucbplan.observing.schedule.exposure import TargetExposure, exposure_sigma_v, target_exposure
 from ucbplan.observing.schedule.nights import NightWindow
 from ucbplan.observing.schedule.settings import ModeSpec, PlanSettings
+from ucbplan.observing.site_time_axis import EpochAxis, TimeAxis
 from ucbplan.observing.sites import Site
 from ucbplan.observing.sky import SkyModel, airmass_from_alt
 from ucbplan.observing.strategy import constrains_k
-from ucbplan.observing.timeaxis import EpochAxis, TimeAxis
-from ucbplan.observing.timeconv import DelayInterpolator, SiteTrack
 
 if TYPE_CHECKING:
     from ucbplan.target import Target

@@ -27,7 +27,7 @@ from ucbplan.observing.blocks import Block
 from ucbplan.observing.schedule.candidates import TargetRun
 from ucbplan.observing.schedule.placement import Unplaced
 from ucbplan.observing.schedule.records import slug
-from ucbplan.observing.timeaxis import elapsed
+from ucbplan.observing.site_time_axis import elapsed
 
 if TYPE_CHECKING:
     from ucbplan.target import Target

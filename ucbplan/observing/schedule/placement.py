@@ -11,8 +11,9 @@ from __future__ import annotations
 import bisect
 import math
 from collections import Counter
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -22,7 +23,17 @@ from ucbplan.observing.schedule.nights import NightSpan
 from ucbplan.observing.schedule.settings import PlanSettings
 from ucbplan.observing.sky import airmass_from_alt
 
-__all__ = ["Allowance", "Session", "Timeline", "Unplaced", "place_sessions", "unusable_reason"]
+__all__ = [
+    "Allowance",
+    "NightPlacer",
+    "NightTask",
+    "Session",
+    "Timeline",
+    "Unplaced",
+    "place_by_priority",
+    "place_sessions",
+    "unusable_reason",
+]
 
 #: Sampling step of the night when explaining why nothing fits [s].
 _REASON_STEP_S = 300.0
@@ -223,16 +234,9 @@ def night_usable(
     return usable
 
 
-def _place_night(
-    run: TargetRun,
-    n: int,
-    span: NightSpan,
-    timeline: Timeline,
-    frame: PlanFrame,
-    settings: PlanSettings,
-    allowance: Allowance,
-) -> str | None:
-    """Place one target's best sessions in night ``n``; the reason if fewer than asked fit."""
+def _place_night(run: TargetRun, night: NightTask) -> str | None:
+    """Place one target's best sessions in a night; the reason if fewer than asked fit."""
+    n, span, timeline, frame, settings, allowance = night
     c = run.cand
     usable = night_usable(run, span, frame, settings)
     if isinstance(usable, str):
@@ -282,15 +286,56 @@ def place_sessions(
         One entry per target and night that got fewer sessions than asked.
     """
     timeline = Timeline(settings.overhead_s)
+    return place_by_priority(
+        runs, spans, frame, settings, timeline, busy, allowances, _place_night, quiet_goals=False
+    )
+
+
+class NightTask(NamedTuple):
+    """What placing one target in one night takes: the night's index and span, the timeline
+    shared by all targets, the plan's frame and settings, and the target's allowance."""
+
+    n: int
+    span: NightSpan
+    timeline: Timeline
+    frame: PlanFrame
+    settings: PlanSettings
+    allowance: Allowance
+
+
+#: Places one target's sessions or visits in one night; returns why fewer than asked fit.
+NightPlacer = Callable[[TargetRun, NightTask], "str | None"]
+
+
+def place_by_priority(
+    runs: list[TargetRun],
+    spans: list[NightSpan],
+    frame: PlanFrame,
+    settings: PlanSettings,
+    timeline: Timeline,
+    busy: Sequence[tuple[float, float]],
+    allowances: Mapping[int, Allowance] | None,
+    place_night: NightPlacer,
+    quiet_goals: bool,
+) -> tuple[list[Session], list[Unplaced]]:
+    """The greedy loop of sessions and visits alike: targets by priority (ties in input order),
+    nights in order, ``place_night`` filling ``timeline`` (the ``busy`` intervals blocked out).
+
+    A target whose allowance is spent gets no more; each later night is noted as "time budget
+    spent", except, with ``quiet_goals`` (visits), when the allowance was a goal's (its
+    exposures or information): the goal is planned, nothing is missing.
+    """
     timeline.block_out(busy)
     unplaced: list[Unplaced] = []
     for run in sorted(runs, key=lambda r: -r.target.priority):
         allowance = (allowances or {}).get(run.index) or Allowance()
         for n, span in enumerate(spans):
             if allowance.spent:
-                unplaced.append(Unplaced(run.target.name, span.label, "time budget spent"))
+                goal = allowance.exposures is not None or allowance.info is not None
+                if not (quiet_goals and goal):
+                    unplaced.append(Unplaced(run.target.name, span.label, "time budget spent"))
                 continue
-            reason = _place_night(run, n, span, timeline, frame, settings, allowance)
+            reason = place_night(run, NightTask(n, span, timeline, frame, settings, allowance))
             if reason is not None:
                 unplaced.append(Unplaced(run.target.name, span.label, reason))
     return timeline.placed, unplaced

@@ -1,15 +1,14 @@
 """Night schedules: anchor epochs → site UTC → constraint-checked blocks → sessions per night.
 
-Pipeline for every target (all vectorised over epochs; :mod:`.candidates`): the planning modes
-name the anchors (Appendix A2); :func:`~ucbplan.core.ephemeris.find_epochs` gives the barycentric
-epochs t★ with σ_t and the φ_ref π-mode alternative; the light time is removed with one shared
-site track (:mod:`ucbplan.observing.timeconv`); blocks are checked against every constraint over
-their whole length (:mod:`ucbplan.observing.constraints`). Sessions (a u = 0 / π pair, both RV
-zero crossings, or single blocks) are then placed night by night in priority order without
-overlaps, with a slew/acquisition overhead before each session (:mod:`.placement`), and become
-block records (:mod:`.records`); fixed-u pairs get their second epoch (:mod:`.pairs`). Whatever
-could not be placed is reported with the reason.
-"""
+Pipeline for every target (all vectorised over epochs; :mod:`.candidates`): the planning modes name
+the anchors (Appendix A2); :func:`~ucbplan.core.ephemeris.find_epochs` gives the barycentric epochs
+t★ with σ_t and the φ_ref π-mode alternative; the light time is removed with one shared site track
+(:mod:`ucbplan.observing.barycentric_time`); blocks are checked against every constraint over their
+whole length (:mod:`ucbplan.observing.constraint_checks`). Sessions (a u = 0 / π pair, both RV zero
+crossings, or single blocks) are then placed night by night in priority order without overlaps, with
+a slew/acquisition overhead before each session (:mod:`.placement`), and become block records
+(:mod:`.records`); fixed-u pairs get their second epoch (:mod:`.pairs`). Whatever could not be
+placed is reported with the reason."""
 
 from __future__ import annotations
 
@@ -22,22 +21,22 @@ import numpy as np
 from astropy.time import Time
 
 from ucbplan.errors import UcbplanError
+from ucbplan.observing.barycentric_time import coverage_warnings
 from ucbplan.observing.blockcolumns import BlockList
 from ucbplan.observing.blocks import Block
 from ucbplan.observing.goals import GoalPlan
-from ucbplan.observing.schedule.candidates import TargetRun, prepare_runs
+from ucbplan.observing.schedule.candidates import PlanFrame, TargetRun, prepare_runs
 from ucbplan.observing.schedule.exposure import TargetExposure
 from ucbplan.observing.schedule.goalplan import balanced_runs, check_goals, goal_plans
-from ucbplan.observing.schedule.nights import night_spans, night_windows
+from ucbplan.observing.schedule.nights import NightWindow, night_spans, night_windows
 from ucbplan.observing.schedule.pairs import SecondEpoch, pair_blocks, pair_targets
 from ucbplan.observing.schedule.placement import Allowance, Unplaced, place_sessions
 from ucbplan.observing.schedule.reasons import not_planned
 from ucbplan.observing.schedule.records import block_records
 from ucbplan.observing.schedule.settings import PlanSettings
 from ucbplan.observing.schedule.visits import place_visits
+from ucbplan.observing.site_time_axis import TimeAxis
 from ucbplan.observing.sites import Site
-from ucbplan.observing.timeaxis import TimeAxis
-from ucbplan.observing.timeconv import coverage_warnings, quiet_erfa
 
 if TYPE_CHECKING:
     from ucbplan.target import Target
@@ -109,9 +108,8 @@ def _busy_x(axis: TimeAxis, busy: Sequence[Block]) -> list[tuple[float, float]]:
     """Blocks planned earlier as intervals on ``axis`` [s], padded by :data:`_BUSY_PAD_S`."""
     if not busy:
         return []
-    with quiet_erfa():
-        x0 = (Time([b.t_start_utc for b in busy]) - axis.origin).to_value("s")
-        x1 = (Time([b.t_end_utc for b in busy]) - axis.origin).to_value("s")
+    x0 = (Time([b.t_start_utc for b in busy]) - axis.origin).to_value("s")
+    x1 = (Time([b.t_end_utc for b in busy]) - axis.origin).to_value("s")
     return [
         (float(a) - _BUSY_PAD_S, float(b) + _BUSY_PAD_S)
         for a, b in zip(np.atleast_1d(x0), np.atleast_1d(x1), strict=True)
@@ -181,22 +179,45 @@ def plan_nights(
     T_valid_alpha; smearing: Eqs. Lambda_K, Lambda_kappa; fixed-u pairs: Eq. delta_kappa_rewrite.
     """
     _check_inputs(targets, nights, settings)
+    targets, infeasible = _plannable(targets, nights, settings)
+    windows = night_windows(site, nights)
+    frame, runs, warns = prepare_runs(targets, site, windows, settings)
+    return _schedule(runs, frame, windows, warns, site, nights, settings, busy, infeasible)
+
+
+def _plannable(
+    targets: list[Target], nights: list[date], settings: PlanSettings
+) -> tuple[list[Target], list[Unplaced]]:
+    """The targets that can be planned, and the reasons the others cannot (fixed-u pairs
+    report a circular target instead of failing on it)."""
     infeasible: list[Unplaced] = []
-    if settings.spec.label == "fixed-u-pairs":  # a circular target is reported, not fatal
+    if settings.spec.label == "fixed-u-pairs":
         targets, infeasible = pair_targets(targets, nights[0].isoformat())
         if not targets:
             raise UcbplanError(f"fixed-u pairs: no target can be planned: {infeasible[0].reason}")
-    windows = night_windows(site, nights)
-    frame, runs, warns = prepare_runs(targets, site, windows, settings)
+    return targets, infeasible
+
+
+def _schedule(
+    runs: list[TargetRun],
+    frame: PlanFrame,
+    windows: list[NightWindow],
+    warns: list[str],
+    site: Site,
+    nights: list[date],
+    settings: PlanSettings,
+    busy: Sequence[Block],
+    infeasible: list[Unplaced],
+) -> PlanResult:
+    """Goals, then sessions or visits placed night by night, then the block records in time
+    order (fixed-u pairs with their second epochs), as a :class:`PlanResult`."""
     spans = night_spans(windows, frame.axis)
     busy_x = _busy_x(frame.axis, busy)
     goals = goal_plans(runs, settings)
     runs = balanced_runs(runs, goals)
     allowances = _allowances(runs, settings, goals)
-    if settings.plans_visits:
-        placed, unplaced = place_visits(runs, spans, frame, settings, busy_x, allowances)
-    else:
-        placed, unplaced = place_sessions(runs, spans, frame, settings, busy_x, allowances)
+    place = place_visits if settings.plans_visits else place_sessions
+    placed, unplaced = place(runs, spans, frame, settings, busy_x, allowances)
     gap = 0.0 if settings.plans_visits else settings.overhead_s
     reasons = not_planned(runs, spans, frame, placed, unplaced, gap)
     records = block_records(placed, runs, spans, frame, site, settings)

@@ -2,7 +2,7 @@
 
 Block and session identifiers are ``<target slug>-<YYYYMMDD>-NN`` and ``...-SNN``, numbered per
 target and night in time order. UTC and TDB times come from one vectorised conversion per target
-(:class:`~ucbplan.observing.timeaxis.TimeAxis`); geometry from the run's sky model.
+(:class:`~ucbplan.observing.site_time_axis.TimeAxis`); geometry from the run's sky model.
 """
 
 from __future__ import annotations

@@ -7,7 +7,6 @@ returns a :class:`PlanRun` that builds the master blocks table with its provenan
 
 from __future__ import annotations
 
-import copy
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
@@ -20,9 +19,13 @@ from astropy.table import Table
 
 from ucbplan.errors import InputError, shorten
 from ucbplan.inputs import check_range
+from ucbplan.observing.accounting import (
+    PlanAccount,
+    VisitSummary,
+    time_accounting,
+    visit_summaries,
+)
 from ucbplan.observing.blockcolumns import block_columns
-from ucbplan.observing.blocktable import blocks_to_table, make_meta
-from ucbplan.observing.schedule.accounting import VisitSummary, time_accounting, visit_summaries
 from ucbplan.observing.schedule.exposure import strategy_facts
 from ucbplan.observing.schedule.goalplan import info_of_columns
 from ucbplan.observing.schedule.nights import night_dates
@@ -30,7 +33,7 @@ from ucbplan.observing.schedule.planner import PlanResult, plan_nights
 from ucbplan.observing.schedule.records import slug
 from ucbplan.observing.schedule.settings import PlanSettings
 from ucbplan.observing.sites import Site, resolve_site
-from ucbplan.observing.timeconv import quiet_erfa
+from ucbplan.observing.tablemake import blocks_to_table, make_meta
 from ucbplan.target import Target, load_targets
 
 __all__ = [
@@ -140,14 +143,14 @@ class PlanRun:
         return list(self._visits)
 
     @cached_property
-    def _accounting(self) -> dict[str, Any]:
+    def time_account(self) -> PlanAccount:
         """The time accounting, summed once per run (the table meta and the report read it)."""
         return time_accounting(self._visits)
 
     def accounting(self) -> dict[str, Any]:
-        """Time accounting, ``{"total": {...}, "targets": {NAME: {...}}}`` (see
-        :func:`~ucbplan.observing.schedule.accounting.time_accounting`); a copy of its own."""
-        return copy.deepcopy(self._accounting)
+        """Time accounting as the table meta holds it, ``{"total": {...}, "targets": {NAME:
+        {...}}}`` (:meth:`~ucbplan.observing.accounting.PlanAccount.as_meta`); a new dict."""
+        return self.time_account.as_meta()
 
     def _planning(self) -> dict[str, Any]:
         """Visit, instrument, cadence and goal facts of the run, per target."""
@@ -192,8 +195,7 @@ class PlanRun:
     def meta(self) -> dict[str, Any]:
         """Provenance of the run for the table ``meta`` (see :func:`make_meta`)."""
         res, plan = self.result, self.settings.exposure
-        with quiet_erfa():
-            valid_until = {k: v.tdb.isot for k, v in res.valid_until.items()}
+        valid_until = {k: v.tdb.isot for k, v in res.valid_until.items()}
         return make_meta(
             site=self.site.as_dict(),
             targets=[

@@ -26,10 +26,12 @@ from ucbplan.observing.schedule.nights import NightSpan
 from ucbplan.observing.schedule.placement import (
     INFO_RTOL,
     Allowance,
+    NightTask,
     Session,
     Timeline,
     Unplaced,
     night_usable,
+    place_by_priority,
 )
 from ucbplan.observing.schedule.settings import PlanSettings
 
@@ -126,16 +128,9 @@ def _best_visit(
     return best
 
 
-def _place_night(
-    run: TargetRun,
-    n: int,
-    span: NightSpan,
-    timeline: Timeline,
-    frame: PlanFrame,
-    settings: PlanSettings,
-    allowance: Allowance,
-) -> str | None:
-    """Place one target's visits in night ``n`` within its allowance; the reason if fewer."""
+def _place_night(run: TargetRun, night: NightTask) -> str | None:
+    """Place one target's visits in a night within its allowance; the reason if fewer."""
+    n, span, timeline, frame, settings, allowance = night
     usable = night_usable(run, span, frame, settings)
     if isinstance(usable, str):
         return usable
@@ -185,17 +180,14 @@ def place_visits(
     unplaced : list of Unplaced
         One entry per target and night that got fewer visits than asked.
     """
-    timeline = Timeline(0.0)
-    timeline.block_out(busy)
-    unplaced: list[Unplaced] = []
-    for run in sorted(runs, key=lambda r: -r.target.priority):
-        allowance = (allowances or {}).get(run.index) or Allowance()
-        for n, span in enumerate(spans):
-            if allowance.spent:
-                if allowance.exposures is None and allowance.info is None:  # a time budget
-                    unplaced.append(Unplaced(run.target.name, span.label, "time budget spent"))
-                continue
-            reason = _place_night(run, n, span, timeline, frame, settings, allowance)
-            if reason is not None:
-                unplaced.append(Unplaced(run.target.name, span.label, reason))
-    return timeline.placed, unplaced
+    return place_by_priority(
+        runs,
+        spans,
+        frame,
+        settings,
+        Timeline(0.0),
+        busy,
+        allowances,
+        _place_night,
+        quiet_goals=True,
+    )

@@ -14,8 +14,7 @@ is built on nodes t★_k = t_k + Δ(t_k), exact at every node without iteration.
 from __future__ import annotations
 
 import warnings
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -55,16 +54,6 @@ DEFAULT_STEP_S = 2400.0
 #: a spline errs by ∝ h⁴). Measured against the exact chain over a year: ≤ 18 m at 2 h (95 m at
 #: 3 h, 0.8 m at 1 h), i.e. ≤ 0.06 µs of light time; tests pin ≤ 30 m.
 ORIENTATION_STEP_S = 2 * 3600.0
-
-
-@contextmanager
-def quiet_erfa() -> Iterator[None]:
-    """Transitional: the warnings filter of :func:`ucbplan.offline.offline` (removed once no
-    module uses it)."""
-    from ucbplan.offline import _quiet_future_dates
-
-    with _quiet_future_dates():
-        yield
 
 
 def light_time_s(t: Time, coord: SkyCoord, location: EarthLocation) -> np.ndarray:
