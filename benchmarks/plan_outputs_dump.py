@@ -4,7 +4,8 @@ Usage: ``python benchmarks/plan_outputs_dump.py OUT_DIR`` (run it before and aft
 then ``diff -r BEFORE AFTER``). The ``created_utc`` stamp is blanked so that equal plans give
 byte-identical files. The plans cover the modes the planner writes: every epoch at u = 0
 (the exposure-dense benchmark case), quadrature pairs of several targets, visits with a
-goal, untargeted exposures, fixed-u pairs, and a timing-ephemeris target.
+goal, untargeted exposures, fixed-u pairs, a timing-ephemeris target, and the semester of the
+speed benchmarks (10 targets × 183 nights).
 """
 
 from __future__ import annotations
@@ -33,6 +34,7 @@ PLANS: dict[str, tuple[list[str], list[str]]] = {
     "pairs": ([FID], ["--night", "2040-02-15", "--nights", "5", "--mode", "fixed-u-pairs",
                      "--exptime", "20", "--overhead", "0"]),
     "timing": ([FID], ["--night", "2040-02-15", "--nights", "2", "--mode", "conjunction"]),
+    "semester": ([f"UCB{i:02d}" for i in range(10)], ["--night", "2040-01-01", "--nights", "183"]),
 }  # fmt: skip
 
 

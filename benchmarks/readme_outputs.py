@@ -1,6 +1,8 @@
 """Run every README example in order and keep what it printed and wrote, to diff two versions.
 
-Usage: ``python benchmarks/readme_outputs.py OUT_DIR [--quick]`` on each version, then
+Usage: ``python benchmarks/readme_outputs.py OUT_DIR [--quick] [--tree DIR]`` on each version
+(``--tree``: another checkout's package and catalogs, e.g. a ``git worktree`` of an older
+commit, run with this README's examples), then
 ``diff -r -I created_utc -I DTSTAMP -I '^# ucbplan ' BEFORE AFTER`` (the creation stamps differ
 between any two runs). The examples are the README's ``ucbplan …`` lines (continuation lines
 joined, comments cut, usage synopses skipped), run in README order in OUT_DIR, which holds a
@@ -42,13 +44,13 @@ def readme_commands(readme: Path = ROOT / "README.md") -> list[list[str]]:
     return out
 
 
-def run_all(out: Path, quick: bool) -> int:
-    """Run the examples in ``out``; the number run."""
+def run_all(out: Path, quick: bool, tree: Path = ROOT) -> int:
+    """Run the examples in ``out`` with the package of ``tree``; the number run."""
     out.mkdir(parents=True)
-    (out / "catalogs").symlink_to(ROOT / "catalogs")
+    (out / "catalogs").symlink_to(tree / "catalogs")
     for sub in ("figs", "simfigs"):
         (out / sub).mkdir()
-    env = {**os.environ, "COLUMNS": "100", "PYTHONPATH": str(ROOT)}
+    env = {**os.environ, "COLUMNS": "100", "PYTHONPATH": str(tree)}
     n = 0
     for k, args in enumerate(readme_commands(), start=1):
         if (quick and args[0] in SLOW) or "--create" in args or "--live" in args:
@@ -67,10 +69,11 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("out", type=Path, help="a new folder")
     ap.add_argument("--quick", action="store_true", help="skip the minutes-long examples")
+    ap.add_argument("--tree", type=Path, default=ROOT, help="the checkout whose package runs")
     a = ap.parse_args()
     if a.out.exists():
         sys.exit(f"{a.out} exists; give a new folder")
-    print(f"{run_all(a.out, a.quick)} README examples run into {a.out}")
+    print(f"{run_all(a.out, a.quick, a.tree.resolve())} README examples run into {a.out}")
 
 
 if __name__ == "__main__":

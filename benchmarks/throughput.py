@@ -81,13 +81,21 @@ def population_row(tmp: Path) -> dict[str, object]:
 
 
 def _target_files(folder: Path, n: int) -> list[Path]:
-    """``n`` LISA target files (HM Cnc with the name and ṗhase varied so each is its own)."""
+    """``n`` LISA target files, each its own binary: HM Cnc with the name, ḟ and K_eff varied
+    (distinct values, so no horizon, tolerance or JSON text is shared between targets)."""
     text = (ROOT / "catalogs" / "hm-cnc-simulated.yaml").read_text(encoding="utf-8")
+    swaps = ("name: HM Cnc (simulated)", 'fdot: "4.662e-19 Hz / s"', 'K_eff: "390 km/s"')
+    assert all(s in text for s in swaps), "the HM Cnc example changed: update _target_files"
     folder.mkdir()
     out = []
     for i in range(n):
         p = folder / f"t{i:05d}.yaml"
-        p.write_text(text.replace("name: HM Cnc (simulated)", f"name: T{i:05d}"), "utf-8")
+        own = (f"name: T{i:05d}", f'fdot: "{4.0 + i / n:.6f}e-19 Hz / s"',
+               f'K_eff: "{300 + 200 * i / n:.4f} km/s"')  # fmt: skip
+        body = text
+        for old, new in zip(swaps, own, strict=True):
+            body = body.replace(old, new)
+        p.write_text(body, "utf-8")
         out.append(p)
     return out
 
