@@ -38,7 +38,6 @@ _MAX_SAMPLES = 1_000_000
 
 
 #: Node spacing of the screening grid of :func:`evaluate_window` [s].
-#: Node spacing of the screening grid of :func:`evaluate_window` [s].
 SCREEN_STEP_S = 300.0
 
 

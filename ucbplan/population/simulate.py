@@ -14,12 +14,13 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ucbplan.errors import NumericalError
 from ucbplan.inputs import check_int
+from ucbplan.lisa.simulation import SimulateOptions
 from ucbplan.population.catalog import Catalog, Source
 from ucbplan.population.catalog_forecast import ForecastOptions, icrs_of, k_total_kms, source_target
 from ucbplan.population.execute import source_seed, worker_setup
@@ -81,6 +82,10 @@ SIMULATE_COLUMNS: tuple[tuple[str, str, str, str], ...] = (
 )
 
 
+#: The sampler's defaults, declared once by :class:`~ucbplan.lisa.simulation.SimulateOptions`.
+_SIMULATE_DEFAULTS: dict[str, Any] = {f.name: f.default for f in fields(SimulateOptions)}
+
+
 @dataclass(frozen=True)
 class PopulationSimulateOptions:
     """Options of a population simulation (all go into the table meta and part fingerprints).
@@ -95,12 +100,12 @@ class PopulationSimulateOptions:
         T_obs, LISA start and band width; σ_v and K written into each target's spectroscopy.
     """
 
-    seed: int = 0
-    walkers: int = 32
-    steps: int = 2000
-    until_converged: bool = False
-    max_steps: int = 50000
-    noise: bool = True
+    seed: int = _SIMULATE_DEFAULTS["seed"]
+    walkers: int = _SIMULATE_DEFAULTS["walkers"]
+    steps: int = _SIMULATE_DEFAULTS["steps"]
+    until_converged: bool = _SIMULATE_DEFAULTS["until_converged"]
+    max_steps: int = _SIMULATE_DEFAULTS["max_steps"]
+    noise: bool = _SIMULATE_DEFAULTS["noise"]
     forecast: ForecastOptions = field(default_factory=ForecastOptions)
 
     def __post_init__(self) -> None:
@@ -139,7 +144,6 @@ def simulate_source(
     import dataclasses
 
     from ucbplan.lisa.pipeline import build_model, simulate
-    from ucbplan.lisa.simulation import SimulateOptions
     from ucbplan.target.write import target_to_dict
 
     seed = source_seed(opts.seed, src.source_id)
