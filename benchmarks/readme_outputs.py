@@ -50,7 +50,8 @@ def run_all(out: Path, quick: bool, tree: Path = ROOT) -> int:
     (out / "catalogs").symlink_to(tree / "catalogs")
     for sub in ("figs", "simfigs"):
         (out / sub).mkdir()
-    env = {**os.environ, "COLUMNS": "100", "PYTHONPATH": str(tree)}
+    # SOURCE_DATE_EPOCH: matplotlib stamps PDFs with it instead of the clock, so two runs compare
+    env = {**os.environ, "COLUMNS": "100", "PYTHONPATH": str(tree), "SOURCE_DATE_EPOCH": "0"}
     n = 0
     for k, args in enumerate(readme_commands(), start=1):
         if (quick and args[0] in SLOW) or "--create" in args or "--live" in args:
