@@ -14,6 +14,7 @@ from ucbplan.api._convert import as_float, scope
 from ucbplan.api.ephemeris import TargetLike, get_site, load_target
 from ucbplan.errors import InputError, ReduceWarning, emit, shorten
 from ucbplan.lisa import MIN_T_OBS_S  # shortest LISA observation [s] (t_obs, --t-obs)
+from ucbplan.population.defaults import DEFAULT_N_BINS, DEFAULT_SIGMA_V_KMS, DEFAULT_T_START
 
 if TYPE_CHECKING:
     from astropy.table import Table
@@ -244,12 +245,12 @@ def t_obs_seconds(t_obs: Any, default_s: float, parameter: str = "t_obs") -> flo
 
 def population_forecast(
     catalog: str | Path,
-    sigma_v: Any = 15.0,
+    sigma_v: Any = DEFAULT_SIGMA_V_KMS,
     k_eff: Any = None,
     *,
     t_obs: str | None = None,
-    t_start: str = "2035-01-01T00:00:00",
-    n_bins: int = 512,
+    t_start: str = DEFAULT_T_START,
+    n_bins: int = DEFAULT_N_BINS,
     workers: int = 1,
 ) -> Table:
     """Per-source Fisher forecast of an LDC catalog (``ucbplan population forecast``).

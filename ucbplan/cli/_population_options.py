@@ -17,6 +17,8 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
+from ucbplan.population.defaults import DEFAULT_N_BINS, DEFAULT_SIGMA_V_KMS, DEFAULT_T_START
+
 if TYPE_CHECKING:
     from ucbplan.population.execute import ExecutorSpec
     from ucbplan.population.runner import RunControl
@@ -54,15 +56,14 @@ Jobs = Annotated[int, typer.Option("--jobs", help="Batch jobs to start with --cl
 Chunk = Annotated[int | None, typer.Option("--chunk", help="Sources per task (default ≥ ~1 s).")]
 Resume = Annotated[bool, typer.Option("--resume", help="Reuse finished part files.")]
 KeepParts = Annotated[bool, typer.Option("--keep-parts", help="Keep part files after merging.")]
-DEFAULT_T_START = "2035-01-01T00:00:00"
 
 #: The shared options in ``--help`` order: (parameter, alias, default).
 SHARED_OPTIONS: tuple[tuple[str, Any, Any], ...] = (
-    ("sigma_v", SigmaV, 15.0),
+    ("sigma_v", SigmaV, DEFAULT_SIGMA_V_KMS),
     ("k_eff", KEff, None),
     ("t_obs", TObs, None),
     ("t_start", TStart, DEFAULT_T_START),
-    ("n_bins", NBins, 512),
+    ("n_bins", NBins, DEFAULT_N_BINS),
     ("columns", Columns, None),
     ("hdf5_path", Hdf5Path, None),
     ("skip_bad", SkipBad, False),

@@ -27,6 +27,12 @@ from ucbplan.errors import InputError, NumericalError, UcbplanError, shorten
 from ucbplan.inputs import check_number
 from ucbplan.lisa import MAX_N_BINS, MIN_T_OBS_S
 from ucbplan.population.catalog import Source
+from ucbplan.population.defaults import (
+    DEFAULT_N_BINS,
+    DEFAULT_SIGMA_V_KMS,
+    DEFAULT_T_OBS_S,
+    DEFAULT_T_START,
+)
 from ucbplan.population.execute import worker_setup
 from ucbplan.population.tables import SOURCE_COLUMNS, blank_row
 from ucbplan.target.model import Spectroscopy
@@ -49,10 +55,6 @@ __all__ = [
 #: Anchors and planning margins of every forecast table (fixed: the table schema is stable).
 ANCHORS: tuple[str, ...] = ("conjunction", "quadrature")
 ALPHAS: tuple[float, ...] = (0.5, 1.0)
-#: LISA mission start assumed by default (as catalogs/fiducial-injection.yaml), TDB.
-DEFAULT_T_START = "2035-01-01T00:00:00"
-#: 4 sidereal years [s] (the paper's T_obs).
-DEFAULT_T_OBS_S = 126232599.054
 
 
 @dataclass(frozen=True, slots=True)
@@ -75,11 +77,11 @@ class ForecastOptions:
         Tolerance form (2: two-epoch difference).
     """
 
-    sigma_v_kms: float = 15.0
+    sigma_v_kms: float = DEFAULT_SIGMA_V_KMS
     k_eff_kms: float | None = None
     t_obs_s: float = DEFAULT_T_OBS_S
     t_start_tdb: str = DEFAULT_T_START
-    n_bins: int = 512
+    n_bins: int = DEFAULT_N_BINS
     n_epochs: int = 2
 
     def as_dict(self) -> dict[str, Any]:
