@@ -26,6 +26,7 @@ from astropy.table import Table
 from astropy.utils import data, iers
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from test_offline_cache import astropy_state
 
 import ucbplan
 from ucbplan.errors import EpochRangeError, InputError, UcbplanError
@@ -172,24 +173,14 @@ def test_import_is_light() -> None:
         _ = ucbplan.no_such_name  # type: ignore[attr-defined]
 
 
-def _state() -> tuple[Any, ...]:
-    return (
-        iers.conf.auto_download,
-        iers.conf.auto_max_age,
-        data.conf.allow_internet,
-        iers.IERS_Auto.__dict__["open"],
-        iers.earth_orientation_table._value,
-    )
-
-
 def test_calls_leave_astropy_as_they_found_it(monkeypatch: pytest.MonkeyPatch) -> None:
     # step out of the session's offline scope (conftest) to astropy's defaults
     monkeypatch.setattr(iers.earth_orientation_table, "_value", None)
     with iers.conf.set_temp("auto_download", True), data.conf.set_temp("allow_internet", True):
-        before = _state()
+        before = astropy_state()
         ucbplan.horizon(HM)
         ucbplan.ephemeris(HM, "2040-02-15T00:00", "2040-02-15T00:20")
-        assert _state() == before
+        assert astropy_state() == before
 
 
 # ------------------------------------------------------------------------------- constraints

@@ -66,6 +66,18 @@ def table_starts(table: Table) -> list[tuple[Time, Time, str]]:
     return out
 
 
+#: The named instants of :func:`instants`, in its order (the tests that visit each one).
+INSTANT_NAMES = (
+    "before the first",
+    "just before a start",
+    "during an exposure",
+    "between exposures",
+    "between visits",
+    "between nights",
+    "after the last",
+)
+
+
 def instants(table: Table) -> dict[str, Time]:
     """Named instants of the issue: before, during, between exposures, visits and nights, after."""
     starts = table_starts(table)
@@ -76,7 +88,7 @@ def instants(table: Table) -> dict[str, Time]:
     )
     targets = [s[2] for s in starts]
     switch = next(k for k in range(1, len(starts)) if targets[k] != targets[k - 1])
-    return {
+    out = {
         "before the first": first[0] - 2 * u.h,
         "just before a start": first[0] - 7.3 * u.s,
         "during an exposure": first[0] + 14.6 * u.s,
@@ -85,6 +97,8 @@ def instants(table: Table) -> dict[str, Time]:
         "between nights": night2 - 10 * u.h,
         "after the last": starts[-1][1] + 1 * u.min,
     }
+    assert tuple(out) == INSTANT_NAMES
+    return out
 
 
 def _nights(table: Table, starts: list[tuple[Time, Time, str]]) -> list[str]:
@@ -159,7 +173,7 @@ def _once(plan: Path, at: Time) -> list[str]:
     return result.stdout.splitlines()
 
 
-def _seconds(text: str) -> int:
+def seconds_of(text: str) -> int:
     """``1 h 02 min 05 s`` / ``2 min 13 s`` / ``45 s`` in seconds."""
     m = re.fullmatch(r"(?:(\d+) h )?(?:(\d+) min )?(\d+) s", text)
     assert m is not None, text
@@ -167,18 +181,7 @@ def _seconds(text: str) -> int:
     return 3600 * h + 60 * mi + s
 
 
-@pytest.mark.parametrize(
-    "name",
-    [
-        "before the first",
-        "just before a start",
-        "during an exposure",
-        "between exposures",
-        "between visits",
-        "between nights",
-        "after the last",
-    ],
-)
+@pytest.mark.parametrize("name", INSTANT_NAMES)
 def test_now_once_shows_the_next_start_and_the_wait(
     table: Table, telescope_plan: Path, name: str
 ) -> None:
@@ -199,7 +202,7 @@ def test_now_once_shows_the_next_start_and_the_wait(
     rounded = (start + 0.5 * u.s).isot  # HH:MM:SS rounded to the nearest second
     assert m.group(2) == rounded[11:19]
     assert (m.group(1) or at.isot[:10]) == rounded[:10]  # the date is shown when it changes
-    assert abs(_seconds(m.group(3)) - (start - at).to_value(u.s)) <= 1.0
+    assert abs(seconds_of(m.group(3)) - (start - at).to_value(u.s)) <= 1.0
     assert f"next      {target}" in text
     running = "during an exposure" == name
     assert ("exposing" in text) == running

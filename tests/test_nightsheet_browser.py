@@ -11,7 +11,6 @@ why, where chromium is not installed (``.ci/run`` installs it).
 
 from __future__ import annotations
 
-import re
 import shutil
 import subprocess
 from pathlib import Path
@@ -21,7 +20,7 @@ import pytest
 from astropy import units as u
 from astropy.table import Table
 from astropy.time import Time
-from test_countdown import expected, instants, table_starts
+from test_countdown import INSTANT_NAMES, expected, instants, seconds_of, table_starts
 from test_nightsheet import _Reader
 
 from ucbplan.observing.nightsheet import write_night_sheet
@@ -88,25 +87,7 @@ def _rows(reader: _Reader) -> list[dict[str, str]]:
     ]
 
 
-def _seconds(text: str) -> int:
-    m = re.fullmatch(r"(?:(\d+) h )?(?:(\d+) min )?(\d+) s", text.strip())
-    assert m is not None, text
-    h, mi, s = (int(g) if g else 0 for g in m.groups())
-    return 3600 * h + 60 * mi + s
-
-
-@pytest.mark.parametrize(
-    "name",
-    [
-        "before the first",
-        "just before a start",
-        "during an exposure",
-        "between exposures",
-        "between visits",
-        "between nights",
-        "after the last",
-    ],
-)
+@pytest.mark.parametrize("name", INSTANT_NAMES)
 def test_clock_countdown_and_highlighted_row(
     table: Table, sheet: Path, tmp_path: Path, name: str
 ) -> None:
@@ -135,7 +116,7 @@ def test_clock_countdown_and_highlighted_row(
     # for the virtual time the page ran
     wait_s = (start.unix * 1000 - now_ms) / 1000
     assert abs(int(clock["data-seconds"]) - wait_s) <= 0.501
-    assert abs(_seconds(reader.ids["countdown"]["text"]) - wait_s) <= 0.501
+    assert abs(seconds_of(reader.ids["countdown"]["text"].strip()) - wait_s) <= 0.501
     assert abs(int(clock["data-seconds"]) - (start - at).to_value(u.s)) <= 0.5 + RAN_ON_MS / 1000
     for r in rows:  # ended rows are marked, the running one says so
         if float(r["data-end"]) <= now_ms:

@@ -6,6 +6,7 @@ astropy's configuration, its ``IERS_Auto`` class and its default table exactly a
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -60,13 +61,16 @@ def test_empty_dir_disables(monkeypatch: pytest.MonkeyPatch, fresh_iers: Path) -
     assert list(fresh_iers.iterdir()) == []
 
 
-def _astropy_state() -> tuple[object, ...]:
+def astropy_state() -> tuple[object, ...]:
+    """What the offline scope sets and must restore: astropy's IERS and data configuration,
+    its ``IERS_Auto`` opener and default table, and the warning filters."""
     return (
         iers.conf.auto_download,
         iers.conf.auto_max_age,
         data.conf.allow_internet,
         iers.IERS_Auto.__dict__["open"],
         iers.earth_orientation_table._value,
+        tuple(warnings.filters),
     )
 
 
@@ -74,13 +78,13 @@ def test_scope_restores_astropy(monkeypatch: pytest.MonkeyPatch) -> None:
     # the test session runs inside one scope (conftest); step out of it to astropy's defaults
     monkeypatch.setattr(iers.earth_orientation_table, "_value", None)
     with iers.conf.set_temp("auto_download", True), data.conf.set_temp("allow_internet", True):
-        before = _astropy_state()
+        before = astropy_state()
         with offline():
             assert iers.conf.auto_download is False and data.conf.allow_internet is False
             assert iers.earth_orientation_table.get() is bundled_iers_table()
             # a night past the bundled predictions converts to UT1 instead of raising
             assert Time("2040-02-15T00:00:00", scale="utc").ut1.jd > 0
-        assert _astropy_state() == before
+        assert astropy_state() == before
 
 
 def test_scope_keeps_a_table_the_caller_chose() -> None:
