@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from contextlib import contextmanager
-from datetime import date
+from datetime import date, datetime
 from typing import Any
 
 from ucbplan.errors import InputError, shorten
@@ -69,9 +69,12 @@ def as_tdb(value: Any, parameter: str) -> Any:
 
 
 def as_date(value: Any, parameter: str) -> Any:
-    """A local evening date: a ``datetime.date``, ``YYYY-MM-DD`` text, or an astropy ``Time``
-    (its calendar date in its own scale)."""
+    """A local evening date: a ``datetime.date``, a ``datetime`` (its date, in its own zone),
+    ``YYYY-MM-DD`` text, or an astropy ``Time`` (its calendar date in its own scale)."""
     from astropy.time import Time
+
+    if isinstance(value, datetime):
+        return value.date()
 
     if isinstance(value, Time):
         if not value.isscalar:

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import re
 
+from ucbplan.api.plan_options import PLAN_FLAGS
+
 __all__ = ["FLAGS", "cli_message"]
 
 #: Parameter of the library (PlanSettings fields, ucbplan.plan / ucbplan.horizon keywords)
@@ -47,6 +49,11 @@ FLAGS = {
     "star": "--star",
     "seed": "--seed",
 }
+
+# a1 (issue 30): ``ucbplan.plan``'s keywords, from the flag table declared beside it
+FLAGS.update(
+    {name: flag.name for name, flag in PLAN_FLAGS.items() if flag.decls and name not in FLAGS}
+)
 
 _LEADING_NAME = re.compile(r"^([a-z_][a-z0-9_]*)(?=[: ])")
 

@@ -10,7 +10,7 @@ time axis), :mod:`.placement` (priority placement into nights, reasons for what 
 
 from ucbplan.observing.schedule.candidates import Candidates, candidate_blocks
 from ucbplan.observing.schedule.nights import NightWindow, night_dates, night_windows
-from ucbplan.observing.schedule.options import plan_settings
+from ucbplan.observing.schedule.options import check_max_visit, plan_settings
 from ucbplan.observing.schedule.pairs import delta_kappa
 from ucbplan.observing.schedule.placement import Unplaced
 from ucbplan.observing.schedule.planner import PlanResult, plan_nights
@@ -27,6 +27,7 @@ __all__ = [
     "PlanSettings",
     "Unplaced",
     "candidate_blocks",
+    "check_max_visit",
     "delta_kappa",
     "night_dates",
     "night_windows",

@@ -28,7 +28,13 @@ from ucbplan.observing.schedule.settings import (
 )
 from ucbplan.observing.sigma_model import SigmaVModel, parse_sigma_v
 
-__all__ = ["DEFAULT_EXPTIME_S", "DEFAULT_OVERHEAD_S", "DEFAULT_READOUT_S", "plan_settings"]
+__all__ = [
+    "DEFAULT_EXPTIME_S",
+    "DEFAULT_OVERHEAD_S",
+    "DEFAULT_READOUT_S",
+    "check_max_visit",
+    "plan_settings",
+]
 
 #: Exposure time without ``--exptime`` [s].
 DEFAULT_EXPTIME_S = 60.0
@@ -82,18 +88,57 @@ def plan_settings(
     exptime = DEFAULT_EXPTIME_S if exptime_s is None else exptime_s
     if inst is not None:
         check_exptime(inst, exptime)
+    visit_s, max_visit_s = _visits(visit, max_visit)
     return PlanSettings(
         exposure=ExposurePlan(exptime_s=exptime, n_exp=n_exp, readout_s=readout),
         overhead_s=acq,
         exptime_explicit=exptime_s is not None,
         instrument=inst,
-        visit_s=parse_duration(visit) if visit is not None else None,
-        max_visit_s=parse_duration(max_visit, "--max-visit") if max_visit else DEFAULT_MAX_VISIT_S,
+        visit_s=visit_s,
+        max_visit_s=max_visit_s,
         sigma_v_kms=fixed,
         sigma_model=model,
         budgets=parse_budgets(list(budgets)),
         **options,
     )
+
+
+def check_max_visit(max_visit: Any, goal: Any, *, compared: bool = False) -> None:
+    """Refuse a ``max_visit`` nothing would use: it is the longest visit a goal plans (or, with
+    ``compared``, a strategy comparison assumes); without either it would be ignored.
+
+    Raises
+    ------
+    InputError
+        One line naming ``max_visit``.
+    """
+    if max_visit is not None and goal is None and not compared:
+        raise InputError(
+            "max_visit: the longest visit a goal plans, and no goal is given: add a goal "
+            "or leave max_visit out",
+            parameter="max_visit",
+        )
+
+
+def _visits(visit: str | float | None, max_visit: str | float | None) -> tuple[float | None, float]:
+    """``visit`` and ``max_visit`` [s] (a goal's longest visit: 2 h unless given).
+
+    Raises
+    ------
+    InputError
+        For a malformed duration (an empty one too: it is not the default), or a maximum
+        shorter than the visit (it would be dropped without a word).
+    """
+    visit_s = parse_duration(visit) if visit is not None else None
+    if max_visit is None:
+        return visit_s, DEFAULT_MAX_VISIT_S
+    max_visit_s = parse_duration(max_visit, "max_visit")
+    if visit_s is not None and max_visit_s < visit_s:
+        raise InputError(
+            f"max_visit: {max_visit_s:g} s is shorter than the visit ({visit_s:g} s), which "
+            "sets every visit's length: give a longer max_visit or leave it out"
+        )
+    return visit_s, max_visit_s
 
 
 def _overheads(
