@@ -248,8 +248,9 @@ def test_modules_are_short_or_declared_cohesive() -> None:
 
 
 #: Module names that stand in several packages on purpose: each stage has its plots, and the
-#: layers of one command family mirror each other (cli/X shells api/X, which calls core/X).
-SHARED_MODULE_NAMES = {"__init__", "plots", "ephemeris", "timing", "report", "pipeline"}
+#: layers of one command family mirror each other (cli/X shells api/X, which calls core/X); the
+#: options of a public function (api/options) and of the planner (observing/schedule/options).
+SHARED_MODULE_NAMES = {"__init__", "plots", "ephemeris", "timing", "report", "pipeline", "options"}
 
 
 def test_each_module_name_has_one_owner() -> None:
@@ -328,3 +329,99 @@ def test_erfa_warnings_are_silenced_at_the_edges_only() -> None:
         if "ErfaWarning" in p.read_text(encoding="utf-8") or "quiet_erfa" in p.read_text("utf-8")
     )
     assert set(users) <= ERFA_EDGES, f"ERFA warnings handled away from the edges: {users}"
+
+
+# --------------------------------------------------------------- the CLI is a shell (issue 30)
+
+#: What ``ucbplan.cli`` may import: the public API, the errors, the version and itself.
+CLI_MAY_IMPORT = ("ucbplan.api", "ucbplan.errors", "ucbplan._version", "ucbplan.cli")
+#: CLI modules still being converted into shells over ``ucbplan.api`` (issue 30: helpers b1 and
+#: b2); temporary, emptied by the lead when their branches are merged.
+CLI_NOT_YET_SHELLS = {
+    "ucbplan.cli.core",
+    "ucbplan.cli.ephemeris",
+    "ucbplan.cli.timing",
+    "ucbplan.cli.feasibility",
+    "ucbplan.cli.reduce",
+    "ucbplan.cli.lisa",
+    "ucbplan.cli.population",
+    "ucbplan.cli._population_options",
+    "ucbplan.cli._epochs",
+}
+
+
+def _cli_imports_outside_the_api(graph: dict[str, set[str]]) -> list[str]:
+    """``module -> import`` for each import of a CLI module that is not the API's."""
+    return sorted(
+        f"{m} -> {d}"
+        for m, deps in graph.items()
+        if _area(m) == "cli" and m not in CLI_NOT_YET_SHELLS
+        for d in deps
+        if not any(d == ok or d.startswith(f"{ok}.") for ok in CLI_MAY_IMPORT)
+    )
+
+
+def test_the_cli_imports_only_the_api() -> None:
+    bad = _cli_imports_outside_the_api(_graph())
+    assert not bad, "the command line reaches past ucbplan.api:\n" + "\n".join(bad)
+
+
+def test_the_cli_import_check_finds_a_planted_import() -> None:
+    code = "def f():\n    from ucbplan.observing.countdown import what_next\n"
+    deps = _imports(ast.parse(code), {"ucbplan.observing.countdown"}, "ucbplan.cli.x", False)
+    graph = {"ucbplan.cli.x": deps, "ucbplan.cli.y": {"ucbplan.api.exporting", "ucbplan.errors"}}
+    assert _cli_imports_outside_the_api(graph) == ["ucbplan.cli.x -> ucbplan.observing.countdown"]
+    assert _cli_imports_outside_the_api({"ucbplan.cli.core": {"ucbplan.io"}}) == []
+
+
+#: Defaults a command may write itself: "not given" (None, False, an empty list) and "required".
+_NEUTRAL_DEFAULTS = (None, False, Ellipsis)
+
+
+def _literal_defaults(tree: ast.AST, where: str) -> list[str]:
+    """``where:function:parameter = value`` for each parameter default that is a literal
+    (``3.0``, ``"auto"``, ``True``), also inside ``typer.Option(3.0, …)``: a default the
+    command line declares beside the API's."""
+    found = []
+    for node in ast.walk(tree):
+        if not isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
+            continue
+        a = node.args
+        pairs = list(zip(a.args[len(a.args) - len(a.defaults) :], a.defaults, strict=True))
+        pairs += [(k, d) for k, d in zip(a.kwonlyargs, a.kw_defaults, strict=True) if d]
+        for arg, default in pairs:
+            value = default
+            if isinstance(value, ast.Call) and value.args:
+                value = value.args[0]  # typer.Option(DEFAULT, "--flag", …)
+            if isinstance(value, ast.Constant) and value.value not in _NEUTRAL_DEFAULTS:
+                found.append(f"{where}:{node.name}:{arg.arg} = {value.value!r}")
+            elif isinstance(value, ast.List | ast.Tuple) and value.elts:
+                found.append(f"{where}:{node.name}:{arg.arg} = {ast.unparse(value)}")
+    return found
+
+
+def test_no_default_is_declared_twice() -> None:
+    # a command's option takes its default from the API signature (ucbplan.cli._derive.option);
+    # a literal default in ucbplan/cli would be the second declaration of it
+    found = []
+    for path in sorted((PACKAGE / "cli").glob("*.py")):
+        name = _module_name(path)
+        if name not in CLI_NOT_YET_SHELLS:
+            found += _literal_defaults(ast.parse(path.read_text(encoding="utf-8")), name)
+    assert not found, "defaults written in the command line, not taken from the API:\n" + "\n".join(
+        found
+    )
+
+
+def test_the_default_check_finds_planted_defaults() -> None:
+    code = (
+        "def cmd(a: int = 3, b: _Opt = None, *, c: str = typer.Option('auto', '--c'),\n"
+        "        d: bool = False, e: list[str] = [], f: list[str] = ['x'],\n"
+        "        g: float = option(api.plan, FLAGS, 'g'), h: str = typer.Option(..., '--h')):\n"
+        "    pass\n"
+    )
+    assert sorted(_literal_defaults(ast.parse(code), "m")) == [
+        "m:cmd:a = 3",
+        "m:cmd:c = 'auto'",
+        "m:cmd:f = ['x']",
+    ]

@@ -220,6 +220,8 @@ def plan(
 
     Every keyword is the ``plan`` option of the same name (:data:`PLAN_FLAGS` gives its flag);
     times, speeds and angles may be astropy quantities, else numbers in the unit in brackets.
+    The names before issue 30 (``exptime_s``, ``max_visit_s``, ``moon_sep_deg`` …,
+    :data:`OLD_NAMES`) still work, with the same numbers.
 
     Parameters
     ----------
@@ -290,9 +292,6 @@ def plan(
         IANA zone replacing the site's.
     site_lonlat, sites_file : str, path, optional
         ``LON,LAT,HEIGHT`` (deg, deg, m) instead of ``site``; a YAML site table searched first.
-
-    Old names (``exptime_s``, ``max_visit_s``, ``moon_sep_deg`` …, :data:`OLD_NAMES`) still
-    work, with the same numbers.
 
     Returns
     -------

@@ -12,13 +12,14 @@ from rich.markup import escape
 from rich.table import Table as RichTable
 from rich.text import Text
 
-from ucbplan.errors import InputError
-from ucbplan.io import (
+from ucbplan.api.terminal import (
+    check_figure_path,
     check_output_path,
     dump_json,
     output_format,
     write_output,
 )
+from ucbplan.errors import InputError
 
 __all__ = [
     "TABLE_FORMATS",
@@ -125,8 +126,6 @@ def check_output_and_plot(output: Path | None, plot: Path | None, overwrite: boo
     if output is not None:
         check_output_path(output, overwrite)
     if plot is not None:
-        from ucbplan.plotting import check_figure_path
-
         check_figure_path(plot, overwrite)
 
 

@@ -14,7 +14,7 @@ import typer
 
 from ucbplan.api.options import Flag, default_of
 
-__all__ = ["argument", "option"]
+__all__ = ["argument", "flag", "option"]
 
 
 def option(func: Callable[..., Any], flags: Mapping[str, Flag], parameter: str) -> Any:
@@ -26,3 +26,11 @@ def option(func: Callable[..., Any], flags: Mapping[str, Flag], parameter: str) 
 def argument(flags: Mapping[str, Flag], parameter: str) -> Any:
     """``typer.Argument`` (required) with the help text declared for ``parameter``."""
     return typer.Argument(..., help=flags[parameter].help)
+
+
+def flag(flags: Mapping[str, Flag], parameter: str, default: Any = None) -> Any:
+    """``typer.Option`` with the flag and help declared for ``parameter`` and a default of the
+    command line's own: None (the API takes the value in another form or has no default), or
+    ``...`` (required)."""
+    spec = flags[parameter]
+    return typer.Option(default, *spec.decls, help=spec.help)

@@ -8,20 +8,19 @@ from typing import TYPE_CHECKING, Any
 
 from rich.markup import escape
 
+from ucbplan.api import terminal
 from ucbplan.cli._console import err_console, rich_table
 from ucbplan.errors import UcbplanError
 
 if TYPE_CHECKING:
-    from ucbplan.observing.accounting import PlanAccount, VisitSummary
+    from ucbplan.api.planning import PlanAccount, VisitSummary
 
 __all__ = ["SUMMARY_NIGHTS", "SUMMARY_ROWS", "report"]
 
 
 def _local(blocks: list[Any]) -> list[str]:
     """Local civil time of each block centre, ``HH:MM:SS TZ`` (one conversion for the night)."""
-    from ucbplan.observing.tableformat import local_datetimes
-
-    times = local_datetimes([b.t_mid_utc for b in blocks], [b.timezone for b in blocks])
+    times = terminal.local_datetimes([b.t_mid_utc for b in blocks], [b.timezone for b in blocks])
     return [dt.strftime("%H:%M:%S %Z") for dt in times]
 
 
@@ -155,10 +154,8 @@ def report(run: Any, wide: bool = False, verbose: bool = False) -> None:
         err_console.print(
             f"[yellow]not placed:[/] {escape(name)} ({span}): {escape(reason)}", soft_wrap=True
         )
-    from ucbplan.observing.blockcolumns import block_columns
-
     blocks = run.result.blocks
-    labels = block_columns(blocks).values["night"]
+    labels = terminal.block_columns(blocks).values["night"]
     if not verbose and (len(set(labels.tolist())) > SUMMARY_NIGHTS or len(blocks) > SUMMARY_ROWS):
         _print_summary(run)
     else:
@@ -248,11 +245,9 @@ def _print_visits(visits: list[VisitSummary]) -> None:
 def _print_goals(run: Any, account: PlanAccount) -> None:
     """Per goal: the spectra planned, at which phases, the visits and hours they take, and the
     σ the goal plan expects."""
-    from ucbplan.observing.blockcolumns import block_columns
-
     if not run.result.goals:
         return
-    targets, u_stars, n_exps = block_columns(run.result.blocks).lists(
+    targets, u_stars, n_exps = terminal.block_columns(run.result.blocks).lists(
         "target", "u_star_rad", "n_exp"
     )
     for name, goal in run.result.goals.items():

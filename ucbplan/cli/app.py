@@ -50,7 +50,7 @@ def _root(
     ),
 ) -> None:
     """Run the command inside the offline astropy scope (restored when the command ends)."""
-    from ucbplan.offline import offline
+    from ucbplan.api.terminal import offline
 
     err_console.quiet_info = quiet
     ctx.with_resource(offline())

@@ -1,8 +1,9 @@
 """``ucbplan export``: observatory and proposal files from the blocks table.
 
-A thin shell: parse options, call :func:`ucbplan.observing.exports.export_blocks`, write the file
-(notes on stderr). The option declarations are module-level ``Annotated`` aliases so that the
-command reads at a glance.
+A thin shell: parse options, call :func:`ucbplan.api.exporting.export`, write the file (notes on
+stderr). Each option that :func:`~ucbplan.api.exporting.export` takes is declared there
+(:data:`~ucbplan.api.exporting.EXPORT_FLAGS`: default, flag and help); the command line adds
+only what is its own (the output file, ``--create`` in p2).
 """
 
 from __future__ import annotations
@@ -15,112 +16,23 @@ from typing import IO, Annotated, Any
 import typer
 from rich.markup import escape
 
+from ucbplan.api import exporting as api
+from ucbplan.api.exporting import EXPORT_FLAGS, P2_FLAGS
 from ucbplan.cli._console import check_output_path, err_console, pick_format, write_output
+from ucbplan.cli._derive import argument, flag, option
 from ucbplan.errors import InputError, shorten
 
 __all__ = ["export_command", "register"]
 
-#: ``--to`` help: the names of ``ucbplan.observing.exports.EXPORT_FORMATS`` (a test keeps them
-#: equal). Spelled out because importing the exports (astropy.coordinates) at CLI start-up costs
-#: ~0.3 s on every command; the library is imported only when ``export`` runs.
-_EXPORT_HELP = "eso-p2 | keck-starlist | ics | proposal | ing-cat | lco | gemini | phase-table"
-
-_Blocks = Annotated[
-    Path, typer.Argument(help="Master blocks table (ECSV, CSV or JSON) from `ucbplan plan -o`.")
-]
-_To = Annotated[str, typer.Option("--to", help=f"Export format: {_EXPORT_HELP}.")]
 _Output = Annotated[
     Path | None, typer.Option("-o", "--output", help="Output file (default stdout).")
 ]
 _Overwrite = Annotated[bool, typer.Option("--overwrite", help="Replace an existing output file.")]
-_Format = Annotated[
-    str | None,
-    typer.Option(
-        "--format",
-        help="Proposal table format: ecsv | csv | latex (default: the -o suffix, else ecsv).",
-    ),
-]
-_Acquisition = Annotated[
-    float | None,
-    typer.Option(
-        "--acquisition", help="Acquisition overhead (s) (default: acq_s column, else 600 s)."
-    ),
-]
-_ToleranceSigma = Annotated[
-    float,
-    typer.Option(
-        "--tolerance-sigma", help="Window half-width in units of the block's 1σ timing error."
-    ),
-]
-_ToleranceFloor = Annotated[
-    float, typer.Option("--tolerance-floor", help="Smallest window half-width (s).")
-]
-_MergeOverlaps = Annotated[
-    bool,
-    typer.Option(
-        "--merge-overlaps", help="ESO p2: merge overlapping OBs of one target into one OB."
-    ),
-]
-_Rotmode = Annotated[
-    str, typer.Option("--rotmode", help="Keck starlist rotmode=: pa | vertical | stationary.")
-]
-_Force = Annotated[
-    bool,
-    typer.Option(
-        "--force", help="Write the file even if the plan's site is not the format's observatory."
-    ),
-]
-_Semester = Annotated[
-    str | None,
-    typer.Option(
-        "--semester",
-        help="Proposal semester: 2041A | 2041B (A = Feb-Jul) or an ESO period like P147 "
-        "(default: the one containing the plan).",
-    ),
-]
-_Seeing = Annotated[
-    float,
-    typer.Option("--seeing", help="ESO p2: seeing limit of the OB constraint set (arcsec)."),
-]
-_Instrument = Annotated[
-    str | None,
-    typer.Option(
-        "--instrument",
-        help="ESO p2: instrument whose readout mode and overheads go into the OB templates.",
-    ),
-]
-_EsoTemplates = Annotated[
-    Path | None,
-    typer.Option(
-        "--eso-templates",
-        help="ESO p2: YAML file with the acquisition/science template names and keywords.",
-    ),
-]
 _Create = Annotated[
     bool,
     typer.Option(
         "--create",
         help="ESO p2: create the OBs in a p2 container with p2api (a dry run unless --no-dry-run).",
-    ),
-]
-_DryRun = Annotated[
-    bool,
-    typer.Option(
-        "--dry-run/--no-dry-run", help="With --create: list the OBs only (default) or create them."
-    ),
-]
-_Container = Annotated[
-    int | None, typer.Option("--container", help="With --create: p2 container id (a run/folder).")
-]
-_P2Env = Annotated[
-    str,
-    typer.Option("--p2-environment", help="With --create: demo | production | production_lasilla."),
-]
-_P2User = Annotated[
-    str | None,
-    typer.Option(
-        "--p2-user",
-        help="With --no-dry-run: ESO user name (password from UCBPLAN_P2_PASSWORD or a prompt).",
     ),
 ]
 
@@ -130,20 +42,18 @@ def _proposal_format(
 ) -> str | None:
     """The proposal table format (``--format``, else the ``-o`` suffix); refuses an unknown
     ``--to`` and the proposal-only options with another format."""
-    from ucbplan.observing.exports import EXPORT_FORMATS, PROPOSAL_FORMATS
-
-    if to not in EXPORT_FORMATS:
+    formats, proposal = api.export_formats()
+    if to not in formats:
         raise InputError(
-            f"--to: unknown export format {shorten(to, 40)}; expected one of "
-            f"{', '.join(EXPORT_FORMATS)}"
+            f"--to: unknown export format {shorten(to, 40)}; expected one of {', '.join(formats)}"
         )
     if to == "proposal":
-        return pick_format(output, fmt, PROPOSAL_FORMATS)
+        return pick_format(output, fmt, proposal)
     if semester is not None:
         raise InputError(f"--semester chooses the proposal's semester: --to {to} takes none")
     if fmt is not None:
         raise InputError(
-            f"--format chooses the proposal table format ({' | '.join(PROPOSAL_FORMATS)}); "
+            f"--format chooses the proposal table format ({' | '.join(proposal)}); "
             f"--to {to} writes one fixed format: leave --format out"
         )
     return None
@@ -158,45 +68,47 @@ def _check_eso_only(to: str, given: dict[str, bool]) -> None:
 
 def _create(content: bytes, c: dict[str, Any]) -> None:
     """``--create``: list (dry run) or create the OBs of an eso-p2 export with p2api."""
-    from ucbplan.observing.exports.eso_create import connect, create_from_export
-
     if c["container"] is None:
         raise InputError("--create: expected --container ID (the p2 run or folder for the OBs)")
-    connection = None
+    password = None
     if not c["dry_run"]:
         if not c["user"]:
             raise InputError("--no-dry-run: expected --p2-user NAME (your ESO user portal name)")
         password = os.environ.get("UCBPLAN_P2_PASSWORD") or typer.prompt(
             "ESO password", hide_input=True
         )
-        connection = connect(c["environment"], c["user"], password)
-    report = create_from_export(
-        content, c["container"], dry_run=c["dry_run"], connection=connection
+    report = api.eso_p2_create(
+        content,
+        c["container"],
+        dry_run=c["dry_run"],
+        environment=c["environment"],
+        user=c["user"],
+        password=password,
     )
     sys.stdout.write(report)
 
 
 def export_command(
-    blocks: _Blocks,
-    to: _To,
+    blocks: Path = argument(EXPORT_FLAGS, "blocks"),
+    to: str = flag(EXPORT_FLAGS, "to", ...),
     output: _Output = None,
     overwrite: _Overwrite = False,
-    fmt: _Format = None,
-    acquisition: _Acquisition = None,
-    tolerance_sigma: _ToleranceSigma = 3.0,
-    tolerance_floor: _ToleranceFloor = 10.0,
-    merge_overlaps: _MergeOverlaps = False,
-    rotmode: _Rotmode = "vertical",
-    force: _Force = False,
-    semester: _Semester = None,
-    seeing: _Seeing = 1.0,
-    instrument: _Instrument = None,
-    eso_templates: _EsoTemplates = None,
+    fmt: str | None = flag(EXPORT_FLAGS, "proposal_format"),
+    acquisition: float | None = option(api.export, EXPORT_FLAGS, "acquisition"),
+    tolerance_sigma: float = option(api.export, EXPORT_FLAGS, "tolerance_sigma"),
+    tolerance_floor: float = option(api.export, EXPORT_FLAGS, "tolerance_floor"),
+    merge_overlaps: bool = option(api.export, EXPORT_FLAGS, "merge_overlaps"),
+    rotmode: str = option(api.export, EXPORT_FLAGS, "rotmode"),
+    force: bool = option(api.export, EXPORT_FLAGS, "force"),
+    semester: str | None = option(api.export, EXPORT_FLAGS, "semester"),
+    seeing: float = option(api.export, EXPORT_FLAGS, "seeing"),
+    instrument: str | None = option(api.export, EXPORT_FLAGS, "instrument"),
+    eso_templates: Path | None = option(api.export, EXPORT_FLAGS, "eso_templates"),
     create: _Create = False,
-    dry_run: _DryRun = True,
-    container: _Container = None,
-    p2_environment: _P2Env = "demo",
-    p2_user: _P2User = None,
+    dry_run: bool = option(api.eso_p2_create, P2_FLAGS, "dry_run"),
+    container: int | None = flag(P2_FLAGS, "container"),
+    p2_environment: str = option(api.eso_p2_create, P2_FLAGS, "environment"),
+    p2_user: str | None = option(api.eso_p2_create, P2_FLAGS, "user"),
 ) -> None:
     """Export a blocks table for an observatory (ESO p2, Keck, ING, LCO, Gemini), a phase table,
     a calendar or a proposal.
@@ -204,29 +116,26 @@ def export_command(
     All times are UTC at the site with their 1σ uncertainty; notes go to stderr. With --create
     (ESO p2), the OBs are listed (dry run) or created in p2 and the file is written only with -o.
     """
-    from ucbplan.observing.exports import PROPOSAL_FORMATS, ExportOptions, export_blocks
-    from ucbplan.observing.tableread import read_blocks
-
     fmt = _proposal_format(to, output, fmt, semester)
     eso_only = {"--create": create, "--instrument": instrument is not None}
     _check_eso_only(to, {**eso_only, "--eso-templates": eso_templates is not None})
     if output is not None:
         check_output_path(output, overwrite)
-    options = ExportOptions(
-        acquisition_s=acquisition,
+    result = api.export(
+        blocks,
+        to,
+        proposal_format=fmt,
+        acquisition=acquisition,
         tolerance_sigma=tolerance_sigma,
-        tolerance_floor_s=tolerance_floor,
+        tolerance_floor=tolerance_floor,
         merge_overlaps=merge_overlaps,
-        proposal_format=fmt or PROPOSAL_FORMATS[0],
-        keck_rotmode=rotmode,
+        rotmode=rotmode,
         force=force,
         semester=semester,
-        seeing_arcsec=seeing,
+        seeing=seeing,
         instrument=instrument,
-        eso_templates=str(eso_templates) if eso_templates else None,
+        eso_templates=eso_templates,
     )
-    table = read_blocks(blocks)
-    result = export_blocks(table, to, options)
     for note in result.notes:
         err_console.print(f"[yellow]note:[/] {escape(note)}", soft_wrap=True)
     if create:
@@ -234,7 +143,7 @@ def export_command(
         _create(result.content, {**p2, "user": p2_user})
         if output is None:
             return
-    _write(result.content, output, overwrite, f"{to} export of {len(table)} blocks")
+    _write(result.content, output, overwrite, f"{to} export of {result.n_blocks} blocks")
 
 
 def _write(content: bytes, output: Path | None, overwrite: bool, what: str) -> None:

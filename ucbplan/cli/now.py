@@ -1,7 +1,8 @@
 """``ucbplan now``: at the telescope, the next exposure start and the wait, refreshed live.
 
-A thin shell over :func:`ucbplan.observing.countdown.what_next`: read the blocks table, list its
-exposures, and print :func:`~ucbplan.observing.countdown.countdown_lines` for the current UTC
+A thin shell over the countdown of :mod:`ucbplan.api.terminal`: read the blocks table
+(:func:`ucbplan.api.exporting.read_blocks`), list its exposures, and print the countdown for
+the current UTC
 (or ``--at``, a rehearsal clock that runs on from that instant). The frame goes to stdout: on a
 terminal it is redrawn every second; in a pipe a new frame is printed only when the next
 exposure changes. ``--once`` prints one frame and exits. Ctrl-C exits with code 130.
@@ -14,12 +15,13 @@ import time
 from collections.abc import Callable, Sequence
 from datetime import UTC, datetime, timedelta
 from pathlib import Path
-from typing import TYPE_CHECKING, TextIO
+from typing import Any, TextIO
 
 import typer
 
-if TYPE_CHECKING:
-    from ucbplan.observing.countdown import Exposure
+from ucbplan.api import terminal
+from ucbplan.api.exporting import NOW_FLAGS, read_blocks
+from ucbplan.cli._derive import argument, flag
 
 __all__ = ["live", "register"]
 
@@ -30,7 +32,7 @@ _INTERRUPTED = 130
 
 
 def live(
-    exposures: Sequence[Exposure],
+    exposures: Sequence[Any],  # ucbplan.api.terminal.plan_exposures(table)
     origin: datetime | None,
     out: TextIO,
     *,
@@ -45,8 +47,7 @@ def live(
     another stream gets a frame when the next exposure changes. ``monotonic`` and ``sleep``
     default to :mod:`time`'s, looked up at call time (tests replace them).
     """
-    from ucbplan.observing.countdown import countdown_lines, what_next
-
+    what_next, countdown_lines = terminal.what_next, terminal.countdown_lines
     monotonic = monotonic or time.monotonic
     sleep = sleep or time.sleep
     wall = wall or (lambda: datetime.now(UTC))
@@ -67,15 +68,8 @@ def live(
 
 
 def now(
-    plan: Path = typer.Argument(
-        ..., help="Blocks table written by `ucbplan plan -o` (ECSV, CSV or JSON)."
-    ),
-    at: str | None = typer.Option(
-        None,
-        "--at",
-        help="Run the clock from this UTC instant, ISO (2040-02-16T01:40:00Z), not from the "
-        "computer's clock: a rehearsal.",
-    ),
+    plan: Path = argument(NOW_FLAGS, "plan"),
+    at: str | None = flag(NOW_FLAGS, "at"),
     once: bool = typer.Option(False, "--once", help="Print one frame and exit (for scripts)."),
 ) -> None:
     """At the telescope: the next exposure start (UTC) and the wait, refreshed every second.
@@ -84,20 +78,12 @@ def now(
     visit/exposure, anchor, start HH:MM:SS UTC and "in 2 min 13 s"), the one after, and what
     to do if the previous start was missed. After the last exposure it says the plan is over.
     """
-    # imported here: `ucbplan --help` must not load astropy (tests/test_cli_help_units.py)
-    from ucbplan.observing.countdown import (
-        countdown_lines,
-        parse_utc,
-        plan_exposures,
-        what_next,
-    )
-    from ucbplan.observing.tableread import read_blocks
-
-    origin = parse_utc(at, "--at") if at is not None else None
-    exposures = plan_exposures(read_blocks(plan))
+    # loaded here: `ucbplan --help` must not load astropy (tests/test_cli_help_units.py)
+    origin = terminal.parse_utc(at, "--at") if at is not None else None
+    exposures = terminal.plan_exposures(read_blocks(plan))
     if once:
         instant = origin if origin is not None else datetime.now(UTC)
-        typer.echo("\n".join(countdown_lines(what_next(exposures, instant))))
+        typer.echo("\n".join(terminal.countdown_lines(terminal.what_next(exposures, instant))))
         return
     try:
         live(exposures, origin, sys.stdout)

@@ -1,0 +1,294 @@
+"""A saved plan read back, and exported for an observatory, a proposal or a calendar: what
+``ucbplan export`` and ``ucbplan now`` call (and :class:`ucbplan.Plan`'s methods can call too).
+
+The options of :func:`export` are declared here once: their defaults in its signature, their
+flags and ``--help`` text in :data:`EXPORT_FLAGS`. Nothing heavy is imported at module level.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from ucbplan.api._convert import as_float, scope
+from ucbplan.api.options import Flag
+from ucbplan.errors import InputError, shorten
+
+if TYPE_CHECKING:
+    from astropy.table import Table
+
+__all__ = [
+    "EXPORT_FLAGS",
+    "EXPORT_FORMAT_NAMES",
+    "NOW_FLAGS",
+    "P2_FLAGS",
+    "Export",
+    "eso_p2_create",
+    "export",
+    "export_formats",
+    "read_blocks",
+]
+
+#: The names of ``ucbplan.observing.exports.EXPORT_FORMATS`` (a test keeps them equal): spelled
+#: out because importing the exports (astropy.coordinates) at start-up costs ~0.3 s on every
+#: command; the library is imported only when an export runs.
+EXPORT_FORMAT_NAMES = (
+    "eso-p2",
+    "keck-starlist",
+    "ics",
+    "proposal",
+    "ing-cat",
+    "lco",
+    "gemini",
+    "phase-table",
+)
+
+#: The blocks table argument, as ``export`` and ``now`` spell it.
+_BLOCKS_HELP = "Master blocks table (ECSV, CSV or JSON) from `ucbplan plan -o`."
+
+#: :func:`export`'s parameters as ``ucbplan export`` spells them: flag and ``--help`` text.
+EXPORT_FLAGS: dict[str, Flag] = {
+    "blocks": Flag((), _BLOCKS_HELP),
+    "to": Flag(("--to",), f"Export format: {' | '.join(EXPORT_FORMAT_NAMES)}."),
+    "proposal_format": Flag(
+        ("--format",),
+        "Proposal table format: ecsv | csv | latex (default: the -o suffix, else ecsv).",
+    ),
+    "acquisition": Flag(
+        ("--acquisition",), "Acquisition overhead (s) (default: acq_s column, else 600 s).", "s"
+    ),
+    "tolerance_sigma": Flag(
+        ("--tolerance-sigma",), "Window half-width in units of the block's 1σ timing error."
+    ),
+    "tolerance_floor": Flag(("--tolerance-floor",), "Smallest window half-width (s).", "s"),
+    "merge_overlaps": Flag(
+        ("--merge-overlaps",), "ESO p2: merge overlapping OBs of one target into one OB."
+    ),
+    "rotmode": Flag(("--rotmode",), "Keck starlist rotmode=: pa | vertical | stationary."),
+    "force": Flag(
+        ("--force",), "Write the file even if the plan's site is not the format's observatory."
+    ),
+    "semester": Flag(
+        ("--semester",),
+        "Proposal semester: 2041A | 2041B (A = Feb-Jul) or an ESO period like P147 "
+        "(default: the one containing the plan).",
+    ),
+    "seeing": Flag(
+        ("--seeing",), "ESO p2: seeing limit of the OB constraint set (arcsec).", "arcsec"
+    ),
+    "instrument": Flag(
+        ("--instrument",),
+        "ESO p2: instrument whose readout mode and overheads go into the OB templates.",
+    ),
+    "eso_templates": Flag(
+        ("--eso-templates",),
+        "ESO p2: YAML file with the acquisition/science template names and keywords.",
+    ),
+}
+
+#: :func:`eso_p2_create`'s parameters as ``ucbplan export --create`` spells them.
+P2_FLAGS: dict[str, Flag] = {
+    "dry_run": Flag(
+        ("--dry-run/--no-dry-run",),
+        "With --create: list the OBs only (default) or create them.",
+    ),
+    "container": Flag(("--container",), "With --create: p2 container id (a run/folder)."),
+    "environment": Flag(
+        ("--p2-environment",), "With --create: demo | production | production_lasilla."
+    ),
+    "user": Flag(
+        ("--p2-user",),
+        "With --no-dry-run: ESO user name (password from UCBPLAN_P2_PASSWORD or a prompt).",
+    ),
+}
+
+#: ``ucbplan now``'s argument and options.
+NOW_FLAGS: dict[str, Flag] = {
+    "plan": Flag((), "Blocks table written by `ucbplan plan -o` (ECSV, CSV or JSON)."),
+    "at": Flag(
+        ("--at",),
+        "Run the clock from this UTC instant, ISO (2040-02-16T01:40:00Z), not from the "
+        "computer's clock: a rehearsal.",
+    ),
+}
+
+
+@dataclass(frozen=True)
+class Export:
+    """An exported plan: the file's bytes, its usual suffix, the notes for the user.
+
+    Attributes
+    ----------
+    content : bytes
+        The file, as ``ucbplan export`` writes it.
+    suffix : str
+        Its usual suffix (``.obx.json``, ``.ics`` …).
+    notes : tuple of str
+        Defaults taken and rounding warnings (``export`` prints them on stderr).
+    n_blocks : int
+        Blocks of the plan exported.
+    """
+
+    content: bytes
+    suffix: str
+    notes: tuple[str, ...]
+    n_blocks: int
+
+    def __repr__(self) -> str:
+        return f"Export({len(self.content)} bytes, {self.suffix}, {self.n_blocks} blocks)"
+
+
+def export_formats() -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """The export formats (``to``) and the proposal table formats (``proposal_format``)."""
+    from ucbplan.observing.exports import EXPORT_FORMATS, PROPOSAL_FORMATS
+
+    return tuple(EXPORT_FORMATS), tuple(PROPOSAL_FORMATS)
+
+
+def read_blocks(path: str | Path) -> Table:
+    """A blocks table written by ``ucbplan plan -o`` (or :meth:`Plan.write`): ECSV, CSV or
+    JSON, recognised by its content, every cell checked.
+
+    Raises
+    ------
+    UcbplanError
+        One line naming the file, the row and column at fault.
+    """
+    from ucbplan.observing.tableread import read_blocks as _read
+
+    if not isinstance(path, str | Path):
+        raise InputError(f"path: expected a file path, got {shorten(path, 40)}", "path")
+    with scope():
+        return _read(path)
+
+
+def export(
+    blocks: Any,
+    to: str,
+    *,
+    proposal_format: str | None = None,
+    acquisition: float | Any | None = None,
+    tolerance_sigma: float = 3.0,
+    tolerance_floor: float | Any = 10.0,
+    merge_overlaps: bool = False,
+    rotmode: str = "vertical",
+    force: bool = False,
+    semester: str | None = None,
+    seeing: float | Any = 1.0,
+    instrument: str | None = None,
+    eso_templates: str | Path | None = None,
+) -> Export:
+    """A plan exported for an observatory (ESO p2, Keck, ING, LCO, Gemini), as a phase table,
+    a calendar or a proposal table: ``ucbplan export``.
+
+    Parameters
+    ----------
+    blocks : path, astropy Table or Plan
+        The blocks table (a file from ``plan -o``, the table, or a :class:`ucbplan.Plan`).
+    to : str
+        The format, one of :data:`EXPORT_FORMAT_NAMES`.
+    proposal_format : str, optional
+        ``proposal``: ``ecsv`` (None), ``csv`` or ``latex``.
+    acquisition : float or Quantity, optional
+        Acquisition overhead [s] (None: the ``acq_s`` column, else the plan's, else 600 s).
+    tolerance_sigma : float
+        Window half-width in units of the block's 1σ timing error.
+    tolerance_floor : float or Quantity
+        Smallest window half-width [s].
+    merge_overlaps : bool
+        ESO p2: merge overlapping OBs of one target into one OB.
+    rotmode : str
+        Keck starlist ``rotmode=``: ``pa``, ``vertical`` or ``stationary``.
+    force : bool
+        Export even if the plan's site is not the format's observatory.
+    semester : str, optional
+        Proposal semester ``2041A``/``2041B`` or an ESO period ``P147`` (None: the plan's).
+    seeing : float or Quantity
+        ESO p2: seeing limit of the OB constraint set [arcsec].
+    instrument : str, optional
+        ESO p2: the instrument whose readout mode and overheads go into the OB templates.
+    eso_templates : path, optional
+        ESO p2: YAML file with the acquisition/science template names and keywords.
+
+    Returns
+    -------
+    Export
+
+    Raises
+    ------
+    UcbplanError
+        An unknown format, a bad option or table cell, a site that is not the format's
+        observatory (without ``force``): one line each.
+    """
+    from ucbplan.observing.exports import PROPOSAL_FORMATS, ExportOptions, export_blocks
+
+    options = ExportOptions(  # the options first: cheap, one line each, before the file
+        acquisition_s=as_float(acquisition, "s", "acquisition"),
+        tolerance_sigma=tolerance_sigma,
+        tolerance_floor_s=as_float(tolerance_floor, "s", "tolerance_floor"),
+        merge_overlaps=merge_overlaps,
+        proposal_format=proposal_format or PROPOSAL_FORMATS[0],
+        keck_rotmode=rotmode,
+        force=force,
+        semester=semester,
+        seeing_arcsec=as_float(seeing, "arcsec", "seeing"),
+        instrument=instrument,
+        eso_templates=str(eso_templates) if eso_templates else None,
+    )
+    table = _blocks_table(blocks)
+    with scope():
+        result = export_blocks(table, to, options)
+    return Export(result.content, result.suffix, tuple(result.notes), len(table))
+
+
+def _blocks_table(blocks: Any) -> Table:
+    """The blocks table of a path, a Table or a Plan."""
+    from astropy.table import Table
+
+    if isinstance(blocks, str | Path):
+        return read_blocks(blocks)
+    table = getattr(blocks, "table", blocks)
+    if not isinstance(table, Table):
+        raise InputError(
+            f"blocks: expected a blocks table file, an astropy Table or a Plan, got "
+            f"{shorten(blocks, 60)}",
+            parameter="blocks",
+        )
+    return table
+
+
+def eso_p2_create(
+    content: bytes,
+    container: int,
+    *,
+    dry_run: bool = True,
+    environment: str = "demo",
+    user: str | None = None,
+    password: str | None = None,
+) -> str:
+    """List (dry run) or create in ESO p2 the OBs of an ``eso-p2`` export, with ``p2api``.
+
+    Parameters
+    ----------
+    content : bytes
+        The ``eso-p2`` export (:attr:`Export.content`).
+    container : int
+        The p2 container id (a run or folder) the OBs go into.
+    dry_run : bool
+        List the OBs only (no connection).
+    environment, user, password : str
+        The p2 environment (``demo``, ``production``, ``production_lasilla``) and the ESO user
+        portal login (only without ``dry_run``).
+
+    Returns
+    -------
+    str
+        The report, one line per OB.
+    """
+    from ucbplan.observing.exports.eso_create import connect, create_from_export
+
+    connection = None
+    if not dry_run:
+        connection = connect(environment, user or "", password or "")
+    return create_from_export(content, container, dry_run=dry_run, connection=connection)

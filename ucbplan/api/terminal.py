@@ -1,0 +1,115 @@
+"""What the command line's shells need besides the public functions: writing outputs, the
+offline scope, and the pieces of the plan view and of the countdown they print.
+
+The command line imports only :mod:`ucbplan.api` (a test enforces it); this module is its door to
+the few library helpers a shell prints or writes with, each named once here. The light ones are
+imported at start-up; the others (astropy behind them) only when a command first uses them, so
+``ucbplan --help`` stays fast.
+
+Names
+-----
+check_output_path, output_format, write_output, dump_json
+    Output files: refused when they exist (unless overwriting), the ``-o``/``--format`` rule,
+    atomic writes (:mod:`ucbplan.io`).
+check_figure_path
+    A figure's suffix and path (:mod:`ucbplan.plotting`).
+offline
+    The offline astropy scope every command runs in (:mod:`ucbplan.offline`).
+write_table
+    A blocks table as ECSV, CSV or JSON to an open file.
+block_columns, local_datetimes
+    The columns of a plan's blocks, and local civil times (the ``plan`` view).
+plan_exposures, what_next, countdown_lines, parse_utc
+    The ``now`` countdown.
+chart_format, sheet_format, night_charts, night_sheet
+    The suffix checks of the night charts and the night sheet, and writing them for a plan.
+"""
+
+from __future__ import annotations
+
+import importlib
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from ucbplan.io import check_output_path, dump_json, output_format, write_output
+from ucbplan.offline import offline
+from ucbplan.plotting import check_figure_path
+
+if TYPE_CHECKING:  # imported when first used (see _LAZY)
+    from ucbplan.observing.blockcolumns import block_columns
+    from ucbplan.observing.countdown import (
+        countdown_lines,
+        parse_utc,
+        plan_exposures,
+        what_next,
+    )
+    from ucbplan.observing.nightplot import chart_format
+    from ucbplan.observing.nightsheet import sheet_format
+    from ucbplan.observing.tableformat import local_datetimes
+    from ucbplan.observing.tablewrite import write_table
+
+__all__ = [
+    "block_columns",
+    "chart_format",
+    "check_figure_path",
+    "check_output_path",
+    "countdown_lines",
+    "dump_json",
+    "local_datetimes",
+    "night_charts",
+    "night_sheet",
+    "offline",
+    "output_format",
+    "parse_utc",
+    "plan_exposures",
+    "sheet_format",
+    "what_next",
+    "write_output",
+    "write_table",
+]
+
+#: Names imported when first used: name → the library module that defines it.
+_LAZY = {
+    "block_columns": "ucbplan.observing.blockcolumns",
+    "local_datetimes": "ucbplan.observing.tableformat",
+    "plan_exposures": "ucbplan.observing.countdown",
+    "what_next": "ucbplan.observing.countdown",
+    "countdown_lines": "ucbplan.observing.countdown",
+    "parse_utc": "ucbplan.observing.countdown",
+    "chart_format": "ucbplan.observing.nightplot",
+    "sheet_format": "ucbplan.observing.nightsheet",
+    "write_table": "ucbplan.observing.tablewrite",
+}
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    return getattr(importlib.import_module(module), name)
+
+
+def night_charts(plan: Any, path: str | Path, overwrite: bool = False) -> int:
+    """The night charts of ``plan`` (a :class:`ucbplan.Plan`) under its constraints:
+    ``.png``/``.svg`` panels or a ``.pdf`` page per night; the number of nights charted."""
+    from ucbplan.observing.nightplot import write_night_charts
+
+    run = plan.run
+    constraints = run.settings.constraints(run.site)
+    with offline():
+        return write_night_charts(
+            plan.table, run.site, Path(path), constraints=constraints, overwrite=overwrite
+        )
+
+
+def night_sheet(plan: Any, path: str | Path, overwrite: bool = False) -> int:
+    """The night sheet of ``plan`` (``.pdf``, or self-contained ``.html``): chart and visits of
+    each night; the number of nights."""
+    from ucbplan.observing.nightsheet import write_night_sheet
+
+    run = plan.run
+    constraints = run.settings.constraints(run.site)
+    with offline():
+        return write_night_sheet(
+            plan.table, run.site, Path(path), constraints=constraints, overwrite=overwrite
+        )
