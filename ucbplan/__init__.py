@@ -55,6 +55,10 @@ _PUBLIC = {
     "PlanWarning": "ucbplan.errors",
     "ReduceWarning": "ucbplan.errors",
     "EarthOrientationWarning": "ucbplan.errors",
+    # a1 (issue 30): a saved plan read back and exported
+    "read_blocks": "ucbplan.api",
+    "export": "ucbplan.api",
+    "Export": "ucbplan.api",
 }
 
 __all__ = ["__version__", *_PUBLIC]
@@ -90,6 +94,9 @@ if TYPE_CHECKING:  # the same names for type checkers and IDEs ("as": re-exporte
     from typing import Any
 
     from ucbplan.api import (
+        Export as Export,
+    )
+    from ucbplan.api import (
         Plan as Plan,
     )
     from ucbplan.api import (
@@ -100,6 +107,9 @@ if TYPE_CHECKING:  # the same names for type checkers and IDEs ("as": re-exporte
     )
     from ucbplan.api import (
         ephemeris as ephemeris,
+    )
+    from ucbplan.api import (
+        export as export,
     )
     from ucbplan.api import (
         fit_ephemeris as fit_ephemeris,
@@ -118,6 +128,9 @@ if TYPE_CHECKING:  # the same names for type checkers and IDEs ("as": re-exporte
     )
     from ucbplan.api import (
         population_forecast as population_forecast,
+    )
+    from ucbplan.api import (
+        read_blocks as read_blocks,
     )
     from ucbplan.api import (
         reduce as reduce,

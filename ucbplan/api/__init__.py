@@ -9,20 +9,26 @@ UcbplanWarning` (filterable) besides returning it. The command line is a shell o
 """
 
 from ucbplan.api.ephemeris import ephemeris, fit_ephemeris, get_site, horizon, load_target
+
+# a1 (issue 30): a saved plan read back and exported
+from ucbplan.api.exporting import Export, export, read_blocks
 from ucbplan.api.planning import Plan, default_constraints, plan
 from ucbplan.api.reduction import Report, population_forecast, reduce, simulate
 
 __all__ = [
+    "Export",
     "Plan",
     "Report",
     "default_constraints",
     "ephemeris",
+    "export",
     "fit_ephemeris",
     "get_site",
     "horizon",
     "load_target",
     "plan",
     "population_forecast",
+    "read_blocks",
     "reduce",
     "simulate",
 ]

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 from ucbplan.api._convert import as_float, scope
 from ucbplan.api.options import Flag
+from ucbplan.api.plan_options import checked_flag, checked_text
 from ucbplan.errors import InputError, shorten
 
 if TYPE_CHECKING:
@@ -223,23 +224,42 @@ def export(
     """
     from ucbplan.observing.exports import PROPOSAL_FORMATS, ExportOptions, export_blocks
 
+    if to not in EXPORT_FORMAT_NAMES:
+        raise InputError(
+            f"to: unknown export format {shorten(to, 40)}; expected one of "
+            f"{', '.join(EXPORT_FORMAT_NAMES)}",
+            parameter="to",
+        )
+    fmt = checked_text(proposal_format, "proposal_format", "ecsv, csv or latex")
+    if fmt is not None and fmt not in PROPOSAL_FORMATS:
+        raise InputError(
+            f"proposal_format: expected {', '.join(PROPOSAL_FORMATS)}, got {shorten(fmt, 40)}",
+            parameter="proposal_format",
+        )
     options = ExportOptions(  # the options first: cheap, one line each, before the file
         acquisition_s=as_float(acquisition, "s", "acquisition"),
         tolerance_sigma=tolerance_sigma,
         tolerance_floor_s=as_float(tolerance_floor, "s", "tolerance_floor"),
-        merge_overlaps=merge_overlaps,
-        proposal_format=proposal_format or PROPOSAL_FORMATS[0],
+        merge_overlaps=checked_flag(merge_overlaps, "merge_overlaps"),
+        proposal_format=fmt or PROPOSAL_FORMATS[0],
         keck_rotmode=rotmode,
-        force=force,
-        semester=semester,
+        force=checked_flag(force, "force"),
+        semester=checked_text(semester, "semester", "a semester such as 2041A or P147"),
         seeing_arcsec=as_float(seeing, "arcsec", "seeing"),
-        instrument=instrument,
-        eso_templates=str(eso_templates) if eso_templates else None,
+        instrument=checked_text(instrument, "instrument", "an instrument name"),
+        eso_templates=_templates(eso_templates),
     )
     table = _blocks_table(blocks)
     with scope():
         result = export_blocks(table, to, options)
     return Export(result.content, result.suffix, tuple(result.notes), len(table))
+
+
+def _templates(value: Any) -> str | None:
+    """``eso_templates`` as the exporter takes it (a path's text)."""
+    if value is None or isinstance(value, Path):
+        return str(value) if value else None
+    return checked_text(value, "eso_templates", "a YAML file path") or None
 
 
 def _blocks_table(blocks: Any) -> Table:

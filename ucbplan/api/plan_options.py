@@ -27,6 +27,8 @@ __all__ = [
     "PLAN_FLAGS",
     "PlanDefault",
     "accept_old_names",
+    "checked_flag",
+    "checked_text",
     "settings_from",
 ]
 
@@ -195,7 +197,7 @@ def _duration(value: Any, parameter: str) -> Any:
     return as_float(value, _S, parameter)
 
 
-def _text(value: Any, parameter: str, what: str) -> str | None:
+def checked_text(value: Any, parameter: str, what: str) -> str | None:
     """``value`` if it is None or text, else one line naming ``parameter``."""
     if value is None or isinstance(value, str):
         return value
@@ -206,7 +208,7 @@ def _path(value: Any, parameter: str) -> Path | None:
     """``value`` (None, text or a path) as a path."""
     if value is None or isinstance(value, Path):
         return value
-    return Path(_text(value, parameter, "a file path") or "")
+    return Path(checked_text(value, parameter, "a file path") or "")
 
 
 def _budgets(value: Any) -> list[Any]:
@@ -224,7 +226,8 @@ def _budgets(value: Any) -> list[Any]:
     return list(value)
 
 
-def _flag(value: Any, parameter: str) -> bool:
+def checked_flag(value: Any, parameter: str) -> bool:
+    """``value`` if it is True or False, else one line naming ``parameter``."""
     if not isinstance(value, bool):
         raise InputError(
             f"{parameter}: expected True or False, got {shorten(value, 40)}", parameter
@@ -277,7 +280,7 @@ def _settings(o: Mapping[str, Any], constraints: tuple[Any, ...] | None) -> Plan
     check_max_visit(o["max_visit"], o["goal"])
     exptime = o["exptime"]
     return plan_settings(
-        instrument=_text(o["instrument"], "instrument", "an instrument name"),
+        instrument=checked_text(o["instrument"], "instrument", "an instrument name"),
         instruments_file=_path(o["instruments_file"], "instruments_file"),
         # left at its default, the exposure time is capped at the smearing floor (or chosen);
         # given, it is refused below it
@@ -291,9 +294,9 @@ def _settings(o: Mapping[str, Any], constraints: tuple[Any, ...] | None) -> Plan
         sigma_floor_kms=as_float(o["sigma_floor"], _KMS, "sigma_floor"),
         extinction_k=o["extinction"],
         cadence=o["cadence"],
-        goal=_text(o["goal"], "goal", "a goal such as sigma_K=2km/s"),
+        goal=checked_text(o["goal"], "goal", "a goal such as sigma_K=2km/s"),
         min_lambda_k=o["min_lambda_k"],
-        allow_smeared=_flag(o["allow_smeared"], "allow_smeared"),
+        allow_smeared=checked_flag(o["allow_smeared"], "allow_smeared"),
         budgets=_budgets(o["budgets"]),
         mode=o["mode"],
         alpha=o["alpha"],

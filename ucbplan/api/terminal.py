@@ -32,8 +32,6 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ucbplan.io import check_output_path, dump_json, output_format, write_output
-from ucbplan.offline import offline
-from ucbplan.plotting import check_figure_path
 
 if TYPE_CHECKING:  # imported when first used (see _LAZY)
     from ucbplan.observing.blockcolumns import block_columns
@@ -47,6 +45,8 @@ if TYPE_CHECKING:  # imported when first used (see _LAZY)
     from ucbplan.observing.nightsheet import sheet_format
     from ucbplan.observing.tableformat import local_datetimes
     from ucbplan.observing.tablewrite import write_table
+    from ucbplan.offline import offline
+    from ucbplan.plotting import check_figure_path
 
 __all__ = [
     "block_columns",
@@ -70,6 +70,8 @@ __all__ = [
 
 #: Names imported when first used: name → the library module that defines it.
 _LAZY = {
+    "offline": "ucbplan.offline",
+    "check_figure_path": "ucbplan.plotting",
     "block_columns": "ucbplan.observing.blockcolumns",
     "local_datetimes": "ucbplan.observing.tableformat",
     "plan_exposures": "ucbplan.observing.countdown",
@@ -93,6 +95,7 @@ def night_charts(plan: Any, path: str | Path, overwrite: bool = False) -> int:
     """The night charts of ``plan`` (a :class:`ucbplan.Plan`) under its constraints:
     ``.png``/``.svg`` panels or a ``.pdf`` page per night; the number of nights charted."""
     from ucbplan.observing.nightplot import write_night_charts
+    from ucbplan.offline import offline
 
     run = plan.run
     constraints = run.settings.constraints(run.site)
@@ -106,6 +109,7 @@ def night_sheet(plan: Any, path: str | Path, overwrite: bool = False) -> int:
     """The night sheet of ``plan`` (``.pdf``, or self-contained ``.html``): chart and visits of
     each night; the number of nights."""
     from ucbplan.observing.nightsheet import write_night_sheet
+    from ucbplan.offline import offline
 
     run = plan.run
     constraints = run.settings.constraints(run.site)

@@ -12,8 +12,8 @@ from rich.markup import escape
 from rich.table import Table as RichTable
 from rich.text import Text
 
+from ucbplan.api import terminal
 from ucbplan.api.terminal import (
-    check_figure_path,
     check_output_path,
     dump_json,
     output_format,
@@ -126,7 +126,7 @@ def check_output_and_plot(output: Path | None, plot: Path | None, overwrite: boo
     if output is not None:
         check_output_path(output, overwrite)
     if plot is not None:
-        check_figure_path(plot, overwrite)
+        terminal.check_figure_path(plot, overwrite)
 
 
 def pick_format(output: Path | None, fmt: str | None, formats: tuple[str, ...]) -> str:

@@ -115,7 +115,7 @@ def check_max_visit(max_visit: Any, goal: Any, *, compared: bool = False) -> Non
     if max_visit is not None and goal is None and not compared:
         raise InputError(
             "max_visit: the longest visit a goal plans, and no goal is given: add a goal "
-            "or leave max_visit out",
+            "or leave it out",
             parameter="max_visit",
         )
 
@@ -136,7 +136,7 @@ def _visits(visit: str | float | None, max_visit: str | float | None) -> tuple[f
     if visit_s is not None and max_visit_s < visit_s:
         raise InputError(
             f"max_visit: {max_visit_s:g} s is shorter than the visit ({visit_s:g} s), which "
-            "sets every visit's length: give a longer max_visit or leave it out"
+            "sets every visit's length: give a longer maximum or leave it out"
         )
     return visit_s, max_visit_s
 
