@@ -146,3 +146,27 @@ def test_plan_refuses_ignored_or_contradictory_max_visit(
 def test_an_unknown_plan_option_is_refused_as_before() -> None:
     with pytest.raises(InputError, match="did you mean 'moon_sep'"):
         ucbplan.plan(HM, "paranal", "2040-02-15", moon_sepp=3)
+
+
+def test_countdown_equals_now_once(saved: tuple[Any, Path]) -> None:
+    from datetime import UTC, datetime
+
+    from astropy.time import Time
+
+    plan, path = saved
+    first = plan.table["t_start_utc"][0]
+    at = f"{str(first)[:19].replace(' ', 'T')}Z"
+    cli = _cli("now", str(path), "--at", at, "--once")
+    assert cli.returncode == 0, cli.stderr
+    lines = ucbplan.api.exporting.countdown(path, at)
+    assert "\n".join(lines) + "\n" == cli.stdout.decode()
+    instant = datetime.fromisoformat(at[:-1]).replace(tzinfo=UTC)
+    assert ucbplan.api.exporting.countdown(plan, instant) == lines
+    assert ucbplan.api.exporting.countdown(plan, Time(at[:-1], scale="utc")) == lines
+
+
+@pytest.mark.parametrize("at", [3, "tomorrow", ["2040-02-16"]])
+def test_countdown_refuses_a_bad_instant_in_one_line(saved: tuple[Any, Path], at: Any) -> None:
+    with pytest.raises(InputError, match=r"^at: expected an ISO UTC time") as info:
+        ucbplan.api.exporting.countdown(saved[1], at)
+    assert "\n" not in str(info.value)

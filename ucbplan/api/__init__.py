@@ -11,7 +11,7 @@ UcbplanWarning` (filterable) besides returning it. The command line is a shell o
 from ucbplan.api.ephemeris import ephemeris, fit_ephemeris, get_site, horizon, load_target
 
 # a1 (issue 30): a saved plan read back and exported
-from ucbplan.api.exporting import Export, export, read_blocks
+from ucbplan.api.exporting import Export, countdown, export, read_blocks
 from ucbplan.api.planning import Plan, default_constraints, plan
 from ucbplan.api.reduction import Report, population_forecast, reduce, simulate
 
@@ -19,6 +19,7 @@ __all__ = [
     "Export",
     "Plan",
     "Report",
+    "countdown",
     "default_constraints",
     "ephemeris",
     "export",

@@ -8,6 +8,7 @@ flags and ``--help`` text in :data:`EXPORT_FLAGS`. Nothing heavy is imported at 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from datetime import UTC, datetime
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -25,6 +26,7 @@ __all__ = [
     "NOW_FLAGS",
     "P2_FLAGS",
     "Export",
+    "countdown",
     "eso_p2_create",
     "export",
     "export_formats",
@@ -312,3 +314,52 @@ def eso_p2_create(
     if not dry_run:
         connection = connect(environment, user or "", password or "")
     return create_from_export(content, container, dry_run=dry_run, connection=connection)
+
+
+def countdown(blocks: Any, at: Any = None) -> list[str]:
+    """The telescope countdown at ``at``: what ``ucbplan now --once`` prints (the exposure that
+    should be running, the next start in UTC and the wait, the one after, what to do if a start
+    was missed; after the last exposure, that the plan is over).
+
+    Parameters
+    ----------
+    blocks : path, astropy Table or Plan
+        The plan (as :func:`export` takes it).
+    at : str, datetime or Time, optional
+        The instant: ISO UTC text (``2040-02-16T01:40:00Z``), a ``datetime`` (naive = UTC) or
+        an astropy ``Time``; None: the computer's clock.
+
+    Returns
+    -------
+    list of str
+        The lines of the frame.
+
+    Raises
+    ------
+    UcbplanError
+        A bad instant or table (one line naming it).
+    """
+    from ucbplan.observing.countdown import countdown_lines, plan_exposures, what_next
+
+    instant = _instant(at)
+    table = _blocks_table(blocks)
+    with scope():
+        return countdown_lines(what_next(plan_exposures(table), instant))
+
+
+def _instant(at: Any) -> datetime:
+    """``at`` (None, ISO UTC text, a datetime or a Time) as an aware UTC datetime."""
+    from ucbplan.observing.countdown import parse_utc
+
+    if at is None:
+        return datetime.now(UTC)
+    if isinstance(at, str):
+        return parse_utc(at, "at")
+    if isinstance(at, datetime):
+        return at.astimezone(UTC) if at.tzinfo is not None else at.replace(tzinfo=UTC)
+    if type(at).__name__ == "Time" and getattr(at, "isscalar", False):
+        with scope():
+            return datetime.fromisoformat(at.utc.isot).replace(tzinfo=UTC)
+    raise InputError(
+        f"at: expected an ISO UTC time, a datetime or a Time, got {shorten(at, 40)}", "at"
+    )

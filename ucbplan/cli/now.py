@@ -20,7 +20,7 @@ from typing import Any, TextIO
 import typer
 
 from ucbplan.api import terminal
-from ucbplan.api.exporting import NOW_FLAGS, read_blocks
+from ucbplan.api.exporting import NOW_FLAGS, countdown, read_blocks
 from ucbplan.cli._derive import argument, flag
 
 __all__ = ["live", "register"]
@@ -80,11 +80,10 @@ def now(
     """
     # loaded here: `ucbplan --help` must not load astropy (tests/test_cli_help_units.py)
     origin = terminal.parse_utc(at, "--at") if at is not None else None
-    exposures = terminal.plan_exposures(read_blocks(plan))
     if once:
-        instant = origin if origin is not None else datetime.now(UTC)
-        typer.echo("\n".join(terminal.countdown_lines(terminal.what_next(exposures, instant))))
+        typer.echo("\n".join(countdown(plan, origin)))
         return
+    exposures = terminal.plan_exposures(read_blocks(plan))
     try:
         live(exposures, origin, sys.stdout)
     except KeyboardInterrupt:
