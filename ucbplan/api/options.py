@@ -42,7 +42,7 @@ class Flag:
     def name(self) -> str:
         """The long flag (``--airmass-max``): the one error messages print."""
         longs = [d for d in self.decls if d.startswith("--")]
-        return (longs or list(self.decls))[0].split("/")[0]
+        return (longs or list(self.decls) or [""])[0].split("/")[0]  # "": an argument
 
 
 def default_of(func: Callable[..., Any], parameter: str) -> Any:
@@ -64,5 +64,6 @@ def flag_names(*tables: Mapping[str, Flag]) -> dict[str, str]:
     out: dict[str, str] = {}
     for table in tables:
         for parameter, flag in table.items():
-            out.setdefault(parameter, flag.name)
+            if flag.decls:  # an argument has no flag
+                out.setdefault(parameter, flag.name)
     return out

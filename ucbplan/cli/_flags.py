@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import re
 
+from ucbplan.api.options import flag_names
 from ucbplan.api.plan_options import PLAN_FLAGS
 
 __all__ = ["FLAGS", "cli_message"]
@@ -51,9 +52,7 @@ FLAGS = {
 }
 
 # a1 (issue 30): ``ucbplan.plan``'s keywords, from the flag table declared beside it
-FLAGS.update(
-    {name: flag.name for name, flag in PLAN_FLAGS.items() if flag.decls and name not in FLAGS}
-)
+FLAGS.update({k: v for k, v in flag_names(PLAN_FLAGS).items() if k not in FLAGS})
 
 _LEADING_NAME = re.compile(r"^([a-z_][a-z0-9_]*)(?=[: ])")
 

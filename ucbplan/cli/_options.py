@@ -7,6 +7,9 @@ from typing import Annotated
 
 import typer
 
+from ucbplan.api.plan_options import PLAN_FLAGS
+from ucbplan.cli._derive import annotated
+
 TargetArg = Annotated[Path, typer.Argument(help="Target YAML file.")]
 TargetsArg = Annotated[list[Path], typer.Argument(help="Target YAML files to check.")]
 ValidateFormatOpt = Annotated[str, typer.Option("--format", help="table | json")]
@@ -65,26 +68,8 @@ CompareFormatOpt = Annotated[
     str | None,
     typer.Option("--format", help="table | json (default: the -o suffix, else table)"),
 ]
-SigmaLawOpt = Annotated[
-    str | None,
-    typer.Option(
-        "--sigma-v",
-        help="RV precision: km/s fixed per exposure (30), or of one spectrum of T_ref seconds "
-        "(30km/s@600s; ,V=20.0 at that magnitude): then exposure time and cadence are chosen.",
-    ),
-]
-SigmaFloorOpt = Annotated[
-    float,
-    typer.Option("--sigma-floor", help="Systematic σ_v floor added in quadrature [km/s]."),
-]
-ExtinctionOpt = Annotated[
-    float | None,
-    typer.Option(
-        "--extinction",
-        help="Extinction k [mag/airmass] of the σ_v law (default: the instrument's, else 0).",
-    ),
-]
-MaxVisitOpt = Annotated[
-    str | None,
-    typer.Option("--max-visit", help="Longest visit a --goal plans (default 2h)."),
-]
+# the σ_v law and the goal's longest visit, as ``plan`` declares them (ucbplan.api.plan_options)
+SigmaLawOpt = Annotated[str | None, annotated(PLAN_FLAGS, "sigma_v")]
+SigmaFloorOpt = Annotated[float, annotated(PLAN_FLAGS, "sigma_floor")]
+ExtinctionOpt = Annotated[float | None, annotated(PLAN_FLAGS, "extinction")]
+MaxVisitOpt = Annotated[str | None, annotated(PLAN_FLAGS, "max_visit")]
