@@ -8,6 +8,7 @@ line's come from the same run.
 
 from __future__ import annotations
 
+import tempfile
 from dataclasses import replace
 from datetime import date
 from html.parser import HTMLParser
@@ -18,9 +19,11 @@ import astropy.units as u
 import numpy as np
 import pytest
 from astropy.time import Time
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
 
 from ucbplan.api.plan_result import Plan
-from ucbplan.errors import InputFileError, OutputExistsError
+from ucbplan.errors import InputFileError, OutputExistsError, UcbplanError
 from ucbplan.observing.blocks import ExposurePlan
 from ucbplan.observing.schedule.run import planned_exposure
 
@@ -192,7 +195,7 @@ def test_table_has_times_and_quantities_and_the_file_stays_text(goal_plan: Plan)
     assert table.meta == text.meta
 
 
-def test_plot_returns_labelled_axes(goal_plan: Plan, tmp_path: Path) -> None:
+def test_plot_returns_labelled_axes(goal_plan: Plan) -> None:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
@@ -202,17 +205,25 @@ def test_plot_returns_labelled_axes(goal_plan: Plan, tmp_path: Path) -> None:
     try:
         assert isinstance(ax, Axes) and len(ax.figure.axes) == 2  # a panel per night
         assert ax.get_xlabel().startswith("UTC [hh:mm]") and ax.get_ylabel() == "altitude [deg]"
-        # what plan --plot nights.png writes (whose layout test_nightsheet checks)
-        ax.figure.savefig(tmp_path / "mine.png", format="png", dpi=110)
     finally:
         import matplotlib.pyplot as plt
 
         plt.close(ax.figure)
-    assert goal_plan.charts(tmp_path / "cli.png") == 2
-    assert (tmp_path / "mine.png").read_bytes() == (tmp_path / "cli.png").read_bytes()
     mine = Figure(figsize=(11, 5.2), layout="constrained").subplots()
     assert goal_plan.plot(ax=mine, night="2040-02-16") is mine
     assert "night of 2040-02-16" in mine.get_title() and layout_problems(mine.figure) == []
+
+
+def test_plot_draws_what_plot_writes(plan: Plan, tmp_path: Path) -> None:
+    import matplotlib.pyplot as plt
+
+    ax = plan.plot()
+    try:  # what `plan --plot night.png` writes (whose layout test_nightsheet checks)
+        ax.figure.savefig(tmp_path / "mine.png", format="png", dpi=110)
+    finally:
+        plt.close(ax.figure)
+    assert plan.charts(tmp_path / "cli.png") == 1
+    assert (tmp_path / "mine.png").read_bytes() == (tmp_path / "cli.png").read_bytes()
 
 
 def test_write_and_read_round_trip(goal_plan: Plan, tmp_path: Path) -> None:
@@ -265,9 +276,66 @@ def test_export_is_what_the_cli_writes(tmp_path: Path, to: str) -> None:
     assert isinstance(written, Path) and written.read_bytes() == result.stdout_bytes
 
 
-def test_sheet_writes_the_night_sheet(goal_plan: Plan, tmp_path: Path) -> None:
-    path = goal_plan.sheet(tmp_path / "night.html")
+def test_sheet_writes_the_night_sheet(plan: Plan, tmp_path: Path) -> None:
+    path = plan.sheet(tmp_path / "night.html")
     text = path.read_text(encoding="utf-8")
-    assert "night of 2040-02-15" in text and "night of 2040-02-16" in text
+    assert "night of 2040-02-15" in text and "V01" in text
     with pytest.raises(OutputExistsError):
-        goal_plan.sheet(path)
+        plan.sheet(path)
+
+
+# ------------------------------------------------------------------------------------ bad input
+
+_ANY = st.one_of(
+    st.none(),
+    st.booleans(),
+    st.integers(-(10**6), 10**6),
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.text(max_size=12),
+    st.lists(st.integers(), max_size=3),
+    st.just(object()),
+    st.just(date(1999, 1, 1)),
+)
+
+
+@settings(max_examples=80, deadline=None)
+@given(
+    method=st.sampled_from(["plot", "charts", "sheet", "write", "read", "export", "to_text"]),
+    parameter=st.sampled_from(["first", "ax", "night", "overwrite", "fmt", "semester", "to"]),
+    value=_ANY,
+)
+def test_methods_take_any_value(goal_plan: Plan, method: str, parameter: str, value: Any) -> None:
+    # anything at all: a ucbplan error in one line naming what is wrong, or a result; the
+    # folder is empty afterwards unless a good path was given (none of these is one)
+    import matplotlib.pyplot as plt
+
+    # a good value draws a figure (seconds): the tests above cover those
+    assume(not (method in ("plot", "charts", "sheet") and (value is None or value is False)))
+    with tempfile.TemporaryDirectory() as folder:
+        call = _call(goal_plan, method, parameter, value, Path(folder))
+        try:
+            result = call()
+        except UcbplanError as exc:
+            text = str(exc)
+            assert "\n" not in text and len(text) < 400, text
+            result = None
+        if hasattr(result, "figure"):
+            plt.close(result.figure)
+
+
+def _call(plan: Plan, method: str, parameter: str, value: Any, folder: Path) -> Any:
+    """``plan.method`` with ``value`` as its first argument or as keyword ``parameter``."""
+    first = {"plot": None, "charts": folder / "c.png", "sheet": folder / "s.html",
+             "write": folder / "p.ecsv", "read": folder / "none.ecsv", "export": "ics",
+             "to_text": "csv"}[method]  # fmt: skip
+    keywords = {"plot": ("ax", "night"), "charts": ("overwrite",), "sheet": ("overwrite",),
+                "write": ("fmt", "overwrite"), "export": ("overwrite", "semester", "to"),
+                "read": (), "to_text": ()}[method]  # fmt: skip
+    target = Plan.read if method == "read" else getattr(plan, method)
+    if method == "plot":  # no positional argument but ax
+        return lambda: target(**{parameter if parameter in keywords else "night": value})
+    if parameter == "first" or parameter not in keywords:
+        return lambda: target(value)
+    if parameter == "to":  # export's first argument by name
+        return lambda: target(to=value)
+    return lambda: target(first, **{parameter: value})

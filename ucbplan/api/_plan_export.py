@@ -7,12 +7,15 @@ from dataclasses import fields
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
 
-from ucbplan.errors import InputError
+from ucbplan.errors import InputError, shorten
 
 if TYPE_CHECKING:
     from astropy.table import Table
 
 __all__ = ["export_plan"]
+
+#: The export choices that are text (or a path).
+_TEXT = ("proposal_format", "keck_rotmode", "semester", "instrument", "eso_templates")
 
 
 def _options(to: str, path: Path | None, given: Mapping[str, Any]) -> Any:
@@ -23,6 +26,9 @@ def _options(to: str, path: Path | None, given: Mapping[str, Any]) -> Any:
 
     known = {f.name for f in fields(ExportOptions)}
     chosen = {k: v for k, v in given.items() if v is not None and k in known}
+    for key in _TEXT:
+        if key in chosen and not isinstance(chosen[key], str | Path):
+            raise InputError(f"{key}: expected text, got {shorten(chosen[key], 40)}", parameter=key)
     if "eso_templates" in chosen:
         chosen["eso_templates"] = str(chosen["eso_templates"])
     if to == "proposal":
@@ -40,7 +46,7 @@ def _options(to: str, path: Path | None, given: Mapping[str, Any]) -> Any:
 def export_plan(
     table: Table,
     to: str,
-    path: str | Path | None,
+    path: Path | None,
     overwrite: bool,
     given: Mapping[str, Any],
 ) -> tuple[str | Path, tuple[str, ...]]:
@@ -56,7 +62,7 @@ def export_plan(
     from ucbplan.io import check_output_path, write_output
     from ucbplan.observing.exports import export_blocks
 
-    out = Path(path) if path is not None else None
+    out = path
     if out is not None:
         check_output_path(out, overwrite)
     result = export_blocks(table, to, _options(to, out, given))

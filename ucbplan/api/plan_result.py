@@ -18,6 +18,7 @@ nothing outside the plan: the file the command line writes is the text table, un
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field
 from datetime import date
 from functools import cached_property
@@ -51,6 +52,35 @@ PLAN_FORMATS = ("ecsv", "csv", "json")
 
 def _count(n: int, what: str) -> str:
     return f"{n} {what}{'' if n == 1 else 's'}"
+
+
+def _path(value: Any, parameter: str) -> Path:
+    """``value`` as a path (a str or os.PathLike).
+
+    Raises
+    ------
+    InputError
+        For anything else, naming ``parameter``.
+    """
+    if isinstance(value, str | os.PathLike) and str(value).strip() and "\0" not in str(value):
+        return Path(value)
+    raise InputError(
+        f"{parameter}: expected a file path (str or pathlib.Path), got {shorten(value, 60)}",
+        parameter=parameter,
+    )
+
+
+def _flag(value: Any, parameter: str) -> bool:
+    """``value`` if it is a bool.
+
+    Raises
+    ------
+    InputError
+        For anything else, naming ``parameter``.
+    """
+    if isinstance(value, bool):
+        return value
+    raise InputError(f"{parameter}: expected True or False, got {shorten(value, 40)}", parameter)
 
 
 @dataclass(frozen=True, eq=False)
@@ -242,6 +272,14 @@ class Plan:
         """
         from ucbplan.observing.nightplot import plot_charts
 
+        if ax is not None and not callable(getattr(ax, "axvspan", None)):
+            raise InputError(
+                f"ax: expected matplotlib Axes (or None), got {shorten(ax, 60)}", parameter="ax"
+            )
+        if night is not None and not isinstance(night, str | date):
+            raise InputError(
+                f"night: expected a date or YYYY-MM-DD text, got {shorten(night, 40)}", "night"
+            )
         with scope():
             return plot_charts(self.text_table, self.site, self._constraints(), ax=ax, night=night)
 
@@ -254,9 +292,9 @@ class Plan:
             return write_night_charts(
                 self.text_table,
                 self.site,
-                Path(path),
+                _path(path, "path"),
                 constraints=self._constraints(),
-                overwrite=overwrite,
+                overwrite=_flag(overwrite, "overwrite"),
             )
 
     def sheet(self, path: str | Path, *, overwrite: bool = False) -> Path:
@@ -271,14 +309,14 @@ class Plan:
         """
         from ucbplan.observing.nightsheet import write_night_sheet
 
-        out = Path(path)
+        out = _path(path, "path")
         with scope():
             write_night_sheet(
                 self.text_table,
                 self.site,
                 out,
                 constraints=self._constraints(),
-                overwrite=overwrite,
+                overwrite=_flag(overwrite, "overwrite"),
             )
         return out
 
@@ -312,7 +350,12 @@ class Plan:
         from ucbplan.io import output_format, write_output
         from ucbplan.observing.tablewrite import write_table
 
-        out = Path(path)
+        out = _path(path, "path")
+        if fmt is not None and fmt not in PLAN_FORMATS:
+            raise InputError(
+                f"fmt: expected one of {', '.join(PLAN_FORMATS)}, got {shorten(fmt, 40)}",
+                parameter="fmt",
+            )
         kind = output_format(out, fmt, PLAN_FORMATS, "ecsv")
         table = self.text_table
 
@@ -320,7 +363,7 @@ class Plan:
             write_table(table, handle, kind, json_meta=True)
 
         with scope():
-            write_output(out, _write, overwrite=overwrite)
+            write_output(out, _write, overwrite=_flag(overwrite, "overwrite"))
         return out
 
     @classmethod
@@ -337,7 +380,7 @@ class Plan:
         from ucbplan.observing.tableread import read_blocks
 
         with scope():
-            table = read_blocks(path)
+            table = read_blocks(_path(path, "path"))
         if "time_accounting" not in table.meta:
             raise InputFileError(
                 f"{shorten(str(path), 80)}: expected an ECSV plan with its meta (Plan.write or "
@@ -388,8 +431,11 @@ keck_rotmode, force, semester, seeing_arcsec, instrument, eso_templates
         from ucbplan.api._plan_export import export_plan
 
         given = {k: v for k, v in locals().items() if k not in ("self", "to", "path", "overwrite")}
+        out = None if path is None else _path(path, "path")
         with scope():
-            content, notes = export_plan(self.text_table, to, path, overwrite, given)
+            content, notes = export_plan(
+                self.text_table, to, out, _flag(overwrite, "overwrite"), given
+            )
         emit(list(notes), PlanWarning)
         return content
 
