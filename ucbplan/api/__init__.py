@@ -9,12 +9,15 @@ UcbplanWarning` (filterable) besides returning it. The command line is a shell o
 """
 
 from ucbplan.api.ephemeris import ephemeris, fit_ephemeris, get_site, horizon, load_target
+from ucbplan.api.plan_result import GoalRecord, StrategyRecord
 from ucbplan.api.planning import Plan, default_constraints, plan
 from ucbplan.api.reduction import Report, population_forecast, reduce, simulate
 
 __all__ = [
+    "GoalRecord",
     "Plan",
     "Report",
+    "StrategyRecord",
     "default_constraints",
     "ephemeris",
     "fit_ephemeris",
