@@ -226,6 +226,12 @@ def test_plot_draws_what_plot_writes(plan: Plan, tmp_path: Path) -> None:
     assert (tmp_path / "mine.png").read_bytes() == (tmp_path / "cli.png").read_bytes()
 
 
+def test_to_dict_is_the_json_document(goal_plan: Plan) -> None:
+    import json
+
+    assert goal_plan.to_dict() == json.loads(goal_plan.to_text("json"))
+
+
 def test_write_and_read_round_trip(goal_plan: Plan, tmp_path: Path) -> None:
     path = goal_plan.write(tmp_path / "plan.ecsv")
     back = Plan.read(path)

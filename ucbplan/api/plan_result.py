@@ -87,6 +87,14 @@ def _flag(value: Any, parameter: str) -> bool:
 class Plan:
     """A finished plan: the blocks table, visits, time accounting, strategies and goals.
 
+    ``repr(plan)`` is one line (targets, nights, visits, exposures, hours); in a notebook the
+    plan shows a summary table (:meth:`_repr_html_`); ``len(plan)`` is its number of exposures.
+
+    Every attribute and method works on a plan read back with :meth:`read` as on the plan just
+    made, from the table and its meta, except :attr:`run` (None) — the charts and the sheet of
+    a read plan then draw no airmass or altitude limit (those are the run's constraint objects)
+    and its :attr:`site` has no aliases.
+
     Attributes
     ----------
     run : PlanRun or None
@@ -337,6 +345,17 @@ class Plan:
         with scope():
             write_table(self.text_table, buffer, fmt, json_meta=True)
         return buffer.getvalue()
+
+    def to_dict(self) -> dict[str, Any]:
+        """``{"meta": {...}, "rows": [{column: value}, ...]}`` in plain Python values (NaN →
+        None): the document ``plan --format json`` prints, without a JSON text round trip."""
+        from ucbplan.io import json_plain
+        from ucbplan.observing.tablewrite import table_to_json_rows
+
+        table = self.text_table
+        doc: dict[str, Any] = json_plain({"meta": dict(table.meta)})
+        doc["rows"] = table_to_json_rows(table)
+        return doc
 
     def write(self, path: str | Path, fmt: str | None = None, overwrite: bool = False) -> Path:
         """Write the blocks table (``.ecsv``, ``.csv`` or ``.json``, as ``plan -o``), atomically;
