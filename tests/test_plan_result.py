@@ -283,7 +283,8 @@ def test_export_is_what_the_cli_writes(tmp_path: Path, to: str) -> None:
 
 
 def test_sheet_writes_the_night_sheet(plan: Plan, tmp_path: Path) -> None:
-    path = plan.sheet(tmp_path / "night.html")
+    path = tmp_path / "night.html"
+    assert plan.sheet(path) == 1  # nights
     text = path.read_text(encoding="utf-8")
     assert "night of 2040-02-15" in text and "V01" in text
     with pytest.raises(OutputExistsError):

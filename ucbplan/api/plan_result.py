@@ -305,8 +305,9 @@ class Plan:
                 overwrite=_flag(overwrite, "overwrite"),
             )
 
-    def sheet(self, path: str | Path, *, overwrite: bool = False) -> Path:
-        """Write the night sheet (``.pdf`` or self-contained ``.html``), as ``plan --sheet``.
+    def sheet(self, path: str | Path, *, overwrite: bool = False) -> int:
+        """Write the night sheet (``.pdf`` or self-contained ``.html``), as ``plan --sheet``;
+        the number of nights on it.
 
         Raises
         ------
@@ -317,16 +318,14 @@ class Plan:
         """
         from ucbplan.observing.nightsheet import write_night_sheet
 
-        out = _path(path, "path")
         with scope():
-            write_night_sheet(
+            return write_night_sheet(
                 self.text_table,
                 self.site,
-                out,
+                _path(path, "path"),
                 constraints=self._constraints(),
                 overwrite=_flag(overwrite, "overwrite"),
             )
-        return out
 
     # ------------------------------------------------------------------------------ files
 
