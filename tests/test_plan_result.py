@@ -346,3 +346,35 @@ def _call(plan: Plan, method: str, parameter: str, value: Any, folder: Path) -> 
     if parameter == "to":  # export's first argument by name
         return lambda: target(to=value)
     return lambda: target(first, **{parameter: value})
+
+
+# ------------------------------------------------------------------------ offline, no global state
+
+
+def test_a_read_plan_works_offline_and_leaves_astropy_as_it_was(
+    goal_plan: Plan, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import socket
+
+    from astropy.utils import data, iers
+    from matplotlib.figure import Figure
+    from test_offline_cache import astropy_state
+
+    path = goal_plan.write(tmp_path / "plan.ecsv")
+    table_meta = repr(goal_plan.text_table.meta)
+
+    def no_network(*args: Any, **kwargs: Any) -> None:
+        raise OSError("network disabled by tests/test_plan_result.py")
+
+    monkeypatch.setattr(socket.socket, "connect", no_network)
+    # step out of the session's offline scope (conftest) to astropy's defaults
+    monkeypatch.setattr(iers.earth_orientation_table, "_value", None)
+    with iers.conf.set_temp("auto_download", True), data.conf.set_temp("allow_internet", True):
+        before = astropy_state()
+        back = Plan.read(path)
+        assert isinstance(back.table["t_mid_utc"], Time) and back.goals and back.strategies
+        assert back.plot(ax=Figure().subplots()) is not None
+        assert back.export("ics", tmp_path / "plan.ics") == tmp_path / "plan.ics"
+        assert len(back.to_astroplan().scheduled_blocks) == back.accounting.total.visits
+        assert astropy_state() == before
+    assert repr(goal_plan.text_table.meta) == table_meta  # the plan's own meta untouched
