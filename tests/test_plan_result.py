@@ -253,6 +253,35 @@ def test_write_and_read_round_trip(goal_plan: Plan, tmp_path: Path) -> None:
         goal_plan.write(path)
 
 
+@pytest.mark.parametrize(
+    ("key", "value", "attribute"),
+    [
+        ("site", {"name": "x"}, "site"),
+        ("nights", ["2040-13-45"], "nights"),
+        ("visits", [{"visit_id": 3}], "visits"),
+        ("not_planned", [1], "not_planned"),
+        ("time_accounting", {"total": {"visits": -1}}, "accounting"),
+        (
+            "planning",
+            {"targets": {"HM Cnc (simulated)": {"strategy": {"strategies": {"x": 1}}}}},
+            "strategies",
+        ),
+        (
+            "planning",
+            {"goal": "sigma_K=5km/s", "targets": {"a": {"goal_spectra": "many"}}},
+            "goals",
+        ),
+        ("planning", {"goal": "nonsense", "targets": {}}, "goals"),
+    ],
+)
+def test_a_hand_edited_meta_is_named(goal_plan: Plan, key: str, value: Any, attribute: str) -> None:
+    table = goal_plan.text_table.copy()
+    table.meta[key] = value
+    with pytest.raises(UcbplanError) as info:
+        getattr(Plan(None, table), attribute)
+    assert "\n" not in str(info.value)
+
+
 def test_read_wants_the_ecsv_plan(goal_plan: Plan, tmp_path: Path) -> None:
     path = goal_plan.write(tmp_path / "plan.csv")
     with pytest.raises(InputFileError, match=r"write the plan as \.ecsv"):

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 from datetime import date
 from functools import cached_property
 from pathlib import Path
-from typing import IO, TYPE_CHECKING, Any
+from typing import IO, TYPE_CHECKING, Any, TypeVar
 
 from ucbplan.api._convert import scope
 from ucbplan.api._plan_records import (
@@ -33,9 +33,11 @@ from ucbplan.api._plan_records import (
     goals_of,
     strategies_of,
 )
-from ucbplan.errors import InputError, InputFileError, PlanWarning, emit, shorten
+from ucbplan.errors import InputError, InputFileError, PlanWarning, UcbplanError, emit, shorten
 
 if TYPE_CHECKING:
+    from collections.abc import Callable
+
     from astropy.table import QTable, Table
     from matplotlib.axes import Axes
 
@@ -46,6 +48,9 @@ if TYPE_CHECKING:
 
 __all__ = ["GoalRecord", "Plan", "StrategyRecord"]
 
+T = TypeVar("T")
+#: The site fields a plan's meta records (``Site.as_dict``).
+_SITE_KEYS = ("name", "lon_deg", "lat_deg", "height_m", "timezone", "zenith_hole_deg")
 #: Formats :meth:`Plan.write` writes (as ``plan -o``); :meth:`Plan.read` reads the first.
 PLAN_FORMATS = ("ecsv", "csv", "json")
 
@@ -143,6 +148,20 @@ class Plan:
             )
         return meta[key]
 
+    def _typed(self, key: str, build: Callable[[Any], T]) -> T:
+        """``build(meta[key])``; a value that does not build (a hand-edited file) is an
+        :class:`InputFileError` naming ``key``."""
+        value = self._meta(key)
+        try:
+            return build(value)
+        except UcbplanError:
+            raise
+        except (TypeError, ValueError, KeyError, AttributeError) as exc:
+            raise InputFileError(
+                f"blocks table meta {key}: expected what `ucbplan plan` writes, got "
+                f"{shorten(value, 60)} ({type(exc).__name__}); regenerate the plan"
+            ) from None
+
     def __len__(self) -> int:
         """The number of exposures (Σ ``n_exp`` over the blocks)."""
         return int(sum(int(n) for n in self.text_table["n_exp"]))
@@ -156,12 +175,12 @@ class Plan:
 
         if self.run is not None:
             return self.run.site
-        return Site(**dict(self._meta("site")))
+        return self._typed("site", lambda v: Site(**{k: v[k] for k in _SITE_KEYS if k in v}))
 
     @property
     def nights(self) -> list[date]:
         """The local dates of the evenings planned."""
-        return [date.fromisoformat(str(n)) for n in self._meta("nights")]
+        return self._typed("nights", lambda v: [date.fromisoformat(str(n)) for n in v])
 
     @cached_property
     def accounting(self) -> PlanAccount:
@@ -192,34 +211,40 @@ class Plan:
         records them), in time order."""
         from ucbplan.observing.accounting import VisitSummary
 
-        return [VisitSummary(**dict(v)) for v in self._meta("visits")]
+        return self._typed("visits", lambda v: [VisitSummary(**dict(r)) for r in v])
 
     @property
     def strategies(self) -> tuple[StrategyRecord, ...]:
         """The exposure-strategy comparison of every target whose exposure time was chosen for
         information per visit (``plan``'s "Exposure strategy" table); empty otherwise."""
+        meta = self.text_table.meta
+        if "planning" not in meta:
+            return ()
         with scope():
-            return strategies_of(self.text_table.meta)
+            return self._typed("planning", lambda _: strategies_of(meta))
 
     @property
     def goals(self) -> tuple[GoalRecord, ...]:
         """Each target's goal (``goal="sigma_K=5km/s"``) and the σ the plan promises."""
+        meta = self.text_table.meta
+        if "planning" not in meta:
+            return ()
         with scope():
-            return goals_of(self.text_table.meta)
+            return self._typed("planning", lambda _: goals_of(meta))
 
     @property
     def not_planned(self) -> dict[str, dict[str, dict[str, int]]]:
         """``{target: {night: {reason: count}}}`` of the night-time anchors not planned."""
         if self.run is not None:
             return dict(self.run.result.reasons)
-        return {str(k): dict(v) for k, v in dict(self._meta("not_planned")).items()}
+        return self._typed("not_planned", lambda v: {str(k): dict(r) for k, r in v.items()})
 
     @property
     def warnings(self) -> list[str]:
         """The plan's warnings (also emitted as :class:`ucbplan.PlanWarning` when planned)."""
         if self.run is not None:
             return list(self.run.result.warnings)
-        return [str(w) for w in self._meta("warnings")]
+        return self._typed("warnings", lambda v: [str(w) for w in v])
 
     # ------------------------------------------------------------------------------ reprs
 
