@@ -8,6 +8,7 @@ line's come from the same run.
 
 from __future__ import annotations
 
+import contextlib
 import tempfile
 from dataclasses import replace
 from datetime import date
@@ -341,13 +342,13 @@ _ANY = st.one_of(
     value=_ANY,
 )
 def test_methods_take_any_value(goal_plan: Plan, method: str, parameter: str, value: Any) -> None:
-    # anything at all: a ucbplan error in one line naming what is wrong, or a result; the
-    # folder is empty afterwards unless a good path was given (none of these is one)
+    # anything at all: a ucbplan error in one line naming what is wrong, or a result
     import matplotlib.pyplot as plt
 
     # a good value draws a figure (seconds): the tests above cover those
     assume(not (method in ("plot", "charts", "sheet") and (value is None or value is False)))
-    with tempfile.TemporaryDirectory() as folder:
+    with tempfile.TemporaryDirectory() as folder, contextlib.chdir(folder):
+        # any text is a path: a relative one is written into the folder, never the checkout
         call = _call(goal_plan, method, parameter, value, Path(folder))
         try:
             result = call()
