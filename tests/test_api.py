@@ -187,7 +187,7 @@ def test_calls_leave_astropy_as_they_found_it(monkeypatch: pytest.MonkeyPatch) -
 
 
 def _blocks(run: ucbplan.Plan) -> list[tuple[str, str]]:
-    t = run.table
+    t = run.text_table
     return list(zip(t["t_start_utc"].tolist(), t["t_end_utc"].tolist(), strict=True))
 
 
@@ -421,7 +421,8 @@ def test_plan_options_take_any_value_before_any_work(key: str, value: Any) -> No
 def test_plan_time_account_is_what_the_table_records(three_nights: dict[str, Any]) -> None:
     plan = ucbplan.plan(**three_nights)
     account = plan.time_account
-    assert account.as_meta() == plan.accounting == dict(plan.table.meta["time_accounting"])
+    assert account.as_meta() == dict(plan.table.meta["time_accounting"])
+    assert account == plan.accounting  # typed
     # the total is the sum of the targets' accounts; one target here, so they are equal
     assert list(account.targets) == [plan.table["target"][0]]
     assert account.total == account.targets[plan.table["target"][0]]

@@ -36,6 +36,8 @@ _PUBLIC = {
     "horizon": "ucbplan.api",
     "plan": "ucbplan.api",
     "Plan": "ucbplan.api",
+    "StrategyRecord": "ucbplan.api",  # a2: Plan.strategies
+    "GoalRecord": "ucbplan.api",  # a2: Plan.goals
     "default_constraints": "ucbplan.api",
     "reduce": "ucbplan.api",
     "Report": "ucbplan.api",
@@ -97,10 +99,16 @@ if TYPE_CHECKING:  # the same names for type checkers and IDEs ("as": re-exporte
         Export as Export,
     )
     from ucbplan.api import (
+        GoalRecord as GoalRecord,
+    )
+    from ucbplan.api import (
         Plan as Plan,
     )
     from ucbplan.api import (
         Report as Report,
+    )
+    from ucbplan.api import (
+        StrategyRecord as StrategyRecord,
     )
     from ucbplan.api import (
         default_constraints as default_constraints,

@@ -12,13 +12,16 @@ from ucbplan.api.ephemeris import ephemeris, fit_ephemeris, get_site, horizon, l
 
 # a1 (issue 30): a saved plan read back and exported
 from ucbplan.api.exporting import Export, countdown, export, read_blocks
+from ucbplan.api.plan_result import GoalRecord, StrategyRecord
 from ucbplan.api.planning import Plan, default_constraints, plan
 from ucbplan.api.reduction import Report, population_forecast, reduce, simulate
 
 __all__ = [
     "Export",
+    "GoalRecord",
     "Plan",
     "Report",
+    "StrategyRecord",
     "countdown",
     "default_constraints",
     "ephemeris",

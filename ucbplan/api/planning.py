@@ -4,10 +4,8 @@ from __future__ import annotations
 
 import inspect
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
-from functools import cached_property
 from pathlib import Path
-from typing import IO, TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any
 
 from ucbplan.api._convert import as_date, as_float, scope
 from ucbplan.api.ephemeris import TargetLike, get_site, load_target
@@ -18,13 +16,12 @@ from ucbplan.api.plan_options import (
     accept_old_names,
     settings_from,
 )
+from ucbplan.api.plan_result import Plan
 from ucbplan.errors import InputError, PlanWarning, emit, shorten
 
 if TYPE_CHECKING:
-    from astropy.table import Table
     from astropy.units import Quantity
 
-    from ucbplan.observing.accounting import PlanAccount, VisitSummary
     from ucbplan.observing.constraints import Constraint
     from ucbplan.observing.schedule import PlanRun
     from ucbplan.observing.sites import Site
@@ -86,97 +83,6 @@ def default_constraints(
         return _defaults(get_site(site) if site is not None else None, **limits)
 
 
-@dataclass(frozen=True)
-class Plan:
-    """A finished plan: the blocks table, visits, time accounting and what was not planned.
-
-    Attributes
-    ----------
-    run : PlanRun
-        The planner's record (targets, site, nights, settings and result).
-    """
-
-    run: PlanRun
-
-    @cached_property
-    def table(self) -> Table:
-        """The blocks table, identical to ``ucbplan plan -o plan.ecsv`` (times UTC at the site
-        and TDB at the barycentre; columns in docs/blocks-table.md)."""
-        with scope():
-            return self.run.table()
-
-    @property
-    def visits(self) -> list[VisitSummary]:
-        """One summary per visit (acquisition + exposures), in time order."""
-        with scope():
-            return self.run.visits()
-
-    @property
-    def time_account(self) -> PlanAccount:
-        """Time accounting, typed: the total and per target (visits, exposures, shutter,
-        overheads, idle [s]; efficiency)."""
-        with scope():
-            return self.run.time_account
-
-    @property
-    def accounting(self) -> dict[str, Any]:
-        """Time accounting as the table meta holds it: ``{"total": {...}, "targets": {NAME:
-        {...}}}`` [s] (:attr:`time_account` as a dict)."""
-        with scope():
-            return self.run.accounting()
-
-    @property
-    def not_planned(self) -> dict[str, dict[str, dict[str, int]]]:
-        """``{target: {night: {reason: count}}}`` of the night-time anchors not planned."""
-        return dict(self.run.result.reasons)
-
-    @property
-    def warnings(self) -> list[str]:
-        """The plan's warnings (also emitted as :class:`ucbplan.PlanWarning`)."""
-        return list(self.run.result.warnings)
-
-    def write(self, path: str | Path, fmt: str | None = None, overwrite: bool = False) -> Path:
-        """Write the blocks table (``.ecsv``, ``.csv`` or ``.json``, as ``plan -o``), atomically.
-
-        Raises
-        ------
-        OutputExistsError
-            ``path`` exists and ``overwrite`` is false.
-        """
-        from ucbplan.io import output_format, write_output
-        from ucbplan.observing.tablewrite import write_table
-
-        out = Path(path)
-        kind = output_format(out, fmt, ("ecsv", "csv", "json"), "ecsv")
-        table = self.table
-
-        def _write(handle: IO[str]) -> None:
-            write_table(table, handle, kind, json_meta=True)
-
-        with scope():
-            write_output(out, _write, overwrite=overwrite)
-        return out
-
-    def plot(self, path: str | Path, overwrite: bool = False) -> int:
-        """Night charts (``.png``/``.svg`` panels or a ``.pdf`` page per night); the number of
-        nights charted."""
-        from ucbplan.observing.nightplot import write_night_charts
-
-        constraints = self.run.settings.constraints(self.run.site)
-        with scope():
-            return write_night_charts(
-                self.table, self.run.site, Path(path), constraints=constraints, overwrite=overwrite
-            )
-
-    def to_astroplan(self) -> Any:
-        """The plan as an ``astroplan.Schedule`` (one ``ObservingBlock`` per visit or block)."""
-        from ucbplan.observing.astroplan_bridge import to_astroplan
-
-        with scope():
-            return to_astroplan(self.table, self.run.site)
-
-
-@accept_old_names
 def plan(
     targets: TargetLike | Sequence[TargetLike],
     site: Any,

@@ -13,7 +13,7 @@ from ucbplan.cli._console import err_console, rich_table
 from ucbplan.errors import UcbplanError
 
 if TYPE_CHECKING:
-    from ucbplan.api.planning import PlanAccount, VisitSummary
+    from ucbplan.api.plan_result import PlanAccount, VisitSummary
 
 __all__ = ["SUMMARY_NIGHTS", "SUMMARY_ROWS", "report"]
 

@@ -24,7 +24,7 @@ from astropy.table import Table
 from astropy.time import Time
 from numpy.typing import NDArray
 
-from ucbplan.errors import InputError
+from ucbplan.errors import InputError, shorten
 from ucbplan.io import write_output
 from ucbplan.observing.blocks import Block
 from ucbplan.observing.constraints import TWILIGHT_SUN_ALT_DEG, ConstraintSet
@@ -36,6 +36,7 @@ from ucbplan.observing.tablemake import blocks_to_table
 from ucbplan.plotting import FIGURE_FORMATS, figure_format, pyplot
 
 if TYPE_CHECKING:
+    from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
     from ucbplan.target import Target
@@ -52,6 +53,7 @@ __all__ = [
     "level_crossings",
     "night_chart",
     "night_figures",
+    "plot_charts",
     "plot_night",
     "write_night_charts",
 ]
@@ -300,13 +302,14 @@ def _label(ax: Any, axis: TimeAxis, chart: NightChart, site_name: str, sky: SkyM
 def _panel(
     ax: Any, chart: NightChart, site: Site, constraints: ConstraintSet | None, **kw: Any
 ) -> None:
-    """Draw one night into ``ax``."""
-    plt = pyplot()
+    """Draw one night into ``ax`` (no pyplot: the caller's backend stays as it is)."""
+    import matplotlib
+
     axis = TimeAxis.starting_at(chart.window.start, site.location)
     coords = SkyCoord([t[1] for t in chart.targets] * u.deg, [t[2] for t in chart.targets] * u.deg)
     sky = SkyModel.build(site.location, axis.origin, (0.0, 86400.0), coords)
     span = _span(sky, chart.visits, axis)
-    colours = plt.get_cmap("tab10")
+    colours = matplotlib.colormaps["tab10"]
     x = np.linspace(span[0], span[1], 721)
     _draw_sky(ax, sky, x, chart, colours)
     _draw_limits(ax, constraints, kw.get("airmass_max"))
@@ -321,29 +324,96 @@ def _shading_note(constraints: ConstraintSet | None) -> str:
     return f"grey: Sun below 0°, {lim}{used}"
 
 
+def _chart_size(n_panels: int) -> tuple[float, float]:
+    """Figure size of ``n_panels`` night panels [in]."""
+    return (11, 1.0 + 4.2 * n_panels)
+
+
+def _legend(ax: Any) -> None:
+    """The legend beside the panel, not on the curves."""
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, fontsize="small")
+
+
 def chart_figure(
     charts: Sequence[NightChart],
     site: Site,
     constraints: ConstraintSet | None = None,
     *,
     airmass_max: float | None = None,
+    figure: Figure | None = None,
 ) -> Figure:
     """One figure, one panel per night chart, the legend beside the first panel.
 
     ``constraints`` (the plan's) draws its airmass and altitude limits and names its twilight;
-    without it, ``airmass_max`` draws an airmass limit.
+    without it, ``airmass_max`` draws an airmass limit. ``figure``: an empty figure to draw in
+    (default: a new one on the file-only backend, :func:`ucbplan.plotting.pyplot`).
     """
-    plt = pyplot()
-    fig = plt.figure(figsize=(11, 1.0 + 4.2 * len(charts)), layout="constrained")
+    fig = figure
+    if fig is None:
+        fig = pyplot().figure(figsize=_chart_size(len(charts)), layout="constrained")
     axes = fig.subplots(len(charts), 1, squeeze=False)[:, 0]
     for ax, chart in zip(axes, charts, strict=True):
         _panel(ax, chart, site, constraints, airmass_max=airmass_max)
-    # beside the first panel, not on the curves
-    axes[0].legend(
-        loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, fontsize="small"
-    )
+    _legend(axes[0])
     fig.supxlabel(_shading_note(constraints), fontsize="small")
     return fig
+
+
+def _charts_of(table: Table, site: Site, night: date | str | None) -> list[NightChart]:
+    """The night charts of ``table`` (only ``night``'s when given).
+
+    Raises
+    ------
+    InputError
+        No blocks, or none on ``night``.
+    """
+    charts = night_chart(table, site)
+    if not charts:
+        raise InputError("plan: the plan has no blocks; nothing to chart")
+    if night is None:
+        return charts
+    label = night.isoformat() if isinstance(night, date) else str(night)
+    mine = [c for c in charts if c.window.label == label]
+    if not mine:
+        known = ", ".join(c.window.label for c in charts)
+        raise InputError(
+            f"night: expected a night with blocks ({known}), got {shorten(night, 40)}", "night"
+        )
+    return mine
+
+
+def plot_charts(
+    table: Table,
+    site: Site,
+    constraints: ConstraintSet | None = None,
+    *,
+    ax: Axes | None = None,
+    night: date | str | None = None,
+) -> Axes:
+    """Chart a blocks table into ``ax`` (one night: ``night``, else the first) or, without
+    ``ax``, into a new pyplot figure (the user's backend: inline in a notebook) with one panel
+    per night (or ``night``'s), as ``--plot nights.png`` draws it; the (first) panel.
+
+    Raises
+    ------
+    InputError
+        No blocks, none on ``night``, or more than :data:`MAX_PANELS` nights for one figure.
+    """
+    charts = _charts_of(table, site, night)
+    if ax is not None:
+        _panel(ax, charts[0], site, constraints)
+        _legend(ax)
+        return ax
+    if len(charts) > MAX_PANELS:
+        raise InputError(
+            f"night: {len(charts)} nights do not fit one figure (at most {MAX_PANELS} panels); "
+            "give night=..., or write a PDF with a page per night",
+            "night",
+        )
+    import matplotlib.pyplot as plt  # the user's backend, not the file-only one
+
+    fig = plt.figure(figsize=_chart_size(len(charts)), layout="constrained")
+    return chart_figure(charts, site, constraints, figure=fig).axes[0]
 
 
 def plot_night(

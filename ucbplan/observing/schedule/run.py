@@ -26,6 +26,7 @@ from ucbplan.observing.accounting import (
     visit_summaries,
 )
 from ucbplan.observing.blockcolumns import block_columns
+from ucbplan.observing.blocks import ExposurePlan
 from ucbplan.observing.schedule.exposure import strategy_facts
 from ucbplan.observing.schedule.goalplan import info_of_columns
 from ucbplan.observing.schedule.nights import night_dates
@@ -42,6 +43,7 @@ __all__ = [
     "parse_priorities",
     "plan_files",
     "plan_targets",
+    "planned_exposure",
     "with_priorities",
 ]
 
@@ -103,6 +105,24 @@ def with_priorities(
         names = names if len(names) <= 200 else f"{names[:199]}…"
         raise InputError(f"--priority: no target named {shorten(unknown[0], 60)}; targets: {names}")
     return [replace(t, priority=values.get(t.name.lower(), t.priority)) for t in targets]
+
+
+def planned_exposure(
+    plans: Sequence[ExposurePlan], requested: ExposurePlan
+) -> dict[str, float | int | None]:
+    """The table meta's ``exposure``: what the run planned, not what was asked for.
+
+    Each of the exposure time, exposures per block and readout is the value every target's
+    exposure plan shares (the exposure time chosen for information per visit, or capped at the
+    smearing floor), or None where the targets' plans differ (each target's is in the meta's
+    ``planning.targets``); ``requested`` (the options) when no target has a plan.
+    """
+    plans = list(plans) or [requested]
+    out: dict[str, float | int | None] = {}
+    for key in ("exptime_s", "n_exp", "readout_s"):
+        values = {getattr(p, key) for p in plans}
+        out[key] = values.pop() if len(values) == 1 else None
+    return out
 
 
 @dataclass(frozen=True)
@@ -194,7 +214,8 @@ class PlanRun:
 
     def meta(self) -> dict[str, Any]:
         """Provenance of the run for the table ``meta`` (see :func:`make_meta`)."""
-        res, plan = self.result, self.settings.exposure
+        res = self.result
+        plans = [te.plan for te in res.exposures.values()]
         valid_until = {k: v.tdb.isot for k, v in res.valid_until.items()}
         return make_meta(
             site=self.site.as_dict(),
@@ -206,11 +227,7 @@ class PlanRun:
             extra={
                 "nights": [d.isoformat() for d in self.nights],
                 "alpha": self.settings.alpha,
-                "exposure": {
-                    "exptime_s": plan.exptime_s,
-                    "n_exp": plan.n_exp,
-                    "readout_s": plan.readout_s,
-                },
+                "exposure": planned_exposure(plans, self.settings.exposure),
                 "overhead_s": self.settings.overhead_s,
                 "valid_until_tdb": valid_until,
                 "warnings": res.warnings,
