@@ -61,6 +61,14 @@ _MergeOverlaps = Annotated[
         "--merge-overlaps", help="ESO p2: merge overlapping OBs of one target into one OB."
     ),
 ]
+_Strict = Annotated[
+    bool,
+    typer.Option(
+        "--strict",
+        help="Queue formats (eso-p2, lco, gemini): refuse a visit that waits between exposures "
+        "instead of noting it.",
+    ),
+]
 _Rotmode = Annotated[
     str, typer.Option("--rotmode", help="Keck starlist rotmode=: pa | vertical | stationary.")
 ]
@@ -186,6 +194,7 @@ def export_command(
     tolerance_sigma: _ToleranceSigma = 3.0,
     tolerance_floor: _ToleranceFloor = 10.0,
     merge_overlaps: _MergeOverlaps = False,
+    strict: _Strict = False,
     rotmode: _Rotmode = "vertical",
     force: _Force = False,
     semester: _Semester = None,
@@ -224,6 +233,7 @@ def export_command(
         seeing_arcsec=seeing,
         instrument=instrument,
         eso_templates=str(eso_templates) if eso_templates else None,
+        strict=strict,
     )
     table = read_blocks(blocks)
     result = export_blocks(table, to, options)
