@@ -108,6 +108,14 @@ _Cadence = Annotated[
         "phase-locked (exposure + readout = anchor spacing) | untargeted (back to back).",
     ),
 ]
+_ServiceMode = Annotated[
+    bool,
+    typer.Option(
+        "--service-mode",
+        help="Plan only what a service-mode queue executes: visits of back-to-back exposures "
+        "(phase-locked or untargeted cadence).",
+    ),
+]
 _Instrument = Annotated[
     str | None,
     typer.Option("--instrument", help="Spectrograph (e.g. xshooter-vis, uves, esi): overheads."),
@@ -244,6 +252,7 @@ def plan(
     visit: _Visit = None,
     max_visit: MaxVisitOpt = None,
     cadence: _Cadence = "auto",
+    service_mode: _ServiceMode = False,
     instrument: _Instrument = None,
     instruments_file: _InstrumentsFile = None,
     goal: _Goal = None,
@@ -326,6 +335,7 @@ def _settings(ctx: typer.Context, o: dict[str, Any]) -> PlanSettings:
         sigma_floor_kms=o["sigma_floor"],
         extinction_k=o["extinction"],
         cadence=o["cadence"],
+        service_mode=o["service_mode"],
         goal=o["goal"],
         min_lambda_k=o["min_lambda_k"],
         allow_smeared=o["allow_smeared"],

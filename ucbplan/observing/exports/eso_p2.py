@@ -35,7 +35,7 @@ from ucbplan.observing.exports.eso_ob import (
 from ucbplan.observing.exports.eso_templates import EsoTemplates, load_eso_templates
 from ucbplan.observing.exports.interface import ExportOptions, ExportResult
 from ucbplan.observing.exports.provenance import created_utc, meta, site_name, version
-from ucbplan.observing.exports.queue import queue_note
+from ucbplan.observing.exports.queue import queue_note, untargeted
 from ucbplan.observing.exports.text import ascii_names, iso_minute, iso_ms
 from ucbplan.observing.exports.visitgroups import ExportUnit, export_units, exposure_runs
 from ucbplan.observing.exports.windows import (
@@ -188,7 +188,8 @@ def _eso_obs(table: Table, options: ExportOptions, notes: list[str]) -> list[_Ob
     ob_names = _ob_names([u.unit_id for u in units], notes)
     obs = [_unit_ob(c, u, options, ob_names[u.unit_id]) for u in units]
     for ob in obs:
-        _note_rounding(ob, options, notes)
+        if not untargeted(table, ob.doc["target"]):
+            _note_rounding(ob, options, notes)
     return _resolve_overlaps(obs, options)
 
 

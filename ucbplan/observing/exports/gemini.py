@@ -28,7 +28,7 @@ from ucbplan.observing.exports.columns import (
 )
 from ucbplan.observing.exports.interface import ExportOptions, ExportResult
 from ucbplan.observing.exports.provenance import created_utc, site_name, version
-from ucbplan.observing.exports.queue import queue_note
+from ucbplan.observing.exports.queue import queue_note, untargeted
 from ucbplan.observing.exports.text import iso_ms
 from ucbplan.observing.exports.visitgroups import ExportUnit, export_units, exposure_runs
 from ucbplan.observing.exports.windows import (
@@ -81,7 +81,8 @@ def gemini_windows(table: Table, options: ExportOptions, notes: list[str]) -> li
         w = ob_start_window(unit.start, float(acq[i]), float(sigma[i]), options)
         lo, hi = floor_minute(w.lo), ceil_minute(w.hi)
         widening = (hi - lo).total_seconds() - 2 * w.half_width_s
-        if math.isfinite(period[i]) and widening > options.rounding_warn_fraction * period[i]:
+        costly = widening > options.rounding_warn_fraction * period[i]
+        if math.isfinite(period[i]) and costly and not untargeted(table, unit.target):
             notes.append(
                 f"Gemini {blocks[i]}: minute rounding widens the start window by {widening:.0f} s "
                 f"= {widening / period[i]:.2f} P_b; {ROUNDING_REMEDY}"

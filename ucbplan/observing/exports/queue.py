@@ -23,7 +23,13 @@ from ucbplan.observing.exports.interface import ExportOptions
 from ucbplan.observing.exports.provenance import meta
 from ucbplan.observing.exports.visitgroups import ExportUnit
 
-__all__ = ["BACK_TO_BACK", "ServiceModeError", "alternatives", "queue_note"]
+__all__ = [
+    "BACK_TO_BACK",
+    "ServiceModeError",
+    "alternatives",
+    "queue_note",
+    "untargeted",
+]
 
 #: The cadences a service-mode queue executes: exposures back to back after one acquisition.
 BACK_TO_BACK = ("phase-locked", "untargeted")
@@ -31,6 +37,20 @@ BACK_TO_BACK = ("phase-locked", "untargeted")
 
 class ServiceModeError(InputError):
     """``--strict``: a unit waits between exposures, which a service-mode queue cannot."""
+
+
+def untargeted(table: Table, target: str) -> bool:
+    """Whether the plan took ``target``'s exposures at any phase (untargeted cadence, from
+    ``meta['planning']``): no window rounding can then cost it a phase."""
+    planning = meta(table).get("planning")
+    if not isinstance(planning, dict):
+        return False
+    targets = planning.get("targets")
+    entry = targets.get(target) if isinstance(targets, dict) else None
+    strategy = entry.get("strategy") if isinstance(entry, dict) else None
+    if isinstance(strategy, dict):
+        return strategy.get("chosen") == "untargeted"
+    return planning.get("cadence") == "untargeted"
 
 
 def _strategies(table: Table, target: str) -> dict[str, Any]:
