@@ -149,7 +149,7 @@ class Plan:
             )
 
     def to_astroplan(self) -> Any:
-        """The plan as an ``astroplan.Schedule`` (one ``ObservingBlock`` per visit or block)."""
+        """The plan as an ``astroplan.Schedule`` (one ``ObservingBlock`` per exposure)."""
         from ucbplan.observing.astroplan_bridge import to_astroplan
 
         with scope():

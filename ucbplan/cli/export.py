@@ -237,14 +237,19 @@ def export_command(
     )
     table = read_blocks(blocks)
     result = export_blocks(table, to, options)
-    for note in result.notes:
-        err_console.print(f"[yellow]note:[/] {escape(note)}", soft_wrap=True)
+    _print_notes(result.notes)
     if create:
         p2 = {"container": container, "dry_run": dry_run, "environment": p2_environment}
         _create(result.content, {**p2, "user": p2_user})
         if output is None:
             return
     _write(result.content, output, overwrite, f"{to} export of {len(table)} blocks")
+
+
+def _print_notes(notes: tuple[str, ...]) -> None:
+    """Each note on stderr, one line each."""
+    for note in notes:
+        err_console.print(f"[yellow]note:[/] {escape(note)}", soft_wrap=True)
 
 
 def _write(content: bytes, output: Path | None, overwrite: bool, what: str) -> None:

@@ -188,19 +188,31 @@ def to_astroplan(table: Table, site: Site) -> Any:
     _check(table)
     start = Time(np.asarray(table["t_start_utc"]).astype(str), scale="utc")
     end = Time(np.asarray(table["t_end_utc"]).astype(str), scale="utc")
+    schedule = Schedule(start.min(), end.max())
+    schedule.observer = Observer(location=site.location, name=site.name, timezone="UTC")
+    make = _block_maker(table, ObservingBlock, FixedTarget, TimeConstraint)
+    for i, k, t0, exptime in _exposures(table, start, end):
+        schedule.insert_slot(t0, make(i, k, t0, exptime))
+    return schedule
+
+
+def _block_maker(
+    table: Table, block_class: Any, target_class: Any, window_class: Any
+) -> Callable[[int, int, Time, float], Any]:
+    """A function (row, exposure number, start, exposure time [s]) → its ``ObservingBlock``
+    (see :func:`to_astroplan`), with the plan's constraints built once."""
     ids = [str(v) for v in table["block_id"]] if "block_id" in table.colnames else None
     visits = [str(v) for v in table["visit_id"]] if "visit_id" in table.colnames else None
     half = np.maximum(WINDOW_SIGMA * _column(table, "sigma_t_s", 0.0), WINDOW_FLOOR_S) * u.s
     shared = astroplan_constraints(list(table.meta.get("constraints") or []))
     n_exp = _column(table, "n_exp", 1.0).astype(int)
-    schedule = Schedule(start.min(), end.max())
-    schedule.observer = Observer(location=site.location, name=site.name, timezone="UTC")
-    for i, k, t0, exptime in _exposures(table, start, end):
+
+    def make(i: int, k: int, t0: Time, exptime: float) -> Any:
         coord = SkyCoord(float(table["ra_deg"][i]) * u.deg, float(table["dec_deg"][i]) * u.deg)
         name = ids[i] if ids else str(i)
         t1 = t0 + exptime * u.s
-        block = ObservingBlock(
-            FixedTarget(coord, name=str(table["target"][i])),
+        return block_class(
+            target_class(coord, name=str(table["target"][i])),
             exptime * u.s,
             float(table["priority"][i]) if "priority" in table.colnames else 1.0,
             configuration={
@@ -210,8 +222,8 @@ def to_astroplan(table: Table, site: Site) -> Any:
                 "n_exp": int(max(n_exp[i], 1)),
                 "exptime_s": exptime,
             },
-            constraints=[*shared, TimeConstraint(t0 - half[i], t1 + half[i])],
+            constraints=[*shared, window_class(t0 - half[i], t1 + half[i])],
             name=f"{name}/{k}" if n_exp[i] > 1 else name,
         )
-        schedule.insert_slot(t0, block)
-    return schedule
+
+    return make

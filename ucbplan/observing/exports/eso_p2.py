@@ -304,6 +304,12 @@ def _science_runs(ob: _Ob, rows: list[tuple[float, int]]) -> list[tuple[float, i
     return [rows[j] for unit in ob.units for j in unit.rows]
 
 
+def _row_exposures(table: Table) -> list[tuple[float, int]]:
+    """(exposure time [s], n_exp) of every table row."""
+    exptime, n_exp = floats(table, "exptime_s", unit="s"), floats(table, "n_exp")
+    return [(float(t), int(n)) for t, n in zip(exptime, n_exp, strict=True)]
+
+
 def _target_names(table: Table, notes: list[str]) -> dict[str, str]:
     """ASCII p2 target name of each target (no commas or quotes)."""
     return ascii_names(strings(table, "target"), "ESO p2 target list", notes, drop=',"')
@@ -352,12 +358,7 @@ def export_eso_p2(table: Table, options: ExportOptions) -> ExportResult:
         ),
         instrument_for(options.instrument),
         load_eso_templates(options.eso_templates) if options.eso_templates else None,
-        [
-            (float(t), int(n))
-            for t, n in zip(
-                floats(table, "exptime_s", unit="s"), floats(table, "n_exp"), strict=True
-            )
-        ],
+        _row_exposures(table),
     )
     notes.append(
         "ESO p2: OB bodies carry no proper motion (target files have none)"
