@@ -375,3 +375,40 @@ def test_p2api_receives_every_exposure(name: str, tmp_path: Path, fake_p2: Any) 
     shutter = sum(v["SEQ.NEXPO"] * v["DET.WIN1.UIT1"] for v in sent)
     assert len(fake_p2.obs) == len({*table["visit_id"]}) or name == "sessions"
     assert (count, shutter) == pytest.approx(totals(table))
+
+
+def test_lco_group_name_is_cut_with_a_note() -> None:
+    table = planned("untargeted").copy()
+    table["target"] = table["target"].astype("U80")
+    table["target"] = "A target whose name is far longer than fifty characters allow"
+    result = export_blocks(table, "lco", FORCE)
+    assert len(json.loads(result.content)["name"]) == 50
+    assert any("request group name cut to 50 characters" in n for n in result.notes)
+
+
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [
+        ({"sigma_v_kms": 30.0}, "--service-mode: expected --visit DURATION"),
+        (
+            {"visit": "1h", "readout_s": 10.0, "cadence": "phase-locked"},
+            "phase-locked 80.5 s exposures .* wait 70.2 s after each readout",
+        ),
+    ],
+)
+def test_service_mode_refuses_what_a_queue_cannot_run(
+    options: dict[str, Any], message: str
+) -> None:
+    with pytest.raises(ucbplan.InputError, match=message):
+        ucbplan.plan(HM, "paranal", "2040-02-15", service_mode=True, **options)
+
+
+def test_service_mode_without_a_sigma_law_plans_back_to_back() -> None:
+    table = ucbplan.plan(
+        HM, "paranal", "2040-02-15", visit="1h", readout_s=10.0, service_mode=True
+    ).table
+    starts = [utc(str(t)) for t in table["t_start_utc"]]
+    ends = [utc(str(t)) for t in table["t_end_utc"]]
+    gaps = [(b - a).total_seconds() for a, b in zip(ends, starts[1:], strict=False)]
+    assert max(gaps) == pytest.approx(10.0, abs=0.05)  # only the readout between exposures
+    assert not any("service-mode queue" in n for n in export_blocks(table, "lco", FORCE).notes)

@@ -25,6 +25,10 @@ from ucbplan.observing.exports.visitgroups import export_units, exposure_runs
 __all__ = ["export_lco", "lco_json", "lco_requests", "request_window"]
 
 
+#: Longest request-group name written [characters].
+LCO_NAME_MAX = 50
+
+
 @dataclass(frozen=True, slots=True)
 class _Settings:
     """Request fields the blocks table does not know (see :func:`lco_requests`)."""
@@ -150,8 +154,13 @@ def lco_requests(
     requests = _requests(table, options, s, notes)
     if not requests:
         raise InputFileError("blocks table has no rows: nothing to export")
+    name = safe_name(f"ucbplan {strings(table, 'target')[0]}")
+    if len(name) > LCO_NAME_MAX:
+        notes.append(
+            f"LCO: request group name cut to {LCO_NAME_MAX} characters: {name[:LCO_NAME_MAX]!r}"
+        )
     return {
-        "name": safe_name(f"ucbplan {strings(table, 'target')[0]}", 50),
+        "name": name[:LCO_NAME_MAX],
         "proposal": s.proposal,
         "ipp_value": 1.0,
         "operator": "MANY",
