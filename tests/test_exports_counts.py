@@ -45,6 +45,12 @@ PLANS: dict[str, tuple[str, str, int, dict[str, Any]]] = {
     "untargeted": (HM, "paranal", 1, {"visit": "1h", "cadence": "untargeted", **XSH}),
     "goal-3-nights": (HM, "paranal", 3, {"goal": "sigma_K=8km/s", **XSH}),
     "service": (HM, "paranal", 1, {"visit": "1h", "service_mode": True, **XSH}),
+    "phase-locked": (
+        HM,
+        "paranal",
+        1,
+        {"visit": "1h", "readout_s": 10.0, "cadence": "phase-locked", "allow_smeared": True},
+    ),
     "lisa": (LISA, "paranal", 1, {"visit": "1h", **XSH}),
     "sessions": (HM, "paranal", 1, {"n_exp": 2, "exptime_s": 30.0, "sessions_per_night": 2}),
     "timing-keck": (
@@ -293,7 +299,7 @@ def test_targeted_visit_is_one_note_with_the_back_to_back_cost(to: str) -> None:
         export_blocks(table, to, ExportOptions(force=True, strict=True))
 
 
-@pytest.mark.parametrize("name", ["untargeted", "service"])
+@pytest.mark.parametrize("name", ["untargeted", "service", "phase-locked"])
 @pytest.mark.parametrize("to", ["eso-p2", "lco", "gemini"])
 def test_back_to_back_visits_need_no_note(name: str, to: str) -> None:
     result = export_blocks(planned(name), to, ExportOptions(force=True, strict=True))
@@ -312,6 +318,25 @@ def test_service_mode_plans_only_back_to_back_visits() -> None:
 def test_service_mode_refuses_a_cadence_that_waits() -> None:
     with pytest.raises(ucbplan.InputError, match="--service-mode: --cadence targeted waits"):
         ucbplan.plan(HM, "paranal", "2040-02-15", cadence="targeted", service_mode=True, **XSH)
+
+
+def test_an_eccentric_phase_locked_visit_that_waits_is_noted() -> None:
+    # exposures shortened for the eccentric anchors' uneven spacing wait seconds after readouts
+    table = ucbplan.plan(
+        str(CATALOGS / "fiducial-eccentric.yaml"),
+        "paranal",
+        "2040-02-15",
+        visit="1h",
+        readout_s=10.0,
+        cadence="phase-locked",
+        allow_smeared=True,
+    ).table
+    starts = [utc(str(t)) for t in table["t_start_utc"]]
+    ends = [utc(str(t)) for t in table["t_end_utc"]]
+    waits = [(b - a).total_seconds() - 10.0 for a, b in zip(ends, starts[1:], strict=False)]
+    assert max(waits) > 1.0  # more than --service-mode allows
+    (note,) = [n for n in export_blocks(table, "gemini", FORCE).notes if "queue" in n]
+    assert f"wait up to {max(waits):.0f} s ({sum(waits):.0f} s in all)" in note
 
 
 def test_cli_strict_exits_2_without_a_file(tmp_path: Path) -> None:

@@ -107,8 +107,9 @@ def queue_note(
     first = waiting[0]
     text = (
         f"{fmt}: {len(waiting)} of {len(units)} visits ({shorten(first.unit_id, 40)}) wait up "
-        f"to {first.drift_s:.0f} s between exposures for their phases; a service-mode queue runs "
-        "them back to back. Queue-executable: `ucbplan plan --service-mode` "
+        f"to {first.max_wait_s:.0f} s ({first.drift_s:.0f} s in all) between exposures for their "
+        "phases; a service-mode queue "
+        "runs them back to back. Queue-executable: `ucbplan plan --service-mode` "
         f"({alternatives(table, first.target)}), or visitor mode"
     )
     if options.strict:

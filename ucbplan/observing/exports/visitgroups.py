@@ -7,11 +7,12 @@ observation (OB, request, observation, calendar event group) per unit, so its ex
 and shutter time add up to the plan's.
 
 A service-mode queue runs a unit's exposures back to back from its first planned start: it
-cannot wait between them. Exposure k then starts early by the waits planned before it (the time
-between exposures beyond the readout); the unit is *back to back* when that drift stays within
-the unit's timing window, max(k·σ_t, floor) (the window already accepted on its start). The
-phase-locked and untargeted cadences are back to back; a targeted visit (idle waits for the
-next anchor) or a session of two anchors is not, and runs as planned only in visitor mode.
+cannot wait between them. The unit is *back to back* when no wait between its exposures (the
+time beyond the readout) exceeds :data:`~ucbplan.observing.schedule.settings.QUEUE_WAIT_S`, the
+wait ``ucbplan plan --service-mode`` allows. The phase-locked and untargeted cadences are back
+to back; a targeted visit (idle waits for the next anchor) or a session of two anchors is not,
+and runs as planned only in visitor mode: run back to back, exposure k would start early by the
+waits before it (``drift_s`` at most).
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ from astropy.table import Table
 
 from ucbplan.observing.exports.columns import floats, required_times, strings
 from ucbplan.observing.exports.interface import ExportOptions
+from ucbplan.observing.schedule.settings import QUEUE_WAIT_S
 
 __all__ = [
     "NO_EXPOSURE_FIELD",
@@ -63,6 +65,8 @@ class ExportUnit:
     drift_s : float
         Largest early start of an exposure when the unit runs back to back from its first
         start: the sum of the waits planned before it [s].
+    max_wait_s : float
+        Longest single wait between two exposures beyond the readout [s].
     half_width_s : float
         The unit's timing window half-width, max(k·σ_t, floor), of its first row [s].
     """
@@ -74,6 +78,7 @@ class ExportUnit:
     starts: tuple[datetime, ...]
     end: datetime
     drift_s: float
+    max_wait_s: float
     half_width_s: float
 
     @property
@@ -93,9 +98,9 @@ class ExportUnit:
 
     @property
     def back_to_back(self) -> bool:
-        """Whether a queue running the exposures back to back keeps every planned start within
-        the unit's timing window (module notes)."""
-        return self.drift_s <= self.half_width_s
+        """Whether a queue running the exposures back to back executes them as planned (no wait
+        above :data:`QUEUE_WAIT_S`, module notes)."""
+        return self.max_wait_s <= QUEUE_WAIT_S
 
 
 def exposure_runs(unit: ExportUnit) -> list[tuple[float, int]]:
@@ -139,21 +144,24 @@ class _Cols:
     readout: np.ndarray
 
 
-def _exposures(rows: list[int], c: _Cols) -> tuple[list[datetime], list[float], float]:
-    """Every exposure's start and time of ``rows`` (start order), and the drift (module notes)."""
+def _exposures(
+    rows: list[int], c: _Cols
+) -> tuple[list[datetime], list[float], tuple[float, float]]:
+    """Every exposure's start and time of ``rows`` (start order), and the drift and longest
+    wait [s] (module notes)."""
     times: list[datetime] = []
     exps: list[float] = []
-    drift = wait = 0.0
+    drift = longest = 0.0
     for k, j in enumerate(rows):
         if k:  # the wait between the previous row's last exposure and this row's first
             prev = rows[k - 1]
             readout = float(c.readout[prev]) if np.isfinite(c.readout[prev]) else 0.0
-            wait += max((c.starts[j] - c.ends[prev]).total_seconds() - readout, 0.0)
-            drift = max(drift, wait)
+            wait = max((c.starts[j] - c.ends[prev]).total_seconds() - readout, 0.0)
+            drift, longest = drift + wait, max(longest, wait)
         count = int(c.n_exp[j])
         times += _row_exposures(c.starts[j], c.ends[j], count, c.exptime[j], c.readout[j])
         exps += [float(c.exptime[j])] * count
-    return times, exps, drift
+    return times, exps, (drift, longest)
 
 
 def export_units(table: Table, options: ExportOptions) -> list[ExportUnit]:
@@ -175,7 +183,7 @@ def export_units(table: Table, options: ExportOptions) -> list[ExportUnit]:
     for rows in groups.values():
         rows.sort(key=lambda j: (c.starts[j], j))
         first = rows[0]
-        times, exps, drift = _exposures(rows, c)
+        times, exps, (drift, longest) = _exposures(rows, c)
         half = max(options.tolerance_sigma * float(sigma[first]), options.tolerance_floor_s)
         units.append(
             ExportUnit(
@@ -186,6 +194,7 @@ def export_units(table: Table, options: ExportOptions) -> list[ExportUnit]:
                 tuple(times),
                 max(c.ends[j] for j in rows),
                 drift,
+                longest,
                 half,
             )
         )

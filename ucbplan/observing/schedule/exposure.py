@@ -38,7 +38,7 @@ from ucbplan.errors import InputError
 from ucbplan.observing.blocks import ExposurePlan
 from ucbplan.observing.goals import goal_info_needed, parse_goal
 from ucbplan.observing.instruments import instrument_magnitude, sigma_v_kms
-from ucbplan.observing.schedule.settings import QUEUE_CADENCES, PlanSettings
+from ucbplan.observing.schedule.settings import QUEUE_CADENCES, QUEUE_WAIT_S, PlanSettings
 from ucbplan.observing.sigma_model import SigmaVModel
 from ucbplan.observing.strategy import (
     LOCK_MARGIN_S,
@@ -65,9 +65,6 @@ __all__ = [
     "visit_shape",
 ]
 
-#: Longest wait after a readout a service-mode queue is taken to absorb [s] (the plan notes a
-#: phase-locked wait above it).
-QUEUE_WAIT_S = 1.0
 #: Shortest exposure the smearing floor may cap to [s].
 _SHORTEST_S = 0.1
 #: Relative precision of the floor exposure time found by bisection.

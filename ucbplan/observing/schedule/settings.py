@@ -22,6 +22,7 @@ __all__ = [
     "CADENCES",
     "MODES",
     "QUEUE_CADENCES",
+    "QUEUE_WAIT_S",
     "ModeSpec",
     "PlanSettings",
     "parse_budgets",
@@ -39,6 +40,10 @@ CADENCES = ("auto", "targeted", "anchor", "phase-locked", "untargeted")
 #: The cadences a service-mode queue executes (``--service-mode``): exposures back to back after
 #: one acquisition, no wait between them for an orbital phase.
 QUEUE_CADENCES = ("phase-locked", "untargeted")
+#: Longest wait after a readout a service-mode queue is taken to absorb [s]: a visit whose
+#: exposures wait longer for their phases runs as planned only in visitor mode (the plan notes a
+#: phase-locked wait above it; the queue exports note such a visit).
+QUEUE_WAIT_S = 1.0
 #: Default smallest smearing factor Λ_K of a planned exposure (``--min-lambda-k``), in every mode.
 DEFAULT_MIN_LAMBDA_K = 0.9
 #: Longest visit a goal plans without ``--visit`` (``--max-visit``) [s].
