@@ -42,9 +42,11 @@ def plan_table() -> Table:
 
 
 def test_planner_visits_become_astroplan_blocks(plan_table: Table) -> None:
-    """The planner's table carries visit_id (each session one visit): one block per visit."""
+    """One astroplan block per exposure (here one per row), each naming its visit."""
     sched = to_astroplan(plan_table, get_site("paranal"))
-    assert [b.name for b in sched.observing_blocks] == list(dict.fromkeys(plan_table["visit_id"]))
+    blocks = sched.observing_blocks
+    assert [b.name for b in blocks] == list(plan_table["block_id"])
+    assert [b.configuration["visit_id"] for b in blocks] == list(plan_table["visit_id"])
 
 
 def test_schedule_holds_every_block(plan_table: Table) -> None:
@@ -62,14 +64,13 @@ def test_schedule_holds_every_block(plan_table: Table) -> None:
     assert sched.observer.location == site.location
 
 
-def test_visits_group_rows(plan_table: Table) -> None:
+def test_visits_keep_every_exposure(plan_table: Table) -> None:
     t = plan_table.copy()
     t["visit_id"] = ["V1"] * len(t)  # one visit spanning every block
-    sched = to_astroplan(t, get_site("paranal"))
-    (block,) = sched.observing_blocks
-    assert block.name == "V1"
-    span = (Time(t["t_end_utc"]).max() - Time(t["t_start_utc"]).min()).to_value(u.s)
-    assert block.duration.to_value(u.s) == pytest.approx(span, abs=1.0)
+    blocks = to_astroplan(t, get_site("paranal")).observing_blocks
+    assert {b.configuration["visit_id"] for b in blocks} == {"V1"}
+    shutter = sum(b.duration.to_value(u.s) for b in blocks)
+    assert shutter == pytest.approx(float(sum(t["n_exp"] * t["exptime_s"])), abs=1.0)
 
 
 def test_schedule_table(plan_table: Table) -> None:

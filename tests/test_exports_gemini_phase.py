@@ -66,12 +66,14 @@ def test_gemini_windows_hold_the_observation_start(site: str) -> None:
 
 def _check_windows(doc: dict[str, Any], table: Table) -> None:
     rows = {str(r["block_id"]): r for r in table}
-    assert [o["block_id"] for o in doc["observations"]] == sorted(
-        rows, key=lambda b: ms(rows[b]["t_mid_utc"])
-    )
+    # the fixture's blocks are lone visits: one observation each, in time order
+    assert [o["block_ids"] for o in doc["observations"]] == [
+        [b] for b in sorted(rows, key=lambda b: ms(rows[b]["t_mid_utc"]))
+    ]
     minute = np.timedelta64(60, "s")
     for obs in doc["observations"]:
-        row = rows[obs["block_id"]]
+        row = rows[obs["block_ids"][0]]
+        assert obs["exposure_count"] == row["n_exp"] and obs["exposure_time_s"] == row["exptime_s"]
         half = np.timedelta64(round(max(3 * row["sigma_t_s"], 10.0) * 1000), "ms")
         start = ms(row["t_start_utc"]) - np.timedelta64(600, "s")
         window = obs["timing_window"]

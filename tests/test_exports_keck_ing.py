@@ -20,11 +20,15 @@ from ucbplan.observing.tableformat import sexagesimal
 KECK = "exports_keck_starlist.txt"
 ING = "exports_ing.cat"
 KECK_COORDS = re.compile(r"(\d\d \d\d \d\d\.\d\d) ([+-]\d\d \d\d \d\d\.\d) 2000")
-KECK_COMMENT = re.compile(r"# (\S+) u\*=(\S+) \((\S+)\) UTC-mid (\S+) \+/-(\S+) s")
+KECK_COMMENT = re.compile(
+    r"# (\S+) u\*=(\S+) \((\S+)\) UTC-mid (\S+) \+/-(\S+) s exp (\d+)x(\S+) s"
+)
+KECK_TOTAL = re.compile(r"# (\S+) (\d+) exposures?, (\S+) s shutter in (\d+) visits?")
 ING_LINE = re.compile(
     r"(\S{1,20}) +(\d\d \d\d \d\d\.\d\d) ([+-]\d\d \d\d \d\d\.\d) J2000"
-    r" ! first UTC-mid (\S+) \+/-(\S+) s"
+    r" ! (\d+) exposures?, (\S+) s shutter in (\d+) visits?"
 )
+ING_BLOCK = re.compile(r"! (\S{1,20}) UTC-mid (\S+) \+/-(\S+) s exp (\d+)x(\S+) s")
 
 
 @pytest.fixture(scope="module")
@@ -90,8 +94,13 @@ def test_keck_golden_follows_the_starlist_columns(table: Table) -> None:
             targets.append(_check_keck_target(line, table, pending))
             pending = []
             continue
-        short, u_star, anchor, mid, sigma = KECK_COMMENT.fullmatch(line).groups()  # type: ignore[union-attr]
+        if KECK_TOTAL.fullmatch(line):
+            continue  # the target's totals: checked in test_exports_counts
+        match = KECK_COMMENT.fullmatch(line)
+        assert match, line
+        short, u_star, anchor, mid, sigma, n_exp, exptime = match.groups()
         row = _nearest_block(table, short, mid)
+        assert (int(n_exp), float(exptime)) == (row["n_exp"], row["exptime_s"])
         assert anchor == row["anchor"]
         assert float(u_star) == pytest.approx(row["u_star_rad"], abs=1e-5)
         _check_time_and_sigma(row, mid, sigma, 1)
@@ -122,23 +131,44 @@ def test_ing_golden(table: Table) -> None:
 def test_ing_golden_follows_the_catalogue_format(table: Table) -> None:
     lines = golden(ING).decode("ascii").splitlines()
     names = []
+    pending: list[Table.Row] = []
     for line in lines:
-        name, ra, dec, mid, sigma = ING_LINE.fullmatch(line).groups()  # type: ignore[union-attr]
+        block = ING_BLOCK.fullmatch(line)
+        if block:  # every block of the target above, in time order, with its exposures
+            short, mid, sigma, n_exp, exptime = block.groups()
+            row = _nearest_block(table, short, mid)
+            _check_time_and_sigma(row, mid, sigma, 1)
+            assert (int(n_exp), float(exptime)) == (row["n_exp"], row["exptime_s"])
+            pending.append(row)
+            continue
+        _check_ing_pending(table, pending)
+        name, ra, dec, count, shutter, _ = ING_LINE.fullmatch(line).groups()  # type: ignore[union-attr]
         assert not set(name) & {":", "\t"}
         row = _row_of(table, name)
         _check_coordinates(row, ra, dec, 2, 1)
-        first = table[table["target"] == row["target"]]
-        first_row = first[np.argmin([ms(t) for t in first["t_mid_utc"]])]
-        _check_time_and_sigma(first_row, mid, sigma, 1)
+        own = table[table["target"] == row["target"]]
+        assert int(count) == sum(own["n_exp"])
+        assert float(shutter) == pytest.approx(float(sum(own["n_exp"] * own["exptime_s"])))
         names.append(name)
+        pending = []
+    _check_ing_pending(table, pending)
     assert sorted(names) == sorted({str(n).replace(" ", "_") for n in table["target"]})
+
+
+def _check_ing_pending(table: Table, pending: list[Table.Row]) -> None:
+    """The block lines below a target line are all its blocks, in time order."""
+    if pending:
+        own = table[table["target"] == pending[0]["target"]]
+        order = list(own[np.argsort(own["t_mid_utc"])]["block_id"])
+        assert [r["block_id"] for r in pending] == order
 
 
 def test_ing_names_lose_colons_and_stay_short(table: Table) -> None:
     t = Table(table, copy=True)
     t["target"] = t["target"].astype("U40")
     t["target"][t["target"] == SDSS] = "Gaia DR3 1234:5678 with a long tail"
-    line = export_blocks(t, "ing-cat", ExportOptions(force=True)).content.decode().splitlines()[1]
+    lines = export_blocks(t, "ing-cat", ExportOptions(force=True)).content.decode().splitlines()
+    line = next(x for x in lines if not x.startswith(("!", "HM_Cnc")))
     assert line.startswith("Gaia_DR3_1234_5678_w ")
 
 

@@ -68,6 +68,11 @@ EXPORT_FLAGS: dict[str, Flag] = {
     "merge_overlaps": Flag(
         ("--merge-overlaps",), "ESO p2: merge overlapping OBs of one target into one OB."
     ),
+    "strict": Flag(
+        ("--strict",),
+        "Queue formats (eso-p2, lco, gemini): refuse a visit that waits between exposures "
+        "instead of noting it.",
+    ),
     "rotmode": Flag(("--rotmode",), "Keck starlist rotmode=: pa | vertical | stationary."),
     "force": Flag(
         ("--force",), "Write the file even if the plan's site is not the format's observatory."
@@ -175,6 +180,7 @@ def export(
     tolerance_sigma: float = 3.0,
     tolerance_floor: float | Any = 10.0,
     merge_overlaps: bool = False,
+    strict: bool = False,
     rotmode: str = "vertical",
     force: bool = False,
     semester: str | None = None,
@@ -201,6 +207,10 @@ def export(
         Smallest window half-width [s].
     merge_overlaps : bool
         ESO p2: merge overlapping OBs of one target into one OB.
+    strict : bool
+        Queue formats (``eso-p2``, ``lco``, ``gemini``): refuse (:class:`ServiceModeError`) a
+        visit that waits between exposures, which a service-mode queue cannot execute as
+        planned, instead of noting it.
     rotmode : str
         Keck starlist ``rotmode=``: ``pa``, ``vertical`` or ``stationary``.
     force : bool
@@ -250,6 +260,7 @@ def export(
         seeing_arcsec=as_float(seeing, "arcsec", "seeing"),
         instrument=checked_text(instrument, "instrument", "an instrument name"),
         eso_templates=_templates(eso_templates),
+        strict=checked_flag(strict, "strict"),
     )
     table = _blocks_table(blocks)
     with scope():

@@ -116,6 +116,11 @@ PLAN_FLAGS: dict[str, Flag] = {
         "auto (most information per visit) | targeted (each exposure on an anchor) | "
         "phase-locked (exposure + readout = anchor spacing) | untargeted (back to back).",
     ),
+    "service_mode": Flag(
+        ("--service-mode",),
+        "Plan only what a service-mode queue executes: visits of back-to-back exposures "
+        "(phase-locked or untargeted cadence).",
+    ),
     "instrument": Flag(
         ("--instrument",), "Spectrograph (e.g. xshooter-vis, uves, esi): overheads."
     ),
@@ -294,6 +299,7 @@ def _settings(o: Mapping[str, Any], constraints: tuple[Any, ...] | None) -> Plan
         sigma_floor_kms=as_float(o["sigma_floor"], _KMS, "sigma_floor"),
         extinction_k=o["extinction"],
         cadence=o["cadence"],
+        service_mode=checked_flag(o["service_mode"], "service_mode"),
         goal=checked_text(o["goal"], "goal", "a goal such as sigma_K=2km/s"),
         min_lambda_k=o["min_lambda_k"],
         allow_smeared=checked_flag(o["allow_smeared"], "allow_smeared"),

@@ -111,6 +111,7 @@ def plan(
     visit: str | float | Quantity | None = None,
     max_visit: str | float | Quantity | None = None,
     cadence: str = "auto",
+    service_mode: bool = False,
     instrument: str | None = None,
     instruments_file: str | Path | None = None,
     goal: str | None = None,
@@ -183,6 +184,9 @@ def plan(
         ``goal`` plans (None: 2 h; refused without a goal, or shorter than ``visit``).
     cadence : str
         ``auto``, ``targeted``, ``phase-locked`` or ``untargeted``.
+    service_mode : bool
+        Plan only what a service-mode queue executes: visits of back-to-back exposures
+        (``phase-locked`` or ``untargeted``; docs/exports.md, "Service mode").
     instrument, instruments_file : str, path, optional
         Spectrograph (its overheads and σ reference); a YAML table searched first.
     goal : str, optional

@@ -98,6 +98,7 @@ def export_command(
     tolerance_sigma: float = option(api.export, EXPORT_FLAGS, "tolerance_sigma"),
     tolerance_floor: float = option(api.export, EXPORT_FLAGS, "tolerance_floor"),
     merge_overlaps: bool = option(api.export, EXPORT_FLAGS, "merge_overlaps"),
+    strict: bool = option(api.export, EXPORT_FLAGS, "strict"),
     rotmode: str = option(api.export, EXPORT_FLAGS, "rotmode"),
     force: bool = option(api.export, EXPORT_FLAGS, "force"),
     semester: str | None = option(api.export, EXPORT_FLAGS, "semester"),
@@ -135,6 +136,7 @@ def export_command(
         seeing=seeing,
         instrument=instrument,
         eso_templates=eso_templates,
+        strict=strict,
     )
     for note in result.notes:
         err_console.print(f"[yellow]note:[/] {escape(note)}", soft_wrap=True)
@@ -144,6 +146,12 @@ def export_command(
         if output is None:
             return
     _write(result.content, output, overwrite, f"{to} export of {result.n_blocks} blocks")
+
+
+def _print_notes(notes: tuple[str, ...]) -> None:
+    """Each note on stderr, one line each."""
+    for note in notes:
+        err_console.print(f"[yellow]note:[/] {escape(note)}", soft_wrap=True)
 
 
 def _write(content: bytes, output: Path | None, overwrite: bool, what: str) -> None:

@@ -127,6 +127,7 @@ def plan(
     visit: str | None = option(api.plan, PLAN_FLAGS, "visit"),
     max_visit: str | None = option(api.plan, PLAN_FLAGS, "max_visit"),
     cadence: str = option(api.plan, PLAN_FLAGS, "cadence"),
+    service_mode: bool = option(api.plan, PLAN_FLAGS, "service_mode"),
     instrument: str | None = option(api.plan, PLAN_FLAGS, "instrument"),
     instruments_file: Path | None = option(api.plan, PLAN_FLAGS, "instruments_file"),
     goal: str | None = option(api.plan, PLAN_FLAGS, "goal"),

@@ -8,9 +8,12 @@ copy them into a new OB and save it with ``saveOB``:
   no proper motion; a note says so);
 - ``constraints``: the plan's airmass limit and Moon distance (parsed from the table's
   ``constraints`` metadata, e.g. ``airmass <= 2.0``) and the seeing limit (``--seeing``);
-- ``obsDescription``: the OB name and a comment with the block ids and UTC mid-times ± σ;
+- ``obsDescription``: the OB name and a comment with the block ids and UTC mid-times ± σ (cut
+  with a mark when it exceeds p2's 1000 characters);
 - ``templates``: the acquisition and the science exposures with the numbers the plan used
-  (exposure time, count) and, with ``--instrument``, that instrument's readout mode and overheads
+  (one science template per run of equal exposure times, its exposure count the run's length;
+  a visit that waits between exposures gets one per block, to be started at its planned time
+  in visitor mode) and, with ``--instrument``, that instrument's readout mode and overheads
   from its configuration (:mod:`ucbplan.observing.instruments`). ESO's template names and keywords
   differ per instrument and instrument-package version and are not in that configuration: they
   come from the user's ``--eso-templates`` file (:mod:`.eso_templates`), which gives each
@@ -30,12 +33,21 @@ from ucbplan.observing.exports.text import fmt_sigma
 from ucbplan.observing.instruments import Instrument, get_instrument
 from ucbplan.observing.tableformat import sexagesimal
 
-__all__ = ["DEFAULT_MAX_AIRMASS", "DEFAULT_MOON_DISTANCE_DEG", "eso_constraints", "ob_body"]
+__all__ = [
+    "DEFAULT_MAX_AIRMASS",
+    "DEFAULT_MOON_DISTANCE_DEG",
+    "USER_COMMENTS_MAX",
+    "eso_constraints",
+    "ob_body",
+    "user_comments",
+]
 
 #: Airmass limit written when the plan names none (ESO's loosest common limit).
 DEFAULT_MAX_AIRMASS = 2.0
 #: Moon distance written when the plan names none [deg] (ESO's default constraint set).
 DEFAULT_MOON_DISTANCE_DEG = 30.0
+#: Longest ``obsDescription.userComments`` p2 stores [characters].
+USER_COMMENTS_MAX = 1000
 
 _AIRMASS = re.compile(r"airmass\s*<=?\s*([0-9]+(?:\.[0-9]*)?)", re.I)
 _MOON = re.compile(r"moon\s+separation\s*>=?\s*([0-9]+(?:\.[0-9]*)?)", re.I)
@@ -85,10 +97,10 @@ def _eso(template: EsoTemplate | None, exptime_s: float, n_exp: int) -> dict[str
 
 
 def _templates(
-    exptime_s: float, n_exp: int, instrument: Instrument | None, eso: EsoTemplates | None
+    runs: Sequence[tuple[float, int]], instrument: Instrument | None, eso: EsoTemplates | None
 ) -> list[dict[str, Any]]:
-    acq_eso = _eso(eso.acquisition if eso else None, exptime_s, n_exp)
-    sci_eso = _eso(eso.science if eso else None, exptime_s, n_exp)
+    """The acquisition, then one science template per run of ``(exposure time [s], count)``."""
+    acq_eso = _eso(eso.acquisition if eso else None, *runs[0])
     setup: dict[str, Any] = {}
     if instrument is not None:
         setup = {
@@ -99,12 +111,35 @@ def _templates(
     acq = {"acquisition_s": instrument.acquisition_s} if instrument is not None else {}
     return [
         {"type": "acquisition", **acq_eso, "parameters": acq},
-        {
-            "type": "science",
-            **sci_eso,
-            "parameters": {"exposure_time_s": exptime_s, "n_exp": n_exp, **setup},
-        },
+        *(
+            {
+                "type": "science",
+                **_eso(eso.science if eso else None, exptime_s, n_exp),
+                "parameters": {"exposure_time_s": exptime_s, "n_exp": n_exp, **setup},
+            }
+            for exptime_s, n_exp in runs
+        ),
     ]
+
+
+def user_comments(members: Sequence[tuple[str, str, float]]) -> tuple[str, int]:
+    """The ``userComments`` text of an OB's blocks (block id, UTC mid-time ISO, σ [s]) and how
+    many blocks it lists: all of them, or, when p2's :data:`USER_COMMENTS_MAX` characters do not
+    hold them, the first ones followed by a mark naming how many are left out and where they are
+    (the OB's ``merged_visits`` in the export file)."""
+    items = [f"{b} mid {t} UTC +/-{fmt_sigma(s)} s" for b, t, s in members]
+    text = "ucbplan: " + "; ".join(items)
+    if len(text) <= USER_COMMENTS_MAX:
+        return text, len(items)
+    for k in range(len(items) - 1, -1, -1):
+        mark = (
+            f"; [cut: {len(items) - k} more of {len(items)} blocks in merged_visits of the "
+            "ucbplan export]"
+        )
+        text = "ucbplan: " + "; ".join(items[:k]) + mark
+        if len(text) <= USER_COMMENTS_MAX:
+            return text, k
+    return text[:USER_COMMENTS_MAX], 0
 
 
 def ob_body(
@@ -114,9 +149,8 @@ def ob_body(
     ra_deg: float,
     dec_deg: float,
     constraints: Mapping[str, Any],
-    members: Sequence[tuple[str, str, float]],
-    exptime_s: float,
-    n_exp: int,
+    comment: str,
+    runs: Sequence[tuple[float, int]],
     instrument: Instrument | None,
     eso_templates: EsoTemplates | None = None,
 ) -> dict[str, Any]:
@@ -124,12 +158,13 @@ def ob_body(
 
     Parameters
     ----------
-    members : sequence of (block id, UTC mid-time ISO, σ [s])
-        The blocks the OB executes, for the comment.
+    comment : str
+        ``userComments`` (:func:`user_comments`).
+    runs : sequence of (exposure time [s], count)
+        The science templates, each repeating its exposure ``count`` times.
     """
-    comment = "; ".join(f"{b} mid {t} UTC +/-{fmt_sigma(s)} s" for b, t, s in members)
     return {
-        "obsDescription": {"name": ob_name, "userComments": f"ucbplan: {comment}"[:1000]},
+        "obsDescription": {"name": ob_name, "userComments": comment},
         "target": {
             "name": target_name,
             "ra": sexagesimal(ra_deg / 15.0, 3, ":", False),
@@ -140,5 +175,5 @@ def ob_body(
             "properMotionDec": 0.0,
         },
         "constraints": dict(constraints),
-        "templates": _templates(exptime_s, n_exp, instrument, eso_templates),
+        "templates": _templates(runs, instrument, eso_templates),
     }

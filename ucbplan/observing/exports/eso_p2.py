@@ -24,14 +24,26 @@ from ucbplan.observing.exports.columns import (
     period_s,
     required_times,
     strings,
-    time_order,
 )
-from ucbplan.observing.exports.eso_ob import eso_constraints, instrument_for, ob_body
+from ucbplan.observing.exports.eso_ob import (
+    USER_COMMENTS_MAX,
+    eso_constraints,
+    instrument_for,
+    ob_body,
+    user_comments,
+)
 from ucbplan.observing.exports.eso_templates import EsoTemplates, load_eso_templates
 from ucbplan.observing.exports.interface import ExportOptions, ExportResult
 from ucbplan.observing.exports.provenance import created_utc, meta, site_name, version
+from ucbplan.observing.exports.queue import queue_note, untargeted
 from ucbplan.observing.exports.text import ascii_names, iso_minute, iso_ms
-from ucbplan.observing.exports.windows import ceil_minute, floor_minute, ob_start_window
+from ucbplan.observing.exports.visitgroups import ExportUnit, export_units, exposure_runs
+from ucbplan.observing.exports.windows import (
+    ROUNDING_REMEDY,
+    ceil_minute,
+    floor_minute,
+    ob_start_window,
+)
 from ucbplan.observing.tableformat import sexagesimal
 
 __all__ = ["ESO_NAME_MAX", "export_eso_p2"]
@@ -61,6 +73,7 @@ class _Ob:
     period_s: float
     session: str
     members: list[_Member]
+    units: list[ExportUnit]
     position: tuple[float, float] = (0.0, 0.0)  # ICRS RA, Dec [deg]
 
 
@@ -103,16 +116,18 @@ def _columns(table: Table, options: ExportOptions, notes: list[str]) -> _Columns
     )
 
 
-def _block_ob(c: _Columns, i: int, options: ExportOptions, ob_names: dict[str, str]) -> _Ob:
-    """The OB of block ``i`` alone: window on its start, rounded outward to whole minutes."""
+def _unit_ob(c: _Columns, unit: ExportUnit, options: ExportOptions, name: str) -> _Ob:
+    """The OB of one visit (:class:`~.visitgroups.ExportUnit`): window on its start, rounded
+    outward to whole minutes; its blocks as members."""
+    i = unit.rows[0]
     mid, sigma = c.mids[i], float(c.sigma[i])
-    w = ob_start_window(c.starts[i], float(c.acq[i]), sigma, options)
+    w = ob_start_window(unit.start, float(c.acq[i]), sigma, options)
     lo_min, hi_min = floor_minute(w.lo), ceil_minute(w.hi)
     widening = (w.lo - lo_min).total_seconds() + (hi_min - w.hi).total_seconds()
     doc = {
-        "name": ob_names[c.blocks[i]],
+        "name": name,
         "target": c.names[i],
-        "block_ids": [c.blocks[i]],
+        "block_ids": [c.blocks[j] for j in unit.rows],
         "anchor": c.anchors[i],
         "u_star_rad": float(c.u_star[i]),
         "t_mid_utc": iso_ms(mid),
@@ -120,13 +135,15 @@ def _block_ob(c: _Columns, i: int, options: ExportOptions, ob_names: dict[str, s
         "ob_start_utc": iso_ms(w.ob_start),
         "acquisition_s": float(c.acq[i]),
         "exptime_s": float(c.exptime[i]),
-        "n_exp": int(c.n_exp[i]),
+        "n_exp": unit.n_exposures,
         "window_half_width_s": w.half_width_s,
         "window_exact_utc": {"from": iso_ms(w.lo), "to": iso_ms(w.hi)},
         "rounding_widening_s": widening,
     }
-    member = _Member(c.blocks[i], iso_ms(mid), sigma, mid)
-    ob = _Ob(doc, lo_min, hi_min, w.ob_start, float(c.period[i]), c.sessions[i], [member])
+    members = [
+        _Member(c.blocks[j], iso_ms(c.mids[j]), float(c.sigma[j]), c.mids[j]) for j in unit.rows
+    ]
+    ob = _Ob(doc, lo_min, hi_min, w.ob_start, float(c.period[i]), c.sessions[i], members, [unit])
     ob.position = (float(c.ra[i]), float(c.dec[i]))
     return ob
 
@@ -163,12 +180,16 @@ def _ob_names(blocks: list[str], notes: list[str]) -> dict[str, str]:
 
 
 def _eso_obs(table: Table, options: ExportOptions, notes: list[str]) -> list[_Ob]:
-    """Time-ordered OBs: one per session (or lone block), overlaps merged or refused."""
+    """Time-ordered OBs: one per visit (:func:`~.visitgroups.export_units`: a visit, a session
+    or a lone block), overlaps merged or refused."""
     c = _columns(table, options, notes)
-    ob_names = _ob_names(c.blocks, notes)
-    obs = _group_sessions([_block_ob(c, i, options, ob_names) for i in time_order(table)])
+    units = export_units(table, options)
+    notes += queue_note(table, units, "ESO p2", options)
+    ob_names = _ob_names([u.unit_id for u in units], notes)
+    obs = [_unit_ob(c, u, options, ob_names[u.unit_id]) for u in units]
     for ob in obs:
-        _note_rounding(ob, options, notes)
+        if not untargeted(table, ob.doc["target"]):
+            _note_rounding(ob, options, notes)
     return _resolve_overlaps(obs, options)
 
 
@@ -179,28 +200,15 @@ def _note_rounding(ob: _Ob, options: ExportOptions, notes: list[str]) -> None:
         notes.append(
             f"ESO p2 {ob.doc['name']}: minute rounding widens the OB start window by "
             f"{widening:.0f} s = {widening / per_s:.2f} P_b; the OB start no longer fixes "
-            "the orbital phase: plan exposures covering the window and select in `reduce`"
+            f"the orbital phase: {ROUNDING_REMEDY}"
         )
-
-
-def _group_sessions(obs: list[_Ob]) -> list[_Ob]:
-    """One OB per planner session (one acquisition, e.g. a u = 0 / π pair); blank = own OB."""
-    out: list[_Ob] = []
-    first: dict[tuple[str, str], _Ob] = {}
-    for ob in obs:  # time-ordered
-        key = (ob.doc["target"], ob.session)
-        lead = first.get(key) if key[1] else None
-        if lead is None:
-            first[key] = ob
-            out.append(ob)
-        else:
-            _merge(lead, ob)
-    return out
 
 
 def _merge(lead: _Ob, ob: _Ob) -> None:
     lead.doc["block_ids"] = [*lead.doc["block_ids"], *ob.doc["block_ids"]]
     lead.members = [*lead.members, *ob.members]
+    lead.units = [*lead.units, *ob.units]
+    lead.doc["n_exp"] = sum(u.n_exposures for u in lead.units)
 
 
 def _resolve_overlaps(obs: list[_Ob], options: ExportOptions) -> list[_Ob]:
@@ -253,9 +261,10 @@ class _BodyContext:
     constraints: dict[str, Any]
     instrument: Any
     templates: EsoTemplates | None
+    rows: list[tuple[float, int]]  # (exposure time [s], n_exp) of every table row
 
 
-def _ob_doc(ob: _Ob, ctx: _BodyContext) -> dict[str, Any]:
+def _ob_doc(ob: _Ob, ctx: _BodyContext, notes: list[str]) -> dict[str, Any]:
     """The OB's JSON: its fields, merged visits, the p2api constraint list, the OBX line and the
     OB body (:func:`~ucbplan.observing.exports.eso_ob.ob_body`)."""
     doc = ob.doc
@@ -265,19 +274,40 @@ def _ob_doc(ob: _Ob, ctx: _BodyContext) -> dict[str, Any]:
     doc["obx_absolute_times_list"] = (
         f'absolute_times_list "{{{ob.lo:%Y-%m-%dT%H:%M:%S} {ob.hi:%Y-%m-%dT%H:%M:%S} 0}} "'
     )
+    comment, listed = user_comments([(m.block_id, m.t_mid_utc, m.sigma_t_s) for m in ob.members])
+    if listed < len(ob.members):
+        notes.append(
+            f"ESO p2 {doc['name']}: userComments lists {listed} of {len(ob.members)} blocks "
+            f"(p2 keeps {USER_COMMENTS_MAX} characters), cut with a mark; every block is in the "
+            "OB's merged_visits in this file"
+        )
     doc["ob"] = ob_body(
         ob_name=doc["name"],
         target_name=ctx.short_names[doc["target"]],
         ra_deg=ob.position[0],
         dec_deg=ob.position[1],
         constraints=ctx.constraints,
-        members=[(m.block_id, m.t_mid_utc, m.sigma_t_s) for m in ob.members],
-        exptime_s=doc["exptime_s"],
-        n_exp=doc["n_exp"],
+        comment=comment,
+        runs=_science_runs(ob, ctx.rows),
         instrument=ctx.instrument,
         eso_templates=ctx.templates,
     )
     return doc
+
+
+def _science_runs(ob: _Ob, rows: list[tuple[float, int]]) -> list[tuple[float, int]]:
+    """The OB's science templates as (exposure time [s], count): a visit run back to back
+    repeats each exposure time; otherwise one template per block (``rows``: per table row),
+    each started at its planned time in visitor mode."""
+    if len(ob.units) == 1 and ob.units[0].back_to_back:
+        return exposure_runs(ob.units[0])
+    return [rows[j] for unit in ob.units for j in unit.rows]
+
+
+def _row_exposures(table: Table) -> list[tuple[float, int]]:
+    """(exposure time [s], n_exp) of every table row."""
+    exptime, n_exp = floats(table, "exptime_s", unit="s"), floats(table, "n_exp")
+    return [(float(t), int(n)) for t, n in zip(exptime, n_exp, strict=True)]
 
 
 def _target_names(table: Table, notes: list[str]) -> dict[str, str]:
@@ -328,6 +358,7 @@ def export_eso_p2(table: Table, options: ExportOptions) -> ExportResult:
         ),
         instrument_for(options.instrument),
         load_eso_templates(options.eso_templates) if options.eso_templates else None,
+        _row_exposures(table),
     )
     notes.append(
         "ESO p2: OB bodies carry no proper motion (target files have none)"
@@ -350,7 +381,7 @@ def export_eso_p2(table: Table, options: ExportOptions) -> ExportResult:
         ),
         "p2api_usage": "api.saveAbsoluteTimeConstraints(obId, ob['absoluteTimeConstraints'], v)",
         "target_list_csv": _target_list(table, short),
-        "obs": [_ob_doc(ob, ctx) for ob in obs],
+        "obs": [_ob_doc(ob, ctx, notes) for ob in obs],
     }
     text = dumps_json(doc) + "\n"
     return ExportResult(text.encode(), ".json", tuple(dict.fromkeys(notes)))

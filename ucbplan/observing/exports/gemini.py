@@ -1,4 +1,7 @@
-"""Gemini timing windows: one window on the observation start per block (docs/exports.md).
+"""Gemini timing windows: one observation per visit, a window on its start (docs/exports.md).
+
+Each observation is one acquisition and then the visit's exposures (a sequence step repeated
+``repeat`` times per exposure time), with their count, shutter time and planned starts.
 
 A Gemini timing window is a start (UTC), a duration and an optional repeat (count, period). As for
 ESO p2, the window constrains the start of the observation, which includes the acquisition:
@@ -22,12 +25,18 @@ from ucbplan.observing.exports.columns import (
     period_s,
     required_times,
     strings,
-    time_order,
 )
 from ucbplan.observing.exports.interface import ExportOptions, ExportResult
 from ucbplan.observing.exports.provenance import created_utc, site_name, version
+from ucbplan.observing.exports.queue import queue_note, untargeted
 from ucbplan.observing.exports.text import iso_ms
-from ucbplan.observing.exports.windows import ceil_minute, floor_minute, ob_start_window
+from ucbplan.observing.exports.visitgroups import ExportUnit, export_units, exposure_runs
+from ucbplan.observing.exports.windows import (
+    ROUNDING_REMEDY,
+    ceil_minute,
+    floor_minute,
+    ob_start_window,
+)
 
 __all__ = ["export_gemini", "gemini_windows"]
 
@@ -43,32 +52,51 @@ def _window(lo: datetime, hi: datetime) -> dict[str, Any]:
     }
 
 
+def _sequence(unit: ExportUnit) -> dict[str, Any]:
+    """The unit's exposures: total count and time, the sequence steps and their repeats, and
+    each exposure's planned start (UTC)."""
+    runs = exposure_runs(unit)
+    return {
+        "exposure_time_s": runs[0][0] if len(runs) == 1 else None,
+        "exposure_count": unit.n_exposures,
+        "shutter_s": unit.shutter_s,
+        "sequence": [{"exposure_time_s": t, "repeat": n} for t, n in runs],
+        "exposure_starts_utc": [iso_ms(t) for t in unit.starts],
+    }
+
+
 def gemini_windows(table: Table, options: ExportOptions, notes: list[str]) -> list[dict[str, Any]]:
-    """One entry per block in time order: the block, its observation start and timing window."""
-    starts, mids = required_times(table, "t_start_utc"), required_times(table, "t_mid_utc")
+    """One observation per visit (:func:`~.visitgroups.export_units`) in time order: its
+    blocks, its start, its exposures and the timing window on its start."""
+    mids = required_times(table, "t_mid_utc")
     sigma = floats(table, "sigma_t_s", unit="s")
     acq = acquisition_s(table, options, notes)
     period = period_s(table, notes)
-    names, blocks = strings(table, "target"), strings(table, "block_id")
+    blocks = strings(table, "block_id")
+    units = export_units(table, options)
+    notes += queue_note(table, units, "Gemini", options)
     out = []
-    for i in time_order(table):
-        w = ob_start_window(starts[i], float(acq[i]), float(sigma[i]), options)
+    for unit in units:
+        i = unit.rows[0]
+        w = ob_start_window(unit.start, float(acq[i]), float(sigma[i]), options)
         lo, hi = floor_minute(w.lo), ceil_minute(w.hi)
         widening = (hi - lo).total_seconds() - 2 * w.half_width_s
-        if math.isfinite(period[i]) and widening > options.rounding_warn_fraction * period[i]:
+        costly = widening > options.rounding_warn_fraction * period[i]
+        if math.isfinite(period[i]) and costly and not untargeted(table, unit.target):
             notes.append(
                 f"Gemini {blocks[i]}: minute rounding widens the start window by {widening:.0f} s "
-                f"= {widening / period[i]:.2f} P_b; plan exposures covering it and select in "
-                "`reduce`"
+                f"= {widening / period[i]:.2f} P_b; {ROUNDING_REMEDY}"
             )
         out.append(
             {
-                "target": names[i],
-                "block_id": blocks[i],
+                "target": unit.target,
+                "visit_id": unit.unit_id,
+                "block_ids": [blocks[j] for j in unit.rows],
                 "t_mid_utc": iso_ms(mids[i]),
                 "sigma_t_s": float(sigma[i]),
                 "observation_start_utc": iso_ms(w.ob_start),
                 "acquisition_s": float(acq[i]),
+                **_sequence(unit),
                 "window_half_width_s": w.half_width_s,
                 "timing_window": _window(lo, hi),
             }
@@ -80,7 +108,7 @@ def export_gemini(table: Table, options: ExportOptions) -> ExportResult:
     """Gemini timing-window JSON (see :func:`gemini_windows`)."""
     notes: list[str] = []
     doc = {
-        "format": "ucbplan gemini timing windows, version 1",
+        "format": "ucbplan gemini timing windows, version 2",
         "ucbplan_version": version(),
         "source_created_utc": created_utc(table),
         "site": site_name(table),
@@ -88,7 +116,7 @@ def export_gemini(table: Table, options: ExportOptions) -> ExportResult:
         "window_rule": (
             "observation start = t_start_utc - acquisition_s; window = start +/- "
             f"max({options.tolerance_sigma:g} sigma_t, {options.tolerance_floor_s:g} s), "
-            "rounded outward to whole minutes; no repeats"
+            "rounded outward to whole minutes; no repeats; one observation per visit"
         ),
         "observations": gemini_windows(table, options, notes),
     }

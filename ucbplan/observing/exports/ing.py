@@ -13,6 +13,11 @@ from ucbplan.observing.exports.columns import (
 )
 from ucbplan.observing.exports.interface import ExportOptions, ExportResult
 from ucbplan.observing.exports.text import ascii_names, fmt_sigma, iso_ms
+from ucbplan.observing.exports.visitgroups import (
+    NO_EXPOSURE_FIELD,
+    exposure_texts,
+    target_totals,
+)
 from ucbplan.observing.tableformat import sexagesimal
 
 __all__ = ["export_ing_cat", "ing_catalogue"]
@@ -25,8 +30,10 @@ def ing_catalogue(table: Table, notes: list[str] | None = None) -> str:
     """ING (WHT/ISIS) catalogue: ``NAME hh mm ss.ss ±dd mm ss.s J2000 ! comment`` per target.
 
     Names are ≤ 20 ASCII characters without spaces, colons or tabs (transliterated with a note,
-    see :func:`~ucbplan.observing.exports.text.ascii_names`); the comment gives the first block's
-    UTC mid-time and σ. Save under a lower-case name ending ``.cat``.
+    see :func:`~ucbplan.observing.exports.text.ascii_names`); the comment gives the target's
+    exposure totals. Below it, one ``!`` comment line per block gives its UTC mid-time, σ and
+    exposures (``n x t s``): the catalogue has no exposure field. Save under a lower-case name
+    ending ``.cat``.
 
     Raises
     ------
@@ -35,24 +42,28 @@ def ing_catalogue(table: Table, notes: list[str] | None = None) -> str:
         spelling.
     """
     names = strings(table, "target")
-    short_names = ascii_names(
-        names, "ING catalogue", notes if notes is not None else [], ING_NAME_MAX, ":"
-    )
+    found = notes if notes is not None else []
+    short_names = ascii_names(names, "ING catalogue", found, ING_NAME_MAX, ":")
     ra, dec = coordinates(table)
     sigma = floats(table, "sigma_t_s", unit="s")
     mids = required_times(table, "t_mid_utc")
+    totals, exposures = target_totals(table), exposure_texts(table)
+    order = time_order(table)
     lines: list[str] = []
-    seen: set[str] = set()
-    for i in time_order(table):
-        short = short_names[names[i]]
-        if short in seen:
-            continue
-        seen.add(short)
+    for name in dict.fromkeys(names[i] for i in order):
+        i = next(j for j in order if names[j] == name)
+        short = short_names[name]
         lines.append(
             f"{short:<20} {sexagesimal(ra[i] / 15.0, 2, ' ', False)} "
-            f"{sexagesimal(dec[i], 1, ' ', True)} J2000 ! first UTC-mid {iso_ms(mids[i], 1)} "
-            f"+/-{fmt_sigma(float(sigma[i]))} s"
+            f"{sexagesimal(dec[i], 1, ' ', True)} J2000 ! {totals[name]}"
         )
+        lines.extend(
+            f"! {short} UTC-mid {iso_ms(mids[j], 1)} +/-{fmt_sigma(float(sigma[j]))} s "
+            f"{exposures[j]}"
+            for j in order
+            if names[j] == name
+        )
+    found.append(NO_EXPOSURE_FIELD.format(fmt="ING catalogue", mark="!"))
     return "\n".join(lines) + "\n"
 
 

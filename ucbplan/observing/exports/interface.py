@@ -55,6 +55,9 @@ class ExportOptions:
         into the ESO OB templates; None = the exposure numbers of the plan only.
     eso_templates : str or None
         YAML file naming the ESO p2 acquisition and science templates and their keywords.
+    strict : bool
+        Refuse (:class:`~ucbplan.observing.exports.queue.ServiceModeError`) instead of noting a
+        visit that waits between exposures in a service-mode queue format (``--strict``).
     """
 
     acquisition_s: float | None = None
@@ -69,6 +72,7 @@ class ExportOptions:
     seeing_arcsec: float = 1.0
     instrument: str | None = None
     eso_templates: str | None = None
+    strict: bool = False
 
     def __post_init__(self) -> None:
         why = "acquisition before the first exposure; a block must fit in one night"

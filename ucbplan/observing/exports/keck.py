@@ -18,6 +18,11 @@ from ucbplan.observing.exports.columns import (
 from ucbplan.observing.exports.interface import ExportOptions, ExportResult
 from ucbplan.observing.exports.provenance import site_name, version
 from ucbplan.observing.exports.text import ascii_names, ascii_text, fmt_sigma, iso_ms
+from ucbplan.observing.exports.visitgroups import (
+    NO_EXPOSURE_FIELD,
+    exposure_texts,
+    target_totals,
+)
 from ucbplan.observing.tableformat import sexagesimal
 
 __all__ = ["export_keck_starlist"]
@@ -40,6 +45,7 @@ def _block_comments(
     u_star = floats(table, "u_star_rad", unit="rad")
     sigma = floats(table, "sigma_t_s", unit="s")
     mids = required_times(table, "t_mid_utc")
+    exposures = exposure_texts(table)
     comments: dict[str, list[str]] = {}
     first: dict[str, int] = {}
     for i in time_order(table):
@@ -47,7 +53,8 @@ def _block_comments(
         first.setdefault(names[i], i)
         comments.setdefault(names[i], []).append(
             f"# {short} u*={u_star[i]:.6g} ({ascii_text(anchors[i])}) UTC-mid "
-            f"{iso_ms(mids[i], _mid_decimals(float(sigma[i])))} +/-{fmt_sigma(float(sigma[i]))} s"
+            f"{iso_ms(mids[i], _mid_decimals(float(sigma[i])))} +/-{fmt_sigma(float(sigma[i]))} s "
+            f"{exposures[i]}"
         )
     return comments, first
 
@@ -65,7 +72,11 @@ def _target_line(short: str, ra_deg: float, dec_deg: float, vmag: float, rotmode
 
 
 def export_keck_starlist(table: Table, options: ExportOptions) -> ExportResult:
-    """Keck starlist: a ``#`` comment per block (UTC mid-time ± σ), then one line per target.
+    """Keck starlist: per target a ``#`` line with its exposure totals and a ``#`` comment per
+    block (UTC mid-time ± σ, exposures ``n x t s``), then the target line.
+
+    A starlist line has no exposure field: the counts and times are in the comments (a note
+    says so) and are set in the instrument's own software.
 
     Name in columns 1–16 (≤ 15 characters, spaces → underscores), RA ``HH MM SS.SS`` from
     column 17, Dec ``±DD MM SS.S``, equinox ``2000``, then ``key=value`` pairs (``vmag=`` when a
@@ -90,8 +101,11 @@ def export_keck_starlist(table: Table, options: ExportOptions) -> ExportResult:
         "at the site, "
         "+/- 1 sigma",
     ]
+    totals = target_totals(table)
     for name, i in sorted(first.items(), key=lambda kv: kv[1]):
+        lines.append(f"# {short[name]} {totals[name]}")
         lines.extend(comments[name])
         lines.append(_target_line(short[name], ra[i], dec[i], vmag[i], options.keck_rotmode))
+    notes.append(NO_EXPOSURE_FIELD.format(fmt="Keck starlist", mark="#"))
     text = "\n".join(lines) + "\n"
     return ExportResult(text.encode("ascii"), ".txt", tuple(dict.fromkeys(notes)))

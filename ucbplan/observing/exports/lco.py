@@ -1,4 +1,4 @@
-"""LCO/SOAR OCS request group JSON, TIME_CRITICAL, one request per block (docs/exports.md)."""
+"""LCO/SOAR OCS request group JSON, TIME_CRITICAL, one request per visit (docs/exports.md)."""
 
 from __future__ import annotations
 
@@ -18,10 +18,15 @@ from ucbplan.observing.exports.columns import (
     strings,
 )
 from ucbplan.observing.exports.interface import ExportOptions, ExportResult
+from ucbplan.observing.exports.queue import queue_note
 from ucbplan.observing.exports.text import iso_ms, safe_name
-from ucbplan.observing.exports.windows import ob_start_window
+from ucbplan.observing.exports.visitgroups import export_units, exposure_runs
 
 __all__ = ["export_lco", "lco_json", "lco_requests", "request_window"]
+
+
+#: Longest request-group name written [characters].
+LCO_NAME_MAX = 50
 
 
 @dataclass(frozen=True, slots=True)
@@ -36,9 +41,10 @@ class _Settings:
 
 
 def _configuration(
-    name: str, ra_deg: float, dec_deg: float, exptime_s: float, n_exp: int, s: _Settings
+    name: str, ra_deg: float, dec_deg: float, runs: list[tuple[float, int]], s: _Settings
 ) -> dict[str, Any]:
-    """One SPECTRUM configuration: ICRS target, constraints, exposures, acquisition, guiding."""
+    """One SPECTRUM configuration: ICRS target, constraints, exposures (one instrument
+    configuration per run of equal exposure times), acquisition, guiding."""
     return {
         "type": "SPECTRUM",
         "instrument_type": s.instrument_type,
@@ -47,7 +53,9 @@ def _configuration(
             "max_airmass": s.max_airmass,
             "min_lunar_distance": s.min_lunar_distance,
         },
-        "instrument_configs": [{"exposure_time": exptime_s, "exposure_count": n_exp}],
+        "instrument_configs": [
+            {"exposure_time": exptime_s, "exposure_count": count} for exptime_s, count in runs
+        ],
         "acquisition_config": {"mode": "WCS"},
         "guiding_config": {"mode": "ON", "optional": True},
     }
@@ -63,36 +71,37 @@ def _ceil_second(t: datetime) -> datetime:
 
 
 def request_window(
-    start: datetime, end: datetime, acquisition: float, sigma_s: float, options: ExportOptions
+    start: datetime, end: datetime, acquisition: float, half_s: float, options: ExportOptions
 ) -> tuple[datetime, datetime]:
     """The OCS window of one request: it holds the whole request, whose start may slide ±half.
 
     The request is the acquisition followed by the block: it starts at t_start − acquisition
     and ends at t_end. The OCS schedules a request anywhere its full duration fits inside the
     window, so the window is [t_start − acquisition − half, t_end + half] with half =
-    max(k·σ_t, floor), rounded outward to whole seconds: the request then starts within ±half
-    (+ < 1 s of rounding) of its nominal start, exactly the OB-start window of the ESO export.
+    max(k·σ_t, floor) (``half_s``), rounded outward to whole seconds: the request then starts
+    within ±half (+ < 1 s of rounding) of its nominal start, exactly the OB-start window of the
+    ESO export.
     """
-    w = ob_start_window(start, acquisition, sigma_s, options)
-    return _floor_second(w.lo), _ceil_second(end + timedelta(seconds=w.half_width_s))
+    lo = start - timedelta(seconds=acquisition + half_s)
+    return _floor_second(lo), _ceil_second(end + timedelta(seconds=half_s))
 
 
 def _requests(
     table: Table, options: ExportOptions, s: _Settings, notes: list[str]
 ) -> list[dict[str, Any]]:
-    """One request per block in start order; its window holds the whole request (to the second)."""
+    """One request per visit (:func:`~.visitgroups.export_units`) in start order: one
+    acquisition, then the visit's exposures; its window holds the whole request (to the
+    second), so it contains every planned exposure start and no two requests of one plan
+    collide."""
     acq = acquisition_s(table, options, notes)
-    names = strings(table, "target")
     ra, dec = coordinates(table)
-    sigma = floats(table, "sigma_t_s", unit="s")
-    exptime, n_exp = floats(table, "exptime_s", unit="s"), floats(table, "n_exp")
-    starts, ends = required_times(table, "t_start_utc"), required_times(table, "t_end_utc")
+    units = export_units(table, options)
+    notes += queue_note(table, units, "LCO", options)
     requests = []
-    for i in sorted(range(len(table)), key=lambda j: starts[j]):
-        lo, hi = request_window(starts[i], ends[i], float(acq[i]), float(sigma[i]), options)
-        config = _configuration(
-            names[i], float(ra[i]), float(dec[i]), float(exptime[i]), int(n_exp[i]), s
-        )
+    for unit in units:
+        i = unit.rows[0]
+        lo, hi = request_window(unit.start, unit.end, float(acq[i]), unit.half_width_s, options)
+        config = _configuration(unit.target, float(ra[i]), float(dec[i]), exposure_runs(unit), s)
         requests.append(
             {
                 "location": {"telescope_class": s.telescope_class},
@@ -113,7 +122,8 @@ def lco_requests(
     max_airmass: float = 2.0,
     min_lunar_distance: float = 30.0,
 ) -> dict[str, Any]:
-    """LCO/SOAR OCS request group: one TIME_CRITICAL request per block.
+    """LCO/SOAR OCS request group: one TIME_CRITICAL request per visit (its exposures after one
+    acquisition; a lone block is a visit of its ``n_exp`` exposures).
 
     Each window holds the whole request (acquisition + block) with its start free by
     ± max(k·σ_t, floor) (:func:`request_window`); the OCS refuses a window shorter than the
@@ -144,8 +154,13 @@ def lco_requests(
     requests = _requests(table, options, s, notes)
     if not requests:
         raise InputFileError("blocks table has no rows: nothing to export")
+    name = safe_name(f"ucbplan {strings(table, 'target')[0]}")
+    if len(name) > LCO_NAME_MAX:
+        notes.append(
+            f"LCO: request group name cut to {LCO_NAME_MAX} characters: {name[:LCO_NAME_MAX]!r}"
+        )
     return {
-        "name": safe_name(f"ucbplan {strings(table, 'target')[0]}", 50),
+        "name": name[:LCO_NAME_MAX],
         "proposal": s.proposal,
         "ipp_value": 1.0,
         "operator": "MANY",
@@ -176,7 +191,8 @@ def lco_json(table: Table, options: ExportOptions) -> str:
 
 
 def export_lco(table: Table, options: ExportOptions) -> ExportResult:
-    """LCO/SOAR OCS request-group JSON, TIME_CRITICAL (see :func:`lco_requests`)."""
-    notes: list[str] = []
-    acquisition_s(table, options, notes)  # the defaults taken, for the user's stderr
-    return ExportResult(lco_json(table, options).encode(), ".json", tuple(notes))
+    """LCO/SOAR OCS request-group JSON, TIME_CRITICAL (see :func:`lco_requests`); its notes
+    (defaults taken, visits a queue cannot run as planned) also go to the user's stderr."""
+    doc = lco_requests(table, options)
+    text = dumps_json(doc) + "\n"
+    return ExportResult(text.encode(), ".json", tuple(doc["ucbplan"]["notes"]))

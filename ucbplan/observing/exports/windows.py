@@ -7,6 +7,13 @@ from datetime import datetime, timedelta
 
 from ucbplan.observing.exports.interface import ExportOptions
 
+#: What a note on a minute-rounded window (ESO p2, Gemini) offers when the window no longer
+#: fixes the orbital phase (docs/exports.md).
+ROUNDING_REMEDY = (
+    "plan exposures covering the window and select in `reduce`, or re-plan back to back with "
+    "`ucbplan plan --service-mode` (no start phase to keep)"
+)
+
 # Time window on the OB start (ESO p2, LCO)
 # --------------------------------------------------------------------------------------------
 

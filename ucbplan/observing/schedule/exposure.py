@@ -38,7 +38,7 @@ from ucbplan.errors import InputError
 from ucbplan.observing.blocks import ExposurePlan
 from ucbplan.observing.goals import goal_info_needed, parse_goal
 from ucbplan.observing.instruments import instrument_magnitude, sigma_v_kms
-from ucbplan.observing.schedule.settings import PlanSettings
+from ucbplan.observing.schedule.settings import QUEUE_CADENCES, QUEUE_WAIT_S, PlanSettings
 from ucbplan.observing.sigma_model import SigmaVModel
 from ucbplan.observing.strategy import (
     LOCK_MARGIN_S,
@@ -212,6 +212,25 @@ def _phase_locked(target: Target, settings: PlanSettings, spacing: float) -> Exp
     return replace(plan, exptime_s=exptime)
 
 
+def _check_queue_wait(
+    target: Target, settings: PlanSettings, plan: ExposurePlan, wait_s: float
+) -> None:
+    """``--service-mode``: a phase-locked exposure shortened below the anchor spacing (the
+    smearing floor) waits after each readout, which a queue cannot.
+
+    Raises
+    ------
+    InputError
+        With ``service_mode`` and a wait above :data:`QUEUE_WAIT_S`.
+    """
+    if settings.service_mode and wait_s > QUEUE_WAIT_S:
+        raise InputError(
+            f"--service-mode: {target.name}: phase-locked {plan.exptime_s:.1f} s exposures "
+            f"(capped for Lambda_K) wait {wait_s:.1f} s after each readout, which a queue "
+            "cannot; use --cadence untargeted (or auto), or pass --allow-smeared"
+        )
+
+
 def _visit_length(settings: PlanSettings) -> float | None:
     """Longest visit [s]: ``--visit``, else ``--max-visit`` for a goal, else None (sessions)."""
     if settings.visit_s is not None:
@@ -245,7 +264,10 @@ def target_exposure(target: Target, settings: PlanSettings) -> TargetExposure:
         return optimised_exposure(target, settings)
     m = len(settings.spec.u_values)
     spacing = target.period_s / m
-    if settings.cadence == "phase-locked":
+    cadence = settings.cadence
+    if settings.service_mode and cadence == "auto":
+        cadence = "untargeted"  # the given exposure time, back to back
+    if cadence == "phase-locked":
         plan, why = _phase_locked(target, settings, spacing), "phase-locked"
     else:
         plan, why = settings.exposure, "default" if not settings.exptime_given else "given"
@@ -255,16 +277,17 @@ def target_exposure(target: Target, settings: PlanSettings) -> TargetExposure:
     cost = plan.exptime_s + plan.readout_s
     step = math.ceil(cost / spacing * (1.0 - 1e-12)) * spacing
     _check_visit(target, settings, plan)
-    strategy = "phase-locked" if settings.cadence == "phase-locked" else "targeted"
-    if settings.cadence == "untargeted":
+    strategy = "phase-locked" if cadence == "phase-locked" else "targeted"
+    if cadence == "untargeted":
         strategy, spacing, step = "untargeted", cost, cost
-    if settings.cadence == "phase-locked":
+    if cadence == "phase-locked":
         wait = step - cost
+        _check_queue_wait(target, settings, plan, wait)
         notes.append(
             f"{target.name}: phase-locked cadence: {plan.exptime_s:.1f} s exposures every "
             f"{step:.1f} s (P_b/{m} x {round(step / spacing)}), duty cycle "
             f"{plan.exptime_s / step:.1%}"
-            + (f"; the OB must wait {wait:.1f} s after each readout" if wait > 1.0 else "")
+            + (f"; the OB must wait {wait:.1f} s after each readout" if wait > QUEUE_WAIT_S else "")
         )
     if settings.sigma_v_kms is not None and settings.sigma_model is None:
         notes.append(
@@ -314,10 +337,14 @@ def visit_shape(target: Target, settings: PlanSettings, visit_s: float) -> Visit
 
 
 def _forced(
-    results: tuple[StrategyResult, ...], cadence: str, hours: tuple[float, ...] = ()
+    results: tuple[StrategyResult, ...],
+    cadence: str,
+    hours: tuple[float, ...] = (),
+    service_mode: bool = False,
 ) -> StrategyResult:
-    """The strategy ``--cadence`` names, or the best (``auto``): the fewest ``hours`` to a
-    goal when given, else the most information per visit.
+    """The strategy ``--cadence`` names, or the best (``auto``; with ``service_mode`` the best
+    of :data:`QUEUE_CADENCES`): the fewest ``hours`` to a goal when given, else the most
+    information per visit.
 
     Raises
     ------
@@ -325,9 +352,10 @@ def _forced(
         The forced strategy plans nothing (its reason); no strategy plans anything.
     """
     if cadence == "auto":
-        best = best_strategy(results)
+        keep = [k for k, r in enumerate(results) if not service_mode or r.name in QUEUE_CADENCES]
+        best = best_strategy([results[k] for k in keep])
         if hours:
-            best = min(zip(results, hours, strict=True), key=lambda p: p[1])[0]
+            best = min(((results[k], hours[k]) for k in keep), key=lambda p: p[1])[0]
         return best
     name = "targeted" if cadence == "anchor" else cadence
     pick = next(r for r in results if r.name == name)
@@ -381,7 +409,7 @@ def optimised_exposure(target: Target, settings: PlanSettings) -> TargetExposure
     )
     _check_visit(target, settings, shortest)
     results, hours = _strategy_results(target, settings, sigma, visit)
-    pick = _forced(results, settings.cadence, hours)
+    pick = _forced(results, settings.cadence, hours, settings.service_mode)
     plan = replace(settings.exposure, exptime_s=pick.exptime_s)
     spacing = target.period_s / len(settings.spec.u_values)
     if pick.name == "untargeted":

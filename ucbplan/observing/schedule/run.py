@@ -183,6 +183,8 @@ class PlanRun:
             "instrument": s.instrument.name if s.instrument is not None else None,
             "goal": s.goal,
         }
+        if s.service_mode:  # only when asked: plans without it keep their meta
+            out["service_mode"] = True
         per_target = {}
         for name, te in self.result.exposures.items():
             entry: dict[str, Any] = {

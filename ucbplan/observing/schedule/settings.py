@@ -21,6 +21,8 @@ from ucbplan.observing.sites import Site
 __all__ = [
     "CADENCES",
     "MODES",
+    "QUEUE_CADENCES",
+    "QUEUE_WAIT_S",
     "ModeSpec",
     "PlanSettings",
     "parse_budgets",
@@ -35,6 +37,13 @@ __all__ = [
 #: so consecutive exposures centre on consecutive anchors without waiting; ``untargeted`` takes
 #: back-to-back exposures at whatever phase they fall.
 CADENCES = ("auto", "targeted", "anchor", "phase-locked", "untargeted")
+#: The cadences a service-mode queue executes (``--service-mode``): exposures back to back after
+#: one acquisition, no wait between them for an orbital phase.
+QUEUE_CADENCES = ("phase-locked", "untargeted")
+#: Longest wait after a readout a service-mode queue is taken to absorb [s]: a visit whose
+#: exposures wait longer for their phases runs as planned only in visitor mode (the plan notes a
+#: phase-locked wait above it; the queue exports note such a visit).
+QUEUE_WAIT_S = 1.0
 #: Default smallest smearing factor Λ_K of a planned exposure (``--min-lambda-k``), in every mode.
 DEFAULT_MIN_LAMBDA_K = 0.9
 #: Longest visit a goal plans without ``--visit`` (``--max-visit``) [s].
@@ -252,6 +261,10 @@ class PlanSettings:
         Longest visit a goal plans (``--max-visit``) [s]; visits are balanced below it.
     cadence : str
         Exposure cadence inside a visit (see :data:`CADENCES`).
+    service_mode : bool
+        Plan only what a service-mode queue executes (``--service-mode``): visits whose
+        exposures run back to back after one acquisition, i.e. the cadences of
+        :data:`QUEUE_CADENCES` (``auto`` picks the better of them; ``targeted`` is refused).
     min_lambda_k : float or None
         Smallest smearing factor Λ_K of a planned block (``--min-lambda-k``). None: 0.9
         (:data:`DEFAULT_MIN_LAMBDA_K`), in every mode.
@@ -300,6 +313,7 @@ class PlanSettings:
     visit_s: float | None = None
     max_visit_s: float = DEFAULT_MAX_VISIT_S
     cadence: str = "auto"
+    service_mode: bool = False
     min_lambda_k: float | None = None
     allow_smeared: bool = False
     exptime_explicit: bool | None = None
@@ -358,6 +372,7 @@ class PlanSettings:
                 raise InputError(
                     f"--cadence {self.cadence}: fixed-u pairs are single blocks; drop --cadence"
                 )
+        self._check_service_mode()
         if self.cadence == "phase-locked":
             if self.exptime_given:
                 raise InputError(
@@ -372,6 +387,22 @@ class PlanSettings:
             parse_goal(self.goal)
             if self.spec.label == "fixed-u-pairs":
                 raise InputError("--goal: fixed-u pairs plan two blocks each; drop --goal")
+
+    def _check_service_mode(self) -> None:
+        """``--service-mode``: visits (or a goal's), and no cadence that waits."""
+        if not self.service_mode:
+            return
+        if self.cadence in ("targeted", "anchor"):
+            raise InputError(
+                f"--service-mode: --cadence {self.cadence} waits between exposures for their "
+                "phases, which a service-mode queue cannot; use --cadence phase-locked, "
+                "untargeted or auto"
+            )
+        if self.visit_s is None and self.goal is None:
+            raise InputError(
+                "--service-mode: expected --visit DURATION (or --goal): a queue executes one "
+                "acquisition, then exposures back to back"
+            )
 
     def _check_budgets(self) -> None:
         """``--max-smear`` (its form, and a positive budget) and ``--max-bin-fraction``."""
