@@ -283,7 +283,7 @@ def test_untargeted_rows_carry_their_phase() -> None:
         (["--sigma-v", "30km/s@600s,Q=20"], "unknown band"),
         (["--sigma-v", "30km/s@300s", "--goal", "sigma_K=2km/s", "--max-visit", "5min"],
          "--max-visit"),
-        (["--sigma-v", "30km/s@300s", "--goal", "sigma_K=0.1km/s"], "add nights"),
+        (["--sigma-v", "30km/s@300s", "--goal", "sigma_K=1km/s"], "add nights"),
         (["--exptime", "129", "--sigma-v", "30"], "--min-lambda-k"),
         (["--sigma-floor", "2"], "--sigma-floor"),
     ],

@@ -22,7 +22,7 @@ from ucbplan.errors import InputError
 from ucbplan.observing.goals import goal_info_needed, parse_goal
 from ucbplan.observing.schedule.exposure import sigma_law, visit_shape
 from ucbplan.observing.schedule.settings import PlanSettings
-from ucbplan.observing.strategy import STRATEGIES, compare_strategies, goal_time
+from ucbplan.observing.strategy import compare_strategies, goal_times
 
 if TYPE_CHECKING:
     from ucbplan.target import Target
@@ -129,8 +129,7 @@ def compare_target_strategies(target: Target, settings: PlanSettings) -> Strateg
     rows: list[StrategyRow] = []
     if settings.goal is not None:
         need = goal_info_needed(parse_goal(settings.goal), target)
-        for name in STRATEGIES:
-            g = goal_time(need, shape, sigma, name)
+        for g in goal_times(need, shape, sigma, settings.goal):
             ok = g.strategy.possible
             rows.append(_row(g.strategy, g.n_spectra if ok else None, g.n_visits if ok else None,
                              g.hours if ok else None))  # fmt: skip

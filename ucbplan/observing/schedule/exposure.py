@@ -42,12 +42,11 @@ from ucbplan.observing.schedule.settings import PlanSettings
 from ucbplan.observing.sigma_model import SigmaVModel
 from ucbplan.observing.strategy import (
     LOCK_MARGIN_S,
-    STRATEGIES,
     StrategyResult,
     VisitShape,
     best_strategy,
     compare_strategies,
-    goal_time,
+    goal_times,
     session_result,
 )
 
@@ -353,7 +352,7 @@ def _strategy_results(
     if settings.goal is None:
         return tuple(compare_strategies(shape, sigma)), ()
     need = goal_info_needed(parse_goal(settings.goal), target)
-    times = [goal_time(need, shape, sigma, name) for name in STRATEGIES]
+    times = goal_times(need, shape, sigma, settings.goal)
     return tuple(g.strategy for g in times), tuple(g.hours for g in times)
 
 

@@ -30,6 +30,7 @@ from ucbplan.observing.goals import (
     GoalPlan,
     Shortfall,
     TimeBudget,
+    check_goal_spectra,
     goal_info_needed,
     parse_goal,
     target_k,
@@ -79,6 +80,7 @@ def _goal_plan(goal: Goal, run: TargetRun, settings: PlanSettings) -> GoalPlan:
     w = _per_spectrum(run)
     te = run.exposure
     pattern = len(settings.spec.u_values) if te.strategy != "untargeted" else 1
+    check_goal_spectra(goal.text, need / w)
     n = max(1, math.ceil(need / w * (1.0 - 1e-12)))
     n_max, step = _max_per_visit(run, settings)
     counts = balanced_counts(n, n_max, pattern)
