@@ -261,7 +261,7 @@ def _check_option_names(options: Mapping[str, Any]) -> None:
 
     known = set(inspect.signature(plan_settings).parameters)
     known |= set(PlanSettings.__dataclass_fields__)
-    known -= {"options", "exposure", "exptime_explicit", "custom_constraints"}
+    known -= {"options", "exposure", "exptime_explicit", "readout_assumed", "custom_constraints"}
     for key in options:
         if key not in known:
             hint = did_you_mean(key, sorted(known))
