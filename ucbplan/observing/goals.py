@@ -421,15 +421,8 @@ def _goal_inputs(
 
 
 def check_goal_spectra(goal_text: str, n_spectra: float) -> None:
-    """The one goal-magnitude check of ``plan``, ``feasibility``, the API and ``population
-    rank``: a goal needing more than :data:`MAX_SPECTRA` spectra (or an infinite number, from a
-    goal like 1e-300 km/s) is a typo, refused before any count of visits is built.
-
-    Raises
-    ------
-    InputError
-        One line naming the goal.
-    """
+    """The one goal-magnitude check (plan, feasibility, API, population rank): a goal needing
+    over :data:`MAX_SPECTRA` spectra, or infinitely many, is a typo (InputError, one line)."""
     if not n_spectra <= MAX_SPECTRA:  # nan and inf too
         raise InputError(
             f"--goal {goal_text}: would need more than {MAX_SPECTRA} spectra; relax the goal"
@@ -438,8 +431,7 @@ def check_goal_spectra(goal_text: str, n_spectra: float) -> None:
 
 def _cycles_to_goal(goal: Goal, per_pattern: float, pattern_len: int) -> int:
     """Whole patterns c = ⌈(σ_goal(1 pattern)/goal)²⌉ that reach ``goal`` (at least one)."""
-    ratio = per_pattern / goal.value
-    ratio *= ratio  # inf, not OverflowError, for a goal like 1e-300
+    ratio = (per_pattern / goal.value) * (per_pattern / goal.value)  # inf, not OverflowError
     check_goal_spectra(goal.text, ratio * pattern_len)
     return max(1, math.ceil(ratio * (1.0 - 1e-12)))
 
@@ -604,5 +596,4 @@ def goal_info_needed(goal: Goal, target: Target) -> float:
         goal, 1.0, 1.0 if k2 is not None else None, k1, k2, target.period_s, sin_i,
         target.params.eccentricity,
     )  # fmt: skip
-    ratio = unit / goal.value
-    return ratio * ratio  # inf, not OverflowError, for a goal like 1e-300: check_goal_spectra
+    return (unit / goal.value) * (unit / goal.value)  # inf, not OverflowError, for 1e-300
