@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from astropy import units as u
@@ -13,6 +15,7 @@ from ucbplan.observing.constraint_checks import evaluate_window
 from ucbplan.observing.constraints import (
     CONSTRAINTS,
     AirmassConstraint,
+    Constraint,
     MoonIlluminationConstraint,
     MoonSeparationConstraint,
     NightConstraint,
@@ -31,6 +34,7 @@ pytestmark = [
 # HM Cnc, the fiducial source, a zenith-passing star at Paranal, a south-polar star.
 COORDS = SkyCoord([121.5967, 108.318, 0.0, 250.0] * u.deg, [15.4583, -55.652, -24.7, -89.0] * u.deg)
 ORIGIN = "2040-02-01T00:00:00"
+HM = str(Path(__file__).resolve().parents[1] / "catalogs" / "hm-cnc-simulated.yaml")
 
 
 @pytest.fixture(scope="module")
@@ -178,3 +182,67 @@ def test_sun_direct_rotation_equals_astropys_frames() -> None:
     with offline():
         t = Time(ORIGIN, scale="tdb") + TimeDelta(np.linspace(0.0, 200.0, 300) * u.d)
         np.testing.assert_array_equal(_sun_cirs_m(t), sun_cirs_frames(t))
+
+
+class _Scalar(Constraint):
+    def ok(self, sky, i, x):  # type: ignore[no-untyped-def]
+        return True
+
+
+class _Nothing(Constraint):
+    def ok(self, sky, i, x):  # type: ignore[no-untyped-def]
+        return None
+
+
+class _WrongShape(Constraint):
+    def ok(self, sky, i, x):  # type: ignore[no-untyped-def]
+        return np.ones(3, dtype=bool)
+
+
+class _Floats(Constraint):
+    def ok(self, sky, i, x):  # type: ignore[no-untyped-def]
+        return np.full(np.shape(x), 0.5)
+
+
+class _NoOk(Constraint):
+    pass
+
+
+@pytest.mark.parametrize(
+    ("constraint", "needle"),
+    [
+        (_Scalar(), "_Scalar.ok(sky, i, x) returned a scalar"),
+        (_Nothing(), "_Nothing.ok(sky, i, x) returned None"),
+        (_WrongShape(), "_WrongShape.ok(sky, i, x) returned shape (3,)"),
+        (_Floats(), "_Floats.ok(sky, i, x) returned float64"),
+        (_NoOk(), "_NoOk defines no ok(sky, i, x)"),
+    ],
+)
+def test_a_broken_custom_constraint_is_one_line(constraint: Constraint, needle: str) -> None:
+    """Issue 33: numpy's AxisError, a bare NotImplementedError (empty message), now one
+    InputError naming the constraint and what ok() must return."""
+    import ucbplan
+    from ucbplan.errors import InputError
+
+    with pytest.raises(InputError) as exc:
+        ucbplan.plan(HM, site="paranal", night="2040-02-15", constraints=[constraint])
+    text = str(exc.value)
+    assert needle in text and "boolean array of x's shape" in text and "\n" not in text, text
+    assert exc.value.parameter == "constraints"
+
+
+def test_an_astroplan_limit_in_the_wrong_unit_is_one_line() -> None:
+    """Issue 33: astroplan's AltitudeConstraint(min=30*u.m) raised UnitConversionError."""
+    import astroplan
+
+    import ucbplan
+    from ucbplan.errors import InputError
+
+    with pytest.raises(InputError, match=r"AltitudeConstraint: min: expected an angle") as exc:
+        ucbplan.plan(
+            HM,
+            site="paranal",
+            night="2040-02-15",
+            constraints=[astroplan.AltitudeConstraint(min=30 * u.m)],
+        )
+    assert "30.0 m" in str(exc.value) and exc.value.parameter == "constraints"

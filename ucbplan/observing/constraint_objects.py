@@ -156,6 +156,12 @@ def as_constraint(item: Any) -> Constraint:
         For anything else (naming ``constraints``).
     """
     if isinstance(item, Constraint):
+        if type(item).ok is Constraint.ok:
+            raise InputError(
+                f"constraints: {type(item).__name__} defines no ok(sky, i, x); expected a method "
+                "returning a boolean array of x's shape, True where the constraint holds",
+                parameter="constraints",
+            )
         return item
     if _is_astroplan(item):
         native = _native(item)
@@ -179,13 +185,27 @@ def _is_astroplan(item: Any) -> bool:
     return isinstance(item, ApConstraint)
 
 
-def _deg(q: Any) -> float | None:
-    """An astroplan angle (Quantity or None) in degrees."""
+def _deg(c: Any, field: str) -> float | None:
+    """The angle ``field`` of astroplan's constraint ``c`` (Quantity or None) in degrees.
+
+    Raises
+    ------
+    InputError
+        Not an angle (``min=30*u.m``); one line naming the constraint and the field.
+    """
+    q = getattr(c, field)
     if q is None:
         return None
     from astropy import units as u
 
-    return float(u.Quantity(q, u.deg).value)
+    try:
+        return float(u.Quantity(q, u.deg).value)
+    except (u.UnitsError, TypeError, ValueError):
+        raise InputError(
+            f"constraints: astroplan {type(c).__name__}: {field}: expected an angle (e.g. "
+            f"30*u.deg), got {shorten(str(q), 40)}",
+            parameter="constraints",
+        ) from None
 
 
 def _native(c: Any) -> Constraint | None:
@@ -195,7 +215,7 @@ def _native(c: Any) -> Constraint | None:
 
     kind = type(c)
     if kind is astroplan.AtNightConstraint and getattr(c, "force_pressure_zero", False):
-        sun = _deg(c.max_solar_altitude)
+        sun = _deg(c, "max_solar_altitude")
         for name, limit in TWILIGHT_SUN_ALT_DEG.items():
             if sun == limit:
                 return NightConstraint(name)
@@ -203,11 +223,11 @@ def _native(c: Any) -> Constraint | None:
     boolean = getattr(c, "boolean_constraint", True)
     if kind is astroplan.AirmassConstraint and boolean and c.max is not None and c.min == 1:
         return AirmassConstraint(float(c.max))
-    if kind is astroplan.AltitudeConstraint and boolean and _deg(c.max) == 90.0:
-        return AltitudeConstraint(_deg(c.min))  # type: ignore[arg-type]
+    if kind is astroplan.AltitudeConstraint and boolean and _deg(c, "max") == 90.0:
+        return AltitudeConstraint(_deg(c, "min"))  # type: ignore[arg-type]
     no_eph = getattr(c, "ephemeris", None) is None
     if kind is astroplan.MoonSeparationConstraint and no_eph and c.max is None:
-        return MoonSeparationConstraint(_deg(c.min), moon_down_ok=False)  # type: ignore[arg-type]
+        return MoonSeparationConstraint(_deg(c, "min"), moon_down_ok=False)  # type: ignore[arg-type]
     if kind is astroplan.MoonIlluminationConstraint and no_eph and c.min is None:
         return MoonIlluminationConstraint(float(c.max))
     return None
