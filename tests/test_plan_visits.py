@@ -492,3 +492,28 @@ def test_cli_default_exposure_is_not_explicit() -> None:
     assert capped["rows"][0]["exptime_s"] < 60.0  # the default 60 s, capped
     res = CliRunner().invoke(app, [*DONE_WHEN, "--min-lambda-k", "0.99", "--exptime", "60"])
     assert res.exit_code != 0 and "--min-lambda-k" in str(res.exception)  # given: refused
+
+
+def test_an_acquisition_never_starts_inside_the_zenith_hole(tmp_path: Path) -> None:
+    """Issue 33: the acquisition was checked against night and airmass only, so a visit could
+    start slewing to a target inside the zenith hole (87.2 deg with a 3-deg hole). A target that
+    transits 0.1 deg from the zenith at Paranal: astropy's altitude over every acquisition
+    (sampled every 10 s) stays out of the hole."""
+    text = HM.read_text(encoding="utf-8").replace('dec: "+15d27m30s"', 'dec: "-24d31m00s"')
+    target = tmp_path / "zenith.yaml"
+    target.write_text(text, encoding="utf-8")
+    settings = plan_settings(visit="30min", zenith_hole_deg=3.0, sigma_v_kms=5.0)
+    run = plan_files([target], first_night="2040-02-15", n_nights=2, site="paranal",
+                     settings=settings)  # fmt: skip
+    starts: dict[str, Time] = {}
+    for b in run.result.blocks:
+        if b.session_id not in starts or b.t_start_utc < starts[b.session_id]:
+            starts[b.session_id] = b.t_start_utc
+    assert len(starts) >= 2
+    site = get_site("paranal")
+    coord = load_target(target).coord
+    for first in starts.values():
+        t = first - np.arange(0.0, settings.overhead_s + 1.0, 10.0) * u.s
+        with offline():
+            alt = coord.transform_to(AltAz(obstime=t, location=site.location)).alt.deg
+        assert np.all(alt < 90.0 - 3.0 + 0.01), (first.iso, float(alt.max()))

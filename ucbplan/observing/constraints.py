@@ -455,6 +455,14 @@ class ConstraintSet:
         )
         return tuple(c for c in named if c is not None) + tuple(self.extra)
 
+    @property
+    def pointing(self) -> tuple[Constraint, ...]:
+        """The constraints an acquisition must meet too (the telescope points at the target
+        while it acquires): night, airmass, altitude and the zenith hole; the Moon limits and
+        the user's own concern the exposures."""
+        named = (self.night, self.airmass, self.altitude, self.zenith_hole)
+        return tuple(c for c in named if c is not None)
+
     def __iter__(self) -> Iterator[Constraint]:
         return iter(self.active)
 
