@@ -246,3 +246,54 @@ def test_an_astroplan_limit_in_the_wrong_unit_is_one_line() -> None:
             constraints=[astroplan.AltitudeConstraint(min=30 * u.m)],
         )
     assert "30.0 m" in str(exc.value) and exc.value.parameter == "constraints"
+
+
+def test_astroplan_local_time_is_the_sites_local_time(sky: SkyModel) -> None:
+    """Issue 33: astroplan 0.10.1's LocalTimeConstraint compares UTC clock times (it finds the
+    time zone, then never uses it), so "22:00-01:30 local" was 22:00-01:30 UTC (19:00-22:30 in
+    Chile in February: blocks at 21:50 local). ucbplan evaluates it in the site's zone (or the
+    zone of the limits, as astroplan documents): 2000 random instants over 20 days against
+    zoneinfo's local clock."""
+    import datetime as dt
+    from zoneinfo import ZoneInfo
+
+    import astroplan
+
+    from ucbplan.observing.constraint_objects import as_constraint
+    from ucbplan.observing.constraints import holds
+
+    window = astroplan.LocalTimeConstraint(min=dt.time(22, 0), max=dt.time(1, 30))
+    native = as_constraint(window, get_site("paranal"))
+    x = np.sort(np.random.default_rng(3).uniform(0, 20 * 86400, 2000))
+    got = holds(native, sky, 0, x)
+    zone = ZoneInfo("America/Santiago")
+    with offline():
+        utc = sky.time(x).utc.to_datetime(timezone=dt.UTC)
+    local = [t.astimezone(zone).time() for t in utc]
+    want = np.array([t >= dt.time(22, 0) or t <= dt.time(1, 30) for t in local])
+    assert np.array_equal(got, want)
+    assert 0.1 < got.mean() < 0.2  # 3.5 h of 24
+    assert "local time 22:00:00-01:30:00 (America/Santiago)" in native.describe()
+    hawaii = astroplan.LocalTimeConstraint(min=dt.time(22, 0, tzinfo=ZoneInfo("US/Hawaii")))
+    assert "US/Hawaii" in as_constraint(hawaii, get_site("paranal")).describe()
+
+
+def test_a_plan_applies_local_time_in_the_sites_zone() -> None:
+    """The API translates astroplan's constraint before it knows the site; the run's set then
+    gives it the site's zone (the blocks, checked with zoneinfo, lie in local 22:00-01:30)."""
+    import datetime as dt
+    from zoneinfo import ZoneInfo
+
+    import astroplan
+
+    import ucbplan
+
+    window = astroplan.LocalTimeConstraint(min=dt.time(22, 0), max=dt.time(1, 30))
+    res = ucbplan.plan(HM, site="paranal", night="2040-02-15", constraints=[window])
+    assert "local time 22:00:00-01:30:00 (America/Santiago)" in res.run.result.constraints
+    zone = ZoneInfo("America/Santiago")
+    assert res.run.result.blocks
+    for b in res.run.result.blocks:
+        for t in (b.t_start_utc, b.t_end_utc):
+            local = t.to_datetime(timezone=dt.UTC).astimezone(zone).time()
+            assert local >= dt.time(22, 0) or local <= dt.time(1, 30), (t.iso, local)

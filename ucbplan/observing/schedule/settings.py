@@ -439,7 +439,7 @@ class PlanSettings:
         ``custom_constraints`` when given, else the command line's
         (:func:`~ucbplan.observing.constraint_objects.default_constraints`)."""
         if self.custom_constraints is not None:
-            return constraint_set(self.custom_constraints)
+            return constraint_set(self.custom_constraints, site)
         return constraint_set(
             default_constraints(
                 site,
