@@ -517,3 +517,28 @@ def test_an_acquisition_never_starts_inside_the_zenith_hole(tmp_path: Path) -> N
         with offline():
             alt = coord.transform_to(AltAz(obstime=t, location=site.location)).alt.deg
         assert np.all(alt < 90.0 - 3.0 + 0.01), (first.iso, float(alt.max()))
+
+
+@pytest.mark.parametrize(
+    ("goal", "needle"),
+    [
+        ("sigma_K=3km/s", "visits as long as the nights allow (9.53 h) reach it: raise max_visit"),
+        ("sigma_K=2km/s", "882 in visits as long as the nights allow (9.53 h; σ(K) ≤ 2.169"),
+    ],
+)
+def test_a_goal_shortfall_gives_the_capacity_at_the_longest_visit(goal: str, needle: str) -> None:
+    """Issue 33: "the nights allow 294 spectra (3.76 km/s); add nights" was the capacity of
+    2-h visits (the default max_visit); the same week holds 882 in visits as long as its nights
+    (9.53 h of nautical night). The message gives both and names max_visit."""
+    from ucbplan.errors import InputError
+
+    kw: dict[str, Any] = dict(sigma_v_kms="30km/s@300s", readout_s=45.0, overhead_s=480.0)
+    with pytest.raises(InputError) as exc:
+        plan_files([HM], first_night="2040-02-15", n_nights=7, site="paranal",
+                   settings=plan_settings(goal=goal, **kw))  # fmt: skip
+    text = str(exc.value)
+    assert "the nights given allow 294 in visits of at most 2 h (max_visit;" in text, text
+    assert needle in text and "\n" not in text and len(text) < 390, text
+    if goal == "sigma_K=3km/s":  # and planned with longer visits the goal holds
+        plan_files([HM], first_night="2040-02-15", n_nights=7, site="paranal",
+                   settings=plan_settings(goal=goal, max_visit="6h", **kw))  # fmt: skip
