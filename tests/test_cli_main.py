@@ -84,6 +84,17 @@ def test_os_error_is_a_user_error(
     )
 
 
+def test_os_error_on_a_huge_path_is_one_short_line(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A 5000-character --out-dir (ENAMETOOLONG) is echoed shortened, not in full (issue 33)."""
+    exc = OSError(36, "File name too long", "a" * 5000)
+    assert _run_main(monkeypatch, _raise(exc)) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and len(err) < 400, len(err)
+    assert " characters)" in err and err.endswith("check the path and its permissions")
+
+
 def test_usage_error_is_one_line() -> None:
     import subprocess
 

@@ -282,3 +282,33 @@ def test_repeated_anchor_names_count_once() -> None:
         anchor_phases(["opposition"])
     with pytest.raises(InputError, match="u=RADIANS"):
         anchor_phases(["u=abc"])
+
+
+@pytest.mark.parametrize("goal", ["sigma_K=1e-300km/s", "K1=1e-300%", "sigma_K=1e-6km/s"])
+def test_goal_magnitude_is_one_check_everywhere(goal: str) -> None:
+    """Issue 33: a tiny goal overflowed (OverflowError) in plan and feasibility, and
+    feasibility ran for minutes building 10¹² visits; one check (check_goal_spectra) refuses
+    a goal needing more than MAX_SPECTRA spectra in the library (the API's path) and both
+    commands, fast and in one line."""
+    import time
+
+    from test_cli_fuzz import run_main
+
+    from ucbplan.observing.goals import goal_info_needed
+    from ucbplan.target import load_target
+
+    hm = "catalogs/hm-cnc-simulated.yaml"
+    assert goal_info_needed(parse_goal(goal), load_target(hm)) > 1e7  # inf, not an overflow
+    with pytest.raises(InputError, match="would need more than 10000000 spectra"):
+        spectra_for_goal(parse_goal(goal), K1=K1, K2=None, sigma_v_kms=30.0, lambda_k=0.9)
+    night = ["--site", "paranal", "--night", "2040-02-15", "--visit", "1h"]
+    for args in (
+        ["plan", hm, *night, "--sigma-v", "30", "--goal", goal],
+        ["plan", hm, *night, "--sigma-v", "30km/s@600s", "--readout", "30", "--goal", goal],
+        ["feasibility", hm, "--sigma-v", "30km/s@600s", "--goal", goal],
+    ):
+        t0 = time.process_time()
+        code, _, err = run_main(args)
+        assert time.process_time() - t0 < 10.0, args
+        assert code == 2 and err.count("\n") == 1, err
+        assert "would need more than 10000000 spectra; relax the goal" in err, err

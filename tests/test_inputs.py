@@ -92,3 +92,16 @@ def test_any_text_gives_data_or_one_line_error(
         load_yaml(path)
     except SchemaError as exc:
         assert "\n" not in str(exc) and len(str(exc)) < 400 + len(str(path))
+
+
+def test_blank_comments_keeps_the_line_count_and_refuses_a_huge_comment() -> None:
+    """One linear reader for # comment lines (issue 33): emptied in place (row numbers hold),
+    a comment longer than MAX_COMMENT_CHARS refused in one line naming its line."""
+    from ucbplan.errors import SchemaError
+    from ucbplan.inputs import MAX_COMMENT_CHARS, blank_comments
+
+    text = "# a\r\nh,k\n  # b # c\n1,2 # not a comment line\n\t#\n"
+    assert blank_comments(text, Path("t.csv")) == "\nh,k\n\n1,2 # not a comment line\n\n"
+    huge = "h\n1\n #" + "y" * MAX_COMMENT_CHARS + "\n"
+    with pytest.raises(SchemaError, match=r"^t.csv: line 3: a comment of 1000002 characters"):
+        blank_comments(huge, Path("t.csv"))

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from astropy import units as u
@@ -13,6 +15,7 @@ from ucbplan.observing.constraint_checks import evaluate_window
 from ucbplan.observing.constraints import (
     CONSTRAINTS,
     AirmassConstraint,
+    Constraint,
     MoonIlluminationConstraint,
     MoonSeparationConstraint,
     NightConstraint,
@@ -31,6 +34,7 @@ pytestmark = [
 # HM Cnc, the fiducial source, a zenith-passing star at Paranal, a south-polar star.
 COORDS = SkyCoord([121.5967, 108.318, 0.0, 250.0] * u.deg, [15.4583, -55.652, -24.7, -89.0] * u.deg)
 ORIGIN = "2040-02-01T00:00:00"
+HM = str(Path(__file__).resolve().parents[1] / "catalogs" / "hm-cnc-simulated.yaml")
 
 
 @pytest.fixture(scope="module")
@@ -178,3 +182,118 @@ def test_sun_direct_rotation_equals_astropys_frames() -> None:
     with offline():
         t = Time(ORIGIN, scale="tdb") + TimeDelta(np.linspace(0.0, 200.0, 300) * u.d)
         np.testing.assert_array_equal(_sun_cirs_m(t), sun_cirs_frames(t))
+
+
+class _Scalar(Constraint):
+    def ok(self, sky, i, x):  # type: ignore[no-untyped-def]
+        return True
+
+
+class _Nothing(Constraint):
+    def ok(self, sky, i, x):  # type: ignore[no-untyped-def]
+        return None
+
+
+class _WrongShape(Constraint):
+    def ok(self, sky, i, x):  # type: ignore[no-untyped-def]
+        return np.ones(3, dtype=bool)
+
+
+class _Floats(Constraint):
+    def ok(self, sky, i, x):  # type: ignore[no-untyped-def]
+        return np.full(np.shape(x), 0.5)
+
+
+class _NoOk(Constraint):
+    pass
+
+
+@pytest.mark.parametrize(
+    ("constraint", "needle"),
+    [
+        (_Scalar(), "_Scalar.ok(sky, i, x) returned a scalar"),
+        (_Nothing(), "_Nothing.ok(sky, i, x) returned None"),
+        (_WrongShape(), "_WrongShape.ok(sky, i, x) returned shape (3,)"),
+        (_Floats(), "_Floats.ok(sky, i, x) returned float64"),
+        (_NoOk(), "_NoOk defines no ok(sky, i, x)"),
+    ],
+)
+def test_a_broken_custom_constraint_is_one_line(constraint: Constraint, needle: str) -> None:
+    """Issue 33: numpy's AxisError, a bare NotImplementedError (empty message), now one
+    InputError naming the constraint and what ok() must return."""
+    import ucbplan
+    from ucbplan.errors import InputError
+
+    with pytest.raises(InputError) as exc:
+        ucbplan.plan(HM, site="paranal", night="2040-02-15", constraints=[constraint])
+    text = str(exc.value)
+    assert needle in text and "boolean array of x's shape" in text and "\n" not in text, text
+    assert exc.value.parameter == "constraints"
+
+
+def test_an_astroplan_limit_in_the_wrong_unit_is_one_line() -> None:
+    """Issue 33: astroplan's AltitudeConstraint(min=30*u.m) raised UnitConversionError."""
+    import astroplan
+
+    import ucbplan
+    from ucbplan.errors import InputError
+
+    with pytest.raises(InputError, match=r"AltitudeConstraint: min: expected an angle") as exc:
+        ucbplan.plan(
+            HM,
+            site="paranal",
+            night="2040-02-15",
+            constraints=[astroplan.AltitudeConstraint(min=30 * u.m)],
+        )
+    assert "30.0 m" in str(exc.value) and exc.value.parameter == "constraints"
+
+
+def test_astroplan_local_time_is_the_sites_local_time(sky: SkyModel) -> None:
+    """Issue 33: astroplan 0.10.1's LocalTimeConstraint compares UTC clock times (it finds the
+    time zone, then never uses it), so "22:00-01:30 local" was 22:00-01:30 UTC (19:00-22:30 in
+    Chile in February: blocks at 21:50 local). ucbplan evaluates it in the site's zone (or the
+    zone of the limits, as astroplan documents): 2000 random instants over 20 days against
+    zoneinfo's local clock."""
+    import datetime as dt
+    from zoneinfo import ZoneInfo
+
+    import astroplan
+
+    from ucbplan.observing.constraint_objects import as_constraint
+    from ucbplan.observing.constraints import holds
+
+    window = astroplan.LocalTimeConstraint(min=dt.time(22, 0), max=dt.time(1, 30))
+    native = as_constraint(window, get_site("paranal"))
+    x = np.sort(np.random.default_rng(3).uniform(0, 20 * 86400, 2000))
+    got = holds(native, sky, 0, x)
+    zone = ZoneInfo("America/Santiago")
+    with offline():
+        utc = sky.time(x).utc.to_datetime(timezone=dt.UTC)
+    local = [t.astimezone(zone).time() for t in utc]
+    want = np.array([t >= dt.time(22, 0) or t <= dt.time(1, 30) for t in local])
+    assert np.array_equal(got, want)
+    assert 0.1 < got.mean() < 0.2  # 3.5 h of 24
+    assert "local time 22:00:00-01:30:00 (America/Santiago)" in native.describe()
+    hawaii = astroplan.LocalTimeConstraint(min=dt.time(22, 0, tzinfo=ZoneInfo("US/Hawaii")))
+    assert "US/Hawaii" in as_constraint(hawaii, get_site("paranal")).describe()
+
+
+def test_a_plan_applies_local_time_in_the_sites_zone() -> None:
+    """The API translates astroplan's constraint before it knows the site; the run's set then
+    gives it the site's zone (the blocks, checked with zoneinfo, lie in local 22:00-01:30)."""
+    import datetime as dt
+    from zoneinfo import ZoneInfo
+
+    import astroplan
+
+    import ucbplan
+
+    window = astroplan.LocalTimeConstraint(min=dt.time(22, 0), max=dt.time(1, 30))
+    res = ucbplan.plan(HM, site="paranal", night="2040-02-15", constraints=[window])
+    assert "local time 22:00:00-01:30:00 (America/Santiago)" in res.run.result.constraints
+    zone = ZoneInfo("America/Santiago")
+    assert res.run.result.blocks
+    for b in res.run.result.blocks:
+        for t in (b.t_start_utc, b.t_end_utc):
+            local = t.to_datetime(timezone=dt.UTC).astimezone(zone).time()
+            assert local >= dt.time(22, 0) or local <= dt.time(1, 30), (t.iso, local)

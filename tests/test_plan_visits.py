@@ -492,3 +492,53 @@ def test_cli_default_exposure_is_not_explicit() -> None:
     assert capped["rows"][0]["exptime_s"] < 60.0  # the default 60 s, capped
     res = CliRunner().invoke(app, [*DONE_WHEN, "--min-lambda-k", "0.99", "--exptime", "60"])
     assert res.exit_code != 0 and "--min-lambda-k" in str(res.exception)  # given: refused
+
+
+def test_an_acquisition_never_starts_inside_the_zenith_hole(tmp_path: Path) -> None:
+    """Issue 33: the acquisition was checked against night and airmass only, so a visit could
+    start slewing to a target inside the zenith hole (87.2 deg with a 3-deg hole). A target that
+    transits 0.1 deg from the zenith at Paranal: astropy's altitude over every acquisition
+    (sampled every 10 s) stays out of the hole."""
+    text = HM.read_text(encoding="utf-8").replace('dec: "+15d27m30s"', 'dec: "-24d31m00s"')
+    target = tmp_path / "zenith.yaml"
+    target.write_text(text, encoding="utf-8")
+    settings = plan_settings(visit="30min", zenith_hole_deg=3.0, sigma_v_kms=5.0)
+    run = plan_files([target], first_night="2040-02-15", n_nights=2, site="paranal",
+                     settings=settings)  # fmt: skip
+    starts: dict[str, Time] = {}
+    for b in run.result.blocks:
+        if b.session_id not in starts or b.t_start_utc < starts[b.session_id]:
+            starts[b.session_id] = b.t_start_utc
+    assert len(starts) >= 2
+    site = get_site("paranal")
+    coord = load_target(target).coord
+    for first in starts.values():
+        t = first - np.arange(0.0, settings.overhead_s + 1.0, 10.0) * u.s
+        with offline():
+            alt = coord.transform_to(AltAz(obstime=t, location=site.location)).alt.deg
+        assert np.all(alt < 90.0 - 3.0 + 0.01), (first.iso, float(alt.max()))
+
+
+@pytest.mark.parametrize(
+    ("goal", "needle"),
+    [
+        ("sigma_K=3km/s", "visits as long as the nights allow (9.53 h) reach it: raise max_visit"),
+        ("sigma_K=2km/s", "882 in visits as long as the nights allow (9.53 h; σ(K) ≤ 2.169"),
+    ],
+)
+def test_a_goal_shortfall_gives_the_capacity_at_the_longest_visit(goal: str, needle: str) -> None:
+    """Issue 33: "the nights allow 294 spectra (3.76 km/s); add nights" was the capacity of
+    2-h visits (the default max_visit); the same week holds 882 in visits as long as its nights
+    (9.53 h of nautical night). The message gives both and names max_visit."""
+    from ucbplan.errors import InputError
+
+    kw: dict[str, Any] = dict(sigma_v_kms="30km/s@300s", readout_s=45.0, overhead_s=480.0)
+    with pytest.raises(InputError) as exc:
+        plan_files([HM], first_night="2040-02-15", n_nights=7, site="paranal",
+                   settings=plan_settings(goal=goal, **kw))  # fmt: skip
+    text = str(exc.value)
+    assert "the nights given allow 294 in visits of at most 2 h (max_visit;" in text, text
+    assert needle in text and "\n" not in text and len(text) < 390, text
+    if goal == "sigma_K=3km/s":  # and planned with longer visits the goal holds
+        plan_files([HM], first_night="2040-02-15", n_nights=7, site="paranal",
+                   settings=plan_settings(goal=goal, max_visit="6h", **kw))  # fmt: skip

@@ -12,6 +12,7 @@ from hypothesis import strategies as st
 from ucbplan.core.smearing import lambda_k, lambda_kappa
 from ucbplan.reduce.regression import (
     OUTLIER_NSIGMA,
+    ComponentFit,
     binned_design,
     fit_component,
     lambda_k_to_x,
@@ -237,3 +238,37 @@ def test_wilson_fit_is_the_chi2_minimum_with_q_in_the_variance() -> None:
     fit = wilson_fit(v1, s1, v2, s2, q0=1.0)
     assert fit.q == pytest.approx(ref.x, abs=1e-6)
     assert fit.chi2 == pytest.approx(chi2(fit.q), rel=1e-12)
+
+
+def _scattered_fit(extra: float, n: int = 400) -> ComponentFit:
+    """A star-1 fit of n spectra whose scatter is σ·extra (σ = 10 km/s given)."""
+    rng = np.random.default_rng(11)
+    g = np.cos(np.linspace(0.0, 40.0, n))
+    v = 30.0 + 300.0 * g + rng.normal(0.0, 10.0 * extra, n)
+    return fit_component(g, v, np.full(n, 10.0), 1)
+
+
+@pytest.mark.parametrize("extra", [1.0, 1.2, 1.6])
+def test_sigma_k_scaling_is_reported_and_warned_by_one_rule(extra: float) -> None:
+    """Issue 33: σ(K) was scaled by √(χ²/dof) whenever χ²/dof > 1, the warning fired only
+    above 2 and the report gave the scaled σ alone. Now the fit carries the scale, the
+    statistical σ from the given σ_v alone is kept beside the scaled one, and the warning fires
+    whenever the excess is significant (χ² above its 99th percentile for the dof), independent
+    closed form: σ_K = σ/√Σ(G − Ḡ)², times √(χ²/dof)."""
+    from scipy.stats import chi2 as chi2_dist
+
+    from ucbplan.reduce.pipeline import _fit_warnings
+
+    f = _scattered_fit(extra)
+    g = np.cos(np.linspace(0.0, 40.0, 400))
+    closed = 10.0 / math.sqrt(float(((g - g.mean()) ** 2).sum()))
+    ratio = f.line.chi2 / f.line.dof
+    assert f.sigma_K_input == pytest.approx(closed, rel=1e-12)
+    assert f.line.scale == pytest.approx(math.sqrt(ratio) if ratio > 1 else 1.0, rel=1e-12)
+    assert f.sigma_K == pytest.approx(f.sigma_K_input * f.line.scale, rel=1e-12)
+    warned = [w for w in _fit_warnings((f,)) if "χ²/dof" in w]
+    significant = f.line.chi2 > chi2_dist.ppf(0.99, f.line.dof)
+    assert bool(warned) == significant
+    assert significant == (extra > 1.1)  # 1.2 (χ²/dof ≈ 1.44) is significant, unlike 1.0
+    if warned:
+        assert f"σ(K) {f.sigma_K_input:.3g} → {f.sigma_K:.3g} km/s" in warned[0], warned

@@ -283,7 +283,7 @@ def test_untargeted_rows_carry_their_phase() -> None:
         (["--sigma-v", "30km/s@600s,Q=20"], "unknown band"),
         (["--sigma-v", "30km/s@300s", "--goal", "sigma_K=2km/s", "--max-visit", "5min"],
          "--max-visit"),
-        (["--sigma-v", "30km/s@300s", "--goal", "sigma_K=0.1km/s"], "add nights"),
+        (["--sigma-v", "30km/s@300s", "--goal", "sigma_K=1km/s"], "add nights"),
         (["--exptime", "129", "--sigma-v", "30"], "--min-lambda-k"),
         (["--sigma-floor", "2"], "--sigma-floor"),
     ],
@@ -337,6 +337,45 @@ def test_feasibility_compares_strategies_json(tmp_path) -> None:  # type: ignore
 def test_no_readout_warns_that_the_shortest_exposure_wins() -> None:
     """Without a readout (and no read noise in the law) 1-s exposures carry the most
     information; the plan says why in one line instead of planning them silently."""
-    run = _plan(visit="1h", sigma_v_kms="30km/s@300s")
+    run = _plan(visit="1h", sigma_v_kms="30km/s@300s", readout_s=0.0)
     notes = [w for w in run.result.warnings if "shortest exposure" in w]
     assert len(notes) == 1 and len(notes[0]) <= 200 and "--readout" in notes[0]
+
+
+def test_a_chosen_exposure_time_assumes_a_real_readout() -> None:
+    """Issue 33: with σ_v following the exposure time and no readout nor instrument the plan
+    picked 1-s exposures (33 CPU s; 2703 spectra in one 0.83-h visit with a goal). It now
+    assumes the shortest readout of the bundled spectrographs (DEFAULT_LAW_READOUT_S, tied to
+    the table below) and says so in one line; the plan is fast again."""
+    import time
+
+    from ucbplan.observing.instruments import load_instruments
+    from ucbplan.observing.schedule.options import DEFAULT_LAW_READOUT_S
+
+    confirmed = [i.readout_s for i in load_instruments().values() if i.readout_s is not None]
+    assert min(confirmed) == DEFAULT_LAW_READOUT_S
+    t0 = time.process_time()
+    run = _plan(visit="1h", sigma_v_kms="30km/s@600s", goal="sigma_K=25km/s")
+    assert time.process_time() - t0 < 10.0
+    notes = [w for w in run.result.warnings if "readout" in w]
+    assert len(notes) == 1 and "24 s assumed" in notes[0] and "--readout" in notes[0], notes
+    blocks = run.result.blocks
+    assert blocks and min(b.exptime_s for b in blocks) >= 10.0
+    assert all(b.readout_s == DEFAULT_LAW_READOUT_S for b in blocks)
+
+
+@pytest.mark.parametrize(
+    ("extra", "needle"),
+    [
+        (["--visit", "5min", "--overhead", "480"], "--visit: expected at least acquisition"),
+        (["--max-visit", "5min", "--overhead", "480", "--goal", "sigma_K=5km/s"], "--max-visit"),
+    ],
+)
+def test_feasibility_refuses_a_short_visit_before_printing(extra: list[str], needle: str) -> None:
+    """Issue 33: feasibility printed its 35-line report and then the one-line error (the
+    comparison failed only when printed); the settings are checked before any output."""
+    from test_cli_fuzz import run_main
+
+    args = ["feasibility", HM_FILE, "--sigma-v", "30km/s@300s", "--readout", "45", *extra]
+    code, out, err = run_main(args)
+    assert code == 2 and out == "" and err.count("\n") == 1 and needle in err, err

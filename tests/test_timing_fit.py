@@ -952,3 +952,16 @@ def test_ephemeris_fit_cli_without_period(tmp_path: Path) -> None:
     doc = json.loads(run([str(path), "--format", "json"]))
     assert doc["n_points"] == len(cycles)
     assert abs(doc["parameters"]["period"]["value"] - float(P_TRUE)) < 1e-3
+
+
+def test_eclipse_csv_comments_share_the_bounded_reader(tmp_path: Path) -> None:
+    """Issue 33: the eclipse-time CSV reads # comments with the velocity tables' one reader."""
+    from ucbplan.inputs import MAX_COMMENT_CHARS
+
+    rows = "bjd_tdb,sigma_s\n2458305.6827886,2\n2458305.6875891,2\n2458305.6923896,2\n"
+    p = tmp_path / "t.csv"
+    p.write_text("# note\n" + rows + "  # trailing note\n", encoding="utf-8")
+    assert len(read_times(p).jd) == 3
+    p.write_text("#" * (MAX_COMMENT_CHARS + 1) + "\n" + rows, encoding="utf-8")
+    with pytest.raises(InputFileError, match=r"^t.csv: line 1: a comment of 1000001 characters"):
+        read_times(p)

@@ -76,7 +76,10 @@ PLAN_FLAGS: dict[str, Flag] = {
     "exptime": Flag(("--exptime",), "Single-exposure time [s].", _S),
     "n_exp": Flag(("--n-exp",), "Exposures per block (co-added)."),
     "readout": Flag(
-        ("--readout",), "Readout after each exposure [s] (default: the instrument's, else 0).", _S
+        ("--readout",),
+        "Readout after each exposure [s] (default: the instrument's, else 0; 24 when the "
+        "--sigma-v law chooses the exposure time).",
+        _S,
     ),
     "alpha": Flag(("--alpha",), "Planning margin α of T_valid."),
     "sigma_v": Flag(

@@ -166,6 +166,10 @@ def write_table_output(tab: Any, fmt: str, output: Path | None, overwrite: bool)
         write_output(output, lambda h: dump_json(doc, h), overwrite=overwrite)
         return
     fmt_name = "ascii.ecsv" if fmt == "ecsv" else "ascii.csv"
+    if fmt == "csv":
+        from ucbplan.observing.tablewrite import csv_safe_table
+
+        tab = csv_safe_table(tab)  # no formula cells (issue 33)
 
     def _w(handle: IO[str]) -> None:
         tab.write(handle, format=fmt_name)

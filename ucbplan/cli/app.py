@@ -16,7 +16,7 @@ import typer
 from ucbplan._version import __version__
 from ucbplan.cli._console import err_console
 from ucbplan.cli._flags import cli_message
-from ucbplan.errors import UcbplanError
+from ucbplan.errors import MAX_VALUE_CHARS, UcbplanError, shorten
 
 __all__ = ["app", "main"]
 
@@ -96,7 +96,10 @@ def _fail(message: str, code: int) -> NoReturn:
 
 
 def _os_error(exc: OSError) -> str:
-    where = f"{exc.filename}: " if exc.filename else ""
+    name = str(exc.filename)
+    if len(name) > MAX_VALUE_CHARS:  # a huge path (ENAMETOOLONG) is quoted cut, not in full
+        name = shorten(name)
+    where = f"{name}: " if exc.filename else ""
     return f"error: {where}{exc.strerror or exc}; check the path and its permissions"
 
 

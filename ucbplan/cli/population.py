@@ -128,7 +128,8 @@ def _finish(run: ForecastRun, output: Path, control: RunControl, keep_parts: boo
         remove_parts(control.parts)
     meta = run.table.meta
     err_console.print(
-        f"wrote {escape(str(output))}: {meta['n_ok']} ok, {meta['n_unconstrained']} unconstrained, "
+        f"wrote {escape(str(output))}: {meta['n_ok']} ok, "
+        f"{meta['n_below_threshold']} below threshold, {meta['n_unconstrained']} unconstrained, "
         f"{meta['n_failed']} failed; chunk {run.chunk}, {run.reused}/{run.n_chunks} parts reused"
     )
 

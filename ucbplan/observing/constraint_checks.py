@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ucbplan.observing.constraints import Constraint, NightConstraint
+from ucbplan.observing.constraints import Constraint, NightConstraint, holds
 from ucbplan.observing.sky import SkyModel
 
 __all__ = [
@@ -184,7 +184,7 @@ def _screened(
         fails = least == -1
         unsure = np.flatnonzero(least == 0)
         if unsure.size:
-            fails[unsure] = ~np.all(c.ok(sky, i, x[pend[unsure]]), axis=1)
+            fails[unsure] = ~np.all(holds(c, sky, i, x[pend[unsure]]), axis=1)
         first[pend[fails]] = j
         ok[pend[fails]] = False
         pend = pend[~fails]
@@ -213,7 +213,7 @@ def evaluate_window_exact(
         for j, c in enumerate(active):
             idx = idx[ok[idx]]  # blocks that passed every constraint so far
             x = xs[idx, None] + (xe - xs)[idx, None] * frac[None, :]
-            fails = idx[~np.all(c.ok(sky, i, x), axis=1)]
+            fails = idx[~np.all(holds(c, sky, i, x), axis=1)]
             first[fails] = j
             ok[fails] = False
     return ok, first

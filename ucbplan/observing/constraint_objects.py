@@ -21,6 +21,7 @@ given.
 
 from __future__ import annotations
 
+import datetime as dt
 from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, ClassVar
@@ -49,7 +50,13 @@ if TYPE_CHECKING:
     from ucbplan.observing.sites import Site
     from ucbplan.observing.sky import SkyModel
 
-__all__ = ["AstroplanConstraint", "as_constraint", "constraint_set", "default_constraints"]
+__all__ = [
+    "AstroplanConstraint",
+    "LocalTimeConstraint",
+    "as_constraint",
+    "constraint_set",
+    "default_constraints",
+]
 
 #: The slot of each native class in a :class:`ConstraintSet` (the first of a kind fills it).
 _SLOTS: dict[type[Constraint], str] = {
@@ -113,8 +120,9 @@ def default_constraints(
     return out
 
 
-def constraint_set(items: Iterable[Any]) -> ConstraintSet:
-    """A run's :class:`ConstraintSet` from a list of constraint objects.
+def constraint_set(items: Iterable[Any], site: Site | None = None) -> ConstraintSet:
+    """A run's :class:`ConstraintSet` from a list of constraint objects (``site``: its time zone
+    serves astroplan's ``LocalTimeConstraint``; None: UTC).
 
     The list replaces the defaults, with two floors the planner always keeps: a list without a
     night constraint is planned for nautical night (ucbplan plans nights), and one without an
@@ -135,7 +143,9 @@ def constraint_set(items: Iterable[Any]) -> ConstraintSet:
     slots: dict[str, Constraint] = {}
     extra: list[Constraint] = []
     for item in items:
-        c = as_constraint(item)
+        c = as_constraint(item, site)
+        if isinstance(c, LocalTimeConstraint) and c.zone is None and site is not None:
+            c = LocalTimeConstraint(c.start, c.end, site.zone)  # translated before the site
         slot = _SLOTS.get(type(c))
         if slot is not None and slot not in slots:
             slots[slot] = c
@@ -146,9 +156,9 @@ def constraint_set(items: Iterable[Any]) -> ConstraintSet:
     return ConstraintSet(**slots, extra=tuple(extra))  # type: ignore[arg-type]
 
 
-def as_constraint(item: Any) -> Constraint:
+def as_constraint(item: Any, site: Site | None = None) -> Constraint:
     """A ucbplan constraint for ``item``: itself, or an astroplan constraint translated or
-    wrapped (module docstring).
+    wrapped (module docstring; ``site``: the zone of a ``LocalTimeConstraint``).
 
     Raises
     ------
@@ -156,9 +166,15 @@ def as_constraint(item: Any) -> Constraint:
         For anything else (naming ``constraints``).
     """
     if isinstance(item, Constraint):
+        if type(item).ok is Constraint.ok:
+            raise InputError(
+                f"constraints: {type(item).__name__} defines no ok(sky, i, x); expected a method "
+                "returning a boolean array of x's shape, True where the constraint holds",
+                parameter="constraints",
+            )
         return item
     if _is_astroplan(item):
-        native = _native(item)
+        native = _native(item, site)
         return native if native is not None else AstroplanConstraint(item)
     raise InputError(
         f"constraints: expected ucbplan or astroplan constraint objects (e.g. "
@@ -179,23 +195,41 @@ def _is_astroplan(item: Any) -> bool:
     return isinstance(item, ApConstraint)
 
 
-def _deg(q: Any) -> float | None:
-    """An astroplan angle (Quantity or None) in degrees."""
+def _deg(c: Any, field: str) -> float | None:
+    """The angle ``field`` of astroplan's constraint ``c`` (Quantity or None) in degrees.
+
+    Raises
+    ------
+    InputError
+        Not an angle (``min=30*u.m``); one line naming the constraint and the field.
+    """
+    q = getattr(c, field)
     if q is None:
         return None
     from astropy import units as u
 
-    return float(u.Quantity(q, u.deg).value)
+    try:
+        return float(u.Quantity(q, u.deg).value)
+    except (u.UnitsError, TypeError, ValueError):
+        raise InputError(
+            f"constraints: astroplan {type(c).__name__}: {field}: expected an angle (e.g. "
+            f"30*u.deg), got {shorten(str(q), 40)}",
+            parameter="constraints",
+        ) from None
 
 
-def _native(c: Any) -> Constraint | None:
+def _native(c: Any, site: Site | None = None) -> Constraint | None:
     """The native constraint with the meaning of astroplan's ``c``, or None (evaluate it
     through astroplan). Exact classes only: a subclass may override anything."""
     import astroplan
 
     kind = type(c)
+    if kind is astroplan.LocalTimeConstraint:  # astroplan 0.10.1 compares UTC clock times
+        limit = c.min if c.min is not None else c.max
+        zone = getattr(limit, "tzinfo", None) or (site.zone if site is not None else None)
+        return LocalTimeConstraint(c.min, c.max, zone)
     if kind is astroplan.AtNightConstraint and getattr(c, "force_pressure_zero", False):
-        sun = _deg(c.max_solar_altitude)
+        sun = _deg(c, "max_solar_altitude")
         for name, limit in TWILIGHT_SUN_ALT_DEG.items():
             if sun == limit:
                 return NightConstraint(name)
@@ -203,11 +237,11 @@ def _native(c: Any) -> Constraint | None:
     boolean = getattr(c, "boolean_constraint", True)
     if kind is astroplan.AirmassConstraint and boolean and c.max is not None and c.min == 1:
         return AirmassConstraint(float(c.max))
-    if kind is astroplan.AltitudeConstraint and boolean and _deg(c.max) == 90.0:
-        return AltitudeConstraint(_deg(c.min))  # type: ignore[arg-type]
+    if kind is astroplan.AltitudeConstraint and boolean and _deg(c, "max") == 90.0:
+        return AltitudeConstraint(_deg(c, "min"))  # type: ignore[arg-type]
     no_eph = getattr(c, "ephemeris", None) is None
     if kind is astroplan.MoonSeparationConstraint and no_eph and c.max is None:
-        return MoonSeparationConstraint(_deg(c.min), moon_down_ok=False)  # type: ignore[arg-type]
+        return MoonSeparationConstraint(_deg(c, "min"), moon_down_ok=False)  # type: ignore[arg-type]
     if kind is astroplan.MoonIlluminationConstraint and no_eph and c.min is None:
         return MoonIlluminationConstraint(float(c.max))
     return None
@@ -237,3 +271,47 @@ class AstroplanConstraint(Constraint):
 
     def describe(self) -> str:
         return f"astroplan {type(self.constraint).__name__}"
+
+
+@dataclass(frozen=True)
+class LocalTimeConstraint(Constraint):
+    """Local clock time between ``start`` and ``end`` (inclusive; across midnight when
+    ``start`` > ``end``; None: no limit) in ``zone``: astroplan's ``LocalTimeConstraint`` with
+    the meaning its documentation gives (the limits' zone, else the observer's, here the
+    site's), which astroplan 0.10.1 does not apply (it compares UTC clock times)."""
+
+    start: dt.time | None
+    end: dt.time | None
+    zone: dt.tzinfo | None = None  # None: the site's, once the run's set is made (else UTC)
+    name: ClassVar[str] = "local-time"
+
+    def ok(self, sky: SkyModel, i: int, x: FloatArray) -> BoolArray:
+        xs = np.asarray(x, dtype=np.float64)
+        if xs.size == 0:
+            return np.zeros(xs.shape, dtype=bool)
+        unix = np.asarray(sky.time(xs.ravel()).utc.unix, dtype=np.float64)
+        minutes, at = np.unique(np.floor(unix / 60.0), return_inverse=True)
+        offset = np.array([self._offset_s(m * 60.0) for m in minutes])[at]
+        clock = np.mod(unix + offset, 86400.0)
+        lo = _seconds(self.start, 0.0)
+        hi = _seconds(self.end, 86399.0)
+        inside = (clock >= lo) & (clock <= hi) if lo < hi else (clock >= lo) | (clock <= hi)
+        return np.asarray(inside.reshape(xs.shape), dtype=bool)
+
+    def _offset_s(self, unix_s: float) -> float:
+        """UTC offset of ``zone`` at a UNIX instant [s] (summer time included)."""
+        moment = dt.datetime.fromtimestamp(unix_s, tz=dt.UTC).astimezone(self.zone or dt.UTC)
+        offset = moment.utcoffset()
+        return offset.total_seconds() if offset is not None else 0.0
+
+    def describe(self) -> str:
+        start = self.start.replace(tzinfo=None) if self.start else dt.time(0, 0)
+        end = self.end.replace(tzinfo=None) if self.end else dt.time(23, 59, 59)
+        return f"local time {start}-{end} ({self.zone or 'UTC'})"
+
+
+def _seconds(t: dt.time | None, default: float) -> float:
+    """Seconds since midnight of a clock time (``default`` for None)."""
+    if t is None:
+        return default
+    return t.hour * 3600.0 + t.minute * 60.0 + t.second + t.microsecond * 1e-6

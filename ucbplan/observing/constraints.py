@@ -35,6 +35,7 @@ __all__ = [
     "MoonSeparationConstraint",
     "NightConstraint",
     "ZenithHoleConstraint",
+    "holds",
     "make_constraint",
 ]
 
@@ -136,7 +137,7 @@ class Constraint:
         ndarray of bool
             ``x.shape``.
         """
-        raise NotImplementedError
+        raise NotImplementedError(f"{type(self).__name__} defines no ok(sky, i, x)")
 
     def describe(self) -> str:
         """One-line human description (goes into the table provenance)."""
@@ -151,6 +152,33 @@ class Constraint:
     def reason(self) -> str:
         """Why a block fails this constraint (for the 'not placed' report)."""
         return f"violates {self.describe()}"
+
+
+def holds(c: Constraint, sky: SkyModel, i: int, x: FloatArray) -> BoolArray:
+    """``c.ok(sky, i, x)``, checked to be what a constraint must return (a user's may not be).
+
+    Raises
+    ------
+    InputError
+        ``ok`` returned None, a scalar, another shape than ``x``'s or values that are not
+        booleans (integers are read as booleans); one line naming the constraint.
+    """
+    got = c.ok(sky, i, x)
+    shape = np.shape(x)
+    if isinstance(got, np.ndarray) and got.shape == shape and got.dtype.kind == "b":
+        return got
+    arr = np.asarray(got) if got is not None else None
+    if arr is not None and arr.shape == shape and arr.dtype.kind in "biu":
+        return arr.astype(bool)
+    what = "None"
+    if arr is not None:
+        what = f"a scalar ({shorten(got, 40)})" if arr.ndim == 0 else f"shape {arr.shape}"
+        what = f"{arr.dtype} values" if arr.shape == shape else what
+    raise InputError(
+        f"constraints: {type(c).__name__}.ok(sky, i, x) returned {what}; expected a boolean "
+        f"array of x's shape {shape}, True where the constraint holds",
+        parameter="constraints",
+    )
 
 
 @dataclass(frozen=True)
@@ -426,6 +454,14 @@ class ConstraintSet:
             self.moon_illum,
         )
         return tuple(c for c in named if c is not None) + tuple(self.extra)
+
+    @property
+    def pointing(self) -> tuple[Constraint, ...]:
+        """The constraints an acquisition must meet too (the telescope points at the target
+        while it acquires): night, airmass, altitude and the zenith hole; the Moon limits and
+        the user's own concern the exposures."""
+        named = (self.night, self.airmass, self.altitude, self.zenith_hole)
+        return tuple(c for c in named if c is not None)
 
     def __iter__(self) -> Iterator[Constraint]:
         return iter(self.active)

@@ -52,6 +52,7 @@ __all__ = [
     "Shortfall",
     "TimeBudget",
     "anchor_phases",
+    "check_goal_spectra",
     "goal_info_needed",
     "goal_sigma",
     "parse_goal",
@@ -419,13 +420,19 @@ def _goal_inputs(
     return k1, k2, sv1, sv2_, lam
 
 
+def check_goal_spectra(goal_text: str, n_spectra: float) -> None:
+    """The one goal-magnitude check (plan, feasibility, API, population rank): a goal needing
+    over :data:`MAX_SPECTRA` spectra, or infinitely many, is a typo (InputError, one line)."""
+    if not n_spectra <= MAX_SPECTRA:  # nan and inf too
+        raise InputError(
+            f"--goal {goal_text}: would need more than {MAX_SPECTRA} spectra; relax the goal"
+        )
+
+
 def _cycles_to_goal(goal: Goal, per_pattern: float, pattern_len: int) -> int:
     """Whole patterns c = ⌈(σ_goal(1 pattern)/goal)²⌉ that reach ``goal`` (at least one)."""
-    ratio = (per_pattern / goal.value) ** 2
-    if not math.isfinite(ratio) or ratio * pattern_len > MAX_SPECTRA:
-        raise InputError(
-            f"--goal {goal.text}: would need more than {MAX_SPECTRA} spectra; relax the goal"
-        )
+    ratio = (per_pattern / goal.value) * (per_pattern / goal.value)  # inf, not OverflowError
+    check_goal_spectra(goal.text, ratio * pattern_len)
     return max(1, math.ceil(ratio * (1.0 - 1e-12)))
 
 
@@ -589,4 +596,4 @@ def goal_info_needed(goal: Goal, target: Target) -> float:
         goal, 1.0, 1.0 if k2 is not None else None, k1, k2, target.period_s, sin_i,
         target.params.eccentricity,
     )  # fmt: skip
-    return (unit / goal.value) ** 2
+    return (unit / goal.value) * (unit / goal.value)  # inf, not OverflowError, for 1e-300

@@ -39,6 +39,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ucbplan.core.smearing import lambda_k
 from ucbplan.errors import InputError
+from ucbplan.observing.goals import MAX_SPECTRA, check_goal_spectra
 
 __all__ = [
     "STRATEGIES",
@@ -49,6 +50,7 @@ __all__ = [
     "compare_strategies",
     "constrains_k",
     "goal_time",
+    "goal_times",
     "information",
     "pattern_weight",
     "session_result",
@@ -440,6 +442,22 @@ def balanced_counts(n: int, n_max: int, pattern: int) -> tuple[int, ...]:
     return tuple(unit * (base + (1 if v < extra else 0)) for v in range(visits))
 
 
+def goal_times(info_needed: float, shape: VisitShape, sigma: SigmaOfT, goal: str) -> list[GoalTime]:
+    """:func:`goal_time` of every strategy (:data:`STRATEGIES`) for the goal ``goal`` (its text).
+
+    Raises
+    ------
+    InputError
+        Every strategy needs more than ``MAX_SPECTRA`` spectra at every exposure time: the one
+        goal-magnitude check, :func:`~ucbplan.observing.goals.check_goal_spectra`.
+    """
+    times = [goal_time(info_needed, shape, sigma, name) for name in STRATEGIES]
+    counts = [g.n_spectra for g in times if g.n_visits or g.n_spectra > MAX_SPECTRA]
+    if counts:
+        check_goal_spectra(goal, min(counts))
+    return times
+
+
 def goal_time(
     info_needed: float, shape: VisitShape, sigma: SigmaOfT, name: str = "targeted"
 ) -> GoalTime:
@@ -448,7 +466,9 @@ def goal_time(
 
     N = ⌈I/w⌉ spectra of w = info per visit / exposures per visit each (whole anchor patterns
     for the targeted strategies), in V = ⌈N/n_max⌉ visits split as evenly as possible; the
-    hours are V·(A + T + r − step) + N·step.
+    hours are V·(A + T + r − step) + N·step. A goal needing more than ``MAX_SPECTRA`` spectra
+    at every exposure time is not possible (no visit is counted); its ``n_spectra`` is then the
+    fewest needed, for :func:`goal_times`'s refusal.
     """
     _check_shape(shape)
     scan = _SCANS[name](shape, sigma)
@@ -458,6 +478,10 @@ def goal_time(
     w = np.where(ok, scan.info / np.maximum(scan.n, 1), np.nan)
     unit = np.full(w.shape, 1.0 if name == "untargeted" else float(len(shape.pattern_u)))
     n, visits = _goal_counts(info_needed, w, scan.n, unit)
+    fewest = float(np.min(np.where(ok, n, np.inf)))
+    if not fewest <= MAX_SPECTRA:  # a typo goal: never build 10¹² visits
+        too_many = int(min(fewest, MAX_SPECTRA + 1))
+        return GoalTime(scan.result(shape, None), info_needed, too_many, 0, (), math.inf)
     wall = visits * (shape.acquisition_s + scan.t + shape.readout_s - scan.step) + n * scan.step
     wall = np.where(ok, wall, np.inf)
     i = int(np.lexsort((scan.t, np.round(wall, 6)))[0])

@@ -33,6 +33,7 @@ from ucbplan.observing.blocktable import (
     TIME_YEARS,
     Column,
 )
+from ucbplan.observing.tablewrite import csv_unsafe_text
 from ucbplan.target.values import one_line
 
 __all__ = ["check_blocks", "read_blocks"]
@@ -276,7 +277,7 @@ def _csv_table(text: str, where: str) -> Table:
             )
     columns = {}
     for k, name in enumerate(header):
-        cells = [row[k] for row in rows]
+        cells = [csv_unsafe_text(row[k]) for row in rows]  # the writer's ' before =, +, -, @
         columns[name] = _object_column(cells, [not v.strip() for v in cells])
     table = Table(columns) if rows else Table(names=header, dtype=[str] * len(header))
     for name in table.colnames:

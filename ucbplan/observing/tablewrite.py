@@ -18,6 +18,7 @@ import json
 import math
 import operator
 import os
+import re
 from collections.abc import Callable, Mapping
 from typing import IO, Any
 
@@ -35,6 +36,10 @@ from ucbplan.observing.ecsvheader import (
 )
 
 __all__ = [
+    "CSV_FORMULA_START",
+    "csv_safe_table",
+    "csv_safe_text",
+    "csv_unsafe_text",
     "ecsv_data_lines",
     "json_records_text",
     "json_rows_text",
@@ -105,11 +110,55 @@ def write_table(table: Table, handle: IO[str], fmt: str, *, json_meta: bool = Fa
         raise InputFileError(f"unknown table format {fmt!r}; expected one of {TABLE_FORMATS}")
 
 
+#: First characters that make a spreadsheet read a CSV cell as a formula (OWASP's list).
+CSV_FORMULA_START = ("=", "+", "-", "@", "\t", "\r")
+#: Text that starts so but is a number or a signed sexagesimal, which no spreadsheet runs.
+_CSV_NUMBER = re.compile(r"[+-](?:\d+(?::\d+)*(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?")
+
+
+def csv_safe_text(cell: str) -> str:
+    """A CSV text cell a spreadsheet shows but never runs (issue 33; docs/blocks-table.md).
+
+    A cell beginning with ``=``, ``+``, ``-``, ``@``, a tab or a carriage return gets a
+    leading ``'`` (``=HYPERLINK(…)`` → ``'=HYPERLINK(…)``), as does one beginning with ``'``
+    (so :func:`csv_unsafe_text` can always strip exactly one). A number or a signed
+    sexagesimal (``-12.5``, ``+3e-4``, ``-23:12:34.5``, ``+01:00``) stays as it is: it is no
+    formula and must stay a number. Numeric columns are never touched (:func:`csv_safe_table`).
+    """
+    if cell[:1] == "'" or (cell[:1] in CSV_FORMULA_START and not _CSV_NUMBER.fullmatch(cell)):
+        return "'" + cell
+    return cell
+
+
+def csv_unsafe_text(cell: str) -> str:
+    """The text :func:`csv_safe_text` neutralised (a reader's inverse: one leading ``'``
+    stripped when the writer put it there)."""
+    if cell[:1] == "'" and csv_safe_text(cell[1:]) == cell:
+        return cell[1:]
+    return cell
+
+
+def csv_safe_table(table: Table) -> Table:
+    """``table`` with each text cell through :func:`csv_safe_text` (a copy of the columns that
+    change only); every CSV writer of ucbplan writes through it."""
+    plain = table.copy(copy_data=False)
+    for name in plain.colnames:
+        col = plain[name]
+        if col.dtype.kind not in "UO" or getattr(col, "ndim", 1) != 1:
+            continue
+        cells = col.tolist()
+        if not any(isinstance(c, str) and c[:1] in "'=+-@\t\r" for c in cells):
+            continue
+        safe = [csv_safe_text(c) if isinstance(c, str) else c for c in cells]
+        plain[name] = Column(safe, name=name, unit=col.unit, description=col.description)
+    return plain
+
+
 def _write_csv(table: Table, handle: IO[str]) -> None:
     """CSV without meta as astropy writes it: its header line (written for no rows), then the
     rows column by column (:func:`ecsv_data_lines`); for tables of other columns,
-    astropy's whole writer."""
-    plain = table.copy(copy_data=False)
+    astropy's whole writer. Text cells are neutralised (:func:`csv_safe_table`)."""
+    plain = csv_safe_table(table)
     plain.meta = {}
     lines = ecsv_data_lines(plain, ",")
     if lines is None:

@@ -6,8 +6,9 @@ T_obs/2), the library Fisher forecast (:func:`ucbplan.lisa.pipeline.fisher_forec
 horizon_table` gives σ_u at the end of the observation and T_valid per anchor and α.
 
 A source whose Fisher matrix does not constrain the phase (face-on: ψ and φ degenerate) gets
-status ``unconstrained`` and NaN horizons, never a silent 300-year horizon; any other per-source
-error is ``failed: <message>``; neither stops the run.
+status ``unconstrained`` and NaN horizons, never a silent 300-year horizon; one below the LISA
+detection threshold (SNR < ``SNR_THRESHOLD``) keeps its numbers with the status
+``below-threshold``; any other per-source error is ``failed: <message>``; none stops the run.
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ from ucbplan.population.defaults import (
     DEFAULT_SIGMA_V_KMS,
     DEFAULT_T_OBS_S,
     DEFAULT_T_START,
+    SNR_THRESHOLD,
 )
 from ucbplan.population.execute import worker_setup
 from ucbplan.population.tables import SOURCE_COLUMNS, blank_row
@@ -113,7 +115,7 @@ def _t_cols() -> list[tuple[str, str, str, str]]:
 #: The forecast table, declared once: (name, unit, dtype, description).
 FORECAST_COLUMNS: tuple[tuple[str, str, str, str], ...] = (
     *SOURCE_COLUMNS,
-    ("status", "", "str", "ok | unconstrained | failed: <error>"),
+    ("status", "", "str", "ok | below-threshold (SNR < 7) | unconstrained | failed: <error>"),
     ("f_gw", "Hz", "f8", "GW frequency at the midpoint"),
     ("fdot", "Hz / s", "f8", "ḟ at the midpoint"),
     ("amplitude", "", "f8", "GW strain amplitude"),
@@ -216,7 +218,7 @@ def _constrained(cov: np.ndarray) -> bool:
 def forecast_source(
     src: Source, ra_deg: float, dec_deg: float, opts: ForecastOptions
 ) -> dict[str, Any]:
-    """One row of the forecast table (status ok | unconstrained | failed: …)."""
+    """One row of the forecast table (status ok | below-threshold | unconstrained | failed)."""
     return forecast_with_target(src, ra_deg, dec_deg, opts)[0]
 
 
@@ -309,6 +311,8 @@ def _fisher_stage(
     if not k > 0:
         row["status"] = "failed: K = 0 (sin ι = 0): give --k-eff"
         return row, None
+    if not fc.snr >= SNR_THRESHOLD:  # its horizons are computed, its status says it
+        row["status"] = "below-threshold"
     return row, fc.target
 
 

@@ -5,7 +5,13 @@ A light module (no imports): the command line reads it when it builds its option
 
 from __future__ import annotations
 
-__all__ = ["DEFAULT_N_BINS", "DEFAULT_SIGMA_V_KMS", "DEFAULT_T_OBS_S", "DEFAULT_T_START"]
+__all__ = [
+    "DEFAULT_N_BINS",
+    "DEFAULT_SIGMA_V_KMS",
+    "DEFAULT_T_OBS_S",
+    "DEFAULT_T_START",
+    "SNR_THRESHOLD",
+]
 
 #: RV precision per epoch assumed for every source [km/s].
 DEFAULT_SIGMA_V_KMS = 15.0
@@ -15,3 +21,6 @@ DEFAULT_N_BINS = 512
 DEFAULT_T_START = "2035-01-01T00:00:00"
 #: 4 sidereal years [s] (the paper's T_obs).
 DEFAULT_T_OBS_S = 126232599.054
+#: LISA detection threshold: a source below this SNR gets the status ``below-threshold`` (its
+#: numbers are kept; the Fisher forecast of an undetected source is not a plan's ephemeris).
+SNR_THRESHOLD = 7.0

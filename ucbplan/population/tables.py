@@ -68,10 +68,12 @@ def provenance(command: str, catalog: Catalog) -> dict[str, Any]:
 
 
 def status_counts(rows: list[dict[str, Any]]) -> dict[str, int]:
-    """``n_ok``, ``n_unconstrained``, ``n_failed`` of a table's rows (the meta's tally)."""
+    """``n_ok``, ``n_below_threshold``, ``n_unconstrained``, ``n_failed`` of a table's rows
+    (the meta's tally)."""
     status = [r["status"] for r in rows]
     return {
         "n_ok": status.count("ok"),
+        "n_below_threshold": status.count("below-threshold"),
         "n_unconstrained": status.count("unconstrained"),
         "n_failed": sum(s.startswith("failed") for s in status),
     }

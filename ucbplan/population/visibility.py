@@ -27,7 +27,7 @@ import numpy as np
 from ucbplan.core.forecast import tolerance, valid_window_s
 from ucbplan.errors import UcbplanError
 from ucbplan.inputs import check_range
-from ucbplan.observing.constraints import ConstraintSet
+from ucbplan.observing.constraints import ConstraintSet, holds
 from ucbplan.observing.schedule.candidates import candidate_blocks
 from ucbplan.observing.schedule.nights import NightWindow, night_windows
 from ucbplan.observing.schedule.settings import PlanSettings, parse_mode
@@ -173,7 +173,7 @@ def _hours(fr: _Frame, i: int, min_hours: float) -> tuple[float, int, float]:
     x = fr.grid_x
     ok = np.ones(x.size, dtype=bool)
     for c in fr.constraints.active[1:]:  # the grid is already night-only
-        ok &= c.ok(fr.sky, i, x)
+        ok &= holds(c, fr.sky, i, x)
     per_night = np.bincount(fr.night_of[ok], minlength=len(fr.windows)) * GRID_STEP_S / 3600.0
     air = airmass_from_alt(fr.sky.target_alt_deg(i, x)) if x.size else np.array([math.inf])
     nights = (

@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ucbplan.errors import SchemaError
-from ucbplan.inputs import read_text
+from ucbplan.inputs import blank_comments, read_text
 
 __all__ = ["read_columns"]
 
@@ -103,7 +103,7 @@ def read_columns(
     required anyway; pyarrow would be a new dependency of ~100 MB.
     """
     try:
-        text = read_text(path, "velocity table")
+        text = blank_comments(read_text(path, "velocity table"), path)
     except SchemaError:
         return None
     found = _header_line(text)

@@ -265,8 +265,17 @@ def _phase_errors(
     return _PhaseErrors(sigma_u, np.array(dK), np.array(dg), tuple(sKp), tuple(sgp), tuple(att))
 
 
+def _chi2_limit(dof: int) -> float:
+    """The χ² above which a fit's scatter significantly exceeds its σ's: the 99th percentile
+    of the χ² distribution with ``dof`` degrees of freedom."""
+    from scipy.stats import chi2
+
+    return float(chi2.ppf(0.99, dof))
+
+
 def _fit_warnings(fits: tuple[ComponentFit, ...]) -> list[str]:
-    """Outliers (kept), χ²/dof > 2 (errors inflated) per star; a negative SB1 K."""
+    """Outliers (kept), a significant χ² (p < 0.01; errors scaled by √(χ²/dof)) per star; a
+    negative SB1 K."""
     warn = []
     for j, f in enumerate(fits):
         n_out = int(f.line.outliers.sum())
@@ -276,10 +285,11 @@ def _fit_warnings(fits: tuple[ComponentFit, ...]) -> list[str]:
                 f"star {j + 1}: {n_out} spectra deviate by > 4σ (rows {rows.tolist()}); "
                 "they are kept — check them"
             )
-        if f.line.dof > 0 and f.line.chi2 / f.line.dof > 2.0:
+        if f.line.scaled and f.line.chi2 > _chi2_limit(f.line.dof):
             warn.append(
-                f"star {j + 1}: χ²/dof = {f.line.chi2 / f.line.dof:.2f}; errors were "
-                "inflated by √(χ²/dof) — check σ_v or outliers"
+                f"star {j + 1}: χ²/dof = {f.line.chi2 / f.line.dof:.2f} (p < 0.01): the scatter "
+                f"exceeds σ_v; errors scaled by √(χ²/dof) = {f.line.scale:.3g}, σ(K) "
+                f"{f.sigma_K_input:.3g} → {f.sigma_K:.3g} km/s — check σ_v or outliers"
             )
     if len(fits) == 1 and fits[0].K < 0:
         warn.append(

@@ -151,6 +151,11 @@ class LineFit:
     scaled: bool
 
     @property
+    def scale(self) -> float:
+        """The factor ``cov``'s σ's were multiplied by: √(χ²/dof) when ``scaled``, else 1."""
+        return math.sqrt(self.chi2 / self.dof) if self.scaled else 1.0
+
+    @property
     def sigma_slope(self) -> float:
         """1σ uncertainty of the slope."""
         return float(math.sqrt(self.cov[1, 1]))
@@ -247,8 +252,13 @@ class ComponentFit:
 
     @property
     def sigma_K(self) -> float:
-        """Statistical 1σ of K [km/s]."""
+        """Statistical 1σ of K [km/s], scaled by √(χ²/dof) when χ²/dof > 1 (``line.scale``)."""
         return float(math.sqrt(self.cov[1, 1]))
+
+    @property
+    def sigma_K_input(self) -> float:
+        """Statistical 1σ of K from the given σ_v alone, before any scaling [km/s]."""
+        return self.sigma_K / self.line.scale
 
     @property
     def sigma_gamma(self) -> float:

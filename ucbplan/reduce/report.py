@@ -162,6 +162,7 @@ def _k_gamma_docs(red: Reduction, j: int) -> tuple[dict[str, Any], dict[str, Any
         lo=sk.lo,
         hi=sk.hi,
         sigma_stat=f.sigma_K,
+        sigma_stat_input=f.sigma_K_input,
         sigma_phase=red.sigma_K_phase[j],
         attenuation=red.attenuation[j],
     )
@@ -190,6 +191,7 @@ def _fit_doc(red: Reduction, j: int) -> dict[str, Any]:
         "dof": line.dof,
         "rms_km_s": _num(line.rms),
         "errors_scaled_by_chi2": line.scaled,
+        "sigma_scale": _num(line.scale),
         "outlier_rows": (np.flatnonzero(line.outliers) + 1).tolist(),
         "lambda_k_mean": _num(lam),
     }

@@ -49,7 +49,7 @@ from numpy.typing import NDArray
 
 from ucbplan.core.constants import C_KM_S
 from ucbplan.errors import SchemaError, VelocityFileError, shorten
-from ucbplan.inputs import read_text
+from ucbplan.inputs import blank_comments, read_text
 
 if TYPE_CHECKING:
     from astropy.coordinates import EarthLocation, SkyCoord
@@ -184,12 +184,11 @@ def _text(path: Path) -> str:
 
 
 def _read_csv(path: Path) -> tuple[list[str], list[tuple[int, list[str]]]]:
-    text = _text(path)
-    lines = [
-        (i + 1, ln)
-        for i, ln in enumerate(text.splitlines())
-        if ln.strip() and not ln.lstrip().startswith("#")
-    ]
+    try:
+        text = blank_comments(_text(path), path)
+    except SchemaError as exc:
+        raise VelocityFileError(str(exc)) from None
+    lines = [(i + 1, ln) for i, ln in enumerate(text.splitlines()) if ln.strip()]
     if not lines:
         raise VelocityFileError(
             f"{path}: empty velocity file; expected a header line like "

@@ -39,8 +39,8 @@ from ucbplan.core.timing_epochs import (
     jd_to_seconds,
     parse_decimal,
 )
-from ucbplan.errors import InputFileError, shorten
-from ucbplan.inputs import MAX_ALIASES, MAX_YAML_BYTES, read_text
+from ucbplan.errors import InputFileError, SchemaError, shorten
+from ucbplan.inputs import MAX_ALIASES, MAX_YAML_BYTES, blank_comments, read_text
 
 __all__ = [
     "EclipseTimes",
@@ -119,7 +119,11 @@ class _Reader:
 
 def _csv_rows(r: _Reader, text: str) -> tuple[list[str], list[tuple[int, list[str]]]]:
     """Header and (row number, cells) of a CSV; ``#`` comments and blank lines skipped."""
-    lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
+    try:
+        text = blank_comments(text, Path(r.path.name))
+    except SchemaError as exc:
+        raise InputFileError(str(exc)) from None
+    lines = [ln for ln in text.splitlines() if ln.strip()]
     if not lines:
         raise r.fail(
             "header", "empty table; expected a header line like bjd_tdb,sigma_s[,kind][,cycle]"

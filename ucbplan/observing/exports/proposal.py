@@ -49,6 +49,7 @@ from ucbplan.observing.exports.provenance import clean_meta, created_utc, meta, 
 from ucbplan.observing.exports.text import iso_ms
 from ucbplan.observing.semesters import semester_dates, semester_label
 from ucbplan.observing.tableformat import sexagesimal
+from ucbplan.observing.tablewrite import csv_safe_table
 
 __all__ = [
     "PROPOSAL_FORMATS",
@@ -343,7 +344,7 @@ def write_proposal(summary: Table, fmt: str) -> str:
     if fmt == "ecsv":
         summary.write(buf, format="ascii.ecsv")
     else:
-        plain = summary.copy()
+        plain = csv_safe_table(summary)  # no formula cells (issue 33)
         plain.meta = {}
         plain.write(buf, format="ascii.csv")
     return buf.getvalue()

@@ -20,9 +20,13 @@ from numpy.typing import NDArray
 
 from ucbplan.errors import InputError
 from ucbplan.observing.goals import goal_info_needed, parse_goal
-from ucbplan.observing.schedule.exposure import sigma_law, visit_shape
+from ucbplan.observing.schedule.exposure import (
+    check_visit_holds_an_exposure,
+    sigma_law,
+    visit_shape,
+)
 from ucbplan.observing.schedule.settings import PlanSettings
-from ucbplan.observing.strategy import STRATEGIES, compare_strategies, goal_time
+from ucbplan.observing.strategy import compare_strategies, goal_times
 
 if TYPE_CHECKING:
     from ucbplan.target import Target
@@ -111,7 +115,8 @@ def compare_target_strategies(target: Target, settings: PlanSettings) -> Strateg
     ------
     InputError
         σ_v does not follow the exposure time (give ``30km/s@600s``); the target has no
-        magnitude in the band of the σ_v reference; a goal the target file cannot serve.
+        magnitude in the band of the σ_v reference; a goal the target file cannot serve; a
+        visit that holds no exposure (checked before anything is printed).
     """
     law = sigma_law(target, settings)
     if law is None:
@@ -124,20 +129,20 @@ def compare_target_strategies(target: Target, settings: PlanSettings) -> Strateg
     def sigma(t: NDArray[np.float64]) -> NDArray[np.float64]:
         return law.sigma(t, 1.0, mag)
 
+    check_visit_holds_an_exposure(target, settings)
     visit = settings.visit_s if settings.visit_s is not None else settings.max_visit_s
     shape = visit_shape(target, settings, visit)
     rows: list[StrategyRow] = []
     if settings.goal is not None:
         need = goal_info_needed(parse_goal(settings.goal), target)
-        for name in STRATEGIES:
-            g = goal_time(need, shape, sigma, name)
+        for g in goal_times(need, shape, sigma, settings.goal):
             ok = g.strategy.possible
             rows.append(_row(g.strategy, g.n_spectra if ok else None, g.n_visits if ok else None,
                              g.hours if ok else None))  # fmt: skip
     else:
         for r in compare_strategies(shape, sigma):
             rows.append(_row(r, None, None, None))
-    return StrategyComparison(
+    comparison = StrategyComparison(
         target.name,
         law.describe(),
         visit,
@@ -146,6 +151,8 @@ def compare_target_strategies(target: Target, settings: PlanSettings) -> Strateg
         settings.goal,
         tuple(rows),
     )
+    _ = comparison.best  # refused now (no strategy fits), not later when printed
+    return comparison
 
 
 def _row(r: Any, spectra: int | None, visits: int | None, hours: float | None) -> StrategyRow:

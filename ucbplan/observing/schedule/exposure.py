@@ -42,12 +42,11 @@ from ucbplan.observing.schedule.settings import QUEUE_CADENCES, QUEUE_WAIT_S, Pl
 from ucbplan.observing.sigma_model import SigmaVModel
 from ucbplan.observing.strategy import (
     LOCK_MARGIN_S,
-    STRATEGIES,
     StrategyResult,
     VisitShape,
     best_strategy,
     compare_strategies,
-    goal_time,
+    goal_times,
     session_result,
 )
 
@@ -56,6 +55,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "TargetExposure",
+    "check_visit_holds_an_exposure",
     "exposure_sigma_v",
     "floor_exptime",
     "optimised_exposure",
@@ -251,6 +251,21 @@ def _check_visit(target: Target, settings: PlanSettings, plan: ExposurePlan) -> 
         )
 
 
+def check_visit_holds_an_exposure(target: Target, settings: PlanSettings) -> ExposurePlan:
+    """The shortest exposure the instrument allows, checked to fit a visit with its
+    acquisition and readout (``plan`` and ``feasibility`` before any work or output).
+
+    Raises
+    ------
+    InputError
+        The visit (``--visit``, else ``--max-visit``) is shorter; one line naming the option.
+    """
+    low = visit_shape(target, settings, 0.0).min_exptime_s
+    shortest = replace(settings.exposure, exptime_s=low)
+    _check_visit(target, settings, shortest)
+    return shortest
+
+
 def target_exposure(target: Target, settings: PlanSettings) -> TargetExposure:
     """Exposure plan and cadence of ``target`` (module notes).
 
@@ -381,7 +396,7 @@ def _strategy_results(
     if settings.goal is None:
         return tuple(compare_strategies(shape, sigma)), ()
     need = goal_info_needed(parse_goal(settings.goal), target)
-    times = [goal_time(need, shape, sigma, name) for name in STRATEGIES]
+    times = goal_times(need, shape, sigma, settings.goal)
     return tuple(g.strategy for g in times), tuple(g.hours for g in times)
 
 
@@ -404,10 +419,7 @@ def optimised_exposure(target: Target, settings: PlanSettings) -> TargetExposure
         return law.sigma(t, 1.0, mag)
 
     visit = _visit_length(settings)
-    shortest = replace(
-        settings.exposure, exptime_s=visit_shape(target, settings, 0.0).min_exptime_s
-    )
-    _check_visit(target, settings, shortest)
+    shortest = check_visit_holds_an_exposure(target, settings)
     results, hours = _strategy_results(target, settings, sigma, visit)
     pick = _forced(results, settings.cadence, hours, settings.service_mode)
     plan = replace(settings.exposure, exptime_s=pick.exptime_s)
@@ -419,6 +431,11 @@ def optimised_exposure(target: Target, settings: PlanSettings) -> TargetExposure
         notes = (
             f"{target.name}: with no readout the shortest exposure ({pick.exptime_s:g} s) wins "
             "(the σ_v law has no read noise); give --readout or an --instrument",
+        )
+    if settings.readout_assumed:
+        notes = (
+            f"{target.name}: no readout given: {plan.readout_s:g} s assumed (the shortest of the "
+            "bundled spectrographs) to choose the exposure time; give --readout or an --instrument",
         )
     return TargetExposure(
         plan,

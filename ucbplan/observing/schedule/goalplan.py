@@ -16,8 +16,9 @@ they fall.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import replace
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -30,6 +31,7 @@ from ucbplan.observing.goals import (
     GoalPlan,
     Shortfall,
     TimeBudget,
+    check_goal_spectra,
     goal_info_needed,
     parse_goal,
     target_k,
@@ -79,6 +81,7 @@ def _goal_plan(goal: Goal, run: TargetRun, settings: PlanSettings) -> GoalPlan:
     w = _per_spectrum(run)
     te = run.exposure
     pattern = len(settings.spec.u_values) if te.strategy != "untargeted" else 1
+    check_goal_spectra(goal.text, need / w)
     n = max(1, math.ceil(need / w * (1.0 - 1e-12)))
     n_max, step = _max_per_visit(run, settings)
     counts = balanced_counts(n, n_max, pattern)
@@ -169,15 +172,38 @@ def check_goals(
     runs: Sequence[TargetRun],
     blocks: Sequence[Block],
     pattern_u: Sequence[float],
+    longer: tuple[float, float, Callable[[], Sequence[Block]]] | None = None,
 ) -> None:
     """Refuse a plan that does not reach a target's goal (one line: the shortfall).
+
+    ``longer``: (``max_visit`` [s], the longest visit the nights allow [s], a function planning
+    with it): when visits were capped by ``max_visit``, the line also gives what visits as long
+    as the nights allow collect.
 
     Raises
     ------
     InputError
         The exposures that fit in the nights given collect less information than the goal needs.
     """
+    for run, short in _shortfalls(plans, runs, blocks, pattern_u):
+        text = short.message()
+        if longer is not None:
+            cap_s, long_s, replan = longer
+            more = dict(_shortfalls(plans, runs, replan(), pattern_u, by_name=True))
+            text = _with_longer_visits(short, more.get(run.target.name), cap_s, long_s)
+        raise InputError(f"{run.target.name}: {text}")
+
+
+def _shortfalls(
+    plans: dict[int, GoalPlan],
+    runs: Sequence[TargetRun],
+    blocks: Sequence[Block],
+    pattern_u: Sequence[float],
+    by_name: bool = False,
+) -> list[tuple[Any, Shortfall]]:
+    """(run, or its target's name with ``by_name``; shortfall) of each goal not reached."""
     cols = block_columns(blocks) if plans else None
+    out: list[tuple[Any, Shortfall]] = []
     for run in runs:
         plan = plans.get(run.index)
         if plan is None or plan.info_needed is None or cols is None:
@@ -188,4 +214,27 @@ def check_goals(
             reach = plan.expected * math.sqrt(plan.info_needed / got) if got > 0 else math.inf
             available = math.floor(plan.n_spectra * got / plan.info_needed)
             short = Shortfall(plan.goal, plan.n_spectra, min(available, int(np.sum(mine))), reach)
-            raise InputError(f"{run.target.name}: {short.message()}")
+            out.append((run.target.name if by_name else run, short))
+    return out
+
+
+def _with_longer_visits(
+    short: Shortfall, longer: Shortfall | None, cap_s: float, long_s: float
+) -> str:
+    """The shortfall line with what visits as long as the nights allow would collect."""
+    cap_h = cap_s / 3600.0
+    reach = Goal(short.goal.quantity, short.reachable, short.goal.relative, "").describe()
+    head = (
+        f"--goal {short.goal.text}: needs {short.needed_spectra} spectra, the nights given allow "
+        f"{short.available_spectra} in visits of at most {cap_h:.3g} h (max_visit; {reach})"
+    )
+    if longer is None:
+        return (
+            f"{head}; visits as long as the nights allow ({long_s / 3600:.3g} h) reach it: "
+            "raise max_visit"
+        )
+    far = Goal(short.goal.quantity, longer.reachable, short.goal.relative, "").describe()
+    return (
+        f"{head}, {longer.available_spectra} in visits as long as the nights allow "
+        f"({long_s / 3600:.3g} h; {far}); add nights or relax the goal"
+    )

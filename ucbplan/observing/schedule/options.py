@@ -3,7 +3,9 @@ overheads, exposure, visits and goal resolved in one place.
 
 Overheads: an option the user gives (``--overhead`` = acquisition per visit or session,
 ``--readout`` per exposure) wins; else the instrument's number (``--instrument``); else the
-defaults of the ``plan`` command before instruments existed (300 s acquisition, no readout).
+defaults of the ``plan`` command before instruments existed (300 s acquisition, no readout;
+when the exposure time is chosen, the shortest readout of the bundled spectrographs, said in a
+note).
 """
 
 from __future__ import annotations
@@ -30,6 +32,7 @@ from ucbplan.observing.sigma_model import SigmaVModel, parse_sigma_v
 
 __all__ = [
     "DEFAULT_EXPTIME_S",
+    "DEFAULT_LAW_READOUT_S",
     "DEFAULT_OVERHEAD_S",
     "DEFAULT_READOUT_S",
     "check_max_visit",
@@ -42,6 +45,11 @@ DEFAULT_EXPTIME_S = 60.0
 DEFAULT_OVERHEAD_S = 300.0
 #: Readout without ``--readout`` or ``--instrument`` [s].
 DEFAULT_READOUT_S = 0.0
+#: Readout assumed when the exposure time is chosen (σ_v follows it, ``30km/s@600s``) and
+#: neither ``--readout`` nor ``--instrument`` gives one [s]: the shortest confirmed readout of
+#: the bundled spectrographs (GMOS, 2×2 binning). With no readout the shortest exposure always
+#: wins (the law has no read noise): 1-s exposures, thousands per visit (issue 33).
+DEFAULT_LAW_READOUT_S = 24.0
 
 
 def plan_settings(
@@ -84,7 +92,8 @@ def plan_settings(
             f"--instrument {inst.name}: the instrument table has no confirmed RV-precision "
             "reference (sigma_ref); pass --sigma-v KM_S (sigma_v per exposure)"
         )
-    acq, readout = _overheads(inst, overhead_s, readout_s)
+    assumed = model is not None and inst is None and readout_s is None
+    acq, readout = _overheads(inst, overhead_s, DEFAULT_LAW_READOUT_S if assumed else readout_s)
     exptime = DEFAULT_EXPTIME_S if exptime_s is None else exptime_s
     if inst is not None:
         check_exptime(inst, exptime)
@@ -93,6 +102,7 @@ def plan_settings(
         exposure=ExposurePlan(exptime_s=exptime, n_exp=n_exp, readout_s=readout),
         overhead_s=acq,
         exptime_explicit=exptime_s is not None,
+        readout_assumed=assumed,
         instrument=inst,
         visit_s=visit_s,
         max_visit_s=max_visit_s,

@@ -12,7 +12,7 @@ placed is reported with the reason."""
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from datetime import date
 from typing import TYPE_CHECKING
@@ -23,12 +23,12 @@ from astropy.time import Time
 from ucbplan.errors import UcbplanError
 from ucbplan.observing.barycentric_time import coverage_warnings
 from ucbplan.observing.blockcolumns import BlockList
-from ucbplan.observing.blocks import Block
+from ucbplan.observing.blocks import MAX_BLOCK_S, Block
 from ucbplan.observing.goals import GoalPlan
 from ucbplan.observing.schedule.candidates import PlanFrame, TargetRun, prepare_runs
 from ucbplan.observing.schedule.exposure import TargetExposure
 from ucbplan.observing.schedule.goalplan import balanced_runs, check_goals, goal_plans
-from ucbplan.observing.schedule.nights import NightWindow, night_spans, night_windows
+from ucbplan.observing.schedule.nights import NightSpan, NightWindow, night_spans, night_windows
 from ucbplan.observing.schedule.pairs import SecondEpoch, pair_blocks, pair_targets
 from ucbplan.observing.schedule.placement import Allowance, Unplaced, place_sessions
 from ucbplan.observing.schedule.reasons import not_planned
@@ -198,6 +198,45 @@ def _plannable(
     return targets, infeasible
 
 
+def _longest_night_s(spans: list[NightSpan], frame: PlanFrame) -> float:
+    """The longest dark stretch of the nights (to the minute) [s]: the longest visit they
+    allow (at most ``MAX_BLOCK_S``)."""
+    longest = 0
+    for sp in spans:
+        dark = frame.constraints.night.ok(frame.sky, 0, np.arange(sp.x0, sp.x1, 60.0))
+        edges = np.flatnonzero(np.diff(np.concatenate(([0], dark.astype(np.int8), [0]))))
+        runs = edges[1::2] - edges[::2]
+        longest = max(longest, int(runs.max()) if runs.size else 0)
+    return min(60.0 * longest, MAX_BLOCK_S)
+
+
+def _longer_visits(
+    runs: list[TargetRun],
+    spans: list[NightSpan],
+    frame: PlanFrame,
+    site: Site,
+    settings: PlanSettings,
+    busy_x: list[tuple[float, float]],
+) -> tuple[float, float, Callable[[], Sequence[Block]]] | None:
+    """For a goal's shortfall message: (max_visit, the longest visit the nights allow [s], a
+    replanning with visits that long), when visits were capped by max_visit; else None."""
+    if not settings.plans_visits or settings.visit_s is not None:
+        return None
+    longest = _longest_night_s(spans, frame)
+    if longest <= settings.max_visit_s:
+        return None
+
+    def replan() -> Sequence[Block]:
+        wide = replace(settings, max_visit_s=longest)
+        ex = [replace(r, exposure=replace(r.exposure, visit_s=longest)) for r in runs]
+        more = goal_plans(ex, wide)
+        ex = balanced_runs(ex, more)
+        got, _ = place_visits(ex, spans, frame, wide, busy_x, _allowances(ex, wide, more))
+        return block_records(got, ex, spans, frame, site, wide)
+
+    return settings.max_visit_s, longest, replan
+
+
 def _schedule(
     runs: list[TargetRun],
     frame: PlanFrame,
@@ -214,7 +253,7 @@ def _schedule(
     spans = night_spans(windows, frame.axis)
     busy_x = _busy_x(frame.axis, busy)
     goals = goal_plans(runs, settings)
-    runs = balanced_runs(runs, goals)
+    runs0, runs = runs, balanced_runs(runs, goals)
     allowances = _allowances(runs, settings, goals)
     place = place_visits if settings.plans_visits else place_sessions
     placed, unplaced = place(runs, spans, frame, settings, busy_x, allowances)
@@ -231,7 +270,8 @@ def _schedule(
         blocks = sorted(pairs, key=lambda b: (b.t_mid_utc.jd1, b.t_mid_utc.jd2))
     else:  # the same order, sorted on the columns
         blocks = BlockList(records.columns.take(records.columns.time_order()))
-    check_goals(goals, runs, blocks, frame.mode.u_values)
+    longer = _longer_visits(runs0, spans, frame, site, settings, busy_x) if goals else None
+    check_goals(goals, runs, blocks, frame.mode.u_values, longer)
     return PlanResult(
         blocks=blocks,
         unplaced=unplaced,

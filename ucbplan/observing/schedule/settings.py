@@ -274,6 +274,9 @@ class PlanSettings:
         The exposure time was chosen by the user: below the floor it is refused, not capped,
         and it is not optimised. None (library calls): chosen unless ``exposure`` keeps the
         default 60 s. The CLI sets it from whether ``--exptime`` was given.
+    readout_assumed : bool
+        The readout is ``DEFAULT_LAW_READOUT_S``, assumed because the exposure time is chosen
+        and no readout was given (the plan says so in a note).
     instrument : Instrument or None
         Spectrograph whose σ_ref scales σ_v per exposure (overheads are resolved already).
     goal : str or None
@@ -317,6 +320,7 @@ class PlanSettings:
     min_lambda_k: float | None = None
     allow_smeared: bool = False
     exptime_explicit: bool | None = None
+    readout_assumed: bool = False
     instrument: Instrument | None = None
     goal: str | None = None
     budgets: tuple[tuple[str, float], ...] = ()
@@ -466,7 +470,7 @@ class PlanSettings:
         ``custom_constraints`` when given, else the command line's
         (:func:`~ucbplan.observing.constraint_objects.default_constraints`)."""
         if self.custom_constraints is not None:
-            return constraint_set(self.custom_constraints)
+            return constraint_set(self.custom_constraints, site)
         return constraint_set(
             default_constraints(
                 site,

@@ -6,7 +6,8 @@ centred on an anchor epoch, and the next exposure is the first anchor whose expo
 least one readout after the previous one ends (:mod:`.exposure` gives the cadence). The visit
 ends with the readout of its last exposure, at most D after it started. Every exposure satisfies
 every constraint over its whole length and lies inside the validity window; the acquisition is
-in the night and below the airmass limit too; a visit stops at the first anchor that fails.
+in the night, within the airmass and altitude limits and outside the zenith hole too; a visit
+stops at the first anchor that fails.
 
 Targets are taken in priority order; in each night a target gets its best visits (most
 exposures, then lowest mean airmass) that keep clear of everything placed before, up to
@@ -99,7 +100,7 @@ def _best_visit(
         return None
     good = (run.ok > 0) & run.valid
     js = np.arange(j0, j1)
-    acq_cs = (frame.constraints.night, frame.constraints.airmass)
+    acq_cs = frame.constraints.pointing  # the zenith hole too (issue 33)
     acq_ok, _ = evaluate_window(acq_cs, frame.sky, run.index, c.x_start[js] - acq, c.x_start[js])
     starts = js[good[js] & acq_ok]
     nxt = np.searchsorted(c.x_start, c.x_end + r - _READOUT_SLACK_S, side="left")
