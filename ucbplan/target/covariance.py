@@ -94,8 +94,9 @@ def parse_covariance(ctx: Ctx, cov: Any, section: str = "lisa") -> Named:
             names, mat = _from_sigma(ctx, sec, cov)
         else:
             raise ctx.fail(sec.path, f"{_FORMS}; got an empty mapping")
-        _check_symmetric(ctx, sec.path, mat)
-        _check_psd(ctx, sec.path, mat)
+        if full or cov.get("correlation"):  # σ's alone: a finite σ² diagonal passes both
+            _check_symmetric(ctx, sec.path, mat)
+            _check_psd(ctx, sec.path, mat)
     return names, mat
 
 

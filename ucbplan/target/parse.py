@@ -18,7 +18,6 @@ from typing import Any
 
 import numpy as np
 from astropy import units as u
-from astropy.coordinates import SkyCoord
 from astropy.time import TimeDelta
 from numpy.typing import NDArray
 
@@ -299,6 +298,8 @@ def _parse_sky(ctx: Ctx, doc: Mapping[str, Any]) -> tuple[float, float]:
                 raise ctx.fail(f"sky.{k}", "missing; give galactic l and b together")
         lon = parse_angle(ctx, field("sky.l"), sky["l"])
         lat = parse_angle(ctx, field("sky.b"), sky["b"])
+        from astropy.coordinates import SkyCoord  # imported for galactic positions only
+
         c = SkyCoord(l=lon * u.deg, b=lat * u.deg, frame="galactic").icrs
         return float(c.ra.deg), float(c.dec.deg)
     for k in ("ra", "dec"):

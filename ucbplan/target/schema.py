@@ -505,6 +505,17 @@ def field(path: str) -> Field:
     return _BY_PATH[path]
 
 
+def _by_section() -> dict[str, tuple[Field, ...]]:
+    """The fields of each section, in document order (built once: every target reads them)."""
+    out: dict[str, list[Field]] = {}
+    for f in FIELDS:
+        out.setdefault(f.section, []).append(f)
+    return {k: tuple(v) for k, v in out.items()}
+
+
+_BY_SECTION = _by_section()
+
+
 def section_fields(section: str) -> tuple[Field, ...]:
     """Fields directly inside the mapping at ``section`` (``""``: top level), document order."""
-    return tuple(f for f in FIELDS if f.section == section)
+    return _BY_SECTION.get(section, ())
