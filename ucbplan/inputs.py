@@ -109,14 +109,22 @@ _STRICT_ONLY = re.compile("[&!|>?\t]")
 _COMMENT = re.compile("(?m)(?:^|[ ])#[^'\"\r\n\x85\u2028\u2029]*\r?$")
 
 
+#: Keys SafeConstructor rewrites before building a mapping (``<<`` merges, ``=`` values).
+_SPECIAL_KEYS = frozenset(("tag:yaml.org,2002:merge", "tag:yaml.org,2002:value"))
+
+
 class _FastLoader(_CSafeLoader):
     """The same reading with libyaml's parser, for text without anchors (so without aliases)
     or characters the strict reader refuses: :func:`load_yaml` tries it first and falls back to
     :class:`_StrictLoader`, which gives every error its message, on any failure."""
 
     def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict[Any, Any]:
-        _refuse_duplicate_keys(node, self.construct_object)
-        return super().construct_mapping(node, deep=deep)
+        if any(k.tag in _SPECIAL_KEYS for k, _ in node.value):
+            raise yaml.YAMLError("merge or value key")  # the strict reader's order decides
+        out: dict[Any, Any] = super().construct_mapping(node, deep=deep)
+        if len(out) != len(node.value):  # a key twice: the strict reader names it
+            raise yaml.YAMLError("duplicate key")
+        return out
 
 
 for _loader in (_StrictLoader, _FastLoader):
@@ -216,7 +224,7 @@ def _load_fast(text: str, documents: bool) -> tuple[Any] | None:
     messages are the ones users see)."""
     if (
         not _FAST_LOADER
-        or _STRICT_ONLY.search(_COMMENT.sub("", text))
+        or (_STRICT_ONLY.search(text) and _STRICT_ONLY.search(_COMMENT.sub("", text)))
         or yaml.reader.Reader.NON_PRINTABLE.search(text)
     ):
         return None

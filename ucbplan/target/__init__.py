@@ -15,6 +15,7 @@ from ucbplan.target.parse import (
     check_distinct_files,
     load_target,
     load_target_documents,
+    load_target_files,
     load_targets,
     target_from_dict,
 )
@@ -29,6 +30,7 @@ __all__ = [
     "load_samples",
     "load_target",
     "load_target_documents",
+    "load_target_files",
     "load_targets",
     "read_samples_file",
     "target_from_dict",
