@@ -33,10 +33,11 @@ __all__ = ["cached_epoch", "quantity_in", "sexagesimal_deg"]
 #: Most distinct entries each cache keeps (a catalog uses a handful of unit strings).
 CACHE_SIZE = 1024
 
-#: A decimal number then the rest: astropy's number pattern without nan, inf and vectors.
-_NUMBER = re.compile(r"\s*([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)")
-#: What would make astropy's greedy number pattern take more characters than ``_NUMBER``.
-_LONGER = re.compile(r"[.+\-\d]|[eE][+-]?\d")
+#: A decimal number (astropy's number pattern without nan, inf and vectors), then its unit: the
+#: lookahead refuses a split where astropy's greedy pattern would take more characters.
+_QUANTITY = re.compile(
+    r"\s*([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)(?![.+\-\d]|[eE][+-]?\d)\s*(.*?)\s*"
+)
 #: ``12h34m56.7s`` / ``-12d34m56.7s`` / ``12:34:56.7`` (no spaces, no exponent).
 _SEXAGESIMAL = re.compile(r"([+-]?)(\d+)([hd:])(\d+)([m:])(\d+(?:\.\d*)?|\.\d+)(s?)")
 
@@ -48,7 +49,8 @@ _epochs: dict[tuple[str, str, bool], Time] = {}
 
 
 def _scale(unit_text: str, unit: str) -> float | None:
-    """Factor from ``unit_text`` to ``unit`` (astropy's), None if astropy must decide."""
+    """Factor from ``unit_text`` to ``unit`` (astropy's; 1.0 where astropy takes the value as
+    is), None if astropy must decide."""
     key = (unit_text, unit)
     scale = _scales.get(key)
     if scale is None:
@@ -59,7 +61,7 @@ def _scale(unit_text: str, unit: str) -> float | None:
             return None
         if not isinstance(found, float) or not math.isfinite(found):
             return None
-        scale = float(found)
+        scale = 1.0 if is_effectively_unity(found) else float(found)
         if len(_scales) < CACHE_SIZE:
             _scales[key] = scale
     return scale
@@ -71,18 +73,14 @@ def quantity_in(text: str, unit: str) -> float | None:
     None: not that spelling (a bare number included), or a unit astropy does not convert to
     ``unit`` directly.
     """
-    m = _NUMBER.match(text)
-    if m is None or "[" in text:
-        return None
-    rest = text[m.end() :]
-    unit_text = rest.strip()
-    if not unit_text or _LONGER.match(rest):
+    m = _QUANTITY.fullmatch(text)
+    if m is None or not m.group(2) or "[" in text:
         return None  # a bare number (the caller reads it), or not astropy's split
-    scale = _scale(unit_text, unit)
+    scale = _scale(m.group(2), unit)
     if scale is None:
         return None
     x = float(m.group(1))
-    return x if is_effectively_unity(scale) else x * scale
+    return x if scale == 1.0 else x * scale
 
 
 def sexagesimal_deg(text: str, hours: bool) -> float | None:
