@@ -84,9 +84,17 @@ TIMING: dict[str, Any] = {
         "eccentricity": {"eta": 0.001, "kappa": 0.002, "omega_dot": "1e-7 rad / s"},
         "inclination": "84.15 deg",
         "distance": "2.34 kpc",
-        "covariance": {
-            "parameters": ["t0", "period", "pdot"],
-            "matrix": [[0.53, 0, 0], [0, 8.4e-12, 0], [0, 0, 2.5e-27]],
+        "covariance": {  # every σ the ephemeris needs (issue 33); P̈ = 0 declared exact
+            "parameters": ["t0", "period", "pdot", "eta", "kappa", "omega_dot"],
+            "matrix": [
+                [0.53, 0, 0, 0, 0, 0],
+                [0, 8.4e-12, 0, 0, 0, 0],
+                [0, 0, 2.5e-27, 0, 0, 0],
+                [0, 0, 0, 1e-8, 0, 0],
+                [0, 0, 0, 0, 1e-8, 0],
+                [0, 0, 0, 0, 0, 1e-18],
+            ],
+            "exact": ["pddot"],
         },
         "source": "Burdge et al. 2019, Nature 571, 528",
     },
@@ -100,8 +108,16 @@ TIMING_VARIANT: dict[str, Any] = {
     "timing": {
         **TIMING["timing"],
         "covariance": {
-            "sigma": {"t0": "8.4e-6 d", "period": "2.9e-6 s", "pdot": 5.0e-14},
+            "sigma": {
+                "t0": "8.4e-6 d",
+                "period": "2.9e-6 s",
+                "pdot": 5.0e-14,
+                "eta": 1e-4,
+                "kappa": 1e-4,
+                "omega_dot": "1e-9 rad / s",
+            },
             "correlation": {"period,pdot": -0.5},
+            "exact": ["pddot"],
         },
     },
 }

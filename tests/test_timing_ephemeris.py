@@ -169,6 +169,7 @@ def _eccentric(tmp_path: Path, eta: float, kappa: float, omega_dot: float) -> Pa
     doc = json.loads(json.dumps(DOC))
     doc["timing"]["pdot"] = 0.0
     doc["timing"]["eccentricity"] = {"eta": eta, "kappa": kappa, "omega_dot": omega_dot}
+    doc["timing"]["covariance"]["exact"] = ["eta", "kappa", "omega_dot"]  # no σ (issue 33)
     path = tmp_path / "ecc.yaml"
     path.write_text(yaml.safe_dump(doc))
     return path

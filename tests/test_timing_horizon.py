@@ -55,7 +55,7 @@ ZTF: dict[str, Any] = {
 def _pure_period() -> Any:
     doc = copy.deepcopy(ZTF)
     doc["timing"]["pdot"] = 0.0
-    doc["timing"]["covariance"] = {"sigma": {"period": f"{SIGMA_P} s"}}
+    doc["timing"]["covariance"] = {"sigma": {"period": f"{SIGMA_P} s"}, "exact": ["t0"]}
     return target_from_dict(doc)
 
 

@@ -98,6 +98,7 @@ def test_write_and_read_back(tmp_path: Path) -> None:
     doc["timing"]["eccentricity"] = {"eta": 0.001, "kappa": -0.002, "omega_dot": "1e-8 rad / s"}
     doc["timing"]["inclination"] = "84.15 deg"
     doc["timing"]["distance"] = "2.34 kpc"
+    doc["timing"]["covariance"]["exact"] = ["pddot", "eta", "kappa", "omega_dot"]  # issue 33
     doc["magnitudes"] = {"g": 20.5, "G": 20.4}
     doc["references"] = {"timing": "2019Natur.571..528B", "magnitudes.g": "Burdge et al. 2019"}
     t = _load(doc, tmp_path)

@@ -62,6 +62,21 @@ _COMMENT_LINE = re.compile(r"^[^\S\n]*#[^\n]*", re.MULTILINE)
 EXPONENT_FLOAT = re.compile(r"^[-+]?(?:[0-9][0-9_]*)(?:\.[0-9_]*)?[eE][-+]?[0-9]+$")
 
 
+def _refuse_duplicate_keys(node: yaml.MappingNode, construct: Any) -> None:
+    """Raise on a key given twice in ``node`` (YAML would silently keep the last one)."""
+    seen: dict[Any, int] = {}
+    for key_node, _ in node.value:
+        key = construct(key_node, deep=True)
+        try:
+            hash(key)
+        except TypeError:
+            continue  # let the base class report an unhashable key
+        if key in seen:
+            line = key_node.start_mark.line + 1
+            raise yaml.YAMLError(f"duplicate key {key!r} (lines {seen[key]} and {line}); keep one")
+        seen[key] = key_node.start_mark.line + 1
+
+
 class _StrictLoader(yaml.SafeLoader):
     """SafeLoader with an alias budget, duplicate-key check and exponent-only floats."""
 
@@ -81,23 +96,46 @@ class _StrictLoader(yaml.SafeLoader):
         return super().compose_node(parent, index)
 
     def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict[Any, Any]:
-        seen: dict[Any, int] = {}
-        for key_node, _ in node.value:
-            key = self.construct_object(key_node, deep=True)
-            try:
-                hash(key)
-            except TypeError:
-                continue  # let the base class report an unhashable key
-            if key in seen:
-                line = key_node.start_mark.line + 1
-                raise yaml.YAMLError(
-                    f"duplicate key {key!r} (lines {seen[key]} and {line}); keep one"
-                )
-            seen[key] = key_node.start_mark.line + 1
+        _refuse_duplicate_keys(node, self.construct_object)
         return super().construct_mapping(node, deep=deep)
 
 
-_StrictLoader.add_implicit_resolver("tag:yaml.org,2002:float", EXPONENT_FLOAT, list("-+0123456789"))
+#: Whether PyYAML has libyaml (the fast path needs it; without it the strict reader reads all).
+_FAST_LOADER = bool(getattr(yaml, "__with_libyaml__", False))
+_CSafeLoader: Any = yaml.CSafeLoader if _FAST_LOADER else yaml.SafeLoader
+
+
+#: Outside comments, text with these goes to the strict reader: anchors (``&``, the alias
+#: budget), and what libyaml reads differently: tabs (it accepts them where the strict reader
+#: refuses them), tags (``!`` on an empty value: "" against None), block scalars (``|#``) and
+#: complex keys (``?`` continuing a flow scalar).
+_STRICT_ONLY = re.compile("[&!|>?\t]")
+#: A comment: ``#`` at the start of a line or after a space, with no quote up to the line's end
+#: (inside a quoted value the text is the value's, where these characters do nothing) and no
+#: line break YAML has but ``$`` has not.
+_COMMENT = re.compile("(?m)(?:^|[ ])#[^'\"\r\n\x85\u2028\u2029]*\r?$")
+
+
+#: Keys SafeConstructor rewrites before building a mapping (``<<`` merges, ``=`` values).
+_SPECIAL_KEYS = frozenset(("tag:yaml.org,2002:merge", "tag:yaml.org,2002:value"))
+
+
+class _FastLoader(_CSafeLoader):
+    """The same reading with libyaml's parser, for text without anchors (so without aliases)
+    or characters the strict reader refuses: :func:`load_yaml` tries it first and falls back to
+    :class:`_StrictLoader`, which gives every error its message, on any failure."""
+
+    def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict[Any, Any]:
+        if any(k.tag in _SPECIAL_KEYS for k, _ in node.value):
+            raise yaml.YAMLError("merge or value key")  # the strict reader's order decides
+        out: dict[Any, Any] = super().construct_mapping(node, deep=deep)
+        if len(out) != len(node.value):  # a key twice: the strict reader names it
+            raise yaml.YAMLError("duplicate key")
+        return out
+
+
+for _loader in (_StrictLoader, _FastLoader):
+    _loader.add_implicit_resolver("tag:yaml.org,2002:float", EXPONENT_FLOAT, list("-+0123456789"))
 
 
 def _read_bytes(path: Path, limit: int, what: str) -> bytes:
@@ -187,6 +225,9 @@ def load_yaml(
         text = _decode(_read_bytes(path, MAX_YAML_BYTES, what), path)
     elif len(text) > MAX_YAML_BYTES:
         raise SchemaError(f"{path}: larger than any {what} ({MAX_YAML_BYTES} bytes at most)")
+    fast = _load_fast(text, documents)
+    if fast is not None:
+        return fast[0]
     try:
         loader = _StrictLoader(text)
     except yaml.YAMLError as exc:  # the reader checks characters on construction
@@ -207,6 +248,30 @@ def load_yaml(
         raise SchemaError(f"{path}: not valid YAML: {' '.join(str(exc).split())}") from None
     except RecursionError:
         raise SchemaError(f"{path}: nested too deeply to be a {what}; check the file") from None
+    finally:
+        loader.dispose()
+
+
+def _load_fast(text: str, documents: bool) -> tuple[Any] | None:
+    """``(document,)`` (or ``(documents,)``) read by libyaml, or None where the strict reader
+    must read the text: :data:`_STRICT_ONLY`, characters it refuses, or any error (its
+    messages are the ones users see)."""
+    if (
+        not _FAST_LOADER
+        or (_STRICT_ONLY.search(text) and _STRICT_ONLY.search(_COMMENT.sub("", text)))
+        or yaml.reader.Reader.NON_PRINTABLE.search(text)
+    ):
+        return None
+    loader = _FastLoader(text)
+    try:
+        if not documents:
+            return (loader.get_single_data(),)
+        docs = []
+        while loader.check_data():
+            docs.append(loader.get_data())
+        return (docs,)
+    except Exception:  # every failure is reported by the strict reader
+        return None
     finally:
         loader.dispose()
 

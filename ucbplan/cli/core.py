@@ -262,7 +262,7 @@ def horizon(
     """
     fmt = pick_format(output, fmt, TABLE_FORMATS)
     from ucbplan.inputs import check_alpha
-    from ucbplan.target import check_distinct_files, load_target_documents
+    from ucbplan.target import check_distinct_files, load_target_files
 
     for a in alpha:
         check_alpha(a)
@@ -274,7 +274,7 @@ def horizon(
         check_figure_path(plot, overwrite)
         if output is not None:
             check_output_path(output, overwrite)
-    targets = [t for p in paths for t in load_target_documents(p)]
+    targets = load_target_files(paths)
     if len(targets) > 1:
         if plot is not None:
             raise UcbplanError("--plot takes one target; give a single target file")

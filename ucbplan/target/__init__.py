@@ -4,7 +4,8 @@ Modules: ``model`` (the :class:`Target` / :class:`Spectroscopy` / :class:`Timing
 records), ``schema`` (every field of a target file declared once: unit, range, example, default),
 ``fieldtypes`` (the schema's :class:`Field` and :class:`Range` records), ``fieldgroups`` (families
 of fields that share a shape: phase parameters, velocities, eccentricity, covariance),
-``values`` (scalar readers), ``sections`` (helpers shared by the sections), ``parse``
+``values`` (scalar readers), ``fastvalues`` (their common spellings read without astropy's
+parsers, the same floats), ``sections`` (helpers shared by the sections), ``parse``
 (:func:`load_target`), ``timing_section`` (``timing``, ``magnitudes``, ``references``),
 ``covariance`` (``lisa.covariance``, ``timing.covariance``), ``samples`` (posterior samples
 files), ``write`` (:func:`write_target`).
@@ -15,6 +16,7 @@ from ucbplan.target.parse import (
     check_distinct_files,
     load_target,
     load_target_documents,
+    load_target_files,
     load_targets,
     target_from_dict,
 )
@@ -29,6 +31,7 @@ __all__ = [
     "load_samples",
     "load_target",
     "load_target_documents",
+    "load_target_files",
     "load_targets",
     "read_samples_file",
     "target_from_dict",

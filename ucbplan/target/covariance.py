@@ -34,7 +34,7 @@ from ucbplan.target.values import (
     to_float,
 )
 
-__all__ = ["parse_covariance"]
+__all__ = ["exact_parameters", "parse_covariance"]
 
 FloatArray = NDArray[np.float64]
 Named = tuple[tuple[str, ...], FloatArray]
@@ -92,11 +92,40 @@ def parse_covariance(ctx: Ctx, cov: Any, section: str = "lisa") -> Named:
             names, mat = _from_matrix(ctx, sec, cov)
         elif marginal:
             names, mat = _from_sigma(ctx, sec, cov)
+        elif "exact" in cov:  # every parameter declared exact (timing.covariance.exact)
+            return (), np.zeros((0, 0))
         else:
             raise ctx.fail(sec.path, f"{_FORMS}; got an empty mapping")
-        _check_symmetric(ctx, sec.path, mat)
-        _check_psd(ctx, sec.path, mat)
+        if full or cov.get("correlation"):  # σ's alone: a finite σ² diagonal passes both
+            _check_symmetric(ctx, sec.path, mat)
+            _check_psd(ctx, sec.path, mat)
     return names, mat
+
+
+def exact_parameters(ctx: Ctx, cov: Any, given: tuple[str, ...]) -> tuple[str, ...]:
+    """``timing.covariance.exact``: the timing parameters declared known exactly (``()`` when
+    absent); none of them may also have a σ (``given``, the covariance's names).
+
+    Raises
+    ------
+    TargetFileError
+        Not a list, unknown or repeated names, or a name that also has a σ.
+    """
+    if not isinstance(cov, Mapping) or "exact" not in cov:
+        return ()
+    sec = _SECTIONS["timing"]
+    where = f"{sec.path}.exact"
+    raw = cov["exact"]
+    if not isinstance(raw, list):
+        f = field(where)
+        raise ctx.fail(where, f"expected {f.what} like {f.example}, got {shorten(raw)}")
+    names = _parameter_names(ctx, sec, where, raw)
+    both = [n for n in names if n in given]
+    if both:
+        raise ctx.fail(
+            where, f"{both[0]} has a σ in the covariance and is listed as exact; keep one"
+        )
+    return names
 
 
 def _parameter_names(ctx: Ctx, sec: _Section, where: str, names: list[Any]) -> tuple[str, ...]:

@@ -6,6 +6,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Any, Literal
@@ -109,12 +110,13 @@ class Field:
     cosine_of: str = ""
     unit_required: bool = False
 
-    @property
-    def name(self) -> str:
-        """Last component of the path (the key in its mapping)."""
-        return self.path.rpartition(".")[2]
+    #: Last component of the path (the key in its mapping); derived from ``path``.
+    name: str = dataclasses.field(init=False, repr=False, compare=False)
+    #: Path of the mapping that holds the field (``""`` for the top level); derived.
+    section: str = dataclasses.field(init=False, repr=False, compare=False)
 
-    @property
-    def section(self) -> str:
-        """Path of the mapping that holds the field (``""`` for the top level)."""
-        return self.path.rpartition(".")[0]
+    def __post_init__(self) -> None:
+        # kept, not recomputed: every value of every target file looks them up
+        section, _, name = self.path.rpartition(".")
+        object.__setattr__(self, "name", name)
+        object.__setattr__(self, "section", section)

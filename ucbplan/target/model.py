@@ -13,17 +13,19 @@ from __future__ import annotations
 import hashlib
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from astropy import units as u
-from astropy.coordinates import SkyCoord
 from astropy.time import Time, TimeDelta
 from numpy.typing import NDArray
 
 from ucbplan.core.params import PARAM_NAMES, PhaseParams
 from ucbplan.core.timing import TimingEphemeris
 from ucbplan.errors import TargetFileError
+
+if TYPE_CHECKING:  # astropy.coordinates is imported where a position is needed, not to load
+    from astropy.coordinates import SkyCoord
 
 __all__ = ["Spectroscopy", "Target", "TimingSection"]
 
@@ -221,6 +223,8 @@ class Target:
     @property
     def coord(self) -> SkyCoord:
         """ICRS position."""
+        from astropy.coordinates import SkyCoord
+
         return SkyCoord(self.ra_deg * u.deg, self.dec_deg * u.deg, frame="icrs")
 
     @property

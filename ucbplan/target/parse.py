@@ -12,13 +12,14 @@ from __future__ import annotations
 
 import os
 import unicodedata
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from contextlib import contextmanager
+from contextvars import ContextVar
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from astropy import units as u
-from astropy.coordinates import SkyCoord
 from astropy.time import TimeDelta
 from numpy.typing import NDArray
 
@@ -54,6 +55,7 @@ __all__ = [
     "check_distinct_files",
     "load_target",
     "load_target_documents",
+    "load_target_files",
     "load_targets",
     "target_from_dict",
 ]
@@ -96,6 +98,47 @@ def load_target(path: Path | str) -> Target:
             one_line(f"{shorten(str(path))}: cannot open; check the path")
         ) from None
     return target_from_dict(doc, path)
+
+
+#: Folders already resolved, inside one :func:`load_target_files` or :func:`load_targets` call
+#: (None outside one: a lone target file is resolved whole, as ``Path.resolve`` does it).
+_FOLDERS: ContextVar[dict[str, Path] | None] = ContextVar("ucbplan_target_folders", default=None)
+
+
+def _resolved(path: Path) -> Path:
+    """``path.resolve()``; inside a call that loads many files each folder is resolved once
+    (the file itself, unless a symbolic link, adds only its name)."""
+    folders = _FOLDERS.get()
+    if folders is None or path.name in ("", ".", "..") or os.path.islink(path):
+        return path.resolve()
+    key = str(path.parent)
+    folder = folders.get(key)
+    if folder is None:
+        folder = folders[key] = path.parent.resolve()
+    return folder / path.name
+
+
+@contextmanager
+def _many_files() -> Iterator[None]:
+    """The scope of :data:`_FOLDERS`: one call loading many target files."""
+    token = _FOLDERS.set({})
+    try:
+        yield
+    finally:
+        _FOLDERS.reset(token)
+
+
+def load_target_files(paths: Sequence[Path | str]) -> list[Target]:
+    """Every target of several files, in order: :func:`load_target_documents` of each (each
+    folder resolved once).
+
+    Raises
+    ------
+    TargetFileError
+        As :func:`load_target_documents`, for the first file that fails.
+    """
+    with _many_files():
+        return [t for path in paths for t in load_target_documents(path)]
 
 
 def _file_key(path: Path | str) -> tuple[int, int] | str:
@@ -146,6 +189,12 @@ def load_targets(
         one line naming both files.
     """
     check_distinct_files(paths)
+    with _many_files():
+        return _load_each_once(paths, ident)
+
+
+def _load_each_once(paths: Sequence[Path | str], ident: Callable[[str], str]) -> list[Target]:
+    """:func:`load_targets` after the files are known distinct."""
     names: dict[str, tuple[Path, str]] = {}
     out = []
     for raw in paths:
@@ -194,7 +243,7 @@ def target_from_dict(doc: Any, path: Path | None = None) -> Target:
         masses = _parse_masses(ctx, doc)
     target = Target(
         name=name,
-        source=path.resolve() if path is not None else None,
+        source=_resolved(path) if path is not None else None,
         ra_deg=ra,
         dec_deg=dec,
         t_ref=eph.t_ref,
@@ -299,6 +348,8 @@ def _parse_sky(ctx: Ctx, doc: Mapping[str, Any]) -> tuple[float, float]:
                 raise ctx.fail(f"sky.{k}", "missing; give galactic l and b together")
         lon = parse_angle(ctx, field("sky.l"), sky["l"])
         lat = parse_angle(ctx, field("sky.b"), sky["b"])
+        from astropy.coordinates import SkyCoord  # imported for galactic positions only
+
         c = SkyCoord(l=lon * u.deg, b=lat * u.deg, frame="galactic").icrs
         return float(c.ra.deg), float(c.dec.deg)
     for k in ("ra", "dec"):

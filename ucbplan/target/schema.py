@@ -29,6 +29,7 @@ __all__ = [
     "FIELDS",
     "SECTIONS",
     "TIMING_COVARIANCE_PARAMETERS",
+    "TIMING_SIGMA_PLACEHOLDERS",
     "field",
     "section_fields",
     "timing_parameter_field",
@@ -36,6 +37,10 @@ __all__ = [
 
 #: Kinds of ephemeris a target file gives: exactly one of these sections.
 EPHEMERIS_KINDS: tuple[str, ...] = ("lisa", "timing")
+
+#: The σ's of a timing covariance as messages and the reference show them: placeholders, so
+#: that no real system's σ's are copied as defaults.
+TIMING_SIGMA_PLACEHOLDERS = '{t0: "<σ(T0)> d", period: "<σ(P)> s", pdot: <σ(Ṗ)>}'
 
 #: Every field of a target file, in document order (the order :func:`write_target` writes).
 FIELDS: tuple[Field, ...] = (
@@ -346,9 +351,17 @@ FIELDS: tuple[Field, ...] = (
     *covariance_fields(
         "timing",
         "[t0, period, pdot]",
-        '{sigma: {t0: "8.4e-6 d", period: "2.9e-6 s", pdot: 5.0e-14}}',
-        '{t0: "8.4e-6 d", period: "2.9e-6 s", pdot: 5.0e-14}',
+        f"{{sigma: {TIMING_SIGMA_PLACEHOLDERS}}}",
+        TIMING_SIGMA_PLACEHOLDERS,
         required=True,
+    ),
+    Field(
+        "timing.covariance.exact",
+        "list",
+        "a list of timing parameters",
+        "[pdot]",
+        doc="timing parameters known exactly (no σ): T0 and P, and Ṗ, P̈, η, κ, ω̇ when not "
+        "zero, need a σ or a place here",
     ),
     Field(
         "timing.source",
@@ -479,7 +492,7 @@ _T0_SIGMA = Field(
     "timing.t0",
     "quantity",
     "a duration",
-    '"8.4e-6 d"',
+    '"<σ(T0)> d"',
     unit="s",
     doc="σ of T0",
     dimension_hint="give a time, e.g. s or d",
@@ -505,6 +518,17 @@ def field(path: str) -> Field:
     return _BY_PATH[path]
 
 
+def _by_section() -> dict[str, tuple[Field, ...]]:
+    """The fields of each section, in document order (built once: every target reads them)."""
+    out: dict[str, list[Field]] = {}
+    for f in FIELDS:
+        out.setdefault(f.section, []).append(f)
+    return {k: tuple(v) for k, v in out.items()}
+
+
+_BY_SECTION = _by_section()
+
+
 def section_fields(section: str) -> tuple[Field, ...]:
     """Fields directly inside the mapping at ``section`` (``""``: top level), document order."""
-    return tuple(f for f in FIELDS if f.section == section)
+    return _BY_SECTION.get(section, ())

@@ -6,6 +6,7 @@ Each reader takes the :class:`~ucbplan.target.values.Ctx` of its file and fails 
 
 from __future__ import annotations
 
+import functools
 import math
 import unicodedata
 from collections.abc import Iterable, Mapping
@@ -52,6 +53,7 @@ CONTROL = frozenset(("Cc", "Cs", "Zl", "Zp"))
 MAX_TEXT_CHARS = 500
 
 
+@functools.cache  # one tuple per section of the schema
 def names(section: str) -> tuple[str, ...]:
     """Names of the fields directly inside ``section`` (``""``: the top level)."""
     return tuple(f.name for f in section_fields(section))

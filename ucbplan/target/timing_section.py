@@ -27,7 +27,7 @@ from ucbplan.core.timing import (
 )
 from ucbplan.core.timing_epochs import parse_timing_epoch
 from ucbplan.errors import shorten
-from ucbplan.target.covariance import parse_covariance
+from ucbplan.target.covariance import exact_parameters, parse_covariance
 from ucbplan.target.model import TimingSection
 from ucbplan.target.schema import FIELDS, field, section_fields
 from ucbplan.target.sections import (
@@ -49,7 +49,7 @@ from ucbplan.target.values import (
     to_float,
 )
 
-__all__ = ["parse_magnitudes", "parse_references", "parse_timing"]
+__all__ = ["parse_magnitudes", "parse_references", "parse_timing", "sigmas_needed"]
 
 FloatArray = NDArray[np.float64]
 _TIMING_VALUES = tuple(field(f"timing.{n}") for n in ("period", "pdot", "pddot"))
@@ -71,6 +71,8 @@ def parse_timing(ctx: Ctx, timing: Any) -> Ephemeris:
     eph = TimingEphemeris(mark, vals["period"], vals["pdot"], vals["pddot"], **ecc)
     _check_period_sign(ctx, eph)
     names, mat = parse_covariance(ctx, timing["covariance"], "timing")
+    exact = exact_parameters(ctx, timing["covariance"], names)
+    _check_sigmas_known(ctx, eph, (*names, *exact))
     cov_names, cov_matrix = _phase_model_covariance(ctx, eph, names, mat)
     extras: dict[str, float | None] = {"cos_inclination": None, "amplitude": None, "psi": None}
     if "inclination" in timing:
@@ -94,6 +96,39 @@ def parse_timing(ctx: Ctx, timing: Any) -> Ephemeris:
         extras=extras,
         timing=section,
     )
+
+
+#: How messages show a σ to give, per timing parameter: placeholders, no real system's values.
+_SIGMA_PLACEHOLDER = {
+    "t0": '"<σ(T0)> d"',
+    "period": '"<σ(P)> s"',
+    "pdot": "<σ(Ṗ)>",
+    "pddot": '"<σ(P̈)> 1/s"',
+    "eta": "<σ(η)>",
+    "kappa": "<σ(κ)>",
+    "omega_dot": '"<σ(ω̇)> rad/s"',
+}
+
+
+def sigmas_needed(eph: TimingEphemeris) -> tuple[str, ...]:
+    """Timing parameters whose σ the covariance must give or declare exact: T0 and P always,
+    Ṗ, P̈, η, κ and ω̇ when not zero (a zero value claims nothing to be uncertain about)."""
+    values = {"pdot": eph.pdot, "pddot": eph.pddot, "eta": eph.eta, "kappa": eph.kappa}
+    values["omega_dot"] = eph.omega_dot
+    return tuple(n for n in TIMING_NAMES if n in ("t0", "period") or values[n] != 0.0)
+
+
+def _check_sigmas_known(ctx: Ctx, eph: TimingEphemeris, known: tuple[str, ...]) -> None:
+    """Every σ of :func:`sigmas_needed` is given or its parameter declared exact (issue 33:
+    σ(T0) alone made P and Ṗ exact without a word, and the horizon 300 yr)."""
+    missing = [n for n in sigmas_needed(eph) if n not in known]
+    if missing:
+        shown = ", ".join(f"{n}: {_SIGMA_PLACEHOLDER[n]}" for n in missing)
+        raise ctx.fail(
+            "timing.covariance",
+            f"no σ for {', '.join(missing)}; give each in sigma ({shown}) or, for a parameter "
+            f"known exactly, list it in exact: [{', '.join(missing)}]",
+        )
 
 
 def _timing_eccentricity(ctx: Ctx, timing: Mapping[str, Any]) -> dict[str, float]:

@@ -14,17 +14,16 @@ import datetime as _dt
 import difflib
 import math
 import re
-from collections.abc import Iterable, Iterator, Mapping, Sequence
-from contextlib import contextmanager
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 from astropy import units as u
-from astropy.coordinates import Angle
 from astropy.time import Time
 
 from ucbplan.core.epochs import MAX_EPOCH_CHARS, epoch_in_scale, split_scale_label
 from ucbplan.errors import EpochRangeError, TargetFileError, shorten
+from ucbplan.target.fastvalues import cached_epoch, quantity_in, sexagesimal_deg
 from ucbplan.target.fieldtypes import Field
 from ucbplan.target.schema import field
 
@@ -92,17 +91,31 @@ class Ctx:
             return key
         return shorten(key, 60)
 
-    @contextmanager
-    def reading(self, where: str, what: str = "a value") -> Iterator[None]:
+    def reading(self, where: str, what: str = "a value") -> _Reading:
         """Turn a stray exception of a malformed value into a one-line error at ``where``."""
-        try:
-            yield
-        except TargetFileError:
-            raise
-        except MALFORMED as exc:
-            raise self.fail(
-                where, f"expected {what}, got a value that cannot be read ({type(exc).__name__})"
-            ) from None
+        return _Reading(self, where, what)
+
+
+class _Reading:
+    """The context of :meth:`Ctx.reading` (a class: entered for every value of every file)."""
+
+    __slots__ = ("ctx", "what", "where")
+
+    def __init__(self, ctx: Ctx, where: str, what: str) -> None:
+        self.ctx, self.where, self.what = ctx, where, what
+
+    def __enter__(self) -> None:
+        return None
+
+    def __exit__(
+        self, kind: type[BaseException] | None, exc: BaseException | None, tb: Any
+    ) -> None:
+        if kind is None or issubclass(kind, TargetFileError) or not issubclass(kind, MALFORMED):
+            return
+        raise self.ctx.fail(
+            self.where,
+            f"expected {self.what}, got a value that cannot be read ({kind.__name__})",
+        ) from None
 
 
 def did_you_mean(name: Any, options: Iterable[str]) -> str:
@@ -183,6 +196,10 @@ def parse_quantity(ctx: Ctx, f: Field, value: Any, where: str | None = None) -> 
     ``where`` replaces ``f.path`` in messages (a covariance σ is read with its parameter's field).
     Ranges are not checked here (:func:`check_range`).
     """
+    if type(value) is str and len(value) <= MAX_VALUE_CHARS and f.unit is not None:
+        fast = quantity_in(value, f.unit)  # "<number> <unit>", the usual spelling
+        if fast is not None and math.isfinite(fast):
+            return fast
     path = where or f.path
     expect = f"expected {f.what} like {f.example}"
     if isinstance(value, bool) or value is None:
@@ -232,6 +249,10 @@ def _quantity_text(ctx: Ctx, path: str, f: Field, value: str) -> float:
     text = value.strip()
     if NUM_RE.match(text) or text.lower().lstrip("+-.") in ("nan", "inf"):
         return float(text.replace(".nan", "nan").replace(".inf", "inf"))
+    assert f.unit is not None, f.path  # a quantity field has a unit ("" when dimensionless)
+    fast = quantity_in(text, f.unit)
+    if fast is not None:
+        return fast
     try:
         q = u.Quantity(text)
     except MALFORMED:
@@ -290,7 +311,7 @@ def parse_angle(ctx: Ctx, f: Field, value: Any, hours: bool = False) -> float:
     if isinstance(value, str) and len(value) > MAX_VALUE_CHARS:
         raise ctx.fail(f.path, f"{expect}, got {shorten(value)} (too long for an angle)")
     try:
-        deg = float(_angle(value, hours).to_value(u.deg))
+        deg = _angle_deg(value, hours)
     except (*MALFORMED, u.UnitsError):
         raise ctx.fail(f.path, f"{expect}, got {shorten(value)}") from None
     if not math.isfinite(deg):
@@ -299,27 +320,37 @@ def parse_angle(ctx: Ctx, f: Field, value: Any, hours: bool = False) -> float:
     return deg
 
 
-def _angle(value: Any, hours: bool) -> Angle:
+def _angle_deg(value: Any, hours: bool) -> float:
+    """Degrees of an angle value: the common spellings read directly
+    (:mod:`~ucbplan.target.fastvalues`, the same floats), the rest by astropy."""
     if isinstance(value, int | float) and not isinstance(value, bool):
-        return Angle(to_float(value), unit=u.deg)
+        return to_float(value)
     if not isinstance(value, str):
         raise ValueError
     text = value.strip()
     if NUM_RE.match(text):
-        return Angle(float(text), unit=u.deg)
+        return float(text)
+    fast = sexagesimal_deg(text, hours)
+    if fast is not None:
+        return fast
+    from astropy.coordinates import Angle  # the other spellings (imported only for them)
+
     if ":" in text or (" " in text and not re.search(r"[a-zA-Z]", text)):
-        return Angle(text, unit=u.hourangle if hours else u.deg)
+        return float(Angle(text, unit=u.hourangle if hours else u.deg).to_value(u.deg))
+    fast = quantity_in(text, "deg")  # a number with an angle unit (converts to deg)
+    if fast is not None:
+        return fast
     try:  # "1.5e-05 deg": astropy's angle parser refuses exponents, its quantity parser not
         q = u.Quantity(text)
     except MALFORMED:
         pass
     else:
         if q.isscalar and q.unit.physical_type == "angle":
-            return Angle(q)
+            return float(Angle(q).to_value(u.deg))
     angle = Angle(text)
     if not angle.isscalar:
         raise ValueError
-    return angle
+    return float(angle.to_value(u.deg))
 
 
 def parse_epoch(ctx: Ctx, f: Field, value: Any, scale_field: Any) -> tuple[Time, str | None]:
@@ -342,7 +373,7 @@ def parse_epoch(ctx: Ctx, f: Field, value: Any, scale_field: Any) -> tuple[Time,
         raise ctx.fail(f.path, f"label {label.upper()} contradicts t_ref_scale: {scale_given}")
     scale = scale_given or label or "tdb"
     try:
-        tdb = epoch_in_scale(text, scale, isot_if_t=True)
+        tdb = cached_epoch(text, scale, True, lambda: epoch_in_scale(text, scale, isot_if_t=True))
     except EpochRangeError as exc:
         raise ctx.fail(f.path, f"{shorten(value)} {exc}") from None
     except ValueError:

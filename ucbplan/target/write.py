@@ -21,6 +21,7 @@ from ucbplan.inputs import EXPONENT_FLOAT
 from ucbplan.io import write_output
 from ucbplan.target.model import Spectroscopy, Target, TimingSection
 from ucbplan.target.schema import field
+from ucbplan.target.timing_section import sigmas_needed
 
 __all__ = ["target_to_dict", "write_target"]
 
@@ -129,11 +130,15 @@ def _timing_dict(t: Target, s: TimingSection) -> dict[str, Any]:
         out["inclination"] = f"{math.degrees(math.acos(t.cos_inclination))!r} deg"
     if t.distance_kpc is not None:
         out["distance"] = _value("timing.distance", t.distance_kpc)
+    cov: dict[str, Any] = {}
     if s.cov_names:
-        out["covariance"] = {
-            "parameters": list(s.cov_names),
-            "matrix": [[float(x) for x in row] for row in s.cov_matrix],
-        }
+        cov["parameters"] = list(s.cov_names)
+        cov["matrix"] = [[float(x) for x in row] for row in s.cov_matrix]
+    exact = [n for n in sigmas_needed(e) if n not in s.cov_names]
+    if exact:  # declared exact when read (the reader refuses a σ left out silently)
+        cov["exact"] = exact
+    if cov:
+        out["covariance"] = cov
     out["source"] = s.source
     return out
 
