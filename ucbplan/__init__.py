@@ -42,6 +42,12 @@ _PUBLIC = {
     "fit_ephemeris": "ucbplan.api",
     "simulate": "ucbplan.api",
     "population_forecast": "ucbplan.api",
+    # b1
+    "write_target": "ucbplan.api",
+    "validate": "ucbplan.api",
+    "compare_ephemerides": "ucbplan.api",
+    "feasibility": "ucbplan.api",
+    "TimingFit": "ucbplan.api",
     "Constraint": "ucbplan.observing.constraints",
     "AirmassConstraint": "ucbplan.observing.constraints",
     "AltitudeConstraint": "ucbplan.observing.constraints",
@@ -95,11 +101,20 @@ if TYPE_CHECKING:  # the same names for type checkers and IDEs ("as": re-exporte
     from ucbplan.api import (
         Report as Report,
     )
+    from ucbplan.api import (  # b1
+        TimingFit as TimingFit,
+    )
+    from ucbplan.api import (
+        compare_ephemerides as compare_ephemerides,
+    )
     from ucbplan.api import (
         default_constraints as default_constraints,
     )
     from ucbplan.api import (
         ephemeris as ephemeris,
+    )
+    from ucbplan.api import (
+        feasibility as feasibility,
     )
     from ucbplan.api import (
         fit_ephemeris as fit_ephemeris,
@@ -124,6 +139,12 @@ if TYPE_CHECKING:  # the same names for type checkers and IDEs ("as": re-exporte
     )
     from ucbplan.api import (
         simulate as simulate,
+    )
+    from ucbplan.api import (
+        validate as validate,
+    )
+    from ucbplan.api import (
+        write_target as write_target,
     )
     from ucbplan.errors import (
         EarthOrientationWarning as EarthOrientationWarning,

@@ -8,15 +8,23 @@ name the parameter at fault, and emits what the user must act on as :class:`ucbp
 UcbplanWarning` (filterable) besides returning it. The command line is a shell over these.
 """
 
-from ucbplan.api.ephemeris import ephemeris, fit_ephemeris, get_site, horizon, load_target
+from ucbplan.api.ephemeris import compare_ephemerides, ephemeris
+from ucbplan.api.horizons import horizon
 from ucbplan.api.planning import Plan, default_constraints, plan
 from ucbplan.api.reduction import Report, population_forecast, reduce, simulate
+from ucbplan.api.signal_sizes import feasibility
+from ucbplan.api.targets import get_site, load_target, validate, write_target
+from ucbplan.api.timing import TimingFit, fit_ephemeris
 
 __all__ = [
     "Plan",
     "Report",
+    # b1: the forecast half (targets, epochs, horizons, timing fits, feasibility)
+    "TimingFit",
+    "compare_ephemerides",
     "default_constraints",
     "ephemeris",
+    "feasibility",
     "fit_ephemeris",
     "get_site",
     "horizon",
@@ -25,4 +33,6 @@ __all__ = [
     "population_forecast",
     "reduce",
     "simulate",
+    "validate",
+    "write_target",
 ]

@@ -46,6 +46,25 @@ FLAGS = {
     "end": "--end",
     "star": "--star",
     "seed": "--seed",
+    # b1: validate, horizon, ephemeris predict/compare/fit, feasibility
+    "at": "--at",
+    "terms": "--terms",
+    "clip": "--clip",
+    "period": "--period",
+    "initial": "--initial",
+    "plot": "--plot",
+    "anchors": "--anchor",
+    "m1": "--m1",
+    "m2": "--m2",
+    "m3": "--m3",
+    "a_out": "--a-out",
+    "n_spectra": "--n-spectra",
+    "baseline": "--baseline",
+    "optical_epoch": "--optical-epoch",
+    "readout": "--readout",
+    "overhead": "--overhead",
+    "sigma_floor": "--sigma-floor",
+    "extinction": "--extinction",
 }
 
 _LEADING_NAME = re.compile(r"^([a-z_][a-z0-9_]*)(?=[: ])")
