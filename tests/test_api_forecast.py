@@ -18,6 +18,8 @@ import pytest
 from astropy import units as u
 from astropy.coordinates import EarthLocation, SkyCoord
 from astropy.table import Table
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import ucbplan
 from ucbplan.errors import InputError, OutputExistsError, UcbplanError
@@ -202,3 +204,69 @@ def test_feasibility_returns_a_typed_report() -> None:
     assert doc["units"].startswith("SI") and doc["name"] == got.report.name
     assert "strategies" not in doc
     assert ucbplan.feasibility(HM, baseline="30 d").to_dict() == doc
+
+
+# ------------------------------------------------------------------ any value, one line
+
+_ANY = st.one_of(
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.integers(-(10**12), 10**12),
+    st.text(max_size=12),
+    st.none(),
+    st.booleans(),
+    st.builds(
+        lambda v, unit: v * unit,
+        st.floats(-1e3, 1e3),
+        st.sampled_from([u.deg, u.m, u.s, u.km / u.s, u.one, u.solMass]),
+    ),
+    st.just(SkyCoord(1, 2, unit="deg")),
+    st.just(EarthLocation.from_geodetic([1, 2] * u.deg, [3, 4] * u.deg)),
+    st.lists(st.floats(allow_nan=True), max_size=3),
+    st.dictionaries(st.text(max_size=3), st.integers(), max_size=2),
+)
+
+#: (call, the parameter it varies): each call sets one argument and keeps the others valid.
+_CALLS: dict[str, Any] = {
+    "site": lambda v: ucbplan.get_site(v),
+    "timezone": lambda v: ucbplan.get_site("paranal", timezone=v),
+    "target": lambda v: ucbplan.load_target(v),
+    "start": lambda v: ucbplan.ephemeris(HM, v, "2040-02-16"),
+    "anchor": lambda v: ucbplan.ephemeris(HM, "2040-02-15", "2040-02-16", anchor=v),
+    "star": lambda v: ucbplan.ephemeris(HM, "2040-02-15", "2040-02-16", star=v),
+    "max_epochs": lambda v: ucbplan.ephemeris(HM, "2040-02-15", "2040-02-16", max_epochs=v),
+    "sigma_v": lambda v: ucbplan.horizon(HM, sigma_v=v),
+    "k_eff": lambda v: ucbplan.horizon(HM, k_eff=v),
+    "alpha": lambda v: ucbplan.horizon(HM, alpha=v),
+    "n_epochs": lambda v: ucbplan.horizon(HM, n_epochs=v),
+    "anchors": lambda v: ucbplan.horizon(HM, anchors=v),
+    "times": lambda v: ucbplan.fit_ephemeris(v),
+    "period": lambda v: ucbplan.fit_ephemeris(_times(CYCLES), period=v),
+    "initial": lambda v: ucbplan.fit_ephemeris(_times(CYCLES), initial=v),
+    "terms": lambda v: ucbplan.fit_ephemeris(_times(CYCLES), terms=v),
+    "clip": lambda v: ucbplan.fit_ephemeris(_times(CYCLES), clip=v),
+    "m1": lambda v: ucbplan.feasibility(HM, m1=v),
+    "n_spectra": lambda v: ucbplan.feasibility(HM, n_spectra=v),
+    "baseline": lambda v: ucbplan.feasibility(HM, baseline=v),
+    "a_out": lambda v: ucbplan.feasibility(HM, a_out=v),
+    "optical_epoch": lambda v: ucbplan.feasibility(HM, optical_epoch=v),
+}
+
+
+def _names_it(text: str, parameter: str, value: Any) -> bool:
+    """The message names the parameter (as the library or the command line spells it), or the
+    value given (a file or site that is not there)."""
+    words = text.replace("-", "_").lower()
+    stem = parameter.removesuffix("s")
+    return stem in words or (isinstance(value, str) and value.strip() != "" and value in text)
+
+
+@settings(max_examples=300, deadline=None)
+@given(parameter=st.sampled_from(sorted(_CALLS)), value=_ANY)
+def test_forecast_functions_take_any_value(parameter: str, value: Any) -> None:
+    # returned, or refused in one line of ucbplan's error tree naming the parameter
+    try:
+        _CALLS[parameter](value)
+    except UcbplanError as exc:
+        text = str(exc)
+        assert "\n" not in text and len(text) < 600, text
+        assert _names_it(text, parameter, value), (parameter, value, text)

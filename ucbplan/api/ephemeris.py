@@ -25,6 +25,7 @@ __all__ = [
     "EPHEMERIS_FLAGS",
     # where the planning and reduction modules import them from (defined in api/targets.py)
     "TargetLike",
+    "check_anchor",
     "compare_ephemerides",
     "ephemeris",
     "epoch_table",
@@ -184,7 +185,7 @@ def predict(
     if not (is_number(star) and star in (1, 2)):
         raise InputError(f"star: expected 1 or 2, got {shorten(star)}", parameter="star")
     check_int("max_epochs", max_epochs, 1, 10**12, "epochs a window may hold")
-    _check_anchor(anchor, "anchor")
+    check_anchor(anchor, "anchor")
     with scope():
         t = load_target(target)
         tau0, tau1 = epoch_window(t, start, end, anchor, int(max_epochs))
@@ -194,16 +195,24 @@ def predict(
     return EpochPrediction(t, table, tuple(lines))
 
 
-def _check_anchor(anchor: Any, parameter: str) -> None:
-    """An anchor is a name or a number u★ [rad] (the name's spelling is checked where used)."""
+def check_anchor(anchor: Any, parameter: str) -> None:
+    """An anchor is a name or a finite number u★ [rad] (a name's spelling is checked where
+    used).
+
+    Raises
+    ------
+    InputError
+        Anything else (one line naming ``parameter``).
+    """
     from ucbplan.inputs import is_number
 
-    if not (isinstance(anchor, str) or is_number(anchor)):
-        raise InputError(
-            f"{parameter}: expected quadrature, conjunction, eclipse, zero-crossing or a number "
-            f"u★ in radians, got {shorten(anchor, 60)}",
-            parameter=parameter,
-        )
+    if isinstance(anchor, str) or (is_number(anchor) and math.isfinite(anchor)):
+        return
+    raise InputError(
+        f"{parameter}: expected quadrature, conjunction, eclipse, zero-crossing or a finite "
+        f"number u★ in radians, got {shorten(anchor, 60)}",
+        parameter=parameter,
+    )
 
 
 def epoch_table(t: Target, es: EpochSet) -> Table:

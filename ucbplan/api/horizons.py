@@ -5,7 +5,6 @@
 
 from __future__ import annotations
 
-import math
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -13,6 +12,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ucbplan.api._convert import as_float, scope
+from ucbplan.api.ephemeris import check_anchor
 from ucbplan.api.options import Flag
 from ucbplan.api.targets import TargetLike, load_target
 from ucbplan.errors import InputError, UcbplanError, shorten
@@ -181,26 +181,24 @@ def horizon_report(
 
 def _checked(alpha: Any, n_epochs: Any, anchors: Any) -> tuple[list[float], list[Any]]:
     """α's, anchors: checked at the door, one line naming the parameter."""
-    from ucbplan.inputs import check_alpha, check_int, is_number
+    from ucbplan.inputs import check_alpha, is_number
 
     alphas = [alpha] if is_number(alpha) or isinstance(alpha, str) else alpha
     if not isinstance(alphas, Sequence) or isinstance(alphas, str) or not alphas:
         raise InputError(f"alpha: expected a number or a list of numbers, got {shorten(alpha)}")
     for a in alphas:
         check_alpha(a)
-    whole = is_number(n_epochs) and math.isfinite(n_epochs) and n_epochs == int(n_epochs)
-    if not whole:  # a whole number; 1 or 2 is core's check
-        check_int("n_epochs", n_epochs, 1, 2, "1: single epoch, 2: two-epoch difference")
+    if not (is_number(n_epochs) and n_epochs in (1, 2)):
+        raise InputError(
+            f"n_epochs: expected 1 (single epoch) or 2 (two-epoch difference), got "
+            f"{shorten(n_epochs)}",
+            parameter="n_epochs",
+        )
     names = [anchors] if isinstance(anchors, str) else anchors
     if not isinstance(names, Sequence) or not names:
         raise InputError(f"anchors: expected a list of anchors, got {shorten(anchors, 60)}")
     for a in names:
-        if not (isinstance(a, str) or is_number(a)):
-            raise InputError(
-                "anchors: expected quadrature, conjunction, eclipse, zero-crossing or a number "
-                f"u★ in radians, got {shorten(a, 60)}",
-                parameter="anchors",
-            )
+        check_anchor(a, "anchors")
     return [float(a) for a in alphas], list(names)
 
 
@@ -283,6 +281,10 @@ def _check_k_sigma(targets: list[Target], sigma_v: Any, k_eff: Any) -> None:
     distinct (σ_v, K) a target would use, on which alone its outcome depends, and only where a
     plain float pair is not plainly in range: the first target that fails is still the one
     named."""
+    from ucbplan.inputs import is_number
+
+    if not all(v is None or is_number(v) for v in (sigma_v, k_eff)):
+        resolve_k_sigma(targets[0], sigma_v, k_eff)  # refuses it, naming the parameter
     pairs: dict[tuple[Any, Any], Target] = {}
     for t in targets:
         spec = t.spectroscopy

@@ -225,7 +225,10 @@ def feasibility(
             optical_sigma_pdot,
             as_float(optical_sigma_t0, "s", "optical_sigma_t0"),
         )
-        offset = _optical_offset(optical_epoch, tgt.t_ref) if optical_epoch else 0.0
+        given = optical_epoch is not None and not (
+            isinstance(optical_epoch, str) and not optical_epoch
+        )
+        offset = _optical_offset(optical_epoch, tgt.t_ref) if given else 0.0
         report = _report(tgt, masses, sigma_ref, n_spectra, baseline, optical, offset)
         result = Feasibility(tgt, report, _comparison(tgt, settings) if compare else None)
         if plot is not None:
@@ -248,18 +251,20 @@ def _checked(settings: Any, n_spectra: Any, masses: tuple[Any, ...]) -> float | 
 
     Returns the reference σ_v [km/s]: the σ_v law's at its reference exposure, else sigma_v.
     """
-    from ucbplan.inputs import check_number
+    from ucbplan.inputs import check_number, check_range
 
     m1, m2, m3, a_out = masses
     law = settings.sigma_model
     sigma_v = law.sigma_kms if law is not None else settings.sigma_v_kms
-    check_number("n_spectra", n_spectra, 0, 1e9, "spectra")
+    check_range("n_spectra", n_spectra, 0, 1e9, "spectra", low_open=True)
+    if int(n_spectra) != n_spectra:
+        raise InputError(f"n_spectra: expected a whole number of spectra, got {n_spectra!r}")
     wd = "white dwarfs weigh between ~0.05 M_sun and the Chandrasekhar mass"
     check_number("m1", m1, 0.05, 1.5, "M_sun", wd)
     check_number("m2", m2, 0.05, 1.5, "M_sun", wd)
     check_number("sigma_v", sigma_v, 0.0, 1e4, "km/s")
-    check_number("m3", m3, 0.0, 1e3, "M_sun")
-    check_number("a_out", a_out, 0.0, 1e6, "AU")
+    check_range("m3", m3, 0.0, 1e3, "M_sun", low_open=True)  # required: None refused
+    check_range("a_out", a_out, 0.0, 1e6, "AU", low_open=True)
     return sigma_v
 
 

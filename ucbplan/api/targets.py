@@ -18,7 +18,15 @@ if TYPE_CHECKING:
     from ucbplan.observing.sites import Site
     from ucbplan.target import Target
 
-__all__ = ["TargetLike", "get_site", "load_target", "validate", "write_target"]
+__all__ = [
+    "TargetLike",
+    "get_site",
+    "is_path",
+    "load_as",
+    "load_target",
+    "validate",
+    "write_target",
+]
 
 TargetLike = Any  # a Target, a path, or a target document (dict)
 
@@ -40,6 +48,11 @@ def load_target(target: TargetLike) -> Target:
     TargetFileError
         One line naming the file (or ``<dict>``), the field, what was expected and how to fix it.
     """
+    return load_as(target, "target")
+
+
+def load_as(target: TargetLike, parameter: str) -> Target:
+    """:func:`load_target` of the argument ``parameter`` (named by its errors)."""
     from ucbplan.target import Target
     from ucbplan.target import load_target as _load
     from ucbplan.target.parse import target_from_dict
@@ -48,12 +61,12 @@ def load_target(target: TargetLike) -> Target:
         return target
     if isinstance(target, Mapping):
         return target_from_dict(dict(target))
-    if isinstance(target, str | Path):
+    if is_path(target, parameter):
         return _load(target)
     raise InputError(
-        f"target: expected a target file path, a target document (dict) or a Target, got "
+        f"{parameter}: expected a target file path, a target document (dict) or a Target, got "
         f"{shorten(target, 60)}",
-        parameter="target",
+        parameter=parameter,
     )
 
 
@@ -92,6 +105,18 @@ def write_target(target: TargetLike, path: str | Path, overwrite: bool = False) 
     return out
 
 
+def is_path(value: Any, parameter: str) -> bool:
+    """Whether ``value`` is a path (text or ``Path``); a blank one, or one with a line break or
+    another unprintable character (an error naming it would not be one line), is refused naming
+    ``parameter``."""
+    if not isinstance(value, str | Path):
+        return False
+    text = str(value)
+    if not text.strip() or not text.isprintable():
+        raise InputError(f"{parameter}: expected a file path, got {shorten(text, 60)}", parameter)
+    return True
+
+
 def get_site(site: Any, timezone: str | None = None) -> Site:
     """An observatory from a name of the bundled table, an ``EarthLocation`` or an astroplan
     ``Observer``.
@@ -128,7 +153,7 @@ def get_site(site: Any, timezone: str | None = None) -> Site:
         if timezone is None and _is_observer(site) and str(site.timezone) != "UTC":
             timezone = str(site.timezone)
         return site_from_lonlat(_lonlat_text(location), timezone)
-    if isinstance(site, str):
+    if isinstance(site, str) and site.strip():
         return resolve_site(site, timezone=timezone)
     raise InputError(
         f"site: expected a site name (e.g. 'paranal'), an EarthLocation or an astroplan "

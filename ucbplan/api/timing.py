@@ -224,10 +224,10 @@ def target_identity(
     from ucbplan.timing.document import identity
 
     if like is not None and not isinstance(like, str | Path):
-        from ucbplan.api.targets import load_target
+        from ucbplan.api.targets import load_as
         from ucbplan.target import target_to_dict
 
-        doc = target_to_dict(load_target(like)) if not isinstance(like, Mapping) else like
+        doc = target_to_dict(load_as(like, "like")) if not isinstance(like, Mapping) else like
         out = {
             k: doc[k] for k in ("name", "sky", "masses", "spectroscopy", "magnitudes") if k in doc
         }
@@ -303,7 +303,7 @@ def _first_ephemeris(period: Any, initial: Any, terms: Any, clip: Any) -> Period
     if period is None:
         return None
     p = as_float(period, "s", "period")
-    return period_guess(f"{p!r} s" if isinstance(p, float) else p)
+    return period_guess(f"{p!r} s" if isinstance(p, float) else p, "period")
 
 
 def _guess_of(initial: Any) -> PeriodGuess:
@@ -312,10 +312,10 @@ def _guess_of(initial: Any) -> PeriodGuess:
 
     if isinstance(initial, Mapping):
         return guess_from_document(initial, "<dict>")
-    from ucbplan.api.targets import load_target
+    from ucbplan.api.targets import load_as
     from ucbplan.target import target_to_dict
 
-    t = load_target(initial)
+    t = load_as(initial, "initial")
     return guess_from_document(target_to_dict(t), t.name)
 
 
@@ -323,12 +323,13 @@ def _times(times: Any) -> EclipseTimes:
     """The eclipse times of a file or an astropy ``Table``."""
     from astropy.table import Table
 
+    from ucbplan.api.targets import is_path
     from ucbplan.timing import read_times
     from ucbplan.timing.eclipse_table import read_times_table
 
     if isinstance(times, Table):
         return read_times_table(times)
-    if not isinstance(times, str | Path):
+    if not is_path(times, "times"):
         raise InputError(
             f"times: expected a table file (CSV or ECSV) or an astropy Table, got "
             f"{shorten(times, 60)}",
