@@ -9,6 +9,8 @@ naming the parameter.
 from __future__ import annotations
 
 import math
+import re
+import sys
 from decimal import Decimal
 from pathlib import Path
 from typing import Any
@@ -270,3 +272,12 @@ def test_forecast_functions_take_any_value(parameter: str, value: Any) -> None:
         text = str(exc)
         assert "\n" not in text and len(text) < 600, text
         assert _names_it(text, parameter, value), (parameter, value, text)
+
+
+def test_the_timing_page_the_fit_points_to_exists_and_is_in_the_site() -> None:
+    root = Path(__file__).resolve().parents[1]
+    pages = set(re.findall(r"docs/[\w/.-]+\.md", ucbplan.fit_ephemeris.__doc__ or ""))
+    pages |= set(re.findall(r"docs/[\w/.-]+\.md", sys.modules["ucbplan.api.timing"].__doc__ or ""))
+    assert pages == {"docs/timing.md"}
+    assert (root / "docs" / "timing.md").is_file()
+    assert "timing.md" in (root / "mkdocs.yml").read_text(encoding="utf-8")
