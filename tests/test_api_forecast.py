@@ -22,6 +22,7 @@ from astropy.coordinates import EarthLocation, SkyCoord
 from astropy.table import Table
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from test_api import _ANY as api_values
 
 import ucbplan
 from ucbplan.errors import InputError, OutputExistsError, UcbplanError
@@ -210,17 +211,9 @@ def test_feasibility_returns_a_typed_report() -> None:
 
 # ------------------------------------------------------------------ any value, one line
 
+#: test_api's values (numbers, text, None, booleans, quantities) and what a notebook holds.
 _ANY = st.one_of(
-    st.floats(allow_nan=True, allow_infinity=True),
-    st.integers(-(10**12), 10**12),
-    st.text(max_size=12),
-    st.none(),
-    st.booleans(),
-    st.builds(
-        lambda v, unit: v * unit,
-        st.floats(-1e3, 1e3),
-        st.sampled_from([u.deg, u.m, u.s, u.km / u.s, u.one, u.solMass]),
-    ),
+    api_values,
     st.just(SkyCoord(1, 2, unit="deg")),
     st.just(EarthLocation.from_geodetic([1, 2] * u.deg, [3, 4] * u.deg)),
     st.lists(st.floats(allow_nan=True), max_size=3),
@@ -281,3 +274,19 @@ def test_the_timing_page_the_fit_points_to_exists_and_is_in_the_site() -> None:
     assert pages == {"docs/timing.md"}
     assert (root / "docs" / "timing.md").is_file()
     assert "timing.md" in (root / "mkdocs.yml").read_text(encoding="utf-8")
+
+
+def test_feasibility_refuses_a_visit_no_strategy_fits_before_printing() -> None:
+    """Issue 33: `--visit 5min --overhead 480` printed the 36-line report, then its error."""
+    import subprocess
+
+    args = [HM, "--sigma-v", "30km/s@600s", "--visit", "5min", "--overhead", "480"]
+    proc = subprocess.run(
+        [sys.executable, "-m", "ucbplan", "feasibility", *args],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert proc.returncode == 2 and proc.stdout == ""
+    lines = [ln for ln in proc.stderr.splitlines() if ln.strip()]
+    assert len(lines) == 1 and "no strategy fits a visit" in lines[0], proc.stderr

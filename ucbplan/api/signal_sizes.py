@@ -264,7 +264,8 @@ def _checked(settings: Any, n_spectra: Any, masses: tuple[Any, ...]) -> float | 
     check_number("m2", m2, 0.05, 1.5, "M_sun", wd)
     check_number("sigma_v", sigma_v, 0.0, 1e4, "km/s")
     check_range("m3", m3, 0.0, 1e3, "M_sun", low_open=True)  # required: None refused
-    check_range("a_out", a_out, 0.0, 1e6, "AU", low_open=True)
+    outside = "a tertiary orbits outside the binary (~1e-4 AU)"
+    check_range("a_out", a_out, 1e-6, 1e6, "AU", outside, low_open=True)
     return sigma_v
 
 
@@ -319,9 +320,13 @@ def _report(
 
 
 def _comparison(target: Target, settings: Any) -> Any:
+    """The strategies compared; one that no strategy fits is refused here, before anything is
+    shown (issue 33: the report used to print before the error)."""
     from ucbplan.observing.schedule.compare import compare_target_strategies
 
-    return compare_target_strategies(target, settings)
+    comparison = compare_target_strategies(target, settings)
+    _ = comparison.best  # raises InputError when no strategy fits a visit
+    return comparison
 
 
 def _baseline_s(value: Any) -> float:
