@@ -276,6 +276,7 @@ def test_the_timing_page_the_fit_points_to_exists_and_is_in_the_site() -> None:
     assert "timing.md" in (root / "mkdocs.yml").read_text(encoding="utf-8")
 
 
+@pytest.mark.slow  # a fresh interpreter (~3 s): the command line's own error path
 def test_feasibility_refuses_a_visit_no_strategy_fits_before_printing() -> None:
     """Issue 33: `--visit 5min --overhead 480` printed the 36-line report, then its error."""
     import subprocess
