@@ -291,3 +291,18 @@ def test_feasibility_refuses_a_visit_no_strategy_fits_before_printing() -> None:
     assert proc.returncode == 2 and proc.stdout == ""
     lines = [ln for ln in proc.stderr.splitlines() if ln.strip()]
     assert len(lines) == 1 and "no strategy fits a visit" in lines[0], proc.stderr
+
+
+def test_to_target_copies_from_a_target_or_a_document_alike() -> None:
+    fit = ucbplan.fit_ephemeris(_times(CYCLES))
+    source = ucbplan.load_target(TIMING)
+    from_target = fit.to_target(like=source)
+    from_file = fit.to_target(like=TIMING)
+    assert from_target.name == from_file.name == source.name
+    assert (from_target.ra_deg, from_target.dec_deg) == (from_file.ra_deg, from_file.dec_deg)
+    assert from_target.spectroscopy == from_file.spectroscopy
+    given = fit.to_target(name="Given", ra="08h00m00s", dec="-20d00m00s")
+    assert given.name == "Given" and given.spectroscopy is None
+    with pytest.raises(InputError) as info:
+        fit.to_target(like=SkyCoord(1, 2, unit="deg"))
+    one_line(info.value, "like: ")

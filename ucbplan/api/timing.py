@@ -223,21 +223,14 @@ def target_identity(
     """
     from ucbplan.timing.document import identity
 
-    if like is not None and not isinstance(like, str | Path):
+    if like is None or isinstance(like, str | Path):
+        return identity(Path(like) if like is not None else None, name, ra, dec)
+    if not isinstance(like, Mapping):
         from ucbplan.api.targets import load_as
         from ucbplan.target import target_to_dict
 
-        doc = target_to_dict(load_as(like, "like")) if not isinstance(like, Mapping) else like
-        out = {
-            k: doc[k] for k in ("name", "sky", "masses", "spectroscopy", "magnitudes") if k in doc
-        }
-        return identity(None, name or out.get("name"), ra, dec) | _keep(out, name, ra)
-    return identity(Path(like) if like is not None else None, name, ra, dec)
-
-
-def _keep(doc: Mapping[str, Any], name: str | None, ra: str | None) -> dict[str, Any]:
-    """The fields of a ``like`` document that ``name``/``ra``/``dec`` do not override."""
-    return {k: v for k, v in doc.items() if not (k == "name" and name) and not (k == "sky" and ra)}
+        like = target_to_dict(load_as(like, "like"))
+    return identity(like, name, ra, dec)
 
 
 def fit_ephemeris(
