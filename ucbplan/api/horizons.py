@@ -1,6 +1,6 @@
 """Phase-coherence horizons T_valid (paper Tables 4 and 7): :func:`horizon` and the command's
-:func:`horizon_report`, both over the batched many-target path
-(:func:`ucbplan.core.horizon_batch.horizons`), with their options declared once
+:func:`horizon_report`, one code path for both (several targets in one vectorised pass,
+:func:`ucbplan.core.horizon_batch.horizons`), with their options declared once
 (:data:`HORIZON_FLAGS`)."""
 
 from __future__ import annotations
@@ -110,10 +110,12 @@ def horizon(
     Returns
     -------
     astropy.table.Table
-        One row per target × anchor × α in one vectorised pass, the table of ``ucbplan horizon``
-        for several targets (``target``, ``file``, ``kind``, ``anchor``, ``alpha``,
-        ``sigma_v_kms`` [km/s], ``tolerance_rad`` [rad], ``t_valid_days`` [d], ``dt_u_s`` [s],
-        ``sigma_u_end_rad`` [rad], and for a timing ephemeris ``t_valid_before_days`` …).
+        One row per target × anchor × α, what ``ucbplan horizon --format json`` writes: for
+        several targets the long table computed in one vectorised pass (``target``, ``file``,
+        ``kind``, ``anchor``, ``alpha``, ``sigma_v_kms`` [km/s], ``tolerance_rad`` [rad],
+        ``t_valid_days`` [d], ``dt_u_s`` [s], ``sigma_u_end_rad`` [rad], and for a timing
+        ephemeris ``t_valid_before_days`` …); for one target its rows (``anchor`` … ``n_epochs``,
+        ``target``) with σ_v and K [km/s] in ``meta``.
 
     Raises
     ------
@@ -125,7 +127,15 @@ def horizon(
     Eq. tol_quad and Eq. tol_conj for the tolerances; T_valid is the first root of
     σ_u(τ) = α·δu_tol (docs/method.md).
     """
-    return horizon_report(targets, sigma_v, k_eff, alpha, n_epochs, anchors, batch=True).table
+    got = horizon_report(targets, sigma_v, k_eff, alpha, n_epochs, anchors)
+    if not got.rows:
+        return got.table
+    from astropy.table import Table
+
+    name = got.targets[0].name
+    tab = Table(rows=[r.as_dict() | {"target": name} for r in got.rows])
+    tab.meta.update(got.table.meta)
+    return tab
 
 
 @dataclass(frozen=True, slots=True)
@@ -153,12 +163,11 @@ def horizon_report(
     anchors: Sequence[str] = ("conjunction", "quadrature"),
     plot: str | Path | None = None,
     overwrite: bool = False,
-    batch: bool = False,
 ) -> HorizonReport:
     """:func:`horizon` and what the command shows with it (parameters as there).
 
-    One target (unless ``batch``) gives its rows as well, and ``plot`` draws its σ_u(t) figure
-    there (refused before any work when it exists and not ``overwrite``).
+    One target gives its rows as well, and ``plot`` draws its σ_u(t) figure there (refused
+    before any work when it exists and not ``overwrite``).
 
     Raises
     ------
@@ -172,7 +181,7 @@ def horizon_report(
 
             check_figure_path(Path(plot), overwrite)
         loaded = _load_all(targets)
-        if len(loaded) > 1 or batch:
+        if len(loaded) > 1:
             if plot is not None:
                 raise InputError("plot: takes one target; give a single target file", "plot")
             return _many(loaded, sigma_v, k_eff, alphas, n_epochs, anchors)
