@@ -344,7 +344,8 @@ def test_cli_feasibility_rejects_mixed_optical_styles() -> None:
 def test_cli_feasibility_bad_baseline() -> None:
     res = CliRunner().invoke(_app(), ["feasibility", str(HM_CNC), "--baseline", "soon"])
     assert isinstance(res.exception, UcbplanError)
-    assert "--baseline: got 'soon'" in str(res.exception)
+    # the library names its parameter; the command line prints it as --baseline (cli/_flags.py)
+    assert str(res.exception).startswith("baseline: got 'soon'")
 
 
 def test_cli_optical_epoch_shifts_the_optical_baseline(tmp_path: Path) -> None:
@@ -363,7 +364,8 @@ def test_cli_optical_epoch_shifts_the_optical_baseline(tmp_path: Path) -> None:
     assert doc["timing_years"][0] == 0.0
     assert doc["optical_timing_s"][0] == pytest.approx(1.79, abs=0.005)
     res = CliRunner().invoke(_app(), [*args[:-1], "someday", "--overwrite"])
-    assert isinstance(res.exception, UcbplanError) and "--optical-epoch" in str(res.exception)
+    assert isinstance(res.exception, UcbplanError)
+    assert str(res.exception).startswith("optical_epoch: ")
 
 
 @pytest.mark.parametrize("style", ["frequency", "period"])

@@ -44,6 +44,12 @@ _PUBLIC = {
     "fit_ephemeris": "ucbplan.api",
     "simulate": "ucbplan.api",
     "population_forecast": "ucbplan.api",
+    # b1
+    "write_target": "ucbplan.api",
+    "validate": "ucbplan.api",
+    "compare_ephemerides": "ucbplan.api",
+    "feasibility": "ucbplan.api",
+    "TimingFit": "ucbplan.api",
     "Constraint": "ucbplan.observing.constraints",
     "AirmassConstraint": "ucbplan.observing.constraints",
     "AltitudeConstraint": "ucbplan.observing.constraints",
@@ -110,6 +116,12 @@ if TYPE_CHECKING:  # the same names for type checkers and IDEs ("as": re-exporte
     from ucbplan.api import (
         StrategyRecord as StrategyRecord,
     )
+    from ucbplan.api import (  # b1
+        TimingFit as TimingFit,
+    )
+    from ucbplan.api import (
+        compare_ephemerides as compare_ephemerides,
+    )
     from ucbplan.api import (
         default_constraints as default_constraints,
     )
@@ -118,6 +130,9 @@ if TYPE_CHECKING:  # the same names for type checkers and IDEs ("as": re-exporte
     )
     from ucbplan.api import (
         export as export,
+    )
+    from ucbplan.api import (
+        feasibility as feasibility,
     )
     from ucbplan.api import (
         fit_ephemeris as fit_ephemeris,
@@ -145,6 +160,12 @@ if TYPE_CHECKING:  # the same names for type checkers and IDEs ("as": re-exporte
     )
     from ucbplan.api import (
         simulate as simulate,
+    )
+    from ucbplan.api import (
+        validate as validate,
+    )
+    from ucbplan.api import (
+        write_target as write_target,
     )
     from ucbplan.errors import (
         EarthOrientationWarning as EarthOrientationWarning,

@@ -58,6 +58,8 @@ def shorten(value: object, limit: int = MAX_VALUE_CHARS) -> str:
     if type(value).__module__ == "numpy" and getattr(value, "ndim", None) == 0:
         value = value.item()  # type: ignore[attr-defined]
     text = repr(value)
+    if "\n" in text:  # a SkyCoord's repr spans lines; an error message has one
+        text = " ".join(text.split())
     if len(text) <= limit:
         return text
     return f"{text[: limit - 1]}… ({len(text)} characters)"

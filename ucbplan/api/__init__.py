@@ -8,13 +8,16 @@ name the parameter at fault, and emits what the user must act on as :class:`ucbp
 UcbplanWarning` (filterable) besides returning it. The command line is a shell over these.
 """
 
-from ucbplan.api.ephemeris import ephemeris, fit_ephemeris, get_site, horizon, load_target
-
 # a1 (issue 30): a saved plan read back and exported
+from ucbplan.api.ephemeris import compare_ephemerides, ephemeris
 from ucbplan.api.exporting import Export, countdown, export, read_blocks
+from ucbplan.api.horizons import horizon
 from ucbplan.api.plan_result import GoalRecord, StrategyRecord
 from ucbplan.api.planning import Plan, default_constraints, plan
 from ucbplan.api.reduction import Report, population_forecast, reduce, simulate
+from ucbplan.api.signal_sizes import feasibility
+from ucbplan.api.targets import get_site, load_target, validate, write_target
+from ucbplan.api.timing import TimingFit, fit_ephemeris
 
 __all__ = [
     "Export",
@@ -22,10 +25,13 @@ __all__ = [
     "Plan",
     "Report",
     "StrategyRecord",
+    "TimingFit",
+    "compare_ephemerides",
     "countdown",
     "default_constraints",
     "ephemeris",
     "export",
+    "feasibility",
     "fit_ephemeris",
     "get_site",
     "horizon",
@@ -35,4 +41,6 @@ __all__ = [
     "read_blocks",
     "reduce",
     "simulate",
+    "validate",
+    "write_target",
 ]

@@ -1,117 +1,60 @@
-"""Targets, sites, epochs, horizons and timing fits: the forecast half of the public API."""
+"""Epochs t★ of a target (``ucbplan ephemeris predict``) and two ephemerides compared
+(``ucbplan ephemeris compare``), with their options declared once (:data:`EPHEMERIS_FLAGS`,
+:data:`COMPARE_FLAGS`)."""
 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
-from pathlib import Path
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from ucbplan._version import __version__
-from ucbplan.api._convert import as_float, as_tdb, scope
-from ucbplan.errors import InputError, PlanWarning, UcbplanError, emit, shorten
+from ucbplan.api._convert import as_tdb, scope
+from ucbplan.api.options import Flag
+from ucbplan.api.targets import TargetLike, get_site, load_target
+from ucbplan.errors import InputError, PlanWarning, emit, shorten
 
 if TYPE_CHECKING:
     from astropy.table import Table
 
     from ucbplan.core.ephemeris import EpochSet
-    from ucbplan.observing.sites import Site
     from ucbplan.target import Target
-    from ucbplan.timing import EphemerisFit
 
 __all__ = [
+    "COMPARE_FLAGS",
+    "EPHEMERIS_FLAGS",
+    # where the planning and reduction modules import them from (defined in api/targets.py)
+    "TargetLike",
+    "check_anchor",
+    "compare_ephemerides",
     "ephemeris",
     "epoch_table",
     "epoch_window",
-    "fit_ephemeris",
     "get_site",
-    "horizon",
     "horizon_warnings",
     "load_target",
-    "resolve_k_sigma",
 ]
 
-TargetLike = Any  # a Target, a path, or a target document (dict)
-
-
-def load_target(target: TargetLike) -> Target:
-    """A target from a YAML file, a parsed target document (``dict``) or a ``Target``.
-
-    Parameters
-    ----------
-    target : str, Path, dict or Target
-        Path of a target YAML file, the same document as a mapping, or a loaded target.
-
-    Returns
-    -------
-    Target
-
-    Raises
-    ------
-    TargetFileError
-        One line naming the file (or ``<dict>``), the field, what was expected and how to fix it.
-    """
-    from ucbplan.target import Target
-    from ucbplan.target import load_target as _load
-    from ucbplan.target.parse import target_from_dict
-
-    if isinstance(target, Target):
-        return target
-    if isinstance(target, Mapping):
-        return target_from_dict(dict(target))
-    if isinstance(target, str | Path):
-        return _load(target)
-    raise InputError(
-        f"target: expected a target file path, a target document (dict) or a Target, got "
-        f"{shorten(target, 60)}",
-        parameter="target",
-    )
-
-
-def get_site(site: Any, timezone: str | None = None) -> Site:
-    """An observatory from a name of the bundled table, an ``EarthLocation`` or an astroplan
-    ``Observer``.
-
-    Parameters
-    ----------
-    site : str, Site, astropy.coordinates.EarthLocation or astroplan.Observer
-        ``"paranal"``, ``"La Palma"`` …, a location (its IANA zone is looked up offline), or an
-        observer (its location; its time zone unless that is UTC).
-    timezone : str, optional
-        IANA time zone replacing the site's (e.g. ``America/Santiago``).
-
-    Returns
-    -------
-    Site
-
-    Raises
-    ------
-    SiteError
-        Unknown name (with the closest known ones), or coordinates out of range.
-    """
-    from ucbplan.observing.sites import Site, resolve_site, site_from_lonlat
-
-    if isinstance(site, Site):
-        return resolve_site(site.name, timezone=timezone) if timezone else site
-    location = getattr(site, "location", None) if _is_observer(site) else site
-    if hasattr(location, "geodetic"):
-        if timezone is None and _is_observer(site) and str(site.timezone) != "UTC":
-            timezone = str(site.timezone)
-        geo = location.geodetic  # type: ignore[union-attr]
-        numbers = (geo.lon.deg, geo.lat.deg, geo.height.to_value("m"))
-        text = ",".join(repr(float(v)) for v in numbers)
-        return site_from_lonlat(text, timezone)
-    if isinstance(site, str):
-        return resolve_site(site, timezone=timezone)
-    raise InputError(
-        f"site: expected a site name (e.g. 'paranal'), an EarthLocation or an astroplan "
-        f"Observer, got {shorten(site, 60)}",
-        parameter="site",
-    )
-
-
-def _is_observer(obj: Any) -> bool:
-    return type(obj).__name__ == "Observer" and type(obj).__module__.startswith("astroplan")
+#: The options of :func:`ephemeris` as ``ucbplan ephemeris predict`` spells them.
+EPHEMERIS_FLAGS: dict[str, Flag] = {
+    "start": Flag(("--start",), "Window start, ISO, TDB at the barycentre."),
+    "end": Flag(("--end",), "Window end, ISO, TDB at the barycentre."),
+    "anchor": Flag(
+        ("--anchor",),
+        "quadrature | conjunction | eclipse (primary and secondary) | zero-crossing | U_RAD",
+    ),
+    "star": Flag(("--star",), "Component whose argument of latitude (1 or 2)."),
+    "max_epochs": Flag(("--max-epochs",), "Refuse windows with more epochs than this."),
+}
+#: The options of :func:`compare_ephemerides` as ``ucbplan ephemeris compare`` spells them.
+COMPARE_FLAGS: dict[str, Flag] = {
+    "a": Flag((), "Target YAML file A (e.g. a LISA posterior)."),
+    "b": Flag((), "Target YAML file B (e.g. a timing ephemeris)."),
+    "at": Flag(
+        ("--at",),
+        'Epoch, "BJD_TDB …" or ISO TDB (default: midway between the two reference epochs).',
+    ),
+}
 
 
 def epoch_window(
@@ -209,18 +152,67 @@ def ephemeris(
     PlanWarning
         Epochs past T_valid(quadrature, α = 1) (also printed by the command line).
     """
-    from ucbplan.core.ephemeris import find_epochs
+    found = predict(target, start, end, anchor, star, max_epochs)
+    emit(list(found.warnings), PlanWarning)
+    return found.table
 
-    if star not in (1, 2) or isinstance(star, bool):
+
+@dataclass(frozen=True, slots=True)
+class EpochPrediction:
+    """What ``ucbplan ephemeris predict`` shows: the target, its epoch table and the warning
+    lines for epochs past the phase-coherence horizon."""
+
+    target: Target
+    table: Table
+    warnings: tuple[str, ...] = ()
+
+    def __repr__(self) -> str:
+        return f"<EpochPrediction: {self.target.name}, {len(self.table)} epochs>"
+
+
+def predict(
+    target: TargetLike,
+    start: Any,
+    end: Any,
+    anchor: str = "quadrature",
+    star: int = 1,
+    max_epochs: int = 2_000_000,
+) -> EpochPrediction:
+    """:func:`ephemeris` with its warnings returned, not emitted (parameters as there)."""
+    from ucbplan.core.ephemeris import find_epochs
+    from ucbplan.inputs import check_int, is_number
+
+    if not (is_number(star) and star in (1, 2)):
         raise InputError(f"star: expected 1 or 2, got {shorten(star)}", parameter="star")
+    check_int("max_epochs", max_epochs, 1, 10**12, "epochs a window may hold")
+    check_anchor(anchor, "anchor")
     with scope():
         t = load_target(target)
-        tau0, tau1 = epoch_window(t, start, end, anchor, max_epochs)
-        es = find_epochs(t, tau0, tau1, anchor, star)
+        tau0, tau1 = epoch_window(t, start, end, anchor, int(max_epochs))
+        es = find_epochs(t, tau0, tau1, anchor, int(star))
         lines = horizon_warnings(t, tau0, tau1)
         table = epoch_table(t, es)
-    emit(lines, PlanWarning)
-    return table
+    return EpochPrediction(t, table, tuple(lines))
+
+
+def check_anchor(anchor: Any, parameter: str) -> None:
+    """An anchor is a name or a finite number u★ [rad] (a name's spelling is checked where
+    used).
+
+    Raises
+    ------
+    InputError
+        Anything else (one line naming ``parameter``).
+    """
+    from ucbplan.inputs import is_number
+
+    if isinstance(anchor, str) or (is_number(anchor) and math.isfinite(anchor)):
+        return
+    raise InputError(
+        f"{parameter}: expected quadrature, conjunction, eclipse, zero-crossing or a finite "
+        f"number u★ in radians, got {shorten(anchor, 60)}",
+        parameter=parameter,
+    )
 
 
 def epoch_table(t: Target, es: EpochSet) -> Table:
@@ -314,148 +306,128 @@ def _iso_us(t: Any) -> list[str]:
     return [str(x) for x in np.atleast_1d(tdb.isot)]
 
 
-def resolve_k_sigma(t: Target, sigma_v: Any = None, k_eff: Any = None) -> tuple[float, float]:
-    """σ_v and K_eff [km/s]: the arguments, else the target file's spectroscopy section.
+def parse_epoch(text: Any, parameter: str) -> Any:
+    """An epoch as an astropy ``Time`` (TDB): a ``Time``, or text as the command line takes it.
+
+    ``"BJD_TDB …"``/``"BMJD_TDB …"`` keep full precision (two-part JD; HJD and UTC-based words
+    are refused with how to convert); anything else is ISO/MJD/JD TDB, or UTC when labelled so
+    (:func:`ucbplan.core.epochs.parse_tdb`).
 
     Raises
     ------
     InputError
-        Neither given nor in the file, out of range, or σ_v ≥ K (naming the parameter).
+        Text that is not an epoch (naming ``parameter``).
     """
-    from ucbplan.inputs import check_number
+    from astropy.time import Time
 
-    spec = t.spectroscopy
-    sv = as_float(sigma_v, "km/s", "sigma_v")
-    k = as_float(k_eff, "km/s", "k_eff")
-    sv = sv if sv is not None else (spec.sigma_v_kms if spec else None)
-    k = k if k is not None else (spec.k_for_tolerance if spec else None)
-    if sv is None:
-        raise InputError(
-            f"sigma_v: {t.name} has no RV precision; pass sigma_v (km/s) or add "
-            "spectroscopy.sigma_v to the target file",
-            parameter="sigma_v",
-        )
-    if k is None:
-        raise InputError(
-            f"k_eff: {t.name} has no semi-amplitude; pass k_eff (km/s) or add "
-            "spectroscopy.K1/K2 (or K_eff) to the target file",
-            parameter="k_eff",
-        )
-    check_number("sigma_v", sv, 0.0, 1e4, "km/s")
-    check_number("k_eff", k, 0.1, 1e4, "km/s", "a binary's velocity semi-amplitude")
-    if sv >= k:
-        raise InputError(
-            f"sigma_v ({sv:g} km/s) must be smaller than k_eff ({k:g} km/s): with "
-            "σ_v ≥ K no phase tolerance exists",
-            parameter="sigma_v",
-        )
-    return float(sv), float(k)
+    from ucbplan.core.timing_epochs import TIMING_EPOCH_WORDS, parse_timing_epoch
+
+    if isinstance(text, Time) or not isinstance(text, str):
+        return as_tdb(text, parameter)
+    word = text.strip().split(" ", 1)[0].upper().replace("-", "_")
+    if word in TIMING_EPOCH_WORDS or word.startswith(("BJD", "BMJD", "HJD", "HMJD")):
+        try:
+            return parse_timing_epoch(text)
+        except ValueError as exc:
+            raise InputError(f"{parameter}: {exc}", parameter) from None
+    return as_tdb(text, parameter)
 
 
-def horizon(
-    targets: TargetLike | Sequence[TargetLike],
-    sigma_v: Any = None,
-    k_eff: Any = None,
-    alpha: Sequence[float] | float = (0.5, 1.0),
-    n_epochs: int = 2,
-    anchors: Sequence[str] = ("conjunction", "quadrature"),
-) -> Table:
-    """Phase-coherence horizons T_valid (paper Tables 4 and 7) and σ_u at the end of LISA.
+@dataclass(frozen=True, slots=True)
+class EphemerisComparison:
+    """Two ephemerides of one system compared at an epoch (``ucbplan ephemeris compare``).
+
+    ``doc`` is the JSON document the command writes (offsets in rad and s, significance, cycle
+    counts, π-mode alternatives, the convention); ``warnings`` says when the two look like
+    different binaries.
+    """
+
+    a: Target
+    b: Target
+    doc: dict[str, Any]
+    warnings: tuple[str, ...] = ()
+
+    def __repr__(self) -> str:
+        d = self.doc
+        return (
+            f"<EphemerisComparison: {self.a.name} − {self.b.name} at {d['epoch_tdb']} TDB: "
+            f"{d['time_offset_s']:.4g} ± {d['sigma_time_offset_s']:.3g} s>"
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON document (a copy)."""
+        return dict(self.doc)
+
+
+def compare_ephemerides(a: TargetLike, b: TargetLike, at: Any = None) -> EphemerisComparison:
+    """Phase and time offset of two ephemerides of one system (A − B, star 1) at an epoch.
 
     Parameters
     ----------
-    targets : target or list of targets
-        Each a path, a target document or a ``Target`` (see :func:`load_target`).
-    sigma_v, k_eff : float or Quantity, optional
-        RV precision σ_v and semi-amplitude K_eff [km/s]; None takes each target file's.
-    alpha : float or sequence of float
-        Planning margins α of T_valid.
-    n_epochs : int
-        Number of epochs the tolerance is shared between.
-    anchors : sequence of str
-        Anchors (``conjunction``, ``quadrature`` …).
+    a, b : str, Path, dict or Target
+        The two ephemerides (see :func:`load_target`), e.g. a LISA posterior and a timing one.
+    at : str or astropy.time.Time, optional
+        The epoch (``"BJD_TDB …"``, ISO TDB or a ``Time``); default midway between the two
+        reference epochs.
 
     Returns
     -------
-    astropy.table.Table
-        One row per target × anchor × α, the columns of ``ucbplan horizon --format json``
-        (``anchor``, ``alpha``, ``tolerance_rad`` [rad], ``t_valid_days`` [d], ``dt_u_s`` [s],
-        ``sigma_u_end_rad`` [rad] …, and ``target``).
-
-    Raises
-    ------
-    InputError
-        A bad α, σ_v or K (naming the parameter); TargetFileError for a target.
-
-    Notes
-    -----
-    Eq. tol_quad and Eq. tol_conj for the tolerances; T_valid is the first root of
-    σ_u(τ) = α·δu_tol (docs/method.md).
+    EphemerisComparison
+        With σ from both covariances, the significance, and the cycles from A's reference epoch
+        to B's as each counts them (a whole-cycle disagreement the wrapped offset hides).
     """
-    from astropy.table import Table
+    from ucbplan.core.timing import compare_sources
 
-    from ucbplan.core.forecast import horizon_table
-    from ucbplan.inputs import check_alpha, check_int
-
-    alphas = [alpha] if isinstance(alpha, int | float) else list(alpha)
-    for a in alphas:
-        check_alpha(a)
-    check_int("n_epochs", n_epochs, 1, 10**6, "epochs sharing the tolerance")
-    many = isinstance(targets, Sequence) and not isinstance(targets, str)
-    items = list(targets) if many else [targets]
-    rows: list[dict[str, Any]] = []
     with scope():
-        for item in items:
-            t = load_target(item)
-            sv, k = resolve_k_sigma(t, sigma_v, k_eff)
-            got = horizon_table(t, sv, k, alphas=alphas, anchors=list(anchors), n_epochs=n_epochs)
-            rows.extend(r.as_dict() | {"target": t.name} for r in got)
-    if not rows:
-        raise UcbplanError("targets: expected at least one target")
-    return Table(rows=rows)
+        ta, tb = load_target(a), load_target(b)
+        epoch = parse_epoch(at, "at") if at is not None else None
+        lines = _different_systems(ta, tb)
+        report = compare_sources(ta, tb, epoch)
+        doc = _comparison_doc(ta, tb, report)
+    return EphemerisComparison(ta, tb, doc, lines)
 
 
-def fit_ephemeris(
-    times: Any,
-    period: Any = None,
-    initial: TargetLike | None = None,
-    terms: int = 3,
-    clip: float | None = None,
-) -> EphemerisFit:
-    """Fit T0, P, Ṗ (and P̈ with ``terms=4``) to eclipse times (``ucbplan ephemeris fit``).
+def _different_systems(ta: Target, tb: Target) -> tuple[str, ...]:
+    """A warning when the two files look like different binaries (sky position, period)."""
+    sep = float(ta.coord.separation(tb.coord).arcsec)
+    dp = abs(ta.period_s - tb.period_s) / ta.period_s
+    if sep <= 5.0 and dp <= 1e-3:
+        return ()
+    return (
+        f"{ta.name} and {tb.name} are {sep:.1f}″ apart and their periods differ by "
+        f"{100 * dp:.3g} %: compare two ephemerides of one system",
+    )
 
-    Parameters
-    ----------
-    times : str or Path
-        Eclipse-time table (see docs/timing.md).
-    period : str, float or Quantity, optional
-        First period guess (``"0.0595 d"``, seconds, or a time Quantity) to count cycles.
-    initial : str or Path, optional
-        An earlier ephemeris (a target file) to count cycles from.
-    terms : int
-        2 (T0, P), 3 (+Ṗ) or 4 (+P̈).
-    clip : float, optional
-        Outlier threshold [σ].
 
-    Returns
-    -------
-    EphemerisFit
-        The fitted parameters, their covariance and ``notes`` (what the fit decided).
+def _comparison_doc(ta: Target, tb: Target, report: Any) -> dict[str, Any]:
+    """JSON-ready comparison: the two files, the epoch, the offset (and π-mode alternatives)."""
+    from ucbplan.core.timing_epochs import format_bjd_tdb
 
-    Raises
-    ------
-    InputError
-        Bad table, ambiguous cycle count, too few times (one line each).
-    """
-    from ucbplan.timing import fit_times, period_guess, read_initial, read_times
+    def side(t: Target) -> dict[str, Any]:
+        return {
+            "name": t.name,
+            "file": str(t.source) if t.source else "",
+            "kind": t.kind,
+            "t_ref_tdb": t.t_ref.tdb.isot,
+        }
 
-    if terms not in (2, 3, 4) or isinstance(terms, bool):
-        raise InputError(f"terms: expected 2, 3 or 4, got {shorten(terms)}", parameter="terms")
-    if period is not None and initial is not None:
-        raise InputError("period, initial: give one first ephemeris, not both", "period")
-    with scope():
-        guess = read_initial(initial) if initial is not None else None
-        if period is not None:
-            p = as_float(period, "s", "period")
-            guess = period_guess(f"{p!r} s" if isinstance(p, float) else str(p))
-        return fit_times(read_times(times), guess, terms, clip)
+    r = report.result
+    return {
+        "a": side(ta),
+        "b": side(tb),
+        "epoch_tdb": report.epoch.tdb.isot,
+        "epoch_bjd_tdb": format_bjd_tdb(report.epoch).split()[1],
+        **r.offsets(),
+        "cycles_a": r.cycles_a,
+        "cycles_b": r.cycles_b,
+        "cycle_count_difference": r.cycle_difference,
+        "sigma_cycle_count_difference": r.sigma_cycle_difference,
+        "whole_cycle_difference": round(r.cycle_difference),
+        "pi_mode": [{"side": s, **c.offsets()} for s, c in report.alternatives],
+        "convention": (
+            "A - B for star 1: phase offset u1_A - u1_B at the epoch wrapped to (-pi, pi]; time "
+            "offset t_A - t_B of the same orbital phase (negative: A predicts it earlier); "
+            "cycles_a/cycles_b: orbits from A's reference epoch to B's as counted by A and by B; "
+            "pi_mode: the same with that side's phi_ref + pi (LISA posteriors)"
+        ),
+    }

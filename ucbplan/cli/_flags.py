@@ -49,6 +49,25 @@ FLAGS = {
     "end": "--end",
     "star": "--star",
     "seed": "--seed",
+    # b1: validate, horizon, ephemeris predict/compare/fit, feasibility
+    "at": "--at",
+    "terms": "--terms",
+    "clip": "--clip",
+    "period": "--period",
+    "initial": "--initial",
+    "plot": "--plot",
+    "anchors": "--anchor",
+    "m1": "--m1",
+    "m2": "--m2",
+    "m3": "--m3",
+    "a_out": "--a-out",
+    "n_spectra": "--n-spectra",
+    "baseline": "--baseline",
+    "optical_epoch": "--optical-epoch",
+    "readout": "--readout",
+    "overhead": "--overhead",
+    "sigma_floor": "--sigma-floor",
+    "extinction": "--extinction",
 }
 
 # a1 (issue 30): ``ucbplan.plan``'s keywords, from the flag table declared beside it

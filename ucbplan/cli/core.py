@@ -1,21 +1,23 @@
-"""Core commands: ``validate`` and ``horizon`` (thin shells over the library).
+"""Core commands: ``validate`` and ``horizon`` (thin shells over the public API).
 
-Each command parses its options, calls :mod:`ucbplan.core` (:func:`~ucbplan.core.forecast.
-horizon_table`, the validate summary numbers) and prints or writes the result. The option types
-are module-level aliases so each command reads as its parameter list; :mod:`ucbplan.cli.ephemeris`
-shares them.
+Each command parses its options, calls one function of :mod:`ucbplan.api`
+(:func:`~ucbplan.api.targets.validate`, :func:`~ucbplan.api.horizons.horizon_report`) and prints
+or writes the result. Options that are parameters of the API take their flag, help and default
+from it (:data:`ucbplan.api.horizons.HORIZON_FLAGS`); :mod:`ucbplan.cli.ephemeris` adds the
+``ephemeris`` group.
 """
 
 from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import Annotated, Any
 
 import typer
 import typer.core
 from rich.markup import escape
 
+from ucbplan.api.horizons import HORIZON_FLAGS, horizon_report
 from ucbplan.cli._console import (
     TABLE_FORMATS,
     check_output_path,
@@ -26,39 +28,21 @@ from ucbplan.cli._console import (
     write_output,
     write_table_output,
 )
+from ucbplan.cli._derive import option
 from ucbplan.cli._options import (
-    AlphaOpt,
-    AnchorsOpt,
-    EpochsOpt,
-    KEffOpt,
     OutputOpt,
     OverwriteAllOpt,
     PlotOpt,
-    SigmaVOpt,
     TableFormatOpt,
     TargetsArg,
     ValidateFormatOpt,
 )
 from ucbplan.cli.ephemeris import register as register_ephemeris
-from ucbplan.errors import UcbplanError
 
-if TYPE_CHECKING:
-    from ucbplan.target import Target
-
-# numpy, ucbplan.target (astropy) and ucbplan.inputs (yaml) are imported inside the commands:
-# `ucbplan --help` must not pay for them (benchmarks/startup.py).
+# numpy and astropy are imported by the API inside the commands: `ucbplan --help` must not pay
+# for them (benchmarks/startup.py).
 
 __all__ = ["horizon", "register", "validate"]
-
-
-def _resolve_k_sigma(
-    target: Target, sigma_v: float | None, k_eff: float | None
-) -> tuple[float, float]:
-    """σ_v and K from the options, else the target file (:func:`ucbplan.api.ephemeris.
-    resolve_k_sigma`; its errors name sigma_v / k_eff, printed as --sigma-v / --k-eff)."""
-    from ucbplan.api.ephemeris import resolve_k_sigma
-
-    return resolve_k_sigma(target, sigma_v, k_eff)
 
 
 def validate(targets: TargetsArg, fmt: ValidateFormatOpt = "table") -> None:
@@ -66,10 +50,10 @@ def validate(targets: TargetsArg, fmt: ValidateFormatOpt = "table") -> None:
 
     For a timing ephemeris: T0, P, Ṗ with their σ, and σ_u one year before and after T0.
     """
-    from ucbplan.target import load_target
+    from ucbplan.api.targets import validate as summaries_of
 
     fmt = pick_format(None, fmt, ("table", "json"))
-    summaries = [_summary(load_target(path)) for path in targets]
+    summaries = summaries_of(targets)
     if fmt == "json":
         write_output(None, lambda h: dump_json(summaries, h))
         return
@@ -131,86 +115,6 @@ def _fmt(v: Any) -> str:
     return str(v)
 
 
-def _summary(t: Target) -> dict[str, Any]:
-    """The validate row of one target: times as TDB ISO strings, the rest SI floats."""
-    from astropy.time import TimeDelta
-
-    if t.kind == "timing":
-        return _timing_summary(t)
-    from ucbplan.core.forecast import sigma_u_end
-    from ucbplan.core.phase import ascending_node_s, sigma_ascending_node_s
-
-    p = t.params
-    t_asc = t.t_ref + TimeDelta(ascending_node_s(p), format="sec")
-    sigmas = {n: float(math.sqrt(t.cov_matrix[i, i])) for i, n in enumerate(t.cov_names)}
-    if t.samples_covariance is not None and t.covariance_source.startswith("samples"):
-        sigmas |= _samples_sigmas(t.covariance)
-    return {
-        "name": t.name,
-        "file": str(t.source.name) if t.source else "",
-        "t_ref_tdb": t.t_ref.tdb.isot,
-        "t_end_tdb": t.t_end.tdb.isot,
-        "period_s": p.period_s,
-        "period_asc_s": 2 / p.f_gw,
-        "eccentricity": p.eccentricity,
-        "omega_deg": math.degrees(p.omega_rad),
-        "omega_dot_rad_s": p.omega_dot,
-        "t_asc_tdb": t_asc.tdb.isot,
-        "sigma_t_asc_s": sigma_ascending_node_s(p, t.covariance),
-        "sigma_u_end_mrad": 1e3 * sigma_u_end(t, "quadrature"),
-        "sigmas": sigmas,
-        "covariance_from": t.covariance_source,
-    }
-
-
-def _samples_sigmas(cov: Any) -> dict[str, float]:
-    """σ of each sampled phase-model parameter from the samples' covariance (SI)."""
-    from ucbplan.core.params import PARAM_NAMES
-
-    return {n: float(math.sqrt(cov[k, k])) for k, n in enumerate(PARAM_NAMES) if cov[k, k] > 0}
-
-
-def _timing_summary(t: Target) -> dict[str, Any]:
-    """The validate row of a timing ephemeris: T0, P, Ṗ (P̈) with σ, σ_u at ±1 yr."""
-    import numpy as np
-
-    from ucbplan.core.constants import YEAR_S
-    from ucbplan.core.forecast import anchor_sigma_u
-    from ucbplan.core.timing_epochs import format_bjd_tdb
-
-    assert t.timing is not None  # kind == "timing" guarantees the section
-    sec, e, p = t.timing, t.timing.ephemeris, t.params
-    tau = np.array([-YEAR_S, YEAR_S])
-    sig = np.maximum(
-        anchor_sigma_u(p, t.covariance, tau, 0.0), anchor_sigma_u(p, t.covariance, tau, math.pi)
-    )
-    rate = math.pi * (p.f_gw + p.fdot * tau + p.fddot * tau**2 / 2)
-    sig_t = sig / np.abs(rate)
-    return {
-        "name": t.name,
-        "file": str(t.source.name) if t.source else "",
-        "kind": "timing",
-        "t0_tdb": t.t_ref.tdb.isot,
-        "t0_bjd_tdb": format_bjd_tdb(t.t_ref).split()[1],
-        "sigma_t0_s": sec.sigma("t0"),
-        "t0_marks": e.mark,
-        "period_s": e.period_s,
-        "sigma_period_s": sec.sigma("period"),
-        "pdot": e.pdot,
-        "sigma_pdot": sec.sigma("pdot"),
-        "pddot_per_s": e.pddot,
-        "sigma_pddot_per_s": sec.sigma("pddot"),
-        "eccentricity": p.eccentricity,
-        "omega_deg": math.degrees(p.omega_rad),
-        "omega_dot_rad_s": p.omega_dot,
-        "sigma_u_before_1yr_mrad": 1e3 * float(sig[0]),
-        "sigma_u_after_1yr_mrad": 1e3 * float(sig[1]),
-        "sigma_t_before_1yr_s": float(sig_t[0]),
-        "sigma_t_after_1yr_s": float(sig_t[1]),
-        "source": sec.source,
-    }
-
-
 #: Plain text, turned into paths by the command: typer's Path type costs ~0.1 ms per value (a
 #: validator built per argument), as much as the whole horizon of a target.
 HorizonTargetsArg = Annotated[
@@ -224,31 +128,13 @@ HorizonTargetsArg = Annotated[
 ]
 
 
-def _expand_targets(names: list[str]) -> list[Path | str]:
-    """Files as given (text: the reader makes the path, ~2 µs each); a directory contributes its
-    *.yaml and *.yml files, sorted."""
-    import os
-
-    out: list[Path | str] = []
-    for name in names:
-        if os.path.isdir(name or "."):  # Path("") is ".", as before
-            path = Path(name)
-            found = sorted([*path.glob("*.yaml"), *path.glob("*.yml")])
-            if not found:
-                raise UcbplanError(f"{path}: no *.yaml target files in this directory")
-            out.extend(found)
-        else:
-            out.append(name)
-    return out
-
-
 def horizon(
     target: HorizonTargetsArg,
-    sigma_v: SigmaVOpt = None,
-    k_eff: KEffOpt = None,
-    alpha: AlphaOpt = [0.5, 1.0],  # noqa: B006 (typer reads the default, never mutates it)
-    epochs: EpochsOpt = 2,
-    anchor: AnchorsOpt = ["conjunction", "quadrature"],  # noqa: B006
+    sigma_v: float | None = option(horizon_report, HORIZON_FLAGS, "sigma_v"),
+    k_eff: float | None = option(horizon_report, HORIZON_FLAGS, "k_eff"),
+    alpha: list[float] = option(horizon_report, HORIZON_FLAGS, "alpha"),
+    epochs: int = option(horizon_report, HORIZON_FLAGS, "n_epochs"),
+    anchor: list[str] = option(horizon_report, HORIZON_FLAGS, "anchors"),
     fmt: TableFormatOpt = None,
     output: OutputOpt = None,
     plot: PlotOpt = None,
@@ -261,63 +147,30 @@ def horizon(
     vectorised pass.
     """
     fmt = pick_format(output, fmt, TABLE_FORMATS)
-    from ucbplan.inputs import check_alpha
-    from ucbplan.target import check_distinct_files, load_target_files
-
-    for a in alpha:
-        check_alpha(a)
-    paths = _expand_targets(target)
-    check_distinct_files(paths)  # one rule for a repeated target (as plan)
-    if plot is not None:
-        from ucbplan.plotting import check_figure_path
-
-        check_figure_path(plot, overwrite)
-        if output is not None:
-            check_output_path(output, overwrite)
-    targets = load_target_files(paths)
-    if len(targets) > 1:
-        if plot is not None:
-            raise UcbplanError("--plot takes one target; give a single target file")
-        _horizon_many(targets, sigma_v, k_eff, alpha, epochs, anchor, fmt, output, overwrite)
+    if plot is not None and output is not None:
+        check_output_path(output, overwrite)
+    got = horizon_report(target, sigma_v, k_eff, alpha, epochs, anchor, plot, overwrite)
+    if len(got.targets) > 1:
+        _show_many(got.table, fmt, output, overwrite)
         return
-    from ucbplan.core.forecast import horizon_table
-
-    t = targets[0]
-    sv, k = _resolve_k_sigma(t, sigma_v, k_eff)
-    rows = horizon_table(t, sv, k, alphas=alpha, anchors=anchor, n_epochs=epochs)
-    if plot is not None:
-        from ucbplan.plotting.horizon import horizon_plot
-
-        horizon_plot(t, rows, plot, overwrite=overwrite)
+    t, rows = got.targets[0], list(got.rows)
     if fmt == "table":
-        _print_horizon(t, rows, sv, k, epochs)
+        _print_horizon(t, rows, got.sigma_v, got.k_eff, got.n_epochs)
     elif fmt == "json":
         doc = [r.as_dict() | {"target": t.name} for r in rows]
         write_output(output, lambda h: dump_json(doc, h), overwrite=overwrite)
     else:
-        write_table_output(_horizon_table(t, rows, sv, k, epochs), fmt, output, overwrite)
+        write_table_output(got.table, fmt, output, overwrite)
 
 
 #: Above this many targets the terminal gets a summary instead of the full table.
 _MANY_ROWS = 40
 
 
-def _horizon_many(
-    targets: list[Target],
-    sigma_v: float | None,
-    k_eff: float | None,
-    alpha: list[float],
-    epochs: int,
-    anchor: list[str],
-    fmt: str,
-    output: Path | None,
-    overwrite: bool,
-) -> None:
-    """The long horizon table of many targets (:func:`ucbplan.core.horizon_batch.horizons`)."""
-    from ucbplan.core.horizon_batch import horizon_json, horizons
+def _show_many(tab: Any, fmt: str, output: Path | None, overwrite: bool) -> None:
+    """The long horizon table of many targets, as JSON, a table file or on the terminal."""
+    from ucbplan.api.horizons import horizon_json
 
-    _check_k_sigma(targets, sigma_v, k_eff)
-    tab = horizons(targets, sigma_v, k_eff, alphas=alpha, anchors=anchor, n_epochs=epochs)
     if fmt == "json":
         text = horizon_json(tab)
 
@@ -329,23 +182,6 @@ def _horizon_many(
         write_table_output(tab, fmt, output, overwrite)
     else:
         _print_many(tab)
-
-
-def _check_k_sigma(targets: list[Target], sigma_v: float | None, k_eff: float | None) -> None:
-    """:func:`_resolve_k_sigma` of every target (one-line errors naming the option; the library
-    names its parameter), once per distinct (σ_v, K) a target would use, on which alone its
-    outcome depends, and only where a plain float pair is not plainly in range: the first
-    target that fails is still the one named."""
-    pairs: dict[tuple[Any, Any], Target] = {}
-    for t in targets:
-        spec = t.spectroscopy
-        sv = sigma_v if sigma_v is not None else (spec.sigma_v_kms if spec else None)
-        k = k_eff if k_eff is not None else (spec.k_for_tolerance if spec else None)
-        pairs.setdefault((sv, k), t)
-    for (sv, k), t in pairs.items():
-        plain = type(sv) is float and type(k) is float
-        if not (plain and 0.0 < sv <= 1e4 and 0.1 < k <= 1e4 and sv < k):
-            _resolve_k_sigma(t, sigma_v, k_eff)
 
 
 def _print_many(tab: Any) -> None:
@@ -377,16 +213,7 @@ def _print_many(tab: Any) -> None:
     err_console.print(f"{n} targets: write the full table with -o FILE.ecsv")
 
 
-def _horizon_table(t: Target, rows: list[Any], sv: float, k: float, epochs: int) -> Any:
-    """The horizon rows as an astropy table with the inputs in its metadata."""
-    from astropy.table import Table
-
-    tab = Table(rows=[r.as_dict() for r in rows])
-    tab.meta.update({"target": t.name, "sigma_v_kms": sv, "k_eff_kms": k, "n_epochs": epochs})
-    return tab
-
-
-def _print_horizon(t: Target, rows: list[Any], sv: float, k: float, epochs: int) -> None:
+def _print_horizon(t: Any, rows: list[Any], sv: float, k: float, epochs: int) -> None:
     if t.kind == "timing":
         _print_two_sided_horizon(t, rows, sv, k, epochs)
         return
@@ -413,13 +240,13 @@ def _print_horizon(t: Target, rows: list[Any], sv: float, k: float, epochs: int)
     _say_samples_covariance(t)
 
 
-def _say_samples_covariance(t: Target) -> None:
+def _say_samples_covariance(t: Any) -> None:
     """One line when the covariance came from a samples file (issue 26: say which was used)."""
     if t.covariance_source.startswith("samples"):
         err_console.print(f"{t.name}: covariance from the {t.covariance_source}", markup=False)
 
 
-def _print_two_sided_horizon(t: Target, rows: list[Any], sv: float, k: float, epochs: int) -> None:
+def _print_two_sided_horizon(t: Any, rows: list[Any], sv: float, k: float, epochs: int) -> None:
     """Horizons of a timing ephemeris: T_valid before and after T0, each with δt_u."""
     rt = rich_table(
         f"{t.name}: horizons before and after T0 ({t.t_ref.tdb.isot[:10]} TDB), "
@@ -450,11 +277,6 @@ def _print_two_sided_horizon(t: Target, rows: list[Any], sv: float, k: float, ep
         f"{a}: {1e3 * s:.2f} mrad (±{s / (math.pi * t.params.f_gw):.2f} s)" for a, s in ends.items()
     )
     err_console.print(escape(f"σ_u at T0 — {txt}"))
-
-
-# ---------------------------------------------------------------------------------------------
-# ephemeris compare
-# ---------------------------------------------------------------------------------------------
 
 
 def register(app: typer.Typer) -> None:

@@ -2,19 +2,22 @@
 
 ``ephemeris`` is a command group whose default sub-command is ``predict``:
 ``ucbplan ephemeris TARGET --start … --end …`` is ``ucbplan ephemeris predict TARGET …``
-(:class:`EphemerisGroup`); ``compare A B`` offsets two ephemerides of one system
-(:func:`ucbplan.core.timing.compare_sources`); ``fit TIMES`` fits T0, P, Ṗ to eclipse times
-(:mod:`ucbplan.cli.timing` over :mod:`ucbplan.timing`).
+(:class:`EphemerisGroup`, over :func:`ucbplan.api.ephemeris.predict`); ``compare A B`` offsets
+two ephemerides of one system (:func:`ucbplan.api.ephemeris.compare_ephemerides`); ``fit TIMES``
+fits T0, P, Ṗ to eclipse times (:mod:`ucbplan.cli.timing` over
+:func:`ucbplan.api.timing.fit_ephemeris`).
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from pathlib import Path
+from typing import Any
 
 import typer
 import typer.core
 from rich.markup import escape
 
+from ucbplan.api.ephemeris import COMPARE_FLAGS, EPHEMERIS_FLAGS, compare_ephemerides, predict
 from ucbplan.cli._console import (
     TABLE_FORMATS,
     dump_json,
@@ -24,68 +27,52 @@ from ucbplan.cli._console import (
     write_output,
     write_table_output,
 )
-from ucbplan.cli._epochs import epoch_option
+from ucbplan.cli._derive import argument, option
 from ucbplan.cli._options import (
-    AnchorOpt,
-    AtOpt,
-    CompareAArg,
-    CompareBArg,
     CompareFormatOpt,
-    EndOpt,
-    MaxEpochsOpt,
     OutputOpt,
     OverwriteOutputOpt,
-    StarOpt,
-    StartOpt,
     TableFormatOpt,
     TargetArg,
 )
 from ucbplan.cli.timing import ephemeris_fit
-from ucbplan.errors import UcbplanError
-
-if TYPE_CHECKING:  # ucbplan.target pulls in astropy: imported inside the commands
-    from ucbplan.target import Target
 
 __all__ = ["EphemerisGroup", "ephemeris_app", "register"]
 
 
+def _required(parameter: str) -> Any:
+    """A required option (no default) with the flag and help :data:`EPHEMERIS_FLAGS` declares."""
+    spec = EPHEMERIS_FLAGS[parameter]
+    return typer.Option(..., *spec.decls, help=spec.help)
+
+
 def ephemeris(
     target: TargetArg,
-    start: StartOpt,
-    end: EndOpt,
-    anchor: AnchorOpt = "quadrature",
-    star: StarOpt = 1,
+    start: str = _required("start"),
+    end: str = _required("end"),
+    anchor: str = option(predict, EPHEMERIS_FLAGS, "anchor"),
+    star: int = option(predict, EPHEMERIS_FLAGS, "star"),
     fmt: TableFormatOpt = None,
     output: OutputOpt = None,
     overwrite: OverwriteOutputOpt = False,
-    max_epochs: MaxEpochsOpt = 2_000_000,
+    max_epochs: int = option(predict, EPHEMERIS_FLAGS, "max_epochs"),
 ) -> None:
     """Barycentric epochs t★ (TDB) where u = u★, with σ_t and the φ_ref π-mode alternative.
 
     A timing ephemeris has no π mode; its epochs carry the cycle number n of its polynomial.
     `--anchor eclipse` gives primary and secondary eclipses.
     """
-    from ucbplan.api.ephemeris import epoch_table, epoch_window, horizon_warnings
-    from ucbplan.core.ephemeris import find_epochs
-
     fmt = pick_format(output, fmt, TABLE_FORMATS)
-    if star not in (1, 2):
-        raise UcbplanError(f"--star must be 1 or 2, got {star}")
-    from ucbplan.target import load_target
-
-    t = load_target(target)
-    tau0, tau1 = epoch_window(t, start, end, anchor, max_epochs)
-    es = find_epochs(t, tau0, tau1, anchor, star)
-    for line in horizon_warnings(t, tau0, tau1):
+    got = predict(target, start, end, anchor, star, max_epochs)
+    for line in got.warnings:
         err_console.print(f"[yellow]warning:[/] {escape(line)}")
-    table = epoch_table(t, es)
     if fmt == "table":
-        _print_epochs(t, table)
+        _print_epochs(got.target, got.table)
         return
-    write_table_output(table, fmt, output, overwrite)
+    write_table_output(got.table, fmt, output, overwrite)
 
 
-def _print_epochs(t: Target, tab: Any) -> None:
+def _print_epochs(t: Any, tab: Any) -> None:
     if not t.has_pi_mode:
         _print_timing_epochs(t, tab)
         return
@@ -110,7 +97,7 @@ def _print_epochs(t: Target, tab: Any) -> None:
     err_console.print(rt)
 
 
-def _print_timing_epochs(t: Target, tab: Any) -> None:
+def _print_timing_epochs(t: Any, tab: Any) -> None:
     """The epochs of a timing ephemeris: cycle n, u★, t★ (TDB ISO and BJD_TDB), σ_t."""
     eclipse = "eclipse" in tab.colnames
     cols = ["n", *(["eclipse"] if eclipse else []), "u★ [rad]", "t★ (TDB)", "BJD_TDB", "σ_t [s]"]
@@ -134,9 +121,9 @@ def _print_timing_epochs(t: Target, tab: Any) -> None:
 
 
 def compare(
-    a: CompareAArg,
-    b: CompareBArg,
-    at: AtOpt = None,
+    a: Path = argument(COMPARE_FLAGS, "a"),
+    b: Path = argument(COMPARE_FLAGS, "b"),
+    at: str | None = option(compare_ephemerides, COMPARE_FLAGS, "at"),
     fmt: CompareFormatOpt = None,
     output: OutputOpt = None,
     overwrite: OverwriteOutputOpt = False,
@@ -146,65 +133,14 @@ def compare(
     With σ from both covariances, the significance, and the cycles from A's reference epoch to
     B's as each counts them (a whole-cycle disagreement the wrapped phase offset hides).
     """
-    from ucbplan.core.timing import compare_sources
-
     fmt = pick_format(output, fmt, ("table", "json"))
-    from ucbplan.target import load_target
-
-    ta, tb = load_target(a), load_target(b)
-    epoch = epoch_option(at, "--at") if at is not None else None
-    _warn_different_systems(ta, tb)
-    report = compare_sources(ta, tb, epoch)
-    doc = _comparison_doc(ta, tb, report)
+    got = compare_ephemerides(a, b, at)
+    for line in got.warnings:
+        err_console.print(f"[yellow]warning:[/] {escape(line)}")
     if fmt == "table":
-        _print_comparison(doc)
+        _print_comparison(got.doc)
         return
-    write_output(output, lambda h: dump_json(doc, h), overwrite=overwrite)
-
-
-def _warn_different_systems(ta: Target, tb: Target) -> None:
-    """Warn when the two files look like different binaries (sky position, period)."""
-    sep = float(ta.coord.separation(tb.coord).arcsec)
-    dp = abs(ta.period_s - tb.period_s) / ta.period_s
-    if sep > 5.0 or dp > 1e-3:
-        err_console.print(
-            f"[yellow]warning:[/] {escape(ta.name)} and {escape(tb.name)} are {sep:.1f}″ apart "
-            f"and their periods differ by {100 * dp:.3g} %: compare two ephemerides of one system"
-        )
-
-
-def _comparison_doc(ta: Target, tb: Target, report: Any) -> dict[str, Any]:
-    """JSON-ready comparison: the two files, the epoch, the offset (and π-mode alternatives)."""
-    from ucbplan.core.timing_epochs import format_bjd_tdb
-
-    def side(t: Target) -> dict[str, Any]:
-        return {
-            "name": t.name,
-            "file": str(t.source) if t.source else "",
-            "kind": t.kind,
-            "t_ref_tdb": t.t_ref.tdb.isot,
-        }
-
-    r = report.result
-    return {
-        "a": side(ta),
-        "b": side(tb),
-        "epoch_tdb": report.epoch.tdb.isot,
-        "epoch_bjd_tdb": format_bjd_tdb(report.epoch).split()[1],
-        **r.offsets(),
-        "cycles_a": r.cycles_a,
-        "cycles_b": r.cycles_b,
-        "cycle_count_difference": r.cycle_difference,
-        "sigma_cycle_count_difference": r.sigma_cycle_difference,
-        "whole_cycle_difference": round(r.cycle_difference),
-        "pi_mode": [{"side": s, **c.offsets()} for s, c in report.alternatives],
-        "convention": (
-            "A - B for star 1: phase offset u1_A - u1_B at the epoch wrapped to (-pi, pi]; time "
-            "offset t_A - t_B of the same orbital phase (negative: A predicts it earlier); "
-            "cycles_a/cycles_b: orbits from A's reference epoch to B's as counted by A and by B; "
-            "pi_mode: the same with that side's phi_ref + pi (LISA posteriors)"
-        ),
-    }
+    write_output(output, lambda h: dump_json(got.doc, h), overwrite=overwrite)
 
 
 def _print_comparison(doc: dict[str, Any]) -> None:

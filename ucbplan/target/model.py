@@ -183,6 +183,16 @@ class Target:
     magnitudes: dict[str, float] = field(default_factory=dict)
     references: dict[str, str] = field(default_factory=dict)
 
+    def __repr__(self) -> str:
+        """One line: name, kind, period, sky position, reference epoch and file."""
+        where = f", {self.source.name}" if self.source else ""
+        epoch = "T0" if self.kind == "timing" else "t_ref"
+        return (
+            f"<Target {self.name!r} ({self.kind}): P={self.period_s:.10g} s, "
+            f"RA={self.ra_deg:.5f}°, Dec={self.dec_deg:+.5f}°, {epoch}={self.t_ref.tdb.isot} "
+            f"TDB{where}>"
+        )
+
     @property
     def has_pi_mode(self) -> bool:
         """Whether φ_ref has the second posterior mode φ_ref + π (a LISA property, Appendix A1).

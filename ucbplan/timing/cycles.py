@@ -151,7 +151,9 @@ def count_cycles(times: EclipseTimes, guess: PeriodGuess) -> F64:
         sig = np.where(np.isfinite(sig) & np.isfinite(n), sig, np.inf)
         ok = sig <= AMBIGUITY_FRACTION * p
         if not ok.any():
-            raise _ambiguous(times, guess, done, int(todo[np.argmin(sig)]), float(np.min(sig)))
+            k = int(np.argmin(sig))
+            why = _limit(times, guess, todo[k], n[k] - center, cov)
+            raise _ambiguous(times, guess, done, int(todo[k]), float(sig[k]), why)
         offset = np.abs(times.t_s[todo] - pred)
         far = ok & (offset > MAX_OFFSET_FRACTION * p) & (offset > 5 * sig)
         if far.any():
@@ -170,8 +172,28 @@ def count_cycles(times: EclipseTimes, guess: PeriodGuess) -> F64:
     return cycles
 
 
+def _limit(times: EclipseTimes, guess: PeriodGuess, i: int, x: float, cov: F64) -> str:
+    """What limits the prediction of time ``i`` at ``x`` cycles from the fit's centre: ``"pdot"``
+    when knowing the quadratic term (Ṗ) alone would predict it to P/8, else ``"period"``.
+
+    The prediction's variance given the quadratic coefficient is the Schur complement of the
+    coefficients' covariance (the linear part's variance conditional on c₂).
+    """
+    j = np.array([1.0, x])
+    if not (np.all(np.isfinite(cov)) and cov[2, 2] > 0):
+        return "period"
+    cond = cov[:2, :2] - np.outer(cov[:2, 2], cov[2, :2]) / cov[2, 2]
+    sig = float(np.hypot(np.sqrt(max(float(j @ cond @ j), 0.0)), times.sigma_s[i]))
+    return "pdot" if sig <= AMBIGUITY_FRACTION * guess.period_s else "period"
+
+
 def _ambiguous(
-    times: EclipseTimes, guess: PeriodGuess, done: NDArray[np.bool_], i: int, sig: float
+    times: EclipseTimes,
+    guess: PeriodGuess,
+    done: NDArray[np.bool_],
+    i: int,
+    sig: float,
+    why: str = "period",
 ) -> InputFileError:
     """The error for an ambiguous count: which gap, how uncertain, what to supply."""
     counted = np.flatnonzero(done)
@@ -185,9 +207,17 @@ def _ambiguous(
             f"{times.rows[last]} (BJD_TDB {times.jd[first]} and {times.jd[last]})"
         )
     sig_text = f"{sig:.3g} s = {sig / guess.period_s:.2g} P" if np.isfinite(sig) else "unbounded"
-    return InputFileError(
+    head = (
         f"{times.label()}: cycle count ambiguous {where}: the ephemeris so far (from "
-        f"{guess.origin}) predicts that eclipse only to σ = {sig_text} (> P/8); add a cycle "
-        "column, or give --initial TARGET.yaml with a better ephemeris (or --period with more "
-        "digits)"
+        f"{guess.origin}) predicts that eclipse only to σ = {sig_text} (> P/8); "
+    )
+    if why == "period":
+        return InputFileError(
+            f"{head}add a cycle column, or give --initial TARGET.yaml with a better ephemeris (or "
+            "--period with more digits)"
+        )
+    return InputFileError(
+        f"{head}an unknown Ṗ limits it, not P (more digits in the period will not help): add a "
+        "cycle column, eclipse times that bridge the gap in shorter steps, or --initial "
+        "TARGET.yaml whose timing block has pdot (a Ṗ prior)"
     )

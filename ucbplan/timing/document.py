@@ -124,11 +124,12 @@ def _points(fit: EphemerisFit, times: EclipseTimes) -> list[dict[str, Any]]:
 
 
 def identity(
-    like: Path | None, name: str | None, ra: str | None, dec: str | None
+    like: Path | Mapping[str, Any] | None, name: str | None, ra: str | None, dec: str | None
 ) -> dict[str, Any]:
     """Name, sky (and masses, spectroscopy, magnitudes) of the target to write.
 
-    From ``like`` (a target YAML) with ``name``/``ra``/``dec`` overriding it.
+    From ``like`` (a target YAML, or the document itself) with ``name``/``ra``/``dec``
+    overriding it.
 
     Raises
     ------
@@ -137,10 +138,11 @@ def identity(
     """
     out: dict[str, Any] = {}
     if like is not None:
-        doc = load_yaml(like, "target file")
+        doc = like if isinstance(like, Mapping) else load_yaml(like, "target file")
         if not isinstance(doc, Mapping):
             raise InputFileError(
-                f"{like.name}: expected a target file (a mapping), got {type(doc).__name__}"
+                f"{getattr(like, 'name', like)}: expected a target file (a mapping), got "
+                f"{type(doc).__name__}"
             )
         for key in ("name", "sky", *COPIED_FIELDS):
             if key in doc:

@@ -45,6 +45,7 @@ from ucbplan.inputs import MAX_ALIASES, MAX_YAML_BYTES, blank_comments, read_tex
 __all__ = [
     "EclipseTimes",
     "read_times",
+    "read_times_table",
 ]
 
 F64 = NDArray[np.float64]
@@ -389,10 +390,35 @@ def read_times(path: Path | str) -> EclipseTimes:
         non-positive σ, or cycle numbers that do not increase with time.
     """
     path = Path(path)
-    r = _Reader(path)
     text = read_text(path, "table of eclipse times")
+    return _parse(path, text, path.suffix.lower() == ".ecsv")
+
+
+def read_times_table(table: Any, label: str = "<Table>") -> EclipseTimes:
+    """The eclipse times of an astropy ``Table`` (columns and rules as :func:`read_times`; a
+    ``Time`` column keeps its two-part JD, a text column every digit).
+
+    Raises
+    ------
+    InputFileError
+        As :func:`read_times`, naming ``label``.
+    """
+    import io
+
+    buf = io.StringIO()
+    try:
+        table.write(buf, format="ascii.ecsv")
+    except Exception as exc:  # astropy raises many types for columns ECSV cannot hold
+        msg = " ".join(str(exc).split())[:200]
+        raise InputFileError(f"{label}: not writable as a table of eclipse times ({msg})") from None
+    return _parse(Path(label), buf.getvalue(), True)
+
+
+def _parse(path: Path, text: str, ecsv: bool) -> EclipseTimes:
+    """:func:`read_times` of a table's text (ECSV or CSV); ``path`` names it in messages."""
+    r = _Reader(path)
     units: dict[str, Any] = {}
-    if path.suffix.lower() == ".ecsv":
+    if ecsv:
         header, body, units = _ecsv_rows(r, text)
     else:
         header, body = _csv_rows(r, text)

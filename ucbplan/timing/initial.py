@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass
 from decimal import Decimal
 from pathlib import Path
@@ -25,7 +26,13 @@ from ucbplan.core.timing_epochs import DAY_S, parse_decimal, parse_epoch_label
 from ucbplan.errors import InputError, InputFileError, shorten
 from ucbplan.inputs import load_yaml
 
-__all__ = ["PDOT_PRIOR_SIGMA", "PeriodGuess", "parse_period", "read_initial"]
+__all__ = [
+    "PDOT_PRIOR_SIGMA",
+    "PeriodGuess",
+    "guess_from_document",
+    "parse_period",
+    "read_initial",
+]
 
 #: Width of the Ṗ prior while counting cycles [s/s]: GW-driven |Ṗ| of a double white dwarf with
 #: P > 5 min and chirp mass < 1 M☉ is < 3e-10, so 1e-9 is generous. Used only to count cycles.
@@ -100,9 +107,9 @@ def parse_period(value: Any, what: str = "--period") -> tuple[float, float]:
     return period, float(_last_digit(num)) * _UNITS_S[unit]
 
 
-def period_guess(value: str) -> PeriodGuess:
-    """A :class:`PeriodGuess` from a ``--period`` text."""
-    p, sp = parse_period(value)
+def period_guess(value: str, what: str = "--period") -> PeriodGuess:
+    """A :class:`PeriodGuess` from a ``--period`` text (errors name ``what``)."""
+    p, sp = parse_period(value, what)
     return PeriodGuess(period_s=p, sigma_period_s=sp, origin="--period")
 
 
@@ -115,10 +122,19 @@ def read_initial(path: Path | str) -> PeriodGuess:
         No ``timing:`` block or period, or a malformed t0/period/pdot (the field named).
     """
     path = Path(path)
-    doc = load_yaml(path, "target file")
-    label = path.name
-    timing = doc.get("timing") if isinstance(doc, dict) else None
-    if not isinstance(timing, dict):
+    return guess_from_document(load_yaml(path, "target file"), path.name)
+
+
+def guess_from_document(doc: Any, label: str) -> PeriodGuess:
+    """P (and T0, Ṗ) from the ``timing:`` block of a target document named ``label``.
+
+    Raises
+    ------
+    InputFileError
+        As :func:`read_initial`.
+    """
+    timing = doc.get("timing") if isinstance(doc, Mapping) else None
+    if not isinstance(timing, Mapping):
         raise InputFileError(
             f"{label}: timing: missing; --initial needs a target file with a timing: block "
             "(t0, period[, pdot]), or give --period"

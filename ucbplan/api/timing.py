@@ -1,0 +1,331 @@
+"""Timing ephemerides fitted to eclipse times: :func:`fit_ephemeris` and its :class:`TimingFit`.
+
+The options are declared once (:data:`FIT_FLAGS`); ``ucbplan ephemeris fit`` derives its flags,
+defaults and help from them and from the function's signature. See docs/timing.md.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from ucbplan.api._convert import as_float, scope
+from ucbplan.api.options import Flag
+from ucbplan.api.targets import TargetLike
+from ucbplan.errors import InputError, shorten
+
+if TYPE_CHECKING:
+    from astropy.time import Time
+    from matplotlib.figure import Figure
+
+    from ucbplan.target import Target
+    from ucbplan.timing import EclipseTimes, EphemerisFit, PeriodGuess
+
+__all__ = ["FIT_FLAGS", "TimingFit", "fit_ephemeris", "target_identity"]
+
+#: The options of :func:`fit_ephemeris` (and of :meth:`TimingFit.to_target`) as
+#: ``ucbplan ephemeris fit`` spells them.
+FIT_FLAGS: dict[str, Flag] = {
+    "times": Flag(
+        (), "Eclipse times: CSV or ECSV with bjd_tdb (or bmjd_tdb), sigma_s [, kind, cycle]."
+    ),
+    "terms": Flag(("--terms",), "2: T0, P; 3: + Pdot; 4: + Pddot."),
+    "period": Flag(
+        ("--period",),
+        "First period guess for counting cycles, e.g. '414.79 s' (trusted to its last digit); "
+        "default: from the best-covered night's eclipses.",
+    ),
+    "initial": Flag(
+        ("--initial",), "Earlier ephemeris (target YAML with timing: t0, period[, pdot])."
+    ),
+    "clip": Flag(("--clip",), "Drop times more than K (rescaled) sigma from the fit; reported."),
+    "like": Flag(
+        ("--like",), "Copy name, sky, masses, spectroscopy, magnitudes from this target YAML."
+    ),
+    "name": Flag(("--name",), "Target name (overrides --like)."),
+    "ra": Flag(("--ra",), "ICRS right ascension, e.g. 15h39m32.16s."),
+    "dec": Flag(("--dec",), "ICRS declination, e.g. +50d27m38.8s."),
+}
+
+
+@dataclass(frozen=True, slots=True)
+class TimingFit:
+    """A fitted timing ephemeris t(n) = T0 + P·n + ½·P·Ṗ·n² (+ ⅙·P²·P̈·n³).
+
+    Attributes
+    ----------
+    fit : ucbplan.timing.EphemerisFit
+        The least-squares solution: values, covariance, O − C, χ², outliers, clipped rows.
+    times : ucbplan.timing.EclipseTimes
+        The eclipse times it was fitted to.
+    notes : tuple of str
+        What the fit decided (σ's rescaled, outliers kept, rows clipped, a guess ignored).
+    """
+
+    fit: EphemerisFit
+    times: EclipseTimes
+    notes: tuple[str, ...] = ()
+
+    def __repr__(self) -> str:
+        f, sig = self.fit, self.fit.sigmas
+        pdot = f", Ṗ={f.values[2]:.4g}±{sig[2]:.2g}" if f.terms > 2 else ""
+        ratio = f"{f.chi2 / f.dof:.3g}" if f.dof > 0 else "n/a"
+        return (
+            f"<TimingFit {f.source}: T0=BJD_TDB {float(f.t0_jd):.7f}±{sig[0]:.3g} s, "
+            f"P={f.period_s:.10g}±{sig[1]:.2g} s{pdot}; {f.n_used} times, chi2/dof={ratio}>"
+        )
+
+    @property
+    def t0(self) -> Time:
+        """T0, the primary eclipse nearest the weighted mean epoch (TDB, full precision)."""
+        from astropy.time import Time
+
+        whole = int(self.fit.t0_jd)
+        return Time(float(whole), float(self.fit.t0_jd - whole), format="jd", scale="tdb")
+
+    @property
+    def t0_text(self) -> str:
+        """T0 as the target file writes it, with every digit (``"BJD_TDB 2458305.6827886…"``)."""
+        from ucbplan.core.timing_epochs import format_bjd
+
+        return format_bjd(self.fit.t0_jd)
+
+    @property
+    def units(self) -> tuple[str, ...]:
+        """The unit of each fitted parameter's value (s, s, s/s, 1/s)."""
+        from ucbplan.timing.fit import UNITS
+
+        return UNITS[: self.fit.terms]
+
+    @property
+    def period(self) -> Any:
+        """P at T0 (Quantity, s)."""
+        from astropy import units as u
+
+        return self.fit.period_s * u.s
+
+    @property
+    def pdot(self) -> float | None:
+        """Ṗ [s/s] (None when only T0 and P were fitted)."""
+        return float(self.fit.values[2]) if self.fit.terms > 2 else None
+
+    @property
+    def sigmas(self) -> dict[str, float]:
+        """1σ of each fitted parameter (t0, period [s], pdot [1], pddot [1/s])."""
+        return dict(zip(self.fit.names, map(float, self.fit.sigmas), strict=True))
+
+    def to_dict(self) -> dict[str, Any]:
+        """The report ``ucbplan ephemeris fit --format json`` writes (parameters, covariance,
+        χ², outliers, clipped rows, notes, every point's O − C)."""
+        from ucbplan.timing.document import fit_report
+
+        return fit_report(self.fit, self.times)
+
+    def target_document(
+        self,
+        name: str | None = None,
+        ra: str | None = None,
+        dec: str | None = None,
+        like: TargetLike | None = None,
+    ) -> dict[str, Any]:
+        """The timing target file as a mapping: name and sky from ``like`` (a target file)
+        and/or ``name``, ``ra``, ``dec`` (see :func:`target_identity`)."""
+        from ucbplan.timing.document import target_document
+
+        ident = target_identity(like, name, ra, dec)
+        return target_document(self.fit, ident, self.times.label())
+
+    def target_yaml(
+        self,
+        name: str | None = None,
+        ra: str | None = None,
+        dec: str | None = None,
+        like: TargetLike | None = None,
+    ) -> str:
+        """The timing target file's text (``ucbplan ephemeris fit -o target.yaml``); name and
+        sky as :meth:`target_document`."""
+        import io
+
+        from ucbplan.timing.document import write_yaml
+
+        buf = io.StringIO()
+        write_yaml(self.target_document(name, ra, dec, like), buf)
+        return buf.getvalue()
+
+    def to_target(
+        self,
+        name: str | None = None,
+        ra: str | None = None,
+        dec: str | None = None,
+        like: TargetLike | None = None,
+    ) -> Target:
+        """This ephemeris as a timing :class:`~ucbplan.target.Target` (``ucbplan.write_target``
+        writes it); name and sky as :meth:`target_document`."""
+        from ucbplan.target import target_from_dict
+
+        with scope():
+            return target_from_dict(self.target_document(name, ra, dec, like))
+
+    def figure(self) -> Figure:
+        """The O − C figure (matplotlib; ``.savefig(path)`` writes it)."""
+        from ucbplan.timing.plots import oc_figure
+
+        return oc_figure(self.fit, self.times)
+
+    def write(
+        self, text: str | None, output: Path | None, plot: Path | None, overwrite: bool = False
+    ) -> list[Path]:
+        """Write ``text`` to ``output`` and the O − C figure to ``plot`` as a unit (both or
+        neither); returns the files written."""
+        from ucbplan.io import write_file_set
+        from ucbplan.plotting import figure_format, pyplot
+
+        files: dict[Path, Any] = {}
+        if text is not None and output is not None:
+            data = text.encode("utf-8")
+            files[output] = lambda handle: handle.write(data)
+        if plot is None:
+            if files:
+                write_file_set(files, overwrite=overwrite, binary=True)
+            return list(files)
+        kind, fig = figure_format(plot), self.figure()
+        files[plot] = lambda handle: fig.savefig(handle, format=kind, dpi=120)
+        try:
+            write_file_set(files, overwrite=overwrite, binary=True)
+        finally:
+            pyplot().close(fig)
+        return list(files)
+
+
+def target_identity(
+    like: TargetLike | None = None,
+    name: str | None = None,
+    ra: str | None = None,
+    dec: str | None = None,
+) -> dict[str, Any]:
+    """Name, sky (and masses, spectroscopy, magnitudes) of a timing target to write.
+
+    Parameters
+    ----------
+    like : str, Path, dict or Target, optional
+        A target file (or document) to copy name, sky, masses, spectroscopy, magnitudes from.
+    name : str, optional
+        The target name (overrides ``like``'s).
+    ra, dec : str, optional
+        ICRS position (``"15h39m32.16s"``, ``"+50d27m38.8s"``), both or neither.
+
+    Raises
+    ------
+    InputError
+        No name or sky position, or an unreadable one.
+    """
+    from ucbplan.timing.document import identity
+
+    if like is None or isinstance(like, str | Path):
+        return identity(Path(like) if like is not None else None, name, ra, dec)
+    if not isinstance(like, Mapping):
+        from ucbplan.api.targets import load_as
+        from ucbplan.target import target_to_dict
+
+        like = target_to_dict(load_as(like, "like"))
+    return identity(like, name, ra, dec)
+
+
+def fit_ephemeris(
+    times: Any,
+    period: Any = None,
+    initial: TargetLike | None = None,
+    terms: int = 3,
+    clip: float | None = None,
+) -> TimingFit:
+    """Fit T0, P, Ṗ (and P̈ with ``terms=4``) to eclipse times (``ucbplan ephemeris fit``).
+
+    Parameters
+    ----------
+    times : str, Path or astropy.table.Table
+        Eclipse-time table (docs/timing.md): ``bjd_tdb`` (or ``bmjd_tdb``; text keeps every
+        digit, a ``Time`` column in TDB too), ``sigma_s`` [s], optional ``kind`` and ``cycle``.
+    period : str, float or Quantity, optional
+        First period guess (``"0.0595 d"``, seconds, or a time Quantity) to count cycles,
+        trusted to its last digit.
+    initial : str, Path, dict or Target, optional
+        An earlier timing ephemeris (a target with ``timing``: t0, period[, pdot]) to count
+        cycles from.
+    terms : int
+        2 (T0, P), 3 (+Ṗ) or 4 (+P̈).
+    clip : float, optional
+        Drop times more than ``clip`` (rescaled) σ from the fit [σ, ≥ 1]; reported.
+
+    Returns
+    -------
+    TimingFit
+        The fitted parameters, their covariance and ``notes`` (what the fit decided);
+        ``.to_target(...)`` turns it into a target, ``.to_dict()`` is the JSON report.
+
+    Raises
+    ------
+    InputError
+        Bad table, ambiguous cycle count, too few times (one line each, naming the row).
+    """
+    from ucbplan.timing import fit_times
+
+    guess = _first_ephemeris(period, initial, terms, clip)
+    with scope():
+        table = _times(times)
+        notes: tuple[str, ...] = ()
+        if table.cycle is not None and guess is not None:
+            notes = (f"{guess.origin} ignored: the table has a cycle column",)
+        fit = fit_times(table, guess, int(terms), None if clip is None else float(clip))
+    return TimingFit(fit, table, notes + tuple(fit.notes))
+
+
+def _first_ephemeris(period: Any, initial: Any, terms: Any, clip: Any) -> PeriodGuess | None:
+    """The checked options and the first ephemeris that counts cycles (``period``/``initial``)."""
+    from ucbplan.inputs import check_number, is_number
+    from ucbplan.timing import period_guess, read_initial
+
+    if not (is_number(terms) and terms in (2, 3, 4)):
+        raise InputError(f"terms: expected 2, 3 or 4, got {shorten(terms)}", parameter="terms")
+    check_number("clip", clip, 1.0, 1e6, "σ", "times within 1σ are never outliers")
+    if period is not None and initial is not None:
+        raise InputError("period, initial: give one first ephemeris, not both", "period")
+    if initial is not None:
+        return read_initial(initial) if isinstance(initial, str | Path) else _guess_of(initial)
+    if period is None:
+        return None
+    p = as_float(period, "s", "period")
+    return period_guess(f"{p!r} s" if isinstance(p, float) else p, "period")
+
+
+def _guess_of(initial: Any) -> PeriodGuess:
+    """The first ephemeris of a target in memory (a ``Target`` or a document)."""
+    from ucbplan.timing.initial import guess_from_document
+
+    if isinstance(initial, Mapping):
+        return guess_from_document(initial, "<dict>")
+    from ucbplan.api.targets import load_as
+    from ucbplan.target import target_to_dict
+
+    t = load_as(initial, "initial")
+    return guess_from_document(target_to_dict(t), t.name)
+
+
+def _times(times: Any) -> EclipseTimes:
+    """The eclipse times of a file or an astropy ``Table``."""
+    from astropy.table import Table
+
+    from ucbplan.api.targets import is_path
+    from ucbplan.timing import read_times
+    from ucbplan.timing.eclipse_table import read_times_table
+
+    if isinstance(times, Table):
+        return read_times_table(times)
+    if not is_path(times, "times"):
+        raise InputError(
+            f"times: expected a table file (CSV or ECSV) or an astropy Table, got "
+            f"{shorten(times, 60)}",
+            parameter="times",
+        )
+    return read_times(times)
