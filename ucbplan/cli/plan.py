@@ -79,7 +79,7 @@ def _write(
     """The blocks table (stdout or ``output``), the night charts and the night sheet."""
     plot, sheet = figures
     if fmt in _MACHINE or plot is not None or sheet is not None:
-        table = result.table
+        table = result.text_table  # the text the files hold (.table has Time columns)
     if fmt in _MACHINE:
 
         def _write_table(handle: IO[str]) -> None:

@@ -144,7 +144,8 @@ def csv_safe_table(table: Table) -> Table:
     plain = table.copy(copy_data=False)
     for name in plain.colnames:
         col = plain[name]
-        if col.dtype.kind not in "UO" or getattr(col, "ndim", 1) != 1:
+        kind = getattr(getattr(col, "dtype", None), "kind", "")
+        if kind not in ("U", "O") or getattr(col, "ndim", 1) != 1:
             continue
         cells = col.tolist()
         if not any(isinstance(c, str) and c[:1] in "'=+-@\t\r" for c in cells):
