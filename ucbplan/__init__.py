@@ -55,6 +55,10 @@ _PUBLIC = {
     "PlanWarning": "ucbplan.errors",
     "ReduceWarning": "ucbplan.errors",
     "EarthOrientationWarning": "ucbplan.errors",
+    # b2 (issue 30): the measuring half
+    "fisher": "ucbplan.api",
+    "waveform": "ucbplan.api",
+    "PopulationForecast": "ucbplan.api",
 }
 
 __all__ = ["__version__", *_PUBLIC]
@@ -93,6 +97,9 @@ if TYPE_CHECKING:  # the same names for type checkers and IDEs ("as": re-exporte
         Plan as Plan,
     )
     from ucbplan.api import (
+        PopulationForecast as PopulationForecast,
+    )
+    from ucbplan.api import (
         Report as Report,
     )
     from ucbplan.api import (
@@ -100,6 +107,9 @@ if TYPE_CHECKING:  # the same names for type checkers and IDEs ("as": re-exporte
     )
     from ucbplan.api import (
         ephemeris as ephemeris,
+    )
+    from ucbplan.api import (
+        fisher as fisher,
     )
     from ucbplan.api import (
         fit_ephemeris as fit_ephemeris,
@@ -124,6 +134,9 @@ if TYPE_CHECKING:  # the same names for type checkers and IDEs ("as": re-exporte
     )
     from ucbplan.api import (
         simulate as simulate,
+    )
+    from ucbplan.api import (
+        waveform as waveform,
     )
     from ucbplan.errors import (
         EarthOrientationWarning as EarthOrientationWarning,

@@ -9,14 +9,18 @@ UcbplanWarning` (filterable) besides returning it. The command line is a shell o
 """
 
 from ucbplan.api.ephemeris import ephemeris, fit_ephemeris, get_site, horizon, load_target
+from ucbplan.api.lisa_analysis import fisher, simulate, waveform
 from ucbplan.api.planning import Plan, default_constraints, plan
-from ucbplan.api.reduction import Report, population_forecast, reduce, simulate
+from ucbplan.api.populations import PopulationForecast, population_forecast
+from ucbplan.api.reduction import Report, reduce
 
 __all__ = [
     "Plan",
+    "PopulationForecast",
     "Report",
     "default_constraints",
     "ephemeris",
+    "fisher",
     "fit_ephemeris",
     "get_site",
     "horizon",
@@ -25,4 +29,5 @@ __all__ = [
     "population_forecast",
     "reduce",
     "simulate",
+    "waveform",
 ]

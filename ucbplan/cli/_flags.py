@@ -46,6 +46,15 @@ FLAGS = {
     "end": "--end",
     "star": "--star",
     "seed": "--seed",
+    # b2 (issue 30): reduce, simulate, fisher, waveform, population
+    "samples": "--samples",
+    "n_bins": "--n-bins",
+    "t_obs": "--t-obs",
+    "t_start": "--t-start",
+    "walkers": "--walkers",
+    "steps": "--steps",
+    "max_steps": "--max-steps",
+    "workers": "--workers",
 }
 
 _LEADING_NAME = re.compile(r"^([a-z_][a-z0-9_]*)(?=[: ])")

@@ -29,6 +29,7 @@ from astropy.time import TimeDelta
 from numpy.typing import NDArray
 
 from ucbplan.errors import InputError
+from ucbplan.lisa import DEFAULT_MAX_STEPS, DEFAULT_N_BINS, DEFAULT_STEPS, DEFAULT_WALKERS
 from ucbplan.lisa import posterior as post
 from ucbplan.lisa.fisher import (
     fisher_covariance,
@@ -81,7 +82,7 @@ def build_model(
     target: Target,
     *,
     t_obs_s: float | None = None,
-    n_bins: int = 512,
+    n_bins: int = DEFAULT_N_BINS,
     circular: bool = False,
     where: str | None = None,
     ecliptic_rad: tuple[float, float] | None = None,
@@ -192,6 +193,9 @@ class FisherForecast:
     cov_theta: F64
     warnings: tuple[str, ...] = ()
 
+    def __repr__(self) -> str:
+        return f"<FisherForecast {self.target.name}: SNR {self.snr:.1f}, {len(self.sigmas)} σ's>"
+
     @property
     def sigmas(self) -> dict[str, float]:
         """Forecast 1σ per parameter (covariance order)."""
@@ -282,13 +286,13 @@ def setup_simulation(
     target: Target,
     *,
     t_obs_s: float | None = None,
-    n_bins: int = 512,
+    n_bins: int = DEFAULT_N_BINS,
     circular: bool = False,
     seed: int = 0,
-    walkers: int = 32,
-    steps: int = 2000,
+    walkers: int = DEFAULT_WALKERS,
+    steps: int = DEFAULT_STEPS,
     until_converged: bool = False,
-    max_steps: int = 50_000,
+    max_steps: int = DEFAULT_MAX_STEPS,
     noise: bool = True,
     resume: Path | None = None,
     where: str | None = None,
