@@ -44,11 +44,9 @@ __all__ = [
     "corner_plot_paths",
     "fisher",
     "plot_waveform",
-    "sample",
     "save_interrupted",
     "simulate",
     "simulation_outputs",
-    "simulation_problem",
     "t_obs_seconds",
     "waveform",
     "write_corner_plots",
@@ -239,40 +237,6 @@ def waveform(
         return waveform_lines(_model(target, t_obs, n_bins, False))
 
 
-def simulation_problem(
-    target: TargetLike,
-    seed: int = 0,
-    *,
-    t_obs: Any = None,
-    n_bins: int = DEFAULT_N_BINS,
-    circular: bool = False,
-    walkers: int = DEFAULT_WALKERS,
-    steps: int = DEFAULT_STEPS,
-    until_converged: bool = False,
-    max_steps: int = DEFAULT_MAX_STEPS,
-    noise: bool = True,
-    resume: str | Path | None = None,
-) -> SimulationProblem:
-    """The model of ``target`` and its drawn data, ready to sample: the first half of
-    :func:`simulate` (same parameters), for a caller that shows the run before it starts."""
-    from ucbplan.lisa.pipeline import prepare_simulation
-    from ucbplan.lisa.simulation import SimulateOptions
-
-    options = SimulateOptions(
-        seed=int(check_seed(seed) or 0),  # not None: optional=False
-        walkers=_walkers(walkers),
-        steps=check_count("steps", steps, 1, MAX_CHAIN_STEPS),
-        until_converged=_flag(until_converged, "until_converged"),
-        max_steps=check_count("max_steps", max_steps, 1, MAX_CHAIN_STEPS),
-        noise=_flag(noise, "noise"),
-        resume=_resume(resume),
-    )
-    with scope():
-        model = _model(target, t_obs, n_bins, circular)
-        _walkers(walkers, model.theta0().size)
-        return prepare_simulation(model, options)
-
-
 def _resume(resume: Any) -> Path | None:
     if resume is None or isinstance(resume, str | Path):
         return None if resume is None else Path(resume)
@@ -295,6 +259,7 @@ def simulate(
     noise: bool = True,
     resume: str | Path | None = None,
     progress: Callable[[int, int, float], None] | None = None,
+    on_ready: Callable[[SimulationProblem], None] | None = None,
     warn: bool = True,
 ) -> SimulationResult:
     """Simulate a LISA observation and sample the targeted-search posterior (``ucbplan
@@ -325,6 +290,9 @@ def simulate(
         Chain (.npz) of an earlier run with the same options to continue.
     progress : callable, optional
         ``progress(step, total, tau_max)``, called every few sampler steps.
+    on_ready : callable, optional
+        ``on_ready(problem)``, called with the model and its drawn data before sampling (to
+        show the run, or to keep the problem for :func:`save_interrupted`).
     warn : bool
         Emit the result's warnings as :class:`ucbplan.ReduceWarning` (besides returning them).
 
@@ -338,39 +306,40 @@ def simulate(
     ------
     InputError
         Bad options (one line each, naming the parameter), before the target is read.
+    SamplerInterrupted
+        Ctrl-C (a ``KeyboardInterrupt``) carrying the chain so far as ``.partial``: keep it
+        with :func:`save_interrupted` to continue with ``resume``.
     """
-    problem = simulation_problem(
-        target,
-        seed,
-        t_obs=t_obs,
-        n_bins=n_bins,
-        circular=circular,
-        walkers=walkers,
-        steps=steps,
-        until_converged=until_converged,
-        max_steps=max_steps,
-        noise=noise,
-        resume=resume,
+    from ucbplan.lisa.pipeline import prepare_simulation
+    from ucbplan.lisa.simulation import SimulateOptions
+
+    options = SimulateOptions(
+        seed=int(check_seed(seed) or 0),  # not None: optional=False
+        walkers=_walkers(walkers),
+        steps=check_count("steps", steps, 1, MAX_CHAIN_STEPS),
+        until_converged=_flag(until_converged, "until_converged"),
+        max_steps=check_count("max_steps", max_steps, 1, MAX_CHAIN_STEPS),
+        noise=_flag(noise, "noise"),
+        resume=_resume(resume),
     )
-    return sample(problem, progress, warn)
+    with scope():
+        model = _model(target, t_obs, n_bins, circular)
+        _walkers(walkers, model.theta0().size)
+        problem = prepare_simulation(model, options)
+    if on_ready is not None:
+        on_ready(problem)
+    return _sample(problem, progress, warn)
 
 
 # --------------------------------------------------------------- the files the commands write
 
 
-def sample(
+def _sample(
     problem: SimulationProblem,
     progress: Callable[[int, int, float], None] | None = None,
     warn: bool = True,
 ) -> SimulationResult:
-    """Sample a prepared :func:`simulation_problem`: the second half of :func:`simulate`.
-
-    Raises
-    ------
-    SamplerInterrupted
-        Ctrl-C (a ``KeyboardInterrupt``) carrying the chain so far as ``.partial``; keep it
-        with :func:`save_interrupted` to continue with ``resume``.
-    """
+    """Sample a prepared simulation: the second half of :func:`simulate`."""
     from ucbplan.lisa.pipeline import run_simulation
 
     with scope():

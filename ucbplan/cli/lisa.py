@@ -21,6 +21,8 @@ from ucbplan.cli._options import OverwriteAllOpt
 from ucbplan.errors import InputError, OutputError, UcbplanError
 
 if TYPE_CHECKING:
+    from rich.progress import Progress, TaskID
+
     from ucbplan.lisa.outputs import SimulationFiles
     from ucbplan.lisa.simulation import SimulationProblem, SimulationResult
 
@@ -101,31 +103,31 @@ def simulate(
 ) -> None:
     """Simulate a LISA observation and sample the targeted-search posterior → target YAML."""
     files = _simulation_files(output, chain, plots, overwrite)
-    problem = api.simulation_problem(
-        target,
-        seed,
-        t_obs=t_obs,
-        n_bins=n_bins,
-        circular=circular,
-        walkers=walkers,
-        steps=steps,
-        until_converged=until_converged,
-        max_steps=max_steps,
-        noise=noise,
-        resume=resume,
-    )
-    model = problem.model
-    err_console.print(
-        f"{model.base.name}: optimal SNR {problem.snr:.1f}, T_obs = {model.t_obs_s:.6f} s, "
-        f"N = {n_bins} bins, {problem.theta0.size} parameters, noise {'on' if noise else 'off'}, "
-        f"seed {seed}"
-    )
+    shown = _Shown(steps)
     try:
-        result = _run_with_progress(problem, steps)
+        result = api.simulate(
+            target,
+            seed,
+            t_obs=t_obs,
+            n_bins=n_bins,
+            circular=circular,
+            walkers=walkers,
+            steps=steps,
+            until_converged=until_converged,
+            max_steps=max_steps,
+            noise=noise,
+            resume=resume,
+            progress=shown.progress,
+            on_ready=shown.ready,
+            warn=False,
+        )
     except KeyboardInterrupt as stop:
-        if hasattr(stop, "partial"):  # SamplerInterrupted: the chain so far
-            _save_interrupted(problem, stop.partial, files, target, overwrite)
+        shown.close()
+        if shown.problem is not None and hasattr(stop, "partial"):  # SamplerInterrupted
+            _save_interrupted(shown.problem, stop.partial, files, target, overwrite)
         raise
+    finally:
+        shown.close()
     _write_simulation(result, files, target, plots, overwrite)
 
 
@@ -193,24 +195,44 @@ def _save_interrupted(
     )
 
 
-def _run_with_progress(problem: SimulationProblem, steps: int) -> SimulationResult:
-    """:func:`ucbplan.api.lisa_analysis.sample` under a transient progress bar on stderr."""
-    from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
+class _Shown:
+    """The run on stderr: its summary line once the data are drawn, then a transient progress
+    bar while the sampler runs."""
 
-    with Progress(
-        TextColumn("emcee"),
-        BarColumn(),
-        TextColumn("{task.completed}/{task.total} steps τ_max≈{task.fields[tau]}"),
-        TimeRemainingColumn(),
-        console=err_console,
-        transient=True,
-    ) as prog:
-        task = prog.add_task("emcee", total=steps, tau="?")
+    def __init__(self, steps: int) -> None:
+        self.steps = steps
+        self.problem: SimulationProblem | None = None
+        self.bar: Progress | None = None
+        self.task: TaskID | None = None
 
-        def _progress(done: int, total: int, tau: float) -> None:
-            prog.update(task, completed=done, total=total, tau=f"{tau:.0f}")
+    def ready(self, problem: SimulationProblem) -> None:
+        from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 
-        return api.sample(problem, _progress, warn=False)
+        self.problem, model, opts = problem, problem.model, problem.options
+        err_console.print(
+            f"{model.base.name}: optimal SNR {problem.snr:.1f}, T_obs = {model.t_obs_s:.6f} s, "
+            f"N = {model.n_bins} bins, {problem.theta0.size} parameters, "
+            f"noise {'on' if opts.noise else 'off'}, seed {opts.seed}"
+        )
+        bar = self.bar = Progress(
+            TextColumn("emcee"),
+            BarColumn(),
+            TextColumn("{task.completed}/{task.total} steps τ_max≈{task.fields[tau]}"),
+            TimeRemainingColumn(),
+            console=err_console,
+            transient=True,
+        )
+        bar.start()
+        self.task = bar.add_task("emcee", total=self.steps, tau="?")
+
+    def progress(self, done: int, total: int, tau: float) -> None:
+        if self.bar is not None and self.task is not None:
+            self.bar.update(self.task, completed=done, total=total, tau=f"{tau:.0f}")
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.stop()
+            self.bar = None
 
 
 def fisher(
