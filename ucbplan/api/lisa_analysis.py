@@ -31,7 +31,12 @@ if TYPE_CHECKING:
     from ucbplan.lisa.lines import WaveformLines
     from ucbplan.lisa.outputs import SimulationFiles
     from ucbplan.lisa.pipeline import FisherForecast
-    from ucbplan.lisa.simulation import LisaModel, SimulationProblem, SimulationResult
+    from ucbplan.lisa.simulation import (
+        LisaModel,
+        SimulateOptions,
+        SimulationProblem,
+        SimulationResult,
+    )
 
 __all__ = [
     "FISHER_FLAGS",
@@ -237,6 +242,29 @@ def waveform(
         return waveform_lines(_model(target, t_obs, n_bins, False))
 
 
+def _sampler_options(
+    seed: Any,
+    walkers: Any,
+    steps: Any,
+    until_converged: Any,
+    max_steps: Any,
+    noise: Any,
+    resume: Any,
+) -> SimulateOptions:
+    """The checked sampler options of :func:`simulate` (one line naming the parameter)."""
+    from ucbplan.lisa.simulation import SimulateOptions
+
+    return SimulateOptions(
+        seed=int(check_seed(seed) or 0),  # not None: optional=False
+        walkers=_walkers(walkers),
+        steps=check_count("steps", steps, 1, MAX_CHAIN_STEPS),
+        until_converged=_flag(until_converged, "until_converged"),
+        max_steps=check_count("max_steps", max_steps, 1, MAX_CHAIN_STEPS),
+        noise=_flag(noise, "noise"),
+        resume=_resume(resume),
+    )
+
+
 def _resume(resume: Any) -> Path | None:
     if resume is None or isinstance(resume, str | Path):
         return None if resume is None else Path(resume)
@@ -262,66 +290,41 @@ def simulate(
     on_ready: Callable[[SimulationProblem], None] | None = None,
     warn: bool = True,
 ) -> SimulationResult:
-    """Simulate a LISA observation and sample the targeted-search posterior (``ucbplan
-    simulate``).
+    """Simulate a LISA observation, sample the targeted-search posterior (``ucbplan simulate``).
 
     Parameters
     ----------
-    target : str, Path, dict or Target
-        Target or injection (needs ``lisa.amplitude``, ``cos_inclination``, ``psi``).
+    target, t_obs, n_bins, circular
+        As :func:`fisher` (the band width is that of the injection and the templates).
     seed : int
         Seed (>= 0) of the noise draw and the sampler.
-    t_obs : str, float or Quantity, optional
-        Observation length (``"4yr"``, seconds or a time Quantity; default: the target's).
-    n_bins : int
-        Band width N in bins of the injection and the templates (even, >= 16).
-    circular : bool
-        Fit the 6-parameter circular model even if the target is eccentric.
-    walkers, steps : int
-        emcee walkers (>= 2 per parameter) and chain steps (the minimum with
-        ``until_converged``).
-    until_converged : bool
-        Extend the chain until it is >= 50 τ long, or ``max_steps``.
-    max_steps : int
-        Cap of the chain with ``until_converged``.
-    noise : bool
-        Add a Gaussian noise draw (else zero-noise data).
+    walkers, steps, max_steps : int
+        emcee walkers (>= 2 per parameter); chain steps (the minimum with ``until_converged``,
+        which extends the chain until it is >= 50 τ long, or ``max_steps``).
+    until_converged, noise : bool
+        See ``steps``; add a Gaussian noise draw (else zero-noise data).
     resume : str or Path, optional
         Chain (.npz) of an earlier run with the same options to continue.
-    progress : callable, optional
-        ``progress(step, total, tau_max)``, called every few sampler steps.
-    on_ready : callable, optional
-        ``on_ready(problem)``, called with the model and its drawn data before sampling (to
-        show the run, or to keep the problem for :func:`save_interrupted`).
+    progress, on_ready : callable, optional
+        ``progress(step, total, tau_max)`` every few steps; ``on_ready(problem)`` with the
+        drawn data before sampling (to show the run; for :func:`save_interrupted`).
     warn : bool
-        Emit the result's warnings as :class:`ucbplan.ReduceWarning` (besides returning them).
+        Emit the result's warnings as :class:`ucbplan.ReduceWarning` too.
 
     Returns
     -------
     SimulationResult
-        Posterior samples, mean, σ and the Fisher σ; write it with
-        :func:`ucbplan.lisa.outputs.write_simulation`.
+        Posterior samples, mean, σ and the Fisher σ (write it with :func:`write_simulation`).
 
     Raises
     ------
-    InputError
-        Bad options (one line each, naming the parameter), before the target is read.
-    SamplerInterrupted
-        Ctrl-C (a ``KeyboardInterrupt``) carrying the chain so far as ``.partial``: keep it
-        with :func:`save_interrupted` to continue with ``resume``.
+    InputError, SamplerInterrupted
+        Bad options (one line naming the parameter), before the target is read; Ctrl-C (a
+        ``KeyboardInterrupt``) carrying the chain so far as ``.partial``.
     """
     from ucbplan.lisa.pipeline import prepare_simulation
-    from ucbplan.lisa.simulation import SimulateOptions
 
-    options = SimulateOptions(
-        seed=int(check_seed(seed) or 0),  # not None: optional=False
-        walkers=_walkers(walkers),
-        steps=check_count("steps", steps, 1, MAX_CHAIN_STEPS),
-        until_converged=_flag(until_converged, "until_converged"),
-        max_steps=check_count("max_steps", max_steps, 1, MAX_CHAIN_STEPS),
-        noise=_flag(noise, "noise"),
-        resume=_resume(resume),
-    )
+    options = _sampler_options(seed, walkers, steps, until_converged, max_steps, noise, resume)
     with scope():
         model = _model(target, t_obs, n_bins, circular)
         _walkers(walkers, model.theta0().size)

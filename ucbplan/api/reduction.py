@@ -284,10 +284,9 @@ def reduce(
     velocities : str, Path, astropy Table or VelocityTable
         Velocity table (CSV or ECSV file, or a table with its columns): ``bjd_tdb``,
         ``exptime_s``, ``v1``, ``sigma_v1`` … [km/s].
-    seed : int, optional
-        Seed (>= 0) of the Monte-Carlo draws (None: fresh entropy, reported in the report).
-    samples : int
-        Monte-Carlo draws, from :data:`MIN_SAMPLES` to :data:`MAX_SAMPLES`.
+    seed, samples : int, optional
+        Seed (>= 0) of the Monte-Carlo draws (None: fresh entropy, reported in the report);
+        their number, from :data:`MIN_SAMPLES` to :data:`MAX_SAMPLES`.
     light_time, mass_radius, cos_i_sigma : bool, str, float, optional
         Correct for the light travel time across the orbit; WD mass–radius relation for the
         redshift check (``eggleton``, ``nauenberg``); 1σ of cos ι [1] in [0, 2] if neither the
@@ -295,8 +294,7 @@ def reduce(
     site : str, EarthLocation or astroplan Observer, optional
         Telescope, when the table's times are UTC at the site.
     warn : bool
-        Emit the report's warnings as :class:`ucbplan.ReduceWarning` (the command line prints
-        them inside the report instead).
+        Emit the report's warnings as :class:`ucbplan.ReduceWarning` (the CLI prints them).
 
     Returns
     -------
