@@ -55,6 +55,8 @@ FLAGS = {
     "steps": "--steps",
     "max_steps": "--max-steps",
     "workers": "--workers",
+    "jobs": "--jobs",
+    "chunk": "--chunk",
 }
 
 _LEADING_NAME = re.compile(r"^([a-z_][a-z0-9_]*)(?=[: ])")

@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any
 import typer
 from rich.markup import escape
 
+from ucbplan.api import populations as api
 from ucbplan.cli._console import check_output_path, err_console
 from ucbplan.cli._population_options import (
     CatalogArg,
@@ -30,6 +31,8 @@ from ucbplan.cli._population_options import (
 from ucbplan.errors import UcbplanError
 
 if TYPE_CHECKING:
+    from rich.progress import Progress, TaskID
+
     from ucbplan.population.catalog import Catalog
     from ucbplan.population.catalog_forecast import ForecastOptions
     from ucbplan.population.execute import ExecutorSpec
@@ -45,27 +48,24 @@ population_app = typer.Typer(
 
 def _catalog(path: Path, shared: PopulationArgs) -> Catalog:
     """The catalog, with its skipped rows printed (one yellow line each)."""
-    from ucbplan.population.catalog import parse_column_map, read_catalog
-
-    cat = read_catalog(
-        path,
-        parse_column_map(shared.columns),
-        skip_bad=shared.skip_bad,
-        hdf5_path=shared.hdf5_path,
+    cat = api.read_population(
+        path, columns=shared.columns, hdf5_path=shared.hdf5_path, skip_bad=shared.skip_bad
     )
+    _skipped(cat)
+    return cat
+
+
+def _skipped(cat: Catalog) -> None:
     for row, msg in cat.bad:
         err_console.print(f"[yellow]skipped row {row}: {escape(msg)}[/yellow]")
-    return cat
 
 
 def _inputs(path: Path, shared: PopulationArgs) -> tuple[Catalog, ForecastOptions]:
     """The catalog and the checked forecast options (``--k-eff`` needed without masses)."""
-    from ucbplan.population.catalog_forecast import forecast_options
-
     cat = _catalog(path, shared)
-    opts = forecast_options(
-        sigma_v_kms=shared.sigma_v,
-        k_eff_kms=shared.k_eff,
+    opts = api.forecast_settings(
+        sigma_v=shared.sigma_v,
+        k_eff=shared.k_eff,
         t_obs=shared.t_obs,
         t_start=shared.t_start,
         n_bins=shared.n_bins,
@@ -78,10 +78,8 @@ def _inputs(path: Path, shared: PopulationArgs) -> tuple[Catalog, ForecastOption
 def _control(output: Path, overwrite: bool, shared: PopulationArgs) -> RunControl:
     """Refuse an existing ``output`` (without ``--overwrite``), then the run control (checked)
     with the part files next to ``output``."""
-    from ucbplan.population.runner import parts_folder
-
     check_output_path(output, overwrite)
-    return shared.control(parts_folder(output), overwrite)
+    return shared.control(api.parts_of(output), overwrite)
 
 
 def _announce(cat: Catalog, path: Path, control: RunControl, where: str = "") -> None:
@@ -90,46 +88,63 @@ def _announce(cat: Catalog, path: Path, control: RunControl, where: str = "") ->
     )
 
 
+class _Bar:
+    """A transient progress line on stderr (sources done, rate, ETA) while a run works."""
+
+    def __init__(self, label: str) -> None:
+        self.label, self.rate = label, api.progress_rate()
+        self.prog: Progress | None = None
+        self.task: TaskID | None = None
+
+    def start(self, total: int) -> None:
+        from rich.progress import BarColumn, Progress, TextColumn
+
+        self.prog = Progress(
+            TextColumn(self.label),
+            BarColumn(),
+            TextColumn(
+                "{task.completed}/{task.total} sources {task.fields[rate]} ETA {task.fields[eta]}"
+            ),
+            console=err_console,
+            transient=True,
+        )
+        self.prog.start()
+        self.task = self.prog.add_task(self.label, total=total, rate="", eta="?")
+
+    def update(self, done: int, n: int) -> None:
+        r, eta = self.rate.eta(done, n)
+        eta_text = "?" if eta != eta else f"{eta:.0f} s"
+        if self.prog is not None and self.task is not None:
+            self.prog.update(self.task, completed=done, rate=f"{r:.1f}/s", eta=eta_text)
+
+    def __enter__(self) -> _Bar:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self.prog is not None:
+            self.prog.stop()
+            self.prog = None
+
+
 def _run(
     label: str, cat: Catalog, control: RunControl, call: Callable[[RunControl], ForecastRun]
 ) -> ForecastRun:
     """``call(control)`` under a progress line on stderr (sources done, rate, ETA)."""
-    from rich.progress import BarColumn, Progress, TextColumn
-
-    from ucbplan.population.execute import Rate
-
-    rate = Rate()
-    with Progress(
-        TextColumn(label),
-        BarColumn(),
-        TextColumn(
-            "{task.completed}/{task.total} sources {task.fields[rate]} ETA {task.fields[eta]}"
-        ),
-        console=err_console,
-        transient=True,
-    ) as prog:
-        task = prog.add_task(label, total=len(cat.sources), rate="", eta="?")
-
-        def _progress(done: int, n: int) -> None:
-            r, eta = rate.eta(done, n)
-            eta_text = "?" if eta != eta else f"{eta:.0f} s"
-            prog.update(task, completed=done, rate=f"{r:.1f}/s", eta=eta_text)
-
-        return call(dataclasses.replace(control, progress=_progress))
+    with _Bar(label) as bar:
+        bar.start(len(cat.sources))
+        return call(dataclasses.replace(control, progress=bar.update))
 
 
 def _finish(run: ForecastRun, output: Path, control: RunControl, keep_parts: bool) -> None:
     """Write the merged table, remove the parts (unless kept), print the summary line."""
-    from ucbplan.population.execute import remove_parts
-    from ucbplan.population.tables import write_table
+    api.write_run(run.table, output, control.parts, overwrite=control.overwrite, keep=keep_parts)
+    _summary(run.table.meta, output, run.chunk, run.reused, run.n_chunks)
 
-    write_table(run.table, output, control.overwrite)
-    if not keep_parts:
-        remove_parts(control.parts)
-    meta = run.table.meta
+
+def _summary(meta: Any, output: Path, chunk: int, reused: int, n_chunks: int) -> None:
     err_console.print(
         f"wrote {escape(str(output))}: {meta['n_ok']} ok, {meta['n_unconstrained']} unconstrained, "
-        f"{meta['n_failed']} failed; chunk {run.chunk}, {run.reused}/{run.n_chunks} parts reused"
+        f"{meta['n_failed']} failed; chunk {chunk}, {reused}/{n_chunks} parts reused"
     )
 
 
@@ -144,18 +159,30 @@ def forecast(
     overwrite: Overwrite = False,
 ) -> None:
     """Per-source Fisher forecast of a catalog → ECSV (σ_u at the end, T_valid, SNR, status)."""
-    from ucbplan.population.plots import forecast_plots
-    from ucbplan.population.runner import run_forecast
-
-    control = _control(output, overwrite, shared)
+    _control(output, overwrite, shared)
     if plots is not None and not plots.is_dir():
         raise UcbplanError(f"--plots: folder {plots} does not exist; create it first")
-    cat, opts = _inputs(catalog, shared)
-    _announce(cat, catalog, control)
-    run = _run("forecast", cat, control, lambda c: run_forecast(cat, opts, c))
-    _finish(run, output, control, shared.keep_parts)
+    bar = _Bar("forecast")
+
+    def ready(cat: Catalog, executor: ExecutorSpec) -> None:
+        _skipped(cat)
+        err_console.print(
+            f"{len(cat.sources)} sources from {escape(str(catalog))}; {executor.describe()}"
+        )
+        bar.start(len(cat.sources))
+
+    with bar:
+        result = api.population_forecast(
+            catalog,
+            **{f.name: getattr(shared, f.name) for f in dataclasses.fields(shared)},
+            output=output,
+            overwrite=overwrite,
+            progress=bar.update,
+            on_ready=ready,
+        )
+    _summary(result.table.meta, output, result.chunk, result.reused, result.n_chunks)
     if plots is not None:
-        for path in forecast_plots(run.table, plots, overwrite=overwrite):
+        for path in result.plot(plots, overwrite=overwrite):
             err_console.print(f"wrote {escape(str(path))}")
 
 
@@ -361,9 +388,7 @@ def semester(
     name: str = typer.Argument(..., help="2041A, 2041B or an ESO period like P147."),
 ) -> None:
     """Print the dates of a semester (A: Feb–Jul, B: Aug–Jan) or ESO period (P110 = 2022-10)."""
-    from ucbplan.observing.semesters import semester_dates
-
-    first, end = semester_dates(name)
+    first, end = api.semester(name)
     typer.echo(f"{name.strip().upper()}: {first.isoformat()} .. {end.isoformat()} (end exclusive)")
 
 
