@@ -236,3 +236,51 @@ def test_fisher_and_waveform_results_have_short_reprs() -> None:
 
 def _velocity_table() -> Table:
     return Table.read(VEL, format="ascii.csv", comment="#")
+
+
+# ------------------------------------------------------- the CLI's options derive from the API
+
+
+def _command_params(*path: str) -> dict[str, Any]:
+    import typer
+
+    from ucbplan.cli.app import app
+
+    cmd: Any = typer.main.get_command(app)
+    for name in path:
+        cmd = cmd.commands[name]
+    return {p.name: p for p in cmd.params}
+
+
+@pytest.mark.parametrize(
+    ("path", "function", "flags"),
+    [
+        (("reduce",), "ucbplan.api.reduction:reduce", "REDUCE_FLAGS"),
+        (("simulate",), "ucbplan.api.lisa_analysis:simulate", "SIMULATE_FLAGS"),
+        (("fisher",), "ucbplan.api.lisa_analysis:fisher", "FISHER_FLAGS"),
+        (("waveform",), "ucbplan.api.lisa_analysis:waveform", "WAVEFORM_FLAGS"),
+        (
+            ("population", "forecast"),
+            "ucbplan.api.populations:population_forecast",
+            "POPULATION_FLAGS",
+        ),
+        (("population", "simulate"), "ucbplan.api.populations:population_forecast", "PARTS_FLAGS"),
+    ],
+)
+def test_cli_options_take_their_default_and_help_from_the_api(
+    path: tuple[str, ...], function: str, flags: str
+) -> None:
+    import importlib
+
+    from ucbplan.api.options import default_of
+
+    module_name, name = function.split(":")
+    module = importlib.import_module(module_name)
+    func, table = getattr(module, name), getattr(module, flags)
+    params = _command_params(*path)
+    options = {p: f for p, f in table.items() if f.decls}
+    assert options and set(options) <= set(params)
+    for parameter, flag in options.items():
+        got = params[parameter]
+        assert got.help == flag.help, parameter
+        assert got.default == default_of(func, parameter), parameter
