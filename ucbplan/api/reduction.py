@@ -240,21 +240,35 @@ class Report:
         return em_prior(self.reduction)
 
     def plot(self, ax: Any = None, overwrite: bool = False) -> Any:
-        """The velocities against the orbital factor F̄ with the fitted lines → its ``Axes``.
+        """The velocities against the orbital factor F̄ with the fitted lines on ``ax`` (None:
+        a new figure, with the residuals below) → the ``Axes`` (``.figure.savefig`` to keep).
 
         Given a folder (str or Path) instead, writes every figure of ``reduce --plots`` there
         and returns their paths (``overwrite`` replaces existing ones).
         """
         if isinstance(ax, str | Path):
             return self.save_plots(ax, overwrite=overwrite)
-        from ucbplan.reduce.plots import fig_rv
+        from ucbplan.reduce.plots import draw_rv, fig_rv
 
-        if ax is not None:
+        if ax is None:
+            axes: Axes = fig_rv(self.reduction).axes[0]
+            return axes
+        if not callable(getattr(ax, "errorbar", None)):
             raise InputError(
-                f"ax: expected None (a new figure) or a folder, got {shorten(ax, 40)}", "ax"
+                f"ax: expected a matplotlib Axes, None or a folder, got {shorten(ax, 40)}", "ax"
             )
-        axes: Axes = fig_rv(self.reduction).axes[0]
-        return axes
+        draw_rv(self.reduction, ax)
+        return ax
+
+    def _repr_html_(self) -> str:
+        from html import escape
+
+        rows = "".join(
+            f"<tr><td>{escape(k)}</td><td>{escape(repr(m))}</td></tr>"
+            for k, m in self.quantities.items()
+        )
+        head = f"<b>{escape(self.target)}</b>: {self.n_spectra} spectra, seed {self.seed}"
+        return f"<p>{head}</p><table>{rows}</table>"
 
     def save_plots(self, folder: str | Path, overwrite: bool = False) -> list[Path]:
         """The reduction's PNG figures in ``folder`` (``reduce --plots``); their paths."""

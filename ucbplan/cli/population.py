@@ -19,8 +19,11 @@ from typing import TYPE_CHECKING, Any
 import typer
 from rich.markup import escape
 
+from ucbplan.api import population_runs as runs
 from ucbplan.api import populations as api
+from ucbplan.api.options import Flag
 from ucbplan.cli._console import check_output_path, err_console
+from ucbplan.cli._derive import option
 from ucbplan.cli._population_options import (
     CatalogArg,
     Overwrite,
@@ -39,6 +42,15 @@ if TYPE_CHECKING:
     from ucbplan.population.runner import ForecastRun, RunControl
 
 __all__ = ["register"]
+
+VIS, RANK, SIM = runs.VISIBILITY_FLAGS, runs.RANK_FLAGS, runs.POPULATION_SIMULATE_FLAGS
+
+
+def _required(flags: dict[str, Flag], parameter: str) -> Any:
+    """A required ``typer.Option`` with the flag and help declared for ``parameter``."""
+    spec = flags[parameter]
+    return typer.Option(..., *spec.decls, help=spec.help)
+
 
 population_app = typer.Typer(
     help="Whole LISA catalogs: forecasts, visibility, ranking and simulations per source.",
@@ -191,44 +203,39 @@ def forecast(
 def visibility(
     catalog: CatalogArg,
     output: TableOut,
-    semester: str = typer.Option(..., "--semester", help="2041A, 2041B or an ESO period P147."),
-    site: str | None = typer.Option(None, "--site", help="Site name or alias (e.g. paranal)."),
-    site_lonlat: str | None = typer.Option(
-        None, "--site-lonlat", help="LON,LAT,HEIGHT (deg east, deg north, m) instead of --site."
-    ),
-    sites_file: Path | None = typer.Option(None, "--sites-file", help="YAML site table."),
-    airmass_max: float = typer.Option(2.0, "--airmass-max", help="Largest airmass (sec z)."),
-    twilight: str = typer.Option("nautical", "--twilight", help="civil|nautical|astronomical"),
-    moon_sep: float = typer.Option(30.0, "--moon-sep", help="Smallest Moon separation [deg]."),
-    min_hours: float = typer.Option(1.0, "--min-hours", help="Usable hours of a usable night."),
-    exptime: float = typer.Option(60.0, "--exptime", help="Block (exposure) length [s]."),
-    alpha: float = typer.Option(1.0, "--alpha", help="Planning margin α of T_valid."),
+    semester: str = _required(VIS, "semester"),
+    site: str | None = option(runs.visibility_settings, VIS, "site"),
+    site_lonlat: str | None = option(runs.visibility_settings, VIS, "site_lonlat"),
+    sites_file: Path | None = option(runs.visibility_settings, VIS, "sites_file"),
+    airmass_max: float = option(runs.visibility_settings, VIS, "airmass_max"),
+    twilight: str = option(runs.visibility_settings, VIS, "twilight"),
+    moon_sep: float = option(runs.visibility_settings, VIS, "moon_sep"),
+    min_hours: float = option(runs.visibility_settings, VIS, "min_hours"),
+    exptime: float = option(runs.visibility_settings, VIS, "exptime"),
+    alpha: float = option(runs.visibility_settings, VIS, "alpha"),
     *,
     shared: PopulationArgs,
     overwrite: Overwrite = False,
 ) -> None:
     """Per source: usable nights, hours at airmass < X, anchor epochs inside T_valid → ECSV."""
-    from ucbplan.observing.blocks import ExposurePlan
-    from ucbplan.observing.schedule.settings import PlanSettings
-    from ucbplan.observing.sites import resolve_site
-    from ucbplan.population.runner import run_visibility
-    from ucbplan.population.visibility import VisibilityOptions
-
     control = _control(output, overwrite, shared)
-    where = resolve_site(site, site_lonlat, sites_file)
-    settings = PlanSettings(
-        twilight=twilight,
+    settings = runs.visibility_settings(
+        semester,
+        site=site,
+        site_lonlat=site_lonlat,
+        sites_file=sites_file,
         airmass_max=airmass_max,
-        moon_sep_deg=moon_sep,
-        exposure=ExposurePlan(exptime_s=exptime),
+        twilight=twilight,
+        moon_sep=moon_sep,
+        min_hours=min_hours,
+        exptime=exptime,
         alpha=alpha,
     )
     cat, fopts = _inputs(catalog, shared)
-    opts = VisibilityOptions(
-        site=where, semester=semester, settings=settings, min_hours=min_hours, forecast=fopts
-    )
-    _announce(cat, catalog, control, f"{escape(where.name)}, {opts.semester.upper()}; ")
-    run = _run("visibility", cat, control, lambda c: run_visibility(cat, opts, c))
+    opts = dataclasses.replace(settings, forecast=fopts)
+    where = f"{escape(opts.site.name)}, {opts.semester.upper()}; "
+    _announce(cat, catalog, control, where)
+    run = _run("visibility", cat, control, lambda c: runs.run_visibility(cat, opts, c))
     _finish(run, output, control, shared.keep_parts)
 
 
@@ -269,24 +276,20 @@ def _ranked_source(
 ) -> tuple[Any, Catalog, ForecastOptions]:
     """(forecast table, catalog, forecast options) of ``rank``'s SOURCE: a forecast table
     (checked against its catalog), or a catalog forecast here (its parts removed after)."""
-    from ucbplan.population import rank as rk
-    from ucbplan.population.execute import remove_parts
-    from ucbplan.population.runner import RunControl, parts_folder, run_forecast
-
-    tab = rk.read_forecast_table(source)
-    if tab is not None:
-        fopts = rk.forecast_options_of(tab.meta, source)
-        cat_path = catalog or Path(str(tab.meta.get("catalog_path", tab.meta.get("catalog"))))
-        cat = _catalog(cat_path, shared)
-        rk.check_catalog_of(tab, cat, source)
+    forecast = runs.read_forecast(source)
+    if forecast is not None:
+        tab, fopts, cat_path = forecast
+        cat = _catalog(catalog or cat_path, shared)
+        runs.check_forecast_catalog(tab, cat, source)
         return tab, cat, fopts
     cat, fopts = _inputs(source, shared)
     with _made_folder(out_dir):
-        control = RunControl(parts_folder(out_dir / "forecast.ecsv"), executor, overwrite=True)
+        parts = api.parts_of(out_dir / "forecast.ecsv")
+        control = api.run_control(parts, executor, overwrite=True)
         try:
-            tab = _run("forecast", cat, control, lambda c: run_forecast(cat, fopts, c)).table
+            tab = _run("forecast", cat, control, lambda c: runs.run_forecast(cat, fopts, c)).table
         finally:
-            remove_parts(control.parts)
+            runs.remove_parts(control.parts)
     return tab, cat, fopts
 
 
@@ -295,17 +298,15 @@ def _ranked_source(
 def rank(
     source: Path = typer.Argument(..., help="Forecast table (ECSV) or an LDC-style catalog."),
     out_dir: Path = typer.Option(..., "--out-dir", help="Folder for ranked.ecsv and targets."),
-    top: int = typer.Option(10, "--top", help="Write target files for the best N."),
-    goal: str = typer.Option("K1=5%", "--goal", help="Precision goal (K1=5%, M1=2%, q=3%…)."),
-    instrument: str | None = typer.Option(None, "--instrument", help="σ_ref and overheads."),
-    instruments_file: Path | None = typer.Option(None, "--instruments-file", help="YAML table."),
-    sigma_ref: str | None = typer.Option(
-        None, "--sigma-ref", help="SIGMA_KMS,MAG,EXPTIME_S: σ_v of one exposure at V = MAG."
-    ),
-    exptime: float = typer.Option(60.0, "--exptime", help="One exposure [s]."),
-    readout: float | None = typer.Option(None, "--readout", help="Readout per exposure [s]."),
-    overhead: float | None = typer.Option(None, "--overhead", help="Acquisition per visit [s]."),
-    visit: float = typer.Option(3600.0, "--visit", help="Visit length [s]."),
+    top: int = option(runs.rank_settings, RANK, "top"),
+    goal: str = option(runs.rank_settings, RANK, "goal"),
+    instrument: str | None = option(runs.rank_settings, RANK, "instrument"),
+    instruments_file: Path | None = option(runs.rank_settings, RANK, "instruments_file"),
+    sigma_ref: str | None = option(runs.rank_settings, RANK, "sigma_ref"),
+    exptime: float = option(runs.rank_settings, RANK, "exptime"),
+    readout: float | None = option(runs.rank_settings, RANK, "readout"),
+    overhead: float | None = option(runs.rank_settings, RANK, "overhead"),
+    visit: float = option(runs.rank_settings, RANK, "visit"),
     catalog: Path | None = typer.Option(
         None, "--catalog", help="The forecast's catalog (default: the path in its meta)."
     ),
@@ -314,28 +315,24 @@ def rank(
     overwrite: Overwrite = False,
 ) -> None:
     """Order sources by a stated figure of merit; target files for the top N (for `plan`)."""
-    from ucbplan.population import rank as rk
-    from ucbplan.population.tables import write_table
-
     ranked_path = out_dir / "ranked.ecsv"
     _check_out_dir(out_dir, ranked_path, overwrite)
     executor = shared.executor()
-    ropts = rk.rank_options(
+    ropts = runs.rank_settings(
         top=top,
         goal=goal,
         instrument=instrument,
         instruments_file=instruments_file,
         sigma_ref=sigma_ref,
-        exptime_s=exptime,
-        readout_s=readout,
-        acquisition_s=overhead,
-        visit_s=visit,
+        exptime=exptime,
+        readout=readout,
+        overhead=overhead,
+        visit=visit,
     )
     tab, cat, fopts = _ranked_source(source, catalog, out_dir, shared, executor)
-    ranked = rk.rank_table(tab, cat, ropts)
+    ranked = runs.rank_sources(tab, cat, ropts)
     with _made_folder(out_dir):
-        paths = rk.write_top_targets(ranked, cat, fopts, out_dir, top, overwrite)
-        write_table(ranked, ranked_path, overwrite)
+        paths = runs.write_ranked(ranked, cat, fopts, out_dir, top=top, overwrite=overwrite)
     err_console.print(
         f"wrote {escape(str(ranked_path))} ({ranked.meta['figure_of_merit']}) and "
         f"{len(paths)} target file(s) in {escape(str(out_dir))}"
@@ -348,36 +345,32 @@ def simulate(
     catalog: CatalogArg,
     output: TableOut,
     out_dir: Path = typer.Option(..., "--out-dir", help="Folder for the posterior targets."),
-    seed: int = typer.Option(0, "--seed", help="Global seed (per source: seed + source id)."),
-    walkers: int = typer.Option(32, "--walkers", help="emcee walkers (≥ 12)."),
-    steps: int = typer.Option(2000, "--steps", help="Chain steps (minimum with --until-conv.)."),
-    until_converged: bool = typer.Option(
-        False, "--until-converged", help="Extend each chain to ≥ 50 τ (or --max-steps)."
-    ),
-    max_steps: int = typer.Option(50000, "--max-steps", help="Cap for --until-converged."),
-    no_noise: bool = typer.Option(False, "--no-noise", help="Zero-noise data."),
+    seed: int = option(runs.simulation_settings, SIM, "seed"),
+    walkers: int = option(runs.simulation_settings, SIM, "walkers"),
+    steps: int = option(runs.simulation_settings, SIM, "steps"),
+    until_converged: bool = option(runs.simulation_settings, SIM, "until_converged"),
+    max_steps: int = option(runs.simulation_settings, SIM, "max_steps"),
+    no_noise: bool = option(runs.simulation_settings, SIM, "no_noise"),
     *,
     shared: PopulationArgs,
     overwrite: Overwrite = False,
 ) -> None:
     """Simulate LISA per source → summary ECSV (posterior vs Fisher σ) + a target file each."""
-    from ucbplan.population.simulate import PopulationSimulateOptions, run_simulate
-
     control = _control(output, overwrite, shared)
-    sampling = PopulationSimulateOptions(  # the options first, then the files, then the work
+    sampling = runs.simulation_settings(  # the options first, then the files, then the work
         seed=seed,
         walkers=walkers,
         steps=steps,
         until_converged=until_converged,
         max_steps=max_steps,
-        noise=not no_noise,
+        no_noise=no_noise,
     )
     _check_out_dir(out_dir, None, overwrite)
     cat, fopts = _inputs(catalog, shared)
     opts = dataclasses.replace(sampling, forecast=fopts)
     _announce(cat, catalog, control)
     with _made_folder(out_dir):
-        run = _run("simulate", cat, control, lambda c: run_simulate(cat, opts, out_dir, c))
+        run = _run("simulate", cat, control, lambda c: runs.run_simulations(cat, opts, out_dir, c))
     _finish(run, output, control, shared.keep_parts)
     for f in run.table.meta["failed"]:
         err_console.print(f"[yellow]failed {escape(f['source_id'])}: {escape(f['error'])}[/yellow]")
