@@ -308,3 +308,12 @@ def test_cli_options_take_their_default_and_help_from_the_api(
         assert got.help == flag.help, parameter
         if not got.required:
             assert got.default == default_of(func, parameter), parameter
+
+
+def test_population_forecast_without_masses_needs_k_eff(tmp_path: Path) -> None:
+    path = tmp_path / "no-masses.ecsv"
+    tab = Table.read(LDC)[:2]
+    tab.remove_columns([c for c in ("Mass1", "Mass2") if c in tab.colnames])
+    tab.write(path, format="ascii.ecsv")
+    _refused(lambda: ucbplan.population_forecast(path), "k_eff")
+    assert len(ucbplan.population_forecast(path, k_eff=600 * u.km / u.s)) == 2

@@ -30,6 +30,7 @@ __all__ = [
     "PARTS_FLAGS",
     "POPULATION_FLAGS",
     "PopulationForecast",
+    "check_k_source",
     "executor",
     "forecast_settings",
     "parts_of",
@@ -228,8 +229,7 @@ def population_forecast(
     )
     spec = executor(workers=workers, scheduler=scheduler, cluster=cluster, jobs=jobs)
     cat = read_population(catalog, columns=columns, hdf5_path=hdf5_path, skip_bad=skip_bad)
-    if k_eff is None and not {"Mass1", "Mass2"} <= set(cat.optional):
-        raise InputError(f"k_eff: needed: {cat.path.name} has no Mass1 and Mass2 columns", "k_eff")
+    check_k_source(cat, k_eff)
     if on_ready is not None:
         on_ready(cat, spec)
     with tempfile.TemporaryDirectory(prefix="ucbplan-parts-") as scratch:
@@ -257,6 +257,20 @@ def _forecast(
     if output is not None:
         write_run(run.table, output, control.parts, overwrite=control.overwrite, keep=keep_parts)
     return PopulationForecast(run.table, cat.path.name, run.chunk, run.reused, run.n_chunks)
+
+
+def check_k_source(catalog: Catalog, k_eff: Any) -> None:
+    """Refuse a forecast with neither ``k_eff`` nor the catalog's masses to take K from.
+
+    Raises
+    ------
+    InputError
+        Naming ``k_eff``.
+    """
+    if k_eff is None and not {"Mass1", "Mass2"} <= set(catalog.optional):
+        raise InputError(
+            f"k_eff: needed: {catalog.path.name} has no Mass1 and Mass2 columns", "k_eff"
+        )
 
 
 def read_population(

@@ -21,8 +21,7 @@ from ucbplan.api import populations as api
 from ucbplan.api.options import Flag, default_of
 
 if TYPE_CHECKING:
-    from ucbplan.population.execute import ExecutorSpec
-    from ucbplan.population.runner import RunControl
+    from ucbplan.api.populations import ExecutorSpec, RunControl
 
 __all__ = ["PopulationArgs", "population_options"]
 

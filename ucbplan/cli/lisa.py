@@ -23,8 +23,7 @@ from ucbplan.errors import InputError, OutputError, UcbplanError
 if TYPE_CHECKING:
     from rich.progress import Progress, TaskID
 
-    from ucbplan.lisa.outputs import SimulationFiles
-    from ucbplan.lisa.simulation import SimulationProblem, SimulationResult
+    from ucbplan.api.lisa_analysis import SimulationFiles, SimulationProblem, SimulationResult
 
 __all__ = ["register"]
 

@@ -36,10 +36,8 @@ from ucbplan.errors import UcbplanError
 if TYPE_CHECKING:
     from rich.progress import Progress, TaskID
 
-    from ucbplan.population.catalog import Catalog
-    from ucbplan.population.catalog_forecast import ForecastOptions
-    from ucbplan.population.execute import ExecutorSpec
-    from ucbplan.population.runner import ForecastRun, RunControl
+    from ucbplan.api.population_runs import ForecastRun
+    from ucbplan.api.populations import Catalog, ExecutorSpec, ForecastOptions, RunControl
 
 __all__ = ["register"]
 
@@ -82,8 +80,7 @@ def _inputs(path: Path, shared: PopulationArgs) -> tuple[Catalog, ForecastOption
         t_start=shared.t_start,
         n_bins=shared.n_bins,
     )
-    if shared.k_eff is None and not {"Mass1", "Mass2"} <= set(cat.optional):
-        raise UcbplanError(f"--k-eff: needed: {cat.path.name} has no Mass1 and Mass2 columns")
+    api.check_k_source(cat, shared.k_eff)
     return cat, opts
 
 
