@@ -48,8 +48,9 @@ def test_the_values_reach_the_run_control(tmp_path: Path) -> None:
     args = PopulationArgs(**{**values, "workers": 3, "chunk": 7, "resume": True})
     control = args.control(tmp_path / "p", overwrite=True)
     assert control == RunControl(tmp_path / "p", ExecutorSpec(workers=3), 7, True, True)
-    with pytest.raises(InputError, match="--workers"):
+    with pytest.raises(InputError, match=r"^workers: ") as info:  # the CLI prints --workers
         dataclasses.replace(args, workers=0).control(tmp_path, overwrite=False)
+    assert info.value.parameter == "workers"
 
 
 def test_a_command_without_a_place_for_the_options_is_refused() -> None:

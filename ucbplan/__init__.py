@@ -67,6 +67,10 @@ _PUBLIC = {
     "read_blocks": "ucbplan.api",
     "export": "ucbplan.api",
     "Export": "ucbplan.api",
+    # b2 (issue 30): the measuring half
+    "fisher": "ucbplan.api",
+    "waveform": "ucbplan.api",
+    "PopulationForecast": "ucbplan.api",
 }
 
 __all__ = ["__version__", *_PUBLIC]
@@ -111,6 +115,9 @@ if TYPE_CHECKING:  # the same names for type checkers and IDEs ("as": re-exporte
         Plan as Plan,
     )
     from ucbplan.api import (
+        PopulationForecast as PopulationForecast,
+    )
+    from ucbplan.api import (
         Report as Report,
     )
     from ucbplan.api import (
@@ -133,6 +140,9 @@ if TYPE_CHECKING:  # the same names for type checkers and IDEs ("as": re-exporte
     )
     from ucbplan.api import (
         feasibility as feasibility,
+    )
+    from ucbplan.api import (
+        fisher as fisher,
     )
     from ucbplan.api import (
         fit_ephemeris as fit_ephemeris,
@@ -163,6 +173,9 @@ if TYPE_CHECKING:  # the same names for type checkers and IDEs ("as": re-exporte
     )
     from ucbplan.api import (
         validate as validate,
+    )
+    from ucbplan.api import (
+        waveform as waveform,
     )
     from ucbplan.api import (
         write_target as write_target,

@@ -8,13 +8,14 @@ name the parameter at fault, and emits what the user must act on as :class:`ucbp
 UcbplanWarning` (filterable) besides returning it. The command line is a shell over these.
 """
 
-# a1 (issue 30): a saved plan read back and exported
 from ucbplan.api.ephemeris import compare_ephemerides, ephemeris
 from ucbplan.api.exporting import Export, countdown, export, read_blocks
 from ucbplan.api.horizons import horizon
+from ucbplan.api.lisa_analysis import fisher, simulate, waveform
 from ucbplan.api.plan_result import GoalRecord, StrategyRecord
 from ucbplan.api.planning import Plan, default_constraints, plan
-from ucbplan.api.reduction import Report, population_forecast, reduce, simulate
+from ucbplan.api.populations import PopulationForecast, population_forecast
+from ucbplan.api.reduction import Report, reduce
 from ucbplan.api.signal_sizes import feasibility
 from ucbplan.api.targets import get_site, load_target, validate, write_target
 from ucbplan.api.timing import TimingFit, fit_ephemeris
@@ -23,6 +24,7 @@ __all__ = [
     "Export",
     "GoalRecord",
     "Plan",
+    "PopulationForecast",
     "Report",
     "StrategyRecord",
     "TimingFit",
@@ -32,6 +34,7 @@ __all__ = [
     "ephemeris",
     "export",
     "feasibility",
+    "fisher",
     "fit_ephemeris",
     "get_site",
     "horizon",
@@ -42,5 +45,6 @@ __all__ = [
     "reduce",
     "simulate",
     "validate",
+    "waveform",
     "write_target",
 ]

@@ -32,11 +32,16 @@ class Flag:
     unit : str, optional
         The unit of the number typed on the command line, where the function also takes a
         Quantity (the function's default is then given in this unit).
+    min, max : float, optional
+        The range the command line checks and ``--help`` shows (``100<=x<=10000000``); the
+        function checks the same bounds.
     """
 
     decls: tuple[str, ...]
     help: str
     unit: str | None = None
+    min: float | None = None
+    max: float | None = None
 
     @property
     def name(self) -> str:

@@ -1,28 +1,122 @@
-"""``ucbplan.reduce``, ``ucbplan.simulate`` and ``ucbplan.population_forecast``: the
-measuring half of the public API (each the library behind one command)."""
+"""``ucbplan.reduce``: measured velocities → K_j, γ_j, masses, Δκ and Δv_CM, the library
+behind ``ucbplan reduce`` (its options declared once, in :data:`REDUCE_FLAGS`)."""
 
 from __future__ import annotations
 
-import io
-import json
+import math
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import IO, TYPE_CHECKING, Any
 
-from ucbplan.api._convert import as_float, scope
+from ucbplan.api._convert import scope
 from ucbplan.api.ephemeris import TargetLike, get_site, load_target
+from ucbplan.api.options import Flag
 from ucbplan.errors import InputError, ReduceWarning, emit, shorten
-from ucbplan.lisa import MIN_T_OBS_S  # shortest LISA observation [s] (t_obs, --t-obs)
-from ucbplan.population.defaults import DEFAULT_N_BINS, DEFAULT_SIGMA_V_KMS, DEFAULT_T_START
 
 if TYPE_CHECKING:
-    from astropy.table import Table
+    from matplotlib.axes import Axes
 
-    from ucbplan.lisa.simulation import SimulationResult
     from ucbplan.reduce.pipeline import ReduceOptions, Reduction
 
-__all__ = ["MIN_T_OBS_S", "Report", "population_forecast", "reduce", "simulate", "t_obs_seconds"]
+__all__ = [
+    "MAX_SAMPLES",
+    "MIN_SAMPLES",
+    "REDUCE_FLAGS",
+    "Measurement",
+    "Report",
+    "check_count",
+    "check_seed",
+    "reduce",
+    "reduce_options",
+]
+
+#: Fewest Monte-Carlo samples (fewer give no usable quantiles).
+MIN_SAMPLES = 100
+#: Most Monte-Carlo samples: above 250 000 they run in chunks; 10⁷ take ~0.65 GB peak resident
+#: memory and ~20 s (benchmarks/reduce_scaling.py).
+MAX_SAMPLES = 10_000_000
+
+#: How ``ucbplan reduce`` spells the parameters of :func:`reduce`.
+REDUCE_FLAGS: dict[str, Flag] = {
+    "target": Flag((), "Target YAML file (LISA ephemeris and posterior)."),
+    "velocities": Flag(
+        (), "Velocity table (CSV or ECSV): bjd_tdb, exptime_s, v1, sigma_v1, v2, sigma_v2."
+    ),
+    "samples": Flag(("--samples",), "Monte-Carlo samples.", min=MIN_SAMPLES, max=MAX_SAMPLES),
+    "seed": Flag(("--seed",), "Random seed (reported).", min=0),
+    "light_time": Flag(("--light-time",), "Correct for the light travel time across the orbit."),
+    "mass_radius": Flag(
+        ("--mass-radius",),
+        "WD mass–radius relation for the redshift check: "
+        "eggleton (Verbunt & Rappaport 1988) | nauenberg (Nauenberg 1972).",
+    ),
+    "cos_i_sigma": Flag(
+        ("--cos-i-sigma",),
+        "1σ of cos ι if neither covariance nor samples carry it (default: held fixed).",
+        min=0.0,
+    ),
+    "site": Flag(("--site",), "Observatory (bundled site table) for jd_utc/mjd_utc time columns."),
+}
+
+
+def check_count(parameter: str, value: Any, low: int, high: int, why: str = "") -> int:
+    """``value`` as an int: a whole number (not a bool) in [low, high].
+
+    Raises
+    ------
+    InputError
+        One line naming ``parameter``: what was expected and what was given.
+    """
+    from ucbplan.inputs import check_int
+
+    return check_int(parameter, value, low, high, why)
+
+
+def check_seed(value: Any, parameter: str = "seed", optional: bool = False) -> int | None:
+    """A random seed: a whole number >= 0 (None too, with ``optional``: fresh entropy).
+
+    Raises
+    ------
+    InputError
+        One line naming ``parameter``.
+    """
+    from ucbplan.inputs import is_number
+
+    if value is None and optional:
+        return None
+    whole = is_number(value) and math.isfinite(float(value)) and float(value) == int(value)
+    if whole and int(value) >= 0:
+        return int(value)
+    expected = "a whole number >= 0" + (" or None (fresh entropy)" if optional else "")
+    raise InputError(
+        f"{parameter}: expected {expected}, got {shorten(value, 40)}", parameter=parameter
+    )
+
+
+@dataclass(frozen=True, slots=True)
+class Measurement:
+    """One reported quantity: value and 1σ in ``unit`` (None where not measurable)."""
+
+    value: float | None
+    sigma: float | None
+    unit: str
+
+    def __repr__(self) -> str:
+        value = "nan" if self.value is None else f"{self.value:.6g}"
+        sigma = "nan" if self.sigma is None else f"{self.sigma:.2g}"
+        return f"{value} ± {sigma}" + (f" {self.unit}" if self.unit else "")
+
+    @property
+    def quantity(self) -> Any:
+        """The value as an astropy ``Quantity`` (NaN where not measurable)."""
+        import astropy.units as u
+
+        return (float("nan") if self.value is None else self.value) * u.Unit(self.unit or "")
+
+
+#: The headline quantities of a report, in its order.
+_HEADLINE = ("K1", "K2", "gamma1", "gamma2", "q", "M1", "M2", "M_tot")
 
 
 @dataclass(frozen=True)
@@ -43,19 +137,101 @@ class Report:
 
         return build_report(self.reduction)
 
-    def to_dict(self) -> dict[str, Any]:
-        """The report exactly as ``ucbplan reduce --format json`` writes it, parsed: plain
-        floats (km/s, M_sun …, units named in each entry), lists and dicts; NaN as None."""
-        from ucbplan.io import dump_json
+    def __repr__(self) -> str:
+        shown = [f"{k} = {m!r}" for k in _HEADLINE[:2] if (m := self[k]) is not None]
+        return (
+            f"<Report {self.target}: {self.n_spectra} spectra, {', '.join(shown)}, "
+            f"seed {self.seed}>"
+        )
 
-        buf = io.StringIO()
-        dump_json(self._doc, buf)
-        return dict(json.loads(buf.getvalue()))
+    def __getitem__(self, key: str) -> Measurement | None:
+        """A reported quantity by its report key (``"K1"``, ``"M_tot"``, ``"dkappa"`` …)."""
+        entry = self._doc.get(key)
+        if not isinstance(entry, dict) or "value" not in entry:
+            return None
+        return Measurement(entry["value"], entry["sigma"], str(entry.get("unit", "")))
+
+    @property
+    def target(self) -> str:
+        """The target's name."""
+        return str(self._doc["target"])
+
+    @property
+    def seed(self) -> int:
+        """The seed of the Monte-Carlo draws (reported; rerun with it to repeat them)."""
+        return int(self._doc["seed"])
+
+    @property
+    def n_spectra(self) -> int:
+        """Spectra reduced."""
+        return int(self._doc["n_spectra"])
+
+    @property
+    def K1(self) -> Measurement | None:
+        """K_1 [km/s] (σ: statistical ⊕ phase ⊕ attenuation)."""
+        return self["K1"]
+
+    @property
+    def K2(self) -> Measurement | None:
+        """K_2 [km/s]; None for a single-lined binary."""
+        return self["K2"]
+
+    @property
+    def quantities(self) -> dict[str, Measurement]:
+        """Every reported quantity with a value and σ, by report key, in the report's order."""
+        return {k: m for k in self._doc if (m := self[k]) is not None}
+
+    def to_dict(self) -> dict[str, Any]:
+        """The report exactly as ``ucbplan reduce --format json`` writes it, as Python values:
+        plain floats (km/s, M_sun …, units named in each entry), lists and dicts; NaN as None."""
+        from ucbplan.io import json_plain
+
+        return dict(json_plain(self._doc))
 
     @property
     def warnings(self) -> list[str]:
         """What the reduction warns about (also emitted as :class:`ucbplan.ReduceWarning`)."""
         return [str(w) for w in self._doc.get("warnings", [])]
+
+    def dump(self, handle: IO[str], fmt: str = "json") -> None:
+        """Write the report to an open text ``handle`` as ``json`` or ``yaml``."""
+        from ucbplan.reduce.report import write_json, write_yaml
+
+        (write_json if fmt == "json" else write_yaml)(self._doc, handle)
+
+    def print(self, console: Any) -> None:
+        """The report as rich tables on ``console`` (what ``ucbplan reduce`` shows)."""
+        from ucbplan.reduce.report import print_report
+
+        print_report(self._doc, console)
+
+    def write(
+        self,
+        path: str | Path | None,
+        fmt: str = "json",
+        *,
+        em_prior: str | Path | None = None,
+        overwrite: bool = False,
+    ) -> None:
+        """Write the report (``json`` or ``yaml``) and the EM prior (YAML): both or neither.
+
+        Raises
+        ------
+        OutputExistsError
+            A file exists and ``overwrite`` is false (nothing is written).
+        """
+        from ucbplan.io import write_file_set
+        from ucbplan.reduce.report import em_prior as em_prior_doc
+        from ucbplan.reduce.report import write_yaml
+
+        files: dict[Path, Any] = {}
+        if path is not None:
+            files[Path(path)] = lambda h: self.dump(h, fmt)
+        if em_prior is not None:
+            prior = em_prior_doc(self.reduction)
+            files[Path(em_prior)] = lambda h: write_yaml(prior, h)
+        if files:
+            write_file_set(files, overwrite=overwrite)
 
     def em_prior(self) -> dict[str, Any]:
         """The EM prior for a later LISA analysis (``reduce --em-prior``)."""
@@ -63,7 +239,38 @@ class Report:
 
         return em_prior(self.reduction)
 
-    def plot(self, folder: str | Path, overwrite: bool = False) -> list[Path]:
+    def plot(self, ax: Any = None, overwrite: bool = False) -> Any:
+        """The velocities against the orbital factor F̄ with the fitted lines on ``ax`` (None:
+        a new figure, with the residuals below) → the ``Axes`` (``.figure.savefig`` to keep).
+
+        Given a folder (str or Path) instead, writes every figure of ``reduce --plots`` there
+        and returns their paths (``overwrite`` replaces existing ones).
+        """
+        if isinstance(ax, str | Path):
+            return self.save_plots(ax, overwrite=overwrite)
+        from ucbplan.reduce.plots import draw_rv, fig_rv
+
+        if ax is None:
+            axes: Axes = fig_rv(self.reduction).axes[0]
+            return axes
+        if not callable(getattr(ax, "errorbar", None)):
+            raise InputError(
+                f"ax: expected a matplotlib Axes, None or a folder, got {shorten(ax, 40)}", "ax"
+            )
+        draw_rv(self.reduction, ax)
+        return ax
+
+    def _repr_html_(self) -> str:
+        from html import escape
+
+        rows = "".join(
+            f"<tr><td>{escape(k)}</td><td>{escape(repr(m))}</td></tr>"
+            for k, m in self.quantities.items()
+        )
+        head = f"<b>{escape(self.target)}</b>: {self.n_spectra} spectra, seed {self.seed}"
+        return f"<p>{head}</p><table>{rows}</table>"
+
+    def save_plots(self, folder: str | Path, overwrite: bool = False) -> list[Path]:
         """The reduction's PNG figures in ``folder`` (``reduce --plots``); their paths."""
         from ucbplan.reduce.plots import plot_all
 
@@ -80,6 +287,7 @@ def reduce(
     mass_radius: str | None = None,
     cos_i_sigma: float = 0.0,
     site: Any = None,
+    warn: bool = True,
 ) -> Report:
     """Reduce measured velocities against a target (``ucbplan reduce``; paper Secs. 3–5).
 
@@ -87,60 +295,100 @@ def reduce(
     ----------
     target : str, Path, dict or Target
         LISA ephemeris and posterior (see :func:`ucbplan.load_target`).
-    velocities : str, Path or VelocityTable
-        Velocity table (CSV or ECSV): ``bjd_tdb``, ``exptime_s``, ``v1``, ``sigma_v1`` … [km/s].
+    velocities : str, Path, astropy Table or VelocityTable
+        Velocity table (CSV or ECSV file, or a table with its columns): ``bjd_tdb``,
+        ``exptime_s``, ``v1``, ``sigma_v1`` … [km/s].
     seed, samples : int, optional
-        Seed of the Monte-Carlo draws (None: fresh entropy, reported in the report); their number.
+        Seed (>= 0) of the Monte-Carlo draws (None: fresh entropy, reported in the report);
+        their number, from :data:`MIN_SAMPLES` to :data:`MAX_SAMPLES`.
     light_time, mass_radius, cos_i_sigma : bool, str, float, optional
         Correct for the light travel time across the orbit; WD mass–radius relation for the
-        redshift check (``eggleton``, ``nauenberg``); 1σ of cos ι [1] if neither the covariance
-        nor the samples carry it.
+        redshift check (``eggleton``, ``nauenberg``); 1σ of cos ι [1] in [0, 2] if neither the
+        covariance nor the samples carry it.
     site : str, EarthLocation or astroplan Observer, optional
         Telescope, when the table's times are UTC at the site.
+    warn : bool
+        Emit the report's warnings as :class:`ucbplan.ReduceWarning` (the CLI prints them).
 
     Returns
     -------
     Report
-        K_j, γ_j [km/s], masses [M_sun], Δκ, Δv_CM; ``warnings`` also emitted as ReduceWarning.
+        K_j, γ_j [km/s], masses [M_sun], Δκ, Δv_CM, and the warnings.
 
     Raises
     ------
     InputError
         Bad options (naming the parameter); VelocityFileError, TargetFileError for the files.
     """
-    from ucbplan.reduce.pipeline import reduce_options
+    from ucbplan.reduce.pipeline import reduce as _reduce
 
-    options = reduce_options(
-        samples=samples,
+    checked = reduce_options(
         seed=seed,
+        samples=samples,
         light_time=light_time,
         mass_radius=mass_radius,
         cos_i_sigma=cos_i_sigma,
     )
-    report, lines = _report(target, velocities, site, options)
-    emit(lines, ReduceWarning)
-    return report
-
-
-def _report(
-    target: TargetLike, velocities: Any, site: Any, options: ReduceOptions
-) -> tuple[Report, list[str]]:
-    """Load the target and the velocities, reduce; the report and its warnings, both built
-    inside the API's astropy scope."""
-    from ucbplan.reduce.pipeline import reduce as _reduce
-
     with scope():
         tgt = load_target(target)
         table = _velocity_table(velocities, tgt, site)
-        report = Report(_reduce(tgt, table, options))
-        return report, report.warnings
+        report = Report(_reduce(tgt, table, checked))
+        report.to_dict()  # the report's numbers, built inside the astropy scope
+    if warn:
+        emit(report.warnings, ReduceWarning)
+    return report
+
+
+def reduce_options(
+    *,
+    seed: Any,
+    samples: Any,
+    light_time: Any,
+    mass_radius: Any,
+    cos_i_sigma: Any,
+) -> ReduceOptions:
+    """The checked options of :func:`reduce` (one line naming the parameter at fault)."""
+    from ucbplan.inputs import check_range
+    from ucbplan.reduce.pipeline import reduce_options as _options
+
+    if not isinstance(light_time, bool):
+        raise InputError(
+            f"light_time: expected True or False, got {shorten(light_time)}", "light_time"
+        )
+    if mass_radius is not None and not isinstance(mass_radius, str):
+        raise InputError(
+            f"mass_radius: expected a name or None, got {shorten(mass_radius)}", "mass_radius"
+        )
+    return _options(
+        samples=check_count("samples", samples, MIN_SAMPLES, MAX_SAMPLES),
+        seed=check_seed(seed, optional=True),
+        light_time=light_time,
+        mass_radius=mass_radius,
+        cos_i_sigma=check_range("cos_i_sigma", cos_i_sigma, 0.0, 2.0, why="1σ of cos ι"),
+    )
 
 
 def _velocity_table(velocities: Any, tgt: Any, site: Any) -> Any:
     """The velocity table, site-UTC times converted to barycentric TDB at ``site``."""
-    from ucbplan.reduce.velocities import VelocityTable, read_velocities, to_barycentric
+    from ucbplan.reduce.velocities import (
+        VelocityTable,
+        read_velocities,
+        to_barycentric,
+        velocities_from_table,
+    )
 
-    table = velocities if isinstance(velocities, VelocityTable) else read_velocities(velocities)
+    if isinstance(velocities, VelocityTable):
+        table = velocities
+    elif isinstance(velocities, str | Path):
+        table = read_velocities(velocities)
+    elif hasattr(velocities, "colnames"):
+        table = velocities_from_table(velocities, Path("velocities"))
+    else:
+        raise InputError(
+            "velocities: expected a file (str or Path) or an astropy Table, got "
+            f"{shorten(velocities, 40)}",
+            parameter="velocities",
+        )
     if table.site_utc:
         if site is None:
             raise InputError(
@@ -150,144 +398,3 @@ def _velocity_table(velocities: Any, tgt: Any, site: Any) -> Any:
             )
         table = to_barycentric(table, tgt.coord, get_site(site).location)
     return table
-
-
-def simulate(
-    target: TargetLike,
-    seed: int = 0,
-    *,
-    t_obs: Any = None,
-    n_bins: int = 512,
-    circular: bool = False,
-    walkers: int = 32,
-    steps: int = 2000,
-    until_converged: bool = False,
-    max_steps: int = 50_000,
-    noise: bool = True,
-) -> SimulationResult:
-    """Simulate a LISA observation and sample the targeted-search posterior (``ucbplan
-    simulate``).
-
-    Parameters
-    ----------
-    target : str, Path, dict or Target
-        Target or injection (needs ``lisa.amplitude``, ``cos_inclination``, ``psi``).
-    seed : int
-        Seed of the noise draw and the sampler.
-    t_obs : str, float or Quantity, optional
-        Observation length (``"4yr"``, seconds or a time Quantity; default: the target's).
-    n_bins, circular, walkers, steps, until_converged, max_steps, noise
-        As the ``simulate`` options.
-
-    Returns
-    -------
-    SimulationResult
-        Posterior samples, mean, σ and the Fisher σ; write it with
-        :func:`ucbplan.lisa.outputs.write_simulation`.
-
-    Raises
-    ------
-    InputError
-        Bad options (one line each).
-    """
-    from ucbplan.lisa.pipeline import run_simulation, setup_simulation
-
-    with scope():
-        tgt = load_target(target)
-        problem = setup_simulation(
-            tgt,
-            t_obs_s=t_obs_seconds(t_obs, tgt.t_obs_s),
-            n_bins=n_bins,
-            circular=circular,
-            seed=seed,
-            walkers=walkers,
-            steps=steps,
-            until_converged=until_converged,
-            max_steps=max_steps,
-            noise=noise,
-        )
-        result = run_simulation(problem)
-    emit(list(result.warnings), ReduceWarning)
-    return result
-
-
-def t_obs_seconds(t_obs: Any, default_s: float, parameter: str = "t_obs") -> float:
-    """An observation length [s] from text (``4yr``, Julian years), seconds or a Quantity.
-
-    Raises
-    ------
-    InputError
-        Not a duration of at least a day (naming ``parameter``).
-    """
-    if t_obs is None:
-        return default_s
-    import astropy.units as u
-
-    value = as_float(t_obs, "s", parameter)
-    if isinstance(value, str):
-        try:
-            value = float(u.Quantity(value.replace(" ", "")).to_value(u.s))
-        except (TypeError, ValueError, u.UnitsError):
-            raise InputError(
-                f"{parameter}: expected a duration like '4yr' (Julian) or '126232599.054s', "
-                f"got {shorten(t_obs)}",
-                parameter=parameter,
-            ) from None
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise InputError(f"{parameter}: expected a duration, got {shorten(t_obs)}", parameter)
-    if not MIN_T_OBS_S <= value < float("inf"):
-        raise InputError(
-            f"{parameter}: expected a finite duration of at least 1 day, got {shorten(t_obs)}",
-            parameter=parameter,
-        )
-    return float(value)
-
-
-def population_forecast(
-    catalog: str | Path,
-    sigma_v: Any = DEFAULT_SIGMA_V_KMS,
-    k_eff: Any = None,
-    *,
-    t_obs: str | None = None,
-    t_start: str = DEFAULT_T_START,
-    n_bins: int = DEFAULT_N_BINS,
-    workers: int = 1,
-) -> Table:
-    """Per-source Fisher forecast of an LDC catalog (``ucbplan population forecast``).
-
-    Parameters
-    ----------
-    catalog : str or Path
-        LDC catalog (CSV, ECSV or HDF5).
-    sigma_v, k_eff : float or Quantity
-        RV precision [km/s]; semi-amplitude [km/s] (None: from the catalog's masses).
-    t_obs, t_start : str, optional
-        LISA observation length (``4yr``) and start (ISO, TDB).
-    n_bins : int
-        Band width N in frequency bins.
-    workers : int
-        Local processes (1 = serial); the table does not depend on it.
-
-    Returns
-    -------
-    astropy.table.Table
-        One row per source: σ_u at the end, T_valid, SNR, status (docs/population.md).
-    """
-    import tempfile
-
-    from ucbplan.population.catalog import read_catalog
-    from ucbplan.population.catalog_forecast import forecast_options
-    from ucbplan.population.execute import ExecutorSpec
-    from ucbplan.population.runner import RunControl, run_forecast
-
-    opts = forecast_options(
-        sigma_v_kms=as_float(sigma_v, "km/s", "sigma_v"),
-        k_eff_kms=as_float(k_eff, "km/s", "k_eff"),
-        t_obs=t_obs,
-        t_start=t_start,
-        n_bins=n_bins,
-    )
-    with scope(), tempfile.TemporaryDirectory(prefix="ucbplan-parts-") as parts:
-        cat = read_catalog(Path(catalog))
-        run = run_forecast(cat, opts, RunControl(Path(parts), ExecutorSpec(workers=workers)))
-    return run.table

@@ -20,7 +20,9 @@ __all__ = ["annotated", "argument", "flag", "option"]
 def option(func: Callable[..., Any], flags: Mapping[str, Flag], parameter: str) -> Any:
     """``typer.Option`` for ``func``'s ``parameter``: its default, flag and help, declared once."""
     spec = flags[parameter]
-    return typer.Option(default_of(func, parameter), *spec.decls, help=spec.help)
+    return typer.Option(
+        default_of(func, parameter), *spec.decls, help=spec.help, min=spec.min, max=spec.max
+    )
 
 
 def argument(flags: Mapping[str, Flag], parameter: str) -> Any:

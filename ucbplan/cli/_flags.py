@@ -68,6 +68,17 @@ FLAGS = {
     "overhead": "--overhead",
     "sigma_floor": "--sigma-floor",
     "extinction": "--extinction",
+    # b2 (issue 30): reduce, simulate, fisher, waveform, population
+    "samples": "--samples",
+    "n_bins": "--n-bins",
+    "t_obs": "--t-obs",
+    "t_start": "--t-start",
+    "walkers": "--walkers",
+    "steps": "--steps",
+    "max_steps": "--max-steps",
+    "workers": "--workers",
+    "jobs": "--jobs",
+    "chunk": "--chunk",
 }
 
 # a1 (issue 30): ``ucbplan.plan``'s keywords, from the flag table declared beside it

@@ -17,67 +17,52 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from ucbplan.population.defaults import DEFAULT_N_BINS, DEFAULT_SIGMA_V_KMS, DEFAULT_T_START
+from ucbplan.api import populations as api
+from ucbplan.api.options import Flag, default_of
 
 if TYPE_CHECKING:
-    from ucbplan.population.execute import ExecutorSpec
-    from ucbplan.population.runner import RunControl
+    from ucbplan.api.populations import ExecutorSpec, RunControl
 
 __all__ = ["PopulationArgs", "population_options"]
 
 CatalogArg = Annotated[Path, typer.Argument(help="LDC-style catalog: ECSV, CSV or HDF5 (.h5).")]
 TableOut = Annotated[Path, typer.Option("-o", "--output", help="Output table (ECSV).")]
 Overwrite = Annotated[bool, typer.Option("--overwrite", help="Replace existing outputs.")]
-SigmaV = Annotated[float, typer.Option("--sigma-v", help="RV precision per epoch [km/s].")]
-KEff = Annotated[
-    float | None,
-    typer.Option("--k-eff", help="K for the tolerance [km/s] (default: K1+K2 from Mass1, Mass2)."),
-]
-TObs = Annotated[str | None, typer.Option("--t-obs", help="LISA observation, e.g. '4yr'.")]
-TStart = Annotated[str, typer.Option("--t-start", help="LISA start (TDB): the catalog's t = 0.")]
-NBins = Annotated[int, typer.Option("--n-bins", help="Band width N of the Fisher model.")]
-Columns = Annotated[
-    str | None, typer.Option("--columns", help="Column map old=new,... onto the LDC names.")
-]
-Hdf5Path = Annotated[str | None, typer.Option("--hdf5-path", help="Table inside an HDF5 file.")]
-SkipBad = Annotated[bool, typer.Option("--skip-bad", help="Skip bad rows (listed in meta).")]
-Workers = Annotated[int, typer.Option("--workers", help="Local processes (1 = serial).")]
-Scheduler = Annotated[
-    str | None,
-    typer.Option("--scheduler", help="Existing Dask scheduler, tcp://HOST:PORT (ucbplan[dask])."),
-]
-Cluster = Annotated[
-    str | None,
-    typer.Option(
-        "--cluster", help="Start Dask workers on a batch system: slurm | pbs (dask-jobqueue)."
-    ),
-]
-Jobs = Annotated[int, typer.Option("--jobs", help="Batch jobs to start with --cluster.")]
-Chunk = Annotated[int | None, typer.Option("--chunk", help="Sources per task (default ≥ ~1 s).")]
-Resume = Annotated[bool, typer.Option("--resume", help="Reuse finished part files.")]
-KeepParts = Annotated[bool, typer.Option("--keep-parts", help="Keep part files after merging.")]
+
+#: The command line's type of each shared option (flag, help and default: the API's).
+_TYPES: dict[str, Any] = {
+    "sigma_v": float,
+    "k_eff": float | None,
+    "t_obs": str | None,
+    "t_start": str,
+    "n_bins": int,
+    "columns": str | None,
+    "hdf5_path": str | None,
+    "skip_bad": bool,
+    "workers": int,
+    "scheduler": str | None,
+    "cluster": str | None,
+    "jobs": int,
+    "chunk": int | None,
+    "resume": bool,
+    "keep_parts": bool,
+}
+
+
+def _declared(flags: dict[str, Flag]) -> tuple[tuple[str, Any, Any], ...]:
+    """(parameter, typer alias, default) of each option in ``flags``: the flag and help from
+    the table, the default from :func:`ucbplan.api.population_forecast`'s signature."""
+    out = []
+    for name, flag in flags.items():
+        alias = Annotated[_TYPES[name], typer.Option(*flag.decls, help=flag.help)]  # type: ignore[valid-type]
+        out.append((name, alias, default_of(api.population_forecast, name)))
+    return tuple(out)
+
 
 #: The shared options in ``--help`` order: (parameter, alias, default).
-SHARED_OPTIONS: tuple[tuple[str, Any, Any], ...] = (
-    ("sigma_v", SigmaV, DEFAULT_SIGMA_V_KMS),
-    ("k_eff", KEff, None),
-    ("t_obs", TObs, None),
-    ("t_start", TStart, DEFAULT_T_START),
-    ("n_bins", NBins, DEFAULT_N_BINS),
-    ("columns", Columns, None),
-    ("hdf5_path", Hdf5Path, None),
-    ("skip_bad", SkipBad, False),
-    ("workers", Workers, 1),
-    ("scheduler", Scheduler, None),
-    ("cluster", Cluster, None),
-    ("jobs", Jobs, 2),
-)
+SHARED_OPTIONS: tuple[tuple[str, Any, Any], ...] = _declared(api.POPULATION_FLAGS)
 #: The options of commands that keep part files (all but ``rank``).
-PARTS_OPTIONS: tuple[tuple[str, Any, Any], ...] = (
-    ("chunk", Chunk, None),
-    ("resume", Resume, False),
-    ("keep_parts", KeepParts, False),
-)
+PARTS_OPTIONS: tuple[tuple[str, Any, Any], ...] = _declared(api.PARTS_FLAGS)
 
 
 @dataclass(frozen=True, slots=True)
@@ -102,15 +87,16 @@ class PopulationArgs:
 
     def executor(self) -> ExecutorSpec:
         """The checked executor of ``--workers``/``--scheduler``/``--cluster``/``--jobs``."""
-        from ucbplan.population.execute import ExecutorSpec
-
-        return ExecutorSpec(self.workers, self.scheduler, self.cluster, self.jobs)
+        return api.executor(
+            workers=self.workers, scheduler=self.scheduler, cluster=self.cluster, jobs=self.jobs
+        )
 
     def control(self, parts: Path, overwrite: bool) -> RunControl:
         """The run control of these options with part files in ``parts``."""
-        from ucbplan.population.runner import RunControl
-
-        return RunControl(parts, self.executor(), self.chunk, self.resume, overwrite)
+        spec = self.executor()
+        return api.run_control(
+            parts, spec, chunk=self.chunk, resume=self.resume, overwrite=overwrite
+        )
 
 
 def population_options(*, parts: bool = True) -> Callable[[Callable[..., Any]], Any]:

@@ -19,7 +19,11 @@ from typing import TYPE_CHECKING, Any
 import typer
 from rich.markup import escape
 
+from ucbplan.api import population_runs as runs
+from ucbplan.api import populations as api
+from ucbplan.api.options import Flag
 from ucbplan.cli._console import check_output_path, err_console
+from ucbplan.cli._derive import option
 from ucbplan.cli._population_options import (
     CatalogArg,
     Overwrite,
@@ -30,12 +34,21 @@ from ucbplan.cli._population_options import (
 from ucbplan.errors import UcbplanError
 
 if TYPE_CHECKING:
-    from ucbplan.population.catalog import Catalog
-    from ucbplan.population.catalog_forecast import ForecastOptions
-    from ucbplan.population.execute import ExecutorSpec
-    from ucbplan.population.runner import ForecastRun, RunControl
+    from rich.progress import Progress, TaskID
+
+    from ucbplan.api.population_runs import ForecastRun
+    from ucbplan.api.populations import Catalog, ExecutorSpec, ForecastOptions, RunControl
 
 __all__ = ["register"]
+
+VIS, RANK, SIM = runs.VISIBILITY_FLAGS, runs.RANK_FLAGS, runs.POPULATION_SIMULATE_FLAGS
+
+
+def _required(flags: dict[str, Flag], parameter: str) -> Any:
+    """A required ``typer.Option`` with the flag and help declared for ``parameter``."""
+    spec = flags[parameter]
+    return typer.Option(..., *spec.decls, help=spec.help)
+
 
 population_app = typer.Typer(
     help="Whole LISA catalogs: forecasts, visibility, ranking and simulations per source.",
@@ -45,43 +58,37 @@ population_app = typer.Typer(
 
 def _catalog(path: Path, shared: PopulationArgs) -> Catalog:
     """The catalog, with its skipped rows printed (one yellow line each)."""
-    from ucbplan.population.catalog import parse_column_map, read_catalog
-
-    cat = read_catalog(
-        path,
-        parse_column_map(shared.columns),
-        skip_bad=shared.skip_bad,
-        hdf5_path=shared.hdf5_path,
+    cat = api.read_population(
+        path, columns=shared.columns, hdf5_path=shared.hdf5_path, skip_bad=shared.skip_bad
     )
+    _skipped(cat)
+    return cat
+
+
+def _skipped(cat: Catalog) -> None:
     for row, msg in cat.bad:
         err_console.print(f"[yellow]skipped row {row}: {escape(msg)}[/yellow]")
-    return cat
 
 
 def _inputs(path: Path, shared: PopulationArgs) -> tuple[Catalog, ForecastOptions]:
     """The catalog and the checked forecast options (``--k-eff`` needed without masses)."""
-    from ucbplan.population.catalog_forecast import forecast_options
-
     cat = _catalog(path, shared)
-    opts = forecast_options(
-        sigma_v_kms=shared.sigma_v,
-        k_eff_kms=shared.k_eff,
+    opts = api.forecast_settings(
+        sigma_v=shared.sigma_v,
+        k_eff=shared.k_eff,
         t_obs=shared.t_obs,
         t_start=shared.t_start,
         n_bins=shared.n_bins,
     )
-    if shared.k_eff is None and not {"Mass1", "Mass2"} <= set(cat.optional):
-        raise UcbplanError(f"--k-eff: needed: {cat.path.name} has no Mass1 and Mass2 columns")
+    api.check_k_source(cat, shared.k_eff)
     return cat, opts
 
 
 def _control(output: Path, overwrite: bool, shared: PopulationArgs) -> RunControl:
     """Refuse an existing ``output`` (without ``--overwrite``), then the run control (checked)
     with the part files next to ``output``."""
-    from ucbplan.population.runner import parts_folder
-
     check_output_path(output, overwrite)
-    return shared.control(parts_folder(output), overwrite)
+    return shared.control(api.parts_of(output), overwrite)
 
 
 def _announce(cat: Catalog, path: Path, control: RunControl, where: str = "") -> None:
@@ -90,47 +97,64 @@ def _announce(cat: Catalog, path: Path, control: RunControl, where: str = "") ->
     )
 
 
+class _Bar:
+    """A transient progress line on stderr (sources done, rate, ETA) while a run works."""
+
+    def __init__(self, label: str) -> None:
+        self.label, self.rate = label, api.progress_rate()
+        self.prog: Progress | None = None
+        self.task: TaskID | None = None
+
+    def start(self, total: int) -> None:
+        from rich.progress import BarColumn, Progress, TextColumn
+
+        self.prog = Progress(
+            TextColumn(self.label),
+            BarColumn(),
+            TextColumn(
+                "{task.completed}/{task.total} sources {task.fields[rate]} ETA {task.fields[eta]}"
+            ),
+            console=err_console,
+            transient=True,
+        )
+        self.prog.start()
+        self.task = self.prog.add_task(self.label, total=total, rate="", eta="?")
+
+    def update(self, done: int, n: int) -> None:
+        r, eta = self.rate.eta(done, n)
+        eta_text = "?" if eta != eta else f"{eta:.0f} s"
+        if self.prog is not None and self.task is not None:
+            self.prog.update(self.task, completed=done, rate=f"{r:.1f}/s", eta=eta_text)
+
+    def __enter__(self) -> _Bar:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self.prog is not None:
+            self.prog.stop()
+            self.prog = None
+
+
 def _run(
     label: str, cat: Catalog, control: RunControl, call: Callable[[RunControl], ForecastRun]
 ) -> ForecastRun:
     """``call(control)`` under a progress line on stderr (sources done, rate, ETA)."""
-    from rich.progress import BarColumn, Progress, TextColumn
-
-    from ucbplan.population.execute import Rate
-
-    rate = Rate()
-    with Progress(
-        TextColumn(label),
-        BarColumn(),
-        TextColumn(
-            "{task.completed}/{task.total} sources {task.fields[rate]} ETA {task.fields[eta]}"
-        ),
-        console=err_console,
-        transient=True,
-    ) as prog:
-        task = prog.add_task(label, total=len(cat.sources), rate="", eta="?")
-
-        def _progress(done: int, n: int) -> None:
-            r, eta = rate.eta(done, n)
-            eta_text = "?" if eta != eta else f"{eta:.0f} s"
-            prog.update(task, completed=done, rate=f"{r:.1f}/s", eta=eta_text)
-
-        return call(dataclasses.replace(control, progress=_progress))
+    with _Bar(label) as bar:
+        bar.start(len(cat.sources))
+        return call(dataclasses.replace(control, progress=bar.update))
 
 
 def _finish(run: ForecastRun, output: Path, control: RunControl, keep_parts: bool) -> None:
     """Write the merged table, remove the parts (unless kept), print the summary line."""
-    from ucbplan.population.execute import remove_parts
-    from ucbplan.population.tables import write_table
+    api.write_run(run.table, output, control.parts, overwrite=control.overwrite, keep=keep_parts)
+    _summary(run.table.meta, output, run.chunk, run.reused, run.n_chunks)
 
-    write_table(run.table, output, control.overwrite)
-    if not keep_parts:
-        remove_parts(control.parts)
-    meta = run.table.meta
+
+def _summary(meta: Any, output: Path, chunk: int, reused: int, n_chunks: int) -> None:
     err_console.print(
         f"wrote {escape(str(output))}: {meta['n_ok']} ok, "
         f"{meta['n_below_threshold']} below threshold, {meta['n_unconstrained']} unconstrained, "
-        f"{meta['n_failed']} failed; chunk {run.chunk}, {run.reused}/{run.n_chunks} parts reused"
+        f"{meta['n_failed']} failed; chunk {chunk}, {reused}/{n_chunks} parts reused"
     )
 
 
@@ -145,18 +169,30 @@ def forecast(
     overwrite: Overwrite = False,
 ) -> None:
     """Per-source Fisher forecast of a catalog → ECSV (σ_u at the end, T_valid, SNR, status)."""
-    from ucbplan.population.plots import forecast_plots
-    from ucbplan.population.runner import run_forecast
-
-    control = _control(output, overwrite, shared)
+    _control(output, overwrite, shared)
     if plots is not None and not plots.is_dir():
         raise UcbplanError(f"--plots: folder {plots} does not exist; create it first")
-    cat, opts = _inputs(catalog, shared)
-    _announce(cat, catalog, control)
-    run = _run("forecast", cat, control, lambda c: run_forecast(cat, opts, c))
-    _finish(run, output, control, shared.keep_parts)
+    bar = _Bar("forecast")
+
+    def ready(cat: Catalog, executor: ExecutorSpec) -> None:
+        _skipped(cat)
+        err_console.print(
+            f"{len(cat.sources)} sources from {escape(str(catalog))}; {executor.describe()}"
+        )
+        bar.start(len(cat.sources))
+
+    with bar:
+        result = api.population_forecast(
+            catalog,
+            **{f.name: getattr(shared, f.name) for f in dataclasses.fields(shared)},
+            output=output,
+            overwrite=overwrite,
+            progress=bar.update,
+            on_ready=ready,
+        )
+    _summary(result.table.meta, output, result.chunk, result.reused, result.n_chunks)
     if plots is not None:
-        for path in forecast_plots(run.table, plots, overwrite=overwrite):
+        for path in result.plot(plots, overwrite=overwrite):
             err_console.print(f"wrote {escape(str(path))}")
 
 
@@ -165,44 +201,39 @@ def forecast(
 def visibility(
     catalog: CatalogArg,
     output: TableOut,
-    semester: str = typer.Option(..., "--semester", help="2041A, 2041B or an ESO period P147."),
-    site: str | None = typer.Option(None, "--site", help="Site name or alias (e.g. paranal)."),
-    site_lonlat: str | None = typer.Option(
-        None, "--site-lonlat", help="LON,LAT,HEIGHT (deg east, deg north, m) instead of --site."
-    ),
-    sites_file: Path | None = typer.Option(None, "--sites-file", help="YAML site table."),
-    airmass_max: float = typer.Option(2.0, "--airmass-max", help="Largest airmass (sec z)."),
-    twilight: str = typer.Option("nautical", "--twilight", help="civil|nautical|astronomical"),
-    moon_sep: float = typer.Option(30.0, "--moon-sep", help="Smallest Moon separation [deg]."),
-    min_hours: float = typer.Option(1.0, "--min-hours", help="Usable hours of a usable night."),
-    exptime: float = typer.Option(60.0, "--exptime", help="Block (exposure) length [s]."),
-    alpha: float = typer.Option(1.0, "--alpha", help="Planning margin α of T_valid."),
+    semester: str = _required(VIS, "semester"),
+    site: str | None = option(runs.visibility_settings, VIS, "site"),
+    site_lonlat: str | None = option(runs.visibility_settings, VIS, "site_lonlat"),
+    sites_file: Path | None = option(runs.visibility_settings, VIS, "sites_file"),
+    airmass_max: float = option(runs.visibility_settings, VIS, "airmass_max"),
+    twilight: str = option(runs.visibility_settings, VIS, "twilight"),
+    moon_sep: float = option(runs.visibility_settings, VIS, "moon_sep"),
+    min_hours: float = option(runs.visibility_settings, VIS, "min_hours"),
+    exptime: float = option(runs.visibility_settings, VIS, "exptime"),
+    alpha: float = option(runs.visibility_settings, VIS, "alpha"),
     *,
     shared: PopulationArgs,
     overwrite: Overwrite = False,
 ) -> None:
     """Per source: usable nights, hours at airmass < X, anchor epochs inside T_valid → ECSV."""
-    from ucbplan.observing.blocks import ExposurePlan
-    from ucbplan.observing.schedule.settings import PlanSettings
-    from ucbplan.observing.sites import resolve_site
-    from ucbplan.population.runner import run_visibility
-    from ucbplan.population.visibility import VisibilityOptions
-
     control = _control(output, overwrite, shared)
-    where = resolve_site(site, site_lonlat, sites_file)
-    settings = PlanSettings(
-        twilight=twilight,
+    settings = runs.visibility_settings(
+        semester,
+        site=site,
+        site_lonlat=site_lonlat,
+        sites_file=sites_file,
         airmass_max=airmass_max,
-        moon_sep_deg=moon_sep,
-        exposure=ExposurePlan(exptime_s=exptime),
+        twilight=twilight,
+        moon_sep=moon_sep,
+        min_hours=min_hours,
+        exptime=exptime,
         alpha=alpha,
     )
     cat, fopts = _inputs(catalog, shared)
-    opts = VisibilityOptions(
-        site=where, semester=semester, settings=settings, min_hours=min_hours, forecast=fopts
-    )
-    _announce(cat, catalog, control, f"{escape(where.name)}, {opts.semester.upper()}; ")
-    run = _run("visibility", cat, control, lambda c: run_visibility(cat, opts, c))
+    opts = dataclasses.replace(settings, forecast=fopts)
+    where = f"{escape(opts.site.name)}, {opts.semester.upper()}; "
+    _announce(cat, catalog, control, where)
+    run = _run("visibility", cat, control, lambda c: runs.run_visibility(cat, opts, c))
     _finish(run, output, control, shared.keep_parts)
 
 
@@ -243,24 +274,20 @@ def _ranked_source(
 ) -> tuple[Any, Catalog, ForecastOptions]:
     """(forecast table, catalog, forecast options) of ``rank``'s SOURCE: a forecast table
     (checked against its catalog), or a catalog forecast here (its parts removed after)."""
-    from ucbplan.population import rank as rk
-    from ucbplan.population.execute import remove_parts
-    from ucbplan.population.runner import RunControl, parts_folder, run_forecast
-
-    tab = rk.read_forecast_table(source)
-    if tab is not None:
-        fopts = rk.forecast_options_of(tab.meta, source)
-        cat_path = catalog or Path(str(tab.meta.get("catalog_path", tab.meta.get("catalog"))))
-        cat = _catalog(cat_path, shared)
-        rk.check_catalog_of(tab, cat, source)
+    forecast = runs.read_forecast(source)
+    if forecast is not None:
+        tab, fopts, cat_path = forecast
+        cat = _catalog(catalog or cat_path, shared)
+        runs.check_forecast_catalog(tab, cat, source)
         return tab, cat, fopts
     cat, fopts = _inputs(source, shared)
     with _made_folder(out_dir):
-        control = RunControl(parts_folder(out_dir / "forecast.ecsv"), executor, overwrite=True)
+        parts = api.parts_of(out_dir / "forecast.ecsv")
+        control = api.run_control(parts, executor, overwrite=True)
         try:
-            tab = _run("forecast", cat, control, lambda c: run_forecast(cat, fopts, c)).table
+            tab = _run("forecast", cat, control, lambda c: runs.run_forecast(cat, fopts, c)).table
         finally:
-            remove_parts(control.parts)
+            runs.remove_parts(control.parts)
     return tab, cat, fopts
 
 
@@ -269,17 +296,15 @@ def _ranked_source(
 def rank(
     source: Path = typer.Argument(..., help="Forecast table (ECSV) or an LDC-style catalog."),
     out_dir: Path = typer.Option(..., "--out-dir", help="Folder for ranked.ecsv and targets."),
-    top: int = typer.Option(10, "--top", help="Write target files for the best N."),
-    goal: str = typer.Option("K1=5%", "--goal", help="Precision goal (K1=5%, M1=2%, q=3%…)."),
-    instrument: str | None = typer.Option(None, "--instrument", help="σ_ref and overheads."),
-    instruments_file: Path | None = typer.Option(None, "--instruments-file", help="YAML table."),
-    sigma_ref: str | None = typer.Option(
-        None, "--sigma-ref", help="SIGMA_KMS,MAG,EXPTIME_S: σ_v of one exposure at V = MAG."
-    ),
-    exptime: float = typer.Option(60.0, "--exptime", help="One exposure [s]."),
-    readout: float | None = typer.Option(None, "--readout", help="Readout per exposure [s]."),
-    overhead: float | None = typer.Option(None, "--overhead", help="Acquisition per visit [s]."),
-    visit: float = typer.Option(3600.0, "--visit", help="Visit length [s]."),
+    top: int = option(runs.rank_settings, RANK, "top"),
+    goal: str = option(runs.rank_settings, RANK, "goal"),
+    instrument: str | None = option(runs.rank_settings, RANK, "instrument"),
+    instruments_file: Path | None = option(runs.rank_settings, RANK, "instruments_file"),
+    sigma_ref: str | None = option(runs.rank_settings, RANK, "sigma_ref"),
+    exptime: float = option(runs.rank_settings, RANK, "exptime"),
+    readout: float | None = option(runs.rank_settings, RANK, "readout"),
+    overhead: float | None = option(runs.rank_settings, RANK, "overhead"),
+    visit: float = option(runs.rank_settings, RANK, "visit"),
     catalog: Path | None = typer.Option(
         None, "--catalog", help="The forecast's catalog (default: the path in its meta)."
     ),
@@ -288,28 +313,24 @@ def rank(
     overwrite: Overwrite = False,
 ) -> None:
     """Order sources by a stated figure of merit; target files for the top N (for `plan`)."""
-    from ucbplan.population import rank as rk
-    from ucbplan.population.tables import write_table
-
     ranked_path = out_dir / "ranked.ecsv"
     _check_out_dir(out_dir, ranked_path, overwrite)
     executor = shared.executor()
-    ropts = rk.rank_options(
+    ropts = runs.rank_settings(
         top=top,
         goal=goal,
         instrument=instrument,
         instruments_file=instruments_file,
         sigma_ref=sigma_ref,
-        exptime_s=exptime,
-        readout_s=readout,
-        acquisition_s=overhead,
-        visit_s=visit,
+        exptime=exptime,
+        readout=readout,
+        overhead=overhead,
+        visit=visit,
     )
     tab, cat, fopts = _ranked_source(source, catalog, out_dir, shared, executor)
-    ranked = rk.rank_table(tab, cat, ropts)
+    ranked = runs.rank_sources(tab, cat, ropts)
     with _made_folder(out_dir):
-        paths = rk.write_top_targets(ranked, cat, fopts, out_dir, top, overwrite)
-        write_table(ranked, ranked_path, overwrite)
+        paths = runs.write_ranked(ranked, cat, fopts, out_dir, top=top, overwrite=overwrite)
     err_console.print(
         f"wrote {escape(str(ranked_path))} ({ranked.meta['figure_of_merit']}) and "
         f"{len(paths)} target file(s) in {escape(str(out_dir))}"
@@ -322,36 +343,32 @@ def simulate(
     catalog: CatalogArg,
     output: TableOut,
     out_dir: Path = typer.Option(..., "--out-dir", help="Folder for the posterior targets."),
-    seed: int = typer.Option(0, "--seed", help="Global seed (per source: seed + source id)."),
-    walkers: int = typer.Option(32, "--walkers", help="emcee walkers (≥ 12)."),
-    steps: int = typer.Option(2000, "--steps", help="Chain steps (minimum with --until-conv.)."),
-    until_converged: bool = typer.Option(
-        False, "--until-converged", help="Extend each chain to ≥ 50 τ (or --max-steps)."
-    ),
-    max_steps: int = typer.Option(50000, "--max-steps", help="Cap for --until-converged."),
-    no_noise: bool = typer.Option(False, "--no-noise", help="Zero-noise data."),
+    seed: int = option(runs.simulation_settings, SIM, "seed"),
+    walkers: int = option(runs.simulation_settings, SIM, "walkers"),
+    steps: int = option(runs.simulation_settings, SIM, "steps"),
+    until_converged: bool = option(runs.simulation_settings, SIM, "until_converged"),
+    max_steps: int = option(runs.simulation_settings, SIM, "max_steps"),
+    no_noise: bool = option(runs.simulation_settings, SIM, "no_noise"),
     *,
     shared: PopulationArgs,
     overwrite: Overwrite = False,
 ) -> None:
     """Simulate LISA per source → summary ECSV (posterior vs Fisher σ) + a target file each."""
-    from ucbplan.population.simulate import PopulationSimulateOptions, run_simulate
-
     control = _control(output, overwrite, shared)
-    sampling = PopulationSimulateOptions(  # the options first, then the files, then the work
+    sampling = runs.simulation_settings(  # the options first, then the files, then the work
         seed=seed,
         walkers=walkers,
         steps=steps,
         until_converged=until_converged,
         max_steps=max_steps,
-        noise=not no_noise,
+        no_noise=no_noise,
     )
     _check_out_dir(out_dir, None, overwrite)
     cat, fopts = _inputs(catalog, shared)
     opts = dataclasses.replace(sampling, forecast=fopts)
     _announce(cat, catalog, control)
     with _made_folder(out_dir):
-        run = _run("simulate", cat, control, lambda c: run_simulate(cat, opts, out_dir, c))
+        run = _run("simulate", cat, control, lambda c: runs.run_simulations(cat, opts, out_dir, c))
     _finish(run, output, control, shared.keep_parts)
     for f in run.table.meta["failed"]:
         err_console.print(f"[yellow]failed {escape(f['source_id'])}: {escape(f['error'])}[/yellow]")
@@ -362,9 +379,7 @@ def semester(
     name: str = typer.Argument(..., help="2041A, 2041B or an ESO period like P147."),
 ) -> None:
     """Print the dates of a semester (A: Feb–Jul, B: Aug–Jan) or ESO period (P110 = 2022-10)."""
-    from ucbplan.observing.semesters import semester_dates
-
-    first, end = semester_dates(name)
+    first, end = api.semester(name)
     typer.echo(f"{name.strip().upper()}: {first.isoformat()} .. {end.isoformat()} (end exclusive)")
 
 

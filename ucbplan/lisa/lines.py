@@ -66,6 +66,10 @@ class WaveformLines:
     line_freqs_hz: dict[str, float]
     table: Table
 
+    def __repr__(self) -> str:
+        nb, n = self.model.model.freqs_hz.shape
+        return f"<WaveformLines {self.model.base.name}: {nb} bands x {n} bins, SNR {self.snr:.1f}>"
+
 
 def _table(model: LisaModel, bands: NDArray[np.complex128], psd: NDArray[np.float64]) -> Table:
     from astropy.table import Table

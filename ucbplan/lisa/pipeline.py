@@ -9,8 +9,8 @@ they return records and never print, so a notebook or a Dask worker can call the
     write_simulation(result, simulation_files(Path("posterior.yaml")))  # YAML + samples + chain
 
 Data flow: :func:`build_model` (start-epoch truth, four-line model, midpoint target) →
-:func:`prepare_simulation` (noise draw, likelihood, SNR, Fisher covariance; both in one call:
-:func:`setup_simulation`) →
+:func:`prepare_simulation` (noise draw, likelihood, SNR, Fisher covariance; both, options
+checked, in :func:`ucbplan.simulate`) →
 :func:`run_simulation` (emcee, midpoint transform, π-mode fold) →
 :func:`ucbplan.lisa.outputs.write_simulation`. The records it passes along (:class:`LisaModel`,
 :class:`SimulateOptions`, :class:`SimulationProblem`, :class:`SimulationResult`) are declared in
@@ -29,6 +29,7 @@ from astropy.time import TimeDelta
 from numpy.typing import NDArray
 
 from ucbplan.errors import InputError
+from ucbplan.lisa import DEFAULT_N_BINS
 from ucbplan.lisa import posterior as post
 from ucbplan.lisa.fisher import (
     fisher_covariance,
@@ -56,8 +57,6 @@ from ucbplan.lisa.simulation import (
 )
 
 if TYPE_CHECKING:
-    from pathlib import Path
-
     from ucbplan.lisa.source import SourceParams
     from ucbplan.lisa.waveform import FourLineModel
     from ucbplan.target import Target
@@ -68,7 +67,6 @@ __all__ = [
     "fisher_forecast",
     "prepare_simulation",
     "run_simulation",
-    "setup_simulation",
     "simulate",
 ]
 
@@ -81,7 +79,7 @@ def build_model(
     target: Target,
     *,
     t_obs_s: float | None = None,
-    n_bins: int = 512,
+    n_bins: int = DEFAULT_N_BINS,
     circular: bool = False,
     where: str | None = None,
     ecliptic_rad: tuple[float, float] | None = None,
@@ -192,6 +190,9 @@ class FisherForecast:
     cov_theta: F64
     warnings: tuple[str, ...] = ()
 
+    def __repr__(self) -> str:
+        return f"<FisherForecast {self.target.name}: SNR {self.snr:.1f}, {len(self.sigmas)} σ's>"
+
     @property
     def sigmas(self) -> dict[str, float]:
         """Forecast 1σ per parameter (covariance order)."""
@@ -276,44 +277,6 @@ def prepare_simulation(model: LisaModel, options: SimulateOptions) -> Simulation
             walkers=options.walkers,
         )
     return SimulationProblem(model, options, theta0, like, snr, cov, previous)
-
-
-def setup_simulation(
-    target: Target,
-    *,
-    t_obs_s: float | None = None,
-    n_bins: int = 512,
-    circular: bool = False,
-    seed: int = 0,
-    walkers: int = 32,
-    steps: int = 2000,
-    until_converged: bool = False,
-    max_steps: int = 50_000,
-    noise: bool = True,
-    resume: Path | None = None,
-    where: str | None = None,
-) -> SimulationProblem:
-    """The model of ``target`` and its drawn data, ready to sample (``simulate`` and
-    :func:`ucbplan.simulate`): :func:`build_model`, then :func:`prepare_simulation` with the
-    :class:`~ucbplan.lisa.simulation.SimulateOptions` of the remaining arguments (their meaning
-    and units are documented there; ``t_obs_s`` in s).
-
-    Raises
-    ------
-    InputError, NumericalError, InputFileError, TargetFileError
-        As :func:`build_model` and :func:`prepare_simulation`.
-    """
-    model = build_model(target, t_obs_s=t_obs_s, n_bins=n_bins, circular=circular, where=where)
-    options = SimulateOptions(
-        seed=seed,
-        walkers=walkers,
-        steps=steps,
-        until_converged=until_converged,
-        max_steps=max_steps,
-        noise=noise,
-        resume=resume,
-    )
-    return prepare_simulation(model, options)
 
 
 def _convergence_warnings(chain: SamplerResult) -> tuple[str, ...]:

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ucbplan.lisa import DEFAULT_MAX_STEPS, DEFAULT_STEPS, DEFAULT_WALKERS
 from ucbplan.lisa import posterior as post
 from ucbplan.lisa.likelihood import Likelihood, Prior, theta_from_source
 from ucbplan.lisa.noise import SANGRIA
@@ -99,10 +100,10 @@ class SimulateOptions:
     """
 
     seed: int = 0
-    walkers: int = 32
-    steps: int = 2000
+    walkers: int = DEFAULT_WALKERS
+    steps: int = DEFAULT_STEPS
     until_converged: bool = False
-    max_steps: int = 50000
+    max_steps: int = DEFAULT_MAX_STEPS
     noise: bool = True
     resume: Path | None = None
 
@@ -156,6 +157,13 @@ class SimulationResult:
     n_folded: int
     fisher: Target
     warnings: tuple[str, ...] = field(default_factory=tuple)
+
+    def __repr__(self) -> str:
+        return (
+            f"<SimulationResult {self.model.base.name}: {self.n_steps} steps, "
+            f"{self.samples.shape[0]} samples of {len(self.names)} parameters, "
+            f"SNR {self.problem.snr:.1f}, seed {self.problem.options.seed}>"
+        )
 
     @property
     def model(self) -> LisaModel:

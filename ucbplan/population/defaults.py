@@ -1,9 +1,12 @@
 """The defaults of a population forecast, declared once for the library, its API and its CLI.
 
-A light module (no imports): the command line reads it when it builds its options.
+A light module (it imports only the light :mod:`ucbplan.lisa`): the command line reads it
+when it builds its options.
 """
 
 from __future__ import annotations
+
+from ucbplan.lisa import DEFAULT_N_BINS
 
 __all__ = [
     "DEFAULT_N_BINS",
@@ -15,8 +18,6 @@ __all__ = [
 
 #: RV precision per epoch assumed for every source [km/s].
 DEFAULT_SIGMA_V_KMS = 15.0
-#: Band width N (frequency bins) of each source's Fisher model.
-DEFAULT_N_BINS = 512
 #: LISA mission start assumed by default (as catalogs/fiducial-injection.yaml), TDB.
 DEFAULT_T_START = "2035-01-01T00:00:00"
 #: 4 sidereal years [s] (the paper's T_obs).

@@ -22,7 +22,7 @@ if TYPE_CHECKING:
 
     from ucbplan.reduce.pipeline import Reduction
 
-__all__ = ["PLOT_NAMES", "fig_dv1_dv2", "fig_mass_mass", "fig_rv", "plot_all"]
+__all__ = ["PLOT_NAMES", "draw_rv", "fig_dv1_dv2", "fig_mass_mass", "fig_rv", "plot_all"]
 
 #: File names written by :func:`plot_all`.
 PLOT_NAMES = ("rv_vs_F.png", "dv1_vs_dv2.png", "mass_mass.png")
@@ -39,6 +39,14 @@ def fig_rv(red: Reduction) -> Figure:
     fig, (ax, axr) = plt.subplots(
         2, 1, figsize=(7, 6), sharex=True, gridspec_kw={"height_ratios": [3, 1]}
     )
+    draw_rv(red, ax, axr)
+    fig.tight_layout()
+    return fig
+
+
+def draw_rv(red: Reduction, ax: Any, axr: Any = None) -> None:
+    """Draw the velocities vs F̄ with the fitted lines on ``ax`` and, given ``axr``, the
+    residuals there (:func:`fig_rv`'s panels)."""
     colors = ("tab:blue", "tab:red")
     for j, f in enumerate(red.fits):
         x = red.design[j]
@@ -56,18 +64,22 @@ def fig_rv(red: Reduction) -> Figure:
             label=f"star {j + 1}: K = {f.K:.2f} ± {f.sigma_K:.2f} km/s",
         )
         ax.plot(xx, f.gamma + sign * f.K * xx, color="k", lw=1)
+        if axr is None:
+            continue
         axr.errorbar(x, f.line.residuals, s, fmt=".", ms=3, alpha=0.5, color=colors[j])
         out = f.line.outliers
         if np.any(out):
             axr.plot(x[out], f.line.residuals[out], "kx", label="> 4σ")
-    axr.axhline(0.0, color="k", lw=0.8)
     ax.set_ylabel("radial velocity [km/s]")
-    axr.set_ylabel("residual [km/s]")
-    axr.set_xlabel("F̄ = window-averaged cos u + κ_LISA [dimensionless]")
     ax.legend(loc="best", fontsize=8)
     ax.set_title(f"{red.target.name}: v–F regressions")
-    fig.tight_layout()
-    return fig
+    xlabel = "F̄ = window-averaged cos u + κ_LISA [dimensionless]"
+    if axr is None:
+        ax.set_xlabel(xlabel)
+        return
+    axr.axhline(0.0, color="k", lw=0.8)
+    axr.set_ylabel("residual [km/s]")
+    axr.set_xlabel(xlabel)
 
 
 def fig_dv1_dv2(red: Reduction) -> Figure | None:

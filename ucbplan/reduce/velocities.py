@@ -41,7 +41,7 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from astropy.time import Time
@@ -65,6 +65,7 @@ __all__ = [
     "check_validity",
     "read_velocities",
     "to_barycentric",
+    "velocities_from_table",
 ]
 
 F64 = NDArray[np.float64]
@@ -212,6 +213,11 @@ def _read_ecsv(path: Path) -> tuple[list[str], dict[str, list[object]], list[int
     except Exception as exc:  # astropy raises many types for malformed ECSV
         why = " ".join(str(exc).split())[:200]
         raise VelocityFileError(f"{path}: not a readable ECSV table ({why})") from None
+    return _table_columns(path, tab)
+
+
+def _table_columns(path: Path, tab: Any) -> tuple[list[str], dict[str, list[object]], list[int]]:
+    """Header (lower case), columns (velocities in km/s) and row numbers of an astropy table."""
     header = [name.strip().lower() for name in tab.colnames]
     cols: dict[str, list[object]] = {}
     for name, key in zip(tab.colnames, header, strict=True):
@@ -328,13 +334,34 @@ def read_velocities(path: Path | str) -> VelocityTable:
     fast = None if path.suffix.lower() == ".ecsv" else _fast_csv(path)
     if fast is not None:
         header, num, colmap, rownums = fast
-        tcol, comps = _check_header(path, header)
-    else:
-        if path.suffix.lower() == ".ecsv":
-            header, colmap, rownums = _read_ecsv(path)
-        else:
-            header, colmap, rownums = _csv_columns(path)
-        tcol, comps = _check_header(path, header)
+        return _assemble(path, header, colmap, rownums, num)
+    if path.suffix.lower() == ".ecsv":
+        return _assemble(path, *_read_ecsv(path))
+    return _assemble(path, *_csv_columns(path))
+
+
+def velocities_from_table(table: Any, source: Path) -> VelocityTable:
+    """Validate an astropy ``Table`` with the columns of a velocity file (as
+    :func:`read_velocities`; velocity columns with units are converted to km/s).
+
+    Raises
+    ------
+    VelocityFileError
+        As :func:`read_velocities`, naming ``source`` in place of a file.
+    """
+    return _assemble(source, *_table_columns(source, table))
+
+
+def _assemble(
+    path: Path,
+    header: list[str],
+    colmap: dict[str, list[object]],
+    rownums: Sequence[int],
+    num: dict[str, Any] | None = None,
+) -> VelocityTable:
+    """The checked :class:`VelocityTable` of parsed columns (``num``: already numeric)."""
+    tcol, comps = _check_header(path, header)
+    if num is None:
         if not rownums:
             raise VelocityFileError(f"{path}: no data rows; add one line per spectrum")
         num = {
