@@ -295,7 +295,7 @@ def test_cli_options_take_their_default_and_help_from_the_api(
 ) -> None:
     import importlib
 
-    from ucbplan.api.options import default_of
+    from ucbplan.api.flagspec import default_of
 
     module_name, name = function.split(":")
     module = importlib.import_module(module_name)

@@ -250,7 +250,7 @@ def test_modules_are_short_or_declared_cohesive() -> None:
 #: Module names that stand in several packages on purpose: each stage has its plots, and the
 #: layers of one command family mirror each other (cli/X shells api/X, which calls core/X); the
 #: options of a public function (api/options) and of the planner (observing/schedule/options).
-SHARED_MODULE_NAMES = {"__init__", "plots", "ephemeris", "timing", "report", "pipeline", "options"}
+SHARED_MODULE_NAMES = {"__init__", "plots", "ephemeris", "timing", "report", "pipeline"}
 
 
 def test_each_module_name_has_one_owner() -> None:
@@ -335,19 +335,6 @@ def test_erfa_warnings_are_silenced_at_the_edges_only() -> None:
 
 #: What ``ucbplan.cli`` may import: the public API, the errors, the version and itself.
 CLI_MAY_IMPORT = ("ucbplan.api", "ucbplan.errors", "ucbplan._version", "ucbplan.cli")
-#: CLI modules still being converted into shells over ``ucbplan.api`` (issue 30: helpers b1 and
-#: b2); temporary, emptied by the lead when their branches are merged.
-CLI_NOT_YET_SHELLS = {
-    "ucbplan.cli.core",
-    "ucbplan.cli.ephemeris",
-    "ucbplan.cli.timing",
-    "ucbplan.cli.feasibility",
-    "ucbplan.cli.reduce",
-    "ucbplan.cli.lisa",
-    "ucbplan.cli.population",
-    "ucbplan.cli._population_options",
-    "ucbplan.cli._epochs",
-}
 
 
 def _cli_imports_outside_the_api(graph: dict[str, set[str]]) -> list[str]:
@@ -355,7 +342,7 @@ def _cli_imports_outside_the_api(graph: dict[str, set[str]]) -> list[str]:
     return sorted(
         f"{m} -> {d}"
         for m, deps in graph.items()
-        if _area(m) == "cli" and m not in CLI_NOT_YET_SHELLS
+        if _area(m) == "cli"
         for d in deps
         if not any(d == ok or d.startswith(f"{ok}.") for ok in CLI_MAY_IMPORT)
     )
@@ -371,17 +358,25 @@ def test_the_cli_import_check_finds_a_planted_import() -> None:
     deps = _imports(ast.parse(code), {"ucbplan.observing.countdown"}, "ucbplan.cli.x", False)
     graph = {"ucbplan.cli.x": deps, "ucbplan.cli.y": {"ucbplan.api.exporting", "ucbplan.errors"}}
     assert _cli_imports_outside_the_api(graph) == ["ucbplan.cli.x -> ucbplan.observing.countdown"]
-    assert _cli_imports_outside_the_api({"ucbplan.cli.core": {"ucbplan.io"}}) == []
 
 
 #: Defaults a command may write itself: "not given" (None, False, an empty list) and "required".
 _NEUTRAL_DEFAULTS = (None, False, Ellipsis)
 
 
-def _literal_defaults(tree: ast.AST, where: str) -> list[str]:
-    """``where:function:parameter = value`` for each parameter default that is a literal
-    (``3.0``, ``"auto"``, ``True``), also inside ``typer.Option(3.0, …)``: a default the
-    command line declares beside the API's."""
+def _is_typer_call(node: ast.AST) -> bool:
+    """``typer.Option(…)`` or ``typer.Argument(…)`` (the default is their first argument)."""
+    return (
+        isinstance(node, ast.Call)
+        and isinstance(node.func, ast.Attribute)
+        and node.func.attr in ("Option", "Argument")
+    )
+
+
+def _literal_defaults(tree: ast.AST, where: str, declared: set[str]) -> list[str]:
+    """``where:function:parameter = value`` for each parameter of ``declared`` (a parameter the
+    API declares) whose default is a literal (``3.0``, ``"auto"``, ``True``), also inside
+    ``typer.Option(3.0, …)``: a default the command line declares beside the API's."""
     found = []
     for node in ast.walk(tree):
         if not isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
@@ -390,9 +385,9 @@ def _literal_defaults(tree: ast.AST, where: str) -> list[str]:
         pairs = list(zip(a.args[len(a.args) - len(a.defaults) :], a.defaults, strict=True))
         pairs += [(k, d) for k, d in zip(a.kwonlyargs, a.kw_defaults, strict=True) if d]
         for arg, default in pairs:
-            value = default
-            if isinstance(value, ast.Call) and value.args:
-                value = value.args[0]  # typer.Option(DEFAULT, "--flag", …)
+            if arg.arg not in declared:
+                continue
+            value = default.args[0] if _is_typer_call(default) and default.args else default
             if isinstance(value, ast.Constant) and value.value not in _NEUTRAL_DEFAULTS:
                 found.append(f"{where}:{node.name}:{arg.arg} = {value.value!r}")
             elif isinstance(value, ast.List | ast.Tuple) and value.elts:
@@ -400,14 +395,36 @@ def _literal_defaults(tree: ast.AST, where: str) -> list[str]:
     return found
 
 
+def _api_parameters() -> set[str]:
+    """Every parameter a flag table of ``ucbplan.api`` declares (``PLAN_FLAGS`` …)."""
+    import importlib
+    import pkgutil
+
+    import ucbplan.api
+    from ucbplan.api.flagspec import Flag
+
+    names: set[str] = set()
+    for info in pkgutil.iter_modules(ucbplan.api.__path__):
+        module = importlib.import_module(f"ucbplan.api.{info.name}")
+        for value in vars(module).values():
+            if (
+                isinstance(value, dict)
+                and value
+                and all(isinstance(v, Flag) for v in value.values())
+            ):
+                names |= set(value)
+    return names
+
+
 def test_no_default_is_declared_twice() -> None:
     # a command's option takes its default from the API signature (ucbplan.cli._derive.option);
-    # a literal default in ucbplan/cli would be the second declaration of it
+    # a literal default in ucbplan/cli for a parameter the API declares is a second declaration
+    declared = _api_parameters()
+    assert {"airmass_max", "samples", "alpha"} <= declared
     found = []
     for path in sorted((PACKAGE / "cli").glob("*.py")):
-        name = _module_name(path)
-        if name not in CLI_NOT_YET_SHELLS:
-            found += _literal_defaults(ast.parse(path.read_text(encoding="utf-8")), name)
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        found += _literal_defaults(tree, _module_name(path), declared)
     assert not found, "defaults written in the command line, not taken from the API:\n" + "\n".join(
         found
     )
@@ -420,8 +437,10 @@ def test_the_default_check_finds_planted_defaults() -> None:
         "        g: float = option(api.plan, FLAGS, 'g'), h: str = typer.Option(..., '--h')):\n"
         "    pass\n"
     )
-    assert sorted(_literal_defaults(ast.parse(code), "m")) == [
+    declared = set("abcdefgh")
+    assert sorted(_literal_defaults(ast.parse(code), "m", declared)) == [
         "m:cmd:a = 3",
         "m:cmd:c = 'auto'",
         "m:cmd:f = ['x']",
     ]
+    assert _literal_defaults(ast.parse(code), "m", {"b", "d"}) == []  # CLI-only options

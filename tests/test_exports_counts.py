@@ -94,7 +94,9 @@ def planned(name: str) -> Table:
         path, site, nights, options = PLANS[name]
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            _CACHE[name] = ucbplan.plan(path, site, "2040-02-15", nights=nights, **options).table
+            _CACHE[name] = ucbplan.plan(
+                path, site, "2040-02-15", nights=nights, **options
+            ).text_table
     return _CACHE[name]
 
 
@@ -330,7 +332,7 @@ def test_an_eccentric_phase_locked_visit_that_waits_is_noted() -> None:
         readout_s=10.0,
         cadence="phase-locked",
         allow_smeared=True,
-    ).table
+    ).text_table
     starts = [utc(str(t)) for t in table["t_start_utc"]]
     ends = [utc(str(t)) for t in table["t_end_utc"]]
     waits = [(b - a).total_seconds() - 10.0 for a, b in zip(ends, starts[1:], strict=False)]
@@ -431,7 +433,7 @@ def test_service_mode_refuses_what_a_queue_cannot_run(
 def test_service_mode_without_a_sigma_law_plans_back_to_back() -> None:
     table = ucbplan.plan(
         HM, "paranal", "2040-02-15", visit="1h", readout_s=10.0, service_mode=True
-    ).table
+    ).text_table
     starts = [utc(str(t)) for t in table["t_start_utc"]]
     ends = [utc(str(t)) for t in table["t_end_utc"]]
     gaps = [(b - a).total_seconds() for a, b in zip(ends, starts[1:], strict=False)]

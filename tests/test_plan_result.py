@@ -405,6 +405,6 @@ def test_a_read_plan_works_offline_and_leaves_astropy_as_it_was(
         assert isinstance(back.table["t_mid_utc"], Time) and back.goals and back.strategies
         assert back.plot(ax=Figure().subplots()) is not None
         assert back.export("ics", tmp_path / "plan.ics") == tmp_path / "plan.ics"
-        assert len(back.to_astroplan().scheduled_blocks) == back.accounting.total.visits
+        assert len(back.to_astroplan().scheduled_blocks) == len(back)  # one block per exposure
         assert astropy_state() == before
     assert repr(goal_plan.text_table.meta) == table_meta  # the plan's own meta untouched

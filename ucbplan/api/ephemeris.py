@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Any
 
 from ucbplan._version import __version__
 from ucbplan.api._convert import as_tdb, scope
-from ucbplan.api.options import Flag
+from ucbplan.api.flagspec import Flag
 from ucbplan.api.targets import TargetLike, get_site, load_target
 from ucbplan.errors import InputError, PlanWarning, emit, shorten
 

@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ucbplan.api._convert import as_float, scope
-from ucbplan.api.options import Flag
+from ucbplan.api.flagspec import Flag
 from ucbplan.api.plan_options import checked_flag, checked_text
 from ucbplan.errors import InputError, shorten
 
@@ -281,7 +281,8 @@ def _blocks_table(blocks: Any) -> Table:
 
     if isinstance(blocks, str | Path):
         return read_blocks(blocks)
-    table = getattr(blocks, "table", blocks)
+    # a Plan: the text table its files hold (Plan.table is a copy with Time columns)
+    table = getattr(blocks, "text_table", blocks)
     if not isinstance(table, Table):
         raise InputError(
             f"blocks: expected a blocks table file, an astropy Table or a Plan, got "

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 from ucbplan.api._convert import as_float, scope
 from ucbplan.api.ephemeris import check_anchor
-from ucbplan.api.options import Flag
+from ucbplan.api.flagspec import Flag
 from ucbplan.api.targets import TargetLike, load_target
 from ucbplan.errors import InputError, UcbplanError, shorten
 

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Any
 
 from ucbplan.api._convert import as_float, scope
 from ucbplan.api.ephemeris import TargetLike, load_target
-from ucbplan.api.options import Flag
+from ucbplan.api.flagspec import Flag
 from ucbplan.api.reduction import check_count, check_seed
 from ucbplan.errors import InputError, ReduceWarning, emit, shorten
 from ucbplan.lisa import (

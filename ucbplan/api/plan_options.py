@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeVar
 
 from ucbplan.api._convert import as_float
-from ucbplan.api.options import Flag
+from ucbplan.api.flagspec import Flag
 from ucbplan.errors import InputError, shorten
 
 if TYPE_CHECKING:

@@ -483,7 +483,8 @@ keck_rotmode, force, semester, seeing_arcsec, instrument, eso_templates
         return content
 
     def to_astroplan(self) -> Any:
-        """The plan as an ``astroplan.Schedule`` (one ``ObservingBlock`` per visit or block)."""
+        """The plan as an ``astroplan.Schedule``: one ``ObservingBlock`` per exposure, each with
+        the plan's constraints as astroplan objects and its time window (docs/exports.md)."""
         from ucbplan.observing.astroplan_bridge import to_astroplan
 
         with scope():

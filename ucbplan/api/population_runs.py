@@ -10,7 +10,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ucbplan.api.options import Flag
+from ucbplan.api.flagspec import Flag
 from ucbplan.lisa import DEFAULT_MAX_STEPS, DEFAULT_STEPS, DEFAULT_WALKERS
 
 if TYPE_CHECKING:

@@ -13,8 +13,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ucbplan.api._convert import as_float, as_tdb, scope
+from ucbplan.api.flagspec import Flag
 from ucbplan.api.lisa_analysis import check_n_bins, t_obs_seconds
-from ucbplan.api.options import Flag
 from ucbplan.errors import InputError, shorten
 from ucbplan.population.defaults import DEFAULT_N_BINS, DEFAULT_SIGMA_V_KMS, DEFAULT_T_START
 

@@ -11,7 +11,7 @@ from typing import IO, TYPE_CHECKING, Any
 
 from ucbplan.api._convert import scope
 from ucbplan.api.ephemeris import TargetLike, get_site, load_target
-from ucbplan.api.options import Flag
+from ucbplan.api.flagspec import Flag
 from ucbplan.errors import InputError, ReduceWarning, emit, shorten
 
 if TYPE_CHECKING:

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 from ucbplan.api._convert import as_float, scope
 from ucbplan.api.ephemeris import parse_epoch
-from ucbplan.api.options import Flag
+from ucbplan.api.flagspec import Flag
 from ucbplan.api.targets import TargetLike, load_target
 from ucbplan.core.constants import DAY_S, MONTH_S, YEAR_S  # also the command's table columns
 from ucbplan.errors import InputError, shorten

@@ -44,7 +44,7 @@ if TYPE_CHECKING:  # imported when first used (see _LAZY)
     from ucbplan.observing.nightplot import chart_format
     from ucbplan.observing.nightsheet import sheet_format
     from ucbplan.observing.tableformat import local_datetimes
-    from ucbplan.observing.tablewrite import write_table
+    from ucbplan.observing.tablewrite import csv_safe_table, write_table
     from ucbplan.offline import offline
     from ucbplan.plotting import check_figure_path
 
@@ -54,6 +54,7 @@ __all__ = [
     "check_figure_path",
     "check_output_path",
     "countdown_lines",
+    "csv_safe_table",
     "dump_json",
     "local_datetimes",
     "night_charts",
@@ -81,6 +82,7 @@ _LAZY = {
     "chart_format": "ucbplan.observing.nightplot",
     "sheet_format": "ucbplan.observing.nightsheet",
     "write_table": "ucbplan.observing.tablewrite",
+    "csv_safe_table": "ucbplan.observing.tablewrite",
 }
 
 
@@ -92,28 +94,10 @@ def __getattr__(name: str) -> Any:
 
 
 def night_charts(plan: Any, path: str | Path, overwrite: bool = False) -> int:
-    """The night charts of ``plan`` (a :class:`ucbplan.Plan`) under its constraints:
-    ``.png``/``.svg`` panels or a ``.pdf`` page per night; the number of nights charted."""
-    from ucbplan.observing.nightplot import write_night_charts
-    from ucbplan.offline import offline
-
-    run = plan.run
-    constraints = run.settings.constraints(run.site)
-    with offline():
-        return write_night_charts(
-            plan.table, run.site, Path(path), constraints=constraints, overwrite=overwrite
-        )
+    """The night charts of ``plan`` (a :class:`ucbplan.Plan`): :meth:`ucbplan.Plan.charts`."""
+    return int(plan.charts(path, overwrite=overwrite))
 
 
 def night_sheet(plan: Any, path: str | Path, overwrite: bool = False) -> int:
-    """The night sheet of ``plan`` (``.pdf``, or self-contained ``.html``): chart and visits of
-    each night; the number of nights."""
-    from ucbplan.observing.nightsheet import write_night_sheet
-    from ucbplan.offline import offline
-
-    run = plan.run
-    constraints = run.settings.constraints(run.site)
-    with offline():
-        return write_night_sheet(
-            plan.table, run.site, Path(path), constraints=constraints, overwrite=overwrite
-        )
+    """The night sheet of ``plan`` (a :class:`ucbplan.Plan`): :meth:`ucbplan.Plan.sheet`."""
+    return int(plan.sheet(path, overwrite=overwrite))

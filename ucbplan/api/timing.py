@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ucbplan.api._convert import as_float, scope
-from ucbplan.api.options import Flag
+from ucbplan.api.flagspec import Flag
 from ucbplan.api.targets import TargetLike
 from ucbplan.errors import InputError, shorten
 

@@ -167,9 +167,7 @@ def write_table_output(tab: Any, fmt: str, output: Path | None, overwrite: bool)
         return
     fmt_name = "ascii.ecsv" if fmt == "ecsv" else "ascii.csv"
     if fmt == "csv":
-        from ucbplan.observing.tablewrite import csv_safe_table
-
-        tab = csv_safe_table(tab)  # no formula cells (issue 33)
+        tab = terminal.csv_safe_table(tab)  # no formula cells (issue 33)
 
     def _w(handle: IO[str]) -> None:
         tab.write(handle, format=fmt_name)

@@ -1,4 +1,4 @@
-"""typer options derived from the public API's declarations (:mod:`ucbplan.api.options`).
+"""typer options derived from the public API's declarations (:mod:`ucbplan.api.flagspec`).
 
 A command writes ``airmass_max: float = option(api.plan, PLAN_FLAGS, "airmass_max")``: the
 default comes from the API function's signature and the flag and help text from its flag table,
@@ -12,7 +12,7 @@ from typing import Any
 
 import typer
 
-from ucbplan.api.options import Flag, default_of
+from ucbplan.api.flagspec import Flag, default_of
 
 __all__ = ["annotated", "argument", "flag", "option"]
 

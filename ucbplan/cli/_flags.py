@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import re
 
-from ucbplan.api.options import flag_names
+from ucbplan.api.flagspec import flag_names
 from ucbplan.api.plan_options import PLAN_FLAGS
 
 __all__ = ["FLAGS", "cli_message"]

@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 from ucbplan.api import populations as api
-from ucbplan.api.options import Flag, default_of
+from ucbplan.api.flagspec import Flag, default_of
 
 if TYPE_CHECKING:
     from ucbplan.api.populations import ExecutorSpec, RunControl

@@ -21,7 +21,7 @@ from rich.markup import escape
 
 from ucbplan.api import population_runs as runs
 from ucbplan.api import populations as api
-from ucbplan.api.options import Flag
+from ucbplan.api.flagspec import Flag
 from ucbplan.cli._console import check_output_path, err_console
 from ucbplan.cli._derive import option
 from ucbplan.cli._population_options import (
