@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
+from ucbplan.cli._flags import cli_message
 from ucbplan.cli.app import app
 from ucbplan.errors import InputError, OutputError
 from ucbplan.lisa import sampler as sampler_mod
@@ -246,7 +247,7 @@ def test_bad_options_are_one_line_errors(tmp_path: Path, argv: list[str], needle
     cmd = [a.replace("{tmp}", str(tmp_path)) for a in argv]
     res = CliRunner().invoke(app, [cmd[0], str(INJECTION), *cmd[1:]])
     assert res.exit_code != 0
-    msg = _one_line(str(res.exception))
+    msg = _one_line(cli_message(str(res.exception)))  # as the command line prints it
     assert needle in msg, msg
     assert list(tmp_path.iterdir()) == []
 

@@ -48,7 +48,7 @@ def test_the_values_reach_the_run_control(tmp_path: Path) -> None:
     args = PopulationArgs(**{**values, "workers": 3, "chunk": 7, "resume": True})
     control = args.control(tmp_path / "p", overwrite=True)
     assert control == RunControl(tmp_path / "p", ExecutorSpec(workers=3), 7, True, True)
-    with pytest.raises(InputError, match="--workers"):
+    with pytest.raises(InputError, match=r"^workers: "):
         dataclasses.replace(args, workers=0).control(tmp_path, overwrite=False)
 
 

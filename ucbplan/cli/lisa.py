@@ -243,6 +243,7 @@ def _save_interrupted(
     overwrite: bool,
 ) -> None:
     """Ctrl-C: keep the chain so far for --resume (the interrupt then ends the program)."""
+    from ucbplan.cli._flags import cli_message
     from ucbplan.errors import OutputError
     from ucbplan.lisa.outputs import save_interrupted
 
@@ -254,7 +255,8 @@ def _save_interrupted(
         save_interrupted(problem, stop.partial, files.chain, overwrite=overwrite)
     except OutputError as exc:
         err_console.print(
-            f"interrupted after {n} steps; the chain was not saved: {exc}", markup=False
+            f"interrupted after {n} steps; the chain was not saved: {cli_message(str(exc))}",
+            markup=False,
         )
         return
     err_console.print(

@@ -424,10 +424,10 @@ def write_night_charts(
     fmt = chart_format(path)
     charts = night_chart(table, site)
     if not charts:
-        raise InputError(f"--plot {path.name}: the plan has no blocks; nothing to chart")
+        raise InputError(f"plot {path.name}: the plan has no blocks; nothing to chart")
     if fmt != "pdf" and len(charts) > MAX_PANELS:
         raise InputError(
-            f"--plot {path.name}: {len(charts)} nights do not fit one image (at most "
+            f"plot {path.name}: {len(charts)} nights do not fit one image (at most "
             f"{MAX_PANELS} panels); give a .pdf path for one page per night"
         )
     plt = pyplot()

@@ -312,7 +312,7 @@ def sheet_format(path: Path) -> str:
         return "html"
     if fmt not in SHEET_FORMATS:
         raise InputError(
-            f"--sheet: expected a .pdf or .html file, got {shorten(path.name, 60)}; "
+            f"sheet: expected a .pdf or .html file, got {shorten(path.name, 60)}; "
             "name the sheet e.g. night.pdf"
         )
     return fmt
@@ -352,7 +352,7 @@ def write_night_sheet(
     fmt = sheet_format(path)
     charts = night_chart(table, site)
     if not charts:
-        raise InputError("--sheet: the plan has no blocks; nothing to put on a night sheet")
+        raise InputError("sheet: the plan has no blocks; nothing to put on a night sheet")
     note, meta = plan_note(table), table.meta
     if fmt == "pdf":
         write_output(

@@ -395,27 +395,27 @@ def forecast_options(
     from astropy.time import Time
 
     # the ranges of the single-target commands (horizon, simulate): one rule per option
-    check_number("--sigma-v", sigma_v_kms, 0.0, 1e4, "km/s")
-    check_number("--k-eff", k_eff_kms, 0.1, 1e4, "km/s", "a binary's velocity semi-amplitude")
+    check_number("sigma_v", sigma_v_kms, 0.0, 1e4, "km/s")
+    check_number("k_eff", k_eff_kms, 0.1, 1e4, "km/s", "a binary's velocity semi-amplitude")
     if not (16 <= n_bins <= MAX_N_BINS and n_bins % 2 == 0):
         raise InputError(
-            f"--n-bins: expected an even number of bins in [16, {MAX_N_BINS}], got {n_bins}"
+            f"n_bins: expected an even number of bins in [16, {MAX_N_BINS}], got {n_bins}"
         )
     try:
         t0 = Time(t_start, scale="tdb").isot
     except ValueError:
-        raise InputError(f"--t-start: expected an ISO time, got {shorten(t_start)}") from None
+        raise InputError(f"t_start: expected an ISO time, got {shorten(t_start)}") from None
     t_obs_s = DEFAULT_T_OBS_S
     if t_obs is not None:
         try:
             t_obs_s = float(u.Quantity(t_obs.replace(" ", "")).to_value(u.s))
         except (TypeError, ValueError, u.UnitsError):
             raise InputError(
-                f"--t-obs: expected a duration like '4yr' or '1.2e8 s', got {shorten(t_obs)}"
+                f"t_obs: expected a duration like '4yr' or '1.2e8 s', got {shorten(t_obs)}"
             ) from None
         if not MIN_T_OBS_S <= t_obs_s <= 100 * YEAR_S:
             raise InputError(
-                f"--t-obs: expected a duration from 1 day to 100 yr, got {shorten(t_obs)}"
+                f"t_obs: expected a duration from 1 day to 100 yr, got {shorten(t_obs)}"
             )
     return ForecastOptions(
         sigma_v_kms=sigma_v_kms, k_eff_kms=k_eff_kms, t_obs_s=t_obs_s, t_start_tdb=t0, n_bins=n_bins

@@ -100,7 +100,7 @@ def _disagrees(times: EclipseTimes, guess: PeriodGuess, name: str, pull: float) 
         "t0": f"t0 (±{guess.sigma_t0_s:.2g} s from its digits)",
     }[name]
     fix = (
-        "write it with fewer digits (as many as hold over the times), or give --initial "
+        "write it with fewer digits (as many as hold over the times), or give `initial` "
         "TARGET.yaml with t0, period and pdot"
         if guess.origin == "--period"
         else "check that file's ephemeris, or add a cycle column"
@@ -161,7 +161,7 @@ def count_cycles(times: EclipseTimes, guess: PeriodGuess) -> F64:
             raise InputFileError(
                 f"{times.label()}: row {times.rows[i]}, column 'bjd_tdb': {offset[k] / p:.2f} P "
                 f"from the nearest predicted {kind} eclipse (counting from {guess.origin}); check "
-                "its kind, or whether the guess holds over these times (fewer digits, or --initial "
+                "its kind, or whether the guess holds over these times (fewer digits, or `initial` "
                 "with t0, period, pdot), or remove the row"
             )
         cycles[todo[ok]] = n[ok]
@@ -188,6 +188,6 @@ def _ambiguous(
     return InputFileError(
         f"{times.label()}: cycle count ambiguous {where}: the ephemeris so far (from "
         f"{guess.origin}) predicts that eclipse only to σ = {sig_text} (> P/8); add a cycle "
-        "column, or give --initial TARGET.yaml with a better ephemeris (or --period with more "
+        "column, or give `initial` TARGET.yaml with a better ephemeris (or `period` with more "
         "digits)"
     )

@@ -401,7 +401,7 @@ def _tolerance_and_validity(
     if sigma_v is None or k is None:
         raise UcbplanError(
             f"{target.name}: the tolerance needs sigma_v and K: add spectroscopy.sigma_v and "
-            "K_eff (or K1/K2) to the target file, or pass --sigma-v and --k-eff (km/s)"
+            "K_eff (or K1/K2) to the target file, or pass `sigma_v` and `k_eff` (km/s)"
         )
     u_star = mode.u_values[0] if mode.tol_kind == "generic" else None
     tol = tolerance(mode.tol_kind, sigma_v, k, settings.n_epochs, u_star)

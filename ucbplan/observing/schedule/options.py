@@ -75,8 +75,8 @@ def plan_settings(
     fixed, model = _sigma_v(sigma_v_kms, sigma_floor_kms, extinction_k, inst)
     if inst is not None and sigma_v_kms is None and inst.sigma_ref is None:
         raise InputError(
-            f"--instrument {inst.name}: the instrument table has no confirmed RV-precision "
-            "reference (sigma_ref); pass --sigma-v KM_S (sigma_v per exposure)"
+            f"instrument {inst.name}: the instrument table has no confirmed RV-precision "
+            "reference (sigma_ref); pass `sigma_v` KM_S (sigma_v per exposure)"
         )
     acq, readout = _overheads(inst, overhead_s, readout_s)
     exptime = DEFAULT_EXPTIME_S if exptime_s is None else exptime_s
@@ -88,7 +88,7 @@ def plan_settings(
         exptime_explicit=exptime_s is not None,
         instrument=inst,
         visit_s=parse_duration(visit) if visit is not None else None,
-        max_visit_s=parse_duration(max_visit, "--max-visit") if max_visit else DEFAULT_MAX_VISIT_S,
+        max_visit_s=parse_duration(max_visit, "max_visit") if max_visit else DEFAULT_MAX_VISIT_S,
         sigma_v_kms=fixed,
         sigma_model=model,
         budgets=parse_budgets(list(budgets)),
@@ -114,9 +114,9 @@ def _sigma_v(
     always was (with a floor in quadrature); a law is a :class:`SigmaVModel`."""
     if text is None:
         if floor_kms:
-            raise InputError("--sigma-floor: expected --sigma-v as well (a floor of what?)")
+            raise InputError("sigma_floor: expected `sigma_v` as well (a floor of what?)")
         if extinction_k is not None:
-            raise InputError("--extinction: expected --sigma-v 30km/s@600s as well")
+            raise InputError("extinction: expected `sigma_v` 30km/s@600s as well")
         return None, None
     k = extinction_k
     if k is None:
@@ -125,7 +125,7 @@ def _sigma_v(
     if not model.follows_exposure:
         if extinction_k is not None:
             raise InputError(
-                "--extinction: a fixed --sigma-v does not scale with airmass; give a reference "
+                "extinction: a fixed `sigma_v` does not scale with airmass; give a reference "
                 "exposure (30km/s@600s)"
             )
         return float(model.sigma(1.0)), None  # (σ_v² + σ_sys²)^½, fixed per exposure

@@ -85,7 +85,7 @@ def _check_inputs(targets: list[Target], nights: list[date], settings: PlanSetti
     if not targets:
         raise UcbplanError("no targets given; pass one or more target YAML files")
     if not nights:
-        raise UcbplanError("--nights must be >= 1")
+        raise UcbplanError("nights must be >= 1")
 
 
 def _second_epoch(site: Site, settings: PlanSettings) -> SecondEpoch:
