@@ -69,7 +69,8 @@ def f(x, option="--visit"):
         raise InputError(f"--goal: expected {x}; lengthen --visit")
     raise InputError("visit: fine")
 '''
-    assert flags_in(planted) == ["--visit", "--max-visit", "--goal: expected ", "; lengthen --visit"]
+    found = ["--visit", "--max-visit", "--goal: expected ", "; lengthen --visit"]
+    assert flags_in(planted) == found
     assert flags_in("raise InputError(f'visit: lengthen `visit` {x}')") == []
 
 
