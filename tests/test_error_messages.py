@@ -62,13 +62,13 @@ def _library_files() -> list[Path]:
 
 
 def test_the_scan_finds_a_planted_flag() -> None:
-    planted = '''
+    planted = """
 def f(x, option="--visit"):
     check_range("--max-visit", x, 0, 1)
     if x:
         raise InputError(f"--goal: expected {x}; lengthen --visit")
     raise InputError("visit: fine")
-'''
+"""
     found = ["--visit", "--max-visit", "--goal: expected ", "; lengthen --visit"]
     assert flags_in(planted) == found
     assert flags_in("raise InputError(f'visit: lengthen `visit` {x}')") == []

@@ -33,6 +33,7 @@ from ucbplan.observing.site_time_axis import TimeAxis
 from ucbplan.observing.sites import Site
 from ucbplan.observing.sky import SkyModel
 from ucbplan.observing.tablemake import blocks_to_table
+from ucbplan.offline import offline
 from ucbplan.plotting import FIGURE_FORMATS, figure_format, pyplot
 
 if TYPE_CHECKING:
@@ -400,6 +401,7 @@ def chart_format(path: Path) -> str:
     return figure_format(path)
 
 
+@offline()  # a notebook's call works with no network, like the CLI's
 def write_night_charts(
     table: Table,
     site: Site,

@@ -45,6 +45,7 @@ from ucbplan.observing.sheet_html import (
 from ucbplan.observing.site_time_axis import TimeAxis
 from ucbplan.observing.sites import Site
 from ucbplan.observing.sky import SkyModel
+from ucbplan.offline import offline
 from ucbplan.plotting import pyplot
 
 __all__ = [
@@ -318,6 +319,7 @@ def sheet_format(path: Path) -> str:
     return fmt
 
 
+@offline()  # a notebook's call works with no network, like the CLI's
 def write_night_sheet(
     table: Table,
     site: Site,
