@@ -55,6 +55,11 @@ _PUBLIC = {
     "PlanWarning": "ucbplan.errors",
     "ReduceWarning": "ucbplan.errors",
     "EarthOrientationWarning": "ucbplan.errors",
+    # helper c (issue 30): warnings by cause
+    "SmearingWarning": "ucbplan.errors",
+    "ExposureWarning": "ucbplan.errors",
+    "EphemerisRangeWarning": "ucbplan.errors",
+    "SamplerConvergenceWarning": "ucbplan.errors",
 }
 
 __all__ = ["__version__", *_PUBLIC]
@@ -142,6 +147,18 @@ if TYPE_CHECKING:  # the same names for type checkers and IDEs ("as": re-exporte
     )
     from ucbplan.errors import (
         UcbplanWarning as UcbplanWarning,
+    )
+    from ucbplan.errors import (  # helper c (issue 30): warnings by cause
+        EphemerisRangeWarning as EphemerisRangeWarning,
+    )
+    from ucbplan.errors import (
+        ExposureWarning as ExposureWarning,
+    )
+    from ucbplan.errors import (
+        SamplerConvergenceWarning as SamplerConvergenceWarning,
+    )
+    from ucbplan.errors import (
+        SmearingWarning as SmearingWarning,
     )
     from ucbplan.observing.constraints import AirmassConstraint as AirmassConstraint
     from ucbplan.observing.constraints import AltitudeConstraint as AltitudeConstraint

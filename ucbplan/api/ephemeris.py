@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Any
 
 from ucbplan._version import __version__
 from ucbplan.api._convert import as_float, as_tdb, scope
-from ucbplan.errors import InputError, PlanWarning, UcbplanError, emit, shorten
+from ucbplan.errors import EphemerisRangeWarning, InputError, UcbplanError, emit, shorten
 
 if TYPE_CHECKING:
     from astropy.table import Table
@@ -206,8 +206,9 @@ def ephemeris(
 
     Warns
     -----
-    PlanWarning
-        Epochs past T_valid(quadrature, α = 1) (also printed by the command line).
+    EphemerisRangeWarning
+        Epochs past T_valid(quadrature, α = 1) (also printed by the command line); a
+        :class:`~ucbplan.errors.PlanWarning`.
     """
     from ucbplan.core.ephemeris import find_epochs
 
@@ -219,7 +220,7 @@ def ephemeris(
         es = find_epochs(t, tau0, tau1, anchor, star)
         lines = horizon_warnings(t, tau0, tau1)
         table = epoch_table(t, es)
-    emit(lines, PlanWarning)
+    emit(lines, EphemerisRangeWarning)
     return table
 
 

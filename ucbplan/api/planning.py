@@ -10,7 +10,7 @@ from typing import IO, TYPE_CHECKING, Any
 
 from ucbplan.api._convert import as_date, as_float, scope
 from ucbplan.api.ephemeris import TargetLike, get_site, load_target
-from ucbplan.errors import InputError, PlanWarning, emit, shorten
+from ucbplan.errors import InputError, emit, shorten
 
 if TYPE_CHECKING:
     from astropy.table import Table
@@ -208,7 +208,9 @@ def plan(
     Warns
     -----
     PlanWarning, EarthOrientationWarning
-        What the plan's ``warnings`` list holds (nights past the bundled IERS tables …).
+        What the plan's ``warnings`` list holds, each with its cause's class:
+        :class:`~ucbplan.errors.SmearingWarning`, :class:`~ucbplan.errors.ExposureWarning`
+        (PlanWarnings), EarthOrientationWarning (nights past the bundled IERS tables).
     """
     from ucbplan.observing.schedule import night_dates, plan_settings
     from ucbplan.observing.schedule.run import plan_targets
@@ -221,7 +223,7 @@ def plan(
         where = get_site(site, timezone)
         loaded = [load_target(t) for t in (targets if many else [targets])]
         run = plan_targets(loaded, where, dates, settings, dict(priorities or {}))
-    emit(list(run.result.warnings), PlanWarning)
+    emit(list(run.result.warnings), run.result.warning_categories)
     return Plan(run)
 
 

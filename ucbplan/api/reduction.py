@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 from ucbplan.api._convert import as_float, scope
 from ucbplan.api.ephemeris import TargetLike, get_site, load_target
-from ucbplan.errors import InputError, ReduceWarning, emit, shorten
+from ucbplan.errors import InputError, ReduceWarning, SamplerConvergenceWarning, emit, shorten
 from ucbplan.lisa import MIN_T_OBS_S  # shortest LISA observation [s] (t_obs, --t-obs)
 from ucbplan.population.defaults import DEFAULT_N_BINS, DEFAULT_SIGMA_V_KMS, DEFAULT_T_START
 
@@ -207,7 +207,7 @@ def simulate(
             noise=noise,
         )
         result = run_simulation(problem)
-    emit(list(result.warnings), ReduceWarning)
+    emit(list(result.warnings), SamplerConvergenceWarning)
     return result
 
 
