@@ -133,6 +133,12 @@ if TYPE_CHECKING:  # the same names for type checkers and IDEs ("as": re-exporte
     from ucbplan.errors import (
         EarthOrientationWarning as EarthOrientationWarning,
     )
+    from ucbplan.errors import (  # helper c (issue 30): warnings by cause
+        EphemerisRangeWarning as EphemerisRangeWarning,
+    )
+    from ucbplan.errors import (
+        ExposureWarning as ExposureWarning,
+    )
     from ucbplan.errors import (
         InputError as InputError,
     )
@@ -143,22 +149,16 @@ if TYPE_CHECKING:  # the same names for type checkers and IDEs ("as": re-exporte
         ReduceWarning as ReduceWarning,
     )
     from ucbplan.errors import (
-        UcbplanError as UcbplanError,
-    )
-    from ucbplan.errors import (
-        UcbplanWarning as UcbplanWarning,
-    )
-    from ucbplan.errors import (  # helper c (issue 30): warnings by cause
-        EphemerisRangeWarning as EphemerisRangeWarning,
-    )
-    from ucbplan.errors import (
-        ExposureWarning as ExposureWarning,
-    )
-    from ucbplan.errors import (
         SamplerConvergenceWarning as SamplerConvergenceWarning,
     )
     from ucbplan.errors import (
         SmearingWarning as SmearingWarning,
+    )
+    from ucbplan.errors import (
+        UcbplanError as UcbplanError,
+    )
+    from ucbplan.errors import (
+        UcbplanWarning as UcbplanWarning,
     )
     from ucbplan.observing.constraints import AirmassConstraint as AirmassConstraint
     from ucbplan.observing.constraints import AltitudeConstraint as AltitudeConstraint
