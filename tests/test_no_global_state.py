@@ -224,14 +224,8 @@ def test_night_sheet_recipe_works_with_no_network(tmp_path: Path) -> None:
     import sys
 
     env = {**os.environ, "PYTHONPATH": str(Path(ucbplan.__file__).parents[1])}
-    proc = subprocess.run(
-        [sys.executable, "-c", SHEET_SCRIPT, str(tmp_path), str(HM)],
-        capture_output=True,
-        text=True,
-        env=env,
-        timeout=120,
-        check=False,
-    )
+    argv = [sys.executable, "-c", SHEET_SCRIPT, str(tmp_path), str(HM)]
+    proc = subprocess.run(argv, capture_output=True, text=True, env=env, timeout=120, check=False)
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert proc.stdout.strip() == "0"  # no connection even tried
     assert (tmp_path / "night.html").read_text(encoding="utf-8").startswith("<!DOCTYPE html>")
