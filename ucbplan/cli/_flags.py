@@ -16,7 +16,7 @@ import re
 __all__ = ["FLAGS", "PARAMETERS", "cli_message", "flag_of"]
 
 #: Parameters whose flag is not ``--`` + the name with ``-`` for ``_``.
-FLAGS = {
+_IRREGULAR = {
     "moon_sep_deg": "--moon-sep",
     "moon_illum_max": "--moon-illum",
     "zenith_hole_deg": "--zenith-hole",
@@ -36,8 +36,8 @@ FLAGS = {
 #: Boolean parameters whose ``name=False`` is a flag of its own.
 FALSE_FLAGS = {"dry_run": "--no-dry-run"}
 
-#: Every parameter name a library message may mention, with its flag by :func:`flag_of`.
-PARAMETERS = frozenset(FLAGS) | {
+#: Every parameter name a library message may mention.
+PARAMETERS = frozenset(_IRREGULAR) | {
     # ucbplan.plan and friends
     *("airmass_max", "twilight", "alpha", "sigma_v", "sigma_floor", "max_visit", "k_eff"),
     *("mass_radius", "cos_i_sigma", "n_exp", "cadence", "min_lambda_k", "max_bin_fraction"),
@@ -72,7 +72,11 @@ _QUOTED = re.compile(rf"`({_NAME})(?:=([^`]*))?`")
 
 def flag_of(name: str) -> str:
     """The flag of the library parameter ``name`` (``max_visit`` → ``--max-visit``)."""
-    return FLAGS.get(name, "--" + name.replace("_", "-"))
+    return _IRREGULAR.get(name, "--" + name.replace("_", "-"))
+
+
+#: Every parameter of :data:`PARAMETERS` → its command-line flag.
+FLAGS = {name: flag_of(name) for name in sorted(PARAMETERS)}
 
 
 def _quoted(m: re.Match[str]) -> str:

@@ -102,7 +102,7 @@ class ExposurePlan:
         )
         if self.span_s > MAX_BLOCK_S:
             raise InputError(
-                f"n_exp/exptime/`readout`: the block lasts {self.span_s:.0f} s = "
+                f"n_exp/exptime/readout: the block lasts {self.span_s:.0f} s = "
                 f"{self.n_exp} x {self.exptime_s:g} s + {self.n_exp - 1} x {self.readout_s:g} s, "
                 f"more than {MAX_BLOCK_S:.0f} s ({night}); use fewer or shorter exposures"
             )
