@@ -16,12 +16,20 @@ A page asks for generated text with a marker line ``<!-- ucbplan:generate NAME -
 
 The repository root is put first on ``sys.path`` before importing, so the site documents the
 checked-out code rather than an installed copy. A generator that fails stops the build.
+
+:func:`on_files` turns each notebook ``docs/tutorials/NAME.ipynb`` into a page
+``tutorials/NAME.md`` (its Markdown cells as they are, its code cells as Python blocks, and the
+outputs it carries), read as JSON with no Jupyter package; the notebook itself is copied beside
+it for download. The test suite executes the notebooks in a Jupyter kernel with no network
+(``tests/test_tutorial_notebooks.py``).
 """
 
 from __future__ import annotations
 
+import base64
 import html
 import importlib
+import json
 import re
 import sys
 from collections.abc import Callable, Iterable, Mapping
@@ -30,6 +38,7 @@ from types import ModuleType
 from typing import Any
 
 from mkdocs.exceptions import PluginError
+from mkdocs.structure.files import File, Files
 
 ROOT = Path(__file__).resolve().parents[1]
 MARKER = re.compile(r"<!--\s*ucbplan:generate\s+([\w-]+)\s*-->")
@@ -322,3 +331,53 @@ def on_page_markdown(markdown: str, page: Any, config: Any, files: Any, **kwargs
         return GENERATORS[name]()
 
     return MARKER.sub(render, markdown)
+
+
+# ------------------------------------------------------------------------------- notebooks
+
+
+def _cell_source(cell: Mapping[str, Any]) -> str:
+    source = cell.get("source", "")
+    return "".join(source) if isinstance(source, list) else str(source)
+
+
+def _output_markdown(output: Mapping[str, Any]) -> list[str]:
+    """An output of a code cell: text in a fenced block, a PNG inline, an error's last line."""
+    data = output.get("data", {})
+    if "image/png" in data:
+        png = "".join(data["image/png"]).replace("\n", "")
+        base64.b64decode(png, validate=True)  # a broken image stops the build
+        return [f'<img alt="figure" src="data:image/png;base64,{png}">', ""]
+    text = output.get("text") or data.get("text/plain")
+    if output.get("output_type") == "error":
+        text = f"{output.get('ename')}: {output.get('evalue')}"
+    if not text:
+        return []
+    body = "".join(text) if isinstance(text, list) else str(text)
+    return ["```text", body.rstrip("\n"), "```", ""]
+
+
+def notebook_markdown(path: Path) -> str:
+    """The Markdown page of the notebook ``path`` (see :func:`on_files`)."""
+    nb = json.loads(path.read_text(encoding="utf-8"))
+    out = [
+        f"*This page is the notebook [{path.name}]({path.name}), executed by the test suite.*",
+        "",
+    ]
+    for cell in nb.get("cells", []):
+        source = _cell_source(cell).rstrip("\n")
+        if cell.get("cell_type") == "markdown":
+            out += [source, ""]
+        elif cell.get("cell_type") == "code" and source:
+            out += ["```python", source, "```", ""]
+            for output in cell.get("outputs", []):
+                out += _output_markdown(output)
+    return "\n".join(out)
+
+
+def on_files(files: Files, config: Any, **kwargs: Any) -> Files:
+    """Add a generated page ``tutorials/NAME.md`` for each ``docs/tutorials/NAME.ipynb``."""
+    for path in sorted((ROOT / "docs" / "tutorials").glob("*.ipynb")):
+        uri = f"tutorials/{path.stem}.md"
+        files.append(File.generated(config, uri, content=notebook_markdown(path)))
+    return files

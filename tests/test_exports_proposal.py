@@ -331,7 +331,7 @@ def test_default_semester_follows_the_site(table: Table) -> None:
 
 
 def test_bad_semester_is_a_one_line_error() -> None:
-    with pytest.raises(InputError, match="--semester: expected YYYYA"):
+    with pytest.raises(InputError, match=r"^semester: expected YYYYA"):
         ExportOptions(semester="2041C")
 
 

@@ -21,6 +21,7 @@ from test_exports_fixture import (
 )
 from typer.testing import CliRunner
 
+from ucbplan.cli._flags import cli_message
 from ucbplan.errors import InputFileError, OutputExistsError, UcbplanError
 from ucbplan.observing.exports import (
     EXPORT_FORMATS,
@@ -216,4 +217,4 @@ def test_cli_export_passes_options_through(blocks_path: Path) -> None:
 def test_cli_export_refuses_bad_options(blocks_path: Path, args: list[str], message: str) -> None:
     res = CliRunner().invoke(_app(), ["export", str(blocks_path), *args])
     assert isinstance(res.exception, UcbplanError)
-    assert message in str(res.exception)
+    assert message in cli_message(str(res.exception))  # as the command line prints it

@@ -72,7 +72,7 @@ def test_a_foreign_site_is_a_one_line_error(to: str, site: str, expected: str) -
         export_blocks(_at(site), to, OPTS)
     text = str(info.value)
     assert "\n" not in text and len(text) < 400
-    assert get_site(site).name in text and expected in text and "--force" in text
+    assert get_site(site).name in text and expected in text and "`force`" in text
 
 
 def test_force_writes_and_says_so() -> None:

@@ -131,10 +131,10 @@ def test_scaling_extinction_term() -> None:
 
 def test_no_sigma_ref_says_pass_sigma_v() -> None:
     inst = get_instrument("uves")
-    with pytest.raises(InputError, match="--sigma-v") as err:
+    with pytest.raises(InputError, match="`sigma_v`") as err:
         sigma_v_kms(inst, 20.0, 300.0, 1.2)
     assert "\n" not in str(err.value)
-    with pytest.raises(InputError, match="--sigma-v"):
+    with pytest.raises(InputError, match="`sigma_v`"):
         instrument_magnitude(inst, {"V": 20.0})
 
 
@@ -179,13 +179,13 @@ def test_overheads_option_wins_else_instrument_else_error() -> None:
         409.0, 45.0, "instrument xshooter-vis", "instrument xshooter-vis"
     )
     got = instrument_overheads(xs, readout_s=11.0)
-    assert got.readout_s == 11.0 and got.readout_from == "--readout" and got.acquisition_s == 409
+    assert got.readout_s == 11.0 and got.readout_from == "readout" and got.acquisition_s == 409
     uves = get_instrument("uves")
-    with pytest.raises(InputError, match="pass --overhead SECONDS") as err:
+    with pytest.raises(InputError, match="pass `overhead` SECONDS") as err:
         instrument_overheads(uves)
     assert "\n" not in str(err.value)
     assert instrument_overheads(uves, acquisition_s=600, readout_s=60).acquisition_s == 600
-    with pytest.raises(InputError, match="--readout"):
+    with pytest.raises(InputError, match=r"^readout: "):
         instrument_overheads(None, acquisition_s=600)
 
 

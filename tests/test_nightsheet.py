@@ -162,7 +162,7 @@ def test_every_night_charted_png_panels_and_pdf_pages(
 
 
 def test_chart_refuses_other_formats(table: Table, site: Site, tmp_path: Path) -> None:
-    with pytest.raises(InputError, match=r"^--plot: expected a \.png, \.pdf or \.svg file"):
+    with pytest.raises(InputError, match=r"^plot: expected a \.png, \.pdf or \.svg file"):
         write_night_charts(table, site, tmp_path / "n.jpg")
     assert nightplot.chart_format(Path("n.SVG")) == "svg"
     assert not list(tmp_path.iterdir())
@@ -417,7 +417,7 @@ def test_instruction_with_acquisition_time_and_magnitude(table: Table, site: Sit
 def test_sheet_format_by_suffix(name: str, fmt: str | None) -> None:
     if fmt is None:
         with pytest.raises(
-            InputError, match=r"^--sheet: expected a \.pdf or \.html file, got .n\.png"
+            InputError, match=r"^sheet: expected a \.pdf or \.html file, got .n\.png"
         ):
             nightsheet.sheet_format(Path(name))
     else:

@@ -62,7 +62,7 @@ def test_bad_rows_named_by_number_or_skipped(tmp_path: Path) -> None:
     bad = "0.01,1e-16,1e-22,3.0,1.0,1.0,0.3,2.0"  # latitude out of range
     missing = "0.01,,1e-22,0.1,1.0,1.0,0.3,2.0"
     p = _csv(tmp_path, GOOD, bad, GOOD, missing)
-    with pytest.raises(InputFileError, match=r"row 2: EclipticLatitude.*--skip-bad"):
+    with pytest.raises(InputFileError, match=r"row 2: EclipticLatitude.*`skip_bad`"):
         read_catalog(p)
     cat = read_catalog(p, skip_bad=True)
     assert [s.row for s in cat.sources] == [1, 3]
@@ -73,15 +73,15 @@ def test_bad_rows_named_by_number_or_skipped(tmp_path: Path) -> None:
 def test_column_map(tmp_path: Path) -> None:
     header = HEADER.replace("Frequency,", "f0,", 1).replace("Polarization", "psi")
     p = _csv(tmp_path, GOOD, header=header)
-    with pytest.raises(InputFileError, match=r"missing column.*Frequency.*--columns"):
+    with pytest.raises(InputFileError, match=r"missing column.*Frequency.*`columns`"):
         read_catalog(p)
     cat = read_catalog(p, parse_column_map("f0=Frequency, psi=Polarization"))
     assert cat.sources[0].f_hz == 0.01
-    with pytest.raises(InputFileError, match="--columns: unknown catalog column"):
+    with pytest.raises(InputFileError, match=r"^columns: unknown catalog column"):
         parse_column_map("f0=Freq")
-    with pytest.raises(InputFileError, match="--columns: expected old=new"):
+    with pytest.raises(InputFileError, match=r"^columns: expected old=new"):
         parse_column_map("f0")
-    with pytest.raises(InputFileError, match="--columns: no column"):
+    with pytest.raises(InputFileError, match=": `columns`: no column"):
         read_catalog(p, {"nope": "Frequency"})
 
 
@@ -144,7 +144,7 @@ def test_semesters() -> None:
         assert b == semester_dates(f"P{n + 1}")[0] and a.day == 1
         assert a.month == (4 if n % 2 else 10)
     for bad in ("2041C", "P0", "41A", "", "P-3"):
-        with pytest.raises(InputError, match="--semester"):
+        with pytest.raises(InputError, match=r"^semester: "):
             semester_dates(bad)
 
 

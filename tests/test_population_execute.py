@@ -24,9 +24,9 @@ def _open(spec: ExecutorSpec) -> None:
     [
         ({"cluster": "sge"}, "expected slurm or pbs"),
         ({"cluster": "slurm", "scheduler": "tcp://h:8786"}, "not both"),
-        ({"cluster": "slurm", "jobs": 0}, "--jobs"),
+        ({"cluster": "slurm", "jobs": 0}, "^jobs: "),
         ({"scheduler": "h:8786"}, "tcp://HOST:8786"),
-        ({"workers": 0}, "--workers"),
+        ({"workers": 0}, "^workers: "),
     ],
 )
 def test_bad_cluster_options_are_one_line(kw: dict[str, object], needle: str) -> None:

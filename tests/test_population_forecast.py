@@ -136,7 +136,7 @@ def test_resume_reuses_parts_and_recomputes_deleted_or_corrupt(
     assert len(files) == 4
     files[1].unlink()
     files[2].write_text("{not json", encoding="utf-8")
-    with pytest.raises(OutputExistsError, match="--resume"):
+    with pytest.raises(OutputExistsError, match="`resume`"):
         run_forecast(cat40, OPTS, RunControl(parts, chunk=10))
     again = run_forecast(cat40, OPTS, RunControl(parts, chunk=10, resume=True))
     assert again.reused == 2
@@ -210,11 +210,11 @@ def test_worker_setup_is_offline() -> None:
 
 
 def test_bad_executor_options(tmp_path: Path, cat40: Catalog) -> None:
-    with pytest.raises(UcbplanError, match="--workers"):
+    with pytest.raises(UcbplanError, match=r"^workers: "):
         run_forecast(cat40, OPTS, RunControl(tmp_path / "a", ExecutorSpec(workers=0)))
-    with pytest.raises(UcbplanError, match="--scheduler"):
+    with pytest.raises(UcbplanError, match=r"^scheduler: "):
         run_forecast(cat40, OPTS, RunControl(tmp_path / "b", ExecutorSpec(scheduler="localhost")))
-    with pytest.raises(UcbplanError, match="--chunk"):
+    with pytest.raises(UcbplanError, match=r"^chunk: "):
         run_forecast(cat40, OPTS, RunControl(tmp_path / "c", chunk=0))
 
 

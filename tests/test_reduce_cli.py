@@ -11,6 +11,7 @@ import pytest
 import yaml
 from typer.testing import CliRunner
 
+from ucbplan.cli._flags import cli_message
 from ucbplan.cli.app import app
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -148,7 +149,7 @@ def test_site_utc_times_are_converted(tmp_path: Path) -> None:
         json.loads(ref.stdout)["K1"]["value"], abs=0.01
     )
     bad = CliRunner().invoke(app, ["reduce", str(TARGET), str(out)])
-    assert bad.exit_code != 0 and "--site" in str(bad.exception)
+    assert bad.exit_code != 0 and "--site" in cli_message(str(bad.exception))
 
 
 # --- issue 11: one -o rule, option values, outputs as a unit ---

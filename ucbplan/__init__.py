@@ -71,6 +71,11 @@ _PUBLIC = {
     "fisher": "ucbplan.api",
     "waveform": "ucbplan.api",
     "PopulationForecast": "ucbplan.api",
+    # helper c (issue 30): warnings by cause
+    "SmearingWarning": "ucbplan.errors",
+    "ExposureWarning": "ucbplan.errors",
+    "EphemerisRangeWarning": "ucbplan.errors",
+    "SamplerConvergenceWarning": "ucbplan.errors",
 }
 
 __all__ = ["__version__", *_PUBLIC]
@@ -183,6 +188,12 @@ if TYPE_CHECKING:  # the same names for type checkers and IDEs ("as": re-exporte
     from ucbplan.errors import (
         EarthOrientationWarning as EarthOrientationWarning,
     )
+    from ucbplan.errors import (  # helper c (issue 30): warnings by cause
+        EphemerisRangeWarning as EphemerisRangeWarning,
+    )
+    from ucbplan.errors import (
+        ExposureWarning as ExposureWarning,
+    )
     from ucbplan.errors import (
         InputError as InputError,
     )
@@ -191,6 +202,12 @@ if TYPE_CHECKING:  # the same names for type checkers and IDEs ("as": re-exporte
     )
     from ucbplan.errors import (
         ReduceWarning as ReduceWarning,
+    )
+    from ucbplan.errors import (
+        SamplerConvergenceWarning as SamplerConvergenceWarning,
+    )
+    from ucbplan.errors import (
+        SmearingWarning as SmearingWarning,
     )
     from ucbplan.errors import (
         UcbplanError as UcbplanError,

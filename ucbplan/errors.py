@@ -17,17 +17,24 @@ argument names the parameter (``airmass_max: expected …``) and may carry it in
 
 Warnings a user must act on are emitted through :func:`warnings.warn` with a category of the
 :class:`UcbplanWarning` tree (so a script can filter or escalate them) as well as returned in
-the results' ``warnings`` lists; :func:`emit` does both kinds of call with one line.
+the results' ``warnings`` lists; :func:`emit` does both with one line. Each line's class is its
+cause's, chosen where the line is made: :class:`EarthOrientationWarning` (past the bundled time
+tables), :class:`PlanWarning` and under it :class:`SmearingWarning`, :class:`ExposureWarning`,
+:class:`EphemerisRangeWarning`; :class:`ReduceWarning` and under it
+:class:`SamplerConvergenceWarning`.
 """
 
 from __future__ import annotations
 
 import warnings
+from collections.abc import Sequence
 
 __all__ = [
     "ConvergenceError",
     "EarthOrientationWarning",
+    "EphemerisRangeWarning",
     "EpochRangeError",
+    "ExposureWarning",
     "InputError",
     "InputFileError",
     "NumericalError",
@@ -35,8 +42,10 @@ __all__ = [
     "OutputExistsError",
     "PlanWarning",
     "ReduceWarning",
+    "SamplerConvergenceWarning",
     "SchemaError",
     "SiteError",
+    "SmearingWarning",
     "TargetFileError",
     "UcbplanError",
     "UcbplanWarning",
@@ -142,23 +151,38 @@ class PlanWarning(UcbplanWarning):
     """A plan was made but something in it needs attention (smearing, horizons, budgets)."""
 
 
+class SmearingWarning(PlanWarning):
+    """An exposure smears the radial-velocity curve past the plan's budget (Λ_K, K(1−Λ_K))."""
+
+
+class ExposureWarning(PlanWarning):
+    """The exposure time chosen needs attention (not optimised, capped, no readout given)."""
+
+
+class EphemerisRangeWarning(PlanWarning):
+    """Epochs past the ephemeris' validity horizon T_valid: σ_u above the phase tolerance."""
+
+
 class ReduceWarning(UcbplanWarning):
     """A reduction finished but something in its input or result needs attention."""
 
 
-#: Words that mark a warning line as being about the bundled IERS / leap-second tables.
-_EARTH_WORDS = ("IERS", "leap-second", "leap second", "UT1")
+class SamplerConvergenceWarning(ReduceWarning):
+    """A posterior chain too short for its autocorrelation time: its σ's are not reliable."""
 
 
-def warning_category(text: str, default: type[UcbplanWarning]) -> type[UcbplanWarning]:
-    """The category of a warning line: :class:`EarthOrientationWarning` for one about the
-    bundled time tables, else ``default``."""
-    return EarthOrientationWarning if any(w in text for w in _EARTH_WORDS) else default
+def emit(
+    lines: list[str],
+    category: type[UcbplanWarning] | Sequence[type[UcbplanWarning]],
+    stacklevel: int = 3,
+) -> list[str]:
+    """Emit each warning line through :func:`warnings.warn` and return the lines unchanged
+    (they also go into the result).
 
-
-def emit(lines: list[str], default: type[UcbplanWarning], stacklevel: int = 3) -> list[str]:
-    """Emit each warning line through :func:`warnings.warn` (category by
-    :func:`warning_category`) and return the lines unchanged (they also go into the result)."""
-    for line in lines:
-        warnings.warn(line, warning_category(line, default), stacklevel=stacklevel)
+    ``category`` is the class of every line, or one class per line: the cause's class, chosen
+    where the line was made (never guessed from its text).
+    """
+    kinds = [category] * len(lines) if isinstance(category, type) else list(category)
+    for line, kind in zip(lines, kinds, strict=True):
+        warnings.warn(line, kind, stacklevel=stacklevel)
     return lines

@@ -68,7 +68,7 @@ def check_output_path(path: Path, overwrite: bool) -> None:
             raise OutputError(f"{path}: output path is {kind}; give a file name with -o")
         if not overwrite:
             raise OutputExistsError(
-                f"{path}: output file exists; pass --overwrite to replace it or choose another "
+                f"{path}: output file exists; pass `overwrite` to replace it or choose another "
                 "-o path"
             )
     parent = _folder(path)
@@ -127,7 +127,7 @@ def _commit(tmp: Path, path: Path, overwrite: bool) -> None:
             os.link(tmp, path)
         except FileExistsError:
             raise OutputExistsError(
-                f"{path}: output file exists (another run wrote it meanwhile?); pass --overwrite "
+                f"{path}: output file exists (another run wrote it meanwhile?); pass `overwrite` "
                 "to replace it or choose another -o path"
             ) from None
         tmp.unlink()
@@ -220,12 +220,12 @@ def output_format(
     suffix = path.suffix.lstrip(".").lower() if path is not None else ""
     suffix = {"yml": "yaml", "tex": "latex"}.get(suffix, suffix)
     if fmt is not None and fmt not in allowed:
-        raise InputError(f"--format: expected one of {', '.join(allowed)}, got {shorten(fmt, 40)}")
+        raise InputError(f"format: expected one of {', '.join(allowed)}, got {shorten(fmt, 40)}")
     if fmt is None:
         return suffix if suffix in allowed else default
     if suffix in allowed and suffix != fmt and path is not None:
         raise InputError(
-            f"-o {path}: the suffix says {suffix} but --format says {fmt}; make them agree"
+            f"-o {path}: the suffix says {suffix} but `format` says {fmt}; make them agree"
         )
     return fmt
 

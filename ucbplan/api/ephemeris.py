@@ -12,7 +12,7 @@ from ucbplan._version import __version__
 from ucbplan.api._convert import as_tdb, scope
 from ucbplan.api.flagspec import Flag
 from ucbplan.api.targets import TargetLike, get_site, load_target
-from ucbplan.errors import InputError, PlanWarning, emit, shorten
+from ucbplan.errors import EphemerisRangeWarning, InputError, emit, shorten
 
 if TYPE_CHECKING:
     from astropy.table import Table
@@ -149,11 +149,12 @@ def ephemeris(
 
     Warns
     -----
-    PlanWarning
-        Epochs past T_valid(quadrature, α = 1) (also printed by the command line).
+    EphemerisRangeWarning
+        Epochs past T_valid(quadrature, α = 1) (also printed by the command line); a
+        :class:`~ucbplan.errors.PlanWarning`.
     """
     found = predict(target, start, end, anchor, star, max_epochs)
-    emit(list(found.warnings), PlanWarning)
+    emit(list(found.warnings), EphemerisRangeWarning)
     return found.table
 
 

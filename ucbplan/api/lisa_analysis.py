@@ -17,7 +17,7 @@ from ucbplan.api._convert import as_float, scope
 from ucbplan.api.ephemeris import TargetLike, load_target
 from ucbplan.api.flagspec import Flag
 from ucbplan.api.reduction import check_count, check_seed
-from ucbplan.errors import InputError, ReduceWarning, emit, shorten
+from ucbplan.errors import InputError, ReduceWarning, SamplerConvergenceWarning, emit, shorten
 from ucbplan.lisa import (
     DEFAULT_MAX_STEPS,
     DEFAULT_N_BINS,
@@ -348,7 +348,7 @@ def _sample(
     with scope():
         result = run_simulation(problem, progress)
     if warn:
-        emit(list(result.warnings), ReduceWarning)
+        emit(list(result.warnings), SamplerConvergenceWarning)
     return result
 
 

@@ -17,7 +17,7 @@ from ucbplan.api.plan_options import (
     settings_from,
 )
 from ucbplan.api.plan_result import Plan
-from ucbplan.errors import InputError, PlanWarning, emit, shorten
+from ucbplan.errors import InputError, emit, shorten
 
 if TYPE_CHECKING:
     from astropy.units import Quantity
@@ -216,10 +216,14 @@ def plan(
     Warns
     -----
     PlanWarning, EarthOrientationWarning
-        What the plan's ``warnings`` list holds (nights past the bundled IERS tables …).
+        What the plan's ``warnings`` list holds, each with its cause's class:
+        :class:`~ucbplan.errors.SmearingWarning`, :class:`~ucbplan.errors.ExposureWarning`
+        (PlanWarnings), EarthOrientationWarning (nights past the bundled IERS tables).
     """
     run = plan_run(dict(locals()))
-    emit(list(run.result.warnings), PlanWarning, stacklevel=4)  # warn, emit, plan, its alias
+    emit(
+        list(run.result.warnings), run.result.warning_categories, stacklevel=4
+    )  # warn, emit, plan, its alias
     return Plan(run)
 
 

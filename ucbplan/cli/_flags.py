@@ -1,95 +1,145 @@
 """Library parameter names → command-line flags: the one place the CLI translates them.
 
-Library errors name the parameter a caller passed (``airmass_max: expected …``); the command
-line prints the flag its user typed instead (``--airmass-max: expected …``). :func:`cli_message`
-rewrites the name an error starts with; messages that already name a flag pass unchanged.
+Library messages name the parameters a Python caller passed, never a flag (a test scans every
+``raise`` outside ``ucbplan.cli``): at the start of a message bare (``max_visit: expected …``,
+``n_exp/exptime/readout: …``), elsewhere between backticks (``lengthen `visit```, ``pass
+`overwrite=True```, ``give `site` NAME``). The command line prints the flag its user typed
+instead (``--max-visit: expected …``, ``lengthen --visit``, ``pass --overwrite``, ``give --site
+NAME``): :func:`cli_message` renders both forms, and a few irregular phrases, from the tables
+below. A name not in :data:`PARAMETERS` is left as it is written.
 """
 
 from __future__ import annotations
 
 import re
 
+from ucbplan.api.ephemeris import COMPARE_FLAGS, EPHEMERIS_FLAGS
+from ucbplan.api.exporting import EXPORT_FLAGS, NOW_FLAGS, P2_FLAGS
 from ucbplan.api.flagspec import flag_names
+from ucbplan.api.horizons import HORIZON_FLAGS
+from ucbplan.api.lisa_analysis import FISHER_FLAGS, LISA_FLAGS, SIMULATE_FLAGS, WAVEFORM_FLAGS
 from ucbplan.api.plan_options import PLAN_FLAGS
+from ucbplan.api.population_runs import POPULATION_SIMULATE_FLAGS, RANK_FLAGS, VISIBILITY_FLAGS
+from ucbplan.api.populations import PARTS_FLAGS, POPULATION_FLAGS
+from ucbplan.api.reduction import REDUCE_FLAGS
+from ucbplan.api.signal_sizes import FEASIBILITY_FLAGS
+from ucbplan.api.timing import FIT_FLAGS
 
-__all__ = ["FLAGS", "cli_message"]
+__all__ = ["FLAGS", "PARAMETERS", "cli_message", "flag_of"]
 
-#: Parameter of the library (PlanSettings fields, ucbplan.plan / ucbplan.horizon keywords)
-#: → the flag of the command line that sets it.
-FLAGS = {
-    "airmass_max": "--airmass-max",
+#: Parameters whose flag is not ``--`` + the name with ``-`` for ``_``.
+_IRREGULAR = {
     "moon_sep_deg": "--moon-sep",
     "moon_illum_max": "--moon-illum",
     "zenith_hole_deg": "--zenith-hole",
-    "twilight": "--twilight",
-    "alpha": "--alpha",
     "sigma_v_kms": "--sigma-v",
-    "sigma_v": "--sigma-v",
     "sigma_floor_kms": "--sigma-floor",
     "extinction_k": "--extinction",
     "max_visit_s": "--max-visit",
-    "max_visit": "--max-visit",
     "k_eff_kms": "--k-eff",
-    "k_eff": "--k-eff",
-    "mass_radius": "--mass-radius",
-    "cos_i_sigma": "--cos-i-sigma",
     "overhead_s": "--overhead",
     "exptime_s": "--exptime",
-    "n_exp": "--n-exp",
     "readout_s": "--readout",
     "sessions_per_night": "--sessions",
-    "cadence": "--cadence",
-    "min_lambda_k": "--min-lambda-k",
-    "max_bin_fraction": "--max-bin-fraction",
-    "max_smear": "--max-smear",
     "n_epochs": "--epochs",
-    "anchor": "--anchor",
-    "start": "--start",
-    "max_epochs": "--max-epochs",
-    "end": "--end",
-    "star": "--star",
-    "seed": "--seed",
-    # b1: validate, horizon, ephemeris predict/compare/fit, feasibility
-    "at": "--at",
-    "terms": "--terms",
-    "clip": "--clip",
-    "period": "--period",
-    "initial": "--initial",
-    "plot": "--plot",
-    "anchors": "--anchor",
-    "m1": "--m1",
-    "m2": "--m2",
-    "m3": "--m3",
-    "a_out": "--a-out",
-    "n_spectra": "--n-spectra",
-    "baseline": "--baseline",
-    "optical_epoch": "--optical-epoch",
-    "readout": "--readout",
-    "overhead": "--overhead",
-    "sigma_floor": "--sigma-floor",
-    "extinction": "--extinction",
-    # b2 (issue 30): reduce, simulate, fisher, waveform, population
-    "samples": "--samples",
-    "n_bins": "--n-bins",
-    "t_obs": "--t-obs",
-    "t_start": "--t-start",
-    "walkers": "--walkers",
-    "steps": "--steps",
-    "max_steps": "--max-steps",
-    "workers": "--workers",
-    "jobs": "--jobs",
-    "chunk": "--chunk",
+    "output": "-o",
 }
 
-# a1 (issue 30): ``ucbplan.plan``'s keywords, from the flag table declared beside it
-FLAGS.update({k: v for k, v in flag_names(PLAN_FLAGS).items() if k not in FLAGS})
+#: Boolean parameters whose ``name=False`` is a flag of its own.
+FALSE_FLAGS = {"dry_run": "--no-dry-run"}
 
-_LEADING_NAME = re.compile(r"^([a-z_][a-z0-9_]*)(?=[: ])")
+#: Every parameter name a library message may mention.
+PARAMETERS = frozenset(_IRREGULAR) | {
+    # ucbplan.plan and friends
+    *("airmass_max", "twilight", "alpha", "sigma_v", "sigma_floor", "max_visit", "k_eff"),
+    *("mass_radius", "cos_i_sigma", "n_exp", "cadence", "min_lambda_k", "max_bin_fraction"),
+    *("max_smear", "anchor", "start", "max_epochs", "end", "star", "seed", "epochs"),
+    *("exptime", "readout", "overhead", "acquisition", "visit", "goal", "mode", "budget"),
+    *("priority", "night", "nights", "instrument", "instruments_file", "site", "site_lonlat"),
+    *("sites_file", "tz", "semester", "allow_smeared", "extinction", "plot", "sheet", "format"),
+    *("overwrite", "force", "to", "create", "dry_run", "p2_environment", "p2_user", "rotmode"),
+    *("eso_templates", "merge_overlaps", "tolerance_sigma", "tolerance_floor", "seeing"),
+    # simulate / population
+    *("n_bins", "t_start", "t_obs", "walkers", "steps", "max_steps", "until_converged"),
+    *("resume", "circular", "chain", "noise", "columns", "hdf5_path", "skip_bad", "catalog"),
+    *("workers", "scheduler", "cluster", "jobs", "chunk", "top", "sigma_ref", "min_hours"),
+    # feasibility, ephemeris fit
+    *("m1", "m2", "name", "like", "ra", "dec", "terms", "clip", "initial", "period"),
+    *(f"optical_sigma_{s}" for s in ("phase", "f_rel", "fdot_rel", "p", "pdot", "t0")),
+}
+
+#: Every parameter the API's flag tables declare → the flag declared for it (issue 30: the
+#: command line's options are declared once, beside the public functions).
+_DECLARED = flag_names(
+    PLAN_FLAGS,
+    EXPORT_FLAGS,
+    P2_FLAGS,
+    NOW_FLAGS,
+    HORIZON_FLAGS,
+    EPHEMERIS_FLAGS,
+    COMPARE_FLAGS,
+    FIT_FLAGS,
+    FEASIBILITY_FLAGS,
+    REDUCE_FLAGS,
+    LISA_FLAGS,
+    SIMULATE_FLAGS,
+    FISHER_FLAGS,
+    WAVEFORM_FLAGS,
+    POPULATION_FLAGS,
+    PARTS_FLAGS,
+    VISIBILITY_FLAGS,
+    RANK_FLAGS,
+    POPULATION_SIMULATE_FLAGS,
+)
+_IRREGULAR.update(
+    {k: v for k, v in _DECLARED.items() if k not in _IRREGULAR and v != "--" + k.replace("_", "-")}
+)
+PARAMETERS = PARAMETERS | frozenset(_DECLARED)
+
+#: Whole phrases whose command-line spelling no rule derives (Python text → CLI text).
+PHRASES = {
+    "optical_sigma_phase/optical_sigma_f_rel/optical_sigma_fdot_rel or "
+    "optical_sigma_p/optical_sigma_pdot/optical_sigma_t0": (
+        "--optical-sigma-phase/-f-rel/-fdot-rel or --optical-sigma-p/-pdot/-t0"
+    ),
+    "(`Plan.write` to a .json path)": "(`ucbplan plan --format json`)",
+}
+
+_NAME = r"[a-z_][a-z0-9_]*"
+_LEADING = re.compile(rf"^({_NAME}(?:/{_NAME})*)(?=[: ])")
+_QUOTED = re.compile(rf"`({_NAME})(?:=([^`]*))?`")
+
+
+def flag_of(name: str) -> str:
+    """The flag of the library parameter ``name`` (``max_visit`` → ``--max-visit``)."""
+    return _IRREGULAR.get(name, "--" + name.replace("_", "-"))
+
+
+#: Every parameter of :data:`PARAMETERS` → its command-line flag.
+FLAGS = {name: flag_of(name) for name in sorted(PARAMETERS)}
+
+
+def _quoted(m: re.Match[str]) -> str:
+    name, value = m.group(1), m.group(2)
+    if name not in PARAMETERS:
+        return m.group(0)
+    if value == "False" and name in FALSE_FLAGS:
+        return FALSE_FLAGS[name]
+    return flag_of(name) if value in (None, "True") else f"{flag_of(name)} {value}"
+
+
+def _leading(message: str) -> str:
+    m = _LEADING.match(message)
+    if m is None:
+        return message
+    names = m.group(1).split("/")
+    if not all(n in PARAMETERS for n in names):
+        return message
+    return "/".join(map(flag_of, names)) + message[m.end() :]
 
 
 def cli_message(message: str) -> str:
-    """``message`` with a leading library parameter name replaced by its flag."""
-    m = _LEADING_NAME.match(message)
-    if m is None or m.group(1) not in FLAGS:
-        return message
-    return FLAGS[m.group(1)] + message[m.end() :]
+    """``message`` as the command line says it: parameter names replaced by their flags."""
+    for python, cli in PHRASES.items():
+        message = message.replace(python, cli)
+    return _leading(_QUOTED.sub(_quoted, message))

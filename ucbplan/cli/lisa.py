@@ -17,6 +17,7 @@ from ucbplan.api import lisa_analysis as api
 from ucbplan.api.shell_files import check_figure_path, file_format
 from ucbplan.cli._console import check_output_path, err_console, write_output
 from ucbplan.cli._derive import argument, option
+from ucbplan.cli._flags import cli_message
 from ucbplan.cli._options import OverwriteAllOpt
 from ucbplan.errors import InputError, OutputError, UcbplanError
 
@@ -182,7 +183,8 @@ def _save_interrupted(
         api.save_interrupted(problem, partial, files.chain, overwrite=overwrite)
     except OutputError as exc:
         err_console.print(
-            f"interrupted after {n} steps; the chain was not saved: {exc}", markup=False
+            f"interrupted after {n} steps; the chain was not saved: {cli_message(str(exc))}",
+            markup=False,
         )
         return
     err_console.print(

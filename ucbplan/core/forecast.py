@@ -123,7 +123,7 @@ def tolerance(
     if not (sigma_v > 0 and k > 0 and math.isfinite(sigma_v) and math.isfinite(k)):
         raise UcbplanError(f"tolerance needs σ_v > 0 and K > 0, got σ_v={sigma_v}, K={k}")
     if n_epochs not in (1, 2):
-        raise UcbplanError(f"--epochs must be 1 or 2, got {n_epochs}")
+        raise UcbplanError(f"epochs must be 1 or 2, got {n_epochs}")
     quad = math.sqrt((2.0 if n_epochs == 1 else math.sqrt(2.0)) * sigma_v / k)
     if kind in ("conjunction", "zero-crossing"):
         return sigma_v / k

@@ -82,7 +82,7 @@ def comb_attenuation(
         1 for Λ_K, 2 for Λ_κ.
     """
     if n_exp < 1:
-        raise UcbplanError(f"--n-exp must be >= 1, got {n_exp}")
+        raise UcbplanError(f"n_exp must be >= 1, got {n_exp}")
     w = harmonic * n_bar
     centres = (np.arange(n_exp) - (n_exp - 1) / 2.0) * (exptime_s + readout_s)
     return float(_sinc(w * exptime_s / 2.0) * np.mean(np.cos(w * centres)))
@@ -118,7 +118,7 @@ def parse_smear_budget(text: str, sigma_v_kms: float | None) -> float:
     if match:
         if sigma_v_kms is None:
             raise UcbplanError(
-                f"--max-smear {text!r} needs sigma_v: give --sigma-v or spectroscopy.sigma_v "
+                f"max_smear {text!r} needs sigma_v: give `sigma_v` or spectroscopy.sigma_v "
                 "in the target file"
             )
         factor = float(match.group(1)) if match.group(1) else 1.0
@@ -129,8 +129,8 @@ def parse_smear_budget(text: str, sigma_v_kms: float | None) -> float:
             value = float(cleaned)
         except ValueError:
             raise UcbplanError(
-                f"--max-smear: expected e.g. '0.5*sigma_v' or '2 km/s', got {text!r}"
+                f"max_smear: expected e.g. '0.5*sigma_v' or '2 km/s', got {text!r}"
             ) from None
     if not (value > 0 and math.isfinite(value)):
-        raise UcbplanError(f"--max-smear must be positive, got {text!r}")
+        raise UcbplanError(f"max_smear must be positive, got {text!r}")
     return value

@@ -113,7 +113,7 @@ def plot_report(report: FeasibilityReport, path: Path, *, overwrite: bool = Fals
     """
     if report.k1_m_s is None or report.omega_dot_used == 0.0:
         raise UcbplanError(
-            f"--plot: {report.name} has no K1 or no apsidal rate; give --m1/--m2 (and "
+            f"plot: {report.name} has no K1 or no apsidal rate; give `m1`/`m2` (and "
             "lisa.cos_inclination or timing.inclination in the target file) or K1 under "
             "spectroscopy"
         )

@@ -363,8 +363,9 @@ def optical_ephemeris(
     period_style = any(v is not None for v in period)
     if freq_style and period_style:
         raise UcbplanError(
-            "optical ephemeris: give either --optical-sigma-phase/-f-rel/-fdot-rel or "
-            "--optical-sigma-p/-pdot/-t0, not both"
+            "optical ephemeris: give either optical_sigma_phase/optical_sigma_f_rel/"
+            "optical_sigma_fdot_rel or optical_sigma_p/optical_sigma_pdot/optical_sigma_t0, "
+            "not both"
         )
     if period_style:
         return OpticalEphemeris.from_period(
@@ -390,7 +391,7 @@ def _check_optical_sigmas(period_s: float, values: tuple[float | None, ...]) -> 
     for (name, high, unit), value in zip(limits, values, strict=True):
         if value is not None:
             why = "a 1σ uncertainty; a larger one carries no phase information"
-            check_range(f"--optical-sigma-{name}", value, 0.0, high, unit, why)
+            check_range(f"optical_sigma_{name.replace('-', '_')}", value, 0.0, high, unit, why)
 
 
 def optical_timing_s(eph: OpticalEphemeris, baseline_s: ArrayLike) -> NDArray[np.float64]:

@@ -55,13 +55,13 @@ def simulation_files(output: Path, chain: Path | None = None) -> SimulationFiles
     """
     chain_path = chain if chain is not None else output.with_suffix(".chain.npz")
     files = SimulationFiles(output, output.with_suffix(".samples.ecsv"), chain_path)
-    named = {"-o": files.target, "the samples file": files.samples, "--chain": files.chain}
+    named = {"-o": files.target, "the samples file": files.samples, "`chain`": files.chain}
     seen: dict[Path, str] = {}
     for what, path in named.items():
         key = path.resolve()
         if key in seen:
             raise InputError(
-                f"{path}: {what} and {seen[key]} name the same file; give --chain a name of its "
+                f"{path}: {what} and {seen[key]} name the same file; give `chain` a name of its "
                 "own (default: next to -o with .chain.npz)"
             )
         seen[key] = what
@@ -182,7 +182,7 @@ def _read_npz(path: Path) -> dict[str, F64]:
     """Arrays of a .npz file (no pickles), or a one-line InputFileError."""
     import zipfile
 
-    bad = InputFileError(f"{path}: --resume: not a .npz chain; give the .npz of a simulate run")
+    bad = InputFileError(f"{path}: `resume`: not a .npz chain; give the .npz of a simulate run")
     try:
         archive = np.load(path, allow_pickle=False)
         if not isinstance(archive, np.lib.npyio.NpzFile):
@@ -190,11 +190,11 @@ def _read_npz(path: Path) -> dict[str, F64]:
         with archive as z:
             return {k: z[k] for k in z.files}
     except FileNotFoundError:
-        raise InputFileError(f"{path}: --resume: file not found; check the path") from None
+        raise InputFileError(f"{path}: `resume`: file not found; check the path") from None
     except IsADirectoryError:
-        raise InputFileError(f"{path}: --resume: is a folder; give the chain .npz") from None
+        raise InputFileError(f"{path}: `resume`: is a folder; give the chain .npz") from None
     except OSError as exc:
-        raise InputFileError(f"{path}: --resume: cannot read ({exc.strerror})") from None
+        raise InputFileError(f"{path}: `resume`: cannot read ({exc.strerror})") from None
     except (ValueError, EOFError, zipfile.BadZipFile):
         raise bad from None
 
@@ -212,7 +212,7 @@ def _check_same_data(path: Path, saved: dict[str, F64], want: dict[str, Any]) ->
         if not isinstance(got, (bool, int, float)) or not np.isclose(got, val, rtol=1e-12):
             raise InputFileError(
                 f"{path}: {key} = {got}, this run has {val}; resume with the same "
-                "--seed/--noise/--n-bins/--t-obs (the data must be identical)"
+                "`seed`/`noise`/`n_bins`/`t_obs` (the data must be identical)"
             )
 
 
@@ -255,12 +255,12 @@ def load_resume(
         model = "circular" if chain.shape[2] == 6 else "eccentric"
         raise InputFileError(
             f"{path}: chain has {chain.shape[2]} parameters, this run {d}; resume the "
-            f"{model} model ({'--circular' if model == 'circular' else 'without --circular'})"
+            f"{model} model ({'`circular`' if model == 'circular' else 'without `circular`'})"
         )
     saved_walkers = chain.shape[1]
     if saved_walkers != walkers or not np.allclose(saved["theta0"], theta0, rtol=0):
         raise InputFileError(
             f"{path}: chain has {saved_walkers} walkers for another target; resume "
-            f"with --walkers {saved_walkers} and the same target file"
+            f"with `walkers` {saved_walkers} and the same target file"
         )
     return (chain, log_prob), saved["fisher_cov"]

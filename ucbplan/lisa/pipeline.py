@@ -136,7 +136,7 @@ def _injection(
     if eccentric and not 0.0 <= truth.omega_dot * t_obs / (2 * np.pi) <= 50.0:
         raise InputError(
             f"{where or target.source or target.name}: omega_dot gives z_omega outside the prior "
-            f"[0, 50] bins for T = {t_obs:.6g} s; use a shorter --t-obs or --circular"
+            f"[0, 50] bins for T = {t_obs:.6g} s; use a shorter `t_obs` or `circular`"
         )
     return truth, eccentric
 
@@ -255,11 +255,11 @@ def prepare_simulation(model: LisaModel, options: SimulateOptions) -> Simulation
     theta0 = model.theta0()
     if options.walkers < 2 * theta0.size:
         raise InputError(
-            f"--walkers: expected at least {2 * theta0.size} (2 per parameter, "
+            f"walkers: expected at least {2 * theta0.size} (2 per parameter, "
             f"{theta0.size} parameters), got {options.walkers}"
         )
     if options.steps < 1 or options.max_steps < 1:
-        raise InputError(f"--steps/--max-steps: expected >= 1, got {options.steps}")
+        raise InputError(f"steps/max_steps: expected >= 1, got {options.steps}")
     rng = np.random.default_rng(options.seed)
     data = simulate_data(model.model, model.truth, SANGRIA, rng if options.noise else None)
     like = model.likelihood(data)

@@ -340,7 +340,7 @@ def _resume_state(
     shape: tuple[int, ...] = tuple(previous[0].shape)
     if len(shape) != 3 or shape[1] != n_walkers or shape[2] != d:
         raise InputFileError(
-            f"--resume: chain shape {shape} does not fit this run (steps, {n_walkers} walkers, "
+            f"resume: chain shape {shape} does not fit this run (steps, {n_walkers} walkers, "
             f"{d} parameters); resume with the options of the saved run"
         )
     x = unwhiten(cov, chol, (previous[0] - theta0).reshape(-1, d)).reshape(shape)

@@ -102,7 +102,7 @@ class ExposurePlan:
         )
         if self.span_s > MAX_BLOCK_S:
             raise InputError(
-                f"--n-exp/--exptime/--readout: the block lasts {self.span_s:.0f} s = "
+                f"n_exp/exptime/readout: the block lasts {self.span_s:.0f} s = "
                 f"{self.n_exp} x {self.exptime_s:g} s + {self.n_exp - 1} x {self.readout_s:g} s, "
                 f"more than {MAX_BLOCK_S:.0f} s ({night}); use fewer or shorter exposures"
             )
@@ -167,13 +167,13 @@ def check_smear_budget(
     """
     if max_bin_fraction is not None and sm.bin_fraction > max_bin_fraction:
         raise UcbplanError(
-            f"{name}: the block spans {sm.bin_fraction:.3f} of the orbit > --max-bin-fraction "
-            f"{max_bin_fraction:g}; use fewer or shorter exposures (--n-exp/--exptime)"
+            f"{name}: the block spans {sm.bin_fraction:.3f} of the orbit > `max_bin_fraction` "
+            f"{max_bin_fraction:g}; use fewer or shorter exposures (`n_exp`/`exptime`)"
         )
     if max_smear_kms is not None and math.isfinite(sm.smear_kms) and sm.smear_kms > max_smear_kms:
         raise UcbplanError(
-            f"{name}: smearing K(1-Lambda_K) = {sm.smear_kms:.3g} km/s exceeds --max-smear "
-            f"{max_smear_kms:.3g} km/s (Lambda_K = {sm.lambda_k:.4f}); shorten --exptime or --n-exp"
+            f"{name}: smearing K(1-Lambda_K) = {sm.smear_kms:.3g} km/s exceeds `max_smear` "
+            f"{max_smear_kms:.3g} km/s (Lambda_K = {sm.lambda_k:.4f}); shorten `exptime` or `n_exp`"
         )
     if (
         max_smear_kms is None

@@ -1,23 +1,24 @@
 """The ECSV header of the blocks table, as astropy writes it, made faster.
 
 astropy writes the header (column declarations and the table ``meta``: a plan's provenance and
-its ``visits``) through PyYAML's pure-Python emitter. :func:`libyaml_header` swaps in libyaml's
-emitter (C) while a header whose strings both emitters write alike (:func:`header_safe`) is
-written, under a lock; :func:`ecsv_header` writes a plan's ``visits`` list apart, line by line
-as libyaml would (:func:`yaml_flow_items`). The tests compare every path with PyYAML's own.
+its ``visits``) through PyYAML's pure-Python emitter. :func:`ecsv_header` writes the same bytes
+with a dumper of its own (astropy's representation, libyaml's emitter in C) when the header's
+strings are ones both emitters write alike (:func:`header_safe`), and a plan's ``visits`` list
+apart, line by line as libyaml would (:func:`yaml_flow_items`); astropy's dumper, its registry
+and the caller's table are never changed. The tests compare every path with PyYAML's own.
 """
 
 from __future__ import annotations
 
+import contextlib
 import functools
-import io
 import itertools
 import math
 import operator
 import os
-import threading
-from collections.abc import Callable, Iterator, Mapping
-from contextlib import contextmanager
+import re
+from collections import OrderedDict
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
@@ -26,7 +27,7 @@ from astropy.table import Table
 
 from ucbplan.observing.blocktable import META_SCALARS
 
-__all__ = ["ecsv_header", "flat_records_safe", "header_safe", "libyaml_header", "yaml_flow_items"]
+__all__ = ["ecsv_header", "flat_records_safe", "header_safe", "yaml_flow_items"]
 
 
 #: Characters every string of an ECSV header must be made of for libyaml to write it: libyaml
@@ -80,9 +81,6 @@ def header_safe(table: Table) -> bool:
     return True
 
 
-_LIBYAML_LOCK = threading.Lock()
-
-
 def _represent_data(dumper: Any, data: Any) -> Any:
     """``represent_data`` of the libyaml dumper: a ``str`` becomes the node PyYAML's
     ``represent_str`` makes (no alias, default style) without the generic dispatch; the
@@ -109,34 +107,83 @@ def _resolve(dumper: Any, kind: Any, value: Any, implicit: Any) -> Any:
 _REPRESENT_STR = yaml.representer.SafeRepresenter.represent_str
 
 
-@contextmanager
-def libyaml_header(enabled: bool) -> Iterator[None]:
-    """While active, astropy emits ECSV headers with libyaml (C) instead of PyYAML's emitter.
+def _represent_mapping(dumper: Any, tag: str, mapping: Any, flow_style: Any = None) -> Any:
+    """astropy's ECSV ``TableDumper.represent_mapping`` (``astropy.table.meta``): the keys in
+    the mapping's own order, flow style when every key and value is a plain scalar."""
+    value: list[tuple[Any, Any]] = []
+    node = yaml.MappingNode(tag, value, flow_style=flow_style)
+    if dumper.alias_key is not None:
+        dumper.represented_objects[dumper.alias_key] = node
+    best_style = True
+    if hasattr(mapping, "items"):
+        mapping = mapping.items()
+        if hasattr(mapping, "sort"):  # astropy's ColumnOrderList: its own order
+            mapping.sort()
+        else:
+            mapping = list(mapping)
+            with contextlib.suppress(TypeError):
+                mapping = sorted(mapping)
+    for item_key, item_value in mapping:
+        node_key, node_value = dumper.represent_data(item_key), dumper.represent_data(item_value)
+        for node_ in (node_key, node_value):
+            best_style &= isinstance(node_, yaml.ScalarNode) and not node_.style
+        value.append((node_key, node_value))
+    if flow_style is None:
+        default = dumper.default_flow_style
+        node.flow_style = best_style if default is None else default
+    return node
 
-    astropy builds its table dumper on ``astropy.io.misc.yaml.AstropyDumper`` when it writes;
-    swapping in a subclass with libyaml's emitter keeps astropy's representation (key order,
-    styles, tags) and only replaces the emitter, ~20x faster on a semester's header. A no-op
-    unless ``enabled`` and PyYAML has libyaml."""
-    if not enabled or not yaml.__with_libyaml__:
-        yield
-        return
-    import astropy.io.misc.yaml as astropy_yaml
-    from yaml._yaml import CEmitter
-    from yaml.cyaml import CSafeDumper
 
-    base = astropy_yaml.AstropyDumper
-    methods = {
-        "__init__": CSafeDumper.__init__,
-        "represent_data": _represent_data,
-        "resolve": _resolve,
-    }
-    fast = type("LibyamlAstropyDumper", (CEmitter, base), methods)
-    with _LIBYAML_LOCK:
-        astropy_yaml.AstropyDumper = fast
-        try:
-            yield
-        finally:
-            astropy_yaml.AstropyDumper = base
+@functools.cache
+def _table_dumper(libyaml: bool) -> type:
+    """A dumper of ECSV headers like astropy's ``TableDumper`` (a subclass of astropy's
+    ``AstropyDumper`` with its own representers), emitting with libyaml (C) when ``libyaml``:
+    ~20x faster on a semester's header. Made beside astropy's classes, never in place of them:
+    astropy's dumper and its registry stay as they are."""
+    from astropy.io.misc.yaml import AstropyDumper
+    from astropy.table.meta import ColumnDict, _repr_column_dict, _repr_odict
+
+    methods: dict[str, Any] = {"represent_mapping": _represent_mapping}
+    bases: tuple[type, ...] = (AstropyDumper,)
+    if libyaml:
+        from yaml._yaml import CEmitter
+        from yaml.cyaml import CSafeDumper
+
+        bases = (CEmitter, AstropyDumper)
+        methods |= {"__init__": CSafeDumper.__init__, "represent_data": _represent_data}
+        methods |= {"resolve": _resolve}
+    dumper: Any = type("UcbplanTableDumper", bases, methods)
+    dumper.add_representer(OrderedDict, _repr_odict)  # copies the registry into the subclass
+    dumper.add_representer(ColumnDict, _repr_column_dict)
+    return dumper
+
+
+def _header_text(table: Table, meta: Mapping[str, Any], libyaml: bool) -> str:
+    """The ECSV header of ``table``'s columns with ``meta``, as astropy's ECSV writer writes it
+    for a table of plain columns (``astropy.io.ascii.ecsv.EcsvHeader.write``)."""
+    from astropy.io.ascii.ecsv import ECSV_VERSION
+    from astropy.table.meta import _get_col_attributes
+
+    header: dict[str, Any] = {"schema": "astropy-2.0"}
+    header["datatype"] = [_get_col_attributes(col) for col in table.itercols()]
+    if meta:
+        header["meta"] = OrderedDict(meta)
+    dumper = _table_dumper(libyaml and yaml.__with_libyaml__)
+    text = yaml.dump(header, default_flow_style=None, Dumper=dumper, width=130)
+    lines = [f"%ECSV {ECSV_VERSION}", "---", *text.splitlines()]
+    return "".join(f"# {line}{os.linesep}" for line in lines) + _names_line(table)
+
+
+def _names_line(table: Table) -> str:
+    """The line of column names ending astropy's ECSV header (every name quoted when the first
+    looks like a comment or one has surrounding spaces)."""
+    from astropy.io.ascii.ecsv import ECSVHeaderSplitter, ECSVHeaderSplitterQuoteAll
+
+    names = table.colnames
+    quote_all = (names and re.match(r"\s*#", names[0])) or any(n.strip() != n for n in names)
+    splitter = ECSVHeaderSplitterQuoteAll() if quote_all else ECSVHeaderSplitter()
+    splitter.delimiter = " "
+    return splitter.join(names) + os.linesep
 
 
 #: The ``visits`` entry of a plan's ECSV header while its items are written apart.
@@ -144,26 +191,18 @@ _NO_VISITS = f"{os.linesep}# - visits: []{os.linesep}"
 
 
 def ecsv_header(table: Table, libyaml: bool) -> str:
-    """The ECSV header of ``table`` (for no rows), as astropy writes it."""
+    """The ECSV header of ``table`` (plain columns), as astropy writes it: with libyaml's
+    emitter if ``libyaml`` (a :func:`header_safe` table), a plan's ``visits`` apart; neither
+    ``table`` nor astropy's YAML dumper is changed."""
     visits = table.meta.get("visits") if libyaml else None
     items = None
     if isinstance(visits, list) and visits and all(isinstance(v, dict) for v in visits):
         items = yaml_flow_items(visits, _yaml_tag)
-    buf = io.StringIO()
     if items is None:
-        table[:0].write(buf, format="ascii.ecsv")
-        return buf.getvalue()
-    table.meta["visits"] = []  # written apart below (not copied with the table)
-    try:
-        empty = table[:0]
-    finally:
-        table.meta["visits"] = visits
-    empty.write(buf, format="ascii.ecsv")
-    text = buf.getvalue()
+        return _header_text(table, table.meta, libyaml)
+    text = _header_text(table, {**table.meta, "visits": []}, libyaml)  # written apart below
     if text.count(_NO_VISITS) != 1:  # never: meta keys are unique
-        buf = io.StringIO()
-        table[:0].write(buf, format="ascii.ecsv")
-        return buf.getvalue()
+        return _header_text(table, table.meta, libyaml)
     listed = "# " + f"{os.linesep}# ".join(items) + os.linesep
     return text.replace(_NO_VISITS, f"{os.linesep}# - visits:{os.linesep}{listed}")
 

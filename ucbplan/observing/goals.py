@@ -145,7 +145,7 @@ class Shortfall:
         """One line for the terminal / error."""
         reach = Goal(self.goal.quantity, self.reachable, self.goal.relative, "").describe()
         return (
-            f"--goal {self.goal.text}: needs {self.needed_spectra} spectra, the nights given allow "
+            f"`goal` {self.goal.text}: needs {self.needed_spectra} spectra, the nights given allow "
             f"{self.available_spectra} (reaching {reach}); add nights or relax the goal"
         )
 
@@ -164,28 +164,27 @@ def parse_goal(text: str) -> Goal:
     forms = "expected QUANTITY=VALUE such as sigma_K=2km/s, K1=1%, q=1%, M1=0.01Msun"
     if str(text).count("=") > 1:  # 'q=1%,M1=2%': name the list, not a unit '%,M1=2%'
         raise InputError(
-            f"--goal: one QUANTITY=VALUE per goal, got several in {shorten(text, 60)}; "
+            f"goal: one QUANTITY=VALUE per goal, got several in {shorten(text, 60)}; "
             "keep the goal that decides the plan"
         )
     match = _GOAL_RE.match(str(text))
     if not match:
-        raise InputError(f"--goal: {forms}, got {shorten(text, 60)}")
+        raise InputError(f"goal: {forms}, got {shorten(text, 60)}")
     name, number, unit = match.group(1), float(match.group(2)), (match.group(3) or "").strip()
     canon = {k.lower(): k for k in GOAL_QUANTITIES}
     quantity = canon.get(name.lower())
     if quantity is None:
         raise InputError(
-            f"--goal: quantity expected one of {', '.join(GOAL_QUANTITIES)}, "
-            f"got {shorten(name, 40)}"
+            f"goal: quantity expected one of {', '.join(GOAL_QUANTITIES)}, got {shorten(name, 40)}"
         )
     if not math.isfinite(number) or number <= 0:
-        raise InputError(f"--goal: {quantity}: expected a positive precision, got {number:g}")
+        raise InputError(f"goal: {quantity}: expected a positive precision, got {number:g}")
     relative = unit == "%"
     if relative:
         if quantity == "sigma_K":
-            raise InputError("--goal: sigma_K is absolute (sigma_K=2km/s); for K1 to 1 % use K1=1%")
+            raise InputError("goal: sigma_K is absolute (sigma_K=2km/s); for K1 to 1 % use K1=1%")
         if number >= 100:
-            raise InputError(f"--goal: {quantity}: expected a percentage below 100, got {number:g}")
+            raise InputError(f"goal: {quantity}: expected a percentage below 100, got {number:g}")
         return Goal(quantity, number / 100.0, True, str(text).strip())
     want = GOAL_QUANTITIES[quantity]
     got = _UNITS.get(unit.lower(), unit)
@@ -194,7 +193,7 @@ def parse_goal(text: str) -> Goal:
         if quantity == "q":
             need = "% or a bare number"
         raise InputError(
-            f"--goal: {quantity}: expected a unit {need}, got {shorten(unit or 'none', 40)}"
+            f"goal: {quantity}: expected a unit {need}, got {shorten(unit or 'none', 40)}"
         )
     return Goal(quantity, number, False, str(text).strip())
 
@@ -223,15 +222,15 @@ def anchor_phases(anchors: tuple[str, ...] | list[str]) -> list[tuple[str, float
             except ValueError:
                 u = math.nan
             if not math.isfinite(u):
-                raise InputError(f"--anchor: expected u=RADIANS, got {shorten(name, 40)}")
+                raise InputError(f"anchor: expected u=RADIANS, got {shorten(name, 40)}")
             out.append((key, u))
         else:
             raise InputError(
-                "--anchor: expected quadrature, conjunction, zero-crossing or u=VALUE, "
+                "anchor: expected quadrature, conjunction, zero-crossing or u=VALUE, "
                 f"got {shorten(name, 40)}"
             )
     if not out:
-        raise InputError("--anchor: expected at least one anchor, got none")
+        raise InputError("anchor: expected at least one anchor, got none")
     return out
 
 
@@ -255,7 +254,7 @@ def sigma_k_per_pattern(phases: list[float], lambda_k: float, sigma_v: float = 1
     spread = float(np.ptp(design[:, 1])) if len(phases) > 1 else 0.0
     if cov is None or spread < 1e-6 * lambda_k or not np.isfinite(cov[1, 1]):
         raise InputError(
-            "--goal: the anchors chosen do not constrain K (no spread in cos u); "
+            "goal: the anchors chosen do not constrain K (no spread in cos u); "
             "add quadrature to the anchors"
         )
     return float(math.sqrt(cov[1, 1]))
@@ -289,7 +288,7 @@ def goal_sigma(
     q = goal.quantity
     if q in ("q", "M1", "M2", "K2") and (k2 is None or s2 is None):
         raise InputError(
-            f"--goal: {q} needs a double-lined (SB2) target with K2; "
+            f"goal: {q} needs a double-lined (SB2) target with K2; "
             "for a single-lined target use sigma_K or K1"
         )
     if q == "sigma_K":
@@ -312,7 +311,7 @@ def goal_sigma(
         return rel
     if period_s is None or sin_i is None:
         raise InputError(
-            f"--goal: {goal.text}: an absolute mass goal needs P_b and sin i; give it in % instead"
+            f"goal: {goal.text}: an absolute mass goal needs P_b and sin i; give it in % instead"
         )
     a = a_total_m(k1 * 1e3, k2 * 1e3, e, period_s, sin_i)
     mtot = float(kepler_total_mass(a, period_s)) / MSUN_KG
@@ -409,8 +408,8 @@ def _goal_inputs(
     """K1, K2, σ_v of star 1 and star 2 [km/s] and Λ_K, checked (star 2's σ_v: star 1's)."""
     k1 = _positive("K1", K1)
     k2 = _positive("K2", K2) if K2 is not None else None
-    sv1 = _positive("--sigma-v", sv)
-    sv2_ = _positive("--sigma-v (star 2)", sv2) if sv2 is not None else sv1
+    sv1 = _positive("sigma_v", sv)
+    sv2_ = _positive("sigma_v (star 2)", sv2) if sv2 is not None else sv1
     lam = _positive("lambda_k", lambda_k, 1.0)
     if lam < LAMBDA_K_MIN:
         raise InputError(
@@ -496,12 +495,12 @@ def _spectra_per_visit(
     """Exposures one visit holds: the first after the acquisition, then one per ``step``."""
     if visit_s is None:
         return max(1, n_spectra)
-    usable = _positive("--visit", visit_s) - acquisition_s
+    usable = _positive("visit", visit_s) - acquisition_s
     if usable < cost:
         raise InputError(
-            f"--visit: expected at least acquisition + one exposure + readout = "
+            f"visit: expected at least acquisition + one exposure + readout = "
             f"{(acquisition_s + cost) / 60:.1f} min, got {visit_s / 60:.1f} min; "
-            "lengthen --visit or shorten the exposure"
+            "lengthen `visit` or shorten the exposure"
         )
     return int((usable - cost) // step) + 1
 
@@ -568,8 +567,8 @@ def target_k(target: Target) -> tuple[float, float | None, float | None]:
     k1 = (spec.K1_kms or spec.K_eff_kms) if spec is not None else None
     if k1 is None:
         raise InputError(
-            f"--goal: {target.name}: expected spectroscopy.K1 (or K_eff) in the target file, "
-            "got none; add it or plan without --goal"
+            f"goal: {target.name}: expected spectroscopy.K1 (or K_eff) in the target file, "
+            "got none; add it or plan without `goal`"
         )
     k2 = spec.K2_kms if spec is not None and spec.lines == "SB2" else None
     sin_i = None

@@ -282,8 +282,8 @@ def instrument_or_none(
     if name is None:
         if instruments_file is not None:
             raise InputError(
-                f"--instruments-file {shorten(str(instruments_file), 60)}: read only with "
-                "--instrument NAME; add --instrument or drop the file"
+                f"instruments_file {shorten(str(instruments_file), 60)}: read only with "
+                "`instrument` NAME; add `instrument` or drop the file"
             )
         return None
     return get_instrument(name, instruments_file)
@@ -308,8 +308,8 @@ def get_instrument(name: str, instruments_file: Path | str | None = None) -> Ins
     close = difflib.get_close_matches(key, known, n=1, cutoff=0.5)
     hint = f"did you mean {close[0]!r}? " if close else ""
     raise InputError(
-        f"--instrument: unknown instrument {shorten(name, 40)}; {hint}known: {', '.join(known)}; "
-        "or give --instruments-file FILE"
+        f"instrument: unknown instrument {shorten(name, 40)}; {hint}known: {', '.join(known)}; "
+        "or give `instruments_file` FILE"
     )
 
 
@@ -328,15 +328,15 @@ def instrument_magnitude(instrument: Instrument, magnitudes: Mapping[str, float]
     have = ", ".join(magnitudes) or "none"
     raise InputError(
         f"magnitudes: expected a {ref.band} magnitude (the band of {instrument.name}'s σ_ref), "
-        f"got {have}; add magnitudes: {{{ref.band}: ...}} to the target file or pass --sigma-v"
+        f"got {have}; add magnitudes: {{{ref.band}: ...}} to the target file or pass `sigma_v`"
     )
 
 
 def _require_ref(instrument: Instrument) -> SigmaRef:
     if instrument.sigma_ref is None:
         raise InputError(
-            f"--instrument {instrument.name}: no confirmed RV-precision reference (sigma_ref) "
-            "in the instrument table; pass --sigma-v KM_S (σ_v per exposure)"
+            f"instrument {instrument.name}: no confirmed RV-precision reference (sigma_ref) "
+            "in the instrument table; pass `sigma_v` KM_S (σ_v per exposure)"
         )
     return instrument.sigma_ref
 
@@ -363,7 +363,7 @@ def sigma_v_kms(
     x = np.asarray(airmass, dtype=np.float64)
     if override_kms is not None:
         if not _is_number(override_kms) or override_kms <= 0:
-            raise InputError(f"--sigma-v: expected a positive number [km/s], got {override_kms!r}")
+            raise InputError(f"sigma_v: expected a positive number [km/s], got {override_kms!r}")
         return np.broadcast_to(np.float64(override_kms), np.broadcast(t, x).shape).copy()
     ref = _require_ref(instrument)
     if not np.all(np.isfinite(t)) or np.any(t <= 0):
@@ -381,9 +381,9 @@ def sigma_v_kms(
     if k is None:
         if np.any(x > 1.0):
             raise InputError(
-                f"--instrument {instrument.name}: extinction_k is not in the instrument table, so "
-                "σ_v cannot be scaled with airmass; add it in an --instruments-file or pass "
-                "--sigma-v"
+                f"instrument {instrument.name}: extinction_k is not in the instrument table, so "
+                "σ_v cannot be scaled with airmass; add it in an `instruments_file` or pass "
+                "`sigma_v`"
             )
         k = 0.0
     return np.asarray(
@@ -429,15 +429,15 @@ def instrument_overheads(
         table = getattr(instrument, key) if instrument is not None else None
         if table is None:
             if instrument is None:
-                raise InputError(f"{option}: expected seconds (no --instrument given), got none")
+                raise InputError(f"{option}: expected seconds (no `instrument` given), got none")
             raise InputError(
-                f"--instrument {instrument.name}: {key} is not confirmed in the instrument table; "
-                f"pass {option} SECONDS"
+                f"instrument {instrument.name}: {key} is not confirmed in the instrument table; "
+                f"pass `{option}` SECONDS"
             )
         return float(table), f"instrument {instrument.name}" if instrument else option
 
-    acq, acq_from = pick(acquisition_s, "acquisition_s", "--overhead")
-    ro, ro_from = pick(readout_s, "readout_s", "--readout")
+    acq, acq_from = pick(acquisition_s, "acquisition_s", "overhead")
+    ro, ro_from = pick(readout_s, "readout_s", "readout")
     return Overheads(acq, ro, acq_from, ro_from)
 
 
@@ -452,6 +452,6 @@ def check_exptime(instrument: Instrument, exptime_s: float) -> None:
     low = instrument.min_exptime_s
     if low is not None and exptime_s < low:
         raise InputError(
-            f"--exptime: expected at least {low:g} s (minimum of {instrument.name}), "
+            f"exptime: expected at least {low:g} s (minimum of {instrument.name}), "
             f"got {exptime_s:g} s"
         )

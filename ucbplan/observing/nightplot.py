@@ -33,6 +33,7 @@ from ucbplan.observing.site_time_axis import TimeAxis
 from ucbplan.observing.sites import Site
 from ucbplan.observing.sky import SkyModel
 from ucbplan.observing.tablemake import blocks_to_table
+from ucbplan.offline import offline
 from ucbplan.plotting import FIGURE_FORMATS, figure_format, pyplot
 
 if TYPE_CHECKING:
@@ -470,6 +471,7 @@ def chart_format(path: Path) -> str:
     return figure_format(path)
 
 
+@offline()  # a notebook's call works with no network, like the CLI's
 def write_night_charts(
     table: Table,
     site: Site,
@@ -494,10 +496,10 @@ def write_night_charts(
     fmt = chart_format(path)
     charts = night_chart(table, site)
     if not charts:
-        raise InputError(f"--plot {path.name}: the plan has no blocks; nothing to chart")
+        raise InputError(f"plot {path.name}: the plan has no blocks; nothing to chart")
     if fmt != "pdf" and len(charts) > MAX_PANELS:
         raise InputError(
-            f"--plot {path.name}: {len(charts)} nights do not fit one image (at most "
+            f"plot {path.name}: {len(charts)} nights do not fit one image (at most "
             f"{MAX_PANELS} panels); give a .pdf path for one page per night"
         )
     plt = pyplot()

@@ -45,6 +45,7 @@ from ucbplan.observing.sheet_html import (
 from ucbplan.observing.site_time_axis import TimeAxis
 from ucbplan.observing.sites import Site
 from ucbplan.observing.sky import SkyModel
+from ucbplan.offline import offline
 from ucbplan.plotting import pyplot
 
 __all__ = [
@@ -312,12 +313,13 @@ def sheet_format(path: Path) -> str:
         return "html"
     if fmt not in SHEET_FORMATS:
         raise InputError(
-            f"--sheet: expected a .pdf or .html file, got {shorten(path.name, 60)}; "
+            f"sheet: expected a .pdf or .html file, got {shorten(path.name, 60)}; "
             "name the sheet e.g. night.pdf"
         )
     return fmt
 
 
+@offline()  # a notebook's call works with no network, like the CLI's
 def write_night_sheet(
     table: Table,
     site: Site,
@@ -352,7 +354,7 @@ def write_night_sheet(
     fmt = sheet_format(path)
     charts = night_chart(table, site)
     if not charts:
-        raise InputError("--sheet: the plan has no blocks; nothing to put on a night sheet")
+        raise InputError("sheet: the plan has no blocks; nothing to put on a night sheet")
     note, meta = plan_note(table), table.meta
     if fmt == "pdf":
         write_output(

@@ -51,7 +51,7 @@ def semester_dates(text: str) -> tuple[dt.date, dt.date]:
         start = _add_months(*_P110, 6 * (int(m.group(1)) - 110))
         return start, _add_months(start.year, start.month, 6)
     raise InputError(
-        f"--semester: expected YYYYA, YYYYB (A = Feb-Jul, B = Aug-Jan) or an ESO period like P147, "
+        f"semester: expected YYYYA, YYYYB (A = Feb-Jul, B = Aug-Jan) or an ESO period like P147, "
         f"got {shorten(text)}"
     )
 

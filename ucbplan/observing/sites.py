@@ -262,7 +262,7 @@ def load_sites(path: Path | None = None) -> list[Site]:
     except SiteError:
         raise
     except InputError as exc:  # unreadable, not UTF-8, not YAML: say it is the site file
-        raise SiteError(f"--sites-file {exc}") from None
+        raise SiteError(f"sites_file {exc}") from None
 
 
 def get_site(name: str, sites_file: Path | None = None) -> Site:
@@ -282,8 +282,8 @@ def get_site(name: str, sites_file: Path | None = None) -> Site:
             return site
     known = shorten(", ".join(dict.fromkeys(s.name for s in tables)), 200).strip("'\"")
     raise SiteError(
-        f"--site: unknown site {shorten(name, 60)}; known sites: {known}; or give "
-        "--site-lonlat LON,LAT,HEIGHT or --sites-file FILE"
+        f"site: unknown site {shorten(name, 60)}; known sites: {known}; or give "
+        "`site_lonlat` LON,LAT,HEIGHT or `sites_file` FILE"
     )
 
 
@@ -303,22 +303,22 @@ def site_from_lonlat(text: str, timezone: str | None = None) -> Site:
     form = "LON,LAT,HEIGHT (deg east, deg north, m)"
     parts = [p.strip() for p in text.split(",")] if len(text) <= 200 else []
     if len(parts) != 3:
-        raise SiteError(f"--site-lonlat: expected {form}, got {shorten(text, 60)}")
+        raise SiteError(f"site_lonlat: expected {form}, got {shorten(text, 60)}")
     try:
         numbers = [float(p) for p in parts]
     except ValueError:
         raise SiteError(
-            f"--site-lonlat: expected three numbers {form}, got {shorten(text, 60)}"
+            f"site_lonlat: expected three numbers {form}, got {shorten(text, 60)}"
         ) from None
     lon, lat, height = (
-        check_range(f"--site-lonlat: {k}", v, *_RANGES[k], error=SiteError)
+        check_range(f"site_lonlat: {k}", v, *_RANGES[k], error=SiteError)
         for k, v in zip(("lon_deg", "lat_deg", "height_m"), numbers, strict=True)
     )
     lon = east_longitude(lon)
     entry: dict[str, Any] = {"name": f"lon{lon:+.4f} lat{lat:+.4f}", "lon_deg": lon}
     entry.update(lat_deg=lat, height_m=height)
     entry["timezone"] = _zone_at(lon, lat) if timezone is None else timezone
-    return _parse_site(entry, "--site-lonlat" if timezone is None else "--tz")
+    return _parse_site(entry, "site_lonlat" if timezone is None else "tz")
 
 
 def _zone_at(lon: float, lat: float) -> str:
@@ -349,14 +349,14 @@ def resolve_site(
     """
     if lonlat and name:
         raise SiteError(
-            f"--site {shorten(name, 40)}, --site-lonlat {shorten(lonlat, 40)}: give one site, "
+            f"site {shorten(name, 40)}, `site_lonlat` {shorten(lonlat, 40)}: give one site, "
             "not both"
         )
     if lonlat:
         return site_from_lonlat(lonlat, timezone)
     if not name:
-        raise UcbplanError("no site: pass --site NAME (e.g. paranal) or --site-lonlat LON,LAT,H")
+        raise UcbplanError("no site: pass `site` NAME (e.g. paranal) or `site_lonlat` LON,LAT,H")
     site = get_site(name, sites_file)
     if timezone is None:
         return site
-    return replace(site, timezone=_check_zone(timezone, "--tz"))
+    return replace(site, timezone=_check_zone(timezone, "tz"))

@@ -356,7 +356,7 @@ def best_strategy(results: Sequence[StrategyResult]) -> StrategyResult:
     possible = [r for r in results if r.possible]
     if not possible:
         why = "; ".join(f"{r.name}: {r.note}" for r in results if r.note)
-        raise InputError(f"no exposure strategy fits the visit ({why}); lengthen --visit")
+        raise InputError(f"no exposure strategy fits the visit ({why}); lengthen `visit`")
     return max(possible, key=lambda r: r.info_per_visit)
 
 

@@ -235,7 +235,7 @@ def _json_table(text: str, where: str) -> Table:
         rows = rows["rows"]
     if not isinstance(rows, list) or not all(isinstance(r, dict) for r in rows):
         raise InputFileError(
-            f"{where}: expected a JSON list of row objects (`ucbplan plan --format json`)"
+            f"{where}: expected a JSON list of row objects (`Plan.write` to a .json path)"
         )
     names = list(dict.fromkeys(k for r in rows for k in r))
     columns: dict[str, Any] = {}

@@ -32,7 +32,6 @@ from ucbplan.observing.ecsvheader import (
     ecsv_header,
     flat_records_safe,
     header_safe,
-    libyaml_header,
 )
 
 __all__ = [
@@ -175,12 +174,10 @@ def _write_ecsv(table: Table, handle: IO[str]) -> None:
     it can), then the rows column by column (:func:`ecsv_data_lines`); for tables
     of other columns, astropy's whole writer."""
     lines = ecsv_data_lines(table)
-    safe = header_safe(table)
-    with libyaml_header(safe):
-        if lines is None:
-            table.write(handle, format="ascii.ecsv")
-            return
-        handle.write(ecsv_header(table, safe))
+    if lines is None:
+        table.write(handle, format="ascii.ecsv")
+        return
+    handle.write(ecsv_header(table, header_safe(table)))
     handle.write("".join(line + os.linesep for line in lines))
 
 

@@ -32,7 +32,7 @@ def pyplot() -> Any:
     return plt
 
 
-def figure_format(path: Path, option: str = "--plot") -> str:
+def figure_format(path: Path, option: str = "plot") -> str:
     """The format of the figure file ``path`` by its suffix, one of :data:`FIGURE_FORMATS`.
 
     Raises
@@ -50,7 +50,7 @@ def figure_format(path: Path, option: str = "--plot") -> str:
     return fmt
 
 
-def check_figure_path(path: Path, overwrite: bool, option: str = "--plot") -> None:
+def check_figure_path(path: Path, overwrite: bool, option: str = "plot") -> None:
     """Check a figure path before any work: a known format, an existing folder, and no file
     replaced without ``overwrite``.
 

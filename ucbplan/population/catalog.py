@@ -124,11 +124,11 @@ def parse_column_map(text: str | None) -> dict[str, str]:
         old, sep, new = (p.strip() for p in pair.partition("="))
         if not sep or not old or not new:
             raise InputFileError(
-                f"--columns: expected old=new pairs separated by commas, got {shorten(pair)}"
+                f"columns: expected old=new pairs separated by commas, got {shorten(pair)}"
             )
         if new not in _BY_NAME and new != ID_COLUMN:
             known = ", ".join([*_BY_NAME, ID_COLUMN])
-            raise InputFileError(f"--columns: unknown catalog column {shorten(new)}; use {known}")
+            raise InputFileError(f"columns: unknown catalog column {shorten(new)}; use {known}")
         out[old] = new
     return out
 
@@ -158,11 +158,11 @@ def _from_hdf5(path: Path, dataset: str | None) -> dict[str, Any]:
             if not found:
                 raise InputFileError(
                     f"{path}: no table with a Frequency column (a compound dataset or a group "
-                    "of 1-D datasets); name it with --hdf5-path"
+                    "of 1-D datasets); name it with `hdf5_path`"
                 )
             dataset = found[0]
         if dataset not in fh:
-            raise InputFileError(f"{path}: --hdf5-path: no dataset {shorten(dataset)}")
+            raise InputFileError(f"{path}: `hdf5_path`: no dataset {shorten(dataset)}")
         obj = fh[dataset]
         if isinstance(obj, h5py.Group):
             return {k: np.asarray(obj[k][()]) for k in obj if isinstance(obj[k], h5py.Dataset)}
@@ -285,7 +285,7 @@ def read_catalog(
         vals, problem = _row_values(data, units, present, conv, i)
         if problem is not None:
             if not skip_bad:
-                raise InputFileError(f"{path}: row {row}: {problem} (or use --skip-bad)")
+                raise InputFileError(f"{path}: row {row}: {problem} (or use `skip_bad`)")
             bad.append((row, problem))
             continue
         sid = str(_id_text(ids[i])) if ids is not None else str(row)
@@ -308,14 +308,14 @@ def _columns_of(
     rename = dict(columns or {})
     for old in rename:
         if old not in raw:
-            raise InputFileError(f"{path}: --columns: no column {shorten(old)} in the catalog")
+            raise InputFileError(f"{path}: `columns`: no column {shorten(old)} in the catalog")
     data = {rename.get(k, k): v for k, v in raw.items()}
     units = {rename.get(k, k): v for k, v in units.items()}
     missing = [c.name for c in COLUMNS if c.required and c.name not in data]
     if missing:
         raise InputFileError(
             f"{path}: missing column(s) {', '.join(missing)}; map other names with "
-            "--columns old=new"
+            "`columns` old=new"
         )
     if len(data["Frequency"]) == 0:
         raise InputFileError(f"{path}: catalog has no rows")

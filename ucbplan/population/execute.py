@@ -136,24 +136,24 @@ class ExecutorSpec:
     def __post_init__(self) -> None:
         """Check the options before any work (one line each, naming the option)."""
         if self.workers < 1:
-            raise InputError(f"--workers: expected >= 1, got {self.workers}")
+            raise InputError(f"workers: expected >= 1, got {self.workers}")
         if self.scheduler and not self.scheduler.startswith(_SCHEMES):
             raise InputError(
-                "--scheduler: expected an address like tcp://HOST:8786, got "
+                "scheduler: expected an address like tcp://HOST:8786, got "
                 f"{shorten(self.scheduler)}"
             )
         if self.cluster is None:
             return
         if self.scheduler:
-            raise InputError("--cluster and --scheduler: give one of them, not both")
+            raise InputError("`cluster` and `scheduler`: give one of them, not both")
         if self.cluster.strip().lower() not in CLUSTERS:
             raise InputError(
-                f"--cluster: expected {' or '.join(CLUSTERS)}, got {shorten(self.cluster)}; for "
-                "another batch system start a Dask scheduler yourself and pass --scheduler "
+                f"cluster: expected {' or '.join(CLUSTERS)}, got {shorten(self.cluster)}; for "
+                "another batch system start a Dask scheduler yourself and pass `scheduler` "
                 "tcp://HOST:PORT"
             )
         if self.jobs < 1:
-            raise InputError(f"--jobs: expected >= 1, got {self.jobs}")
+            raise InputError(f"jobs: expected >= 1, got {self.jobs}")
 
     def describe(self) -> str:
         """One line for logs (not written into outputs: they are identical everywhere)."""
@@ -200,7 +200,7 @@ def _client_class() -> Any:
         from distributed import Client
     except ImportError:
         raise InputError(
-            "--scheduler/--cluster need Dask distributed: pip install 'ucbplan[dask]'"
+            "scheduler/cluster need Dask distributed: pip install 'ucbplan[dask]'"
         ) from None
     return Client
 
@@ -224,7 +224,7 @@ def _dask_executor(address: str) -> Iterator[tuple[Executor, int]]:
         client = client_cls(address, timeout=30, set_as_default=False)
     except (OSError, TimeoutError) as exc:
         raise InputError(
-            f"--scheduler: cannot reach {shorten(address)} ({shorten(exc)}); is the scheduler up?"
+            f"scheduler: cannot reach {shorten(address)} ({shorten(exc)}); is the scheduler up?"
         ) from None
     with _client_executor(client) as pair:
         yield pair
@@ -241,15 +241,15 @@ def jobqueue_cluster_class(name: str) -> Any:
     key = name.strip().lower()
     if key not in CLUSTERS:
         raise InputError(
-            f"--cluster: expected {' or '.join(CLUSTERS)}, got {shorten(name)}; for another "
-            "batch system start a Dask scheduler yourself and pass --scheduler tcp://HOST:PORT"
+            f"cluster: expected {' or '.join(CLUSTERS)}, got {shorten(name)}; for another "
+            "batch system start a Dask scheduler yourself and pass `scheduler` tcp://HOST:PORT"
         )
     _client_class()
     try:
         import dask_jobqueue
     except ImportError:
         raise InputError(
-            "--cluster needs dask-jobqueue: pip install dask-jobqueue (and set cores, memory, "
+            "cluster needs dask-jobqueue: pip install dask-jobqueue (and set cores, memory, "
             "queue in ~/.config/dask/jobqueue.yaml; see docs/population.md)"
         ) from None
     return getattr(dask_jobqueue, CLUSTERS[key])
@@ -263,7 +263,7 @@ def _jobqueue_executor(name: str, jobs: int) -> Iterator[tuple[Executor, int]]:
         cluster = cluster_cls()  # cores, memory, queue … from the dask-jobqueue config file
     except (ValueError, TypeError, KeyError) as exc:
         raise InputError(
-            f"--cluster {name}: dask-jobqueue could not configure the cluster "
+            f"cluster {name}: dask-jobqueue could not configure the cluster "
             f"({shorten(' '.join(str(exc).split()), 160)}); set cores and memory in "
             "~/.config/dask/jobqueue.yaml (docs/population.md)"
         ) from None
@@ -319,8 +319,8 @@ def prepare_parts(folder: Path, *, resume: bool, overwrite: bool) -> None:
     if old and not resume:
         if not overwrite:
             raise OutputExistsError(
-                f"{folder}: holds {len(old)} part file(s) of an earlier run; add --resume to "
-                "reuse them or --overwrite to start again"
+                f"{folder}: holds {len(old)} part file(s) of an earlier run; add `resume` to "
+                "reuse them or `overwrite` to start again"
             )
         for p in old:
             p.unlink()
@@ -433,7 +433,7 @@ def run_chunks(
         All rows in item order and the number of chunks reused from earlier parts.
     """
     if chunk < 1:
-        raise InputError(f"--chunk: expected >= 1, got {chunk}")
+        raise InputError(f"chunk: expected >= 1, got {chunk}")
     chunks = _Parts(parts, _fingerprint(kind, options, catalog_sha256, chunk), ids, chunk)
     results = chunks.reuse() if resume else {}
     reused = len(results)

@@ -100,22 +100,22 @@ class RankOptions:
 
     def __post_init__(self) -> None:
         if not isinstance(self.top, int) or self.top < 0:
-            raise InputError(f"--top: expected an integer >= 0, got {shorten(self.top)}")
+            raise InputError(f"top: expected an integer >= 0, got {shorten(self.top)}")
         parse_goal(self.goal)
         ExposurePlan(exptime_s=self.exptime_s, readout_s=self.readout_s)
-        check_range("--overhead", self.acquisition_s, 0.0, MAX_BLOCK_S, "s", "per visit")
+        check_range("overhead", self.acquisition_s, 0.0, MAX_BLOCK_S, "s", "per visit")
         night = "a visit fits in one night"
-        check_range("--visit", self.visit_s, 0.0, MAX_BLOCK_S, "s", night, low_open=True)
+        check_range("visit", self.visit_s, 0.0, MAX_BLOCK_S, "s", night, low_open=True)
         need = self.acquisition_s + self.exptime_s + self.readout_s
         if self.visit_s < need:
             raise InputError(
-                f"--visit: expected at least acquisition + one exposure + readout = {need:g} s, "
-                f"got {self.visit_s:g} s; lengthen --visit or shorten the exposure"
+                f"visit: expected at least acquisition + one exposure + readout = {need:g} s, "
+                f"got {self.visit_s:g} s; lengthen `visit` or shorten the exposure"
             )
         if self.instrument is not None and self.instrument.sigma_ref is None:
             raise InputError(
-                f"--instrument {self.instrument.name}: no RV-precision reference (sigma_ref) in "
-                "the instrument table; add --sigma-ref SIGMA_KMS,MAG,EXPTIME_S"
+                f"instrument {self.instrument.name}: no RV-precision reference (sigma_ref) in "
+                "the instrument table; add `sigma_ref` SIGMA_KMS,MAG,EXPTIME_S"
             )
 
     @property
@@ -312,7 +312,7 @@ def rank_instrument(
         sv = mag = t = math.nan
     if not (sv > 0 and t > 0 and math.isfinite(mag)):
         raise InputError(
-            "--sigma-ref: expected SIGMA_KMS,MAG,EXPTIME_S (σ_v of one exposure of that length "
+            "sigma_ref: expected SIGMA_KMS,MAG,EXPTIME_S (σ_v of one exposure of that length "
             f"at that V magnitude), got {shorten(sigma_ref)}"
         )
     ref = SigmaRef(sigma_v_kms=sv, mag=mag, band="V", exptime_s=t)
@@ -358,7 +358,7 @@ def check_catalog_of(forecast: Any, catalog: Catalog, where: Path) -> None:
     if want != catalog.sha256:
         raise InputFileError(
             f"{where}: forecast of catalog sha256 {shorten(want, 20)}, but {catalog.path.name} "
-            f"has {catalog.sha256[:16]}…; pass the forecast's catalog with --catalog"
+            f"has {catalog.sha256[:16]}…; pass the forecast's catalog with `catalog`"
         )
 
 

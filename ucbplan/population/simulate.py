@@ -112,9 +112,9 @@ class PopulationSimulateOptions:
         # checked once here, before any source runs (the pipeline would fail every source alike)
         n_params = len(SIMULATED_PARAMETERS)
         why = f"2 per parameter of the circular {n_params}-parameter model"
-        check_int("--walkers", self.walkers, 2 * n_params, 100_000, why)
-        check_int("--steps", self.steps, 1, 10_000_000, "chain steps")
-        check_int("--max-steps", self.max_steps, 1, 10_000_000, "cap of --until-converged")
+        check_int("walkers", self.walkers, 2 * n_params, 100_000, why)
+        check_int("steps", self.steps, 1, 10_000_000, "chain steps")
+        check_int("max_steps", self.max_steps, 1, 10_000_000, "cap of `until_converged`")
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready mapping (fingerprints and meta)."""

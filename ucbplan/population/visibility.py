@@ -80,7 +80,7 @@ class VisibilityOptions:
 
     def __post_init__(self) -> None:
         semester_dates(self.semester)
-        check_range("--min-hours", self.min_hours, 0.0, 24.0, "h", "usable time of a night")
+        check_range("min_hours", self.min_hours, 0.0, 24.0, "h", "usable time of a night")
 
     def dates(self) -> list[dt.date]:
         """Local evening dates of the semester's nights."""

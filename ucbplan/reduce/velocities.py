@@ -522,7 +522,7 @@ def check_validity(table: VelocityTable, target: Target) -> F64:
     if table.site_utc:
         raise VelocityFileError(
             f"{table.source}: times are UTC at the telescope (jd_utc/mjd_utc); give the site with "
-            "--site NAME so they can be converted to barycentric TDB"
+            "`site` NAME so they can be converted to barycentric TDB"
         )
     tau = np.asarray((table.time - target.t_ref).to_value("s"), dtype=np.float64)
     timing = getattr(target, "kind", "lisa") == "timing"

@@ -100,7 +100,7 @@ def _disagrees(times: EclipseTimes, guess: PeriodGuess, name: str, pull: float) 
         "t0": f"t0 (±{guess.sigma_t0_s:.2g} s from its digits)",
     }[name]
     fix = (
-        "write it with fewer digits (as many as hold over the times), or give --initial "
+        "write it with fewer digits (as many as hold over the times), or give `initial` "
         "TARGET.yaml with t0, period and pdot"
         if guess.origin == "--period"
         else "check that file's ephemeris, or add a cycle column"
@@ -163,7 +163,7 @@ def count_cycles(times: EclipseTimes, guess: PeriodGuess) -> F64:
             raise InputFileError(
                 f"{times.label()}: row {times.rows[i]}, column 'bjd_tdb': {offset[k] / p:.2f} P "
                 f"from the nearest predicted {kind} eclipse (counting from {guess.origin}); check "
-                "its kind, or whether the guess holds over these times (fewer digits, or --initial "
+                "its kind, or whether the guess holds over these times (fewer digits, or `initial` "
                 "with t0, period, pdot), or remove the row"
             )
         cycles[todo[ok]] = n[ok]
@@ -213,11 +213,11 @@ def _ambiguous(
     )
     if why == "period":
         return InputFileError(
-            f"{head}add a cycle column, or give --initial TARGET.yaml with a better ephemeris (or "
-            "--period with more digits)"
+            f"{head}add a cycle column, or give `initial` TARGET.yaml with a better ephemeris (or "
+            "`period` with more digits)"
         )
     return InputFileError(
         f"{head}an unknown Ṗ limits it, not P (more digits in the period will not help): add a "
-        "cycle column, eclipse times that bridge the gap in shorter steps, or --initial "
+        "cycle column, eclipse times that bridge the gap in shorter steps, or `initial` "
         "TARGET.yaml whose timing block has pdot (a Ṗ prior)"
     )

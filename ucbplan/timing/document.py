@@ -150,26 +150,24 @@ def identity(
     if name is not None:
         if not name.strip() or len(name) > 200 or not name.isprintable():
             raise InputError(
-                f"--name: expected a printable name of 1–200 characters, got {shorten(name, 60)}"
+                f"name: expected a printable name of 1–200 characters, got {shorten(name, 60)}"
             )
         out["name"] = name.strip()
     if ra is not None or dec is not None:
         if ra is None or dec is None:
-            raise InputError(
-                "--ra/--dec: give both (ICRS), e.g. --ra 15h39m32.16s --dec +50d27m38.8s"
-            )
-        _check_angle("--ra", ra, hours=True)
-        _check_angle("--dec", dec, hours=False)
+            raise InputError("ra/dec: give both (ICRS), e.g. `ra` 15h39m32.16s `dec` +50d27m38.8s")
+        _check_angle("ra", ra, hours=True)
+        _check_angle("dec", dec, hours=False)
         out["sky"] = {"ra": ra.strip(), "dec": dec.strip()}
     missing = [k for k in ("name", "sky") if k not in out]
     if missing:
         raise InputError(
-            f"-o: the timing target needs {' and '.join(missing)}; pass --like TARGET.yaml (copies "
-            "name, sky, masses, spectroscopy, magnitudes) or --name, --ra, --dec"
+            f"-o: the timing target needs {' and '.join(missing)}; pass `like` TARGET.yaml (copies "
+            "name, sky, masses, spectroscopy, magnitudes) or `name`, `ra`, `dec`"
         )
     if not isinstance(out["sky"], Mapping):
         raise InputError(
-            f"--like: sky: expected a mapping {{ra, dec}}, got {shorten(out['sky'], 60)}"
+            f"like: sky: expected a mapping {{ra, dec}}, got {shorten(out['sky'], 60)}"
         )
     return out
 

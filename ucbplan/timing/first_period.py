@@ -131,7 +131,7 @@ def period_from_times(times: EclipseTimes) -> PeriodGuess:
         No night with :data:`MIN_ECLIPSES` distinct eclipses, or one whose times fit no single
         period that the timing noise can tell: one line naming the ambiguity and the fixes.
     """
-    fixes = "give --period P, --initial TARGET.yaml or a cycle column"
+    fixes = "give `period` P, `initial` TARGET.yaml or a cycle column"
     nights = [_distinct(times, idx) for idx in _nights(times)]
     best = max(nights, key=len)  # the first of equally full nights
     if best.size < MIN_ECLIPSES:

@@ -191,8 +191,8 @@ def _check_counts(
     if n < terms or distinct < terms:
         what = f"{n} times" if n < terms else f"{distinct} distinct cycles"
         raise InputError(
-            f"{times.label()}: {why}{what}, fewer than the {terms} parameters of --terms {terms}; "
-            f"add times or fit fewer terms (--terms {max(2, min(terms - 1, distinct))})"
+            f"{times.label()}: {why}{what}, fewer than the {terms} parameters of `terms` {terms}; "
+            f"add times or fit fewer terms (`terms` {max(2, min(terms - 1, distinct))})"
         )
 
 
@@ -216,7 +216,7 @@ def _fit_core(y: F64, sigma: F64, cycles: F64, terms: int, label: str) -> _Core:
     except np.linalg.LinAlgError:
         raise NumericalError(
             f"{label}: the times do not constrain all {terms} parameters (singular design); "
-            "fit fewer terms (--terms)"
+            "fit fewer terms (`terms`)"
         ) from None
     resid = (y - a @ coef) / sigma
     return _Core(m, wmean, coef, cov_c, float(resid @ resid), int(y.size - terms))
@@ -289,7 +289,7 @@ def fit_ephemeris(
         A singular design, or a fit with P ≤ 0.
     """
     if terms not in (2, 3, 4):
-        raise InputError(f"--terms: expected 2, 3 or 4, got {terms}")
+        raise InputError(f"terms: expected 2, 3 or 4, got {terms}")
     cycles = np.asarray(cycles, dtype=np.float64)
     label = times.label()
     _check_counts(times, cycles, np.ones(times.n, dtype=bool), terms, "")
@@ -370,7 +370,7 @@ def _clipped_fit(
             break
         clipped.extend(int(r) for r in times.rows[drop])
         used = used & ~drop
-        _check_counts(times, cycles, used, terms, f"--clip {clip:g} leaves ")
+        _check_counts(times, cycles, used, terms, f"`clip` {clip:g} leaves ")
     return _Clipped(core, scale, oc, z, used, tuple(clipped))
 
 

@@ -76,7 +76,7 @@ def _last_digit(d: Decimal) -> Decimal:
     return Decimal(1).scaleb(int(d.as_tuple().exponent))
 
 
-def parse_period(value: Any, what: str = "--period") -> tuple[float, float]:
+def parse_period(value: Any, what: str = "period") -> tuple[float, float]:
     """A period text (``"414.7915404 s"``, ``"6.9 min"``, ``0.0048 d``, a bare number: seconds)
     as (P [s], σ_P [s] = one unit in the last digit).
 
@@ -136,8 +136,8 @@ def guess_from_document(doc: Any, label: str) -> PeriodGuess:
     timing = doc.get("timing") if isinstance(doc, Mapping) else None
     if not isinstance(timing, Mapping):
         raise InputFileError(
-            f"{label}: timing: missing; --initial needs a target file with a timing: block "
-            "(t0, period[, pdot]), or give --period"
+            f"{label}: timing: missing; `initial` needs a target file with a timing: block "
+            "(t0, period[, pdot]), or give `period`"
         )
     if "period" not in timing:
         raise InputFileError(f'{label}: timing.period: missing; add e.g. period: "414.79 s"')

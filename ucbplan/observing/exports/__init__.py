@@ -100,7 +100,7 @@ def export_blocks(table: Table, to: str, options: ExportOptions | None = None) -
     exporter = EXPORTERS.get(to) if isinstance(to, str) else None
     if exporter is None:
         raise InputError(
-            f"--to: unknown export format {shorten(to, 40)}; expected one of {', '.join(EXPORTERS)}"
+            f"to: unknown export format {shorten(to, 40)}; expected one of {', '.join(EXPORTERS)}"
         )
     if len(table) == 0:
         raise InputFileError("blocks table has no rows: nothing to export; re-run `ucbplan plan`")

@@ -114,7 +114,7 @@ def _obs(doc: Mapping[str, Any]) -> list[dict[str, Any]]:
         isinstance(o, dict) and isinstance(o.get("ob"), dict) for o in obs
     ):
         raise InputError(
-            "--create: the eso-p2 export has no OB bodies; re-export with this ucbplan version"
+            "create: the eso-p2 export has no OB bodies; re-export with this ucbplan version"
         )
     return obs
 
@@ -130,7 +130,7 @@ def _add_templates(api: P2Api, ob_id: int, templates: list[dict[str, Any]]) -> N
         missing = sorted(set(params) - known) if known else []
         if missing:  # p2api's setTemplateParams would drop them without a word
             raise ValueError(
-                f"template {template['name']} has no keyword {missing[0]}; check --eso-templates"
+                f"template {template['name']} has no keyword {missing[0]}; check `eso_templates`"
             )
         if params:
             api.setTemplateParams(ob_id, tpl, params, version)
@@ -189,14 +189,14 @@ def connect(environment: str, username: str, password: str) -> P2Api:
     """
     if environment not in P2_ENVIRONMENTS:
         raise InputError(
-            f"--p2-environment: expected one of {', '.join(P2_ENVIRONMENTS)}, "
+            f"p2_environment: expected one of {', '.join(P2_ENVIRONMENTS)}, "
             f"got {shorten(environment, 40)}"
         )
     try:
         import p2api
     except ImportError:
         raise UcbplanError(
-            "--create needs ESO's p2api: pip install 'ucbplan[eso]' (or pip install p2api)"
+            "create needs ESO's p2api: pip install 'ucbplan[eso]' (or pip install p2api)"
         ) from None
     try:
         api: P2Api = p2api.ApiConnection(environment, username, password)
@@ -224,7 +224,7 @@ def create_from_export(
     if dry_run:
         api: P2Api = DryRunApi()
     elif connection is None:
-        raise InputError("--no-dry-run: no p2 connection (give --p2-user)")
+        raise InputError("`dry_run=False`: no p2 connection (give `p2_user`)")
     else:
         api = connection
     return creation_report(create_obs(doc, api, container_id), container_id, dry_run)

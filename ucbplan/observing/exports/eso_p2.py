@@ -228,7 +228,7 @@ def _resolve_overlaps(obs: list[_Ob], options: ExportOptions) -> list[_Ob]:
 def _overlap_error(prev: _Ob, ob: _Ob) -> UcbplanError:
     pair = f"{prev.doc['block_ids'][-1]} and {ob.doc['block_ids'][0]}"
     how = (
-        "pass --merge-overlaps to execute them as one OB"
+        "pass `merge_overlaps` to execute them as one OB"
         if prev.doc["target"] == ob.doc["target"]
         else "drop one of them from the blocks table (different targets)"
     )
@@ -236,7 +236,7 @@ def _overlap_error(prev: _Ob, ob: _Ob) -> UcbplanError:
         f"ESO p2: OB start windows of blocks {pair} overlap "
         f"({iso_minute(prev.lo)}-{iso_minute(prev.hi)} and "
         f"{iso_minute(ob.lo)}-{iso_minute(ob.hi)} UTC); {how}, "
-        "or lower --tolerance-sigma"
+        "or lower `tolerance_sigma`"
     )
 
 

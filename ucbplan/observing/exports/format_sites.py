@@ -142,5 +142,5 @@ def check_site(site: object, to: str, force: bool) -> list[str]:
         return [f"{to}: written for site {label}, none of {where}, because of --force"]
     raise SiteError(
         f"{to}: the plan's site {label} is none of this format's observatory sites ({where}); "
-        "re-plan with --site for one of them, or pass --force to write it anyway"
+        "re-plan with `site` for one of them, or pass `force` to write it anyway"
     )

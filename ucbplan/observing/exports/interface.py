@@ -77,19 +77,19 @@ class ExportOptions:
     def __post_init__(self) -> None:
         why = "acquisition before the first exposure; a block must fit in one night"
         if self.acquisition_s is not None:
-            check_range("--acquisition", self.acquisition_s, 0.0, MAX_BLOCK_S, "s", why)
+            check_range("acquisition", self.acquisition_s, 0.0, MAX_BLOCK_S, "s", why)
         why = "window half-width in units of the block's 1-sigma timing error"
-        check_range("--tolerance-sigma", self.tolerance_sigma, 0.0, MAX_TOLERANCE_SIGMA, "", why)
+        check_range("tolerance_sigma", self.tolerance_sigma, 0.0, MAX_TOLERANCE_SIGMA, "", why)
         why = "smallest window half-width; a day at most"
-        check_range("--tolerance-floor", self.tolerance_floor_s, 0.0, 86400.0, "s", why)
+        check_range("tolerance_floor", self.tolerance_floor_s, 0.0, 86400.0, "s", why)
         check_range("rounding_warn_fraction", self.rounding_warn_fraction, 0.0, 1.0)
         why = "seeing limit of the ESO constraint set"
-        check_range("--seeing", self.seeing_arcsec, 0.0, 5.0, "arcsec", why, low_open=True)
+        check_range("seeing", self.seeing_arcsec, 0.0, 5.0, "arcsec", why, low_open=True)
         if self.semester is not None:
             semester_dates(self.semester)  # refuses anything but 2041A, 2041B, P147
         if not isinstance(self.keck_rotmode, str) or self.keck_rotmode not in KECK_ROTMODES:
             raise InputError(
-                f"--rotmode: expected {', '.join(KECK_ROTMODES)} (Keck starlist rotator "
+                f"rotmode: expected {', '.join(KECK_ROTMODES)} (Keck starlist rotator "
                 f"modes), got {shorten(self.keck_rotmode, 40)}"
             )
 

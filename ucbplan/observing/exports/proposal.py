@@ -335,9 +335,7 @@ def write_proposal(summary: Table, fmt: str) -> str:
         For an unknown format.
     """
     if fmt not in PROPOSAL_FORMATS:
-        raise InputFileError(
-            f"--format: got {fmt!r}, expected one of {', '.join(PROPOSAL_FORMATS)}"
-        )
+        raise InputFileError(f"format: got {fmt!r}, expected one of {', '.join(PROPOSAL_FORMATS)}")
     if fmt == "latex":
         return proposal_latex(summary)
     buf = io.StringIO()

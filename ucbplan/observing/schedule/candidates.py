@@ -25,7 +25,7 @@ from ucbplan.core.constants import TWO_PI
 from ucbplan.core.ephemeris import EpochSet, arg_latitude, find_epochs, with_details
 from ucbplan.core.forecast import tolerance, valid_window_s
 from ucbplan.core.smearing import parse_smear_budget
-from ucbplan.errors import UcbplanError
+from ucbplan.errors import ExposureWarning, SmearingWarning, UcbplanError, UcbplanWarning
 from ucbplan.observing.barycentric_time import DelayInterpolator, SiteTrack
 from ucbplan.observing.blocks import ExposurePlan, Smearing, block_smearing, check_smear_budget
 from ucbplan.observing.constraint_checks import DARK_STEP_S, evaluate_window
@@ -53,6 +53,8 @@ __all__ = [
 ]
 
 FloatArray = NDArray[np.float64]
+#: A warning line with the class of its cause.
+Warned = tuple[type[UcbplanWarning], str]
 
 #: Epochs are searched this far beyond the span [s]: the light time (≤ 510 s) moves the site
 #: arrival of an epoch just outside the span into it.
@@ -401,7 +403,7 @@ def _tolerance_and_validity(
     if sigma_v is None or k is None:
         raise UcbplanError(
             f"{target.name}: the tolerance needs sigma_v and K: add spectroscopy.sigma_v and "
-            "K_eff (or K1/K2) to the target file, or pass --sigma-v and --k-eff (km/s)"
+            "K_eff (or K1/K2) to the target file, or pass `sigma_v` and `k_eff` (km/s)"
         )
     u_star = mode.u_values[0] if mode.tol_kind == "generic" else None
     tol = tolerance(mode.tol_kind, sigma_v, k, settings.n_epochs, u_star)
@@ -429,13 +431,14 @@ def _smearing(
 
 def _target_run(
     target: Target, i: int, frame: PlanFrame, settings: PlanSettings
-) -> tuple[TargetRun, list[str]]:
+) -> tuple[TargetRun, list[Warned]]:
     te = target_exposure(target, settings)
     since, until, sigma_v, k = _tolerance_and_validity(
         target, frame.mode, settings, te.plan.exptime_s
     )
-    sm, warns = _smearing(target, settings, te.plan, sigma_v, k)
-    warns = [*te.notes, *warns]
+    sm, smeared = _smearing(target, settings, te.plan, sigma_v, k)
+    warns: list[Warned] = [(ExposureWarning, n) for n in te.notes]
+    warns += [(SmearingWarning, w) for w in smeared]
     cand = candidate_blocks(
         target,
         i,
@@ -465,7 +468,7 @@ def _target_run(
 
 def prepare_runs(
     targets: list[Target], site: Site, windows: list[NightWindow], settings: PlanSettings
-) -> tuple[PlanFrame, list[TargetRun], list[str]]:
+) -> tuple[PlanFrame, list[TargetRun], list[Warned]]:
     """The shared frame (one sky model and light-time track) and every target's run.
 
     Returns
@@ -473,8 +476,8 @@ def prepare_runs(
     frame : PlanFrame
     runs : list of TargetRun
         In the order of ``targets``.
-    warnings : list of str
-        Smearing warnings.
+    warnings : list of (category, str)
+        Exposure notes and smearing warnings, each with its class.
 
     Raises
     ------

@@ -67,7 +67,7 @@ class StrategyComparison:
         """Fewest hours to the goal, else the most information per hour."""
         ok = [r for r in self.rows if r.info_per_visit > 0]
         if not ok:
-            raise InputError(f"{self.target}: no strategy fits a visit; lengthen --visit")
+            raise InputError(f"{self.target}: no strategy fits a visit; lengthen `visit`")
         if self.goal is not None:
             return min(ok, key=lambda r: r.hours if r.hours is not None else math.inf)
         return max(ok, key=lambda r: r.info_per_hour)
@@ -121,7 +121,7 @@ def compare_target_strategies(target: Target, settings: PlanSettings) -> Strateg
     law = sigma_law(target, settings)
     if law is None:
         raise InputError(
-            "--sigma-v: expected the RV precision of one spectrum of a given length, e.g. "
+            "sigma_v: expected the RV precision of one spectrum of a given length, e.g. "
             "30km/s@600s, so that exposure times can be compared"
         )
     mag = law.target_mag(target.magnitudes, target.name)

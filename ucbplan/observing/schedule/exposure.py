@@ -177,10 +177,10 @@ def _capped(
             "lower --min-lambda-k or pass --allow-smeared"
         ]
     if settings.exptime_given or best is None:
-        fix = f"use --exptime <= {math.floor(best * 10) / 10:g} s" if best else "fewer --n-exp"
+        fix = f"use `exptime` <= {math.floor(best * 10) / 10:g} s" if best else "fewer `n_exp`"
         raise InputError(
-            f"--exptime: {target.name}: {plan.exptime_s:g} s gives Lambda_K = {lam:.3f} "
-            f"({period}), below --min-lambda-k {floor:g}; {fix}, or pass --allow-smeared"
+            f"exptime: {target.name}: {plan.exptime_s:g} s gives Lambda_K = {lam:.3f} "
+            f"({period}), below `min_lambda_k` {floor:g}; {fix}, or pass `allow_smeared`"
         )
     capped = replace(plan, exptime_s=math.floor(best * 1000) / 1000)
     note = (
@@ -206,8 +206,8 @@ def _phase_locked(target: Target, settings: PlanSettings, spacing: float) -> Exp
     exptime = math.floor((k * short - plan.readout_s) * 10) / 10
     if exptime <= 0:
         raise InputError(
-            f"--cadence phase-locked: {target.name}: no exposure fits between anchors "
-            f"{spacing:.1f} s apart with {plan.readout_s:g} s readout; use --cadence anchor"
+            f"cadence phase-locked: {target.name}: no exposure fits between anchors "
+            f"{spacing:.1f} s apart with {plan.readout_s:g} s readout; use `cadence` anchor"
         )
     return replace(plan, exptime_s=exptime)
 
@@ -243,11 +243,11 @@ def _check_visit(target: Target, settings: PlanSettings, plan: ExposurePlan) -> 
     visit = _visit_length(settings)
     cost = plan.exptime_s + plan.readout_s
     if visit is not None and settings.overhead_s + cost > visit:
-        option = "--visit" if settings.visit_s is not None else "--max-visit"
+        option = "visit" if settings.visit_s is not None else "max_visit"
         raise InputError(
             f"{option}: expected at least acquisition + one exposure + readout = "
             f"{(settings.overhead_s + cost) / 60:.1f} min, got {visit / 60:.1f} min; "
-            f"lengthen {option} or shorten the exposure"
+            f"lengthen `{option}` or shorten the exposure"
         )
 
 
@@ -328,7 +328,7 @@ def sigma_law(target: Target, settings: PlanSettings) -> SigmaVModel | None:
         ref.band,
         ref.mag,
         extinction_k=inst.extinction_k or 0.0,
-        option=f"--instrument {inst.name}",
+        option=f"instrument {inst.name}",
     )
 
 
@@ -375,7 +375,7 @@ def _forced(
     name = "targeted" if cadence == "anchor" else cadence
     pick = next(r for r in results if r.name == name)
     if not pick.possible:
-        raise InputError(f"--cadence {cadence}: {pick.note or 'no exposure fits'}; use another")
+        raise InputError(f"cadence {cadence}: {pick.note or 'no exposure fits'}; use another")
     return pick
 
 

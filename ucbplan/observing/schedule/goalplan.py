@@ -60,8 +60,8 @@ def _per_spectrum(run: TargetRun) -> float:
     value = float(np.nanmean(w)) if np.any(np.isfinite(w)) else math.nan
     if not math.isfinite(value) or value <= 0:
         raise InputError(
-            f"--goal: {run.target.name}: sigma_v is unknown; pass --sigma-v KM_S, or an "
-            "--instrument with sigma_ref and a magnitude in the target file"
+            f"goal: {run.target.name}: sigma_v is unknown; pass `sigma_v` KM_S, or an "
+            "`instrument` with sigma_ref and a magnitude in the target file"
         )
     return value
 
@@ -130,8 +130,8 @@ def goal_plans(runs: Sequence[TargetRun], settings: PlanSettings) -> dict[int, G
     goal = parse_goal(settings.goal)
     if not constrains_k(settings.spec.u_values):
         raise InputError(
-            f"--goal: the anchors of --mode {settings.spec.label} do not constrain K "
-            "(cos u = 0); use --mode quadrature"
+            f"goal: the anchors of `mode` {settings.spec.label} do not constrain K "
+            "(cos u = 0); use `mode` quadrature"
         )
     return {run.index: _goal_plan(goal, run, settings) for run in runs}
 

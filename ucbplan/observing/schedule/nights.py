@@ -56,9 +56,7 @@ def _parse_night(text: object) -> date:
             return date.fromisoformat(t)
     except ValueError:
         pass
-    raise InputError(
-        f"--night: expected the local evening date YYYY-MM-DD, got {shorten(text, 40)}"
-    )
+    raise InputError(f"night: expected the local evening date YYYY-MM-DD, got {shorten(text, 40)}")
 
 
 def night_dates(first: str | date, count: int = 1) -> list[date]:
@@ -70,13 +68,13 @@ def night_dates(first: str | date, count: int = 1) -> list[date]:
         For a malformed date, ``count`` outside 1..:data:`MAX_NIGHTS`, or nights outside
         :data:`NIGHT_RANGE`.
     """
-    check_int("--nights", count, 1, MAX_NIGHTS, "a year at most; plan longer runs in parts")
+    check_int("nights", count, 1, MAX_NIGHTS, "a year at most; plan longer runs in parts")
     start = first if isinstance(first, date) else _parse_night(first)
     lo, hi = NIGHT_RANGE
     if not (lo <= start <= hi and (hi - start).days >= count - 1):
         span = str(start) if count == 1 else f"{count} nights from {start}"
         raise InputError(
-            f"--night/--nights: expected nights from {lo} to {hi} (the built-in Earth ephemeris "
+            f"night/nights: expected nights from {lo} to {hi} (the built-in Earth ephemeris "
             f"of the light time is valid 1900-2100), got {span}"
         )
     return [start + timedelta(days=k) for k in range(count)]

@@ -89,8 +89,8 @@ def plan_settings(
     fixed, model = _sigma_v(sigma_v_kms, sigma_floor_kms, extinction_k, inst)
     if inst is not None and sigma_v_kms is None and inst.sigma_ref is None:
         raise InputError(
-            f"--instrument {inst.name}: the instrument table has no confirmed RV-precision "
-            "reference (sigma_ref); pass --sigma-v KM_S (sigma_v per exposure)"
+            f"instrument {inst.name}: the instrument table has no confirmed RV-precision "
+            "reference (sigma_ref); pass `sigma_v` KM_S (sigma_v per exposure)"
         )
     assumed = model is not None and inst is None and readout_s is None
     acq, readout = _overheads(inst, overhead_s, DEFAULT_LAW_READOUT_S if assumed else readout_s)
@@ -169,9 +169,9 @@ def _sigma_v(
     always was (with a floor in quadrature); a law is a :class:`SigmaVModel`."""
     if text is None:
         if floor_kms:
-            raise InputError("--sigma-floor: expected --sigma-v as well (a floor of what?)")
+            raise InputError("sigma_floor: expected `sigma_v` as well (a floor of what?)")
         if extinction_k is not None:
-            raise InputError("--extinction: expected --sigma-v 30km/s@600s as well")
+            raise InputError("extinction: expected `sigma_v` 30km/s@600s as well")
         return None, None
     k = extinction_k
     if k is None:
@@ -180,7 +180,7 @@ def _sigma_v(
     if not model.follows_exposure:
         if extinction_k is not None:
             raise InputError(
-                "--extinction: a fixed --sigma-v does not scale with airmass; give a reference "
+                "extinction: a fixed `sigma_v` does not scale with airmass; give a reference "
                 "exposure (30km/s@600s)"
             )
         return float(model.sigma(1.0)), None  # (σ_v² + σ_sys²)^½, fixed per exposure

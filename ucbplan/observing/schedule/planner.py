@@ -20,12 +20,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 from astropy.time import Time
 
-from ucbplan.errors import UcbplanError
+from ucbplan.errors import EarthOrientationWarning, UcbplanError, UcbplanWarning
 from ucbplan.observing.barycentric_time import coverage_warnings
 from ucbplan.observing.blockcolumns import BlockList
 from ucbplan.observing.blocks import MAX_BLOCK_S, Block
 from ucbplan.observing.goals import GoalPlan
-from ucbplan.observing.schedule.candidates import PlanFrame, TargetRun, prepare_runs
+from ucbplan.observing.schedule.candidates import PlanFrame, TargetRun, Warned, prepare_runs
 from ucbplan.observing.schedule.exposure import TargetExposure
 from ucbplan.observing.schedule.goalplan import balanced_runs, check_goals, goal_plans
 from ucbplan.observing.schedule.nights import NightSpan, NightWindow, night_spans, night_windows
@@ -56,7 +56,7 @@ class PlanResult:
     unplaced : list of Unplaced
         Target/nights with fewer sessions than asked, and why.
     warnings : list of str
-        Smearing and time-table coverage warnings.
+        Exposure, smearing and time-table coverage warnings.
     constraints : list of str
         One line per applied constraint (provenance).
     valid_until : dict of str to Time
@@ -68,6 +68,8 @@ class PlanResult:
     reasons : dict
         {target: {night: {reason: count}}}: night-time anchor epochs not planned, by reason
         (:mod:`.reasons`).
+    warning_categories : tuple of type
+        The class of each warning (its cause: :class:`~ucbplan.errors.SmearingWarning` …).
     """
 
     blocks: Sequence[Block]
@@ -78,6 +80,7 @@ class PlanResult:
     goals: dict[str, GoalPlan] = field(default_factory=dict)
     exposures: dict[str, TargetExposure] = field(default_factory=dict)
     reasons: dict[str, dict[str, dict[str, int]]] = field(default_factory=dict)
+    warning_categories: tuple[type[UcbplanWarning], ...] = ()
 
 
 def _check_inputs(targets: list[Target], nights: list[date], settings: PlanSettings) -> None:
@@ -85,7 +88,7 @@ def _check_inputs(targets: list[Target], nights: list[date], settings: PlanSetti
     if not targets:
         raise UcbplanError("no targets given; pass one or more target YAML files")
     if not nights:
-        raise UcbplanError("--nights must be >= 1")
+        raise UcbplanError("nights must be >= 1")
 
 
 def _second_epoch(site: Site, settings: PlanSettings) -> SecondEpoch:
@@ -241,7 +244,7 @@ def _schedule(
     runs: list[TargetRun],
     frame: PlanFrame,
     windows: list[NightWindow],
-    warns: list[str],
+    warns: list[Warned],
     site: Site,
     nights: list[date],
     settings: PlanSettings,
@@ -272,10 +275,12 @@ def _schedule(
         blocks = BlockList(records.columns.take(records.columns.time_order()))
     longer = _longer_visits(runs0, spans, frame, site, settings, busy_x) if goals else None
     check_goals(goals, runs, blocks, frame.mode.u_values, longer)
+    coverage = coverage_warnings(windows[0].start, windows[-1].end)
     return PlanResult(
         blocks=blocks,
         unplaced=unplaced,
-        warnings=warns + coverage_warnings(windows[0].start, windows[-1].end),
+        warnings=[w for _, w in warns] + coverage,
+        warning_categories=(*(c for c, _ in warns), *[EarthOrientationWarning] * len(coverage)),
         constraints=frame.constraints.describe(),
         valid_until={r.target.name: r.until for r in runs},
         goals={runs[i].target.name: g for i, g in goals.items()},

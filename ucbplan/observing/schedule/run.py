@@ -68,11 +68,11 @@ def parse_priorities(items: Sequence[str]) -> dict[str, float]:
             number = math.nan
         if not sep or not name.strip() or not math.isfinite(number):
             raise InputError(
-                "--priority: expected NAME=NUMBER (a target name and a finite number, e.g. "
+                "priority: expected NAME=NUMBER (a target name and a finite number, e.g. "
                 f"'HM Cnc=2'), got {shorten(item, 80)}"
             )
         values[name.strip().lower()] = check_range(
-            f"--priority {shorten(name.strip(), 40)}", number, -MAX_PRIORITY, MAX_PRIORITY
+            f"priority {shorten(name.strip(), 40)}", number, -MAX_PRIORITY, MAX_PRIORITY
         )
     return values
 
@@ -103,7 +103,7 @@ def with_priorities(
     if unknown:
         names = ", ".join(t.name for t in targets)
         names = names if len(names) <= 200 else f"{names[:199]}…"
-        raise InputError(f"--priority: no target named {shorten(unknown[0], 60)}; targets: {names}")
+        raise InputError(f"priority: no target named {shorten(unknown[0], 60)}; targets: {names}")
     return [replace(t, priority=values.get(t.name.lower(), t.priority)) for t in targets]
 
 
@@ -253,7 +253,7 @@ def _check_budget_names(targets: Sequence[Target], settings: PlanSettings) -> No
         if name not in known:
             names = ", ".join(t.name for t in targets)
             names = names if len(names) <= 200 else f"{names[:199]}…"
-            raise InputError(f"--budget: no target named {shorten(name, 60)}; targets: {names}")
+            raise InputError(f"budget: no target named {shorten(name, 60)}; targets: {names}")
 
 
 def plan_files(

@@ -81,7 +81,7 @@ _MAX_SMEAR_CHARS = 60
 
 
 def parse_duration(
-    text: str | float, option: str = "--visit", longest_s: float = MAX_BLOCK_S
+    text: str | float, option: str = "visit", longest_s: float = MAX_BLOCK_S
 ) -> float:
     """A duration such as ``1h``, ``45min``, ``3600s`` or ``1.5h`` → seconds.
 
@@ -115,7 +115,7 @@ def parse_budgets(items: object) -> tuple[tuple[str, float], ...]:
         For an item that is not ``NAME=DURATION``, or a name given twice.
     """
     if not isinstance(items, list | tuple):
-        raise InputError(f"--budget: expected NAME=DURATION items, got {shorten(items, 60)}")
+        raise InputError(f"budget: expected NAME=DURATION items, got {shorten(items, 60)}")
     out: dict[str, float] = {}
     for item in items:
         if isinstance(item, tuple) and len(item) == 2:
@@ -124,13 +124,13 @@ def parse_budgets(items: object) -> tuple[tuple[str, float], ...]:
             name, sep, text = str(item).rpartition("=")
             if not sep or not name.strip():
                 raise InputError(
-                    "--budget: expected NAME=DURATION (a target name and e.g. 2h or 90min), "
+                    "budget: expected NAME=DURATION (a target name and e.g. 2h or 90min), "
                     f"got {shorten(item, 80)}"
                 )
         key = name.strip().lower()
         if key in out:
-            raise InputError(f"--budget: target {shorten(name.strip(), 40)} is given twice")
-        out[key] = parse_duration(text, f"--budget {shorten(name.strip(), 40)}", MAX_BUDGET_S)
+            raise InputError(f"budget: target {shorten(name.strip(), 40)} is given twice")
+        out[key] = parse_duration(text, f"budget {shorten(name.strip(), 40)}", MAX_BUDGET_S)
     return tuple(out.items())
 
 
@@ -175,7 +175,7 @@ def _u_value(text: str) -> float | None:
     except ValueError:
         return None
     why = "argument of latitude; the anchor is taken modulo 2 pi"
-    return check_range("--mode u=VALUE", value, -MAX_ABS_U_RAD, MAX_ABS_U_RAD, "rad", why)
+    return check_range("mode u=VALUE", value, -MAX_ABS_U_RAD, MAX_ABS_U_RAD, "rad", why)
 
 
 def parse_mode(text: str) -> ModeSpec:
@@ -207,7 +207,7 @@ def parse_mode(text: str) -> ModeSpec:
     if value is not None:
         return ModeSpec(f"u={value:g}", value, (value,), "generic", False)
     raise InputError(
-        f"--mode: unknown mode {shorten(text, 60)}; expected quadrature, conjunction, "
+        f"mode: unknown mode {shorten(text, 60)}; expected quadrature, conjunction, "
         "zero-crossing, fixed-u-pairs, quadrature+conjunction or u=VALUE (radians, e.g. u=0.785)"
     )
 
@@ -354,13 +354,13 @@ class PlanSettings:
             parse_duration(self.visit_s)
             if self.spec.label == "fixed-u-pairs":
                 raise InputError(
-                    "--visit: fixed-u pairs are single blocks at two epochs; drop --visit or "
-                    "use --mode quadrature"
+                    "visit: fixed-u pairs are single blocks at two epochs; drop `visit` or "
+                    "use `mode` quadrature"
                 )
             if self.exposure.n_exp != 1:
                 raise InputError(
-                    f"--n-exp: expected 1 with --visit (each exposure of a visit is centred on "
-                    f"its own anchor), got {self.exposure.n_exp}; drop --n-exp"
+                    f"n_exp: expected 1 with `visit` (each exposure of a visit is centred on "
+                    f"its own anchor), got {self.exposure.n_exp}; drop `n_exp`"
                 )
         parse_duration(self.max_visit_s, "max_visit_s")
         if self.cadence not in CADENCES:
@@ -370,18 +370,18 @@ class PlanSettings:
         if self.cadence in ("phase-locked", "untargeted"):
             if self.visit_s is None and self.goal is None:
                 raise InputError(
-                    f"--cadence {self.cadence}: expected --visit DURATION (or --goal) as well"
+                    f"cadence {self.cadence}: expected `visit` DURATION (or `goal`) as well"
                 )
             if self.spec.label == "fixed-u-pairs":
                 raise InputError(
-                    f"--cadence {self.cadence}: fixed-u pairs are single blocks; drop --cadence"
+                    f"cadence {self.cadence}: fixed-u pairs are single blocks; drop `cadence`"
                 )
         self._check_service_mode()
         if self.cadence == "phase-locked":
             if self.exptime_given:
                 raise InputError(
-                    "--cadence phase-locked sets exposure + readout to the anchor spacing; "
-                    "drop --exptime (or use --cadence anchor)"
+                    "cadence phase-locked sets exposure + readout to the anchor spacing; "
+                    "drop `exptime` (or use `cadence` anchor)"
                 )
         why = "smallest smearing factor of an exposure: 0 = none, 1 = no smearing at all"
         if self.min_lambda_k is not None:
@@ -390,7 +390,7 @@ class PlanSettings:
         if self.goal is not None:
             parse_goal(self.goal)
             if self.spec.label == "fixed-u-pairs":
-                raise InputError("--goal: fixed-u pairs plan two blocks each; drop --goal")
+                raise InputError("goal: fixed-u pairs plan two blocks each; drop `goal`")
 
     def _check_service_mode(self) -> None:
         """``--service-mode``: visits (or a goal's), and no cadence that waits."""
