@@ -296,8 +296,8 @@ def test_targeted_visit_is_one_note_with_the_back_to_back_cost(to: str) -> None:
     assert len(notes) == 1 and "\n" not in notes[0]
     share = _strategy_share(table, "untargeted")
     assert f"untargeted 27 x 73 s, {share} of the best info/h" in notes[0]
-    assert "--service-mode" in notes[0] and "visitor mode" in notes[0]
-    with pytest.raises(ServiceModeError, match="--strict: no file written"):
+    assert "`service_mode`" in notes[0] and "visitor mode" in notes[0]  # CLI: --service-mode
+    with pytest.raises(ServiceModeError, match="`strict`: no file written"):
         export_blocks(table, to, ExportOptions(force=True, strict=True))
 
 
@@ -318,7 +318,7 @@ def test_service_mode_plans_only_back_to_back_visits() -> None:
 
 
 def test_service_mode_refuses_a_cadence_that_waits() -> None:
-    with pytest.raises(ucbplan.InputError, match="--service-mode: --cadence targeted waits"):
+    with pytest.raises(ucbplan.InputError, match="service_mode: `cadence=targeted` waits"):
         ucbplan.plan(HM, "paranal", "2040-02-15", cadence="targeted", service_mode=True, **XSH)
 
 
@@ -416,7 +416,7 @@ def test_lco_group_name_is_cut_with_a_note() -> None:
 @pytest.mark.parametrize(
     ("options", "message"),
     [
-        ({"sigma_v_kms": 30.0}, "--service-mode: expected --visit DURATION"),
+        ({"sigma_v_kms": 30.0}, "service_mode: expected `visit=DURATION`"),
         (
             {"visit": "1h", "readout_s": 10.0, "cadence": "phase-locked"},
             "phase-locked 80.5 s exposures .* wait 70.2 s after each readout",

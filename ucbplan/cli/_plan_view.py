@@ -10,6 +10,7 @@ from rich.markup import escape
 
 from ucbplan.api import terminal
 from ucbplan.cli._console import err_console, rich_table
+from ucbplan.cli._flags import cli_message
 from ucbplan.errors import UcbplanError
 
 if TYPE_CHECKING:
@@ -142,7 +143,7 @@ def report(run: Any, wide: bool = False, verbose: bool = False) -> None:
         if t.covariance_source.startswith("samples"):
             err_console.print(f"{t.name}: covariance from the {t.covariance_source}", markup=False)
     for w in run.result.warnings:
-        err_console.print(f"[yellow]warning:[/] {escape(w)}", soft_wrap=True)
+        err_console.print(f"[yellow]warning:[/] {escape(cli_message(w))}", soft_wrap=True)
     failure = run.failure()
     if failure is not None:  # the error line says what was not placed, once
         raise UcbplanError(failure)

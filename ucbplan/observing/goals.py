@@ -424,7 +424,7 @@ def check_goal_spectra(goal_text: str, n_spectra: float) -> None:
     over :data:`MAX_SPECTRA` spectra, or infinitely many, is a typo (InputError, one line)."""
     if not n_spectra <= MAX_SPECTRA:  # nan and inf too
         raise InputError(
-            f"--goal {goal_text}: would need more than {MAX_SPECTRA} spectra; relax the goal"
+            f"goal {goal_text}: would need more than {MAX_SPECTRA} spectra; relax the goal"
         )
 
 

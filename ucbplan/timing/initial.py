@@ -107,7 +107,7 @@ def parse_period(value: Any, what: str = "period") -> tuple[float, float]:
     return period, float(_last_digit(num)) * _UNITS_S[unit]
 
 
-def period_guess(value: str, what: str = "--period") -> PeriodGuess:
+def period_guess(value: str, what: str = "period") -> PeriodGuess:
     """A :class:`PeriodGuess` from a ``--period`` text (errors name ``what``)."""
     p, sp = parse_period(value, what)
     return PeriodGuess(period_s=p, sigma_period_s=sp, origin="--period")

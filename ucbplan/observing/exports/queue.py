@@ -109,9 +109,9 @@ def queue_note(
         f"{fmt}: {len(waiting)} of {len(units)} visits ({shorten(first.unit_id, 40)}) wait up "
         f"to {first.max_wait_s:.0f} s ({first.drift_s:.0f} s in all) between exposures for their "
         "phases; a service-mode queue "
-        "runs them back to back. Queue-executable: `ucbplan plan --service-mode` "
+        "runs them back to back. Queue-executable: re-planned with `service_mode` "
         f"({alternatives(table, first.target)}), or visitor mode"
     )
     if options.strict:
-        raise ServiceModeError(f"{text} (--strict: no file written)")
+        raise ServiceModeError(f"{text} (`strict`: no file written)")
     return [text]

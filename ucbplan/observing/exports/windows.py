@@ -11,7 +11,7 @@ from ucbplan.observing.exports.interface import ExportOptions
 #: fixes the orbital phase (docs/exports.md).
 ROUNDING_REMEDY = (
     "plan exposures covering the window and select in `reduce`, or re-plan back to back with "
-    "`ucbplan plan --service-mode` (no start phase to keep)"
+    "`service_mode` (no start phase to keep)"
 )
 
 # Time window on the OB start (ESO p2, LCO)

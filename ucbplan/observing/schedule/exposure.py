@@ -225,9 +225,9 @@ def _check_queue_wait(
     """
     if settings.service_mode and wait_s > QUEUE_WAIT_S:
         raise InputError(
-            f"--service-mode: {target.name}: phase-locked {plan.exptime_s:.1f} s exposures "
+            f"service_mode: {target.name}: phase-locked {plan.exptime_s:.1f} s exposures "
             f"(capped for Lambda_K) wait {wait_s:.1f} s after each readout, which a queue "
-            "cannot; use --cadence untargeted (or auto), or pass --allow-smeared"
+            "cannot; use `cadence=untargeted` (or auto), or pass `allow_smeared`"
         )
 
 

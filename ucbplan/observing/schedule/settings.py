@@ -398,13 +398,13 @@ class PlanSettings:
             return
         if self.cadence in ("targeted", "anchor"):
             raise InputError(
-                f"--service-mode: --cadence {self.cadence} waits between exposures for their "
-                "phases, which a service-mode queue cannot; use --cadence phase-locked, "
+                f"service_mode: `cadence={self.cadence}` waits between exposures for their "
+                "phases, which a service-mode queue cannot; use `cadence=phase-locked`, "
                 "untargeted or auto"
             )
         if self.visit_s is None and self.goal is None:
             raise InputError(
-                "--service-mode: expected --visit DURATION (or --goal): a queue executes one "
+                "service_mode: expected `visit=DURATION` (or `goal`): a queue executes one "
                 "acquisition, then exposures back to back"
             )
 
