@@ -373,7 +373,7 @@ def optimised_exposure(target: Target, settings: PlanSettings) -> TargetExposure
     mag = law.target_mag(target.magnitudes, target.name)
 
     def sigma(t: NDArray[np.float64]) -> NDArray[np.float64]:
-        return law.sigma(t, 1.0, mag)
+        return law.sigma(t, 1.0, mag) * settings.sigma_v_scale
 
     visit = _visit_length(settings)
     shortest = replace(
@@ -410,7 +410,8 @@ def exposure_sigma_v(
     target: Target, settings: PlanSettings, exptime_s: float, airmass: ArrayLike
 ) -> NDArray[np.float64]:
     """σ_v per exposure [km/s]: the exposure-time law (:func:`sigma_law`), else ``--sigma-v``,
-    else the instrument's scaling, else the target file's σ_v (NaN if none of them is known).
+    else the instrument's scaling, else the target file's σ_v (NaN if none of them is known),
+    times ``settings.sigma_v_scale``.
 
     Raises
     ------
@@ -418,6 +419,13 @@ def exposure_sigma_v(
         An instrument without σ_ref (pass --sigma-v), or a target without a magnitude in its
         band.
     """
+    return _law_sigma_v(target, settings, exptime_s, airmass) * settings.sigma_v_scale
+
+
+def _law_sigma_v(
+    target: Target, settings: PlanSettings, exptime_s: float, airmass: ArrayLike
+) -> NDArray[np.float64]:
+    """:func:`exposure_sigma_v` before ``settings.sigma_v_scale``."""
     x = np.asarray(airmass, dtype=np.float64)
     law = sigma_law(target, settings)
     if law is not None and settings.sigma_model is not None:
