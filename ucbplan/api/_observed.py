@@ -49,7 +49,7 @@ def observed_settings(
 
     given = _scale(scale)
     if path is None:
-        return dataclasses.replace(settings, sigma_v_scale=given or 1.0)
+        return dataclasses.replace(settings, sigma_v_scale=1.0 if given is None else given)
     if settings.goal is None:
         raise InputError(
             "observed: the spectra already taken count toward a goal; give goal "
