@@ -26,8 +26,6 @@ from ucbplan.core.phase import arg_latitude
 from ucbplan.errors import InputError, UcbplanError
 from ucbplan.observing.observed import (
     ObservedSpectra,
-    fisher_matrix,
-    k_information,
     observed_information,
     sigma_v_ratio,
 )
@@ -103,12 +101,16 @@ def test_information_of_random_spectra_equals_brute_force_fisher() -> None:
     assert got == pytest.approx(_brute_force_info(tau, exptime, sigma), rel=1e-12)
 
 
-def test_k_information_of_a_degenerate_or_empty_set_is_zero() -> None:
-    assert k_information(fisher_matrix([], [], [])) == 0.0
-    # one phase only: γ and K cannot be told apart
-    assert k_information(fisher_matrix([0.3, 0.3], [0.9, 0.9], [5.0, 5.0])) == pytest.approx(
-        0.0, abs=1e-15
+def test_a_degenerate_or_empty_set_collects_nothing() -> None:
+    target = load_target(TARGET)
+    empty = np.zeros(0)
+    assert (
+        observed_information(ObservedSpectra(NAME, empty, empty, empty, empty), target.params) == 0
     )
+    # all spectra at one phase: γ and K cannot be told apart
+    tau = np.full(3, 1.0e6)
+    one = ObservedSpectra(NAME, tau, np.full(3, 0.9), np.full(3, 5.0), tau * np.nan)
+    assert observed_information(one, target.params) == 0.0
 
 
 def test_sigma_v_ratio_is_the_median_of_measured_over_predicted() -> None:
@@ -215,6 +217,8 @@ def _bad(first_night: Path, tmp_path: Path, kind: str) -> Path:
     if kind == "validity":
         late = "2099-06-01T00:00:00.000"
         return _with_status(first_night, path, t_mid_tdb_bary=lambda c: [late] * len(c))
+    if kind == "sigma":
+        return _with_status(first_night, path, sigma_v_kms=lambda c: np.where(c > 0, np.nan, c))
     if kind == "nostatus":
         Table.read(first_night, format="ascii.ecsv").write(path, format="ascii.ecsv")
         return path
@@ -232,6 +236,7 @@ def _bad(first_night: Path, tmp_path: Path, kind: str) -> Path:
         ("status", "row 14, column status: expected one of taken, missed, skipped, got 'done'"),
         ("validity", "outside the validity"),
         ("nostatus", "expected a status column"),
+        ("sigma", "row 1, column sigma_v_kms: expected the measured σ_v"),
     ],
 )
 def test_bad_observed_file_is_one_line_exit_2_nothing_written(

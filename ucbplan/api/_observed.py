@@ -236,6 +236,14 @@ def _target_rows(
     exptime = column("exptime_s")
     predicted = _predicted(target, settings, exptime, column("airmass"))
     sigma = column("sigma_v_kms")
+    bad = np.flatnonzero(~(sigma > 0))
+    if bad.size:
+        row = int(np.flatnonzero(rows)[bad[0]]) + 1
+        raise InputError(
+            f"observed {path}: row {row}, column sigma_v_kms: expected the measured σ_v of the "
+            f"spectrum taken (km/s, > 0), got {sigma[bad[0]]:g}; fill it in",
+            parameter="observed",
+        )
     return ObservedSpectra(target.name, tau, column("lambda_k"), sigma, predicted, str(path))
 
 

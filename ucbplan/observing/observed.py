@@ -8,7 +8,8 @@ smearing factor Λ_K = sin x/x, x = n̄_b T/2 (Eq. Lambda_K). The spectra's (γ,
     F = Σ_i (1, Λ_K,i cos u_i)ᵀ (1, Λ_K,i cos u_i) / σ_v,i²,
 
 and the information on K with γ free is its Schur complement I = F_KK − F_γK²/F_γγ, so that
-σ_K = I^{-½} = √[(F⁻¹)_KK]. A goal plan that needs the information I_goal
+σ_K = I^{-½} = √[(F⁻¹)_KK] (:func:`ucbplan.observing.strategy.sigma_k_from_rows`; 0 when the
+spectra do not separate γ and K). A goal plan that needs the information I_goal
 (:func:`ucbplan.observing.goals.goal_info_needed`) then adds only I_goal − I: the Schur complement
 of a sum is at least the sum of the Schur complements, so the observed and the planned spectra
 together reach the goal (exactly so when either set is balanced, Σ Λ cos u / σ² = 0).
@@ -30,12 +31,11 @@ from numpy.typing import ArrayLike, NDArray
 from ucbplan.core.params import PhaseParams
 from ucbplan.core.phase import arg_latitude
 from ucbplan.core.smearing import lambda_k as smearing_factor
+from ucbplan.observing.strategy import sigma_k_from_rows
 
 __all__ = [
     "SIGMA_V_RATIO_TOL",
     "ObservedSpectra",
-    "fisher_matrix",
-    "k_information",
     "observed_information",
     "sigma_v_ratio",
     "spectra_u",
@@ -83,23 +83,6 @@ class ObservedSpectra:
         return int(self.tau_s.size)
 
 
-def fisher_matrix(u_rad: ArrayLike, lambda_k: ArrayLike, sigma_v_kms: ArrayLike) -> F64:
-    """The (γ, K) Fisher matrix of spectra at ``u_rad`` with ``lambda_k`` and σ_v [km/s]:
-    Σ_i g_iᵀ g_i / σ_i², g_i = (1, Λ_K,i cos u_i) (module notes) [(km/s)⁻²]."""
-    g = np.asarray(lambda_k, dtype=np.float64) * np.cos(np.asarray(u_rad, dtype=np.float64))
-    w = 1.0 / np.asarray(sigma_v_kms, dtype=np.float64) ** 2
-    s0, s1, s2 = float(np.sum(w)), float(np.sum(w * g)), float(np.sum(w * g * g))
-    return np.array([[s0, s1], [s1, s2]])
-
-
-def k_information(fisher: ArrayLike) -> float:
-    """Information on K with γ free, F_KK − F_γK²/F_γγ [(km/s)⁻²] (0 without spectra)."""
-    f = np.asarray(fisher, dtype=np.float64)
-    if not f[0, 0] > 0:
-        return 0.0
-    return max(0.0, float(f[1, 1] - f[0, 1] ** 2 / f[0, 0]))
-
-
 def spectra_u(params: PhaseParams, tau_s: ArrayLike, star: int = 1) -> F64:
     """Argument of latitude of each spectrum at its mid-exposure epoch ``tau_s`` [rad]."""
     return np.asarray(arg_latitude(params, tau_s, star), dtype=np.float64)
@@ -113,7 +96,8 @@ def window_lambda_k(window_s: ArrayLike, n_bar: float) -> F64:
 def observed_information(spectra: ObservedSpectra, params: PhaseParams, star: int = 1) -> float:
     """Information on K [(km/s)⁻²] the ``spectra`` collect (γ free), each at its own u."""
     u = spectra_u(params, spectra.tau_s, star)
-    return k_information(fisher_matrix(u, spectra.lambda_k, spectra.sigma_v_kms))
+    sigma_k = sigma_k_from_rows(spectra.lambda_k, u, spectra.sigma_v_kms)
+    return sigma_k**-2 if math.isfinite(sigma_k) else 0.0
 
 
 def sigma_v_ratio(measured_kms: ArrayLike, predicted_kms: ArrayLike) -> float:
