@@ -206,6 +206,10 @@ def test_sigma_v_worse_than_the_law_is_detected_and_rescales_it(
     assert result.exit_code == 0, result.output
     note = [ln for ln in result.output.splitlines() if ln.startswith("observed:")]
     assert len(note) == 1 and "= 1.3 over 14 spectra" in note[0] and "× 1.3" in note[0]
+    # per target: collected so far, still needed, then the plan for the rest
+    lines = [ln for ln in result.output.splitlines() if ln.startswith("goal σ(K) ≤ 13 km/s")]
+    assert len(lines) == 2 and "collected so far σ_K = " in lines[0]
+    assert "from the 14 spectra taken; still needed" in lines[0] and "spectra in" in lines[1]
 
 
 def _bad(first_night: Path, tmp_path: Path, kind: str) -> Path:

@@ -23,6 +23,7 @@ Velocities in km/s, times in seconds, angles in radians (plain floats and numpy 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -36,9 +37,11 @@ from ucbplan.observing.strategy import sigma_k_from_rows
 __all__ = [
     "SIGMA_V_RATIO_TOL",
     "ObservedSpectra",
+    "collected_information",
     "observed_information",
     "sigma_v_ratio",
     "spectra_u",
+    "target_spectra",
     "window_lambda_k",
 ]
 
@@ -98,6 +101,20 @@ def observed_information(spectra: ObservedSpectra, params: PhaseParams, star: in
     u = spectra_u(params, spectra.tau_s, star)
     sigma_k = sigma_k_from_rows(spectra.lambda_k, u, spectra.sigma_v_kms)
     return sigma_k**-2 if math.isfinite(sigma_k) else 0.0
+
+
+def collected_information(
+    observed: Sequence[ObservedSpectra], name: str, params: PhaseParams, star: int = 1
+) -> float:
+    """Information on K [(km/s)⁻²] the spectra of target ``name`` among ``observed`` collect
+    (0 when none was taken)."""
+    spectra = target_spectra(observed, name)
+    return observed_information(spectra, params, star) if spectra is not None else 0.0
+
+
+def target_spectra(observed: Sequence[ObservedSpectra], name: str) -> ObservedSpectra | None:
+    """The spectra of target ``name`` among ``observed`` (None when it has none)."""
+    return next((s for s in observed if s.target == name and s.n > 0), None)
 
 
 def sigma_v_ratio(measured_kms: ArrayLike, predicted_kms: ArrayLike) -> float:

@@ -38,6 +38,7 @@ from ucbplan.errors import InputError
 from ucbplan.observing.blocks import ExposurePlan
 from ucbplan.observing.goals import goal_info_needed, parse_goal
 from ucbplan.observing.instruments import instrument_magnitude, sigma_v_kms
+from ucbplan.observing.observed import collected_information
 from ucbplan.observing.schedule.settings import PlanSettings
 from ucbplan.observing.sigma_model import SigmaVModel
 from ucbplan.observing.strategy import (
@@ -353,6 +354,9 @@ def _strategy_results(
     if settings.goal is None:
         return tuple(compare_strategies(shape, sigma)), ()
     need = goal_info_needed(parse_goal(settings.goal), target)
+    # the spectra already taken (--observed) leave less to collect: the hours are the rest's
+    taken = collected_information(settings.observed, target.name, target.params, settings.star)
+    need = max(0.0, need - taken)
     times = [goal_time(need, shape, sigma, name) for name in STRATEGIES]
     return tuple(g.strategy for g in times), tuple(g.hours for g in times)
 

@@ -35,7 +35,7 @@ from ucbplan.observing.goals import (
     parse_goal,
     target_k,
 )
-from ucbplan.observing.observed import observed_information
+from ucbplan.observing.observed import observed_information, target_spectra
 from ucbplan.observing.schedule.candidates import TargetRun
 from ucbplan.observing.schedule.placement import INFO_RTOL
 from ucbplan.observing.schedule.settings import PlanSettings
@@ -85,8 +85,8 @@ def _collected(run: TargetRun, settings: PlanSettings) -> tuple[float, int]:
     InputError
         A spectrum outside the validity window of the target's ephemeris.
     """
-    spectra = next((s for s in settings.observed if s.target == run.target.name), None)
-    if spectra is None or spectra.n == 0:
+    spectra = target_spectra(settings.observed, run.target.name)
+    if spectra is None:
         return 0.0, 0
     t_ref = run.target.t_ref
     lo, hi = ((t - t_ref).to_value("s") for t in (run.since, run.until))
