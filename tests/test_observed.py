@@ -223,6 +223,11 @@ def _bad(first_night: Path, tmp_path: Path, kind: str) -> Path:
         return _with_status(first_night, path, t_mid_tdb_bary=lambda c: [late] * len(c))
     if kind == "sigma":
         return _with_status(first_night, path, sigma_v_kms=lambda c: np.where(c > 0, np.nan, c))
+    if kind == "rv-validity":
+        path = tmp_path / "late.csv"
+        rows = [f"{2472730.5 + k / 24!r},65.0,0.0,30.0" for k in range(4)]  # in 2058
+        path.write_text("bjd_tdb,exptime_s,v,sigma_v\n" + "\n".join(rows) + "\n", "utf-8")
+        return path
     if kind == "nostatus":
         Table.read(first_night, format="ascii.ecsv").write(path, format="ascii.ecsv")
         return path
@@ -240,6 +245,7 @@ def _bad(first_night: Path, tmp_path: Path, kind: str) -> Path:
         ("status", "row 14, column status: expected one of taken, missed, skipped, got 'done'"),
         ("validity", "outside the validity"),
         ("nostatus", "expected a status column"),
+        ("rv-validity", "outside the validity"),
         ("sigma", "row 1, column sigma_v_kms: expected the measured σ_v"),
     ],
 )
