@@ -92,7 +92,7 @@ def _is_blocks(path: Path) -> bool:
     from ucbplan.inputs import read_text
 
     try:
-        text = read_text(path, "observed spectra")
+        text = read_text(path, "spectra file")
     except InputError as exc:
         raise InputError(f"observed: {exc}", parameter="observed") from None
     head = text.lstrip()

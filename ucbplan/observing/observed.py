@@ -52,9 +52,10 @@ F64 = NDArray[np.float64]
 SIGMA_V_RATIO_TOL = 0.05
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class ObservedSpectra:
-    """The spectra of one target already taken.
+    """The spectra of one target already taken (compared by identity: the settings that hold
+    them stay hashable).
 
     Attributes
     ----------
