@@ -83,6 +83,7 @@ def default_constraints(
         return _defaults(get_site(site) if site is not None else None, **limits)
 
 
+@accept_old_names
 def plan(
     targets: TargetLike | Sequence[TargetLike],
     site: Any,
