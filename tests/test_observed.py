@@ -154,6 +154,19 @@ def test_velocities_file_gives_the_information_of_the_blocks_table(
     assert a == pytest.approx(b, rel=1e-6)  # bjd as a float JD: ~20 µs, far below an orbit
 
 
+def test_csv_blocks_table_counts_like_the_ecsv(first_night: Path, tmp_path: Path) -> None:
+    status = ["taken", "taken", "missed"] * 4 + ["taken", "skipped"]
+    ecsv = _with_status(first_night, tmp_path / "obs.ecsv", status=status)
+    csv = tmp_path / "obs.csv"
+    Table.read(ecsv, format="ascii.ecsv").write(csv, format="ascii.csv")
+    a, b = (
+        _plan("2040-02-16", 2, goal="sigma_K=13km/s", observed=f).run.result.goals[NAME]
+        for f in (ecsv, csv)
+    )
+    assert a.collected_spectra == b.collected_spectra == 9  # only the taken rows
+    assert a.collected_info > 0 and a.collected_info == pytest.approx(b.collected_info, rel=1e-12)
+
+
 def test_goal_already_reached_plans_nothing_and_says_so(first_night: Path, tmp_path: Path) -> None:
     obs = _with_status(first_night, tmp_path / "obs.ecsv")
     out = tmp_path / "rest.ecsv"
