@@ -133,6 +133,16 @@ PLAN_FLAGS: dict[str, Flag] = {
     "goal": Flag(
         ("--goal",), "Precision goal (sigma_K=2km/s, K1=1%, q=1%): plan the spectra it needs."
     ),
+    "observed": Flag(
+        ("--observed",),
+        "Spectra already taken: a velocities file (epochs, exposure times, measured σ_v) or a "
+        "blocks table with a status column (taken | missed | skipped); the goal plans the rest.",
+    ),
+    "sigma_v_scale": Flag(
+        ("--sigma-v-scale",),
+        "Factor on the σ_v law (default: the measured/predicted σ_v of --observed when it "
+        "differs by more than 5 %; 1 keeps the law).",
+    ),
     "min_lambda_k": Flag(
         ("--min-lambda-k",),
         "Smallest smearing factor Λ_K of an exposure (default 0.9 with --visit).",

@@ -116,6 +116,8 @@ def plan(
     instrument: str | None = None,
     instruments_file: str | Path | None = None,
     goal: str | None = None,
+    observed: str | Path | None = None,
+    sigma_v_scale: float | None = None,
     min_lambda_k: float | None = None,
     allow_smeared: bool = False,
     budgets: Mapping[str, Any] | Sequence[str] | None = None,
@@ -192,6 +194,15 @@ def plan(
         Spectrograph (its overheads and σ reference); a YAML table searched first.
     goal : str, optional
         Precision goal (``sigma_K=2km/s``, ``K1=1%``, ``q=1%``): plans the spectra it needs.
+    observed : str or path, optional
+        Spectra already taken, counted toward ``goal``: a velocities file as :func:`reduce`
+        takes it (the one target planned; epochs, exposure times and measured σ_v), or a blocks
+        table from ``plan -o`` with a ``status`` column (``taken``, ``missed``, ``skipped``;
+        only ``taken`` rows count, their ``sigma_v_kms`` as measured). The goal plans only the
+        information still missing.
+    sigma_v_scale : float, optional
+        Factor on every σ_v of the law (None: the median measured / predicted σ_v of
+        ``observed`` when it differs from 1 by more than 5 %, else 1; ``1`` keeps the law).
     min_lambda_k : float, optional
         Smallest smearing factor Λ_K of an exposure (None: 0.9).
     allow_smeared : bool
@@ -230,6 +241,7 @@ def plan(
 def plan_run(o: dict[str, Any]) -> PlanRun:
     """The planner's run of :func:`plan`'s arguments ``o`` by name: every option checked first
     (cheap, one line each), then the site, then the files, then the work."""
+    from ucbplan.api._observed import observed_settings
     from ucbplan.observing.schedule import night_dates
     from ucbplan.observing.schedule.run import parse_priorities, plan_targets
 
@@ -241,6 +253,8 @@ def plan_run(o: dict[str, Any]) -> PlanRun:
             parse_priorities(priorities)
         where = _site(o)
         loaded = _load_all(o["targets"])
+        if o["observed"] is not None or o["sigma_v_scale"] is not None:
+            settings = observed_settings(o["observed"], o["sigma_v_scale"], loaded, where, settings)
         return plan_targets(loaded, where, dates, settings, priorities)
 
 

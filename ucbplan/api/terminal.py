@@ -23,6 +23,8 @@ plan_exposures, what_next, countdown_lines, parse_utc
     The ``now`` countdown.
 chart_format, sheet_format, night_charts, night_sheet
     The suffix checks of the night charts and the night sheet, and writing them for a plan.
+sigma_v_note
+    The measured σ_v of ``--observed`` spectra against the law (the ``plan`` view).
 """
 
 from __future__ import annotations
@@ -34,6 +36,7 @@ from typing import TYPE_CHECKING, Any
 from ucbplan.io import check_output_path, dump_json, output_format, write_output
 
 if TYPE_CHECKING:  # imported when first used (see _LAZY)
+    from ucbplan.api._observed import sigma_v_note
     from ucbplan.observing.blockcolumns import block_columns
     from ucbplan.observing.countdown import (
         countdown_lines,
@@ -64,6 +67,7 @@ __all__ = [
     "parse_utc",
     "plan_exposures",
     "sheet_format",
+    "sigma_v_note",
     "what_next",
     "write_output",
     "write_table",
@@ -83,6 +87,7 @@ _LAZY = {
     "sheet_format": "ucbplan.observing.nightsheet",
     "write_table": "ucbplan.observing.tablewrite",
     "csv_safe_table": "ucbplan.observing.tablewrite",
+    "sigma_v_note": "ucbplan.api._observed",
 }
 
 

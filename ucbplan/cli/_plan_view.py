@@ -251,7 +251,12 @@ def _print_goals(run: Any, account: PlanAccount) -> None:
     targets, u_stars, n_exps = terminal.block_columns(run.result.blocks).lists(
         "target", "u_star_rad", "n_exp"
     )
+    _print_sigma_v_ratio(run)
     for name, goal in run.result.goals.items():
+        if goal.collected_spectra:
+            _print_collected(name, goal)
+        if goal.collected_spectra and not goal.n_spectra:
+            continue
         at: dict[float, int] = {}
         for target, u_star, n_exp in zip(targets, u_stars, n_exps, strict=True):
             if target == name:
@@ -268,6 +273,35 @@ def _print_goals(run: Any, account: PlanAccount) -> None:
             f"({split}), expected {escape(_expected(goal))}",
             soft_wrap=True,
         )
+
+
+def _print_collected(name: str, goal: Any) -> None:
+    """What the spectra already taken give a goal's target, and what is still needed (or, in
+    one line, that they reach the goal)."""
+    head = f"goal {escape(goal.goal.describe())}: {escape(name)}:"
+    taken = f"{goal.collected_spectra} spectra taken"
+    got = f"σ_K = {goal.collected_info**-0.5:.3g} km/s"
+    if not goal.n_spectra:
+        err_console.print(
+            f"{head} already reached by the {taken} ({got}, expected "
+            f"{escape(_expected(goal))}): no visits planned",
+            soft_wrap=True,
+        )
+        return
+    err_console.print(
+        f"{head} collected so far {got} from the {taken}; still needed "
+        f"{goal.info_needed:.4g} (km/s)^-2 of information on K (σ_K = "
+        f"{goal.info_needed**-0.5:.3g} km/s alone); the plan below adds it",
+        soft_wrap=True,
+    )
+
+
+def _print_sigma_v_ratio(run: Any) -> None:
+    """One line: the measured σ_v of the spectra taken against the law's, and the factor the
+    remainder is planned with."""
+    note = terminal.sigma_v_note(run.settings)
+    if note is not None:
+        err_console.print(f"observed: {escape(note)}", soft_wrap=True)
 
 
 def _print_strategies(run: Any) -> None:

@@ -131,6 +131,8 @@ def plan(
     instrument: str | None = option(api.plan, PLAN_FLAGS, "instrument"),
     instruments_file: Path | None = option(api.plan, PLAN_FLAGS, "instruments_file"),
     goal: str | None = option(api.plan, PLAN_FLAGS, "goal"),
+    observed: Path | None = option(api.plan, PLAN_FLAGS, "observed"),
+    sigma_v_scale: float | None = option(api.plan, PLAN_FLAGS, "sigma_v_scale"),
     min_lambda_k: float | None = option(api.plan, PLAN_FLAGS, "min_lambda_k"),
     allow_smeared: bool = option(api.plan, PLAN_FLAGS, "allow_smeared"),
     budgets: list[str] = option(api.plan, PLAN_FLAGS, "budgets"),

@@ -118,7 +118,9 @@ class TimeBudget:
 
 @dataclass(frozen=True)
 class GoalPlan:
-    """Spectra needed for a goal, their split over anchors, the σ reached, and the time."""
+    """Spectra needed for a goal, their split over anchors, the σ reached, and the time (with
+    spectra already taken: ``info_needed`` is what they still miss, ``collected_info`` what they
+    give [(km/s)⁻²], and ``expected`` counts both)."""
 
     goal: Goal
     n_spectra: int
@@ -130,6 +132,8 @@ class GoalPlan:
     cycles: int = 1
     info_needed: float | None = None
     visit_s: float | None = None
+    collected_info: float = 0.0
+    collected_spectra: int = 0
 
 
 @dataclass(frozen=True)

@@ -38,6 +38,7 @@ from ucbplan.errors import InputError
 from ucbplan.observing.blocks import ExposurePlan
 from ucbplan.observing.goals import goal_info_needed, parse_goal
 from ucbplan.observing.instruments import instrument_magnitude, sigma_v_kms
+from ucbplan.observing.observed import collected_information
 from ucbplan.observing.schedule.settings import QUEUE_CADENCES, QUEUE_WAIT_S, PlanSettings
 from ucbplan.observing.sigma_model import SigmaVModel
 from ucbplan.observing.strategy import (
@@ -396,6 +397,9 @@ def _strategy_results(
     if settings.goal is None:
         return tuple(compare_strategies(shape, sigma)), ()
     need = goal_info_needed(parse_goal(settings.goal), target)
+    # the spectra already taken (observed) leave less to collect: the hours are the rest's
+    taken = collected_information(settings.observed, target.name, target.params, settings.star)
+    need = max(0.0, need - taken)
     times = goal_times(need, shape, sigma, settings.goal)
     return tuple(g.strategy for g in times), tuple(g.hours for g in times)
 
@@ -416,7 +420,7 @@ def optimised_exposure(target: Target, settings: PlanSettings) -> TargetExposure
     mag = law.target_mag(target.magnitudes, target.name)
 
     def sigma(t: NDArray[np.float64]) -> NDArray[np.float64]:
-        return law.sigma(t, 1.0, mag)
+        return law.sigma(t, 1.0, mag) * settings.sigma_v_scale
 
     visit = _visit_length(settings)
     shortest = check_visit_holds_an_exposure(target, settings)
@@ -455,7 +459,8 @@ def exposure_sigma_v(
     target: Target, settings: PlanSettings, exptime_s: float, airmass: ArrayLike
 ) -> NDArray[np.float64]:
     """σ_v per exposure [km/s]: the exposure-time law (:func:`sigma_law`), else ``--sigma-v``,
-    else the instrument's scaling, else the target file's σ_v (NaN if none of them is known).
+    else the instrument's scaling, else the target file's σ_v (NaN if none of them is known),
+    times ``settings.sigma_v_scale``.
 
     Raises
     ------
@@ -463,6 +468,13 @@ def exposure_sigma_v(
         An instrument without σ_ref (pass --sigma-v), or a target without a magnitude in its
         band.
     """
+    return _law_sigma_v(target, settings, exptime_s, airmass) * settings.sigma_v_scale
+
+
+def _law_sigma_v(
+    target: Target, settings: PlanSettings, exptime_s: float, airmass: ArrayLike
+) -> NDArray[np.float64]:
+    """:func:`exposure_sigma_v` before ``settings.sigma_v_scale``."""
     x = np.asarray(airmass, dtype=np.float64)
     law = sigma_law(target, settings)
     if law is not None and settings.sigma_model is not None:

@@ -21,6 +21,7 @@ from dataclasses import replace
 from typing import Any
 
 import numpy as np
+from astropy.time import TimeDelta
 from numpy.typing import NDArray
 
 from ucbplan.errors import InputError
@@ -36,7 +37,9 @@ from ucbplan.observing.goals import (
     parse_goal,
     target_k,
 )
+from ucbplan.observing.observed import observed_information, target_spectra
 from ucbplan.observing.schedule.candidates import TargetRun
+from ucbplan.observing.schedule.placement import INFO_RTOL
 from ucbplan.observing.schedule.settings import PlanSettings
 from ucbplan.observing.strategy import balanced_counts, constrains_k, information
 
@@ -75,9 +78,58 @@ def _max_per_visit(run: TargetRun, settings: PlanSettings) -> tuple[int, float]:
     return max(1, int(science // te.step_s + 1e-9) + 1), te.step_s
 
 
+def _collected(run: TargetRun, settings: PlanSettings) -> tuple[float, int]:
+    """(information on K [(km/s)⁻²], number) of the target's spectra already taken
+    (``--observed``), each at its own u, Λ_K and σ_v (:mod:`ucbplan.observing.observed`).
+
+    Raises
+    ------
+    InputError
+        A spectrum outside the validity window of the target's ephemeris.
+    """
+    spectra = target_spectra(settings.observed, run.target.name)
+    if spectra is None:
+        return 0.0, 0
+    t_ref = run.target.t_ref
+    lo, hi = ((t - t_ref).to_value("s") for t in (run.since, run.until))
+    bad = np.flatnonzero((spectra.tau_s < lo) | (spectra.tau_s > hi))
+    if bad.size:
+        when = (t_ref + TimeDelta(float(spectra.tau_s[bad[0]]), format="sec")).tdb.isot
+        raise InputError(
+            f"--observed {spectra.source}: {run.target.name}: spectrum {int(bad[0]) + 1} at "
+            f"{when} TDB is outside the validity of its ephemeris ({run.since.tdb.isot} – "
+            f"{run.until.tdb.isot} TDB); remove it or update the target file"
+        )
+    return observed_information(spectra, run.target.params, settings.star), spectra.n
+
+
+def _reached(goal: Goal, run: TargetRun, need: float, collected: tuple[float, int]) -> GoalPlan:
+    """The goal plan of a target whose spectra already taken reach the goal: no spectra."""
+    info, n_taken = collected
+    sigma_k = 1.0 / math.sqrt(info)
+    _, k2, _ = target_k(run.target)
+    return GoalPlan(
+        goal=goal,
+        n_spectra=0,
+        per_anchor=(),
+        expected=math.sqrt(need) * goal.value * sigma_k,
+        sigma_K1_kms=sigma_k,
+        sigma_K2_kms=sigma_k if k2 is not None else None,
+        time=TimeBudget(0, 0, run.exposure.step_s, 0.0, 0.0, 0.0, 0.0),
+        cycles=0,
+        info_needed=0.0,
+        collected_info=info,
+        collected_spectra=n_taken,
+    )
+
+
 def _goal_plan(goal: Goal, run: TargetRun, settings: PlanSettings) -> GoalPlan:
-    """Spectra, balanced visits and time of one target's goal."""
-    need = goal_info_needed(goal, run.target)
+    """Spectra, balanced visits and time of one target's goal (less what was observed)."""
+    need_all = goal_info_needed(goal, run.target)
+    collected = _collected(run, settings)
+    need = need_all - collected[0]
+    if need <= need_all * INFO_RTOL:
+        return _reached(goal, run, need_all, collected)
     w = _per_spectrum(run)
     te = run.exposure
     pattern = len(settings.spec.u_values) if te.strategy != "untargeted" else 1
@@ -100,19 +152,21 @@ def _goal_plan(goal: Goal, run: TargetRun, settings: PlanSettings) -> GoalPlan:
         idle_h=(total - shutter - overhead) / 3600.0,
         total_h=total / 3600.0,
     )
-    sigma_k = 1.0 / math.sqrt(n * w)
+    sigma_k = 1.0 / math.sqrt(n * w + collected[0])
     _, k2, _ = target_k(run.target)
     return GoalPlan(
         goal=goal,
         n_spectra=n,
         per_anchor=((settings.spec.label if pattern > 1 else te.strategy, n),),
-        expected=math.sqrt(need) * goal.value * sigma_k,
+        expected=math.sqrt(need_all) * goal.value * sigma_k,
         sigma_K1_kms=sigma_k,
         sigma_K2_kms=sigma_k if k2 is not None else None,
         time=time,
         cycles=max(1, n // pattern),
         info_needed=need,
         visit_s=min(max(walls) + _VISIT_SLACK_S, te.visit_s or settings.max_visit_s),
+        collected_info=collected[0],
+        collected_spectra=collected[1],
     )
 
 
@@ -211,7 +265,10 @@ def _shortfalls(
         mine = cols.values["target"] == run.target.name
         got = info_of_columns(cols, pattern_u, mine)
         if got < plan.info_needed * (1.0 - 1e-9):
-            reach = plan.expected * math.sqrt(plan.info_needed / got) if got > 0 else math.inf
+            taken = plan.collected_info  # the spectra already taken count on both sides
+            reach = math.inf
+            if got + taken > 0:
+                reach = plan.expected * math.sqrt((plan.info_needed + taken) / (got + taken))
             available = math.floor(plan.n_spectra * got / plan.info_needed)
             short = Shortfall(plan.goal, plan.n_spectra, min(available, int(np.sum(mine))), reach)
             out.append((run.target.name if by_name else run, short))

@@ -27,6 +27,7 @@ from ucbplan.observing.accounting import (
 )
 from ucbplan.observing.blockcolumns import block_columns
 from ucbplan.observing.blocks import ExposurePlan
+from ucbplan.observing.goals import GoalPlan
 from ucbplan.observing.schedule.exposure import strategy_facts
 from ucbplan.observing.schedule.goalplan import info_of_columns
 from ucbplan.observing.schedule.nights import night_dates
@@ -137,8 +138,11 @@ class PlanRun:
 
     def failure(self) -> str | None:
         """Why no block at all could be planned (None if some were), grouped by target and
-        reason over the nights."""
-        if self.result.blocks:
+        reason over the nights; None too when the spectra already taken reach every target's
+        goal)."""
+        goals = self.result.goals
+        reached = len(goals) == len(self.targets) and all(g.n_spectra == 0 for g in goals.values())
+        if self.result.blocks or reached:
             return None
         grouped: dict[tuple[str, str], list[str]] = {}
         for m in self.result.unplaced:
@@ -198,10 +202,16 @@ class PlanRun:
             if goal is not None:
                 entry["goal_spectra"] = goal.n_spectra
                 entry["goal_expected"] = goal.expected
+                if goal.collected_spectra:
+                    entry.update(_collected_facts(goal))
             if te.results:
                 entry["strategy"] = strategy_facts(te, self.collected_info().get(name, 0.0))
             per_target[name] = entry
         out["targets"] = per_target
+        if s.observed or s.sigma_v_scale != 1.0:
+            out["sigma_v_scale"] = s.sigma_v_scale
+            spectra = [str(x.source) for x in s.observed]
+            out["observed"] = list(dict.fromkeys(spectra))
         return out
 
     def collected_info(self) -> dict[str, float]:
@@ -244,6 +254,17 @@ class PlanRun:
     def table(self) -> Table:
         """The master blocks table (:mod:`ucbplan.observing.blocktable`) with provenance."""
         return blocks_to_table(self.result.blocks, self.meta())
+
+
+def _collected_facts(goal: GoalPlan) -> dict[str, Any]:
+    """What the spectra already taken give a goal (table meta): their number, information on K
+    [(km/s)⁻²] and σ_K [km/s], and the information still needed."""
+    return {
+        "observed_spectra": goal.collected_spectra,
+        "observed_info": goal.collected_info,
+        "observed_sigma_K_kms": goal.collected_info**-0.5,
+        "info_still_needed": goal.info_needed,
+    }
 
 
 def _check_budget_names(targets: Sequence[Target], settings: PlanSettings) -> None:

@@ -15,6 +15,7 @@ from ucbplan.observing.constraint_objects import constraint_set, default_constra
 from ucbplan.observing.constraints import ConstraintSet
 from ucbplan.observing.goals import parse_goal
 from ucbplan.observing.instruments import Instrument
+from ucbplan.observing.observed import ObservedSpectra
 from ucbplan.observing.sigma_model import SigmaVModel
 from ucbplan.observing.sites import Site
 
@@ -76,6 +77,8 @@ MAX_ABS_U_RAD = 4.0 * math.pi
 MAX_SPEED_KMS = 1.0e4
 #: Most sessions per target and night (a 5-min binary has ~100 u = 0 / π pairs in a night).
 MAX_SESSIONS = 1000
+#: Largest factor on the σ_v law (``--sigma-v-scale``).
+MAX_SIGMA_V_SCALE = 100.0
 #: Longest ``--max-smear`` text [characters].
 _MAX_SMEAR_CHARS = 60
 
@@ -287,6 +290,11 @@ class PlanSettings:
         Constraint objects (ucbplan's, a user's or astroplan's) replacing the set built from
         ``twilight``, ``airmass_max``, ``moon_sep_deg``, ``moon_illum_max`` and
         ``zenith_hole_deg`` (see :func:`~ucbplan.observing.constraint_objects.constraint_set`).
+    observed : tuple of ObservedSpectra
+        Spectra already taken (``--observed``): their information counts toward the goal.
+    sigma_v_scale : float
+        Factor on every σ_v the law predicts (``--sigma-v-scale``, or the ratio the observed
+        spectra measured).
 
     Raises
     ------
@@ -325,6 +333,8 @@ class PlanSettings:
     goal: str | None = None
     budgets: tuple[tuple[str, float], ...] = ()
     custom_constraints: tuple[Any, ...] | None = None
+    observed: tuple[ObservedSpectra, ...] = ()
+    sigma_v_scale: float = 1.0
 
     def __post_init__(self) -> None:
         parse_mode(self.mode)
@@ -337,6 +347,10 @@ class PlanSettings:
             if value is not None:
                 check_range(name, value, 0.0, MAX_SPEED_KMS, "km/s", "", low_open=True)
         self._check_budgets()
+        why = "factor on the σ_v law"
+        check_range(
+            "sigma_v_scale", self.sigma_v_scale, 0.0, MAX_SIGMA_V_SCALE, "", why, low_open=True
+        )
         why = "slew + acquisition before each session; a block must fit in one night"
         check_range("overhead_s", self.overhead_s, 0.0, MAX_BLOCK_S, "s", why)
         check_int(

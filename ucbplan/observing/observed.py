@@ -1,0 +1,127 @@
+"""What was observed counts: the information on K that spectra already taken collect.
+
+A spectrum taken at mid-exposure time τ (TDB seconds since the target's reference epoch), with
+exposure (or co-add window) T and measured σ_v, measures v = γ + K Λ_K cos u + noise, with its
+own argument of latitude u = u(τ) from the target's ephemeris (Eq. u_precessing_app) and its own
+smearing factor Λ_K = sin x/x, x = n̄_b T/2 (Eq. Lambda_K). The spectra's (γ, K) Fisher matrix is
+
+    F = Σ_i (1, Λ_K,i cos u_i)ᵀ (1, Λ_K,i cos u_i) / σ_v,i²,
+
+and the information on K with γ free is its Schur complement I = F_KK − F_γK²/F_γγ, so that
+σ_K = I^{-½} = √[(F⁻¹)_KK] (:func:`ucbplan.observing.strategy.sigma_k_from_rows`; 0 when the
+spectra do not separate γ and K). A goal plan that needs the information I_goal
+(:func:`ucbplan.observing.goals.goal_info_needed`) then adds only I_goal − I: the Schur complement
+of a sum is at least the sum of the Schur complements, so the observed and the planned spectra
+together reach the goal (exactly so when either set is balanced, Σ Λ cos u / σ² = 0).
+
+The measured σ_v of the spectra also say whether the plan's σ_v law holds: the median of
+measured / predicted (:func:`sigma_v_ratio`) rescales the law for the remainder.
+
+Velocities in km/s, times in seconds, angles in radians (plain floats and numpy arrays).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ucbplan.core.params import PhaseParams
+from ucbplan.core.phase import arg_latitude
+from ucbplan.core.smearing import lambda_k as smearing_factor
+from ucbplan.observing.strategy import sigma_k_from_rows
+
+__all__ = [
+    "SIGMA_V_RATIO_TOL",
+    "ObservedSpectra",
+    "collected_information",
+    "observed_information",
+    "sigma_v_ratio",
+    "spectra_u",
+    "target_spectra",
+    "window_lambda_k",
+]
+
+F64 = NDArray[np.float64]
+
+#: Relative difference of the measured σ_v from the law's below which the law is kept (the
+#: median of a few spectra scatters by several per cent).
+SIGMA_V_RATIO_TOL = 0.05
+
+
+@dataclass(frozen=True, eq=False)
+class ObservedSpectra:
+    """The spectra of one target already taken (compared by identity: the settings that hold
+    them stay hashable).
+
+    Attributes
+    ----------
+    target : str
+        Target name (as its file names it).
+    tau_s : ndarray
+        Mid-exposure epochs, TDB seconds since the target's reference epoch [s].
+    lambda_k : ndarray
+        Smearing factor Λ_K of each spectrum.
+    sigma_v_kms : ndarray
+        Measured σ_v of each spectrum [km/s].
+    predicted_kms : ndarray
+        σ_v the plan's law predicts for each spectrum's exposure time and airmass (unscaled)
+        [km/s]; NaN where unknown.
+    source : str
+        The file they were read from (for messages).
+    """
+
+    target: str
+    tau_s: F64
+    lambda_k: F64
+    sigma_v_kms: F64
+    predicted_kms: F64
+    source: str = ""
+
+    @property
+    def n(self) -> int:
+        """Number of spectra."""
+        return int(self.tau_s.size)
+
+
+def spectra_u(params: PhaseParams, tau_s: ArrayLike, star: int = 1) -> F64:
+    """Argument of latitude of each spectrum at its mid-exposure epoch ``tau_s`` [rad]."""
+    return np.asarray(arg_latitude(params, tau_s, star), dtype=np.float64)
+
+
+def window_lambda_k(window_s: ArrayLike, n_bar: float) -> F64:
+    """Λ_K = sin x/x, x = n̄_b T/2 of exposures (windows) of ``window_s`` [s]."""
+    return np.asarray(smearing_factor(window_s, n_bar), dtype=np.float64)
+
+
+def observed_information(spectra: ObservedSpectra, params: PhaseParams, star: int = 1) -> float:
+    """Information on K [(km/s)⁻²] the ``spectra`` collect (γ free), each at its own u."""
+    u = spectra_u(params, spectra.tau_s, star)
+    sigma_k = sigma_k_from_rows(spectra.lambda_k, u, spectra.sigma_v_kms)
+    return sigma_k**-2 if math.isfinite(sigma_k) else 0.0
+
+
+def collected_information(
+    observed: Sequence[ObservedSpectra], name: str, params: PhaseParams, star: int = 1
+) -> float:
+    """Information on K [(km/s)⁻²] the spectra of target ``name`` among ``observed`` collect
+    (0 when none was taken)."""
+    spectra = target_spectra(observed, name)
+    return observed_information(spectra, params, star) if spectra is not None else 0.0
+
+
+def target_spectra(observed: Sequence[ObservedSpectra], name: str) -> ObservedSpectra | None:
+    """The spectra of target ``name`` among ``observed`` (None when it has none)."""
+    return next((s for s in observed if s.target == name and s.n > 0), None)
+
+
+def sigma_v_ratio(measured_kms: ArrayLike, predicted_kms: ArrayLike) -> float:
+    """Median of measured / predicted σ_v over the spectra whose prediction is known (NaN if
+    none is)."""
+    m = np.asarray(measured_kms, dtype=np.float64)
+    p = np.asarray(predicted_kms, dtype=np.float64)
+    ok = np.isfinite(p) & (p > 0) & np.isfinite(m)
+    return float(np.median(m[ok] / p[ok])) if np.any(ok) else math.nan
