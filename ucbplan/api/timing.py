@@ -291,12 +291,26 @@ def _first_ephemeris(period: Any, initial: Any, terms: Any, clip: Any) -> Period
     check_number("clip", clip, 1.0, 1e6, "σ", "times within 1σ are never outliers")
     if period is not None and initial is not None:
         raise InputError("period, initial: give one first ephemeris, not both", "period")
+    if isinstance(initial, str | Path):
+        return read_initial(_existing(initial, "initial"))
     if initial is not None:
-        return read_initial(initial) if isinstance(initial, str | Path) else _guess_of(initial)
+        return _guess_of(initial)
     if period is None:
         return None
     p = as_float(period, "s", "period")
     return period_guess(f"{p!r} s" if isinstance(p, float) else p, "period")
+
+
+def _existing(path: str | Path, parameter: str) -> str | Path:
+    """``path`` if it names a file; else one line naming ``parameter`` and the path as given."""
+    from ucbplan.api.targets import is_path
+
+    is_path(path, parameter)
+    if not Path(path).is_file():
+        raise InputError(
+            f"{parameter}: {shorten(str(path), 80)}: file not found; check the path", parameter
+        )
+    return path
 
 
 def _guess_of(initial: Any) -> PeriodGuess:
