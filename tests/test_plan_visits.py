@@ -523,7 +523,10 @@ def test_an_acquisition_never_starts_inside_the_zenith_hole(tmp_path: Path) -> N
 @pytest.mark.parametrize(
     ("goal", "needle"),
     [
-        ("sigma_K=3km/s", "visits as long as the nights allow (9.53 h) reach it: raise max_visit"),
+        (
+            "sigma_K=3km/s",
+            "visits as long as the nights allow (9.53 h) reach it: raise `max_visit`",
+        ),
         ("sigma_K=2km/s", "882 in visits as long as the nights allow (9.53 h; σ(K) ≤ 2.169"),
     ],
 )
@@ -538,7 +541,7 @@ def test_a_goal_shortfall_gives_the_capacity_at_the_longest_visit(goal: str, nee
         plan_files([HM], first_night="2040-02-15", n_nights=7, site="paranal",
                    settings=plan_settings(goal=goal, **kw))  # fmt: skip
     text = str(exc.value)
-    assert "the nights given allow 294 in visits of at most 2 h (max_visit;" in text, text
+    assert "the nights given allow 294 in visits of at most 2 h (`max_visit`;" in text, text
     assert needle in text and "\n" not in text and len(text) < 390, text
     if goal == "sigma_K=3km/s":  # and planned with longer visits the goal holds
         plan_files([HM], first_night="2040-02-15", n_nights=7, site="paranal",

@@ -52,8 +52,8 @@ def observed_settings(
         return dataclasses.replace(settings, sigma_v_scale=1.0 if given is None else given)
     if settings.goal is None:
         raise InputError(
-            "observed: the spectra already taken count toward a goal; give goal "
-            "(--goal sigma_K=2km/s) too",
+            "observed: the spectra already taken count toward a goal; give `goal` too (e.g. "
+            "sigma_K=2km/s)",
             parameter="observed",
         )
     spectra = _read(Path(_text(path)), targets, site, settings)
@@ -267,5 +267,5 @@ def sigma_v_note(settings: PlanSettings) -> str | None:
     elif scale == ratio:
         plan = f"the remainder is planned with the σ_v law × {scale:.3g}"
     else:
-        plan = f"--sigma-v-scale {scale:g}: the remainder is planned with the σ_v law × {scale:g}"
+        plan = f"`sigma_v_scale={scale:g}`: the remainder is planned with the σ_v law × {scale:g}"
     return f"{text}; {plan}"

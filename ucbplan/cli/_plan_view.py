@@ -301,7 +301,7 @@ def _print_sigma_v_ratio(run: Any) -> None:
     remainder is planned with."""
     note = terminal.sigma_v_note(run.settings)
     if note is not None:
-        err_console.print(f"observed: {escape(note)}", soft_wrap=True)
+        err_console.print(f"observed: {escape(cli_message(note))}", soft_wrap=True)
 
 
 def _print_strategies(run: Any) -> None:

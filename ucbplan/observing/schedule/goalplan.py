@@ -96,7 +96,7 @@ def _collected(run: TargetRun, settings: PlanSettings) -> tuple[float, int]:
     if bad.size:
         when = (t_ref + TimeDelta(float(spectra.tau_s[bad[0]]), format="sec")).tdb.isot
         raise InputError(
-            f"--observed {spectra.source}: {run.target.name}: spectrum {int(bad[0]) + 1} at "
+            f"observed: {spectra.source}: {run.target.name}: spectrum {int(bad[0]) + 1} at "
             f"{when} TDB is outside the validity of its ephemeris ({run.since.tdb.isot} – "
             f"{run.until.tdb.isot} TDB); remove it or update the target file"
         )
@@ -282,13 +282,13 @@ def _with_longer_visits(
     cap_h = cap_s / 3600.0
     reach = Goal(short.goal.quantity, short.reachable, short.goal.relative, "").describe()
     head = (
-        f"--goal {short.goal.text}: needs {short.needed_spectra} spectra, the nights given allow "
-        f"{short.available_spectra} in visits of at most {cap_h:.3g} h (max_visit; {reach})"
+        f"`goal` {short.goal.text}: needs {short.needed_spectra} spectra, the nights given allow "
+        f"{short.available_spectra} in visits of at most {cap_h:.3g} h (`max_visit`; {reach})"
     )
     if longer is None:
         return (
             f"{head}; visits as long as the nights allow ({long_s / 3600:.3g} h) reach it: "
-            "raise max_visit"
+            "raise `max_visit`"
         )
     far = Goal(short.goal.quantity, longer.reachable, short.goal.relative, "").describe()
     return (
