@@ -25,7 +25,7 @@ from ucbplan.api.reduction import REDUCE_FLAGS
 from ucbplan.api.signal_sizes import FEASIBILITY_FLAGS
 from ucbplan.api.timing import FIT_FLAGS
 
-__all__ = ["FLAGS", "PARAMETERS", "cli_message", "flag_of"]
+__all__ = ["FLAGS", "PARAMETERS", "cli_message", "cli_text", "flag_of"]
 
 #: Parameters whose flag is not ``--`` + the name with ``-`` for ``_``.
 _IRREGULAR = {
@@ -138,8 +138,17 @@ def _leading(message: str) -> str:
     return "/".join(map(flag_of, names)) + message[m.end() :]
 
 
-def cli_message(message: str) -> str:
-    """``message`` as the command line says it: parameter names replaced by their flags."""
+def cli_text(text: str) -> str:
+    """A note or warning as the command line says it: the parameters it quotes (`name`)
+    replaced by their flags. Its first word stays: a note may begin with a word that is also a
+    parameter's name ("acquisition overhead 409 s …"), which only an error's leading
+    ``name:`` means as one."""
     for python, cli in PHRASES.items():
-        message = message.replace(python, cli)
-    return _leading(_QUOTED.sub(_quoted, message))
+        text = text.replace(python, cli)
+    return _QUOTED.sub(_quoted, text)
+
+
+def cli_message(message: str) -> str:
+    """An error ``message`` as the command line says it: parameter names replaced by their
+    flags, the leading one (``max_visit: …``) too."""
+    return _leading(cli_text(message))

@@ -10,7 +10,7 @@ from rich.markup import escape
 
 from ucbplan.api import terminal
 from ucbplan.cli._console import err_console, rich_table
-from ucbplan.cli._flags import cli_message
+from ucbplan.cli._flags import cli_text
 from ucbplan.errors import UcbplanError
 
 if TYPE_CHECKING:
@@ -143,7 +143,7 @@ def report(run: Any, wide: bool = False, verbose: bool = False) -> None:
         if t.covariance_source.startswith("samples"):
             err_console.print(f"{t.name}: covariance from the {t.covariance_source}", markup=False)
     for w in run.result.warnings:
-        err_console.print(f"[yellow]warning:[/] {escape(cli_message(w))}", soft_wrap=True)
+        err_console.print(f"[yellow]warning:[/] {escape(cli_text(w))}", soft_wrap=True)
     failure = run.failure()
     if failure is not None:  # the error line says what was not placed, once
         raise UcbplanError(failure)
@@ -301,7 +301,7 @@ def _print_sigma_v_ratio(run: Any) -> None:
     remainder is planned with."""
     note = terminal.sigma_v_note(run.settings)
     if note is not None:
-        err_console.print(f"observed: {escape(cli_message(note))}", soft_wrap=True)
+        err_console.print(f"observed: {escape(cli_text(note))}", soft_wrap=True)
 
 
 def _print_strategies(run: Any) -> None:

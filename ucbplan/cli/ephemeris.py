@@ -28,7 +28,7 @@ from ucbplan.cli._console import (
     write_table_output,
 )
 from ucbplan.cli._derive import argument, option
-from ucbplan.cli._flags import cli_message
+from ucbplan.cli._flags import cli_text
 from ucbplan.cli._options import (
     CompareFormatOpt,
     OutputOpt,
@@ -66,7 +66,7 @@ def ephemeris(
     fmt = pick_format(output, fmt, TABLE_FORMATS)
     got = predict(target, start, end, anchor, star, max_epochs)
     for line in got.warnings:
-        err_console.print(f"[yellow]warning:[/] {escape(cli_message(line))}")
+        err_console.print(f"[yellow]warning:[/] {escape(cli_text(line))}")
     if fmt == "table":
         _print_epochs(got.target, got.table)
         return
@@ -137,7 +137,7 @@ def compare(
     fmt = pick_format(output, fmt, ("table", "json"))
     got = compare_ephemerides(a, b, at)
     for line in got.warnings:
-        err_console.print(f"[yellow]warning:[/] {escape(cli_message(line))}")
+        err_console.print(f"[yellow]warning:[/] {escape(cli_text(line))}")
     if fmt == "table":
         _print_comparison(got.doc)
         return

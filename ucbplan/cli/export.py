@@ -20,7 +20,7 @@ from ucbplan.api import exporting as api
 from ucbplan.api.exporting import EXPORT_FLAGS, P2_FLAGS
 from ucbplan.cli._console import check_output_path, err_console, pick_format, write_output
 from ucbplan.cli._derive import argument, flag, option
-from ucbplan.cli._flags import cli_message
+from ucbplan.cli._flags import cli_text
 from ucbplan.errors import InputError, shorten
 
 __all__ = ["export_command", "register"]
@@ -151,7 +151,7 @@ def export_command(
 def _print_notes(notes: tuple[str, ...]) -> None:
     """Each note on stderr, one line each, parameters named by their flags."""
     for note in notes:
-        err_console.print(f"[yellow]note:[/] {escape(cli_message(note))}", soft_wrap=True)
+        err_console.print(f"[yellow]note:[/] {escape(cli_text(note))}", soft_wrap=True)
 
 
 def _write(content: bytes, output: Path | None, overwrite: bool, what: str) -> None:

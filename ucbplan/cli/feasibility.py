@@ -24,7 +24,7 @@ from ucbplan.cli._console import (
     write_output,
 )
 from ucbplan.cli._derive import option
-from ucbplan.cli._flags import cli_message
+from ucbplan.cli._flags import cli_text
 from ucbplan.cli._options import OverwriteAllOpt, TargetArg
 from ucbplan.cli._strategies import print_comparison
 
@@ -113,7 +113,7 @@ def _print_report(rep: Any) -> None:
     if rep.gw_timing_s is not None or rep.optical_timing_s is not None:
         err_console.print(_timing_table(rep))
     for note in rep.notes:
-        err_console.print(f"[yellow]note:[/] {cli_message(note)}", soft_wrap=True)
+        err_console.print(f"[yellow]note:[/] {cli_text(note)}", soft_wrap=True)
 
 
 def _quantity_table(rep: Any) -> RichTable:

@@ -29,7 +29,7 @@ from ucbplan.cli._console import (
     write_output,
 )
 from ucbplan.cli._derive import option
-from ucbplan.cli._flags import cli_message
+from ucbplan.cli._flags import cli_text
 from ucbplan.cli._options import OverwriteAllOpt
 
 __all__ = ["ephemeris_fit"]
@@ -72,7 +72,7 @@ def ephemeris_fit(
     check_output_and_plot(output, plot, overwrite)
     fit = fit_ephemeris(times_path, period, initial, terms, clip)
     for note in fit.notes:
-        err_console.print(f"note: {cli_message(note)}", markup=False)
+        err_console.print(f"note: {cli_text(note)}", markup=False)
     if fmt == "table" or output is not None:
         _print_summary(fit)
     text: str | None = None

@@ -24,8 +24,7 @@ and ι from LISA taken as exact):
     M1 sin³ι = (1 − e²)^{3/2} P_b K2 (K1 + K2)² / (2πG),   M2: K1 ↔ K2 in the first factor
     (σ_M1/M1)² = (2σ_K1/(K1+K2))² + ((1/K2 + 2/(K1+K2)) σ_K2)²
     (σ_M2/M2)² = ((1/K1 + 2/(K1+K2)) σ_K1)² + (2σ_K2/(K1+K2))²
-
-The inclination's own uncertainty (3 σ_sin ι / sin ι on the masses) is not included.
+(the inclination's own uncertainty, 3 σ_sin ι / sin ι on the masses, is not included).
 """
 
 from __future__ import annotations
@@ -118,9 +117,8 @@ class TimeBudget:
 
 @dataclass(frozen=True)
 class GoalPlan:
-    """Spectra needed for a goal, their split over anchors, the σ reached, and the time (with
-    spectra already taken: ``info_needed`` is what they still miss, ``collected_info`` what they
-    give [(km/s)⁻²], and ``expected`` counts both)."""
+    """Spectra for a goal, their anchors, the σ reached (counting spectra already taken, whose
+    ``collected_info`` [(km/s)⁻²] ``info_needed`` excludes), and the time."""
 
     goal: Goal
     n_spectra: int

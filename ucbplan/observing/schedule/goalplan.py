@@ -128,7 +128,7 @@ def _goal_plan(goal: Goal, run: TargetRun, settings: PlanSettings) -> GoalPlan:
     need_all = goal_info_needed(goal, run.target)
     collected = _collected(run, settings)
     need = need_all - collected[0]
-    if need <= need_all * INFO_RTOL:
+    if collected[0] > 0 and math.isfinite(need_all) and need <= need_all * INFO_RTOL:
         return _reached(goal, run, need_all, collected)
     w = _per_spectrum(run)
     te = run.exposure
