@@ -186,6 +186,27 @@ def test_fit_result_is_short_and_becomes_a_target(tmp_path: Path) -> None:
     ucbplan.write_target(back, path, overwrite=True)
 
 
+@pytest.mark.parametrize(
+    ("given", "parameter"),
+    [
+        ({"name": 5}, "name: "),
+        ({"name": ["x"]}, "name: "),
+        ({"ra": 5, "dec": "+50d"}, "ra: "),
+        ({"ra": "15h39m", "dec": 50.4}, "dec: "),
+    ],
+)
+def test_to_target_refuses_a_name_or_position_not_text_in_one_line(
+    given: dict[str, Any], parameter: str
+) -> None:
+    """A number where the target's name or sky position is text was an AttributeError from
+    ``str.strip`` (a traceback outside ucbplan's errors), found by the tutorial notebook."""
+    fit = ucbplan.fit_ephemeris(_times(CYCLES))
+    for call in (fit.to_target, fit.target_yaml, fit.target_document):
+        with pytest.raises(InputError) as info:
+            call(**{"like": TIMING, **given})
+        one_line(info.value, parameter)
+
+
 def test_horizon_is_the_batched_table_with_the_per_target_numbers() -> None:
     from ucbplan.core.forecast import horizon_table
 

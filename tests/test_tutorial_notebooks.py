@@ -5,12 +5,14 @@ the repository root (the notebooks read the bundled ``catalogs/``). A cell put f
 every socket connection in the kernel and snapshots astropy's state
 (``test_no_global_state.snapshot``); a cell put last checks that no connection was tried, and
 that the state is as it was (but the warning filters, which the notebooks' own cells may set).
-Any error in a cell fails the test with the cell's traceback.
+Any error in a cell fails the test with the cell's traceback. A fast test checks that the
+notebooks read the typed results (``plan.goals``, ``plan.strategies`` …), not meta dicts.
 """
 
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import pytest
@@ -50,6 +52,24 @@ def test_there_are_three_notebooks_stored_without_outputs() -> None:
         cells = json.loads(path.read_text(encoding="utf-8"))["cells"]
         code = [c for c in cells if c["cell_type"] == "code"]
         assert code and all(not c.get("outputs") for c in code), path.name
+
+
+def _code(path: Path) -> str:
+    cells = json.loads(path.read_text(encoding="utf-8"))["cells"]
+    return "\n".join("".join(c["source"]) for c in cells if c["cell_type"] == "code")
+
+
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])
+def test_notebooks_use_the_public_api(path: Path) -> None:
+    """What a notebook user should write: the typed records, not the meta dicts a file's header
+    holds; no private attribute; the plan's keywords by their names, not the old ones."""
+    from ucbplan.api.plan_options import OLD_NAMES
+
+    code = _code(path)
+    assert ".meta[" not in code and ".meta.get(" not in code, path.name
+    assert re.search(r"\.\_[a-z]", code) is None, path.name
+    old = [name for name in OLD_NAMES if re.search(rf"\b{name}\s*=", code)]
+    assert old == [], (path.name, old)
 
 
 @pytest.mark.slow

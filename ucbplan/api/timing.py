@@ -223,6 +223,15 @@ def target_identity(
     """
     from ucbplan.timing.document import identity
 
+    for parameter, value, example in (
+        ("name", name, "'ZTF J1539+5027'"),
+        ("ra", ra, "'15h39m32.16s'"),
+        ("dec", dec, "'+50d27m38.8s'"),
+    ):
+        if value is not None and not isinstance(value, str):
+            raise InputError(
+                f"{parameter}: expected text like {example}, got {shorten(value, 40)}", parameter
+            )
     if like is None or isinstance(like, str | Path):
         return identity(Path(like) if like is not None else None, name, ra, dec)
     if not isinstance(like, Mapping):
