@@ -311,7 +311,8 @@ def test_feasibility_refuses_a_visit_no_strategy_fits_before_printing() -> None:
     )
     assert proc.returncode == 2 and proc.stdout == ""
     lines = [ln for ln in proc.stderr.splitlines() if ln.strip()]
-    assert len(lines) == 1 and "no strategy fits a visit" in lines[0], proc.stderr
+    # one line naming the visit (the shared visit check: acquisition + one exposure + readout)
+    assert len(lines) == 1 and lines[0].startswith("error: --visit: "), proc.stderr
 
 
 def test_to_target_copies_from_a_target_or_a_document_alike() -> None:

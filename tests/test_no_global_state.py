@@ -224,7 +224,7 @@ import ucbplan
 from ucbplan.observing.nightplot import write_night_charts
 from ucbplan.observing.nightsheet import write_night_sheet
 out = Path(sys.argv[1])
-run = ucbplan.plan(sys.argv[2], "paranal", "2040-02-15", max_visit="1h")
+run = ucbplan.plan(sys.argv[2], "paranal", "2040-02-15", visit="1h")
 site = ucbplan.get_site("paranal")
 write_night_sheet(run.table, site, out / "night.html")
 write_night_charts(run.table, site, out / "nights.png")
