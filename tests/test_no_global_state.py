@@ -226,8 +226,9 @@ from ucbplan.observing.nightsheet import write_night_sheet
 out = Path(sys.argv[1])
 run = ucbplan.plan(sys.argv[2], "paranal", "2040-02-15", visit="1h")
 site = ucbplan.get_site("paranal")
-write_night_sheet(run.table, site, out / "night.html")
-write_night_charts(run.table, site, out / "nights.png")
+write_night_sheet(run.text_table, site, out / "night.html")
+write_night_charts(run.text_table, site, out / "nights.png")
+run.sheet(out / "night2.html")
 print(len(attempts))
 """
 
