@@ -172,14 +172,10 @@ class EpochPrediction:
 
 
 def predict(
-    target: TargetLike,
-    start: Any,
-    end: Any,
-    anchor: str = "quadrature",
-    star: int = 1,
-    max_epochs: int = 2_000_000,
+    target: TargetLike, start: Any, end: Any, anchor: str, star: int, max_epochs: int
 ) -> EpochPrediction:
-    """:func:`ephemeris` with its warnings returned, not emitted (parameters as there)."""
+    """:func:`ephemeris` with its warnings returned, not emitted (parameters and their defaults
+    as there: declared once, in :func:`ephemeris`)."""
     from ucbplan.core.ephemeris import find_epochs
     from ucbplan.inputs import check_int, is_number
 

@@ -156,15 +156,16 @@ class HorizonReport:
 
 def horizon_report(
     targets: TargetLike | Sequence[TargetLike],
-    sigma_v: Any = None,
-    k_eff: Any = None,
-    alpha: Sequence[float] | float = (0.5, 1.0),
-    n_epochs: int = 2,
-    anchors: Sequence[str] = ("conjunction", "quadrature"),
+    sigma_v: Any,
+    k_eff: Any,
+    alpha: Sequence[float] | float,
+    n_epochs: int,
+    anchors: Sequence[str],
     plot: str | Path | None = None,
     overwrite: bool = False,
 ) -> HorizonReport:
-    """:func:`horizon` and what the command shows with it (parameters as there).
+    """:func:`horizon` and what the command shows with it (parameters and their defaults as
+    there: declared once, in :func:`horizon`).
 
     One target gives its rows as well, and ``plot`` draws its σ_u(t) figure there (refused
     before any work when it exists and not ``overwrite``).

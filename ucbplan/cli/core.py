@@ -18,6 +18,7 @@ import typer.core
 from rich.markup import escape
 
 from ucbplan.api.horizons import HORIZON_FLAGS, horizon_report
+from ucbplan.api.horizons import horizon as _horizons  # its signature declares the defaults
 from ucbplan.cli._console import (
     TABLE_FORMATS,
     check_output_path,
@@ -130,11 +131,11 @@ HorizonTargetsArg = Annotated[
 
 def horizon(
     target: HorizonTargetsArg,
-    sigma_v: float | None = option(horizon_report, HORIZON_FLAGS, "sigma_v"),
-    k_eff: float | None = option(horizon_report, HORIZON_FLAGS, "k_eff"),
-    alpha: list[float] = option(horizon_report, HORIZON_FLAGS, "alpha"),
-    epochs: int = option(horizon_report, HORIZON_FLAGS, "n_epochs"),
-    anchor: list[str] = option(horizon_report, HORIZON_FLAGS, "anchors"),
+    sigma_v: float | None = option(_horizons, HORIZON_FLAGS, "sigma_v"),
+    k_eff: float | None = option(_horizons, HORIZON_FLAGS, "k_eff"),
+    alpha: list[float] = option(_horizons, HORIZON_FLAGS, "alpha"),
+    epochs: int = option(_horizons, HORIZON_FLAGS, "n_epochs"),
+    anchor: list[str] = option(_horizons, HORIZON_FLAGS, "anchors"),
     fmt: TableFormatOpt = None,
     output: OutputOpt = None,
     plot: PlotOpt = None,

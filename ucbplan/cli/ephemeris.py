@@ -18,6 +18,7 @@ import typer.core
 from rich.markup import escape
 
 from ucbplan.api.ephemeris import COMPARE_FLAGS, EPHEMERIS_FLAGS, compare_ephemerides, predict
+from ucbplan.api.ephemeris import ephemeris as _epochs  # its signature declares the defaults
 from ucbplan.cli._console import (
     TABLE_FORMATS,
     dump_json,
@@ -51,12 +52,12 @@ def ephemeris(
     target: TargetArg,
     start: str = _required("start"),
     end: str = _required("end"),
-    anchor: str = option(predict, EPHEMERIS_FLAGS, "anchor"),
-    star: int = option(predict, EPHEMERIS_FLAGS, "star"),
+    anchor: str = option(_epochs, EPHEMERIS_FLAGS, "anchor"),
+    star: int = option(_epochs, EPHEMERIS_FLAGS, "star"),
     fmt: TableFormatOpt = None,
     output: OutputOpt = None,
     overwrite: OverwriteOutputOpt = False,
-    max_epochs: int = option(predict, EPHEMERIS_FLAGS, "max_epochs"),
+    max_epochs: int = option(_epochs, EPHEMERIS_FLAGS, "max_epochs"),
 ) -> None:
     """Barycentric epochs t★ (TDB) where u = u★, with σ_t and the φ_ref π-mode alternative.
 

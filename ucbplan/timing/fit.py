@@ -190,9 +190,11 @@ def _check_counts(
     distinct = np.unique(cycles[used]).size
     if n < terms or distinct < terms:
         what = f"{n} times" if n < terms else f"{distinct} distinct cycles"
+        # times in few cycles: the first ephemeris may have counted them wrong
+        check = "" if n < terms else ", or check the first ephemeris (`period`, `initial`)"
         raise InputError(
             f"{times.label()}: {why}{what}, fewer than the {terms} parameters of `terms` {terms}; "
-            f"add times or fit fewer terms (`terms` {max(2, min(terms - 1, distinct))})"
+            f"add times or fit fewer terms (`terms` {max(2, min(terms - 1, distinct))}){check}"
         )
 
 
