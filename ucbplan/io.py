@@ -65,7 +65,7 @@ def check_output_path(path: Path, overwrite: bool) -> None:
     if mode is not None:
         if not stat.S_ISREG(mode):
             kind = "a folder" if stat.S_ISDIR(mode) else "not a regular file"
-            raise OutputError(f"{path}: output path is {kind}; give a file name with -o")
+            raise OutputError(f"{path}: output path is {kind}; give a file name with `output`")
         if not overwrite:
             raise OutputExistsError(
                 f"{path}: output file exists; pass `overwrite` to replace it or choose another "
