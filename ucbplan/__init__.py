@@ -35,6 +35,7 @@ _PUBLIC = {
     "ephemeris": "ucbplan.api",
     "horizon": "ucbplan.api",
     "plan": "ucbplan.api",
+    "replan": "ucbplan.api",
     "Plan": "ucbplan.api",
     "StrategyRecord": "ucbplan.api",  # a2: Plan.strategies
     "GoalRecord": "ucbplan.api",  # a2: Plan.goals

@@ -16,6 +16,7 @@ from ucbplan.api.plan_result import GoalRecord, StrategyRecord
 from ucbplan.api.planning import Plan, default_constraints, plan
 from ucbplan.api.populations import PopulationForecast, population_forecast
 from ucbplan.api.reduction import Report, reduce
+from ucbplan.api.replanning import replan
 from ucbplan.api.signal_sizes import feasibility
 from ucbplan.api.targets import get_site, load_target, validate, write_target
 from ucbplan.api.timing import TimingFit, fit_ephemeris
@@ -43,6 +44,7 @@ __all__ = [
     "population_forecast",
     "read_blocks",
     "reduce",
+    "replan",
     "simulate",
     "validate",
     "waveform",

@@ -29,6 +29,7 @@ __all__ = [
     "accept_old_names",
     "checked_flag",
     "checked_text",
+    "recorded_options",
     "settings_from",
 ]
 
@@ -337,3 +338,33 @@ def _limits(o: Mapping[str, Any]) -> dict[str, Any]:
         "moon_illum_max": o["moon_illum"],
         "zenith_hole_deg": as_float(o["zenith_hole"], _DEG, "zenith_hole"),
     }
+
+
+#: The plan options a replan takes from the plan's meta instead (site, nights, targets).
+_FROM_META = frozenset(
+    {"targets", "site", "site_lonlat", "sites_file", "timezone", "night", "nights"}
+)
+
+
+def recorded_options(o: Mapping[str, Any], plan_func: Any) -> dict[str, Any]:
+    """The options of a :func:`ucbplan.plan` call ``o`` that differ from its defaults, as the
+    meta records them: text, numbers and lists of text; anything else (objects) by its type
+    under ``unrecorded`` (a replan then refuses)."""
+    defaults = inspect.signature(plan_func).parameters
+    out: dict[str, Any] = {}
+    unrecorded: list[str] = []
+    for name, value in o.items():
+        if name in _FROM_META or name not in defaults or value is defaults[name].default:
+            continue
+        if isinstance(value, Path):
+            value = str(value)
+        plain = value is None or isinstance(value, str | int | float | bool)
+        if isinstance(value, list | tuple) and all(isinstance(v, str) for v in value):
+            value, plain = list(value), True
+        if plain:
+            out[name] = value if not isinstance(value, float) else float(value)
+        else:
+            unrecorded.append(name)
+    if unrecorded:
+        out["unrecorded"] = unrecorded
+    return out

@@ -111,6 +111,11 @@ class Plan:
 
     run: PlanRun | None = None
     source: Table | None = field(default=None, repr=False)
+    #: The options :func:`ucbplan.plan` was called with, recorded in the meta (``plan_options``)
+    #: so that :func:`ucbplan.replan` can plan again with them.
+    options: dict[str, Any] | None = field(default=None, repr=False)
+    #: The rows a replan keeps before its ``from_`` instant (the plan's history), first.
+    history: Table | None = field(default=None, repr=False)
 
     # ------------------------------------------------------------------------------ tables
 
@@ -123,7 +128,16 @@ class Plan:
                 raise InputError("Plan: expected a planner run or a blocks table, got neither")
             return self.source
         with scope():
-            return self.run.table()
+            table = self.run.table()
+        if self.history is not None and len(self.history):
+            from astropy.table import vstack
+
+            meta = table.meta
+            table = vstack([self.history, table], metadata_conflicts="silent")
+            table.meta = meta
+        if self.options is not None:
+            table.meta["plan_options"] = dict(self.options)
+        return table
 
     @cached_property
     def table(self) -> QTable:

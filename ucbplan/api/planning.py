@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import inspect
 from collections.abc import Mapping, Sequence
+from datetime import date
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -14,6 +15,7 @@ from ucbplan.api.plan_options import (
     OLD_NAMES,
     PLAN_FLAGS,
     accept_old_names,
+    recorded_options,
     settings_from,
 )
 from ucbplan.api.plan_result import Plan
@@ -231,16 +233,22 @@ def plan(
         :class:`~ucbplan.errors.SmearingWarning`, :class:`~ucbplan.errors.ExposureWarning`
         (PlanWarnings), EarthOrientationWarning (nights past the bundled IERS tables).
     """
-    run = plan_run(dict(locals()))
+    o = dict(locals())
+    run = plan_run(o)
     emit(
         list(run.result.warnings), run.result.warning_categories, stacklevel=4
     )  # warn, emit, plan, its alias
-    return Plan(run)
+    return Plan(run, options=recorded_options(o, plan))
 
 
 def plan_run(o: dict[str, Any]) -> PlanRun:
     """The planner's run of :func:`plan`'s arguments ``o`` by name: every option checked first
     (cheap, one line each), then the site, then the files, then the work."""
+    return plan_run_on(o, None)
+
+
+def plan_run_on(o: dict[str, Any], nights: Sequence[date] | None) -> PlanRun:
+    """:func:`plan_run` on the given nights (None: ``o``'s ``night`` and ``nights``)."""
     from ucbplan.api._observed import observed_settings
     from ucbplan.observing.schedule import night_dates
     from ucbplan.observing.schedule.run import parse_priorities, plan_targets
@@ -248,6 +256,7 @@ def plan_run(o: dict[str, Any]) -> PlanRun:
     with scope():
         settings = settings_from(o, _constraints(o))
         dates = night_dates(as_date(o["night"], "night"), _nights(o["nights"]))
+        dates = dates if nights is None else list(nights)
         priorities = _priorities(o["priorities"])
         if not isinstance(priorities, Mapping):
             parse_priorities(priorities)

@@ -57,9 +57,19 @@ def _root(
 
 
 def _register_all() -> None:
-    from ucbplan.cli import core, export, feasibility, lisa, now, plan, population, reduce
+    from ucbplan.cli import (
+        core,
+        export,
+        feasibility,
+        lisa,
+        now,
+        plan,
+        population,
+        reduce,
+        replan,
+    )
 
-    for module in (core, plan, now, export, feasibility, reduce, lisa, population):
+    for module in (core, plan, replan, now, export, feasibility, reduce, lisa, population):
         module.register(app)
 
 

@@ -262,7 +262,7 @@ def _collected_facts(goal: GoalPlan) -> dict[str, Any]:
     return {
         "observed_spectra": goal.collected_spectra,
         "observed_info": goal.collected_info,
-        "observed_sigma_K_kms": goal.collected_info**-0.5,
+        "observed_sigma_K_kms": goal.collected_info**-0.5 if goal.collected_info > 0 else None,
         "info_still_needed": goal.info_needed,
     }
 
