@@ -65,7 +65,7 @@ def test_replan_from_the_start_without_losses_is_the_original_plan(
 
 
 def test_a_lost_night_gets_nothing_and_the_history_is_kept(original: Path, tmp_path: Path) -> None:
-    new = _quiet(ucbplan.replan, original, SECOND, lost=["2040-02-16"])
+    new = _quiet(ucbplan.replan, ucbplan.Plan.read(original), SECOND, lost=["2040-02-16"])
     new.write(tmp_path / "new.ecsv")
     old_lines, new_lines = _data_lines(original), _data_lines(tmp_path / "new.ecsv")
     old = Table.read(original, format="ascii.ecsv")

@@ -22,6 +22,7 @@ from ucbplan.api.plan_options import PLAN_FLAGS
 from ucbplan.api.population_runs import POPULATION_SIMULATE_FLAGS, RANK_FLAGS, VISIBILITY_FLAGS
 from ucbplan.api.populations import PARTS_FLAGS, POPULATION_FLAGS
 from ucbplan.api.reduction import REDUCE_FLAGS
+from ucbplan.api.replanning import REPLAN_FLAGS
 from ucbplan.api.signal_sizes import FEASIBILITY_FLAGS
 from ucbplan.api.timing import FIT_FLAGS
 
@@ -90,6 +91,7 @@ _DECLARED = flag_names(
     VISIBILITY_FLAGS,
     RANK_FLAGS,
     POPULATION_SIMULATE_FLAGS,
+    REPLAN_FLAGS,
 )
 _IRREGULAR.update(
     {k: v for k, v in _DECLARED.items() if k not in _IRREGULAR and v != "--" + k.replace("_", "-")}
