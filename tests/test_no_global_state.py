@@ -141,6 +141,9 @@ CALLS: dict[str, Callable[[Path], object]] = {
     "horizon": lambda tmp: ucbplan.horizon(HM),
     "default_constraints": lambda tmp: ucbplan.default_constraints("paranal"),
     "plan": lambda tmp: ucbplan.plan(HM, "paranal", "2040-02-15"),
+    "replan": lambda tmp: ucbplan.replan(
+        ucbplan.plan(HM, "paranal", "2040-02-15", 3), "2040-02-16T18:00", lost=["2040-02-16"]
+    ),
     "reduce": lambda tmp: ucbplan.reduce(ECC, VELOCITIES, samples=200, seed=1),
     "fit_ephemeris": lambda tmp: ucbplan.fit_ephemeris(_eclipse_times(tmp), period="0.0595 d"),
     "population_forecast": lambda tmp: ucbplan.population_forecast(_small_catalog(tmp)),

@@ -149,7 +149,7 @@ def replan(
     remaining = [n for n in nights if n >= start and n not in gone]
     if not remaining:
         raise InputError(
-            "lost: every night from --from on is lost; nothing is left to re-plan", "lost"
+            "lost: every night from from_ on is lost; nothing is left to re-plan", "lost"
         )
     with tempfile.TemporaryDirectory() as tmp:
         if observed is None and len(kept_rows) and options.get("goal"):
@@ -174,7 +174,7 @@ def _options(old: Plan) -> dict[str, Any]:
     if options.get("observed") is not None or options.get("sigma_v_scale") is not None:
         raise InputFileError(
             "plan meta plan_options: the plan counted observed spectra itself; re-plan the "
-            "original plan with --observed instead"
+            "original plan with `observed` instead"
         )
     for entry in meta.get("targets", []):
         _check_target(entry)
