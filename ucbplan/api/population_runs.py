@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ucbplan.api.flagspec import Flag
+from ucbplan.api.plan_options import PLAN_FLAGS
 from ucbplan.lisa import DEFAULT_MAX_STEPS, DEFAULT_STEPS, DEFAULT_WALKERS
 
 if TYPE_CHECKING:
@@ -43,17 +44,16 @@ __all__ = [
 #: How ``ucbplan population visibility`` spells the parameters of :func:`visibility_settings`.
 VISIBILITY_FLAGS: dict[str, Flag] = {
     "semester": Flag(("--semester",), "2041A, 2041B or an ESO period P147."),
-    "site": Flag(("--site",), "Site name or alias (e.g. paranal)."),
-    "site_lonlat": Flag(
-        ("--site-lonlat",), "LON,LAT,HEIGHT (deg east, deg north, m) instead of --site."
-    ),
+    # the site and the constraints as plan declares them
+    "site": PLAN_FLAGS["site"],
+    "site_lonlat": PLAN_FLAGS["site_lonlat"],
     "sites_file": Flag(("--sites-file",), "YAML site table."),
-    "airmass_max": Flag(("--airmass-max",), "Largest airmass (sec z)."),
+    "airmass_max": PLAN_FLAGS["airmass_max"],
     "twilight": Flag(("--twilight",), "civil|nautical|astronomical"),
-    "moon_sep": Flag(("--moon-sep",), "Smallest Moon separation [deg].", unit="deg"),
+    "moon_sep": PLAN_FLAGS["moon_sep"],
     "min_hours": Flag(("--min-hours",), "Usable hours of a usable night.", unit="h"),
     "exptime": Flag(("--exptime",), "Block (exposure) length [s].", unit="s"),
-    "alpha": Flag(("--alpha",), "Planning margin α of T_valid."),
+    "alpha": PLAN_FLAGS["alpha"],
 }
 #: How ``ucbplan population rank`` spells the parameters of :func:`rank_settings`.
 RANK_FLAGS: dict[str, Flag] = {

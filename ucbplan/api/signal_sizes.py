@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Any
 from ucbplan.api._convert import as_float, scope
 from ucbplan.api.ephemeris import parse_epoch
 from ucbplan.api.flagspec import Flag
+from ucbplan.api.plan_options import PLAN_FLAGS
 from ucbplan.api.targets import TargetLike, load_target
 from ucbplan.core.constants import DAY_S, MONTH_S, YEAR_S  # also the command's table columns
 from ucbplan.errors import InputError, shorten
@@ -51,13 +52,9 @@ FEASIBILITY_FLAGS: dict[str, Flag] = {
         "Optical ephemeris reference epoch: ISO (TDB unless labelled UTC) or BJD_TDB; "
         "default: the target's reference epoch (LISA midpoint or timing T0).",
     ),
-    "sigma_floor": Flag(
-        ("--sigma-floor",), "Systematic σ_v floor added in quadrature [km/s].", "km/s"
-    ),
-    "extinction": Flag(
-        ("--extinction",),
-        "Extinction k [mag/airmass] of the σ_v law (default: the instrument's, else 0).",
-    ),
+    # the σ_v law's floor and extinction as plan declares them
+    "sigma_floor": PLAN_FLAGS["sigma_floor"],
+    "extinction": PLAN_FLAGS["extinction"],
     "readout": Flag(("--readout",), "Readout per exposure (s).", "s"),
     "overhead": Flag(("--overhead",), "Acquisition per visit (s).", "s"),
     "visit": Flag(("--visit",), "Visit length (1h); default --max-visit."),

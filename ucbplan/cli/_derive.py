@@ -14,7 +14,7 @@ import typer
 
 from ucbplan.api.flagspec import Flag, default_of
 
-__all__ = ["annotated", "argument", "flag", "option"]
+__all__ = ["argument", "flag", "option"]
 
 
 def option(func: Callable[..., Any], flags: Mapping[str, Flag], parameter: str) -> Any:
@@ -36,10 +36,3 @@ def flag(flags: Mapping[str, Flag], parameter: str, default: Any = None) -> Any:
     ``...`` (required)."""
     spec = flags[parameter]
     return typer.Option(default, *spec.decls, help=spec.help)
-
-
-def annotated(flags: Mapping[str, Flag], parameter: str) -> Any:
-    """``typer.Option`` for an ``Annotated`` alias shared by several commands: the flag and help
-    declared for ``parameter`` (each command gives the default)."""
-    spec = flags[parameter]
-    return typer.Option(*spec.decls, help=spec.help)

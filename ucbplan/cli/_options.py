@@ -7,9 +7,6 @@ from typing import Annotated
 
 import typer
 
-from ucbplan.api.plan_options import PLAN_FLAGS
-from ucbplan.cli._derive import annotated
-
 TargetArg = Annotated[Path, typer.Argument(help="Target YAML file.")]
 TargetsArg = Annotated[list[Path], typer.Argument(help="Target YAML files to check.")]
 ValidateFormatOpt = Annotated[str, typer.Option("--format", help="table | json")]
@@ -29,8 +26,3 @@ CompareFormatOpt = Annotated[
     str | None,
     typer.Option("--format", help="table | json (default: the -o suffix, else table)"),
 ]
-# the σ_v law and the goal's longest visit, as ``plan`` declares them (ucbplan.api.plan_options)
-SigmaLawOpt = Annotated[str | None, annotated(PLAN_FLAGS, "sigma_v")]
-SigmaFloorOpt = Annotated[float, annotated(PLAN_FLAGS, "sigma_floor")]
-ExtinctionOpt = Annotated[float | None, annotated(PLAN_FLAGS, "extinction")]
-MaxVisitOpt = Annotated[str | None, annotated(PLAN_FLAGS, "max_visit")]
