@@ -46,6 +46,13 @@ def test_same_text_as_dumps_json(doc: object) -> None:
     assert dumps_report(doc) == dumps_json(doc)
 
 
+def test_keys_equal_as_text_merge_as_json_plain_merges_them() -> None:
+    """A key and another whose text is the same ("0" and 0) are one JSON key, the last value
+    kept at the first one's place, as io.json_plain makes them (hypothesis found it)."""
+    doc = {"0": None, 0: 1.5, "a": {1: "x", "1": "y"}}
+    assert dumps_report(doc) == dumps_json(doc) == '{\n  "0": 1.5,\n  "a": {\n    "1": "y"\n  }\n}'
+
+
 def test_numpy_arrays_and_non_finite_values() -> None:
     doc = {
         "a": np.array([1.5, np.nan, -np.inf]),

@@ -71,6 +71,8 @@ def _mapping(obj: Mapping[Any, Any], level: int, out: list[str]) -> None:
     if not obj:
         out.append("{}")
         return
+    if not all(type(k) is str for k in obj):  # keys equal as text are one key (json_plain)
+        obj = {str(k): v for k, v in obj.items()}
     inner = "\n" + _INDENT * (level + 1)
     sep = "{" + inner
     for key, val in obj.items():
