@@ -26,6 +26,7 @@ from typing import Any
 
 import pytest
 from test_nightsheet_browser import CHROMIUM
+from test_nightsheet_browser import pytestmark as BROWSER_MARKS
 from test_observed import BASE, NAME, TARGET
 from test_obslog import fisher_of_taken
 
@@ -35,16 +36,8 @@ from ucbplan.observing.obslog import log_cells, log_text
 from ucbplan.observing.sites import get_site
 from ucbplan.observing.tableread import read_blocks
 
-pytestmark = [
-    pytest.mark.slow,
-    pytest.mark.skipif(
-        CHROMIUM is None,
-        reason="chromium is not installed (Debian: apt-get install -y chromium; .ci/run does "
-        "it): the night sheet's log buttons are tested in a real browser",
-    ),
-    pytest.mark.filterwarnings("ignore::erfa.ErfaWarning"),
-    pytest.mark.filterwarnings("ignore::astropy.utils.exceptions.AstropyWarning"),
-]
+#: As the night sheet's other browser tests: skipped, saying why, without chromium.
+pytestmark = [pytest.mark.slow, *BROWSER_MARKS]
 
 #: Longest wait for the browser to answer or to finish the download [s].
 TIMEOUT_S = 60.0

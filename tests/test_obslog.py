@@ -114,16 +114,23 @@ class _Keys:
         return None
 
 
-def test_now_log_marks_the_exposure_just_started_and_writes_after_each_key(
-    goal_plan: Path, tmp_path: Path
-) -> None:
-    table = read_blocks(goal_plan)
-    path = tmp_path / "now.csv"
-    log = ObservingLog.open(table, path)
+@pytest.fixture(scope="module")
+def now_log(goal_plan: Path, tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, _Keys, str]:
+    """A rehearsal of ``now --log`` over the first night: the log, the keys and the frames."""
+    path = tmp_path_factory.mktemp("now") / "now.csv"
+    log = ObservingLog.open(read_blocks(goal_plan), path)
     assert path.read_text(encoding="utf-8") == ",".join(LOG_COLUMNS) + "\n"  # written at once
     keys = _Keys([e.start for e in log.exposures], MARKS, path)
     out = io.StringIO()
     now_cli.live(log.exposures, keys.origin, out, monotonic=keys.monotonic, log=log, keys=keys.keys)
+    return path, keys, out.getvalue()
+
+
+def test_now_log_marks_the_exposure_just_started_and_writes_after_each_key(
+    goal_plan: Path, now_log: tuple[Path, _Keys, str]
+) -> None:
+    path, keys, frames = now_log
+    table = read_blocks(goal_plan)
     assert keys.script == [] and keys.pressed[-1] == "q"
     with path.open(newline="", encoding="utf-8") as handle:
         rows = list(csv.DictReader(handle))
@@ -136,17 +143,13 @@ def test_now_log_marks_the_exposure_just_started_and_writes_after_each_key(
     # the file after each key holds every mark so far: a crash loses none
     written = [f.count("\n") - 1 for f in dict.fromkeys(keys.files)]
     assert written == list(range(len(MARKS) + 1))
-    assert "log       V01/09 taken; 9 marked, 0 earlier not" in out.getvalue()
+    assert "log       V01/09 taken; 9 marked, 0 earlier not" in frames
 
 
 def test_now_log_round_trip_counts_the_fisher_sum_of_the_taken_rows(
-    goal_plan: Path, tmp_path: Path
+    goal_plan: Path, now_log: tuple[Path, _Keys, str]
 ) -> None:
-    table = read_blocks(goal_plan)
-    path = tmp_path / "now.csv"
-    log = ObservingLog.open(table, path)
-    for e, status in zip(log.exposures, MARKS, strict=False):
-        log.mark(e, status)
+    path = now_log[0]
     want = fisher_of_taken(goal_plan, path)
     goal = _replan(goal_plan, path).run.result.goals[NAME]
     assert goal.collected_spectra == MARKS.count("taken") == 6
@@ -208,6 +211,20 @@ def test_now_log_reads_keys_from_stdin(goal_plan: Path, tmp_path: Path) -> None:
     table = read_blocks(goal_plan)
     assert row["status"] == "taken" and row["block_id"] == table["block_id"][-1]
     assert "V01/14 taken; 1 marked, 27 earlier not" in run.stdout
+
+
+def test_plan_id_is_the_same_in_memory_and_in_every_file_format(tmp_path: Path) -> None:
+    """The sheet of a plan just made and ``now`` on its ECSV, CSV or JSON name one plan."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        p = ucbplan.plan(str(TARGET), night="2040-02-15", nights=1, **BASE, goal="sigma_K=20km/s")
+    ids = {
+        plan_id(read_blocks(p.write(tmp_path / f"plan.{fmt}"))) for fmt in ("ecsv", "csv", "json")
+    }
+    assert ids == {plan_id(p.table)}
+    shifted = p.table.copy()
+    shifted["t_start_utc"][0] = "2040-02-16T03:00:00.000"  # another plan
+    assert plan_id(shifted) not in ids
 
 
 def _edited(src: Path, dst: Path, column: str, value: str, row: int = 0) -> Path:
