@@ -220,8 +220,8 @@ def read_log(path: Path | str) -> Table:
     if not is_log(text):
         raise InputFileError(
             f"{where}: expected an observing log (first line {','.join(LOG_COLUMNS)}), got "
-            f"{shorten(text.split(chr(10), 1)[0], 60)}; save it from the night sheet or "
-            "`ucbplan now --log`"
+            f"{shorten(text.split(chr(10), 1)[0], 60)}; save it with the night sheet's save-log "
+            "button or `ucbplan now`'s `log`"
         )
     rows = _rows(text, where)
     table = Table(
@@ -247,7 +247,7 @@ def _existing(path: Path) -> Table:
     if not is_log(read_text(path, "observing log")):
         raise InputError(
             f"log {path}: the file exists and is not an observing log; give a new file name, "
-            "or --overwrite to replace it",
+            "or `overwrite` to replace it",
             parameter="log",
         )
     return read_log(path)
@@ -292,7 +292,7 @@ class ObservingLog:
         if len(old) and theirs != ident:
             raise InputError(
                 f"log {self.path}: a log of another plan (plan_id {theirs}, this plan "
-                f"{ident}); give a new file name, or --overwrite to start it again",
+                f"{ident}); give a new file name, or `overwrite` to start it again",
                 parameter="log",
             )
         where = {(c[4], c[3]): k for k, c in enumerate(self.cells)}
@@ -302,14 +302,14 @@ class ObservingLog:
                 raise InputError(
                     f"log {self.path}: exposure {shorten(str(row['exposure']), 30)} at "
                     f"{shorten(str(row['site']), 30)} is not in this plan at {site}; give a "
-                    "new file name, or --overwrite to start it again",
+                    "new file name, or `overwrite` to start it again",
                     parameter="log",
                 )
             if str(row["status"]) not in STATUSES:
                 raise InputError(
                     f"log {self.path}: exposure {row['exposure']}, column status: expected one "
                     f"of {', '.join(STATUSES)}, got {shorten(str(row['status']), 30)}; fix it, "
-                    "or --overwrite to start the log again",
+                    "or `overwrite` to start the log again",
                     parameter="log",
                 )
             self.statuses[k] = str(row["status"])
