@@ -14,6 +14,7 @@ driven by an injected clock and key source, never by timing.
 from __future__ import annotations
 
 import csv
+import dataclasses
 import io
 import subprocess
 import sys
@@ -40,6 +41,7 @@ from ucbplan.observing.obslog import (
     LOG_KEYS,
     ObservingLog,
     log_cells,
+    log_lines,
     log_text,
     plan_id,
     read_log,
@@ -144,6 +146,16 @@ def test_now_log_marks_the_exposure_just_started_and_writes_after_each_key(
     written = [f.count("\n") - 1 for f in dict.fromkeys(keys.files)]
     assert written == list(range(len(MARKS) + 1))
     assert "log       V01/09 taken; 9 marked, 0 earlier not" in frames
+
+
+def test_the_log_entry_fits_100_columns(goal_plan: Path, tmp_path: Path) -> None:
+    log = ObservingLog.open(read_blocks(goal_plan), tmp_path / "now.csv")
+    log.exposures[0] = dataclasses.replace(log.exposures[0], label="VERYLONGVISIT/01.12")
+    log.statuses[1:] = ["taken"] * (len(log.statuses) - 1)
+    lines = log_lines(log, log.exposures[0])
+    assert len(lines) == 2 and all(len(ln) <= 100 for ln in lines)
+    assert lines[0].startswith("log       VERYLONGVISIT/01.12 not marked; 27 marked")
+    assert lines[1].startswith(" " * 10) and lines[1].endswith("q quit")
 
 
 def test_now_log_round_trip_counts_the_fisher_sum_of_the_taken_rows(

@@ -103,7 +103,7 @@ def _draw(out: TextIO, c: Any, log: Any, tty: bool) -> None:
     """One frame: the countdown, and with a log its line."""
     lines = terminal.countdown_lines(c)
     if log is not None:
-        lines.append(terminal.log_line(log, c.previous))
+        lines += terminal.log_lines(log, c.previous)
     out.write((_CLEAR if tty else "") + "\n".join(lines) + "\n")
     out.write("" if tty else "\n")
     out.flush()

@@ -18,6 +18,7 @@ import csv
 import hashlib
 import io
 import math
+import textwrap
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from datetime import datetime, timedelta
@@ -39,7 +40,7 @@ __all__ = [
     "is_log",
     "log_cells",
     "log_file_name",
-    "log_line",
+    "log_lines",
     "log_text",
     "plan_id",
     "read_log",
@@ -333,16 +334,19 @@ class ObservingLog:
         write_output(self.path, _write, overwrite=True)
 
 
-def log_line(log: ObservingLog, previous: Exposure | None) -> str:
-    """The ``log`` line of a ``now --log`` frame: the mark of the exposure just started (the
-    one a key marks), how many are marked and how many earlier ones are not, and the keys."""
+def log_lines(log: ObservingLog, previous: Exposure | None, width: int = 100) -> list[str]:
+    """The ``log`` entry of a ``now --log`` frame, wrapped to ``width`` columns under its
+    10-column tag as the countdown's: the mark of the exposure just started (the one a key
+    marks), how many are marked and how many earlier ones are not, and the keys."""
     keys = ", ".join(f"{k} {s}" for k, s in LOG_KEYS.items())
     if previous is None:
-        return f"{'log':<10}no exposure started yet; then keys {keys}"
-    k = log.exposures.index(previous)
-    unmarked = sum(1 for s in log.statuses[:k] if not s)
-    marked = sum(1 for s in log.statuses if s)
-    return (
-        f"{'log':<10}{previous.label} {log.statuses[k] or 'not marked'}; {marked} marked, "
-        f"{unmarked} earlier not; keys {keys}, q quit"
-    )
+        text = f"no exposure started yet; then keys {keys}"
+    else:
+        k = log.exposures.index(previous)
+        unmarked = sum(1 for s in log.statuses[:k] if not s)
+        marked = sum(1 for s in log.statuses if s)
+        text = (
+            f"{previous.label} {log.statuses[k] or 'not marked'}; {marked} marked, "
+            f"{unmarked} earlier not; keys {keys}, q quit"
+        )
+    return textwrap.wrap(text, width, initial_indent=f"{'log':<10}", subsequent_indent=" " * 10)
