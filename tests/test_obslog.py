@@ -239,6 +239,34 @@ def test_plan_id_is_the_same_in_memory_and_in_every_file_format(tmp_path: Path) 
     assert plan_id(shifted) not in ids
 
 
+def test_a_log_of_a_csv_plan_names_no_site_and_counts_the_same(
+    goal_plan: Path, now_log: tuple[Path, _Keys, str], tmp_path: Path
+) -> None:
+    """A CSV plan has no meta: its log's site is blank, and the reader checks no site."""
+    plan_csv = tmp_path / "goal.csv"
+    Table.read(goal_plan, format="ascii.ecsv").write(plan_csv, format="ascii.csv")
+    log = ObservingLog.open(read_blocks(plan_csv), tmp_path / "now.csv")
+    for e, status in zip(log.exposures, MARKS, strict=False):
+        log.mark(e, status)
+    rows = read_log(log.path)
+    assert set(rows["site"]) == {""} and "site" not in rows.meta
+    assert list(rows["t_mid_tdb_bary"]) == list(read_log(now_log[0])["t_mid_tdb_bary"])
+    goal = _replan(goal_plan, log.path).run.result.goals[NAME]
+    assert goal.collected_info == pytest.approx(fisher_of_taken(goal_plan, log.path), rel=1e-9)
+
+
+def test_a_formula_name_is_written_safe_and_read_back(telescope_plan: Path, tmp_path: Path) -> None:
+    """Issue 33 for the log: a target named like a formula is no formula in a spreadsheet."""
+    table = read_blocks(telescope_plan)[:2]
+    table["target"] = ["=cmd|' /C calc'!A0", "@SUM(1+1)*cmd"]
+    path = tmp_path / "log.csv"
+    path.write_text(log_text([c for _, c in log_cells(table)], ["taken", "missed"]), "utf-8")
+    with path.open(newline="", encoding="utf-8") as handle:
+        cells = [r["target"] for r in csv.DictReader(handle)]
+    assert cells == ["'=cmd|' /C calc'!A0", "'@SUM(1+1)*cmd"]
+    assert list(read_log(path)["target"]) == list(table["target"])
+
+
 def _edited(src: Path, dst: Path, column: str, value: str, row: int = 0) -> Path:
     with src.open(newline="", encoding="utf-8") as handle:
         rows = list(csv.reader(handle))

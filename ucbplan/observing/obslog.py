@@ -31,6 +31,7 @@ from ucbplan.errors import InputError, InputFileError, shorten
 from ucbplan.io import write_output
 from ucbplan.observing.countdown import Exposure, plan_exposures
 from ucbplan.observing.sites import Site
+from ucbplan.observing.tablewrite import csv_safe_text, csv_unsafe_text
 
 __all__ = [
     "LOG_COLUMNS",
@@ -113,7 +114,9 @@ def log_file_name(table: Table) -> str:
 
 def log_cells(table: Table, site: Site | None = None) -> list[tuple[Exposure, tuple[str, ...]]]:
     """Every exposure of the plan in time order with its log cells (:data:`LOG_COLUMNS`
-    without ``status``; ``site``: as :func:`~ucbplan.observing.countdown.plan_exposures`)."""
+    without ``status``; ``site``: as :func:`~ucbplan.observing.countdown.plan_exposures`): text
+    cells neutralised for spreadsheets (:func:`~ucbplan.observing.tablewrite.csv_safe_text`),
+    which :func:`read_log` undoes."""
     rows = {str(r["block_id"]): r for r in table}
     ident, site_name = plan_id(table), _site_name(table)
     sigma = "sigma_v_kms" in table.colnames
@@ -124,10 +127,10 @@ def log_cells(table: Table, site: Site | None = None) -> list[tuple[Exposure, tu
         k = seen[e.block_id] = seen.get(e.block_id, -1) + 1
         cells = (
             ident,
-            site_name,
-            e.target,
-            e.label,
-            e.block_id,
+            csv_safe_text(site_name),
+            csv_safe_text(e.target),
+            csv_safe_text(e.label),
+            csv_safe_text(e.block_id),
             str(row["t_start_utc"]).strip() if k == 0 else _iso_ms(e.start),
             _mid_tdb(row, e, k),
             _number(e.exptime_s),
@@ -161,7 +164,8 @@ _NUMBERS = ("exptime_s", "airmass", "lambda_k", "sigma_v_kms")
 
 
 def _value(name: str, text: str) -> Any:
-    return (float(text) if text else math.nan) if name in _NUMBERS else text
+    """A cell as read: a number (blank: NaN), or the text a CSV writer neutralised."""
+    return (float(text) if text else math.nan) if name in _NUMBERS else csv_unsafe_text(text)
 
 
 def _check_cell(where: str, i: int, name: str, value: str) -> None:
@@ -236,8 +240,10 @@ def read_log(path: Path | str) -> Table:
                 f"{where}: column {name}: expected one value (a log of one plan), got "
                 f"{shorten(', '.join(values), 80)}; keep one plan's rows per log"
             )
-    site = rows[0]["site"] if rows else ""
-    table.meta.update({"plan_id": rows[0]["plan_id"] if rows else "", "site": {"name": site}})
+    site = csv_unsafe_text(rows[0]["site"]) if rows else ""
+    table.meta["plan_id"] = rows[0]["plan_id"] if rows else ""
+    if site:  # a log of a plan without a site (a CSV plan) says none
+        table.meta["site"] = {"name": site}
     return table
 
 
@@ -296,7 +302,9 @@ class ObservingLog:
                 f"{ident}); give a new file name, or `overwrite` to start it again",
                 parameter="log",
             )
-        where = {(c[4], c[3]): k for k, c in enumerate(self.cells)}
+        where = {
+            (csv_unsafe_text(c[4]), csv_unsafe_text(c[3])): k for k, c in enumerate(self.cells)
+        }
         for row in old:
             k = where.get((str(row["block_id"]), str(row["exposure"])))
             if k is None or str(row["site"]) != site:
