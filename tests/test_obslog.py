@@ -40,6 +40,7 @@ from ucbplan.observing.obslog import (
     LOG_COLUMNS,
     LOG_KEYS,
     ObservingLog,
+    check_log_plan,
     log_cells,
     log_lines,
     log_text,
@@ -253,6 +254,14 @@ def test_a_log_of_a_csv_plan_names_no_site_and_counts_the_same(
     assert list(rows["t_mid_tdb_bary"]) == list(read_log(now_log[0])["t_mid_tdb_bary"])
     goal = _replan(goal_plan, log.path).run.result.goals[NAME]
     assert goal.collected_info == pytest.approx(fisher_of_taken(goal_plan, log.path), rel=1e-9)
+
+
+def test_a_log_of_another_plan_is_refused_by_check_log_plan(
+    goal_plan: Path, telescope_plan: Path, now_log: tuple[Path, _Keys, str]
+) -> None:
+    check_log_plan(now_log[0], read_blocks(goal_plan))  # its own plan: fine
+    with pytest.raises(InputError, match=r"^observed .*: a log of another plan \(plan_id "):
+        check_log_plan(now_log[0], read_blocks(telescope_plan))
 
 
 def test_a_formula_name_is_written_safe_and_read_back(telescope_plan: Path, tmp_path: Path) -> None:

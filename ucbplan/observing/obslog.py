@@ -38,6 +38,7 @@ __all__ = [
     "LOG_KEYS",
     "STATUSES",
     "ObservingLog",
+    "check_log_plan",
     "is_log",
     "log_cells",
     "log_file_name",
@@ -245,6 +246,29 @@ def read_log(path: Path | str) -> Table:
     if site:  # a log of a plan without a site (a CSV plan) says none
         table.meta["site"] = {"name": site}
     return table
+
+
+def check_log_plan(path: Path | str, table: Table) -> None:
+    """Refuse an observing log of another plan than ``table`` (a file that is no log, or a log
+    without rows, passes: the reader judges it).
+
+    Raises
+    ------
+    InputError
+        ``path`` is a log whose ``plan_id`` is not ``table``'s (one line, naming both).
+    """
+    from ucbplan.inputs import read_text
+
+    path = Path(path)
+    if not is_log(read_text(path, "observing log")):
+        return
+    theirs, ours = str(read_log(path).meta["plan_id"]), plan_id(table)
+    if theirs and theirs != ours:
+        raise InputError(
+            f"observed {path}: a log of another plan (plan_id {theirs}, this plan {ours}); give "
+            "the log of this plan's nights",
+            parameter="observed",
+        )
 
 
 def _existing(path: Path) -> Table:
