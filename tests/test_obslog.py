@@ -313,6 +313,12 @@ def test_bad_log_is_one_line_exit_2_nothing_written(
     assert not out.exists()
 
 
+def test_a_missing_observed_file_names_the_option(tmp_path: Path) -> None:
+    args = [*CLI_BASE, "--night", "2040-02-17", "--goal", "sigma_K=13km/s"]
+    code, _, err = run_main([*args, "--observed", str(tmp_path / "none.csv")])
+    assert code == 2 and err.startswith("error: --observed: ") and "file not found" in err
+
+
 def test_a_bad_status_through_the_library_is_refused(goal_plan: Path) -> None:
     log = ObservingLog.open(read_blocks(goal_plan), goal_plan.with_name("lib.csv"), overwrite=True)
     with pytest.raises(InputError, match="expected a status taken, missed, skipped, got 'lost'"):

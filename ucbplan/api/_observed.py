@@ -108,7 +108,11 @@ def _is_log(path: Path) -> bool:
     from ucbplan.inputs import read_text
     from ucbplan.observing.obslog import is_log
 
-    return is_log(read_text(path, "spectra file"))
+    try:
+        text = read_text(path, "spectra file")
+    except InputError as exc:
+        raise InputError(f"observed: {exc}", parameter="observed") from None
+    return is_log(text)
 
 
 def _read(

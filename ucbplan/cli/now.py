@@ -59,7 +59,7 @@ def live(
     another stream gets a frame when the next exposure (or a mark) changes. ``monotonic`` and
     ``sleep`` default to :mod:`time`'s, looked up at call time (tests replace them). With a
     ``log``, ``keys(timeout)`` waits up to ``timeout`` seconds for a key (None: none came) in
-    place of ``sleep``: ``t``/``m``/``s`` mark the exposure just started, ``q`` quits, ``\x04``
+    place of ``sleep``: ``t``/``m``/``s`` mark the exposure just started, ``q`` quits, :data:`_END`
     says no key will come; the countdown ends when the plan is over and its last exposure is
     marked (or no key will come).
     """
@@ -117,7 +117,7 @@ def _all_passed(log: Any) -> bool:
 @contextmanager
 def _keyboard(stream: TextIO) -> Iterator[Callable[[float], str | None]]:
     """``keys(timeout)`` reading single keys from ``stream`` (a terminal: without Enter, its
-    mode restored after); at the end of the stream, ``\x04`` (:data:`_END`)."""
+    mode restored after); at the end of the stream, :data:`_END`."""
     import select
 
     fd = stream.fileno()
