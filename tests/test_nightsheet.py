@@ -308,7 +308,8 @@ def test_html_sheet_is_self_contained_and_says_what_to_do(
         assert tell[1].startswith(f"Starts are phase-critical ±{sigma:.2g} s: start each exposure")
         assert len(visit["rows"]) == len(rows)  # one row per exposure (n_exp = 1 here)
         for cell_row, row in zip(visit["rows"], rows, strict=True):
-            _, begin, end, anchor, airmass, lam, sig, status = cell_row["cells"]
+            _, begin, end, anchor, airmass, lam, sig, status, log = cell_row["cells"]
+            assert log == "takenmissedskipped"  # the observing log's buttons
             t0 = Time(str(row["t_start_utc"]), scale="utc")
             assert begin == (t0 + 0.5 * u.s).isot[11:19]
             assert end == (t0 + (float(row["exptime_s"]) + 0.5) * u.s).isot[11:19]
@@ -327,7 +328,7 @@ def test_html_sheet_prints_a_page_per_night_in_portrait(
     text = path.read_text(encoding="utf-8")
     assert "@page{size:portrait" in text  # A4 or Letter, whichever the printer has
     assert "section.night{break-before:page}" in text
-    assert "@media print{#clock,.status{display:none}" in text  # no stale clock on paper
+    assert "@media print{#clock,.status,.log{display:none}" in text  # no stale clock on paper
 
 
 def test_pdf_sheet_has_one_page_per_night(table: Table, site: Site, tmp_path: Path) -> None:

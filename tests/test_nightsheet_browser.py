@@ -24,6 +24,7 @@ from test_countdown import INSTANT_NAMES, expected, instants, seconds_of, table_
 from test_nightsheet import _Reader
 
 from ucbplan.observing.nightsheet import write_night_sheet
+from ucbplan.observing.sheet_html import EXPOSURE_COLUMNS
 from ucbplan.observing.sites import get_site
 from ucbplan.observing.tableread import read_blocks
 
@@ -80,7 +81,7 @@ def render(sheet: Path, now: str, profile: Path) -> _Reader:
 
 def _rows(reader: _Reader) -> list[dict[str, str]]:
     return [
-        {**r["attrs"], "status": r["cells"][-1]}
+        {**r["attrs"], "status": r["cells"][len(EXPOSURE_COLUMNS)]}  # then the log buttons
         for s in reader.sections
         for v in s["visits"]
         for r in v["rows"]

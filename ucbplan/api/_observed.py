@@ -2,11 +2,12 @@
 
 FILE is a velocities file as ``reduce`` takes it (:func:`ucbplan.reduce.velocities.read_velocities`:
 epochs, exposure times or Λ_K, and the measured σ_v; the velocities are not used) of the one
-target planned, or a blocks table as ``plan -o`` writes it with a ``status`` column (``taken``,
+target planned, a blocks table as ``plan -o`` writes it with a ``status`` column (``taken``,
 ``missed`` or ``skipped``: only ``taken`` rows count; their ``sigma_v_kms`` is taken as the σ_v
-measured). The spectra become :class:`~ucbplan.observing.observed.ObservedSpectra` in the
-planner's settings, and the median of measured / predicted σ_v rescales the σ_v law
-(:func:`observed_settings`).
+measured), or an observing log as the night sheet and ``now --log`` write it
+(:mod:`ucbplan.observing.obslog`: one row per exposure, read the same way). The spectra become
+:class:`~ucbplan.observing.observed.ObservedSpectra` in the planner's settings, and the median of
+measured / predicted σ_v rescales the σ_v law (:func:`observed_settings`).
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ucbplan.errors import InputError, shorten
+from ucbplan.observing.obslog import STATUSES
 
 if TYPE_CHECKING:
     from ucbplan.observing.observed import ObservedSpectra
@@ -27,9 +29,6 @@ if TYPE_CHECKING:
     from ucbplan.target import Target
 
 __all__ = ["STATUSES", "observed_settings", "sigma_v_note"]
-
-#: The statuses a blocks table's ``status`` column may hold (only ``taken`` counts).
-STATUSES = ("taken", "missed", "skipped")
 
 
 def observed_settings(
@@ -104,12 +103,30 @@ def _is_blocks(path: Path) -> bool:
     return "block_id" in first.split(",") or any("name: block_id" in ln for ln in header)
 
 
+def _is_log(path: Path) -> bool:
+    """Whether ``path`` is an observing log (the night sheet's or ``now --log``'s CSV)."""
+    from ucbplan.inputs import read_text
+    from ucbplan.observing.obslog import is_log
+
+    try:
+        text = read_text(path, "spectra file")
+    except InputError as exc:
+        raise InputError(f"observed: {exc}", parameter="observed") from None
+    return is_log(text)
+
+
 def _read(
     path: Path, targets: list[Target], site: Site, settings: PlanSettings
 ) -> list[ObservedSpectra]:
     """The spectra of ``path``, one :class:`ObservedSpectra` per target it names."""
+    if _is_log(path):
+        from ucbplan.observing.obslog import read_log
+
+        return _from_blocks(path, read_log(path), targets, site, settings)
     if _is_blocks(path):
-        return _from_blocks(path, targets, site, settings)
+        from ucbplan.observing.tableread import read_blocks
+
+        return _from_blocks(path, read_blocks(path), targets, site, settings)
     return [_from_velocities(path, targets, site, settings)]
 
 
@@ -164,12 +181,10 @@ def _airmass(target: Target, site: Site, time: Any) -> np.ndarray:
 
 
 def _from_blocks(
-    path: Path, targets: list[Target], site: Site, settings: PlanSettings
+    path: Path, table: Any, targets: list[Target], site: Site, settings: PlanSettings
 ) -> list[ObservedSpectra]:
-    """A blocks table with a status column: its ``taken`` rows, per target."""
-    from ucbplan.observing.tableread import read_blocks
-
-    table = read_blocks(path)
+    """A blocks table with a status column, or an observing log (one row per exposure,
+    :data:`~ucbplan.observing.obslog.LOG_COLUMNS`): its ``taken`` rows, per target."""
     where = f"observed {path}"
     _check_site(table.meta, site, where)
     taken = _taken_rows(table, where)

@@ -119,6 +119,13 @@ NOW_FLAGS: dict[str, Flag] = {
         "Run the clock from this UTC instant, ISO (2040-02-16T01:40:00Z), not from the "
         "computer's clock: a rehearsal.",
     ),
+    "log": Flag(
+        ("--log",),
+        "Write the observing log (CSV, for `plan --observed`) to this file: press t (taken), "
+        "m (missed) or s (skipped) for the exposure just started, q to quit; the file is "
+        "rewritten at each key. An existing log of the same plan is continued.",
+    ),
+    "overwrite": Flag(("--overwrite",), "Start the --log file again if it exists."),
 }
 
 

@@ -21,6 +21,8 @@ block_columns, local_datetimes
     The columns of a plan's blocks, and local civil times (the ``plan`` view).
 plan_exposures, what_next, countdown_lines, parse_utc
     The ``now`` countdown.
+ObservingLog, LOG_KEYS, log_lines
+    The observing log ``now --log`` writes, its keys and its line in the frame.
 chart_format, sheet_format, night_charts, night_sheet
     The suffix checks of the night charts and the night sheet, and writing them for a plan.
 sigma_v_note
@@ -46,12 +48,15 @@ if TYPE_CHECKING:  # imported when first used (see _LAZY)
     )
     from ucbplan.observing.nightplot import chart_format
     from ucbplan.observing.nightsheet import sheet_format
+    from ucbplan.observing.obslog import LOG_KEYS, ObservingLog, log_lines
     from ucbplan.observing.tableformat import local_datetimes
     from ucbplan.observing.tablewrite import csv_safe_table, write_table
     from ucbplan.offline import offline
     from ucbplan.plotting import check_figure_path
 
 __all__ = [
+    "LOG_KEYS",
+    "ObservingLog",
     "block_columns",
     "chart_format",
     "check_figure_path",
@@ -60,6 +65,7 @@ __all__ = [
     "csv_safe_table",
     "dump_json",
     "local_datetimes",
+    "log_lines",
     "night_charts",
     "night_sheet",
     "offline",
@@ -88,6 +94,9 @@ _LAZY = {
     "write_table": "ucbplan.observing.tablewrite",
     "csv_safe_table": "ucbplan.observing.tablewrite",
     "sigma_v_note": "ucbplan.api._observed",
+    "ObservingLog": "ucbplan.observing.obslog",
+    "LOG_KEYS": "ucbplan.observing.obslog",
+    "log_lines": "ucbplan.observing.obslog",
 }
 
 

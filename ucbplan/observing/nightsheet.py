@@ -8,13 +8,15 @@ has a short header — target, ICRS position, acquisition start — two lines fo
 assistant ("acquire by HH:MM:SS UTC, then N × T s with R s readout; starts are phase-critical
 ±σ s") and one row per exposure (:data:`ucbplan.observing.sheet_html.EXPOSURE_COLUMNS`): UTC
 start and end (HH:MM:SS, rounded to the second), anchor and its epoch, airmass, Λ_K and σ_t.
+The HTML rows also have a button per status (taken, missed, skipped) and the page a "save log"
+button that downloads the observing log (:mod:`ucbplan.observing.obslog`) of the rows marked.
 """
 
 from __future__ import annotations
 
 import base64
 import io
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import IO, Any
 
@@ -35,6 +37,7 @@ from ucbplan.observing.nightplot import (
     level_crossings,
     night_chart,
 )
+from ucbplan.observing.obslog import LOG_COLUMNS, log_cells, log_file_name
 from ucbplan.observing.sheet_html import (
     EXPOSURE_COLUMNS,
     SheetNight,
@@ -279,9 +282,14 @@ def _png(chart: NightChart, site: Site, constraints: ConstraintSet | None) -> st
 
 
 def sheet_nights(
-    charts: Sequence[NightChart], site: Site, constraints: ConstraintSet | None, meta: Any
+    charts: Sequence[NightChart],
+    site: Site,
+    constraints: ConstraintSet | None,
+    meta: Any,
+    log: Mapping[tuple[str, str], tuple[str, ...]] | None = None,
 ) -> list[SheetNight]:
-    """What the HTML sheet shows, night by night (``meta``: the blocks table's)."""
+    """What the HTML sheet shows, night by night (``meta``: the blocks table's; ``log``: the
+    observing-log cells by block id and exposure label, None for no log buttons)."""
     out = []
     for chart in charts:
         visits = tuple(
@@ -290,6 +298,7 @@ def sheet_nights(
                 about=visit_about(v, exposures),
                 tell=visit_instruction(exposures),
                 exposures=tuple(exposures),
+                log=tuple(log[e.block_id, e.label] for e in exposures) if log else (),
             )
             for k, (v, exposures) in enumerate(_visits(chart, meta), start=1)
         )
@@ -364,9 +373,10 @@ def write_night_sheet(
             binary=True,
         )
     else:
-        nights = sheet_nights(charts, site, constraints, meta)
+        cells = {(e.block_id, e.label): c for e, c in log_cells(table, site)}
+        nights = sheet_nights(charts, site, constraints, meta, cells)
         title = f"Night sheet: {site.name}, {len(charts)} night(s)"
-        text = render_html(title, note, nights)
+        text = render_html(title, note, nights, (LOG_COLUMNS, log_file_name(table)))
 
         def _write_html(handle: IO[str]) -> None:
             handle.write(text)

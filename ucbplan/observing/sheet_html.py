@@ -17,11 +17,13 @@ after now. Printed (A4 or Letter, portrait), each night starts a page and the cl
 from __future__ import annotations
 
 import html
+import json
 from collections.abc import Sequence
 from dataclasses import dataclass
 from datetime import datetime
 
 from ucbplan.observing.countdown import Exposure, hms
+from ucbplan.observing.obslog import STATUSES
 
 __all__ = ["EXPOSURE_COLUMNS", "SheetNight", "SheetVisit", "exposure_cells", "render_html"]
 
@@ -32,12 +34,14 @@ EXPOSURE_COLUMNS = ("#", "start UTC", "end UTC", "anchor (epoch UTC)", "airmass"
 @dataclass(frozen=True, slots=True)
 class SheetVisit:
     """A visit on the sheet: heading, one line about the target, two lines for the assistant,
-    and its exposures in time order."""
+    its exposures in time order, and their observing-log cells
+    (:func:`ucbplan.observing.obslog.log_cells`; empty: no log buttons)."""
 
     heading: str
     about: str
     tell: tuple[str, ...]
     exposures: tuple[Exposure, ...]
+    log: tuple[tuple[str, ...], ...] = ()
 
 
 @dataclass(frozen=True, slots=True)
@@ -80,6 +84,10 @@ th,td{border:1px solid #000;padding:1px 4px;text-align:right;white-space:nowrap}
 td:nth-child(4),th:nth-child(4){text-align:left}
 .tell{border-left:4px solid #000;padding-left:6px;font-weight:bold}
 .status{text-align:left;min-width:7em}
+td.log{text-align:left}td.log button{font-size:9pt;padding:0 3px;margin:0 1px}
+tr[data-status=taken] button[data-status=taken],tr[data-status=missed] button[data-status=missed],
+tr[data-status=skipped] button[data-status=skipped]{background:#000;color:#fff;font-weight:bold}
+#save-log{font-size:11pt;margin-top:2px}
 tr.done{color:#666;text-decoration:line-through}
 tr.running td{font-weight:bold;border-top:3px double #000;border-bottom:3px double #000}
 tr.next td{font-weight:bold;border-top:3px solid #000;border-bottom:3px solid #000;
@@ -91,7 +99,7 @@ margin:4px 0;font-size:14pt;z-index:1}
 section.night{break-before:page}section.night:first-of-type{break-before:auto}
 .visit{break-inside:avoid-page}tr{break-inside:avoid}thead{display:table-header-group}
 @page{size:portrait;margin:12mm}
-@media print{#clock,.status{display:none}body{max-width:none;font-size:9.5pt}
+@media print{#clock,.status,.log{display:none}body{max-width:none;font-size:9.5pt}
 tr.next td,tr.running td{font-weight:normal;border:1px solid #000;background:none}
 tr.done{color:#000;text-decoration:none}}
 """
@@ -100,8 +108,14 @@ _CLOCK_HTML = (
     '<div id="clock" role="timer" aria-live="off">'
     '<div><span id="rehearsal"></span>UTC <span id="utc">--:--:--</span></div>'
     '<div>next start <span id="next">&ndash;</span> in <span id="countdown">&ndash;</span></div>'
-    '<div id="advice"></div></div>'
+    '<div id="advice"></div>{log}</div>'
     "<noscript><p>The live clock needs JavaScript; the times below are UTC.</p></noscript>"
+)
+#: The "save log" button: the log's columns (:data:`ucbplan.observing.obslog.LOG_COLUMNS`) and
+#: its file name are read from it by :data:`_LOG_SCRIPT`.
+_SAVE_HTML = (
+    '<button type="button" id="save-log" data-columns="{columns}" data-file="{file}">'
+    "save log</button>"
 )
 
 #: The live clock (plain JavaScript, no library, no network; see the module docstring).
@@ -190,15 +204,81 @@ _SCRIPT = r"""
 })();
 """
 
+#: The observing log (plain JavaScript, no network): a button per status on each exposure row
+#: marks it (again: unmarks it; kept in the browser's localStorage across reloads), and "save
+#: log" downloads the marked rows as CSV (a Blob, as :func:`ucbplan.observing.obslog.log_text`
+#: writes it: rows in time order, cells quoted only when they hold a comma, quote or newline).
+_LOG_SCRIPT = r"""
+(function () {
+  "use strict";
+  var save = document.getElementById("save-log");
+  if (!save) { return; }
+  var rows = Array.prototype.slice.call(document.querySelectorAll("tr[data-log]"));
+  var key = "ucbplan-log-" + save.getAttribute("data-file");
+  var kept = {};
+  try { kept = JSON.parse(window.localStorage.getItem(key) || "{}"); } catch (e) { kept = {}; }
+  function id(r) { return r.getAttribute("data-log"); }
+  function count() {
+    var n = rows.filter(function (r) { return r.getAttribute("data-status"); }).length;
+    save.textContent = "save log (" + n + " marked)";
+  }
+  function mark(r, status) {
+    if (status) {
+      r.setAttribute("data-status", status);
+      kept[id(r)] = status;
+    } else {
+      r.removeAttribute("data-status");
+      delete kept[id(r)];
+    }
+    try { window.localStorage.setItem(key, JSON.stringify(kept)); } catch (e) { /* no storage */ }
+    count();
+  }
+  rows.forEach(function (r) {
+    if (kept[id(r)]) { r.setAttribute("data-status", kept[id(r)]); }
+    r.querySelectorAll("button[data-status]").forEach(function (b) {
+      b.addEventListener("click", function () {
+        var s = b.getAttribute("data-status");
+        mark(r, r.getAttribute("data-status") === s ? "" : s);
+      });
+    });
+  });
+  function cell(text) {
+    return /[",\r\n]/.test(text) ? "\"" + text.replace(/"/g, "\"\"") + "\"" : text;
+  }
+  save.addEventListener("click", function () {
+    var lines = [save.getAttribute("data-columns")];
+    rows.slice().sort(function (a, b) {
+      return +a.getAttribute("data-start") - +b.getAttribute("data-start");
+    }).forEach(function (r) {
+      var s = r.getAttribute("data-status");
+      if (s) { lines.push(JSON.parse(id(r)).concat([s]).map(cell).join(",")); }
+    });
+    var blob = new Blob([lines.join("\n") + "\n"], {type: "text/csv"});
+    var a = document.createElement("a");
+    a.href = URL.createObjectURL(blob);
+    a.download = save.getAttribute("data-file");
+    document.body.appendChild(a);
+    a.click();
+    a.remove();
+  });
+  count();
+})();
+"""
 
-def _row(e: Exposure) -> str:
+#: The status buttons of an exposure row (:data:`ucbplan.observing.obslog.STATUSES`).
+_STATUS_BUTTONS = "".join(f'<button type="button" data-status="{s}">{s}</button>' for s in STATUSES)
+
+
+def _row(e: Exposure, log: tuple[str, ...] | None) -> str:
     a = html.escape
     acq = f' data-acq="{_ms(e.acq_start)}"' if e.first_of_visit and e.acq_start else ""
     cells = "".join(f"<td>{a(c)}</td>" for c in exposure_cells(e))
+    data = f' data-log="{a(json.dumps(log, ensure_ascii=False))}"' if log else ""
+    buttons = f'<td class="log">{_STATUS_BUTTONS}</td>' if log else ""
     return (
         f'<tr data-start="{_ms(e.start)}" data-end="{_ms(e.end)}" data-label="{a(e.label)}" '
-        f'data-target="{a(e.target)}" data-anchor="{a(e.anchor)}"{acq}>{cells}'
-        '<td class="status"></td></tr>'
+        f'data-target="{a(e.target)}" data-anchor="{a(e.anchor)}"{acq}{data}>{cells}'
+        f'<td class="status"></td>{buttons}</tr>'
     )
 
 
@@ -206,11 +286,13 @@ def _visit(v: SheetVisit) -> str:
     a = html.escape
     head = "".join(f"<th>{a(c)}</th>" for c in EXPOSURE_COLUMNS)
     tell = "<br>".join(a(line) for line in v.tell)
-    rows = "".join(_row(e) for e in v.exposures)
+    logs = v.log or (None,) * len(v.exposures)
+    rows = "".join(_row(e, log) for e, log in zip(v.exposures, logs, strict=True))
+    log_head = '<th class="log">log</th>' if v.log else ""
     return (
         f'<div class="visit"><h3>{a(v.heading)}</h3><p>{a(v.about)}</p>'
         f'<p class="tell">{tell}</p></div>'
-        f'<table><thead><tr>{head}<th class="status">now</th></tr></thead>'
+        f'<table><thead><tr>{head}<th class="status">now</th>{log_head}</tr></thead>'
         f"<tbody>{rows}</tbody></table>"
     )
 
@@ -224,13 +306,23 @@ def _night(n: SheetNight) -> str:
     )
 
 
-def render_html(title: str, note: str, nights: Sequence[SheetNight]) -> str:
-    """The whole page: title, the plan's note, the clock, then night by night."""
+def render_html(
+    title: str,
+    note: str,
+    nights: Sequence[SheetNight],
+    log: tuple[Sequence[str], str] | None = None,
+) -> str:
+    """The whole page: title, the plan's note, the clock, then night by night; with ``log``
+    (the log's columns and file name), the "save log" button and its script."""
     a = html.escape
+    save, script = "", ""
+    if log is not None:
+        save = _SAVE_HTML.format(columns=a(",".join(log[0])), file=a(log[1]))
+        script = f"<script>{_LOG_SCRIPT}</script>"
     return (
         '<!DOCTYPE html><html lang="en"><head><meta charset="utf-8">'
         '<meta name="viewport" content="width=device-width,initial-scale=1">'
         f"<title>{a(title)}</title><style>{_STYLE}</style></head>"
-        f"<body><h1>{a(title)}</h1><p>{a(note)}</p>{_CLOCK_HTML}"
-        f"{''.join(_night(n) for n in nights)}<script>{_SCRIPT}</script></body></html>\n"
+        f"<body><h1>{a(title)}</h1><p>{a(note)}</p>{_CLOCK_HTML.replace('{log}', save)}"
+        f"{''.join(_night(n) for n in nights)}<script>{_SCRIPT}</script>{script}</body></html>\n"
     )
