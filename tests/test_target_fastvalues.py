@@ -194,3 +194,48 @@ def test_generated_yaml_reads_as_the_strict_reader_or_declines(text: str) -> Non
     finally:
         loader.dispose()
     assert repr(fast[0]) == repr(slow), text
+
+
+#: Plain words YAML's resolvers read as other than text, or nearly so.
+_WORDS = ["yes", "No", "on", "OFF", "~", "null", "Null", "1e5", "0x1F", "0o17", "1_000",
+          "1:30", "-.inf", ".NaN", "2037-01-01", "2037-01-01T00:00:00", "<<", "=", "+1", "1.",
+          "e5"]  # fmt: skip
+_SCALARS = st.one_of(
+    st.sampled_from(_WORDS),
+    st.text(alphabet="abc019.-+:eE_ ", max_size=8),
+    st.integers(),
+    st.floats(),
+    st.booleans(),
+    st.none(),
+)
+_DOCS = st.recursive(
+    _SCALARS,
+    lambda kids: st.lists(kids, max_size=4) | st.dictionaries(_SCALARS, kids, max_size=4),
+    max_leaves=20,
+)
+
+
+def _all_documents(loader: _StrictLoader) -> list[object]:
+    docs = []
+    while loader.check_data():
+        docs.append(loader.get_data())
+    return docs
+
+
+@settings(max_examples=300, deadline=None, derandomize=True)
+@given(_DOCS, st.sampled_from([None, True, False]))
+def test_generated_documents_read_as_the_strict_reader_or_decline(doc: object, flow: bool) -> None:
+    """Whole documents, plain words unquoted (what the event reader resolves itself), two
+    documents of a stream as one list."""
+    text = yaml.safe_dump(doc, default_flow_style=flow)
+    text = text.replace("'", "") if all(w not in text for w in ("''", ": ", "#")) else text
+    for documents, body in ((False, text), (True, f"{text}---\n{text}")):
+        fast = _load_fast(body, documents)
+        if fast is None:
+            continue
+        loader = _StrictLoader(body)
+        try:
+            slow = loader.get_single_data() if not documents else _all_documents(loader)
+        finally:
+            loader.dispose()
+        assert repr(fast[0]) == repr(slow), body
