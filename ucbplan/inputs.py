@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 import re
+import stat
 from pathlib import Path
 from typing import Any, TypeGuard
 
@@ -178,13 +179,20 @@ class _FastLoader(_CSafeLoader):
             raise _Refused("anchor or tag")
         if not event.implicit[0]:
             return value
-        resolvers = self.yaml_implicit_resolvers.get(value[:1], ())
-        tag = next((tag for tag, regexp in resolvers if regexp.match(value)), None)
+        tag = _implicit_tag(self.yaml_implicit_resolvers.get(value[:1], ()), value)
         if tag is None:
             return value
         if tag not in _SCALAR_TAGS:
             raise _Refused(tag)
         return self.yaml_constructors[tag](self, yaml.ScalarNode(tag, value))
+
+
+def _implicit_tag(resolvers: list[tuple[str, re.Pattern[str]]], value: str) -> str | None:
+    """The tag of the first resolver matching ``value``; None: text."""
+    for tag, regexp in resolvers:
+        if regexp.match(value):
+            return tag
+    return None
 
 
 for _loader in (_StrictLoader, _FastLoader):
@@ -197,10 +205,10 @@ def _read_bytes(path: Path, limit: int, what: str) -> bytes:
     if "\x00" in str(path) or len(str(path)) > 4096:
         raise SchemaError(f"{shorten(str(path), 80)}: not a usable file name; check the path")
     try:
-        size = path.stat().st_size
-        if not path.is_file():
+        st = path.stat()
+        if not stat.S_ISREG(st.st_mode):
             raise SchemaError(f"{path}: not a regular file; give the path of a {what}")
-        if size > limit:
+        if (size := st.st_size) > limit:
             raise SchemaError(
                 f"{path}: {size} bytes is larger than any {what} ({limit} bytes at most); "
                 "check the path"
