@@ -239,3 +239,17 @@ def test_generated_documents_read_as_the_strict_reader_or_decline(doc: object, f
         finally:
             loader.dispose()
         assert repr(fast[0]) == repr(slow), body
+
+
+def test_loading_the_bundled_targets_imports_no_coordinates() -> None:
+    """Angles with a unit ("108.3 deg") are read without astropy.coordinates (27 ms cold)."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys; from ucbplan.target import load_target_files; "
+        f"load_target_files({[str(p) for p in sorted(CATALOGS.glob('*.yaml'))]!r}); "
+        "print('astropy.coordinates' in sys.modules)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"
