@@ -11,6 +11,7 @@ import pytest
 import yaml
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from test_target import BASE  # tests/ is on sys.path (no __init__.py)
 
 from ucbplan.errors import TargetFileError
 from ucbplan.target import load_target
@@ -18,20 +19,11 @@ from ucbplan.target.covariance import _check_psd, _check_symmetric, _plainly_goo
 from ucbplan.target.parse import load_target_documents, load_target_files
 from ucbplan.target.values import Ctx
 
-GOOD = {
-    "name": "Good",
-    "sky": {"ra": "08h06m23.2s", "dec": "+15d27m30s"},
-    "lisa": {
-        "t_ref": "2037-01-01T00:00:00",
-        "t_obs": "126232599.05 s",
-        "phase": 5.5,
-        "f_gw": "6.2204944286e-3 Hz",
-        "fdot": "7.073958e-16 Hz / s",
-        "covariance": {
-            "sigma": {"phase": 0.02, "f_gw": "7.7e-12 Hz", "fdot": "4e-19 Hz / s"},
-            "correlation": {"phase,fdot": -0.7},
-        },
-    },
+#: A LISA target with correlated σ's (its covariance goes through the batched checks).
+GOOD = copy.deepcopy(BASE)
+GOOD["lisa"]["covariance"] = {
+    "sigma": {"phase": 0.02, "f_gw": "7.7e-12 Hz", "fdot": "4e-19 Hz / s"},
+    "correlation": {"phase,fdot": -0.7},
 }
 #: Full matrices each check refuses: not PSD, not symmetric, non-finite, a negative variance.
 BAD_MATRICES = [
