@@ -253,3 +253,16 @@ def test_loading_the_bundled_targets_imports_no_coordinates() -> None:
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
+
+
+@settings(max_examples=2000, deadline=None, derandomize=True)
+@given(st.text(alphabet="0123456789.+-eE Hzkm/s\t\n\u00a0[", max_size=16))
+def test_the_quantity_split_is_the_pattern_s(text: str) -> None:
+    """The split without the regular expression is the pattern's, whatever the text."""
+    from ucbplan.target.fastvalues import _QUANTITY, _split_quantity
+
+    m = _QUANTITY.fullmatch(text)
+    assert _split_quantity(text) == (None if m is None else (m.group(1), m.group(2)))
+    spaced = f"{text.strip()} Hz"  # the usual spelling, where the fast split applies
+    m = _QUANTITY.fullmatch(spaced)
+    assert _split_quantity(spaced) == (None if m is None else (m.group(1), m.group(2)))
