@@ -199,8 +199,8 @@ def _from_sigma(ctx: Ctx, sec: _Section, cov: Mapping[str, Any]) -> Named:
     names = tuple(sig)
     sigmas = np.array([_sigma(ctx, sec, n, sig[n]) for n in names])
     corr = _correlation_matrix(ctx, sec, names, cov.get("correlation"))
-    out = corr * np.outer(sigmas, sigmas)
-    if not np.all(np.isfinite(out)):
+    out = corr * (sigmas[:, None] * sigmas)  # ρ ∘ σσᵀ, σσᵀ as np.outer forms it
+    if not np.isfinite(out).all():
         raise ctx.fail(where, "σ² overflows a float; check the units of sigma")
     return names, out
 
