@@ -26,6 +26,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -275,6 +276,9 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="smaller runs, for CI")
     ap.add_argument("--only", default="population,horizon,first_load,reduce", help="rows to run")
+    ap.add_argument(
+        "--markdown", action="store_true", help="the rows as the README's table has them"
+    )
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as d:
         tmp = Path(d)
@@ -290,6 +294,19 @@ def main() -> None:
     for r in out:
         print(f"{r['name']}: {r['value']:.4g} {r['unit']}; goal {r['goal']}; met {r['met']}")
         print(f"    {r['note']}")
+    if args.markdown:
+        print(_table().render([r | {"module": "throughput"} for r in out], True))
+
+
+def _table() -> Any:
+    """``benchmarks/__main__.py`` (its ``render`` writes the README's table), loaded by path."""
+    from importlib.util import module_from_spec, spec_from_file_location
+
+    spec = spec_from_file_location("benchmarks_table", Path(__file__).with_name("__main__.py"))
+    assert spec is not None and spec.loader is not None
+    module = module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
 
 
 if __name__ == "__main__":

@@ -194,3 +194,75 @@ def test_generated_yaml_reads_as_the_strict_reader_or_declines(text: str) -> Non
     finally:
         loader.dispose()
     assert repr(fast[0]) == repr(slow), text
+
+
+#: Plain words YAML's resolvers read as other than text, or nearly so.
+_WORDS = ["yes", "No", "on", "OFF", "~", "null", "Null", "1e5", "0x1F", "0o17", "1_000",
+          "1:30", "-.inf", ".NaN", "2037-01-01", "2037-01-01T00:00:00", "<<", "=", "+1", "1.",
+          "e5"]  # fmt: skip
+_SCALARS = st.one_of(
+    st.sampled_from(_WORDS),
+    st.text(alphabet="abc019.-+:eE_ ", max_size=8),
+    st.integers(),
+    st.floats(),
+    st.booleans(),
+    st.none(),
+)
+_DOCS = st.recursive(
+    _SCALARS,
+    lambda kids: st.lists(kids, max_size=4) | st.dictionaries(_SCALARS, kids, max_size=4),
+    max_leaves=20,
+)
+
+
+def _all_documents(loader: _StrictLoader) -> list[object]:
+    docs = []
+    while loader.check_data():
+        docs.append(loader.get_data())
+    return docs
+
+
+@settings(max_examples=300, deadline=None, derandomize=True)
+@given(_DOCS, st.sampled_from([None, True, False]))
+def test_generated_documents_read_as_the_strict_reader_or_decline(doc: object, flow: bool) -> None:
+    """Whole documents, plain words unquoted (what the event reader resolves itself), two
+    documents of a stream as one list."""
+    text = yaml.safe_dump(doc, default_flow_style=flow)
+    text = text.replace("'", "") if all(w not in text for w in ("''", ": ", "#")) else text
+    for documents, body in ((False, text), (True, f"{text}---\n{text}")):
+        fast = _load_fast(body, documents)
+        if fast is None:
+            continue
+        loader = _StrictLoader(body)
+        try:
+            slow = loader.get_single_data() if not documents else _all_documents(loader)
+        finally:
+            loader.dispose()
+        assert repr(fast[0]) == repr(slow), body
+
+
+def test_loading_the_bundled_targets_imports_no_coordinates() -> None:
+    """Angles with a unit ("108.3 deg") are read without astropy.coordinates (27 ms cold)."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys; from ucbplan.target import load_target_files; "
+        f"load_target_files({[str(p) for p in sorted(CATALOGS.glob('*.yaml'))]!r}); "
+        "print('astropy.coordinates' in sys.modules)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"
+
+
+@settings(max_examples=2000, deadline=None, derandomize=True)
+@given(st.text(alphabet="0123456789.+-eE Hzkm/s\t\n\u00a0[", max_size=16))
+def test_the_quantity_split_is_the_pattern_s(text: str) -> None:
+    """The split without the regular expression is the pattern's, whatever the text."""
+    from ucbplan.target.fastvalues import _QUANTITY, _split_quantity
+
+    m = _QUANTITY.fullmatch(text)
+    assert _split_quantity(text) == (None if m is None else (m.group(1), m.group(2)))
+    spaced = f"{text.strip()} Hz"  # the usual spelling, where the fast split applies
+    m = _QUANTITY.fullmatch(spaced)
+    assert _split_quantity(spaced) == (None if m is None else (m.group(1), m.group(2)))

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 import re
+import stat
 from pathlib import Path
 from typing import Any, TypeGuard
 
@@ -116,36 +117,98 @@ _STRICT_ONLY = re.compile("[&!|>?\t]")
 _COMMENT = re.compile("(?m)(?:^|[ ])#[^'\"\r\n\x85\u2028\u2029]*\r?$")
 
 
-#: Keys SafeConstructor rewrites before building a mapping (``<<`` merges, ``=`` values).
-_SPECIAL_KEYS = frozenset(("tag:yaml.org,2002:merge", "tag:yaml.org,2002:value"))
+class _Refused(Exception):
+    """What the event reader leaves to the strict reader (anchors, aliases, tags, merge and
+    value keys, a key given twice, an unhashable key)."""
+
+
+#: Tags of plain scalars the event reader builds with SafeConstructor's own methods; any other
+#: (``<<`` merges, ``=`` values) goes to the strict reader, whose order decides.
+_SCALAR_TAGS = frozenset(
+    f"tag:yaml.org,2002:{t}" for t in ("null", "bool", "int", "float", "timestamp")
+)
+_STR_TAG = "tag:yaml.org,2002:str"
 
 
 class _FastLoader(_CSafeLoader):
     """The same reading with libyaml's parser, for text without anchors (so without aliases)
     or characters the strict reader refuses: :func:`load_yaml` tries it first and falls back to
-    :class:`_StrictLoader`, which gives every error its message, on any failure."""
+    :class:`_StrictLoader`, which gives every error its message, on any failure.
 
-    def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict[Any, Any]:
-        if any(k.tag in _SPECIAL_KEYS for k, _ in node.value):
-            raise yaml.YAMLError("merge or value key")  # the strict reader's order decides
-        out: dict[Any, Any] = super().construct_mapping(node, deep=deep)
-        if len(out) != len(node.value):  # a key twice: the strict reader names it
-            raise yaml.YAMLError("duplicate key")
+    The documents are built straight from libyaml's events (no node tree, no constructor
+    generators): each plain scalar's tag resolved by the loader's own resolver and built by
+    SafeConstructor's own method, so the values are those ``yaml.load`` gives; anything else
+    raises :class:`_Refused`."""
+
+    def documents(self) -> list[Any]:
+        """Every document of the stream."""
+        self.get_event()  # the stream start
+        docs = []
+        while not isinstance(self.get_event(), yaml.StreamEndEvent):  # a document start
+            docs.append(self._node(self.get_event()))
+            self.get_event()  # the document end
+        return docs
+
+    def _node(self, event: Any) -> Any:
+        kind = type(event)
+        if kind is yaml.ScalarEvent:
+            return self._plain(event)
+        if kind is yaml.AliasEvent or event.anchor is not None or event.tag is not None:
+            raise _Refused("anchor, alias or tag")
+        get, node, scalar, plain = self.get_event, self._node, yaml.ScalarEvent, self._plain
+        if kind is yaml.SequenceStartEvent:
+            items = []
+            while type(event := get()) is not yaml.SequenceEndEvent:
+                items.append(node(event))
+            return items
+        out: dict[Any, Any] = {}
+        while (kind := type(event := get())) is not yaml.MappingEndEvent:
+            key = plain(event) if kind is scalar else node(event)
+            if key in out:  # also raises TypeError for an unhashable key
+                raise _Refused("duplicate key")
+            event = get()
+            out[key] = plain(event) if type(event) is scalar else node(event)
         return out
+
+    def _plain(self, event: yaml.ScalarEvent) -> Any:
+        """The value of a scalar event, as ``yaml.load`` builds it: quoted text is text, plain
+        text goes through the implicit resolvers for its first character, as ``resolve``
+        does (this loader has no path resolvers)."""
+        value = event.value
+        if event.anchor is not None or event.tag is not None:
+            raise _Refused("anchor or tag")
+        if not event.implicit[0]:
+            return value
+        tag = _implicit_tag(self.yaml_implicit_resolvers.get(value[:1], ()), value)
+        if tag is None:
+            return value
+        if tag not in _SCALAR_TAGS:
+            raise _Refused(tag)
+        return self.yaml_constructors[tag](self, yaml.ScalarNode(tag, value))
+
+
+def _implicit_tag(resolvers: list[tuple[str, re.Pattern[str]]], value: str) -> str | None:
+    """The tag of the first resolver matching ``value``; None: text."""
+    for tag, regexp in resolvers:
+        if regexp.match(value):
+            return tag
+    return None
 
 
 for _loader in (_StrictLoader, _FastLoader):
     _loader.add_implicit_resolver("tag:yaml.org,2002:float", EXPONENT_FLOAT, list("-+0123456789"))
+# _FastLoader._plain resolves as Resolver.resolve does for loaders without these
+assert None not in _FastLoader.yaml_implicit_resolvers and not _FastLoader.yaml_path_resolvers
 
 
 def _read_bytes(path: Path, limit: int, what: str) -> bytes:
     if "\x00" in str(path) or len(str(path)) > 4096:
         raise SchemaError(f"{shorten(str(path), 80)}: not a usable file name; check the path")
     try:
-        size = path.stat().st_size
-        if not path.is_file():
+        st = path.stat()
+        if not stat.S_ISREG(st.st_mode):
             raise SchemaError(f"{path}: not a regular file; give the path of a {what}")
-        if size > limit:
+        if (size := st.st_size) > limit:
             raise SchemaError(
                 f"{path}: {size} bytes is larger than any {what} ({limit} bytes at most); "
                 "check the path"
@@ -264,16 +327,16 @@ def _load_fast(text: str, documents: bool) -> tuple[Any] | None:
         return None
     loader = _FastLoader(text)
     try:
-        if not documents:
-            return (loader.get_single_data(),)
-        docs = []
-        while loader.check_data():
-            docs.append(loader.get_data())
-        return (docs,)
+        docs = loader.documents()
     except Exception:  # every failure is reported by the strict reader
         return None
     finally:
         loader.dispose()
+    if documents:
+        return (docs,)
+    if len(docs) > 1:
+        return None  # the strict reader says "expected a single document"
+    return (docs[0] if docs else None,)
 
 
 def is_number(value: Any) -> TypeGuard[int | float | np.integer[Any] | np.floating[Any]]:

@@ -10,7 +10,9 @@ positive semi-definite.
 from __future__ import annotations
 
 import re
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
+from contextvars import ContextVar
 from typing import Any
 
 import numpy as np
@@ -34,7 +36,7 @@ from ucbplan.target.values import (
     to_float,
 )
 
-__all__ = ["exact_parameters", "parse_covariance"]
+__all__ = ["batched_checks", "exact_parameters", "parse_covariance"]
 
 FloatArray = NDArray[np.float64]
 Named = tuple[tuple[str, ...], FloatArray]
@@ -97,8 +99,7 @@ def parse_covariance(ctx: Ctx, cov: Any, section: str = "lisa") -> Named:
         else:
             raise ctx.fail(sec.path, f"{_FORMS}; got an empty mapping")
         if full or cov.get("correlation"):  # σ's alone: a finite σ² diagonal passes both
-            _check_symmetric(ctx, sec.path, mat)
-            _check_psd(ctx, sec.path, mat)
+            _check_matrix(ctx, sec.path, mat)
     return names, mat
 
 
@@ -198,8 +199,8 @@ def _from_sigma(ctx: Ctx, sec: _Section, cov: Mapping[str, Any]) -> Named:
     names = tuple(sig)
     sigmas = np.array([_sigma(ctx, sec, n, sig[n]) for n in names])
     corr = _correlation_matrix(ctx, sec, names, cov.get("correlation"))
-    out = corr * np.outer(sigmas, sigmas)
-    if not np.all(np.isfinite(out)):
+    out = corr * (sigmas[:, None] * sigmas)  # ρ ∘ σσᵀ, σσᵀ as np.outer forms it
+    if not np.isfinite(out).all():
         raise ctx.fail(where, "σ² overflows a float; check the units of sigma")
     return names, out
 
@@ -307,3 +308,86 @@ def _check_psd(ctx: Ctx, path: str, mat: FloatArray) -> None:
             f"matrix is not positive semi-definite (smallest correlation eigenvalue "
             f"{eig.min():.3g}); export the full posterior covariance again",
         )
+
+
+#: Inside :func:`batched_checks`: the matrices whose checks wait for the batch, with the
+#: context and field path their message would name.
+_PENDING: ContextVar[list[tuple[Ctx, str, FloatArray]] | None] = ContextVar(
+    "ucbplan_pending_covariances", default=None
+)
+
+
+def _check_matrix(ctx: Ctx, path: str, mat: FloatArray) -> None:
+    """Finite, symmetric and positive semi-definite, now or (inside :func:`batched_checks`)
+    with the batch."""
+    pending = _PENDING.get()
+    if pending is None:
+        _check_symmetric(ctx, path, mat)
+        _check_psd(ctx, path, mat)
+    else:
+        pending.append((ctx, path, mat))
+
+
+@contextmanager
+def batched_checks() -> Iterator[None]:
+    """Within: the covariance matrices read are checked (finite, symmetric, positive
+    semi-definite) in batches, one ``eigvalsh`` per matrix size, when the scope ends or an
+    error leaves it; the first matrix (in reading order) that fails raises its own message,
+    before the error that left the scope, as checking each in turn would.
+
+    Raises
+    ------
+    TargetFileError
+        As :func:`parse_covariance`, for the first matrix that fails.
+    """
+    token = _PENDING.set([])
+    try:
+        yield
+    except Exception:
+        _check_pending()
+        raise
+    else:
+        _check_pending()
+    finally:
+        _PENDING.reset(token)
+
+
+def _check_pending() -> None:
+    """Check the waiting matrices: a batch passes each plainly good one; any other is checked
+    alone, in reading order, so the first bad one raises its message."""
+    pending = _PENDING.get() or []
+    _PENDING.set([])
+    by_size: dict[int, list[int]] = {}
+    for k, (_, _, mat) in enumerate(pending):
+        by_size.setdefault(mat.shape[0], []).append(k)
+    good = np.zeros(len(pending), dtype=bool)
+    for idx in by_size.values():
+        good[idx] = _plainly_good(np.stack([pending[k][2] for k in idx]))
+    for bad in np.flatnonzero(~good):
+        ctx, path, mat = pending[bad]
+        with np.errstate(all="ignore"), ctx.reading(path, "a covariance"):
+            _check_symmetric(ctx, path, mat)
+            _check_psd(ctx, path, mat)
+
+
+def _plainly_good(mats: FloatArray) -> NDArray[np.bool_]:
+    """Which of the stacked matrices (n, k, k) pass :func:`_check_symmetric` and
+    :func:`_check_psd` (False: check it alone), the same tests on the whole stack."""
+    with np.errstate(all="ignore"):
+        diag = np.diagonal(mats, axis1=1, axis2=2)
+        scale = np.sqrt(np.abs(diag))
+        outer = scale[:, :, None] * scale[:, None, :]
+        ok = np.isfinite(mats).all(axis=(1, 2)) & (diag >= 0).all(axis=1)
+        ok &= ~(np.abs(mats - mats.transpose(0, 2, 1)) > 1e-9 * outer + 1e-300).any(axis=(1, 2))
+        safe = np.where(scale > 0, scale, 1.0)
+        corr = mats / (safe[:, :, None] * safe[:, None, :])
+        ok &= np.isfinite(corr).all(axis=(1, 2))
+        corr[~ok] = np.eye(mats.shape[1])  # refused already; not to spoil the others' eigvalsh
+        try:
+            eig = np.linalg.eigvalsh(0.5 * (corr + corr.transpose(0, 2, 1)))
+        except np.linalg.LinAlgError:
+            return np.zeros(len(mats), dtype=bool)
+        if eig.shape[1] == 0:
+            return ok
+        # a margin below the limit: near it, the matrix is checked alone (its own eigvalsh)
+        return ok & np.isfinite(eig).all(axis=1) & (eig.min(axis=1) >= -0.5e-9)

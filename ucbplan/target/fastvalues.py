@@ -38,6 +38,8 @@ CACHE_SIZE = 1024
 _QUANTITY = re.compile(
     r"\s*([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)(?![.+\-\d]|[eE][+-]?\d)\s*(.*?)\s*"
 )
+#: The number of :data:`_QUANTITY` alone.
+_NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
 #: ``12h34m56.7s`` / ``-12d34m56.7s`` / ``12:34:56.7`` (no spaces, no exponent).
 _SEXAGESIMAL = re.compile(r"([+-]?)(\d+)([hd:])(\d+)([m:])(\d+(?:\.\d*)?|\.\d+)(s?)")
 
@@ -73,14 +75,25 @@ def quantity_in(text: str, unit: str) -> float | None:
     None: not that spelling (a bare number included), or a unit astropy does not convert to
     ``unit`` directly.
     """
-    m = _QUANTITY.fullmatch(text)
-    if m is None or not m.group(2) or "[" in text:
+    split = _split_quantity(text)
+    if split is None or not split[1] or "[" in text:
         return None  # a bare number (the caller reads it), or not astropy's split
-    scale = _scale(m.group(2), unit)
+    scale = _scale(split[1], unit)
     if scale is None:
         return None
-    x = float(m.group(1))
+    x = float(split[0])
     return x if scale == 1.0 else x * scale
+
+
+def _split_quantity(text: str) -> tuple[str, str] | None:
+    """``(number, unit)`` as :data:`_QUANTITY` splits ``text`` (None: no match): the usual
+    ``"<number> <unit>"``, one space between and none around, without the regular expression
+    (the number is all before the space, so the greedy pattern takes the same split)."""
+    number, space, rest = text.partition(" ")
+    if space and rest and _NUMBER.fullmatch(number) and rest == rest.strip() and "\n" not in rest:
+        return number, rest
+    m = _QUANTITY.fullmatch(text)
+    return None if m is None else (m.group(1), m.group(2))
 
 
 def sexagesimal_deg(text: str, hours: bool) -> float | None:

@@ -27,7 +27,7 @@ from ucbplan.core.constants import L_B
 from ucbplan.core.params import PARAM_NAMES, PhaseParams, shift_jacobian, shift_reference
 from ucbplan.errors import SchemaError, TargetFileError, shorten
 from ucbplan.inputs import load_yaml
-from ucbplan.target.covariance import parse_covariance
+from ucbplan.target.covariance import batched_checks, parse_covariance
 from ucbplan.target.model import Spectroscopy, Target
 from ucbplan.target.samples import with_samples_covariance
 from ucbplan.target.schema import EPHEMERIS_KINDS, field, section_fields
@@ -137,7 +137,7 @@ def load_target_files(paths: Sequence[Path | str]) -> list[Target]:
     TargetFileError
         As :func:`load_target_documents`, for the first file that fails.
     """
-    with _many_files():
+    with _many_files(), batched_checks():
         return [t for path in paths for t in load_target_documents(path)]
 
 
@@ -544,7 +544,8 @@ def load_target_documents(path: Path | str) -> list[Target]:
     out = []
     for k, doc in enumerate(docs, start=1):
         try:
-            out.append(target_from_dict(doc, path))
+            with batched_checks():  # checked with its document, so its errors name it
+                out.append(target_from_dict(doc, path))
         except TargetFileError as exc:
             label = Ctx(path).label
             msg = str(exc)

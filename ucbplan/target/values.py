@@ -333,13 +333,14 @@ def _angle_deg(value: Any, hours: bool) -> float:
     fast = sexagesimal_deg(text, hours)
     if fast is not None:
         return fast
-    from astropy.coordinates import Angle  # the other spellings (imported only for them)
-
-    if ":" in text or (" " in text and not re.search(r"[a-zA-Z]", text)):
-        return float(Angle(text, unit=u.hourangle if hours else u.deg).to_value(u.deg))
-    fast = quantity_in(text, "deg")  # a number with an angle unit (converts to deg)
+    spaced = ":" in text or (" " in text and not re.search(r"[a-zA-Z]", text))
+    fast = None if spaced else quantity_in(text, "deg")  # a number with an angle unit
     if fast is not None:
         return fast
+    from astropy.coordinates import Angle  # the other spellings (imported only for them)
+
+    if spaced:
+        return float(Angle(text, unit=u.hourangle if hours else u.deg).to_value(u.deg))
     try:  # "1.5e-05 deg": astropy's angle parser refuses exponents, its quantity parser not
         q = u.Quantity(text)
     except MALFORMED:
