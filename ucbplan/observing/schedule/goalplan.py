@@ -37,7 +37,7 @@ from ucbplan.observing.goals import (
     parse_goal,
     target_k,
 )
-from ucbplan.observing.observed import observed_information, target_spectra
+from ucbplan.observing.observed import ObservedFisher, observed_fisher, target_spectra
 from ucbplan.observing.schedule.candidates import TargetRun
 from ucbplan.observing.schedule.placement import INFO_RTOL
 from ucbplan.observing.schedule.settings import PlanSettings
@@ -78,9 +78,19 @@ def _max_per_visit(run: TargetRun, settings: PlanSettings) -> tuple[int, float]:
     return max(1, int(science // te.step_s + 1e-9) + 1), te.step_s
 
 
-def _collected(run: TargetRun, settings: PlanSettings) -> tuple[float, int]:
-    """(information on K [(km/s)⁻²], number) of the target's spectra already taken
-    (``--observed``), each at its own u, Λ_K and σ_v (:mod:`ucbplan.observing.observed`).
+def _gamma_ratio(run: TargetRun) -> float:
+    """γ-to-K information ratio r = Σ 1/σ_v² / Σ (Λ_K cos u)²/σ_v² of the target's usable
+    exposures (:mod:`ucbplan.observing.observed`; ≈ 1/Λ_K² at quadrature anchors)."""
+    g2 = (run.exposure.lambda_k * np.cos(run.cand.u_star)) ** 2
+    usable = (run.ok > 0) & run.valid & np.isfinite(run.weight) & (g2 > 1e-12)
+    if not np.any(usable):
+        return 0.0
+    return float(np.sum(run.weight[usable] / g2[usable]) / np.sum(run.weight[usable]))
+
+
+def _collected(run: TargetRun, settings: PlanSettings) -> tuple[ObservedFisher, int]:
+    """(Fisher matrix, number) of the target's spectra already taken (``--observed``), each at
+    its own u, Λ_K and σ_v (:mod:`ucbplan.observing.observed`).
 
     Raises
     ------
@@ -89,7 +99,7 @@ def _collected(run: TargetRun, settings: PlanSettings) -> tuple[float, int]:
     """
     spectra = target_spectra(settings.observed, run.target.name)
     if spectra is None:
-        return 0.0, 0
+        return ObservedFisher(), 0
     t_ref = run.target.t_ref
     lo, hi = ((t - t_ref).to_value("s") for t in (run.since, run.until))
     bad = np.flatnonzero((spectra.tau_s < lo) | (spectra.tau_s > hi))
@@ -100,13 +110,16 @@ def _collected(run: TargetRun, settings: PlanSettings) -> tuple[float, int]:
             f"{when} TDB is outside the validity of its ephemeris ({run.since.tdb.isot} – "
             f"{run.until.tdb.isot} TDB); remove it or update the target file"
         )
-    return observed_information(spectra, run.target.params, settings.star), spectra.n
+    fisher = observed_fisher(spectra, run.target.params, _gamma_ratio(run), settings.star)
+    return fisher, spectra.n
 
 
-def _reached(goal: Goal, run: TargetRun, need: float, collected: tuple[float, int]) -> GoalPlan:
+def _reached(
+    goal: Goal, run: TargetRun, need: float, collected: tuple[ObservedFisher, int]
+) -> GoalPlan:
     """The goal plan of a target whose spectra already taken reach the goal: no spectra."""
-    info, n_taken = collected
-    sigma_k = 1.0 / math.sqrt(info)
+    fisher, n_taken = collected
+    sigma_k = 1.0 / math.sqrt(fisher.alone)
     _, k2, _ = target_k(run.target)
     return GoalPlan(
         goal=goal,
@@ -118,17 +131,23 @@ def _reached(goal: Goal, run: TargetRun, need: float, collected: tuple[float, in
         time=TimeBudget(0, 0, run.exposure.step_s, 0.0, 0.0, 0.0, 0.0),
         cycles=0,
         info_needed=0.0,
-        collected_info=info,
+        collected_info=fisher.alone,
         collected_spectra=n_taken,
+        collected_fisher=_as_tuple(fisher),
     )
+
+
+def _as_tuple(fisher: ObservedFisher) -> tuple[float, float, float, float]:
+    return (fisher.f_gg, fisher.f_gk, fisher.f_kk, fisher.ratio)
 
 
 def _goal_plan(goal: Goal, run: TargetRun, settings: PlanSettings) -> GoalPlan:
     """Spectra, balanced visits and time of one target's goal (less what was observed)."""
     need_all = goal_info_needed(goal, run.target)
     collected = _collected(run, settings)
-    need = need_all - collected[0]
-    if collected[0] > 0 and math.isfinite(need_all) and need <= need_all * INFO_RTOL:
+    fisher = collected[0]
+    need = fisher.needed(need_all)
+    if collected[1] and math.isfinite(need_all) and need <= need_all * INFO_RTOL:
         return _reached(goal, run, need_all, collected)
     w = _per_spectrum(run)
     te = run.exposure
@@ -152,7 +171,7 @@ def _goal_plan(goal: Goal, run: TargetRun, settings: PlanSettings) -> GoalPlan:
         idle_h=(total - shutter - overhead) / 3600.0,
         total_h=total / 3600.0,
     )
-    sigma_k = 1.0 / math.sqrt(n * w + collected[0])
+    sigma_k = 1.0 / math.sqrt(fisher.joint(n * w))
     _, k2, _ = target_k(run.target)
     return GoalPlan(
         goal=goal,
@@ -165,8 +184,9 @@ def _goal_plan(goal: Goal, run: TargetRun, settings: PlanSettings) -> GoalPlan:
         cycles=max(1, n // pattern),
         info_needed=need,
         visit_s=min(max(walls) + _VISIT_SLACK_S, te.visit_s or settings.max_visit_s),
-        collected_info=collected[0],
+        collected_info=fisher.alone,
         collected_spectra=collected[1],
+        collected_fisher=_as_tuple(fisher),
     )
 
 
@@ -265,10 +285,10 @@ def _shortfalls(
         mine = cols.values["target"] == run.target.name
         got = info_of_columns(cols, pattern_u, mine)
         if got < plan.info_needed * (1.0 - 1e-9):
-            taken = plan.collected_info  # the spectra already taken count on both sides
-            reach = math.inf
-            if got + taken > 0:
-                reach = plan.expected * math.sqrt((plan.info_needed + taken) / (got + taken))
+            joint = ObservedFisher(*plan.collected_fisher)
+            got_all, goal_all = float(joint.joint(got)), float(joint.joint(plan.info_needed))
+            # the goal quantity's σ scales as I^-½ and is the goal's value at the goal's I
+            reach = plan.goal.value * math.sqrt(goal_all / got_all) if got_all > 0 else math.inf
             available = math.floor(plan.n_spectra * got / plan.info_needed)
             short = Shortfall(plan.goal, plan.n_spectra, min(available, int(np.sum(mine))), reach)
             out.append((run.target.name if by_name else run, short))
