@@ -152,3 +152,36 @@ def test_cli_exit_codes_and_nothing_written_on_bad_input(original: Path, tmp_pat
         code, _, err = run_main(["replan", str(original), "-o", str(tmp_path / "x.ecsv"), *bad])
         assert code == 2 and len(err.strip().splitlines()) == 1, err
         assert not (tmp_path / "x.ecsv").exists()
+
+
+def test_a_goal_out_of_reach_is_planned_as_far_as_it_goes_and_stated(
+    original: Path, tmp_path: Path
+) -> None:
+    """Night 1 missed and night 2 lost: night 3 alone cannot reach σ_K ≤ 15 km/s. The replan
+    plans it anyway, in one visit as full as the 1-h visit holds (not the half of an even split
+    that assumed two nights), and states in one line of ≤ 100 columns the σ_K reached, which
+    equals 1/√(F_KK) of the planned rows from the design matrix within 2 % (the planner counts
+    the planned visits as balanced), and the hours more: the missing information at the
+    information per hour of the visits planned."""
+    old = Table.read(original, format="ascii.ecsv")
+    first = old[old["night"] == "2040-02-15"]
+    first["status"] = "missed"
+    first.write(tmp_path / "log.ecsv", format="ascii.ecsv")
+    new = _quiet(
+        ucbplan.replan, original, SECOND, observed=tmp_path / "log.ecsv", lost=["2040-02-16"]
+    )
+    assert new.run is not None
+    (line,) = new.run.shortfall_lines()
+    assert "not reached" in line and "h (~1 night(s)) more" in line and len(line) <= 100
+    (short,) = new.run.result.shortfalls
+    rows = new.text_table[new.text_table["night"] != "2040-02-15"]  # the history goes
+    tau = (Time(list(rows["t_mid_tdb_bary"]), scale="tdb") - load_target(TARGET).t_ref).to("s")
+    info = _brute_force_info(
+        tau.value, np.asarray(rows["exptime_s"], float), np.asarray(rows["sigma_v_kms"], float)
+    )
+    assert short.reachable == pytest.approx(info**-0.5, rel=0.02)
+    assert 15.0 < short.reachable < 16.0  # 19.6 km/s in half a visit
+    (goal,) = new.goals
+    assert goal.expected.to_value("km/s") == pytest.approx(short.reachable)
+    hours = new.run.time_account.targets[short.target].total_s / 3600
+    assert f"needs {(short.needed / short.got - 1) * hours:.2g} h" in line

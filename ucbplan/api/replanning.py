@@ -285,5 +285,6 @@ def _plan_nights(
     o.update(options)
     files = [str(t["file"]) for t in old.meta.get("targets", [])]
     o.update(targets=files, site=old.site, night=nights[0], nights=1, observed=observed)
+    o["short_goals"] = True
     run = planning.plan_run_on(o, nights)
     return Plan(run, options={**options}, history=kept)

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -43,7 +43,15 @@ from ucbplan.observing.schedule.placement import INFO_RTOL
 from ucbplan.observing.schedule.settings import PlanSettings
 from ucbplan.observing.strategy import balanced_counts, constrains_k, information
 
-__all__ = ["balanced_runs", "check_goals", "goal_plans", "info_of_blocks"]
+__all__ = [
+    "GoalShortfall",
+    "as_planned",
+    "balanced_runs",
+    "check_goals",
+    "goal_plans",
+    "goal_shortfalls",
+    "info_of_blocks",
+]
 
 #: Time added to a balanced visit so that the light-time drift of its anchors (≤ 0.02 s/min)
 #: never drops its last exposure [s].
@@ -268,6 +276,77 @@ def check_goals(
         raise InputError(f"{run.target.name}: {text}")
 
 
+@dataclass(frozen=True)
+class GoalShortfall:
+    """A goal the nights cannot reach, planned as far as they go (a replan states it instead of
+    failing).
+
+    Attributes
+    ----------
+    target : str
+        Target name.
+    goal : Goal
+        The goal.
+    reachable : float
+        σ of the goal quantity the spectra taken and planned reach (the goal's unit).
+    got, needed : float
+        Information the planned spectra collect, and would need (Σ (Λ_K cos u)²/σ_v²,
+        balanced visits: :meth:`~ucbplan.observing.observed.ObservedFisher.joint`) [(km/s)⁻²].
+    """
+
+    target: str
+    goal: Goal
+    reachable: float
+    got: float
+    needed: float
+
+    def line(self, booked_s: float, n_nights: int) -> str:
+        """One line (≤ 100 columns for names up to 24 characters): the σ the nights reach, and
+        the hours (at the information per hour of the ``booked_s`` of visits planned on
+        ``n_nights``) and nights more that would reach the goal."""
+        value = float(f"{self.reachable:.3g}")
+        reach = Goal(self.goal.quantity, value, self.goal.relative, "").describe()
+        head = f"{self.target[:24]}: {self.goal.text} not reached: {reach.replace(' ≤', ' =')}"
+        if self.got <= 0 or booked_s <= 0:
+            return f"{head}; no visit fits: add nights"
+        hours = (self.needed - self.got) / self.got * booked_s / 3600.0
+        nights = math.ceil(hours / (booked_s / 3600.0 / max(1, n_nights)) - 1e-9)
+        return f"{head}; needs {hours:.2g} h (~{nights} night(s)) more"
+
+
+def goal_shortfalls(
+    plans: dict[int, GoalPlan],
+    runs: Sequence[TargetRun],
+    blocks: Sequence[Block],
+    pattern_u: Sequence[float],
+) -> list[GoalShortfall]:
+    """The goals the planned ``blocks`` do not reach (a replan's statement, not an error)."""
+    return [
+        GoalShortfall(run.target.name, short.goal, reach, got, need)
+        for run, short, got, need, reach in _short_goals(plans, runs, blocks, pattern_u)
+    ]
+
+
+def as_planned(
+    plans: dict[int, GoalPlan], runs: Sequence[TargetRun], shortfalls: Sequence[GoalShortfall]
+) -> dict[int, GoalPlan]:
+    """``plans`` with each goal out of reach expecting the σ its planned spectra reach."""
+    reach = {x.target: x.reachable for x in shortfalls}
+    out = dict(plans)
+    for run in runs:
+        plan = plans.get(run.index)
+        if plan is not None and run.target.name in reach:
+            f = reach[run.target.name] / plan.expected
+            k2 = plan.sigma_K2_kms * f if plan.sigma_K2_kms is not None else None
+            out[run.index] = replace(
+                plan,
+                expected=f * plan.expected,
+                sigma_K1_kms=f * plan.sigma_K1_kms,
+                sigma_K2_kms=k2,
+            )
+    return out
+
+
 def _shortfalls(
     plans: dict[int, GoalPlan],
     runs: Sequence[TargetRun],
@@ -276,8 +355,22 @@ def _shortfalls(
     by_name: bool = False,
 ) -> list[tuple[Any, Shortfall]]:
     """(run, or its target's name with ``by_name``; shortfall) of each goal not reached."""
+    return [
+        (run.target.name if by_name else run, short)
+        for run, short, *_ in _short_goals(plans, runs, blocks, pattern_u)
+    ]
+
+
+def _short_goals(
+    plans: dict[int, GoalPlan],
+    runs: Sequence[TargetRun],
+    blocks: Sequence[Block],
+    pattern_u: Sequence[float],
+) -> list[tuple[TargetRun, Shortfall, float, float, float]]:
+    """(run, shortfall, information got, information needed, σ reached) of each goal not
+    reached."""
     cols = block_columns(blocks) if plans else None
-    out: list[tuple[Any, Shortfall]] = []
+    out: list[tuple[TargetRun, Shortfall, float, float, float]] = []
     for run in runs:
         plan = plans.get(run.index)
         if plan is None or plan.info_needed is None or cols is None:
@@ -287,11 +380,14 @@ def _shortfalls(
         if got < plan.info_needed * (1.0 - 1e-9):
             joint = ObservedFisher(*plan.collected_fisher)
             got_all, goal_all = float(joint.joint(got)), float(joint.joint(plan.info_needed))
-            # the goal quantity's σ scales as I^-½ and is the goal's value at the goal's I
-            reach = plan.goal.value * math.sqrt(goal_all / got_all) if got_all > 0 else math.inf
+            # the goal quantity's σ scales as I^-½; the error scales the promise, the replan's
+            # statement the goal itself (exact: the goal's value at the goal's I)
+            ratio = math.sqrt(goal_all / got_all) if got_all > 0 else math.inf
             available = math.floor(plan.n_spectra * got / plan.info_needed)
-            short = Shortfall(plan.goal, plan.n_spectra, min(available, int(np.sum(mine))), reach)
-            out.append((run.target.name if by_name else run, short))
+            short = Shortfall(
+                plan.goal, plan.n_spectra, min(available, int(np.sum(mine))), plan.expected * ratio
+            )
+            out.append((run, short, got, plan.info_needed, plan.goal.value * ratio))
     return out
 
 

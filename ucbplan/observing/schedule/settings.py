@@ -295,6 +295,9 @@ class PlanSettings:
     sigma_v_scale : float
         Factor on every σ_v the law predicts (``--sigma-v-scale``, or the ratio the observed
         spectra measured).
+    short_goals : bool
+        A goal the nights cannot reach is planned as far as they go and its shortfall stated
+        (``replan``), not refused.
 
     Raises
     ------
@@ -335,6 +338,7 @@ class PlanSettings:
     custom_constraints: tuple[Any, ...] | None = None
     observed: tuple[ObservedSpectra, ...] = ()
     sigma_v_scale: float = 1.0
+    short_goals: bool = False
 
     def __post_init__(self) -> None:
         parse_mode(self.mode)
