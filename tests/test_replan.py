@@ -185,3 +185,19 @@ def test_a_goal_out_of_reach_is_planned_as_far_as_it_goes_and_stated(
     assert goal.expected.to_value("km/s") == pytest.approx(short.reachable)
     hours = new.run.time_account.targets[short.target].total_s / 3600
     assert f"needs {(short.needed / short.got - 1) * hours:.2g} h" in line
+
+
+def test_cli_one_anchor_spectra_taken_say_they_fix_nothing_alone(
+    original: Path, tmp_path: Path
+) -> None:
+    """Every other row of night 1 taken (one anchor): alone they give no σ_K (the report said
+    so by dividing by zero before); with the plan's spectra they count."""
+    old = Table.read(original, format="ascii.ecsv")
+    first = old[old["night"] == "2040-02-15"]
+    first["status"] = np.where(np.arange(len(first)) % 2 == 0, "taken", "missed")
+    first.write(tmp_path / "log.ecsv", format="ascii.ecsv")
+    code, _, err = run_main(
+        ["replan", str(original), "--from", SECOND, "--observed", str(tmp_path / "log.ecsv")]
+    )
+    assert code == 0, err
+    assert "no σ_K alone (γ and K not separated)" in err
