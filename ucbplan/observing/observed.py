@@ -8,8 +8,8 @@ smearing factor Λ_K = sin x/x, x = n̄_b T/2 (Eq. Lambda_K). The spectra's (γ,
     F = Σ_i (1, Λ_K,i cos u_i)ᵀ (1, Λ_K,i cos u_i) / σ_v,i²,
 
 and the information on K with γ free is its Schur complement I = F_KK − F_γK²/F_γγ, so that
-σ_K = I^{-½} = √[(F⁻¹)_KK] (:func:`ucbplan.observing.strategy.sigma_k_from_rows`; 0 when the
-spectra do not separate γ and K).
+σ_K = I^{-½} = √[(F⁻¹)_KK] (:attr:`ObservedFisher.alone`; 0 when the spectra do not separate
+γ and K).
 
 γ is one number per target, shared by the spectra taken and the spectra still to plan (a plan
 has one instrument; an observed file is taken to be from it). The goal is reached when the
@@ -43,7 +43,6 @@ from numpy.typing import ArrayLike, NDArray
 from ucbplan.core.params import PhaseParams
 from ucbplan.core.phase import arg_latitude
 from ucbplan.core.smearing import lambda_k as smearing_factor
-from ucbplan.observing.strategy import sigma_k_from_rows
 
 __all__ = [
     "SIGMA_V_RATIO_TOL",
@@ -112,9 +111,7 @@ def window_lambda_k(window_s: ArrayLike, n_bar: float) -> F64:
 
 def observed_information(spectra: ObservedSpectra, params: PhaseParams, star: int = 1) -> float:
     """Information on K [(km/s)⁻²] the ``spectra`` collect (γ free), each at its own u."""
-    u = spectra_u(params, spectra.tau_s, star)
-    sigma_k = sigma_k_from_rows(spectra.lambda_k, u, spectra.sigma_v_kms)
-    return sigma_k**-2 if math.isfinite(sigma_k) else 0.0
+    return observed_fisher(spectra, params, 0.0, star).alone
 
 
 @dataclass(frozen=True)
