@@ -151,10 +151,15 @@ def replan(
         raise InputError(
             "lost: every night from from_ on is lost; nothing is left to re-plan", "lost"
         )
+    from ucbplan.observing.schedule.goalplan import REPLAN_INFO_SLACK
+
+    # a replan that changes the plan reaches its goals to REPLAN_INFO_SLACK; one that changes
+    # nothing (no loss, the spectra taken as planned) keeps the plan's own counts
+    slack = REPLAN_INFO_SLACK if gone or observed is not None else 0.0
     with tempfile.TemporaryDirectory() as tmp:
         if observed is None and len(kept_rows) and options.get("goal"):
             observed = _history_file(kept_rows, gone, Path(tmp) / "history.ecsv")
-        return _plan_nights(old, options, remaining, observed, kept_rows)
+        return _plan_nights(old, options, remaining, observed, kept_rows, slack)
 
 
 def _options(old: Plan) -> dict[str, Any]:
@@ -275,7 +280,12 @@ def _history_file(rows: Table, lost: set[date], path: Path) -> Path:
 
 
 def _plan_nights(
-    old: Plan, options: dict[str, Any], nights: list[date], observed: Any, kept: Table
+    old: Plan,
+    options: dict[str, Any],
+    nights: list[date],
+    observed: Any,
+    kept: Table,
+    slack: float,
 ) -> Plan:
     """:func:`ucbplan.plan`'s run on ``nights`` (not necessarily consecutive) with ``options``."""
     from ucbplan.api import planning
@@ -285,6 +295,6 @@ def _plan_nights(
     o.update(options)
     files = [str(t["file"]) for t in old.meta.get("targets", [])]
     o.update(targets=files, site=old.site, night=nights[0], nights=1, observed=observed)
-    o["short_goals"] = True
+    o.update(short_goals=True, goal_slack=slack)
     run = planning.plan_run_on(o, nights)
     return Plan(run, options={**options}, history=kept)

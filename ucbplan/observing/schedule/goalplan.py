@@ -53,7 +53,8 @@ __all__ = [
     "info_of_blocks",
 ]
 
-#: Fraction of a goal's information a replan (``short_goals``) may leave uncollected: σ within
+#: Fraction of a goal's information a replan that changes the plan (lost nights, spectra taken
+#: given) may leave uncollected (``PlanSettings.goal_slack``): σ within
 #: 0.5 % of the goal rather than a whole anchor pattern more (observers replan to the goal, and
 #: a knife-edge pattern costs an acquisition's worth of hours for 0.05 % in σ).
 REPLAN_INFO_SLACK = 0.01
@@ -160,7 +161,7 @@ def _goal_plan(goal: Goal, run: TargetRun, settings: PlanSettings) -> GoalPlan:
     collected = _collected(run, settings)
     fisher = collected[0]
     # a replan may leave REPLAN_INFO_SLACK of the information (σ within ½ of it of the goal)
-    need = fisher.needed(need_all * (1.0 - (REPLAN_INFO_SLACK if settings.short_goals else 0.0)))
+    need = fisher.needed(need_all * (1.0 - settings.goal_slack))
     if collected[1] and math.isfinite(need_all) and need <= need_all * INFO_RTOL:
         return _reached(goal, run, need_all, collected)
     w = _per_spectrum(run)

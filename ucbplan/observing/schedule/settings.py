@@ -298,6 +298,9 @@ class PlanSettings:
     short_goals : bool
         A goal the nights cannot reach is planned as far as they go and its shortfall stated
         (``replan``), not refused.
+    goal_slack : float
+        Fraction of each goal's information the plan may leave uncollected (a replan that
+        changes the plan: ``REPLAN_INFO_SLACK``; 0 otherwise).
 
     Raises
     ------
@@ -339,6 +342,7 @@ class PlanSettings:
     observed: tuple[ObservedSpectra, ...] = ()
     sigma_v_scale: float = 1.0
     short_goals: bool = False
+    goal_slack: float = 0.0
 
     def __post_init__(self) -> None:
         parse_mode(self.mode)
