@@ -64,6 +64,19 @@ def test_replan_from_the_start_without_losses_is_the_original_plan(
     )
 
 
+def test_a_replan_later_in_the_run_without_losses_keeps_every_visit(
+    original: Path, tmp_path: Path
+) -> None:
+    """From the second night, nothing lost and the first night's spectra taken as planned: the
+    plan stands (the observer's schedule does not move)."""
+    new = _quiet(ucbplan.replan, original, SECOND)
+    new.write(tmp_path / "new.ecsv")
+    assert _data_lines(tmp_path / "new.ecsv") == _data_lines(original)
+    assert plan_changes(ucbplan.Plan.read(original), new).line() == (
+        "replan: 2 visit(s) kept, 0 moved, 0 added, 0 dropped"
+    )
+
+
 def test_a_lost_night_gets_nothing_and_the_history_is_kept(original: Path, tmp_path: Path) -> None:
     new = _quiet(ucbplan.replan, ucbplan.Plan.read(original), SECOND, lost=["2040-02-16"])
     new.write(tmp_path / "new.ecsv")

@@ -130,6 +130,8 @@ def replan(
     -------
     Plan
         The kept rows and the new plan of the remaining nights (its meta: the remaining nights).
+        A replan that changes nothing (no night lost, ``observed`` not given: the spectra taken
+        as planned) is the plan itself, every visit kept: its visits reach the goals already.
 
     Raises
     ------
@@ -151,15 +153,14 @@ def replan(
         raise InputError(
             "lost: every night from from_ on is lost; nothing is left to re-plan", "lost"
         )
+    if not gone and observed is None:  # nothing changed: the plan stands, every visit kept
+        return _plan_nights(old, options, nights, None, None, 0.0)
     from ucbplan.observing.schedule.goalplan import REPLAN_INFO_SLACK
 
-    # a replan that changes the plan reaches its goals to REPLAN_INFO_SLACK; one that changes
-    # nothing (no loss, the spectra taken as planned) keeps the plan's own counts
-    slack = REPLAN_INFO_SLACK if gone or observed is not None else 0.0
-    with tempfile.TemporaryDirectory() as tmp:
+    with tempfile.TemporaryDirectory() as tmp:  # a changed plan: its goals to the slack
         if observed is None and len(kept_rows) and options.get("goal"):
             observed = _history_file(kept_rows, gone, Path(tmp) / "history.ecsv")
-        return _plan_nights(old, options, remaining, observed, kept_rows, slack)
+        return _plan_nights(old, options, remaining, observed, kept_rows, REPLAN_INFO_SLACK)
 
 
 def _options(old: Plan) -> dict[str, Any]:
@@ -284,10 +285,11 @@ def _plan_nights(
     options: dict[str, Any],
     nights: list[date],
     observed: Any,
-    kept: Table,
+    kept: Table | None,
     slack: float,
 ) -> Plan:
-    """:func:`ucbplan.plan`'s run on ``nights`` (not necessarily consecutive) with ``options``."""
+    """:func:`ucbplan.plan`'s run on ``nights`` (not necessarily consecutive) with ``options``,
+    the rows ``kept`` first, each goal reached to ``slack`` of its information."""
     from ucbplan.api import planning
 
     call = inspect.signature(planning.plan).parameters
