@@ -26,6 +26,7 @@ from ucbplan.core.phase import arg_latitude
 from ucbplan.errors import InputError, UcbplanError
 from ucbplan.observing.observed import (
     ObservedSpectra,
+    observed_fisher,
     observed_information,
     sigma_v_ratio,
 )
@@ -99,6 +100,32 @@ def test_information_of_random_spectra_equals_brute_force_fisher() -> None:
     spectra = ObservedSpectra(NAME, tau, np.sin(x) / x, sigma, sigma * np.nan)
     got = observed_information(spectra, target.params)
     assert got == pytest.approx(_brute_force_info(tau, exptime, sigma), rel=1e-12)
+
+
+@pytest.mark.parametrize("one_anchor", [False, True])
+def test_joint_information_with_planned_spectra_equals_brute_force_fisher(one_anchor: bool) -> None:
+    """Taken spectra (random, or all at one epoch: nothing alone) and balanced planned ones
+    (pairs at u = 0, π, one σ_v per pair) share one γ: ObservedFisher.joint equals 1/σ_K² of
+    the stacked design matrix inverted with numpy (1e-9: float rounding only), and needed()
+    inverts joint()."""
+    rng = np.random.default_rng(7)
+    target = load_target(TARGET)
+    tau = np.full(6, 2.0e6) if one_anchor else rng.uniform(0.0, 3.0e7, 6)
+    sigma = rng.uniform(10.0, 40.0, 6)
+    taken = ObservedSpectra(NAME, tau, np.full(6, 0.9), sigma, sigma * np.nan)
+    lam, pair_sigma = 0.8, rng.uniform(15.0, 30.0, 5)
+    g_plan = np.tile([lam, -lam], 5)
+    s_plan = np.repeat(pair_sigma, 2)
+    fisher = observed_fisher(taken, target.params, ratio=1.0 / lam**2)
+    g_taken = 0.9 * np.cos(arg_latitude(target.params, tau))
+    a = np.column_stack([np.ones(16), np.concatenate([g_taken, g_plan])])
+    w = np.diag(1.0 / np.concatenate([sigma, s_plan]) ** 2)
+    brute = 1.0 / float(np.linalg.inv(a.T @ w @ a)[1, 1])
+    planned = float(np.sum((g_plan / s_plan) ** 2))
+    assert fisher.joint(planned) == pytest.approx(brute, rel=1e-9)
+    assert (fisher.alone == 0.0) is one_anchor
+    goal = 3.0 * brute
+    assert fisher.joint(fisher.needed(goal)) == pytest.approx(goal, rel=1e-9)
 
 
 def test_a_degenerate_or_empty_set_collects_nothing() -> None:

@@ -56,9 +56,9 @@ def observed_settings(
             parameter="observed",
         )
     spectra = _read(Path(_text(path)), targets, site, settings)
-    ratio = sigma_v_ratio(
-        np.concatenate([s.sigma_v_kms for s in spectra]),
-        np.concatenate([s.predicted_kms for s in spectra]),
+    ratio = sigma_v_ratio(  # a log of only missed exposures has no spectra
+        np.concatenate([s.sigma_v_kms for s in spectra] or [np.zeros(0)]),
+        np.concatenate([s.predicted_kms for s in spectra] or [np.zeros(0)]),
     )
     if given is None:
         given = ratio if math.isfinite(ratio) and abs(ratio - 1) > SIGMA_V_RATIO_TOL else 1.0

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import inspect
 from collections.abc import Mapping, Sequence
 from datetime import date
@@ -264,6 +265,8 @@ def plan_run_on(o: dict[str, Any], nights: Sequence[date] | None) -> PlanRun:
         loaded = _load_all(o["targets"])
         if o["observed"] is not None or o["sigma_v_scale"] is not None:
             settings = observed_settings(o["observed"], o["sigma_v_scale"], loaded, where, settings)
+        if o.get("short_goals"):  # replan: a goal out of reach is stated, not refused
+            settings = dataclasses.replace(settings, short_goals=True, goal_slack=o["goal_slack"])
         return plan_targets(loaded, where, dates, settings, priorities)
 
 

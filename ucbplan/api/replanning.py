@@ -130,6 +130,8 @@ def replan(
     -------
     Plan
         The kept rows and the new plan of the remaining nights (its meta: the remaining nights).
+        A replan that changes nothing (no night lost, ``observed`` not given: the spectra taken
+        as planned) is the plan itself, every visit kept: its visits reach the goals already.
 
     Raises
     ------
@@ -151,10 +153,14 @@ def replan(
         raise InputError(
             "lost: every night from from_ on is lost; nothing is left to re-plan", "lost"
         )
-    with tempfile.TemporaryDirectory() as tmp:
+    if not gone and observed is None:  # nothing changed: the plan stands, every visit kept
+        return _plan_nights(old, options, nights, None, None, 0.0)
+    from ucbplan.observing.schedule.goalplan import REPLAN_INFO_SLACK
+
+    with tempfile.TemporaryDirectory() as tmp:  # a changed plan: its goals to the slack
         if observed is None and len(kept_rows) and options.get("goal"):
             observed = _history_file(kept_rows, gone, Path(tmp) / "history.ecsv")
-        return _plan_nights(old, options, remaining, observed, kept_rows)
+        return _plan_nights(old, options, remaining, observed, kept_rows, REPLAN_INFO_SLACK)
 
 
 def _options(old: Plan) -> dict[str, Any]:
@@ -275,9 +281,15 @@ def _history_file(rows: Table, lost: set[date], path: Path) -> Path:
 
 
 def _plan_nights(
-    old: Plan, options: dict[str, Any], nights: list[date], observed: Any, kept: Table
+    old: Plan,
+    options: dict[str, Any],
+    nights: list[date],
+    observed: Any,
+    kept: Table | None,
+    slack: float,
 ) -> Plan:
-    """:func:`ucbplan.plan`'s run on ``nights`` (not necessarily consecutive) with ``options``."""
+    """:func:`ucbplan.plan`'s run on ``nights`` (not necessarily consecutive) with ``options``,
+    the rows ``kept`` first, each goal reached to ``slack`` of its information."""
     from ucbplan.api import planning
 
     call = inspect.signature(planning.plan).parameters
@@ -285,5 +297,6 @@ def _plan_nights(
     o.update(options)
     files = [str(t["file"]) for t in old.meta.get("targets", [])]
     o.update(targets=files, site=old.site, night=nights[0], nights=1, observed=observed)
+    o.update(short_goals=True, goal_slack=slack)
     run = planning.plan_run_on(o, nights)
     return Plan(run, options={**options}, history=kept)

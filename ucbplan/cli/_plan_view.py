@@ -280,7 +280,9 @@ def _print_collected(name: str, goal: Any) -> None:
     one line, that they reach the goal)."""
     head = f"goal {escape(goal.goal.describe())}: {escape(name)}:"
     taken = f"{goal.collected_spectra} spectra taken"
-    got = f"σ_K = {goal.collected_info**-0.5:.3g} km/s"
+    got = "no σ_K alone (γ and K not separated)"  # one anchor: they count with the plan's
+    if goal.collected_info > 0:
+        got = f"σ_K = {goal.collected_info**-0.5:.3g} km/s"
     if not goal.n_spectra:
         err_console.print(
             f"{head} already reached by the {taken} ({got}, expected "

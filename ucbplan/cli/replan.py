@@ -50,7 +50,10 @@ def replan(
         new = api.replan(old, from_, observed=observed, lost=lost or ())
     report(new.run, wide, verbose)
     err_console.print(api.plan_changes(old, new).line(), markup=False)
-    for g in new.goals:
+    short = {x.target for x in new.run.result.shortfalls} if new.run is not None else set()
+    for line in new.run.shortfall_lines() if new.run is not None else []:
+        err_console.print(line, markup=False)
+    for g in (g for g in new.goals if g.target not in short):
         err_console.print(
             f"{g.target}: {g.description}: expected {g.expected.value:.4g} "
             f"{str(g.expected.unit).replace(' / ', '/')} with the spectra taken",

@@ -117,8 +117,7 @@ class TimeBudget:
 
 @dataclass(frozen=True)
 class GoalPlan:
-    """Spectra for a goal, their anchors, the σ reached (counting spectra already taken, whose
-    ``collected_info`` [(km/s)⁻²] ``info_needed`` excludes), and the time."""
+    """Spectra, anchors, σ reached and time of a goal; ``collected_fisher``: ObservedFisher's."""
 
     goal: Goal
     n_spectra: int
@@ -132,6 +131,7 @@ class GoalPlan:
     visit_s: float | None = None
     collected_info: float = 0.0
     collected_spectra: int = 0
+    collected_fisher: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
 
 
 @dataclass(frozen=True)

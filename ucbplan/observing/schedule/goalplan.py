@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -37,13 +37,27 @@ from ucbplan.observing.goals import (
     parse_goal,
     target_k,
 )
-from ucbplan.observing.observed import observed_information, target_spectra
+from ucbplan.observing.observed import ObservedFisher, observed_fisher, target_spectra
 from ucbplan.observing.schedule.candidates import TargetRun
 from ucbplan.observing.schedule.placement import INFO_RTOL
 from ucbplan.observing.schedule.settings import PlanSettings
 from ucbplan.observing.strategy import balanced_counts, constrains_k, information
 
-__all__ = ["balanced_runs", "check_goals", "goal_plans", "info_of_blocks"]
+__all__ = [
+    "GoalShortfall",
+    "as_planned",
+    "balanced_runs",
+    "check_goals",
+    "goal_plans",
+    "goal_shortfalls",
+    "info_of_blocks",
+]
+
+#: Fraction of a goal's information a replan that changes the plan (lost nights, spectra taken
+#: given) may leave uncollected (``PlanSettings.goal_slack``): σ within
+#: 0.5 % of the goal rather than a whole anchor pattern more (observers replan to the goal, and
+#: a knife-edge pattern costs an acquisition's worth of hours for 0.05 % in σ).
+REPLAN_INFO_SLACK = 0.01
 
 #: Time added to a balanced visit so that the light-time drift of its anchors (≤ 0.02 s/min)
 #: never drops its last exposure [s].
@@ -78,9 +92,19 @@ def _max_per_visit(run: TargetRun, settings: PlanSettings) -> tuple[int, float]:
     return max(1, int(science // te.step_s + 1e-9) + 1), te.step_s
 
 
-def _collected(run: TargetRun, settings: PlanSettings) -> tuple[float, int]:
-    """(information on K [(km/s)⁻²], number) of the target's spectra already taken
-    (``--observed``), each at its own u, Λ_K and σ_v (:mod:`ucbplan.observing.observed`).
+def _gamma_ratio(run: TargetRun) -> float:
+    """γ-to-K information ratio r = Σ 1/σ_v² / Σ (Λ_K cos u)²/σ_v² of the target's usable
+    exposures (:mod:`ucbplan.observing.observed`; ≈ 1/Λ_K² at quadrature anchors)."""
+    g2 = (run.exposure.lambda_k * np.cos(run.cand.u_star)) ** 2
+    usable = (run.ok > 0) & run.valid & np.isfinite(run.weight) & (g2 > 1e-12)
+    if not np.any(usable):
+        return 0.0
+    return float(np.sum(run.weight[usable] / g2[usable]) / np.sum(run.weight[usable]))
+
+
+def _collected(run: TargetRun, settings: PlanSettings) -> tuple[ObservedFisher, int]:
+    """(Fisher matrix, number) of the target's spectra already taken (``--observed``), each at
+    its own u, Λ_K and σ_v (:mod:`ucbplan.observing.observed`).
 
     Raises
     ------
@@ -89,7 +113,7 @@ def _collected(run: TargetRun, settings: PlanSettings) -> tuple[float, int]:
     """
     spectra = target_spectra(settings.observed, run.target.name)
     if spectra is None:
-        return 0.0, 0
+        return ObservedFisher(), 0
     t_ref = run.target.t_ref
     lo, hi = ((t - t_ref).to_value("s") for t in (run.since, run.until))
     bad = np.flatnonzero((spectra.tau_s < lo) | (spectra.tau_s > hi))
@@ -100,13 +124,16 @@ def _collected(run: TargetRun, settings: PlanSettings) -> tuple[float, int]:
             f"{when} TDB is outside the validity of its ephemeris ({run.since.tdb.isot} – "
             f"{run.until.tdb.isot} TDB); remove it or update the target file"
         )
-    return observed_information(spectra, run.target.params, settings.star), spectra.n
+    fisher = observed_fisher(spectra, run.target.params, _gamma_ratio(run), settings.star)
+    return fisher, spectra.n
 
 
-def _reached(goal: Goal, run: TargetRun, need: float, collected: tuple[float, int]) -> GoalPlan:
+def _reached(
+    goal: Goal, run: TargetRun, need: float, collected: tuple[ObservedFisher, int]
+) -> GoalPlan:
     """The goal plan of a target whose spectra already taken reach the goal: no spectra."""
-    info, n_taken = collected
-    sigma_k = 1.0 / math.sqrt(info)
+    fisher, n_taken = collected
+    sigma_k = 1.0 / math.sqrt(fisher.alone)
     _, k2, _ = target_k(run.target)
     return GoalPlan(
         goal=goal,
@@ -118,17 +145,24 @@ def _reached(goal: Goal, run: TargetRun, need: float, collected: tuple[float, in
         time=TimeBudget(0, 0, run.exposure.step_s, 0.0, 0.0, 0.0, 0.0),
         cycles=0,
         info_needed=0.0,
-        collected_info=info,
+        collected_info=fisher.alone,
         collected_spectra=n_taken,
+        collected_fisher=_as_tuple(fisher),
     )
+
+
+def _as_tuple(fisher: ObservedFisher) -> tuple[float, float, float, float]:
+    return (fisher.f_gg, fisher.f_gk, fisher.f_kk, fisher.ratio)
 
 
 def _goal_plan(goal: Goal, run: TargetRun, settings: PlanSettings) -> GoalPlan:
     """Spectra, balanced visits and time of one target's goal (less what was observed)."""
     need_all = goal_info_needed(goal, run.target)
     collected = _collected(run, settings)
-    need = need_all - collected[0]
-    if collected[0] > 0 and math.isfinite(need_all) and need <= need_all * INFO_RTOL:
+    fisher = collected[0]
+    # a replan may leave REPLAN_INFO_SLACK of the information (σ within ½ of it of the goal)
+    need = fisher.needed(need_all * (1.0 - settings.goal_slack))
+    if collected[1] and math.isfinite(need_all) and need <= need_all * INFO_RTOL:
         return _reached(goal, run, need_all, collected)
     w = _per_spectrum(run)
     te = run.exposure
@@ -152,7 +186,7 @@ def _goal_plan(goal: Goal, run: TargetRun, settings: PlanSettings) -> GoalPlan:
         idle_h=(total - shutter - overhead) / 3600.0,
         total_h=total / 3600.0,
     )
-    sigma_k = 1.0 / math.sqrt(n * w + collected[0])
+    sigma_k = 1.0 / math.sqrt(fisher.joint(n * w))
     _, k2, _ = target_k(run.target)
     return GoalPlan(
         goal=goal,
@@ -165,8 +199,9 @@ def _goal_plan(goal: Goal, run: TargetRun, settings: PlanSettings) -> GoalPlan:
         cycles=max(1, n // pattern),
         info_needed=need,
         visit_s=min(max(walls) + _VISIT_SLACK_S, te.visit_s or settings.max_visit_s),
-        collected_info=collected[0],
+        collected_info=fisher.alone,
         collected_spectra=collected[1],
+        collected_fisher=_as_tuple(fisher),
     )
 
 
@@ -248,6 +283,77 @@ def check_goals(
         raise InputError(f"{run.target.name}: {text}")
 
 
+@dataclass(frozen=True)
+class GoalShortfall:
+    """A goal the nights cannot reach, planned as far as they go (a replan states it instead of
+    failing).
+
+    Attributes
+    ----------
+    target : str
+        Target name.
+    goal : Goal
+        The goal.
+    reachable : float
+        σ of the goal quantity the spectra taken and planned reach (the goal's unit).
+    got, needed : float
+        Information the planned spectra collect, and would need (Σ (Λ_K cos u)²/σ_v²,
+        balanced visits: :meth:`~ucbplan.observing.observed.ObservedFisher.joint`) [(km/s)⁻²].
+    """
+
+    target: str
+    goal: Goal
+    reachable: float
+    got: float
+    needed: float
+
+    def line(self, booked_s: float, n_nights: int) -> str:
+        """One line (≤ 100 columns for names up to 24 characters): the σ the nights reach, and
+        the hours (at the information per hour of the ``booked_s`` of visits planned on
+        ``n_nights``) and nights more that would reach the goal."""
+        value = float(f"{self.reachable:.3g}")
+        reach = Goal(self.goal.quantity, value, self.goal.relative, "").describe()
+        head = f"{self.target[:24]}: {self.goal.text} not reached: {reach.replace(' ≤', ' =')}"
+        if self.got <= 0 or booked_s <= 0:
+            return f"{head}; no visit fits: add nights"
+        hours = (self.needed - self.got) / self.got * booked_s / 3600.0
+        nights = math.ceil(hours / (booked_s / 3600.0 / max(1, n_nights)) - 1e-9)
+        return f"{head}; needs {hours:.2g} h (~{nights} night(s)) more"
+
+
+def goal_shortfalls(
+    plans: dict[int, GoalPlan],
+    runs: Sequence[TargetRun],
+    blocks: Sequence[Block],
+    pattern_u: Sequence[float],
+) -> list[GoalShortfall]:
+    """The goals the planned ``blocks`` do not reach (a replan's statement, not an error)."""
+    return [
+        GoalShortfall(run.target.name, short.goal, reach, got, need)
+        for run, short, got, need, reach in _short_goals(plans, runs, blocks, pattern_u)
+    ]
+
+
+def as_planned(
+    plans: dict[int, GoalPlan], runs: Sequence[TargetRun], shortfalls: Sequence[GoalShortfall]
+) -> dict[int, GoalPlan]:
+    """``plans`` with each goal out of reach expecting the σ its planned spectra reach."""
+    reach = {x.target: x.reachable for x in shortfalls}
+    out = dict(plans)
+    for run in runs:
+        plan = plans.get(run.index)
+        if plan is not None and run.target.name in reach:
+            f = reach[run.target.name] / plan.expected
+            k2 = plan.sigma_K2_kms * f if plan.sigma_K2_kms is not None else None
+            out[run.index] = replace(
+                plan,
+                expected=f * plan.expected,
+                sigma_K1_kms=f * plan.sigma_K1_kms,
+                sigma_K2_kms=k2,
+            )
+    return out
+
+
 def _shortfalls(
     plans: dict[int, GoalPlan],
     runs: Sequence[TargetRun],
@@ -256,8 +362,22 @@ def _shortfalls(
     by_name: bool = False,
 ) -> list[tuple[Any, Shortfall]]:
     """(run, or its target's name with ``by_name``; shortfall) of each goal not reached."""
+    return [
+        (run.target.name if by_name else run, short)
+        for run, short, *_ in _short_goals(plans, runs, blocks, pattern_u)
+    ]
+
+
+def _short_goals(
+    plans: dict[int, GoalPlan],
+    runs: Sequence[TargetRun],
+    blocks: Sequence[Block],
+    pattern_u: Sequence[float],
+) -> list[tuple[TargetRun, Shortfall, float, float, float]]:
+    """(run, shortfall, information got, information needed, σ reached) of each goal not
+    reached."""
     cols = block_columns(blocks) if plans else None
-    out: list[tuple[Any, Shortfall]] = []
+    out: list[tuple[TargetRun, Shortfall, float, float, float]] = []
     for run in runs:
         plan = plans.get(run.index)
         if plan is None or plan.info_needed is None or cols is None:
@@ -265,13 +385,16 @@ def _shortfalls(
         mine = cols.values["target"] == run.target.name
         got = info_of_columns(cols, pattern_u, mine)
         if got < plan.info_needed * (1.0 - 1e-9):
-            taken = plan.collected_info  # the spectra already taken count on both sides
-            reach = math.inf
-            if got + taken > 0:
-                reach = plan.expected * math.sqrt((plan.info_needed + taken) / (got + taken))
+            joint = ObservedFisher(*plan.collected_fisher)
+            got_all, goal_all = float(joint.joint(got)), float(joint.joint(plan.info_needed))
+            # the goal quantity's σ scales as I^-½; the error scales the promise, the replan's
+            # statement the goal itself (exact: the goal's value at the goal's I)
+            ratio = math.sqrt(goal_all / got_all) if got_all > 0 else math.inf
             available = math.floor(plan.n_spectra * got / plan.info_needed)
-            short = Shortfall(plan.goal, plan.n_spectra, min(available, int(np.sum(mine))), reach)
-            out.append((run.target.name if by_name else run, short))
+            short = Shortfall(
+                plan.goal, plan.n_spectra, min(available, int(np.sum(mine))), plan.expected * ratio
+            )
+            out.append((run, short, got, plan.info_needed, plan.goal.value * ratio))
     return out
 
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from datetime import date
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from astropy.time import Time
@@ -27,7 +27,14 @@ from ucbplan.observing.blocks import MAX_BLOCK_S, Block
 from ucbplan.observing.goals import GoalPlan
 from ucbplan.observing.schedule.candidates import PlanFrame, TargetRun, Warned, prepare_runs
 from ucbplan.observing.schedule.exposure import TargetExposure
-from ucbplan.observing.schedule.goalplan import balanced_runs, check_goals, goal_plans
+from ucbplan.observing.schedule.goalplan import (
+    GoalShortfall,
+    as_planned,
+    balanced_runs,
+    check_goals,
+    goal_plans,
+    goal_shortfalls,
+)
 from ucbplan.observing.schedule.nights import NightSpan, NightWindow, night_spans, night_windows
 from ucbplan.observing.schedule.pairs import SecondEpoch, pair_blocks, pair_targets
 from ucbplan.observing.schedule.placement import Allowance, Unplaced, place_sessions
@@ -70,6 +77,8 @@ class PlanResult:
         (:mod:`.reasons`).
     warning_categories : tuple of type
         The class of each warning (its cause: :class:`~ucbplan.errors.SmearingWarning` …).
+    shortfalls : list of GoalShortfall
+        Goals the nights do not reach (``short_goals`` settings only; otherwise an error).
     """
 
     blocks: Sequence[Block]
@@ -81,6 +90,7 @@ class PlanResult:
     exposures: dict[str, TargetExposure] = field(default_factory=dict)
     reasons: dict[str, dict[str, dict[str, int]]] = field(default_factory=dict)
     warning_categories: tuple[type[UcbplanWarning], ...] = ()
+    shortfalls: list[GoalShortfall] = field(default_factory=list)
 
 
 def _check_inputs(targets: list[Target], nights: list[date], settings: PlanSettings) -> None:
@@ -240,6 +250,26 @@ def _longer_visits(
     return settings.max_visit_s, longest, replan
 
 
+def _placed(
+    runs0: list[TargetRun],
+    goals: dict[int, GoalPlan],
+    spans: list[NightSpan],
+    frame: PlanFrame,
+    settings: PlanSettings,
+    busy_x: list[tuple[float, float]],
+    full: bool,
+) -> tuple[list[TargetRun], Any, Any]:
+    """(runs, placed, unplaced): the goals' balanced visits placed (``full``: every visit as
+    full as its length allows, for goals the nights cannot reach)."""
+    runs = runs0 if full else balanced_runs(runs0, goals)
+    allowances = _allowances(runs, settings, goals)
+    for allowance in allowances.values() if full else ():
+        allowance.visits_left = 1
+    place = place_visits if settings.plans_visits else place_sessions
+    placed, unplaced = place(runs, spans, frame, settings, busy_x, allowances)
+    return runs, placed, unplaced
+
+
 def _schedule(
     runs: list[TargetRun],
     frame: PlanFrame,
@@ -250,16 +280,16 @@ def _schedule(
     settings: PlanSettings,
     busy: Sequence[Block],
     infeasible: list[Unplaced],
+    full: bool = False,
 ) -> PlanResult:
     """Goals, then sessions or visits placed night by night, then the block records in time
-    order (fixed-u pairs with their second epochs), as a :class:`PlanResult`."""
+    order (fixed-u pairs with their second epochs), as a :class:`PlanResult`. A goal the nights
+    cannot reach (``short_goals``) is planned again in visits as full as they may be."""
     spans = night_spans(windows, frame.axis)
     busy_x = _busy_x(frame.axis, busy)
     goals = goal_plans(runs, settings)
-    runs0, runs = runs, balanced_runs(runs, goals)
-    allowances = _allowances(runs, settings, goals)
-    place = place_visits if settings.plans_visits else place_sessions
-    placed, unplaced = place(runs, spans, frame, settings, busy_x, allowances)
+    runs0 = runs
+    runs, placed, unplaced = _placed(runs0, goals, spans, frame, settings, busy_x, full)
     gap = 0.0 if settings.plans_visits else settings.overhead_s
     reasons = not_planned(runs, spans, frame, placed, unplaced, gap)
     records = block_records(placed, runs, spans, frame, site, settings)
@@ -273,8 +303,16 @@ def _schedule(
         blocks = sorted(pairs, key=lambda b: (b.t_mid_utc.jd1, b.t_mid_utc.jd2))
     else:  # the same order, sorted on the columns
         blocks = BlockList(records.columns.take(records.columns.time_order()))
-    longer = _longer_visits(runs0, spans, frame, site, settings, busy_x) if goals else None
-    check_goals(goals, runs, blocks, frame.mode.u_values, longer)
+    shortfalls = []
+    if settings.short_goals:
+        shortfalls = goal_shortfalls(goals, runs, blocks, frame.mode.u_values)
+        if shortfalls and not full:  # the even split assumed nights that hold every visit
+            args = (windows, warns, site, nights, settings, busy, infeasible)
+            return _schedule(runs0, frame, *args, full=True)
+        goals = as_planned(goals, runs, shortfalls)
+    else:
+        longer = _longer_visits(runs0, spans, frame, site, settings, busy_x) if goals else None
+        check_goals(goals, runs, blocks, frame.mode.u_values, longer)
     coverage = coverage_warnings(windows[0].start, windows[-1].end)
     return PlanResult(
         blocks=blocks,
@@ -286,4 +324,5 @@ def _schedule(
         goals={runs[i].target.name: g for i, g in goals.items()},
         exposures={r.target.name: r.exposure for r in runs},
         reasons=reasons,
+        shortfalls=shortfalls,
     )

@@ -208,11 +208,22 @@ class PlanRun:
                 entry["strategy"] = strategy_facts(te, self.collected_info().get(name, 0.0))
             per_target[name] = entry
         out["targets"] = per_target
+        if self.result.shortfalls:  # a replan's goals out of reach
+            out["shortfalls"] = self.shortfall_lines()
         if s.observed or s.sigma_v_scale != 1.0:
             out["sigma_v_scale"] = s.sigma_v_scale
             spectra = [str(x.source) for x in s.observed]
             out["observed"] = list(dict.fromkeys(spectra))
         return out
+
+    def shortfall_lines(self) -> list[str]:
+        """One line per goal the nights do not reach (a replan's): how far short, and the hours
+        and nights more that would reach it (:meth:`GoalShortfall.line`)."""
+        targets = self.time_account.targets
+        return [
+            s.line(targets[s.target].total_s if s.target in targets else 0.0, len(self.nights))
+            for s in self.result.shortfalls
+        ]
 
     def collected_info(self) -> dict[str, float]:
         """Information on K each target's planned spectra collect [(km/s)⁻²], from the rows

@@ -295,6 +295,12 @@ class PlanSettings:
     sigma_v_scale : float
         Factor on every σ_v the law predicts (``--sigma-v-scale``, or the ratio the observed
         spectra measured).
+    short_goals : bool
+        A goal the nights cannot reach is planned as far as they go and its shortfall stated
+        (``replan``), not refused.
+    goal_slack : float
+        Fraction of each goal's information the plan may leave uncollected (a replan that
+        changes the plan: ``REPLAN_INFO_SLACK``; 0 otherwise).
 
     Raises
     ------
@@ -335,6 +341,8 @@ class PlanSettings:
     custom_constraints: tuple[Any, ...] | None = None
     observed: tuple[ObservedSpectra, ...] = ()
     sigma_v_scale: float = 1.0
+    short_goals: bool = False
+    goal_slack: float = 0.0
 
     def __post_init__(self) -> None:
         parse_mode(self.mode)
