@@ -311,3 +311,21 @@ def test_observed_without_a_goal_or_with_a_bad_scale_is_refused(first_night: Pat
         _plan("2040-02-16", goal="sigma_K=13km/s", sigma_v_scale=-1.0)
     code, _, err = run_main([*CLI_BASE, "--night", "2040-02-16", "--sigma-v-scale", "0"])
     assert code == 2 and "--sigma-v-scale: expected a number in (0, 100]" in err
+
+
+def test_planned_sigma_v_read_back_is_not_called_measured(
+    first_night: Path, tmp_path: Path
+) -> None:
+    """A blocks table (or log) whose σ_v are the plan's own says so, instead of reporting a
+    "measured/predicted" ratio of 1 that no measurement made."""
+    obs = _with_status(first_night, tmp_path / "obs.ecsv")
+    args = [*CLI_BASE, "--night", "2040-02-16", "--nights", "2", "--goal", "sigma_K=13km/s"]
+    result = CliRunner().invoke(app, [*args, "--observed", str(obs)])
+    assert result.exit_code == 0, result.output
+    note = [ln for ln in result.output.splitlines() if ln.startswith("observed:")]
+    assert len(note) == 1 and "14 spectra carry the plan's σ_v, not measured ones" in note[0]
+    assert "measured/predicted" not in note[0] and len(note[0]) <= 100
+    # one measured value among them: a ratio again
+    edited = _with_status(first_night, tmp_path / "one.ecsv", sigma_v_kms=lambda c: c * 1.02)
+    result = CliRunner().invoke(app, [*args, "--observed", str(edited)])
+    assert "median measured/predicted σ_v = 1.02" in result.output

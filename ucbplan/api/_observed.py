@@ -271,8 +271,14 @@ def sigma_v_note(settings: PlanSettings) -> str | None:
     if not spectra:
         return None
     measured = np.concatenate([s.sigma_v_kms for s in spectra])
-    ratio = sigma_v_ratio(measured, np.concatenate([s.predicted_kms for s in spectra]))
+    predicted = np.concatenate([s.predicted_kms for s in spectra])
+    ratio = sigma_v_ratio(measured, predicted)
     scale = settings.sigma_v_scale
+    if scale == 1.0 and _as_planned(measured, predicted):
+        return (
+            f"{measured.size} spectra carry the plan's σ_v, not measured ones: the law is kept "
+            "(fill in sigma_v_kms)"
+        )
     if not math.isfinite(ratio):
         text = "no σ_v law prediction to compare with (no exposure times)"
     else:
@@ -284,3 +290,16 @@ def sigma_v_note(settings: PlanSettings) -> str | None:
     else:
         plan = f"`sigma_v_scale={scale:g}`: the remainder is planned with the σ_v law × {scale:g}"
     return f"{text}; {plan}"
+
+
+#: Relative difference below which a σ_v read back equals the law's prediction: the spectra carry
+#: the plan's own σ_v (a blocks table or an observing log), not measured ones.
+_AS_PLANNED_RTOL = 1e-6
+
+
+def _as_planned(measured: np.ndarray, predicted: np.ndarray) -> bool:
+    """Whether every σ_v read equals the law's prediction for its spectrum (none measured)."""
+    known = np.isfinite(predicted)
+    return bool(known.all()) and bool(
+        np.all(np.abs(measured - predicted) <= _AS_PLANNED_RTOL * predicted)
+    )
