@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from ucbplan.reduce.groups import ANCHOR_U, group_spectra
+from ucbplan.reduce.groups import ANCHOR_U, MATCH_TOL_RAD, assign_anchors, group_spectra
 
 
 def _brute(sessions, tau, u, us, vels, sigs, K, G, lk, lkap):  # type: ignore[no-untyped-def]
@@ -80,3 +80,32 @@ def test_no_assigned_spectra_give_no_groups() -> None:
         lam_kappa=1.0,
     )
     assert out == []
+
+
+def _anchors_by_table(u_rad: np.ndarray) -> np.ndarray:
+    """The nearest anchor within tolerance from the full spectrum-by-anchor distance table."""
+    u = np.asarray(u_rad, float) % (2.0 * math.pi)
+    anchors = np.asarray(ANCHOR_U)
+    d = np.abs((u[:, None] - anchors[None, :] + math.pi) % (2.0 * math.pi) - math.pi)
+    k = np.argmin(d, axis=1)
+    ok = d[np.arange(u.size), k] <= MATCH_TOL_RAD
+    return np.where(ok, anchors[k], np.nan)
+
+
+def test_assign_anchors_nearest_only() -> None:
+    """Only the nearest anchor's distance is computed: the same u★ as the full table, on random
+    phases (unwrapped over ±20 turns) and on the tolerance's edges, bit for bit."""
+    rng = np.random.default_rng(4)
+    edges = np.array([a + s * MATCH_TOL_RAD for a in (*ANCHOR_U, 2 * math.pi) for s in (-1, 1)])
+    edges = np.concatenate([edges, np.nextafter(edges, 0.0), np.nextafter(edges, 10.0)])
+    quarter = np.arange(8) * 0.25 * math.pi  # half-way between anchors: none
+    u = np.concatenate([rng.uniform(-40 * math.pi, 40 * math.pi, 20_000), edges, quarter, [0.0]])
+    got = assign_anchors(u)
+    np.testing.assert_array_equal(got, _anchors_by_table(u))
+    # independent values: 0.3 rad is within π/8 of 0, 0.4 rad is not; 2π − 0.1 → 0
+    assert assign_anchors(np.array([0.3, 2 * math.pi - 0.1, 1.5 * math.pi + 0.39])).tolist() == [
+        0.0,
+        0.0,
+        1.5 * math.pi,
+    ]
+    assert np.isnan(assign_anchors(np.array([0.4, np.nan]))).all()

@@ -53,6 +53,15 @@ def test_keys_equal_as_text_merge_as_json_plain_merges_them() -> None:
     assert dumps_report(doc) == dumps_json(doc) == '{\n  "0": 1.5,\n  "a": {\n    "1": "y"\n  }\n}'
 
 
+def test_non_text_key_after_nested_values() -> None:
+    """A mapping whose first non-text key comes after nested values is written again from its
+    start with text keys (the pieces already written for it are dropped)."""
+    doc = {"x": [{"a": {"b": 1.0}, "c": [1, 2], 3: "x", "3": np.nan}], "y": {2.5: 0}}
+    assert dumps_report(doc) == dumps_json(doc)
+    assert json.loads(dumps_report(doc)) == {"x": [{"a": {"b": 1.0}, "c": [1, 2], "3": None}],
+                                             "y": {"2.5": 0}}  # fmt: skip
+
+
 def test_numpy_arrays_and_non_finite_values() -> None:
     doc = {
         "a": np.array([1.5, np.nan, -np.inf]),

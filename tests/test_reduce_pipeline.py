@@ -415,3 +415,32 @@ def test_terminal_report_lists_at_most_forty_sessions_and_pairs() -> None:
     assert "N39," in text and "N40," not in text and "(100 sessions)" in text
     assert f"… and {100 - MAX_TERMINAL_ROWS} more fixed-u pairs" in text
     assert len(doc["drifts"]["pairs"]) == 100
+
+
+@pytest.mark.parametrize("dof", [1, 2, 3, 10, 57, 480, 10_001, 999_998])
+def test_chi2_limit_is_scipy_stats_percentile(dof: int) -> None:
+    """The χ² warning's limit, computed without importing scipy.stats, is its 99th percentile
+    bit for bit; independent values from tables (Abramowitz & Stegun 26.8): 6.6349 (1 dof),
+    23.2093 (10 dof), to the 4 decimals printed there."""
+    from scipy.stats import chi2
+
+    from ucbplan.reduce.pipeline import _chi2_limit
+
+    assert _chi2_limit(dof) == float(chi2.ppf(0.99, dof))
+    table = {1: 6.6349, 10: 23.2093}
+    if dof in table:
+        assert _chi2_limit(dof) == pytest.approx(table[dof], abs=5e-5)
+
+
+def test_chi2_limit_does_not_import_scipy_stats() -> None:
+    """scipy.stats costs ~0.3 s of reduce's start-up and is not needed for the limit."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys; from ucbplan.reduce.pipeline import _chi2_limit; _chi2_limit(10); "
+        "print('scipy.stats' in sys.modules)"
+    )
+    root = Path(__file__).resolve().parents[1]
+    out = subprocess.run([sys.executable, "-c", code], cwd=root, capture_output=True, text=True)
+    assert out.stdout.strip() == "False", out.stderr

@@ -272,3 +272,27 @@ def test_sigma_k_scaling_is_reported_and_warned_by_one_rule(extra: float) -> Non
     assert significant == (extra > 1.1)  # 1.2 (χ²/dof ≈ 1.44) is significant, unlike 1.0
     if warned:
         assert f"σ(K) {f.sigma_K_input:.3g} → {f.sigma_K:.3g} km/s" in warned[0], warned
+
+
+@pytest.mark.parametrize("n", [2, 3, 8191, 8192, 8193, 3 * 8192 + 5])
+def test_phase_sensitivity_block_sums_are_the_whole_products(n: int) -> None:
+    """phase_sensitivity sums its (n, 7) products block by block; the result is the sum of the
+    whole products bit for bit (numpy's row-after-row order carried across blocks), on values
+    spread over 40 decades so that any other order of the additions would show."""
+    from ucbplan.reduce import regression
+
+    rng = np.random.default_rng(n)
+    x, s = rng.standard_normal(n), rng.uniform(5, 20, n)
+    dG = rng.standard_normal((n, 7)) * np.exp(rng.uniform(-46, 46, (n, 7)))
+    w = 1.0 / s**2
+    for weights in (w, w * (x - 0.3)):
+        whole = (weights[:, None] * dG).sum(axis=0)
+        np.testing.assert_array_equal(regression._weighted_column_sums(weights, dG), whole)
+    sw = w.sum()
+    xm = (w * x).sum() / sw
+    sxx = (w * (x - xm) ** 2).sum()
+    slope = -1.0 * 585.3 * ((w * (x - xm))[:, None] * dG).sum(axis=0) / sxx
+    intercept = -1.0 * 585.3 * (w[:, None] * dG).sum(axis=0) / sw - xm * slope
+    dK, dg = phase_sensitivity(x, s, dG, 585.3, -1.0)
+    np.testing.assert_array_equal(dK, -1.0 * slope)
+    np.testing.assert_array_equal(dg, intercept)

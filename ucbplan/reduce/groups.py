@@ -24,6 +24,8 @@ F64 = NDArray[np.float64]
 ANCHOR_U: tuple[float, ...] = (0.0, 0.5 * math.pi, math.pi, 1.5 * math.pi)
 #: A spectrum belongs to the nearest anchor if within this phase distance [rad] (P_b/16).
 MATCH_TOL_RAD = math.pi / 8.0
+#: The spacing of ANCHOR_U [rad] (they are k·π/2, k = 0 … 3).
+_ANCHOR_STEP = 0.5 * math.pi
 
 
 def _wrap(x: ArrayLike) -> F64:
@@ -43,9 +45,11 @@ def assign_anchors(u_rad: ArrayLike, u_star: ArrayLike | None = None) -> F64:
         us = np.asarray(u_star, float)
         return np.asarray(np.where(np.isfinite(us), us % (2.0 * math.pi), np.nan), dtype=float)
     anchors = np.asarray(ANCHOR_U)
-    d = np.abs(_wrap(u[:, None] - anchors[None, :]))
-    k = np.argmin(d, axis=1)
-    ok = d[np.arange(u.size), k] <= MATCH_TOL_RAD
+    # only the nearest anchor can lie within MATCH_TOL_RAD (< π/4, half the anchors' spacing):
+    # its distance alone, the same double as in a spectrum-by-anchor table of them
+    near = np.rint(u / _ANCHOR_STEP)
+    k = np.where(np.isfinite(near), near, 0.0).astype(np.intp) % anchors.size
+    ok = np.abs(_wrap(u - anchors[k])) <= MATCH_TOL_RAD
     return np.asarray(np.where(ok, anchors[k], np.nan), dtype=float)
 
 

@@ -71,12 +71,15 @@ def _mapping(obj: Mapping[Any, Any], level: int, out: list[str]) -> None:
     if not obj:
         out.append("{}")
         return
-    if not all(type(k) is str for k in obj):  # keys equal as text are one key (json_plain)
-        obj = {str(k): v for k, v in obj.items()}
+    mark = len(out)
     inner = "\n" + _INDENT * (level + 1)
     sep = "{" + inner
     for key, val in obj.items():
-        head = sep + encode_basestring_ascii(str(key)) + ": "
+        if type(key) is not str:  # keys equal as text are one key (json_plain): start again
+            del out[mark:]
+            _mapping({str(k): v for k, v in obj.items()}, level, out)
+            return
+        head = sep + encode_basestring_ascii(key) + ": "
         kind = type(val)
         if kind is float:  # the common leaves, without a call
             out.append(head + (float.__repr__(val) if math.isfinite(val) else "null"))
