@@ -136,3 +136,23 @@ def test_every_parameter_renders_as_a_flag_of_the_command_line() -> None:
 )
 def test_cli_message_renders_parameters_as_flags(python: str, cli: str) -> None:
     assert cli_message(python) == cli
+
+
+@pytest.mark.parametrize("value", ["0\n", "a\rb", "tab\there", "nul\x00", "esc\x1b[31m"])
+def test_a_control_character_in_a_user_value_never_breaks_the_one_line(
+    value: str, tmp_path: Path
+) -> None:
+    """Found by hypothesis (tests/test_plan_result.py::test_methods_take_any_value): a file
+    name ``"0\\n"`` put a raw newline into two messages (the figure suffix check and the blocks
+    table reader), so the "one line" promise broke. Every ucbplan error escapes them."""
+    from ucbplan.errors import InputError, UcbplanError
+    from ucbplan.observing.tableread import read_blocks
+    from ucbplan.plotting import figure_format
+
+    for make in (lambda: figure_format(Path(value)), lambda: read_blocks(tmp_path / value)):
+        with pytest.raises(UcbplanError) as info:
+            make()
+        text = str(info.value)
+        assert text.isprintable() and "\n" not in text, text
+    assert str(InputError("x: got 'a'\nb")) == "x: got 'a'\\nb"
+    assert str(InputError("σ_v ≤ 5 km/s … ok")) == "σ_v ≤ 5 km/s … ok"  # printable text kept

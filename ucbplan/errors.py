@@ -75,7 +75,21 @@ def shorten(value: object, limit: int = MAX_VALUE_CHARS) -> str:
 
 
 class UcbplanError(Exception):
-    """Base class of all ucbplan errors shown to users as one line."""
+    """Base class of all ucbplan errors shown to users as one line.
+
+    A control character in the message (a newline in a file name a user typed, say) is written
+    as its escape (``\\n``), so that the message stays one line whatever value it quotes.
+    """
+
+    def __init__(self, *args: object) -> None:
+        if args and isinstance(args[0], str) and not args[0].isprintable():
+            args = (_escaped(args[0]), *args[1:])
+        super().__init__(*args)
+
+
+def _escaped(text: str) -> str:
+    """``text`` with each non-printable character as its Python escape (``\\n``, ``\\x00``)."""
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
 
 
 class InputError(UcbplanError, ValueError):
