@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 from test_target import BASE  # tests/ is on sys.path (no __init__.py)
 
 from ucbplan.errors import TargetFileError
-from ucbplan.target import load_target
+from ucbplan.target import load_target, target_from_dict
 from ucbplan.target.covariance import _check_psd, _check_symmetric, _plainly_good
 from ucbplan.target.parse import load_target_documents, load_target_files
 from ucbplan.target.values import Ctx
@@ -123,3 +123,29 @@ def test_the_batch_passes_only_what_each_check_passes(rows: list[list[float]]) -
         assert good[1]
         if good[0]:
             assert _checked_alone(m)
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    st.lists(
+        st.floats(min_value=5e-324, max_value=1.7e308, allow_nan=False, allow_infinity=False),
+        min_size=1,
+        max_size=4,
+    )
+)
+def test_sigmas_alone_give_the_matrix_rho_sigma_sigma_gives(sigmas: list[float]) -> None:
+    """σ's without correlations take diag(σ²): bit for bit ρ ∘ σσᵀ with ρ = I, and refused
+    (the same message) exactly when that has a non-finite entry."""
+    names = ("phase", "f_gw", "fdot", "fddot")[: len(sigmas)]
+    doc = copy.deepcopy(BASE)
+    doc["lisa"]["covariance"] = {"sigma": {n: repr(s) for n, s in zip(names, sigmas, strict=True)}}
+    s = np.array(sigmas)
+    with np.errstate(all="ignore"):
+        want = np.eye(len(s)) * (s[:, None] * s)  # the ρ ∘ σσᵀ of the correlated form
+    try:
+        got = target_from_dict(doc)
+    except TargetFileError as exc:
+        assert not np.isfinite(want).all() and "σ² overflows a float" in str(exc)
+        return
+    assert got.cov_names == names
+    assert got.cov_matrix.tobytes() == want.tobytes() and got.cov_matrix.shape == want.shape

@@ -9,6 +9,7 @@ positive semi-definite.
 
 from __future__ import annotations
 
+import math
 import re
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
@@ -197,12 +198,25 @@ def _from_sigma(ctx: Ctx, sec: _Section, cov: Mapping[str, Any]) -> Named:
                 f"{where}.{ctx.key(n)}", f"unknown parameter; {hint}expected some of {sec.allowed}"
             )
     names = tuple(sig)
-    sigmas = np.array([_sigma(ctx, sec, n, sig[n]) for n in names])
+    listed = [_sigma(ctx, sec, n, sig[n]) for n in names]
+    if cov.get("correlation", ()) is None:  # σ's alone: ρ = I, Σ = diag(σ²)
+        return names, _diagonal(ctx, where, listed)
+    sigmas = np.array(listed)
     corr = _correlation_matrix(ctx, sec, names, cov.get("correlation"))
     out = corr * (sigmas[:, None] * sigmas)  # ρ ∘ σσᵀ, σσᵀ as np.outer forms it
     if not np.isfinite(out).all():
         raise ctx.fail(where, "σ² overflows a float; check the units of sigma")
     return names, out
+
+
+def _diagonal(ctx: Ctx, where: str, sigmas: list[float]) -> FloatArray:
+    """I ∘ σσᵀ without the products off the diagonal: each σ is finite and > 0 (read and range
+    checked), so σᵢσⱼ ≤ max(σᵢ², σⱼ²) and those products are finite when the squares are, and
+    0 × a finite product is the 0.0 the identity gives."""
+    squares = [s * s for s in sigmas]
+    if not all(map(math.isfinite, squares)):
+        raise ctx.fail(where, "σ² overflows a float; check the units of sigma")
+    return np.diag(squares)
 
 
 def _sigma(ctx: Ctx, sec: _Section, name: str, raw: Any) -> float:
