@@ -36,6 +36,7 @@ from ucbplan.target.sections import (
     Ephemeris,
     check_eccentricity,
     check_section,
+    each_quantity,
     mapping,
     names,
     number,
@@ -63,6 +64,8 @@ __all__ = [
 FloatArray = NDArray[np.float64]
 
 _PHASE_MODEL = tuple(field(f"lisa.{n}") for n in PARAM_NAMES)
+_T_OBS = (field("lisa.t_obs"),)
+_SPECTROSCOPY_VALUES = tuple(f for f in section_fields("spectroscopy") if f.kind == "quantity")
 _LISA_EXTRAS = tuple(
     field(f"lisa.{n}") for n in ("cos_inclination", "amplitude", "psi", "distance")
 )
@@ -367,10 +370,7 @@ def _parse_spectroscopy(ctx: Ctx, spec: Any) -> Spectroscopy | None:
     spec = mapping(ctx, field("spectroscopy"), spec)
     lines_field = field("spectroscopy.lines")
     lines = parse_choice(ctx, lines_field, spec.get("lines", lines_field.default))
-    vals: dict[str, Any] = {}
-    for f in section_fields("spectroscopy"):
-        if f.kind == "quantity":  # each read and range-checked in turn
-            vals |= quantities(ctx, spec, (f,))
+    vals = each_quantity(ctx, spec, _SPECTROSCOPY_VALUES)
     return Spectroscopy(lines, vals["K1"], vals["K2"], vals["K_eff"], vals["sigma_v"])
 
 
@@ -390,7 +390,7 @@ def _parse_lisa(ctx: Ctx, lisa: Any, path: Path | None) -> Ephemeris:
     """The ``lisa`` section; TCB rates are rescaled and start-referenced ones moved."""
     _check_lisa_fields(ctx, lisa)
     t_ref, converted = parse_epoch(ctx, field("lisa.t_ref"), lisa["t_ref"], lisa.get("t_ref_scale"))
-    t_obs = float(quantities(ctx, lisa, (field("lisa.t_obs"),))["t_obs"])
+    t_obs = float(each_quantity(ctx, lisa, _T_OBS)["t_obs"])
     ref_is = _reference_point(ctx, lisa)
     vals = quantities(ctx, lisa, _PHASE_MODEL)
     check_eccentricity(ctx, vals["eta"], vals["kappa"])

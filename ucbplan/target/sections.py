@@ -78,6 +78,20 @@ def quantities(ctx: Ctx, mapping: Mapping[str, Any], fields: Iterable[Field]) ->
     return {f.name: got.get(f.name, f.default) for f in fields}
 
 
+def each_quantity(ctx: Ctx, mapping: Mapping[str, Any], fields: Iterable[Field]) -> dict[str, Any]:
+    """Fields of ``mapping`` as floats (absent: the schema default), each read and range-checked
+    in turn: :func:`quantities` of one field at a time."""
+    out: dict[str, Any] = {}
+    for f in fields:
+        if f.name in mapping:
+            raw = mapping[f.name]
+            out[f.name] = x = parse_quantity(ctx, f, raw)
+            check_range(ctx, f, x, raw)
+        else:
+            out[f.name] = f.default
+    return out
+
+
 def number(ctx: Ctx, doc: Mapping[str, Any], f: Field) -> Any:
     """A plain number at the top level (absent: the schema default), range checked."""
     if f.name not in doc:
