@@ -214,3 +214,29 @@ def test_cli_one_anchor_spectra_taken_say_they_fix_nothing_alone(
     )
     assert code == 0, err
     assert "no σ_K alone (γ and K not separated)" in err
+
+
+def test_an_observing_log_of_another_plan_is_refused_in_one_line(
+    original: Path, tmp_path: Path
+) -> None:
+    """A ``now --log`` file of this plan counts; the same log of another plan (one block start
+    moved: another plan_id) is refused in one line, by the API and the CLI (exit 2, nothing
+    written)."""
+    from ucbplan.observing.obslog import ObservingLog
+    from ucbplan.observing.tableread import read_blocks
+
+    ours = ObservingLog.open(read_blocks(original), tmp_path / "ours.csv")
+    other_table = read_blocks(original)
+    other_table["t_start_utc"][0] = "2040-02-15T23:59:59.000"
+    theirs = ObservingLog.open(other_table, tmp_path / "theirs.csv")
+    for log in (ours, theirs):
+        for e in log.exposures[:4]:
+            log.mark(e, "taken")
+    assert _quiet(ucbplan.replan, original, SECOND, observed=ours.path).goals
+    with pytest.raises(InputError, match=r"^observed .*: a log of another plan \(plan_id ") as e:
+        _quiet(ucbplan.replan, original, SECOND, observed=theirs.path)
+    assert "\n" not in str(e.value)
+    out = tmp_path / "new.ecsv"
+    args = ["replan", str(original), "--from", SECOND, "--observed", str(theirs.path)]
+    code, _, err = run_main([*args, "-o", str(out)])
+    assert code == 2 and len(err.strip().splitlines()) == 1 and not out.exists(), err

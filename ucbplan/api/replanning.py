@@ -137,12 +137,16 @@ def replan(
     ------
     InputError
         ``from_`` after the plan's last night or inside a night's blocks; a lost night not in
-        the plan; a bad status in ``observed``.
+        the plan; a bad status in ``observed``; ``observed`` an observing log of another plan.
     InputFileError
         A plan without the recorded options, or whose target file is missing or changed.
     """
     old = plan if isinstance(plan, Plan) else Plan.read(plan)
     options = _options(old)
+    if observed is not None:
+        from ucbplan.observing.obslog import check_log_plan
+
+        check_log_plan(observed, old.text_table)
     nights = [date.fromisoformat(str(n)) for n in old.meta.get("nights", [])]
     gone = _lost(lost, nights)
     start = _from_night(old, from_, nights)
