@@ -6,6 +6,7 @@ goal σ_K ≤ 15 km/s over the three nights from 2040-02-15 (the goal needs the 
 
 from __future__ import annotations
 
+import math
 import shutil
 import warnings
 from pathlib import Path
@@ -21,6 +22,7 @@ from test_observed import _brute_force_info
 import ucbplan
 from ucbplan.api.replanning import plan_changes
 from ucbplan.errors import InputError, InputFileError
+from ucbplan.observing.schedule.goalplan import REPLAN_INFO_SLACK
 from ucbplan.target import load_target
 
 TARGET = Path(__file__).resolve().parents[1] / "catalogs" / "hm-cnc-simulated.yaml"
@@ -114,7 +116,8 @@ def test_promised_sigma_k_with_half_observed_matches_a_fisher_sum(
     )
     (goal,) = new.goals
     assert goal.expected.to_value("km/s") == pytest.approx(info**-0.5, rel=0.02)
-    assert goal.expected.to_value("km/s") <= 15.0
+    # a changed replan may leave REPLAN_INFO_SLACK of the information: σ ≤ goal/√(1 − slack)
+    assert goal.expected.to_value("km/s") <= 15.0 / math.sqrt(1.0 - REPLAN_INFO_SLACK)
 
 
 @pytest.mark.parametrize(

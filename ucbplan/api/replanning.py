@@ -143,10 +143,7 @@ def replan(
     """
     old = plan if isinstance(plan, Plan) else Plan.read(plan)
     options = _options(old)
-    if observed is not None:
-        from ucbplan.observing.obslog import check_log_plan
-
-        check_log_plan(observed, old.text_table)
+    _check_log(observed, old)
     nights = [date.fromisoformat(str(n)) for n in old.meta.get("nights", [])]
     gone = _lost(lost, nights)
     start = _from_night(old, from_, nights)
@@ -189,6 +186,14 @@ def _options(old: Plan) -> dict[str, Any]:
     for entry in meta.get("targets", []):
         _check_target(entry)
     return dict(options)
+
+
+def _check_log(observed: str | Path | None, old: Plan) -> None:
+    """An observing log given as ``observed`` is one of ``old``'s (another plan's is refused)."""
+    from ucbplan.observing.obslog import check_log_plan
+
+    if observed is not None:
+        check_log_plan(observed, old.text_table)
 
 
 def _check_target(entry: Any) -> None:
