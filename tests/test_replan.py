@@ -243,3 +243,24 @@ def test_an_observing_log_of_another_plan_is_refused_in_one_line(
     args = ["replan", str(original), "--from", SECOND, "--observed", str(theirs.path)]
     code, _, err = run_main([*args, "-o", str(out)])
     assert code == 2 and len(err.strip().splitlines()) == 1 and not out.exists(), err
+
+
+def test_a_replan_after_one_lost_night_keeps_the_other_nights_visits(tmp_path: Path) -> None:
+    """σ_K ≤ 9 km/s over five nights books three visits (2040-02-15 to 17); 02-16 lost, the
+    replan keeps the visits of 02-15 and 02-17 (same start, every exposure) and adds one visit
+    for what the lost night held; the goal is still reached (within the replan's slack)."""
+    plan = _quiet(
+        ucbplan.plan, str(TARGET), night="2040-02-15", nights=5, **{**BASE, "goal": "sigma_K=9km/s"}
+    )
+    plan.write(tmp_path / "p.ecsv")
+    old = ucbplan.Plan.read(tmp_path / "p.ecsv")
+    new = _quiet(ucbplan.replan, tmp_path / "p.ecsv", "2040-02-15T12:00", lost=["2040-02-16"])
+    changes = plan_changes(old, new)
+    survivors = old.text_table[old.text_table["night"] != "2040-02-16"]
+    assert len(set(survivors["visit_id"])) == 2
+    assert sorted(changes.kept) == sorted(set(survivors["visit_id"]))
+    assert (len(changes.moved), len(changes.added)) == (0, 1)
+    starts = {str(s) for s in new.text_table["t_start_utc"]}
+    assert {str(s) for s in survivors["t_start_utc"]} <= starts  # every exposure kept
+    (goal,) = new.goals
+    assert goal.expected.to_value("km/s") <= 9.0 / math.sqrt(1.0 - REPLAN_INFO_SLACK)

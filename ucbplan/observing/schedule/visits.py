@@ -27,6 +27,7 @@ from numpy.typing import NDArray
 from ucbplan.observing.constraint_checks import evaluate_window
 from ucbplan.observing.schedule.candidates import PlanFrame, TargetRun
 from ucbplan.observing.schedule.nights import NightSpan
+from ucbplan.observing.schedule.pinning import pin_visits
 from ucbplan.observing.schedule.placement import (
     INFO_RTOL,
     Allowance,
@@ -141,8 +142,6 @@ def _best_visit(
             exps.pop()
         if allowance.info is not None and exps:
             _goal_cut(exps, run.weight, allowance.info, pattern)
-            if fastest:  # whole patterns: the balance (Σ Λ_K cos u/σ_v² ≈ 0) the goal assumes
-                _whole_patterns(exps, pattern)
         elif allowance.exposures is not None:
             _whole_patterns(exps, pattern)  # an exposure cap: whole patterns
         if not exps:
@@ -160,7 +159,8 @@ def _place_night(run: TargetRun, night: NightTask) -> str | None:
     usable = night_usable(run, span, frame, settings)
     if isinstance(usable, str):
         return usable
-    wanted, placed = settings.sessions_per_night, 0
+    wanted = settings.sessions_per_night
+    placed = sum(1 for s in timeline.placed if s.target_i == run.index and s.night_i == n)
     while placed < wanted and not allowance.spent:
         pick = _best_visit(run, span, timeline, frame, settings, allowance)
         if pick is None:
@@ -222,12 +222,15 @@ def place_visits(
     unplaced : list of Unplaced
         One entry per target and night that got fewer visits than asked.
     """
+    timeline = Timeline(0.0)
+    if settings.pinned:  # a replan's kept visits first
+        pin_visits(runs, spans, frame, settings, timeline, allowances)
     return place_by_priority(
         runs,
         spans,
         frame,
         settings,
-        Timeline(0.0),
+        timeline,
         busy,
         allowances,
         _place_night,
