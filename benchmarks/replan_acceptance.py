@@ -32,8 +32,8 @@ cancels the taken spectra's F_γK) give an upper bound on the information n expo
 the smallest n that reaches the goal is at most the planner's; those n exposures are charged the
 plan's cadence (step between exposures) and one acquisition per visit of the longest visit allowed,
 so no schedule reaches the goal in fewer hours. "The goal" here is the goal as a replan reaches it:
-σ within 0.5 % of it (the planner's ``REPLAN_INFO_SLACK``, 1 % of the information, well inside the 5
-% the acceptance allows).
+σ within 0.5 % of it (the planner's ``REPLAN_INFO_SLACK``, 1 % of the information, well inside the
+5 % the acceptance allows).
 
 Run ``python benchmarks/replan_acceptance.py [N_CASES] [FIRST_SEED]`` (default 30 cases from
 seed 0); it prints one line per case and the pass rates.

@@ -264,3 +264,23 @@ def test_a_replan_after_one_lost_night_keeps_the_other_nights_visits(tmp_path: P
     assert {str(s) for s in survivors["t_start_utc"]} <= starts  # every exposure kept
     (goal,) = new.goals
     assert goal.expected.to_value("km/s") <= 9.0 / math.sqrt(1.0 - REPLAN_INFO_SLACK)
+
+
+def test_kept_visits_are_dropped_only_when_the_goal_is_over_reached_without_them() -> None:
+    """Three kept visits of information 4, 2 and 3 (per hour: 4, 1, 3): with 5 still needed the
+    least information per hour goes first (2: 7 ≥ 5 without it), then none can go (4 or 3
+    alone < 5); with 10 needed every one stays; with no goal nothing is judged."""
+    from types import SimpleNamespace
+
+    from ucbplan.observing.schedule.pinning import _needed
+    from ucbplan.observing.schedule.placement import Allowance, Session
+
+    run: Any = SimpleNamespace(weight=np.array([2.0, 2.0, 1.0, 1.0, 1.5, 1.5]))
+    visits = [
+        Session(0, 0, (0, 1), 0.0, 1.0),
+        Session(0, 1, (2, 3), 10.0, 12.0),
+        Session(0, 2, (4, 5), 20.0, 21.0),
+    ]
+    assert _needed(run, visits, Allowance(info=5.0)) == [visits[0], visits[2]]
+    assert _needed(run, visits, Allowance(info=10.0)) == visits
+    assert _needed(run, visits, Allowance()) == visits
