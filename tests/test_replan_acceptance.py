@@ -40,6 +40,10 @@ def test_a_check_can_fail() -> None:
     assert case.checks == {"goal": False, "hours": True}
     case.short, case.stated = "short", 2.0
     assert case.checks == {"stated": False}
+    case.achieved = case.stated = float("inf")  # nothing taken, no visit fits: stated so
+    assert case.checks == {"stated": True}
+    case.stated = 2.0
+    assert case.checks == {"stated": False}
 
 
 @pytest.mark.slow
