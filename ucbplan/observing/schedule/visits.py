@@ -160,7 +160,9 @@ def _place_night(run: TargetRun, night: NightTask) -> str | None:
     if isinstance(usable, str):
         return usable
     wanted = settings.sessions_per_night
-    placed = sum(1 for s in timeline.placed if s.target_i == run.index and s.night_i == n)
+    placed = 0  # a replan's kept visits of this night count (sessions_per_night)
+    if settings.pinned:
+        placed = sum(1 for s in timeline.placed if s.target_i == run.index and s.night_i == n)
     while placed < wanted and not allowance.spent:
         pick = _best_visit(run, span, timeline, frame, settings, allowance)
         if pick is None:
