@@ -95,14 +95,15 @@ def _visit_key(run: TargetRun, exps: list[int]) -> tuple[float, float]:
 
 def _replan_key(
     run: TargetRun, exps: list[int], allowance: Allowance, wall_s: float
-) -> tuple[float, float]:
+) -> tuple[float, float, float]:
     """How good a visit of a replan's goal is: the information it brings toward what is still
-    missing, then the shorter visit (a visit that reaches the goal with fewer exposures beats a
-    longer one, which :func:`_visit_key` would prefer)."""
+    missing, then the shorter visit to the second (a visit that reaches the goal with fewer
+    exposures beats a longer one, which :func:`_visit_key` would prefer), then the lower mean
+    airmass (a σ_v fixed per exposure ties the information)."""
     info = float(np.nansum(run.weight[exps]))
     if allowance.info is not None:
         info = min(info, allowance.info * (1.0 - INFO_RTOL))
-    return round(info, 12), -wall_s
+    return round(info, 12), -round(wall_s), -float(np.mean(run.cand.airmass_mid[exps]))
 
 
 def _best_visit(
@@ -127,7 +128,7 @@ def _best_visit(
     starts = js[good[js] & acq_ok]
     nxt = np.searchsorted(c.x_start, c.x_end + r - _READOUT_SLACK_S, side="left")
     best: tuple[tuple[int, ...], float, float] | None = None
-    best_key = (0.0, 0.0)
+    best_key: tuple[float, ...] = (0.0, 0.0)
     pattern = len(settings.spec.u_values) if te.strategy != "untargeted" else 1
     cap = c.x_mid.size if allowance.exposures is None else allowance.exposures
     cap = min(cap, allowance.share(pattern) or cap)
@@ -141,7 +142,7 @@ def _best_visit(
         while exps and not timeline.free(x0, float(c.x_end[exps[-1]]) + r):
             exps.pop()
         if allowance.info is not None and exps:
-            _goal_cut(exps, run.weight, allowance.info, pattern)
+            _goal_cut(exps, run.weight, allowance.info, 1 if fastest else pattern)
         elif allowance.exposures is not None:
             _whole_patterns(exps, pattern)  # an exposure cap: whole patterns
         if not exps:
