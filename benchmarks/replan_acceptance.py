@@ -23,15 +23,20 @@ Checks per case:
 * ``stated``: with a shortfall statement, the achieved σ_K is within 5 % of the σ_K it states.
 
 :func:`fewest_hours` is a *lower bound* computed without the planner: every anchor epoch (u★ = 0 or
-π) of the surviving nights at airmass ≤ 2 with the Sun below −12° is a candidate exposure (astropy,
-the ephemeris; the Moon ignored, which only adds candidates); the n best (smallest σ_v; at most the
-exposures of ``sessions_per_night`` 1-h visits a night, the planner's limit per target) with the
-signs of cos u chosen freely (a relaxation: the best sign split cancels the taken spectra's F_γK)
-give an upper bound on the information n exposures can collect, so the smallest n that reaches the
-goal is at most the planner's; those n exposures are charged the plan's cadence (step between
-exposures) and one acquisition per visit of the longest visit allowed, so no schedule reaches the
-goal in fewer hours. "The goal" here is the goal as a replan reaches it: σ within 0.5 % of it (the
-planner's ``REPLAN_INFO_SLACK``, 1 % of the information, well inside the 5 % the acceptance allows).
+π) of the surviving nights at airmass ≤ 2 with the Sun below −12° and at least ``moon_sep_deg`` from
+the Moon (or the Moon down) is a candidate exposure (astropy, the ephemeris: the plan's own limits,
+checked at the anchor only and with the acquisition left out, which only adds candidates); the n
+best (smallest σ_v; at most the exposures of ``sessions_per_night`` 1-h visits a night, the
+planner's limit per target) with the signs of cos u chosen freely (a relaxation: the best sign split
+cancels the taken spectra's F_γK) give an upper bound on the information n exposures can collect, so
+the smallest n that reaches the goal is at most the planner's; those n exposures are charged the
+plan's cadence (step between exposures) and one acquisition per visit of the longest visit allowed,
+so no schedule reaches the goal in fewer hours. A plan of back-to-back exposures (the ``untargeted``
+strategy) cannot put them all at anchors: the bound is then the smaller of one visit whose n
+exposures, a step apart from the best start phase, have the largest Σ cos²u and Σ |cos u| at the
+best σ_v, and of at least two visits (one acquisition more) with the anchors' relaxation. "The goal"
+here is the goal as a replan reaches it: σ within 0.5 % of it (the planner's ``REPLAN_INFO_SLACK``,
+1 % of the information, well inside the 5 % the acceptance allows).
 
 Run ``python benchmarks/replan_acceptance.py [N_CASES] [FIRST_SEED]`` (default 30 cases from
 seed 0); it prints one line per case and the pass rates.
@@ -86,8 +91,9 @@ class Case:
     @property
     def checks(self) -> dict[str, bool]:
         """The acceptance checks that apply to the case (name → passed)."""
-        if self.short:
-            return {"stated": abs(self.achieved / self.stated - 1.0) <= TOL}
+        if self.short:  # "no visit fits" with nothing taken: σ_K infinite, as stated
+            both_inf = math.isinf(self.achieved) and math.isinf(self.stated)
+            return {"stated": both_inf or abs(self.achieved / self.stated - 1.0) <= TOL}
         out = {"goal": self.achieved <= self.goal * (1.0 + TOL)}
         if self.booked_h > 0:
             out["hours"] = self.booked_h <= (1.0 + TOL) * self.fewest_h
@@ -146,6 +152,8 @@ def _fit_sigma_k(g: np.ndarray, sigma: np.ndarray, rng: np.random.Generator, k: 
     """Weighted least-squares (γ, K) fit of simulated velocities; the formal σ_K [km/s]."""
     v = 30.0 + k * g + rng.normal(0.0, sigma)
     a = np.column_stack([np.ones_like(g), g]) / sigma[:, None]
+    if np.linalg.matrix_rank(a.T @ a) < 2:  # nothing taken nor planned, or one anchor only
+        return math.inf
     cov = np.linalg.inv(a.T @ a)
     np.linalg.lstsq(a, v / sigma, rcond=None)  # the fit itself (its K is not checked)
     return float(math.sqrt(cov[1, 1]))
@@ -164,14 +172,47 @@ def fewest_hours(case_plan: Any, target: Any, taken: tuple[np.ndarray, np.ndarra
     from ucbplan.observing.schedule.goalplan import REPLAN_INFO_SLACK
 
     g_obs, s_obs = taken
-    o0, o1, o2 = (float(np.sum(g_obs**p / s_obs**2)) for p in (0, 1, 2))
+    o = tuple(float(np.sum(g_obs**p / s_obs**2)) for p in (0, 1, 2))
     p0 = np.cumsum(np.sort(1.0 / sig**2)[::-1])
-    resid = np.maximum(0.0, abs(o1) - lam * p0)
-    info = o2 + lam**2 * p0 - resid**2 / (o0 + p0)
-    reach = np.flatnonzero(info >= goal**-2 * (1.0 - REPLAN_INFO_SLACK))
-    if reach.size == 0:
-        return math.inf
-    return _visit_hours(int(reach[0]) + 1, planning, case_plan.meta["overhead_s"])
+    need = goal**-2 * (1.0 - REPLAN_INFO_SLACK)
+    overhead = case_plan.meta["overhead_s"]
+    n = _first_reaching(o, lam, p0, p0, p0, need)
+    hours = math.inf if n is None else _visit_hours(n, planning, overhead)
+    if planning["strategy"]["chosen"] != "untargeted" or n is None:
+        return hours
+    # back-to-back exposures: one visit's phases advance by a fixed step (module notes)
+    n_max = _n_max(planning, overhead)
+    a, b = _consecutive_cos(target, planning, n_max)
+    s_best = float(np.max(1.0 / sig**2))
+    one = _first_reaching(o, lam, s_best * np.arange(1, n_max + 1), a * s_best, b * s_best, need)
+    cost = planning["readout_s"] + planning["exptime_s"]
+    two = hours + (0.0 if n > n_max else (overhead + cost - planning["step_s"]) / 3600.0)
+    return min(two, math.inf if one is None else _visit_hours(one, planning, overhead))
+
+
+def _first_reaching(o: tuple[float, ...], lam: float, p0: np.ndarray, p2: np.ndarray,
+                    p1: np.ndarray, need: float) -> int | None:  # fmt: skip
+    """The fewest exposures whose information (upper bounds: Σ 1/σ_v² ``p0``, Σ cos²u/σ_v²
+    ``p2``, Σ |cos u|/σ_v² ``p1`` of the first n) with the taken ``o`` reaches ``need``."""
+    resid = np.maximum(0.0, abs(o[1]) - lam * p1)
+    info = o[2] + lam**2 * p2 - resid**2 / (o[0] + p0)
+    reach = np.flatnonzero(info >= need)
+    return int(reach[0]) + 1 if reach.size else None
+
+
+def _consecutive_cos(
+    target: Any, planning: dict[str, Any], n_max: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """The largest Σ cos²u and Σ |cos u| of n = 1 … ``n_max`` exposures a step apart (any
+    start phase; u advances by 2π step/P)."""
+    from ucbplan.core.phase import arg_latitude
+
+    step = planning["step_s"]
+    tau = np.linspace(0.0, 2.0 * math.pi / target.params.n_bar, 721)[:, None] + step * np.arange(
+        n_max
+    )
+    c = np.cos(np.asarray(arg_latitude(target.params, tau), dtype=float))
+    return np.max(np.cumsum(c**2, axis=1), axis=0), np.max(np.cumsum(np.abs(c), axis=1), axis=0)
 
 
 def _visit_hours(n: int, planning: dict[str, Any], overhead: float) -> float:
@@ -214,11 +255,23 @@ def _candidate_sigma(case_plan: Any, target: Any, nights: list[date]) -> np.ndar
         sun = get_body("sun", anchors, site.location).transform_to(frame).alt.to_value(u.deg)
         alt = target.coord.transform_to(frame).alt.to_value(u.deg)
         x = 1.0 / np.sin(np.radians(np.clip(alt, 1e-3, 90)))
-        ok = (sun < -12.0) & (alt > 0) & (x <= 2.0)
+        ok = (sun < -12.0) & (alt > 0) & (x <= 2.0) & _moon_ok(target, anchors, frame, run)
         exptime = case_plan.meta["planning"]["targets"][target.name]["exptime_s"]
         sig = np.sort(exposure_sigma_v(target, run.settings, exptime, x[ok]))
         out.append(sig[:per_night])  # a night holds sessions_per_night visits of a target
     return np.concatenate(out) if out else np.zeros(0)
+
+
+def _moon_ok(target: Any, when: Any, frame: Any, run: Any) -> np.ndarray:
+    """The plan's Moon constraint at ``when``: at least ``moon_sep_deg`` from the Moon, or the
+    Moon down (every plan obeys it, so a bound without it may count exposures none can take)."""
+    import astropy.units as u
+    from astropy.coordinates import get_body
+
+    moon = get_body("moon", when, frame.location)
+    sep = _quiet(moon.separation, target.coord).to_value(u.deg)  # GCRS vs ICRS: no matter
+    down = moon.transform_to(frame).alt.to_value(u.deg) < 0.0
+    return np.asarray((sep >= run.settings.moon_sep_deg) | down)
 
 
 def simulate(seed: int, tmp: Path) -> Case:

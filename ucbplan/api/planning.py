@@ -266,7 +266,10 @@ def plan_run_on(o: dict[str, Any], nights: Sequence[date] | None) -> PlanRun:
         if o["observed"] is not None or o["sigma_v_scale"] is not None:
             settings = observed_settings(o["observed"], o["sigma_v_scale"], loaded, where, settings)
         if o.get("short_goals"):  # replan: a goal out of reach is stated, not refused
-            settings = dataclasses.replace(settings, short_goals=True, goal_slack=o["goal_slack"])
+            pinned = o.get("pinned", ())
+            settings = dataclasses.replace(
+                settings, short_goals=True, goal_slack=o["goal_slack"], pinned=pinned
+            )
         return plan_targets(loaded, where, dates, settings, priorities)
 
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import hashlib
 import inspect
+import math
 import tempfile
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -137,12 +138,13 @@ def replan(
     ------
     InputError
         ``from_`` after the plan's last night or inside a night's blocks; a lost night not in
-        the plan; a bad status in ``observed``.
+        the plan; a bad status in ``observed``; ``observed`` an observing log of another plan.
     InputFileError
         A plan without the recorded options, or whose target file is missing or changed.
     """
     old = plan if isinstance(plan, Plan) else Plan.read(plan)
     options = _options(old)
+    _check_log(observed, old)
     nights = [date.fromisoformat(str(n)) for n in old.meta.get("nights", [])]
     gone = _lost(lost, nights)
     start = _from_night(old, from_, nights)
@@ -155,12 +157,53 @@ def replan(
         )
     if not gone and observed is None:  # nothing changed: the plan stands, every visit kept
         return _plan_nights(old, options, nights, None, None, 0.0)
-    from ucbplan.observing.schedule.goalplan import REPLAN_INFO_SLACK
-
     with tempfile.TemporaryDirectory() as tmp:  # a changed plan: its goals to the slack
         if observed is None and len(kept_rows) and options.get("goal"):
             observed = _history_file(kept_rows, gone, Path(tmp) / "history.ecsv")
-        return _plan_nights(old, options, remaining, observed, kept_rows, REPLAN_INFO_SLACK)
+        return _changed(old, options, remaining, observed, kept_rows)
+
+
+#: How many more telescope hours (relative) a replan that keeps the old plan's visits may book
+#: than one planned afresh on the same nights: beyond it the cheaper plan wins (issue 32: the
+#: goal in no more than 5 % over the fewest hours; a schedule that moves little within that).
+PIN_HOURS_RTOL = 0.05
+
+
+def _changed(
+    old: Plan, options: dict[str, Any], nights: list[date], observed: Any, kept: Table | None
+) -> Plan:
+    """The replan of ``nights`` keeping the old plan's visits on them that still serve
+    (:mod:`ucbplan.observing.schedule.pinning`), unless it books more than
+    :data:`PIN_HOURS_RTOL` more hours, or reaches fewer goals, than a plan afresh."""
+    from ucbplan.observing.schedule.goalplan import REPLAN_INFO_SLACK
+
+    free = _plan_nights(old, options, nights, observed, kept, REPLAN_INFO_SLACK)
+    pins = _old_visits(old.text_table, nights)
+    if not pins or not options.get("goal"):
+        return free
+    pinned = _plan_nights(old, options, nights, observed, kept, REPLAN_INFO_SLACK, pins)
+    (short_p, hours_p), (short_f, hours_f) = _booked(pinned), _booked(free)
+    if short_p <= short_f and hours_p <= (1.0 + PIN_HOURS_RTOL) * hours_f:
+        return pinned
+    return free
+
+
+def _booked(plan: Plan) -> tuple[float, float]:
+    """(goals not reached, telescope hours booked [s]) of a plan just made."""
+    if plan.run is None:
+        return math.inf, math.inf
+    return len(plan.run.result.shortfalls), plan.run.time_account.total.total_s
+
+
+def _old_visits(table: Table, nights: list[date]) -> tuple[tuple[str, tuple[str, ...]], ...]:
+    """The visits of ``table`` on ``nights``: (target, UTC starts of its exposures) each."""
+    wanted = {n.isoformat() for n in nights}
+    visits: dict[str, tuple[str, list[str]]] = {}
+    for row in table:
+        if str(row["night"]) in wanted:
+            entry = visits.setdefault(str(row["visit_id"]), (str(row["target"]), []))
+            entry[1].append(str(row["t_start_utc"]))
+    return tuple((name, tuple(sorted(starts))) for name, starts in visits.values())
 
 
 def _options(old: Plan) -> dict[str, Any]:
@@ -185,6 +228,14 @@ def _options(old: Plan) -> dict[str, Any]:
     for entry in meta.get("targets", []):
         _check_target(entry)
     return dict(options)
+
+
+def _check_log(observed: str | Path | None, old: Plan) -> None:
+    """An observing log given as ``observed`` is one of ``old``'s (another plan's is refused)."""
+    from ucbplan.observing.obslog import check_log_plan
+
+    if observed is not None:
+        check_log_plan(observed, old.text_table)
 
 
 def _check_target(entry: Any) -> None:
@@ -287,9 +338,11 @@ def _plan_nights(
     observed: Any,
     kept: Table | None,
     slack: float,
+    pinned: tuple[tuple[str, tuple[str, ...]], ...] = (),
 ) -> Plan:
     """:func:`ucbplan.plan`'s run on ``nights`` (not necessarily consecutive) with ``options``,
-    the rows ``kept`` first, each goal reached to ``slack`` of its information."""
+    the rows ``kept`` first, each goal reached to ``slack`` of its information, the visits
+    ``pinned`` kept where they still serve."""
     from ucbplan.api import planning
 
     call = inspect.signature(planning.plan).parameters
@@ -297,6 +350,6 @@ def _plan_nights(
     o.update(options)
     files = [str(t["file"]) for t in old.meta.get("targets", [])]
     o.update(targets=files, site=old.site, night=nights[0], nights=1, observed=observed)
-    o.update(short_goals=True, goal_slack=slack)
+    o.update(short_goals=True, goal_slack=slack, pinned=pinned)
     run = planning.plan_run_on(o, nights)
     return Plan(run, options={**options}, history=kept)

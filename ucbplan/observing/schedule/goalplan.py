@@ -45,6 +45,7 @@ from ucbplan.observing.strategy import balanced_counts, constrains_k, informatio
 
 __all__ = [
     "GoalShortfall",
+    "as_placed",
     "as_planned",
     "balanced_runs",
     "check_goals",
@@ -351,6 +352,39 @@ def as_planned(
                 sigma_K1_kms=f * plan.sigma_K1_kms,
                 sigma_K2_kms=k2,
             )
+    return out
+
+
+def as_placed(
+    plans: dict[int, GoalPlan],
+    runs: Sequence[TargetRun],
+    blocks: Sequence[Block],
+    pattern_u: Sequence[float],
+) -> dict[int, GoalPlan]:
+    """``plans`` with each goal expecting what its placed spectra give with those taken (a
+    replan places the fewest that reach it, not the estimated count): σ_K = 1/√(F_KK) of the
+    joint Fisher matrix at the placed information, the goal's σ scaled alike."""
+    cols = block_columns(blocks) if plans else None
+    out = dict(plans)
+    for run in runs:
+        plan = plans.get(run.index)
+        if plan is None or plan.info_needed is None or cols is None or not plan.n_spectra:
+            continue
+        mine = cols.values["target"] == run.target.name
+        got = float(
+            ObservedFisher(*plan.collected_fisher).joint(info_of_columns(cols, pattern_u, mine))
+        )
+        if got <= 0:
+            continue
+        f = got**-0.5 / plan.sigma_K1_kms
+        k2 = plan.sigma_K2_kms * f if plan.sigma_K2_kms is not None else None
+        out[run.index] = replace(
+            plan,
+            n_spectra=int(np.sum(mine)),
+            expected=f * plan.expected,
+            sigma_K1_kms=f * plan.sigma_K1_kms,
+            sigma_K2_kms=k2,
+        )
     return out
 
 

@@ -25,6 +25,7 @@ from ucbplan.observing.sky import airmass_from_alt
 
 __all__ = [
     "Allowance",
+    "NightOrder",
     "NightPlacer",
     "NightTask",
     "Session",
@@ -306,6 +307,9 @@ class NightTask(NamedTuple):
 #: Places one target's sessions or visits in one night; returns why fewer than asked fit.
 NightPlacer = Callable[[TargetRun, NightTask], "str | None"]
 
+#: The order in which one target's nights are filled (indices into its tasks, one per night).
+NightOrder = Callable[[TargetRun, Sequence[NightTask]], list[int]]
+
 
 def place_by_priority(
     runs: list[TargetRun],
@@ -317,25 +321,33 @@ def place_by_priority(
     allowances: Mapping[int, Allowance] | None,
     place_night: NightPlacer,
     quiet_goals: bool,
+    order: NightOrder | None = None,
 ) -> tuple[list[Session], list[Unplaced]]:
     """The greedy loop of sessions and visits alike: targets by priority (ties in input order),
-    nights in order, ``place_night`` filling ``timeline`` (the ``busy`` intervals blocked out).
+    nights in order (``order``: in the order it gives), ``place_night`` filling ``timeline``
+    (the ``busy`` intervals blocked out).
 
     A target whose allowance is spent gets no more; each later night is noted as "time budget
     spent", except, with ``quiet_goals`` (visits), when the allowance was a goal's (its
-    exposures or information): the goal is planned, nothing is missing.
+    exposures or information): the goal is planned, nothing is missing. The reasons come in
+    night order whatever the order of filling.
     """
     timeline.block_out(busy)
     unplaced: list[Unplaced] = []
     for run in sorted(runs, key=lambda r: -r.target.priority):
         allowance = (allowances or {}).get(run.index) or Allowance()
-        for n, span in enumerate(spans):
+        tasks = [
+            NightTask(n, sp, timeline, frame, settings, allowance) for n, sp in enumerate(spans)
+        ]
+        mine: dict[int, Unplaced] = {}
+        for n in range(len(tasks)) if order is None else order(run, tasks):
             if allowance.spent:
                 goal = allowance.exposures is not None or allowance.info is not None
                 if not (quiet_goals and goal):
-                    unplaced.append(Unplaced(run.target.name, span.label, "time budget spent"))
+                    mine[n] = Unplaced(run.target.name, spans[n].label, "time budget spent")
                 continue
-            reason = place_night(run, NightTask(n, span, timeline, frame, settings, allowance))
+            reason = place_night(run, tasks[n])
             if reason is not None:
-                unplaced.append(Unplaced(run.target.name, span.label, reason))
+                mine[n] = Unplaced(run.target.name, spans[n].label, reason)
+        unplaced += [mine[n] for n in sorted(mine)]
     return timeline.placed, unplaced

@@ -29,6 +29,7 @@ from ucbplan.observing.schedule.candidates import PlanFrame, TargetRun, Warned, 
 from ucbplan.observing.schedule.exposure import TargetExposure
 from ucbplan.observing.schedule.goalplan import (
     GoalShortfall,
+    as_placed,
     as_planned,
     balanced_runs,
     check_goals,
@@ -309,6 +310,8 @@ def _schedule(
         if shortfalls and not full:  # the even split assumed nights that hold every visit
             args = (windows, warns, site, nights, settings, busy, infeasible)
             return _schedule(runs0, frame, *args, full=True)
+        if settings.goal_slack > 0:  # a changed replan: the fewest spectra that reach it
+            goals = as_placed(goals, runs, blocks, frame.mode.u_values)
         goals = as_planned(goals, runs, shortfalls)
     else:
         longer = _longer_visits(runs0, spans, frame, site, settings, busy_x) if goals else None

@@ -301,6 +301,9 @@ class PlanSettings:
     goal_slack : float
         Fraction of each goal's information the plan may leave uncollected (a replan that
         changes the plan: ``REPLAN_INFO_SLACK``; 0 otherwise).
+    pinned : tuple of (str, tuple of str)
+        Visits a replan keeps (:mod:`.pinning`): per visit, its target's name and the UTC
+        starts (ISO) of its exposures.
 
     Raises
     ------
@@ -343,6 +346,7 @@ class PlanSettings:
     sigma_v_scale: float = 1.0
     short_goals: bool = False
     goal_slack: float = 0.0
+    pinned: tuple[tuple[str, tuple[str, ...]], ...] = ()
 
     def __post_init__(self) -> None:
         parse_mode(self.mode)

@@ -11,7 +11,10 @@ stops at the first anchor that fails.
 
 Targets are taken in priority order; in each night a target gets its best visits (most
 exposures, then lowest mean airmass) that keep clear of everything placed before, up to
-``sessions_per_night`` visits, or until its quota of exposures (a ``--goal``) is planned.
+``sessions_per_night`` visits, or until its quota of exposures (a ``--goal``) is planned. A
+replan that changes the plan (``goal_slack`` > 0) fills a goal's nights in the order of the
+information per hour of their best visit, not in date order: the fewest hours for what is
+still missing.
 """
 
 from __future__ import annotations
@@ -24,6 +27,7 @@ from numpy.typing import NDArray
 from ucbplan.observing.constraint_checks import evaluate_window
 from ucbplan.observing.schedule.candidates import PlanFrame, TargetRun
 from ucbplan.observing.schedule.nights import NightSpan
+from ucbplan.observing.schedule.pinning import pin_visits
 from ucbplan.observing.schedule.placement import (
     INFO_RTOL,
     Allowance,
@@ -74,6 +78,12 @@ def _goal_cut(exps: list[int], weight: NDArray[np.float64], need: float, pattern
     del exps[keep:]
 
 
+def _whole_patterns(exps: list[int], pattern: int) -> None:
+    """Drop the exposures past the last whole anchor pattern (a visit of more than one)."""
+    if len(exps) > pattern:
+        del exps[len(exps) - len(exps) % pattern :]
+
+
 def _visit_key(run: TargetRun, exps: list[int]) -> tuple[float, float]:
     """How good a visit is: its information for back-to-back exposures (their phases differ),
     else its number of exposures; then the lower mean airmass."""
@@ -81,6 +91,19 @@ def _visit_key(run: TargetRun, exps: list[int]) -> tuple[float, float]:
     if run.exposure.strategy == "untargeted":
         return round(float(np.nansum(run.weight[exps])), 12), airmass
     return float(len(exps)), airmass
+
+
+def _replan_key(
+    run: TargetRun, exps: list[int], allowance: Allowance, wall_s: float
+) -> tuple[float, float, float]:
+    """How good a visit of a replan's goal is: the information it brings toward what is still
+    missing, then the shorter visit to the second (a visit that reaches the goal with fewer
+    exposures beats a longer one, which :func:`_visit_key` would prefer), then the lower mean
+    airmass (a σ_v fixed per exposure ties the information)."""
+    info = float(np.nansum(run.weight[exps]))
+    if allowance.info is not None:
+        info = min(info, allowance.info * (1.0 - INFO_RTOL))
+    return round(info, 12), -round(wall_s), -float(np.mean(run.cand.airmass_mid[exps]))
 
 
 def _best_visit(
@@ -105,11 +128,12 @@ def _best_visit(
     starts = js[good[js] & acq_ok]
     nxt = np.searchsorted(c.x_start, c.x_end + r - _READOUT_SLACK_S, side="left")
     best: tuple[tuple[int, ...], float, float] | None = None
-    best_key = (0.0, 0.0)
+    best_key: tuple[float, ...] = (0.0, 0.0)
     pattern = len(settings.spec.u_values) if te.strategy != "untargeted" else 1
     cap = c.x_mid.size if allowance.exposures is None else allowance.exposures
     cap = min(cap, allowance.share(pattern) or cap)
     length = visit_s if allowance.seconds is None else min(visit_s, allowance.seconds)
+    fastest = settings.goal_slack > 0 and allowance.info is not None
     for j in starts:
         x0 = float(c.x_start[j]) - acq
         exps = _chain(int(j), nxt, good, c.x_start, c.x_end, x0 + length, r, cap)
@@ -118,14 +142,15 @@ def _best_visit(
         while exps and not timeline.free(x0, float(c.x_end[exps[-1]]) + r):
             exps.pop()
         if allowance.info is not None and exps:
-            _goal_cut(exps, run.weight, allowance.info, pattern)
-        elif allowance.exposures is not None and len(exps) > pattern:
-            del exps[len(exps) - len(exps) % pattern :]  # an exposure cap: whole patterns
+            _goal_cut(exps, run.weight, allowance.info, 1 if fastest else pattern)
+        elif allowance.exposures is not None:
+            _whole_patterns(exps, pattern)  # an exposure cap: whole patterns
         if not exps:
             continue
-        key = _visit_key(run, exps)
+        x1 = float(c.x_end[exps[-1]]) + r
+        key = _replan_key(run, exps, allowance, x1 - x0) if fastest else _visit_key(run, exps)
         if best is None or key > best_key:
-            best, best_key = (tuple(exps), x0, float(c.x_end[exps[-1]]) + r), key
+            best, best_key = (tuple(exps), x0, x1), key
     return best
 
 
@@ -135,7 +160,10 @@ def _place_night(run: TargetRun, night: NightTask) -> str | None:
     usable = night_usable(run, span, frame, settings)
     if isinstance(usable, str):
         return usable
-    wanted, placed = settings.sessions_per_night, 0
+    wanted = settings.sessions_per_night
+    placed = 0  # a replan's kept visits of this night count (sessions_per_night)
+    if settings.pinned:
+        placed = sum(1 for s in timeline.placed if s.target_i == run.index and s.night_i == n)
     while placed < wanted and not allowance.spent:
         pick = _best_visit(run, span, timeline, frame, settings, allowance)
         if pick is None:
@@ -156,6 +184,22 @@ def _place_night(run: TargetRun, night: NightTask) -> str | None:
     if placed < wanted:
         return f"only {placed} of {wanted} visits fit"
     return None
+
+
+def _cheapest_first(run: TargetRun, tasks: Sequence[NightTask]) -> list[int]:
+    """A goal's nights, the one whose best free visit collects the most information per hour
+    first (a replan books the fewest hours for what is still missing; ties in night order)."""
+    rate = []
+    for task in tasks:
+        _, span, timeline, frame, settings, allowance = task
+        pick = None
+        if allowance.info is not None and not isinstance(
+            night_usable(run, span, frame, settings), str
+        ):
+            pick = _best_visit(run, span, timeline, frame, settings, allowance)
+        info = float(np.nansum(run.weight[list(pick[0])])) if pick else 0.0
+        rate.append(info / (pick[2] - pick[1]) if pick else 0.0)
+    return sorted(range(len(tasks)), key=lambda n: -rate[n])
 
 
 def place_visits(
@@ -181,14 +225,18 @@ def place_visits(
     unplaced : list of Unplaced
         One entry per target and night that got fewer visits than asked.
     """
+    timeline = Timeline(0.0)
+    if settings.pinned:  # a replan's kept visits first
+        pin_visits(runs, spans, frame, settings, timeline, allowances)
     return place_by_priority(
         runs,
         spans,
         frame,
         settings,
-        Timeline(0.0),
+        timeline,
         busy,
         allowances,
         _place_night,
         quiet_goals=True,
+        order=_cheapest_first if settings.goal_slack > 0 else None,
     )
