@@ -47,6 +47,11 @@ def _data_lines(path: Path) -> list[str]:
     return [line for line in path.read_text().splitlines() if not line.startswith("#")]
 
 
+def _data_lines_of(plan: Any, folder: Path) -> list[str]:
+    plan.write(folder / "out.ecsv", overwrite=True)
+    return _data_lines(folder / "out.ecsv")
+
+
 @pytest.fixture(scope="module")
 def original(tmp_path_factory: pytest.TempPathFactory) -> Path:
     out = tmp_path_factory.mktemp("replan") / "plan.ecsv"
@@ -90,6 +95,36 @@ def test_a_lost_night_gets_nothing_and_the_history_is_kept(original: Path, tmp_p
     assert "2040-02-16" not in nights and "2040-02-17" in nights
     changes = plan_changes(ucbplan.Plan.read(original), new)
     assert (len(changes.added), len(changes.dropped)) == (1, 1)
+
+
+def test_a_replan_file_names_its_kept_nights_not_a_temporary_file(
+    original: Path, tmp_path: Path
+) -> None:
+    """The replan's meta said ``observed: [/tmp/tmpXXXX/history.ecsv]``: a file that no longer
+    exists, and another name on every run (two replans of one plan differed byte for byte)."""
+    texts = []
+    for k in range(2):
+        new = _quiet(ucbplan.replan, original, SECOND, lost=["2040-02-16"])
+        new.write(tmp_path / f"new{k}.ecsv")
+        texts.append((tmp_path / f"new{k}.ecsv").read_text())
+    assert "/tmp" not in texts[0] and "history.ecsv" not in texts[0]
+    assert new.meta["planning"]["observed"] == ["the plan's nights before 2040-02-16"]
+    strip = [[ln for ln in t.splitlines() if "created_utc" not in ln] for t in texts]
+    assert strip[0] == strip[1]
+
+
+def test_observed_may_be_a_table_in_memory(original: Path, tmp_path: Path) -> None:
+    """``plan(observed=Table)`` counts the same spectra as the same table written to a file."""
+    rows = Table.read(original, format="ascii.ecsv")
+    rows = rows[rows["night"] == "2040-02-15"]
+    rows["status"] = ["taken"] * len(rows)
+    rows.write(tmp_path / "obs.ecsv", format="ascii.ecsv")
+    kw: dict[str, Any] = {**BASE, "night": "2040-02-16", "nights": 2}
+    from_file = _quiet(ucbplan.plan, str(TARGET), observed=tmp_path / "obs.ecsv", **kw)
+    from_table = _quiet(ucbplan.plan, str(TARGET), observed=rows, **kw)
+    assert len(from_table) > 0 and from_table.goals[0].expected == from_file.goals[0].expected
+    assert _data_lines_of(from_table, tmp_path) == _data_lines_of(from_file, tmp_path)
+    assert from_table.meta["planning"]["observed"] == ["a table in memory"]
 
 
 @pytest.mark.parametrize("alternate", [False, True])

@@ -55,7 +55,11 @@ def observed_settings(
             "sigma_K=2km/s)",
             parameter="observed",
         )
-    spectra = _read(Path(_text(path)), targets, site, settings)
+    if _is_table(path):
+        label = str(path.meta.get(SOURCE_KEY, "a table in memory"))
+        spectra = _from_blocks(label, path, targets, site, settings)
+    else:
+        spectra = _read(Path(_text(path)), targets, site, settings)
     ratio = sigma_v_ratio(  # a log of only missed exposures has no spectra
         np.concatenate([s.sigma_v_kms for s in spectra] or [np.zeros(0)]),
         np.concatenate([s.predicted_kms for s in spectra] or [np.zeros(0)]),
@@ -65,11 +69,23 @@ def observed_settings(
     return dataclasses.replace(settings, observed=tuple(spectra), sigma_v_scale=given)
 
 
+#: The key of a table's meta that names it in messages and in the plan's meta (a table in memory
+#: has no file name: a replan names its kept rows so).
+SOURCE_KEY = "observed_source"
+
+
+def _is_table(value: Any) -> bool:
+    """Whether ``value`` is an astropy table (a blocks table in memory, with its status column)."""
+    return hasattr(value, "colnames") and hasattr(value, "meta")
+
+
 def _text(value: Any) -> str | Path:
     if isinstance(value, str | Path):
         return value
     raise InputError(
-        f"observed: expected a file path, got {shorten(value, 40)}", parameter="observed"
+        f"observed: expected a file path or a blocks table with a status column, got "
+        f"{shorten(value, 40)}",
+        parameter="observed",
     )
 
 
@@ -181,7 +197,7 @@ def _airmass(target: Target, site: Site, time: Any) -> np.ndarray:
 
 
 def _from_blocks(
-    path: Path, table: Any, targets: list[Target], site: Site, settings: PlanSettings
+    path: Path | str, table: Any, targets: list[Target], site: Site, settings: PlanSettings
 ) -> list[ObservedSpectra]:
     """A blocks table with a status column, or an observing log (one row per exposure,
     :data:`~ucbplan.observing.obslog.LOG_COLUMNS`): its ``taken`` rows, per target."""
@@ -236,7 +252,7 @@ def _taken_rows(table: Any, where: str) -> np.ndarray:
 
 
 def _target_rows(
-    table: Any, rows: np.ndarray, target: Target, settings: PlanSettings, path: Path
+    table: Any, rows: np.ndarray, target: Target, settings: PlanSettings, path: Path | str
 ) -> ObservedSpectra:
     """The ``rows`` of one target as :class:`ObservedSpectra` (σ_v: the ``sigma_v_kms``)."""
     from astropy.time import Time

@@ -23,6 +23,7 @@ from ucbplan.api.plan_result import Plan
 from ucbplan.errors import InputError, emit, shorten
 
 if TYPE_CHECKING:
+    from astropy.table import Table
     from astropy.units import Quantity
 
     from ucbplan.observing.constraints import Constraint
@@ -119,7 +120,7 @@ def plan(
     instrument: str | None = None,
     instruments_file: str | Path | None = None,
     goal: str | None = None,
-    observed: str | Path | None = None,
+    observed: str | Path | Table | None = None,
     sigma_v_scale: float | None = None,
     min_lambda_k: float | None = None,
     allow_smeared: bool = False,
@@ -197,12 +198,12 @@ def plan(
         Spectrograph (its overheads and σ reference); a YAML table searched first.
     goal : str, optional
         Precision goal (``sigma_K=2km/s``, ``K1=1%``, ``q=1%``): plans the spectra it needs.
-    observed : str or path, optional
+    observed : str, path or Table, optional
         Spectra already taken, counted toward ``goal``: a velocities file as :func:`reduce`
         takes it (the one target planned; epochs, exposure times and measured σ_v), or a blocks
-        table from ``plan -o`` with a ``status`` column (``taken``, ``missed``, ``skipped``;
-        only ``taken`` rows count, their ``sigma_v_kms`` as measured). The goal plans only the
-        information still missing.
+        table (a file from ``plan -o``, or a table in memory) with a ``status`` column (``taken``,
+        ``missed``, ``skipped``; only ``taken`` rows count, their ``sigma_v_kms`` as measured). The
+        goal plans only the information still missing.
     sigma_v_scale : float, optional
         Factor on every σ_v of the law (None: the median measured / predicted σ_v of
         ``observed`` when it differs from 1 by more than 5 %, else 1; ``1`` keeps the law).

@@ -12,7 +12,6 @@ from __future__ import annotations
 import hashlib
 import inspect
 import math
-import tempfile
 from collections.abc import Sequence
 from dataclasses import dataclass
 from datetime import date, datetime, timedelta
@@ -107,7 +106,7 @@ def plan_changes(old: Plan, new: Plan) -> PlanChanges:
 def replan(
     plan: Plan | str | Path,
     from_: Any,
-    observed: str | Path | None = None,
+    observed: str | Path | Table | None = None,
     lost: Sequence[Any] = (),
 ) -> Plan:
     """Plan the nights of ``plan`` again from ``from_`` on, with the plan's own site, settings,
@@ -121,7 +120,7 @@ def replan(
         The instant (UTC) from which to plan again; the nights before the one it falls in are
         kept as they were (their rows come first in the new plan). It must come before the
         first block of its night.
-    observed : str or path, optional
+    observed : str, path or Table, optional
         Spectra already taken (as :func:`ucbplan.plan`'s ``observed``). None: the kept rows
         count as taken, those of ``lost`` nights as missed.
     lost : list of str or date
@@ -157,10 +156,9 @@ def replan(
         )
     if not gone and observed is None:  # nothing changed: the plan stands, every visit kept
         return _plan_nights(old, options, nights, None, None, 0.0)
-    with tempfile.TemporaryDirectory() as tmp:  # a changed plan: its goals to the slack
-        if observed is None and len(kept_rows) and options.get("goal"):
-            observed = _history_file(kept_rows, gone, Path(tmp) / "history.ecsv")
-        return _changed(old, options, remaining, observed, kept_rows)
+    if observed is None and len(kept_rows) and options.get("goal"):  # a changed plan
+        observed = _history(kept_rows, gone, start)
+    return _changed(old, options, remaining, observed, kept_rows)
 
 
 #: How many more telescope hours (relative) a replan that keeps the old plan's visits may book
@@ -230,11 +228,11 @@ def _options(old: Plan) -> dict[str, Any]:
     return dict(options)
 
 
-def _check_log(observed: str | Path | None, old: Plan) -> None:
+def _check_log(observed: str | Path | Table | None, old: Plan) -> None:
     """An observing log given as ``observed`` is one of ``old``'s (another plan's is refused)."""
     from ucbplan.observing.obslog import check_log_plan
 
-    if observed is not None:
+    if isinstance(observed, str | Path):
         check_log_plan(observed, old.text_table)
 
 
@@ -318,17 +316,20 @@ def _utc(text: str) -> datetime:
     return datetime.fromisoformat(text).replace(tzinfo=ZoneInfo("UTC"))
 
 
-def _history_file(rows: Table, lost: set[date], path: Path) -> Path:
-    """The kept rows with a status column (``missed`` on lost nights, else ``taken``)."""
+def _history(rows: Table, lost: set[date], start: date) -> Table:
+    """The kept rows with a status column (``missed`` on lost nights, else ``taken``), named
+    for messages and the plan's meta as the nights before ``start``."""
     import numpy as np
+
+    from ucbplan.api._observed import SOURCE_KEY
 
     history = rows.copy()
     history["status"] = np.array(
         ["missed" if date.fromisoformat(str(n)) in lost else "taken" for n in rows["night"]],
         dtype=object,
     )
-    history.write(path, format="ascii.ecsv")
-    return path
+    history.meta[SOURCE_KEY] = f"the plan's nights before {start.isoformat()}"
+    return history
 
 
 def _plan_nights(
