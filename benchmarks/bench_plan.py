@@ -49,9 +49,12 @@ from plan_peers import (
     random_picks,
 )
 
-from ucbplan.observing.barycentric_time import SiteTrack
-from ucbplan.observing.blocks import ExposurePlan
+from ucbplan.observing.blocks.block import ExposurePlan
 from ucbplan.observing.constraints import ConstraintSet
+from ucbplan.observing.observatory.barycentric import SiteTrack
+from ucbplan.observing.observatory.sites import get_site
+from ucbplan.observing.observatory.sky import SkyModel
+from ucbplan.observing.observatory.time_axis import TimeAxis
 from ucbplan.observing.schedule import (
     PlanSettings,
     candidate_blocks,
@@ -59,12 +62,9 @@ from ucbplan.observing.schedule import (
     parse_mode,
     plan_nights,
 )
-from ucbplan.observing.site_time_axis import TimeAxis
-from ucbplan.observing.sites import get_site
-from ucbplan.observing.sky import SkyModel
 from ucbplan.offline import offline
-from ucbplan.target import Target, load_target
-from ucbplan.target.write import write_target
+from ucbplan.targets import Target, load_target
+from ucbplan.targets.write import write_target
 
 REPO = Path(__file__).resolve().parents[1]
 GOAL_KERNEL = 500.0

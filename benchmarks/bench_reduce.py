@@ -38,7 +38,7 @@ from ucbplan.offline import offline  # noqa: E402
 from ucbplan.reduce import masses as m  # noqa: E402
 from ucbplan.reduce.pipeline import ReduceOptions, reduce  # noqa: E402
 from ucbplan.reduce.velocities import VelocityTable  # noqa: E402
-from ucbplan.target import Target, load_target  # noqa: E402
+from ucbplan.targets import Target, load_target  # noqa: E402
 
 
 def make_table(t: Target, seed: int = 1) -> VelocityTable:

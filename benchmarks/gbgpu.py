@@ -64,7 +64,7 @@ def rows(quick: bool) -> list[dict[str, object]]:
         ]
     from benchmarks.posterior import INJECTION
     from ucbplan.lisa.response import ecliptic_from_icrs
-    from ucbplan.target import load_target
+    from ucbplan.targets import load_target
 
     _, ours, _, params, _ = setup(N_SOURCES)
     target = load_target(INJECTION)

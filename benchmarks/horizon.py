@@ -3,7 +3,7 @@
 Both methods run in this process on the same random targets (circular and ω̇ = 0 eccentric,
 correlated covariances, 30 % timing ephemerides with horizons both before and after T0), so the
 ratio is fair on a shared machine. Apsidally oscillating rows (ω̇ ≠ 0, eccentric) have their own
-row: the envelope search of :mod:`ucbplan.core.horizon_apsidal` against the grid. Also: the full
+row: the envelope search of :mod:`ucbplan.core.validity_apsidal` against the grid. Also: the full
 horizon table (2 anchors × 2 α) of 10⁴ targets through the API (goal ≤ 50 µs per target), its
 scaling on 2 processes, and the peak resident memory.
 
@@ -29,7 +29,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from test_horizon_poly import _random_targets
 
 from ucbplan.core.forecast import AFTER, BEFORE, t_valid_batch
-from ucbplan.core.horizon_batch import horizon_columns
+from ucbplan.core.validity_batch import horizon_columns
 
 GOAL_US_PER_TARGET = 50.0
 

@@ -23,7 +23,7 @@ SIGMA = "30km/s@300s"
 
 
 def _info(run: Any) -> float:
-    from ucbplan.observing.strategy import information
+    from ucbplan.observing.precision.strategy import information
 
     rows = run.result.blocks
     return information(
@@ -44,7 +44,7 @@ def rows(quick: bool) -> list[dict[str, object]]:
     from ucbplan.observing.schedule.compare import compare_target_strategies
     from ucbplan.observing.schedule.options import plan_settings
     from ucbplan.offline import offline
-    from ucbplan.target import load_target
+    from ucbplan.targets import load_target
 
     out: list[dict[str, object]] = []
     with offline():

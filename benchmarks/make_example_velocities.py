@@ -25,7 +25,7 @@ sys.path.insert(0, str(ROOT / "tests"))
 from test_reduce_synth import exposure_factor  # noqa: E402
 
 from ucbplan.core import binary, constants, ephemeris  # noqa: E402
-from ucbplan.target import Target, load_target  # noqa: E402
+from ucbplan.targets import Target, load_target  # noqa: E402
 
 M1, M2 = 0.347, 0.285
 V_CM = 25.0

@@ -34,12 +34,12 @@ from _workload import children_cpu_s, workload_s
 from bench_plan import make_targets
 from plan_peers import make_samples, peer_rates, random_picks
 
-from ucbplan.observing.blocks import ExposurePlan
+from ucbplan.observing.blocks.block import ExposurePlan
+from ucbplan.observing.observatory.sites import get_site
 from ucbplan.observing.schedule import PlanSettings, night_windows
 from ucbplan.observing.schedule.candidates import prepare_runs
-from ucbplan.observing.sites import get_site
 from ucbplan.offline import offline
-from ucbplan.target.write import write_target
+from ucbplan.targets.write import write_target
 
 REPO = Path(__file__).resolve().parents[1]
 #: The exposure-dense target of :func:`bench_plan.make_targets` (~85 u = 0 exposures a night in

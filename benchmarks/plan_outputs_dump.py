@@ -43,7 +43,7 @@ def targets(tmp: Path) -> dict[str, str]:
     sys.path.insert(0, str(REPO / "benchmarks"))
     from bench_plan import make_targets
 
-    from ucbplan.target.write import write_target
+    from ucbplan.targets.write import write_target
 
     out = {}
     for name in (HM, FID):  # copied: every dump names the same files

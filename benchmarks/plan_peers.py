@@ -18,8 +18,9 @@ with our accept/reject decision (the candidates' ``ok``).
   separately the blocks that astroplan's unmodified result rejects only for that reason.
   Decisions must be identical except for blocks where a decisive quantity lies within the
   accuracy of our sky model of its limit (:data:`SKY_TOL_ARCSEC`, stated in
-  :mod:`ucbplan.observing.sky`), judged with astropy's values at the block's start, middle and
-  end (the samples of a 60 s block in :func:`ucbplan.observing.constraint_checks.evaluate_window`).
+  :mod:`ucbplan.observing.observatory.sky`), judged with astropy's values at the block's start,
+  middle and end (the samples of a 60 s block in
+  :func:`ucbplan.observing.constraints.checks.evaluate_window`).
 """
 
 from __future__ import annotations
@@ -41,8 +42,9 @@ from ucbplan.offline import offline
 BoolArray = NDArray[np.bool_]
 FloatArray = NDArray[np.float64]
 
-#: Accuracy of our sky model against astropy's AltAz [arcsec] (ucbplan/observing/sky.py):
-#: target and Sun altitudes 2″, the Moon (altitude and separation) 10″.
+#: Accuracy of our sky model against astropy's AltAz [arcsec]
+#: (ucbplan/observing/observatory/sky.py): target and Sun altitudes 2″, the Moon (altitude and
+#: separation) 10″.
 SKY_TOL_ARCSEC = {"sun_alt": 2.0, "alt": 2.0, "moon_alt": 10.0, "moon_sep": 10.0}
 #: Moon altitude [deg] below which our Moon-separation constraint always holds.
 MOON_DOWN_DEG = 0.0

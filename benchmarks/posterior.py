@@ -23,7 +23,7 @@ def rows(quick: bool) -> list[dict[str, object]]:
     """Converged posterior: wall time, and its σ's against the Fisher forecast."""
     from ucbplan.lisa.pipeline import build_model, simulate
     from ucbplan.lisa.simulation import SimulateOptions
-    from ucbplan.target import load_target
+    from ucbplan.targets import load_target
 
     seeds = (1,) if quick else (1, 2, 3)
     out: list[dict[str, object]] = []

@@ -31,7 +31,7 @@ from test_reduce_synth import exposure_factor, session_times  # noqa: E402
 from ucbplan.offline import offline  # noqa: E402
 from ucbplan.reduce.pipeline import ReduceOptions, reduce  # noqa: E402
 from ucbplan.reduce.velocities import VelocityTable  # noqa: E402
-from ucbplan.target import Target, load_target  # noqa: E402
+from ucbplan.targets import Target, load_target  # noqa: E402
 
 GOAL_SPECTRA, GOAL_SPECTRA_S = 1_000_000, 5.0
 GOAL_SAMPLES, GOAL_SAMPLES_MB = 10_000_000, 1024.0  # judged in full mode only

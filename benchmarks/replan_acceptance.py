@@ -277,7 +277,7 @@ def _moon_ok(target: Any, when: Any, frame: Any, run: Any) -> np.ndarray:
 def simulate(seed: int, tmp: Path) -> Case:
     """One seeded case (module notes)."""
     import ucbplan
-    from ucbplan.target import load_target
+    from ucbplan.targets import load_target
 
     rng = np.random.default_rng(seed)
     plan, path, n, goal = _goal_plan(rng, tmp / "plan.ecsv")

@@ -184,7 +184,7 @@ def first_load_s() -> float:
     """Wall s of a notebook user's first ``load_target`` in a fresh process (imports included),
     the median of 5."""
     code = (
-        "import time; t = time.perf_counter(); from ucbplan.target import load_target; "
+        "import time; t = time.perf_counter(); from ucbplan.targets import load_target; "
         "load_target('catalogs/hm-cnc-simulated.yaml'); print(time.perf_counter() - t)"
     )
     runs = []
@@ -213,7 +213,7 @@ def first_load_row() -> dict[str, object]:
         "goal": "",
         "met": None,
         "peak_mb": _peak_mb(),
-        "note": "python -c 'from ucbplan.target import load_target; load_target(HM Cnc)'",
+        "note": "python -c 'from ucbplan.targets import load_target; load_target(HM Cnc)'",
     }
 
 
@@ -222,7 +222,7 @@ def _velocity_csv(path: Path, n: int) -> None:
     import numpy as np
     from reduce_scaling import make_table
 
-    from ucbplan.target import load_target
+    from ucbplan.targets import load_target
 
     tab = make_table(load_target(ROOT / "catalogs" / "fiducial-eccentric.yaml"), n)
     jd = tab.time.tdb.jd1 + tab.time.tdb.jd2

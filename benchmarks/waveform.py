@@ -62,7 +62,7 @@ def setup(n_walkers: int, seed: int = 7) -> tuple[Any, Any, np.ndarray, dict[str
     from ucbplan.lisa.likelihood import physical_from_theta, simulate_data
     from ucbplan.lisa.noise import SANGRIA
     from ucbplan.lisa.pipeline import build_model, fisher_forecast
-    from ucbplan.target import load_target
+    from ucbplan.targets import load_target
 
     lisa = build_model(load_target(INJECTION), n_bins=N_BINS)
     ours = lisa.model

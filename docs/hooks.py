@@ -7,11 +7,11 @@ A page asks for generated text with a marker line ``<!-- ucbplan:generate NAME -
     Every command of the typer app: help, usage, arguments and options with their help texts,
     types and defaults, read from the same click objects that ``ucbplan COMMAND --help`` prints.
 ``blocks-table``
-    The columns of the master blocks table from :mod:`ucbplan.observing.blocktable` (a
+    The columns of the master blocks table from :mod:`ucbplan.observing.blocks.schema` (a
     declarative column list when the module has one, else ``REQUIRED_COLUMNS``/``EXTRA_COLUMNS``
     with their unit and description maps).
 ``target-schema``
-    The field table of :mod:`ucbplan.target.schema` when that module exists; nothing (and no
+    The field table of :mod:`ucbplan.targets.schema` when that module exists; nothing (and no
     warning) when it does not.
 
 The repository root is put first on ``sys.path`` before importing, so the site documents the
@@ -235,7 +235,7 @@ def _listed_columns(module: ModuleType) -> list[tuple[str, str, str, str]]:
 
 def blocks_table() -> str:
     """Markdown tables of the master blocks table's required and further columns."""
-    module = _import("ucbplan.observing.blocktable")
+    module = _import("ucbplan.observing.blocks.schema")
     listed = [*module.REQUIRED_COLUMNS, *getattr(module, "EXTRA_COLUMNS", ())]
     columns = _declared_columns(module, listed) or _listed_columns(module)
     missing = sorted(set(listed) - {c[0] for c in columns})
@@ -282,11 +282,11 @@ def _field_row(field: Any) -> list[str]:
 
 
 def target_schema() -> str:
-    """Field table of :mod:`ucbplan.target.schema`; empty text while that module does not exist."""
+    """Field table of :mod:`ucbplan.targets.schema`; empty text while that module does not exist."""
     try:
-        schema = _import("ucbplan.target.schema")
+        schema = _import("ucbplan.targets.schema")
     except ModuleNotFoundError as exc:
-        if exc.name == "ucbplan.target.schema":
+        if exc.name == "ucbplan.targets.schema":
             return ""
         raise
     fields = getattr(schema, "FIELDS", ())
@@ -296,7 +296,7 @@ def target_schema() -> str:
         "## Field reference",
         "",
         "Generated from the declarative schema the parser and writer use "
-        "(`ucbplan.target.schema`). A bare number is read in the unit shown.",
+        "(`ucbplan.targets.schema`). A bare number is read in the unit shown.",
         "",
     ]
     header = ["field", "required", "unit", "default", "allowed", "example", "description"]

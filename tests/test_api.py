@@ -30,7 +30,7 @@ from test_offline_cache import astropy_state
 
 import ucbplan
 from ucbplan.errors import EpochRangeError, InputError, UcbplanError
-from ucbplan.observing.constraint_objects import AstroplanConstraint, as_constraint
+from ucbplan.observing.constraints.objects import AstroplanConstraint, as_constraint
 
 pytestmark = [
     pytest.mark.filterwarnings("ignore::erfa.ErfaWarning"),

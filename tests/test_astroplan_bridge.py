@@ -17,13 +17,13 @@ from hypothesis import strategies as st
 
 from ucbplan.errors import InputError
 from ucbplan.observing import constraints as ours
-from ucbplan.observing.astroplan_bridge import to_astroplan
-from ucbplan.observing.blocks import ExposurePlan
+from ucbplan.observing.blocks.block import ExposurePlan
+from ucbplan.observing.blocks.make import blocks_to_table
+from ucbplan.observing.exports.astroplan_schedule import to_astroplan
+from ucbplan.observing.observatory.sites import get_site
+from ucbplan.observing.observatory.sky import SkyModel
 from ucbplan.observing.schedule import PlanSettings, plan_nights
-from ucbplan.observing.sites import get_site
-from ucbplan.observing.sky import SkyModel
-from ucbplan.observing.tablemake import blocks_to_table
-from ucbplan.target import load_target
+from ucbplan.targets import load_target
 
 CATALOGS = Path(__file__).resolve().parents[1] / "catalogs"
 

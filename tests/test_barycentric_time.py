@@ -10,14 +10,14 @@ from astropy.time import Time, TimeDelta
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from ucbplan.observing.barycentric_time import (
+from ucbplan.observing.observatory.barycentric import (
     DelayInterpolator,
     bary_tdb_to_site_utc,
     coverage_warnings,
     light_time_s,
     site_utc_to_bary_tdb,
 )
-from ucbplan.observing.sites import get_site
+from ucbplan.observing.observatory.sites import get_site
 from ucbplan.offline import offline
 
 HM_CNC = SkyCoord(121.5967 * u.deg, 15.4583 * u.deg)
@@ -113,7 +113,7 @@ def test_round_trip_property(day: float, ra: float, dec: float, site_name: str) 
 def test_site_track_positions_equal_astropys_frame_chain() -> None:
     """The site track's direct rotations give astropy's ITRS → GCRS → ICRS chain (the one
     ``Time.light_travel_time`` uses) bit for bit, and that chain's light time is astropy's."""
-    from ucbplan.observing.barycentric_time import _site_icrs_m, site_icrs_frames
+    from ucbplan.observing.observatory.barycentric import _site_icrs_m, site_icrs_frames
 
     site = get_site("paranal")
     with offline():

@@ -24,11 +24,12 @@ from astropy.time import Time
 from test_observing_table import _block, _meta  # tests/ is on sys.path (no __init__.py)
 
 from ucbplan.io import dump_json
-from ucbplan.observing import ecsvheader, tablewrite
-from ucbplan.observing.blockcolumns import BlockColumns, BlockList, block_columns, isot
-from ucbplan.observing.blocks import Block
-from ucbplan.observing.tablemake import blocks_to_table
-from ucbplan.observing.tablewrite import (
+from ucbplan.observing.blocks import ecsv_header as ecsvheader
+from ucbplan.observing.blocks import write as tablewrite
+from ucbplan.observing.blocks.arrays import BlockColumns, BlockList, block_columns, isot
+from ucbplan.observing.blocks.block import Block
+from ucbplan.observing.blocks.make import blocks_to_table
+from ucbplan.observing.blocks.write import (
     ecsv_data_lines,
     json_rows_text,
     table_to_json_rows,

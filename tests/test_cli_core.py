@@ -63,7 +63,7 @@ def test_ephemeris_round_trip_from_json(eccentric_path: Path) -> None:
     from astropy.time import Time
 
     from ucbplan.core.ephemeris import arg_latitude
-    from ucbplan.target import load_target
+    from ucbplan.targets import load_target
 
     res = runner.invoke(
         app,

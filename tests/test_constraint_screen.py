@@ -18,7 +18,6 @@ from astropy import units as u
 from astropy.coordinates import SkyCoord
 from astropy.time import Time
 
-from ucbplan.observing.constraint_checks import evaluate_window, evaluate_window_exact
 from ucbplan.observing.constraints import (
     ALT_RATE_DEG_S,
     MOON_ALT_RATE_DEG_S,
@@ -32,8 +31,9 @@ from ucbplan.observing.constraints import (
     NightConstraint,
     ZenithHoleConstraint,
 )
-from ucbplan.observing.sites import get_site
-from ucbplan.observing.sky import SkyModel
+from ucbplan.observing.constraints.checks import evaluate_window, evaluate_window_exact
+from ucbplan.observing.observatory.sites import get_site
+from ucbplan.observing.observatory.sky import SkyModel
 from ucbplan.offline import offline
 
 pytestmark = [

@@ -33,14 +33,14 @@ from typer.testing import CliRunner
 from ucbplan.cli import now as now_cli
 from ucbplan.cli.app import app, main
 from ucbplan.errors import InputError
-from ucbplan.observing.countdown import (
+from ucbplan.observing.blocks.read import read_blocks
+from ucbplan.observing.night.countdown import (
     countdown_lines,
     parse_utc,
     plan_exposures,
     wait_text,
     what_next,
 )
-from ucbplan.observing.tableread import read_blocks
 
 pytestmark = [
     pytest.mark.filterwarnings("ignore::erfa.ErfaWarning"),

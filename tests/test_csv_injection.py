@@ -2,7 +2,7 @@
 ``=cmd|' /C calc'!A0`` was written verbatim into ``plan -o b.csv`` and ``export --to proposal
 --format csv``, and a spreadsheet runs it. Every CSV writer neutralises a text cell that begins
 with ``=``, ``+``, ``-``, ``@``, a tab or a carriage return by a leading ``'``
-(:func:`ucbplan.observing.tablewrite.csv_safe_text`); numbers, and text that is a number or a
+(:func:`ucbplan.observing.blocks.write.csv_safe_text`); numbers, and text that is a number or a
 signed sexagesimal (``-12.5``, ``-23:12:34.5``, ``+01:00``), stay as they are. The blocks-table
 reader undoes the prefix, so a CSV plan reads back to the same names.
 
@@ -23,7 +23,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from test_cli_fuzz import run_main
 
-from ucbplan.observing.tablewrite import CSV_FORMULA_START, csv_safe_text, csv_unsafe_text
+from ucbplan.observing.blocks.write import CSV_FORMULA_START, csv_safe_text, csv_unsafe_text
 
 ROOT = Path(__file__).resolve().parents[1]
 HM = ROOT / "catalogs" / "hm-cnc-simulated.yaml"
@@ -66,7 +66,7 @@ def test_any_text_is_safe_and_reads_back(cell: str) -> None:
 
 def test_numeric_columns_stay_numbers() -> None:
     """Only text cells are neutralised: a negative number in a float column is written as is."""
-    from ucbplan.observing.tablewrite import write_table
+    from ucbplan.observing.blocks.write import write_table
 
     tab = Table({"target": ["=x", "-5", "ok"], "v": [-1.5, 2.0, -3.0], "dec": ["-1:2:3"] * 3})
     buf = io.StringIO()
@@ -90,7 +90,7 @@ def _evil_target(tmp_path: Path, name: str) -> Path:
 
 @pytest.mark.parametrize("name", EVIL)
 def test_plan_and_proposal_csv_neutralise_a_formula_name(tmp_path: Path, name: str) -> None:
-    from ucbplan.observing.tableread import read_blocks
+    from ucbplan.observing.blocks.read import read_blocks
 
     target = _evil_target(tmp_path, name)
     night = ["--site", "paranal", "--night", "2040-02-15"]
@@ -121,7 +121,7 @@ def test_html_latex_ics_escape_any_name(name: str) -> None:
     an iCalendar line or parameter of its own."""
     from ucbplan.observing.exports.ics import ics_escape
     from ucbplan.observing.exports.proposal_latex import _latex_escape
-    from ucbplan.observing.sheet_html import render_html
+    from ucbplan.observing.night.sheet_html import render_html
 
     tex = _latex_escape(name)
     for token in _LATEX_TOKENS:

@@ -93,7 +93,7 @@ def test_cli_page_shows_defaults_and_help_texts(site: Path) -> None:
 
 
 def test_blocks_table_page_lists_every_column(site: Path) -> None:
-    from ucbplan.observing.blocktable import EXTRA_COLUMNS, REQUIRED_COLUMNS
+    from ucbplan.observing.blocks.schema import EXTRA_COLUMNS, REQUIRED_COLUMNS
 
     assert {"t_mid_utc", "sigma_t_s", "t_mid_tdb_bary"} <= set(REQUIRED_COLUMNS)
     spans = _code_spans(_page(site, "blocks-table"))
@@ -111,7 +111,7 @@ def test_target_schema_section_only_when_the_schema_exists(site: Path) -> None:
     import importlib.util
 
     page = _page(site, "target-file")
-    has_schema = importlib.util.find_spec("ucbplan.target.schema") is not None
+    has_schema = importlib.util.find_spec("ucbplan.targets.schema") is not None
     assert ('id="field-reference"' in page) == has_schema
     assert "ucbplan:generate" not in page  # the marker is always replaced
 

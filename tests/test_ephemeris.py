@@ -246,7 +246,7 @@ def test_details_of_a_subset_equal_those_of_the_whole_set(
     """σ_t, σ_u, u̇ and the π-mode alternative of chosen epochs (the planner's usable blocks)
     are bit for bit those that find_epochs computes for every epoch."""
     from ucbplan.core.ephemeris import find_epochs, with_details
-    from ucbplan.target import load_target
+    from ucbplan.targets import load_target
 
     for path in (hm_cnc_path, eccentric_path):
         target = load_target(path)

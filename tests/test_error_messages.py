@@ -146,7 +146,7 @@ def test_a_control_character_in_a_user_value_never_breaks_the_one_line(
     name ``"0\\n"`` put a raw newline into two messages (the figure suffix check and the blocks
     table reader), so the "one line" promise broke. Every ucbplan error escapes them."""
     from ucbplan.errors import InputError, UcbplanError
-    from ucbplan.observing.tableread import read_blocks
+    from ucbplan.observing.blocks.read import read_blocks
     from ucbplan.plotting import figure_format
 
     for make in (lambda: figure_format(Path(value)), lambda: read_blocks(tmp_path / value)):

@@ -28,11 +28,11 @@ from test_cli_fuzz import run_cli
 from test_exports_eso_p2api import TEMPLATES_YAML, fake_p2  # noqa: F401  # fixture: a fake p2
 
 import ucbplan
-from ucbplan.observing.astroplan_bridge import to_astroplan
 from ucbplan.observing.exports import ExportOptions, export_blocks
+from ucbplan.observing.exports.astroplan_schedule import to_astroplan
 from ucbplan.observing.exports.eso_ob import USER_COMMENTS_MAX
 from ucbplan.observing.exports.queue import ServiceModeError
-from ucbplan.observing.sites import get_site
+from ucbplan.observing.observatory.sites import get_site
 
 CATALOGS = Path(__file__).resolve().parents[1] / "catalogs"
 HM = str(CATALOGS / "hm-cnc-simulated.yaml")

@@ -18,11 +18,11 @@ import numpy as np
 from astropy.table import Table
 from astropy.time import Time
 
-from ucbplan.observing.blocks import Block
-from ucbplan.observing.blocktable import EXTRA_COLUMNS, REQUIRED_COLUMNS
+from ucbplan.observing.blocks.block import Block
+from ucbplan.observing.blocks.make import blocks_to_table, make_meta
+from ucbplan.observing.blocks.read import read_blocks
+from ucbplan.observing.blocks.schema import EXTRA_COLUMNS, REQUIRED_COLUMNS
 from ucbplan.observing.exports import ExportOptions, export_blocks
-from ucbplan.observing.tablemake import blocks_to_table, make_meta
-from ucbplan.observing.tableread import read_blocks
 from ucbplan.offline import offline
 
 GOLDEN = Path(__file__).parent / "golden"

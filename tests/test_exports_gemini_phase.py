@@ -21,7 +21,7 @@ from test_exports_fixture import HM_P_S, fixture_table, golden, golden_export, m
 
 from ucbplan.errors import SiteError
 from ucbplan.observing.exports import EXPORT_FORMATS, ExportOptions, export_blocks
-from ucbplan.observing.sites import get_site
+from ucbplan.observing.observatory.sites import get_site
 
 OPTS = ExportOptions(acquisition_s=600.0)
 

@@ -22,9 +22,9 @@ import pytest
 from astropy.table import Table
 
 from ucbplan.errors import InputFileError, UcbplanError
+from ucbplan.observing.blocks.read import read_blocks
+from ucbplan.observing.blocks.write import write_table
 from ucbplan.observing.exports import EXPORT_FORMATS, ExportOptions, export_blocks
-from ucbplan.observing.tableread import read_blocks
-from ucbplan.observing.tablewrite import write_table
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_cli_fuzz import check_outcome, run_cli
@@ -213,7 +213,7 @@ def test_provenance_target_file_never_hangs(tmp_path: Path, kind: str) -> None:
 
 
 def test_provenance_target_file_read_when_unchanged(tmp_path: Path) -> None:
-    from ucbplan.observing.tablemake import file_sha256
+    from ucbplan.observing.blocks.make import file_sha256
 
     table = fixture_table()
     table.remove_column("vmag")

@@ -14,8 +14,8 @@ from hypothesis import strategies as st
 from test_exports_fixture import SDSS, SDSS_VMAG_META, golden, golden_export, ms, written_table
 
 from ucbplan.errors import InputFileError
+from ucbplan.observing.blocks.cells import sexagesimal
 from ucbplan.observing.exports import ExportOptions, export_blocks
-from ucbplan.observing.tableformat import sexagesimal
 
 KECK = "exports_keck_starlist.txt"
 ING = "exports_ing.cat"

@@ -25,7 +25,7 @@ from ucbplan.observing.exports.format_sites import (
     _distance_km,
     check_site,
 )
-from ucbplan.observing.sites import get_site
+from ucbplan.observing.observatory.sites import get_site
 
 OPTS = ExportOptions(acquisition_s=600.0)
 

@@ -234,7 +234,7 @@ def test_optical_from_period_matches_frequency_form() -> None:
 
 
 def test_gw_timing_four_years_after_midpoint() -> None:
-    from ucbplan.target import load_target
+    from ucbplan.targets import load_target
 
     # Paper Sec. 5: δt_u ≈ 0.3 s (eccentric source) and 0.9 s (HM Cnc-like) four years after
     # the observation midpoint; one significant figure → ± half a unit of that digit.
@@ -245,7 +245,7 @@ def test_gw_timing_four_years_after_midpoint() -> None:
 
 
 def test_report_for_fiducial_target() -> None:
-    from ucbplan.target import load_target
+    from ucbplan.targets import load_target
 
     rep = report_for_target(load_target(FIDUCIAL), baseline_s=30 * 86400.0)
     # Masses from the file; K1 from the target's own P_b and cos i (Table 3) ≈ 585.3 km/s.
@@ -376,7 +376,7 @@ def test_cli_optical_timing_uses_the_node_to_node_period(tmp_path: Path, style: 
     ``timing.period`` definition). The fiducial source's ω̇/(πf) = 5.7e-5 is far above the 1e-9
     relative tolerance (float64 rounding of a few operations).
     """
-    from ucbplan.target import load_target
+    from ucbplan.targets import load_target
 
     f_gw = load_target(FIDUCIAL).params.f_gw
     P = 2.0 / f_gw

@@ -11,7 +11,7 @@ import pytest
 from ucbplan.core.forecast import anchor_sigma_u, horizon_table, sigma_u, t_valid, tolerance
 from ucbplan.core.params import PARAM_NAMES, PhaseParams, shift_reference
 from ucbplan.core.phase import u_cycles, u_jacobian
-from ucbplan.target import load_target
+from ucbplan.targets import load_target
 
 DAY = 86400.0
 YEAR = 365.25 * DAY

@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from ucbplan.errors import InputError, UcbplanError
-from ucbplan.observing.goals import (
+from ucbplan.observing.precision.goals import (
     Goal,
     anchor_phases,
     parse_goal,
@@ -294,8 +294,8 @@ def test_goal_magnitude_is_one_check_everywhere(goal: str) -> None:
 
     from test_cli_fuzz import run_main
 
-    from ucbplan.observing.goals import goal_info_needed
-    from ucbplan.target import load_target
+    from ucbplan.observing.precision.goals import goal_info_needed
+    from ucbplan.targets import load_target
 
     hm = "catalogs/hm-cnc-simulated.yaml"
     assert goal_info_needed(parse_goal(goal), load_target(hm)) > 1e7  # inf, not an overflow

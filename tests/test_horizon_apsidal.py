@@ -13,11 +13,11 @@ import numpy as np
 import pytest
 from test_horizon_poly import _random_targets
 
-import ucbplan.core.horizon_apsidal as ha
+import ucbplan.core.validity_apsidal as ha
 from ucbplan.core.constants import DAY_S, YEAR_S
 from ucbplan.core.forecast import AFTER, BEFORE, HORIZON_CAP_S, t_valid_batch, time_reversed
-from ucbplan.core.horizon_grid import anchor_sigma_batch, oscillating
-from ucbplan.core.horizon_poly import horner
+from ucbplan.core.validity_grid import anchor_sigma_batch, oscillating
+from ucbplan.core.validity_poly import horner
 
 #: Goal of issue 14: |ΔT_valid| ≤ 1e-3 max(T_valid, 1 d).
 REL = 1e-3

@@ -10,8 +10,8 @@ import pytest
 from test_horizon_poly import _random_targets
 
 from ucbplan.core.forecast import horizon_table, two_sided
-from ucbplan.core.horizon_batch import horizon_columns
-from ucbplan.target import load_target, target_from_dict
+from ucbplan.core.validity_batch import horizon_columns
+from ucbplan.targets import load_target, target_from_dict
 
 ROOT = Path(__file__).resolve().parents[1] / "catalogs"
 TIMING = {

@@ -15,9 +15,9 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
 from ucbplan.core.forecast import horizon_table
-from ucbplan.core.horizon_batch import HORIZON_COLUMNS, horizon_json, horizon_rows, horizons
+from ucbplan.core.validity_batch import HORIZON_COLUMNS, horizon_json, horizon_rows, horizons
 from ucbplan.errors import InputError, TargetFileError
-from ucbplan.target import load_target, load_target_documents
+from ucbplan.targets import load_target, load_target_documents
 
 if TYPE_CHECKING:
     from astropy.table import Table

@@ -9,9 +9,9 @@ import pytest
 
 from ucbplan.core.constants import YEAR_S
 from ucbplan.core.forecast import AFTER, BEFORE, HORIZON_CAP_S, anchor_sigma_u, t_valid_batch
-from ucbplan.core.horizon_grid import oscillating
-from ucbplan.core.horizon_poly import sigma2_coefficients
 from ucbplan.core.params import PhaseParams
+from ucbplan.core.validity_grid import oscillating
+from ucbplan.core.validity_poly import sigma2_coefficients
 from ucbplan.errors import UcbplanError
 
 

@@ -13,7 +13,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from ucbplan.errors import InputError, InputFileError, UcbplanError
-from ucbplan.observing.instruments import (
+from ucbplan.observing.precision.instruments import (
     Instrument,
     Overheads,
     SigmaRef,

@@ -14,7 +14,7 @@ from typing import Any
 import pytest
 import yaml
 
-from ucbplan.observing.sites import get_site, load_sites
+from ucbplan.observing.observatory.sites import get_site, load_sites
 
 REPO = Path(__file__).resolve().parents[1]
 CONFIG = REPO / "configs" / "instruments.yaml"

@@ -22,7 +22,7 @@ from ucbplan.lisa.likelihood import Prior, simulate_data, source_from_target
 from ucbplan.lisa.noise import SANGRIA
 from ucbplan.lisa.pipeline import build_model, fisher_forecast, prepare_simulation, simulate
 from ucbplan.lisa.simulation import LisaModel, SimulateOptions
-from ucbplan.target import load_target, target_from_dict
+from ucbplan.targets import load_target, target_from_dict
 
 INJECTION = Path(__file__).resolve().parents[1] / "catalogs" / "fiducial-injection.yaml"
 

@@ -21,7 +21,7 @@ from ucbplan.lisa.likelihood import (
 )
 from ucbplan.lisa.noise import SANGRIA, NoiseModel, psd_a
 from ucbplan.lisa.sampler import run_sampler
-from ucbplan.target import load_target
+from ucbplan.targets import load_target
 
 INJECTION = Path(__file__).resolve().parents[1] / "catalogs" / "fiducial-injection.yaml"
 

@@ -30,7 +30,7 @@ from ucbplan.lisa.outputs import (
 from ucbplan.lisa.pipeline import build_model, prepare_simulation, run_simulation
 from ucbplan.lisa.sampler import SamplerInterrupted
 from ucbplan.lisa.simulation import SimulateOptions, SimulationResult
-from ucbplan.target import load_target
+from ucbplan.targets import load_target
 
 ROOT = Path(__file__).resolve().parents[1]
 INJECTION = ROOT / "catalogs" / "fiducial-injection.yaml"

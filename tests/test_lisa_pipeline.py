@@ -11,7 +11,7 @@ from ucbplan.lisa.lines import LINE_COLUMNS, waveform_lines
 from ucbplan.lisa.outputs import simulation_files, write_simulation
 from ucbplan.lisa.pipeline import build_model, fisher_forecast, simulate
 from ucbplan.lisa.simulation import SimulateOptions
-from ucbplan.target import load_target
+from ucbplan.targets import load_target
 
 INJECTION = Path(__file__).resolve().parents[1] / "catalogs" / "fiducial-injection.yaml"
 

@@ -23,7 +23,7 @@ from ucbplan.errors import UcbplanError
 from ucbplan.lisa import _fused, numerics, waveform
 from ucbplan.lisa.likelihood import model_for_target, source_from_target
 from ucbplan.lisa.waveform import FourLineModel
-from ucbplan.target import load_target
+from ucbplan.targets import load_target
 
 ROOT = Path(__file__).resolve().parents[1]
 INJECTION = ROOT / "catalogs" / "fiducial-injection.yaml"

@@ -17,14 +17,14 @@ from astropy.coordinates import SkyCoord
 from astropy.time import Time
 
 from ucbplan.core.ephemeris import find_epochs
-from ucbplan.observing.blocks import ExposurePlan
-from ucbplan.observing.constraint_checks import DARK_STEP_S
+from ucbplan.observing.blocks.block import ExposurePlan
 from ucbplan.observing.constraints import ALT_RATE_DEG_S, NightConstraint
+from ucbplan.observing.constraints.checks import DARK_STEP_S
+from ucbplan.observing.observatory.sites import get_site, site_from_lonlat
+from ucbplan.observing.observatory.sky import SkyModel
 from ucbplan.observing.schedule import PlanSettings, candidates, plan_nights
-from ucbplan.observing.sites import get_site, site_from_lonlat
-from ucbplan.observing.sky import SkyModel
 from ucbplan.offline import offline
-from ucbplan.target import load_target
+from ucbplan.targets import load_target
 
 pytestmark = [
     pytest.mark.filterwarnings("ignore::erfa.ErfaWarning"),

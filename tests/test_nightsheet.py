@@ -24,18 +24,19 @@ from typer.testing import CliRunner
 
 from ucbplan.cli.app import app
 from ucbplan.errors import InputError, OutputExistsError
-from ucbplan.observing import nightplot, nightsheet
+from ucbplan.observing.blocks.read import read_blocks
 from ucbplan.observing.constraints import AirmassConstraint, ConstraintSet
-from ucbplan.observing.countdown import visit_exposures
-from ucbplan.observing.nightplot import (
+from ucbplan.observing.night import chart as nightplot
+from ucbplan.observing.night import sheet as nightsheet
+from ucbplan.observing.night.chart import (
     chart_figure,
     group_visits,
     night_chart,
     write_night_charts,
 )
-from ucbplan.observing.nightsheet import write_night_sheet
-from ucbplan.observing.sites import Site, get_site
-from ucbplan.observing.tableread import read_blocks
+from ucbplan.observing.night.countdown import visit_exposures
+from ucbplan.observing.night.sheet import write_night_sheet
+from ucbplan.observing.observatory.sites import Site, get_site
 from ucbplan.plotting import pyplot
 from ucbplan.plotting.layout import layout_problems
 
@@ -440,8 +441,8 @@ def test_night_without_darkness_spans_the_whole_day() -> None:
     instead of failing to find a sunset."""
     from datetime import date
 
-    from ucbplan.observing.nightplot import plot_night
-    from ucbplan.target import load_target
+    from ucbplan.observing.night.chart import plot_night
+    from ucbplan.targets import load_target
 
     svalbard = Site("Svalbard", 15.6, 78.2, 500.0, "Arctic/Longyearbyen")
     fig = plot_night([load_target(HM)], svalbard, date(2040, 6, 21), [], 2.0)

@@ -4,7 +4,7 @@ Debian's ``chromium`` renders the sheet headless from ``file://`` with ``?now=T`
 time budget of :data:`BUDGET_MS` (the page's clock runs on from T by at most that much), then
 dumps its DOM; html.parser reads it back. The expected next start is computed from the blocks
 table with astropy (tests/test_countdown.py: ``expected``, ``instants``), independently of the
-page's JavaScript and of ``ucbplan.observing.countdown``. The countdown must agree to the
+page's JavaScript and of ``ucbplan.observing.night.countdown``. The countdown must agree to the
 rounding (0.5 s) with the page's own clock, which ran on < 1 s from T. The tests skip, saying
 why, where chromium is not installed (``.ci/run`` installs it).
 """
@@ -23,10 +23,10 @@ from astropy.time import Time
 from test_countdown import INSTANT_NAMES, expected, instants, seconds_of, table_starts
 from test_nightsheet import _Reader
 
-from ucbplan.observing.nightsheet import write_night_sheet
-from ucbplan.observing.sheet_html import EXPOSURE_COLUMNS
-from ucbplan.observing.sites import get_site
-from ucbplan.observing.tableread import read_blocks
+from ucbplan.observing.blocks.read import read_blocks
+from ucbplan.observing.night.sheet import write_night_sheet
+from ucbplan.observing.night.sheet_html import EXPOSURE_COLUMNS
+from ucbplan.observing.observatory.sites import get_site
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 

@@ -6,9 +6,9 @@ network, no extra package). The test opens the sheet from ``file://``, clicks st
 with real mouse events at their place on the page (one row clicked twice: unmarked again),
 clicks "save log", and reads the downloaded file with Python's csv module: its rows are the
 marked exposures in time order with their statuses, byte for byte what ``now --log`` writes for
-the same marks (:func:`ucbplan.observing.obslog.log_text`); fed to ``plan --observed`` it counts
-the independent Fisher sum of its taken rows (tests/test_obslog.py). Skips, saying why, where
-chromium is not installed (``.ci/run`` installs it).
+the same marks (:func:`ucbplan.observing.night.observing_log.log_text`); fed to ``plan --observed``
+it counts the independent Fisher sum of its taken rows (tests/test_obslog.py). Skips, saying why,
+where chromium is not installed (``.ci/run`` installs it).
 """
 
 from __future__ import annotations
@@ -31,10 +31,10 @@ from test_observed import BASE, NAME, TARGET
 from test_obslog import fisher_of_taken
 
 import ucbplan
-from ucbplan.observing.nightsheet import write_night_sheet
-from ucbplan.observing.obslog import log_cells, log_text
-from ucbplan.observing.sites import get_site
-from ucbplan.observing.tableread import read_blocks
+from ucbplan.observing.blocks.read import read_blocks
+from ucbplan.observing.night.observing_log import log_cells, log_text
+from ucbplan.observing.night.sheet import write_night_sheet
+from ucbplan.observing.observatory.sites import get_site
 
 #: As the night sheet's other browser tests: skipped, saying why, without chromium.
 pytestmark = [pytest.mark.slow, *BROWSER_MARKS]

@@ -224,8 +224,8 @@ socket.socket.connect = refuse
 socket.create_connection = refuse
 from pathlib import Path
 import ucbplan
-from ucbplan.observing.nightplot import write_night_charts
-from ucbplan.observing.nightsheet import write_night_sheet
+from ucbplan.observing.night.chart import write_night_charts
+from ucbplan.observing.night.sheet import write_night_sheet
 out = Path(sys.argv[1])
 run = ucbplan.plan(sys.argv[2], "paranal", "2040-02-15", visit="1h")
 site = ucbplan.get_site("paranal")

@@ -24,14 +24,14 @@ import ucbplan
 from ucbplan.cli.app import app
 from ucbplan.core.phase import arg_latitude
 from ucbplan.errors import InputError, UcbplanError
-from ucbplan.observing.observed import (
+from ucbplan.observing.precision.observed import (
     ObservedSpectra,
     observed_fisher,
     observed_information,
     sigma_v_ratio,
 )
 from ucbplan.observing.schedule.exposure import exposure_sigma_v
-from ucbplan.target import load_target
+from ucbplan.targets import load_target
 
 CATALOGS = Path(__file__).resolve().parents[1] / "catalogs"
 TARGET = CATALOGS / "hm-cnc-simulated.yaml"

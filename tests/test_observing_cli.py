@@ -13,9 +13,9 @@ from typer.testing import CliRunner
 
 from ucbplan.cli.app import app
 from ucbplan.errors import OutputExistsError
-from ucbplan.observing.blocktable import REQUIRED_COLUMNS
-from ucbplan.observing.tablemake import file_sha256
-from ucbplan.observing.tableread import read_blocks
+from ucbplan.observing.blocks.make import file_sha256
+from ucbplan.observing.blocks.read import read_blocks
+from ucbplan.observing.blocks.schema import REQUIRED_COLUMNS
 
 pytestmark = [
     pytest.mark.filterwarnings("ignore::erfa.ErfaWarning"),
@@ -120,10 +120,10 @@ def test_site_lonlat_and_sites_file(tmp_path: Path) -> None:
 def test_night_chart_axes() -> None:
     from datetime import date
 
-    from ucbplan.observing.nightplot import plot_night
-    from ucbplan.observing.sites import get_site
+    from ucbplan.observing.night.chart import plot_night
+    from ucbplan.observing.observatory.sites import get_site
     from ucbplan.plotting import pyplot
-    from ucbplan.target import load_target
+    from ucbplan.targets import load_target
 
     fig = plot_night([load_target(Path(HM))], get_site("paranal"), date(2040, 2, 15), [], 2.0)
     ax = fig.axes[0]

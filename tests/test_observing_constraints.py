@@ -11,7 +11,6 @@ from astropy.coordinates import AltAz, SkyCoord, get_body, get_sun
 from astropy.time import Time, TimeDelta
 
 from ucbplan.errors import UcbplanError
-from ucbplan.observing.constraint_checks import evaluate_window
 from ucbplan.observing.constraints import (
     CONSTRAINTS,
     AirmassConstraint,
@@ -22,8 +21,9 @@ from ucbplan.observing.constraints import (
     ZenithHoleConstraint,
     make_constraint,
 )
-from ucbplan.observing.sites import get_site
-from ucbplan.observing.sky import SkyModel, airmass_from_alt
+from ucbplan.observing.constraints.checks import evaluate_window
+from ucbplan.observing.observatory.sites import get_site
+from ucbplan.observing.observatory.sky import SkyModel, airmass_from_alt
 from ucbplan.offline import offline
 
 pytestmark = [
@@ -177,7 +177,7 @@ def test_plan_settings_constraints_follow_site_and_options() -> None:
 def test_sun_direct_rotation_equals_astropys_frames() -> None:
     """The sky model's Sun: astropy's GCRS → CIRS matrix applied directly gives the frame
     transformation's positions bit for bit."""
-    from ucbplan.observing.sky import _sun_cirs_m, sun_cirs_frames
+    from ucbplan.observing.observatory.sky import _sun_cirs_m, sun_cirs_frames
 
     with offline():
         t = Time(ORIGIN, scale="tdb") + TimeDelta(np.linspace(0.0, 200.0, 300) * u.d)
@@ -259,8 +259,8 @@ def test_astroplan_local_time_is_the_sites_local_time(sky: SkyModel) -> None:
 
     import astroplan
 
-    from ucbplan.observing.constraint_objects import as_constraint
     from ucbplan.observing.constraints import holds
+    from ucbplan.observing.constraints.objects import as_constraint
 
     window = astroplan.LocalTimeConstraint(min=dt.time(22, 0), max=dt.time(1, 30))
     native = as_constraint(window, get_site("paranal"))

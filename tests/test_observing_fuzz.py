@@ -29,11 +29,11 @@ from hypothesis import strategies as st
 
 from ucbplan.cli._flags import cli_message
 from ucbplan.errors import UcbplanError
-from ucbplan.observing.blocks import ExposurePlan
+from ucbplan.observing.blocks.block import ExposurePlan
+from ucbplan.observing.blocks.write import write_table
 from ucbplan.observing.exports import EXPORT_FORMATS
+from ucbplan.observing.observatory.sites import Site, load_sites
 from ucbplan.observing.schedule import PlanSettings
-from ucbplan.observing.sites import Site, load_sites
-from ucbplan.observing.tablewrite import write_table
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_cli_fuzz import check_outcome, run_cli

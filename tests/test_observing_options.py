@@ -16,14 +16,14 @@ from hypothesis import strategies as st
 
 from ucbplan.cli._flags import FLAGS, cli_message
 from ucbplan.errors import InputError, UcbplanError
-from ucbplan.observing import constraint_checks as constraints_module
-from ucbplan.observing.blocks import Block, ExposurePlan
-from ucbplan.observing.constraint_checks import evaluate_window
+from ucbplan.observing.blocks.block import Block, ExposurePlan
 from ucbplan.observing.constraints import ConstraintSet
+from ucbplan.observing.constraints import checks as constraints_module
+from ucbplan.observing.constraints.checks import evaluate_window
+from ucbplan.observing.observatory.sites import get_site, site_from_lonlat
 from ucbplan.observing.schedule import PlanSettings, night_dates, plan_nights
 from ucbplan.observing.schedule.run import parse_priorities
-from ucbplan.observing.sites import get_site, site_from_lonlat
-from ucbplan.target import Target, load_target
+from ucbplan.targets import Target, load_target
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_cli_fuzz import check_outcome, run_cli
@@ -159,8 +159,8 @@ def test_plan_cli_refuses_before_any_work(tmp_path: Path, args: list[str]) -> No
 
 def test_evaluate_window_in_chunks_is_exact(monkeypatch: pytest.MonkeyPatch) -> None:
     # The night pre-check at start/middle/end and the chunking must not change any answer.
-    from ucbplan.observing.site_time_axis import TimeAxis
-    from ucbplan.observing.sky import SkyModel
+    from ucbplan.observing.observatory.sky import SkyModel
+    from ucbplan.observing.observatory.time_axis import TimeAxis
 
     site, target = get_site("paranal"), load_target(HM)
     from astropy.coordinates import SkyCoord

@@ -16,12 +16,12 @@ from astropy.time import Time
 
 from ucbplan.core.ephemeris import arg_latitude, ll_pair
 from ucbplan.errors import UcbplanError
-from ucbplan.observing.barycentric_time import site_utc_to_bary_tdb
-from ucbplan.observing.blocks import ExposurePlan
+from ucbplan.observing.blocks.block import ExposurePlan
+from ucbplan.observing.observatory.barycentric import site_utc_to_bary_tdb
+from ucbplan.observing.observatory.sites import Site, get_site
 from ucbplan.observing.schedule import PlanSettings, parse_mode, plan_nights
-from ucbplan.observing.sites import Site, get_site
 from ucbplan.offline import offline
-from ucbplan.target import Target, load_target
+from ucbplan.targets import Target, load_target
 
 pytestmark = [
     pytest.mark.filterwarnings("ignore::erfa.ErfaWarning"),
@@ -221,8 +221,8 @@ def test_conjunction_and_zero_crossing(hm: Target) -> None:
 
 
 def test_settings_and_inputs_fail_in_words() -> None:
+    from ucbplan.observing.observatory.sites import resolve_site
     from ucbplan.observing.schedule import night_dates
-    from ucbplan.observing.sites import resolve_site
 
     with pytest.raises(UcbplanError, match=r"alpha: expected a number in \(0, 10\]"):
         PlanSettings(alpha=0.0)

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from ucbplan.errors import SiteError
-from ucbplan.observing.sites import get_site, load_sites, site_from_lonlat
+from ucbplan.observing.observatory.sites import get_site, load_sites, site_from_lonlat
 
 REPO = Path(__file__).resolve().parents[1]
 REQUIRED = (
@@ -201,7 +201,7 @@ def test_lonlat_zone_matches_every_bundled_site() -> None:
 
 
 def test_tz_option_replaces_zone_and_refuses_unknown() -> None:
-    from ucbplan.observing.sites import resolve_site
+    from ucbplan.observing.observatory.sites import resolve_site
 
     assert resolve_site("paranal", timezone="UTC").timezone == "UTC"
     assert resolve_site("paranal").timezone == "America/Santiago"

@@ -12,11 +12,11 @@ import pytest
 from astropy.time import Time
 
 from ucbplan.errors import InputFileError
-from ucbplan.observing.blocks import Block
-from ucbplan.observing.blocktable import REQUIRED_COLUMNS
-from ucbplan.observing.tablemake import blocks_to_table, make_meta
-from ucbplan.observing.tableread import read_blocks
-from ucbplan.observing.tablewrite import write_table
+from ucbplan.observing.blocks.block import Block
+from ucbplan.observing.blocks.make import blocks_to_table, make_meta
+from ucbplan.observing.blocks.read import read_blocks
+from ucbplan.observing.blocks.schema import REQUIRED_COLUMNS
+from ucbplan.observing.blocks.write import write_table
 from ucbplan.offline import offline
 
 # Dates past the leap-second table are intended (2040 nights); the planner warns once itself.
@@ -164,7 +164,7 @@ def test_required_columns_are_the_exporters_contract() -> None:
 def test_column_list_covers_every_block_field_and_reads_back_typed(tmp_path: Path) -> None:
     from dataclasses import fields
 
-    from ucbplan.observing.blocktable import COLUMNS, EXTRA_COLUMNS
+    from ucbplan.observing.blocks.schema import COLUMNS, EXTRA_COLUMNS
 
     assert len({c.name for c in COLUMNS}) == len(COLUMNS)
     assert {f.name for f in fields(Block)} <= {c.attribute for c in COLUMNS}
@@ -184,7 +184,7 @@ def test_column_list_covers_every_block_field_and_reads_back_typed(tmp_path: Pat
 
 
 def test_column_reference_lists_every_column() -> None:
-    from ucbplan.observing.blocktable import COLUMNS, column_reference
+    from ucbplan.observing.blocks.schema import COLUMNS, column_reference
 
     text = column_reference()
     rows = [line for line in text.splitlines() if line.startswith("| `")]

@@ -36,7 +36,8 @@ import ucbplan
 from ucbplan.cli import now as now_cli
 from ucbplan.cli.app import app
 from ucbplan.errors import InputError
-from ucbplan.observing.obslog import (
+from ucbplan.observing.blocks.read import read_blocks
+from ucbplan.observing.night.observing_log import (
     LOG_COLUMNS,
     LOG_KEYS,
     ObservingLog,
@@ -47,8 +48,7 @@ from ucbplan.observing.obslog import (
     plan_id,
     read_log,
 )
-from ucbplan.observing.tableread import read_blocks
-from ucbplan.target import load_target
+from ucbplan.targets import load_target
 
 pytestmark = [
     pytest.mark.filterwarnings("ignore::erfa.ErfaWarning"),

@@ -13,12 +13,12 @@ from astropy import units as u
 
 from ucbplan.core.constants import DAY_S
 from ucbplan.core.ephemeris import ll_pair
-from ucbplan.observing.blocks import ExposurePlan
+from ucbplan.observing.blocks.block import ExposurePlan
 from ucbplan.observing.exports.text import safe_name
+from ucbplan.observing.observatory.sites import get_site
 from ucbplan.observing.schedule import PlanSettings, plan_nights
 from ucbplan.observing.schedule.pairs import DK_FRACTION, pair_infeasible_reason, pair_targets
-from ucbplan.observing.sites import get_site
-from ucbplan.target import Target, load_target
+from ucbplan.targets import Target, load_target
 
 pytestmark = [
     pytest.mark.filterwarnings("ignore::erfa.ErfaWarning"),

@@ -14,7 +14,7 @@ apart.
 
 Tolerance: decisions may differ only where, at the block's start, middle or end, a decisive
 quantity (astropy's value) lies within the stated accuracy of our sky model of its limit — 2″ for
-the target and Sun altitudes, 10″ for the Moon (ucbplan/observing/sky.py).
+the target and Sun altitudes, 10″ for the Moon (ucbplan/observing/observatory/sky.py).
 """
 
 from __future__ import annotations
@@ -28,9 +28,9 @@ from typing import Any
 import numpy as np
 import pytest
 
-from ucbplan.observing.blocks import ExposurePlan
+from ucbplan.observing.blocks.block import ExposurePlan
+from ucbplan.observing.observatory.sites import get_site
 from ucbplan.observing.schedule import PlanSettings
-from ucbplan.observing.sites import get_site
 
 pytest.importorskip("astroplan")
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))

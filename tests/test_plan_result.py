@@ -25,7 +25,7 @@ from hypothesis import strategies as st
 
 from ucbplan.api.plan_result import Plan
 from ucbplan.errors import InputFileError, OutputExistsError, UcbplanError
-from ucbplan.observing.blocks import ExposurePlan
+from ucbplan.observing.blocks.block import ExposurePlan
 from ucbplan.observing.schedule.run import planned_exposure
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -4,7 +4,7 @@ Promised: epochs and UTC times within 1 µs, altitudes within 0.1″, accepted s
 from 1 s of a constraint edge. Three shortcuts are pinned here, each against the exact chain:
 the site's barycentric track between Earth-orientation nodes (:data:`ORIENTATION_STEP_S`), the
 TDB − TT spline of :meth:`TimeAxis.utc`, and the daylight shortcut of
-:func:`~ucbplan.observing.constraint_checks.evaluate_window` (exact: never skips a block that
+:func:`~ucbplan.observing.constraints.checks.evaluate_window` (exact: never skips a block that
 touches the night). End to end, a plan is compared with the same plan through the exact conversions.
 """
 
@@ -18,17 +18,18 @@ from astropy import units as u
 from astropy.coordinates import SkyCoord, solar_system_ephemeris
 from astropy.time import Time, TimeDelta
 
-from ucbplan.observing import barycentric_time, site_time_axis
-from ucbplan.observing.barycentric_time import SiteTrack, site_icrs_frames
-from ucbplan.observing.blocks import ExposurePlan
-from ucbplan.observing.constraint_checks import DARK_STEP_S, _maybe_dark
+from ucbplan.observing.blocks.block import ExposurePlan
 from ucbplan.observing.constraints import NightConstraint
+from ucbplan.observing.constraints.checks import DARK_STEP_S, _maybe_dark
+from ucbplan.observing.observatory import barycentric as barycentric_time
+from ucbplan.observing.observatory import time_axis as site_time_axis
+from ucbplan.observing.observatory.barycentric import SiteTrack, site_icrs_frames
+from ucbplan.observing.observatory.sites import get_site
+from ucbplan.observing.observatory.sky import SkyModel
+from ucbplan.observing.observatory.time_axis import TimeAxis
 from ucbplan.observing.schedule import PlanSettings, plan_nights
-from ucbplan.observing.site_time_axis import TimeAxis
-from ucbplan.observing.sites import get_site
-from ucbplan.observing.sky import SkyModel
 from ucbplan.offline import offline
-from ucbplan.target import load_target
+from ucbplan.targets import load_target
 
 pytestmark = [
     pytest.mark.filterwarnings("ignore::erfa.ErfaWarning"),

@@ -2,7 +2,7 @@
 
 Independent checks: u(t_mid) recomputed through astropy's own light time; Sun, altitude and
 airmass from astropy AltAz; the wall time of a visit against the closed form of
-:func:`ucbplan.observing.goals.time_budget`; the goal count against σ_v²/(σ_K² Λ_K²).
+:func:`ucbplan.observing.precision.goals.time_budget`; the goal count against σ_v²/(σ_K² Λ_K²).
 """
 
 from __future__ import annotations
@@ -26,13 +26,13 @@ from typer.testing import CliRunner
 from ucbplan.cli._flags import cli_message
 from ucbplan.cli.app import app
 from ucbplan.core.ephemeris import arg_latitude
-from ucbplan.observing.barycentric_time import site_utc_to_bary_tdb
-from ucbplan.observing.goals import time_budget
+from ucbplan.observing.blocks.read import read_blocks
+from ucbplan.observing.observatory.barycentric import site_utc_to_bary_tdb
+from ucbplan.observing.observatory.sites import get_site
+from ucbplan.observing.precision.goals import time_budget
 from ucbplan.observing.schedule import plan_files, plan_settings
-from ucbplan.observing.sites import get_site
-from ucbplan.observing.tableread import read_blocks
 from ucbplan.offline import offline
-from ucbplan.target import Target, load_target
+from ucbplan.targets import Target, load_target
 
 ROOT = Path(__file__).resolve().parents[1]
 HM = ROOT / "catalogs" / "hm-cnc-simulated.yaml"

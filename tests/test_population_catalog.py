@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 from ucbplan.errors import InputError, InputFileError, UcbplanError
-from ucbplan.observing.semesters import semester_dates
+from ucbplan.observing.observatory.semesters import semester_dates
 from ucbplan.population.catalog import parse_column_map, read_catalog
 
 ROOT = Path(__file__).resolve().parents[1]

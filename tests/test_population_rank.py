@@ -11,7 +11,7 @@ import pytest
 from astropy.table import Table
 
 from ucbplan.population.catalog import read_catalog
-from ucbplan.target import load_target
+from ucbplan.targets import load_target
 
 ROOT = Path(__file__).resolve().parents[1]
 CATALOG = ROOT / "catalogs" / "population" / "ldc-200.ecsv"

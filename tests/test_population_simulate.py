@@ -14,7 +14,7 @@ from ucbplan.population.catalog_forecast import ForecastOptions
 from ucbplan.population.runner import RunControl
 from ucbplan.population.simulate import PopulationSimulateOptions, run_simulate
 from ucbplan.population.tables import write_table
-from ucbplan.target import load_target
+from ucbplan.targets import load_target
 
 ROOT = Path(__file__).resolve().parents[1]
 CATALOG = ROOT / "catalogs" / "population" / "ldc-200.ecsv"

@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from ucbplan.errors import InputError
+from ucbplan.observing.observatory.sites import get_site
 from ucbplan.observing.schedule.settings import PlanSettings
-from ucbplan.observing.sites import get_site
 from ucbplan.population.catalog import Catalog, read_catalog
 from ucbplan.population.runner import RunControl, run_visibility
 from ucbplan.population.tables import write_table

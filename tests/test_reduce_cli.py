@@ -111,9 +111,9 @@ def test_site_utc_times_are_converted(tmp_path: Path) -> None:
     import numpy as np
     from astropy.time import Time
 
-    from ucbplan.observing.barycentric_time import bary_tdb_to_site_utc
-    from ucbplan.observing.sites import get_site
-    from ucbplan.target import load_target
+    from ucbplan.observing.observatory.barycentric import bary_tdb_to_site_utc
+    from ucbplan.observing.observatory.sites import get_site
+    from ucbplan.targets import load_target
 
     t = load_target(TARGET)
     lines = [ln for ln in VELS.read_text().splitlines() if not ln.startswith("#")]

@@ -18,7 +18,7 @@ import yaml
 from ucbplan.core.params import PARAM_NAMES
 from ucbplan.reduce import ReduceOptions, read_velocities, reduce
 from ucbplan.reduce.montecarlo import posterior_samples
-from ucbplan.target import Target, target_from_dict
+from ucbplan.targets import Target, target_from_dict
 
 ROOT = Path(__file__).resolve().parents[1]
 NAMES = ["phase", "f_gw", "fdot", "eta", "kappa", "omega_dot"]

@@ -13,7 +13,7 @@ from astropy.table import Table
 from ucbplan.core.mvnormal import sample_normal
 from ucbplan.core.params import PARAM_NAMES
 from ucbplan.reduce.pipeline import ReduceOptions, reduce
-from ucbplan.target import load_target
+from ucbplan.targets import load_target
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))

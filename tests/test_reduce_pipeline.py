@@ -339,7 +339,7 @@ def test_posterior_samples_file_drives_the_monte_carlo(tmp_path) -> None:  # typ
     from astropy.table import Table
 
     from ucbplan.core.mvnormal import sample_normal
-    from ucbplan.target import read_samples_file
+    from ucbplan.targets import read_samples_file
 
     t = make_target()
     p = t.params
@@ -396,7 +396,7 @@ def test_terminal_report_lists_at_most_forty_sessions_and_pairs() -> None:
 
     from ucbplan.reduce.report import MAX_TERMINAL_ROWS, print_report
     from ucbplan.reduce.velocities import read_velocities
-    from ucbplan.target import load_target
+    from ucbplan.targets import load_target
 
     root = Path(__file__).resolve().parents[1] / "catalogs"
     t = load_target(root / "fiducial-eccentric.yaml")

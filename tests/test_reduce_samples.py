@@ -1,4 +1,4 @@
-"""reduce reads posterior samples through ucbplan.target.load_samples (issue 11).
+"""reduce reads posterior samples through ucbplan.targets.load_samples (issue 11).
 
 Bug: reduce had its own samples reader and ignored ``t_ref_is: start`` for a samples file, so a
 start-referenced file was used as if it were at the midpoint (f off by ḟT/2 ≈ 1e-7 Hz, (η, κ)
@@ -21,7 +21,7 @@ from ucbplan.core.mvnormal import sample_normal
 from ucbplan.core.params import PARAM_NAMES, shift_columns
 from ucbplan.errors import UcbplanError
 from ucbplan.reduce import ReduceOptions, read_velocities, reduce
-from ucbplan.target import Target, load_target
+from ucbplan.targets import Target, load_target
 
 ROOT = Path(__file__).resolve().parents[1]
 INJECTION = ROOT / "catalogs" / "fiducial-injection.yaml"  # t_ref_is: start

@@ -50,7 +50,7 @@ FIDUCIAL = {
 
 def make_target(circular: bool = False, **lisa: object):  # type: ignore[no-untyped-def]
     """Fiducial target (optionally circular: η = κ = ω̇ = 0) via the lead's target parser."""
-    from ucbplan.target import target_from_dict
+    from ucbplan.targets import target_from_dict
 
     doc = {**FIDUCIAL, "lisa": {**FIDUCIAL["lisa"], **lisa}}  # type: ignore[dict-item]
     if circular:

@@ -192,7 +192,7 @@ def test_duplicate_ecsv_columns_differing_in_case_are_refused(tmp_path: Path) ->
 
 def _reduce(path: Path) -> object:
     from ucbplan.reduce import ReduceOptions, reduce
-    from ucbplan.target import load_target
+    from ucbplan.targets import load_target
 
     return reduce(load_target(FIDUCIAL), read_velocities(path), ReduceOptions(200, seed=1))
 

@@ -23,7 +23,7 @@ import ucbplan
 from ucbplan.api.replanning import plan_changes
 from ucbplan.errors import InputError, InputFileError
 from ucbplan.observing.schedule.goalplan import REPLAN_INFO_SLACK
-from ucbplan.target import load_target
+from ucbplan.targets import load_target
 
 TARGET = Path(__file__).resolve().parents[1] / "catalogs" / "hm-cnc-simulated.yaml"
 BASE: dict[str, Any] = {
@@ -260,8 +260,8 @@ def test_an_observing_log_of_another_plan_is_refused_in_one_line(
     """A ``now --log`` file of this plan counts; the same log of another plan (one block start
     moved: another plan_id) is refused in one line, by the API and the CLI (exit 2, nothing
     written)."""
-    from ucbplan.observing.obslog import ObservingLog
-    from ucbplan.observing.tableread import read_blocks
+    from ucbplan.observing.blocks.read import read_blocks
+    from ucbplan.observing.night.observing_log import ObservingLog
 
     ours = ObservingLog.open(read_blocks(original), tmp_path / "ours.csv")
     other_table = read_blocks(original)

@@ -8,7 +8,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from ucbplan.observing.semesters import semester_dates, semester_label
+from ucbplan.observing.observatory.semesters import semester_dates, semester_label
 
 
 @given(st.dates(dt.date(1990, 1, 1), dt.date(2200, 12, 31)), st.booleans())

@@ -7,8 +7,8 @@ import pytest
 from astropy import units as u
 from astropy.time import Time, TimeDelta
 
-from ucbplan.observing.site_time_axis import TimeAxis, elapsed
-from ucbplan.observing.sites import get_site
+from ucbplan.observing.observatory.sites import get_site
+from ucbplan.observing.observatory.time_axis import TimeAxis, elapsed
 from ucbplan.offline import offline
 
 pytestmark = pytest.mark.filterwarnings("ignore::erfa.ErfaWarning")

@@ -1,7 +1,7 @@
 """Information per telescope hour (issue 20): the σ_v law, the strategy scan and its choice.
 
-The references here are independent of ucbplan.observing.strategy: the σ_v law by hand, and a
-brute force that lays out each visit's exposures on a timeline one by one and averages cos u
+The references here are independent of ucbplan.observing.precision.strategy: the σ_v law by hand,
+and a brute force that lays out each visit's exposures on a timeline one by one and averages cos u
 over each exposure numerically (no sin x/x formula), over every whole-second exposure time.
 """
 
@@ -15,8 +15,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from ucbplan.errors import InputError
-from ucbplan.observing.sigma_model import SigmaVModel, parse_sigma_v
-from ucbplan.observing.strategy import (
+from ucbplan.observing.precision.sigma_v import SigmaVModel, parse_sigma_v
+from ucbplan.observing.precision.strategy import (
     STRATEGIES,
     VisitShape,
     best_strategy,
@@ -349,7 +349,7 @@ def test_a_chosen_exposure_time_assumes_a_real_readout() -> None:
     the table below) and says so in one line; the plan is fast again."""
     import time
 
-    from ucbplan.observing.instruments import load_instruments
+    from ucbplan.observing.precision.instruments import load_instruments
     from ucbplan.observing.schedule.options import DEFAULT_LAW_READOUT_S
 
     confirmed = [i.readout_s for i in load_instruments().values() if i.readout_s is not None]

@@ -20,12 +20,16 @@ import pytest
 from astropy.table import MaskedColumn, Table
 from astropy.time import Time, TimeDelta
 
-from ucbplan.observing import accounting, ecsvheader, tableformat, tablemake, tablewrite
-from ucbplan.observing.accounting import visit_summaries
-from ucbplan.observing.blockcolumns import jd_parts, time_array
-from ucbplan.observing.blocks import Block
-from ucbplan.observing.tableformat import local_datetimes
-from ucbplan.observing.tablewrite import table_to_json_rows, write_table
+from ucbplan.observing.blocks import accounting
+from ucbplan.observing.blocks import cells as tableformat
+from ucbplan.observing.blocks import ecsv_header as ecsvheader
+from ucbplan.observing.blocks import make as tablemake
+from ucbplan.observing.blocks import write as tablewrite
+from ucbplan.observing.blocks.accounting import visit_summaries
+from ucbplan.observing.blocks.arrays import jd_parts, time_array
+from ucbplan.observing.blocks.block import Block
+from ucbplan.observing.blocks.cells import local_datetimes
+from ucbplan.observing.blocks.write import table_to_json_rows, write_table
 from ucbplan.offline import offline
 
 pytestmark = pytest.mark.filterwarnings("ignore::erfa.ErfaWarning")

@@ -1,4 +1,4 @@
-"""The one coordinate formatter (:func:`ucbplan.observing.tableformat.sexagesimal`): its
+"""The one coordinate formatter (:func:`ucbplan.observing.blocks.cells.sexagesimal`): its
 ``astropy`` rounding writes the blocks table's ``ra_hms``/``dec_dms`` exactly as astropy's
 ``Angle.to_string`` did, its ``once`` rounding what the exports always wrote, and the two differ
 only where these tests say (a one-off run over 1.4 million values found no other difference)."""
@@ -11,7 +11,7 @@ from astropy.coordinates import Angle
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from ucbplan.observing.tableformat import dec_dms_column, ra_hms_column, sexagesimal
+from ucbplan.observing.blocks.cells import dec_dms_column, ra_hms_column, sexagesimal
 
 #: Values per sample: enough to meet every kind of rounding case (a tie within a few ulps
 #: differs in ~1 of 7), few enough to stay well under a second per test.

@@ -13,7 +13,7 @@ from astropy.time import Time
 
 from ucbplan.core.constants import L_B
 from ucbplan.errors import TargetFileError
-from ucbplan.target import load_target, target_to_dict, write_target
+from ucbplan.targets import load_target, target_to_dict, write_target
 
 CATALOGS = Path(__file__).resolve().parents[1] / "catalogs"
 

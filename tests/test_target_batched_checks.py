@@ -14,10 +14,10 @@ from hypothesis import strategies as st
 from test_target import BASE  # tests/ is on sys.path (no __init__.py)
 
 from ucbplan.errors import TargetFileError
-from ucbplan.target import load_target, target_from_dict
-from ucbplan.target.covariance import _check_psd, _check_symmetric, _plainly_good
-from ucbplan.target.parse import load_target_documents, load_target_files
-from ucbplan.target.values import Ctx
+from ucbplan.targets import load_target, target_from_dict
+from ucbplan.targets.covariance import _check_psd, _check_symmetric, _plainly_good
+from ucbplan.targets.parse import load_target_documents, load_target_files
+from ucbplan.targets.values import Ctx
 
 #: A LISA target with correlated σ's (its covariance goes through the batched checks).
 GOOD = copy.deepcopy(BASE)

@@ -1,6 +1,6 @@
 """The fast readers of target-file values give astropy's floats bit for bit (issue 34).
 
-:mod:`ucbplan.target.fastvalues` reads the common spellings of quantities, angles and epochs
+:mod:`ucbplan.targets.fastvalues` reads the common spellings of quantities, angles and epochs
 without astropy's parsers, and :func:`ucbplan.inputs.load_yaml` reads anchor-free text with
 libyaml; each must give exactly what the slow way gives (or decline, None), on the schema's own
 units and on generated spellings.
@@ -20,8 +20,8 @@ from hypothesis import strategies as st
 
 from ucbplan.core.epochs import epoch_in_scale
 from ucbplan.inputs import _FastLoader, _load_fast, _StrictLoader
-from ucbplan.target.fastvalues import cached_epoch, quantity_in, sexagesimal_deg
-from ucbplan.target.schema import FIELDS
+from ucbplan.targets.fastvalues import cached_epoch, quantity_in, sexagesimal_deg
+from ucbplan.targets.schema import FIELDS
 
 CATALOGS = Path(__file__).resolve().parents[1] / "catalogs"
 #: Every unit a quantity of the schema is read in, and spellings users write for them.
@@ -247,7 +247,7 @@ def test_loading_the_bundled_targets_imports_no_coordinates() -> None:
     import sys
 
     code = (
-        "import sys; from ucbplan.target import load_target_files; "
+        "import sys; from ucbplan.targets import load_target_files; "
         f"load_target_files({[str(p) for p in sorted(CATALOGS.glob('*.yaml'))]!r}); "
         "print('astropy.coordinates' in sys.modules)"
     )
@@ -259,7 +259,7 @@ def test_loading_the_bundled_targets_imports_no_coordinates() -> None:
 @given(st.text(alphabet="0123456789.+-eE Hzkm/s\t\n\u00a0[", max_size=16))
 def test_the_quantity_split_is_the_pattern_s(text: str) -> None:
     """The split without the regular expression is the pattern's, whatever the text."""
-    from ucbplan.target.fastvalues import _QUANTITY, _split_quantity
+    from ucbplan.targets.fastvalues import _QUANTITY, _split_quantity
 
     m = _QUANTITY.fullmatch(text)
     assert _split_quantity(text) == (None if m is None else (m.group(1), m.group(2)))

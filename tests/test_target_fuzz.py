@@ -27,10 +27,10 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 from ucbplan.errors import TargetFileError
-from ucbplan.target import Target, load_target, write_target
-from ucbplan.target.schema import COVARIANCE_PARAMETERS, field
-from ucbplan.target.values import Ctx
-from ucbplan.target.write import _Dumper
+from ucbplan.targets import Target, load_target, write_target
+from ucbplan.targets.schema import COVARIANCE_PARAMETERS, field
+from ucbplan.targets.values import Ctx
+from ucbplan.targets.write import _Dumper
 
 CATALOGS = Path(__file__).resolve().parents[1] / "catalogs"
 CATALOG_NAMES = ("hm-cnc-simulated.yaml", "fiducial-eccentric.yaml", "fiducial-injection.yaml")

@@ -18,7 +18,7 @@ from astropy import units as u
 
 from ucbplan.core.epochs import parse_tdb
 from ucbplan.errors import InputError, TargetFileError
-from ucbplan.target import load_target, target_from_dict
+from ucbplan.targets import load_target, target_from_dict
 
 CATALOGS = Path(__file__).resolve().parents[1] / "catalogs"
 
@@ -548,7 +548,7 @@ def test_written_targets_read_back(tmp_path: Path) -> None:
     "1.5e-05 deg"), a name that looks like a number, a sub-millisecond midpoint epoch."""
     from dataclasses import replace
 
-    from ucbplan.target import write_target
+    from ucbplan.targets import write_target
 
     t = load_target(CATALOGS / "fiducial-injection.yaml")
     t = replace(t, name="1e3", ra_deg=1.5e-5, dec_deg=-2e-300)

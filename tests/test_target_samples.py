@@ -12,8 +12,8 @@ import yaml
 from astropy.table import Table
 
 from ucbplan.errors import InputFileError, TargetFileError
-from ucbplan.target import load_samples, load_target, read_samples_file, write_target
-from ucbplan.target import samples as samples_module
+from ucbplan.targets import load_samples, load_target, read_samples_file, write_target
+from ucbplan.targets import samples as samples_module
 
 RNG = np.random.default_rng(12)
 

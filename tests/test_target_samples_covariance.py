@@ -18,7 +18,7 @@ from astropy.table import Table
 
 from ucbplan.core.forecast import horizon_s, sigma_u_end
 from ucbplan.core.params import PARAM_NAMES
-from ucbplan.target import Target, load_target
+from ucbplan.targets import Target, load_target
 
 ROOT = Path(__file__).resolve().parents[1]
 FIDUCIAL = ROOT / "catalogs" / "fiducial-eccentric.yaml"

@@ -17,9 +17,9 @@ from typing import Any
 import pytest
 
 from ucbplan.errors import TargetFileError
-from ucbplan.target import Target, target_from_dict, target_to_dict
-from ucbplan.target.fieldtypes import Field
-from ucbplan.target.schema import FIELDS, SECTIONS, field
+from ucbplan.targets import Target, target_from_dict, target_to_dict
+from ucbplan.targets.fieldtypes import Field
+from ucbplan.targets.schema import FIELDS, SECTIONS, field
 
 FULL: dict[str, Any] = {
     "name": "Full",

@@ -17,7 +17,7 @@ from typing import Any
 import pytest
 
 from ucbplan.errors import TargetFileError
-from ucbplan.target import Target, load_target, target_from_dict, write_target
+from ucbplan.targets import Target, load_target, target_from_dict, write_target
 
 #: A synthetic timing target (round numbers, not a real system).
 DOC: dict[str, Any] = {

@@ -15,7 +15,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from ucbplan.errors import InputFileError
-from ucbplan.observing.accounting import (
+from ucbplan.observing.blocks.accounting import (
     ACCOUNT_KEYS,
     PlanAccount,
     TimeAccount,

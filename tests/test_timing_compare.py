@@ -25,7 +25,7 @@ from typer.testing import CliRunner
 from ucbplan.cli.app import app
 from ucbplan.core.forecast import sigma_u
 from ucbplan.core.timing import compare_sources, midway
-from ucbplan.target import load_target
+from ucbplan.targets import load_target
 
 runner = CliRunner()
 

@@ -23,7 +23,7 @@ from typer.testing import CliRunner
 from ucbplan.cli.app import app
 from ucbplan.core.constants import DAY_S, YEAR_S
 from ucbplan.core.ephemeris import find_epochs
-from ucbplan.target import load_target
+from ucbplan.targets import load_target
 
 runner = CliRunner()
 

@@ -30,7 +30,7 @@ from ucbplan.core.forecast import (
     two_sided,
     valid_window_s,
 )
-from ucbplan.target import load_target, target_from_dict
+from ucbplan.targets import load_target, target_from_dict
 
 runner = CliRunner()
 

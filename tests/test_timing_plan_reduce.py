@@ -12,7 +12,7 @@ from astropy.time import Time
 
 from ucbplan.core.phase import arg_latitude
 from ucbplan.reduce.velocities import VelocityTable, check_validity
-from ucbplan.target import load_target
+from ucbplan.targets import load_target
 
 ROOT = Path(__file__).resolve().parents[1]
 SYN = ROOT / "catalogs" / "examples" / "synthetic-eclipsing.yaml"

@@ -23,7 +23,7 @@ from hypothesis import strategies as st
 
 from ucbplan.core.timing import TimingEphemeris, phase_covariance, to_phase_params
 from ucbplan.errors import TargetFileError
-from ucbplan.target import Target, load_target, target_from_dict, write_target
+from ucbplan.targets import Target, load_target, target_from_dict, write_target
 
 #: ZTF J1539+5027 from the issue text (test input, not a catalog entry).
 ZTF_DOC: dict[str, Any] = {

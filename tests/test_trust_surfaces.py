@@ -18,7 +18,7 @@ from typer.testing import CliRunner
 from ucbplan.cli.app import app
 from ucbplan.errors import shorten
 from ucbplan.io import dumps_json, json_plain
-from ucbplan.observing.sites import east_longitude, site_from_lonlat
+from ucbplan.observing.observatory.sites import east_longitude, site_from_lonlat
 
 runner = CliRunner()
 ROOT = Path(__file__).resolve().parents[1]

@@ -29,7 +29,7 @@ import pytest
 import yaml
 from astropy.time import TimeDelta
 
-from ucbplan.target import load_target
+from ucbplan.targets import load_target
 
 ROOT = Path(__file__).resolve().parents[1]
 CATALOG = ROOT / "catalogs" / "verification"

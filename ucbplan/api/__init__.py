@@ -10,7 +10,6 @@ UcbplanWarning` (filterable) besides returning it. The command line is a shell o
 
 from ucbplan.api.ephemeris import compare_ephemerides, ephemeris
 from ucbplan.api.exporting import Export, countdown, export, read_blocks
-from ucbplan.api.horizons import horizon
 from ucbplan.api.lisa_analysis import fisher, simulate, waveform
 from ucbplan.api.plan_result import GoalRecord, StrategyRecord
 from ucbplan.api.planning import Plan, default_constraints, plan
@@ -20,6 +19,7 @@ from ucbplan.api.replanning import replan
 from ucbplan.api.signal_sizes import feasibility
 from ucbplan.api.targets import get_site, load_target, validate, write_target
 from ucbplan.api.timing import TimingFit, fit_ephemeris
+from ucbplan.api.validity import horizon
 
 __all__ = [
     "Export",

@@ -5,9 +5,9 @@ epochs, exposure times or Λ_K, and the measured σ_v; the velocities are not us
 target planned, a blocks table as ``plan -o`` writes it with a ``status`` column (``taken``,
 ``missed`` or ``skipped``: only ``taken`` rows count; their ``sigma_v_kms`` is taken as the σ_v
 measured), or an observing log as the night sheet and ``now --log`` write it
-(:mod:`ucbplan.observing.obslog`: one row per exposure, read the same way). The spectra become
-:class:`~ucbplan.observing.observed.ObservedSpectra` in the planner's settings, and the median of
-measured / predicted σ_v rescales the σ_v law (:func:`observed_settings`).
+(:mod:`ucbplan.observing.night.observing_log`: one row per exposure, read the same way). The spectra
+become :class:`~ucbplan.observing.precision.observed.ObservedSpectra` in the planner's settings, and
+the median of measured / predicted σ_v rescales the σ_v law (:func:`observed_settings`).
 """
 
 from __future__ import annotations
@@ -20,13 +20,13 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ucbplan.errors import InputError, shorten
-from ucbplan.observing.obslog import STATUSES
+from ucbplan.observing.night.observing_log import STATUSES
 
 if TYPE_CHECKING:
-    from ucbplan.observing.observed import ObservedSpectra
+    from ucbplan.observing.observatory.sites import Site
+    from ucbplan.observing.precision.observed import ObservedSpectra
     from ucbplan.observing.schedule import PlanSettings
-    from ucbplan.observing.sites import Site
-    from ucbplan.target import Target
+    from ucbplan.targets import Target
 
 __all__ = ["STATUSES", "observed_settings", "sigma_v_note"]
 
@@ -36,7 +36,7 @@ def observed_settings(
 ) -> PlanSettings:
     """``settings`` with the spectra of ``path`` (None: none) and the σ_v scale: ``scale`` if
     given, else the measured / predicted ratio when it differs from 1 by more than
-    :data:`~ucbplan.observing.observed.SIGMA_V_RATIO_TOL`, else 1.
+    :data:`~ucbplan.observing.precision.observed.SIGMA_V_RATIO_TOL`, else 1.
 
     Raises
     ------
@@ -44,7 +44,7 @@ def observed_settings(
         Observed spectra without a goal; a file of another target or site; a bad status; an
         unreadable file (one line naming the file).
     """
-    from ucbplan.observing.observed import SIGMA_V_RATIO_TOL, sigma_v_ratio
+    from ucbplan.observing.precision.observed import SIGMA_V_RATIO_TOL, sigma_v_ratio
 
     given = _scale(scale)
     if path is None:
@@ -122,7 +122,7 @@ def _is_blocks(path: Path) -> bool:
 def _is_log(path: Path) -> bool:
     """Whether ``path`` is an observing log (the night sheet's or ``now --log``'s CSV)."""
     from ucbplan.inputs import read_text
-    from ucbplan.observing.obslog import is_log
+    from ucbplan.observing.night.observing_log import is_log
 
     try:
         text = read_text(path, "spectra file")
@@ -136,11 +136,11 @@ def _read(
 ) -> list[ObservedSpectra]:
     """The spectra of ``path``, one :class:`ObservedSpectra` per target it names."""
     if _is_log(path):
-        from ucbplan.observing.obslog import read_log
+        from ucbplan.observing.night.observing_log import read_log
 
         return _from_blocks(path, read_log(path), targets, site, settings)
     if _is_blocks(path):
-        from ucbplan.observing.tableread import read_blocks
+        from ucbplan.observing.blocks.read import read_blocks
 
         return _from_blocks(path, read_blocks(path), targets, site, settings)
     return [_from_velocities(path, targets, site, settings)]
@@ -163,7 +163,7 @@ def _from_velocities(
     path: Path, targets: list[Target], site: Site, settings: PlanSettings
 ) -> ObservedSpectra:
     """A velocities file: the spectra of the one target planned."""
-    from ucbplan.observing.observed import ObservedSpectra, window_lambda_k
+    from ucbplan.observing.precision.observed import ObservedSpectra, window_lambda_k
     from ucbplan.reduce.velocities import check_validity, read_velocities, to_barycentric
 
     if len(targets) != 1:
@@ -190,7 +190,7 @@ def _airmass(target: Target, site: Site, time: Any) -> np.ndarray:
     """Airmass of ``target`` at ``site`` at each time (the light time, ≤ 8.3 min, neglected)."""
     from astropy.coordinates import AltAz
 
-    from ucbplan.observing.sky import airmass_from_alt
+    from ucbplan.observing.observatory.sky import airmass_from_alt
 
     alt = target.coord.transform_to(AltAz(obstime=time.utc, location=site.location)).alt.deg
     return np.asarray(airmass_from_alt(np.asarray(alt, dtype=np.float64)), dtype=np.float64)
@@ -200,7 +200,7 @@ def _from_blocks(
     path: Path | str, table: Any, targets: list[Target], site: Site, settings: PlanSettings
 ) -> list[ObservedSpectra]:
     """A blocks table with a status column, or an observing log (one row per exposure,
-    :data:`~ucbplan.observing.obslog.LOG_COLUMNS`): its ``taken`` rows, per target."""
+    :data:`~ucbplan.observing.night.observing_log.LOG_COLUMNS`): its ``taken`` rows, per target."""
     where = f"observed {path}"
     _check_site(table.meta, site, where)
     taken = _taken_rows(table, where)
@@ -257,7 +257,7 @@ def _target_rows(
     """The ``rows`` of one target as :class:`ObservedSpectra` (σ_v: the ``sigma_v_kms``)."""
     from astropy.time import Time
 
-    from ucbplan.observing.observed import ObservedSpectra
+    from ucbplan.observing.precision.observed import ObservedSpectra
 
     def column(name: str) -> np.ndarray:
         return np.asarray(table[name], dtype=np.float64)[rows]
@@ -281,7 +281,7 @@ def _target_rows(
 def sigma_v_note(settings: PlanSettings) -> str | None:
     """The measured σ_v of the spectra taken against the law's, and the factor the remainder
     is planned with, in one line (None without observed spectra)."""
-    from ucbplan.observing.observed import SIGMA_V_RATIO_TOL, sigma_v_ratio
+    from ucbplan.observing.precision.observed import SIGMA_V_RATIO_TOL, sigma_v_ratio
 
     spectra = settings.observed
     if not spectra:

@@ -170,7 +170,7 @@ def _strategy(target: str, name: str, row: Mapping[str, Any], chosen: str) -> St
 
 def _strategy_rank(name: str) -> tuple[int, str]:
     """The planner's order of the strategies (a file's YAML header sorts them by name)."""
-    from ucbplan.observing.strategy import STRATEGIES
+    from ucbplan.observing.precision.strategy import STRATEGIES
 
     order = list(STRATEGIES)
     return (order.index(name) if name in order else len(order), name)
@@ -195,7 +195,7 @@ def goals_of(meta: Mapping[str, Any]) -> tuple[GoalRecord, ...]:
     """Every target's goal and its promised σ (none without ``--goal``)."""
     from astropy import units as u
 
-    from ucbplan.observing.goals import GOAL_QUANTITIES, parse_goal
+    from ucbplan.observing.precision.goals import GOAL_QUANTITIES, parse_goal
 
     text = (meta.get("planning") or {}).get("goal")
     if not text:
@@ -238,7 +238,7 @@ def as_qtable(table: Table) -> QTable:
     and sexagesimal text stay text. The meta is copied."""
     from astropy.table import QTable
 
-    from ucbplan.observing.blocktable import COLUMNS
+    from ucbplan.observing.blocks.schema import COLUMNS
 
     scales = {c.name: (c.kind, 3 if c.kind == "utc" else 6) for c in COLUMNS}
     out = QTable(table, copy=True)

@@ -18,7 +18,7 @@ if TYPE_CHECKING:
     from astropy.table import Table
 
     from ucbplan.core.ephemeris import EpochSet
-    from ucbplan.target import Target
+    from ucbplan.targets import Target
 
 __all__ = [
     "COMPARE_FLAGS",

@@ -170,7 +170,7 @@ def read_blocks(path: str | Path) -> Table:
     UcbplanError
         One line naming the file, the row and column at fault.
     """
-    from ucbplan.observing.tableread import read_blocks as _read
+    from ucbplan.observing.blocks.read import read_blocks as _read
 
     if not isinstance(path, str | Path):
         raise InputError(f"path: expected a file path, got {shorten(path, 40)}", "path")
@@ -358,7 +358,7 @@ def countdown(blocks: Any, at: Any = None) -> list[str]:
     UcbplanError
         A bad instant or table (one line naming it).
     """
-    from ucbplan.observing.countdown import countdown_lines, plan_exposures, what_next
+    from ucbplan.observing.night.countdown import countdown_lines, plan_exposures, what_next
 
     instant = _instant(at)
     table = _blocks_table(blocks)
@@ -368,7 +368,7 @@ def countdown(blocks: Any, at: Any = None) -> list[str]:
 
 def _instant(at: Any) -> datetime:
     """``at`` (None, ISO UTC text, a datetime or a Time) as an aware UTC datetime."""
-    from ucbplan.observing.countdown import parse_utc
+    from ucbplan.observing.night.countdown import parse_utc
 
     if at is None:
         return datetime.now(UTC)

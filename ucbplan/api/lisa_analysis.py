@@ -402,7 +402,7 @@ def write_forecast(
     forecast: FisherForecast, path: str | Path, *, n_bins: int, overwrite: bool = False
 ) -> None:
     """Write a :func:`fisher` forecast as a target YAML (``ucbplan fisher -o``)."""
-    from ucbplan.target import write_target
+    from ucbplan.targets import write_target
 
     header = f"ucbplan fisher: SNR {forecast.snr:.1f}, N={n_bins}"
     write_target(forecast.target, Path(path), overwrite=overwrite, header=header)

@@ -192,7 +192,7 @@ def accept_old_names(func: F) -> F:
 
 def renamed(kwargs: dict[str, Any], known: Sequence[str], where: str) -> dict[str, Any]:
     """``kwargs`` with old names replaced by the new ones (see :func:`accept_old_names`)."""
-    from ucbplan.target.values import did_you_mean
+    from ucbplan.targets.values import did_you_mean
 
     out: dict[str, Any] = {}
     for key, value in kwargs.items():

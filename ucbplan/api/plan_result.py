@@ -41,10 +41,10 @@ if TYPE_CHECKING:
     from astropy.table import QTable, Table
     from matplotlib.axes import Axes
 
-    from ucbplan.observing.accounting import PlanAccount, VisitSummary
+    from ucbplan.observing.blocks.accounting import PlanAccount, VisitSummary
     from ucbplan.observing.constraints import ConstraintSet
+    from ucbplan.observing.observatory.sites import Site
     from ucbplan.observing.schedule import PlanRun
-    from ucbplan.observing.sites import Site
 
 __all__ = ["GoalRecord", "Plan", "StrategyRecord"]
 
@@ -185,7 +185,7 @@ class Plan:
     @cached_property
     def site(self) -> Site:
         """The observatory."""
-        from ucbplan.observing.sites import Site
+        from ucbplan.observing.observatory.sites import Site
 
         if self.run is not None:
             return self.run.site
@@ -201,7 +201,7 @@ class Plan:
         """Time accounting, typed: the total and one account per target (visits, exposures,
         shutter, overheads, idle [s] to 1 ms, as the table's meta records it; efficiency);
         ``.as_meta()`` is the meta's dict."""
-        from ucbplan.observing.accounting import PlanAccount, TimeAccount
+        from ucbplan.observing.blocks.accounting import PlanAccount, TimeAccount
 
         entry = self._meta("time_accounting")
         entry = entry if isinstance(entry, dict) else {}
@@ -223,7 +223,7 @@ class Plan:
     def visits(self) -> list[VisitSummary]:
         """One summary per visit (acquisition + exposures; times to 1 ms, as the table's meta
         records them), in time order."""
-        from ucbplan.observing.accounting import VisitSummary
+        from ucbplan.observing.blocks.accounting import VisitSummary
 
         return self._typed("visits", lambda v: [VisitSummary(**dict(r)) for r in v])
 
@@ -314,10 +314,10 @@ class Plan:
         ------
         InputError
             No blocks, a night the plan has no blocks on, or more nights than one figure holds
-            (:data:`~ucbplan.observing.nightplot.MAX_PANELS`; give ``night`` or use
+            (:data:`~ucbplan.observing.night.chart.MAX_PANELS`; give ``night`` or use
             :meth:`charts` with a PDF).
         """
-        from ucbplan.observing.nightplot import plot_charts
+        from ucbplan.observing.night.chart import plot_charts
 
         if ax is not None and not callable(getattr(ax, "axvspan", None)):
             raise InputError(
@@ -333,7 +333,7 @@ class Plan:
     def charts(self, path: str | Path, *, overwrite: bool = False) -> int:
         """Write the night charts, as ``plan --plot PATH``: a ``.pdf`` page per night or a
         ``.png``/``.svg`` panel per night; the number of nights charted."""
-        from ucbplan.observing.nightplot import write_night_charts
+        from ucbplan.observing.night.chart import write_night_charts
 
         with scope():
             return write_night_charts(
@@ -355,7 +355,7 @@ class Plan:
         OutputExistsError
             ``path`` exists and ``overwrite`` is false.
         """
-        from ucbplan.observing.nightsheet import write_night_sheet
+        from ucbplan.observing.night.sheet import write_night_sheet
 
         with scope():
             return write_night_sheet(
@@ -372,7 +372,7 @@ class Plan:
         """The table as ``plan --format FMT`` prints it (``ecsv``, ``csv`` or ``json``)."""
         import io
 
-        from ucbplan.observing.tablewrite import write_table
+        from ucbplan.observing.blocks.write import write_table
 
         if fmt not in PLAN_FORMATS:
             raise InputError(
@@ -388,7 +388,7 @@ class Plan:
         """``{"meta": {...}, "rows": [{column: value}, ...]}`` in plain Python values (NaN →
         None): the document ``plan --format json`` prints, without a JSON text round trip."""
         from ucbplan.io import json_plain
-        from ucbplan.observing.tablewrite import table_to_json_rows
+        from ucbplan.observing.blocks.write import table_to_json_rows
 
         table = self.text_table
         doc: dict[str, Any] = json_plain({"meta": dict(table.meta)})
@@ -405,7 +405,7 @@ class Plan:
             ``path`` exists and ``overwrite`` is false.
         """
         from ucbplan.io import output_format, write_output
-        from ucbplan.observing.tablewrite import write_table
+        from ucbplan.observing.blocks.write import write_table
 
         out = _path(path, "path")
         if fmt is not None and fmt not in PLAN_FORMATS:
@@ -434,7 +434,7 @@ class Plan:
             Not a readable ECSV blocks table with the plan's meta (CSV and JSON files hold the
             rows only: write ECSV to read a plan back).
         """
-        from ucbplan.observing.tableread import read_blocks
+        from ucbplan.observing.blocks.read import read_blocks
 
         with scope():
             table = read_blocks(_path(path, "path"))
@@ -499,7 +499,7 @@ keck_rotmode, force, semester, seeing_arcsec, instrument, eso_templates
     def to_astroplan(self) -> Any:
         """The plan as an ``astroplan.Schedule``: one ``ObservingBlock`` per exposure, each with
         the plan's constraints as astroplan objects and its time window (docs/exports.md)."""
-        from ucbplan.observing.astroplan_bridge import to_astroplan
+        from ucbplan.observing.exports.astroplan_schedule import to_astroplan
 
         with scope():
             return to_astroplan(self.text_table, self.site)

@@ -27,9 +27,9 @@ if TYPE_CHECKING:
     from astropy.units import Quantity
 
     from ucbplan.observing.constraints import Constraint
+    from ucbplan.observing.observatory.sites import Site
     from ucbplan.observing.schedule import PlanRun
-    from ucbplan.observing.sites import Site
-    from ucbplan.target import Target
+    from ucbplan.targets import Target
 
 __all__ = ["OLD_NAMES", "PLAN_FLAGS", "Plan", "default_constraints", "plan", "plan_run"]
 
@@ -73,7 +73,7 @@ def default_constraints(
     InputError
         An unknown keyword or a bad value: one line naming it.
     """
-    from ucbplan.observing.constraint_objects import default_constraints as _defaults
+    from ucbplan.observing.constraints.objects import default_constraints as _defaults
 
     given = {
         "twilight": twilight,
@@ -302,7 +302,7 @@ def _priorities(value: Any) -> Mapping[str, float] | Sequence[str]:
 def _site(o: Mapping[str, Any]) -> Site:
     """The site: a name (``sites_file`` searched first) or ``site_lonlat`` as the command line
     gives them, else an astropy or astroplan location (:func:`get_site`)."""
-    from ucbplan.observing.sites import resolve_site
+    from ucbplan.observing.observatory.sites import resolve_site
 
     zone = o["timezone"]
     if zone is not None and not isinstance(zone, str):
@@ -331,8 +331,8 @@ def _load_all(targets: Any) -> list[Target]:
     naming one target, refused), and the same rule for documents and ``Target`` objects."""
     from ucbplan.errors import TargetFileError
     from ucbplan.observing.schedule.records import slug
-    from ucbplan.target import load_targets
-    from ucbplan.target.parse import check_distinct_files
+    from ucbplan.targets import load_targets
+    from ucbplan.targets.parse import check_distinct_files
 
     many = isinstance(targets, Sequence) and not isinstance(targets, str)
     items = list(targets) if many else [targets]
@@ -368,7 +368,7 @@ def _constraints(o: Mapping[str, Any]) -> tuple[Any, ...] | None:
 
 def _constraint_tuple(constraints: Any) -> tuple[Any, ...]:
     """``constraints`` as a tuple, each item checked (:func:`as_constraint`)."""
-    from ucbplan.observing.constraint_objects import as_constraint
+    from ucbplan.observing.constraints.objects import as_constraint
 
     if isinstance(constraints, str | bytes) or not isinstance(constraints, Sequence):
         raise InputError(

@@ -110,9 +110,9 @@ def visibility_settings(
         The forecast behind the validity window (:func:`~ucbplan.api.populations.
         forecast_settings`; default: its defaults).
     """
-    from ucbplan.observing.blocks import ExposurePlan
+    from ucbplan.observing.blocks.block import ExposurePlan
+    from ucbplan.observing.observatory.sites import resolve_site
     from ucbplan.observing.schedule.settings import PlanSettings
-    from ucbplan.observing.sites import resolve_site
     from ucbplan.population.visibility import VisibilityOptions
 
     where = resolve_site(site, site_lonlat, None if sites_file is None else Path(sites_file))

@@ -356,7 +356,7 @@ def parts_of(output: str | Path) -> Path:
 def semester(name: str) -> tuple[date, date]:
     """The first day and the (exclusive) end of a semester (``2041A``: Feb–Jul, ``2041B``:
     Aug–Jan) or an ESO period (``P110`` starts 2022-10) (``ucbplan population semester``)."""
-    from ucbplan.observing.semesters import semester_dates
+    from ucbplan.observing.observatory.semesters import semester_dates
 
     if not isinstance(name, str):
         raise InputError(f"name: expected a semester like 2041A or P147, got {shorten(name)}")

@@ -230,7 +230,7 @@ def _options(old: Plan) -> dict[str, Any]:
 
 def _check_log(observed: str | Path | Table | None, old: Plan) -> None:
     """An observing log given as ``observed`` is one of ``old``'s (another plan's is refused)."""
-    from ucbplan.observing.obslog import check_log_plan
+    from ucbplan.observing.night.observing_log import check_log_plan
 
     if isinstance(observed, str | Path):
         check_log_plan(observed, old.text_table)

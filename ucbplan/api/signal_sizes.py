@@ -20,7 +20,7 @@ from ucbplan.errors import InputError, shorten
 
 if TYPE_CHECKING:
     from ucbplan.feasibility import FeasibilityReport
-    from ucbplan.target import Target
+    from ucbplan.targets import Target
 
 __all__ = ["DAY_S", "FEASIBILITY_FLAGS", "MONTH_S", "YEAR_S", "Feasibility", "feasibility"]
 

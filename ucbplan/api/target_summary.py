@@ -6,7 +6,7 @@ import math
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from ucbplan.target import Target
+    from ucbplan.targets import Target
 
 __all__ = ["summary"]
 

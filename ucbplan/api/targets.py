@@ -15,8 +15,8 @@ from typing import TYPE_CHECKING, Any
 from ucbplan.errors import InputError, shorten
 
 if TYPE_CHECKING:
-    from ucbplan.observing.sites import Site
-    from ucbplan.target import Target
+    from ucbplan.observing.observatory.sites import Site
+    from ucbplan.targets import Target
 
 __all__ = [
     "TargetLike",
@@ -53,9 +53,9 @@ def load_target(target: TargetLike) -> Target:
 
 def load_as(target: TargetLike, parameter: str) -> Target:
     """:func:`load_target` of the argument ``parameter`` (named by its errors)."""
-    from ucbplan.target import Target
-    from ucbplan.target import load_target as _load
-    from ucbplan.target.parse import target_from_dict
+    from ucbplan.targets import Target
+    from ucbplan.targets import load_target as _load
+    from ucbplan.targets.parse import target_from_dict
 
     if isinstance(target, Target):
         return target
@@ -92,7 +92,7 @@ def write_target(target: TargetLike, path: str | Path, overwrite: bool = False) 
     OutputExistsError
         ``path`` exists and ``overwrite`` is false (nothing is written).
     """
-    from ucbplan.target import write_target as _write
+    from ucbplan.targets import write_target as _write
 
     if not isinstance(path, str | Path) or not str(path).strip():
         raise InputError(f"path: expected a file path, got {shorten(path, 60)}", "path")
@@ -140,7 +140,7 @@ def get_site(site: Any, timezone: str | None = None) -> Site:
     InputError
         Anything else, or a location holding more than one place.
     """
-    from ucbplan.observing.sites import Site, resolve_site, site_from_lonlat
+    from ucbplan.observing.observatory.sites import Site, resolve_site, site_from_lonlat
 
     if timezone is not None and not isinstance(timezone, str):
         raise InputError(

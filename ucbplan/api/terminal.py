@@ -39,18 +39,18 @@ from ucbplan.io import check_output_path, dump_json, output_format, write_output
 
 if TYPE_CHECKING:  # imported when first used (see _LAZY)
     from ucbplan.api._observed import sigma_v_note
-    from ucbplan.observing.blockcolumns import block_columns
-    from ucbplan.observing.countdown import (
+    from ucbplan.observing.blocks.arrays import block_columns
+    from ucbplan.observing.blocks.cells import local_datetimes
+    from ucbplan.observing.blocks.write import csv_safe_table, write_table
+    from ucbplan.observing.night.chart import chart_format
+    from ucbplan.observing.night.countdown import (
         countdown_lines,
         parse_utc,
         plan_exposures,
         what_next,
     )
-    from ucbplan.observing.nightplot import chart_format
-    from ucbplan.observing.nightsheet import sheet_format
-    from ucbplan.observing.obslog import LOG_KEYS, ObservingLog, log_lines
-    from ucbplan.observing.tableformat import local_datetimes
-    from ucbplan.observing.tablewrite import csv_safe_table, write_table
+    from ucbplan.observing.night.observing_log import LOG_KEYS, ObservingLog, log_lines
+    from ucbplan.observing.night.sheet import sheet_format
     from ucbplan.offline import offline
     from ucbplan.plotting import check_figure_path
 
@@ -83,20 +83,20 @@ __all__ = [
 _LAZY = {
     "offline": "ucbplan.offline",
     "check_figure_path": "ucbplan.plotting",
-    "block_columns": "ucbplan.observing.blockcolumns",
-    "local_datetimes": "ucbplan.observing.tableformat",
-    "plan_exposures": "ucbplan.observing.countdown",
-    "what_next": "ucbplan.observing.countdown",
-    "countdown_lines": "ucbplan.observing.countdown",
-    "parse_utc": "ucbplan.observing.countdown",
-    "chart_format": "ucbplan.observing.nightplot",
-    "sheet_format": "ucbplan.observing.nightsheet",
-    "write_table": "ucbplan.observing.tablewrite",
-    "csv_safe_table": "ucbplan.observing.tablewrite",
+    "block_columns": "ucbplan.observing.blocks.arrays",
+    "local_datetimes": "ucbplan.observing.blocks.cells",
+    "plan_exposures": "ucbplan.observing.night.countdown",
+    "what_next": "ucbplan.observing.night.countdown",
+    "countdown_lines": "ucbplan.observing.night.countdown",
+    "parse_utc": "ucbplan.observing.night.countdown",
+    "chart_format": "ucbplan.observing.night.chart",
+    "sheet_format": "ucbplan.observing.night.sheet",
+    "write_table": "ucbplan.observing.blocks.write",
+    "csv_safe_table": "ucbplan.observing.blocks.write",
     "sigma_v_note": "ucbplan.api._observed",
-    "ObservingLog": "ucbplan.observing.obslog",
-    "LOG_KEYS": "ucbplan.observing.obslog",
-    "log_lines": "ucbplan.observing.obslog",
+    "ObservingLog": "ucbplan.observing.night.observing_log",
+    "LOG_KEYS": "ucbplan.observing.night.observing_log",
+    "log_lines": "ucbplan.observing.night.observing_log",
 }
 
 

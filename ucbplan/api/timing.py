@@ -20,7 +20,7 @@ if TYPE_CHECKING:
     from astropy.time import Time
     from matplotlib.figure import Figure
 
-    from ucbplan.target import Target
+    from ucbplan.targets import Target
     from ucbplan.timing import EclipseTimes, EphemerisFit, PeriodGuess
 
 __all__ = ["FIT_FLAGS", "TimingFit", "fit_ephemeris", "target_identity"]
@@ -161,9 +161,9 @@ class TimingFit:
         dec: str | None = None,
         like: TargetLike | None = None,
     ) -> Target:
-        """This ephemeris as a timing :class:`~ucbplan.target.Target` (``ucbplan.write_target``
+        """This ephemeris as a timing :class:`~ucbplan.targets.Target` (``ucbplan.write_target``
         writes it); name and sky as :meth:`target_document`."""
-        from ucbplan.target import target_from_dict
+        from ucbplan.targets import target_from_dict
 
         with scope():
             return target_from_dict(self.target_document(name, ra, dec, like))
@@ -236,7 +236,7 @@ def target_identity(
         return identity(Path(like) if like is not None else None, name, ra, dec)
     if not isinstance(like, Mapping):
         from ucbplan.api.targets import load_as
-        from ucbplan.target import target_to_dict
+        from ucbplan.targets import target_to_dict
 
         like = target_to_dict(load_as(like, "like"))
     return identity(like, name, ra, dec)
@@ -329,7 +329,7 @@ def _guess_of(initial: Any) -> PeriodGuess:
     if isinstance(initial, Mapping):
         return guess_from_document(initial, "<dict>")
     from ucbplan.api.targets import load_as
-    from ucbplan.target import target_to_dict
+    from ucbplan.targets import target_to_dict
 
     t = load_as(initial, "initial")
     return guess_from_document(target_to_dict(t), t.name)

@@ -16,7 +16,6 @@ import re
 from ucbplan.api.ephemeris import COMPARE_FLAGS, EPHEMERIS_FLAGS
 from ucbplan.api.exporting import EXPORT_FLAGS, NOW_FLAGS, P2_FLAGS
 from ucbplan.api.flagspec import flag_names
-from ucbplan.api.horizons import HORIZON_FLAGS
 from ucbplan.api.lisa_analysis import FISHER_FLAGS, LISA_FLAGS, SIMULATE_FLAGS, WAVEFORM_FLAGS
 from ucbplan.api.plan_options import PLAN_FLAGS
 from ucbplan.api.population_runs import POPULATION_SIMULATE_FLAGS, RANK_FLAGS, VISIBILITY_FLAGS
@@ -25,6 +24,7 @@ from ucbplan.api.reduction import REDUCE_FLAGS
 from ucbplan.api.replanning import REPLAN_FLAGS
 from ucbplan.api.signal_sizes import FEASIBILITY_FLAGS
 from ucbplan.api.timing import FIT_FLAGS
+from ucbplan.api.validity import HORIZON_FLAGS
 
 __all__ = ["FLAGS", "PARAMETERS", "cli_message", "cli_text", "flag_of"]
 

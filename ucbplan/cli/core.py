@@ -1,9 +1,9 @@
 """Core commands: ``validate`` and ``horizon`` (thin shells over the public API).
 
 Each command parses its options, calls one function of :mod:`ucbplan.api`
-(:func:`~ucbplan.api.targets.validate`, :func:`~ucbplan.api.horizons.horizon_report`) and prints
+(:func:`~ucbplan.api.targets.validate`, :func:`~ucbplan.api.validity.horizon_report`) and prints
 or writes the result. Options that are parameters of the API take their flag, help and default
-from it (:data:`ucbplan.api.horizons.HORIZON_FLAGS`); :mod:`ucbplan.cli.ephemeris` adds the
+from it (:data:`ucbplan.api.validity.HORIZON_FLAGS`); :mod:`ucbplan.cli.ephemeris` adds the
 ``ephemeris`` group.
 """
 
@@ -17,8 +17,8 @@ import typer
 import typer.core
 from rich.markup import escape
 
-from ucbplan.api.horizons import HORIZON_FLAGS, horizon_report
-from ucbplan.api.horizons import horizon as _horizons  # its signature declares the defaults
+from ucbplan.api.validity import HORIZON_FLAGS, horizon_report
+from ucbplan.api.validity import horizon as _horizons  # its signature declares the defaults
 from ucbplan.cli._console import (
     TABLE_FORMATS,
     check_output_path,
@@ -170,7 +170,7 @@ _MANY_ROWS = 40
 
 def _show_many(tab: Any, fmt: str, output: Path | None, overwrite: bool) -> None:
     """The long horizon table of many targets, as JSON, a table file or on the terminal."""
-    from ucbplan.api.horizons import horizon_json
+    from ucbplan.api.validity import horizon_json
 
     if fmt == "json":
         text = horizon_json(tab)

@@ -7,10 +7,10 @@ the current UTC
 terminal it is redrawn every second; in a pipe a new frame is printed only when the next
 exposure changes. ``--once`` prints one frame and exits. Ctrl-C exits with code 130.
 
-``--log FILE`` writes the observing log (:mod:`ucbplan.observing.obslog`): a key marks the
-exposure just started (t taken, m missed, s skipped; again: a new mark replaces it), read from
-stdin without Enter on a terminal, and the whole file is rewritten atomically at each key; q
-quits. After the plan is over the countdown waits for the last exposure's mark (or q).
+``--log FILE`` writes the observing log (:mod:`ucbplan.observing.night.observing_log`): a key marks
+the exposure just started (t taken, m missed, s skipped; again: a new mark replaces it), read from
+stdin without Enter on a terminal, and the whole file is rewritten atomically at each key; q quits.
+After the plan is over the countdown waits for the last exposure's mark (or q).
 """
 
 from __future__ import annotations

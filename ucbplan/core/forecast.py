@@ -22,11 +22,11 @@ from numpy.typing import ArrayLike, NDArray
 
 from ucbplan.core.constants import DAY_S
 from ucbplan.core.ephemeris import ANCHORS, resolve_anchor
-from ucbplan.core.horizon_apsidal import t_valid_apsidal
-from ucbplan.core.horizon_grid import HORIZON_CAP_S, anchor_sigma_batch, oscillating, t_valid_grid
-from ucbplan.core.horizon_poly import t_valid_poly
 from ucbplan.core.params import EphemerisSource, PhaseParams
 from ucbplan.core.phase import sigma_u_from_jacobian, u_jacobian
+from ucbplan.core.validity_apsidal import t_valid_apsidal
+from ucbplan.core.validity_grid import HORIZON_CAP_S, anchor_sigma_batch, oscillating, t_valid_grid
+from ucbplan.core.validity_poly import t_valid_poly
 from ucbplan.errors import UcbplanError
 
 __all__ = [
@@ -178,10 +178,10 @@ def t_valid_batch(
     direction : :data:`AFTER` (after the end of the observation, the default) or
     :data:`BEFORE` (before its start: the result is then −T/2 − τ of the closing, also ≥ 0);
     method : ``"analytic"`` (default) finds the window from the roots of the polynomial σ_u²(τ)
-    (:mod:`ucbplan.core.horizon_poly`) wherever σ_u does not oscillate, and for apsidally
+    (:mod:`ucbplan.core.validity_poly`) wherever σ_u does not oscillate, and for apsidally
     oscillating rows from an envelope bracket and a curvature-certified scan
-    (:mod:`ucbplan.core.horizon_apsidal`; a row it cannot settle within its sample budget goes
-    to the grid); ``"grid"`` samples every row (:mod:`ucbplan.core.horizon_grid`).
+    (:mod:`ucbplan.core.validity_apsidal`; a row it cannot settle within its sample budget goes
+    to the grid); ``"grid"`` samples every row (:mod:`ucbplan.core.validity_grid`).
 
     A row whose σ_u never exceeds the threshold (e.g. a zero covariance) gets the search cap
     :data:`HORIZON_CAP_S`; one that never meets it gets 0.
@@ -283,7 +283,7 @@ def t_valid(
     -----
     Eq. T_valid_alpha and the text around Table 4. When ω̇ ≠ 0, σ_u oscillates on the apsidal
     period; the first closing is found inside an envelope bracket by a scan whose sample gaps are
-    cleared by a curvature bound (:mod:`ucbplan.core.horizon_apsidal`).
+    cleared by a curvature bound (:mod:`ucbplan.core.validity_apsidal`).
     """
     p, cov, t_obs = _unpack(target)
     us = [float(anchor_u_star)] if np.isscalar(anchor_u_star) else list(anchor_u_star)  # type: ignore[arg-type]

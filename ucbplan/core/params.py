@@ -1,6 +1,6 @@
 """The phase-model parameter record and reference-epoch transforms (SI floats, no astropy).
 
-Kept apart from :mod:`ucbplan.target` (YAML parsing) so the numerical core imports nothing heavy;
+Kept apart from :mod:`ucbplan.targets` (YAML parsing) so the numerical core imports nothing heavy;
 :class:`EphemerisSource` is the little the core asks of a target (duck-typed, no import of it).
 """
 
@@ -117,7 +117,7 @@ class PhaseParams:
 class EphemerisSource(Protocol):
     """What the core needs of a target: its phase model, covariance and observation length.
 
-    :class:`ucbplan.target.Target` satisfies it; so does any object with these attributes (a
+    :class:`ucbplan.targets.Target` satisfies it; so does any object with these attributes (a
     notebook record, a row of a catalogue), which keeps the core free of the target layer.
     Optional attributes read with defaults: ``kind`` (``"lisa"``; ``"timing"`` makes horizons
     two-sided, :func:`ucbplan.core.forecast.two_sided`) and ``has_pi_mode`` (True; False drops

@@ -386,7 +386,7 @@ def _cycles_between(p: PhaseParams, cov: FloatArray, t0: float, t1: float) -> tu
 
 
 class ReferencedSource(Protocol):
-    """An ephemeris with its reference epoch (a :class:`~ucbplan.target.Target` is one)."""
+    """An ephemeris with its reference epoch (a :class:`~ucbplan.targets.Target` is one)."""
 
     @property
     def params(self) -> PhaseParams:

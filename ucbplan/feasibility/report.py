@@ -30,7 +30,7 @@ from ucbplan.feasibility.signals import (
 )
 
 if TYPE_CHECKING:
-    from ucbplan.target import Target
+    from ucbplan.targets import Target
 
 __all__ = ["FeasibilityReport", "feasibility_report", "report_for_target"]
 

@@ -37,7 +37,7 @@ from ucbplan.lisa.source import SourceParams
 from ucbplan.lisa.waveform import FourLineModel
 
 if TYPE_CHECKING:
-    from ucbplan.target import Target
+    from ucbplan.targets import Target
 
 __all__ = [
     "CIRCULAR_NAMES",

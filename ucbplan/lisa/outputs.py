@@ -23,7 +23,7 @@ from ucbplan.lisa.sampler import SamplerResult, chain_writer, save_chain
 
 if TYPE_CHECKING:
     from ucbplan.lisa.simulation import SimulationProblem, SimulationResult
-    from ucbplan.target import Target
+    from ucbplan.targets import Target
 
 __all__ = [
     "SimulationFiles",
@@ -86,7 +86,7 @@ def _target_writer(t: Target, samples_name: str, header: str) -> Callable[[IO[st
     """Writer of the posterior target YAML whose samples file lies beside it."""
     import yaml
 
-    from ucbplan.target import target_to_dict
+    from ucbplan.targets import target_to_dict
 
     doc = target_to_dict(t)
     doc["lisa"]["samples"] = samples_name

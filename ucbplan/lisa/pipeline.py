@@ -59,7 +59,7 @@ from ucbplan.lisa.simulation import (
 if TYPE_CHECKING:
     from ucbplan.lisa.source import SourceParams
     from ucbplan.lisa.waveform import FourLineModel
-    from ucbplan.target import Target
+    from ucbplan.targets import Target
 
 __all__ = [
     "FisherForecast",

@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 
 from ucbplan.core.params import PhaseParams, shift_columns, shift_jacobian
 from ucbplan.lisa.likelihood import physical_from_theta
-from ucbplan.target import Target
+from ucbplan.targets import Target
 
 __all__ = [
     "EXTRA_NAMES",

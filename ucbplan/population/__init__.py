@@ -8,7 +8,7 @@ merged table), :mod:`~ucbplan.population.tables` (what every population table sh
 columns, blank rows, provenance, status tally, the ECSV writer),
 :mod:`~ucbplan.population.plots` (summary figures), :mod:`~ucbplan.population.visibility`
 (usable hours, nights and anchor epochs at a site in a semester; semesters and ESO periods come
-from :mod:`ucbplan.observing.semesters`), :mod:`~ucbplan.population.rank` (figures of
+from :mod:`ucbplan.observing.observatory.semesters`), :mod:`~ucbplan.population.rank` (figures of
 merit, target files for the best sources), :mod:`~ucbplan.population.simulate` (the simulate
 pipeline per source). Nothing is loaded on package import.
 """

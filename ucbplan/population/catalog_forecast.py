@@ -37,7 +37,7 @@ from ucbplan.population.defaults import (
 )
 from ucbplan.population.execute import worker_setup
 from ucbplan.population.tables import SOURCE_COLUMNS, blank_row
-from ucbplan.target.model import Spectroscopy
+from ucbplan.targets.model import Spectroscopy
 
 __all__ = [
     "ALPHAS",
@@ -145,14 +145,14 @@ def k_total_kms(m1_msun: float, m2_msun: float, f_gw_hz: float, cos_i: float) ->
 def source_target(
     src: Source, ra_deg: float, dec_deg: float, opts: ForecastOptions, t_ref: Any = None
 ) -> Any:
-    """The catalog row as a :class:`ucbplan.target.Target` at the midpoint (no covariance).
+    """The catalog row as a :class:`ucbplan.targets.Target` at the midpoint (no covariance).
 
     ``t_ref``: the LISA midpoint (TDB :class:`~astropy.time.Time`) if the caller has it (a
     chunk shares one); default: ``opts.t_start_tdb`` + T_obs/2.
     """
     from astropy.time import Time, TimeDelta
 
-    from ucbplan.target import Target
+    from ucbplan.targets import Target
 
     p0 = PhaseParams(phase=src.phase_rad % (2 * math.pi), f_gw=src.f_hz, fdot=src.fdot_hz_s)
     mid, _ = shift_reference(p0, np.zeros((7, 7)), 0.5 * opts.t_obs_s)
@@ -237,7 +237,7 @@ def forecast_rows(
 
     What the sources share is done once for the chunk: the sky conversion to the ecliptic
     frame of the LISA response (one astropy call), the LISA midpoint, and the horizons of
-    every constrained source (one vectorised :func:`~ucbplan.core.horizon_batch.
+    every constrained source (one vectorised :func:`~ucbplan.core.validity_batch.
     horizon_columns` pass instead of a horizon table per source). The Fisher matrix of each
     source is its own (its band, sky and reference track differ).
     """
@@ -322,7 +322,7 @@ def _horizon_stage(staged: list[tuple[dict[str, Any], Any]], opts: ForecastOptio
     A pass that fails (a :class:`UcbplanError`) is redone source by source, so that only the
     sources that cause it get ``failed: <message>``.
     """
-    from ucbplan.core.horizon_batch import horizon_columns
+    from ucbplan.core.validity_batch import horizon_columns
 
     if not staged:
         return

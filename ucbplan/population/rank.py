@@ -4,11 +4,11 @@ Two figures of merit, the one used named in the table meta:
 
 - ``goal_hours`` (when an RV-precision reference is known and the catalog has magnitudes):
   telescope hours to reach a precision goal (``--goal``, e.g. ``K1=5%`` or ``M1=2%``) with
-  quadrature spectra, from the goal model of :mod:`ucbplan.observing.goals`: σ_v per exposure
-  from the catalog magnitude (:func:`ucbplan.observing.instruments.sigma_v_kms`, airmass 1),
-  K1 and K2 from Mass1, Mass2, f and ι (else K_eff, single-lined), the smearing Λ_K of one
-  exposure, and the wall time of :func:`~ucbplan.observing.goals.time_budget` (exposures,
-  readout, one acquisition per visit, waits for phase). Fewer hours rank first.
+  quadrature spectra, from the goal model of :mod:`ucbplan.observing.precision.goals`: σ_v per
+  exposure from the catalog magnitude (:func:`ucbplan.observing.precision.instruments.sigma_v_kms`,
+  airmass 1), K1 and K2 from Mass1, Mass2, f and ι (else K_eff, single-lined), the smearing Λ_K of
+  one exposure, and the wall time of :func:`~ucbplan.observing.precision.goals.time_budget`
+  (exposures, readout, one acquisition per visit, waits for phase). Fewer hours rank first.
 - ``t_valid`` (otherwise): T_valid after the end of LISA, quadrature anchor, α = 1 (from the
   forecast). Longer ranks first.
 
@@ -31,9 +31,9 @@ from astropy.table import Column
 
 from ucbplan.errors import InputError, InputFileError, UcbplanError, shorten
 from ucbplan.inputs import check_range
-from ucbplan.observing.blocks import MAX_BLOCK_S, ExposurePlan, block_smearing
-from ucbplan.observing.goals import Goal, parse_goal, spectra_for_goal
-from ucbplan.observing.instruments import Instrument, sigma_v_kms
+from ucbplan.observing.blocks.block import MAX_BLOCK_S, ExposurePlan, block_smearing
+from ucbplan.observing.precision.goals import Goal, parse_goal, spectra_for_goal
+from ucbplan.observing.precision.instruments import Instrument, sigma_v_kms
 from ucbplan.observing.schedule.records import slug
 from ucbplan.population.catalog import Catalog, Source
 from ucbplan.population.catalog_forecast import (
@@ -83,7 +83,8 @@ class RankOptions:
     top : int
         Target files written for the best ``top`` sources.
     goal : str
-        Precision goal of the ``goal_hours`` merit (:func:`ucbplan.observing.goals.parse_goal`).
+        Precision goal of the ``goal_hours`` merit
+        (:func:`ucbplan.observing.precision.goals.parse_goal`).
     instrument : Instrument or None
         RV-precision reference (σ_ref) and overheads; None: the ``t_valid`` merit.
     exptime_s, readout_s, acquisition_s, visit_s : float
@@ -258,7 +259,7 @@ def write_top_targets(
         A file exists and ``overwrite`` is false (checked for all before any is written).
     """
     from ucbplan.io import check_output_path
-    from ucbplan.target.write import write_target
+    from ucbplan.targets.write import write_target
 
     by_id = {s.source_id: s for s in catalog.sources}
     picks = [i for i in range(len(ranked)) if np.isfinite(ranked["merit"][i])][:top]
@@ -300,7 +301,7 @@ def rank_instrument(
     InputError
         Unknown instrument, or a ``--sigma-ref`` that is not three positive numbers.
     """
-    from ucbplan.observing.instruments import SigmaRef, instrument_or_none
+    from ucbplan.observing.precision.instruments import SigmaRef, instrument_or_none
 
     inst = instrument_or_none(name or None, instruments_file)
     if sigma_ref is None:
@@ -379,7 +380,7 @@ def rank_options(
     Overheads: ``--readout``/``--overhead`` when given, else the instrument's (an error naming
     the option when the table has none), else 0 without an instrument.
     """
-    from ucbplan.observing.instruments import instrument_overheads
+    from ucbplan.observing.precision.instruments import instrument_overheads
 
     inst = rank_instrument(instrument, instruments_file, sigma_ref)
     if instrument:

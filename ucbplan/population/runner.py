@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ucbplan.observing.semesters import semester_dates
+from ucbplan.observing.observatory.semesters import semester_dates
 from ucbplan.population.catalog import Catalog
 from ucbplan.population.catalog_forecast import (
     ALPHAS,

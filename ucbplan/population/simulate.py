@@ -129,7 +129,7 @@ def _nan_row(src: Source, seed: int) -> dict[str, Any]:
 
 
 def _spectroscopy(src: Source, opts: ForecastOptions) -> Any:
-    from ucbplan.target.model import Spectroscopy
+    from ucbplan.targets.model import Spectroscopy
 
     k = opts.k_eff_kms
     if k is None and src.m1_msun is not None and src.m2_msun is not None:
@@ -144,7 +144,7 @@ def simulate_source(
     import dataclasses
 
     from ucbplan.lisa.pipeline import build_model, simulate
-    from ucbplan.target.write import target_to_dict
+    from ucbplan.targets.write import target_to_dict
 
     seed = source_seed(opts.seed, src.source_id)
     row = _nan_row(src, seed)
@@ -211,8 +211,8 @@ def write_posterior_targets(
     """
     from ucbplan.io import check_output_path
     from ucbplan.observing.schedule.records import slug
-    from ucbplan.target.parse import target_from_dict
-    from ucbplan.target.write import write_target
+    from ucbplan.targets.parse import target_from_dict
+    from ucbplan.targets.write import write_target
 
     todo = {}
     for i, r in enumerate(rows):

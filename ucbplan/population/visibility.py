@@ -6,12 +6,12 @@ airmass ≤ X, Moon separation, zenith hole: the ``plan`` constraints of
 ``min_hours`` of such time), and per anchor the anchor epochs whose block meets every constraint
 (``observable_*``) and those of them inside the validity window σ_u ≤ α·δu_tol (``epochs_*``).
 
-All of it reuses the planner: one :class:`~ucbplan.observing.sky.SkyModel` and one light-time
-:class:`~ucbplan.observing.barycentric_time.SiteTrack` per chunk of sources, night windows from
-:func:`~ucbplan.observing.schedule.nights.night_windows`, anchor epochs and their constraint check
-from :func:`~ucbplan.observing.schedule.candidates.candidate_blocks`, and the validity window
-from :func:`ucbplan.core.forecast.valid_window_s` with the per-source Fisher target of
-:func:`ucbplan.population.catalog_forecast.forecast_with_target`.
+All of it reuses the planner: one :class:`~ucbplan.observing.observatory.sky.SkyModel` and one
+light-time :class:`~ucbplan.observing.observatory.barycentric.SiteTrack` per chunk of sources, night
+windows from :func:`~ucbplan.observing.schedule.nights.night_windows`, anchor epochs and their
+constraint check from :func:`~ucbplan.observing.schedule.candidates.candidate_blocks`, and the
+validity window from :func:`ucbplan.core.forecast.valid_window_s` with the per-source Fisher target
+of :func:`ucbplan.population.catalog_forecast.forecast_with_target`.
 """
 
 from __future__ import annotations
@@ -28,11 +28,11 @@ from ucbplan.core.forecast import tolerance, valid_window_s
 from ucbplan.errors import UcbplanError
 from ucbplan.inputs import check_range
 from ucbplan.observing.constraints import ConstraintSet, holds
+from ucbplan.observing.observatory.semesters import semester_dates
+from ucbplan.observing.observatory.sites import Site
 from ucbplan.observing.schedule.candidates import candidate_blocks
 from ucbplan.observing.schedule.nights import NightWindow, night_windows
 from ucbplan.observing.schedule.settings import PlanSettings, parse_mode
-from ucbplan.observing.semesters import semester_dates
-from ucbplan.observing.sites import Site
 from ucbplan.population.catalog import Source
 from ucbplan.population.catalog_forecast import (
     ANCHORS,
@@ -62,7 +62,8 @@ class VisibilityOptions:
     site : Site
         Observatory.
     semester : str
-        ``2041A``, ``2041B`` or an ESO period ``P147`` (:mod:`ucbplan.observing.semesters`).
+        ``2041A``, ``2041B`` or an ESO period ``P147``
+        (:mod:`ucbplan.observing.observatory.semesters`).
     settings : PlanSettings
         Constraints (twilight, airmass, Moon, zenith hole), the exposure plan (block length),
         α and the tolerance form, as ``ucbplan plan`` takes them.
@@ -147,9 +148,9 @@ def _frame(opts: VisibilityOptions, ra: np.ndarray, dec: np.ndarray) -> _Frame:
     import astropy.units as u
     from astropy.coordinates import SkyCoord
 
-    from ucbplan.observing.barycentric_time import SiteTrack
-    from ucbplan.observing.site_time_axis import TimeAxis
-    from ucbplan.observing.sky import SkyModel
+    from ucbplan.observing.observatory.barycentric import SiteTrack
+    from ucbplan.observing.observatory.sky import SkyModel
+    from ucbplan.observing.observatory.time_axis import TimeAxis
 
     site = opts.site
     windows = night_windows(site, opts.dates())
@@ -168,7 +169,7 @@ def _frame(opts: VisibilityOptions, ra: np.ndarray, dec: np.ndarray) -> _Frame:
 
 def _hours(fr: _Frame, i: int, min_hours: float) -> tuple[float, int, float]:
     """(usable hours, usable nights, best airmass at night) of sky target ``i``."""
-    from ucbplan.observing.sky import airmass_from_alt
+    from ucbplan.observing.observatory.sky import airmass_from_alt
 
     x = fr.grid_x
     ok = np.ones(x.size, dtype=bool)

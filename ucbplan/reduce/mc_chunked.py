@@ -41,7 +41,7 @@ from ucbplan.reduce.quantiles import BracketMissed, ChunkedPercentiles
 
 if TYPE_CHECKING:
     from ucbplan.reduce.regression import ComponentFit
-    from ucbplan.target import Target
+    from ucbplan.targets import Target
 
 __all__ = ["chunked_monte_carlo"]
 

@@ -25,7 +25,7 @@ from ucbplan.reduce import masses as _masses
 
 if TYPE_CHECKING:
     from ucbplan.reduce.regression import ComponentFit
-    from ucbplan.target import Target
+    from ucbplan.targets import Target
 
 __all__ = [
     "EXTRA_NAMES",

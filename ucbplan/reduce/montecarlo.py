@@ -29,7 +29,7 @@ from ucbplan.reduce.mc_samples import (
 
 if TYPE_CHECKING:
     from ucbplan.reduce.regression import ComponentFit
-    from ucbplan.target import Target
+    from ucbplan.targets import Target
 
 __all__ = ["CHUNK", "EXTRA_NAMES", "MonteCarlo", "monte_carlo", "posterior_samples"]
 

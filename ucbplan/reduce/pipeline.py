@@ -49,12 +49,12 @@ from ucbplan.reduce.regression import (
     wilson_fit,
 )
 from ucbplan.reduce.velocities import MIN_SPECTRA, VelocityTable, check_validity
-from ucbplan.target import load_samples
+from ucbplan.targets import load_samples
 
 if TYPE_CHECKING:
     from ucbplan.core.kepler import WindowedVelocity
     from ucbplan.core.params import PhaseParams
-    from ucbplan.target import Target
+    from ucbplan.targets import Target
 
 __all__ = ["ReduceOptions", "Reduction", "reduce", "reduce_options"]
 
@@ -342,7 +342,7 @@ def reduce(target: Target, table: VelocityTable, options: ReduceOptions | None =
         Times outside the target's validity window, or too few spectra for the fits.
     TargetFileError
         The target's samples file is unreadable or has no parameter columns
-        (:func:`ucbplan.target.load_samples`, which also moves start-referenced samples to the
+        (:func:`ucbplan.targets.load_samples`, which also moves start-referenced samples to the
         midpoint).
 
     Notes

@@ -8,7 +8,7 @@ column                 meaning
 ``bjd_tdb``            mid-exposure barycentric Julian date, TDB  (or ``bmjd_tdb`` / ``mjd_tdb``:
                        barycentric MJD in TDB)
 ``jd_utc``/``mjd_utc`` mid-exposure UTC at the telescope (needs ``--site``; converted with
-                       :func:`ucbplan.observing.barycentric_time.site_utc_to_bary_tdb`)
+                       :func:`ucbplan.observing.observatory.barycentric.site_utc_to_bary_tdb`)
 ``exptime_s``          exposure or co-add window Δt_bin [s] (alias ``window_s``), ≥ 0
 ``lambda_k``           Λ_K of the window as written by ``ucbplan plan`` (instead of exptime_s)
 ``v1, sigma_v1``       star 1 velocity and 1σ [km/s]; with ``v2, sigma_v2`` for SB2
@@ -54,7 +54,7 @@ from ucbplan.inputs import blank_comments, read_text
 if TYPE_CHECKING:
     from astropy.coordinates import EarthLocation, SkyCoord
 
-    from ucbplan.target import Target
+    from ucbplan.targets import Target
 
 __all__ = [
     "HORIZON_S",
@@ -503,7 +503,7 @@ def to_barycentric(table: VelocityTable, coord: SkyCoord, location: EarthLocatio
     """
     if not table.site_utc:
         return table
-    from ucbplan.observing.barycentric_time import site_utc_to_bary_tdb
+    from ucbplan.observing.observatory.barycentric import site_utc_to_bary_tdb
 
     bary = site_utc_to_bary_tdb(table.time, coord, location)
     return dataclasses.replace(table, time=Time(bary, scale="tdb"), site_utc=False)

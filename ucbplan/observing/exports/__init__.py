@@ -18,6 +18,7 @@ from dataclasses import replace
 from astropy.table import Table
 
 from ucbplan.errors import InputError, InputFileError, shorten
+from ucbplan.observing.blocks.read import check_blocks
 from ucbplan.observing.exports.eso_p2 import export_eso_p2
 from ucbplan.observing.exports.format_sites import check_site
 from ucbplan.observing.exports.gemini import export_gemini
@@ -34,7 +35,6 @@ from ucbplan.observing.exports.lco import export_lco
 from ucbplan.observing.exports.phase_table import export_phase_table
 from ucbplan.observing.exports.proposal import PROPOSAL_FORMATS, export_proposal
 from ucbplan.observing.exports.provenance import meta
-from ucbplan.observing.tableread import check_blocks
 
 __all__ = [
     "DEFAULT_ACQUISITION_S",
@@ -77,7 +77,7 @@ def export_blocks(table: Table, to: str, options: ExportOptions | None = None) -
     Parameters
     ----------
     table : astropy.table.Table
-        Master blocks table (:func:`ucbplan.observing.tableread.read_blocks`).
+        Master blocks table (:func:`ucbplan.observing.blocks.read.read_blocks`).
     to : str
         Format name, one of :data:`EXPORT_FORMATS`.
     options : ExportOptions, optional
@@ -92,7 +92,7 @@ def export_blocks(table: Table, to: str, options: ExportOptions | None = None) -
     ------
     UcbplanError
         For an unknown format name (the message lists the known ones), an empty table or a bad
-        cell (:func:`~ucbplan.observing.tableread.check_blocks`).
+        cell (:func:`~ucbplan.observing.blocks.read.check_blocks`).
     SiteError
         The plan's site is not one of the format's observatory sites and ``options.force`` is
         False (:func:`~ucbplan.observing.exports.format_sites.check_site`).

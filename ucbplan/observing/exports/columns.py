@@ -2,7 +2,7 @@
 
 Every time written is UTC at the site (from the ``t_*_utc`` columns) and carries its 1σ
 uncertainty ``sigma_t_s`` (docs/exports.md). Column names are those declared by
-:mod:`ucbplan.observing.blocktable`; the accessors here refuse any other name except the few
+:mod:`ucbplan.observing.blocks.schema`; the accessors here refuse any other name except the few
 optional inputs a user may add by hand (:data:`USER_COLUMNS`), so a renamed schema column fails
 loudly instead of silently reading a default.
 
@@ -30,16 +30,16 @@ from astropy.time import Time
 
 from ucbplan.errors import InputFileError, UcbplanError, shorten
 from ucbplan.inputs import MAX_YAML_BYTES, is_number, load_yaml
-from ucbplan.observing.blocks import MAX_BLOCK_S
-from ucbplan.observing.blocktable import EXTRA_COLUMNS, REQUIRED_COLUMNS
-from ucbplan.observing.blocktable import USER_COLUMNS as USER_COLUMN_DECLS
+from ucbplan.observing.blocks.block import MAX_BLOCK_S
+from ucbplan.observing.blocks.schema import EXTRA_COLUMNS, REQUIRED_COLUMNS
+from ucbplan.observing.blocks.schema import USER_COLUMNS as USER_COLUMN_DECLS
 from ucbplan.observing.exports.interface import DEFAULT_ACQUISITION_S, ExportOptions
 from ucbplan.observing.exports.provenance import meta
-from ucbplan.target import target_from_dict
+from ucbplan.targets import target_from_dict
 
 #: Optional columns the planner does not write but the exports read when a user adds them:
 #: ``vmag`` [mag], ``acq_s`` (acquisition overhead per block) [s], ``tol_rad`` (phase tolerance);
-#: declared (type, unit, range) in :data:`ucbplan.observing.blocktable.USER_COLUMNS`.
+#: declared (type, unit, range) in :data:`ucbplan.observing.blocks.schema.USER_COLUMNS`.
 USER_COLUMNS = tuple(c.name for c in USER_COLUMN_DECLS)
 
 _KNOWN_COLUMNS = frozenset((*REQUIRED_COLUMNS, *EXTRA_COLUMNS, *USER_COLUMNS))
@@ -53,7 +53,8 @@ def _declared(column: str) -> str:
     """``column`` if the blocks-table schema (or :data:`USER_COLUMNS`) declares it."""
     if column not in _KNOWN_COLUMNS:
         raise LookupError(
-            f"exports read column {column!r}, which ucbplan.observing.blocktable does not declare"
+            f"exports read column {column!r}, which ucbplan.observing.blocks.schema does not "
+            "declare"
         )
     return column
 

@@ -14,12 +14,12 @@ copy them into a new OB and save it with ``saveOB``:
   (one science template per run of equal exposure times, its exposure count the run's length;
   a visit that waits between exposures gets one per block, to be started at its planned time
   in visitor mode) and, with ``--instrument``, that instrument's readout mode and overheads
-  from its configuration (:mod:`ucbplan.observing.instruments`). ESO's template names and keywords
-  differ per instrument and instrument-package version and are not in that configuration: they
-  come from the user's ``--eso-templates`` file (:mod:`.eso_templates`), which gives each
-  template its ``name`` and ``eso_parameters`` (keyword → value, the block's exposure time and
-  count included); without it the ``name`` is null and the templates are chosen in p2
-  (``--create`` then leaves them out).
+  from its configuration (:mod:`ucbplan.observing.precision.instruments`). ESO's template names and
+  keywords differ per instrument and instrument-package version and are not in that configuration:
+  they come from the user's ``--eso-templates`` file (:mod:`.eso_templates`), which gives each
+  template its ``name`` and ``eso_parameters`` (keyword → value, the block's exposure time and count
+  included); without it the ``name`` is null and the templates are chosen in p2 (``--create`` then
+  leaves them out).
 """
 
 from __future__ import annotations
@@ -28,10 +28,10 @@ import re
 from collections.abc import Mapping, Sequence
 from typing import Any
 
+from ucbplan.observing.blocks.cells import sexagesimal
 from ucbplan.observing.exports.eso_templates import EsoTemplate, EsoTemplates
 from ucbplan.observing.exports.text import fmt_sigma
-from ucbplan.observing.instruments import Instrument, get_instrument
-from ucbplan.observing.tableformat import sexagesimal
+from ucbplan.observing.precision.instruments import Instrument, get_instrument
 
 __all__ = [
     "DEFAULT_MAX_AIRMASS",

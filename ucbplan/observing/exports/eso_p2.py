@@ -17,6 +17,7 @@ from astropy.table import Table
 
 from ucbplan.errors import InputFileError, UcbplanError, shorten
 from ucbplan.io import dumps_json
+from ucbplan.observing.blocks.cells import sexagesimal
 from ucbplan.observing.exports.columns import (
     acquisition_s,
     coordinates,
@@ -44,7 +45,6 @@ from ucbplan.observing.exports.windows import (
     floor_minute,
     ob_start_window,
 )
-from ucbplan.observing.tableformat import sexagesimal
 
 __all__ = ["ESO_NAME_MAX", "export_eso_p2"]
 

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 from ucbplan.errors import SiteError, UcbplanError, shorten
 from ucbplan.inputs import is_number
-from ucbplan.observing.sites import get_site
+from ucbplan.observing.observatory.sites import get_site
 
 __all__ = ["FORMAT_SITES", "SITE_MATCH_KM", "ObservatorySite", "check_site", "serves_site"]
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from astropy.table import Table
 
+from ucbplan.observing.blocks.cells import sexagesimal
 from ucbplan.observing.exports.columns import (
     coordinates,
     floats,
@@ -18,7 +19,6 @@ from ucbplan.observing.exports.visitgroups import (
     exposure_texts,
     target_totals,
 )
-from ucbplan.observing.tableformat import sexagesimal
 
 __all__ = ["export_ing_cat", "ing_catalogue"]
 

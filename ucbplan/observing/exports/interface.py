@@ -9,8 +9,8 @@ from astropy.table import Table
 
 from ucbplan.errors import InputError, shorten
 from ucbplan.inputs import check_range
-from ucbplan.observing.blocks import MAX_BLOCK_S
-from ucbplan.observing.semesters import semester_dates
+from ucbplan.observing.blocks.block import MAX_BLOCK_S
+from ucbplan.observing.observatory.semesters import semester_dates
 
 #: Acquisition overhead assumed when neither ``--acquisition`` nor an ``acq_s`` column is given [s]
 #: (a typical VLT/Keck slit acquisition of a faint target: pointing, acquisition image, centring).

@@ -7,6 +7,7 @@ import math
 import numpy as np
 from astropy.table import Table
 
+from ucbplan.observing.blocks.cells import sexagesimal
 from ucbplan.observing.exports.columns import (
     coordinates,
     floats,
@@ -23,7 +24,6 @@ from ucbplan.observing.exports.visitgroups import (
     exposure_texts,
     target_totals,
 )
-from ucbplan.observing.tableformat import sexagesimal
 
 __all__ = ["export_keck_starlist"]
 

@@ -3,8 +3,8 @@
 One row per target: coordinates, magnitude, P_orb, the ephemeris file, σ_T at the semester
 midpoint, the anchor phases and their tolerance, windows per month, visits and exposures, shutter,
 overheads and idle time (from the plan's own time accounting, else from the blocks:
-:mod:`ucbplan.observing.accounting`), efficiency, the time-critical flag and the constraints. The
-LaTeX form is written by :mod:`.proposal_latex`.
+:mod:`ucbplan.observing.blocks.accounting`), efficiency, the time-critical flag and the constraints.
+The LaTeX form is written by :mod:`.proposal_latex`.
 
 Decisions where the issue is silent: the semester is the observatory's own (``--semester 2041A``
 or ``P147``; default: the one containing the plan's first night, an ESO period for a plan made
@@ -31,7 +31,9 @@ import numpy as np
 from astropy.table import MaskedColumn, Table
 
 from ucbplan.errors import InputFileError, shorten
-from ucbplan.observing.accounting import BlockRows, TimeAccount, accounts_from_blocks
+from ucbplan.observing.blocks.accounting import BlockRows, TimeAccount, accounts_from_blocks
+from ucbplan.observing.blocks.cells import sexagesimal
+from ucbplan.observing.blocks.write import csv_safe_table
 from ucbplan.observing.exports.columns import (
     acquisition_s,
     coordinates,
@@ -47,9 +49,7 @@ from ucbplan.observing.exports.interface import ExportOptions, ExportResult
 from ucbplan.observing.exports.proposal_latex import proposal_latex
 from ucbplan.observing.exports.provenance import clean_meta, created_utc, meta, version
 from ucbplan.observing.exports.text import iso_ms
-from ucbplan.observing.semesters import semester_dates, semester_label
-from ucbplan.observing.tableformat import sexagesimal
-from ucbplan.observing.tablewrite import csv_safe_table
+from ucbplan.observing.observatory.semesters import semester_dates, semester_label
 
 __all__ = [
     "PROPOSAL_FORMATS",
@@ -385,8 +385,8 @@ def _plan_accounting(
     """Per-target accounts and where they come from (``"plan"`` or ``"blocks"``).
 
     The plan's own ``meta['time_accounting']`` when it covers every target of the table, else
-    :func:`~ucbplan.observing.accounting.accounts_from_blocks` (with a note). A plan account whose
-    shutter time differs from the blocks' by more than 1 % gets a note (the table was edited
+    :func:`~ucbplan.observing.blocks.accounting.accounts_from_blocks` (with a note). A plan account
+    whose shutter time differs from the blocks' by more than 1 % gets a note (the table was edited
     after planning).
 
     Raises

@@ -1,5 +1,5 @@
 """Text the export formats write: ISO times, safe names, short σ's (sexagesimal angles:
-:func:`ucbplan.observing.tableformat.sexagesimal`, the blocks table's own)."""
+:func:`ucbplan.observing.blocks.cells.sexagesimal`, the blocks table's own)."""
 
 from __future__ import annotations
 

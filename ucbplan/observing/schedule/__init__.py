@@ -3,7 +3,7 @@
 Modules, in data-flow order: :mod:`.settings` (planning modes, :class:`PlanSettings`),
 :mod:`.nights` (night windows), :mod:`.candidates` (epochs → candidate blocks and sessions on one
 time axis), :mod:`.placement` (priority placement into nights, reasons for what is not placed),
-:mod:`.records` (placed sessions → :class:`~ucbplan.observing.blocks.Block` rows),
+:mod:`.records` (placed sessions → :class:`~ucbplan.observing.blocks.block.Block` rows),
 :mod:`.pairs` (fixed-u pairs), :mod:`.planner` (:func:`plan_nights`, the pipeline) and
 :mod:`.run` (:func:`plan_files`, the ``plan`` command as one call).
 """

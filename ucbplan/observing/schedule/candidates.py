@@ -4,9 +4,10 @@ and two orbits: daytime epochs would all fail the night, :func:`night_search_x`)
 
 For each target (vectorised over epochs): the anchor epochs t★ with σ_t and the φ_ref π-mode
 alternative (:func:`ucbplan.core.ephemeris.find_epochs`, Appendix A2), their site arrival times from
-one shared light-time track (:mod:`ucbplan.observing.barycentric_time`), every constraint checked
-over the whole block (:mod:`ucbplan.observing.constraint_checks`), the validity limit T_valid, the
-smearing of the exposure plan, and the grouping of blocks into sessions (a u = 0 / π pair, both RV
+one shared light-time track (:mod:`ucbplan.observing.observatory.barycentric`), every constraint
+checked over the whole block (:mod:`ucbplan.observing.constraints.checks`), the validity limit
+T_valid, the smearing of the exposure plan, and the grouping of blocks into sessions (a u = 0 / π
+pair, both RV
 zero crossings, or single blocks). All times are on one :class:`TimeAxis`."""
 
 from __future__ import annotations
@@ -26,21 +27,26 @@ from ucbplan.core.ephemeris import EpochSet, arg_latitude, find_epochs, with_det
 from ucbplan.core.forecast import tolerance, valid_window_s
 from ucbplan.core.smearing import parse_smear_budget
 from ucbplan.errors import ExposureWarning, SmearingWarning, UcbplanError, UcbplanWarning
-from ucbplan.observing.barycentric_time import DelayInterpolator, SiteTrack
-from ucbplan.observing.blocks import ExposurePlan, Smearing, block_smearing, check_smear_budget
-from ucbplan.observing.constraint_checks import DARK_STEP_S, evaluate_window
+from ucbplan.observing.blocks.block import (
+    ExposurePlan,
+    Smearing,
+    block_smearing,
+    check_smear_budget,
+)
 from ucbplan.observing.constraints import ConstraintSet, NightConstraint
-from ucbplan.observing.instruments import MAX_AIRMASS
+from ucbplan.observing.constraints.checks import DARK_STEP_S, evaluate_window
+from ucbplan.observing.observatory.barycentric import DelayInterpolator, SiteTrack
+from ucbplan.observing.observatory.sites import Site
+from ucbplan.observing.observatory.sky import SkyModel, airmass_from_alt
+from ucbplan.observing.observatory.time_axis import EpochAxis, TimeAxis
+from ucbplan.observing.precision.instruments import MAX_AIRMASS
+from ucbplan.observing.precision.strategy import constrains_k
 from ucbplan.observing.schedule.exposure import TargetExposure, exposure_sigma_v, target_exposure
 from ucbplan.observing.schedule.nights import NightWindow
 from ucbplan.observing.schedule.settings import ModeSpec, PlanSettings
-from ucbplan.observing.site_time_axis import EpochAxis, TimeAxis
-from ucbplan.observing.sites import Site
-from ucbplan.observing.sky import SkyModel, airmass_from_alt
-from ucbplan.observing.strategy import constrains_k
 
 if TYPE_CHECKING:
-    from ucbplan.target import Target
+    from ucbplan.targets import Target
 
 __all__ = [
     "Candidates",
@@ -179,10 +185,11 @@ def night_search_x(
     """Intervals (m, 2) [s on the plan's axis] that hold every instant of ``span_x`` at which
     the Sun may be below the ``night`` limit.
 
-    The Sun's altitude is screened on nodes :data:`~ucbplan.observing.constraint_checks.DARK_STEP_S`
-    apart with the rate bound of the constraints (a node certainly in daylight is in daylight
-    for one node spacing either side); each run of the other nodes, widened by one spacing,
-    is an interval. An instant at night has its nearest node (≤ half a spacing away) in a run.
+    The Sun's altitude is screened on nodes
+    :data:`~ucbplan.observing.constraints.checks.DARK_STEP_S` apart with the rate bound of the
+    constraints (a node certainly in daylight is in daylight for one node spacing either side); each
+    run of the other nodes, widened by one spacing, is an interval. An instant at night has its
+    nearest node (≤ half a spacing away) in a run.
     """
     lo, hi = float(span_x[0]), float(span_x[1])
     n = math.ceil((hi - lo) / DARK_STEP_S) + 1

@@ -2,11 +2,11 @@
 
 For a target, a σ_v law that follows the exposure time and the overheads of a run
 (:class:`~ucbplan.observing.schedule.PlanSettings`), each strategy of
-:mod:`ucbplan.observing.strategy` is given its best exposure time: the most information on K per
-visit, or, with a goal, the fewest hours to reach it in balanced visits. ``targeted`` and
-``phase-locked`` need the phase model; ``untargeted`` is what an observer does without it. The
-ratio of their information per hour (or of their hours to the goal) answers the paper's question
-for that target.
+:mod:`ucbplan.observing.precision.strategy` is given its best exposure time: the most information on
+K per visit, or, with a goal, the fewest hours to reach it in balanced visits. ``targeted`` and
+``phase-locked`` need the phase model; ``untargeted`` is what an observer does without it. The ratio
+of their information per hour (or of their hours to the goal) answers the paper's question for that
+target.
 """
 
 from __future__ import annotations
@@ -19,17 +19,17 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ucbplan.errors import InputError
-from ucbplan.observing.goals import goal_info_needed, parse_goal
+from ucbplan.observing.precision.goals import goal_info_needed, parse_goal
+from ucbplan.observing.precision.strategy import compare_strategies, goal_times
 from ucbplan.observing.schedule.exposure import (
     check_visit_holds_an_exposure,
     sigma_law,
     visit_shape,
 )
 from ucbplan.observing.schedule.settings import PlanSettings
-from ucbplan.observing.strategy import compare_strategies, goal_times
 
 if TYPE_CHECKING:
-    from ucbplan.target import Target
+    from ucbplan.targets import Target
 
 __all__ = ["StrategyComparison", "StrategyRow", "compare_target_strategies"]
 

@@ -15,12 +15,12 @@ Every target of a run gets its own exposure plan, because the smearing factor Λ
 - **Chosen for information per hour** (:func:`optimised_exposure`): when σ_v follows the
   exposure time (``--sigma-v 30km/s@600s``, or an instrument's σ_ref) and no ``--exptime`` is
   given, the exposure time and the strategy (targeted, phase-locked, untargeted) are those with
-  the most information on K per visit (:mod:`ucbplan.observing.strategy`); ``--cadence`` may
-  force a strategy. Sessions (no visits) take the exposure time with the most information per
+  the most information on K per visit (:mod:`ucbplan.observing.precision.strategy`); ``--cadence``
+  may force a strategy. Sessions (no visits) take the exposure time with the most information per
   hour of a session.
 - **σ_v per exposure** (:func:`exposure_sigma_v`): the exposure-time law of ``--sigma-v``, else a
   fixed ``--sigma-v``, else the instrument's σ_ref scaled with magnitude, exposure time and
-  airmass (:func:`ucbplan.observing.instruments.sigma_v_kms`), else the target file's σ_v.
+  airmass (:func:`ucbplan.observing.precision.instruments.sigma_v_kms`), else the target file's σ_v.
 """
 
 from __future__ import annotations
@@ -35,13 +35,12 @@ from numpy.typing import ArrayLike, NDArray
 
 from ucbplan.core.smearing import comb_attenuation
 from ucbplan.errors import InputError
-from ucbplan.observing.blocks import ExposurePlan
-from ucbplan.observing.goals import goal_info_needed, parse_goal
-from ucbplan.observing.instruments import instrument_magnitude, sigma_v_kms
-from ucbplan.observing.observed import collected_information
-from ucbplan.observing.schedule.settings import QUEUE_CADENCES, QUEUE_WAIT_S, PlanSettings
-from ucbplan.observing.sigma_model import SigmaVModel
-from ucbplan.observing.strategy import (
+from ucbplan.observing.blocks.block import ExposurePlan
+from ucbplan.observing.precision.goals import goal_info_needed, parse_goal
+from ucbplan.observing.precision.instruments import instrument_magnitude, sigma_v_kms
+from ucbplan.observing.precision.observed import collected_information
+from ucbplan.observing.precision.sigma_v import SigmaVModel
+from ucbplan.observing.precision.strategy import (
     LOCK_MARGIN_S,
     StrategyResult,
     VisitShape,
@@ -50,9 +49,10 @@ from ucbplan.observing.strategy import (
     goal_times,
     session_result,
 )
+from ucbplan.observing.schedule.settings import QUEUE_CADENCES, QUEUE_WAIT_S, PlanSettings
 
 if TYPE_CHECKING:
-    from ucbplan.target import Target
+    from ucbplan.targets import Target
 
 __all__ = [
     "TargetExposure",

@@ -2,9 +2,9 @@
 
 A goal on σ_K, K1, K2, q or a mass is a goal on the information I = Σ_i w_i on K of the spectra,
 w_i = (Λ_K,i cos u_i)²/σ_v,i² (γ's, 1/σ_v,i², for anchors at cos u = 0): every goal quantity's σ
-scales as I^{-½} (:mod:`ucbplan.observing.goals`), so the goal needs I = (σ_goal(I = 1)/goal)².
-Each exposure's σ_v at its own airmass and exposure time enters its w_i exactly; the visit
-planner (:mod:`.visits`) plans visits until the information is collected.
+scales as I^{-½} (:mod:`ucbplan.observing.precision.goals`), so the goal needs I = (σ_goal(I =
+1)/goal)². Each exposure's σ_v at its own airmass and exposure time enters its w_i exactly; the
+visit planner (:mod:`.visits`) plans visits until the information is collected.
 
 Visits are balanced: the spectra a goal is expected to need (at the mean information of the
 target's usable exposures) are split as evenly as whole anchor patterns allow over the fewest
@@ -25,9 +25,9 @@ from astropy.time import TimeDelta
 from numpy.typing import NDArray
 
 from ucbplan.errors import InputError
-from ucbplan.observing.blockcolumns import BlockColumns, block_columns
-from ucbplan.observing.blocks import Block
-from ucbplan.observing.goals import (
+from ucbplan.observing.blocks.arrays import BlockColumns, block_columns
+from ucbplan.observing.blocks.block import Block
+from ucbplan.observing.precision.goals import (
     Goal,
     GoalPlan,
     Shortfall,
@@ -37,11 +37,11 @@ from ucbplan.observing.goals import (
     parse_goal,
     target_k,
 )
-from ucbplan.observing.observed import ObservedFisher, observed_fisher, target_spectra
+from ucbplan.observing.precision.observed import ObservedFisher, observed_fisher, target_spectra
+from ucbplan.observing.precision.strategy import balanced_counts, constrains_k, information
 from ucbplan.observing.schedule.candidates import TargetRun
 from ucbplan.observing.schedule.placement import INFO_RTOL
 from ucbplan.observing.schedule.settings import PlanSettings
-from ucbplan.observing.strategy import balanced_counts, constrains_k, information
 
 __all__ = [
     "GoalShortfall",
@@ -95,7 +95,7 @@ def _max_per_visit(run: TargetRun, settings: PlanSettings) -> tuple[int, float]:
 
 def _gamma_ratio(run: TargetRun) -> float:
     """γ-to-K information ratio r = Σ 1/σ_v² / Σ (Λ_K cos u)²/σ_v² of the target's usable
-    exposures (:mod:`ucbplan.observing.observed`; ≈ 1/Λ_K² at quadrature anchors)."""
+    exposures (:mod:`ucbplan.observing.precision.observed`; ≈ 1/Λ_K² at quadrature anchors)."""
     g2 = (run.exposure.lambda_k * np.cos(run.cand.u_star)) ** 2
     usable = (run.ok > 0) & run.valid & np.isfinite(run.weight) & (g2 > 1e-12)
     if not np.any(usable):
@@ -105,7 +105,7 @@ def _gamma_ratio(run: TargetRun) -> float:
 
 def _collected(run: TargetRun, settings: PlanSettings) -> tuple[ObservedFisher, int]:
     """(Fisher matrix, number) of the target's spectra already taken (``--observed``), each at
-    its own u, Λ_K and σ_v (:mod:`ucbplan.observing.observed`).
+    its own u, Λ_K and σ_v (:mod:`ucbplan.observing.precision.observed`).
 
     Raises
     ------
@@ -207,8 +207,8 @@ def _goal_plan(goal: Goal, run: TargetRun, settings: PlanSettings) -> GoalPlan:
 
 
 def goal_plans(runs: Sequence[TargetRun], settings: PlanSettings) -> dict[int, GoalPlan]:
-    """The :class:`~ucbplan.observing.goals.GoalPlan` of every target (by sky-model index);
-    empty without ``--goal``.
+    """The :class:`~ucbplan.observing.precision.goals.GoalPlan` of every target (by sky-model
+    index); empty without ``--goal``.
 
     Raises
     ------
@@ -299,7 +299,8 @@ class GoalShortfall:
         σ of the goal quantity the spectra taken and planned reach (the goal's unit).
     got, needed : float
         Information the planned spectra collect, and would need (Σ (Λ_K cos u)²/σ_v²,
-        balanced visits: :meth:`~ucbplan.observing.observed.ObservedFisher.joint`) [(km/s)⁻²].
+        balanced visits: :meth:`~ucbplan.observing.precision.observed.ObservedFisher.joint`)
+        [(km/s)⁻²].
     """
 
     target: str

@@ -12,8 +12,8 @@ from astropy.time import Time
 
 from ucbplan.errors import InputError, shorten
 from ucbplan.inputs import check_int
-from ucbplan.observing.site_time_axis import TimeAxis
-from ucbplan.observing.sites import Site
+from ucbplan.observing.observatory.sites import Site
+from ucbplan.observing.observatory.time_axis import TimeAxis
 
 __all__ = [
     "MAX_NIGHTS",
@@ -41,7 +41,7 @@ class NightWindow(NamedTuple):
 
 
 class NightSpan(NamedTuple):
-    """One night on a plan's :class:`~ucbplan.observing.site_time_axis.TimeAxis` [s]."""
+    """One night on a plan's :class:`~ucbplan.observing.observatory.time_axis.TimeAxis` [s]."""
 
     label: str
     x0: float

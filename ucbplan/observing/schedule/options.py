@@ -15,20 +15,20 @@ from pathlib import Path
 from typing import Any
 
 from ucbplan.errors import InputError
-from ucbplan.observing.blocks import ExposurePlan
-from ucbplan.observing.instruments import (
+from ucbplan.observing.blocks.block import ExposurePlan
+from ucbplan.observing.precision.instruments import (
     Instrument,
     check_exptime,
     instrument_or_none,
     instrument_overheads,
 )
+from ucbplan.observing.precision.sigma_v import SigmaVModel, parse_sigma_v
 from ucbplan.observing.schedule.settings import (
     DEFAULT_MAX_VISIT_S,
     PlanSettings,
     parse_budgets,
     parse_duration,
 )
-from ucbplan.observing.sigma_model import SigmaVModel, parse_sigma_v
 
 __all__ = [
     "DEFAULT_EXPTIME_S",
@@ -76,8 +76,8 @@ def plan_settings(
     default). ``visit``, ``max_visit``: ``--visit`` and ``--max-visit`` durations (``1h``,
     ``45min``, ``3600s`` or seconds; a goal's longest visit defaults to 2 h). ``sigma_v_kms``:
     a number (km/s per exposure) or a law ``30km/s@600s[,V=20.0]``
-    (:func:`~ucbplan.observing.sigma_model.parse_sigma_v`), required with an instrument without
-    a σ reference; ``sigma_floor_kms``: a floor in quadrature [km/s]; ``extinction_k``
+    (:func:`~ucbplan.observing.precision.sigma_v.parse_sigma_v`), required with an instrument
+    without a σ reference; ``sigma_floor_kms``: a floor in quadrature [km/s]; ``extinction_k``
     [mag/airmass]: the instrument's, else 0. ``budgets``: ``NAME=DURATION`` wall time per target.
     Every other :class:`PlanSettings` field comes by name in ``options``.
 

@@ -23,14 +23,14 @@ from numpy.typing import NDArray
 
 from ucbplan.core.constants import DAY_S
 from ucbplan.core.ephemeris import ll_pair
-from ucbplan.observing.blocks import Block
+from ucbplan.observing.blocks.block import Block
+from ucbplan.observing.observatory.time_axis import elapsed
 from ucbplan.observing.schedule.candidates import TargetRun
 from ucbplan.observing.schedule.placement import Unplaced
 from ucbplan.observing.schedule.records import slug
-from ucbplan.observing.site_time_axis import elapsed
 
 if TYPE_CHECKING:
-    from ucbplan.target import Target
+    from ucbplan.targets import Target
 
 __all__ = [
     "SecondEpoch",

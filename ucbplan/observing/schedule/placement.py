@@ -18,10 +18,10 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
+from ucbplan.observing.observatory.sky import airmass_from_alt
 from ucbplan.observing.schedule.candidates import Candidates, PlanFrame, TargetRun
 from ucbplan.observing.schedule.nights import NightSpan
 from ucbplan.observing.schedule.settings import PlanSettings
-from ucbplan.observing.sky import airmass_from_alt
 
 __all__ = [
     "Allowance",

@@ -3,11 +3,12 @@
 Pipeline for every target (all vectorised over epochs; :mod:`.candidates`): the planning modes name
 the anchors (Appendix A2); :func:`~ucbplan.core.ephemeris.find_epochs` gives the barycentric epochs
 t★ with σ_t and the φ_ref π-mode alternative; the light time is removed with one shared site track
-(:mod:`ucbplan.observing.barycentric_time`); blocks are checked against every constraint over their
-whole length (:mod:`ucbplan.observing.constraint_checks`). Sessions (a u = 0 / π pair, both RV zero
-crossings, or single blocks) are then placed night by night in priority order without overlaps, with
-a slew/acquisition overhead before each session (:mod:`.placement`), and become block records
-(:mod:`.records`); fixed-u pairs get their second epoch (:mod:`.pairs`). Whatever could not be
+(:mod:`ucbplan.observing.observatory.barycentric`); blocks are checked against every constraint over
+their whole length (:mod:`ucbplan.observing.constraints.checks`). Sessions (a u = 0 / π pair, both
+RV zero crossings, or single blocks) are then placed night by night in priority order without
+overlaps, with a slew/acquisition overhead before each session (:mod:`.placement`), and become block
+records (:mod:`.records`); fixed-u pairs get their second epoch (:mod:`.pairs`). Whatever could not
+be
 placed is reported with the reason."""
 
 from __future__ import annotations
@@ -21,10 +22,12 @@ import numpy as np
 from astropy.time import Time
 
 from ucbplan.errors import EarthOrientationWarning, UcbplanError, UcbplanWarning
-from ucbplan.observing.barycentric_time import coverage_warnings
-from ucbplan.observing.blockcolumns import BlockList
-from ucbplan.observing.blocks import MAX_BLOCK_S, Block
-from ucbplan.observing.goals import GoalPlan
+from ucbplan.observing.blocks.arrays import BlockList
+from ucbplan.observing.blocks.block import MAX_BLOCK_S, Block
+from ucbplan.observing.observatory.barycentric import coverage_warnings
+from ucbplan.observing.observatory.sites import Site
+from ucbplan.observing.observatory.time_axis import TimeAxis
+from ucbplan.observing.precision.goals import GoalPlan
 from ucbplan.observing.schedule.candidates import PlanFrame, TargetRun, Warned, prepare_runs
 from ucbplan.observing.schedule.exposure import TargetExposure
 from ucbplan.observing.schedule.goalplan import (
@@ -43,11 +46,9 @@ from ucbplan.observing.schedule.reasons import not_planned
 from ucbplan.observing.schedule.records import block_records
 from ucbplan.observing.schedule.settings import PlanSettings
 from ucbplan.observing.schedule.visits import place_visits
-from ucbplan.observing.site_time_axis import TimeAxis
-from ucbplan.observing.sites import Site
 
 if TYPE_CHECKING:
-    from ucbplan.target import Target
+    from ucbplan.targets import Target
 
 __all__ = ["PlanResult", "plan_nights"]
 
@@ -59,7 +60,7 @@ class PlanResult:
     Attributes
     ----------
     blocks : sequence of Block
-        Planned blocks in time order (a :class:`~ucbplan.observing.blockcolumns.BlockList`:
+        Planned blocks in time order (a :class:`~ucbplan.observing.blocks.arrays.BlockList`:
         columns, with the records made on first access).
     unplaced : list of Unplaced
         Target/nights with fewer sessions than asked, and why.

@@ -22,7 +22,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from ucbplan.observing.constraint_checks import evaluate_window
+from ucbplan.observing.constraints.checks import evaluate_window
 from ucbplan.observing.schedule.candidates import PlanFrame, TargetRun
 from ucbplan.observing.schedule.nights import NightSpan
 from ucbplan.observing.schedule.placement import Session, Unplaced

@@ -1,8 +1,8 @@
-"""Block records: placed sessions → named :class:`~ucbplan.observing.blocks.Block` rows.
+"""Block records: placed sessions → named :class:`~ucbplan.observing.blocks.block.Block` rows.
 
 Block and session identifiers are ``<target slug>-<YYYYMMDD>-NN`` and ``...-SNN``, numbered per
 target and night in time order. UTC and TDB times come from one vectorised conversion per target
-(:class:`~ucbplan.observing.site_time_axis.TimeAxis`); geometry from the run's sky model.
+(:class:`~ucbplan.observing.observatory.time_axis.TimeAxis`); geometry from the run's sky model.
 """
 
 from __future__ import annotations
@@ -18,16 +18,16 @@ from astropy.time import Time
 from numpy.typing import NDArray
 
 from ucbplan.core.constants import TWO_PI
-from ucbplan.observing.blockcolumns import BlockColumns, BlockList
-from ucbplan.observing.constraint_checks import SAMPLE_STEP_S
-from ucbplan.observing.instruments import MAX_AIRMASS
+from ucbplan.observing.blocks.arrays import BlockColumns, BlockList
+from ucbplan.observing.constraints.checks import SAMPLE_STEP_S
+from ucbplan.observing.observatory.sites import Site
+from ucbplan.observing.observatory.sky import airmass_from_alt
+from ucbplan.observing.precision.instruments import MAX_AIRMASS
 from ucbplan.observing.schedule.candidates import PlanFrame, TargetRun
 from ucbplan.observing.schedule.exposure import exposure_sigma_v
 from ucbplan.observing.schedule.nights import NightSpan
 from ucbplan.observing.schedule.placement import Session
 from ucbplan.observing.schedule.settings import PlanSettings
-from ucbplan.observing.sites import Site
-from ucbplan.observing.sky import airmass_from_alt
 
 __all__ = ["BlockLabel", "block_records", "slug"]
 
@@ -180,7 +180,7 @@ def block_records(
     settings: PlanSettings,
 ) -> BlockList:
     """Block records of the placed sessions, grouped by target (in target order), as columns
-    (:class:`~ucbplan.observing.blockcolumns.BlockList`)."""
+    (:class:`~ucbplan.observing.blocks.arrays.BlockList`)."""
     parts: list[BlockColumns] = []
     for i, (idx, labels) in _labels(placed, runs, spans).items():
         js = np.asarray(idx, dtype=np.int64)

@@ -19,24 +19,24 @@ from astropy.table import Table
 
 from ucbplan.errors import InputError, shorten
 from ucbplan.inputs import check_range
-from ucbplan.observing.accounting import (
+from ucbplan.observing.blocks.accounting import (
     PlanAccount,
     VisitSummary,
     time_accounting,
     visit_summaries,
 )
-from ucbplan.observing.blockcolumns import block_columns
-from ucbplan.observing.blocks import ExposurePlan
-from ucbplan.observing.goals import GoalPlan
+from ucbplan.observing.blocks.arrays import block_columns
+from ucbplan.observing.blocks.block import ExposurePlan
+from ucbplan.observing.blocks.make import blocks_to_table, make_meta
+from ucbplan.observing.observatory.sites import Site, resolve_site
+from ucbplan.observing.precision.goals import GoalPlan
 from ucbplan.observing.schedule.exposure import strategy_facts
 from ucbplan.observing.schedule.goalplan import info_of_columns
 from ucbplan.observing.schedule.nights import night_dates
 from ucbplan.observing.schedule.planner import PlanResult, plan_nights
 from ucbplan.observing.schedule.records import slug
 from ucbplan.observing.schedule.settings import PlanSettings
-from ucbplan.observing.sites import Site, resolve_site
-from ucbplan.observing.tablemake import blocks_to_table, make_meta
-from ucbplan.target import Target, load_targets
+from ucbplan.targets import Target, load_targets
 
 __all__ = [
     "MAX_PRIORITY",
@@ -173,7 +173,7 @@ class PlanRun:
 
     def accounting(self) -> dict[str, Any]:
         """Time accounting as the table meta holds it, ``{"total": {...}, "targets": {NAME:
-        {...}}}`` (:meth:`~ucbplan.observing.accounting.PlanAccount.as_meta`); a new dict."""
+        {...}}}`` (:meth:`~ucbplan.observing.blocks.accounting.PlanAccount.as_meta`); a new dict."""
         return self.time_account.as_meta()
 
     def _planning(self) -> dict[str, Any]:
@@ -263,7 +263,7 @@ class PlanRun:
         )
 
     def table(self) -> Table:
-        """The master blocks table (:mod:`ucbplan.observing.blocktable`) with provenance."""
+        """The master blocks table (:mod:`ucbplan.observing.blocks.schema`) with provenance."""
         return blocks_to_table(self.result.blocks, self.meta())
 
 

@@ -10,14 +10,14 @@ from typing import Any
 from ucbplan.core.smearing import parse_smear_budget
 from ucbplan.errors import InputError, UcbplanError, shorten
 from ucbplan.inputs import check_alpha, check_int, check_range
-from ucbplan.observing.blocks import MAX_BLOCK_S, ExposurePlan
-from ucbplan.observing.constraint_objects import constraint_set, default_constraints
+from ucbplan.observing.blocks.block import MAX_BLOCK_S, ExposurePlan
 from ucbplan.observing.constraints import ConstraintSet
-from ucbplan.observing.goals import parse_goal
-from ucbplan.observing.instruments import Instrument
-from ucbplan.observing.observed import ObservedSpectra
-from ucbplan.observing.sigma_model import SigmaVModel
-from ucbplan.observing.sites import Site
+from ucbplan.observing.constraints.objects import constraint_set, default_constraints
+from ucbplan.observing.observatory.sites import Site
+from ucbplan.observing.precision.goals import parse_goal
+from ucbplan.observing.precision.instruments import Instrument
+from ucbplan.observing.precision.observed import ObservedSpectra
+from ucbplan.observing.precision.sigma_v import SigmaVModel
 
 __all__ = [
     "CADENCES",
@@ -32,11 +32,11 @@ __all__ = [
 ]
 
 #: Exposure cadences inside a visit (``--cadence``): ``auto`` takes the strategy with the most
-#: information per visit when σ_v follows the exposure time (:mod:`ucbplan.observing.strategy`),
-#: else ``targeted``; ``targeted`` (or ``anchor``) centres every exposure on an anchor and waits
-#: for the next one it can reach; ``phase-locked`` sets exposure + readout to the anchor spacing,
-#: so consecutive exposures centre on consecutive anchors without waiting; ``untargeted`` takes
-#: back-to-back exposures at whatever phase they fall.
+#: information per visit when σ_v follows the exposure time
+#: (:mod:`ucbplan.observing.precision.strategy`), else ``targeted``; ``targeted`` (or ``anchor``)
+#: centres every exposure on an anchor and waits for the next one it can reach; ``phase-locked``
+#: sets exposure + readout to the anchor spacing, so consecutive exposures centre on consecutive
+#: anchors without waiting; ``untargeted`` takes back-to-back exposures at whatever phase they fall.
 CADENCES = ("auto", "targeted", "anchor", "phase-locked", "untargeted")
 #: The cadences a service-mode queue executes (``--service-mode``): exposures back to back after
 #: one acquisition, no wait between them for an orbital phase.
@@ -289,7 +289,7 @@ class PlanSettings:
     custom_constraints : tuple or None
         Constraint objects (ucbplan's, a user's or astroplan's) replacing the set built from
         ``twilight``, ``airmass_max``, ``moon_sep_deg``, ``moon_illum_max`` and
-        ``zenith_hole_deg`` (see :func:`~ucbplan.observing.constraint_objects.constraint_set`).
+        ``zenith_hole_deg`` (see :func:`~ucbplan.observing.constraints.objects.constraint_set`).
     observed : tuple of ObservedSpectra
         Spectra already taken (``--observed``): their information counts toward the goal.
     sigma_v_scale : float
@@ -494,7 +494,7 @@ class PlanSettings:
     def constraints(self, site: Site | None) -> ConstraintSet:
         """The constraints of a run at ``site`` (None: without the site's zenith hole), by name:
         ``custom_constraints`` when given, else the command line's
-        (:func:`~ucbplan.observing.constraint_objects.default_constraints`)."""
+        (:func:`~ucbplan.observing.constraints.objects.default_constraints`)."""
         if self.custom_constraints is not None:
             return constraint_set(self.custom_constraints, site)
         return constraint_set(

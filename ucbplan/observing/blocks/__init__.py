@@ -1,0 +1,1 @@
+"""The blocks table: blocks planned, their columns, made, formatted, written, read, accounted."""

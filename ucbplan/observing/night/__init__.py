@@ -1,0 +1,1 @@
+"""At the telescope: the night chart, the night sheet (HTML) and the live countdown."""

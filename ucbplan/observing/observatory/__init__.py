@@ -1,0 +1,1 @@
+"""Where and when: sites, their sky, barycentric time, the run's time axis, semesters."""

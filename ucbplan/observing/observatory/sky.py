@@ -1,0 +1,210 @@
+"""A fast sky model of one site: Sun, Moon and targets at arbitrary times of a run.
+
+:class:`SkyModel` evaluates geometric altitudes (no refraction, like astroplan with pressure 0)
+and Moon separation/illumination at arbitrary times of a run. It calls astropy once on a coarse
+grid (6 h) for the slowly moving apparent positions — targets, Sun and Moon in CIRS (which
+includes precession, nutation, aberration and light deflection) and the Earth rotation angle from
+UT1 — and then applies the Earth's rotation analytically: sin(alt) = û·ẑ_up with the site's
+geodetic vertical rotated by the ERA. The Moon's topocentric parallax (≤ 1°) is exact (vector
+difference with the site position). Polar motion (< 0.5″) and diurnal aberration (0.3″) are
+neglected; the test suite compares against astropy ``AltAz`` (errors < 2″ for targets and the
+Sun, < 10″ for the Moon).
+
+Times are ``x`` = TDB seconds after the model's origin (see
+:class:`ucbplan.observing.observatory.barycentric.TimeAxis`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from astropy import units as u
+from astropy.coordinates import CIRS, EarthLocation, SkyCoord, get_body, get_sun
+from astropy.time import Time
+from numpy.typing import NDArray
+from scipy.interpolate import CubicSpline
+
+from ucbplan.observing.observatory.barycentric import astropy_rotations
+from ucbplan.observing.observatory.time_axis import TimeAxis
+
+__all__ = ["SLOW_STEP_S", "SkyModel", "airmass_from_alt", "sun_cirs_frames"]
+
+FloatArray = NDArray[np.float64]
+
+#: Node spacing of the coarse astropy grid [s] (apparent places move < 3.5 deg per node).
+SLOW_STEP_S = 6 * 3600.0
+
+
+def airmass_from_alt(alt_deg: FloatArray) -> FloatArray:
+    """Plane-parallel airmass sec z [1]; +inf at or below the horizon."""
+    alt = np.asarray(alt_deg, dtype=np.float64)
+    with np.errstate(divide="ignore"):
+        out = np.where(alt > 0.0, 1.0 / np.sin(np.radians(np.maximum(alt, 1e-9))), np.inf)
+    return np.asarray(out, dtype=np.float64)
+
+
+def _unit(v: FloatArray) -> FloatArray:
+    return np.asarray(v / np.linalg.norm(v, axis=-1, keepdims=True), dtype=np.float64)
+
+
+def sun_cirs_frames(t: Time) -> FloatArray:
+    """Geocentric CIRS position of the Sun at ``t`` [m], (n, 3), through astropy's frames."""
+    sun = get_sun(t).transform_to(CIRS(obstime=t)).cartesian.xyz.to_value(u.m).T
+    return np.asarray(sun, dtype=np.float64)
+
+
+def _sun_cirs_m(t: Time) -> FloatArray:
+    """:func:`sun_cirs_frames` with astropy's GCRS → CIRS rotation (:func:`astropy_rotations`)
+    applied directly: the same matrix, bit for bit (tests compare)."""
+    rotations = astropy_rotations()
+    if rotations is None:
+        return sun_cirs_frames(t)
+    sun = get_sun(t).cartesian.transform(rotations[1](t)).xyz.to_value(u.m).T
+    return np.asarray(sun, dtype=np.float64)
+
+
+@dataclass(frozen=True)
+class SkyModel:
+    """Sun, Moon and target geometry at one site over a span of time.
+
+    Times are ``x`` = TDB seconds after ``origin`` (the site-arrival axis used by
+    :class:`ucbplan.observing.observatory.barycentric.DelayInterpolator`).
+    """
+
+    origin: Time
+    location: EarthLocation
+    coords: SkyCoord
+    era: CubicSpline
+    sun: CubicSpline
+    moon: CubicSpline
+    targets: tuple[CubicSpline, ...]
+    site_itrs_m: FloatArray
+    up_itrs: FloatArray
+
+    @classmethod
+    def build(
+        cls,
+        location: EarthLocation,
+        origin: Time,
+        span_s: tuple[float, float],
+        coords: SkyCoord,
+        step_s: float = SLOW_STEP_S,
+    ) -> SkyModel:
+        """Sample apparent places on a coarse grid covering ``span_s`` (s after ``origin``).
+
+        Parameters
+        ----------
+        location : EarthLocation
+            Observatory.
+        origin : Time
+            Axis origin (any scale; used as TDB).
+        span_s : (float, float)
+            Times to cover [s after ``origin``]; padded by two nodes each side.
+        coords : SkyCoord
+            Targets (ICRS), scalar or 1-d.
+        step_s : float
+            Node spacing [s].
+        """
+        lo, hi = float(span_s[0]) - 2 * step_s, float(span_s[1]) + 2 * step_s
+        n = max(math.ceil((hi - lo) / step_s) + 1, 5)
+        x = np.linspace(lo, hi, n)
+        coords = coords.reshape(-1) if not coords.isscalar else coords.reshape(1)
+        origin = Time(origin, scale="tdb", location=location)
+        import erfa
+
+        t = TimeAxis(origin).tdb(x)
+        ut1 = t.ut1
+        era = np.unwrap(erfa.era00(ut1.jd1, ut1.jd2))
+        frame = CIRS(obstime=t)
+        sun = _sun_cirs_m(t)
+        # the Moon seen from the site (t has its location), then geocentric CIRS
+        moon = get_body("moon", t).transform_to(frame).cartesian.xyz.to_value(u.m).T
+        tgt = coords[:, None].transform_to(CIRS(obstime=t[None, :]))
+        tvec = tgt.cartesian.xyz.value  # (3, n_targets, n_nodes), unit vectors
+        tvec = np.moveaxis(tvec, 0, -1)  # (n_targets, n_nodes, 3)
+        geo = location.geodetic
+        lon, lat = float(geo.lon.to_value(u.rad)), float(geo.lat.to_value(u.rad))
+        up = np.array([math.cos(lat) * math.cos(lon), math.cos(lat) * math.sin(lon), math.sin(lat)])
+        site = np.array([c.to_value(u.m) for c in location.to_geocentric()], dtype=np.float64)
+        return cls(
+            origin=origin,
+            location=location,
+            coords=coords,
+            era=CubicSpline(x, era),
+            sun=CubicSpline(x, sun, axis=0),
+            moon=CubicSpline(x, moon, axis=0),
+            targets=tuple(CubicSpline(x, v, axis=0) for v in tvec),
+            site_itrs_m=site,
+            up_itrs=up,
+        )
+
+    def time(self, x: FloatArray) -> Time:
+        """The instants ``x`` [s after the origin] as astropy ``Time`` (TDB at the site)."""
+        return TimeAxis(self.origin).tdb(np.asarray(x, dtype=np.float64))
+
+    @property
+    def n_targets(self) -> int:
+        """Number of targets in the model."""
+        return int(self.coords.shape[0])
+
+    def _rotate(self, v_itrs: FloatArray, x: FloatArray) -> FloatArray:
+        """ITRS (≈TIRS) vector → CIRS at times x: rotation by −ERA about z. Shape x.shape+(3,)."""
+        era = self.era(x)
+        c, s = np.cos(era), np.sin(era)
+        return np.stack(
+            [
+                c * v_itrs[0] - s * v_itrs[1],
+                s * v_itrs[0] + c * v_itrs[1],
+                np.full_like(c, v_itrs[2]),
+            ],
+            axis=-1,
+        )
+
+    def up(self, x: FloatArray) -> FloatArray:
+        """Local geodetic vertical in CIRS at times x."""
+        return self._rotate(self.up_itrs, np.asarray(x, dtype=np.float64))
+
+    def _alt(self, direction: FloatArray, x: FloatArray) -> FloatArray:
+        s = np.einsum("...k,...k->...", _unit(direction), self.up(x))
+        return np.asarray(np.degrees(np.arcsin(np.clip(s, -1.0, 1.0))), dtype=np.float64)
+
+    def _topocentric(self, spline: CubicSpline, x: FloatArray) -> FloatArray:
+        return np.asarray(spline(x) - self._rotate(self.site_itrs_m, x), dtype=np.float64)
+
+    def sun_alt_deg(self, x: FloatArray) -> FloatArray:
+        """Geometric altitude of the Sun's centre [deg]."""
+        x = np.asarray(x, dtype=np.float64)
+        return self._alt(self._topocentric(self.sun, x), x)
+
+    def moon_alt_deg(self, x: FloatArray) -> FloatArray:
+        """Geometric topocentric altitude of the Moon's centre [deg]."""
+        x = np.asarray(x, dtype=np.float64)
+        return self._alt(self._topocentric(self.moon, x), x)
+
+    def target_dir(self, i: int, x: FloatArray) -> FloatArray:
+        """Apparent (CIRS) unit vector of target ``i`` at times x."""
+        return _unit(np.asarray(self.targets[i](np.asarray(x, dtype=np.float64)), dtype=np.float64))
+
+    def target_alt_deg(self, i: int, x: FloatArray) -> FloatArray:
+        """Geometric altitude of target ``i`` [deg]."""
+        x = np.asarray(x, dtype=np.float64)
+        return self._alt(self.target_dir(i, x), x)
+
+    def moon_sep_deg(self, i: int, x: FloatArray) -> FloatArray:
+        """Angle between target ``i`` and the topocentric Moon [deg]."""
+        x = np.asarray(x, dtype=np.float64)
+        m = _unit(self._topocentric(self.moon, x))
+        cosang = np.einsum("...k,...k->...", m, self.target_dir(i, x))
+        return np.asarray(np.degrees(np.arccos(np.clip(cosang, -1.0, 1.0))), dtype=np.float64)
+
+    def moon_illum(self, x: FloatArray) -> FloatArray:
+        """Illuminated fraction of the Moon (geocentric phase angle, as astroplan) [0–1]."""
+        x = np.asarray(x, dtype=np.float64)
+        s, m = self.sun(x), self.moon(x)
+        rs, rm = np.linalg.norm(s, axis=-1), np.linalg.norm(m, axis=-1)
+        cos_elong = np.einsum("...k,...k->...", s, m) / (rs * rm)
+        elong = np.arccos(np.clip(cos_elong, -1.0, 1.0))
+        phase = np.arctan2(rs * np.sin(elong), rm - rs * np.cos(elong))
+        return np.asarray((1.0 + np.cos(phase)) / 2.0, dtype=np.float64)

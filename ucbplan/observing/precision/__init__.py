@@ -1,0 +1,1 @@
+"""How well spectra measure K: instruments, the σ_v law, strategies, goals, observed data."""
