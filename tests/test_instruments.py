@@ -173,6 +173,16 @@ def test_sigma_v_fuzz(mag: float, t: float, x: float) -> None:
     assert s.shape == () and (math.isnan(float(s)) or float(s) >= 0.0)
 
 
+@pytest.mark.parametrize("t", [5e-324, 1e-300, 1e-6])
+def test_an_exposure_shorter_than_a_millisecond_is_refused(t: float) -> None:
+    """Found by hypothesis (test_sigma_v_fuzz): a subnormal exposure time overflowed the σ_v law
+    (RuntimeWarning, then σ_v = inf) instead of being refused in one line."""
+    with pytest.raises(InputError, match=r"^exptime: expected seconds ≥ 0.001") as err:
+        sigma_v_kms(_with_ref(), 0.0, t, 1.0)
+    assert "\n" not in str(err.value)
+    assert math.isfinite(float(sigma_v_kms(_with_ref(), 0.0, 1e-3, 1.0)))
+
+
 def test_overheads_option_wins_else_instrument_else_error() -> None:
     xs = get_instrument("xshooter-vis")
     assert instrument_overheads(xs) == Overheads(

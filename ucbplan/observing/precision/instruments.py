@@ -49,6 +49,9 @@ __all__ = [
 BUNDLED = "ucbplan/data/instruments.yaml"
 
 #: Fields that are either given or named under ``missing:``.
+#: The shortest exposure the σ_v law is evaluated for [s]: a millisecond, below any spectrograph's
+#: shutter (a subnormal exposure time would overflow the law's √(t_ref/t)).
+MIN_EXPOSURE_S = 1e-3
 OPTIONAL_NUMBERS = ("acquisition_s", "readout_s", "min_exptime_s", "extinction_k")
 #: Open physical ranges (lo, hi) of the numeric fields.
 RANGES = {
@@ -368,6 +371,11 @@ def sigma_v_kms(
     ref = _require_ref(instrument)
     if not np.all(np.isfinite(t)) or np.any(t <= 0):
         raise InputError(f"exptime: expected positive seconds, got {shorten(t.tolist(), 60)}")
+    if np.any(t < MIN_EXPOSURE_S):
+        raise InputError(
+            f"exptime: expected seconds ≥ {MIN_EXPOSURE_S:g} (no spectrograph exposes shorter), "
+            f"got {shorten(t.tolist(), 60)}"
+        )
     if not np.all(np.isfinite(x)) or np.any(x < 1.0) or np.any(x > MAX_AIRMASS):
         raise InputError(
             f"airmass: expected a number in [1, {MAX_AIRMASS:g}], got {shorten(x.tolist(), 60)}"
