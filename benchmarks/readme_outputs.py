@@ -39,17 +39,22 @@ def readme_commands(readme: Path | None = None) -> list[list[str]]:
     if readme is None:
         return [c for page in (ROOT / "README.md", *EXAMPLE_PAGES) for c in readme_commands(page)]
     text = readme.read_text(encoding="utf-8")
+    blocks = re.findall(r"```[a-z]*\n(.*?)```", text, flags=re.S)
+    return [args for block in blocks for args in block_commands(block)]
+
+
+def block_commands(block: str) -> list[list[str]]:
+    """The ``ucbplan`` examples of one code block's text, as argument lists (``ucbplan`` cut)."""
     out: list[list[str]] = []
-    for block in re.findall(r"```[a-z]*\n(.*?)```", text, flags=re.S):
-        joined = re.sub(r"\\\n\s*", " ", block)
-        for line in joined.splitlines():
-            line = line.split("&& ", 1)[-1].strip()
-            if not line.startswith("ucbplan "):
-                continue
-            line = re.sub(r"\s#\s.*$", "", line)
-            if "…" in line or "[" in line or re.search(r"\b[A-Z]{3,}\b", line):
-                continue  # a usage synopsis, not an example
-            out.append(shlex.split(line)[1:])
+    joined = re.sub(r"\\\n\s*", " ", block)
+    for line in joined.splitlines():
+        line = line.split("&& ", 1)[-1].strip()
+        if not line.startswith("ucbplan "):
+            continue
+        line = re.sub(r"\s#\s.*$", "", line)
+        if "…" in line or "[" in line or re.search(r"\b[A-Z]{3,}\b", line):
+            continue  # a usage synopsis, not an example
+        out.append(shlex.split(line)[1:])
     return out
 
 
