@@ -1,11 +1,12 @@
-"""Run every README example in order and keep what it printed and wrote, to diff two versions.
+"""Run every README and docs example in order, keeping what it printed and wrote, to diff versions.
 
 Usage: ``python benchmarks/readme_outputs.py OUT_DIR [--quick] [--tree DIR]`` on each version
 (``--tree``: another checkout's package and catalogs, e.g. a ``git worktree`` of an older
 commit, run with this README's examples), then
 ``diff -r -I created_utc -I DTSTAMP -I '^# ucbplan ' BEFORE AFTER`` (the creation stamps differ
-between any two runs). The examples are the README's ``ucbplan …`` lines (continuation lines
-joined, comments cut, usage synopses skipped), run in README order in OUT_DIR, which holds a
+between any two runs). The examples are the ``ucbplan …`` lines (continuation lines joined,
+comments cut, usage synopses skipped) of the README and then of the docs pages that hold the
+examples moved out of it (``EXAMPLE_PAGES``), run in that order in OUT_DIR, which holds a
 link to the bundled ``catalogs/``, so that a later example finds the files an earlier one wrote.
 Each example's standard output, standard error and exit code go to ``NN-command.out|err|rc``;
 the files it writes stay where it wrote them. ``--quick`` skips the LISA simulation and the
@@ -25,22 +26,35 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 #: Command families that take minutes (skipped by --quick).
 SLOW = {"simulate", "fisher", "waveform", "population"}
+#: Pages whose examples run after the README's, in this order (the README is the front page; the
+#: worked examples of every command live in the docs site).
+EXAMPLE_PAGES = (ROOT / "docs" / "commands.md",)
 
 
-def readme_commands(readme: Path = ROOT / "README.md") -> list[list[str]]:
-    """The ``ucbplan`` examples of the README, as argument lists (``ucbplan`` cut), in order."""
+def readme_commands(readme: Path | None = None) -> list[list[str]]:
+    """The ``ucbplan`` examples, as argument lists (``ucbplan`` cut), in order.
+
+    ``readme`` given: that file's examples; else the README's, then those of ``EXAMPLE_PAGES``.
+    """
+    if readme is None:
+        return [c for page in (ROOT / "README.md", *EXAMPLE_PAGES) for c in readme_commands(page)]
     text = readme.read_text(encoding="utf-8")
+    blocks = re.findall(r"```[a-z]*\n(.*?)```", text, flags=re.S)
+    return [args for block in blocks for args in block_commands(block)]
+
+
+def block_commands(block: str) -> list[list[str]]:
+    """The ``ucbplan`` examples of one code block's text, as argument lists (``ucbplan`` cut)."""
     out: list[list[str]] = []
-    for block in re.findall(r"```[a-z]*\n(.*?)```", text, flags=re.S):
-        joined = re.sub(r"\\\n\s*", " ", block)
-        for line in joined.splitlines():
-            line = line.split("&& ", 1)[-1].strip()
-            if not line.startswith("ucbplan "):
-                continue
-            line = re.sub(r"\s#\s.*$", "", line)
-            if "…" in line or "[" in line or re.search(r"\b[A-Z]{3,}\b", line):
-                continue  # a usage synopsis, not an example
-            out.append(shlex.split(line)[1:])
+    joined = re.sub(r"\\\n\s*", " ", block)
+    for line in joined.splitlines():
+        line = line.split("&& ", 1)[-1].strip()
+        if not line.startswith("ucbplan "):
+            continue
+        line = re.sub(r"\s#\s.*$", "", line)
+        if "…" in line or "[" in line or re.search(r"\b[A-Z]{3,}\b", line):
+            continue  # a usage synopsis, not an example
+        out.append(shlex.split(line)[1:])
     return out
 
 
