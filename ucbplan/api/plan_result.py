@@ -33,6 +33,7 @@ from ucbplan.api._plan_records import (
     goals_of,
     strategies_of,
 )
+from ucbplan.core.constants import HOUR_S
 from ucbplan.errors import InputError, InputFileError, PlanWarning, UcbplanError, emit, shorten
 
 if TYPE_CHECKING:
@@ -269,7 +270,7 @@ class Plan:
             "nights": len(self._meta("nights")),
             "visits": total.visits,
             "exposures": len(self),
-            "hours": total.total_s / 3600.0,
+            "hours": total.total_s / HOUR_S,
         }
 
     def __repr__(self) -> str:

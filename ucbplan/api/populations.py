@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 from ucbplan.api._convert import as_float, as_tdb, scope
 from ucbplan.api.flagspec import Flag
 from ucbplan.api.lisa_analysis import check_n_bins, t_obs_seconds
+from ucbplan.core.constants import DAY_S
 from ucbplan.errors import InputError, shorten
 from ucbplan.population.defaults import DEFAULT_N_BINS, DEFAULT_SIGMA_V_KMS, DEFAULT_T_START
 
@@ -151,7 +152,7 @@ def forecast_settings(
     t_obs_text = t_obs if isinstance(t_obs, str) or t_obs is None else None
     if t_obs_text is None and t_obs is not None:  # seconds or a Quantity: as text, exactly
         t_obs_s = t_obs_seconds(t_obs, 0.0)
-        if t_obs_s > MAX_T_OBS_YR * 365.25 * 86400.0:
+        if t_obs_s > MAX_T_OBS_YR * 365.25 * DAY_S:
             raise InputError(
                 f"t_obs: expected a duration from 1 day to 100 yr, got {shorten(t_obs)}", "t_obs"
             )

@@ -18,6 +18,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from ucbplan.core.constants import DAY_S
 from ucbplan.observing.blocks.block import MAX_BLOCK_S, MAX_N_EXP, MAX_READOUT_S
 
 __all__ = [
@@ -148,7 +149,7 @@ COLUMNS: tuple[Column, ...] = (
         "s",
         "1-sigma timing uncertainty of the anchor epoch (sigma_u / u_dot)",
         required=True,
-        bounds=(0.0, 86400.0),
+        bounds=(0.0, DAY_S),
     ),
     Column(
         "t_alt_utc",
@@ -290,7 +291,7 @@ COLUMNS: tuple[Column, ...] = (
         "block length, first exposure start to last exposure end",
         in_header=False,
         kind="width",
-        bounds=(0.0, 86400.0),
+        bounds=(0.0, DAY_S),
     ),
     Column(
         "lambda_kappa",

@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
+from ucbplan.core.constants import DAY_S, HOUR_S
 from ucbplan.errors import InputError, shorten
 from ucbplan.observing.constraints import (
     TWILIGHT_SUN_ALT_DEG,
@@ -292,7 +293,7 @@ class LocalTimeConstraint(Constraint):
         unix = np.asarray(sky.time(xs.ravel()).utc.unix, dtype=np.float64)
         minutes, at = np.unique(np.floor(unix / 60.0), return_inverse=True)
         offset = np.array([self._offset_s(m * 60.0) for m in minutes])[at]
-        clock = np.mod(unix + offset, 86400.0)
+        clock = np.mod(unix + offset, DAY_S)
         lo = _seconds(self.start, 0.0)
         hi = _seconds(self.end, 86399.0)
         inside = (clock >= lo) & (clock <= hi) if lo < hi else (clock >= lo) | (clock <= hi)
@@ -314,4 +315,4 @@ def _seconds(t: dt.time | None, default: float) -> float:
     """Seconds since midnight of a clock time (``default`` for None)."""
     if t is None:
         return default
-    return t.hour * 3600.0 + t.minute * 60.0 + t.second + t.microsecond * 1e-6
+    return t.hour * HOUR_S + t.minute * 60.0 + t.second + t.microsecond * 1e-6

@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 from astropy.table import Table
 
+from ucbplan.core.constants import HOUR_S_INT
 from ucbplan.errors import InputError, shorten
 from ucbplan.observing.night.chart import Visit, group_visits
 from ucbplan.observing.observatory.sites import Site
@@ -307,7 +308,7 @@ def _when(t: datetime, now: datetime) -> str:
 def wait_text(seconds: float) -> str:
     """A wait in words, rounded to the second: ``45 s``, ``2 min 13 s``, ``3 h 02 min 05 s``."""
     s = max(round(seconds), 0)
-    h, m, x = s // 3600, s % 3600 // 60, s % 60
+    h, m, x = s // HOUR_S_INT, s % HOUR_S_INT // 60, s % 60
     if h:
         return f"{h} h {m:02d} min {x:02d} s"
     return f"{m} min {x} s" if m else f"{x} s"

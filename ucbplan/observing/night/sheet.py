@@ -26,6 +26,7 @@ from astropy import units as u
 from astropy.coordinates import SkyCoord
 from astropy.table import Table
 
+from ucbplan.core.constants import DAY_S
 from ucbplan.errors import InputError, shorten
 from ucbplan.io import write_output
 from ucbplan.observing.constraints import ConstraintSet
@@ -148,8 +149,8 @@ def night_events(chart: NightChart, site: Site) -> tuple[list[tuple[str, str]], 
     and the Moon's illuminated fraction at local midnight."""
     axis = TimeAxis.starting_at(chart.window.start, site.location)
     probe = SkyCoord([0.0] * u.deg, [0.0] * u.deg)
-    sky = SkyModel.build(site.location, axis.origin, (0.0, 86400.0), probe)
-    x = np.linspace(0.0, 86400.0, 1441)
+    sky = SkyModel.build(site.location, axis.origin, (0.0, DAY_S), probe)
+    x = np.linspace(0.0, DAY_S, 1441)
     sun = sky.sun_alt_deg(x)
     found = [
         (xc, evening if falling else morning)
@@ -157,7 +158,7 @@ def night_events(chart: NightChart, site: Site) -> tuple[list[tuple[str, str]], 
         for xc, falling in level_crossings(x, sun - level)
     ]
     dark = [xc for xc, name in found if name in ("sunset", "sunrise")]
-    lo, hi = (min(dark), max(dark)) if len(dark) == 2 else (0.0, 86400.0)
+    lo, hi = (min(dark), max(dark)) if len(dark) == 2 else (0.0, DAY_S)
     moon = level_crossings(x, sky.moon_alt_deg(x))
     found += [(xc, "moonset" if down else "moonrise") for xc, down in moon if lo <= xc <= hi]
     found.sort()

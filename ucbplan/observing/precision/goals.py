@@ -37,7 +37,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ucbplan.core.binary import a_total_m, kepler_total_mass
-from ucbplan.core.constants import MSUN_KG
+from ucbplan.core.constants import HOUR_S, MSUN_KG
 from ucbplan.core.mvnormal import inverse_scaled
 from ucbplan.errors import InputError, shorten
 
@@ -484,10 +484,10 @@ def time_budget(
         n_visits=n_visits,
         spectra_per_visit=per_visit,
         step_s=step,
-        shutter_h=shutter / 3600.0,
-        overhead_h=overhead / 3600.0,
-        idle_h=idle / 3600.0,
-        total_h=(shutter + overhead + idle) / 3600.0,
+        shutter_h=shutter / HOUR_S,
+        overhead_h=overhead / HOUR_S,
+        idle_h=idle / HOUR_S,
+        total_h=(shutter + overhead + idle) / HOUR_S,
     )
 
 
