@@ -47,7 +47,7 @@ __all__ = [
     "CHART_FORMATS",
     "MAX_PANELS",
     "NightChart",
-    "Visit",
+    "VisitRows",
     "chart_figure",
     "chart_format",
     "group_visits",
@@ -78,7 +78,7 @@ MAX_PANELS = 7
 
 
 @dataclass(frozen=True)
-class Visit:
+class VisitRows:
     """Blocks observed together (one acquisition): a ``visit_id``, ``session_id`` or one block.
 
     Attributes
@@ -115,7 +115,7 @@ class NightChart:
 
     window: NightWindow
     targets: tuple[tuple[str, float, float], ...]
-    visits: tuple[Visit, ...]
+    visits: tuple[VisitRows, ...]
 
 
 def _text(row: Any, name: str) -> str:
@@ -132,7 +132,7 @@ def _night_of(row: Any, site: Site) -> str:
     return (start - timedelta(hours=12)).date().isoformat()
 
 
-def group_visits(table: Table, site: Site) -> dict[str, list[Visit]]:
+def group_visits(table: Table, site: Site) -> dict[str, list[VisitRows]]:
     """The visits of a blocks table, by night (in date order), each night's in start order.
 
     Blocks with the same ``visit_id`` (or, without that column, the same ``session_id``) on the
@@ -149,8 +149,8 @@ def group_visits(table: Table, site: Site) -> dict[str, list[Visit]]:
     for (night, key), idx in groups.items():
         rows = table[idx]
         rows.sort("t_start_utc")
-        visits.append(Visit(key, str(rows["target"][0]), night, rows))
-    out: dict[str, list[Visit]] = {}
+        visits.append(VisitRows(key, str(rows["target"][0]), night, rows))
+    out: dict[str, list[VisitRows]] = {}
     for v in sorted(visits, key=lambda v: (v.night, v.start_utc)):
         out.setdefault(v.night, []).append(v)
     return out
@@ -193,7 +193,7 @@ def _seconds(axis: TimeAxis, iso: Sequence[str]) -> FloatArray:
     return np.asarray((t.tdb - axis.origin).to_value(u.s), dtype=np.float64)
 
 
-def _span(sky: SkyModel, visits: Sequence[Visit], axis: TimeAxis) -> tuple[float, float]:
+def _span(sky: SkyModel, visits: Sequence[VisitRows], axis: TimeAxis) -> tuple[float, float]:
     """Sunset − 20 min to sunrise + 20 min [s on the axis], widened to every visit."""
     x = np.linspace(0.0, DAY_S, 1441)
     dark = np.flatnonzero(sky.sun_alt_deg(x) < 0.0)

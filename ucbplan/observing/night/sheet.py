@@ -32,13 +32,13 @@ from ucbplan.io import write_output
 from ucbplan.observing.constraints import ConstraintSet
 from ucbplan.observing.night.chart import (
     NightChart,
-    Visit,
+    VisitRows,
     chart_figure,
     hhmm,
     level_crossings,
     night_chart,
 )
-from ucbplan.observing.night.countdown import Exposure, hms, seconds_text, visit_exposures
+from ucbplan.observing.night.countdown import TimedExposure, hms, seconds_text, visit_exposures
 from ucbplan.observing.night.observing_log import LOG_COLUMNS, log_cells, log_file_name
 from ucbplan.observing.night.sheet_html import (
     EXPOSURE_COLUMNS,
@@ -92,13 +92,13 @@ def _text(row: Any, name: str) -> str:
     return str(row[name]).strip()
 
 
-def visit_heading(number: int, visit: Visit, exposures: Sequence[Exposure]) -> str:
+def visit_heading(number: int, visit: VisitRows, exposures: Sequence[TimedExposure]) -> str:
     """``Visit 1: HM Cnc (V01), 2040-02-16 UTC``: number in the night, target, visit, UTC date."""
     short = exposures[0].label.split("/")[0]
     return f"Visit {number}: {visit.target} ({short}), {exposures[0].start.date()} UTC"
 
 
-def visit_about(visit: Visit, exposures: Sequence[Exposure]) -> str:
+def visit_about(visit: VisitRows, exposures: Sequence[TimedExposure]) -> str:
     """One line on the target of a visit: ICRS position, magnitude (if the table has ``vmag``),
     acquisition start (UTC), first start and last end."""
     row = visit.rows[0]
@@ -118,7 +118,7 @@ def visit_about(visit: Visit, exposures: Sequence[Exposure]) -> str:
     )
 
 
-def visit_instruction(exposures: Sequence[Exposure]) -> tuple[str, str]:
+def visit_instruction(exposures: Sequence[TimedExposure]) -> tuple[str, str]:
     """What to tell the night assistant about a visit, in two lines: when to be acquired and the
     exposures, then that the starts are phase-critical and what to do about a missed one."""
     first = exposures[0]
@@ -189,7 +189,7 @@ def plan_note(table: Table) -> str:
     return "; ".join(parts) + "."
 
 
-def _visits(chart: NightChart, meta: Any) -> list[tuple[Visit, list[Exposure]]]:
+def _visits(chart: NightChart, meta: Any) -> list[tuple[VisitRows, list[TimedExposure]]]:
     return [(v, visit_exposures(v, meta)) for v in chart.visits]
 
 
@@ -202,7 +202,7 @@ def _wrap(text: str, width: int = _WIDTH) -> list[str]:
     return textwrap.wrap(text, width=width, subsequent_indent="    ") or [""]
 
 
-def _table_lines(exposures: Sequence[Exposure]) -> list[str]:
+def _table_lines(exposures: Sequence[TimedExposure]) -> list[str]:
     """The exposure table as fixed-width text (one line per exposure)."""
     rows = [EXPOSURE_COLUMNS, *(exposure_cells(e) for e in exposures)]
     widths = [max(len(r[k]) for r in rows) for k in range(len(EXPOSURE_COLUMNS))]

@@ -375,10 +375,10 @@ def spectra_for_goal(
             visit_s=visit_s,
             anchors_per_orbit=len(pattern),
         )
-    return _goal_plan(goal, [name for name, _ in pattern], cycles, per_pattern, s1, s2, time)
+    return _cycle_plan(goal, [name for name, _ in pattern], cycles, per_pattern, s1, s2, time)
 
 
-def _goal_plan(
+def _cycle_plan(
     goal: Goal,
     pattern: list[str],
     cycles: int,

@@ -157,7 +157,7 @@ def _as_tuple(fisher: ObservedFisher) -> tuple[float, float, float, float]:
     return (fisher.f_gg, fisher.f_gk, fisher.f_kk, fisher.ratio)
 
 
-def _goal_plan(goal: Goal, run: TargetRun, settings: PlanSettings) -> GoalPlan:
+def _target_goal_plan(goal: Goal, run: TargetRun, settings: PlanSettings) -> GoalPlan:
     """Spectra, balanced visits and time of one target's goal (less what was observed)."""
     need_all = goal_info_needed(goal, run.target)
     collected = _collected(run, settings)
@@ -224,7 +224,7 @@ def goal_plans(runs: Sequence[TargetRun], settings: PlanSettings) -> dict[int, G
             f"goal: the anchors of `mode` {settings.spec.label} do not constrain K "
             "(cos u = 0); use `mode` quadrature"
         )
-    return {run.index: _goal_plan(goal, run, settings) for run in runs}
+    return {run.index: _target_goal_plan(goal, run, settings) for run in runs}
 
 
 def balanced_runs(runs: Sequence[TargetRun], plans: dict[int, GoalPlan]) -> list[TargetRun]:
