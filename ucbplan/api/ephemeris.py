@@ -11,7 +11,8 @@ from typing import TYPE_CHECKING, Any
 from ucbplan._version import __version__
 from ucbplan.api._convert import as_tdb, scope
 from ucbplan.api.flagspec import Flag
-from ucbplan.api.targets import TargetLike, get_site, load_target
+from ucbplan.api.targets import TargetLike, load_target
+from ucbplan.api.targets import get_site as get_site
 from ucbplan.errors import EphemerisRangeWarning, InputError, emit, shorten
 
 if TYPE_CHECKING:
@@ -19,21 +20,6 @@ if TYPE_CHECKING:
 
     from ucbplan.core.ephemeris import EpochSet
     from ucbplan.targets import Target
-
-__all__ = [
-    "COMPARE_FLAGS",
-    "EPHEMERIS_FLAGS",
-    # where the planning and reduction modules import them from (defined in api/targets.py)
-    "TargetLike",
-    "check_anchor",
-    "compare_ephemerides",
-    "ephemeris",
-    "epoch_table",
-    "epoch_window",
-    "get_site",
-    "horizon_warnings",
-    "load_target",
-]
 
 #: The options of :func:`ephemeris` as ``ucbplan ephemeris predict`` spells them.
 EPHEMERIS_FLAGS: dict[str, Flag] = {

@@ -20,19 +20,6 @@ from ucbplan.errors import InputError, shorten
 if TYPE_CHECKING:
     from astropy.table import Table
 
-__all__ = [
-    "EXPORT_FLAGS",
-    "EXPORT_FORMAT_NAMES",
-    "NOW_FLAGS",
-    "P2_FLAGS",
-    "Export",
-    "countdown",
-    "eso_p2_create",
-    "export",
-    "export_formats",
-    "read_blocks",
-]
-
 #: The names of ``ucbplan.observing.exports.EXPORT_FORMATS`` (a test keeps them equal): spelled
 #: out because importing the exports (astropy.coordinates) at start-up costs ~0.3 s on every
 #: command; the library is imported only when an export runs.

@@ -38,27 +38,6 @@ if TYPE_CHECKING:
         SimulationResult,
     )
 
-__all__ = [
-    "FISHER_FLAGS",
-    "LISA_FLAGS",
-    "MAX_CHAIN_STEPS",
-    "MAX_WALKERS",
-    "SIMULATE_FLAGS",
-    "WAVEFORM_FLAGS",
-    "check_n_bins",
-    "corner_plot_paths",
-    "fisher",
-    "plot_waveform",
-    "save_interrupted",
-    "simulate",
-    "simulation_outputs",
-    "t_obs_seconds",
-    "waveform",
-    "write_corner_plots",
-    "write_forecast",
-    "write_simulation",
-]
-
 #: Most walkers and chain steps accepted (memory: walkers × steps × parameters floats).
 MAX_WALKERS = 100_000
 MAX_CHAIN_STEPS = 10_000_000

@@ -47,8 +47,6 @@ if TYPE_CHECKING:
     from ucbplan.observing.observatory.sites import Site
     from ucbplan.observing.schedule import PlanRun
 
-__all__ = ["GoalRecord", "Plan", "StrategyRecord"]
-
 T = TypeVar("T")
 #: The site fields a plan's meta records (``Site.as_dict``).
 _SITE_KEYS = ("name", "lon_deg", "lat_deg", "height_m", "timezone", "zenith_hole_deg")

@@ -13,11 +13,15 @@ from ucbplan.api._convert import as_date, as_float, scope
 from ucbplan.api.ephemeris import TargetLike, get_site, load_target
 from ucbplan.api.plan_options import (
     DEFAULT_EXPTIME,
-    OLD_NAMES,
-    PLAN_FLAGS,
     accept_old_names,
     recorded_options,
     settings_from,
+)
+from ucbplan.api.plan_options import (
+    OLD_NAMES as OLD_NAMES,
+)
+from ucbplan.api.plan_options import (
+    PLAN_FLAGS as PLAN_FLAGS,
 )
 from ucbplan.api.plan_result import Plan
 from ucbplan.errors import InputError, emit, shorten
@@ -30,8 +34,6 @@ if TYPE_CHECKING:
     from ucbplan.observing.observatory.sites import Site
     from ucbplan.observing.schedule import PlanRun
     from ucbplan.targets import Target
-
-__all__ = ["OLD_NAMES", "PLAN_FLAGS", "Plan", "default_constraints", "plan", "plan_run"]
 
 #: The keywords of :func:`plan` that a ``constraints`` list replaces (giving both is an error).
 _CONSTRAINT_OPTIONS = ("twilight", "airmass_max", "moon_sep", "moon_illum", "zenith_hole")

@@ -27,22 +27,6 @@ if TYPE_CHECKING:
     from ucbplan.population.execute import ExecutorSpec
     from ucbplan.population.runner import RunControl
 
-__all__ = [
-    "PARTS_FLAGS",
-    "POPULATION_FLAGS",
-    "PopulationForecast",
-    "check_k_source",
-    "executor",
-    "forecast_settings",
-    "parts_of",
-    "population_forecast",
-    "progress_rate",
-    "read_population",
-    "run_control",
-    "semester",
-    "write_run",
-]
-
 #: Longest LISA observation of a population forecast [yr].
 MAX_T_OBS_YR = 100.0
 

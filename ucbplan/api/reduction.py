@@ -19,18 +19,6 @@ if TYPE_CHECKING:
 
     from ucbplan.reduce.pipeline import ReduceOptions, Reduction
 
-__all__ = [
-    "MAX_SAMPLES",
-    "MIN_SAMPLES",
-    "REDUCE_FLAGS",
-    "Measurement",
-    "Report",
-    "check_count",
-    "check_seed",
-    "reduce",
-    "reduce_options",
-]
-
 #: Fewest Monte-Carlo samples (fewer give no usable quantiles).
 MIN_SAMPLES = 100
 #: Most Monte-Carlo samples: above 250 000 they run in chunks; 10⁷ take ~0.65 GB peak resident

@@ -27,8 +27,6 @@ from ucbplan.errors import InputError, InputFileError, shorten
 if TYPE_CHECKING:
     from astropy.table import Table
 
-__all__ = ["REPLAN_FLAGS", "PlanChanges", "plan_changes", "replan"]
-
 #: How ``ucbplan replan`` spells :func:`replan`'s parameters (declared once).
 REPLAN_FLAGS: dict[str, Flag] = {
     "plan": Flag((), "Plan to re-plan: an ECSV blocks table written by `ucbplan plan -o`."),

@@ -18,16 +18,6 @@ if TYPE_CHECKING:
     from ucbplan.observing.observatory.sites import Site
     from ucbplan.targets import Target
 
-__all__ = [
-    "TargetLike",
-    "get_site",
-    "is_path",
-    "load_as",
-    "load_target",
-    "validate",
-    "write_target",
-]
-
 TargetLike = Any  # a Target, a path, or a target document (dict)
 
 

@@ -23,8 +23,6 @@ if TYPE_CHECKING:
     from ucbplan.targets import Target
     from ucbplan.timing import EclipseTimes, EphemerisFit, PeriodGuess
 
-__all__ = ["FIT_FLAGS", "TimingFit", "fit_ephemeris", "target_identity"]
-
 #: The options of :func:`fit_ephemeris` (and of :meth:`TimingFit.to_target`) as
 #: ``ucbplan ephemeris fit`` spells them.
 FIT_FLAGS: dict[str, Flag] = {

@@ -22,15 +22,6 @@ if TYPE_CHECKING:
 
     from ucbplan.targets import Target
 
-__all__ = [
-    "HORIZON_FLAGS",
-    "HorizonReport",
-    "horizon",
-    "horizon_json",
-    "horizon_report",
-    "resolve_k_sigma",
-]
-
 #: The options of :func:`horizon` as ``ucbplan horizon`` spells them.
 HORIZON_FLAGS: dict[str, Flag] = {
     "sigma_v": Flag(

@@ -8,26 +8,6 @@ from __future__ import annotations
 
 import math
 
-__all__ = [
-    "AU_M",
-    "C_KM_S",
-    "C_M_S",
-    "DAY_S",
-    "DAY_S_INT",
-    "E_MAX",
-    "G_SI",
-    "HOUR_S",
-    "HOUR_S_INT",
-    "KPC_M",
-    "L_B",
-    "MONTH_S",
-    "MSUN_KG",
-    "RSUN_M",
-    "SIDEREAL_YEAR_S",
-    "TWO_PI",
-    "YEAR_S",
-]
-
 #: Speed of light [m/s] (exact).
 C_M_S = 299792458.0
 #: Speed of light [km/s].

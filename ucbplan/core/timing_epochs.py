@@ -22,23 +22,6 @@ from ucbplan.core.constants import DAY_S_INT
 from ucbplan.core.epochs import YEAR_RANGE, split_scale_label, year_of
 from ucbplan.errors import InputError, shorten
 
-__all__ = [
-    "DECIMAL_CONTEXT",
-    "JD_RANGE",
-    "MAX_TIMING_EPOCH_CHARS",
-    "MJD_OFFSET",
-    "TIMING_EPOCH_EXAMPLE",
-    "TIMING_EPOCH_WORDS",
-    "bjd_tdb_numbers",
-    "format_bjd",
-    "format_bjd_tdb",
-    "jd_to_seconds",
-    "parse_decimal",
-    "parse_epoch_label",
-    "parse_timing_epoch",
-    "seconds_to_jd",
-]
-
 #: Scale words of a timing epoch → astropy format of the number that follows (all TDB at the
 #: solar-system barycentre).
 TIMING_EPOCH_WORDS: dict[str, str] = {

@@ -20,14 +20,6 @@ from numpy.typing import ArrayLike, NDArray
 from ucbplan.core.constants import YEAR_S
 from ucbplan.lisa.orbits import C_M_S, LISA_ARM_M
 
-__all__ = [
-    "SANGRIA",
-    "SCIRDV1",
-    "NoiseModel",
-    "galactic_strain_psd",
-    "psd_a",
-]
-
 
 @dataclass(frozen=True, slots=True)
 class NoiseModel:

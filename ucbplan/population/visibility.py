@@ -44,12 +44,6 @@ from ucbplan.population.catalog_forecast import (
 from ucbplan.population.execute import worker_setup
 from ucbplan.population.tables import SOURCE_COLUMNS
 
-__all__ = [
-    "VISIBILITY_COLUMNS",
-    "VisibilityOptions",
-    "visibility_chunk",
-]
-
 #: Spacing of the time grid on which usable hours are summed [s].
 GRID_STEP_S = 300.0
 

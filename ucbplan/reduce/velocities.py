@@ -56,18 +56,6 @@ if TYPE_CHECKING:
 
     from ucbplan.targets import Target
 
-__all__ = [
-    "HORIZON_S",
-    "KNOWN_COLUMNS",
-    "MIN_SPECTRA",
-    "SESSION_GAP_S",
-    "VelocityTable",
-    "check_validity",
-    "read_velocities",
-    "to_barycentric",
-    "velocities_from_table",
-]
-
 F64 = NDArray[np.float64]
 
 #: Latest accepted epoch after the end of the LISA observation [s] (20 Julian years).

@@ -30,8 +30,6 @@ from ucbplan.timing.eclipse_table import EclipseTimes, check_monotonic
 from ucbplan.timing.fit import solve_wls
 from ucbplan.timing.initial import PeriodGuess
 
-__all__ = ["AMBIGUITY_FRACTION", "count_cycles"]
-
 F64 = NDArray[np.float64]
 
 #: A cycle is counted only when its predicted time is known to this fraction of P (1σ).

@@ -43,12 +43,6 @@ from ucbplan.core.timing_epochs import (
 from ucbplan.errors import InputFileError, SchemaError, shorten
 from ucbplan.inputs import MAX_ALIASES, MAX_YAML_BYTES, blank_comments, read_text
 
-__all__ = [
-    "EclipseTimes",
-    "read_times",
-    "read_times_table",
-]
-
 F64 = NDArray[np.float64]
 
 

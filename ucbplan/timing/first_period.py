@@ -33,8 +33,6 @@ from ucbplan.timing.eclipse_table import EclipseTimes
 from ucbplan.timing.fit import solve_wls
 from ucbplan.timing.initial import PeriodGuess
 
-__all__ = ["MIN_ECLIPSES", "NIGHT_GAP_S", "period_from_times"]
-
 F64 = NDArray[np.float64]
 
 #: A gap longer than this ends a night [s] (6 h: no night of eclipse timing has a longer one).

@@ -34,17 +34,6 @@ from ucbplan.core.mvnormal import inverse_scaled
 from ucbplan.errors import InputError, NumericalError
 from ucbplan.timing.eclipse_table import EclipseTimes
 
-__all__ = [
-    "OUTLIER_SIGMA",
-    "PARAMETERS",
-    "EphemerisFit",
-    "coefficients_to_parameters",
-    "fit_ephemeris",
-    "parameters_to_coefficients",
-    "shift_coefficients",
-    "solve_wls",
-]
-
 F64 = NDArray[np.float64]
 
 #: Parameter names, in order, and the units of their values (T0 as seconds in the covariance).

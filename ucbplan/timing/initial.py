@@ -27,14 +27,6 @@ from ucbplan.core.timing_epochs import parse_decimal, parse_epoch_label
 from ucbplan.errors import InputError, InputFileError, shorten
 from ucbplan.inputs import load_yaml
 
-__all__ = [
-    "PDOT_PRIOR_SIGMA",
-    "PeriodGuess",
-    "guess_from_document",
-    "parse_period",
-    "read_initial",
-]
-
 #: Width of the Ṗ prior while counting cycles [s/s]: GW-driven |Ṗ| of a double white dwarf with
 #: P > 5 min and chirp mass < 1 M☉ is < 3e-10, so 1e-9 is generous. Used only to count cycles.
 PDOT_PRIOR_SIGMA = 1e-9

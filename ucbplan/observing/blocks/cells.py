@@ -23,15 +23,6 @@ from astropy.time import Time
 from ucbplan.core.constants import DAY_S_INT, HOUR_S_INT
 from ucbplan.observing.blocks.arrays import isot_array, time_array
 
-__all__ = [
-    "dec_dms_column",
-    "iso_column",
-    "local_datetimes",
-    "local_iso",
-    "ra_hms_column",
-    "sexagesimal",
-]
-
 
 def iso_column(times: Time, has: np.ndarray | None, precision: int) -> np.ndarray:
     """ISO strings of an array Time (its Julian dates as stored) with ``precision`` decimals of

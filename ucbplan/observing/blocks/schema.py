@@ -21,23 +21,6 @@ from dataclasses import dataclass
 from ucbplan.core.constants import DAY_S
 from ucbplan.observing.blocks.block import MAX_BLOCK_S, MAX_N_EXP, MAX_READOUT_S
 
-__all__ = [
-    "BLANK_OK",
-    "COLUMNS",
-    "COLUMN_BY_NAME",
-    "EXTRA_COLUMNS",
-    "KNOWN_COLUMNS",
-    "MAX_HEADER_CHARS",
-    "MAX_TABLE_BYTES",
-    "META_SCALARS",
-    "REQUIRED_COLUMNS",
-    "TABLE_FORMATS",
-    "TIME_YEARS",
-    "USER_COLUMNS",
-    "Column",
-    "column_reference",
-]
-
 
 @dataclass(frozen=True, slots=True)
 class Column:

@@ -51,14 +51,6 @@ if TYPE_CHECKING:
     from ucbplan.observing.observatory.sites import Site
     from ucbplan.observing.observatory.sky import SkyModel
 
-__all__ = [
-    "AstroplanConstraint",
-    "LocalTimeConstraint",
-    "as_constraint",
-    "constraint_set",
-    "default_constraints",
-]
-
 #: The slot of each native class in a :class:`ConstraintSet` (the first of a kind fills it).
 _SLOTS: dict[type[Constraint], str] = {
     NightConstraint: "night",

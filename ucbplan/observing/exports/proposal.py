@@ -52,13 +52,6 @@ from ucbplan.observing.exports.provenance import clean_meta, created_utc, meta, 
 from ucbplan.observing.exports.text import iso_ms
 from ucbplan.observing.observatory.semesters import semester_dates, semester_label
 
-__all__ = [
-    "PROPOSAL_FORMATS",
-    "export_proposal",
-    "proposal_table",
-    "write_proposal",
-]
-
 #: Proposal table formats (``--format``) and the file suffix of each.
 PROPOSAL_SUFFIXES = {"ecsv": ".ecsv", "csv": ".csv", "latex": ".tex"}
 PROPOSAL_FORMATS = tuple(PROPOSAL_SUFFIXES)

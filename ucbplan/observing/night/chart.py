@@ -43,23 +43,6 @@ if TYPE_CHECKING:
 
     from ucbplan.targets import Target
 
-__all__ = [
-    "CHART_FORMATS",
-    "MAX_PANELS",
-    "NightChart",
-    "VisitRows",
-    "chart_figure",
-    "chart_format",
-    "group_visits",
-    "hhmm",
-    "level_crossings",
-    "night_chart",
-    "night_figures",
-    "plot_charts",
-    "plot_night",
-    "write_night_charts",
-]
-
 FloatArray = NDArray[np.float64]
 
 #: Twilight shading: (Sun altitude limit [deg], grey level) from day to astronomical night.

@@ -31,19 +31,6 @@ from ucbplan.errors import InputError, shorten
 from ucbplan.observing.night.chart import VisitRows, group_visits
 from ucbplan.observing.observatory.sites import Site
 
-__all__ = [
-    "Countdown",
-    "TimedExposure",
-    "countdown_lines",
-    "hms",
-    "parse_utc",
-    "plan_exposures",
-    "seconds_text",
-    "visit_exposures",
-    "wait_text",
-    "what_next",
-]
-
 #: Longest target name in a countdown line [characters] (longer names are cut with "…").
 _NAME_CHARS = 40
 #: Longest visit name in an exposure label [characters] (``V01`` from ``…-20400215-V01``).

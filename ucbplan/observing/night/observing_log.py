@@ -33,21 +33,6 @@ from ucbplan.observing.blocks.write import csv_safe_text, csv_unsafe_text
 from ucbplan.observing.night.countdown import TimedExposure, plan_exposures
 from ucbplan.observing.observatory.sites import Site
 
-__all__ = [
-    "LOG_COLUMNS",
-    "LOG_KEYS",
-    "STATUSES",
-    "ObservingLog",
-    "check_log_plan",
-    "is_log",
-    "log_cells",
-    "log_file_name",
-    "log_lines",
-    "log_text",
-    "plan_id",
-    "read_log",
-]
-
 #: What may become of an exposure (only ``taken`` counts toward a goal).
 STATUSES = ("taken", "missed", "skipped")
 #: The key that marks the exposure just started with each status (``ucbplan now --log``).

@@ -53,19 +53,6 @@ from ucbplan.observing.observatory.time_axis import TimeAxis
 from ucbplan.offline import offline
 from ucbplan.plotting import pyplot
 
-__all__ = [
-    "SHEET_FORMATS",
-    "night_events",
-    "plan_note",
-    "sheet_format",
-    "sheet_nights",
-    "sky_line",
-    "visit_about",
-    "visit_heading",
-    "visit_instruction",
-    "write_night_sheet",
-]
-
 #: Formats of :func:`write_night_sheet`, by file suffix.
 SHEET_FORMATS = ("pdf", "html")
 #: The PDF page [inch]: A4 portrait.

@@ -25,8 +25,6 @@ from datetime import datetime
 from ucbplan.observing.night.countdown import TimedExposure, hms
 from ucbplan.observing.night.observing_log import STATUSES
 
-__all__ = ["EXPOSURE_COLUMNS", "SheetNight", "SheetVisit", "exposure_cells", "render_html"]
-
 #: Columns of the exposure table, one row per exposure (HTML and PDF).
 EXPOSURE_COLUMNS = ("#", "start UTC", "end UTC", "anchor (epoch UTC)", "airmass", "Λ_K", "σ_t [s]")
 

@@ -26,17 +26,6 @@ from scipy.interpolate import CubicSpline
 from ucbplan.core.constants import HOUR_S
 from ucbplan.errors import InputError
 
-__all__ = [
-    "DelayInterpolator",
-    "SiteTrack",
-    "astropy_rotations",
-    "bary_tdb_to_site_utc",
-    "coverage_warnings",
-    "light_time_s",
-    "site_icrs_frames",
-    "site_utc_to_bary_tdb",
-]
-
 #: Number of fixed-point iterations t ← t★ − Δ(t); Δ changes by ≤ 1e-4 s/s, so each iteration
 #: shrinks the error by ≥ 1e4: 500 s → 0.05 s → 5 µs → 0.5 ns.
 N_ITER = 3

@@ -30,8 +30,6 @@ from ucbplan.core.constants import HOUR_S
 from ucbplan.observing.observatory.barycentric import astropy_rotations
 from ucbplan.observing.observatory.time_axis import TimeAxis
 
-__all__ = ["SLOW_STEP_S", "SkyModel", "airmass_from_alt", "sun_cirs_frames"]
-
 FloatArray = NDArray[np.float64]
 
 #: Node spacing of the coarse astropy grid [s] (apparent places move < 3.5 deg per node).

@@ -22,8 +22,6 @@ from scipy.interpolate import CubicSpline
 
 from ucbplan.core.constants import HOUR_S
 
-__all__ = ["TDB_TT_STEP_S", "EpochAxis", "TimeAxis", "elapsed"]
-
 FloatArray = NDArray[np.float64]
 
 

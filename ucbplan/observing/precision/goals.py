@@ -44,24 +44,6 @@ from ucbplan.errors import InputError, shorten
 if TYPE_CHECKING:
     from ucbplan.targets import Target
 
-__all__ = [
-    "GOAL_QUANTITIES",
-    "Goal",
-    "GoalPlan",
-    "Shortfall",
-    "TimeBudget",
-    "anchor_phases",
-    "check_goal_spectra",
-    "goal_info_needed",
-    "goal_sigma",
-    "parse_goal",
-    "shortfall",
-    "sigma_k_per_pattern",
-    "spectra_for_goal",
-    "target_k",
-    "time_budget",
-]
-
 #: Goal quantities and the units their absolute form takes.
 GOAL_QUANTITIES = {
     "sigma_K": "km/s",

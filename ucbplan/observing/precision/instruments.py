@@ -32,20 +32,6 @@ from ucbplan.core.constants import HOUR_S
 from ucbplan.errors import InputError, InputFileError, shorten
 from ucbplan.inputs import load_yaml
 
-__all__ = [
-    "BUNDLED",
-    "Instrument",
-    "Overheads",
-    "SigmaRef",
-    "check_exptime",
-    "get_instrument",
-    "instrument_magnitude",
-    "instrument_or_none",
-    "instrument_overheads",
-    "load_instruments",
-    "sigma_v_kms",
-]
-
 #: Where the bundled table lives inside the package.
 BUNDLED = "ucbplan/data/instruments.yaml"
 

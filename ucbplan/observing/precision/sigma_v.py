@@ -32,13 +32,6 @@ from ucbplan.core.constants import HOUR_S
 from ucbplan.errors import InputError, shorten
 from ucbplan.inputs import check_range
 
-__all__ = [
-    "KNOWN_BANDS",
-    "MAX_SIGMA_KMS",
-    "SigmaVModel",
-    "parse_sigma_v",
-]
-
 #: Photometric bands a σ_v reference may be quoted in (Johnson-Cousins, SDSS, Gaia, 2MASS).
 KNOWN_BANDS = (
     "U",

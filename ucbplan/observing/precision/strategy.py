@@ -42,22 +42,6 @@ from ucbplan.core.smearing import lambda_k
 from ucbplan.errors import InputError
 from ucbplan.observing.precision.goals import MAX_SPECTRA, check_goal_spectra
 
-__all__ = [
-    "STRATEGIES",
-    "StrategyResult",
-    "VisitShape",
-    "balanced_counts",
-    "best_strategy",
-    "compare_strategies",
-    "constrains_k",
-    "goal_time",
-    "goal_times",
-    "information",
-    "pattern_weight",
-    "session_result",
-    "sigma_k_from_rows",
-]
-
 #: The strategies compared, in the order they are reported.
 STRATEGIES = ("targeted", "phase-locked", "untargeted")
 #: Mean cos² u of an exposure at a random phase (untargeted).

@@ -48,16 +48,6 @@ from ucbplan.observing.schedule.settings import ModeSpec, PlanSettings
 if TYPE_CHECKING:
     from ucbplan.targets import Target
 
-__all__ = [
-    "Candidates",
-    "PlanFrame",
-    "TargetRun",
-    "candidate_blocks",
-    "grid_epochs",
-    "night_search_x",
-    "prepare_runs",
-]
-
 FloatArray = NDArray[np.float64]
 #: A warning line with the class of its cause.
 Warned = tuple[type[UcbplanWarning], str]

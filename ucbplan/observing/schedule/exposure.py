@@ -54,18 +54,6 @@ from ucbplan.observing.schedule.settings import QUEUE_CADENCES, QUEUE_WAIT_S, Pl
 if TYPE_CHECKING:
     from ucbplan.targets import Target
 
-__all__ = [
-    "TargetCadence",
-    "check_visit_holds_an_exposure",
-    "exposure_sigma_v",
-    "floor_exptime",
-    "optimised_exposure",
-    "sigma_law",
-    "strategy_facts",
-    "target_exposure",
-    "visit_shape",
-]
-
 #: Shortest exposure the smearing floor may cap to [s].
 _SHORTEST_S = 0.1
 #: Relative precision of the floor exposure time found by bisection.

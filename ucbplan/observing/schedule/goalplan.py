@@ -44,17 +44,6 @@ from ucbplan.observing.schedule.candidates import TargetRun
 from ucbplan.observing.schedule.placement import INFO_RTOL
 from ucbplan.observing.schedule.settings import PlanSettings
 
-__all__ = [
-    "GoalShortfall",
-    "as_placed",
-    "as_planned",
-    "balanced_runs",
-    "check_goals",
-    "goal_plans",
-    "goal_shortfalls",
-    "info_of_blocks",
-]
-
 #: Fraction of a goal's information a replan that changes the plan (lost nights, spectra taken
 #: given) may leave uncollected (``PlanSettings.goal_slack``): σ within
 #: 0.5 % of the goal rather than a whole anchor pattern more (observers replan to the goal, and

@@ -34,8 +34,6 @@ from ucbplan.core.constants import DAY_S
 from ucbplan.errors import NumericalError
 from ucbplan.observing.schedule.placement import Timeline
 
-__all__ = ["Instance", "Solution", "greedy", "is_feasible", "optimum"]
-
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 

@@ -50,8 +50,6 @@ from ucbplan.observing.schedule.visits import place_visits
 if TYPE_CHECKING:
     from ucbplan.targets import Target
 
-__all__ = ["PlanSchedule", "plan_nights"]
-
 
 @dataclass(frozen=True)
 class PlanSchedule:

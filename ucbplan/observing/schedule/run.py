@@ -38,16 +38,6 @@ from ucbplan.observing.schedule.records import slug
 from ucbplan.observing.schedule.settings import PlanSettings
 from ucbplan.targets import Target, load_targets
 
-__all__ = [
-    "MAX_PRIORITY",
-    "PlanRun",
-    "parse_priorities",
-    "plan_files",
-    "plan_targets",
-    "planned_exposure",
-    "with_priorities",
-]
-
 #: Largest |priority| (priorities only order the targets).
 MAX_PRIORITY = 1.0e9
 

@@ -20,18 +20,6 @@ from ucbplan.observing.precision.instruments import Instrument
 from ucbplan.observing.precision.observed import ObservedSpectra
 from ucbplan.observing.precision.sigma_v import SigmaVModel
 
-__all__ = [
-    "CADENCES",
-    "MODES",
-    "QUEUE_CADENCES",
-    "QUEUE_WAIT_S",
-    "ModeSpec",
-    "PlanSettings",
-    "parse_budgets",
-    "parse_duration",
-    "parse_mode",
-]
-
 #: Exposure cadences inside a visit (``--cadence``): ``auto`` takes the strategy with the most
 #: information per visit when σ_v follows the exposure time
 #: (:mod:`ucbplan.observing.precision.strategy`), else ``targeted``; ``targeted`` (or ``anchor``)
