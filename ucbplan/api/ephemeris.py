@@ -138,6 +138,22 @@ def ephemeris(
     EphemerisRangeWarning
         Epochs past T_valid(quadrature, α = 1) (also printed by the command line); a
         :class:`~ucbplan.errors.PlanWarning`.
+
+    Examples
+    --------
+    >>> import ucbplan
+    >>> table = ucbplan.ephemeris(
+    ...     "catalogs/hm-cnc-simulated.yaml", "2040-02-15T00:00", "2040-02-15T00:30"
+    ... )
+    >>> len(table)
+    11
+    >>> table["k", "anchor", "t_star_tdb"][:2]
+    <Table length=2>
+      k      anchor           t_star_tdb
+    int64    str10              str26
+    ------ ---------- --------------------------
+    306349 quadrature 2040-02-15T00:02:20.767885
+    306350 quadrature 2040-02-15T00:05:01.525011
     """
     found = predict(target, start, end, anchor, star, max_epochs)
     emit(list(found.warnings), EphemerisRangeWarning)
@@ -358,6 +374,20 @@ def compare_ephemerides(a: TargetLike, b: TargetLike, at: Any = None) -> Ephemer
     EphemerisComparison
         With σ from both covariances, the significance, and the cycles from A's reference epoch
         to B's as each counts them (a whole-cycle disagreement the wrapped offset hides).
+
+    Raises
+    ------
+    UcbplanError
+        A target that does not load, or an ``at`` that is not an epoch: one line naming it.
+
+    Examples
+    --------
+    >>> import ucbplan
+    >>> ucbplan.compare_ephemerides(
+    ...     "catalogs/hm-cnc-simulated.yaml", "catalogs/hm-cnc-simulated.yaml"
+    ... )
+    <EphemerisComparison: HM Cnc (simulated) − HM Cnc (simulated)
+    at 2037-01-01T00:00:00.000 TDB: -0 ± 0.832 s>
     """
     from ucbplan.core.timing import compare_sources
 

@@ -188,6 +188,19 @@ def fisher(
     -------
     FisherForecast
         ``.target`` (a Gaussian target at the midpoint), ``.snr``, ``.sigmas``, ``.warnings``.
+
+    Raises
+    ------
+    UcbplanError
+        A target without the LISA injection fields, or a bad ``t_obs`` or ``n_bins``: one line
+        naming it.
+
+    Examples
+    --------
+    >>> import ucbplan
+    >>> forecast = ucbplan.fisher("catalogs/fiducial-injection.yaml", n_bins=64)
+    >>> forecast
+    <FisherForecast Fiducial eccentric dWD (injection) (Fisher forecast): SNR 831.8, 9 σ's>
     """
     from ucbplan.lisa.pipeline import fisher_forecast
 
@@ -214,6 +227,18 @@ def waveform(
     -------
     WaveformLines
         ``.table`` (band, freq_hz [Hz], A_re, A_im, E_re, E_im [1/Hz], psd_a [1/Hz]), ``.snr``.
+
+    Raises
+    ------
+    UcbplanError
+        A target without the LISA injection fields, or a bad ``t_obs`` or ``n_bins``: one line
+        naming it.
+
+    Examples
+    --------
+    >>> import ucbplan
+    >>> ucbplan.waveform("catalogs/fiducial-injection.yaml", n_bins=64)
+    <WaveformLines Fiducial eccentric dWD (injection): 3 bands x 64 bins, SNR 831.8>
     """
     from ucbplan.lisa.lines import waveform_lines
 
@@ -300,6 +325,15 @@ def simulate(
     InputError, SamplerInterrupted
         Bad options (one line naming the parameter), before the target is read; Ctrl-C (a
         ``KeyboardInterrupt``) carrying the chain so far as ``.partial``.
+
+    Examples
+    --------
+    A short chain (20 steps; a real run takes the default 2000 or ``until_converged``):
+
+    >>> import ucbplan
+    >>> ucbplan.simulate("catalogs/fiducial-injection.yaml", seed=1, n_bins=64, steps=20)
+    <SimulationResult Fiducial eccentric dWD (injection): 20 steps, 512 samples of 9 parameters,
+    SNR 831.8, seed 1>
     """
     from ucbplan.lisa.pipeline import prepare_simulation
 

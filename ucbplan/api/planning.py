@@ -74,6 +74,14 @@ def default_constraints(
     ------
     InputError
         An unknown keyword or a bad value: one line naming it.
+
+    Examples
+    --------
+    >>> import ucbplan
+    >>> ucbplan.default_constraints("paranal")
+    [NightConstraint(twilight='nautical'), AirmassConstraint(max_airmass=2.0),
+     ZenithHoleConstraint(radius_deg=4.0),
+     MoonSeparationConstraint(min_deg=30.0, moon_down_ok=True)]
     """
     from ucbplan.observing.constraints.objects import default_constraints as _defaults
 
@@ -236,6 +244,23 @@ def plan(
         What the plan's ``warnings`` list holds, each with its cause's class:
         :class:`~ucbplan.errors.SmearingWarning`, :class:`~ucbplan.errors.ExposureWarning`
         (PlanWarnings), EarthOrientationWarning (nights past the bundled IERS tables).
+
+    Examples
+    --------
+    One night at Paranal for the bundled simulated HM Cnc (a night after 2027 also warns that the
+    bundled Earth-orientation tables end before it):
+
+    >>> import ucbplan
+    >>> run = ucbplan.plan("catalogs/hm-cnc-simulated.yaml", site="paranal", night="2040-02-15")
+    >>> run
+    <Plan at Paranal: 1 target, 1 night, 1 visit, 2 exposures, 0.14 h>
+    >>> run.table["block_id", "anchor", "t_mid_utc"]
+    <QTable length=2>
+              block_id             anchor          t_mid_utc
+               str28               str10              Time
+    ---------------------------- ---------- -----------------------
+    HM_Cnc_simulated-20400215-01 quadrature 2040-02-16T03:05:33.800
+    HM_Cnc_simulated-20400215-02 quadrature 2040-02-16T03:08:14.564
     """
     o = dict(locals())
     run = plan_run(o)

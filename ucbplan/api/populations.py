@@ -206,6 +206,12 @@ def population_forecast(
     ------
     InputError
         Bad options (one line naming the parameter), before the catalog is read.
+
+    Examples
+    --------
+    >>> import ucbplan
+    >>> ucbplan.population_forecast("catalogs/population/ldc-200.ecsv")
+    <PopulationForecast ldc-200.ecsv: 200 sources (158 ok, 26 unconstrained, 0 failed)>
     """
     import tempfile
 

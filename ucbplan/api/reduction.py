@@ -307,6 +307,21 @@ def reduce(
     ------
     InputError
         Bad options (naming the parameter); VelocityFileError, TargetFileError for the files.
+
+    Examples
+    --------
+    The bundled exact-Keplerian velocities of the fiducial eccentric binary (truth K1 = 585.293,
+    K2 = 712.620 km/s):
+
+    >>> import ucbplan
+    >>> ucbplan.reduce(
+    ...     "catalogs/fiducial-eccentric.yaml",
+    ...     "catalogs/fiducial-eccentric-velocities.csv",
+    ...     seed=1,
+    ...     samples=2000,
+    ... )
+    <Report Fiducial eccentric dWD: 480 spectra, K1 = 586.476 ± 1 km / s,
+    K2 = 711.893 ± 0.99 km / s, seed 1>
     """
     from ucbplan.reduce.pipeline import reduce as _reduce
 

@@ -138,6 +138,17 @@ def replan(
         the plan; a bad status in ``observed``; ``observed`` an observing log of another plan.
     InputFileError
         A plan without the recorded options, or whose target file is missing or changed.
+
+    Examples
+    --------
+    Two nights planned, the second re-planned from its evening:
+
+    >>> import ucbplan
+    >>> run = ucbplan.plan(
+    ...     "catalogs/hm-cnc-simulated.yaml", site="paranal", night="2040-02-15", nights=2
+    ... )
+    >>> ucbplan.replan(run, from_="2040-02-16T22:00")
+    <Plan at Paranal: 1 target, 2 nights, 2 visits, 4 exposures, 0.29 h>
     """
     old = plan if isinstance(plan, Plan) else Plan.read(plan)
     options = _options(old)

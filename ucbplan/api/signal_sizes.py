@@ -187,6 +187,12 @@ def feasibility(
     ------
     InputError
         A bad value (one line naming the parameter), before the target is read.
+
+    Examples
+    --------
+    >>> import ucbplan
+    >>> ucbplan.feasibility("catalogs/hm-cnc-simulated.yaml", sigma_v=15, n_spectra=100)
+    <Feasibility HM Cnc (simulated): P_b=5.3586 min, K1=156.2 km/s, e=0>
     """
     from ucbplan.observing.schedule.options import plan_settings
 
