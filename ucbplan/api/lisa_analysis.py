@@ -198,8 +198,7 @@ def fisher(
     Examples
     --------
     >>> import ucbplan
-    >>> forecast = ucbplan.fisher("catalogs/fiducial-injection.yaml", n_bins=64)
-    >>> forecast
+    >>> ucbplan.fisher("catalogs/fiducial-injection.yaml", n_bins=64)
     <FisherForecast Fiducial eccentric dWD (injection) (Fisher forecast): SNR 831.8, 9 σ's>
     """
     from ucbplan.lisa.pipeline import fisher_forecast
@@ -231,8 +230,7 @@ def waveform(
     Raises
     ------
     UcbplanError
-        A target without the LISA injection fields, or a bad ``t_obs`` or ``n_bins``: one line
-        naming it.
+        As :func:`fisher`.
 
     Examples
     --------
