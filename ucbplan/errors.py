@@ -29,31 +29,6 @@ from __future__ import annotations
 import warnings
 from collections.abc import Sequence
 
-__all__ = [
-    "ConvergenceError",
-    "EarthOrientationWarning",
-    "EphemerisRangeWarning",
-    "EpochRangeError",
-    "ExposureWarning",
-    "InputError",
-    "InputFileError",
-    "NumericalError",
-    "OutputError",
-    "OutputExistsError",
-    "PlanWarning",
-    "ReduceWarning",
-    "SamplerConvergenceWarning",
-    "SchemaError",
-    "SiteError",
-    "SmearingWarning",
-    "TargetFileError",
-    "UcbplanError",
-    "UcbplanWarning",
-    "VelocityFileError",
-    "emit",
-    "shorten",
-]
-
 #: Longest quoted input value in an error message [characters].
 MAX_VALUE_CHARS = 200
 

@@ -29,23 +29,6 @@ import yaml
 
 from ucbplan.errors import InputError, SchemaError, shorten
 
-__all__ = [
-    "EXPONENT_FLOAT",
-    "MAX_ALIASES",
-    "MAX_ALPHA",
-    "MAX_COMMENT_CHARS",
-    "MAX_TEXT_BYTES",
-    "MAX_YAML_BYTES",
-    "blank_comments",
-    "check_alpha",
-    "check_int",
-    "check_number",
-    "check_range",
-    "is_number",
-    "load_yaml",
-    "read_text",
-]
-
 #: Largest YAML input [bytes]; target and configuration files are a few kB.
 MAX_YAML_BYTES = 2_000_000
 #: Largest text table [bytes] (10⁷ spectra of ~60 bytes).

@@ -28,17 +28,6 @@ from typing import IO, Any
 
 from ucbplan.errors import InputError, OutputError, OutputExistsError, shorten
 
-__all__ = [
-    "check_output_path",
-    "dump_json",
-    "dumps_json",
-    "json_default",
-    "json_plain",
-    "output_format",
-    "write_file_set",
-    "write_output",
-]
-
 Writer = Callable[[IO[Any]], None]
 
 

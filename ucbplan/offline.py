@@ -33,8 +33,6 @@ from contextlib import ExitStack, contextmanager
 from pathlib import Path
 from typing import Any
 
-__all__ = ["bundled_iers_table", "iers_cache_path", "offline"]
-
 #: The bundled IERS table once read in this process (an explicit cache: see :func:`offline`).
 _TABLE: dict[str, Any] = {}
 

@@ -9,8 +9,6 @@ from typing import Any
 
 from ucbplan.errors import InputError, shorten
 
-__all__ = ["as_date", "as_float", "as_tdb", "scope"]
-
 
 @contextmanager
 def scope() -> Iterator[None]:

@@ -28,8 +28,6 @@ if TYPE_CHECKING:
     from ucbplan.observing.schedule import PlanSettings
     from ucbplan.targets import Target
 
-__all__ = ["STATUSES", "observed_settings", "sigma_v_note"]
-
 
 def observed_settings(
     path: Any, scale: Any, targets: list[Target], site: Site, settings: PlanSettings

@@ -12,8 +12,6 @@ from ucbplan.errors import InputError, shorten
 if TYPE_CHECKING:
     from astropy.table import Table
 
-__all__ = ["export_plan"]
-
 #: The export choices that are text (or a path).
 _TEXT = ("proposal_format", "keck_rotmode", "semester", "instrument", "eso_templates")
 

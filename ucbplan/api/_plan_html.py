@@ -8,8 +8,6 @@ from typing import Any
 
 from ucbplan.api._plan_records import GoalRecord, StrategyRecord
 
-__all__ = ["summary_html"]
-
 #: The summary's rows: key of the summary, label.
 _ROWS = (
     ("targets", "targets"),

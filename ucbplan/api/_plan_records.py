@@ -20,15 +20,6 @@ if TYPE_CHECKING:
     from astropy.table import QTable, Table
     from astropy.units import Quantity
 
-__all__ = [
-    "GoalRecord",
-    "StrategyRecord",
-    "as_qtable",
-    "goals_of",
-    "planning_targets",
-    "strategies_of",
-]
-
 #: The unit of the information on K [(km/s)⁻²].
 _INFO_UNIT = "km-2 s2"
 

@@ -11,7 +11,8 @@ from typing import TYPE_CHECKING, Any
 from ucbplan._version import __version__
 from ucbplan.api._convert import as_tdb, scope
 from ucbplan.api.flagspec import Flag
-from ucbplan.api.targets import TargetLike, get_site, load_target
+from ucbplan.api.targets import TargetLike, load_target
+from ucbplan.api.targets import get_site as get_site
 from ucbplan.errors import EphemerisRangeWarning, InputError, emit, shorten
 
 if TYPE_CHECKING:
@@ -19,21 +20,6 @@ if TYPE_CHECKING:
 
     from ucbplan.core.ephemeris import EpochSet
     from ucbplan.targets import Target
-
-__all__ = [
-    "COMPARE_FLAGS",
-    "EPHEMERIS_FLAGS",
-    # where the planning and reduction modules import them from (defined in api/targets.py)
-    "TargetLike",
-    "check_anchor",
-    "compare_ephemerides",
-    "ephemeris",
-    "epoch_table",
-    "epoch_window",
-    "get_site",
-    "horizon_warnings",
-    "load_target",
-]
 
 #: The options of :func:`ephemeris` as ``ucbplan ephemeris predict`` spells them.
 EPHEMERIS_FLAGS: dict[str, Flag] = {
@@ -152,6 +138,22 @@ def ephemeris(
     EphemerisRangeWarning
         Epochs past T_valid(quadrature, α = 1) (also printed by the command line); a
         :class:`~ucbplan.errors.PlanWarning`.
+
+    Examples
+    --------
+    >>> import ucbplan
+    >>> table = ucbplan.ephemeris(
+    ...     "catalogs/hm-cnc-simulated.yaml", "2040-02-15T00:00", "2040-02-15T00:30"
+    ... )
+    >>> len(table)
+    11
+    >>> table["k", "anchor", "t_star_tdb"][:2]
+    <Table length=2>
+      k      anchor           t_star_tdb
+    int64    str10              str26
+    ------ ---------- --------------------------
+    306349 quadrature 2040-02-15T00:02:20.767885
+    306350 quadrature 2040-02-15T00:05:01.525011
     """
     found = predict(target, start, end, anchor, star, max_epochs)
     emit(list(found.warnings), EphemerisRangeWarning)
@@ -372,6 +374,20 @@ def compare_ephemerides(a: TargetLike, b: TargetLike, at: Any = None) -> Ephemer
     EphemerisComparison
         With σ from both covariances, the significance, and the cycles from A's reference epoch
         to B's as each counts them (a whole-cycle disagreement the wrapped offset hides).
+
+    Raises
+    ------
+    UcbplanError
+        A target that does not load, or an ``at`` that is not an epoch: one line naming it.
+
+    Examples
+    --------
+    >>> import ucbplan
+    >>> ucbplan.compare_ephemerides(
+    ...     "catalogs/hm-cnc-simulated.yaml", "catalogs/hm-cnc-simulated.yaml"
+    ... )
+    <EphemerisComparison: HM Cnc (simulated) − HM Cnc (simulated)
+    at 2037-01-01T00:00:00.000 TDB: -0 ± 0.832 s>
     """
     from ucbplan.core.timing import compare_sources
 

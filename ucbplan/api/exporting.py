@@ -20,19 +20,6 @@ from ucbplan.errors import InputError, shorten
 if TYPE_CHECKING:
     from astropy.table import Table
 
-__all__ = [
-    "EXPORT_FLAGS",
-    "EXPORT_FORMAT_NAMES",
-    "NOW_FLAGS",
-    "P2_FLAGS",
-    "Export",
-    "countdown",
-    "eso_p2_create",
-    "export",
-    "export_formats",
-    "read_blocks",
-]
-
 #: The names of ``ucbplan.observing.exports.EXPORT_FORMATS`` (a test keeps them equal): spelled
 #: out because importing the exports (astropy.coordinates) at start-up costs ~0.3 s on every
 #: command; the library is imported only when an export runs.
@@ -165,10 +152,32 @@ def read_blocks(path: str | Path) -> Table:
     """A blocks table written by ``ucbplan plan -o`` (or :meth:`Plan.write`): ECSV, CSV or
     JSON, recognised by its content, every cell checked.
 
+    Parameters
+    ----------
+    path : str or Path
+        The blocks table (``.ecsv``, ``.csv`` or ``.json``).
+
+    Returns
+    -------
+    astropy.table.Table
+        The blocks, with the plan's provenance in ``.meta``.
+
     Raises
     ------
     UcbplanError
         One line naming the file, the row and column at fault.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> import ucbplan
+    >>> run = ucbplan.plan("catalogs/hm-cnc-simulated.yaml", site="paranal", night="2040-02-15")
+    >>> tmp = tempfile.TemporaryDirectory()
+    >>> path = run.write(pathlib.Path(tmp.name) / "plan.ecsv")
+    >>> blocks = ucbplan.read_blocks(path)
+    >>> len(blocks), str(blocks["t_mid_utc"][0])
+    (2, '2040-02-16T03:05:33.800')
+    >>> tmp.cleanup()
     """
     from ucbplan.observing.blocks.read import read_blocks as _read
 
@@ -240,6 +249,13 @@ def export(
     UcbplanError
         An unknown format, a bad option or table cell, a site that is not the format's
         observatory (without ``force``): one line each.
+
+    Examples
+    --------
+    >>> import ucbplan
+    >>> run = ucbplan.plan("catalogs/hm-cnc-simulated.yaml", site="paranal", night="2040-02-15")
+    >>> ucbplan.export(run, "phase-table")
+    Export(... bytes, .ecsv, 2 blocks)
     """
     from ucbplan.observing.exports import PROPOSAL_FORMATS, ExportOptions, export_blocks
 
@@ -357,6 +373,19 @@ def countdown(blocks: Any, at: Any = None) -> list[str]:
     ------
     UcbplanError
         A bad instant or table (one line naming it).
+
+    Examples
+    --------
+    >>> import ucbplan
+    >>> from ucbplan.api import countdown
+    >>> run = ucbplan.plan("catalogs/hm-cnc-simulated.yaml", site="paranal", night="2040-02-15")
+    >>> for line in countdown(run, at="2040-02-16T03:00:00"):
+    ...     print(line)
+    now       2040-02-16 03:00:00 UTC
+    next      HM Cnc (simulated) V01/01, anchor quadrature (u★ = 0.000 rad)
+              start 03:05:04 UTC (±0.71 s), in 5 min 4 s; 60 s exposure
+              new visit: acquisition starts 03:00:04 UTC
+    then      HM Cnc (simulated) V01/02, start 03:07:45 UTC, in 7 min 45 s
     """
     from ucbplan.observing.night.countdown import countdown_lines, plan_exposures, what_next
 

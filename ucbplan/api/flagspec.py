@@ -16,8 +16,6 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
-__all__ = ["Flag", "default_of", "flag_names"]
-
 
 @dataclass(frozen=True, slots=True)
 class Flag:

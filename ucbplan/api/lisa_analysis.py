@@ -38,27 +38,6 @@ if TYPE_CHECKING:
         SimulationResult,
     )
 
-__all__ = [
-    "FISHER_FLAGS",
-    "LISA_FLAGS",
-    "MAX_CHAIN_STEPS",
-    "MAX_WALKERS",
-    "SIMULATE_FLAGS",
-    "WAVEFORM_FLAGS",
-    "check_n_bins",
-    "corner_plot_paths",
-    "fisher",
-    "plot_waveform",
-    "save_interrupted",
-    "simulate",
-    "simulation_outputs",
-    "t_obs_seconds",
-    "waveform",
-    "write_corner_plots",
-    "write_forecast",
-    "write_simulation",
-]
-
 #: Most walkers and chain steps accepted (memory: walkers × steps × parameters floats).
 MAX_WALKERS = 100_000
 MAX_CHAIN_STEPS = 10_000_000
@@ -209,6 +188,18 @@ def fisher(
     -------
     FisherForecast
         ``.target`` (a Gaussian target at the midpoint), ``.snr``, ``.sigmas``, ``.warnings``.
+
+    Raises
+    ------
+    UcbplanError
+        A target without the LISA injection fields, or a bad ``t_obs`` or ``n_bins``: one line
+        naming it.
+
+    Examples
+    --------
+    >>> import ucbplan
+    >>> ucbplan.fisher("catalogs/fiducial-injection.yaml", n_bins=64)
+    <FisherForecast Fiducial eccentric dWD (injection) (Fisher forecast): SNR 831.8, 9 σ's>
     """
     from ucbplan.lisa.pipeline import fisher_forecast
 
@@ -235,6 +226,17 @@ def waveform(
     -------
     WaveformLines
         ``.table`` (band, freq_hz [Hz], A_re, A_im, E_re, E_im [1/Hz], psd_a [1/Hz]), ``.snr``.
+
+    Raises
+    ------
+    UcbplanError
+        As :func:`fisher`.
+
+    Examples
+    --------
+    >>> import ucbplan
+    >>> ucbplan.waveform("catalogs/fiducial-injection.yaml", n_bins=64)
+    <WaveformLines Fiducial eccentric dWD (injection): 3 bands x 64 bins, SNR 831.8>
     """
     from ucbplan.lisa.lines import waveform_lines
 
@@ -321,6 +323,15 @@ def simulate(
     InputError, SamplerInterrupted
         Bad options (one line naming the parameter), before the target is read; Ctrl-C (a
         ``KeyboardInterrupt``) carrying the chain so far as ``.partial``.
+
+    Examples
+    --------
+    A short chain (20 steps; a real run takes the default 2000 or ``until_converged``):
+
+    >>> import ucbplan
+    >>> ucbplan.simulate("catalogs/fiducial-injection.yaml", seed=1, n_bins=64, steps=20)
+    <SimulationResult Fiducial eccentric dWD (injection): 20 steps, 512 samples of 9 parameters,
+    SNR 831.8, seed 1>
     """
     from ucbplan.lisa.pipeline import prepare_simulation
 

@@ -21,18 +21,6 @@ from ucbplan.errors import InputError, shorten
 if TYPE_CHECKING:
     from ucbplan.observing.schedule import PlanSettings
 
-__all__ = [
-    "DEFAULT_EXPTIME",
-    "OLD_NAMES",
-    "PLAN_FLAGS",
-    "PlanDefault",
-    "accept_old_names",
-    "checked_flag",
-    "checked_text",
-    "recorded_options",
-    "settings_from",
-]
-
 F = TypeVar("F", bound=Callable[..., Any])
 
 

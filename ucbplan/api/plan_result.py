@@ -33,6 +33,7 @@ from ucbplan.api._plan_records import (
     goals_of,
     strategies_of,
 )
+from ucbplan.core.constants import HOUR_S
 from ucbplan.errors import InputError, InputFileError, PlanWarning, UcbplanError, emit, shorten
 
 if TYPE_CHECKING:
@@ -45,8 +46,6 @@ if TYPE_CHECKING:
     from ucbplan.observing.constraints import ConstraintSet
     from ucbplan.observing.observatory.sites import Site
     from ucbplan.observing.schedule import PlanRun
-
-__all__ = ["GoalRecord", "Plan", "StrategyRecord"]
 
 T = TypeVar("T")
 #: The site fields a plan's meta records (``Site.as_dict``).
@@ -269,7 +268,7 @@ class Plan:
             "nights": len(self._meta("nights")),
             "visits": total.visits,
             "exposures": len(self),
-            "hours": total.total_s / 3600.0,
+            "hours": total.total_s / HOUR_S,
         }
 
     def __repr__(self) -> str:
@@ -332,7 +331,27 @@ class Plan:
 
     def charts(self, path: str | Path, *, overwrite: bool = False) -> int:
         """Write the night charts, as ``plan --plot PATH``: a ``.pdf`` page per night or a
-        ``.png``/``.svg`` panel per night; the number of nights charted."""
+        ``.png``/``.svg`` panel per night; the number of nights charted.
+
+        Parameters
+        ----------
+        path : str or Path
+            ``.pdf`` (a page per night), ``.png`` or ``.svg`` (one image, a panel per night).
+        overwrite : bool
+            Replace an existing ``path``.
+
+        Returns
+        -------
+        int
+            The nights charted.
+
+        Raises
+        ------
+        InputError
+            Another suffix, a plan without blocks, or too many nights for one image.
+        OutputExistsError
+            ``path`` exists and ``overwrite`` is false.
+        """
         from ucbplan.observing.night.chart import write_night_charts
 
         with scope():
@@ -347,6 +366,18 @@ class Plan:
     def sheet(self, path: str | Path, *, overwrite: bool = False) -> int:
         """Write the night sheet (``.pdf`` or self-contained ``.html``), as ``plan --sheet``;
         the number of nights on it.
+
+        Parameters
+        ----------
+        path : str or Path
+            ``.pdf`` or ``.html``.
+        overwrite : bool
+            Replace an existing ``path``.
+
+        Returns
+        -------
+        int
+            The nights on the sheet.
 
         Raises
         ------
@@ -369,7 +400,23 @@ class Plan:
     # ------------------------------------------------------------------------------ files
 
     def to_text(self, fmt: str = "ecsv") -> str:
-        """The table as ``plan --format FMT`` prints it (``ecsv``, ``csv`` or ``json``)."""
+        """The table as ``plan --format FMT`` prints it (``ecsv``, ``csv`` or ``json``).
+
+        Parameters
+        ----------
+        fmt : str
+            ``ecsv``, ``csv`` or ``json``.
+
+        Returns
+        -------
+        str
+            The text, ending in a newline.
+
+        Raises
+        ------
+        InputError
+            Another ``fmt``.
+        """
         import io
 
         from ucbplan.observing.blocks.write import write_table
@@ -399,8 +446,24 @@ class Plan:
         """Write the blocks table (``.ecsv``, ``.csv`` or ``.json``, as ``plan -o``), atomically;
         :meth:`read` reads an ECSV file back.
 
+        Parameters
+        ----------
+        path : str or Path
+            The file; its suffix picks the format unless ``fmt`` is given.
+        fmt : str, optional
+            ``ecsv``, ``csv`` or ``json``.
+        overwrite : bool
+            Replace an existing ``path``.
+
+        Returns
+        -------
+        Path
+            ``path``.
+
         Raises
         ------
+        InputError
+            An unknown ``fmt``.
         OutputExistsError
             ``path`` exists and ``overwrite`` is false.
         """
@@ -427,6 +490,16 @@ class Plan:
     def read(cls, path: str | Path) -> Plan:
         """A plan written by :meth:`write` (or ``ucbplan plan -o plan.ecsv``): the same table,
         meta, accounting, visits, strategies and goals; no :attr:`run`.
+
+        Parameters
+        ----------
+        path : str or Path
+            An ECSV blocks table with the plan's meta.
+
+        Returns
+        -------
+        Plan
+            The plan, without the live run.
 
         Raises
         ------

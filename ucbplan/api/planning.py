@@ -13,11 +13,15 @@ from ucbplan.api._convert import as_date, as_float, scope
 from ucbplan.api.ephemeris import TargetLike, get_site, load_target
 from ucbplan.api.plan_options import (
     DEFAULT_EXPTIME,
-    OLD_NAMES,
-    PLAN_FLAGS,
     accept_old_names,
     recorded_options,
     settings_from,
+)
+from ucbplan.api.plan_options import (
+    OLD_NAMES as OLD_NAMES,
+)
+from ucbplan.api.plan_options import (
+    PLAN_FLAGS as PLAN_FLAGS,
 )
 from ucbplan.api.plan_result import Plan
 from ucbplan.errors import InputError, emit, shorten
@@ -30,8 +34,6 @@ if TYPE_CHECKING:
     from ucbplan.observing.observatory.sites import Site
     from ucbplan.observing.schedule import PlanRun
     from ucbplan.targets import Target
-
-__all__ = ["OLD_NAMES", "PLAN_FLAGS", "Plan", "default_constraints", "plan", "plan_run"]
 
 #: The keywords of :func:`plan` that a ``constraints`` list replaces (giving both is an error).
 _CONSTRAINT_OPTIONS = ("twilight", "airmass_max", "moon_sep", "moon_illum", "zenith_hole")
@@ -72,6 +74,14 @@ def default_constraints(
     ------
     InputError
         An unknown keyword or a bad value: one line naming it.
+
+    Examples
+    --------
+    >>> import ucbplan
+    >>> ucbplan.default_constraints("paranal")
+    [NightConstraint(twilight='nautical'), AirmassConstraint(max_airmass=2.0),
+     ZenithHoleConstraint(radius_deg=4.0),
+     MoonSeparationConstraint(min_deg=30.0, moon_down_ok=True)]
     """
     from ucbplan.observing.constraints.objects import default_constraints as _defaults
 
@@ -234,6 +244,23 @@ def plan(
         What the plan's ``warnings`` list holds, each with its cause's class:
         :class:`~ucbplan.errors.SmearingWarning`, :class:`~ucbplan.errors.ExposureWarning`
         (PlanWarnings), EarthOrientationWarning (nights past the bundled IERS tables).
+
+    Examples
+    --------
+    One night at Paranal for the bundled simulated HM Cnc (a night after 2027 also warns that the
+    bundled Earth-orientation tables end before it):
+
+    >>> import ucbplan
+    >>> run = ucbplan.plan("catalogs/hm-cnc-simulated.yaml", site="paranal", night="2040-02-15")
+    >>> run
+    <Plan at Paranal: 1 target, 1 night, 1 visit, 2 exposures, 0.14 h>
+    >>> run.table["block_id", "anchor", "t_mid_utc"]
+    <QTable length=2>
+              block_id             anchor          t_mid_utc
+               str28               str10              Time
+    ---------------------------- ---------- -----------------------
+    HM_Cnc_simulated-20400215-01 quadrature 2040-02-16T03:05:33.800
+    HM_Cnc_simulated-20400215-02 quadrature 2040-02-16T03:08:14.564
     """
     o = dict(locals())
     run = plan_run(o)

@@ -24,23 +24,6 @@ if TYPE_CHECKING:
     from ucbplan.population.simulate import PopulationSimulateOptions
     from ucbplan.population.visibility import VisibilityOptions
 
-__all__ = [
-    "POPULATION_SIMULATE_FLAGS",
-    "RANK_FLAGS",
-    "VISIBILITY_FLAGS",
-    "check_forecast_catalog",
-    "rank_settings",
-    "rank_sources",
-    "read_forecast",
-    "remove_parts",
-    "run_forecast",
-    "run_simulations",
-    "run_visibility",
-    "simulation_settings",
-    "visibility_settings",
-    "write_ranked",
-]
-
 #: How ``ucbplan population visibility`` spells the parameters of :func:`visibility_settings`.
 VISIBILITY_FLAGS: dict[str, Flag] = {
     "semester": Flag(("--semester",), "2041A, 2041B or an ESO period P147."),

@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 from ucbplan.api._convert import as_float, as_tdb, scope
 from ucbplan.api.flagspec import Flag
 from ucbplan.api.lisa_analysis import check_n_bins, t_obs_seconds
+from ucbplan.core.constants import DAY_S
 from ucbplan.errors import InputError, shorten
 from ucbplan.population.defaults import DEFAULT_N_BINS, DEFAULT_SIGMA_V_KMS, DEFAULT_T_START
 
@@ -25,22 +26,6 @@ if TYPE_CHECKING:
     from ucbplan.population.catalog_forecast import ForecastOptions
     from ucbplan.population.execute import ExecutorSpec
     from ucbplan.population.runner import RunControl
-
-__all__ = [
-    "PARTS_FLAGS",
-    "POPULATION_FLAGS",
-    "PopulationForecast",
-    "check_k_source",
-    "executor",
-    "forecast_settings",
-    "parts_of",
-    "population_forecast",
-    "progress_rate",
-    "read_population",
-    "run_control",
-    "semester",
-    "write_run",
-]
 
 #: Longest LISA observation of a population forecast [yr].
 MAX_T_OBS_YR = 100.0
@@ -151,7 +136,7 @@ def forecast_settings(
     t_obs_text = t_obs if isinstance(t_obs, str) or t_obs is None else None
     if t_obs_text is None and t_obs is not None:  # seconds or a Quantity: as text, exactly
         t_obs_s = t_obs_seconds(t_obs, 0.0)
-        if t_obs_s > MAX_T_OBS_YR * 365.25 * 86400.0:
+        if t_obs_s > MAX_T_OBS_YR * 365.25 * DAY_S:
             raise InputError(
                 f"t_obs: expected a duration from 1 day to 100 yr, got {shorten(t_obs)}", "t_obs"
             )
@@ -221,6 +206,12 @@ def population_forecast(
     ------
     InputError
         Bad options (one line naming the parameter), before the catalog is read.
+
+    Examples
+    --------
+    >>> import ucbplan
+    >>> ucbplan.population_forecast("catalogs/population/ldc-200.ecsv")
+    <PopulationForecast ldc-200.ecsv: 200 sources (158 ok, 26 unconstrained, 0 failed)>
     """
     import tempfile
 

@@ -19,18 +19,6 @@ if TYPE_CHECKING:
 
     from ucbplan.reduce.pipeline import ReduceOptions, Reduction
 
-__all__ = [
-    "MAX_SAMPLES",
-    "MIN_SAMPLES",
-    "REDUCE_FLAGS",
-    "Measurement",
-    "Report",
-    "check_count",
-    "check_seed",
-    "reduce",
-    "reduce_options",
-]
-
 #: Fewest Monte-Carlo samples (fewer give no usable quantiles).
 MIN_SAMPLES = 100
 #: Most Monte-Carlo samples: above 250 000 they run in chunks; 10⁷ take ~0.65 GB peak resident
@@ -319,6 +307,21 @@ def reduce(
     ------
     InputError
         Bad options (naming the parameter); VelocityFileError, TargetFileError for the files.
+
+    Examples
+    --------
+    The bundled exact-Keplerian velocities of the fiducial eccentric binary (truth K1 = 585.293,
+    K2 = 712.620 km/s):
+
+    >>> import ucbplan
+    >>> ucbplan.reduce(
+    ...     "catalogs/fiducial-eccentric.yaml",
+    ...     "catalogs/fiducial-eccentric-velocities.csv",
+    ...     seed=1,
+    ...     samples=2000,
+    ... )
+    <Report Fiducial eccentric dWD: 480 spectra, K1 = 586.476 ± 1 km / s,
+    K2 = 711.893 ± 0.99 km / s, seed 1>
     """
     from ucbplan.reduce.pipeline import reduce as _reduce
 

@@ -27,8 +27,6 @@ from ucbplan.errors import InputError, InputFileError, shorten
 if TYPE_CHECKING:
     from astropy.table import Table
 
-__all__ = ["REPLAN_FLAGS", "PlanChanges", "plan_changes", "replan"]
-
 #: How ``ucbplan replan`` spells :func:`replan`'s parameters (declared once).
 REPLAN_FLAGS: dict[str, Flag] = {
     "plan": Flag((), "Plan to re-plan: an ECSV blocks table written by `ucbplan plan -o`."),
@@ -140,6 +138,17 @@ def replan(
         the plan; a bad status in ``observed``; ``observed`` an observing log of another plan.
     InputFileError
         A plan without the recorded options, or whose target file is missing or changed.
+
+    Examples
+    --------
+    Two nights planned, the second re-planned from its evening:
+
+    >>> import ucbplan
+    >>> run = ucbplan.plan(
+    ...     "catalogs/hm-cnc-simulated.yaml", site="paranal", night="2040-02-15", nights=2
+    ... )
+    >>> ucbplan.replan(run, from_="2040-02-16T22:00")
+    <Plan at Paranal: 1 target, 2 nights, 2 visits, 4 exposures, 0.29 h>
     """
     old = plan if isinstance(plan, Plan) else Plan.read(plan)
     options = _options(old)

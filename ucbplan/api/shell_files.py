@@ -8,8 +8,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-__all__ = ["check_figure_path", "file_format"]
-
 
 def file_format(path: str | Path, default: str = "yaml") -> str:
     """The format a file's suffix names (``yaml``, ``json``, ``ecsv``, ``csv``), else

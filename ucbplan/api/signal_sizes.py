@@ -15,14 +15,13 @@ from ucbplan.api.ephemeris import parse_epoch
 from ucbplan.api.flagspec import Flag
 from ucbplan.api.plan_options import PLAN_FLAGS
 from ucbplan.api.targets import TargetLike, load_target
-from ucbplan.core.constants import DAY_S, MONTH_S, YEAR_S  # also the command's table columns
+from ucbplan.core.constants import DAY_S, YEAR_S  # also the command's table columns
+from ucbplan.core.constants import MONTH_S as MONTH_S
 from ucbplan.errors import InputError, shorten
 
 if TYPE_CHECKING:
     from ucbplan.feasibility import FeasibilityReport
     from ucbplan.targets import Target
-
-__all__ = ["DAY_S", "FEASIBILITY_FLAGS", "MONTH_S", "YEAR_S", "Feasibility", "feasibility"]
 
 #: The options of :func:`feasibility` as ``ucbplan feasibility`` spells them. ``sigma_v``,
 #: ``sigma_floor``, ``extinction`` and ``max_visit`` are the plan's options too (one Flag each
@@ -188,6 +187,12 @@ def feasibility(
     ------
     InputError
         A bad value (one line naming the parameter), before the target is read.
+
+    Examples
+    --------
+    >>> import ucbplan
+    >>> ucbplan.feasibility("catalogs/hm-cnc-simulated.yaml", sigma_v=15, n_spectra=100)
+    <Feasibility HM Cnc (simulated): P_b=5.3586 min, K1=156.2 km/s, e=0>
     """
     from ucbplan.observing.schedule.options import plan_settings
 

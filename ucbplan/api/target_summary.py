@@ -8,8 +8,6 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     from ucbplan.targets import Target
 
-__all__ = ["summary"]
-
 
 def summary(t: Target) -> dict[str, Any]:
     """The validate row of one target: times as TDB ISO strings, the rest SI floats."""

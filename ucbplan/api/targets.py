@@ -18,16 +18,6 @@ if TYPE_CHECKING:
     from ucbplan.observing.observatory.sites import Site
     from ucbplan.targets import Target
 
-__all__ = [
-    "TargetLike",
-    "get_site",
-    "is_path",
-    "load_as",
-    "load_target",
-    "validate",
-    "write_target",
-]
-
 TargetLike = Any  # a Target, a path, or a target document (dict)
 
 
@@ -47,6 +37,12 @@ def load_target(target: TargetLike) -> Target:
     ------
     TargetFileError
         One line naming the file (or ``<dict>``), the field, what was expected and how to fix it.
+
+    Examples
+    --------
+    >>> import ucbplan
+    >>> ucbplan.load_target("catalogs/hm-cnc-simulated.yaml")
+    <Target 'HM Cnc (simulated)' (lisa): P=321.5178509 s, RA=121.59667°, Dec=+15.45833°, ...>
     """
     return load_as(target, "target")
 
@@ -91,6 +87,18 @@ def write_target(target: TargetLike, path: str | Path, overwrite: bool = False) 
     ------
     OutputExistsError
         ``path`` exists and ``overwrite`` is false (nothing is written).
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> import ucbplan
+    >>> tmp = tempfile.TemporaryDirectory()
+    >>> path = pathlib.Path(tmp.name) / "hm-cnc.yaml"
+    >>> ucbplan.write_target("catalogs/hm-cnc-simulated.yaml", path).name
+    'hm-cnc.yaml'
+    >>> ucbplan.load_target(path).name
+    'HM Cnc (simulated)'
+    >>> tmp.cleanup()
     """
     from ucbplan.targets import write_target as _write
 
@@ -139,6 +147,15 @@ def get_site(site: Any, timezone: str | None = None) -> Site:
         Unknown name (with the closest known ones), or coordinates out of range.
     InputError
         Anything else, or a location holding more than one place.
+
+    Examples
+    --------
+    >>> import ucbplan
+    >>> site = ucbplan.get_site("paranal")
+    >>> site.name, site.timezone
+    ('Paranal', 'America/Santiago')
+    >>> site.lat_deg, site.height_m
+    (-24.6272, 2635.0)
     """
     from ucbplan.observing.observatory.sites import Site, resolve_site, site_from_lonlat
 
@@ -199,6 +216,13 @@ def validate(targets: TargetLike | Sequence[TargetLike]) -> list[dict[str, Any]]
     ------
     TargetFileError
         The first file that is not a valid target (one line naming the field).
+
+    Examples
+    --------
+    >>> import ucbplan
+    >>> row = ucbplan.validate("catalogs/hm-cnc-simulated.yaml")[0]
+    >>> row["name"], row["t_ref_tdb"], row["t_end_tdb"]
+    ('HM Cnc (simulated)', '2037-01-01T00:00:00.000', '2039-01-01T12:18:19.525')
     """
     from ucbplan.api.target_summary import summary
 

@@ -35,49 +35,36 @@ import importlib
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ucbplan.io import check_output_path, dump_json, output_format, write_output
+from ucbplan.io import check_output_path as check_output_path
+from ucbplan.io import dump_json as dump_json
+from ucbplan.io import output_format as output_format
+from ucbplan.io import write_output as write_output
 
 if TYPE_CHECKING:  # imported when first used (see _LAZY)
-    from ucbplan.api._observed import sigma_v_note
-    from ucbplan.observing.blocks.arrays import block_columns
-    from ucbplan.observing.blocks.cells import local_datetimes
-    from ucbplan.observing.blocks.write import csv_safe_table, write_table
-    from ucbplan.observing.night.chart import chart_format
+    from ucbplan.api._observed import sigma_v_note as sigma_v_note
+    from ucbplan.observing.blocks.arrays import block_columns as block_columns
+    from ucbplan.observing.blocks.cells import local_datetimes as local_datetimes
+    from ucbplan.observing.blocks.write import csv_safe_table as csv_safe_table
+    from ucbplan.observing.blocks.write import write_table as write_table
+    from ucbplan.observing.night.chart import chart_format as chart_format
     from ucbplan.observing.night.countdown import (
-        countdown_lines,
-        parse_utc,
-        plan_exposures,
-        what_next,
+        countdown_lines as countdown_lines,
     )
-    from ucbplan.observing.night.observing_log import LOG_KEYS, ObservingLog, log_lines
-    from ucbplan.observing.night.sheet import sheet_format
-    from ucbplan.offline import offline
-    from ucbplan.plotting import check_figure_path
-
-__all__ = [
-    "LOG_KEYS",
-    "ObservingLog",
-    "block_columns",
-    "chart_format",
-    "check_figure_path",
-    "check_output_path",
-    "countdown_lines",
-    "csv_safe_table",
-    "dump_json",
-    "local_datetimes",
-    "log_lines",
-    "night_charts",
-    "night_sheet",
-    "offline",
-    "output_format",
-    "parse_utc",
-    "plan_exposures",
-    "sheet_format",
-    "sigma_v_note",
-    "what_next",
-    "write_output",
-    "write_table",
-]
+    from ucbplan.observing.night.countdown import (
+        parse_utc as parse_utc,
+    )
+    from ucbplan.observing.night.countdown import (
+        plan_exposures as plan_exposures,
+    )
+    from ucbplan.observing.night.countdown import (
+        what_next as what_next,
+    )
+    from ucbplan.observing.night.observing_log import LOG_KEYS as LOG_KEYS
+    from ucbplan.observing.night.observing_log import ObservingLog as ObservingLog
+    from ucbplan.observing.night.observing_log import log_lines as log_lines
+    from ucbplan.observing.night.sheet import sheet_format as sheet_format
+    from ucbplan.offline import offline as offline
+    from ucbplan.plotting import check_figure_path as check_figure_path
 
 #: Names imported when first used: name → the library module that defines it.
 _LAZY = {

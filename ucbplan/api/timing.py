@@ -23,8 +23,6 @@ if TYPE_CHECKING:
     from ucbplan.targets import Target
     from ucbplan.timing import EclipseTimes, EphemerisFit, PeriodGuess
 
-__all__ = ["FIT_FLAGS", "TimingFit", "fit_ephemeris", "target_identity"]
-
 #: The options of :func:`fit_ephemeris` (and of :meth:`TimingFit.to_target`) as
 #: ``ucbplan ephemeris fit`` spells them.
 FIT_FLAGS: dict[str, Flag] = {
@@ -277,6 +275,29 @@ def fit_ephemeris(
     ------
     InputError
         Bad table, ambiguous cycle count, too few times (one line each, naming the row).
+
+    Examples
+    --------
+    Five eclipses of a 400 s binary, 1000 cycles apart (times as text keep every digit):
+
+    >>> from astropy.table import Table
+    >>> import ucbplan
+    >>> times = Table(
+    ...     {
+    ...         "cycle": [0, 1000, 2000, 3000, 4000],
+    ...         "bjd_tdb": [
+    ...             "2461000.5000000",
+    ...             "2461005.1296296",
+    ...             "2461009.7592593",
+    ...             "2461014.3888889",
+    ...             "2461019.0185185",
+    ...         ],
+    ...         "sigma_s": [1.0] * 5,
+    ...     }
+    ... )
+    >>> ucbplan.fit_ephemeris(times, terms=2)
+    <TimingFit <Table>: T0=BJD_TDB 2461009.7592593±0.447 s, P=400±0.00032 s; 5 times,
+    chi2/dof=...>
     """
     from ucbplan.timing import fit_times
 

@@ -22,15 +22,6 @@ if TYPE_CHECKING:
 
     from ucbplan.targets import Target
 
-__all__ = [
-    "HORIZON_FLAGS",
-    "HorizonReport",
-    "horizon",
-    "horizon_json",
-    "horizon_report",
-    "resolve_k_sigma",
-]
-
 #: The options of :func:`horizon` as ``ucbplan horizon`` spells them.
 HORIZON_FLAGS: dict[str, Flag] = {
     "sigma_v": Flag(
@@ -126,6 +117,21 @@ def horizon(
     -----
     Eq. tol_quad and Eq. tol_conj for the tolerances; T_valid is the first root of
     σ_u(τ) = α·δu_tol (docs/method.md).
+
+    Examples
+    --------
+    >>> import ucbplan
+    >>> table = ucbplan.horizon("catalogs/hm-cnc-simulated.yaml")
+    >>> table["t_valid_days"].info.format = ".0f"
+    >>> table["anchor", "alpha", "t_valid_days"]
+    <Table length=4>
+       anchor    alpha  t_valid_days
+       str11    float64   float64
+    ----------- ------- ------------
+    conjunction     0.5         2511
+    conjunction     1.0         3607
+     quadrature     0.5         4446
+     quadrature     1.0         6004
     """
     got = horizon_report(targets, sigma_v, k_eff, alpha, n_epochs, anchors)
     if not got.rows:

@@ -21,20 +21,6 @@ from ucbplan.api.terminal import (
 )
 from ucbplan.errors import InputError
 
-__all__ = [
-    "TABLE_FORMATS",
-    "check_output_and_plot",
-    "check_output_path",
-    "dump_json",
-    "err_console",
-    "literal",
-    "pick_format",
-    "rich_table",
-    "write_output",
-    "write_table_output",
-]
-
-
 #: Markup tags, removed before deciding whether a message is an alert.
 _TAG = re.compile(r"\[/?[a-z #]*\]")
 #: Plain-text starts of the messages ``--quiet`` still prints.

@@ -14,8 +14,6 @@ import typer
 
 from ucbplan.api.flagspec import Flag, default_of
 
-__all__ = ["argument", "flag", "option"]
-
 
 def option(func: Callable[..., Any], flags: Mapping[str, Flag], parameter: str) -> Any:
     """``typer.Option`` for ``func``'s ``parameter``: its default, flag and help, declared once."""

@@ -26,8 +26,6 @@ from ucbplan.api.signal_sizes import FEASIBILITY_FLAGS
 from ucbplan.api.timing import FIT_FLAGS
 from ucbplan.api.validity import HORIZON_FLAGS
 
-__all__ = ["FLAGS", "PARAMETERS", "cli_message", "cli_text", "flag_of"]
-
 #: Parameters whose flag is not ``--`` + the name with ``-`` for ``_``.
 _IRREGULAR = {
     "moon_sep_deg": "--moon-sep",

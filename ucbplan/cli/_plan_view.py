@@ -16,8 +16,6 @@ from ucbplan.errors import UcbplanError
 if TYPE_CHECKING:
     from ucbplan.api.plan_result import PlanAccount, VisitSummary
 
-__all__ = ["SUMMARY_NIGHTS", "SUMMARY_ROWS", "report"]
-
 
 def _local(blocks: list[Any]) -> list[str]:
     """Local civil time of each block centre, ``HH:MM:SS TZ`` (one conversion for the night)."""

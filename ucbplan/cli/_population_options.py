@@ -23,8 +23,6 @@ from ucbplan.api.flagspec import Flag, default_of
 if TYPE_CHECKING:
     from ucbplan.api.populations import ExecutorSpec, RunControl
 
-__all__ = ["PopulationArgs", "population_options"]
-
 CatalogArg = Annotated[Path, typer.Argument(help="LDC-style catalog: ECSV, CSV or HDF5 (.h5).")]
 TableOut = Annotated[Path, typer.Option("-o", "--output", help="Output table (ECSV).")]
 Overwrite = Annotated[bool, typer.Option("--overwrite", help="Replace existing outputs.")]

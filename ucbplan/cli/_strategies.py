@@ -9,8 +9,6 @@ from rich.markup import escape
 
 from ucbplan.cli._console import err_console, rich_table
 
-__all__ = ["print_comparison"]
-
 
 def _num(value: float | None, fmt: str) -> str:
     return "-" if value is None or not math.isfinite(value) else format(value, fmt)

@@ -18,8 +18,6 @@ from ucbplan.cli._console import err_console
 from ucbplan.cli._flags import cli_message
 from ucbplan.errors import MAX_VALUE_CHARS, UcbplanError, shorten
 
-__all__ = ["app", "main"]
-
 app = typer.Typer(
     name="ucbplan",
     help="Phase-targeted spectroscopy of ultracompact binaries from LISA ephemerides.",

@@ -43,8 +43,6 @@ from ucbplan.cli.ephemeris import register as register_ephemeris
 # numpy and astropy are imported by the API inside the commands: `ucbplan --help` must not pay
 # for them (benchmarks/startup.py).
 
-__all__ = ["horizon", "register", "validate"]
-
 
 def validate(targets: TargetsArg, fmt: ValidateFormatOpt = "table") -> None:
     """Check target files and print a summary (period, e, ω, T_asc, σ's).

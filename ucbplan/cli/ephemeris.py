@@ -39,8 +39,6 @@ from ucbplan.cli._options import (
 )
 from ucbplan.cli.timing import ephemeris_fit
 
-__all__ = ["EphemerisGroup", "ephemeris_app", "register"]
-
 
 def _required(parameter: str) -> Any:
     """A required option (no default) with the flag and help :data:`EPHEMERIS_FLAGS` declares."""

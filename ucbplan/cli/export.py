@@ -23,8 +23,6 @@ from ucbplan.cli._derive import argument, flag, option
 from ucbplan.cli._flags import cli_text
 from ucbplan.errors import InputError, shorten
 
-__all__ = ["export_command", "register"]
-
 _Output = Annotated[
     Path | None, typer.Option("-o", "--output", help="Output file (default stdout).")
 ]

@@ -28,8 +28,6 @@ from ucbplan.cli._flags import cli_text
 from ucbplan.cli._options import OverwriteAllOpt, TargetArg
 from ucbplan.cli._strategies import print_comparison
 
-__all__ = ["feasibility_command", "register"]
-
 PlotOpt = Annotated[Path | None, typer.Option("--plot", help="Write Δv_aps vs baseline PNG here.")]
 FormatOpt = Annotated[
     str | None,

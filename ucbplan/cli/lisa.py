@@ -26,8 +26,6 @@ if TYPE_CHECKING:
 
     from ucbplan.api.lisa_analysis import SimulationFiles, SimulationProblem, SimulationResult
 
-__all__ = ["register"]
-
 SIM, FIS, WAV = api.SIMULATE_FLAGS, api.FISHER_FLAGS, api.WAVEFORM_FLAGS
 # simulate
 PosteriorOutputOpt = Annotated[

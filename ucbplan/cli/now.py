@@ -31,8 +31,6 @@ from ucbplan.api.exporting import NOW_FLAGS, countdown, read_blocks
 from ucbplan.cli._derive import argument, flag
 from ucbplan.errors import InputError
 
-__all__ = ["live", "register"]
-
 #: Clears a terminal and puts the cursor top left (ANSI).
 _CLEAR = "\x1b[H\x1b[2J"
 #: What the key source returns when no key will come (the end of a piped stdin).

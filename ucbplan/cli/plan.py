@@ -30,8 +30,6 @@ from ucbplan.cli._derive import argument, flag, option
 from ucbplan.cli._plan_view import report
 from ucbplan.errors import UcbplanWarning
 
-__all__ = ["register"]
-
 _MACHINE = ("ecsv", "csv", "json")
 
 _Wide = Annotated[bool, typer.Option("--wide", help="Print every column of the plan table.")]

@@ -39,8 +39,6 @@ if TYPE_CHECKING:
     from ucbplan.api.population_runs import ForecastRun
     from ucbplan.api.populations import Catalog, ExecutorSpec, ForecastOptions, RunControl
 
-__all__ = ["register"]
-
 VIS, RANK, SIM = runs.VISIBILITY_FLAGS, runs.RANK_FLAGS, runs.POPULATION_SIMULATE_FLAGS
 
 

@@ -16,8 +16,6 @@ from ucbplan.cli._derive import argument, option
 from ucbplan.cli._options import OverwriteAllOpt
 from ucbplan.errors import InputError, UcbplanError
 
-__all__ = ["reduce_cmd", "register"]
-
 _FORMATS = ("table", "json", "yaml")
 FLAGS = api.REDUCE_FLAGS
 

@@ -19,8 +19,6 @@ from ucbplan.cli._derive import argument, flag, option
 from ucbplan.cli._plan_view import report
 from ucbplan.errors import UcbplanWarning
 
-__all__ = ["register"]
-
 _Output = Annotated[
     Path | None, typer.Option("-o", "--output", help="Write the new blocks table (.ecsv).")
 ]

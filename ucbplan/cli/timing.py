@@ -32,8 +32,6 @@ from ucbplan.cli._derive import option
 from ucbplan.cli._flags import cli_text
 from ucbplan.cli._options import OverwriteAllOpt
 
-__all__ = ["ephemeris_fit"]
-
 TimesArg = Annotated[Path, typer.Argument(metavar="TIMES", help=FIT_FLAGS["times"].help)]
 FormatOpt = Annotated[
     str | None,

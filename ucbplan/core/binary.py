@@ -14,23 +14,6 @@ from numpy.typing import ArrayLike, NDArray
 
 from ucbplan.core.constants import C_M_S, G_SI
 
-__all__ = [
-    "MASS_RADIUS_MODELS",
-    "a_total_m",
-    "chirp_mass",
-    "chirp_mass_from_amplitude",
-    "chirp_mass_from_fdot",
-    "distance_from_amplitude_m",
-    "fdot_gw_only",
-    "kepler_total_mass",
-    "mass_from_omega_dot",
-    "omega_dot_gr",
-    "peters_mathews_enhancement",
-    "radius_eggleton",
-    "radius_nauenberg",
-    "redshift_difference_orbital",
-]
-
 F64 = NDArray[np.float64]
 
 

@@ -8,23 +8,6 @@ from __future__ import annotations
 
 import math
 
-__all__ = [
-    "AU_M",
-    "C_KM_S",
-    "C_M_S",
-    "DAY_S",
-    "E_MAX",
-    "G_SI",
-    "KPC_M",
-    "L_B",
-    "MONTH_S",
-    "MSUN_KG",
-    "RSUN_M",
-    "SIDEREAL_YEAR_S",
-    "TWO_PI",
-    "YEAR_S",
-]
-
 #: Speed of light [m/s] (exact).
 C_M_S = 299792458.0
 #: Speed of light [km/s].
@@ -42,8 +25,14 @@ KPC_M = 3.0856775814913673e19
 #: IAU 2006 Resolution B3: d(TDB)/d(TCB) = 1 − L_B.
 L_B = 1.550519768e-8
 
+#: One day [s], as an int (exact integer arithmetic: POSIX seconds, Decimal epochs).
+DAY_S_INT = 86400
 #: One day [s].
-DAY_S = 86400.0
+DAY_S = float(DAY_S_INT)
+#: One hour [s], as an int (whole-second clock arithmetic).
+HOUR_S_INT = 3600
+#: One hour [s].
+HOUR_S = float(HOUR_S_INT)
 #: Julian year [s] (what astropy's bare "yr" means).
 YEAR_S = 365.25 * DAY_S
 #: One twelfth of a Julian year [s].

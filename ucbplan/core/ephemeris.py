@@ -17,38 +17,29 @@ from numpy.typing import NDArray
 from ucbplan.core.constants import TWO_PI
 from ucbplan.core.params import PARAM_NAMES, EphemerisSource, PhaseParams
 from ucbplan.core.phase import (
-    arg_latitude,
+    arg_latitude as arg_latitude,
+)
+from ucbplan.core.phase import (
     arg_latitude_rate,
-    gw_phase,
-    jacobian_kernel,
     ll_pair,
-    phase_asc,
-    radial_velocity,
     sigma_u_from_jacobian,
     u_cycles,
     u_jacobian,
     u_state,
 )
+from ucbplan.core.phase import (
+    gw_phase as gw_phase,
+)
+from ucbplan.core.phase import (
+    jacobian_kernel as jacobian_kernel,
+)
+from ucbplan.core.phase import (
+    phase_asc as phase_asc,
+)
+from ucbplan.core.phase import (
+    radial_velocity as radial_velocity,
+)
 from ucbplan.errors import ConvergenceError, UcbplanError, shorten
-
-__all__ = [
-    "ANCHORS",
-    "EpochSet",
-    "arg_latitude",
-    "arg_latitude_rate",
-    "eclipse_kind",
-    "find_epochs",
-    "gw_phase",
-    "jacobian_kernel",
-    "ll_pair",
-    "phase_asc",
-    "radial_velocity",
-    "resolve_anchor",
-    "sigma_u_from_jacobian",
-    "solve_u",
-    "u_jacobian",
-    "with_details",
-]
 
 FloatArray = NDArray[np.float64]
 

@@ -14,16 +14,6 @@ from astropy.time import Time
 
 from ucbplan.errors import EpochRangeError, InputError, shorten
 
-__all__ = [
-    "MAX_EPOCH_CHARS",
-    "SCALES",
-    "YEAR_RANGE",
-    "epoch_in_scale",
-    "parse_tdb",
-    "split_scale_label",
-    "year_of",
-]
-
 #: Time scales an epoch may be labelled with (lower case).
 SCALES: tuple[str, ...] = ("tdb", "tcb", "tt", "utc", "tai")
 #: Longest epoch text [characters]: "MJD 65059.123456789012345 (TDB)" is 31.

@@ -29,27 +29,6 @@ from ucbplan.core.validity_grid import HORIZON_CAP_S, anchor_sigma_batch, oscill
 from ucbplan.core.validity_poly import t_valid_poly
 from ucbplan.errors import UcbplanError
 
-__all__ = [
-    "AFTER",
-    "BEFORE",
-    "HorizonRow",
-    "anchor_kind",
-    "anchor_sigma_u",
-    "anchor_u_values",
-    "horizon_s",
-    "horizon_table",
-    "sigma_u",
-    "sigma_u_end",
-    "sigma_u_from_jacobian",
-    "t_valid",
-    "t_valid_batch",
-    "time_reversed",
-    "tolerance",
-    "two_sided",
-    "u_jacobian",
-    "valid_window_s",
-]
-
 FloatArray = NDArray[np.float64]
 #: A target, or its (parameters, covariance, T_obs [s]) directly.
 SourceLike = EphemerisSource | tuple[PhaseParams, FloatArray, float]

@@ -26,8 +26,6 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["WindowedVelocity", "harmonics", "n_harmonics", "window_average"]
-
 F64 = NDArray[np.float64]
 
 #: Harmonics are kept until the dropped tail is below this fraction of h (K·1e-14 ≪ 1 mm/s).

@@ -16,8 +16,6 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["correlation_split", "inverse_scaled", "sample_normal", "sqrt_factor"]
-
 F64 = NDArray[np.float64]
 
 

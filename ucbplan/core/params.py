@@ -14,16 +14,6 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = [
-    "PARAM_NAMES",
-    "PARAM_UNITS",
-    "EphemerisSource",
-    "PhaseParams",
-    "shift_columns",
-    "shift_jacobian",
-    "shift_reference",
-]
-
 #: Order of the phase-model parameters everywhere (covariance rows, Jacobian columns).
 PARAM_NAMES: tuple[str, ...] = ("phase", "f_gw", "fdot", "fddot", "eta", "kappa", "omega_dot")
 #: SI unit of each parameter, as astropy unit strings.

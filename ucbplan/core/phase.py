@@ -22,24 +22,6 @@ from ucbplan.core.constants import TWO_PI
 from ucbplan.core.params import PARAM_NAMES, PhaseParams
 from ucbplan.errors import UcbplanError
 
-__all__ = [
-    "arg_latitude",
-    "arg_latitude_rate",
-    "ascending_node_s",
-    "gw_phase",
-    "jacobian_kernel",
-    "ll_pair",
-    "orbit_state",
-    "phase_asc",
-    "phase_asc_mod",
-    "radial_velocity",
-    "sigma_ascending_node_s",
-    "sigma_u_from_jacobian",
-    "u_cycles",
-    "u_jacobian",
-    "u_state",
-]
-
 FloatArray = NDArray[np.float64]
 
 _SPLIT = 134217729.0  # 2**27 + 1, Dekker splitting constant

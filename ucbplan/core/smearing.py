@@ -17,14 +17,6 @@ from numpy.typing import ArrayLike, NDArray
 
 from ucbplan.errors import UcbplanError
 
-__all__ = [
-    "comb_attenuation",
-    "lambda_k",
-    "lambda_kappa",
-    "parse_smear_budget",
-    "smear_velocity",
-]
-
 FloatArray = NDArray[np.float64]
 
 

@@ -38,27 +38,6 @@ from ucbplan.core.constants import TWO_PI, YEAR_S
 from ucbplan.core.params import PhaseParams
 from ucbplan.core.phase import arg_latitude_rate, sigma_u_from_jacobian, u_cycles, u_jacobian
 
-__all__ = [
-    "MARKS",
-    "SIGN_SPAN_S",
-    "TIMING_NAMES",
-    "TIMING_UNITS",
-    "Comparison",
-    "ComparisonReport",
-    "ReferencedSource",
-    "TimingEphemeris",
-    "compare",
-    "compare_sources",
-    "cycle_time_s",
-    "mark_phase_asc",
-    "midway",
-    "period_sign_change",
-    "phase_covariance",
-    "phase_jacobian",
-    "to_phase_params",
-    "truncation_s",
-]
-
 FloatArray = NDArray[np.float64]
 
 #: Event at T0 → star 1's argument of latitude u₁ there [rad].

@@ -18,26 +18,9 @@ from decimal import Decimal
 
 from astropy.time import Time
 
+from ucbplan.core.constants import DAY_S_INT
 from ucbplan.core.epochs import YEAR_RANGE, split_scale_label, year_of
 from ucbplan.errors import InputError, shorten
-
-__all__ = [
-    "DAY_S",
-    "DECIMAL_CONTEXT",
-    "JD_RANGE",
-    "MAX_TIMING_EPOCH_CHARS",
-    "MJD_OFFSET",
-    "TIMING_EPOCH_EXAMPLE",
-    "TIMING_EPOCH_WORDS",
-    "bjd_tdb_numbers",
-    "format_bjd",
-    "format_bjd_tdb",
-    "jd_to_seconds",
-    "parse_decimal",
-    "parse_epoch_label",
-    "parse_timing_epoch",
-    "seconds_to_jd",
-]
 
 #: Scale words of a timing epoch → astropy format of the number that follows (all TDB at the
 #: solar-system barycentre).
@@ -238,8 +221,6 @@ def bjd_tdb_numbers(t: Time, decimals: int = 12) -> list[str]:
 
 # exact decimals (eclipse-time tables, initial ephemerides)
 
-#: Seconds per day (exact).
-DAY_S = 86400
 #: JD − MJD (exact).
 MJD_OFFSET = Decimal("2400000.5")
 #: Decimal context wide enough for every epoch arithmetic here (JDs with 20+ digits, times 86400).
@@ -327,9 +308,9 @@ def format_bjd(jd: Decimal, decimals: int = 12) -> str:
 
 def jd_to_seconds(jd: Decimal, ref: Decimal) -> float:
     """``(jd − ref)`` in seconds as float64, the subtraction exact."""
-    return float(DECIMAL_CONTEXT.multiply(DECIMAL_CONTEXT.subtract(jd, ref), Decimal(DAY_S)))
+    return float(DECIMAL_CONTEXT.multiply(DECIMAL_CONTEXT.subtract(jd, ref), Decimal(DAY_S_INT)))
 
 
 def seconds_to_jd(t_s: float, ref: Decimal) -> Decimal:
     """``ref + t_s`` (seconds, float64 taken exactly) as an exact JD."""
-    return DECIMAL_CONTEXT.add(ref, DECIMAL_CONTEXT.divide(Decimal(t_s), Decimal(DAY_S)))
+    return DECIMAL_CONTEXT.add(ref, DECIMAL_CONTEXT.divide(Decimal(t_s), Decimal(DAY_S_INT)))

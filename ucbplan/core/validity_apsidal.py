@@ -42,8 +42,6 @@ from ucbplan.core.validity_poly import (
     shift_matrix,
 )
 
-__all__ = ["envelope", "t_valid_apsidal"]
-
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
 #: Samples of the apsidal angle per period for the Fourier bounds of the F_m.

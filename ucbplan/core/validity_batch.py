@@ -36,8 +36,6 @@ from ucbplan.errors import InputError
 if TYPE_CHECKING:
     from astropy.table import Table
 
-__all__ = ["HORIZON_COLUMNS", "horizon_columns", "horizon_json", "horizon_rows", "horizons"]
-
 FloatArray = NDArray[np.float64]
 #: A target's parameters as a tuple in PARAM_NAMES order (PhaseParams.as_array without the array).
 _PARAMS = operator.attrgetter(*PARAM_NAMES)

@@ -16,8 +16,6 @@ from numpy.typing import NDArray
 from ucbplan.core.constants import YEAR_S
 from ucbplan.core.phase import jacobian_kernel
 
-__all__ = ["HORIZON_CAP_S", "anchor_sigma_batch", "oscillating", "t_valid_grid"]
-
 FloatArray = NDArray[np.float64]
 #: Horizons are searched up to this long after the end of the information [s].
 HORIZON_CAP_S = 300.0 * YEAR_S

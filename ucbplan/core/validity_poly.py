@@ -19,19 +19,6 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = [
-    "anchor_phase",
-    "horner",
-    "monotone_01",
-    "power_gram",
-    "roots_01",
-    "shift_matrix",
-    "sigma2_coefficients",
-    "sigma2_polys",
-    "t_valid_from_sigma2",
-    "t_valid_poly",
-]
-
 FloatArray = NDArray[np.float64]
 _BINOM = np.array([[math.comb(k, j) for j in range(4)] for k in range(4)], dtype=np.float64)
 #: Leading coefficients below this fraction of the largest term on [0, 1] are dropped.

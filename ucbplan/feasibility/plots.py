@@ -14,8 +14,6 @@ from ucbplan.feasibility.report import FeasibilityReport
 from ucbplan.feasibility.signals import apsidal_period_s, delta_v_aps
 from ucbplan.plotting import pyplot, save_figure
 
-__all__ = ["plot_apsidal_signal", "plot_report"]
-
 _LINESTYLES = ("-", "--", ":", "-.")
 
 

@@ -32,8 +32,6 @@ from ucbplan.feasibility.signals import (
 if TYPE_CHECKING:
     from ucbplan.targets import Target
 
-__all__ = ["FeasibilityReport", "feasibility_report", "report_for_target"]
-
 #: Default velocity precision per spectrum when neither the caller nor the target gives one [m/s].
 DEFAULT_SIGMA_V_M_S = 15e3
 #: Default rows of the timing table: ΔT after the reference epoch (LISA midpoint or T0) [Julian yr].

@@ -34,24 +34,6 @@ from ucbplan.core.phase import arg_latitude_rate
 from ucbplan.errors import InputError, UcbplanError
 from ucbplan.inputs import check_range
 
-__all__ = [
-    "OpticalEphemeris",
-    "apsidal_period_s",
-    "delta_k_bound",
-    "delta_v_aps",
-    "delta_v_cm",
-    "eccentricity_floor",
-    "gw_timing_s",
-    "omega_dot_gr",
-    "omega_dot_tide",
-    "optical_ephemeris",
-    "optical_timing_s",
-    "semi_amplitudes",
-    "tau_chirp_gr_s",
-    "tertiary_acceleration",
-    "tidal_deformability",
-]
-
 
 def _check_positive(**values: float) -> None:
     for name, value in values.items():

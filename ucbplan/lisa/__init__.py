@@ -14,6 +14,8 @@ kernels :mod:`~ucbplan.lisa.waveform` (with :mod:`~ucbplan.lisa.numerics`),
 :mod:`~ucbplan.lisa.posterior` (start → midpoint, π-mode fold); figures :mod:`~ucbplan.lisa.plots`.
 """
 
+from ucbplan.core.constants import DAY_S
+
 __all__ = [
     "DEFAULT_MAX_STEPS",
     "DEFAULT_N_BINS",
@@ -27,7 +29,7 @@ __all__ = [
 #: complex numbers); every command that takes ``--n-bins`` checks it.
 MAX_N_BINS = 65536
 #: Shortest accepted observation [s] (a day: the response needs a resolved orbit).
-MIN_T_OBS_S = 86400.0
+MIN_T_OBS_S = DAY_S
 
 # The defaults of the model and the sampler, declared once for the library, the API
 # (:mod:`ucbplan.api.lisa_analysis`, whose signatures the command line derives from) and the

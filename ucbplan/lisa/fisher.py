@@ -20,17 +20,6 @@ from ucbplan.core.mvnormal import correlation_split, inverse_scaled, sqrt_factor
 from ucbplan.errors import NumericalError
 from ucbplan.lisa.likelihood import Likelihood
 
-__all__ = [
-    "STEPS",
-    "fisher_covariance",
-    "fisher_from_templates",
-    "fisher_matrix",
-    "fisher_points",
-    "prior_excess",
-    "unwhiten",
-    "whitening",
-]
-
 #: Largest condition number of the Fisher correlation matrix that is still inverted: beyond it a
 #: combination of parameters is unconstrained (round-off alone gives ~1e-16 relative errors).
 MAX_CONDITION = 1e10

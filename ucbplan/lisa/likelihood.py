@@ -39,21 +39,6 @@ from ucbplan.lisa.waveform import FourLineModel
 if TYPE_CHECKING:
     from ucbplan.targets import Target
 
-__all__ = [
-    "CIRCULAR_NAMES",
-    "ECCENTRIC_NAMES",
-    "LOG10_FDOT_RANGE",
-    "Likelihood",
-    "Prior",
-    "linear_fdot",
-    "model_for_target",
-    "physical_from_theta",
-    "sampled_names",
-    "simulate_data",
-    "source_from_target",
-    "theta_from_source",
-]
-
 ECCENTRIC_NAMES: tuple[str, ...] = (
     "log10_amplitude",
     "f_gw",

@@ -19,8 +19,6 @@ if TYPE_CHECKING:
 
     from ucbplan.lisa.simulation import LisaModel
 
-__all__ = ["CONVENTION", "LINE_COLUMNS", "WaveformLines", "waveform_lines"]
-
 #: Fourier and TDI conventions of the table (written to its metadata).
 CONVENTION = (
     "one-sided Fourier transform x~(f) = int_0^T x(t) exp(-2 pi i f t) dt, t = 0 at the start of "

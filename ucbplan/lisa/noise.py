@@ -17,15 +17,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ucbplan.core.constants import YEAR_S
 from ucbplan.lisa.orbits import C_M_S, LISA_ARM_M
-
-__all__ = [
-    "SANGRIA",
-    "SCIRDV1",
-    "NoiseModel",
-    "galactic_strain_psd",
-    "psd_a",
-]
 
 
 @dataclass(frozen=True, slots=True)
@@ -62,7 +55,7 @@ def galactic_strain_psd(f_hz: ArrayLike, t_obs_s: float) -> NDArray[np.float64]:
     LDC Sangria fit (docs/method.md, "Waveform and noise"); T in years of 365.25 d.
     """
     f = np.asarray(f_hz, dtype=float)
-    t_yr = t_obs_s / (365.25 * 86400.0)
+    t_yr = t_obs_s / YEAR_S
     a_g, alpha, f2 = 1.28265531e-44, 1.629667, 4.81078e-4
     f1 = 10.0 ** (-0.2235 * np.log10(t_yr) - 2.70408)
     fk = 10.0 ** (-0.36098 * np.log10(t_yr) - 2.37822)

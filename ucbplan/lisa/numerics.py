@@ -10,17 +10,6 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = [
-    "GEMM_SERIAL",
-    "TABLE_Q",
-    "beta_powers",
-    "cis",
-    "gemm",
-    "n_monomials",
-    "quadratic_cis",
-    "quadratic_tables",
-]
-
 #: Table length of the block split k = Q p + q of the slow-time index (the orbital carrier and the
 #: apsidal rotation, :func:`quadratic_cis`).
 TABLE_Q = 32

@@ -15,14 +15,6 @@ from numpy.typing import ArrayLike, NDArray
 
 from ucbplan.core.constants import AU_M, C_M_S, SIDEREAL_YEAR_S
 
-__all__ = [
-    "AU_M",
-    "C_M_S",
-    "LISA_ARM_M",
-    "SIDEREAL_YEAR_S",
-    "EqualArmOrbits",
-]
-
 LISA_ARM_M = 2.5e9
 
 

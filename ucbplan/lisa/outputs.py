@@ -25,14 +25,6 @@ if TYPE_CHECKING:
     from ucbplan.lisa.simulation import SimulationProblem, SimulationResult
     from ucbplan.targets import Target
 
-__all__ = [
-    "SimulationFiles",
-    "load_resume",
-    "save_interrupted",
-    "simulation_files",
-    "write_simulation",
-]
-
 F64 = NDArray[np.float64]
 
 

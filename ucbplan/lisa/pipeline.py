@@ -61,15 +61,6 @@ if TYPE_CHECKING:
     from ucbplan.lisa.waveform import FourLineModel
     from ucbplan.targets import Target
 
-__all__ = [
-    "FisherForecast",
-    "build_model",
-    "fisher_forecast",
-    "prepare_simulation",
-    "run_simulation",
-    "simulate",
-]
-
 F64 = NDArray[np.float64]
 #: ``progress(step, total, tau_max)``, called every few sampler steps.
 Progress = Callable[[int, int, float], None]

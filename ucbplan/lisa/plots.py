@@ -18,8 +18,6 @@ if TYPE_CHECKING:
     from ucbplan.lisa.lines import WaveformLines
     from ucbplan.lisa.simulation import SimulationResult
 
-__all__ = ["CORNER_NAMES", "asd_plot", "corner_plot", "simulation_corner_plots", "waveform_plot"]
-
 #: File names written by :func:`simulation_corner_plots`.
 CORNER_NAMES = ("corner_start.png", "corner_midpoint.png", "corner_e_omega.png")
 _DPI = 110

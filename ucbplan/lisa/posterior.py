@@ -20,17 +20,6 @@ from ucbplan.core.params import PhaseParams, shift_columns, shift_jacobian
 from ucbplan.lisa.likelihood import physical_from_theta
 from ucbplan.targets import Target
 
-__all__ = [
-    "EXTRA_NAMES",
-    "fold_phase_mode",
-    "gaussian_target",
-    "midpoint_samples",
-    "posterior_target",
-    "sampled_to_physical_jacobian",
-    "samples_writer",
-    "write_samples",
-]
-
 EXTRA_NAMES = ("cos_inclination", "amplitude", "psi")
 _ECC_NAMES = ("phase", "f_gw", "fdot", "eta", "kappa", "omega_dot")
 _CIRC_NAMES = ("phase", "f_gw", "fdot")

@@ -27,19 +27,6 @@ from numpy.typing import NDArray
 
 from ucbplan.lisa.orbits import C_M_S, EqualArmOrbits
 
-__all__ = [
-    "LINKS",
-    "ResponseGrid",
-    "SkyFrame",
-    "band_transform",
-    "band_weights",
-    "ecliptic_from_icrs",
-    "ecliptic_from_icrs_batch",
-    "response_grid",
-    "sky_frame",
-    "tdi_coefficients",
-]
-
 #: Links as (emitter, receiver) spacecraft indices.
 LINKS: tuple[tuple[int, int], ...] = ((1, 0), (0, 1), (2, 0), (0, 2), (2, 1), (1, 2))
 

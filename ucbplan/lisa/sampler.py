@@ -21,15 +21,6 @@ from numpy.typing import NDArray
 from ucbplan.errors import ConvergenceError, InputFileError
 from ucbplan.lisa.likelihood import Likelihood
 
-__all__ = [
-    "CONVERGENCE_FACTOR",
-    "SamplerInterrupted",
-    "SamplerResult",
-    "chain_writer",
-    "run_sampler",
-    "save_chain",
-]
-
 F64 = NDArray[np.float64]
 #: Required chain length in units of the integrated autocorrelation time.
 CONVERGENCE_FACTOR = 50.0

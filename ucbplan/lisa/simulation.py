@@ -24,14 +24,6 @@ if TYPE_CHECKING:
     from ucbplan.lisa.waveform import FourLineModel
     from ucbplan.targets import Target
 
-__all__ = [
-    "LisaModel",
-    "SimulateOptions",
-    "SimulationProblem",
-    "SimulationResult",
-    "parameter_sigmas",
-]
-
 F64 = NDArray[np.float64]
 
 

@@ -27,8 +27,6 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["LINES", "Line", "SourceParams", "line_amplitudes", "line_frequencies"]
-
 
 @dataclass(frozen=True, slots=True)
 class Line:

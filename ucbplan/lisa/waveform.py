@@ -29,9 +29,6 @@ from ucbplan.lisa.numerics import (
 from ucbplan.lisa.response import LINKS, ResponseGrid, band_weights, tdi_coefficients
 from ucbplan.lisa.source import LINES, SourceParams, line_amplitudes
 
-__all__ = ["FourLineModel"]
-
-
 #: Walkers per internal block of :meth:`FourLineModel.bands`: a sampler batch in one block (with
 #: the link sums as column-blocked BLAS products, 64 beat 8, 16 and 32: the per-block Python
 #: work outweighs the cache misses of the larger arrays).

@@ -19,8 +19,6 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
     from matplotlib.transforms import Bbox
 
-__all__ = ["layout_problems"]
-
 #: Overlap smaller than this [display px] on either side is not reported (anti-aliasing).
 _SLACK_PX = 1.0
 #: Fraction of a curve's points under a legend above which the legend hides the curve.

@@ -14,8 +14,6 @@ from ucbplan.core.forecast import HorizonRow, anchor_sigma_u
 from ucbplan.core.params import EphemerisSource
 from ucbplan.plotting import pyplot, save_figure
 
-__all__ = ["horizon_plot"]
-
 
 class NamedSource(EphemerisSource, Protocol):
     """An :class:`~ucbplan.core.params.EphemerisSource` with a name for the title (a Target)."""

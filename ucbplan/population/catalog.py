@@ -24,15 +24,6 @@ import numpy as np
 from ucbplan.errors import InputFileError, shorten
 from ucbplan.inputs import read_text
 
-__all__ = [
-    "COLUMNS",
-    "Catalog",
-    "CatalogColumn",
-    "Source",
-    "parse_column_map",
-    "read_catalog",
-]
-
 
 @dataclass(frozen=True, slots=True)
 class CatalogColumn:

@@ -39,21 +39,6 @@ from ucbplan.population.execute import worker_setup
 from ucbplan.population.tables import SOURCE_COLUMNS, blank_row
 from ucbplan.targets.model import Spectroscopy
 
-__all__ = [
-    "ALPHAS",
-    "ANCHORS",
-    "FORECAST_COLUMNS",
-    "ForecastOptions",
-    "forecast_chunk",
-    "forecast_options",
-    "forecast_rows",
-    "forecast_source",
-    "forecast_with_target",
-    "icrs_of",
-    "k_total_kms",
-    "source_target",
-]
-
 #: Anchors and planning margins of every forecast table (fixed: the table schema is stable).
 ANCHORS: tuple[str, ...] = ("conjunction", "quadrature")
 ALPHAS: tuple[float, ...] = (0.5, 1.0)

@@ -6,15 +6,7 @@ when it builds its options.
 
 from __future__ import annotations
 
-from ucbplan.lisa import DEFAULT_N_BINS
-
-__all__ = [
-    "DEFAULT_N_BINS",
-    "DEFAULT_SIGMA_V_KMS",
-    "DEFAULT_T_OBS_S",
-    "DEFAULT_T_START",
-    "SNR_THRESHOLD",
-]
+from ucbplan.lisa import DEFAULT_N_BINS as DEFAULT_N_BINS
 
 #: RV precision per epoch assumed for every source [km/s].
 DEFAULT_SIGMA_V_KMS = 15.0

@@ -31,20 +31,6 @@ from typing import Any, TypeVar
 from ucbplan.errors import InputError, OutputExistsError, UcbplanError, shorten
 from ucbplan.io import write_output
 
-__all__ = [
-    "CLUSTERS",
-    "ExecutorSpec",
-    "SerialExecutor",
-    "default_chunk",
-    "jobqueue_cluster_class",
-    "offline_task",
-    "open_executor",
-    "run_chunks",
-    "source_seed",
-    "tune_malloc",
-    "worker_setup",
-]
-
 T = TypeVar("T")
 #: ``progress(sources_done, sources_total)``.
 Progress = Callable[[int, int], None]

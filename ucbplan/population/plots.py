@@ -9,8 +9,6 @@ import numpy as np
 
 from ucbplan.plotting import pyplot, save_figure
 
-__all__ = ["forecast_plots"]
-
 
 def forecast_plots(
     tab: Any, folder: Path, *, column: str = "t_valid_quadrature_a1", overwrite: bool = False

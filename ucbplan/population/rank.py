@@ -44,18 +44,6 @@ from ucbplan.population.catalog_forecast import (
 )
 from ucbplan.population.tables import SOURCE_COLUMNS, columns_table, provenance
 
-__all__ = [
-    "RANK_COLUMNS",
-    "RankOptions",
-    "check_catalog_of",
-    "forecast_options_of",
-    "rank_instrument",
-    "rank_options",
-    "rank_table",
-    "read_forecast_table",
-    "write_top_targets",
-]
-
 #: Forecast column of the T_valid figure of merit.
 T_VALID_COLUMN = "t_valid_quadrature_a1"
 

@@ -40,18 +40,6 @@ from ucbplan.population.visibility import (
     visibility_chunk,
 )
 
-__all__ = [
-    "CatalogJob",
-    "ForecastRun",
-    "RunControl",
-    "forecast_table",
-    "parts_folder",
-    "run_catalog",
-    "run_forecast",
-    "run_visibility",
-    "visibility_table",
-]
-
 #: Measured Fisher + horizons per source on one core (batched: 3–5 ms) [s]; chunks
 #: of ~1 s of work also amortise the per-chunk sky conversion and horizon pass.
 FORECAST_SECONDS_PER_SOURCE = 0.004

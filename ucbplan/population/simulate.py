@@ -35,17 +35,6 @@ from ucbplan.population.tables import (
 if TYPE_CHECKING:
     from ucbplan.population.runner import ForecastRun, RunControl
 
-__all__ = [
-    "SIMULATED_PARAMETERS",
-    "SIMULATE_COLUMNS",
-    "PopulationSimulateOptions",
-    "run_simulate",
-    "simulate_chunk",
-    "simulate_source",
-    "simulate_table",
-    "write_posterior_targets",
-]
-
 #: Parameters of the circular model summarised per source, with their units.
 SIMULATED_PARAMETERS: tuple[tuple[str, str], ...] = (
     ("phase", "rad"),

@@ -18,15 +18,6 @@ from ucbplan._version import __version__
 if TYPE_CHECKING:
     from ucbplan.population.catalog import Catalog
 
-__all__ = [
-    "SOURCE_COLUMNS",
-    "blank_row",
-    "columns_table",
-    "provenance",
-    "status_counts",
-    "write_table",
-]
-
 #: The first columns of every population table (name, unit, dtype, description): which source.
 SOURCE_COLUMNS: tuple[tuple[str, str, str, str], ...] = (
     ("source_id", "", "str", "catalog Name (or row number)"),

@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from ucbplan.core.constants import HOUR_S
 from ucbplan.core.forecast import tolerance, valid_window_s
 from ucbplan.errors import UcbplanError
 from ucbplan.inputs import check_range
@@ -42,12 +43,6 @@ from ucbplan.population.catalog_forecast import (
 )
 from ucbplan.population.execute import worker_setup
 from ucbplan.population.tables import SOURCE_COLUMNS
-
-__all__ = [
-    "VISIBILITY_COLUMNS",
-    "VisibilityOptions",
-    "visibility_chunk",
-]
 
 #: Spacing of the time grid on which usable hours are summed [s].
 GRID_STEP_S = 300.0
@@ -175,14 +170,14 @@ def _hours(fr: _Frame, i: int, min_hours: float) -> tuple[float, int, float]:
     ok = np.ones(x.size, dtype=bool)
     for c in fr.constraints.active[1:]:  # the grid is already night-only
         ok &= holds(c, fr.sky, i, x)
-    per_night = np.bincount(fr.night_of[ok], minlength=len(fr.windows)) * GRID_STEP_S / 3600.0
+    per_night = np.bincount(fr.night_of[ok], minlength=len(fr.windows)) * GRID_STEP_S / HOUR_S
     air = airmass_from_alt(fr.sky.target_alt_deg(i, x)) if x.size else np.array([math.inf])
     nights = (
         int(np.count_nonzero(per_night >= min_hours - 1e-9))
         if min_hours > 0
         else int(np.count_nonzero(per_night > 0))
     )
-    return float(ok.sum() * GRID_STEP_S / 3600.0), nights, float(np.min(air))
+    return float(ok.sum() * GRID_STEP_S / HOUR_S), nights, float(np.min(air))
 
 
 def _epochs(

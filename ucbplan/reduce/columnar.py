@@ -19,8 +19,6 @@ from numpy.typing import NDArray
 from ucbplan.errors import SchemaError
 from ucbplan.inputs import blank_comments, read_text
 
-__all__ = ["read_columns"]
-
 F64 = NDArray[np.float64]
 
 

@@ -29,17 +29,6 @@ if TYPE_CHECKING:
     from ucbplan.core.params import PhaseParams
     from ucbplan.reduce.velocities import VelocityTable
 
-__all__ = [
-    "OrbitTrack",
-    "design_jacobian",
-    "designs",
-    "mid_exposure",
-    "orbit",
-    "track",
-    "window_durations",
-    "window_factors",
-]
-
 #: Below this eccentricity the Jacobian uses Eq. vbar_master's (exact at e = 0; the O(e²)
 #: remainder is < 1e-16) instead of dividing ∂G/∂ω by e.
 _E_FIRST_ORDER = 1e-8

@@ -36,15 +36,6 @@ from ucbplan.core.constants import C_M_S
 from ucbplan.reduce.groups import MATCH_TOL_RAD, Group
 from ucbplan.reduce.regression import LineFit, weighted_line
 
-__all__ = [
-    "UPPER_LIMIT_NSIGMA",
-    "DriftResult",
-    "LLPredictor",
-    "Pair",
-    "combine",
-    "make_pairs",
-]
-
 F64 = NDArray[np.float64]
 
 #: Non-detections (|x| < 2σ) are reported as upper limits |x| < |x̂| + 2σ.

@@ -16,8 +16,6 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["ANCHOR_U", "MATCH_TOL_RAD", "Group", "assign_anchors", "group_spectra"]
-
 F64 = NDArray[np.float64]
 
 #: Standard anchors (star-1 argument of latitude, rad) used when the table has no u_star column.

@@ -21,8 +21,6 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["dumps_report"]
-
 _INDENT = "  "  # json.dumps(indent=2)
 
 

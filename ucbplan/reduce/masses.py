@@ -28,9 +28,6 @@ from ucbplan.core.binary import (
 )
 from ucbplan.core.constants import C_M_S, G_SI, KPC_M, MSUN_KG, RSUN_M
 
-__all__ = ["Summary", "derive", "summarize"]
-
-
 F64 = NDArray[np.float64]
 
 

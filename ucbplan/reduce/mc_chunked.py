@@ -43,8 +43,6 @@ if TYPE_CHECKING:
     from ucbplan.reduce.regression import ComponentFit
     from ucbplan.targets import Target
 
-__all__ = ["chunked_monte_carlo"]
-
 F64 = NDArray[np.float64]
 _QS = (15.865525393145708, 50.0, 84.13447460685429)  # as masses.summarize
 

@@ -27,16 +27,6 @@ if TYPE_CHECKING:
     from ucbplan.reduce.regression import ComponentFit
     from ucbplan.targets import Target
 
-__all__ = [
-    "EXTRA_NAMES",
-    "MEAN_BLOCK",
-    "MonteCarlo",
-    "block_sums",
-    "derive_samples",
-    "final_warnings",
-    "posterior_samples",
-]
-
 F64 = NDArray[np.float64]
 #: Columns drawn beyond PARAM_NAMES (cos ι, GW amplitude 𝒜): 9 columns in all.
 EXTRA_NAMES = ("cos_inclination", "amplitude")

@@ -18,7 +18,9 @@ from numpy.typing import NDArray
 from ucbplan.reduce import masses as _masses
 from ucbplan.reduce.mc_chunked import chunked_monte_carlo
 from ucbplan.reduce.mc_samples import (
-    EXTRA_NAMES,
+    EXTRA_NAMES as EXTRA_NAMES,
+)
+from ucbplan.reduce.mc_samples import (
     MonteCarlo,
     _draw_k_gamma,
     block_sums,
@@ -30,8 +32,6 @@ from ucbplan.reduce.mc_samples import (
 if TYPE_CHECKING:
     from ucbplan.reduce.regression import ComponentFit
     from ucbplan.targets import Target
-
-__all__ = ["CHUNK", "EXTRA_NAMES", "MonteCarlo", "monte_carlo", "posterior_samples"]
 
 F64 = NDArray[np.float64]
 #: Samples per chunk above which the Monte Carlo runs chunked (~0.6 kB per sample in flight).

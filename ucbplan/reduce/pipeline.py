@@ -56,8 +56,6 @@ if TYPE_CHECKING:
     from ucbplan.core.params import PhaseParams
     from ucbplan.targets import Target
 
-__all__ = ["ReduceOptions", "Reduction", "reduce", "reduce_options"]
-
 F64 = NDArray[np.float64]
 
 

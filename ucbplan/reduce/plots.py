@@ -22,8 +22,6 @@ if TYPE_CHECKING:
 
     from ucbplan.reduce.pipeline import Reduction
 
-__all__ = ["PLOT_NAMES", "draw_rv", "fig_dv1_dv2", "fig_mass_mass", "fig_rv", "plot_all"]
-
 #: File names written by :func:`plot_all`.
 PLOT_NAMES = ("rv_vs_F.png", "dv1_vs_dv2.png", "mass_mass.png")
 

@@ -15,8 +15,6 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["BracketMissed", "ChunkedPercentiles", "percentile_from_order_stats"]
-
 F64 = NDArray[np.float64]
 #: Half-width of a bracket in binomial standard deviations of the rank.
 _MARGIN_SIGMA = 8.0

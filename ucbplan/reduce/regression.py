@@ -29,21 +29,6 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = [
-    "OUTLIER_NSIGMA",
-    "ComponentFit",
-    "LineFit",
-    "WilsonFit",
-    "binned_design",
-    "fit_component",
-    "lambda_k_to_x",
-    "paper_recipe",
-    "phase_sensitivity",
-    "two_spectrum_solution",
-    "weighted_line",
-    "wilson_fit",
-]
-
 #: Residuals beyond this many σ are flagged (reported, never dropped).
 OUTLIER_NSIGMA = 4.0
 

@@ -20,15 +20,6 @@ if TYPE_CHECKING:
     from ucbplan.reduce.masses import Summary
     from ucbplan.reduce.pipeline import Reduction
 
-__all__ = [
-    "MC_UNITS",
-    "build_report",
-    "em_prior",
-    "print_report",
-    "write_json",
-    "write_yaml",
-]
-
 #: Units of the Monte-Carlo quantities (astropy unit strings), after conversion in :func:`_mc`.
 MC_UNITS: dict[str, tuple[str, float]] = {
     "K1": ("km / s", 1.0),

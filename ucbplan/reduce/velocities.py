@@ -47,7 +47,7 @@ import numpy as np
 from astropy.time import Time
 from numpy.typing import NDArray
 
-from ucbplan.core.constants import C_KM_S
+from ucbplan.core.constants import C_KM_S, DAY_S, YEAR_S
 from ucbplan.errors import SchemaError, VelocityFileError, shorten
 from ucbplan.inputs import blank_comments, read_text
 
@@ -56,24 +56,12 @@ if TYPE_CHECKING:
 
     from ucbplan.targets import Target
 
-__all__ = [
-    "HORIZON_S",
-    "KNOWN_COLUMNS",
-    "MIN_SPECTRA",
-    "SESSION_GAP_S",
-    "VelocityTable",
-    "check_validity",
-    "read_velocities",
-    "to_barycentric",
-    "velocities_from_table",
-]
-
 F64 = NDArray[np.float64]
 
 #: Latest accepted epoch after the end of the LISA observation [s] (20 Julian years).
-HORIZON_S = 20.0 * 365.25 * 86400.0
+HORIZON_S = 20.0 * YEAR_S
 #: Without a session column, consecutive spectra further apart than this start a new session [s].
-SESSION_GAP_S = 0.5 * 86400.0
+SESSION_GAP_S = 0.5 * DAY_S
 #: Fewest spectra the fit v = γ ± K F̄ accepts (two unknowns per star).
 MIN_SPECTRA = 2
 #: Accepted range of each time column (JD or MJD): years 1858 … 2500, far wider than LISA's.
@@ -486,7 +474,7 @@ def _sessions(
 def _auto_sessions(jd: F64) -> tuple[str, ...]:
     """Label spectra by gaps > :data:`SESSION_GAP_S` in time order ("S1", "S2", …)."""
     order = np.argsort(jd, kind="stable")
-    gaps = np.diff(jd[order]) * 86400.0 > SESSION_GAP_S
+    gaps = np.diff(jd[order]) * DAY_S > SESSION_GAP_S
     number = np.empty(jd.size, dtype=np.int64)
     number[order] = 1 + np.concatenate([[0], np.cumsum(gaps)])
     names = np.array([f"S{k}" for k in range(1, int(number.max(initial=1)) + 1)], dtype=object)

@@ -37,8 +37,6 @@ from ucbplan.targets.values import (
     to_float,
 )
 
-__all__ = ["batched_checks", "exact_parameters", "parse_covariance"]
-
 FloatArray = NDArray[np.float64]
 Named = tuple[tuple[str, ...], FloatArray]
 

@@ -28,8 +28,6 @@ from astropy import units as u
 from astropy.time import Time
 from astropy.units.utils import is_effectively_unity
 
-__all__ = ["cached_epoch", "quantity_in", "sexagesimal_deg"]
-
 #: Most distinct entries each cache keeps (a catalog uses a handful of unit strings).
 CACHE_SIZE = 1024
 

@@ -9,15 +9,6 @@ from ucbplan.core.constants import C_KM_S, E_MAX
 from ucbplan.core.params import PARAM_UNITS
 from ucbplan.targets.fieldtypes import Field, Range
 
-__all__ = [
-    "TIME_SCALES",
-    "covariance_fields",
-    "eccentricity_fields",
-    "phase_field",
-    "positive",
-    "velocity_field",
-]
-
 #: Time scales an epoch may be labelled with (``t_ref_scale``).
 TIME_SCALES = ("tdb", "tcb", "tt", "utc", "tai")
 _ECC_NOTE = f"e = |η + iκ| < {E_MAX} (the paper's first-order small-e model)"

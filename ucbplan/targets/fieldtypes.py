@@ -11,8 +11,6 @@ import math
 from dataclasses import dataclass
 from typing import Any, Literal
 
-__all__ = ["Field", "Kind", "Range"]
-
 #: How a field's value is read: a number with a unit, a plain number, an angle, an epoch, one of
 #: ``choices``, free text, a file name, a nested mapping (a section), a list, or anything.
 Kind = Literal[

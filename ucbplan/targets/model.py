@@ -27,8 +27,6 @@ from ucbplan.errors import TargetFileError
 if TYPE_CHECKING:  # astropy.coordinates is imported where a position is needed, not to load
     from astropy.coordinates import SkyCoord
 
-__all__ = ["Spectroscopy", "Target", "TimingSection"]
-
 FloatArray = NDArray[np.float64]
 
 

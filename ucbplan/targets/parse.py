@@ -52,15 +52,6 @@ from ucbplan.targets.values import (
     parse_epoch,
 )
 
-__all__ = [
-    "check_distinct_files",
-    "load_target",
-    "load_target_documents",
-    "load_target_files",
-    "load_targets",
-    "target_from_dict",
-]
-
 FloatArray = NDArray[np.float64]
 
 _PHASE_MODEL = tuple(field(f"lisa.{n}") for n in PARAM_NAMES)

@@ -19,8 +19,6 @@ from ucbplan.errors import InputFileError, TargetFileError
 from ucbplan.targets.model import Target
 from ucbplan.targets.schema import COVARIANCE_PARAMETERS
 
-__all__ = ["load_samples", "read_samples_file", "samples_covariance", "with_samples_covariance"]
-
 FloatArray = NDArray[np.float64]
 
 

@@ -22,19 +22,6 @@ from ucbplan.targets.fieldgroups import (
 )
 from ucbplan.targets.fieldtypes import Field, Range
 
-__all__ = [
-    "COVARIANCE_EXTRAS",
-    "COVARIANCE_PARAMETERS",
-    "EPHEMERIS_KINDS",
-    "FIELDS",
-    "SECTIONS",
-    "TIMING_COVARIANCE_PARAMETERS",
-    "TIMING_SIGMA_PLACEHOLDERS",
-    "field",
-    "section_fields",
-    "timing_parameter_field",
-]
-
 #: Kinds of ephemeris a target file gives: exactly one of these sections.
 EPHEMERIS_KINDS: tuple[str, ...] = ("lisa", "timing")
 

@@ -32,20 +32,6 @@ from ucbplan.targets.values import (
     parse_quantity,
 )
 
-__all__ = [
-    "CONTROL",
-    "MAX_TEXT_CHARS",
-    "Ephemeris",
-    "check_eccentricity",
-    "check_section",
-    "expect",
-    "mapping",
-    "names",
-    "number",
-    "parse_text",
-    "quantities",
-]
-
 FloatArray = NDArray[np.float64]
 #: Unicode categories refused in a name or text: control characters, surrogates, line separators.
 CONTROL = frozenset(("Cc", "Cs", "Zl", "Zp"))

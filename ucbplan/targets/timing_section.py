@@ -49,8 +49,6 @@ from ucbplan.targets.values import (
     to_float,
 )
 
-__all__ = ["parse_magnitudes", "parse_references", "parse_timing", "sigmas_needed"]
-
 FloatArray = NDArray[np.float64]
 _TIMING_VALUES = tuple(field(f"timing.{n}") for n in ("period", "pdot", "pddot"))
 #: A photometric band name: V, g, G, G_BP, Ks, r', …

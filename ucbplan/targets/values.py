@@ -27,22 +27,6 @@ from ucbplan.targets.fastvalues import cached_epoch, quantity_in, sexagesimal_de
 from ucbplan.targets.fieldtypes import Field
 from ucbplan.targets.schema import field
 
-__all__ = [
-    "MALFORMED",
-    "MAX_VALUE_CHARS",
-    "Ctx",
-    "check_keys",
-    "check_range",
-    "did_you_mean",
-    "one_line",
-    "parse_angle",
-    "parse_choice",
-    "parse_epoch",
-    "parse_number",
-    "parse_quantity",
-    "to_float",
-]
-
 #: A plain decimal number (PyYAML leaves exponents without a decimal point, 1e-6, as strings).
 NUM_RE = re.compile(r"^\s*[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?\s*$")
 #: Longest number, quantity or angle text [characters] ("-1.0650000000000001e-26 Hz / s2" is 31).

@@ -23,8 +23,6 @@ from ucbplan.targets.model import Spectroscopy, Target, TimingSection
 from ucbplan.targets.schema import field
 from ucbplan.targets.timing_section import sigmas_needed
 
-__all__ = ["target_to_dict", "write_target"]
-
 
 class _Dumper(yaml.SafeDumper):
     """SafeDumper that quotes text :func:`ucbplan.inputs.load_yaml` would read as a number.

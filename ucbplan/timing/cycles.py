@@ -23,13 +23,12 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from ucbplan.core.constants import DAY_S
 from ucbplan.core.timing_epochs import jd_to_seconds
 from ucbplan.errors import InputFileError
 from ucbplan.timing.eclipse_table import EclipseTimes, check_monotonic
 from ucbplan.timing.fit import solve_wls
 from ucbplan.timing.initial import PeriodGuess
-
-__all__ = ["AMBIGUITY_FRACTION", "count_cycles"]
 
 F64 = NDArray[np.float64]
 
@@ -200,7 +199,7 @@ def _ambiguous(
     where = f"at row {times.rows[i]} (BJD_TDB {times.jd[i]})"
     if counted.size:
         a = int(counted[np.argmin(np.abs(times.t_s[counted] - times.t_s[i]))])
-        gap_d = abs(times.t_s[i] - times.t_s[a]) / 86400.0
+        gap_d = abs(times.t_s[i] - times.t_s[a]) / DAY_S
         first, last = sorted((a, i))
         where = (
             f"across the {gap_d:.4g} d gap between rows {times.rows[first]} and "

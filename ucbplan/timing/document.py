@@ -35,15 +35,6 @@ from ucbplan.inputs import load_yaml
 from ucbplan.timing.eclipse_table import EclipseTimes
 from ucbplan.timing.fit import COV_UNITS, UNITS, EphemerisFit
 
-__all__ = [
-    "COPIED_FIELDS",
-    "MODEL",
-    "fit_report",
-    "identity",
-    "target_document",
-    "write_yaml",
-]
-
 MODEL = (
     "t(n) = T0 + P*n + P*Pdot*n^2/2 (+ P^2*Pddot*n^3/6); n = cycles since T0, integer at primary "
     "and half-integer at secondary eclipses; times BJD_TDB"

@@ -32,6 +32,7 @@ import numpy as np
 import yaml
 from numpy.typing import NDArray
 
+from ucbplan.core.constants import DAY_S
 from ucbplan.core.timing_epochs import (
     DECIMAL_CONTEXT,
     JD_RANGE,
@@ -41,12 +42,6 @@ from ucbplan.core.timing_epochs import (
 )
 from ucbplan.errors import InputFileError, SchemaError, shorten
 from ucbplan.inputs import MAX_ALIASES, MAX_YAML_BYTES, blank_comments, read_text
-
-__all__ = [
-    "EclipseTimes",
-    "read_times",
-    "read_times_table",
-]
 
 F64 = NDArray[np.float64]
 
@@ -58,7 +53,7 @@ TEXT_COLUMNS = ("instrument", "reference", "note")
 KNOWN_COLUMNS = (*TIME_COLUMNS, "sigma_s", "kind", "cycle", *TEXT_COLUMNS)
 #: Accepted σ of one time [s]: from 1 ns (below any clock) to a day (no eclipse timing).
 MIN_SIGMA_S = 1e-9
-MAX_SIGMA_S = 86400.0
+MAX_SIGMA_S = DAY_S
 #: Largest |cycle| accepted.
 MAX_CYCLE = 1e12
 

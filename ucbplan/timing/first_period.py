@@ -26,18 +26,17 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
+from ucbplan.core.constants import HOUR_S
 from ucbplan.errors import InputFileError
 from ucbplan.timing.cycles import AMBIGUITY_FRACTION, count_cycles
 from ucbplan.timing.eclipse_table import EclipseTimes
 from ucbplan.timing.fit import solve_wls
 from ucbplan.timing.initial import PeriodGuess
 
-__all__ = ["MIN_ECLIPSES", "NIGHT_GAP_S", "period_from_times"]
-
 F64 = NDArray[np.float64]
 
 #: A gap longer than this ends a night [s] (6 h: no night of eclipse timing has a longer one).
-NIGHT_GAP_S = 6.0 * 3600.0
+NIGHT_GAP_S = 6.0 * HOUR_S
 #: Distinct eclipses a night needs to fix the period (two fit any period d/k alike).
 MIN_ECLIPSES = 3
 #: Two times closer than this many σ (combined) are the same eclipse measured twice.
@@ -138,7 +137,7 @@ def period_from_times(times: EclipseTimes) -> PeriodGuess:
         raise InputFileError(
             f"{times.label()}: column 'cycle': missing, and no night has {MIN_ECLIPSES} or more "
             f"eclipses to fix the period (at most {best.size} within "
-            f"{NIGHT_GAP_S / 3600:g} h of each other), so cycles cannot be counted from the "
+            f"{NIGHT_GAP_S / HOUR_S:g} h of each other), so cycles cannot be counted from the "
             f"times alone; {fixes}"
         )
     night = _subset(times, best)

@@ -29,21 +29,10 @@ from decimal import Decimal
 import numpy as np
 from numpy.typing import NDArray
 
+from ucbplan.core.constants import DAY_S_INT
 from ucbplan.core.mvnormal import inverse_scaled
-from ucbplan.core.timing_epochs import DAY_S
 from ucbplan.errors import InputError, NumericalError
 from ucbplan.timing.eclipse_table import EclipseTimes
-
-__all__ = [
-    "OUTLIER_SIGMA",
-    "PARAMETERS",
-    "EphemerisFit",
-    "coefficients_to_parameters",
-    "fit_ephemeris",
-    "parameters_to_coefficients",
-    "shift_coefficients",
-    "solve_wls",
-]
 
 F64 = NDArray[np.float64]
 
@@ -258,7 +247,7 @@ def _base(times: EclipseTimes, cycles: F64, terms: int) -> tuple[_Base, F64]:
     return base, y
 
 
-_DAY = Decimal(DAY_S)
+_DAY = Decimal(DAY_S_INT)
 
 
 def fit_ephemeris(

@@ -22,17 +22,10 @@ from decimal import Decimal
 from pathlib import Path
 from typing import Any
 
-from ucbplan.core.timing_epochs import DAY_S, parse_decimal, parse_epoch_label
+from ucbplan.core.constants import DAY_S, HOUR_S
+from ucbplan.core.timing_epochs import parse_decimal, parse_epoch_label
 from ucbplan.errors import InputError, InputFileError, shorten
 from ucbplan.inputs import load_yaml
-
-__all__ = [
-    "PDOT_PRIOR_SIGMA",
-    "PeriodGuess",
-    "guess_from_document",
-    "parse_period",
-    "read_initial",
-]
 
 #: Width of the Ṗ prior while counting cycles [s/s]: GW-driven |Ṗ| of a double white dwarf with
 #: P > 5 min and chirp mass < 1 M☉ is < 3e-10, so 1e-9 is generous. Used only to count cycles.
@@ -41,7 +34,7 @@ PDOT_PRIOR_SIGMA = 1e-9
 PERIOD_RANGE = (1e-3, 1e9)
 
 _PERIOD_RE = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d{1,4})?)\s*([A-Za-z]*)\s*$")
-_UNITS_S = {"": 1.0, "s": 1.0, "sec": 1.0, "min": 60.0, "h": 3600.0, "hr": 3600.0, "d": 86400.0}
+_UNITS_S = {"": 1.0, "s": 1.0, "sec": 1.0, "min": 60.0, "h": HOUR_S, "hr": HOUR_S, "d": DAY_S}
 
 
 @dataclass(frozen=True)

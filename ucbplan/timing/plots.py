@@ -20,8 +20,6 @@ from ucbplan.timing.fit import EphemerisFit
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-__all__ = ["oc_figure", "plot_oc"]
-
 
 def oc_figure(fit: EphemerisFit, times: EclipseTimes, title: str | None = None) -> Figure:
     """The O − C figure (not yet written)."""

@@ -48,17 +48,6 @@ from ucbplan.inputs import is_number
 from ucbplan.observing.blocks.arrays import BlockColumns, block_columns, isot
 from ucbplan.observing.blocks.block import Block
 
-__all__ = [
-    "ACCOUNT_KEYS",
-    "BlockRows",
-    "PlanAccount",
-    "TimeAccount",
-    "VisitSummary",
-    "accounts_from_blocks",
-    "time_accounting",
-    "visit_summaries",
-]
-
 #: Keys of one ``time_accounting`` entry, in the order written (counts, then seconds, then a
 #: fraction); the proposal export reads exactly these.
 ACCOUNT_KEYS = ("visits", "exposures", "shutter_s", "overhead_s", "idle_s", "efficiency")

@@ -21,17 +21,6 @@ from numpy.typing import NDArray
 
 from ucbplan.observing.blocks.block import Block
 
-__all__ = [
-    "TIME_FIELDS",
-    "BlockColumns",
-    "BlockList",
-    "block_columns",
-    "isot",
-    "isot_array",
-    "jd_parts",
-    "time_array",
-]
-
 #: The :class:`Block` fields that are times, and the scale each is kept in.
 TIME_FIELDS: dict[str, str] = {
     "t_mid_utc": "utc",

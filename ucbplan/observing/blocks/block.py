@@ -16,17 +16,6 @@ from ucbplan.core.smearing import comb_attenuation, smear_velocity
 from ucbplan.errors import InputError, UcbplanError
 from ucbplan.inputs import check_int, check_range
 
-__all__ = [
-    "MAX_BLOCK_S",
-    "MAX_N_EXP",
-    "MAX_READOUT_S",
-    "Block",
-    "ExposurePlan",
-    "Smearing",
-    "block_smearing",
-    "check_smear_budget",
-]
-
 #: Longest block, first exposure start to last exposure end [s]: a block must fit in one night.
 MAX_BLOCK_S = 43200.0
 #: Longest dead time between two exposures [s].

@@ -20,16 +20,8 @@ import numpy as np
 from astropy import units as u
 from astropy.time import Time
 
+from ucbplan.core.constants import DAY_S_INT, HOUR_S_INT
 from ucbplan.observing.blocks.arrays import isot_array, time_array
-
-__all__ = [
-    "dec_dms_column",
-    "iso_column",
-    "local_datetimes",
-    "local_iso",
-    "ra_hms_column",
-    "sexagesimal",
-]
 
 
 def iso_column(times: Time, has: np.ndarray | None, precision: int) -> np.ndarray:
@@ -96,7 +88,7 @@ def local_iso(times: Time | Sequence[Time], zones: Sequence[str]) -> np.ndarray:
     # offsets at whole seconds, so the zone's offset is that of the instant itself
     months = (year - 1970) * 12 + (month - 1)
     days = months.astype("datetime64[M]").astype("datetime64[D]").astype(np.int64) + (day - 1)
-    posix = days * 86400 + hmsf["h"] * 3600 + hmsf["m"] * 60 + hmsf["s"]
+    posix = days * DAY_S_INT + hmsf["h"] * HOUR_S_INT + hmsf["m"] * 60 + hmsf["s"]
     tz = {z: ZoneInfo(z) for z in dict.fromkeys(zones)}
     offsets = [
         datetime.fromtimestamp(t, tz[z]).utcoffset()
@@ -117,7 +109,9 @@ def _offset_text(offset: timedelta | None) -> tuple[int, str] | None:
     if offset is None or offset.microseconds:
         return None
     zone = timezone(offset)
-    return offset.days * 86400 + offset.seconds, datetime(2000, 1, 1, tzinfo=zone).isoformat()[19:]
+    return offset.days * DAY_S_INT + offset.seconds, datetime(2000, 1, 1, tzinfo=zone).isoformat()[
+        19:
+    ]
 
 
 def _per_distinct(values: np.ndarray, fmt: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:

@@ -27,9 +27,6 @@ from astropy.table import Table
 
 from ucbplan.observing.blocks.schema import META_SCALARS
 
-__all__ = ["ecsv_header", "flat_records_safe", "header_safe", "yaml_flow_items"]
-
-
 #: Characters every string of an ECSV header must be made of for libyaml to write it: libyaml
 #: and PyYAML's pure-Python emitter write such headers byte for byte alike (tested on random
 #: headers), not strings that need double quotes (other characters) nor empty mapping keys.

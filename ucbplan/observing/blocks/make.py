@@ -24,8 +24,6 @@ from ucbplan.observing.blocks.block import Block
 from ucbplan.observing.blocks.cells import dec_dms_column, iso_column, local_iso, ra_hms_column
 from ucbplan.observing.blocks.schema import COLUMNS, META_SCALARS, Column
 
-__all__ = ["blocks_to_table", "file_sha256", "make_meta"]
-
 
 def _plain_values(column: Column, cols: BlockColumns) -> np.ndarray:
     values = cols.values[column.attribute]

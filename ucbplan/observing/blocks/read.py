@@ -36,8 +36,6 @@ from ucbplan.observing.blocks.schema import (
 from ucbplan.observing.blocks.write import csv_unsafe_text
 from ucbplan.targets.values import one_line
 
-__all__ = ["check_blocks", "read_blocks"]
-
 
 def _bad_cell(where: str, row: int, column: str, expected: str, value: Any) -> InputFileError:
     return InputFileError(

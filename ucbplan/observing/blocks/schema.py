@@ -18,24 +18,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from ucbplan.core.constants import DAY_S
 from ucbplan.observing.blocks.block import MAX_BLOCK_S, MAX_N_EXP, MAX_READOUT_S
-
-__all__ = [
-    "BLANK_OK",
-    "COLUMNS",
-    "COLUMN_BY_NAME",
-    "EXTRA_COLUMNS",
-    "KNOWN_COLUMNS",
-    "MAX_HEADER_CHARS",
-    "MAX_TABLE_BYTES",
-    "META_SCALARS",
-    "REQUIRED_COLUMNS",
-    "TABLE_FORMATS",
-    "TIME_YEARS",
-    "USER_COLUMNS",
-    "Column",
-    "column_reference",
-]
 
 
 @dataclass(frozen=True, slots=True)
@@ -148,7 +132,7 @@ COLUMNS: tuple[Column, ...] = (
         "s",
         "1-sigma timing uncertainty of the anchor epoch (sigma_u / u_dot)",
         required=True,
-        bounds=(0.0, 86400.0),
+        bounds=(0.0, DAY_S),
     ),
     Column(
         "t_alt_utc",
@@ -290,7 +274,7 @@ COLUMNS: tuple[Column, ...] = (
         "block length, first exposure start to last exposure end",
         in_header=False,
         kind="width",
-        bounds=(0.0, 86400.0),
+        bounds=(0.0, DAY_S),
     ),
     Column(
         "lambda_kappa",

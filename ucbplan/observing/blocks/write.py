@@ -34,18 +34,6 @@ from ucbplan.observing.blocks.ecsv_header import (
 )
 from ucbplan.observing.blocks.schema import TABLE_FORMATS
 
-__all__ = [
-    "CSV_FORMULA_START",
-    "csv_safe_table",
-    "csv_safe_text",
-    "csv_unsafe_text",
-    "ecsv_data_lines",
-    "json_records_text",
-    "json_rows_text",
-    "table_to_json_rows",
-    "write_table",
-]
-
 
 def _plain(value: Any) -> Any:
     if isinstance(value, np.generic):
@@ -221,8 +209,6 @@ def _json_head(meta: dict[str, Any]) -> str:
         return dumps_json({"meta": meta, "rows": []})
     return head.replace(mark, listed)
 
-
-__all__ = ["ecsv_data_lines", "json_records_text", "json_rows_text"]
 
 #: Column dtype kinds the fast paths take (bool, integers, floats, Unicode text).
 _PLAIN_KINDS = "biufU"

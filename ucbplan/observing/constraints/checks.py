@@ -17,14 +17,6 @@ from numpy.typing import NDArray
 from ucbplan.observing.constraints import Constraint, NightConstraint, holds
 from ucbplan.observing.observatory.sky import SkyModel
 
-__all__ = [
-    "DARK_STEP_S",
-    "SAMPLE_STEP_S",
-    "SCREEN_STEP_S",
-    "evaluate_window",
-    "evaluate_window_exact",
-]
-
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 Int8Array = NDArray[np.int8]

@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
+from ucbplan.core.constants import DAY_S, HOUR_S
 from ucbplan.errors import InputError, shorten
 from ucbplan.observing.constraints import (
     TWILIGHT_SUN_ALT_DEG,
@@ -49,14 +50,6 @@ from ucbplan.observing.constraints.checks import BoolArray, FloatArray
 if TYPE_CHECKING:
     from ucbplan.observing.observatory.sites import Site
     from ucbplan.observing.observatory.sky import SkyModel
-
-__all__ = [
-    "AstroplanConstraint",
-    "LocalTimeConstraint",
-    "as_constraint",
-    "constraint_set",
-    "default_constraints",
-]
 
 #: The slot of each native class in a :class:`ConstraintSet` (the first of a kind fills it).
 _SLOTS: dict[type[Constraint], str] = {
@@ -292,7 +285,7 @@ class LocalTimeConstraint(Constraint):
         unix = np.asarray(sky.time(xs.ravel()).utc.unix, dtype=np.float64)
         minutes, at = np.unique(np.floor(unix / 60.0), return_inverse=True)
         offset = np.array([self._offset_s(m * 60.0) for m in minutes])[at]
-        clock = np.mod(unix + offset, 86400.0)
+        clock = np.mod(unix + offset, DAY_S)
         lo = _seconds(self.start, 0.0)
         hi = _seconds(self.end, 86399.0)
         inside = (clock >= lo) & (clock <= hi) if lo < hi else (clock >= lo) | (clock <= hi)
@@ -314,4 +307,4 @@ def _seconds(t: dt.time | None, default: float) -> float:
     """Seconds since midnight of a clock time (``default`` for None)."""
     if t is None:
         return default
-    return t.hour * 3600.0 + t.minute * 60.0 + t.second + t.microsecond * 1e-6
+    return t.hour * HOUR_S + t.minute * 60.0 + t.second + t.microsecond * 1e-6

@@ -35,8 +35,6 @@ if TYPE_CHECKING:
 
     from ucbplan.observing.observatory.sites import Site
 
-__all__ = ["astroplan_constraints", "to_astroplan"]
-
 #: Columns :func:`to_astroplan` reads from a blocks table.
 REQUIRED = ("target", "t_start_utc", "t_end_utc", "ra_deg", "dec_deg")
 #: Smallest half-width of an exposure's time window when the table has no ``sigma_t_s`` [s]

@@ -19,16 +19,6 @@ from typing import Any, Protocol
 
 from ucbplan.errors import InputError, UcbplanError, shorten
 
-__all__ = [
-    "P2_ENVIRONMENTS",
-    "CreatedOb",
-    "DryRunApi",
-    "P2Api",
-    "connect",
-    "create_obs",
-    "creation_report",
-]
-
 #: p2api environments: ESO's demo server, Paranal and La Silla production.
 P2_ENVIRONMENTS = ("demo", "production", "production_lasilla")
 #: The OB fields the body sets (the rest of the OB is p2's).

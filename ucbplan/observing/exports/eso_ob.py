@@ -33,15 +33,6 @@ from ucbplan.observing.exports.eso_templates import EsoTemplate, EsoTemplates
 from ucbplan.observing.exports.text import fmt_sigma
 from ucbplan.observing.precision.instruments import Instrument, get_instrument
 
-__all__ = [
-    "DEFAULT_MAX_AIRMASS",
-    "DEFAULT_MOON_DISTANCE_DEG",
-    "USER_COMMENTS_MAX",
-    "eso_constraints",
-    "ob_body",
-    "user_comments",
-]
-
 #: Airmass limit written when the plan names none (ESO's loosest common limit).
 DEFAULT_MAX_AIRMASS = 2.0
 #: Moon distance written when the plan names none [deg] (ESO's default constraint set).

@@ -46,8 +46,6 @@ from ucbplan.observing.exports.windows import (
     ob_start_window,
 )
 
-__all__ = ["ESO_NAME_MAX", "export_eso_p2"]
-
 #: Longest OB name p2 accepts.
 ESO_NAME_MAX = 32
 

@@ -24,8 +24,6 @@ from typing import Any
 from ucbplan.errors import InputFileError, shorten
 from ucbplan.inputs import is_number, load_yaml
 
-__all__ = ["EsoTemplate", "EsoTemplates", "load_eso_templates"]
-
 _KINDS = ("acquisition", "science")
 _KEYS = {
     "acquisition": {"name", "parameters"},

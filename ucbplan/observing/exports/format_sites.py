@@ -17,8 +17,6 @@ from ucbplan.errors import SiteError, UcbplanError, shorten
 from ucbplan.inputs import is_number
 from ucbplan.observing.observatory.sites import get_site
 
-__all__ = ["FORMAT_SITES", "SITE_MATCH_KM", "ObservatorySite", "check_site", "serves_site"]
-
 #: Largest distance between a plan's site and an observatory that still counts as that
 #: observatory [km]: a mountain's telescopes lie within ~2 km; the closest distinct sites in the
 #: tables below (Cerro Tololo and Cerro Pachon) are ~10 km apart.

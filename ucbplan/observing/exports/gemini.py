@@ -38,8 +38,6 @@ from ucbplan.observing.exports.windows import (
     ob_start_window,
 )
 
-__all__ = ["export_gemini", "gemini_windows"]
-
 
 def _window(lo: datetime, hi: datetime) -> dict[str, Any]:
     minutes = round((hi - lo).total_seconds() / 60)

@@ -22,8 +22,6 @@ from ucbplan.observing.exports.interface import ExportOptions, ExportResult
 from ucbplan.observing.exports.provenance import created_utc, site_name, version
 from ucbplan.observing.exports.text import fmt_sigma, iso_ms, safe_name
 
-__all__ = ["export_ics", "ics_escape", "ics_fold"]
-
 #: Longest content line in octets (RFC 5545 §3.1); longer lines are folded.
 ICS_LINE_OCTETS = 75
 

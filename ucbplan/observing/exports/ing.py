@@ -20,8 +20,6 @@ from ucbplan.observing.exports.visitgroups import (
     target_totals,
 )
 
-__all__ = ["export_ing_cat", "ing_catalogue"]
-
 #: Longest target name an ING catalogue accepts.
 ING_NAME_MAX = 20
 

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 
 from astropy.table import Table
 
+from ucbplan.core.constants import DAY_S
 from ucbplan.errors import InputError, shorten
 from ucbplan.inputs import check_range
 from ucbplan.observing.blocks.block import MAX_BLOCK_S
@@ -81,7 +82,7 @@ class ExportOptions:
         why = "window half-width in units of the block's 1-sigma timing error"
         check_range("tolerance_sigma", self.tolerance_sigma, 0.0, MAX_TOLERANCE_SIGMA, "", why)
         why = "smallest window half-width; a day at most"
-        check_range("tolerance_floor", self.tolerance_floor_s, 0.0, 86400.0, "s", why)
+        check_range("tolerance_floor", self.tolerance_floor_s, 0.0, DAY_S, "s", why)
         check_range("rounding_warn_fraction", self.rounding_warn_fraction, 0.0, 1.0)
         why = "seeing limit of the ESO constraint set"
         check_range("seeing", self.seeing_arcsec, 0.0, 5.0, "arcsec", why, low_open=True)

@@ -25,8 +25,6 @@ from ucbplan.observing.exports.visitgroups import (
     target_totals,
 )
 
-__all__ = ["export_keck_starlist"]
-
 #: Longest target name a Keck starlist accepts (the name field is columns 1–16).
 KECK_NAME_MAX = 15
 

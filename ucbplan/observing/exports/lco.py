@@ -22,9 +22,6 @@ from ucbplan.observing.exports.queue import queue_note
 from ucbplan.observing.exports.text import iso_ms, safe_name
 from ucbplan.observing.exports.visitgroups import export_units, exposure_runs
 
-__all__ = ["export_lco", "lco_json", "lco_requests", "request_window"]
-
-
 #: Longest request-group name written [characters].
 LCO_NAME_MAX = 50
 

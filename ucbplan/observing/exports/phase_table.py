@@ -26,8 +26,6 @@ from ucbplan.observing.exports.columns import floats, strings
 from ucbplan.observing.exports.interface import ExportOptions, ExportResult
 from ucbplan.observing.exports.provenance import clean_meta, created_utc, meta, site_name, version
 
-__all__ = ["export_phase_table", "phase_table"]
-
 _UNITS = {
     "period_s": "s",
     "t0_bjd_tdb": "d",

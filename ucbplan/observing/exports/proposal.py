@@ -30,6 +30,7 @@ from zoneinfo import ZoneInfo
 import numpy as np
 from astropy.table import MaskedColumn, Table
 
+from ucbplan.core.constants import HOUR_S
 from ucbplan.errors import InputFileError, shorten
 from ucbplan.observing.blocks.accounting import BlockRows, TimeAccount, accounts_from_blocks
 from ucbplan.observing.blocks.cells import sexagesimal
@@ -50,13 +51,6 @@ from ucbplan.observing.exports.proposal_latex import proposal_latex
 from ucbplan.observing.exports.provenance import clean_meta, created_utc, meta, version
 from ucbplan.observing.exports.text import iso_ms
 from ucbplan.observing.observatory.semesters import semester_dates, semester_label
-
-__all__ = [
-    "PROPOSAL_FORMATS",
-    "export_proposal",
-    "proposal_table",
-    "write_proposal",
-]
 
 #: Proposal table formats (``--format``) and the file suffix of each.
 PROPOSAL_SUFFIXES = {"ecsv": ".ecsv", "csv": ".csv", "latex": ".tex"}
@@ -187,10 +181,10 @@ def _target_row(
         "exposure_per_visit_s": account.shutter_s / visits,
         "overhead_per_visit_s": account.overhead_s / visits,
         "idle_per_visit_s": account.idle_s / visits,
-        "integration_h": account.shutter_s / 3600.0,
-        "overhead_h": account.overhead_s / 3600.0,
-        "idle_h": account.idle_s / 3600.0,
-        "total_h": account.total_s / 3600.0,
+        "integration_h": account.shutter_s / HOUR_S,
+        "overhead_h": account.overhead_s / HOUR_S,
+        "idle_h": account.idle_s / HOUR_S,
+        "total_h": account.total_s / HOUR_S,
         "efficiency": account.efficiency,
         "time_critical": True,
     }
@@ -317,10 +311,10 @@ def _summary_meta(
         ),
         "n_visits": total.visits,
         "n_exposures": total.exposures,
-        "total_integration_h": total.shutter_s / 3600.0,
-        "total_overhead_h": total.overhead_s / 3600.0,
-        "total_idle_h": total.idle_s / 3600.0,
-        "total_h": total.total_s / 3600.0,
+        "total_integration_h": total.shutter_s / HOUR_S,
+        "total_overhead_h": total.overhead_s / HOUR_S,
+        "total_idle_h": total.idle_s / HOUR_S,
+        "total_h": total.total_s / HOUR_S,
         "efficiency": total.efficiency,
         "time_scale": "UTC at the site",
     }

@@ -17,8 +17,6 @@ from astropy.table import Table
 
 from ucbplan.observing.exports.text import fmt_sigma
 
-__all__ = ["FONT_PT", "TEXTWIDTH_PT", "latex_width_pt", "proposal_latex"]
-
 #: ``\textwidth`` of the ``article`` class at 10 pt [pt].
 TEXTWIDTH_PT = 345.0
 #: ``\footnotesize`` in a 10 pt document [pt] (1 em of Computer Modern at that size).

@@ -23,14 +23,6 @@ from ucbplan.observing.exports.interface import ExportOptions
 from ucbplan.observing.exports.provenance import meta
 from ucbplan.observing.exports.visitgroups import ExportUnit
 
-__all__ = [
-    "BACK_TO_BACK",
-    "ServiceModeError",
-    "alternatives",
-    "queue_note",
-    "untargeted",
-]
-
 #: The cadences a service-mode queue executes: exposures back to back after one acquisition.
 BACK_TO_BACK = ("phase-locked", "untargeted")
 

@@ -27,15 +27,6 @@ from ucbplan.observing.exports.columns import floats, required_times, strings
 from ucbplan.observing.exports.interface import ExportOptions
 from ucbplan.observing.schedule.settings import QUEUE_WAIT_S
 
-__all__ = [
-    "NO_EXPOSURE_FIELD",
-    "ExportUnit",
-    "export_units",
-    "exposure_runs",
-    "exposure_texts",
-    "target_totals",
-]
-
 #: The note of a format without exposure fields (``fmt``: its name, ``mark``: its comment mark).
 NO_EXPOSURE_FIELD = (
     "{fmt}: the format has no exposure time or count field: each block's exposures "

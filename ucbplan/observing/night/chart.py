@@ -24,6 +24,7 @@ from astropy.table import Table
 from astropy.time import Time
 from numpy.typing import NDArray
 
+from ucbplan.core.constants import DAY_S, HOUR_S
 from ucbplan.errors import InputError, shorten
 from ucbplan.io import write_output
 from ucbplan.observing.blocks.block import Block
@@ -41,23 +42,6 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
     from ucbplan.targets import Target
-
-__all__ = [
-    "CHART_FORMATS",
-    "MAX_PANELS",
-    "NightChart",
-    "Visit",
-    "chart_figure",
-    "chart_format",
-    "group_visits",
-    "hhmm",
-    "level_crossings",
-    "night_chart",
-    "night_figures",
-    "plot_charts",
-    "plot_night",
-    "write_night_charts",
-]
 
 FloatArray = NDArray[np.float64]
 
@@ -77,7 +61,7 @@ MAX_PANELS = 7
 
 
 @dataclass(frozen=True)
-class Visit:
+class VisitRows:
     """Blocks observed together (one acquisition): a ``visit_id``, ``session_id`` or one block.
 
     Attributes
@@ -114,7 +98,7 @@ class NightChart:
 
     window: NightWindow
     targets: tuple[tuple[str, float, float], ...]
-    visits: tuple[Visit, ...]
+    visits: tuple[VisitRows, ...]
 
 
 def _text(row: Any, name: str) -> str:
@@ -131,7 +115,7 @@ def _night_of(row: Any, site: Site) -> str:
     return (start - timedelta(hours=12)).date().isoformat()
 
 
-def group_visits(table: Table, site: Site) -> dict[str, list[Visit]]:
+def group_visits(table: Table, site: Site) -> dict[str, list[VisitRows]]:
     """The visits of a blocks table, by night (in date order), each night's in start order.
 
     Blocks with the same ``visit_id`` (or, without that column, the same ``session_id``) on the
@@ -148,8 +132,8 @@ def group_visits(table: Table, site: Site) -> dict[str, list[Visit]]:
     for (night, key), idx in groups.items():
         rows = table[idx]
         rows.sort("t_start_utc")
-        visits.append(Visit(key, str(rows["target"][0]), night, rows))
-    out: dict[str, list[Visit]] = {}
+        visits.append(VisitRows(key, str(rows["target"][0]), night, rows))
+    out: dict[str, list[VisitRows]] = {}
     for v in sorted(visits, key=lambda v: (v.night, v.start_utc)):
         out.setdefault(v.night, []).append(v)
     return out
@@ -192,20 +176,20 @@ def _seconds(axis: TimeAxis, iso: Sequence[str]) -> FloatArray:
     return np.asarray((t.tdb - axis.origin).to_value(u.s), dtype=np.float64)
 
 
-def _span(sky: SkyModel, visits: Sequence[Visit], axis: TimeAxis) -> tuple[float, float]:
+def _span(sky: SkyModel, visits: Sequence[VisitRows], axis: TimeAxis) -> tuple[float, float]:
     """Sunset − 20 min to sunrise + 20 min [s on the axis], widened to every visit."""
-    x = np.linspace(0.0, 86400.0, 1441)
+    x = np.linspace(0.0, DAY_S, 1441)
     dark = np.flatnonzero(sky.sun_alt_deg(x) < 0.0)
-    lo, hi = (x[dark[0]] - _MARGIN_S, x[dark[-1]] + _MARGIN_S) if dark.size else (0.0, 86400.0)
+    lo, hi = (x[dark[0]] - _MARGIN_S, x[dark[-1]] + _MARGIN_S) if dark.size else (0.0, DAY_S)
     for v in visits:
         lo = min(lo, float(_seconds(axis, [v.start_utc])[0]) - 600.0)
         hi = max(hi, float(_seconds(axis, [v.end_utc])[0]) + 600.0)
-    return max(lo, 0.0), min(hi, 86400.0)
+    return max(lo, 0.0), min(hi, DAY_S)
 
 
 def _draw_sky(ax: Any, sky: SkyModel, x: FloatArray, chart: NightChart, colours: Any) -> None:
     """Twilight shading, target and Moon altitudes (x in s, drawn in h)."""
-    hours = x / 3600.0
+    hours = x / HOUR_S
     sun = sky.sun_alt_deg(x)
     for limit, grey in _SHADES:
         ax.fill_between(hours, 0, 90, where=sun <= limit, color=str(grey), lw=0, zorder=0)
@@ -231,11 +215,11 @@ def _draw_visits(ax: Any, axis: TimeAxis, chart: NightChart, colours: Any) -> No
     names = [t[0] for t in chart.targets]
     last = [-math.inf] * len(_NUMBER_ALT_DEG)
     for k, v in enumerate(chart.visits):
-        h0 = _seconds(axis, [v.start_utc])[0] / 3600.0
-        h1 = _seconds(axis, [v.end_utc])[0] / 3600.0
+        h0 = _seconds(axis, [v.start_utc])[0] / HOUR_S
+        h1 = _seconds(axis, [v.end_utc])[0] / HOUR_S
         colour = colours(names.index(v.target) % 10)
         ax.axvspan(h0, h1, color=colour, alpha=0.35, lw=0, zorder=1)
-        mids = _seconds(axis, [str(t) for t in v.rows["t_mid_utc"]]) / 3600.0
+        mids = _seconds(axis, [str(t) for t in v.rows["t_mid_utc"]]) / HOUR_S
         ax.plot(mids, np.full(mids.shape, 88.0), "|", color="k", ms=9, mew=1.2, zorder=4)
         centre = (h0 + h1) / 2.0
         level = next((j for j, x in enumerate(last) if centre - x > _NUMBER_GAP_H), 0)
@@ -252,13 +236,13 @@ def _utc_ticks(ax: Any, axis: TimeAxis, span: tuple[float, float]) -> None:
     """Ticks on whole UTC hours (every 1 h up to 12 h of span, else 2 h), labelled hh:mm."""
     utc0 = axis.utc(0.0).datetime
     past = utc0.minute * 60 + utc0.second + utc0.microsecond / 1e6
-    step = 1 if span[1] - span[0] <= 12 * 3600 else 2
-    first = 3600.0 - past
-    xs = np.arange(first, span[1] + 1, 3600.0)
+    step = 1 if span[1] - span[0] <= 12 * HOUR_S else 2
+    first = HOUR_S - past
+    xs = np.arange(first, span[1] + 1, HOUR_S)
     hours = [(utc0.hour + 1 + k) % 24 for k in range(len(xs))]
     keep = [(x, h) for x, h in zip(xs, hours, strict=True) if x >= span[0] and h % step == 0]
-    ax.set_xticks([x / 3600.0 for x, _ in keep], [f"{h:02d}:00" for _, h in keep])
-    ax.set_xlim(span[0] / 3600.0, span[1] / 3600.0)
+    ax.set_xticks([x / HOUR_S for x, _ in keep], [f"{h:02d}:00" for _, h in keep])
+    ax.set_xlim(span[0] / HOUR_S, span[1] / HOUR_S)
 
 
 def level_crossings(x: FloatArray, f: FloatArray) -> list[tuple[float, bool]]:
@@ -280,8 +264,8 @@ def hhmm(iso: str) -> str:
 def _label(ax: Any, axis: TimeAxis, chart: NightChart, site_name: str, sky: SkyModel) -> None:
     """Axis labels and a title with the UTC date, sunset/sunrise and the Moon's illumination."""
     night = chart.window.label
-    start = axis.utc(ax.get_xlim()[0] * 3600.0).iso[:16]
-    x = np.linspace(0.0, 86400.0, 1441)
+    start = axis.utc(ax.get_xlim()[0] * HOUR_S).iso[:16]
+    x = np.linspace(0.0, DAY_S, 1441)
     illum = float(sky.moon_illum(np.array([43200.0]))[0])
     sun = sky.sun_alt_deg(x)
     ax.set_xlabel(f"UTC [hh:mm] from {start} UTC")
@@ -308,7 +292,7 @@ def _panel(
 
     axis = TimeAxis.starting_at(chart.window.start, site.location)
     coords = SkyCoord([t[1] for t in chart.targets] * u.deg, [t[2] for t in chart.targets] * u.deg)
-    sky = SkyModel.build(site.location, axis.origin, (0.0, 86400.0), coords)
+    sky = SkyModel.build(site.location, axis.origin, (0.0, DAY_S), coords)
     span = _span(sky, chart.visits, axis)
     colours = matplotlib.colormaps["tab10"]
     x = np.linspace(span[0], span[1], 721)

@@ -26,22 +26,10 @@ from typing import Any
 import numpy as np
 from astropy.table import Table
 
+from ucbplan.core.constants import HOUR_S_INT
 from ucbplan.errors import InputError, shorten
-from ucbplan.observing.night.chart import Visit, group_visits
+from ucbplan.observing.night.chart import VisitRows, group_visits
 from ucbplan.observing.observatory.sites import Site
-
-__all__ = [
-    "Countdown",
-    "Exposure",
-    "countdown_lines",
-    "hms",
-    "parse_utc",
-    "plan_exposures",
-    "seconds_text",
-    "visit_exposures",
-    "wait_text",
-    "what_next",
-]
 
 #: Longest target name in a countdown line [characters] (longer names are cut with "…").
 _NAME_CHARS = 40
@@ -56,7 +44,7 @@ _ISO = re.compile(
 
 
 @dataclass(frozen=True, slots=True)
-class Exposure:
+class TimedExposure:
     """One exposure of a plan: when it starts and ends (UTC), its visit and its anchor.
 
     Attributes
@@ -131,12 +119,12 @@ class Countdown:
     """
 
     now: datetime
-    previous: Exposure | None
-    next: Exposure | None
-    after: Exposure | None
+    previous: TimedExposure | None
+    next: TimedExposure | None
+    after: TimedExposure | None
 
     @property
-    def running(self) -> Exposure | None:
+    def running(self) -> TimedExposure | None:
         """The exposure that should be running at ``now`` (None between exposures)."""
         p = self.previous
         return p if p is not None and p.end > self.now else None
@@ -182,7 +170,7 @@ def _float(row: Any, name: str, default: float = math.nan) -> float:
     return value if math.isfinite(value) else default
 
 
-def _acquisition(visit: Visit, meta: Mapping[str, Any]) -> datetime | None:
+def _acquisition(visit: VisitRows, meta: Mapping[str, Any]) -> datetime | None:
     """The visit's acquisition start: the ``acq_s`` column, the plan's visit record, or the
     plan's ``overhead_s`` before the first exposure; None when the table says none of these."""
     start = _utc(visit.start_utc)
@@ -201,18 +189,18 @@ def _acquisition(visit: Visit, meta: Mapping[str, Any]) -> datetime | None:
     return start - timedelta(seconds=seconds) if math.isfinite(seconds) else None
 
 
-def visit_exposures(visit: Visit, meta: Mapping[str, Any] | None = None) -> list[Exposure]:
+def visit_exposures(visit: VisitRows, meta: Mapping[str, Any] | None = None) -> list[TimedExposure]:
     """The exposures of a visit in time order (``meta``: the table's, for the acquisition)."""
     acq = _acquisition(visit, meta or {})
     short = visit.visit_id.rsplit("-", 1)[-1][:_LABEL_CHARS]
-    out: list[Exposure] = []
+    out: list[TimedExposure] = []
     for k, row in enumerate(visit.rows, start=1):
         start, n_exp = _utc(row["t_start_utc"]), int(row["n_exp"])
         exptime, readout = float(row["exptime_s"]), max(_float(row, "readout_s", 0.0), 0.0)
         for j in range(n_exp):
             t0 = start + timedelta(seconds=j * (exptime + readout))
             out.append(
-                Exposure(
+                TimedExposure(
                     target=str(row["target"]),
                     visit_id=visit.visit_id,
                     label=f"{short}/{k:02d}" + (f".{j + 1}" if n_exp > 1 else ""),
@@ -252,7 +240,7 @@ def _site_of(table: Table) -> Site:
     return Site("UTC", 0.0, 0.0, 0.0, "UTC")
 
 
-def plan_exposures(table: Table, site: Site | None = None) -> list[Exposure]:
+def plan_exposures(table: Table, site: Site | None = None) -> list[TimedExposure]:
     """Every exposure of a blocks table in time order (visits as the night sheet groups them).
 
     Parameters
@@ -273,7 +261,7 @@ def plan_exposures(table: Table, site: Site | None = None) -> list[Exposure]:
     return out
 
 
-def what_next(exposures: Sequence[Exposure], now: datetime) -> Countdown:
+def what_next(exposures: Sequence[TimedExposure], now: datetime) -> Countdown:
     """The exposure before ``now``, the next one at or after it and the one after that.
 
     Parameters
@@ -307,7 +295,7 @@ def _when(t: datetime, now: datetime) -> str:
 def wait_text(seconds: float) -> str:
     """A wait in words, rounded to the second: ``45 s``, ``2 min 13 s``, ``3 h 02 min 05 s``."""
     s = max(round(seconds), 0)
-    h, m, x = s // 3600, s % 3600 // 60, s % 60
+    h, m, x = s // HOUR_S_INT, s % HOUR_S_INT // 60, s % 60
     if h:
         return f"{h} h {m:02d} min {x:02d} s"
     return f"{m} min {x} s" if m else f"{x} s"
@@ -320,12 +308,12 @@ def seconds_text(seconds: float) -> str:
     return f"{whole:d}" if abs(seconds - whole) < 1e-3 else f"{seconds:.1f}"
 
 
-def _name(e: Exposure) -> str:
+def _name(e: TimedExposure) -> str:
     name = e.target if len(e.target) <= _NAME_CHARS else f"{e.target[: _NAME_CHARS - 1]}…"
     return f"{name} {e.label}"
 
 
-def _anchor(e: Exposure) -> str:
+def _anchor(e: TimedExposure) -> str:
     return f"{e.anchor} (u★ = {e.u_star_rad:.3f} rad)"
 
 

@@ -30,23 +30,8 @@ from astropy.table import Table
 from ucbplan.errors import InputError, InputFileError, shorten
 from ucbplan.io import write_output
 from ucbplan.observing.blocks.write import csv_safe_text, csv_unsafe_text
-from ucbplan.observing.night.countdown import Exposure, plan_exposures
+from ucbplan.observing.night.countdown import TimedExposure, plan_exposures
 from ucbplan.observing.observatory.sites import Site
-
-__all__ = [
-    "LOG_COLUMNS",
-    "LOG_KEYS",
-    "STATUSES",
-    "ObservingLog",
-    "check_log_plan",
-    "is_log",
-    "log_cells",
-    "log_file_name",
-    "log_lines",
-    "log_text",
-    "plan_id",
-    "read_log",
-]
 
 #: What may become of an exposure (only ``taken`` counts toward a goal).
 STATUSES = ("taken", "missed", "skipped")
@@ -86,7 +71,7 @@ def _site_name(table: Table) -> str:
     return str(entry.get("name", "")) if isinstance(entry, Mapping) else ""
 
 
-def _mid_tdb(row: Any, exposure: Exposure, index: int) -> str:
+def _mid_tdb(row: Any, exposure: TimedExposure, index: int) -> str:
     """The exposure's mid-time, TDB at the barycentre: the block's anchor epoch moved by the
     exposure's place in the block (the Rømer delay changes by < 1e-4 s per s: < 0.1 s over a
     block of ≤ 1000 s, 1e-3 rad of an orbit of 10 min)."""
@@ -113,7 +98,9 @@ def log_file_name(table: Table) -> str:
     return f"observing-log-{plan_id(table)}.csv"
 
 
-def log_cells(table: Table, site: Site | None = None) -> list[tuple[Exposure, tuple[str, ...]]]:
+def log_cells(
+    table: Table, site: Site | None = None
+) -> list[tuple[TimedExposure, tuple[str, ...]]]:
     """Every exposure of the plan in time order with its log cells (:data:`LOG_COLUMNS`
     without ``status``; ``site``: as :func:`~ucbplan.observing.night.countdown.plan_exposures`):
     text cells neutralised for spreadsheets (:func:`~ucbplan.observing.blocks.write.csv_safe_text`),
@@ -121,7 +108,7 @@ def log_cells(table: Table, site: Site | None = None) -> list[tuple[Exposure, tu
     rows = {str(r["block_id"]): r for r in table}
     ident, site_name = plan_id(table), _site_name(table)
     sigma = "sigma_v_kms" in table.colnames
-    out: list[tuple[Exposure, tuple[str, ...]]] = []
+    out: list[tuple[TimedExposure, tuple[str, ...]]] = []
     seen: dict[str, int] = {}
     for e in plan_exposures(table, site):
         row = rows[e.block_id]
@@ -293,7 +280,7 @@ class ObservingLog:
     """
 
     path: Path
-    exposures: list[Exposure]
+    exposures: list[TimedExposure]
     cells: list[tuple[str, ...]]
     statuses: list[str] = field(default_factory=list)
 
@@ -347,7 +334,7 @@ class ObservingLog:
                 )
             self.statuses[k] = str(row["status"])
 
-    def mark(self, exposure: Exposure, status: str) -> None:
+    def mark(self, exposure: TimedExposure, status: str) -> None:
         """Record ``status`` (:data:`STATUSES`) for ``exposure`` and write the log."""
         if status not in STATUSES:
             raise InputError(
@@ -366,7 +353,7 @@ class ObservingLog:
         write_output(self.path, _write, overwrite=True)
 
 
-def log_lines(log: ObservingLog, previous: Exposure | None, width: int = 100) -> list[str]:
+def log_lines(log: ObservingLog, previous: TimedExposure | None, width: int = 100) -> list[str]:
     """The ``log`` entry of a ``now --log`` frame, wrapped to ``width`` columns under its
     10-column tag as the countdown's: the mark of the exposure just started (the one a key
     marks), how many are marked and how many earlier ones are not, and the keys."""

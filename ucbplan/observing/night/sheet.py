@@ -26,18 +26,19 @@ from astropy import units as u
 from astropy.coordinates import SkyCoord
 from astropy.table import Table
 
+from ucbplan.core.constants import DAY_S
 from ucbplan.errors import InputError, shorten
 from ucbplan.io import write_output
 from ucbplan.observing.constraints import ConstraintSet
 from ucbplan.observing.night.chart import (
     NightChart,
-    Visit,
+    VisitRows,
     chart_figure,
     hhmm,
     level_crossings,
     night_chart,
 )
-from ucbplan.observing.night.countdown import Exposure, hms, seconds_text, visit_exposures
+from ucbplan.observing.night.countdown import TimedExposure, hms, seconds_text, visit_exposures
 from ucbplan.observing.night.observing_log import LOG_COLUMNS, log_cells, log_file_name
 from ucbplan.observing.night.sheet_html import (
     EXPOSURE_COLUMNS,
@@ -51,19 +52,6 @@ from ucbplan.observing.observatory.sky import SkyModel
 from ucbplan.observing.observatory.time_axis import TimeAxis
 from ucbplan.offline import offline
 from ucbplan.plotting import pyplot
-
-__all__ = [
-    "SHEET_FORMATS",
-    "night_events",
-    "plan_note",
-    "sheet_format",
-    "sheet_nights",
-    "sky_line",
-    "visit_about",
-    "visit_heading",
-    "visit_instruction",
-    "write_night_sheet",
-]
 
 #: Formats of :func:`write_night_sheet`, by file suffix.
 SHEET_FORMATS = ("pdf", "html")
@@ -91,13 +79,13 @@ def _text(row: Any, name: str) -> str:
     return str(row[name]).strip()
 
 
-def visit_heading(number: int, visit: Visit, exposures: Sequence[Exposure]) -> str:
+def visit_heading(number: int, visit: VisitRows, exposures: Sequence[TimedExposure]) -> str:
     """``Visit 1: HM Cnc (V01), 2040-02-16 UTC``: number in the night, target, visit, UTC date."""
     short = exposures[0].label.split("/")[0]
     return f"Visit {number}: {visit.target} ({short}), {exposures[0].start.date()} UTC"
 
 
-def visit_about(visit: Visit, exposures: Sequence[Exposure]) -> str:
+def visit_about(visit: VisitRows, exposures: Sequence[TimedExposure]) -> str:
     """One line on the target of a visit: ICRS position, magnitude (if the table has ``vmag``),
     acquisition start (UTC), first start and last end."""
     row = visit.rows[0]
@@ -117,7 +105,7 @@ def visit_about(visit: Visit, exposures: Sequence[Exposure]) -> str:
     )
 
 
-def visit_instruction(exposures: Sequence[Exposure]) -> tuple[str, str]:
+def visit_instruction(exposures: Sequence[TimedExposure]) -> tuple[str, str]:
     """What to tell the night assistant about a visit, in two lines: when to be acquired and the
     exposures, then that the starts are phase-critical and what to do about a missed one."""
     first = exposures[0]
@@ -148,8 +136,8 @@ def night_events(chart: NightChart, site: Site) -> tuple[list[tuple[str, str]], 
     and the Moon's illuminated fraction at local midnight."""
     axis = TimeAxis.starting_at(chart.window.start, site.location)
     probe = SkyCoord([0.0] * u.deg, [0.0] * u.deg)
-    sky = SkyModel.build(site.location, axis.origin, (0.0, 86400.0), probe)
-    x = np.linspace(0.0, 86400.0, 1441)
+    sky = SkyModel.build(site.location, axis.origin, (0.0, DAY_S), probe)
+    x = np.linspace(0.0, DAY_S, 1441)
     sun = sky.sun_alt_deg(x)
     found = [
         (xc, evening if falling else morning)
@@ -157,7 +145,7 @@ def night_events(chart: NightChart, site: Site) -> tuple[list[tuple[str, str]], 
         for xc, falling in level_crossings(x, sun - level)
     ]
     dark = [xc for xc, name in found if name in ("sunset", "sunrise")]
-    lo, hi = (min(dark), max(dark)) if len(dark) == 2 else (0.0, 86400.0)
+    lo, hi = (min(dark), max(dark)) if len(dark) == 2 else (0.0, DAY_S)
     moon = level_crossings(x, sky.moon_alt_deg(x))
     found += [(xc, "moonset" if down else "moonrise") for xc, down in moon if lo <= xc <= hi]
     found.sort()
@@ -188,7 +176,7 @@ def plan_note(table: Table) -> str:
     return "; ".join(parts) + "."
 
 
-def _visits(chart: NightChart, meta: Any) -> list[tuple[Visit, list[Exposure]]]:
+def _visits(chart: NightChart, meta: Any) -> list[tuple[VisitRows, list[TimedExposure]]]:
     return [(v, visit_exposures(v, meta)) for v in chart.visits]
 
 
@@ -201,7 +189,7 @@ def _wrap(text: str, width: int = _WIDTH) -> list[str]:
     return textwrap.wrap(text, width=width, subsequent_indent="    ") or [""]
 
 
-def _table_lines(exposures: Sequence[Exposure]) -> list[str]:
+def _table_lines(exposures: Sequence[TimedExposure]) -> list[str]:
     """The exposure table as fixed-width text (one line per exposure)."""
     rows = [EXPOSURE_COLUMNS, *(exposure_cells(e) for e in exposures)]
     widths = [max(len(r[k]) for r in rows) for k in range(len(EXPOSURE_COLUMNS))]

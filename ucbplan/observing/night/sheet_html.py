@@ -22,10 +22,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from datetime import datetime
 
-from ucbplan.observing.night.countdown import Exposure, hms
+from ucbplan.observing.night.countdown import TimedExposure, hms
 from ucbplan.observing.night.observing_log import STATUSES
-
-__all__ = ["EXPOSURE_COLUMNS", "SheetNight", "SheetVisit", "exposure_cells", "render_html"]
 
 #: Columns of the exposure table, one row per exposure (HTML and PDF).
 EXPOSURE_COLUMNS = ("#", "start UTC", "end UTC", "anchor (epoch UTC)", "airmass", "Λ_K", "σ_t [s]")
@@ -40,7 +38,7 @@ class SheetVisit:
     heading: str
     about: str
     tell: tuple[str, ...]
-    exposures: tuple[Exposure, ...]
+    exposures: tuple[TimedExposure, ...]
     log: tuple[tuple[str, ...], ...] = ()
 
 
@@ -54,7 +52,7 @@ class SheetNight:
     visits: tuple[SheetVisit, ...]
 
 
-def exposure_cells(e: Exposure) -> tuple[str, ...]:
+def exposure_cells(e: TimedExposure) -> tuple[str, ...]:
     """The cells of an exposure's row (:data:`EXPOSURE_COLUMNS`): times HH:MM:SS UTC (rounded
     to the second), the anchor with u★ [rad] and its epoch (ms cut to 0.1 s)."""
     epoch = e.anchor_utc.strftime("%H:%M:%S.%f")[:10]
@@ -271,7 +269,7 @@ _LOG_SCRIPT = r"""
 _STATUS_BUTTONS = "".join(f'<button type="button" data-status="{s}">{s}</button>' for s in STATUSES)
 
 
-def _row(e: Exposure, log: tuple[str, ...] | None) -> str:
+def _row(e: TimedExposure, log: tuple[str, ...] | None) -> str:
     a = html.escape
     acq = f' data-acq="{_ms(e.acq_start)}"' if e.first_of_visit and e.acq_start else ""
     cells = "".join(f"<td>{a(c)}</td>" for c in exposure_cells(e))

@@ -23,18 +23,8 @@ from astropy.coordinates import EarthLocation, SkyCoord
 from astropy.time import Time, TimeDelta
 from scipy.interpolate import CubicSpline
 
+from ucbplan.core.constants import HOUR_S
 from ucbplan.errors import InputError
-
-__all__ = [
-    "DelayInterpolator",
-    "SiteTrack",
-    "astropy_rotations",
-    "bary_tdb_to_site_utc",
-    "coverage_warnings",
-    "light_time_s",
-    "site_icrs_frames",
-    "site_utc_to_bary_tdb",
-]
 
 #: Number of fixed-point iterations t ← t★ − Δ(t); Δ changes by ≤ 1e-4 s/s, so each iteration
 #: shrinks the error by ≥ 1e4: 500 s → 0.05 s → 5 µs → 0.5 ns.
@@ -53,7 +43,7 @@ DEFAULT_STEP_S = 2400.0
 #: 6400 km vector, which turns with the Earth relative to the orbital velocity (~640 m, diurnal;
 #: a spline errs by ∝ h⁴). Measured against the exact chain over a year: ≤ 18 m at 2 h (95 m at
 #: 3 h, 0.8 m at 1 h), i.e. ≤ 0.06 µs of light time; tests pin ≤ 30 m.
-ORIENTATION_STEP_S = 2 * 3600.0
+ORIENTATION_STEP_S = 2 * HOUR_S
 
 
 def light_time_s(t: Time, coord: SkyCoord, location: EarthLocation) -> np.ndarray:

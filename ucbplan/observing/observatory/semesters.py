@@ -18,8 +18,6 @@ import re
 
 from ucbplan.errors import InputError, shorten
 
-__all__ = ["semester_dates", "semester_label"]
-
 _SEMESTER = re.compile(r"^(\d{4})([AB])$")
 _ESO = re.compile(r"^P(\d{1,3})$")
 #: P110 starts here (ESO).

@@ -21,15 +21,6 @@ from ucbplan.errors import InputError, SiteError, UcbplanError, shorten
 from ucbplan.inputs import check_range, load_yaml
 from ucbplan.targets.values import did_you_mean
 
-__all__ = [
-    "Site",
-    "east_longitude",
-    "get_site",
-    "load_sites",
-    "resolve_site",
-    "site_from_lonlat",
-]
-
 
 @dataclass(frozen=True, slots=True)
 class Site:

@@ -26,15 +26,14 @@ from astropy.time import Time
 from numpy.typing import NDArray
 from scipy.interpolate import CubicSpline
 
+from ucbplan.core.constants import HOUR_S
 from ucbplan.observing.observatory.barycentric import astropy_rotations
 from ucbplan.observing.observatory.time_axis import TimeAxis
-
-__all__ = ["SLOW_STEP_S", "SkyModel", "airmass_from_alt", "sun_cirs_frames"]
 
 FloatArray = NDArray[np.float64]
 
 #: Node spacing of the coarse astropy grid [s] (apparent places move < 3.5 deg per node).
-SLOW_STEP_S = 6 * 3600.0
+SLOW_STEP_S = 6 * HOUR_S
 
 
 def airmass_from_alt(alt_deg: FloatArray) -> FloatArray:

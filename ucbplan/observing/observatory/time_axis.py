@@ -20,7 +20,7 @@ from astropy.time import Time, TimeDelta
 from numpy.typing import ArrayLike, NDArray
 from scipy.interpolate import CubicSpline
 
-__all__ = ["TDB_TT_STEP_S", "EpochAxis", "TimeAxis", "elapsed"]
+from ucbplan.core.constants import HOUR_S
 
 FloatArray = NDArray[np.float64]
 
@@ -28,7 +28,7 @@ FloatArray = NDArray[np.float64]
 #: Node spacing of the TDB − TT spline of :meth:`TimeAxis.utc` [s]. The fastest term is the
 #: diurnal topocentric one (amplitude ~2 µs): a cubic spline errs by ≈ 5/384·(ωh)⁴·2 µs
 #: = 0.1 ns at 1 h (tests compare with astropy's exact conversion: < 1 ns).
-TDB_TT_STEP_S = 3600.0
+TDB_TT_STEP_S = HOUR_S
 
 #: Fewest times :meth:`TimeAxis.utc` converts through the spline.
 TDB_TT_MIN = 64

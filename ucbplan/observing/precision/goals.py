@@ -37,30 +37,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ucbplan.core.binary import a_total_m, kepler_total_mass
-from ucbplan.core.constants import MSUN_KG
+from ucbplan.core.constants import HOUR_S, MSUN_KG
 from ucbplan.core.mvnormal import inverse_scaled
 from ucbplan.errors import InputError, shorten
 
 if TYPE_CHECKING:
     from ucbplan.targets import Target
-
-__all__ = [
-    "GOAL_QUANTITIES",
-    "Goal",
-    "GoalPlan",
-    "Shortfall",
-    "TimeBudget",
-    "anchor_phases",
-    "check_goal_spectra",
-    "goal_info_needed",
-    "goal_sigma",
-    "parse_goal",
-    "shortfall",
-    "sigma_k_per_pattern",
-    "spectra_for_goal",
-    "target_k",
-    "time_budget",
-]
 
 #: Goal quantities and the units their absolute form takes.
 GOAL_QUANTITIES = {
@@ -375,10 +357,10 @@ def spectra_for_goal(
             visit_s=visit_s,
             anchors_per_orbit=len(pattern),
         )
-    return _goal_plan(goal, [name for name, _ in pattern], cycles, per_pattern, s1, s2, time)
+    return _cycle_plan(goal, [name for name, _ in pattern], cycles, per_pattern, s1, s2, time)
 
 
-def _goal_plan(
+def _cycle_plan(
     goal: Goal,
     pattern: list[str],
     cycles: int,
@@ -484,10 +466,10 @@ def time_budget(
         n_visits=n_visits,
         spectra_per_visit=per_visit,
         step_s=step,
-        shutter_h=shutter / 3600.0,
-        overhead_h=overhead / 3600.0,
-        idle_h=idle / 3600.0,
-        total_h=(shutter + overhead + idle) / 3600.0,
+        shutter_h=shutter / HOUR_S,
+        overhead_h=overhead / HOUR_S,
+        idle_h=idle / HOUR_S,
+        total_h=(shutter + overhead + idle) / HOUR_S,
     )
 
 

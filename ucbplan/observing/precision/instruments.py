@@ -28,22 +28,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ucbplan.core.constants import HOUR_S
 from ucbplan.errors import InputError, InputFileError, shorten
 from ucbplan.inputs import load_yaml
-
-__all__ = [
-    "BUNDLED",
-    "Instrument",
-    "Overheads",
-    "SigmaRef",
-    "check_exptime",
-    "get_instrument",
-    "instrument_magnitude",
-    "instrument_or_none",
-    "instrument_overheads",
-    "load_instruments",
-    "sigma_v_kms",
-]
 
 #: Where the bundled table lives inside the package.
 BUNDLED = "ucbplan/data/instruments.yaml"
@@ -55,9 +42,9 @@ MIN_EXPOSURE_S = 1e-3
 OPTIONAL_NUMBERS = ("acquisition_s", "readout_s", "min_exptime_s", "extinction_k")
 #: Open physical ranges (lo, hi) of the numeric fields.
 RANGES = {
-    "acquisition_s": (0.0, 3600.0),
+    "acquisition_s": (0.0, HOUR_S),
     "readout_s": (0.0, 600.0),
-    "min_exptime_s": (0.0, 3600.0),
+    "min_exptime_s": (0.0, HOUR_S),
     "extinction_k": (0.0, 1.0),
 }
 SIGMA_REF_RANGES = {"sigma_v_kms": (0.0, 200.0), "mag": (10.0, 25.0), "exptime_s": (0.0, 36000.0)}

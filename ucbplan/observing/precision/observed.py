@@ -44,19 +44,6 @@ from ucbplan.core.params import PhaseParams
 from ucbplan.core.phase import arg_latitude
 from ucbplan.core.smearing import lambda_k as smearing_factor
 
-__all__ = [
-    "SIGMA_V_RATIO_TOL",
-    "ObservedFisher",
-    "ObservedSpectra",
-    "collected_information",
-    "observed_fisher",
-    "observed_information",
-    "sigma_v_ratio",
-    "spectra_u",
-    "target_spectra",
-    "window_lambda_k",
-]
-
 F64 = NDArray[np.float64]
 
 #: Relative difference of the measured σ_v from the law's below which the law is kept (the

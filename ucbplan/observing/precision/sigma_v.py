@@ -28,15 +28,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ucbplan.core.constants import HOUR_S
 from ucbplan.errors import InputError, shorten
 from ucbplan.inputs import check_range
-
-__all__ = [
-    "KNOWN_BANDS",
-    "MAX_SIGMA_KMS",
-    "SigmaVModel",
-    "parse_sigma_v",
-]
 
 #: Photometric bands a σ_v reference may be quoted in (Johnson-Cousins, SDSS, Gaia, 2MASS).
 KNOWN_BANDS = (
@@ -72,7 +66,7 @@ _FORM = re.compile(
     rf"^\s*{_NUMBER}\s*(km/s|kms|m/s)?\s*(?:@\s*{_NUMBER}\s*(s|sec|min|h)?\s*)?"
     rf"(?:,\s*([A-Za-z]+)\s*=\s*{_NUMBER}\s*)?$"
 )
-_TIME_UNITS = {None: 1.0, "s": 1.0, "sec": 1.0, "min": 60.0, "h": 3600.0}
+_TIME_UNITS = {None: 1.0, "s": 1.0, "sec": 1.0, "min": 60.0, "h": HOUR_S}
 _FORMS = "a number in km/s (30), or 30km/s@600s, or 30km/s@600s,V=20.0"
 
 F64 = NDArray[np.float64]

@@ -37,25 +37,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ucbplan.core.constants import HOUR_S
 from ucbplan.core.smearing import lambda_k
 from ucbplan.errors import InputError
 from ucbplan.observing.precision.goals import MAX_SPECTRA, check_goal_spectra
-
-__all__ = [
-    "STRATEGIES",
-    "StrategyResult",
-    "VisitShape",
-    "balanced_counts",
-    "best_strategy",
-    "compare_strategies",
-    "constrains_k",
-    "goal_time",
-    "goal_times",
-    "information",
-    "pattern_weight",
-    "session_result",
-    "sigma_k_from_rows",
-]
 
 #: The strategies compared, in the order they are reported.
 STRATEGIES = ("targeted", "phase-locked", "untargeted")
@@ -194,7 +179,7 @@ class StrategyResult:
     @property
     def info_per_hour(self) -> float:
         """Information per hour of the visit's wall time [(km/s)⁻² h⁻¹]."""
-        return self.info_per_visit / (self.wall_s / 3600.0) if self.wall_s > 0 else 0.0
+        return self.info_per_visit / (self.wall_s / HOUR_S) if self.wall_s > 0 else 0.0
 
     @property
     def sigma_k_per_visit(self) -> float:
@@ -487,7 +472,7 @@ def goal_time(
     i = int(np.lexsort((scan.t, np.round(wall, 6)))[0])
     counts = balanced_counts(int(n[i]), int(scan.n[i]), int(unit[i]))
     return GoalTime(
-        scan.result(shape, i), info_needed, int(n[i]), len(counts), counts, float(wall[i]) / 3600
+        scan.result(shape, i), info_needed, int(n[i]), len(counts), counts, float(wall[i]) / HOUR_S
     )
 
 

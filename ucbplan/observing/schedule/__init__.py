@@ -13,7 +13,7 @@ from ucbplan.observing.schedule.nights import NightWindow, night_dates, night_wi
 from ucbplan.observing.schedule.options import check_max_visit, plan_settings
 from ucbplan.observing.schedule.pairs import delta_kappa
 from ucbplan.observing.schedule.placement import Unplaced
-from ucbplan.observing.schedule.planner import PlanResult, plan_nights
+from ucbplan.observing.schedule.planner import PlanSchedule, plan_nights
 from ucbplan.observing.schedule.run import PlanRun, plan_files, with_priorities
 from ucbplan.observing.schedule.settings import MODES, ModeSpec, PlanSettings, parse_mode
 
@@ -22,8 +22,8 @@ __all__ = [
     "Candidates",
     "ModeSpec",
     "NightWindow",
-    "PlanResult",
     "PlanRun",
+    "PlanSchedule",
     "PlanSettings",
     "Unplaced",
     "candidate_blocks",

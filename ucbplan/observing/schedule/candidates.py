@@ -41,22 +41,12 @@ from ucbplan.observing.observatory.sky import SkyModel, airmass_from_alt
 from ucbplan.observing.observatory.time_axis import EpochAxis, TimeAxis
 from ucbplan.observing.precision.instruments import MAX_AIRMASS
 from ucbplan.observing.precision.strategy import constrains_k
-from ucbplan.observing.schedule.exposure import TargetExposure, exposure_sigma_v, target_exposure
+from ucbplan.observing.schedule.exposure import TargetCadence, exposure_sigma_v, target_exposure
 from ucbplan.observing.schedule.nights import NightWindow
 from ucbplan.observing.schedule.settings import ModeSpec, PlanSettings
 
 if TYPE_CHECKING:
     from ucbplan.targets import Target
-
-__all__ = [
-    "Candidates",
-    "PlanFrame",
-    "TargetRun",
-    "candidate_blocks",
-    "grid_epochs",
-    "night_search_x",
-    "prepare_runs",
-]
 
 FloatArray = NDArray[np.float64]
 #: A warning line with the class of its cause.
@@ -360,7 +350,7 @@ class TargetRun:
     since : Time
         Start of validity (TDB): the LISA observation start, or T_valid before T0 for a timing
         ephemeris.
-    exposure : TargetExposure
+    exposure : TargetCadence
         The target's exposure plan and visit cadence (smearing floor applied).
     weight : ndarray of float
         Fisher information on K of each block's exposure, (Λ_K cos u)²/σ_v² [(km/s)⁻²] (γ's,
@@ -378,12 +368,12 @@ class TargetRun:
     until: Time
     smearing: Smearing
     since: Time
-    exposure: TargetExposure
+    exposure: TargetCadence
     weight: FloatArray
 
 
 def _weights(
-    target: Target, cand: Candidates, settings: PlanSettings, te: TargetExposure
+    target: Target, cand: Candidates, settings: PlanSettings, te: TargetCadence
 ) -> FloatArray:
     """Information of each candidate's exposure (see :class:`TargetRun`), σ_v at its airmass."""
     x = np.clip(np.where(np.isfinite(cand.airmass_mid), cand.airmass_mid, 1.0), 1.0, MAX_AIRMASS)

@@ -31,8 +31,6 @@ from ucbplan.observing.schedule.settings import PlanSettings
 if TYPE_CHECKING:
     from ucbplan.targets import Target
 
-__all__ = ["StrategyComparison", "StrategyRow", "compare_target_strategies"]
-
 
 @dataclass(frozen=True)
 class StrategyRow:

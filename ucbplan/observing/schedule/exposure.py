@@ -54,18 +54,6 @@ from ucbplan.observing.schedule.settings import QUEUE_CADENCES, QUEUE_WAIT_S, Pl
 if TYPE_CHECKING:
     from ucbplan.targets import Target
 
-__all__ = [
-    "TargetExposure",
-    "check_visit_holds_an_exposure",
-    "exposure_sigma_v",
-    "floor_exptime",
-    "optimised_exposure",
-    "sigma_law",
-    "strategy_facts",
-    "target_exposure",
-    "visit_shape",
-]
-
 #: Shortest exposure the smearing floor may cap to [s].
 _SHORTEST_S = 0.1
 #: Relative precision of the floor exposure time found by bisection.
@@ -73,7 +61,7 @@ _FLOOR_RTOL = 1e-9
 
 
 @dataclass(frozen=True)
-class TargetExposure:
+class TargetCadence:
     """One target's exposure plan and visit cadence.
 
     Attributes
@@ -267,7 +255,7 @@ def check_visit_holds_an_exposure(target: Target, settings: PlanSettings) -> Exp
     return shortest
 
 
-def target_exposure(target: Target, settings: PlanSettings) -> TargetExposure:
+def target_exposure(target: Target, settings: PlanSettings) -> TargetCadence:
     """Exposure plan and cadence of ``target`` (module notes).
 
     Raises
@@ -311,7 +299,7 @@ def target_exposure(target: Target, settings: PlanSettings) -> TargetExposure:
             f"time not optimised (--sigma-v {settings.sigma_v_kms:g}km/s@600s would)"
         )
     visit = _visit_length(settings)
-    return TargetExposure(plan, spacing, step, lam, tuple(notes), floor_ok, strategy, (), visit)
+    return TargetCadence(plan, spacing, step, lam, tuple(notes), floor_ok, strategy, (), visit)
 
 
 def sigma_law(target: Target, settings: PlanSettings) -> SigmaVModel | None:
@@ -404,7 +392,7 @@ def _strategy_results(
     return tuple(g.strategy for g in times), tuple(g.hours for g in times)
 
 
-def optimised_exposure(target: Target, settings: PlanSettings) -> TargetExposure:
+def optimised_exposure(target: Target, settings: PlanSettings) -> TargetCadence:
     """Exposure time and cadence with the most information on K per visit (module notes).
 
     The σ_v law is evaluated at airmass 1; per-exposure airmasses enter the planned σ_v.
@@ -441,7 +429,7 @@ def optimised_exposure(target: Target, settings: PlanSettings) -> TargetExposure
             f"{target.name}: no readout given: {plan.readout_s:g} s assumed (the shortest of the "
             "bundled spectrographs) to choose the exposure time; give --readout or an --instrument",
         )
-    return TargetExposure(
+    return TargetCadence(
         plan,
         spacing,
         pick.step_s,
@@ -488,7 +476,7 @@ def _law_sigma_v(
     return np.full(x.shape, np.nan if value is None else float(value))
 
 
-def strategy_facts(te: TargetExposure, collected: float) -> dict[str, Any]:
+def strategy_facts(te: TargetCadence, collected: float) -> dict[str, Any]:
     """The exposure-strategy choice of a target as plain values (table meta, reports, JSON):
     every strategy's exposure time, Λ_K, exposures and information per visit and per hour,
     the chosen one's fraction of the best, and the information the plan's rows collect."""

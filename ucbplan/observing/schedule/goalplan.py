@@ -24,6 +24,7 @@ import numpy as np
 from astropy.time import TimeDelta
 from numpy.typing import NDArray
 
+from ucbplan.core.constants import HOUR_S
 from ucbplan.errors import InputError
 from ucbplan.observing.blocks.arrays import BlockColumns, block_columns
 from ucbplan.observing.blocks.block import Block
@@ -42,17 +43,6 @@ from ucbplan.observing.precision.strategy import balanced_counts, constrains_k, 
 from ucbplan.observing.schedule.candidates import TargetRun
 from ucbplan.observing.schedule.placement import INFO_RTOL
 from ucbplan.observing.schedule.settings import PlanSettings
-
-__all__ = [
-    "GoalShortfall",
-    "as_placed",
-    "as_planned",
-    "balanced_runs",
-    "check_goals",
-    "goal_plans",
-    "goal_shortfalls",
-    "info_of_blocks",
-]
 
 #: Fraction of a goal's information a replan that changes the plan (lost nights, spectra taken
 #: given) may leave uncollected (``PlanSettings.goal_slack``): σ within
@@ -156,7 +146,7 @@ def _as_tuple(fisher: ObservedFisher) -> tuple[float, float, float, float]:
     return (fisher.f_gg, fisher.f_gk, fisher.f_kk, fisher.ratio)
 
 
-def _goal_plan(goal: Goal, run: TargetRun, settings: PlanSettings) -> GoalPlan:
+def _target_goal_plan(goal: Goal, run: TargetRun, settings: PlanSettings) -> GoalPlan:
     """Spectra, balanced visits and time of one target's goal (less what was observed)."""
     need_all = goal_info_needed(goal, run.target)
     collected = _collected(run, settings)
@@ -182,10 +172,10 @@ def _goal_plan(goal: Goal, run: TargetRun, settings: PlanSettings) -> GoalPlan:
         n_visits=len(counts),
         spectra_per_visit=max(counts),
         step_s=step,
-        shutter_h=shutter / 3600.0,
-        overhead_h=overhead / 3600.0,
-        idle_h=(total - shutter - overhead) / 3600.0,
-        total_h=total / 3600.0,
+        shutter_h=shutter / HOUR_S,
+        overhead_h=overhead / HOUR_S,
+        idle_h=(total - shutter - overhead) / HOUR_S,
+        total_h=total / HOUR_S,
     )
     sigma_k = 1.0 / math.sqrt(fisher.joint(n * w))
     _, k2, _ = target_k(run.target)
@@ -223,7 +213,7 @@ def goal_plans(runs: Sequence[TargetRun], settings: PlanSettings) -> dict[int, G
             f"goal: the anchors of `mode` {settings.spec.label} do not constrain K "
             "(cos u = 0); use `mode` quadrature"
         )
-    return {run.index: _goal_plan(goal, run, settings) for run in runs}
+    return {run.index: _target_goal_plan(goal, run, settings) for run in runs}
 
 
 def balanced_runs(runs: Sequence[TargetRun], plans: dict[int, GoalPlan]) -> list[TargetRun]:
@@ -318,8 +308,8 @@ class GoalShortfall:
         head = f"{self.target[:24]}: {self.goal.text} not reached: {reach.replace(' ≤', ' =')}"
         if self.got <= 0 or booked_s <= 0:
             return f"{head}; no visit fits: add nights"
-        hours = (self.needed - self.got) / self.got * booked_s / 3600.0
-        nights = math.ceil(hours / (booked_s / 3600.0 / max(1, n_nights)) - 1e-9)
+        hours = (self.needed - self.got) / self.got * booked_s / HOUR_S
+        nights = math.ceil(hours / (booked_s / HOUR_S / max(1, n_nights)) - 1e-9)
         return f"{head}; needs {hours:.2g} h (~{nights} night(s)) more"
 
 
@@ -437,7 +427,7 @@ def _with_longer_visits(
     short: Shortfall, longer: Shortfall | None, cap_s: float, long_s: float
 ) -> str:
     """The shortfall line with what visits as long as the nights allow would collect."""
-    cap_h = cap_s / 3600.0
+    cap_h = cap_s / HOUR_S
     reach = Goal(short.goal.quantity, short.reachable, short.goal.relative, "").describe()
     head = (
         f"`goal` {short.goal.text}: needs {short.needed_spectra} spectra, the nights given allow "
@@ -445,11 +435,11 @@ def _with_longer_visits(
     )
     if longer is None:
         return (
-            f"{head}; visits as long as the nights allow ({long_s / 3600:.3g} h) reach it: "
+            f"{head}; visits as long as the nights allow ({long_s / HOUR_S:.3g} h) reach it: "
             "raise `max_visit`"
         )
     far = Goal(short.goal.quantity, longer.reachable, short.goal.relative, "").describe()
     return (
         f"{head}, {longer.available_spectra} in visits as long as the nights allow "
-        f"({long_s / 3600:.3g} h; {far}); add nights or relax the goal"
+        f"({long_s / HOUR_S:.3g} h; {far}); add nights or relax the goal"
     )

@@ -15,16 +15,6 @@ from ucbplan.inputs import check_int
 from ucbplan.observing.observatory.sites import Site
 from ucbplan.observing.observatory.time_axis import TimeAxis
 
-__all__ = [
-    "MAX_NIGHTS",
-    "NIGHT_RANGE",
-    "NightSpan",
-    "NightWindow",
-    "night_dates",
-    "night_spans",
-    "night_windows",
-]
-
 #: Most nights in one plan (a year).
 MAX_NIGHTS = 366
 #: First and last night that can be planned (the built-in Earth ephemeris, ERFA epv00, used for

@@ -30,10 +30,9 @@ from numpy.typing import NDArray
 from scipy import sparse
 from scipy.optimize import Bounds, LinearConstraint, milp
 
+from ucbplan.core.constants import DAY_S
 from ucbplan.errors import NumericalError
 from ucbplan.observing.schedule.placement import Timeline
-
-__all__ = ["Instance", "Solution", "greedy", "is_feasible", "optimum"]
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -205,7 +204,7 @@ def random_instance(seed: int, n_targets: int = 3, n_nights: int = 2) -> Instanc
         durations[t] = rng.uniform(60.0, 0.45 * period)
         for n in range(n_nights):
             width = rng.uniform(7200.0, 14400.0)
-            centre = n * 86400.0 + rng.uniform(width / 2, 28800.0 - width / 2)
+            centre = n * DAY_S + rng.uniform(width / 2, 28800.0 - width / 2)
             mids = np.arange(centre - width / 2, centre + width / 2, period / 2)
             mids = mids + rng.uniform(0.0, period / 2)
             mids = mids[mids < centre + width / 2]

@@ -30,15 +30,6 @@ from ucbplan.observing.schedule.settings import (
     parse_duration,
 )
 
-__all__ = [
-    "DEFAULT_EXPTIME_S",
-    "DEFAULT_LAW_READOUT_S",
-    "DEFAULT_OVERHEAD_S",
-    "DEFAULT_READOUT_S",
-    "check_max_visit",
-    "plan_settings",
-]
-
 #: Exposure time without ``--exptime`` [s].
 DEFAULT_EXPTIME_S = 60.0
 #: Acquisition without ``--overhead`` or ``--instrument`` [s].

@@ -32,14 +32,6 @@ from ucbplan.observing.schedule.records import slug
 if TYPE_CHECKING:
     from ucbplan.targets import Target
 
-__all__ = [
-    "SecondEpoch",
-    "delta_kappa",
-    "pair_blocks",
-    "pair_infeasible_reason",
-    "pair_targets",
-]
-
 FloatArray = NDArray[np.float64]
 
 #: Plans the single u★ = 0 block of one target on one night, clear of the blocks given (None if

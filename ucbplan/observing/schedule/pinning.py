@@ -20,8 +20,6 @@ from ucbplan.observing.schedule.nights import NightSpan
 from ucbplan.observing.schedule.placement import Allowance, Session, Timeline
 from ucbplan.observing.schedule.settings import PlanSettings
 
-__all__ = ["pin_visits"]
-
 #: How far a kept exposure's start may lie from a candidate exposure's of the new plan [s]
 #: (the same anchor: anchors are a step of ≥ 1 min apart; rounding of the text table is 1 ms).
 _MATCH_S = 1.0

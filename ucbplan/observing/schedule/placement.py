@@ -23,19 +23,6 @@ from ucbplan.observing.schedule.candidates import Candidates, PlanFrame, TargetR
 from ucbplan.observing.schedule.nights import NightSpan
 from ucbplan.observing.schedule.settings import PlanSettings
 
-__all__ = [
-    "Allowance",
-    "NightOrder",
-    "NightPlacer",
-    "NightTask",
-    "Session",
-    "Timeline",
-    "Unplaced",
-    "place_by_priority",
-    "place_sessions",
-    "unusable_reason",
-]
-
 #: Sampling step of the night when explaining why nothing fits [s].
 _REASON_STEP_S = 300.0
 

@@ -29,7 +29,7 @@ from ucbplan.observing.observatory.sites import Site
 from ucbplan.observing.observatory.time_axis import TimeAxis
 from ucbplan.observing.precision.goals import GoalPlan
 from ucbplan.observing.schedule.candidates import PlanFrame, TargetRun, Warned, prepare_runs
-from ucbplan.observing.schedule.exposure import TargetExposure
+from ucbplan.observing.schedule.exposure import TargetCadence
 from ucbplan.observing.schedule.goalplan import (
     GoalShortfall,
     as_placed,
@@ -50,11 +50,9 @@ from ucbplan.observing.schedule.visits import place_visits
 if TYPE_CHECKING:
     from ucbplan.targets import Target
 
-__all__ = ["PlanResult", "plan_nights"]
-
 
 @dataclass(frozen=True)
-class PlanResult:
+class PlanSchedule:
     """Blocks (sorted by time), what could not be placed, warnings, provenance facts.
 
     Attributes
@@ -72,7 +70,7 @@ class PlanResult:
         End of each target's validity T_valid (TDB).
     goals : dict of str to GoalPlan
         Each target's goal plan (``--goal``; empty without).
-    exposures : dict of str to TargetExposure
+    exposures : dict of str to TargetCadence
         Each target's exposure plan and cadence.
     reasons : dict
         {target: {night: {reason: count}}}: night-time anchor epochs not planned, by reason
@@ -89,7 +87,7 @@ class PlanResult:
     constraints: list[str]
     valid_until: dict[str, Time]
     goals: dict[str, GoalPlan] = field(default_factory=dict)
-    exposures: dict[str, TargetExposure] = field(default_factory=dict)
+    exposures: dict[str, TargetCadence] = field(default_factory=dict)
     reasons: dict[str, dict[str, dict[str, int]]] = field(default_factory=dict)
     warning_categories: tuple[type[UcbplanWarning], ...] = ()
     shortfalls: list[GoalShortfall] = field(default_factory=list)
@@ -160,7 +158,7 @@ def plan_nights(
     nights: list[date],
     settings: PlanSettings,
     busy: Sequence[Block] = (),
-) -> PlanResult:
+) -> PlanSchedule:
     """Plan blocks for ``targets`` at ``site`` on the given local evening dates.
 
     No two blocks of the result overlap, whatever their targets, and each session keeps the
@@ -181,7 +179,7 @@ def plan_nights(
 
     Returns
     -------
-    PlanResult
+    PlanSchedule
 
     Raises
     ------
@@ -283,9 +281,9 @@ def _schedule(
     busy: Sequence[Block],
     infeasible: list[Unplaced],
     full: bool = False,
-) -> PlanResult:
+) -> PlanSchedule:
     """Goals, then sessions or visits placed night by night, then the block records in time
-    order (fixed-u pairs with their second epochs), as a :class:`PlanResult`. A goal the nights
+    order (fixed-u pairs with their second epochs), as a :class:`PlanSchedule`. A goal the nights
     cannot reach (``short_goals``) is planned again in visits as full as they may be."""
     spans = night_spans(windows, frame.axis)
     busy_x = _busy_x(frame.axis, busy)
@@ -318,7 +316,7 @@ def _schedule(
         longer = _longer_visits(runs0, spans, frame, site, settings, busy_x) if goals else None
         check_goals(goals, runs, blocks, frame.mode.u_values, longer)
     coverage = coverage_warnings(windows[0].start, windows[-1].end)
-    return PlanResult(
+    return PlanSchedule(
         blocks=blocks,
         unplaced=unplaced,
         warnings=[w for _, w in warns] + coverage,

@@ -27,8 +27,6 @@ from ucbplan.observing.schedule.candidates import PlanFrame, TargetRun
 from ucbplan.observing.schedule.nights import NightSpan
 from ucbplan.observing.schedule.placement import Session, Unplaced
 
-__all__ = ["REASONS", "not_planned"]
-
 #: The reasons, in the order they are tried.
 REASONS = (
     "outside validity",

@@ -29,8 +29,6 @@ from ucbplan.observing.schedule.nights import NightSpan
 from ucbplan.observing.schedule.placement import Session
 from ucbplan.observing.schedule.settings import PlanSettings
 
-__all__ = ["BlockLabel", "block_records", "slug"]
-
 FloatArray = NDArray[np.float64]
 
 

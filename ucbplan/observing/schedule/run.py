@@ -33,20 +33,10 @@ from ucbplan.observing.precision.goals import GoalPlan
 from ucbplan.observing.schedule.exposure import strategy_facts
 from ucbplan.observing.schedule.goalplan import info_of_columns
 from ucbplan.observing.schedule.nights import night_dates
-from ucbplan.observing.schedule.planner import PlanResult, plan_nights
+from ucbplan.observing.schedule.planner import PlanSchedule, plan_nights
 from ucbplan.observing.schedule.records import slug
 from ucbplan.observing.schedule.settings import PlanSettings
 from ucbplan.targets import Target, load_targets
-
-__all__ = [
-    "MAX_PRIORITY",
-    "PlanRun",
-    "parse_priorities",
-    "plan_files",
-    "plan_targets",
-    "planned_exposure",
-    "with_priorities",
-]
 
 #: Largest |priority| (priorities only order the targets).
 MAX_PRIORITY = 1.0e9
@@ -128,13 +118,13 @@ def planned_exposure(
 
 @dataclass(frozen=True)
 class PlanRun:
-    """A finished ``plan``: its inputs and :class:`PlanResult`, and the blocks table."""
+    """A finished ``plan``: its inputs and :class:`PlanSchedule`, and the blocks table."""
 
     targets: list[Target]
     site: Site
     nights: list[date]
     settings: PlanSettings
-    result: PlanResult
+    result: PlanSchedule
 
     def failure(self) -> str | None:
         """Why no block at all could be planned (None if some were), grouped by target and

@@ -7,6 +7,7 @@ import re
 from dataclasses import dataclass, field
 from typing import Any
 
+from ucbplan.core.constants import DAY_S, HOUR_S
 from ucbplan.core.smearing import parse_smear_budget
 from ucbplan.errors import InputError, UcbplanError, shorten
 from ucbplan.inputs import check_alpha, check_int, check_range
@@ -18,18 +19,6 @@ from ucbplan.observing.precision.goals import parse_goal
 from ucbplan.observing.precision.instruments import Instrument
 from ucbplan.observing.precision.observed import ObservedSpectra
 from ucbplan.observing.precision.sigma_v import SigmaVModel
-
-__all__ = [
-    "CADENCES",
-    "MODES",
-    "QUEUE_CADENCES",
-    "QUEUE_WAIT_S",
-    "ModeSpec",
-    "PlanSettings",
-    "parse_budgets",
-    "parse_duration",
-    "parse_mode",
-]
 
 #: Exposure cadences inside a visit (``--cadence``): ``auto`` takes the strategy with the most
 #: information per visit when σ_v follows the exposure time
@@ -50,15 +39,15 @@ DEFAULT_MIN_LAMBDA_K = 0.9
 #: Longest visit a goal plans without ``--visit`` (``--max-visit``) [s].
 DEFAULT_MAX_VISIT_S = 7200.0
 #: Longest per-target time budget [s] (a year of nights).
-MAX_BUDGET_S = 366 * 86400.0
+MAX_BUDGET_S = 366 * DAY_S
 #: Seconds per unit of a ``--visit`` duration.
 _DURATION_UNITS = {
     "s": 1.0,
     "sec": 1.0,
     "min": 60.0,
     "m": 60.0,
-    "h": 3600.0,
-    "hr": 3600.0,
+    "h": HOUR_S,
+    "hr": HOUR_S,
 }
 
 #: The planning modes, as ``--mode`` spells them.

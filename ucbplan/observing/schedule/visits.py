@@ -40,8 +40,6 @@ from ucbplan.observing.schedule.placement import (
 )
 from ucbplan.observing.schedule.settings import PlanSettings
 
-__all__ = ["place_visits"]
-
 #: Slack on the readout between two exposures [s]: the light time moves anchors by up to ~0.02 s
 #: per minute, so a phase-locked cadence may find the next exposure starting a hair early.
 _READOUT_SLACK_S = 0.1
