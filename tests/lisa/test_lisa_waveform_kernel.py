@@ -27,7 +27,7 @@ from ucbplan.targets import load_target
 
 ROOT = Path(__file__).resolve().parents[2]
 INJECTION = ROOT / "catalogs" / "fiducial-injection.yaml"
-GOLDEN = Path(__file__).resolve().parent / "golden" / "lisa_bands.npz"
+GOLDEN = ROOT / "tests" / "golden" / "lisa_bands.npz"
 KEYS = (
     "amplitude",
     "f_gw",
