@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 import pytest
 import yaml
+from support.targets import ztf_j1539_doc
 from typer.testing import CliRunner
 
 from ucbplan.cli.app import app
@@ -38,19 +39,7 @@ runner = CliRunner()
 P_S = 414.7915404
 SIGMA_P = 2.9e-6
 #: The issue's ZTF J1539+5027 ephemeris (test input, not a catalog entry).
-ZTF: dict[str, Any] = {
-    "name": "ZTF J1539+5027 (test input)",
-    "sky": {"ra": "15h39m32.16s", "dec": "+50d27m38.8s"},
-    "timing": {
-        "t0": "BJD_TDB 2458305.6827886",
-        "t0_marks": "primary_eclipse",
-        "period": f"{P_S} s",
-        "pdot": -2.373e-11,
-        "covariance": {"sigma": {"t0": "8.4e-6 d", "period": "2.9e-6 s", "pdot": 5.0e-14}},
-        "source": "Burdge et al. 2019, Nature 571, 528",
-    },
-    "spectroscopy": {"lines": "SB2", "K1": "300 km/s", "K2": "870 km/s", "sigma_v": "20 km/s"},
-}
+ZTF: dict[str, Any] = ztf_j1539_doc()
 
 
 def _pure_period() -> Any:

@@ -7,25 +7,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from support.targets import _random_targets
+from support.targets import _random_targets, ztf_j1539_doc
 
 from ucbplan.core.forecast import horizon_table, two_sided
 from ucbplan.core.validity_batch import horizon_columns
 from ucbplan.targets import load_target, target_from_dict
 
 ROOT = Path(__file__).resolve().parents[2] / "catalogs"
-TIMING = {
-    "name": "timing test input",
-    "sky": {"ra": "15h39m32.16s", "dec": "+50d27m38.8s"},
-    "timing": {
-        "t0": "BJD_TDB 2458305.6827886",
-        "t0_marks": "primary_eclipse",
-        "period": "414.7915404 s",
-        "pdot": -2.373e-11,
-        "covariance": {"sigma": {"t0": "8.4e-6 d", "period": "2.9e-6 s", "pdot": 5.0e-14}},
-        "source": "Burdge et al. 2019, Nature 571, 528",
-    },
-}
+TIMING = ztf_j1539_doc("timing test input", spectroscopy=False)
 
 
 @pytest.mark.parametrize("anchors", [("conjunction", "quadrature"), ("zero-crossing", 1.0)])

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
@@ -51,3 +52,43 @@ BASE = {
         "covariance": {"sigma": {"phase": 0.02, "f_gw": "7.7e-12 Hz"}},
     },
 }
+
+
+def ztf_j1539_doc(
+    name: str = "ZTF J1539+5027 (test input)",
+    *,
+    pdot: float | str = -2.373e-11,
+    spectroscopy: bool = True,
+) -> dict[str, Any]:
+    """ZTF J1539+5027's timing ephemeris as quoted in issue 10 (Burdge et al. 2019, Nature 571,
+    528), as a target document: TEST INPUT, not a catalog entry. A fresh copy on every call.
+
+    Parameters
+    ----------
+    name : str
+        The document's ``name``.
+    pdot : float or str
+        Ṗ [s/s] as written in the file (a float, or the string form a test wants to read).
+    spectroscopy : bool
+        Add the issue's SB2 spectroscopy block (K1 = 300, K2 = 870, σ_v = 20 km/s).
+    """
+    doc: dict[str, Any] = {
+        "name": name,
+        "sky": {"ra": "15h39m32.16s", "dec": "+50d27m38.8s"},
+        "timing": {
+            "t0": "BJD_TDB 2458305.6827886",
+            "t0_marks": "primary_eclipse",
+            "period": "414.7915404 s",
+            "pdot": pdot,
+            "covariance": {"sigma": {"t0": "8.4e-6 d", "period": "2.9e-6 s", "pdot": 5.0e-14}},
+            "source": "Burdge et al. 2019, Nature 571, 528",
+        },
+    }
+    if spectroscopy:
+        doc["spectroscopy"] = {
+            "lines": "SB2",
+            "K1": "300 km/s",
+            "K2": "870 km/s",
+            "sigma_v": "20 km/s",
+        }
+    return doc

@@ -20,25 +20,14 @@ import pytest
 import yaml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from support.targets import ztf_j1539_doc
 
 from ucbplan.core.timing import TimingEphemeris, phase_covariance, to_phase_params
 from ucbplan.errors import TargetFileError
 from ucbplan.targets import Target, load_target, target_from_dict, write_target
 
 #: ZTF J1539+5027 from the issue text (test input, not a catalog entry).
-ZTF_DOC: dict[str, Any] = {
-    "name": "ZTF J1539+5027 (test input)",
-    "sky": {"ra": "15h39m32.16s", "dec": "+50d27m38.8s"},
-    "timing": {
-        "t0": "BJD_TDB 2458305.6827886",
-        "t0_marks": "primary_eclipse",
-        "period": "414.7915404 s",
-        "pdot": -2.373e-11,
-        "covariance": {"sigma": {"t0": "8.4e-6 d", "period": "2.9e-6 s", "pdot": 5.0e-14}},
-        "source": "Burdge et al. 2019, Nature 571, 528",
-    },
-    "spectroscopy": {"lines": "SB2", "K1": "300 km/s", "K2": "870 km/s", "sigma_v": "20 km/s"},
-}
+ZTF_DOC: dict[str, Any] = ztf_j1539_doc()
 
 
 def _load(doc: Any, tmp_path: Path | None = None) -> Target:

@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 import pytest
 import yaml
+from support.targets import ztf_j1539_doc
 from typer.testing import CliRunner
 
 from ucbplan.cli.app import app
@@ -32,18 +33,7 @@ runner = CliRunner()
 P = Decimal("414.7915404")
 PDOT = Decimal("-2.373e-11")
 T0 = Decimal("2458305.6827886")
-A_DOC: dict[str, Any] = {
-    "name": "ZTF J1539+5027 (test input A)",
-    "sky": {"ra": "15h39m32.16s", "dec": "+50d27m38.8s"},
-    "timing": {
-        "t0": f"BJD_TDB {T0}",
-        "t0_marks": "primary_eclipse",
-        "period": f"{P} s",
-        "pdot": float(PDOT),
-        "covariance": {"sigma": {"t0": "8.4e-6 d", "period": "2.9e-6 s", "pdot": 5.0e-14}},
-        "source": "Burdge et al. 2019, Nature 571, 528",
-    },
-}
+A_DOC: dict[str, Any] = ztf_j1539_doc("ZTF J1539+5027 (test input A)", spectroscopy=False)
 
 
 def _b_doc(n_cycles: int, delta_s: Decimal, mark: str = "primary_eclipse") -> dict[str, Any]:

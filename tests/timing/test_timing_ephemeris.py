@@ -18,6 +18,7 @@ import pytest
 import yaml
 from astropy.time import Time, TimeDelta
 from scipy.optimize import brentq
+from support.targets import ztf_j1539_doc
 from typer.testing import CliRunner
 
 from ucbplan.cli.app import app
@@ -31,19 +32,7 @@ T0_JD = Fraction("2458305.6827886")
 P = Fraction("414.7915404")
 PDOT = Fraction("-2.373e-11")
 #: The issue's timing ephemeris of ZTF J1539+5027 (test input).
-DOC: dict[str, Any] = {
-    "name": "ZTF J1539+5027 (test input)",
-    "sky": {"ra": "15h39m32.16s", "dec": "+50d27m38.8s"},
-    "timing": {
-        "t0": "BJD_TDB 2458305.6827886",
-        "t0_marks": "primary_eclipse",
-        "period": "414.7915404 s",
-        "pdot": "-2.373e-11",
-        "covariance": {"sigma": {"t0": "8.4e-6 d", "period": "2.9e-6 s", "pdot": 5.0e-14}},
-        "source": "Burdge et al. 2019, Nature 571, 528",
-    },
-    "spectroscopy": {"lines": "SB2", "K1": "300 km/s", "K2": "870 km/s", "sigma_v": "20 km/s"},
-}
+DOC: dict[str, Any] = ztf_j1539_doc(pdot="-2.373e-11")
 #: Largest allowed |model − polynomial| [s] (the issue's bound; the fourth-order term of the
 #: series inversion is 1.2 µs at ±10 yr, the printed BJD has 86 ns steps).
 TOL_S = 10e-6
