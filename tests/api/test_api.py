@@ -27,12 +27,13 @@ from astropy.utils import data, iers
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from support.state import astropy_state
-from support.strategies import _ANY
+from support.strategies import any_value
 
 import ucbplan
 from ucbplan.errors import EpochRangeError, InputError, UcbplanError
 from ucbplan.observing.constraints.objects import AstroplanConstraint, as_constraint
 
+_ANY = any_value(units=[u.deg, u.rad, u.m, u.s, u.one])
 pytestmark = [
     pytest.mark.filterwarnings("ignore::erfa.ErfaWarning"),
     pytest.mark.filterwarnings("ignore::ucbplan.errors.UcbplanWarning"),

@@ -13,6 +13,7 @@ from typing import Any
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from support.strategies import any_value
 
 import ucbplan
 from ucbplan.api.exporting import EXPORT_FLAGS
@@ -85,13 +86,7 @@ def test_bad_input_is_one_line_naming_the_parameter(
     assert text.startswith(f"{parameter}: ") and "\n" not in text, text
 
 
-_ANY = st.one_of(
-    st.floats(allow_nan=True, allow_infinity=True),
-    st.integers(-(10**9), 10**9),
-    st.text(max_size=10),
-    st.none(),
-    st.booleans(),
-)
+_ANY = any_value(integers=10**9, text=10)
 _KEYWORDS = sorted(
     p for p, v in inspect.signature(ucbplan.export).parameters.items() if v.kind == v.KEYWORD_ONLY
 )

@@ -21,6 +21,7 @@ from astropy import units as u
 from astropy.table import Table
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from support.strategies import any_value
 
 import ucbplan
 from ucbplan.errors import InputError, UcbplanError
@@ -126,18 +127,7 @@ def test_population_forecast_refuses_bad_options(kwargs: dict, parameter: str) -
 
 # ------------------------------------------------------------------------ any value, one line
 
-_ANY = st.one_of(
-    st.floats(allow_nan=True, allow_infinity=True),
-    st.integers(-(10**12), 10**12),
-    st.text(max_size=8),
-    st.none(),
-    st.booleans(),
-    st.builds(
-        lambda v, unit: v * unit,
-        st.floats(-1e9, 1e9),
-        st.sampled_from([u.s, u.yr, u.m, u.km / u.s, u.one]),
-    ),
-)
+_ANY = any_value(text=8, units=[u.s, u.yr, u.m, u.km / u.s, u.one], magnitude=1e9)
 
 #: Every option of each function (the target or catalog is a missing file, so a call whose
 #: option passes the door stops at reading it, fast).

@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 from astropy.table import Table
 from astropy.utils import data
+from support.network import BLOCK_SOCKETS
 from support.state import snapshot
 
 import ucbplan
@@ -157,14 +158,10 @@ def test_plan_write_leaves_the_table_and_astropy_alone(tmp_path: Path) -> None:
 #: The documented recipe (docs/plots.md) in a fresh interpreter: astropy's defaults (IERS
 #: auto-download on, internet allowed), no ``ucbplan.offline.offline()`` around it, every socket
 #: connection refused; prints the connection attempts (none expected).
-SHEET_SCRIPT = """
-import socket, sys
-attempts = []
-def refuse(*args, **kwargs):
-    attempts.append(args)
-    raise OSError("network blocked by the test")
-socket.socket.connect = refuse
-socket.create_connection = refuse
+SHEET_SCRIPT = (
+    BLOCK_SOCKETS
+    + """
+import sys
 from pathlib import Path
 import ucbplan
 from ucbplan.observing.night.chart import write_night_charts
@@ -175,8 +172,9 @@ site = ucbplan.get_site("paranal")
 write_night_sheet(run.text_table, site, out / "night.html")
 write_night_charts(run.text_table, site, out / "nights.png")
 run.sheet(out / "night2.html")
-print(len(attempts))
+print(len(_attempts))
 """
+)
 
 
 @pytest.mark.slow

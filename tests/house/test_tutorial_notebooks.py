@@ -16,23 +16,21 @@ import re
 from pathlib import Path
 
 import pytest
+from support.network import BLOCK_SOCKETS
 
 ROOT = Path(__file__).resolve().parents[2]
 NOTEBOOKS = sorted((ROOT / "docs" / "tutorials").glob("*.ipynb"))
 
 #: Put first: no network in the kernel (every attempt recorded, then refused), and the state.
-FIRST = f"""
-import socket, sys
-_attempts = []
-def _refuse(*args, **kwargs):
-    _attempts.append(args)
-    raise OSError("network blocked by the notebook test")
-socket.socket.connect = _refuse
-socket.create_connection = _refuse
+FIRST = (
+    BLOCK_SOCKETS
+    + f"""
+import sys
 sys.path.insert(0, {str(ROOT / "tests")!r})
 from support.state import snapshot as _snapshot
 _before = _snapshot()
 """
+)
 
 #: Put last: no connection tried, astropy's state as the notebook found it (all but the
 #: warning filters, which a notebook's own cells may set: ``warnings.simplefilter``).

@@ -20,43 +20,17 @@ import pytest
 import yaml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from support.bad_targets import load_doc as _load
+from support.bad_targets import refused as _refused
+from support.bad_targets import timing_with as _with
 from support.targets import ztf_j1539_doc
 
 from ucbplan.core.timing import TimingEphemeris, phase_covariance, to_phase_params
 from ucbplan.errors import TargetFileError
-from ucbplan.targets import Target, load_target, target_from_dict, write_target
+from ucbplan.targets import load_target, target_from_dict, write_target
 
 #: ZTF J1539+5027 from the issue text (test input, not a catalog entry).
 ZTF_DOC: dict[str, Any] = ztf_j1539_doc()
-
-
-def _load(doc: Any, tmp_path: Path | None = None) -> Target:
-    return target_from_dict(doc, (tmp_path or Path(".")) / "t.yaml")
-
-
-def _refused(doc: Any) -> str:
-    with pytest.raises(TargetFileError) as exc:
-        _load(doc)
-    msg = str(exc.value)
-    assert "\n" not in msg and len(msg) < 400, msg
-    assert msg.startswith("t.yaml: ")
-    return msg
-
-
-def _with(path: str, value: Any) -> dict[str, Any]:
-    doc = copy.deepcopy(ZTF_DOC)
-    *parents, key = path.split(".")
-    node = doc
-    for p in parents:
-        node = node[p]
-    if value is _DELETE:
-        del node[key]
-    else:
-        node[key] = value
-    return doc
-
-
-_DELETE = object()
 
 
 def test_timing_target_is_the_phase_model_at_t0() -> None:
@@ -117,58 +91,6 @@ def test_magnitudes_and_the_vmag_alias() -> None:
     del doc["vmag"]
     doc["magnitudes"] = {"V": 19.0}
     assert _load(doc).vmag == 19.0
-
-
-BAD: list[tuple[str, Any, list[str]]] = [
-    ("timing.t0_marks", "primary", ["timing.t0_marks", "did you mean 'primary_eclipse'"]),
-    ("timing.t0_marks", "periastron", ["timing.t0_marks", "expected one of"]),
-    ("timing.t0", "BJD_XYZ 2458305.68", ["timing.t0", "unknown time-scale word"]),
-    ("timing.t0", "HJD 2458305.6827886", ["timing.t0", "HJD", "convert"]),
-    ("timing.t0", "2018-07-06T04:23:12 UTC", ["timing.t0", "UTC", "convert"]),
-    ("timing.t0", 2458305.6827886, ["timing.t0", "quote it"]),
-    ("timing.t0", "2458305.6827886", ["timing.t0", "state the time scale"]),
-    ("timing.period", "0 s", ["timing.period", "must be positive"]),
-    ("timing.period", "-414.79 s", ["timing.period", "must be positive"]),
-    ("timing.period", 414.79, ["timing.period", "bare number", "unit"]),
-    ("timing.period", "414.79 Hz", ["timing.period", "give a time"]),
-    ("timing.pdot", -4e-6, ["timing.pdot", "reach zero", "100 yr"]),
-    ("timing.pdot", 1e-5, ["timing.pdot", "before T0"]),
-    ("timing.pdot", "1e-11 Hz", ["timing.pdot", "dimensionless"]),
-    ("timing.pddot", "-1e-15 1 / s", ["timing.pddot", "reach zero"]),
-    ("timing.pddot", "1e-15 s", ["timing.pddot", "1/s"]),
-    ("timing.perod", "414 s", ["timing.perod", "did you mean 'period'"]),
-    ("timing.covariance", _DELETE, ["timing.covariance", "missing"]),
-    ("timing.source", _DELETE, ["timing.source", "missing"]),
-    ("timing.source", "", ["timing.source", "citation"]),
-    ("timing.source", "two\nlines", ["timing.source", "one line"]),
-    ("timing.t0_marks", _DELETE, ["timing.t0_marks", "missing"]),
-    ("timing.covariance.sigma", {"t0": 8.4e-6}, ["sigma.t0", "bare number", "unit"]),
-    ("timing.covariance.sigma", {"perod": "1 s"}, ["sigma.perod", "did you mean 'period'"]),
-    ("timing.covariance.sigma", {"phase": 0.1}, ["sigma.phase", "unknown parameter"]),
-    ("timing.covariance.sigma", {"pdot": -1e-14}, ["sigma.pdot", "must be > 0"]),
-    ("timing.covariance.correlaton", {}, ["correlaton", "did you mean 'correlation'"]),
-    ("timing.eccentricity", {"eta": 0.09, "kappa": 0.09}, ["timing.eccentricity", "small-e"]),
-    ("timing.eccentricity", {"e": 0.01}, ["timing.eccentricity.e", "unknown field"]),
-    ("timing.inclination", "95 rad", ["timing.inclination", "[0, 180]"]),
-    ("timing", "BJD_TDB 1", ["timing", "mapping"]),
-    ("magnitudes", {"V": "bright"}, ["magnitudes.V", "magnitude"]),
-    ("magnitudes", {"not a band!": 20.0}, ["magnitudes", "band name"]),
-    ("magnitudes", {"g": 99.0}, ["magnitudes.g", "[-30, 40]"]),
-    ("references", {"timing.perod": "x"}, ["references.timing.perod", "did you mean"]),
-    ("references", {"masses.m1": "x"}, ["references.masses.m1", "not a field of this file"]),
-    ("references", {"timing": ""}, ["references.timing", "citation"]),
-    ("lisa", {"t_ref": "2037-01-01T00:00:00"}, ["lisa/timing", "exactly one"]),
-    ("timing", _DELETE, ["lisa", "missing", "timing:"]),
-]
-
-
-@pytest.mark.parametrize(
-    ("path", "value", "words"), BAD, ids=[f"{p}-{i}" for i, (p, _, _) in enumerate(BAD)]
-)
-def test_bad_input_is_one_line_naming_the_field(path: str, value: Any, words: list[str]) -> None:
-    msg = _refused(_with(path, value))
-    for w in words:
-        assert w in msg, (w, msg)
 
 
 def test_vmag_and_magnitudes_v_must_agree() -> None:
