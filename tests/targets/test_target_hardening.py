@@ -15,6 +15,7 @@ from typing import Any
 import pytest
 import yaml
 from astropy import units as u
+from support.targets import BASE
 
 from ucbplan.core.epochs import parse_tdb
 from ucbplan.errors import InputError, TargetFileError
@@ -22,8 +23,7 @@ from ucbplan.targets import load_target, target_from_dict
 
 CATALOGS = Path(__file__).resolve().parents[2] / "catalogs"
 
-# the same minimal valid document as tests/targets/test_target.py (declared once)
-from support.targets import BASE  # noqa: E402
+# the same minimal valid document as tests/targets/test_target.py (tests/support/targets.py)
 
 
 def _doc(**lisa: Any) -> dict[str, Any]:

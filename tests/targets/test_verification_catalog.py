@@ -27,6 +27,7 @@ from typing import Any
 import pytest
 import yaml
 from astropy.time import TimeDelta
+from support.cli import run_cli
 
 from ucbplan.targets import load_target
 
@@ -35,7 +36,6 @@ CATALOG = ROOT / "catalogs" / "verification"
 SYN = ROOT / "catalogs" / "examples" / "synthetic-eclipsing.yaml"
 FILES = sorted(CATALOG.glob("*.yaml"))
 
-from support.cli import run_cli  # noqa: E402
 
 getcontext().prec = 40
 DAY = Decimal(86400)

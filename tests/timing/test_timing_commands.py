@@ -15,11 +15,11 @@ from pathlib import Path
 
 import pytest
 from astropy.table import Table
+from support.cli import check_outcome, run_cli
 
 ROOT = Path(__file__).resolve().parents[2]
 SYN = ROOT / "catalogs" / "examples" / "synthetic-eclipsing.yaml"
 
-from support.cli import check_outcome, run_cli  # noqa: E402
 
 YEAR_S = 365.25 * 86400.0
 P_S, PDOT = 400.0, -2.0e-11

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from astropy.time import Time
+from support.cli import run_cli
 
 from ucbplan.core.phase import arg_latitude
 from ucbplan.reduce.velocities import VelocityTable, check_validity
@@ -16,8 +17,6 @@ from ucbplan.targets import load_target
 ROOT = Path(__file__).resolve().parents[2]
 SYN = ROOT / "catalogs" / "examples" / "synthetic-eclipsing.yaml"
 HM = ROOT / "catalogs" / "hm-cnc-simulated.yaml"
-
-from support.cli import run_cli  # noqa: E402
 
 
 @pytest.mark.parametrize("night", ["2020-01-15", "2031-01-15"])
