@@ -6,19 +6,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from support.reduce import JD, _same
+from support.reduce import HEADER, JD, _ecsv, _same, _write
 from support.reduce_synth import make_target
 
 from ucbplan.errors import VelocityFileError
 from ucbplan.reduce.velocities import check_validity, read_velocities
-
-HEADER = "bjd_tdb,exptime_s,v1,sigma_v1,v2,sigma_v2,session\n"
-
-
-def _write(tmp_path: Path, text: str, name: str = "v.csv") -> Path:
-    p = tmp_path / name
-    p.write_text(text, encoding="utf-8")
-    return p
 
 
 def test_reads_sb2_csv_with_comments_and_sessions(tmp_path: Path) -> None:
@@ -70,32 +62,6 @@ def test_reads_ecsv_with_units(tmp_path: Path) -> None:
     np.testing.assert_allclose(out.window_s, [30.0, 30.0])
 
 
-@pytest.mark.parametrize(
-    "text, needle",
-    [
-        (HEADER + f"{JD},30,abc,15,1,15,A\n", "row 1, column 'v1'"),
-        (HEADER + f"{JD},30,1,15,1,15,A\n{JD},30,1,0,1,15,A\n", "row 2, column 'sigma_v1'"),
-        (HEADER + f"{JD},30,1,15,1,-3,A\n", "row 1, column 'sigma_v2'"),
-        (HEADER + f"{JD},30,nan,15,1,15,A\n", "row 1, column 'v1'"),
-        (HEADER + f"{JD},30,1,15,1,A\n", "row 1 (line 2)"),
-        (HEADER + f"{JD},-5,1,15,1,15,A\n", "row 1, column 'exptime_s'"),
-        ("bjd_tdb,exptime_s,v1,sigma_v1,v2,sigma_v2,colour\n", "column 'colour'"),
-        ("bjd_utc,exptime_s,v,sigma_v\n", "column 'bjd_utc'"),
-        ("bjd_tdb,exptime_s,v1,v2,sigma_v2\n", "sigma_v1"),
-        ("bjd_tdb,v,sigma_v\n", "exptime_s"),
-        (HEADER, "no data rows"),
-        ("", "empty velocity file"),
-    ],
-)
-def test_malformed_tables_raise_one_line_errors(tmp_path: Path, text: str, needle: str) -> None:
-    """Each malformed table raises VelocityFileError naming the file and the row/column."""
-    p = _write(tmp_path, text)
-    with pytest.raises(VelocityFileError) as exc:
-        read_velocities(p)
-    msg = str(exc.value)
-    assert needle in msg and str(p) in msg and "\n" not in msg
-
-
 def test_validity_window(tmp_path: Path) -> None:
     """Times before the LISA start or > 20 yr after its end are rejected with the row number."""
     t = make_target()
@@ -123,14 +89,6 @@ ROWS = [
 ]
 
 
-def _ecsv(tmp_path: Path, body: list[str], header: str = "bjd_tdb v sigma_v exptime_s") -> Path:
-    names = header.split()
-    lines = ["# %ECSV 1.0", "# ---", "# datatype:"]
-    lines += [f"# - {{name: {n}, datatype: float64}}" for n in names]
-    lines += ["# schema: astropy-2.0", header, *body]
-    return _write(tmp_path, "\n".join(lines) + "\n", "v.ecsv")
-
-
 def test_utf8_bom_and_crlf_are_read(tmp_path: Path) -> None:
     """Excel's UTF-8 with a byte-order mark and CRLF line ends read like plain UTF-8."""
     p = tmp_path / "bom.csv"
@@ -145,43 +103,6 @@ def test_latin1_is_refused_with_the_fix(tmp_path: Path) -> None:
     with pytest.raises(VelocityFileError, match=r"not UTF-8 text .*iconv") as exc:
         read_velocities(p)
     assert str(p) in str(exc.value) and "\n" not in str(exc.value)
-
-
-@pytest.mark.parametrize(
-    "body, needle",
-    [
-        ([f'{JD} "" 15 30', f"{JD + 0.01} 2 15 30"], "row 1, column 'v': blank cell"),
-        ([f"{JD} 1 15 30", f'{JD + 0.01} 2 15 ""'], "row 2, column 'exptime_s': blank cell"),
-        ([f"{JD} 1 15 30", f"{JD + 0.01} inf 15 30"], "row 2, column 'v'"),
-        ([f"{JD} 1 -15 30", f"{JD + 0.01} 1 15 30"], "row 1, column 'sigma_v'"),
-    ],
-)
-def test_ecsv_blank_and_bad_cells_are_refused(tmp_path: Path, body: list[str], needle: str) -> None:
-    """A blank ECSV cell is masked by astropy; it used to be read as a number (0.0 or NaN)."""
-    with pytest.raises(VelocityFileError) as exc:
-        read_velocities(_ecsv(tmp_path, body))
-    assert needle in str(exc.value)
-
-
-@pytest.mark.parametrize(
-    "text, needle",
-    [
-        (HEADER + f"{JD},30,,15,1,15,A\n", "row 1, column 'v1': blank cell"),
-        (HEADER + f"{JD},30,1,15,1,15,\n", "row 1, column 'session': blank cell"),
-        (HEADER + f"{JD},30,1,15,1e400,15,A\n", "row 1, column 'v2'"),
-        (HEADER + f"{JD},30,3e5,15,1,15,A\n", "speed of light"),
-        (HEADER + "1e300,30,1,15,1,15,A\n", "row 1, column 'bjd_tdb'"),
-        (HEADER + f"{'9' * 5000},30,1,15,1,15,A\n", "characters"),
-        ("bjd_tdb,exptime_s,v1,sigma_v1,V1,sigma_v2\n", "column 'v1': appears twice"),
-        ("bjd_tdb,exptime_s,v,sigma_v,exptime_s\n", "column 'exptime_s': appears twice"),
-    ],
-)
-def test_more_malformed_tables(tmp_path: Path, text: str, needle: str) -> None:
-    p = _write(tmp_path, text)
-    with pytest.raises(VelocityFileError) as exc:
-        read_velocities(p)
-    msg = str(exc.value)
-    assert needle in msg and str(p) in msg and "\n" not in msg and len(msg) < 400
 
 
 def test_duplicate_ecsv_columns_differing_in_case_are_refused(tmp_path: Path) -> None:
