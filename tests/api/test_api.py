@@ -243,9 +243,9 @@ def test_astroplan_subclass_evaluated_by_astroplan_gives_the_same_blocks(
 
     native = ucbplan.plan(**three_nights, constraints=[ucbplan.AltitudeConstraint(42 * u.deg)])
     through = ucbplan.plan(**three_nights, constraints=[Mine(min=42 * u.deg)])
-    # astroplan's AltAz and ucbplan's sky model agree to < 2 arcsec (tests/test_observing_
-    # constraints.py); no block sample of this plan lies that close to 42 deg, so the blocks are
-    # the same
+    # astroplan's AltAz and ucbplan's sky model agree to < 2 arcsec
+    # (tests/observing/constraints/test_constraints.py); no block sample of this plan lies that
+    # close to 42 deg, so the blocks are the same
     assert len(native.table) >= 4
     assert _blocks(through) == _blocks(native)
 

@@ -26,7 +26,7 @@ ANCHORS = [(0.0, math.pi), (math.pi / 2,), (1.0,)]
 
 def _precessing(n: int, seed: int, e_max: float) -> tuple[np.ndarray, ...]:
     """Eccentric targets with ω̇ ≠ 0 (P_aps from ~2 d to ~20 yr, both signs), e up to e_max,
-    σ_e from 1e-4 to 1e-2 and σ_ω̇ from 1e-12 to 1e-9 rad/s on the test_horizon_poly targets."""
+    σ_e from 1e-4 to 1e-2 and σ_ω̇ from 1e-12 to 1e-9 rad/s on the test_validity_poly targets."""
     pars, covs, t_obs, thr = _random_targets(n, seed)
     rng = np.random.default_rng(seed + 1000)
     e = e_max * rng.random(n) ** 2

@@ -35,7 +35,9 @@ def table(tmp_path_factory: pytest.TempPathFactory) -> Table:
 
 def test_golden(table: Table) -> None:
     # Byte for byte: any change to the format must be deliberate (regenerate + review).
-    assert golden_export(table, NAME) == golden(NAME), f"{NAME} differs; see test_exports_fixture"
+    assert golden_export(table, NAME) == golden(NAME), (
+        f"{NAME} differs; see tests/support/exports.py"
+    )
 
 
 def _p2_minute(text: str) -> np.datetime64:

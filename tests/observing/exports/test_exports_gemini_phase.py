@@ -40,7 +40,9 @@ def test_new_formats_are_registered() -> None:
 def test_golden(tmp_path: Path, name: str) -> None:
     # Byte for byte (change detector); the rules are checked by the tests below.
     table = written_table(tmp_path)
-    assert golden_export(table, name) == golden(name), f"{name} differs; see test_exports_fixture"
+    assert golden_export(table, name) == golden(name), (
+        f"{name} differs; see tests/support/exports.py"
+    )
 
 
 def test_golden_gemini_windows_match_the_blocks(tmp_path: Path) -> None:

@@ -24,7 +24,9 @@ def table(tmp_path_factory: pytest.TempPathFactory) -> Table:
 
 
 def test_golden(table: Table) -> None:
-    assert golden_export(table, NAME) == golden(NAME), f"{NAME} differs; see test_exports_fixture"
+    assert golden_export(table, NAME) == golden(NAME), (
+        f"{NAME} differs; see tests/support/exports.py"
+    )
 
 
 def test_golden_lines_are_crlf_and_folded_at_75_octets() -> None:

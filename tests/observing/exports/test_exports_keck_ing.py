@@ -57,7 +57,9 @@ def _check_time_and_sigma(row: Table.Row, mid: str, sigma: str, decimals: int) -
 
 
 def test_keck_golden(table: Table) -> None:
-    assert golden_export(table, KECK) == golden(KECK), f"{KECK} differs; see test_exports_fixture"
+    assert golden_export(table, KECK) == golden(KECK), (
+        f"{KECK} differs; see tests/support/exports.py"
+    )
 
 
 def _nearest_block(table: Table, short: str, mid: str) -> Table.Row:
@@ -125,7 +127,7 @@ def test_keck_truncates_long_names_and_refuses_collisions(table: Table) -> None:
 
 
 def test_ing_golden(table: Table) -> None:
-    assert golden_export(table, ING) == golden(ING), f"{ING} differs; see test_exports_fixture"
+    assert golden_export(table, ING) == golden(ING), f"{ING} differs; see tests/support/exports.py"
 
 
 def test_ing_golden_follows_the_catalogue_format(table: Table) -> None:

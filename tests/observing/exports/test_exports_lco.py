@@ -36,7 +36,9 @@ def _second(value: np.datetime64) -> str:
 
 
 def test_golden(table: Table) -> None:
-    assert golden_export(table, NAME) == golden(NAME), f"{NAME} differs; see test_exports_fixture"
+    assert golden_export(table, NAME) == golden(NAME), (
+        f"{NAME} differs; see tests/support/exports.py"
+    )
 
 
 def test_golden_is_an_ocs_request_group_of_the_blocks(doc: dict[str, Any], table: Table) -> None:

@@ -84,7 +84,9 @@ def table(tmp_path_factory: pytest.TempPathFactory) -> Table:
     "name", ["exports_proposal.ecsv", "exports_proposal.csv", "exports_proposal.tex"]
 )
 def test_golden(table: Table, name: str) -> None:
-    assert golden_export(table, name) == golden(name), f"{name} differs; see test_exports_fixture"
+    assert golden_export(table, name) == golden(name), (
+        f"{name} differs; see tests/support/exports.py"
+    )
 
 
 # -------------------------------------------------------------------- the table, by hand
