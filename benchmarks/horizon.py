@@ -26,7 +26,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
-from test_horizon_poly import _random_targets
+from support.targets import _random_targets
 
 from ucbplan.core.forecast import AFTER, BEFORE, t_valid_batch
 from ucbplan.core.validity_batch import horizon_columns

@@ -3,8 +3,9 @@
 Three targeted sessions (20 orbits each, 8 exposures of P_b/8 per orbit centred on u★ = kπ/4, the
 epochs found with the ephemeris' u(t★) = u★ solver) 40 and 90 days after the end of the LISA
 observation of ``catalogs/fiducial-eccentric.yaml``. Velocities follow the exact Keplerian orbit
-(Kepler's equation; tests/test_reduce_synth.py), averaged over each exposure by Gauss–Legendre
-quadrature, with γ_j = v_CM + z_j + orbital terms (z_j = G M_j/(R_j c), Eggleton's WD radii),
+(Kepler's equation; tests/support/reduce_synth.py), averaged over each exposure by
+Gauss–Legendre quadrature, with γ_j = v_CM + z_j + orbital terms (z_j = G M_j/(R_j c),
+Eggleton's WD radii),
 M1 = 0.347, M2 = 0.285 M☉, v_CM = 25 km/s, Gaussian noise σ_v = 15 km/s (seed 20370101).
 
 Usage: ``python benchmarks/make_example_velocities.py [--out FILE] [--seed S] [--a-los A]``
@@ -22,7 +23,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
-from test_reduce_synth import exposure_factor  # noqa: E402
+from support.reduce_synth import exposure_factor  # noqa: E402
 
 from ucbplan.core import binary, constants, ephemeris  # noqa: E402
 from ucbplan.targets import Target, load_target  # noqa: E402

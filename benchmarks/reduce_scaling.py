@@ -26,7 +26,7 @@ from astropy.time import TimeDelta
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
-from test_reduce_synth import exposure_factor, session_times  # noqa: E402
+from support.reduce_synth import exposure_factor, session_times  # noqa: E402
 
 from ucbplan.offline import offline  # noqa: E402
 from ucbplan.reduce.pipeline import ReduceOptions, reduce  # noqa: E402

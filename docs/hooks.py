@@ -21,7 +21,7 @@ checked-out code rather than an installed copy. A generator that fails stops the
 ``tutorials/NAME.md`` (its Markdown cells as they are, its code cells as Python blocks, and the
 outputs it carries), read as JSON with no Jupyter package; the notebook itself is copied beside
 it for download. The test suite executes the notebooks in a Jupyter kernel with no network
-(``tests/test_tutorial_notebooks.py``).
+(``tests/house/test_tutorial_notebooks.py``).
 """
 
 from __future__ import annotations

@@ -26,7 +26,7 @@ if "UCBPLAN_CACHE_DIR" not in os.environ:
 
 # The tests do not depend on the terminal they run in: no inherited width (pytest-xdist workers
 # inherit the COLUMNS/LINES that readline exported in the parent). A test that wants a width sets
-# COLUMNS itself (tests/test_screen_100_columns.py). Done before any test imports the CLI, whose
+# COLUMNS itself (tests/cli/test_screen_100_columns.py). Done before any test imports the CLI, whose
 # console reads the width once.
 for _name in ("COLUMNS", "LINES"):
     os.environ.pop(_name, None)
@@ -50,7 +50,7 @@ def _no_inherited_terminal_size() -> None:
     readline (imported during the run) exports ``COLUMNS``/``LINES`` into the process's C
     environment, behind ``os.environ``'s back; a ``ucbplan`` subprocess would inherit them and
     wrap its messages at that width as on a terminal. A test that wants a width passes
-    ``COLUMNS`` itself (tests/test_screen_100_columns.py).
+    ``COLUMNS`` itself (tests/cli/test_screen_100_columns.py).
     """
     for name in ("COLUMNS", "LINES"):
         if name not in os.environ:

@@ -6,13 +6,13 @@ astropy's configuration, its ``IERS_Auto`` class and its default table exactly a
 
 from __future__ import annotations
 
-import warnings
 from pathlib import Path
 
 import numpy as np
 import pytest
 from astropy.time import Time
 from astropy.utils import data, iers
+from support.state import astropy_state
 
 from ucbplan import offline as offline_module
 from ucbplan.offline import bundled_iers_table, iers_cache_path, offline
@@ -59,19 +59,6 @@ def test_empty_dir_disables(monkeypatch: pytest.MonkeyPatch, fresh_iers: Path) -
     assert iers_cache_path() is None
     bundled_iers_table()
     assert list(fresh_iers.iterdir()) == []
-
-
-def astropy_state() -> tuple[object, ...]:
-    """What the offline scope sets and must restore: astropy's IERS and data configuration,
-    its ``IERS_Auto`` opener and default table, and the warning filters."""
-    return (
-        iers.conf.auto_download,
-        iers.conf.auto_max_age,
-        data.conf.allow_internet,
-        iers.IERS_Auto.__dict__["open"],
-        iers.earth_orientation_table._value,
-        tuple(warnings.filters),
-    )
 
 
 def test_scope_restores_astropy(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -154,7 +154,7 @@ def now(
     visit/exposure, anchor, start HH:MM:SS UTC and "in 2 min 13 s"), the one after, and what
     to do if the previous start was missed. After the last exposure it says the plan is over.
     """
-    # loaded here: `ucbplan --help` must not load astropy (tests/test_cli_help_units.py)
+    # loaded here: `ucbplan --help` must not load astropy (tests/cli/test_cli_help_units.py)
     origin = terminal.parse_utc(at, "--at") if at is not None else None
     if once and log is not None:
         raise InputError(

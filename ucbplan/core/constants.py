@@ -1,7 +1,8 @@
 """Physical constants and time units, declared once for the whole package (SI).
 
 The values are astropy's (CODATA 2018, IAU 2015 nominal solar values), written out so the numerical
-core does not import ``astropy.constants``; ``tests/test_constants.py`` checks them against astropy.
+core does not import ``astropy.constants``; ``tests/core/test_constants.py`` checks them against
+astropy.
 """
 
 from __future__ import annotations

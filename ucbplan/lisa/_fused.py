@@ -4,7 +4,7 @@ With numba installed (``pip install ucbplan[fast]``) the carriers, their product
 sums and the band accumulation, and the per-bin weighting after the FFT run as two fused loops
 instead of about ten numpy passes over the (walker, band, channel, sample) arrays; the link sums
 stay one BLAS product per line. Both paths compute the same sums (to ~1e-14;
-tests/test_lisa_waveform_kernel.py compares them).
+tests/lisa/test_lisa_waveform_kernel.py compares them).
 
 Compiling costs seconds (measured: import 0.8-1 s, compilation 2-6 s on a shared two-core
 machine; nothing is cached on disk) and saves some 30 us per waveform, so the loops are used only

@@ -493,7 +493,7 @@ def _weighted_column_sums(weights: F64, d: F64) -> F64:
 
     numpy sums a C-ordered array over its first axis row after row (no pairwise splitting), so
     the sum is carried from block to block as the first row of the next: the same additions in
-    the same order (``tests/test_reduce_regression.py`` compares with the whole product).
+    the same order (``tests/reduce/test_reduce_regression.py`` compares with the whole product).
     """
     n, cols = d.shape
     buf = np.empty((min(n, _SUM_ROWS) + 1, cols))

@@ -2,7 +2,7 @@
 
 Every quantity is ``{"value", "sigma", "unit"}``; Monte-Carlo quantities add ``lo``/``hi`` (16/84 %
 percentiles, value = median). Upper limits add ``upper_limit`` (|x̂| + 2σ) when |x̂| < 2σ.
-The keys are documented in the README ("ucbplan reduce" → "Report keys").
+The keys are documented in docs/commands.md ("ucbplan reduce" → "Report keys").
 """
 
 from __future__ import annotations

@@ -14,8 +14,8 @@ target takes to load. The readers here give the very same float for those spelli
   :class:`~astropy.time.Time` handed out (:func:`cached_epoch`).
 
 Each returns None for anything else (and for values astropy would warn about or refuse), and the
-caller then goes astropy's way, which gives every message. ``tests/test_target_fastvalues.py``
-checks the results bit for bit against astropy.
+caller then goes astropy's way, which gives every message.
+``tests/targets/test_target_fastvalues.py`` checks the results bit for bit against astropy.
 """
 
 from __future__ import annotations
