@@ -335,14 +335,7 @@ def as_planned(
     for run in runs:
         plan = plans.get(run.index)
         if plan is not None and run.target.name in reach:
-            f = reach[run.target.name] / plan.expected
-            k2 = plan.sigma_K2_kms * f if plan.sigma_K2_kms is not None else None
-            out[run.index] = replace(
-                plan,
-                expected=f * plan.expected,
-                sigma_K1_kms=f * plan.sigma_K1_kms,
-                sigma_K2_kms=k2,
-            )
+            out[run.index] = _scaled(plan, reach[run.target.name] / plan.expected)
     return out
 
 
@@ -368,15 +361,20 @@ def as_placed(
         if got <= 0:
             continue
         f = got**-0.5 / plan.sigma_K1_kms
-        k2 = plan.sigma_K2_kms * f if plan.sigma_K2_kms is not None else None
-        out[run.index] = replace(
-            plan,
-            n_spectra=int(np.sum(mine)),
-            expected=f * plan.expected,
-            sigma_K1_kms=f * plan.sigma_K1_kms,
-            sigma_K2_kms=k2,
-        )
+        out[run.index] = _scaled(plan, f, n_spectra=int(np.sum(mine)))
     return out
+
+
+def _scaled(plan: GoalPlan, f: float, **fields: Any) -> GoalPlan:
+    """``plan`` with its expected σ, σ_K1 and σ_K2 scaled by ``f`` (and ``fields`` replaced)."""
+    k2 = plan.sigma_K2_kms * f if plan.sigma_K2_kms is not None else None
+    return replace(
+        plan,
+        expected=f * plan.expected,
+        sigma_K1_kms=f * plan.sigma_K1_kms,
+        sigma_K2_kms=k2,
+        **fields,
+    )
 
 
 def _shortfalls(
