@@ -115,8 +115,14 @@ class TimingFit:
         return dict(zip(self.fit.names, map(float, self.fit.sigmas), strict=True))
 
     def to_dict(self) -> dict[str, Any]:
-        """The report ``ucbplan ephemeris fit --format json`` writes (parameters, covariance,
-        χ², outliers, clipped rows, notes, every point's O − C)."""
+        """The report ``ucbplan ephemeris fit --format json`` writes, as Python values.
+
+        Returns
+        -------
+        dict
+            Parameters with σ and units, covariance, χ², outliers, clipped rows, notes and every
+            point's O − C.
+        """
         from ucbplan.timing.document import fit_report
 
         return fit_report(self.fit, self.times)
@@ -128,8 +134,28 @@ class TimingFit:
         dec: str | None = None,
         like: TargetLike | None = None,
     ) -> dict[str, Any]:
-        """The timing target file as a mapping: name and sky from ``like`` (a target file)
-        and/or ``name``, ``ra``, ``dec`` (see :func:`target_identity`)."""
+        """The timing target file as a mapping (see :func:`target_identity`).
+
+        Parameters
+        ----------
+        name : str, optional
+            The target name (overrides ``like``'s).
+        ra, dec : str, optional
+            ICRS position (``"15h39m32.16s"``, ``"+50d27m38.8s"``), both or neither.
+        like : str, Path, dict or Target, optional
+            A target file (or document) to copy name, sky, masses, spectroscopy, magnitudes from.
+
+        Returns
+        -------
+        dict
+            The target document: name, sky, this ephemeris (T0 with every digit, P, Ṗ … and
+            their covariance) and what ``like`` adds.
+
+        Raises
+        ------
+        InputError
+            No name or sky position, or an unreadable one.
+        """
         from ucbplan.timing.document import target_document
 
         ident = target_identity(like, name, ra, dec)
@@ -142,8 +168,23 @@ class TimingFit:
         dec: str | None = None,
         like: TargetLike | None = None,
     ) -> str:
-        """The timing target file's text (``ucbplan ephemeris fit -o target.yaml``); name and
-        sky as :meth:`target_document`."""
+        """The timing target file's text (``ucbplan ephemeris fit -o target.yaml``).
+
+        Parameters
+        ----------
+        name, ra, dec, like
+            As :meth:`target_document`.
+
+        Returns
+        -------
+        str
+            The YAML text.
+
+        Raises
+        ------
+        InputError
+            As :meth:`target_document`.
+        """
         import io
 
         from ucbplan.timing.document import write_yaml
@@ -159,15 +200,37 @@ class TimingFit:
         dec: str | None = None,
         like: TargetLike | None = None,
     ) -> Target:
-        """This ephemeris as a timing :class:`~ucbplan.targets.Target` (``ucbplan.write_target``
-        writes it); name and sky as :meth:`target_document`."""
+        """This ephemeris as a timing target (``ucbplan.write_target`` writes it).
+
+        Parameters
+        ----------
+        name, ra, dec, like
+            As :meth:`target_document`.
+
+        Returns
+        -------
+        ucbplan.targets.Target
+            The target :func:`ucbplan.load_target` reads from :meth:`target_yaml`'s text.
+
+        Raises
+        ------
+        InputError
+            As :meth:`target_document`.
+        """
         from ucbplan.targets import target_from_dict
 
         with scope():
             return target_from_dict(self.target_document(name, ra, dec, like))
 
     def figure(self) -> Figure:
-        """The O − C figure (matplotlib; ``.savefig(path)`` writes it)."""
+        """The O − C figure.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            O − C against the linear ephemeris [s] with the fitted curve, and the residuals
+            below, against cycle since T0 (``.savefig(path)`` writes it).
+        """
         from ucbplan.timing.plots import oc_figure
 
         return oc_figure(self.fit, self.times)
@@ -176,7 +239,31 @@ class TimingFit:
         self, text: str | None, output: Path | None, plot: Path | None, overwrite: bool = False
     ) -> list[Path]:
         """Write ``text`` to ``output`` and the O − C figure to ``plot`` as a unit (both or
-        neither); returns the files written."""
+        neither).
+
+        Parameters
+        ----------
+        text : str or None
+            The report or target file's text (None: none written).
+        output : Path or None
+            Its file (None: none written).
+        plot : Path or None
+            The figure's file, ``.png``, ``.pdf`` or ``.svg`` (None: no figure).
+        overwrite : bool
+            Replace existing files.
+
+        Returns
+        -------
+        list of Path
+            The files written.
+
+        Raises
+        ------
+        InputError
+            ``plot`` is not a ``.png``, ``.pdf`` or ``.svg`` file name.
+        OutputExistsError
+            A file exists and ``overwrite`` is false (nothing is written).
+        """
         from ucbplan.io import write_file_set
         from ucbplan.plotting import figure_format, pyplot
 
