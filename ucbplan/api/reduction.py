@@ -115,6 +115,25 @@ class Report:
     ----------
     reduction : Reduction
         Everything the reduction found (fits, Monte-Carlo samples …).
+
+    Examples
+    --------
+    The bundled fiducial eccentric binary's velocities (truth K1 = 585.293 km/s):
+
+    >>> import ucbplan
+    >>> report = ucbplan.reduce(
+    ...     "catalogs/fiducial-eccentric.yaml",
+    ...     "catalogs/fiducial-eccentric-velocities.csv",
+    ...     seed=1,
+    ...     samples=2000,
+    ...     warn=False,
+    ... )
+    >>> report.K1, report["M_tot"]
+    (586.476 ± 1 km / s, 0.632644 ± 0.0021 solMass)
+    >>> report.to_dict()["K1"]["unit"]
+    'km / s'
+    >>> list(report.em_prior()["em_prior"])
+    ['target', 'source', 'q', 'M_tot', 'M1', 'M2', 'M_c', 'K1', 'K2', 'a_los']
     """
 
     reduction: Reduction

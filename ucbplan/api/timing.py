@@ -60,6 +60,32 @@ class TimingFit:
         The eclipse times it was fitted to.
     notes : tuple of str
         What the fit decided (σ's rescaled, outliers kept, rows clipped, a guess ignored).
+
+    Examples
+    --------
+    T0, P and Ṗ of five eclipses of a 400 s binary, as a timing target (a target file needs Ṗ,
+    so ``terms=3`` or more):
+
+    >>> from astropy.table import Table
+    >>> import ucbplan
+    >>> times = Table(
+    ...     {
+    ...         "cycle": [0, 1000, 2000, 3000, 4000],
+    ...         "bjd_tdb": [
+    ...             "2461000.5000000",
+    ...             "2461005.1296296",
+    ...             "2461009.7592593",
+    ...             "2461014.3888889",
+    ...             "2461019.0185185",
+    ...         ],
+    ...         "sigma_s": [1.0] * 5,
+    ...     }
+    ... )
+    >>> fit = ucbplan.fit_ephemeris(times, terms=3)
+    >>> fit.t0_text, fit.period, fit.units
+    ('BJD_TDB 2461009.759259274286', <Quantity 400.00000003 s>, ('s', 's', 's/s'))
+    >>> fit.to_target(name="Demo", ra="15h39m32.16s", dec="+50d27m38.8s")
+    <Target 'Demo' (timing): P=400 s, RA=234.88400°, Dec=+50.46078°, T0=2025-11-30T06:13:20.001 TDB>
     """
 
     fit: EphemerisFit
@@ -216,6 +242,8 @@ class TimingFit:
         ------
         InputError
             As :meth:`target_document`.
+        TargetFileError
+            A fit without Ṗ (``terms=2``): a timing target needs ``timing.pdot``.
         """
         from ucbplan.targets import target_from_dict
 
