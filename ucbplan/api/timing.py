@@ -63,29 +63,22 @@ class TimingFit:
 
     Examples
     --------
-    T0, P and Ṗ of five eclipses of a 400 s binary, as a timing target (a target file needs Ṗ,
-    so ``terms=3`` or more):
+    T0, P and Ṗ of six eclipses of a 400 s binary (times written to 10⁻⁷ d), as a timing target
+    (a target file needs Ṗ, so ``terms=3`` or more):
 
+    >>> from astropy import units as u
     >>> from astropy.table import Table
     >>> import ucbplan
-    >>> times = Table(
-    ...     {
-    ...         "cycle": [0, 1000, 2000, 3000, 4000],
-    ...         "bjd_tdb": [
-    ...             "2461000.5000000",
-    ...             "2461005.1296296",
-    ...             "2461009.7592593",
-    ...             "2461014.3888889",
-    ...             "2461019.0185185",
-    ...         ],
-    ...         "sigma_s": [1.0] * 5,
-    ...     }
-    ... )
+    >>> cycles = [0, 1000, 2000, 3000, 4000, 5000]
+    >>> period_d = (400 * u.s).to_value(u.day)
+    >>> bjd = [f"{2461000.5 + n * period_d:.7f}" for n in cycles]
+    >>> times = Table({"cycle": cycles, "bjd_tdb": bjd, "sigma_s": [1.0] * 6})
     >>> fit = ucbplan.fit_ephemeris(times, terms=3)
     >>> fit.t0_text, fit.period, fit.units
-    ('BJD_TDB 2461009.759259274286', <Quantity 400.00000003 s>, ('s', 's', 's/s'))
+    ('BJD_TDB 2461012.074074087500', <Quantity 399.99999941 s>, ('s', 's', 's/s'))
     >>> fit.to_target(name="Demo", ra="15h39m32.16s", dec="+50d27m38.8s")
-    <Target 'Demo' (timing): P=400 s, RA=234.88400°, Dec=+50.46078°, T0=2025-11-30T06:13:20.001 TDB>
+    <Target 'Demo' (timing): P=399.9999994 s, RA=234.88400°, Dec=+50.46078°,
+    T0=2025-12-02T13:46:40.001 TDB>
     """
 
     fit: EphemerisFit
@@ -230,8 +223,9 @@ class TimingFit:
 
         Parameters
         ----------
-        name, ra, dec, like
-            As :meth:`target_document`.
+        name, ra, dec, like : str or None; like also Path, dict or Target
+            Its name and sky position, and a target file to copy them (and masses,
+            spectroscopy, magnitudes) from, as for :meth:`target_document`.
 
         Returns
         -------
