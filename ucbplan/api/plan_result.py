@@ -563,7 +563,7 @@ keck_rotmode, force, semester, seeing_arcsec, instrument, eso_templates
         Raises
         ------
         UcbplanError
-            A bad ``to`` or option; OutputExistsError: ``path`` exists, ``overwrite`` false.
+            A bad ``to`` or option, a site ``to`` does not serve (SiteError), ``path`` exists.
 
         Warns
         -----
