@@ -35,14 +35,18 @@ MODULES = [
 ]
 
 
+#: Further modules of ``ucbplan.__all__``'s classes whose docstrings hold examples.
+OTHER_MODULES = ["ucbplan.observing.constraints"]
+
+
 def _run(name: str) -> doctest.TestResults:
-    module = importlib.import_module(f"ucbplan.api.{name}")
+    module = importlib.import_module(name if "." in name else f"ucbplan.api.{name}")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UcbplanWarning)  # the bundled IERS tables end in 2027
         return doctest.testmod(module, optionflags=FLAGS, verbose=False, report=True)
 
 
-@pytest.mark.parametrize("name", MODULES)
+@pytest.mark.parametrize("name", MODULES + OTHER_MODULES)
 def test_examples_run(name: str, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.chdir(ROOT)
     result = _run(name)
@@ -70,3 +74,68 @@ def test_every_public_function_has_an_example() -> None:
         if inspect.isfunction(getattr(ucbplan.api, n))
     }
     assert homes <= set(MODULES), sorted(homes - set(MODULES))
+
+
+#: The numpydoc sections that document a method's call (one is enough: ``plot(ax)`` may return
+#: what it was given, ``to_dict()`` takes nothing).
+CALL_SECTIONS = ("Parameters\n---", "Returns\n---")
+
+
+def _undocumented_methods(cls: type) -> list[str]:
+    """The public methods of ``cls`` (inherited ones too) whose docstring has no call section."""
+    import inspect
+
+    names = []
+    for name in dir(cls):
+        static = inspect.getattr_static(cls, name)
+        func = getattr(static, "__func__", static)  # classmethod, staticmethod
+        if name.startswith("_") or not inspect.isfunction(func):
+            continue
+        doc = inspect.getdoc(getattr(cls, name)) or ""
+        if not any(section in doc for section in CALL_SECTIONS):
+            names.append(f"{cls.__name__}.{name}")
+    return names
+
+
+def test_every_public_method_has_numpydoc_sections() -> None:
+    """Each public class of ``ucbplan`` and ``ucbplan.api`` documents its fields (Parameters or
+    Attributes, unless it takes none) and each public method its call (Parameters or Returns)."""
+    import inspect
+
+    import ucbplan
+    import ucbplan.api
+
+    public = {getattr(m, n) for m in (ucbplan, ucbplan.api) for n in m.__all__}
+    classes = sorted(
+        (c for c in public if inspect.isclass(c) and not issubclass(c, Warning | Exception)),
+        key=lambda c: c.__name__,
+    )
+    assert len(classes) > 10, [c.__name__ for c in classes]
+    bare = [
+        c.__name__
+        for c in classes
+        if len(inspect.signature(c).parameters) > 0
+        and not any(s in (inspect.getdoc(c) or "") for s in ("Parameters\n---", "Attributes\n---"))
+    ]
+    assert not bare, f"public classes without Parameters/Attributes: {bare}"
+    missing = [m for c in classes for m in _undocumented_methods(c)]
+    assert not missing, f"public methods without Parameters/Returns: {missing}"
+
+
+def test_the_method_check_finds_a_planted_bare_method() -> None:
+    class Planted:
+        def documented(self, x: int) -> int:
+            """Twice ``x``.
+
+            Parameters
+            ----------
+            x : int
+                A number.
+            """
+            return 2 * x
+
+        def bare(self) -> int:
+            """A number."""
+            return 1
+
+    assert _undocumented_methods(Planted) == ["Planted.bare"]

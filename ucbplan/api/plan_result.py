@@ -6,14 +6,12 @@ planner run. Everything a notebook reads comes from the table and its meta, so a
 from its ECSV file answers the same: :attr:`Plan.table`, :attr:`~Plan.accounting`,
 :attr:`~Plan.visits`, :attr:`~Plan.nights`, :attr:`~Plan.strategies`, :attr:`~Plan.goals`,
 :attr:`~Plan.warnings`, ``len``, the reprs, :meth:`~Plan.plot`, :meth:`~Plan.charts`,
-:meth:`~Plan.sheet`, :meth:`~Plan.export`, :meth:`~Plan.write` and :meth:`~Plan.to_astroplan`.
-Only :attr:`Plan.run` (the planner's objects: targets, settings, blocks) is absent from a read
-plan, and its charts and sheet draw no airmass or altitude limit (the constraint objects are the
-run's).
+:meth:`~Plan.sheet`, :meth:`~Plan.export`, :meth:`~Plan.write` and :meth:`~Plan.to_astroplan`. Only
+:attr:`Plan.run` (the planner's objects: targets, settings, blocks) is absent from a read plan, and
+its charts and sheet draw no airmass or altitude limit (the constraint objects are the run's).
 
 Every method works in the offline astropy scope (:func:`ucbplan.offline.offline`) and changes
-nothing outside the plan: the file the command line writes is the text table, unchanged;
-:attr:`Plan.table` is a converted copy.
+nothing outside the plan; :attr:`Plan.table` is a converted copy of the ``plan -o`` text table.
 """
 
 from __future__ import annotations
@@ -95,9 +93,8 @@ class Plan:
     plan shows a summary table (:meth:`_repr_html_`); ``len(plan)`` is its number of exposures.
 
     Every attribute and method works on a plan read back with :meth:`read` as on the plan just
-    made, from the table and its meta, except :attr:`run` (None) — the charts and the sheet of
-    a read plan then draw no airmass or altitude limit (those are the run's constraint objects)
-    and its :attr:`site` has no aliases.
+    made, except :attr:`run` (None: its charts and sheet draw no airmass or altitude limit, those
+    being the run's constraint objects) and the aliases of its :attr:`site`.
 
     Attributes
     ----------
@@ -432,8 +429,13 @@ class Plan:
         return buffer.getvalue()
 
     def to_dict(self) -> dict[str, Any]:
-        """``{"meta": {...}, "rows": [{column: value}, ...]}`` in plain Python values (NaN →
-        None): the document ``plan --format json`` prints, without a JSON text round trip."""
+        """The document ``plan --format json`` prints, without a JSON text round trip.
+
+        Returns
+        -------
+        dict
+            ``{"meta": {...}, "rows": [{column: value}, ...]}`` in plain values (NaN → None).
+        """
         from ucbplan.io import json_plain
         from ucbplan.observing.blocks.write import table_to_json_rows
 
@@ -553,6 +555,16 @@ keck_rotmode, force, semester, seeing_arcsec, instrument, eso_templates
             As :class:`~ucbplan.observing.exports.ExportOptions` (None: its default, the
             command's); ``proposal_format`` defaults to the suffix of ``path``, else ``ecsv``.
 
+        Returns
+        -------
+        str or Path
+            The export's text (no ``path``), else ``path``.
+
+        Raises
+        ------
+        UcbplanError
+            A bad ``to`` or option, a site ``to`` does not serve (SiteError), ``path`` exists.
+
         Warns
         -----
         PlanWarning
@@ -570,8 +582,18 @@ keck_rotmode, force, semester, seeing_arcsec, instrument, eso_templates
         return content
 
     def to_astroplan(self) -> Any:
-        """The plan as an ``astroplan.Schedule``: one ``ObservingBlock`` per exposure, each with
-        the plan's constraints as astroplan objects and its time window (docs/exports.md)."""
+        """The plan as an ``astroplan.Schedule`` (docs/exports.md).
+
+        Returns
+        -------
+        astroplan.Schedule
+            One ``ObservingBlock`` per exposure with the plan's constraints and its window.
+
+        Raises
+        ------
+        InputError
+            astroplan is not installed (``pip install 'ucbplan[astroplan]'``).
+        """
         from ucbplan.observing.exports.astroplan_schedule import to_astroplan
 
         with scope():

@@ -261,6 +261,9 @@ def plan(
     ---------------------------- ---------- -----------------------
     HM_Cnc_simulated-20400215-01 quadrature 2040-02-16T03:05:33.800
     HM_Cnc_simulated-20400215-02 quadrature 2040-02-16T03:08:14.564
+    >>> doc = run.to_dict()  # what ``plan --format json`` prints, as Python values
+    >>> len(doc["rows"]), doc["rows"][0]["t_mid_utc"]
+    (2, '2040-02-16T03:05:33.800')
     """
     o = dict(locals())
     run = plan_run(o)

@@ -103,7 +103,26 @@ class PopulationForecast:
         return list(self.table.colnames)
 
     def plot(self, folder: str | Path, *, overwrite: bool = False) -> list[Path]:
-        """The summary plots (``population forecast --plots``) in ``folder``; their paths."""
+        """Write the summary plots (``population forecast --plots``) in ``folder``.
+
+        Parameters
+        ----------
+        folder : str or Path
+            An existing folder: ``tvalid_vs_f.png``, ``tvalid_vs_snr.png`` (T_valid of the ``ok``
+            rows against f_GW and SNR) and ``tvalid_cumulative.png`` go there.
+        overwrite : bool
+            Replace existing figures.
+
+        Returns
+        -------
+        list of Path
+            The three figures written.
+
+        Raises
+        ------
+        OutputExistsError
+            A figure exists and ``overwrite`` is false (the figures before it are written).
+        """
         from ucbplan.population.plots import forecast_plots
 
         return list(forecast_plots(self.table, Path(folder), overwrite=overwrite))

@@ -115,6 +115,25 @@ class Report:
     ----------
     reduction : Reduction
         Everything the reduction found (fits, Monte-Carlo samples …).
+
+    Examples
+    --------
+    The bundled fiducial eccentric binary's velocities (truth K1 = 585.293 km/s):
+
+    >>> import ucbplan
+    >>> report = ucbplan.reduce(
+    ...     "catalogs/fiducial-eccentric.yaml",
+    ...     "catalogs/fiducial-eccentric-velocities.csv",
+    ...     seed=1,
+    ...     samples=2000,
+    ...     warn=False,
+    ... )
+    >>> report.K1, report["M_tot"]
+    (586.476 ± 1 km / s, 0.632644 ± 0.0021 solMass)
+    >>> report.to_dict()["K1"]["unit"]
+    'km / s'
+    >>> list(report.em_prior()["em_prior"])
+    ['target', 'source', 'q', 'M_tot', 'M1', 'M2', 'M_c', 'K1', 'K2', 'a_los']
     """
 
     reduction: Reduction
@@ -170,8 +189,14 @@ class Report:
         return {k: m for k in self._doc if (m := self[k]) is not None}
 
     def to_dict(self) -> dict[str, Any]:
-        """The report exactly as ``ucbplan reduce --format json`` writes it, as Python values:
-        plain floats (km/s, M_sun …, units named in each entry), lists and dicts; NaN as None."""
+        """The report exactly as ``ucbplan reduce --format json`` writes it, as Python values.
+
+        Returns
+        -------
+        dict
+            By report key (``"K1"``, ``"M_tot"`` …): plain floats (km/s, M_sun …, the unit named
+            in each entry's ``unit``), lists and dicts; NaN as None.
+        """
         from ucbplan.io import json_plain
 
         return dict(json_plain(self._doc))
@@ -182,13 +207,27 @@ class Report:
         return [str(w) for w in self._doc.get("warnings", [])]
 
     def dump(self, handle: IO[str], fmt: str = "json") -> None:
-        """Write the report to an open text ``handle`` as ``json`` or ``yaml``."""
+        """Write the report to an open text ``handle`` (what ``reduce -o`` writes).
+
+        Parameters
+        ----------
+        handle : file-like
+            An open text stream.
+        fmt : str
+            ``json`` (indented, NaN-free); any other value writes block-style YAML.
+        """
         from ucbplan.reduce.report import write_json, write_yaml
 
         (write_json if fmt == "json" else write_yaml)(self._doc, handle)
 
     def print(self, console: Any) -> None:
-        """The report as rich tables on ``console`` (what ``ucbplan reduce`` shows)."""
+        """The report as rich tables on ``console`` (what ``ucbplan reduce`` shows).
+
+        Parameters
+        ----------
+        console : rich.console.Console
+            Where to print (the command line's prints to stderr).
+        """
         from ucbplan.reduce.report import print_report
 
         print_report(self._doc, console)
@@ -201,7 +240,18 @@ class Report:
         em_prior: str | Path | None = None,
         overwrite: bool = False,
     ) -> None:
-        """Write the report (``json`` or ``yaml``) and the EM prior (YAML): both or neither.
+        """Write the report and the EM prior (YAML) atomically: both or neither.
+
+        Parameters
+        ----------
+        path : str, Path or None
+            The report's file (None: no report file).
+        fmt : str
+            ``json``; any other value writes YAML (as :meth:`dump`).
+        em_prior : str or Path, optional
+            The EM prior's file (``reduce --em-prior``; :meth:`em_prior`).
+        overwrite : bool
+            Replace existing files.
 
         Raises
         ------
@@ -222,17 +272,40 @@ class Report:
             write_file_set(files, overwrite=overwrite)
 
     def em_prior(self) -> dict[str, Any]:
-        """The EM prior for a later LISA analysis (``reduce --em-prior``)."""
+        """The EM prior for a later LISA analysis or ``ucbplan simulate`` (``reduce --em-prior``).
+
+        Returns
+        -------
+        dict
+            ``{"em_prior": {"target", "source", <name>: {value, sigma, unit}}}`` for q, M_tot,
+            M1, M2, M_c, K1, K2 (when measured) and a_los (value and σ, or an upper limit).
+        """
         from ucbplan.reduce.report import em_prior
 
         return em_prior(self.reduction)
 
     def plot(self, ax: Any = None, overwrite: bool = False) -> Any:
-        """The velocities against the orbital factor F̄ with the fitted lines on ``ax`` (None:
-        a new figure, with the residuals below) → the ``Axes`` (``.figure.savefig`` to keep).
+        """The velocities against the orbital factor F̄ with the fitted lines.
 
-        Given a folder (str or Path) instead, writes every figure of ``reduce --plots`` there
-        and returns their paths (``overwrite`` replaces existing ones).
+        Parameters
+        ----------
+        ax : matplotlib Axes, str, Path or None
+            Draw on this Axes; None: a new figure, with the residuals below; a folder (str or
+            Path): write every figure of ``reduce --plots`` there (as :meth:`save_plots`).
+        overwrite : bool
+            With a folder: replace existing figures.
+
+        Returns
+        -------
+        Axes or list of Path
+            The ``Axes`` drawn on (``.figure.savefig`` to keep it), or the figures written.
+
+        Raises
+        ------
+        InputError
+            ``ax`` is none of these.
+        OutputExistsError
+            With a folder: a figure exists and ``overwrite`` is false (none is written).
         """
         if isinstance(ax, str | Path):
             return self.save_plots(ax, overwrite=overwrite)
@@ -259,7 +332,25 @@ class Report:
         return f"<p>{head}</p><table>{rows}</table>"
 
     def save_plots(self, folder: str | Path, overwrite: bool = False) -> list[Path]:
-        """The reduction's PNG figures in ``folder`` (``reduce --plots``); their paths."""
+        """Write the reduction's PNG figures in ``folder`` (``reduce --plots``).
+
+        Parameters
+        ----------
+        folder : str or Path
+            Where the figures go (file names :data:`ucbplan.reduce.plots.PLOT_NAMES`).
+        overwrite : bool
+            Replace existing figures.
+
+        Returns
+        -------
+        list of Path
+            The figures written (the Δv and mass–mass figures only where they apply).
+
+        Raises
+        ------
+        OutputExistsError
+            A figure exists and ``overwrite`` is false (checked for all before writing any).
+        """
         from ucbplan.reduce.plots import plot_all
 
         return list(plot_all(self.reduction, Path(folder), overwrite=overwrite))

@@ -60,6 +60,25 @@ class TimingFit:
         The eclipse times it was fitted to.
     notes : tuple of str
         What the fit decided (σ's rescaled, outliers kept, rows clipped, a guess ignored).
+
+    Examples
+    --------
+    T0, P and Ṗ of six eclipses of a 400 s binary (times written to 10⁻⁷ d), as a timing target
+    (a target file needs Ṗ, so ``terms=3`` or more):
+
+    >>> from astropy import units as u
+    >>> from astropy.table import Table
+    >>> import ucbplan
+    >>> cycles = [0, 1000, 2000, 3000, 4000, 5000]
+    >>> period_d = (400 * u.s).to_value(u.day)
+    >>> bjd = [f"{2461000.5 + n * period_d:.7f}" for n in cycles]
+    >>> times = Table({"cycle": cycles, "bjd_tdb": bjd, "sigma_s": [1.0] * 6})
+    >>> fit = ucbplan.fit_ephemeris(times, terms=3)
+    >>> fit.t0_text, fit.period, fit.units
+    ('BJD_TDB 2461012.074074087500', <Quantity 399.99999941 s>, ('s', 's', 's/s'))
+    >>> fit.to_target(name="Demo", ra="15h39m32.16s", dec="+50d27m38.8s")
+    <Target 'Demo' (timing): P=399.9999994 s, RA=234.88400°, Dec=+50.46078°,
+    T0=2025-12-02T13:46:40.001 TDB>
     """
 
     fit: EphemerisFit
@@ -115,8 +134,14 @@ class TimingFit:
         return dict(zip(self.fit.names, map(float, self.fit.sigmas), strict=True))
 
     def to_dict(self) -> dict[str, Any]:
-        """The report ``ucbplan ephemeris fit --format json`` writes (parameters, covariance,
-        χ², outliers, clipped rows, notes, every point's O − C)."""
+        """The report ``ucbplan ephemeris fit --format json`` writes, as Python values.
+
+        Returns
+        -------
+        dict
+            Parameters with σ and units, covariance, χ², outliers, clipped rows, notes and every
+            point's O − C.
+        """
         from ucbplan.timing.document import fit_report
 
         return fit_report(self.fit, self.times)
@@ -128,8 +153,28 @@ class TimingFit:
         dec: str | None = None,
         like: TargetLike | None = None,
     ) -> dict[str, Any]:
-        """The timing target file as a mapping: name and sky from ``like`` (a target file)
-        and/or ``name``, ``ra``, ``dec`` (see :func:`target_identity`)."""
+        """The timing target file as a mapping (see :func:`target_identity`).
+
+        Parameters
+        ----------
+        name : str, optional
+            The target name (overrides ``like``'s).
+        ra, dec : str, optional
+            ICRS position (``"15h39m32.16s"``, ``"+50d27m38.8s"``), both or neither.
+        like : str, Path, dict or Target, optional
+            A target file (or document) to copy name, sky, masses, spectroscopy, magnitudes from.
+
+        Returns
+        -------
+        dict
+            The target document: name, sky, this ephemeris (T0 with every digit, P, Ṗ … and
+            their covariance) and what ``like`` adds.
+
+        Raises
+        ------
+        InputError
+            No name or sky position, or an unreadable one.
+        """
         from ucbplan.timing.document import target_document
 
         ident = target_identity(like, name, ra, dec)
@@ -142,8 +187,23 @@ class TimingFit:
         dec: str | None = None,
         like: TargetLike | None = None,
     ) -> str:
-        """The timing target file's text (``ucbplan ephemeris fit -o target.yaml``); name and
-        sky as :meth:`target_document`."""
+        """The timing target file's text (``ucbplan ephemeris fit -o target.yaml``).
+
+        Parameters
+        ----------
+        name, ra, dec, like
+            As :meth:`target_document`.
+
+        Returns
+        -------
+        str
+            The YAML text.
+
+        Raises
+        ------
+        InputError
+            As :meth:`target_document`.
+        """
         import io
 
         from ucbplan.timing.document import write_yaml
@@ -159,15 +219,40 @@ class TimingFit:
         dec: str | None = None,
         like: TargetLike | None = None,
     ) -> Target:
-        """This ephemeris as a timing :class:`~ucbplan.targets.Target` (``ucbplan.write_target``
-        writes it); name and sky as :meth:`target_document`."""
+        """This ephemeris as a timing target (``ucbplan.write_target`` writes it).
+
+        Parameters
+        ----------
+        name, ra, dec, like : str or None; like also Path, dict or Target
+            Its name and sky position, and a target file to copy them (and masses,
+            spectroscopy, magnitudes) from, as for :meth:`target_document`.
+
+        Returns
+        -------
+        ucbplan.targets.Target
+            The target :func:`ucbplan.load_target` reads from :meth:`target_yaml`'s text.
+
+        Raises
+        ------
+        InputError
+            As :meth:`target_document`.
+        TargetFileError
+            A fit without Ṗ (``terms=2``): a timing target needs ``timing.pdot``.
+        """
         from ucbplan.targets import target_from_dict
 
         with scope():
             return target_from_dict(self.target_document(name, ra, dec, like))
 
     def figure(self) -> Figure:
-        """The O − C figure (matplotlib; ``.savefig(path)`` writes it)."""
+        """The O − C figure.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            O − C against the linear ephemeris [s] with the fitted curve, and the residuals
+            below, against cycle since T0 (``.savefig(path)`` writes it).
+        """
         from ucbplan.timing.plots import oc_figure
 
         return oc_figure(self.fit, self.times)
@@ -176,7 +261,31 @@ class TimingFit:
         self, text: str | None, output: Path | None, plot: Path | None, overwrite: bool = False
     ) -> list[Path]:
         """Write ``text`` to ``output`` and the O − C figure to ``plot`` as a unit (both or
-        neither); returns the files written."""
+        neither).
+
+        Parameters
+        ----------
+        text : str or None
+            The report or target file's text (None: none written).
+        output : Path or None
+            Its file (None: none written).
+        plot : Path or None
+            The figure's file, ``.png``, ``.pdf`` or ``.svg`` (None: no figure).
+        overwrite : bool
+            Replace existing files.
+
+        Returns
+        -------
+        list of Path
+            The files written.
+
+        Raises
+        ------
+        InputError
+            ``plot`` is not a ``.png``, ``.pdf`` or ``.svg`` file name.
+        OutputExistsError
+            A file exists and ``overwrite`` is false (nothing is written).
+        """
         from ucbplan.io import write_file_set
         from ucbplan.plotting import figure_format, pyplot
 

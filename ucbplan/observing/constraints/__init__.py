@@ -141,17 +141,42 @@ class Constraint:
         raise NotImplementedError(f"{type(self).__name__} defines no ok(sky, i, x)")
 
     def describe(self) -> str:
-        """One-line human description (goes into the table provenance)."""
+        """One-line human description (goes into the table provenance).
+
+        Returns
+        -------
+        str
+            The default: the class name.
+        """
         return type(self).__name__
 
     def screen(self, sky: SkyModel, i: int, x: FloatArray, slack_s: float) -> Int8Array:
-        """Where the answer is certain near ``x``: +1 if ``ok`` holds at every time within
-        ``slack_s`` of each ``x``, −1 if it fails at every such time, 0 if it may change (the
-        exact check decides). The default screens nothing (all 0)."""
+        """Where the answer is certain near ``x`` (an optional speed-up of the exact check).
+
+        Parameters
+        ----------
+        sky, i, x
+            As :meth:`ok`.
+        slack_s : float
+            Half-width [s] of the interval around each ``x`` the answer must hold on.
+
+        Returns
+        -------
+        ndarray of int8
+            ``x.shape``: +1 if ``ok`` holds at every time within ``slack_s`` of each ``x``, −1
+            if it fails at every such time, 0 if it may change (the exact check decides). The
+            default screens nothing (all 0).
+        """
         return np.zeros(np.shape(x), dtype=np.int8)
 
     def reason(self) -> str:
-        """Why a block fails this constraint (for the 'not placed' report)."""
+        """Why a block fails this constraint (for the 'not placed' report).
+
+        Returns
+        -------
+        str
+            The default: ``"violates "`` and :meth:`describe`'s text.
+        """
         return f"violates {self.describe()}"
 
 
@@ -184,7 +209,18 @@ def holds(c: Constraint, sky: SkyModel, i: int, x: FloatArray) -> BoolArray:
 
 @dataclass(frozen=True)
 class NightConstraint(Constraint):
-    """Sun below the twilight limit (civil −6°, nautical −12°, astronomical −18°)."""
+    """Sun below the twilight limit (civil −6°, nautical −12°, astronomical −18°).
+
+    Parameters
+    ----------
+    twilight : str
+        ``civil``, ``nautical`` (the default) or ``astronomical``.
+
+    Raises
+    ------
+    InputError
+        Any other ``twilight``.
+    """
 
     twilight: str = "nautical"
     name: ClassVar[str] = "night"
@@ -199,17 +235,35 @@ class NightConstraint(Constraint):
 
     @classmethod
     def twilight_civil(cls) -> NightConstraint:
-        """Sun below −6° (astroplan's ``AtNightConstraint.twilight_civil()``)."""
+        """Sun below −6° (astroplan's ``AtNightConstraint.twilight_civil()``).
+
+        Returns
+        -------
+        NightConstraint
+            ``NightConstraint("civil")``.
+        """
         return cls("civil")
 
     @classmethod
     def twilight_nautical(cls) -> NightConstraint:
-        """Sun below −12° (the default)."""
+        """Sun below −12° (the default).
+
+        Returns
+        -------
+        NightConstraint
+            ``NightConstraint("nautical")``.
+        """
         return cls("nautical")
 
     @classmethod
     def twilight_astronomical(cls) -> NightConstraint:
-        """Sun below −18°."""
+        """Sun below −18°.
+
+        Returns
+        -------
+        NightConstraint
+            ``NightConstraint("astronomical")``.
+        """
         return cls("astronomical")
 
     @property
@@ -232,7 +286,18 @@ class NightConstraint(Constraint):
 
 @dataclass(frozen=True)
 class AirmassConstraint(Constraint):
-    """Airmass (sec z) at most ``max_airmass`` (target above the horizon)."""
+    """Airmass (sec z) at most ``max_airmass`` (target above the horizon).
+
+    Parameters
+    ----------
+    max_airmass : float
+        Largest airmass [1], in [1, :data:`MAX_AIRMASS`].
+
+    Raises
+    ------
+    InputError
+        ``max_airmass`` outside that range or not a number.
+    """
 
     max_airmass: float = 2.0
     name: ClassVar[str] = "airmass"
@@ -253,7 +318,18 @@ class AirmassConstraint(Constraint):
 
 @dataclass(frozen=True)
 class AltitudeConstraint(Constraint):
-    """Altitude at least ``min_deg``."""
+    """Altitude at least ``min_deg``.
+
+    Parameters
+    ----------
+    min_deg : float or Quantity
+        Lowest altitude [deg] (or an angle ``Quantity``), in [−90, 90].
+
+    Raises
+    ------
+    InputError
+        ``min_deg`` outside that range or not an angle.
+    """
 
     min_deg: float = 30.0
     name: ClassVar[str] = "altitude"
@@ -274,7 +350,19 @@ class AltitudeConstraint(Constraint):
 
 @dataclass(frozen=True)
 class ZenithHoleConstraint(Constraint):
-    """Target outside a cone of ``radius_deg`` around the zenith (alt-az mount keyhole)."""
+    """Target outside a cone of ``radius_deg`` around the zenith (alt-az mount keyhole).
+
+    Parameters
+    ----------
+    radius_deg : float or Quantity
+        The cone's radius [deg] (or an angle ``Quantity``), in [0,
+        :data:`MAX_ZENITH_HOLE_DEG`]; 0: no hole.
+
+    Raises
+    ------
+    InputError
+        ``radius_deg`` outside that range or not an angle.
+    """
 
     radius_deg: float = 4.0
     name: ClassVar[str] = "zenith-hole"
@@ -301,7 +389,20 @@ class ZenithHoleConstraint(Constraint):
 class MoonSeparationConstraint(Constraint):
     """Target at least ``min_deg`` from the Moon; with ``moon_down_ok`` (the default) always
     satisfied while the Moon is below the horizon (astroplan's counts the Moon down too:
-    ``moon_down_ok=False``)."""
+    ``moon_down_ok=False``).
+
+    Parameters
+    ----------
+    min_deg : float or Quantity
+        Smallest separation [deg] (or an angle ``Quantity``), in [0, 180]; 0: no limit.
+    moon_down_ok : bool
+        Count the constraint as met while the Moon is below the horizon.
+
+    Raises
+    ------
+    InputError
+        ``min_deg`` outside that range or not an angle.
+    """
 
     min_deg: float = 30.0
     moon_down_ok: bool = True
@@ -332,7 +433,18 @@ class MoonSeparationConstraint(Constraint):
 
 @dataclass(frozen=True)
 class MoonIlluminationConstraint(Constraint):
-    """Moon illuminated fraction at most ``max_fraction``, or Moon below the horizon."""
+    """Moon illuminated fraction at most ``max_fraction``, or Moon below the horizon.
+
+    Parameters
+    ----------
+    max_fraction : float
+        Largest illuminated fraction [1], in [0, 1] (0: new Moon, 1: full Moon, no limit).
+
+    Raises
+    ------
+    InputError
+        ``max_fraction`` outside that range or not a number.
+    """
 
     max_fraction: float = 1.0
     name: ClassVar[str] = "moon-illum"
