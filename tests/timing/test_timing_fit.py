@@ -967,3 +967,26 @@ def test_eclipse_csv_comments_share_the_bounded_reader(tmp_path: Path) -> None:
     p.write_text("#" * (MAX_COMMENT_CHARS + 1) + "\n" + rows, encoding="utf-8")
     with pytest.raises(InputFileError, match=r"^t.csv: line 1: a comment of 1000001 characters"):
         read_times(p)
+
+
+def test_a_fit_without_pdot_writes_a_target_that_loads(tmp_path: Path) -> None:
+    """Found while documenting TimingFit: a ``terms=2`` fit (T0, P; Ṗ held at 0) wrote a target
+    without ``timing.pdot``, which the loader refuses (``timing.pdot: missing``). The fit held Ṗ
+    at 0 exactly, so the file says so (a zero Ṗ claims no uncertainty)."""
+    from astropy.table import Table
+
+    import ucbplan
+
+    period_d = 400.0 / 86400.0
+    cycles = [0, 1000, 2000, 3000, 4000, 5000]
+    bjd = [f"{2461000.5 + n * period_d:.7f}" for n in cycles]
+    fit = ucbplan.fit_ephemeris(
+        Table({"cycle": cycles, "bjd_tdb": bjd, "sigma_s": [1.0] * 6}), terms=2
+    )
+    target = fit.to_target(name="Demo", ra="15h39m32.16s", dec="+50d27m38.8s")
+    assert target.timing is not None and target.timing.ephemeris.pdot == 0.0
+    assert abs(target.timing.ephemeris.period_s - 400.0) < 1e-3
+    path = tmp_path / "demo.yaml"
+    path.write_text(fit.target_yaml(name="Demo", ra="15h39m32.16s", dec="+50d27m38.8s"))
+    loaded = ucbplan.load_target(path)
+    assert loaded.timing is not None and loaded.timing.ephemeris.pdot == 0.0

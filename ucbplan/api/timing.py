@@ -64,7 +64,7 @@ class TimingFit:
     Examples
     --------
     T0, P and Ṗ of six eclipses of a 400 s binary (times written to 10⁻⁷ d), as a timing target
-    (a target file needs Ṗ, so ``terms=3`` or more):
+    (``terms=2`` holds Ṗ at 0, and the target says so):
 
     >>> from astropy import units as u
     >>> from astropy.table import Table
@@ -237,7 +237,7 @@ class TimingFit:
         InputError
             As :meth:`target_document`.
         TargetFileError
-            A fit without Ṗ (``terms=2``): a timing target needs ``timing.pdot``.
+            A target that fails the target-file checks (as :func:`load_target`).
         """
         from ucbplan.targets import target_from_dict
 

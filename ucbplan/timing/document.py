@@ -194,8 +194,8 @@ def target_document(fit: EphemerisFit, ident: Mapping[str, Any], table_name: str
         "t0_marks": "primary_eclipse",
         "period": _period_text(fit.period_s, float(sig[1])),
     }
-    if fit.terms > 2:
-        timing["pdot"] = float(fit.values[2])
+    # a fit without Ṗ held it at 0 exactly: a target states it (a zero Ṗ claims no uncertainty)
+    timing["pdot"] = float(fit.values[2]) if fit.terms > 2 else 0.0
     if fit.terms > 3:
         timing["pddot"] = float(fit.values[3])
     timing["covariance"] = {
