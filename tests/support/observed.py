@@ -38,7 +38,7 @@ CLI_BASE = [
 ]
 
 
-def _brute_force_info(tau: np.ndarray, exptime: np.ndarray, sigma: np.ndarray) -> float:
+def brute_force_info(tau: np.ndarray, exptime: np.ndarray, sigma: np.ndarray) -> float:
     """1/σ_K² from the design matrix built row by row (Λ_K = sin x/x, x = n̄ T/2 written out)
     and inverted with numpy."""
     target = load_target(TARGET)
@@ -63,4 +63,4 @@ def fisher_of_taken(plan: Path, log: Path) -> float:
     tau = (Time(list(rows["t_mid_tdb_bary"]), scale="tdb") - load_target(TARGET).t_ref).to_value(
         "s"
     )
-    return _brute_force_info(tau, np.asarray(rows["exptime_s"]), np.asarray(rows["sigma_v_kms"]))
+    return brute_force_info(tau, np.asarray(rows["exptime_s"]), np.asarray(rows["sigma_v_kms"]))

@@ -5,7 +5,7 @@ Base case: the goal plan of HM Cnc (simulated) at Paranal for 2040-02-15 to 17 (
 ``--sigma-v 30km/s@300s --visit 1h --instrument xshooter-vis``: 14 spectra a night, one exposure
 per block, on the first two nights). The information the reader collects from a log is checked
 against an independent Fisher sum over the taken rows (tests/observing/precision/test_observed.py:
-``_brute_force_info``, the design matrix built row by row from the blocks table's epochs,
+``brute_force_info``, the design matrix built row by row from the blocks table's epochs,
 exposure times and σ_v, inverted with numpy), to 1e-9 relative (the log carries the table's
 numbers in full and the same ISO µs epochs; only the summation order differs). Live mode is
 driven by an injected clock and key source, never by timing.
