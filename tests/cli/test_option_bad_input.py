@@ -8,6 +8,7 @@ from datetime import date
 from pathlib import Path
 
 import pytest
+from support.bad_eclipse_times import GOOD, times_table
 from support.bad_options import (
     EXPOSURE_PLANS,
     NON_FINITE,
@@ -37,13 +38,6 @@ pytestmark = [
 HM = CATALOGS / "hm-cnc-simulated.yaml"
 ECC = CATALOGS / "fiducial-eccentric.yaml"
 POP = CATALOGS / "population" / "ldc-200.ecsv"
-TIMES_ROWS = [
-    "bjd_tdb,sigma_s,kind,cycle",
-    "2458305.6827886,2,primary,0",
-    "2458305.6875891,2,primary,1",
-    "2458305.6923896,2,primary,2",
-    "2458305.6971901,2,primary,3",
-]
 
 
 def refused(*args: str) -> str:
@@ -65,7 +59,7 @@ def _one_line(exc: BaseException | str, *names: str) -> None:
 @pytest.fixture
 def times_csv(tmp_path: Path) -> Path:
     path = tmp_path / "times.csv"
-    path.write_text("\n".join(TIMES_ROWS) + "\n", encoding="utf-8")
+    path.write_text(times_table(GOOD), encoding="utf-8")
     return path
 
 
