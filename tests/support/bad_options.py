@@ -1,6 +1,7 @@
 """The CLI-option bad-input corpus: option values each command refuses before any work, in one
 line naming the flag (exit 2, nothing written), and the library keywords behind the `plan` flags.
-Run by tests/cli/test_option_bad_input.py."""
+Run by tests/cli/test_option_bad_input.py; the fuzzed options and values by
+tests/cli/test_cli_fuzz_surfaces.py."""
 
 from __future__ import annotations
 
@@ -8,9 +9,18 @@ import math
 from collections.abc import Callable
 from datetime import date
 
+from hypothesis import strategies as st
+
+from support.cli import VALUES
+from support.paths import CATALOGS
 from ucbplan.observing.observatory.sites import site_from_lonlat
 from ucbplan.observing.schedule import PlanSettings, night_dates
 from ucbplan.observing.schedule.run import parse_priorities
+
+HM = str(CATALOGS / "hm-cnc-simulated.yaml")
+INJ = str(CATALOGS / "fiducial-injection.yaml")
+ECC = str(CATALOGS / "fiducial-eccentric.yaml")
+TIMING = str(CATALOGS / "examples" / "synthetic-eclipsing.yaml")
 
 #: The night the `plan` cases are planned for.
 NIGHT = date(2040, 2, 15)
@@ -116,4 +126,105 @@ PLAN_ARGS: list[list[str]] = [
     ["--night", "9999-12-31"],
     ["--site-lonlat", "nan,0,0"],
     ["--k-eff", "0"],  # was silently replaced by the target file's K
+]
+
+#: Extra values that name the new surfaces' own words.
+SURFACE_VALUES = st.one_of(
+    VALUES,
+    st.sampled_from(
+        [
+            "q=1%,M1=2%",
+            "K1=5%",
+            "M1=0.01Msun",
+            "sigma_K=2km/s",
+            "10,17,600",
+            "1,2",
+            "-70,-24,2600",
+            "200,0,0",
+            "360,10,0",
+            "414.79 s",
+            "414.79",
+            "1e-30 s",
+            "oc.txt",
+            "figs/",
+            "fors2",
+            "xshooter-vis",
+            "phase-table",
+            "eso-p2",
+            "2041A",
+            "P147",
+            "4yr",
+            "1h",
+        ]
+    ),
+)
+
+#: Options fuzzed by tests/cli/test_cli_fuzz_surfaces.py with SURFACE_VALUES: (command line without
+#: the option, option under test). "{NAME}" is one of that test's inputs, "{OUT}" a file and
+#: "{DIR}" a new folder inside the output folder the test watches; FUZZED_SLOW start real work.
+FUZZED_FAST: list[tuple[list[str], str]] = [
+    (["ephemeris", "fit", "{TIMES}", "-o", "{OUT}.yaml"], "--terms"),
+    (["ephemeris", "fit", "{TIMES}", "-o", "{OUT}.yaml"], "--clip"),
+    (["ephemeris", "fit", "{TIMES}", "-o", "{OUT}.json"], "--plot"),
+    (["ephemeris", "fit", "{TIMES}", "--format", "json"], "--period"),
+    (["ephemeris", "fit", "{TIMES}", "--format", "json"], "--initial"),
+    (["ephemeris", "fit", "{TIMES}", "-o", "{OUT}.yaml"], "--ra"),
+    (["ephemeris", "fit", "{TIMES}", "--format", "yaml"], "--like"),
+    (["feasibility", TIMING, "--format", "json"], "--optical-sigma-p"),
+    (["feasibility", TIMING, "--format", "json"], "--optical-sigma-pdot"),
+    (["feasibility", TIMING, "--format", "json"], "--optical-sigma-t0"),
+    (["feasibility", HM, "--format", "json"], "--optical-sigma-phase"),
+    (["feasibility", HM, "--format", "json"], "--optical-sigma-f-rel"),
+    (["feasibility", ECC, "-o", "{OUT}.json"], "--plot"),
+    (["horizon", HM, INJ, "--format", "json"], "--alpha"),
+    (["horizon", HM, INJ, "--format", "json"], "--sigma-v"),
+    (["horizon", HM, INJ, "-o", "{OUT}.json"], "--format"),
+    (["horizon", HM, "-o", "{OUT}.json"], "--plot"),
+    (["population", "rank", "{FORECAST}", "--out-dir", "{DIR}"], "--top"),
+    (["population", "rank", "{FORECAST}", "--out-dir", "{DIR}"], "--goal"),
+    (["population", "rank", "{FORECAST}", "--out-dir", "{DIR}"], "--sigma-ref"),
+    (["population", "rank", "{FORECAST}", "--out-dir", "{DIR}"], "--readout"),
+    (["population", "rank", "{FORECAST}", "--out-dir", "{DIR}"], "--overhead"),
+    (["population", "rank", "{FORECAST}", "--out-dir", "{DIR}"], "--visit"),
+    (["population", "rank", "{FORECAST}", "--out-dir", "{DIR}"], "--exptime"),
+    (["population", "rank", "{FORECAST}", "--out-dir", "{DIR}"], "--instrument"),
+    (["population", "rank", "{FORECAST}", "--out-dir", "{DIR}"], "--instruments-file"),
+    (["population", "rank", "{FORECAST}", "--out-dir", "{DIR}"], "--catalog"),
+    (["population", "rank", "{FORECAST}", "--out-dir", "{DIR}"], "--out-dir"),
+    (["population", "simulate", "{CAT}", "-o", "{OUT}.ecsv", "--out-dir", "{TAKEN}"], "--walkers"),
+    (["population", "simulate", "{CAT}", "-o", "{OUT}.ecsv", "--out-dir", "{TAKEN}"], "--steps"),
+    (
+        ["population", "simulate", "{CAT}", "-o", "{OUT}.ecsv", "--out-dir", "{TAKEN}"],
+        "--max-steps",
+    ),
+    (["population", "simulate", "{CAT}", "-o", "{OUT}.ecsv", "--out-dir", "{TAKEN}"], "--seed"),
+    (["export", "{BLOCKS}", "-o", "{OUT}"], "--to"),
+    (["export", "{BLOCKS}", "--to", "phase-table", "-o", "{OUT}.ecsv"], "--tolerance-sigma"),
+    (["export", "{BLOCKS}", "--to", "proposal", "-o", "{OUT}.csv"], "--semester"),
+    (["export", "{BLOCKS}", "--to", "proposal", "-o", "{OUT}.csv"], "--acquisition"),
+    (["export", "{BLOCKS}", "--to", "eso-p2", "-o", "{OUT}.json"], "--seeing"),
+    (["export", "{BLOCKS}", "--to", "eso-p2", "-o", "{OUT}.json"], "--instrument"),
+    (["plan", HM, "--night", "2040-02-15", "--site-lonlat", "-70,-24,2600"], "--site"),
+]
+FUZZED_SLOW: list[tuple[list[str], str]] = [
+    (["population", "forecast", "{CAT}", "-o", "{OUT}.ecsv"], "--sigma-v"),
+    (["population", "forecast", "{CAT}", "-o", "{OUT}.ecsv"], "--t-obs"),
+    (["population", "forecast", "{CAT}", "-o", "{OUT}.ecsv"], "--n-bins"),
+    (["population", "forecast", "{CAT}", "-o", "{OUT}.ecsv"], "--columns"),
+    (["population", "visibility", "{CAT}", "-o", "{OUT}.ecsv", "--site", "paranal"], "--semester"),
+    (
+        ["population", "visibility", "{CAT}", "-o", "{OUT}.ecsv", "--semester", "2041A"],
+        "--site-lonlat",
+    ),
+    (
+        ["population", "visibility", "{CAT}", "-o", "{OUT}.ecsv", "--semester", "2041A"],
+        "--site",
+    ),
+    (["plan", HM, "--site", "paranal", "--night", "2040-02-15"], "--instrument"),
+    (["plan", HM, "--site", "paranal", "--night", "2040-02-15"], "--instruments-file"),
+    (["plan", HM, "--site", "paranal", "--night", "2040-02-15"], "--goal"),
+    (["plan", HM, "--site", "paranal", "--night", "2040-02-15"], "--visit"),
+    (["plan", HM, "--site", "paranal", "--night", "2040-02-15"], "--readout"),
+    (["plan", HM, "--site", "paranal", "--night", "2040-02-15"], "--plot"),
+    (["plan", HM, "--night", "2040-02-15"], "--site-lonlat"),
 ]
