@@ -86,3 +86,23 @@ def telescope_plan(tmp_path_factory: pytest.TempPathFactory) -> Path:
     result = CliRunner().invoke(app, args)
     assert result.exit_code == 0, result.output
     return out
+
+
+@pytest.fixture(scope="session")
+def first_night(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """``plan --observed``'s base case (tests/support/observed.py): the plan of 2040-02-15 for
+    sigma_K=20km/s (14 spectra), written with -o."""
+    from support.observed import written_plan
+
+    out = tmp_path_factory.mktemp("observed") / "night1.ecsv"
+    return written_plan(out, "--night", "2040-02-15", "--goal", "sigma_K=20km/s")
+
+
+@pytest.fixture(scope="session")
+def goal_plan(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The observing log's base case: the goal plan of 2040-02-15 to 17 (it books the first two
+    nights), written with -o."""
+    from support.observed import written_plan
+
+    out = tmp_path_factory.mktemp("obslog") / "goal.ecsv"
+    return written_plan(out, "--night", "2040-02-15", "--nights", "3", "--goal", "sigma_K=13km/s")

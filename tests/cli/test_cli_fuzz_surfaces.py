@@ -21,46 +21,12 @@ from pathlib import Path
 import pytest
 from astropy.table import Table
 from hypothesis import HealthCheck, given, settings
-from hypothesis import strategies as st
-from support.cli import VALUES, check_outcome, run_cli, run_main
+from support.bad_options import FUZZED_FAST, FUZZED_SLOW, SURFACE_VALUES
+from support.cli import check_outcome, run_cli, run_main
 
 ROOT = Path(__file__).resolve().parents[2]
 CAT = ROOT / "catalogs"
 HM = str(CAT / "hm-cnc-simulated.yaml")
-INJ = str(CAT / "fiducial-injection.yaml")
-ECC = str(CAT / "fiducial-eccentric.yaml")
-TIMING = str(CAT / "examples" / "synthetic-eclipsing.yaml")
-
-#: Extra values that name the new surfaces' own words.
-SURFACE_VALUES = st.one_of(
-    VALUES,
-    st.sampled_from(
-        [
-            "q=1%,M1=2%",
-            "K1=5%",
-            "M1=0.01Msun",
-            "sigma_K=2km/s",
-            "10,17,600",
-            "1,2",
-            "-70,-24,2600",
-            "200,0,0",
-            "360,10,0",
-            "414.79 s",
-            "414.79",
-            "1e-30 s",
-            "oc.txt",
-            "figs/",
-            "fors2",
-            "xshooter-vis",
-            "phase-table",
-            "eso-p2",
-            "2041A",
-            "P147",
-            "4yr",
-            "1h",
-        ]
-    ),
-)
 
 
 @pytest.fixture(scope="module")
@@ -95,77 +61,14 @@ def inputs(tmp_path_factory: pytest.TempPathFactory) -> dict[str, str]:
     }
 
 
-# (command line without the option, option under test). "{NAME}" is an input above, "{OUT}" a
-# file and "{DIR}" a new folder inside the output folder the test watches.
-FAST = [
-    (["ephemeris", "fit", "{TIMES}", "-o", "{OUT}.yaml"], "--terms"),
-    (["ephemeris", "fit", "{TIMES}", "-o", "{OUT}.yaml"], "--clip"),
-    (["ephemeris", "fit", "{TIMES}", "-o", "{OUT}.json"], "--plot"),
-    (["ephemeris", "fit", "{TIMES}", "--format", "json"], "--period"),
-    (["ephemeris", "fit", "{TIMES}", "--format", "json"], "--initial"),
-    (["ephemeris", "fit", "{TIMES}", "-o", "{OUT}.yaml"], "--ra"),
-    (["ephemeris", "fit", "{TIMES}", "--format", "yaml"], "--like"),
-    (["feasibility", TIMING, "--format", "json"], "--optical-sigma-p"),
-    (["feasibility", TIMING, "--format", "json"], "--optical-sigma-pdot"),
-    (["feasibility", TIMING, "--format", "json"], "--optical-sigma-t0"),
-    (["feasibility", HM, "--format", "json"], "--optical-sigma-phase"),
-    (["feasibility", HM, "--format", "json"], "--optical-sigma-f-rel"),
-    (["feasibility", ECC, "-o", "{OUT}.json"], "--plot"),
-    (["horizon", HM, INJ, "--format", "json"], "--alpha"),
-    (["horizon", HM, INJ, "--format", "json"], "--sigma-v"),
-    (["horizon", HM, INJ, "-o", "{OUT}.json"], "--format"),
-    (["horizon", HM, "-o", "{OUT}.json"], "--plot"),
-    (["population", "rank", "{FORECAST}", "--out-dir", "{DIR}"], "--top"),
-    (["population", "rank", "{FORECAST}", "--out-dir", "{DIR}"], "--goal"),
-    (["population", "rank", "{FORECAST}", "--out-dir", "{DIR}"], "--sigma-ref"),
-    (["population", "rank", "{FORECAST}", "--out-dir", "{DIR}"], "--readout"),
-    (["population", "rank", "{FORECAST}", "--out-dir", "{DIR}"], "--overhead"),
-    (["population", "rank", "{FORECAST}", "--out-dir", "{DIR}"], "--visit"),
-    (["population", "rank", "{FORECAST}", "--out-dir", "{DIR}"], "--exptime"),
-    (["population", "rank", "{FORECAST}", "--out-dir", "{DIR}"], "--instrument"),
-    (["population", "rank", "{FORECAST}", "--out-dir", "{DIR}"], "--instruments-file"),
-    (["population", "rank", "{FORECAST}", "--out-dir", "{DIR}"], "--catalog"),
-    (["population", "rank", "{FORECAST}", "--out-dir", "{DIR}"], "--out-dir"),
-    (["population", "simulate", "{CAT}", "-o", "{OUT}.ecsv", "--out-dir", "{TAKEN}"], "--walkers"),
-    (["population", "simulate", "{CAT}", "-o", "{OUT}.ecsv", "--out-dir", "{TAKEN}"], "--steps"),
-    (
-        ["population", "simulate", "{CAT}", "-o", "{OUT}.ecsv", "--out-dir", "{TAKEN}"],
-        "--max-steps",
-    ),
-    (["population", "simulate", "{CAT}", "-o", "{OUT}.ecsv", "--out-dir", "{TAKEN}"], "--seed"),
-    (["export", "{BLOCKS}", "-o", "{OUT}"], "--to"),
-    (["export", "{BLOCKS}", "--to", "phase-table", "-o", "{OUT}.ecsv"], "--tolerance-sigma"),
-    (["export", "{BLOCKS}", "--to", "proposal", "-o", "{OUT}.csv"], "--semester"),
-    (["export", "{BLOCKS}", "--to", "proposal", "-o", "{OUT}.csv"], "--acquisition"),
-    (["export", "{BLOCKS}", "--to", "eso-p2", "-o", "{OUT}.json"], "--seeing"),
-    (["export", "{BLOCKS}", "--to", "eso-p2", "-o", "{OUT}.json"], "--instrument"),
-    (["plan", HM, "--night", "2040-02-15", "--site-lonlat", "-70,-24,2600"], "--site"),
-]
-SLOW = [
-    (["population", "forecast", "{CAT}", "-o", "{OUT}.ecsv"], "--sigma-v"),
-    (["population", "forecast", "{CAT}", "-o", "{OUT}.ecsv"], "--t-obs"),
-    (["population", "forecast", "{CAT}", "-o", "{OUT}.ecsv"], "--n-bins"),
-    (["population", "forecast", "{CAT}", "-o", "{OUT}.ecsv"], "--columns"),
-    (["population", "visibility", "{CAT}", "-o", "{OUT}.ecsv", "--site", "paranal"], "--semester"),
-    (
-        ["population", "visibility", "{CAT}", "-o", "{OUT}.ecsv", "--semester", "2041A"],
-        "--site-lonlat",
-    ),
-    (
-        ["population", "visibility", "{CAT}", "-o", "{OUT}.ecsv", "--semester", "2041A"],
-        "--site",
-    ),
-    (["plan", HM, "--site", "paranal", "--night", "2040-02-15"], "--instrument"),
-    (["plan", HM, "--site", "paranal", "--night", "2040-02-15"], "--instruments-file"),
-    (["plan", HM, "--site", "paranal", "--night", "2040-02-15"], "--goal"),
-    (["plan", HM, "--site", "paranal", "--night", "2040-02-15"], "--visit"),
-    (["plan", HM, "--site", "paranal", "--night", "2040-02-15"], "--readout"),
-    (["plan", HM, "--site", "paranal", "--night", "2040-02-15"], "--plot"),
-    (["plan", HM, "--night", "2040-02-15"], "--site-lonlat"),
-]
+# (command line without the option, option under test): the corpus of fuzzed options,
+# tests/support/bad_options.py.
 PARAMS = [
-    *(pytest.param(b, o, id=f"{'-'.join(b[:2])}{o}") for b, o in FAST),
-    *(pytest.param(b, o, id=f"{'-'.join(b[:2])}{o}", marks=pytest.mark.slow) for b, o in SLOW),
+    *(pytest.param(b, o, id=f"{'-'.join(b[:2])}{o}") for b, o in FUZZED_FAST),
+    *(
+        pytest.param(b, o, id=f"{'-'.join(b[:2])}{o}", marks=pytest.mark.slow)
+        for b, o in FUZZED_SLOW
+    ),
 ]
 
 

@@ -69,41 +69,6 @@ def test_horizon_of_two_lisa_targets_is_valid_json(tmp_path: Path) -> None:
 
 
 ECC = CAT / "fiducial-eccentric.yaml"
-TIMES_ROWS = [
-    "bjd_tdb,sigma_s,kind,cycle",
-    "2458305.6827886,2,primary,0",
-    "2458305.6875891,2,primary,1",
-    "2458305.6923896,2,primary,2",
-    "2458305.6971901,2,primary,3",
-]
-
-
-@pytest.fixture
-def times_csv(tmp_path: Path) -> Path:
-    path = tmp_path / "times.csv"
-    path.write_text("\n".join(TIMES_ROWS) + "\n", encoding="utf-8")
-    return path
-
-
-def _plot_cases(times_csv: Path) -> list[list[str]]:
-    return [
-        ["ephemeris", "fit", str(times_csv), "--terms", "2"],
-        ["feasibility", str(ECC)],
-        ["horizon", str(HM)],
-    ]
-
-
-@pytest.mark.parametrize("name", ["oc.txt", "figs", "oc.PNGX"])
-@pytest.mark.parametrize("which", [0, 1, 2])
-def test_plot_to_an_unknown_format_is_refused_before_the_run(
-    tmp_path: Path, times_csv: Path, name: str, which: int
-) -> None:
-    out = tmp_path / "out"
-    out.mkdir()
-    args = [*_plot_cases(times_csv)[which], "--plot", str(out / name), "-o", str(out / "r.json")]
-    line = refused(*args)
-    assert "--plot: expected a .png, .pdf or .svg file name" in line
-    assert list(out.iterdir()) == []
 
 
 def test_plot_and_existing_output_writes_neither(tmp_path: Path) -> None:
@@ -151,49 +116,6 @@ def test_site_and_site_lonlat_together_are_refused(tmp_path: Path, command: str)
     assert list(tmp_path.iterdir()) == []
 
 
-RANK_BAD = [
-    (["--goal", "q=1%,M1=2%"], "one QUANTITY=VALUE per goal"),
-    (["--top", "-1"], "--top"),
-    (["--sigma-ref", "abc"], "--sigma-ref"),
-    (["--readout", "-30"], "--readout"),
-    (["--visit", "0"], "--visit"),
-    (["--overhead", "-1"], "--overhead"),
-    (
-        ["--sigma-ref", "10,17,600", "--visit", "100", "--exptime", "60", "--overhead", "60"],
-        "--visit",
-    ),
-    (["--instruments-file", "missing.yaml"], "--instruments-file"),
-    (["--top", "3"], "nosuch.ecsv"),  # the source itself is missing (see the test)
-]
-
-
-@pytest.mark.parametrize(("extra", "blame"), RANK_BAD)
-def test_population_rank_checks_everything_before_making_its_folder(
-    tmp_path: Path, extra: list[str], blame: str
-) -> None:
-    out = tmp_path / "r" / "deeper"
-    source = str(POP) if blame != "nosuch.ecsv" else str(tmp_path / "nosuch.ecsv")
-    line = refused("population", "rank", source, "--out-dir", str(out), *extra)
-    assert blame in line
-    assert list(tmp_path.iterdir()) == []
-
-
-@pytest.mark.parametrize(
-    ("extra", "blame"),
-    [
-        (["--walkers", "2"], "--walkers: expected a whole number in [12,"),
-        (["--steps", "0"], "--steps"),
-    ],
-)
-def test_population_simulate_option_errors_come_before_the_run(
-    tmp_path: Path, extra: list[str], blame: str
-) -> None:
-    args = ["population", "simulate", str(POP), "-o", str(tmp_path / "s.ecsv")]
-    line = refused(*args, "--out-dir", str(tmp_path / "sd"), *extra)
-    assert blame in line
-    assert list(tmp_path.iterdir()) == []
-
-
 def test_instruments_file_without_instrument_is_refused(tmp_path: Path) -> None:
     line = refused(
         "plan", str(HM), "--site", "paranal", "--night", "2040-02-15",
@@ -214,15 +136,6 @@ def test_bad_value_in_an_instruments_file_is_named_before_a_missing_one(tmp_path
         "--instrument", "myspec", "--instruments-file", str(path),
     )  # fmt: skip
     assert "readout_s: expected a number" in line and "got -5" in line
-
-
-@pytest.mark.parametrize("option", ["p", "pdot", "t0", "phase", "f-rel", "fdot-rel"])
-@pytest.mark.parametrize("value", ["-1", "-1e-30", "inf", "1e140"])
-def test_feasibility_refuses_negative_or_meaningless_optical_sigmas(
-    option: str, value: str
-) -> None:
-    line = refused("feasibility", str(ECC), f"--optical-sigma-{option}", value)
-    assert f"--optical-sigma-{option}: expected a number in [0, " in line
 
 
 def test_numbers_in_messages_are_written_as_users_write_them() -> None:

@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 import pytest
-from support.targets import _random_targets
+from support.targets import random_targets
 
 import ucbplan.core.validity_apsidal as ha
 from ucbplan.core.constants import DAY_S, YEAR_S
@@ -27,7 +27,7 @@ ANCHORS = [(0.0, math.pi), (math.pi / 2,), (1.0,)]
 def _precessing(n: int, seed: int, e_max: float) -> tuple[np.ndarray, ...]:
     """Eccentric targets with ω̇ ≠ 0 (P_aps from ~2 d to ~20 yr, both signs), e up to e_max,
     σ_e from 1e-4 to 1e-2 and σ_ω̇ from 1e-12 to 1e-9 rad/s on the test_validity_poly targets."""
-    pars, covs, t_obs, thr = _random_targets(n, seed)
+    pars, covs, t_obs, thr = random_targets(n, seed)
     rng = np.random.default_rng(seed + 1000)
     e = e_max * rng.random(n) ** 2
     om = rng.uniform(0, 2 * math.pi, n)
@@ -74,7 +74,7 @@ def test_matches_grid(direction: int, anchor: tuple[float, ...]) -> None:
 @pytest.mark.slow
 def test_benchmark_targets_match_grid() -> None:
     """The benchmark's precessing rows (P_aps ≈ 48 d): within 0.1 % of the grid (in fact 1e-6)."""
-    pars, covs, t_obs, thr = _random_targets(400, seed=3)
+    pars, covs, t_obs, thr = random_targets(400, seed=3)
     ecc = pars[:, 4] != 0
     pars, covs, t_obs, thr = pars[ecc], covs[ecc], t_obs[ecc], thr[ecc]
     pars[:, 6] = 1.5e-6

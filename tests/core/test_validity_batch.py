@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from support.targets import _random_targets, ztf_j1539_doc
+from support.targets import random_targets, ztf_j1539_doc
 
 from ucbplan.core.forecast import horizon_table, two_sided
 from ucbplan.core.validity_batch import horizon_columns
@@ -54,7 +54,7 @@ def test_a_row_is_the_same_alone_or_in_a_batch() -> None:
     roots of all α are found in one stacked pass, the Newton rows leave as they converge and the
     window search keeps only the points some row needs (random circular, eccentric, timing-like
     targets and thresholds from tests/core/test_validity_poly.py, one call each vs one batch)."""
-    pars, covs, t_obs, thr = _random_targets(40, 7)
+    pars, covs, t_obs, thr = random_targets(40, 7)
     k_eff = 15.0 / thr  # a spread of tolerances, a few above π (no window)
     kw = {"alphas": (0.3, 1.0, 2.0), "anchors": ("quadrature", "zero-crossing")}
     batch = horizon_columns(pars, covs, t_obs, 15.0, k_eff, two_sided=t_obs == 0, **kw)

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from support.targets import _random_targets
+from support.targets import random_targets
 
 from ucbplan.core.constants import YEAR_S
 from ucbplan.core.forecast import AFTER, BEFORE, HORIZON_CAP_S, anchor_sigma_u, t_valid_batch
@@ -20,7 +20,7 @@ from ucbplan.errors import UcbplanError
 @pytest.mark.parametrize("anchor", [(0.0, math.pi), (math.pi / 2,), (1.0,)])
 def test_analytic_matches_grid(direction: int, anchor: tuple[float, ...]) -> None:
     """T_valid from the roots equals the refined grid search within 1e-6 (goal: 0.1 %)."""
-    pars, covs, t_obs, thr = _random_targets(400, seed=11)
+    pars, covs, t_obs, thr = random_targets(400, seed=11)
     assert not oscillating(pars, covs).any()
     got = t_valid_batch(pars, covs, t_obs, thr, anchor, 1, direction)
     ref = t_valid_batch(pars, covs, t_obs, thr, anchor, 1, direction, method="grid")
@@ -30,7 +30,7 @@ def test_analytic_matches_grid(direction: int, anchor: tuple[float, ...]) -> Non
 
 def test_polynomial_equals_sigma_u() -> None:
     """The coefficients reproduce σ_u² of the Jacobian at the anchor (rel. 1e-10)."""
-    pars, covs, t_obs, _ = _random_targets(20, seed=3)
+    pars, covs, t_obs, _ = random_targets(20, seed=3)
     x = np.linspace(0.0, 1.0, 9)
     cap = 10 * YEAR_S
     coef = sigma2_coefficients(pars, covs, t_obs / 2, cap, 0.3)

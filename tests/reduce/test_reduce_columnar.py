@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from support.reduce import JD, _same
+from support.reduce import JD, assert_same_velocities
 
 from ucbplan.errors import VelocityFileError
 from ucbplan.reduce import columnar
@@ -70,7 +70,7 @@ def test_numpy_reader_equals_the_strict_reader(
     p = tmp_path / "v.csv"
     p.write_bytes(text.encode())
     assert _numpy_read(p) is numpy_path
-    _same(read_velocities(p), _strict(p, monkeypatch))
+    assert_same_velocities(read_velocities(p), _strict(p, monkeypatch))
 
 
 @pytest.mark.parametrize(
@@ -92,7 +92,7 @@ def test_bad_plain_files_get_the_strict_readers_message(
     p.write_text(HEADER + body, encoding="utf-8")
     assert not _numpy_read(p)
     if needle is None:
-        _same(read_velocities(p), _strict(p, monkeypatch))
+        assert_same_velocities(read_velocities(p), _strict(p, monkeypatch))
         return
     with pytest.raises(VelocityFileError, match=needle.replace("(", r"\(").replace(")", r"\)")):
         read_velocities(p)
@@ -115,7 +115,7 @@ def test_random_number_texts_read_as_float_does(
     p = tmp_path / "v.csv"
     p.write_text(HEADER + body, encoding="utf-8")
     assert _numpy_read(p)
-    _same(read_velocities(p), _strict(p, monkeypatch))
+    assert_same_velocities(read_velocities(p), _strict(p, monkeypatch))
 
 
 def _sessions_file(path: Path, comment_chars: int) -> Path:

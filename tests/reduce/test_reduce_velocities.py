@@ -6,7 +6,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from support.reduce import HEADER, JD, _ecsv, _same, _write
+from support.reduce import (
+    HEADER,
+    JD,
+    assert_same_velocities,
+    write_velocity_ecsv,
+    write_velocity_file,
+)
 from support.reduce_synth import make_target
 
 from ucbplan.errors import VelocityFileError
@@ -15,7 +21,7 @@ from ucbplan.reduce.velocities import check_validity, read_velocities
 
 def test_reads_sb2_csv_with_comments_and_sessions(tmp_path: Path) -> None:
     """SB2 CSV: TDB times to 1e-9 d, windows, velocities and session labels read exactly."""
-    p = _write(
+    p = write_velocity_file(
         tmp_path,
         "# comment\n" + HEADER + f"{JD + 0.1},30,100.5,15,-80,14,A\n"
         f"{JD + 0.2},30,-100,15,90,14,B\n",
@@ -33,7 +39,7 @@ def test_reads_sb2_csv_with_comments_and_sessions(tmp_path: Path) -> None:
 def test_reads_sb1_mjd_and_lambda_k_and_auto_sessions(tmp_path: Path) -> None:
     """SB1 with mjd_tdb and lambda_k; sessions split at gaps > 0.5 d."""
     mjd = JD - 2400000.5
-    p = _write(
+    p = write_velocity_file(
         tmp_path,
         f"mjd_tdb,lambda_k,v,sigma_v\n{mjd},0.97,1,2\n{mjd + 0.01},0.97,1,2\n{mjd + 3},0.97,1,2\n",
     )
@@ -66,15 +72,17 @@ def test_validity_window(tmp_path: Path) -> None:
     """Times before the LISA start or > 20 yr after its end are rejected with the row number."""
     t = make_target()
     start_jd = t.t_start.tdb.jd
-    ok = _write(tmp_path, HEADER + f"{JD},30,1,15,1,15,A\n", "ok.csv")
+    ok = write_velocity_file(tmp_path, HEADER + f"{JD},30,1,15,1,15,A\n", "ok.csv")
     tau = check_validity(read_velocities(ok), t)
     assert tau[0] > 0.5 * t.t_obs_s
-    early = _write(
+    early = write_velocity_file(
         tmp_path, HEADER + f"{JD},30,1,15,1,15,A\n{start_jd - 1},30,1,15,1,15,A\n", "early.csv"
     )
     with pytest.raises(VelocityFileError, match=r"row 2: .*before the LISA observation start"):
         check_validity(read_velocities(early), t)
-    late = _write(tmp_path, HEADER + f"{JD + 365.25 * 25},30,1,15,1,15,A\n", "late.csv")
+    late = write_velocity_file(
+        tmp_path, HEADER + f"{JD + 365.25 * 25},30,1,15,1,15,A\n", "late.csv"
+    )
     with pytest.raises(VelocityFileError, match=r"row 1: .*more than 20 yr"):
         check_validity(read_velocities(late), t)
 
@@ -106,7 +114,7 @@ def test_latin1_is_refused_with_the_fix(tmp_path: Path) -> None:
 
 
 def test_duplicate_ecsv_columns_differing_in_case_are_refused(tmp_path: Path) -> None:
-    p = _ecsv(tmp_path, [f"{JD} 1 15 30 2"], "bjd_tdb v sigma_v exptime_s V")
+    p = write_velocity_ecsv(tmp_path, [f"{JD} 1 15 30 2"], "bjd_tdb v sigma_v exptime_s V")
     with pytest.raises(VelocityFileError, match="column 'v': appears twice"):
         read_velocities(p)
 
@@ -121,7 +129,7 @@ def _reduce(path: Path) -> object:
 @pytest.mark.parametrize("n_rows", [1])
 def test_too_few_spectra_is_one_line_error(tmp_path: Path, n_rows: int) -> None:
     """One spectrum cannot fit γ and K (it was a ValueError traceback)."""
-    p = _write(tmp_path, HEADER + "".join(ROWS[:n_rows]))
+    p = write_velocity_file(tmp_path, HEADER + "".join(ROWS[:n_rows]))
     with pytest.raises(VelocityFileError, match="at least 2 spectra") as exc:
         _reduce(p)
     assert str(p) in str(exc.value)
@@ -129,7 +137,7 @@ def test_too_few_spectra_is_one_line_error(tmp_path: Path, n_rows: int) -> None:
 
 def test_spectra_at_one_phase_are_one_line_error(tmp_path: Path) -> None:
     """Three spectra at the same time: F̄ does not vary, K is undetermined."""
-    p = _write(tmp_path, HEADER + "".join(ROWS[0] for _ in range(3)))
+    p = write_velocity_file(tmp_path, HEADER + "".join(ROWS[0] for _ in range(3)))
     with pytest.raises(VelocityFileError, match="same orbital phase"):
         _reduce(p)
 
@@ -138,14 +146,14 @@ def test_spectra_at_one_phase_are_one_line_error(tmp_path: Path) -> None:
 def test_window_as_long_as_the_orbit_is_refused(tmp_path: Path, window: str) -> None:
     """exptime_s ≥ P_b (238 s) makes Λ_K ≤ 0: K1 came out as −1e7 km/s with exit 0."""
     rows = [r.replace(",30,", f",{window},", 1) if k == 2 else r for k, r in enumerate(ROWS)]
-    p = _write(tmp_path, HEADER + "".join(rows))
+    p = write_velocity_file(tmp_path, HEADER + "".join(rows))
     with pytest.raises(VelocityFileError, match=r"row 3, column 'exptime_s'.*orbital period"):
         _reduce(p)
 
 
 def test_two_spectra_at_different_phases_reduce(tmp_path: Path) -> None:
     """Two spectra are the minimum (the two-spectrum quadrature technique): a result, no error."""
-    p = _write(tmp_path, HEADER + "".join(ROWS[:2]))
+    p = write_velocity_file(tmp_path, HEADER + "".join(ROWS[:2]))
     red = _reduce(p)
     assert np.isfinite(red.fits[0].K)  # type: ignore[attr-defined]
 
@@ -158,7 +166,7 @@ def test_swapped_star_gives_warning_not_nan_masses(tmp_path: Path) -> None:
         c = r.split(",")
         c[4] = f"{-float(c[4]):.3f}"  # star 2 moving like star 1
         flipped.append(",".join(c))
-    red = _reduce(_write(tmp_path, HEADER + "".join(flipped)))
+    red = _reduce(write_velocity_file(tmp_path, HEADER + "".join(flipped)))
     assert "M1" not in red.summaries  # type: ignore[attr-defined]
     assert any("K =" in w and "not computed" in w for w in red.warnings)  # type: ignore[attr-defined]
 
@@ -199,8 +207,8 @@ def test_columnar_reader_equals_the_strict_reader(
         .encode()
     )
     assert vel._fast_csv(p) is not None  # the columnar path is the one taken
-    _same(*_both_readers(p, monkeypatch))
-    auto = _write(
+    assert_same_velocities(*_both_readers(p, monkeypatch))
+    auto = write_velocity_file(
         tmp_path,
         HEADER.replace(",session", "")
         + "".join(
@@ -208,7 +216,7 @@ def test_columnar_reader_equals_the_strict_reader(
         ),
     )
     fast, strict = _both_readers(auto, monkeypatch)
-    _same(fast, strict)
+    assert_same_velocities(fast, strict)
     assert len(set(fast.session)) > 1  # type: ignore[attr-defined]
 
 
@@ -227,7 +235,7 @@ def test_columnar_reader_leaves_bad_files_to_the_strict_reader(
 ) -> None:
     """A file the columnar reader cannot take whole goes to the strict reader: its one-line
     message names the row and column, and a numeric-looking session label stays text."""
-    p = _write(tmp_path, HEADER + body)
+    p = write_velocity_file(tmp_path, HEADER + body)
     if needle is None:
         assert read_velocities(p).session == ("01", "1")
         return

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 from support.bad_velocities import CSV_TABLES, CSV_TABLES_MORE, ECSV_ROWS
-from support.reduce import _ecsv, _write
+from support.reduce import write_velocity_ecsv, write_velocity_file
 
 from ucbplan.errors import VelocityFileError
 from ucbplan.reduce.velocities import read_velocities
@@ -16,7 +16,7 @@ from ucbplan.reduce.velocities import read_velocities
 @pytest.mark.parametrize("text, needle", CSV_TABLES)
 def test_malformed_tables_raise_one_line_errors(tmp_path: Path, text: str, needle: str) -> None:
     """Each malformed table raises VelocityFileError naming the file and the row/column."""
-    p = _write(tmp_path, text)
+    p = write_velocity_file(tmp_path, text)
     with pytest.raises(VelocityFileError) as exc:
         read_velocities(p)
     msg = str(exc.value)
@@ -27,13 +27,13 @@ def test_malformed_tables_raise_one_line_errors(tmp_path: Path, text: str, needl
 def test_ecsv_blank_and_bad_cells_are_refused(tmp_path: Path, body: list[str], needle: str) -> None:
     """A blank ECSV cell is masked by astropy; it used to be read as a number (0.0 or NaN)."""
     with pytest.raises(VelocityFileError) as exc:
-        read_velocities(_ecsv(tmp_path, body))
+        read_velocities(write_velocity_ecsv(tmp_path, body))
     assert needle in str(exc.value)
 
 
 @pytest.mark.parametrize("text, needle", CSV_TABLES_MORE)
 def test_more_malformed_tables(tmp_path: Path, text: str, needle: str) -> None:
-    p = _write(tmp_path, text)
+    p = write_velocity_file(tmp_path, text)
     with pytest.raises(VelocityFileError) as exc:
         read_velocities(p)
     msg = str(exc.value)

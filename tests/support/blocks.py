@@ -47,12 +47,12 @@ def _make_block(i: int, alt: bool) -> Block:
     )
 
 
-def _block(i: int, alt: bool = True) -> Block:
+def make_block(i: int, alt: bool = True) -> Block:
     with offline():
         return _make_block(i, alt)
 
 
-def _meta() -> dict:
+def block_meta() -> dict:
     return make_meta(
         site={"name": "Paranal", "lon_deg": -70.4, "lat_deg": -24.6, "height_m": 2635.0},
         targets=[{"name": "HM Cnc", "file": "catalogs/hm-cnc-simulated.yaml", "sha256": "0" * 64}],

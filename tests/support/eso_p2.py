@@ -20,7 +20,7 @@ TEMPLATE_KEYWORDS = ("DET.WIN1.UIT1", "SEQ.NEXPO", "TEL.AG.GUIDESTAR")
 p2api_module = pytest.importorskip("p2api.p2api")
 
 
-class _P2:
+class P2State:
     """State of the fake p2: OBs, their versions and every request received."""
 
     def __init__(self) -> None:
@@ -31,7 +31,7 @@ class _P2:
         self.templates: dict[int, tuple[int, dict[str, Any]]] = {}
 
 
-def _handler(state: _P2) -> type[BaseHTTPRequestHandler]:
+def _handler(state: P2State) -> type[BaseHTTPRequestHandler]:
     class Handler(BaseHTTPRequestHandler):
         def log_message(self, *args: Any) -> None:  # quiet
             pass
@@ -155,8 +155,8 @@ science:
 
 
 @pytest.fixture
-def fake_p2(monkeypatch: pytest.MonkeyPatch) -> Iterator[_P2]:
-    state = _P2()
+def fake_p2(monkeypatch: pytest.MonkeyPatch) -> Iterator[P2State]:
+    state = P2State()
     server = ThreadingHTTPServer(("127.0.0.1", 0), _handler(state))
     thread = threading.Thread(target=server.serve_forever, daemon=True)
     thread.start()

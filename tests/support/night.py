@@ -78,7 +78,7 @@ def seconds_of(text: str) -> int:
     return 3600 * h + 60 * mi + s
 
 
-class _Reader(HTMLParser):
+class SheetReader(HTMLParser):
     """Reads a night sheet (the written file or a browser's DOM dump): per <section> its h2,
     images and visits (h3, the assistant's lines, rows with their attributes and cells), and the
     text and attributes of every element with an id (the clock)."""

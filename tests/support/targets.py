@@ -10,7 +10,7 @@ import numpy as np
 from ucbplan.core.constants import YEAR_S
 
 
-def _random_targets(n: int, seed: int) -> tuple[np.ndarray, ...]:
+def random_targets(n: int, seed: int) -> tuple[np.ndarray, ...]:
     """Circular and (ω̇ = 0) eccentric targets with correlated covariances; 30 % timing-like."""
     rng = np.random.default_rng(seed)
     f = 10 ** rng.uniform(-3.5, -2, n)

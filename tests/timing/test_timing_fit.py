@@ -21,6 +21,7 @@ import typer
 import yaml
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
+from support.bad_eclipse_times import BAD_FIT_OPTIONS, GOOD, times_table
 
 from ucbplan.cli import timing as timing_cli
 from ucbplan.cli._flags import cli_message
@@ -421,122 +422,7 @@ def test_outlier_reported_and_only_clip_drops_it(tmp_path: Path) -> None:
 
 
 # ---------------------------------------------------------------------------------------------
-# bad input: one line, the row and column named
-
-HEADER = "bjd_tdb,sigma_s,kind,cycle\n"
-GOOD = [
-    "2458305.6827886,2,primary,0",
-    "2458305.6875891,2,primary,1",
-    "2458305.6923896,2,primary,2",
-    "2458305.6971901,2,primary,3",
-]
-
-
-def _table(rows: list[str], header: str = HEADER) -> str:
-    return header + "\n".join(rows) + "\n"
-
-
-BAD_TABLES = [
-    ("empty", "", "header"),
-    ("only header", HEADER, "no data rows"),
-    ("no sigma", _table([r.split(",", 1)[0] for r in GOOD], "bjd_tdb\n"), "sigma_s"),
-    ("unknown column", _table(GOOD, "bjd_tdb,sigma,kind,cycle\n"), "did you mean 'sigma_s'"),
-    ("two time columns", _table(GOOD, "bjd_tdb,bmjd_tdb,kind,cycle\n"), "exactly one time"),
-    ("duplicate column", _table(GOOD, "bjd_tdb,sigma_s,cycle,cycle\n"), "appears twice"),
-    ("blank epoch", _table([*GOOD[:2], ",2,primary,2"]), "row 3, column 'bjd_tdb'"),
-    ("text epoch", _table([*GOOD[:2], "tomorrow,2,primary,2"]), "row 3, column 'bjd_tdb'"),
-    ("MJD in bjd column", _table([*GOOD[:2], "58305.18,2,primary,2"]), "bmjd_tdb"),
-    ("nan epoch", _table([*GOOD[:2], "nan,2,primary,2"]), "row 3"),
-    (
-        "negative sigma",
-        _table([*GOOD[:2], "2458305.69239,-2,primary,2"]),
-        "row 3, column 'sigma_s'",
-    ),
-    ("zero sigma", _table([*GOOD[:2], "2458305.69239,0,primary,2"]), "positive"),
-    ("inf sigma", _table([*GOOD[:2], "2458305.69239,inf,primary,2"]), "row 3"),
-    ("bad kind", _table([*GOOD[:2], "2458305.69239,2,tertiary,2"]), "row 3, column 'kind'"),
-    ("half cycle primary", _table([*GOOD[:2], "2458305.69239,2,primary,2.5"]), "integer"),
-    ("integer cycle secondary", _table([*GOOD[:2], "2458305.69239,2,secondary,2"]), "half-integer"),
-    (
-        "cycle not a number",
-        _table([*GOOD[:2], "2458305.69239,2,primary,x"]),
-        "row 3, column 'cycle'",
-    ),
-    ("short row", _table([*GOOD[:2], "2458305.69239,2"]), "row 3"),
-    (
-        "non-monotonic cycles",
-        _table([GOOD[0], GOOD[1].replace(",1", ",5"), GOOD[2], GOOD[3]]),
-        "rows 2 and 3",
-    ),
-]
-
-
-@pytest.mark.parametrize(("text", "expect"), [pytest.param(t, e, id=i) for i, t, e in BAD_TABLES])
-def test_bad_table_is_one_line_error(tmp_path: Path, text: str, expect: str) -> None:
-    path = tmp_path / "times.csv"
-    path.write_text(text, encoding="utf-8")
-    with pytest.raises(InputFileError) as info:
-        read_times(path)
-    msg = one_line(info.value)
-    assert msg.startswith("times.csv: ") and expect in msg, msg
-
-
-def test_fewer_points_than_parameters(tmp_path: Path) -> None:
-    path = tmp_path / "times.csv"
-    path.write_text(_table(GOOD[:2]), encoding="utf-8")
-    with pytest.raises(InputError, match="fewer than the 3 parameters") as info:
-        fit_times(read_times(path))
-    one_line(info.value)
-    path.write_text(_table([GOOD[0], GOOD[0], GOOD[1]]), encoding="utf-8")
-    with pytest.raises(InputError, match="2 distinct cycles"):
-        fit_times(read_times(path))
-
-
-def test_file_level_errors(tmp_path: Path) -> None:
-    with pytest.raises(UcbplanError, match="not found"):
-        read_times(tmp_path / "missing.csv")
-    latin = tmp_path / "latin.csv"
-    latin.write_bytes(_table(GOOD).replace("primary", "prim\xe4ry").encode("latin-1"))
-    with pytest.raises(UcbplanError, match="UTF-8"):
-        read_times(latin)
-    bom = tmp_path / "bom.csv"
-    bom.write_bytes(b"\xef\xbb\xbf" + _table(GOOD).encode())
-    assert read_times(bom).n == 4
-    ecsv = tmp_path / "t.ecsv"
-    ecsv.write_text(
-        "# %ECSV 1.0\n# ---\n# datatype:\n# - {name: bjd_tdb, datatype: float64}\n"
-        "# - {name: sigma_s, unit: m, datatype: float64}\n# schema: astropy-2.0\n"
-        "bjd_tdb sigma_s\n2458305.68 1\n2458305.69 1\n",
-        encoding="utf-8",
-    )
-    with pytest.raises(InputFileError, match="time unit"):
-        read_times(ecsv)
-    ecsv.write_text(
-        ecsv.read_text().replace("unit: m", "unit: s").replace("2458305.69 1", '2458305.69 ""')
-    )
-    with pytest.raises(InputFileError, match="row 2"):
-        read_times(ecsv)
-
-
-@pytest.mark.parametrize(
-    ("doc", "expect"),
-    [
-        ("name: x\n", "timing: missing"),
-        ("timing: {t0: 'BJD_TDB 2458305.68'}\n", "timing.period"),
-        ("timing: {period: '-4 s'}\n", "positive period"),
-        ("timing: {period: '414 m'}\n", "period like"),
-        ("timing: {period: 414, t0: 'HJD 2458305.68'}\n", "BJD_TDB"),
-        ("timing: {period: 414, t0: 2458305.68}\n", "labelled"),
-        ("timing: {period: 414, t0: 'BJD_UTC 2458305.68'}\n", "convert"),
-        ("timing: {period: 414, pdot: fast}\n", "timing.pdot"),
-    ],
-)
-def test_bad_initial_file(tmp_path: Path, doc: str, expect: str) -> None:
-    path = tmp_path / "init.yaml"
-    path.write_text(doc, encoding="utf-8")
-    with pytest.raises(InputError) as info:
-        read_initial(path)
-    assert expect in one_line(info.value)
+# period guesses (the bad ones: tests/timing/test_eclipse_times_bad_input.py)
 
 
 @pytest.mark.parametrize(
@@ -551,13 +437,6 @@ def test_bad_initial_file(tmp_path: Path, doc: str, expect: str) -> None:
 def test_period_guess_digits(text: str, value: float, sigma: float) -> None:
     g = period_guess(text)
     assert g.period_s == pytest.approx(value) and g.sigma_period_s == pytest.approx(sigma)
-
-
-@pytest.mark.parametrize("text", ["", "nan", "-1 s", "0", "1e400", "4 parsecs", "x" * 5000])
-def test_bad_period_guess(text: str) -> None:
-    with pytest.raises(InputError) as info:
-        period_guess(text)
-    assert one_line(info.value).startswith("period: ")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -667,21 +546,7 @@ def test_plot_alone_and_never_overwritten(
     assert (tmp_path / "oc.pdf").read_bytes()[:5] == b"%PDF-"
 
 
-@pytest.mark.parametrize(
-    ("args", "expect"),
-    [
-        (["-o", "t.yaml"], "needs name and sky"),
-        (["-o", "t.yaml", "--name", "X", "--ra", "25h", "--dec", "0"], "--ra"),
-        (["-o", "t.yaml", "--name", "X", "--ra", "10"], "give both"),
-        # the library names its parameter; the command line prints the flag (cli/_flags.py)
-        (["--terms", "5"], "terms: "),
-        (["--clip", "0.5"], "clip: "),
-        (["--clip", "nan"], "clip: "),
-        (["-o", "t.json", "--format", "yaml"], "suffix"),
-        (["--period", "414 s", "--initial", "x.yaml"], "not both"),
-        (["-o", "same.png", "--format", "json", "--plot", "same.png"], "two different"),
-    ],
-)
+@pytest.mark.parametrize(("args", "expect"), BAD_FIT_OPTIONS)
 def test_bad_options(
     tmp_path: Path, campaign: tuple[Path, np.ndarray], args: list[str], expect: str
 ) -> None:
@@ -779,7 +644,7 @@ def test_mutated_tables_succeed_or_fail_in_one_line(
     tmp_path: Path, row: int, col: int, value: str, counted: bool
 ) -> None:
     """A valid table with one cell replaced: a fit, or a one-line UcbplanError, nothing else."""
-    lines = _table(GOOD).splitlines()
+    lines = times_table(GOOD).splitlines()
     lines = [lines[0], *lines[1:], "2458305.7019906,2,secondary,3.5"]
     cells = lines[row].split(",")
     cells[col] = value

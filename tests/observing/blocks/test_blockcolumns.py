@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 from astropy.table import MaskedColumn, Table
 from astropy.time import Time
-from support.blocks import _block, _meta
+from support.blocks import block_meta, make_block
 
 from ucbplan.io import dump_json
 from ucbplan.observing.blocks import ecsv_header as ecsvheader
@@ -177,7 +177,7 @@ def _cells(block: Block) -> list[object]:
 
 
 def test_columns_round_trip_to_the_same_records_and_table() -> None:
-    blocks = [_block(i, alt=i % 3 != 0) for i in range(7)]
+    blocks = [make_block(i, alt=i % 3 != 0) for i in range(7)]
     for k in range(0, 7, 2):  # a block with every number known compares equal as a whole
         blocks[k] = replace(blocks[k], smear_kms=1.25, delta_kappa=0.1, sigma_v_kms=3.0)
     with offline():
@@ -187,9 +187,9 @@ def test_columns_round_trip_to_the_same_records_and_table() -> None:
         assert listed[2] == blocks[2] and listed[4:5] == blocks[4:5]
         assert listed != blocks[:-1] and BlockList(cols.take(np.arange(1))) == blocks[:1]
         assert block_columns(listed) is cols
-        a, b = blocks_to_table(blocks, _meta()), blocks_to_table(listed, _meta())
+        a, b = blocks_to_table(blocks, block_meta()), blocks_to_table(listed, block_meta())
         joined = BlockColumns.concat([cols.take(np.arange(3)), cols.take(np.arange(3, 7))])
-        c = blocks_to_table(BlockList(joined), _meta())
+        c = blocks_to_table(BlockList(joined), block_meta())
     for table in (b, c):
         assert table.colnames == a.colnames
         assert all(_ours(table[[n]], "csv") == _ours(a[[n]], "csv") for n in a.colnames)
@@ -198,7 +198,7 @@ def test_columns_round_trip_to_the_same_records_and_table() -> None:
 
 
 def test_time_order_is_the_stable_sort_of_the_records() -> None:
-    blocks = [_block(i) for i in (3, 1, 2, 1, 0)]
+    blocks = [make_block(i) for i in (3, 1, 2, 1, 0)]
     with offline():
         cols = BlockColumns.from_blocks(blocks)
         got = BlockList(cols.take(cols.time_order()))

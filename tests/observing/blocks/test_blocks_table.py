@@ -9,7 +9,7 @@ from pathlib import Path
 import astropy.units as u
 import numpy as np
 import pytest
-from support.blocks import _block, _meta
+from support.blocks import block_meta, make_block
 
 from ucbplan.errors import InputFileError
 from ucbplan.observing.blocks.block import Block
@@ -23,7 +23,7 @@ pytestmark = pytest.mark.filterwarnings("ignore::erfa.ErfaWarning")
 
 
 def test_required_columns_first_and_iso_precision() -> None:
-    table = blocks_to_table([_block(0), _block(1, alt=False)], _meta())
+    table = blocks_to_table([make_block(0), make_block(1, alt=False)], block_meta())
     assert tuple(table.colnames[: len(REQUIRED_COLUMNS)]) == REQUIRED_COLUMNS
     # ms precision for UTC (23 chars), us for TDB (26 chars).
     assert table["t_mid_utc"][0] == "2040-02-16T02:00:00.000"
@@ -38,7 +38,7 @@ def test_required_columns_first_and_iso_precision() -> None:
 
 
 def test_ecsv_round_trip(tmp_path: Path) -> None:
-    table = blocks_to_table([_block(0), _block(1, alt=False)], _meta())
+    table = blocks_to_table([make_block(0), make_block(1, alt=False)], block_meta())
     path = tmp_path / "blocks.ecsv"
     with path.open("w") as handle:
         write_table(table, handle, "ecsv")
@@ -53,7 +53,7 @@ def test_ecsv_round_trip(tmp_path: Path) -> None:
 
 
 def test_empty_table_has_all_columns(tmp_path: Path) -> None:
-    table = blocks_to_table([], _meta())
+    table = blocks_to_table([], block_meta())
     assert tuple(table.colnames[: len(REQUIRED_COLUMNS)]) == REQUIRED_COLUMNS
     path = tmp_path / "empty.ecsv"
     with path.open("w") as handle:
@@ -62,7 +62,7 @@ def test_empty_table_has_all_columns(tmp_path: Path) -> None:
 
 
 def test_json_rows_and_csv() -> None:
-    table = blocks_to_table([_block(0)], _meta())
+    table = blocks_to_table([make_block(0)], block_meta())
     buf = io.StringIO()
     write_table(table, buf, "json")
     rows = json.loads(buf.getvalue())
@@ -118,7 +118,7 @@ def test_column_list_covers_every_block_field_and_reads_back_typed(tmp_path: Pat
     assert len({c.name for c in COLUMNS}) == len(COLUMNS)
     assert {f.name for f in fields(Block)} <= {c.attribute for c in COLUMNS}
     assert (*REQUIRED_COLUMNS, *EXTRA_COLUMNS) == tuple(c.name for c in COLUMNS)
-    table = blocks_to_table([_block(0)], _meta())
+    table = blocks_to_table([make_block(0)], block_meta())
     path = tmp_path / "b.ecsv"
     with path.open("w") as handle:
         write_table(table, handle, "ecsv")

@@ -350,11 +350,11 @@ def test_meta_copied_as_deepcopy_copies_it() -> None:
 
 def test_plan_table_header_uses_libyaml_when_safe(monkeypatch: pytest.MonkeyPatch) -> None:
     import yaml
-    from support.blocks import _block, _meta
+    from support.blocks import block_meta, make_block
     from yaml._yaml import CEmitter
 
     with offline():
-        table = tablemake.blocks_to_table([_block(i) for i in range(5)], _meta())
+        table = tablemake.blocks_to_table([make_block(i) for i in range(5)], block_meta())
     assert ecsvheader.header_safe(table)
     expected = _pyyaml_ecsv(table)
     dumpers = []

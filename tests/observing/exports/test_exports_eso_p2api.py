@@ -13,7 +13,7 @@ from typing import Any
 
 import pytest
 from support.cli import run_cli
-from support.eso_p2 import _P2, TEMPLATES_YAML
+from support.eso_p2 import TEMPLATES_YAML, P2State
 from support.exports import fixture_table
 
 from ucbplan.errors import UcbplanError
@@ -33,7 +33,7 @@ def _export() -> tuple[bytes, dict[str, Any]]:
     return content, json.loads(content)
 
 
-def test_p2api_creates_each_ob_with_its_body_and_window(fake_p2: _P2) -> None:
+def test_p2api_creates_each_ob_with_its_body_and_window(fake_p2: P2State) -> None:
     content, doc = _export()
     api = connect("demo", "52052", "secret")
     report = create_from_export(content, 42, dry_run=False, connection=api)
@@ -54,7 +54,7 @@ def test_p2api_creates_each_ob_with_its_body_and_window(fake_p2: _P2) -> None:
     assert [r["body"] for r in posts] == [{"itemType": "OB", "name": o["name"]} for o in doc["obs"]]
 
 
-def test_dry_run_sends_nothing_and_lists_what_it_would_create(fake_p2: _P2) -> None:
+def test_dry_run_sends_nothing_and_lists_what_it_would_create(fake_p2: P2State) -> None:
     content, doc = _export()
     report = create_from_export(content, 42)
     assert not fake_p2.requests
@@ -70,7 +70,7 @@ def test_dry_run_sends_nothing_and_lists_what_it_would_create(fake_p2: _P2) -> N
     )
 
 
-def test_a_p2_error_is_one_line_naming_what_was_created(fake_p2: _P2) -> None:
+def test_a_p2_error_is_one_line_naming_what_was_created(fake_p2: P2State) -> None:
     content, _ = _export()
     fake_p2.fail_on_ob = 1
     api = connect("demo", "52052", "secret")
@@ -81,12 +81,12 @@ def test_a_p2_error_is_one_line_naming_what_was_created(fake_p2: _P2) -> None:
     assert "not in a state to add OBs" in text and "HM_Cnc-001 (1000)" in text
 
 
-def test_bad_login_is_one_line(fake_p2: _P2) -> None:
+def test_bad_login_is_one_line(fake_p2: P2State) -> None:
     with pytest.raises(UcbplanError, match="login to demo as '52052' failed"):
         connect("demo", "52052", "wrong")
 
 
-def test_cli_create_is_a_dry_run_by_default(tmp_path: Path, fake_p2: _P2) -> None:
+def test_cli_create_is_a_dry_run_by_default(tmp_path: Path, fake_p2: P2State) -> None:
     blocks = tmp_path / "blocks.ecsv"
     fixture_table().write(blocks, format="ascii.ecsv")
     args = ["export", str(blocks), "--to", "eso-p2", "--acquisition", "600", "--create"]
@@ -100,7 +100,7 @@ def test_cli_create_is_a_dry_run_by_default(tmp_path: Path, fake_p2: _P2) -> Non
 
 
 def test_cli_creates_with_no_dry_run(
-    tmp_path: Path, fake_p2: _P2, monkeypatch: pytest.MonkeyPatch
+    tmp_path: Path, fake_p2: P2State, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     blocks = tmp_path / "blocks.ecsv"
     fixture_table().write(blocks, format="ascii.ecsv")
@@ -131,7 +131,7 @@ def _export_with_templates(tmp_path: Path, text: str = TEMPLATES_YAML) -> bytes:
 
 
 def test_templates_from_the_file_are_attached_with_the_block_exposures(
-    tmp_path: Path, fake_p2: _P2
+    tmp_path: Path, fake_p2: P2State
 ) -> None:
     content = _export_with_templates(tmp_path)
     doc = json.loads(content)
@@ -152,7 +152,9 @@ def test_templates_from_the_file_are_attached_with_the_block_exposures(
         )
 
 
-def test_a_keyword_the_template_lacks_is_an_error_not_dropped(tmp_path: Path, fake_p2: _P2) -> None:
+def test_a_keyword_the_template_lacks_is_an_error_not_dropped(
+    tmp_path: Path, fake_p2: P2State
+) -> None:
     content = _export_with_templates(tmp_path, TEMPLATES_YAML.replace("SEQ.NEXPO", "SEQ.NOPE"))
     api = connect("demo", "52052", "secret")
     with pytest.raises(UcbplanError, match=r"has no keyword SEQ\.NOPE"):

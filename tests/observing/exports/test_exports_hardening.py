@@ -1,4 +1,5 @@
-"""Bad blocks tables and awkward names: `export` answers in one line, never hangs or crashes.
+"""Bad blocks tables and awkward names: `export` answers in one line, never hangs or crashes. The
+cases are the blocks-table bad-input corpus, tests/support/bad_blocks.py.
 
 The blocks-table reader (blank cells, missing columns, encodings, non-files, ECSV/CSV/JSON), the
 target files named in a table's provenance (FIFOs, folders, missing or changed files), non-ASCII
@@ -10,7 +11,6 @@ from __future__ import annotations
 import contextlib
 import io
 import json
-import math
 import os
 import signal
 from collections.abc import Iterator
@@ -19,6 +19,16 @@ from pathlib import Path
 import icalendar
 import pytest
 from astropy.table import Table
+from support.bad_blocks import (
+    ASCII_FORMATS,
+    BAD_CELLS,
+    COLLIDING_NAMES,
+    EXPORT_OPTIONS,
+    PROVENANCE_KINDS,
+    ecsv_text,
+    replace_cell,
+    untrusted_files,
+)
 from support.cli import check_outcome, run_cli
 from support.exports import fixture_table, golden
 
@@ -53,12 +63,6 @@ def deadline(seconds: int) -> Iterator[None]:
         signal.signal(signal.SIGALRM, old)
 
 
-def _ecsv(table: Table) -> str:
-    buf = io.StringIO()
-    write_table(table, buf, "ecsv")
-    return buf.getvalue()
-
-
 def _one_line(exc: BaseException, *parts: str) -> str:
     text = str(exc)
     assert "\n" not in text and len(text) < 400, text
@@ -70,66 +74,20 @@ def _one_line(exc: BaseException, *parts: str) -> str:
 # ------------------------------------------------------------------------------ read_blocks
 
 
-def _replace_cell(text: str, row: int, column: str, value: str) -> str:
-    """ECSV text with one data cell replaced (space-separated, quoted cells kept whole)."""
-    import shlex
-
-    lines = text.splitlines()
-    first = next(i for i, ln in enumerate(lines) if not ln.startswith("#"))
-    names = shlex.split(lines[first])
-    cells = shlex.split(lines[first + 1 + row])
-    cells[names.index(column)] = value
-    lines[first + 1 + row] = " ".join(f'"{c}"' if not c or " " in c else c for c in cells)
-    return "\n".join(lines) + "\n"
-
-
-@pytest.mark.parametrize(
-    ("column", "value", "expected"),
-    [
-        ("sigma_t_s", "", "row 2, column sigma_t_s: expected a number in [0, 86400] s (blank"),
-        ("exptime_s", "", "row 2, column exptime_s: expected a number"),
-        ("target", "", "row 2, column target: expected a value (blank cell)"),
-        ("t_mid_utc", "", "row 2, column t_mid_utc: expected a value (blank cell)"),
-        ("t_start_utc", "9999-12-31T23:59:00", "row 2, column t_start_utc: expected an ISO time"),
-        ("t_end_utc", "2037-01-15T04:00:00", "row 2, column t_end_utc: expected a time after"),
-        ("sigma_t_s", "nan", "row 2, column sigma_t_s: expected a number in [0, 86400] s"),
-        ("sigma_t_s", "1e300", "row 2, column sigma_t_s: expected a number"),
-        ("ra_deg", "inf", "row 2, column ra_deg: expected a number in [0, 360] deg"),
-        ("n_exp", "0", "column n_exp"),
-        ("block_id", "HM_Cnc-001", "rows 1 and 2: block_id 'HM_Cnc-001' appears twice"),
-    ],
-)
+@pytest.mark.parametrize(("column", "value", "expected"), BAD_CELLS)
 def test_bad_cells_are_named_by_row_and_column(
     tmp_path: Path, column: str, value: str, expected: str
 ) -> None:
     path = tmp_path / "blocks.ecsv"
-    path.write_text(_replace_cell(_ecsv(fixture_table()), 1, column, value), encoding="utf-8")
+    path.write_text(replace_cell(ecsv_text(fixture_table()), 1, column, value), encoding="utf-8")
     with pytest.raises(InputFileError) as info:
         read_blocks(path)
     _one_line(info.value, expected)
 
 
 def test_reader_refuses_files_it_cannot_trust(tmp_path: Path) -> None:
-    text = _ecsv(fixture_table())
-    cases: dict[str, tuple[bytes | None, str]] = {
-        "latin.ecsv": (text.replace("HM Cnc", "HM Cnç").encode("latin-1"), "not UTF-8"),
-        "cut.ecsv": (text.encode()[:900], "not a readable ECSV blocks table"),
-        "nocol.ecsv": (
-            _ecsv(Table({"target": ["x"], "block_id": ["b"]})).encode(),
-            "lacks required columns anchor, u_star_rad",
-        ),
-        "bomb.ecsv": (
-            text.replace(
-                "# meta: !!omap\n",
-                "# meta: !!omap\n# - bomb: &a [1]\n# - b2: [" + ", ".join(["*a"] * 60) + "]\n",
-            ).encode(),
-            "more than 50 YAML aliases",
-        ),
-        "empty.csv": (b"", "empty file"),
-        "ragged.csv": (b"target,block_id\nx\n", "row 1: 1 cells for 2 columns"),
-        "rows.json": (b'{"target": 1}', "expected a JSON list of row objects"),
-        "bad.json": (b"[1, 2", "not valid JSON"),
-    }
+    text = ecsv_text(fixture_table())
+    cases = untrusted_files(text)
     for name, (data, message) in cases.items():
         path = tmp_path / name
         assert data is not None
@@ -154,7 +112,7 @@ def test_bom_csv_and_json_tables_export_like_ecsv(tmp_path: Path) -> None:
     table = fixture_table()
     table.meta = {}  # CSV and JSON carry no provenance; compare like with like
     bom = tmp_path / "bom.ecsv"
-    bom.write_bytes(b"\xef\xbb\xbf" + _ecsv(table).encode())
+    bom.write_bytes(b"\xef\xbb\xbf" + ecsv_text(table).encode())
     ref = {to: export_blocks(read_blocks(bom), to, OPTS).content for to in EXPORT_FORMATS}
     for fmt in ("csv", "json"):
         path = tmp_path / f"blocks.{fmt}"
@@ -182,7 +140,7 @@ def test_json_table_with_a_lone_surrogate_is_refused(tmp_path: Path) -> None:
 # ------------------------------------------------------------------- provenance target files
 
 
-@pytest.mark.parametrize("kind", ["fifo", "folder", "missing", "device", "changed", "not-a-path"])
+@pytest.mark.parametrize("kind", PROVENANCE_KINDS)
 def test_provenance_target_file_never_hangs(tmp_path: Path, kind: str) -> None:
     table = fixture_table()
     table.remove_column("vmag")
@@ -227,7 +185,7 @@ def test_export_cli_with_a_fifo_in_the_provenance(tmp_path: Path) -> None:
     os.mkfifo(tmp_path / "fifo.yaml")
     table.meta["targets"][0]["file"] = str(tmp_path / "fifo.yaml")
     blocks = tmp_path / "blocks.ecsv"
-    blocks.write_text(_ecsv(table), encoding="utf-8")
+    blocks.write_text(ecsv_text(table), encoding="utf-8")
     out = tmp_path / "list.txt"
     with deadline(30):
         code, err = run_cli(
@@ -263,7 +221,7 @@ def test_non_ascii_names_in_every_format(to: str) -> None:
         assert UNICODE_NAME in text or UNICODE_NAME.replace(" ", "\\ ") in text
 
 
-@pytest.mark.parametrize("to", ["keck-starlist", "ing-cat", "eso-p2"])
+@pytest.mark.parametrize("to", ASCII_FORMATS)
 def test_name_without_ascii_spelling_is_one_line(to: str) -> None:
     with pytest.raises(InputFileError) as info:
         export_blocks(_named("白矮星"), to, OPTS)
@@ -285,14 +243,7 @@ def test_latex_escapes_specials_and_drops_controls() -> None:
     assert "\x07" not in tex
 
 
-@pytest.mark.parametrize(
-    ("to", "message"),
-    [
-        ("ing-cat", "ING catalogue: targets 'HM Cnc' and 'HM_Cnc' both become 'HM_Cnc'"),
-        ("keck-starlist", "Keck starlist: targets 'HM Cnc' and 'HM_Cnc' both become 'HM_Cnc'"),
-        ("eso-p2", "ESO p2 target list: targets 'HM Cnc' and 'HM_Cnc' both become 'HM_Cnc'"),
-    ],
-)
+@pytest.mark.parametrize(("to", "message"), COLLIDING_NAMES)
 def test_names_colliding_after_sanitising_are_an_error(to: str, message: str) -> None:
     # ING silently dropped the second target (issue 15).
     table = fixture_table()
@@ -326,15 +277,7 @@ def test_long_eso_ob_names_stay_unique() -> None:
 
 
 def test_export_options_are_range_checked() -> None:
-    for kwargs, option in (
-        ({"tolerance_sigma": math.nan}, "tolerance_sigma:"),
-        ({"tolerance_sigma": 1e300}, "tolerance_sigma:"),
-        ({"tolerance_floor_s": -1.0}, "tolerance_floor:"),
-        ({"tolerance_floor_s": math.inf}, "tolerance_floor:"),
-        ({"acquisition_s": -5.0}, "acquisition:"),
-        ({"acquisition_s": 1e300}, "acquisition:"),  # was OverflowError in timedelta
-        ({"keck_rotmode": "vertical\nx"}, "rotmode:"),
-    ):
+    for kwargs, option in EXPORT_OPTIONS:
         with pytest.raises(UcbplanError) as info:
             ExportOptions(**kwargs)  # type: ignore[arg-type]
         _one_line(info.value, option)
@@ -342,7 +285,7 @@ def test_export_options_are_range_checked() -> None:
 
 def test_export_cli_format_rule(tmp_path: Path) -> None:
     blocks = tmp_path / "blocks.ecsv"
-    blocks.write_text(_ecsv(fixture_table()), encoding="utf-8")
+    blocks.write_text(ecsv_text(fixture_table()), encoding="utf-8")
     tex = tmp_path / "time.tex"
     args = ["export", str(blocks), "--to", "proposal", "--acquisition", "600"]
     code, err = run_cli([*args, "-o", str(tex)])

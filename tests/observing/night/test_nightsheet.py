@@ -18,7 +18,7 @@ from astropy import units as u
 from astropy.coordinates import AltAz, get_sun
 from astropy.table import Table, vstack
 from astropy.time import Time
-from support.night import _Reader
+from support.night import SheetReader
 from typer.testing import CliRunner
 
 from ucbplan.cli.app import app
@@ -223,7 +223,7 @@ def test_html_sheet_is_self_contained_and_says_what_to_do(
     path = tmp_path / "night.html"
     assert write_night_sheet(table, site, path) == 3
     text = path.read_text(encoding="utf-8")
-    reader = _Reader()
+    reader = SheetReader()
     reader.feed(text)
     assert [s["h2"] for s in reader.sections] == [f"Paranal, night of {n}" for n in NIGHTS]
     assert all(u.startswith("data:image/png;base64,") for u in reader.urls)  # no network

@@ -20,7 +20,7 @@ from astropy import units as u
 from astropy.table import Table
 from astropy.time import Time
 from support.browser import BROWSER_MARKS, CHROMIUM
-from support.night import INSTANT_NAMES, _Reader, expected, instants, seconds_of, table_starts
+from support.night import INSTANT_NAMES, SheetReader, expected, instants, seconds_of, table_starts
 
 from ucbplan.observing.blocks.read import read_blocks
 from ucbplan.observing.night.sheet import write_night_sheet
@@ -48,7 +48,7 @@ def sheet(table: Table, tmp_path_factory: pytest.TempPathFactory) -> Path:
     return path
 
 
-def render(sheet: Path, now: str, profile: Path) -> _Reader:
+def render(sheet: Path, now: str, profile: Path) -> SheetReader:
     """The sheet's DOM after the browser ran it for ``BUDGET_MS`` with ``?now=``."""
     assert CHROMIUM is not None
     url = f"{sheet.as_uri()}?now={quote(now)}"
@@ -64,12 +64,12 @@ def render(sheet: Path, now: str, profile: Path) -> _Reader:
     ]
     out = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
     assert out.returncode == 0 and "<html" in out.stdout, out.stderr[-600:]
-    reader = _Reader()
+    reader = SheetReader()
     reader.feed(out.stdout)
     return reader
 
 
-def _rows(reader: _Reader) -> list[dict[str, str]]:
+def _rows(reader: SheetReader) -> list[dict[str, str]]:
     return [
         {**r["attrs"], "status": r["cells"][len(EXPOSURE_COLUMNS)]}  # then the log buttons
         for s in reader.sections

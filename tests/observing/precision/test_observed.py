@@ -9,22 +9,24 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import warnings
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pytest
 from astropy.table import Table
 from astropy.time import Time
-from support.cli import run_main
-from support.observed import BASE, CLI_BASE, NAME, TARGET, _brute_force_info
+from support.observed import (
+    CLI_BASE,
+    NAME,
+    TARGET,
+    brute_force_info,
+    plan_base,
+    with_status,
+)
 from typer.testing import CliRunner
 
-import ucbplan
 from ucbplan.cli.app import app
 from ucbplan.core.phase import arg_latitude
-from ucbplan.errors import InputError, UcbplanError
 from ucbplan.observing.precision.observed import (
     ObservedSpectra,
     observed_fisher,
@@ -33,31 +35,6 @@ from ucbplan.observing.precision.observed import (
 )
 from ucbplan.observing.schedule.exposure import exposure_sigma_v
 from ucbplan.targets import load_target
-
-
-def _plan(night: str, nights: int = 1, **kw: Any) -> Any:
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return ucbplan.plan(str(TARGET), night=night, nights=nights, **{**BASE, **kw})
-
-
-@pytest.fixture(scope="module")
-def first_night(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """The plan of 2040-02-15 for sigma_K=20km/s (14 spectra), written with -o."""
-    out = tmp_path_factory.mktemp("observed") / "night1.ecsv"
-    args = [*CLI_BASE, "--night", "2040-02-15", "--goal", "sigma_K=20km/s", "-o", str(out)]
-    result = CliRunner().invoke(app, args)
-    assert result.exit_code == 0, result.output
-    return out
-
-
-def _with_status(src: Path, dst: Path, status: list[str] | None = None, **edit: Any) -> Path:
-    table = Table.read(src, format="ascii.ecsv")
-    table["status"] = np.array(status or ["taken"] * len(table), dtype=object)
-    for name, value in edit.items():
-        table[name] = value(table[name]) if callable(value) else value
-    table.write(dst, format="ascii.ecsv", overwrite=True)
-    return dst
 
 
 def test_information_of_random_spectra_equals_brute_force_fisher() -> None:
@@ -69,7 +46,7 @@ def test_information_of_random_spectra_equals_brute_force_fisher() -> None:
     x = target.params.n_bar * exptime / 2.0
     spectra = ObservedSpectra(NAME, tau, np.sin(x) / x, sigma, sigma * np.nan)
     got = observed_information(spectra, target.params)
-    assert got == pytest.approx(_brute_force_info(tau, exptime, sigma), rel=1e-12)
+    assert got == pytest.approx(brute_force_info(tau, exptime, sigma), rel=1e-12)
 
 
 @pytest.mark.parametrize("one_anchor", [False, True])
@@ -118,13 +95,13 @@ def test_sigma_v_ratio_is_the_median_of_measured_over_predicted() -> None:
 def test_collected_information_of_a_blocks_table_equals_brute_force(
     first_night: Path, tmp_path: Path
 ) -> None:
-    obs = _with_status(first_night, tmp_path / "obs.ecsv")
-    p = _plan("2040-02-16", 2, goal="sigma_K=13km/s", observed=obs)
+    obs = with_status(first_night, tmp_path / "obs.ecsv")
+    p = plan_base("2040-02-16", 2, goal="sigma_K=13km/s", observed=obs)
     goal = p.run.result.goals[NAME]
     table = Table.read(obs, format="ascii.ecsv")
     target = load_target(TARGET)
     tau = (Time(list(table["t_mid_tdb_bary"]), scale="tdb") - target.t_ref).to_value("s")
-    want = _brute_force_info(tau, np.asarray(table["exptime_s"]), np.asarray(table["sigma_v_kms"]))
+    want = brute_force_info(tau, np.asarray(table["exptime_s"]), np.asarray(table["sigma_v_kms"]))
     assert goal.collected_spectra == len(table) == 14
     assert goal.collected_info == pytest.approx(want, rel=1e-12)
     # each spectrum's own u from the ephemeris falls on the anchor it was planned at (±1e-4 rad)
@@ -143,9 +120,9 @@ def test_velocities_file_gives_the_information_of_the_blocks_table(
         for t, e, s in zip(jd, table["exptime_s"], table["sigma_v_kms"], strict=True)
     ]
     vel.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    from_rv = _plan("2040-02-16", 2, goal="sigma_K=13km/s", observed=vel)
-    from_blocks = _plan(
-        "2040-02-16", 2, goal="sigma_K=13km/s", observed=_with_status(first_night, tmp_path / "b")
+    from_rv = plan_base("2040-02-16", 2, goal="sigma_K=13km/s", observed=vel)
+    from_blocks = plan_base(
+        "2040-02-16", 2, goal="sigma_K=13km/s", observed=with_status(first_night, tmp_path / "b")
     )
     a, b = (x.run.result.goals[NAME].collected_info for x in (from_rv, from_blocks))
     assert a == pytest.approx(b, rel=1e-6)  # bjd as a float JD: ~20 µs, far below an orbit
@@ -153,11 +130,11 @@ def test_velocities_file_gives_the_information_of_the_blocks_table(
 
 def test_csv_blocks_table_counts_like_the_ecsv(first_night: Path, tmp_path: Path) -> None:
     status = ["taken", "taken", "missed"] * 4 + ["taken", "skipped"]
-    ecsv = _with_status(first_night, tmp_path / "obs.ecsv", status=status)
+    ecsv = with_status(first_night, tmp_path / "obs.ecsv", status=status)
     csv = tmp_path / "obs.csv"
     Table.read(ecsv, format="ascii.ecsv").write(csv, format="ascii.csv")
     a, b = (
-        _plan("2040-02-16", 2, goal="sigma_K=13km/s", observed=f).run.result.goals[NAME]
+        plan_base("2040-02-16", 2, goal="sigma_K=13km/s", observed=f).run.result.goals[NAME]
         for f in (ecsv, csv)
     )
     assert a.collected_spectra == b.collected_spectra == 9  # only the taken rows
@@ -165,7 +142,7 @@ def test_csv_blocks_table_counts_like_the_ecsv(first_night: Path, tmp_path: Path
 
 
 def test_goal_already_reached_plans_nothing_and_says_so(first_night: Path, tmp_path: Path) -> None:
-    obs = _with_status(first_night, tmp_path / "obs.ecsv")
+    obs = with_status(first_night, tmp_path / "obs.ecsv")
     out = tmp_path / "rest.ecsv"
     args = [*CLI_BASE, "--night", "2040-02-16", "--goal", "sigma_K=20km/s", "--observed", str(obs)]
     result = CliRunner().invoke(app, [*args, "-o", str(out)])
@@ -178,13 +155,13 @@ def test_goal_already_reached_plans_nothing_and_says_so(first_night: Path, tmp_p
 def test_half_the_information_observed_plans_about_half_the_spectra(
     first_night: Path, tmp_path: Path
 ) -> None:
-    obs = _with_status(first_night, tmp_path / "obs.ecsv")
-    taken = _plan("2040-02-16", 2, goal="sigma_K=13km/s", observed=obs)
+    obs = with_status(first_night, tmp_path / "obs.ecsv")
+    taken = plan_base("2040-02-16", 2, goal="sigma_K=13km/s", observed=obs)
     collected = taken.run.result.goals[NAME].collected_info
     goal_kms = (2.0 * collected) ** -0.5  # the spectra taken hold half of what it needs
     text = f"sigma_K={goal_kms:.6f}km/s"
-    fresh = _plan("2040-02-16", 2, goal=text).run.result.goals[NAME]
-    rest = _plan("2040-02-16", 2, goal=text, observed=obs)
+    fresh = plan_base("2040-02-16", 2, goal=text).run.result.goals[NAME]
+    rest = plan_base("2040-02-16", 2, goal=text, observed=obs)
     plan = rest.run.result.goals[NAME]
     assert plan.info_needed == pytest.approx(collected, rel=1e-6)
     assert abs(plan.n_spectra - fresh.n_spectra / 2) <= 0.15 * fresh.n_spectra
@@ -200,10 +177,10 @@ def test_half_the_information_observed_plans_about_half_the_spectra(
 def test_sigma_v_worse_than_the_law_is_detected_and_rescales_it(
     first_night: Path, tmp_path: Path
 ) -> None:
-    obs = _with_status(first_night, tmp_path / "obs.ecsv", sigma_v_kms=lambda c: 1.3 * c)
-    p = _plan("2040-02-16", 2, goal="sigma_K=13km/s", observed=obs)
+    obs = with_status(first_night, tmp_path / "obs.ecsv", sigma_v_kms=lambda c: 1.3 * c)
+    p = plan_base("2040-02-16", 2, goal="sigma_K=13km/s", observed=obs)
     assert p.run.settings.sigma_v_scale == pytest.approx(1.3, rel=1e-6)
-    kept = _plan("2040-02-16", 2, goal="sigma_K=13km/s", observed=obs, sigma_v_scale=1)
+    kept = plan_base("2040-02-16", 2, goal="sigma_K=13km/s", observed=obs, sigma_v_scale=1)
     assert kept.run.settings.sigma_v_scale == 1.0
     # the remainder's σ_v: the law × 1.3, row by row (its exposure time and airmass)
     law = dataclasses.replace(p.run.settings, sigma_v_scale=1.0)
@@ -222,73 +199,12 @@ def test_sigma_v_worse_than_the_law_is_detected_and_rescales_it(
     assert "from the 14 spectra taken; still needed" in lines[0] and "spectra in" in lines[1]
 
 
-def _bad(first_night: Path, tmp_path: Path, kind: str) -> Path:
-    path = tmp_path / f"{kind}.ecsv"
-    if kind == "target":
-        return _with_status(first_night, path, target=lambda c: ["V407 Vul"] * len(c))
-    if kind == "status":
-        return _with_status(first_night, path, status=["taken"] * 13 + ["done"])
-    if kind == "validity":
-        late = "2099-06-01T00:00:00.000"
-        return _with_status(first_night, path, t_mid_tdb_bary=lambda c: [late] * len(c))
-    if kind == "sigma":
-        return _with_status(first_night, path, sigma_v_kms=lambda c: np.where(c > 0, np.nan, c))
-    if kind == "rv-validity":
-        path = tmp_path / "late.csv"
-        rows = [f"{2472730.5 + k / 24!r},65.0,0.0,30.0" for k in range(4)]  # in 2058
-        path.write_text("bjd_tdb,exptime_s,v,sigma_v\n" + "\n".join(rows) + "\n", "utf-8")
-        return path
-    if kind == "nostatus":
-        Table.read(first_night, format="ascii.ecsv").write(path, format="ascii.ecsv")
-        return path
-    table = Table.read(_with_status(first_night, path), format="ascii.ecsv")
-    table.meta["site"] = {**table.meta["site"], "name": "La Silla"}
-    table.write(path, format="ascii.ecsv", overwrite=True)
-    return path
-
-
-@pytest.mark.parametrize(
-    ("kind", "words"),
-    [
-        ("target", "'V407 Vul' is not planned"),
-        ("site", "observed at 'La Silla', but the plan is for Paranal"),
-        ("status", "row 14, column status: expected one of taken, missed, skipped, got 'done'"),
-        ("validity", "outside the validity"),
-        ("nostatus", "expected a status column"),
-        ("rv-validity", "outside the validity"),
-        ("sigma", "row 1, column sigma_v_kms: expected the measured σ_v"),
-    ],
-)
-def test_bad_observed_file_is_one_line_exit_2_nothing_written(
-    first_night: Path, tmp_path: Path, kind: str, words: str
-) -> None:
-    obs = _bad(first_night, tmp_path, kind)
-    with pytest.raises(UcbplanError, match=words):
-        _plan("2040-02-16", goal="sigma_K=13km/s", observed=obs)
-    out = tmp_path / "out.ecsv"
-    args = [*CLI_BASE, "--night", "2040-02-16", "--goal", "sigma_K=13km/s"]
-    code, _, err = run_main([*args, "--observed", str(obs), "-o", str(out)])
-    lines = [ln for ln in err.splitlines() if ln.strip()]
-    assert code == 2 and "Traceback" not in err
-    assert lines[-1].startswith("error: ") and words in lines[-1]
-    assert not out.exists()
-
-
-def test_observed_without_a_goal_or_with_a_bad_scale_is_refused(first_night: Path) -> None:
-    with pytest.raises(InputError, match="count toward a goal"):
-        _plan("2040-02-16", observed=first_night)
-    with pytest.raises(InputError, match="sigma_v_scale"):
-        _plan("2040-02-16", goal="sigma_K=13km/s", sigma_v_scale=-1.0)
-    code, _, err = run_main([*CLI_BASE, "--night", "2040-02-16", "--sigma-v-scale", "0"])
-    assert code == 2 and "--sigma-v-scale: expected a number in (0, 100]" in err
-
-
 def test_planned_sigma_v_read_back_is_not_called_measured(
     first_night: Path, tmp_path: Path
 ) -> None:
     """A blocks table (or log) whose σ_v are the plan's own says so, instead of reporting a
     "measured/predicted" ratio of 1 that no measurement made."""
-    obs = _with_status(first_night, tmp_path / "obs.ecsv")
+    obs = with_status(first_night, tmp_path / "obs.ecsv")
     args = [*CLI_BASE, "--night", "2040-02-16", "--nights", "2", "--goal", "sigma_K=13km/s"]
     result = CliRunner().invoke(app, [*args, "--observed", str(obs)])
     assert result.exit_code == 0, result.output
@@ -296,6 +212,6 @@ def test_planned_sigma_v_read_back_is_not_called_measured(
     assert len(note) == 1 and "14 spectra carry the plan's σ_v, not measured ones" in note[0]
     assert "measured/predicted" not in note[0] and len(note[0]) <= 100
     # one measured value among them: a ratio again
-    edited = _with_status(first_night, tmp_path / "one.ecsv", sigma_v_kms=lambda c: c * 1.02)
+    edited = with_status(first_night, tmp_path / "one.ecsv", sigma_v_kms=lambda c: c * 1.02)
     result = CliRunner().invoke(app, [*args, "--observed", str(edited)])
     assert "median measured/predicted σ_v = 1.02" in result.output

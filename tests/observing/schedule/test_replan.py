@@ -17,7 +17,7 @@ import pytest
 from astropy.table import Table, vstack
 from astropy.time import Time
 from support.cli import run_main
-from support.observed import _brute_force_info
+from support.observed import brute_force_info
 
 import ucbplan
 from ucbplan.api.replanning import plan_changes
@@ -146,7 +146,7 @@ def test_promised_sigma_k_with_half_observed_matches_a_fisher_sum(
     planned = new.text_table[new.text_table["night"] != "2040-02-15"]
     rows = vstack([first[first["status"] == "taken"], planned], metadata_conflicts="silent")
     tau = (Time(list(rows["t_mid_tdb_bary"]), scale="tdb") - load_target(TARGET).t_ref).to("s")
-    info = _brute_force_info(
+    info = brute_force_info(
         tau.value, np.asarray(rows["exptime_s"], float), np.asarray(rows["sigma_v_kms"], float)
     )
     (goal,) = new.goals
@@ -227,7 +227,7 @@ def test_a_goal_out_of_reach_is_planned_as_far_as_it_goes_and_stated(
     (short,) = new.run.result.shortfalls
     rows = new.text_table[new.text_table["night"] != "2040-02-15"]  # the history goes
     tau = (Time(list(rows["t_mid_tdb_bary"]), scale="tdb") - load_target(TARGET).t_ref).to("s")
-    info = _brute_force_info(
+    info = brute_force_info(
         tau.value, np.asarray(rows["exptime_s"], float), np.asarray(rows["sigma_v_kms"], float)
     )
     assert short.reachable == pytest.approx(info**-0.5, rel=0.02)
