@@ -26,7 +26,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
-from support.targets import _random_targets
+from support.targets import random_targets
 
 from ucbplan.core.forecast import AFTER, BEFORE, t_valid_batch
 from ucbplan.core.validity_batch import horizon_columns
@@ -42,7 +42,7 @@ def _timed(fn, *args, **kw):  # type: ignore[no-untyped-def]
 
 def measure_methods(n: int) -> dict[str, object]:
     """Analytic σ_u² roots against the grid search on the same targets (4 anchor/directions)."""
-    pars, covs, t_obs, thr = _random_targets(n, seed=2026)
+    pars, covs, t_obs, thr = random_targets(n, seed=2026)
     worst, t_an, t_gr = 0.0, 0.0, 0.0
     for anchor in ((0.0, math.pi), (math.pi / 2,)):
         for direction in (AFTER, BEFORE):
@@ -68,7 +68,7 @@ def measure_methods(n: int) -> dict[str, object]:
 
 def _precessing_targets(n: int) -> tuple[np.ndarray, ...]:
     """The eccentric rows of the random targets with ω̇ = 1.5e-6 rad/s (P_aps ≈ 48 d)."""
-    pars, covs, t_obs, thr = _random_targets(n, seed=3)
+    pars, covs, t_obs, thr = random_targets(n, seed=3)
     ecc = pars[:, 4] != 0
     pars, covs, t_obs, thr = pars[ecc], covs[ecc], t_obs[ecc], thr[ecc]
     pars[:, 6] = 1.5e-6
@@ -115,7 +115,7 @@ def measure_oscillating(n: int) -> dict[str, object]:
 
 def measure_table(n: int) -> dict[str, object]:
     """The full horizon table (2 anchors × 2 α) through the API."""
-    pars, covs, t_obs, _ = _random_targets(n, seed=7)
+    pars, covs, t_obs, _ = random_targets(n, seed=7)
     horizon_columns(pars[:10], covs[:10], t_obs[:10], 15.0, 1000.0)  # warm-up
     _, wall = _timed(horizon_columns, pars, covs, t_obs, 15.0, 1000.0, two_sided=t_obs == 0)
     per = 1e6 * wall / n
@@ -131,7 +131,7 @@ def measure_table(n: int) -> dict[str, object]:
 
 def _table_part(args: tuple[int, int]) -> int:
     n, seed = args
-    pars, covs, t_obs, _ = _random_targets(n, seed=seed)
+    pars, covs, t_obs, _ = random_targets(n, seed=seed)
     horizon_columns(pars, covs, t_obs, 15.0, 1000.0, two_sided=t_obs == 0)
     return n
 
