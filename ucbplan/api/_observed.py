@@ -100,14 +100,18 @@ def _scale(value: Any) -> float | None:
     return float(value)
 
 
-def _is_blocks(path: Path) -> bool:
-    """Whether ``path`` holds a blocks table (a ``block_id`` column) rather than velocities."""
+def _spectra_text(path: Path) -> str:
+    """The text of a spectra file (read once, to tell a log, a blocks table and velocities)."""
     from ucbplan.inputs import read_text
 
     try:
-        text = read_text(path, "spectra file")
+        return read_text(path, "spectra file")
     except InputError as exc:
         raise InputError(f"observed: {exc}", parameter="observed") from None
+
+
+def _is_blocks(text: str) -> bool:
+    """Whether ``text`` holds a blocks table (a ``block_id`` column) rather than velocities."""
     head = text.lstrip()
     if head.startswith(("[", "{")):
         return True
@@ -117,27 +121,19 @@ def _is_blocks(path: Path) -> bool:
     return "block_id" in first.split(",") or any("name: block_id" in ln for ln in header)
 
 
-def _is_log(path: Path) -> bool:
-    """Whether ``path`` is an observing log (the night sheet's or ``now --log``'s CSV)."""
-    from ucbplan.inputs import read_text
-    from ucbplan.observing.night.observing_log import is_log
-
-    try:
-        text = read_text(path, "spectra file")
-    except InputError as exc:
-        raise InputError(f"observed: {exc}", parameter="observed") from None
-    return is_log(text)
-
-
 def _read(
     path: Path, targets: list[Target], site: Site, settings: PlanSettings
 ) -> list[ObservedSpectra]:
-    """The spectra of ``path``, one :class:`ObservedSpectra` per target it names."""
-    if _is_log(path):
+    """The spectra of ``path``, one :class:`ObservedSpectra` per target it names: an observing
+    log (the night sheet's or ``now --log``'s CSV), a blocks table, else velocities."""
+    from ucbplan.observing.night.observing_log import is_log
+
+    text = _spectra_text(path)
+    if is_log(text):
         from ucbplan.observing.night.observing_log import read_log
 
         return _from_blocks(path, read_log(path), targets, site, settings)
-    if _is_blocks(path):
+    if _is_blocks(text):
         from ucbplan.observing.blocks.read import read_blocks
 
         return _from_blocks(path, read_blocks(path), targets, site, settings)

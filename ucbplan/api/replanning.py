@@ -70,15 +70,20 @@ class PlanChanges:
         )
 
 
+def _visits(table: Table, nights: set[str] | None) -> dict[str, tuple[str, list[str]]]:
+    """visit_id → (its target, the UTC starts of its blocks), over the rows of ``nights``
+    (None: all)."""
+    visits: dict[str, tuple[str, list[str]]] = {}
+    for row in table:
+        if nights is None or str(row["night"]) in nights:
+            entry = visits.setdefault(str(row["visit_id"]), (str(row["target"]), []))
+            entry[1].append(str(row["t_start_utc"]))
+    return visits
+
+
 def _visit_starts(table: Table, nights: set[str] | None = None) -> dict[str, str]:
     """visit_id → its first block start (UTC text), over the rows of ``nights`` (None: all)."""
-    starts: dict[str, str] = {}
-    for row in table:
-        if nights is not None and str(row["night"]) not in nights:
-            continue
-        vid, start = str(row["visit_id"]), str(row["t_start_utc"])
-        starts[vid] = min(start, starts.get(vid, start))
-    return starts
+    return {vid: min(starts) for vid, (_, starts) in _visits(table, nights).items()}
 
 
 def plan_changes(old: Plan, new: Plan) -> PlanChanges:
@@ -204,12 +209,7 @@ def _booked(plan: Plan) -> tuple[float, float]:
 
 def _old_visits(table: Table, nights: list[date]) -> tuple[tuple[str, tuple[str, ...]], ...]:
     """The visits of ``table`` on ``nights``: (target, UTC starts of its exposures) each."""
-    wanted = {n.isoformat() for n in nights}
-    visits: dict[str, tuple[str, list[str]]] = {}
-    for row in table:
-        if str(row["night"]) in wanted:
-            entry = visits.setdefault(str(row["visit_id"]), (str(row["target"]), []))
-            entry[1].append(str(row["t_start_utc"]))
+    visits = _visits(table, {n.isoformat() for n in nights})
     return tuple((name, tuple(sorted(starts))) for name, starts in visits.values())
 
 
