@@ -1,5 +1,5 @@
 """``python -m ucbplan`` runs the CLI."""
 
-from ucbplan.cli.app import main
+from ucbplan.cli import main
 
 main()

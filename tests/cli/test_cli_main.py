@@ -108,3 +108,33 @@ def test_usage_error_is_one_line() -> None:
     assert res.stderr.strip() == (
         "error: No such option: --bogus-flag (see `python -m ucbplan plan --help`)"
     )
+
+
+#: Runs the entry point ``ARGV[1]`` (``run`` or ``main``) with ``ucbplan ARGV[2:]``; an atexit
+#: handler (which runs after the entry returned) reports whether the collector was frozen.
+_FREEZE_PROBE = """
+import atexit, gc, sys
+from ucbplan.cli import app
+atexit.register(lambda: print("FROZEN", gc.get_freeze_count() > 0, flush=True))
+entry = getattr(app, sys.argv[1])
+sys.argv = ["ucbplan", *sys.argv[2:]]
+entry()
+"""
+
+
+@pytest.mark.parametrize(("entry", "frozen"), [("run", True), ("main", False)])
+def test_only_the_process_entry_freezes_the_collector(entry: str, frozen: bool) -> None:
+    """The console script (``ucbplan.cli.main`` = ``app.run``) freezes the objects it made when
+    it exits, so the interpreter's shutdown does not trace them again (issue 34); ``app.main``,
+    what in-process callers use, leaves the collector alone. Exit code and output are the same."""
+    import subprocess
+
+    from ucbplan import cli
+    from ucbplan._version import __version__
+
+    assert cli.main is app_module.run  # what pyproject's console script calls
+    res = subprocess.run(
+        [sys.executable, "-c", _FREEZE_PROBE, entry, "--version"], capture_output=True, text=True
+    )
+    assert res.returncode == 0, res.stderr
+    assert res.stdout.splitlines() == [f"ucbplan {__version__}", f"FROZEN {frozen}"]

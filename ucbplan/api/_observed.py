@@ -20,7 +20,6 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ucbplan.errors import InputError, shorten
-from ucbplan.observing.night.observing_log import STATUSES
 
 if TYPE_CHECKING:
     from ucbplan.observing.observatory.sites import Site
@@ -228,6 +227,9 @@ def _check_site(meta: Any, site: Site, where: str) -> None:
 
 def _taken_rows(table: Any, where: str) -> np.ndarray:
     """Rows whose ``status`` is ``taken`` (every status one of :data:`STATUSES`)."""
+    # here, not at the top: a plan without observed spectra need not import the night tools
+    from ucbplan.observing.night.observing_log import STATUSES
+
     if "status" not in table.colnames:
         raise InputError(
             f"{where}: expected a status column ({', '.join(STATUSES)} per row), got none; "
