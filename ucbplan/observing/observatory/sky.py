@@ -113,7 +113,7 @@ class SkyModel:
         origin = Time(origin, scale="tdb", location=location)
         import erfa
 
-        t = TimeAxis(origin).tdb(x)
+        t = TimeAxis(origin).tdb_grid(x)  # one dtdb for every frame below
         ut1 = t.ut1
         era = np.unwrap(erfa.era00(ut1.jd1, ut1.jd2))
         frame = CIRS(obstime=t)
