@@ -174,10 +174,16 @@ class SkyModel:
         """Number of targets in the model."""
         return int(self.coords.shape[0])
 
-    def _rotate(self, v_itrs: FloatArray, x: FloatArray) -> FloatArray:
-        """ITRS (≈TIRS) vector → CIRS at times x: rotation by −ERA about z. Shape x.shape+(3,)."""
+    def _spin(self, x: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """(cos, sin) of the Earth rotation angle at times x."""
         era = self.era(x)
-        c, s = np.cos(era), np.sin(era)
+        return np.cos(era), np.sin(era)
+
+    @staticmethod
+    def _rotate(v_itrs: FloatArray, spin: tuple[FloatArray, FloatArray]) -> FloatArray:
+        """ITRS (≈TIRS) vector → CIRS: rotation by −ERA about z (``spin``: its cos and sin at
+        the times wanted). Shape x.shape+(3,)."""
+        c, s = spin
         return np.stack(
             [
                 c * v_itrs[0] - s * v_itrs[1],
@@ -189,24 +195,28 @@ class SkyModel:
 
     def up(self, x: FloatArray) -> FloatArray:
         """Local geodetic vertical in CIRS at times x."""
-        return self._rotate(self.up_itrs, np.asarray(x, dtype=np.float64))
+        return self._rotate(self.up_itrs, self._spin(np.asarray(x, dtype=np.float64)))
 
-    def _alt(self, direction: FloatArray, x: FloatArray) -> FloatArray:
-        s = np.einsum("...k,...k->...", _unit(direction), self.up(x))
+    def _alt(self, direction: FloatArray, spin: tuple[FloatArray, FloatArray]) -> FloatArray:
+        s = np.einsum("...k,...k->...", _unit(direction), self._rotate(self.up_itrs, spin))
         return np.asarray(np.degrees(np.arcsin(np.clip(s, -1.0, 1.0))), dtype=np.float64)
 
-    def _topocentric(self, spline: CubicSpline, x: FloatArray) -> FloatArray:
-        return np.asarray(spline(x) - self._rotate(self.site_itrs_m, x), dtype=np.float64)
+    def _topocentric(
+        self, spline: CubicSpline, x: FloatArray, spin: tuple[FloatArray, FloatArray]
+    ) -> FloatArray:
+        return np.asarray(spline(x) - self._rotate(self.site_itrs_m, spin), dtype=np.float64)
 
     def sun_alt_deg(self, x: FloatArray) -> FloatArray:
         """Geometric altitude of the Sun's centre [deg]."""
         x = np.asarray(x, dtype=np.float64)
-        return self._alt(self._topocentric(self.sun, x), x)
+        spin = self._spin(x)  # one Earth rotation angle for the site and its vertical
+        return self._alt(self._topocentric(self.sun, x, spin), spin)
 
     def moon_alt_deg(self, x: FloatArray) -> FloatArray:
         """Geometric topocentric altitude of the Moon's centre [deg]."""
         x = np.asarray(x, dtype=np.float64)
-        return self._alt(self._topocentric(self.moon, x), x)
+        spin = self._spin(x)
+        return self._alt(self._topocentric(self.moon, x, spin), spin)
 
     def target_dir(self, i: int, x: FloatArray) -> FloatArray:
         """Apparent (CIRS) unit vector of target ``i`` at times x."""
@@ -215,12 +225,12 @@ class SkyModel:
     def target_alt_deg(self, i: int, x: FloatArray) -> FloatArray:
         """Geometric altitude of target ``i`` [deg]."""
         x = np.asarray(x, dtype=np.float64)
-        return self._alt(self.target_dir(i, x), x)
+        return self._alt(self.target_dir(i, x), self._spin(x))
 
     def moon_sep_deg(self, i: int, x: FloatArray) -> FloatArray:
         """Angle between target ``i`` and the topocentric Moon [deg]."""
         x = np.asarray(x, dtype=np.float64)
-        m = _unit(self._topocentric(self.moon, x))
+        m = _unit(self._topocentric(self.moon, x, self._spin(x)))
         cosang = np.einsum("...k,...k->...", m, self.target_dir(i, x))
         return np.asarray(np.degrees(np.arccos(np.clip(cosang, -1.0, 1.0))), dtype=np.float64)
 
