@@ -31,7 +31,11 @@ from ucbplan.observing.constraints import (
     NightConstraint,
     ZenithHoleConstraint,
 )
-from ucbplan.observing.constraints.checks import evaluate_window, evaluate_window_exact
+from ucbplan.observing.constraints.checks import (
+    NightScreens,
+    evaluate_window,
+    evaluate_window_exact,
+)
 from ucbplan.observing.observatory.sites import get_site
 from ucbplan.observing.observatory.sky import SkyModel
 from ucbplan.offline import offline
@@ -125,3 +129,38 @@ def test_few_blocks_over_a_long_span_use_the_exact_check(sky: SkyModel) -> None:
     ok_ref, first_ref = evaluate_window_exact(cs, sky, 0, xs, xs + 120.0)
     np.testing.assert_array_equal(ok, ok_ref)
     np.testing.assert_array_equal(first, first_ref)
+
+
+def test_night_screens_shared_by_targets_give_the_exact_answer(sky: SkyModel) -> None:
+    """One :class:`NightScreens` for every target (as a plan shares it): each target's answer
+    is the exact one, and a later target reuses the night's nodes instead of screening them
+    again (the Sun is the same for all)."""
+    rng = np.random.default_rng(11)
+    cs = _all_six()
+    shared = NightScreens(cs.night, sky)
+    mid = np.sort(rng.uniform(0.0, YEAR_S / 4, 3000))
+    for i in range(sky.n_targets):
+        xs, xe = mid - 450.0, mid + 450.0
+        ok, first = evaluate_window(cs, sky, i, xs, xe, shared)
+        ok_ref, first_ref = evaluate_window_exact(cs, sky, i, xs, xe)
+        np.testing.assert_array_equal(ok, ok_ref)
+        np.testing.assert_array_equal(first, first_ref)
+        if i == 0:
+            computed = int(np.sum(shared.screen.codes != 2) + np.sum(shared.dark.codes != 2))
+            assert computed > 0
+    # the same blocks for the other targets: no node of the night screened twice
+    after = int(np.sum(shared.screen.codes != 2) + np.sum(shared.dark.codes != 2))
+    assert after == computed
+    # a NightScreens of another sky model is not used (the answer stays the exact one)
+    other = NightScreens(cs.night, SkyModel.build(*_other_sky_args()))
+    ok, first = evaluate_window(cs, sky, 0, mid - 450.0, mid + 450.0, other)
+    np.testing.assert_array_equal(
+        first, evaluate_window_exact(cs, sky, 0, mid - 450.0, mid + 450.0)[1]
+    )
+    assert np.all(other.screen.codes == 2) and np.all(other.dark.codes == 2)
+
+
+def _other_sky_args() -> tuple[object, ...]:
+    with offline():
+        t0 = Time("2041-09-01", scale="tdb")
+    return get_site("paranal").location, t0, (0.0, 86400.0), COORDS

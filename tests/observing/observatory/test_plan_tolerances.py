@@ -20,7 +20,7 @@ from astropy.time import Time, TimeDelta
 
 from ucbplan.observing.blocks.block import ExposurePlan
 from ucbplan.observing.constraints import NightConstraint
-from ucbplan.observing.constraints.checks import DARK_STEP_S, _maybe_dark
+from ucbplan.observing.constraints.checks import DARK_STEP_S, NightScreens, _maybe_dark
 from ucbplan.observing.observatory import barycentric as barycentric_time
 from ucbplan.observing.observatory import time_axis as site_time_axis
 from ucbplan.observing.observatory.barycentric import SiteTrack, site_icrs_frames
@@ -84,7 +84,7 @@ def test_daylight_shortcut_never_skips_a_block_that_touches_the_night() -> None:
     rng = np.random.default_rng(7)
     xs = np.sort(rng.uniform(0.0, 20 * 86400.0 - 4000.0, 4000))
     xe = xs + rng.choice([1.0, 60.0, 900.0, 3600.0], xs.size)
-    maybe = _maybe_dark(night, sky, xs, xe)
+    maybe = _maybe_dark(NightScreens(night, sky).dark, xs, xe)
     grid = np.arange(0.0, 20 * 86400.0, 10.0)
     dark = sky.sun_alt_deg(grid) <= night.sun_alt_max_deg
     touched = np.array(

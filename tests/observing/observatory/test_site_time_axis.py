@@ -63,3 +63,20 @@ def test_epoch_axis_matches_time_arithmetic(axis: TimeAxis) -> None:
     t = ep.time(whole, dt)
     assert ep.tau(t[2]) == pytest.approx(whole + dt[2], abs=1e-6)
     np.testing.assert_allclose(np.array([axis.x(ti) for ti in t]), x, rtol=0, atol=1e-6)
+
+
+def test_tdb_grid_converts_as_a_plain_grid_bit_for_bit(axis: TimeAxis) -> None:
+    """A :meth:`TimeAxis.tdb_grid` (its TDB − TT term computed once and kept) converts to TT,
+    TAI, UTC and UT1, itself and its slices, to the same bits as a plain :meth:`TimeAxis.tdb`;
+    and its slices carry the term along (astropy's frames do not compute it again)."""
+    x = np.linspace(-3.0e5, 2.0e7, 997)
+    with offline():
+        plain, grid = axis.tdb(x), axis.tdb_grid(x)
+        for scale in ("tt", "tai", "utc", "ut1"):
+            a, b = getattr(plain, scale), getattr(grid, scale)
+            np.testing.assert_array_equal(a.jd1, b.jd1)
+            np.testing.assert_array_equal(a.jd2, b.jd2)
+        row = grid[None, :]
+        assert "_delta_tdb_tt" in vars(row)  # carried along: no erfa dtdb for the slice
+        np.testing.assert_array_equal(row.utc.jd2[0], plain.utc.jd2)
+        assert "_delta_tdb_tt" not in vars(axis.tdb(x))  # a plain grid computes it per use

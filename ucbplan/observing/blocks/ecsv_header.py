@@ -183,25 +183,95 @@ def _names_line(table: Table) -> str:
     return splitter.join(names) + os.linesep
 
 
-#: The ``visits`` entry of a plan's ECSV header while its items are written apart.
-_NO_VISITS = f"{os.linesep}# - visits: []{os.linesep}"
+def _apart(meta: Mapping[str, Any]) -> dict[str, tuple[Any, list[str]]]:
+    """The entries of a plan's meta written apart (``visits``, ``not_planned``): for each,
+    (the empty value that stands in for it, its lines), where this module's paths write it."""
+    out: dict[str, tuple[Any, list[str]]] = {}
+    visits = meta.get("visits")
+    if isinstance(visits, list) and visits and all(isinstance(v, dict) for v in visits):
+        items = yaml_flow_items(visits, _yaml_tag)
+        if items is not None:
+            out["visits"] = ([], items)
+    reasons = meta.get("not_planned")
+    if isinstance(reasons, dict) and reasons:
+        lines = yaml_nested_flow(reasons, _yaml_tag)
+        if lines is not None:
+            out["not_planned"] = ({}, lines)
+    return out
 
 
 def ecsv_header(table: Table, libyaml: bool) -> str:
     """The ECSV header of ``table`` (plain columns), as astropy writes it: with libyaml's
-    emitter if ``libyaml`` (a :func:`header_safe` table), a plan's ``visits`` apart; neither
-    ``table`` nor astropy's YAML dumper is changed."""
-    visits = table.meta.get("visits") if libyaml else None
-    items = None
-    if isinstance(visits, list) and visits and all(isinstance(v, dict) for v in visits):
-        items = yaml_flow_items(visits, _yaml_tag)
-    if items is None:
+    emitter if ``libyaml`` (a :func:`header_safe` table), a plan's ``visits`` and
+    ``not_planned`` apart; neither ``table`` nor astropy's YAML dumper is changed."""
+    apart = _apart(table.meta) if libyaml else {}
+    if not apart:
         return _header_text(table, table.meta, libyaml)
-    text = _header_text(table, {**table.meta, "visits": []}, libyaml)  # written apart below
-    if text.count(_NO_VISITS) != 1:  # never: meta keys are unique
-        return _header_text(table, table.meta, libyaml)
-    listed = "# " + f"{os.linesep}# ".join(items) + os.linesep
-    return text.replace(_NO_VISITS, f"{os.linesep}# - visits:{os.linesep}{listed}")
+    stand_in = {key: empty for key, (empty, _) in apart.items()}
+    text = _header_text(table, {**table.meta, **stand_in}, libyaml)  # written apart below
+    for key, (empty, lines) in apart.items():
+        blank = f"{os.linesep}# - {key}: {'[]' if empty == [] else '{}'}{os.linesep}"
+        if text.count(blank) != 1:  # never: meta keys are unique
+            return _header_text(table, table.meta, libyaml)
+        listed = "# " + f"{os.linesep}# ".join(lines) + os.linesep
+        text = text.replace(blank, f"{os.linesep}# - {key}:{os.linesep}{listed}")
+    return text
+
+
+def yaml_nested_flow(
+    mapping: dict[Any, Any], tags: Callable[[str], str], indent: int = 4
+) -> list[str] | None:
+    """Lines of a block mapping (at ``indent``) of block mappings … whose innermost values are
+    flow mappings of scalars (a plan's ``not_planned``: target → night → reason → count), as
+    astropy's ECSV header writer emits it through libyaml, keys sorted; None where this path
+    does not know (a key or value of another kind, a line that libyaml might break)."""
+    if not all(type(k) is str for k in mapping):
+        return None
+    lines: list[str] = []
+    for key in sorted(mapping):
+        head = _flow_scalar(key, tags)
+        value = mapping[key]
+        if head is None or not isinstance(value, dict):
+            return None
+        pad = " " * indent
+        flat = all(not isinstance(v, dict | list | tuple) for v in value.values())
+        if flat:
+            inner = _flow_mapping(value, tags, len(pad) + len(head) + 2)
+            if inner is None:
+                return None
+            lines.append(f"{pad}{head}: {inner}")
+            continue
+        nested = yaml_nested_flow(value, tags, indent + 2)
+        if nested is None:
+            return None
+        lines += [f"{pad}{head}:", *nested]
+    return lines
+
+
+def _flow_scalar(value: Any, tags: Callable[[str], str]) -> str | None:
+    """A key or value of :func:`yaml_nested_flow` as libyaml writes it, unbroken (no space in
+    a value, a key short enough to be a simple key), or None."""
+    if isinstance(value, str) and (not value or value.strip() != value or len(value) > 128):
+        return None
+    got = _yaml_scalar(value, tags)
+    return None if got is None else got[0]
+
+
+def _flow_mapping(mapping: dict[Any, Any], tags: Callable[[str], str], col: int) -> str | None:
+    """``{k: v, …}`` (keys sorted) starting at column ``col``, on one line: None where libyaml
+    would break it (a key starting past the width, a value with a space) or for other kinds."""
+    if not all(type(k) is str for k in mapping):
+        return None
+    parts: list[str] = []
+    col += 1  # "{"
+    for key in sorted(mapping):
+        k, v = _flow_scalar(key, tags), _flow_scalar(mapping[key], tags)
+        col += 1 if parts else 0  # the "," before it: libyaml breaks there past the width
+        if k is None or v is None or " " in v or col > _YAML_WIDTH:
+            return None
+        col += len(f"{k}: {v}") + (1 if parts else 0)  # and the " " after the ","
+        parts.append(f"{k}: {v}")
+    return "{" + ", ".join(parts) + "}"
 
 
 @functools.lru_cache(maxsize=4096)

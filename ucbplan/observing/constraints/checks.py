@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
@@ -39,6 +39,7 @@ def evaluate_window(
     i: int,
     x_start: FloatArray,
     x_end: FloatArray,
+    night: NightScreens | None = None,
 ) -> tuple[BoolArray, NDArray[np.int64]]:
     """Check every constraint over whole blocks [x_start, x_end].
 
@@ -50,7 +51,9 @@ def evaluate_window(
     Many blocks are first screened on a grid of :data:`SCREEN_STEP_S` (:meth:`Constraint.screen`):
     a sample far enough from every limit, given how fast the sky changes, has a certain answer;
     only the others are checked exactly. The result is the exact one
-    (:func:`evaluate_window_exact`; tests compare the two).
+    (:func:`evaluate_window_exact`; tests compare the two). ``night``: the screens of the first
+    constraint (a :class:`NightConstraint`, the same for every target), shared by the targets
+    of a run (:class:`NightScreens`); the answer is the same with or without.
 
     Returns
     -------
@@ -65,47 +68,110 @@ def evaluate_window(
     xe = np.asarray(x_end, dtype=np.float64)
     if not active or xs.size == 0:
         return np.ones(xs.shape, dtype=bool), np.full(xs.shape, -1, dtype=np.int64)
-    if isinstance(active[0], NightConstraint) and xs.ndim == 1:
-        maybe = _maybe_dark(active[0], sky, xs, xe)
-        if not maybe.all():  # the others certainly fail the night, the first constraint
-            ok, first = np.zeros(xs.shape, dtype=bool), np.zeros(xs.shape, dtype=np.int64)
-            if maybe.any():
-                ok[maybe], first[maybe] = _evaluate_screened(active, sky, i, xs[maybe], xe[maybe])
-            return ok, first
-    return _evaluate_screened(active, sky, i, xs, xe)
+    if not isinstance(active[0], NightConstraint) or xs.ndim != 1:
+        return _evaluate_screened(active, sky, i, xs, xe)
+    if night is None or night.night != active[0] or night.sky is not sky:
+        night = NightScreens(active[0], sky)
+    maybe = _maybe_dark(night.dark, xs, xe)
+    if not maybe.all():  # the others certainly fail the night, the first constraint
+        ok, first = np.zeros(xs.shape, dtype=bool), np.zeros(xs.shape, dtype=np.int64)
+        if maybe.any():
+            ok[maybe], first[maybe] = _evaluate_screened(
+                active, sky, i, xs[maybe], xe[maybe], night.screen
+            )
+        return ok, first
+    return _evaluate_screened(active, sky, i, xs, xe, night.screen)
+
+
+@dataclass
+class LatticeScreen:
+    """One constraint's screen (:meth:`Constraint.screen`, over ±``slack_s``) at the nodes
+    ``k·step_s`` of the plan's axis, computed for the nodes asked for when first asked: a
+    constraint that is the same for every target (the night) is screened once per run.
+
+    ``codes[k − k0]`` is node k's screen (2: not computed yet)."""
+
+    constraint: Constraint
+    sky: SkyModel
+    step_s: float
+    slack_s: float
+    k0: int = 0
+    codes: Int8Array = field(default_factory=lambda: np.zeros(0, dtype=np.int8))
+
+    def at(self, k: NDArray[np.int64]) -> Int8Array:
+        """The screen at nodes ``k`` (any shape)."""
+        if k.size == 0:
+            return np.zeros(k.shape, dtype=np.int8)
+        self._cover(int(np.min(k)), int(np.max(k)))
+        todo = np.zeros(self.codes.size, dtype=bool)
+        todo[(k - self.k0).ravel()] = True
+        todo &= self.codes == 2
+        if todo.any():
+            at = np.flatnonzero(todo)
+            x = np.asarray(self.step_s * (at + self.k0), dtype=np.float64)
+            self.codes[at] = self.constraint.screen(self.sky, 0, x, self.slack_s)
+        return self.codes[k - self.k0]
+
+    def _cover(self, lo: int, hi: int) -> None:
+        """Extend ``codes`` (not computed) to hold nodes ``lo`` … ``hi``."""
+        k1 = self.k0 + self.codes.size - 1
+        if self.codes.size and lo >= self.k0 and hi <= k1:
+            return
+        new_k0 = min(lo, self.k0) if self.codes.size else lo
+        new_k1 = max(hi, k1) if self.codes.size else hi
+        codes = np.full(new_k1 - new_k0 + 1, 2, dtype=np.int8)
+        codes[self.k0 - new_k0 : self.k0 - new_k0 + self.codes.size] = self.codes
+        self.k0, self.codes = new_k0, codes
+
+
+class NightScreens:
+    """The night's screens shared by the targets of a run: on the :data:`DARK_STEP_S` nodes
+    (blocks that may touch the night) and on the :data:`SCREEN_STEP_S` nodes (samples), of
+    one sky model."""
+
+    def __init__(self, night: NightConstraint, sky: SkyModel) -> None:
+        self.night, self.sky = night, sky
+        self.dark = LatticeScreen(night, sky, DARK_STEP_S, DARK_STEP_S)
+        self.screen = LatticeScreen(night, sky, SCREEN_STEP_S, SCREEN_STEP_S / 2 + 1e-3)
 
 
 #: Node spacing of the Sun's altitude in :func:`_maybe_dark` [s].
 DARK_STEP_S = 600.0
 
 
-def _maybe_dark(night: NightConstraint, sky: SkyModel, xs: FloatArray, xe: FloatArray) -> BoolArray:
+def _maybe_dark(dark: LatticeScreen, xs: FloatArray, xe: FloatArray) -> BoolArray:
     """Blocks [xs, xe] that may touch the night: not every node from the one at or before
     ``xs`` to the one at or after ``xe`` is certainly in daylight (its screen over ±one node
-    spacing), so a block outside it fails the night at every instant (anchor epochs in the day
-    are never evaluated further)."""
-    lo = float(np.min(xs))
-    n = math.ceil((float(np.max(xe)) - lo) / DARK_STEP_S) + 2
-    nodes = np.asarray(lo + DARK_STEP_S * np.arange(n), dtype=np.float64)
-    day = night.screen(sky, 0, nodes, DARK_STEP_S) == -1
+    spacing, ``dark``), so a block outside it fails the night at every instant (anchor epochs
+    in the day are never evaluated further)."""
+    j0 = np.floor(xs / dark.step_s).astype(np.int64)
+    j1 = np.ceil(xe / dark.step_s).astype(np.int64)
+    lo = int(np.min(j0))
+    day = dark.at(np.arange(lo, int(np.max(j1)) + 1, dtype=np.int64)) == -1
     count = np.concatenate([[0], np.cumsum(~day)])
-    j0 = np.floor((xs - lo) / DARK_STEP_S).astype(np.int64)
-    j1 = np.minimum(np.ceil((xe - lo) / DARK_STEP_S).astype(np.int64), n - 1)
-    return np.asarray(count[j1 + 1] - count[j0] > 0)
+    return np.asarray(count[j1 - lo + 1] - count[j0 - lo] > 0)
 
 
 def _evaluate_screened(
-    active: list[Constraint], sky: SkyModel, i: int, xs: FloatArray, xe: FloatArray
+    active: list[Constraint],
+    sky: SkyModel,
+    i: int,
+    xs: FloatArray,
+    xe: FloatArray,
+    shared: LatticeScreen | None = None,
 ) -> tuple[BoolArray, NDArray[np.int64]]:
-    """:func:`evaluate_window` without the daylight shortcut."""
+    """:func:`evaluate_window` without the daylight shortcut; ``shared``: the first
+    constraint's screen on the :data:`SCREEN_STEP_S` nodes of the plan's axis."""
     frac = _sample_fractions(xs, xe)
     lo, hi = float(np.min(xs)), float(np.max(xe))
+    if shared is not None:  # the shared screen's nodes: multiples of SCREEN_STEP_S
+        lo = SCREEN_STEP_S * math.floor(lo / SCREEN_STEP_S)
     n_nodes = math.ceil((hi - lo) / SCREEN_STEP_S) + 1
     if n_nodes > 4 * xs.size * frac.size:  # a few blocks over a long span: check them all
         return evaluate_window_exact(active, sky, i, xs, xe)
     ok = np.ones(xs.shape, dtype=bool)
     first = np.full(xs.shape, -1, dtype=np.int64)
-    grid = _ScreenGrid(lo, n_nodes, [None] * len(active))
+    grid = _ScreenGrid(lo, n_nodes, [None] * len(active), shared)
     step = max(1, _MAX_SAMPLES // frac.size)
     for k in range(0, xs.size, step):
         part = slice(k, k + step)
@@ -121,11 +187,16 @@ class _ScreenGrid:
     lo: float
     n_nodes: int
     codes: list[Int8Array | None]
+    #: The first constraint's screen on the plan axis's nodes, shared by a run's targets.
+    shared: LatticeScreen | None = None
 
     def code(
         self, j: int, c: Constraint, sky: SkyModel, i: int, node: NDArray[np.int64]
     ) -> Int8Array:
         """Constraint ``j``'s screen at grid nodes ``node`` (any shape)."""
+        if j == 0 and self.shared is not None:
+            k0 = round(self.lo / SCREEN_STEP_S)  # lo is a node of the plan's axis here
+            return self.shared.at(node + k0)
         codes = self.codes[j]
         if codes is None:
             codes = self.codes[j] = np.full(self.n_nodes, 2, dtype=np.int8)

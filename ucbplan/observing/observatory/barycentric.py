@@ -126,6 +126,7 @@ def _site_icrs_interpolated(
         return _site_icrs_m(location, origin + TimeDelta(x * u.s))
     xc = np.linspace(x[0] - step_s, x[0] + step_s * (n - 2), n)
     tc = origin + TimeDelta(xc * u.s)
+    _ = tc.delta_tdb_tt  # computed once, kept for every conversion below (TimeAxis.tdb_grid)
     r = _site_icrs_m(location, tc)
     _, pv = erfa.epv00(tc.tdb.jd1, tc.tdb.jd2)  # the Earth's barycentric position (astropy's)
     earth = pv["p"] * au.to_value(u.m)

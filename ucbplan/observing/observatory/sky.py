@@ -54,14 +54,42 @@ def sun_cirs_frames(t: Time) -> FloatArray:
     return np.asarray(sun, dtype=np.float64)
 
 
-def _sun_cirs_m(t: Time) -> FloatArray:
-    """:func:`sun_cirs_frames` with astropy's GCRS → CIRS rotation (:func:`astropy_rotations`)
-    applied directly: the same matrix, bit for bit (tests compare)."""
+def moon_cirs_frames(t: Time) -> FloatArray:
+    """Geocentric CIRS position [m], (n, 3), of the Moon seen from ``t.location`` at ``t``
+    (its light time and aberration the site's), through astropy's ``get_body`` and frames."""
+    moon = get_body("moon", t).transform_to(CIRS(obstime=t)).cartesian.xyz.to_value(u.m).T
+    return np.asarray(moon, dtype=np.float64)
+
+
+def _sun_moon_cirs_m(t: Time) -> tuple[FloatArray, FloatArray]:
+    """(:func:`sun_cirs_frames`, :func:`moon_cirs_frames`) with astropy's rotations
+    (:func:`astropy_rotations`) computed once, for the Sun, the site's GCRS position in
+    ``get_body`` and the Moon's GCRS → CIRS, in astropy's own steps (``get_body``,
+    ``gcrs_to_cirs``): the same numbers, bit for bit (tests compare), with erfa's ``c2i06a``
+    (the costliest step) run once instead of three times."""
     rotations = astropy_rotations()
-    if rotations is None:
-        return sun_cirs_frames(t)
-    sun = get_sun(t).cartesian.transform(rotations[1](t)).xyz.to_value(u.m).T
-    return np.asarray(sun, dtype=np.float64)
+    try:
+        from astropy.coordinates.builtin_frames.intermediate_rotation_transforms import (
+            get_location_gcrs,
+        )
+        from astropy.coordinates.solar_system import _get_apparent_body_position
+    except ImportError:  # a future astropy moved them: its public functions, the same numbers
+        rotations = None
+    if rotations is None or t.location is None:
+        return sun_cirs_frames(t), moon_cirs_frames(t)
+    from astropy.coordinates import GCRS, ICRS, SphericalRepresentation
+
+    to_itrs, to_cirs = rotations[0](t), rotations[1](t)
+    sun = get_sun(t).cartesian.transform(to_cirs).xyz.to_value(u.m).T
+    # get_body("moon", t): the site's GCRS position from the rotations above
+    geoloc, geovel = t.location._get_gcrs_posvel(t, to_itrs, to_cirs)
+    body = ICRS(_get_apparent_body_position("moon", t, None, geoloc))
+    gcrs = SkyCoord(body.transform_to(GCRS(obstime=t, obsgeoloc=geoloc, obsgeovel=geovel)))
+    # gcrs_to_cirs: to the geocentric observer, rotate; held spherical, as a SkyCoord holds it
+    observer = get_location_gcrs(CIRS(obstime=t).location, t, to_itrs, to_cirs)
+    cirs = gcrs.frame.transform_to(observer).cartesian.transform(to_cirs)
+    moon = cirs.represent_as(SphericalRepresentation).to_cartesian().xyz.to_value(u.m).T
+    return np.asarray(sun, dtype=np.float64), np.asarray(moon, dtype=np.float64)
 
 
 @dataclass(frozen=True)
@@ -113,13 +141,11 @@ class SkyModel:
         origin = Time(origin, scale="tdb", location=location)
         import erfa
 
-        t = TimeAxis(origin).tdb(x)
+        t = TimeAxis(origin).tdb_grid(x)  # one dtdb for every frame below
         ut1 = t.ut1
         era = np.unwrap(erfa.era00(ut1.jd1, ut1.jd2))
-        frame = CIRS(obstime=t)
-        sun = _sun_cirs_m(t)
         # the Moon seen from the site (t has its location), then geocentric CIRS
-        moon = get_body("moon", t).transform_to(frame).cartesian.xyz.to_value(u.m).T
+        sun, moon = _sun_moon_cirs_m(t)
         tgt = coords[:, None].transform_to(CIRS(obstime=t[None, :]))
         tvec = tgt.cartesian.xyz.value  # (3, n_targets, n_nodes), unit vectors
         tvec = np.moveaxis(tvec, 0, -1)  # (n_targets, n_nodes, 3)
@@ -148,10 +174,16 @@ class SkyModel:
         """Number of targets in the model."""
         return int(self.coords.shape[0])
 
-    def _rotate(self, v_itrs: FloatArray, x: FloatArray) -> FloatArray:
-        """ITRS (≈TIRS) vector → CIRS at times x: rotation by −ERA about z. Shape x.shape+(3,)."""
+    def _spin(self, x: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """(cos, sin) of the Earth rotation angle at times x."""
         era = self.era(x)
-        c, s = np.cos(era), np.sin(era)
+        return np.cos(era), np.sin(era)
+
+    @staticmethod
+    def _rotate(v_itrs: FloatArray, spin: tuple[FloatArray, FloatArray]) -> FloatArray:
+        """ITRS (≈TIRS) vector → CIRS: rotation by −ERA about z (``spin``: its cos and sin at
+        the times wanted). Shape x.shape+(3,)."""
+        c, s = spin
         return np.stack(
             [
                 c * v_itrs[0] - s * v_itrs[1],
@@ -163,24 +195,28 @@ class SkyModel:
 
     def up(self, x: FloatArray) -> FloatArray:
         """Local geodetic vertical in CIRS at times x."""
-        return self._rotate(self.up_itrs, np.asarray(x, dtype=np.float64))
+        return self._rotate(self.up_itrs, self._spin(np.asarray(x, dtype=np.float64)))
 
-    def _alt(self, direction: FloatArray, x: FloatArray) -> FloatArray:
-        s = np.einsum("...k,...k->...", _unit(direction), self.up(x))
+    def _alt(self, direction: FloatArray, spin: tuple[FloatArray, FloatArray]) -> FloatArray:
+        s = np.einsum("...k,...k->...", _unit(direction), self._rotate(self.up_itrs, spin))
         return np.asarray(np.degrees(np.arcsin(np.clip(s, -1.0, 1.0))), dtype=np.float64)
 
-    def _topocentric(self, spline: CubicSpline, x: FloatArray) -> FloatArray:
-        return np.asarray(spline(x) - self._rotate(self.site_itrs_m, x), dtype=np.float64)
+    def _topocentric(
+        self, spline: CubicSpline, x: FloatArray, spin: tuple[FloatArray, FloatArray]
+    ) -> FloatArray:
+        return np.asarray(spline(x) - self._rotate(self.site_itrs_m, spin), dtype=np.float64)
 
     def sun_alt_deg(self, x: FloatArray) -> FloatArray:
         """Geometric altitude of the Sun's centre [deg]."""
         x = np.asarray(x, dtype=np.float64)
-        return self._alt(self._topocentric(self.sun, x), x)
+        spin = self._spin(x)  # one Earth rotation angle for the site and its vertical
+        return self._alt(self._topocentric(self.sun, x, spin), spin)
 
     def moon_alt_deg(self, x: FloatArray) -> FloatArray:
         """Geometric topocentric altitude of the Moon's centre [deg]."""
         x = np.asarray(x, dtype=np.float64)
-        return self._alt(self._topocentric(self.moon, x), x)
+        spin = self._spin(x)
+        return self._alt(self._topocentric(self.moon, x, spin), spin)
 
     def target_dir(self, i: int, x: FloatArray) -> FloatArray:
         """Apparent (CIRS) unit vector of target ``i`` at times x."""
@@ -189,12 +225,12 @@ class SkyModel:
     def target_alt_deg(self, i: int, x: FloatArray) -> FloatArray:
         """Geometric altitude of target ``i`` [deg]."""
         x = np.asarray(x, dtype=np.float64)
-        return self._alt(self.target_dir(i, x), x)
+        return self._alt(self.target_dir(i, x), self._spin(x))
 
     def moon_sep_deg(self, i: int, x: FloatArray) -> FloatArray:
         """Angle between target ``i`` and the topocentric Moon [deg]."""
         x = np.asarray(x, dtype=np.float64)
-        m = _unit(self._topocentric(self.moon, x))
+        m = _unit(self._topocentric(self.moon, x, self._spin(x)))
         cosang = np.einsum("...k,...k->...", m, self.target_dir(i, x))
         return np.asarray(np.degrees(np.arccos(np.clip(cosang, -1.0, 1.0))), dtype=np.float64)
 

@@ -81,6 +81,18 @@ class TimeAxis:
         """``Time`` (TDB, with location) of axis coordinates ``x`` [s]."""
         return self.origin + TimeDelta(np.asarray(x, dtype=np.float64) * u.s)
 
+    def tdb_grid(self, x: ArrayLike) -> Time:
+        """:meth:`tdb`, with the TDB − TT term (erfa ``dtdb``) computed once, now, and kept.
+
+        For a grid that astropy converts many times (frames read its TT, UTC and UT1): astropy
+        carries the term to the grid's slices and copies and reuses it in every later scale
+        conversion of them, so ``dtdb`` runs once instead of once per conversion. It is astropy's
+        own value for these times, so every conversion gives the same bits.
+        """
+        t = self.tdb(x)
+        _ = t.delta_tdb_tt  # the property computes and keeps it (t is TDB)
+        return t
+
     def utc(self, x: ArrayLike) -> Time:
         """``Time`` (UTC, with location) of axis coordinates ``x`` [s].
 

@@ -34,7 +34,7 @@ from ucbplan.observing.blocks.block import (
     check_smear_budget,
 )
 from ucbplan.observing.constraints import ConstraintSet, NightConstraint
-from ucbplan.observing.constraints.checks import DARK_STEP_S, evaluate_window
+from ucbplan.observing.constraints.checks import DARK_STEP_S, NightScreens, evaluate_window
 from ucbplan.observing.observatory.barycentric import DelayInterpolator, SiteTrack
 from ucbplan.observing.observatory.sites import Site
 from ucbplan.observing.observatory.sky import SkyModel, airmass_from_alt
@@ -221,6 +221,7 @@ def candidate_blocks(
     star: int = 1,
     grid_step_s: float | None = None,
     search_x: FloatArray | None = None,
+    night: NightScreens | None = None,
 ) -> Candidates:
     """Every anchor epoch whose block centre lies in ``span_x`` (s on ``axis``); with
     ``grid_step_s``, every epoch of a back-to-back grid instead (:func:`grid_epochs`).
@@ -228,7 +229,8 @@ def candidate_blocks(
     With ``search_x`` (the nights, :func:`night_search_x`), epochs are searched only there,
     widened by a block and two orbits: every block that may touch the night, and the second
     block of its session, is found with the values the whole span gives it (≤ 2 ulp of its
-    epoch); daytime epochs, which fail the night, are never solved.
+    epoch); daytime epochs, which fail the night, are never solved. ``night``: the night's
+    screens shared by the run's targets (see :func:`evaluate_window`).
 
     Notes
     -----
@@ -242,7 +244,7 @@ def candidate_blocks(
     keep = (x_mid >= lo) & (x_mid < hi)
     half = plan.span_s / 2.0
     x_mid = x_mid[keep]
-    ok, first = evaluate_window(constraints, sky, i, x_mid - half, x_mid + half)
+    ok, first = evaluate_window(constraints, sky, i, x_mid - half, x_mid + half, night)
     if grid_step_s is not None:  # σ_t of usable exposures; no π-mode twin without an anchor
         es = with_details(target, es, np.flatnonzero(keep)[ok], pi_mode=False)
     elif not _combined(mode.anchor):  # σ_t and the π-mode alternative of usable blocks only
@@ -329,6 +331,8 @@ class PlanFrame:
     constraints: ConstraintSet
     #: Where anchor epochs are searched (:func:`night_search_x`); None: the whole span.
     search_x: FloatArray | None = None
+    #: The night's screens, computed once for all targets (None: each target's own).
+    night: NightScreens | None = None
 
 
 @dataclass(frozen=True)
@@ -449,6 +453,7 @@ def _target_run(
         settings.star,
         te.step_s if te.strategy == "untargeted" else None,
         frame.search_x,
+        frame.night,
     )
     tau = cand.tau_origin_s + cand.dt_s
     valid = (tau >= cand.epochs.tau(since)) & (tau <= cand.epochs.tau(until))
@@ -494,6 +499,7 @@ def prepare_runs(
         track=SiteTrack.build(axis.origin, span_x, site.location),
         constraints=constraints,
         search_x=night_search_x(constraints.night, sky, span_x),
+        night=NightScreens(constraints.night, sky),
     )
     runs, warns = [], []
     for i, t in enumerate(targets):

@@ -124,7 +124,9 @@ def not_planned(
         free[[j for s in placed if s.target_i == run.index for j in s.idx]] = False
         before = set(order[: order.index(run.index)])  # placed before this target
         taken = [(s.x0 - gap_s, s.x1) for s in placed if s.target_i in before]
-        dark = free & evaluate_window([night], frame.sky, run.index, c.x_mid, c.x_mid)[0]
+        dark = (
+            free & evaluate_window([night], frame.sky, run.index, c.x_mid, c.x_mid, frame.night)[0]
+        )
         others = _overlaps(c.x_start - gap_s, c.x_end + gap_s, taken)
         codes = _reason_codes(run, frame)
         codes = np.where((codes < 0) & others, taken_code, codes)

@@ -53,10 +53,13 @@ def _labels(
     blocks: Counter[tuple[int, int]] = Counter()
     sessions: Counter[tuple[int, int]] = Counter()
     out: dict[int, tuple[list[int], list[BlockLabel]]] = {}
+    prefixes: dict[tuple[int, int], str] = {}  # a dense night holds dozens of sessions
     for s in sorted(placed, key=lambda s: (s.target_i, s.x0)):
         key = (s.target_i, s.night_i)
         label = spans[s.night_i].label
-        prefix = f"{slug(runs[s.target_i].target.name)}-{label.replace('-', '')}"
+        if key not in prefixes:
+            prefixes[key] = f"{slug(runs[s.target_i].target.name)}-{label.replace('-', '')}"
+        prefix = prefixes[key]
         js, labels = out.setdefault(s.target_i, ([], []))
         sessions[key] += 1
         session_id = f"{prefix}-S{sessions[key]:02d}"

@@ -122,7 +122,9 @@ def _best_visit(
     good = (run.ok > 0) & run.valid
     js = np.arange(j0, j1)
     acq_cs = frame.constraints.pointing  # the zenith hole too (issue 33)
-    acq_ok, _ = evaluate_window(acq_cs, frame.sky, run.index, c.x_start[js] - acq, c.x_start[js])
+    acq_ok, _ = evaluate_window(
+        acq_cs, frame.sky, run.index, c.x_start[js] - acq, c.x_start[js], frame.night
+    )
     starts = js[good[js] & acq_ok]
     nxt = np.searchsorted(c.x_start, c.x_end + r - _READOUT_SLACK_S, side="left")
     best: tuple[tuple[int, ...], float, float] | None = None
