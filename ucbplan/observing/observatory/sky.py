@@ -54,42 +54,14 @@ def sun_cirs_frames(t: Time) -> FloatArray:
     return np.asarray(sun, dtype=np.float64)
 
 
-def moon_cirs_frames(t: Time) -> FloatArray:
-    """Geocentric CIRS position [m], (n, 3), of the Moon seen from ``t.location`` at ``t``
-    (its light time and aberration the site's), through astropy's ``get_body`` and frames."""
-    moon = get_body("moon", t).transform_to(CIRS(obstime=t)).cartesian.xyz.to_value(u.m).T
-    return np.asarray(moon, dtype=np.float64)
-
-
-def _sun_moon_cirs_m(t: Time) -> tuple[FloatArray, FloatArray]:
-    """(:func:`sun_cirs_frames`, :func:`moon_cirs_frames`) with astropy's rotations
-    (:func:`astropy_rotations`) computed once, for the Sun, the site's GCRS position in
-    ``get_body`` and the Moon's GCRS → CIRS, in astropy's own steps (``get_body``,
-    ``gcrs_to_cirs``): the same numbers, bit for bit (tests compare), with erfa's ``c2i06a``
-    (the costliest step) run once instead of three times."""
+def _sun_cirs_m(t: Time) -> FloatArray:
+    """:func:`sun_cirs_frames` with astropy's GCRS → CIRS rotation (:func:`astropy_rotations`)
+    applied directly: the same matrix, bit for bit (tests compare)."""
     rotations = astropy_rotations()
-    try:
-        from astropy.coordinates.builtin_frames.intermediate_rotation_transforms import (
-            get_location_gcrs,
-        )
-        from astropy.coordinates.solar_system import _get_apparent_body_position
-    except ImportError:  # a future astropy moved them: its public functions, the same numbers
-        rotations = None
-    if rotations is None or t.location is None:
-        return sun_cirs_frames(t), moon_cirs_frames(t)
-    from astropy.coordinates import GCRS, ICRS, SphericalRepresentation
-
-    to_itrs, to_cirs = rotations[0](t), rotations[1](t)
-    sun = get_sun(t).cartesian.transform(to_cirs).xyz.to_value(u.m).T
-    # get_body("moon", t): the site's GCRS position from the rotations above
-    geoloc, geovel = t.location._get_gcrs_posvel(t, to_itrs, to_cirs)
-    body = ICRS(_get_apparent_body_position("moon", t, None, geoloc))
-    gcrs = SkyCoord(body.transform_to(GCRS(obstime=t, obsgeoloc=geoloc, obsgeovel=geovel)))
-    # gcrs_to_cirs: to the geocentric observer, rotate; held spherical, as a SkyCoord holds it
-    observer = get_location_gcrs(CIRS(obstime=t).location, t, to_itrs, to_cirs)
-    cirs = gcrs.frame.transform_to(observer).cartesian.transform(to_cirs)
-    moon = cirs.represent_as(SphericalRepresentation).to_cartesian().xyz.to_value(u.m).T
-    return np.asarray(sun, dtype=np.float64), np.asarray(moon, dtype=np.float64)
+    if rotations is None:
+        return sun_cirs_frames(t)
+    sun = get_sun(t).cartesian.transform(rotations[1](t)).xyz.to_value(u.m).T
+    return np.asarray(sun, dtype=np.float64)
 
 
 @dataclass(frozen=True)
@@ -144,8 +116,10 @@ class SkyModel:
         t = TimeAxis(origin).tdb_grid(x)  # one dtdb for every frame below
         ut1 = t.ut1
         era = np.unwrap(erfa.era00(ut1.jd1, ut1.jd2))
+        frame = CIRS(obstime=t)
+        sun = _sun_cirs_m(t)
         # the Moon seen from the site (t has its location), then geocentric CIRS
-        sun, moon = _sun_moon_cirs_m(t)
+        moon = get_body("moon", t).transform_to(frame).cartesian.xyz.to_value(u.m).T
         tgt = coords[:, None].transform_to(CIRS(obstime=t[None, :]))
         tvec = tgt.cartesian.xyz.value  # (3, n_targets, n_nodes), unit vectors
         tvec = np.moveaxis(tvec, 0, -1)  # (n_targets, n_nodes, 3)
