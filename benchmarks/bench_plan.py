@@ -39,6 +39,7 @@ from astropy.coordinates import SkyCoord
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+from _workload import compile_package
 from plan_peers import (
     Agreement,
     Sample,
@@ -122,6 +123,7 @@ def cli_seconds(files: list[Path], n_nights: int, out: Path) -> float:
     """Wall time [s] of ``ucbplan plan`` in a fresh process, blocks table written to ``out``."""
     cmd = [sys.executable, "-m", "ucbplan", "plan", *map(str, files), "--site", "paranal"]
     cmd += ["--night", "2040-01-01", "--nights", str(n_nights), "-o", str(out), "--overwrite"]
+    compile_package()
     t0 = time.perf_counter()
     subprocess.run(cmd, check=True, capture_output=True, cwd=REPO)
     return time.perf_counter() - t0

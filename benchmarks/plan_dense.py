@@ -30,7 +30,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from _workload import children_cpu_s, workload_s
+from _workload import children_cpu_s, compile_package, workload_s
 from bench_plan import make_targets
 from plan_peers import make_samples, peer_rates, random_picks
 
@@ -54,6 +54,7 @@ def cli(files: list[Path], n_nights: int, out: Path, opts: list[str]) -> tuple[f
     cmd = [sys.executable, "-m", "ucbplan", "plan", *map(str, files), "--site", "paranal"]
     cmd += ["--night", "2040-01-01", "--nights", str(n_nights), *opts]
     cmd += ["-o", str(out), "--overwrite"]
+    compile_package()
     c0 = children_cpu_s()
     subprocess.run(cmd, check=True, capture_output=True, cwd=REPO)
     cpu = children_cpu_s() - c0

