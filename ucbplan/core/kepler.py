@@ -30,8 +30,10 @@ F64 = NDArray[np.float64]
 
 #: Harmonics are kept until the dropped tail is below this fraction of h (K·1e-14 ≪ 1 mm/s).
 _SERIES_TOL = 1e-14
-#: Spectra per chunk of the window-average kernel (its temporaries stay in cache).
-_CHUNK = 8192
+#: Spectra per chunk of the window-average kernel (its temporaries stay in cache). Callers that
+#: chunk the same arrays keep these boundaries: numpy's complex product of a one-element array
+#: is not the vectorised loop's double, so a chunk of one row would round differently.
+CHUNK_ROWS = 8192
 #: Half-window floor [s]: a zero window evaluates as this one (sin x/x = 1 to rounding).
 _HALF_FLOOR_S = 1e-280
 #: Series terms whose coefficient and e-derivative are both below this are skipped [1].
@@ -169,8 +171,8 @@ def window_average(
     fphi, fom, fhalf, fnb = (np.broadcast_to(x, shape).ravel() for x in (phi, om, half, nb))
     terms = _terms(e, derivatives)
     out = np.zeros((4, fphi.size))
-    for lo in range(0, fphi.size, _CHUNK):  # chunks that stay in cache
-        sl = slice(lo, lo + _CHUNK)
+    for lo in range(0, fphi.size, CHUNK_ROWS):  # chunks that stay in cache
+        sl = slice(lo, lo + CHUNK_ROWS)
         chunk = (fphi[sl], fom[sl], fhalf[sl], fnb[sl])
         _kernel(*chunk, omega_dot=omega_dot, terms=terms, derivatives=derivatives, out=out[:, sl])
     return WindowedVelocity(*(np.asarray(o.reshape(shape)) for o in out))
