@@ -39,13 +39,14 @@ def test_the_chunks_are_the_window_averages_chunks() -> None:
     assert design._ROWS == CHUNK_ROWS
 
 
+@pytest.mark.parametrize("circular", [False, True])
 @pytest.mark.parametrize("rows", [7, 64])
 def test_chunks_give_the_same_doubles_as_one_piece(
-    rows: int, monkeypatch: pytest.MonkeyPatch
+    rows: int, circular: bool, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """101 spectra over 4 years (a partial last chunk, never of one row): chunks of 7 and 64
-    rows against one chunk of all of them."""
-    p = make_target().params
+    rows against one chunk of all of them, eccentric and circular (the first-order Jacobian)."""
+    p = make_target(circular=circular).params
     rng = np.random.default_rng(34)
     tau = np.sort(rng.uniform(-6e7, 6e8, 101))
     window = rng.uniform(0.0, 120.0, 101)

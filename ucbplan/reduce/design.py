@@ -43,7 +43,7 @@ _ROWS = CHUNK_ROWS
 F64 = NDArray[np.float64]
 
 
-def _chunks(n: int) -> Iterator[slice]:
+def row_chunks(n: int) -> Iterator[slice]:
     """Consecutive slices of at most :data:`_ROWS` rows covering ``n`` rows."""
     return (slice(lo, lo + _ROWS) for lo in range(0, n, _ROWS))
 
@@ -147,7 +147,7 @@ def track(p: PhaseParams, tau: F64) -> OrbitTrack:
     tau = np.asarray(tau, dtype=np.float64)
     at = OrbitTrack(*(np.empty(tau.shape) for _ in range(5)))
     flat = [x.reshape(-1) for x in (tau, at.phase, at.phase_mod, at.eta, at.kap, at.u)]
-    for sl in _chunks(tau.size):  # elementwise: chunk by chunk, the same doubles
+    for sl in row_chunks(tau.size):  # elementwise: chunk by chunk, the same doubles
         t = flat[0][sl]
         phi, eta, kap, u = orbit_state(p, t)
         for out, x in zip(flat[1:], (phi, phase_asc_mod(p, t), eta, kap, u), strict=True):
@@ -187,7 +187,7 @@ def _windowed(
     t, w = (np.broadcast_to(x, shape).reshape(-1) for x in (tau, window_s))
     orbit_rows = None if at is None else [x.reshape(-1) for x in (at.phase_mod, at.eta, at.kap)]
     out = np.zeros((5, t.size))  # ⟨h⟩, its three partials (zero without derivatives), ω
-    for sl in _chunks(t.size):
+    for sl in row_chunks(t.size):
         rows = None if orbit_rows is None else tuple(x[sl] for x in orbit_rows)
         wv, om = _windowed_rows(p, t[sl], w[sl], derivatives, rows)
         out[0, sl], out[4, sl] = wv.h, om
@@ -225,39 +225,69 @@ def design_jacobian(
     ∂ω/∂η = cos ω/e, ∂e/∂κ = cos ω, ∂ω/∂κ = −sin ω/e. The window rates' own dependence on f
     and ω̇ (a relative 1e-5 of Λ) is not differentiated.
     """
-    e = p.eccentricity
     at = track(p, tau) if at is None else at
-    if e < _E_FIRST_ORDER:
-        return _first_order_jacobian(p, tau, window_s, at)
-    wv, om = _windowed(p, tau, window_s, at=at) if mid is None else mid
+    if p.eccentricity < _E_FIRST_ORDER:
+        rows, args = _first_order_rows, (window_s, at.phase, at.eta, at.kap)
+    else:
+        wv, om = _windowed(p, tau, window_s, at=at) if mid is None else mid
+        rows, args = _exact_rows, (wv.d_phase, wv.d_omega, wv.d_e, om, at.eta, at.kap)
+    t = np.reshape(tau, -1)
+    flat = [np.broadcast_to(x, np.shape(tau)).reshape(-1) for x in args]
+    jac = np.empty((t.size, 7))
+    for sl in row_chunks(t.size):  # elementwise: chunk by chunk, the same doubles
+        rows(p, t[sl], *(x[sl] for x in flat), out=jac[sl])
+    return jac
+
+
+def _exact_rows(
+    p: PhaseParams,
+    tau: F64,
+    d_phase: F64,
+    d_omega: F64,
+    d_e: F64,
+    om: F64,
+    eta: F64,
+    kap: F64,
+    out: F64,
+) -> None:
+    """∂G/∂θ of the exact design into ``out`` from its partials ∂⟨h⟩/∂(Φ, ω, e) at ω."""
+    e = p.eccentricity
     so, co = np.sin(om), np.cos(om)
-    dG_dphi = wv.d_phase
-    dG_deta = so * wv.d_e + co / e * wv.d_omega
-    dG_dkap = co * wv.d_e - so / e * wv.d_omega
-    return _chain(p, tau, dG_dphi, dG_deta, dG_dkap, at.eta, at.kap)
+    dG_deta = so * d_e + co / e * d_omega
+    dG_dkap = co * d_e - so / e * d_omega
+    _chain(p, tau, d_phase, dG_deta, dG_dkap, eta, kap, out)
 
 
-def _first_order_jacobian(p: PhaseParams, tau: F64, window_s: F64, at: OrbitTrack) -> F64:
-    """∂G/∂θ of Eq. vbar_master (exact at e = 0), with the window rates of the exact design:
-    n̄(τ) for the cos Φ term and 2n̄(τ) − ω̇ for the (η, κ) term."""
+def _first_order_rows(
+    p: PhaseParams, tau: F64, window_s: F64, phi: F64, eta: F64, kap: F64, out: F64
+) -> None:
+    """∂G/∂θ of Eq. vbar_master (exact at e = 0) into ``out``, with the window rates of the
+    exact design: n̄(τ) for the cos Φ term and 2n̄(τ) − ω̇ for the (η, κ) term."""
     nbar = math.pi * (p.f_gw + p.fdot * tau + p.fddot * tau**2 / 2.0)
     half = 0.5 * window_s
     lam_k = np.sinc(nbar * half / math.pi)
     lam_kap = np.sinc((2.0 * nbar - p.omega_dot) * half / math.pi)
-    phi, eta, kap = at.phase, at.eta, at.kap
     dG_dphi = -lam_k * np.sin(phi) + 2.0 * lam_kap * (
         -kap * np.sin(2 * phi) + eta * np.cos(2 * phi)
     )
-    return _chain(p, tau, dG_dphi, lam_kap * np.sin(2 * phi), lam_kap * np.cos(2 * phi), eta, kap)
+    dG_deta, dG_dkap = lam_kap * np.sin(2 * phi), lam_kap * np.cos(2 * phi)
+    _chain(p, tau, dG_dphi, dG_deta, dG_dkap, eta, kap, out)
 
 
 def _chain(
-    p: PhaseParams, tau: F64, dG_dphi: F64, dG_deta: F64, dG_dkap: F64, eta: F64, kap: F64
-) -> F64:
-    """∂G/∂θ from ∂G/∂(Φ, η(τ), κ(τ)) through the phase model and the apsidal rotation."""
+    p: PhaseParams,
+    tau: F64,
+    dG_dphi: F64,
+    dG_deta: F64,
+    dG_dkap: F64,
+    eta: F64,
+    kap: F64,
+    jac: F64,
+) -> None:
+    """∂G/∂θ (into ``jac``, rows × 7) from ∂G/∂(Φ, η(τ), κ(τ)) through the phase model and the
+    apsidal rotation."""
     w = p.omega_dot * tau
     c, s = np.cos(w), np.sin(w)
-    jac = np.empty((tau.size, 7))
     jac[:, 0] = 0.5 * dG_dphi
     jac[:, 1] = math.pi * tau * dG_dphi
     jac[:, 2] = math.pi * tau**2 / 2.0 * dG_dphi
@@ -265,7 +295,6 @@ def _chain(
     jac[:, 4] = dG_deta * c - dG_dkap * s  # ∂/∂η_ref
     jac[:, 5] = dG_deta * s + dG_dkap * c  # ∂/∂κ_ref
     jac[:, 6] = dG_deta * tau * kap - dG_dkap * tau * eta  # ∂/∂ω̇
-    return jac
 
 
 def designs(
@@ -287,7 +316,7 @@ def designs(
     nb = math.pi * p.f_gw - p.omega_dot
     t, w = (np.broadcast_to(x, np.shape(tau)).reshape(-1) for x in (tau, window_s))
     out = np.empty((ncomp, t.size))
-    for sl in _chunks(t.size):  # both stars' emission times from one sin u per chunk
+    for sl in row_chunks(t.size):  # both stars' emission times from one sin u per chunk
         sin_u = np.sin(np.reshape(u, -1)[sl])
         for j in range(ncomp):
             sign = 1.0 if j == 0 else -1.0
