@@ -14,7 +14,7 @@ biased K_j by ≈ −e²K_j (docs/method.md, "Reduction").
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -226,16 +226,16 @@ def design_jacobian(
     and ω̇ (a relative 1e-5 of Λ) is not differentiated.
     """
     at = track(p, tau) if at is None else at
-    if p.eccentricity < _E_FIRST_ORDER:
-        rows, args = _first_order_rows, (window_s, at.phase, at.eta, at.kap)
-    else:
+    rows: Callable[..., None] = _first_order_rows
+    args: tuple[F64, ...] = (np.asarray(window_s, float), at.phase, at.eta, at.kap)
+    if p.eccentricity >= _E_FIRST_ORDER:
         wv, om = _windowed(p, tau, window_s, at=at) if mid is None else mid
         rows, args = _exact_rows, (wv.d_phase, wv.d_omega, wv.d_e, om, at.eta, at.kap)
     t = np.reshape(tau, -1)
     flat = [np.broadcast_to(x, np.shape(tau)).reshape(-1) for x in args]
     jac = np.empty((t.size, 7))
     for sl in row_chunks(t.size):  # elementwise: chunk by chunk, the same doubles
-        rows(p, t[sl], *(x[sl] for x in flat), out=jac[sl])
+        rows(p, t[sl], *(x[sl] for x in flat), jac[sl])
     return jac
 
 
