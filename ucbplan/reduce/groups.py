@@ -139,16 +139,26 @@ class _Keys:
 def _group_keys(sessions: Sequence[str], us: F64) -> _Keys:
     """Sort the spectra with a u★ (finite ``us``) by (session, u★) and number the groups."""
     keep = np.nonzero(np.isfinite(us))[0]
-    names, code = np.unique(np.asarray([str(x) for x in sessions])[keep], return_inverse=True)
-    order = np.lexsort((us[keep], code.reshape(-1)))
+    names, code = _session_codes(sessions)
+    order = np.lexsort((us[keep], code[keep]))
     rows = keep[order]
-    key_s, key_u = code.reshape(-1)[order], us[rows]
+    key_s, key_u = code[rows], us[rows]
     new = np.ones(rows.size, dtype=bool)
     new[1:] = (key_s[1:] != key_s[:-1]) | (key_u[1:] != key_u[:-1])
     starts = np.nonzero(new)[0]
     counts = np.diff(np.append(starts, rows.size))
     gid = np.cumsum(new) - 1
     return _Keys(rows, key_u, gid, names[key_s[starts]], starts, counts)
+
+
+def _session_codes(sessions: Sequence[str]) -> tuple[NDArray[np.str_], NDArray[np.intp]]:
+    """The distinct session labels as :func:`numpy.unique` sorts them, and each spectrum's
+    index into them: ``np.unique(labels, return_inverse=True)`` of all spectra, found among the
+    distinct labels alone (a dictionary of the label objects, not 10⁶ strings sorted)."""
+    first = {label: k for k, label in enumerate(dict.fromkeys(sessions))}
+    names, inverse = np.unique(np.asarray([str(label) for label in first]), return_inverse=True)
+    number = np.fromiter(map(first.__getitem__, sessions), dtype=np.intp, count=len(sessions))
+    return names, inverse.reshape(-1)[number]
 
 
 def _build_groups(
