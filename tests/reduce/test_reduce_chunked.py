@@ -81,8 +81,24 @@ def test_reduce_is_the_same_chunk_by_chunk(monkeypatch: pytest.MonkeyPatch) -> N
     def run() -> list[object]:
         r = reduce(t, table, ReduceOptions(n_samples=200, seed=1, light_time=True))
         lt = list(r.light_time.values())
-        return [r.u_rad, *r.design, r.dK, r.dgamma, r.sigma_u, [f.K for f in r.fits], lt]
+        return [r.tau_s, r.u_rad, *r.design, r.dK, r.dgamma, r.sigma_u, [f.K for f in r.fits], lt]
 
     whole = run()
     monkeypatch.setattr(design, "_ROWS", 5)
     assert all(_same_bits(a, b) for a, b in zip(whole, run(), strict=True))
+
+
+def test_seconds_since_the_reference_are_astropys(monkeypatch: pytest.MonkeyPatch) -> None:
+    """τ = (t − t_ref) in s chunk by chunk (7 rows) is astropy's whole-array subtraction, bit for
+    bit, for TDB times over 20 years given as two-part JDs."""
+    from astropy.time import Time
+
+    from ucbplan.reduce.velocities import _seconds_since
+
+    rng = np.random.default_rng(11)
+    jd = 2464329.5 + np.sort(rng.uniform(-3650.0, 3650.0, 103))
+    time = Time(np.floor(jd), jd - np.floor(jd), format="jd", scale="tdb")
+    t_ref = Time("2037-01-01T00:00:00", scale="tdb")
+    whole = np.asarray((time - t_ref).to_value("s"), dtype=np.float64)
+    monkeypatch.setattr(design, "_ROWS", 7)
+    assert _same_bits(_seconds_since(time, t_ref), whole)
