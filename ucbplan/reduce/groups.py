@@ -112,7 +112,9 @@ def group_spectra(
     G = np.asarray(design, float)
     k = _group_keys(sessions, us)
     rows = k.rows
-    at = (lk[rows], u[rows], k.u_star, G[rows], k.gid)
+    # the phase-mismatch term's cos u − cos u★ of every kept row, once for all components
+    mismatch = np.cos(u[rows]) - np.cos(k.u_star)
+    at = (lk[rows], mismatch, G[rows], k.gid)
     comps = [
         _component_means(np.asarray(v, float)[rows], np.asarray(sg, float)[rows], sK, *at)
         for v, sg, sK in zip(velocities, sigmas, _signed(K), strict=True)
@@ -206,18 +208,18 @@ def _component_means(
     sigma: F64,
     sK: float,
     lam_k: F64,
-    u: F64,
-    u_star: F64,
+    mismatch: F64,
     G: F64,
     gid: NDArray[np.intp],
 ) -> tuple[F64, F64, F64]:
     """One component of every group: (fixed-u mean, its σ, zero-crossing γ estimate) per group.
 
-    ``sK`` is ±K_j (the star's sign); the velocities are moved to the exact u★ first and the γ
-    estimate removes the whole orbital term ±K_j G. ``gid`` numbers each row's group.
+    ``sK`` is ±K_j (the star's sign); the velocities are moved to the exact u★ first (by
+    ``mismatch`` = cos u − cos u★) and the γ estimate removes the whole orbital term ±K_j G.
+    ``gid`` numbers each row's group.
     """
     w = 1.0 / sigma**2
-    vc = v - sK * lam_k * (np.cos(u) - np.cos(u_star))
+    vc = v - sK * lam_k * mismatch
     gam = v - sK * G
     wsum = np.bincount(gid, weights=w)
     return (
