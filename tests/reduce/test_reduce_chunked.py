@@ -1,6 +1,8 @@
-"""The per-spectrum passes of ``reduce`` (orbit, window averages, light-time designs, Jacobians)
-run chunk by chunk (:data:`ucbplan.reduce.design._ROWS` spectra): every operation is
-elementwise, so the chunks must give the same doubles as one piece, bit for bit (issue 34)."""
+"""The per-spectrum passes of ``reduce`` (orbit, window averages, light-time designs, Jacobians,
+seconds since t_ref) run chunk by chunk (:data:`ucbplan.core.kepler.CHUNK_ROWS` spectra): every
+operation is elementwise, so the chunks must give the same doubles as one piece, bit for bit
+(issue 34). A chunk of one row is avoided: numpy's complex product of a one-element array
+rounds differently from its vectorised loop."""
 
 from __future__ import annotations
 
@@ -8,6 +10,7 @@ import numpy as np
 import pytest
 from support.reduce_synth import make_target
 
+from ucbplan.core import kepler
 from ucbplan.reduce import design
 from ucbplan.reduce.pipeline import ReduceOptions, reduce
 from ucbplan.reduce.velocities import VelocityTable
@@ -30,15 +33,6 @@ def _passes(p, tau, window):  # type: ignore[no-untyped-def]
             mid[1], jac, *lt, *plain]  # fmt: skip
 
 
-def test_the_chunks_are_the_window_averages_chunks() -> None:
-    """The same boundaries as :func:`ucbplan.core.kepler.window_average`'s chunks: numpy's
-    complex product of a one-row array rounds differently from its vectorised loop, so other
-    boundaries could leave a last row alone that the whole table had not."""
-    from ucbplan.core.kepler import CHUNK_ROWS
-
-    assert design._ROWS == CHUNK_ROWS
-
-
 @pytest.mark.parametrize("circular", [False, True])
 @pytest.mark.parametrize("rows", [7, 64])
 def test_chunks_give_the_same_doubles_as_one_piece(
@@ -51,7 +45,7 @@ def test_chunks_give_the_same_doubles_as_one_piece(
     tau = np.sort(rng.uniform(-6e7, 6e8, 101))
     window = rng.uniform(0.0, 120.0, 101)
     whole = _passes(p, tau, window)
-    monkeypatch.setattr(design, "_ROWS", rows)
+    monkeypatch.setattr(kepler, "CHUNK_ROWS", rows)
     chunked = _passes(p, tau, window)
     assert all(_same_bits(a, b) for a, b in zip(whole, chunked, strict=True))
 
@@ -84,7 +78,7 @@ def test_reduce_is_the_same_chunk_by_chunk(monkeypatch: pytest.MonkeyPatch) -> N
         return [r.tau_s, r.u_rad, *r.design, r.dK, r.dgamma, r.sigma_u, [f.K for f in r.fits], lt]
 
     whole = run()
-    monkeypatch.setattr(design, "_ROWS", 5)
+    monkeypatch.setattr(kepler, "CHUNK_ROWS", 5)
     assert all(_same_bits(a, b) for a, b in zip(whole, run(), strict=True))
 
 
@@ -100,5 +94,5 @@ def test_seconds_since_the_reference_are_astropys(monkeypatch: pytest.MonkeyPatc
     time = Time(np.floor(jd), jd - np.floor(jd), format="jd", scale="tdb")
     t_ref = Time("2037-01-01T00:00:00", scale="tdb")
     whole = np.asarray((time - t_ref).to_value("s"), dtype=np.float64)
-    monkeypatch.setattr(design, "_ROWS", 7)
+    monkeypatch.setattr(kepler, "CHUNK_ROWS", 7)
     assert _same_bits(_seconds_since(time, t_ref), whole)

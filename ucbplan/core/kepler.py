@@ -21,6 +21,7 @@ this is Eq. vbar_master: P₁ = 1 − O(e²) carries Λ_K cos Φ and P₂ = e + 
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -30,9 +31,10 @@ F64 = NDArray[np.float64]
 
 #: Harmonics are kept until the dropped tail is below this fraction of h (K·1e-14 ≪ 1 mm/s).
 _SERIES_TOL = 1e-14
-#: Spectra per chunk of the window-average kernel (its temporaries stay in cache). Callers that
-#: chunk the same arrays keep these boundaries: numpy's complex product of a one-element array
-#: is not the vectorised loop's double, so a chunk of one row would round differently.
+#: Spectra per chunk of the window-average kernel (its temporaries stay in cache), and of the
+#: callers' per-spectrum passes over the same arrays (:func:`row_chunks`): the same boundaries,
+#: since numpy's complex product of a one-element array is not the vectorised loop's double (a
+#: chunk of one row elsewhere would round differently).
 CHUNK_ROWS = 8192
 #: Half-window floor [s]: a zero window evaluates as this one (sin x/x = 1 to rounding).
 _HALF_FLOOR_S = 1e-280
@@ -40,6 +42,11 @@ _HALF_FLOOR_S = 1e-280
 _TERM_FLOOR = 1e-15
 #: Never more harmonics than this (e < 0.1, what a target may have, needs ≤ 19).
 _MAX_HARMONICS = 400
+
+
+def row_chunks(n: int) -> Iterator[slice]:
+    """Consecutive slices of at most :data:`CHUNK_ROWS` rows covering ``n`` rows."""
+    return (slice(lo, lo + CHUNK_ROWS) for lo in range(0, n, CHUNK_ROWS))
 
 
 def n_harmonics(e: float) -> int:
@@ -171,8 +178,7 @@ def window_average(
     fphi, fom, fhalf, fnb = (np.broadcast_to(x, shape).ravel() for x in (phi, om, half, nb))
     terms = _terms(e, derivatives)
     out = np.zeros((4, fphi.size))
-    for lo in range(0, fphi.size, CHUNK_ROWS):  # chunks that stay in cache
-        sl = slice(lo, lo + CHUNK_ROWS)
+    for sl in row_chunks(fphi.size):  # chunks that stay in cache
         chunk = (fphi[sl], fom[sl], fhalf[sl], fnb[sl])
         _kernel(*chunk, omega_dot=omega_dot, terms=terms, derivatives=derivatives, out=out[:, sl])
     return WindowedVelocity(*(np.asarray(o.reshape(shape)) for o in out))

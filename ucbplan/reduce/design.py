@@ -14,7 +14,7 @@ biased K_j by ≈ −e²K_j (docs/method.md, "Reduction").
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -22,7 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ucbplan.core.constants import C_KM_S
-from ucbplan.core.kepler import CHUNK_ROWS, WindowedVelocity, window_average
+from ucbplan.core.kepler import WindowedVelocity, row_chunks, window_average
 from ucbplan.core.smearing import lambda_k, lambda_kappa
 from ucbplan.reduce.regression import lambda_k_to_x
 
@@ -34,18 +34,7 @@ if TYPE_CHECKING:
 #: remainder is < 1e-16) instead of dividing ∂G/∂ω by e.
 _E_FIRST_ORDER = 1e-8
 
-#: Spectra per chunk of the per-spectrum passes (orbit, window averages, Jacobian): every
-#: operation is elementwise, so a chunk gives the same doubles as the whole table, and its
-#: temporaries stay in cache instead of a fresh 8 MB array per operation at 10⁶ spectra. The
-#: window average's own chunks (a one-row chunk rounds its complex products differently).
-_ROWS = CHUNK_ROWS
-
 F64 = NDArray[np.float64]
-
-
-def row_chunks(n: int) -> Iterator[slice]:
-    """Consecutive slices of at most :data:`_ROWS` rows covering ``n`` rows."""
-    return (slice(lo, lo + _ROWS) for lo in range(0, n, _ROWS))
 
 
 def window_factors(table: VelocityTable, f_hz: float) -> tuple[F64, F64]:
@@ -181,7 +170,7 @@ def _windowed(
     at: OrbitTrack | None = None,
 ) -> tuple[WindowedVelocity, F64]:
     """The exact window average at ``tau`` and ω there (the orbit from ``at`` when given),
-    chunk by chunk (:data:`_ROWS`)."""
+    chunk by chunk (:func:`~ucbplan.core.kepler.row_chunks`: temporaries in cache)."""
     tau = np.asarray(tau, dtype=np.float64)
     shape = np.broadcast_shapes(tau.shape, np.shape(window_s))
     t, w = (np.broadcast_to(x, shape).reshape(-1) for x in (tau, window_s))

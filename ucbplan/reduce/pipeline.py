@@ -27,6 +27,7 @@ from numpy.typing import NDArray
 
 from ucbplan.core.binary import MASS_RADIUS_MODELS
 from ucbplan.core.constants import C_KM_S
+from ucbplan.core.kepler import row_chunks
 from ucbplan.errors import InputError, VelocityFileError, shorten
 from ucbplan.reduce import drifts as _drifts
 from ucbplan.reduce import masses as _masses
@@ -35,7 +36,6 @@ from ucbplan.reduce.design import (
     design_jacobian,
     designs,
     mid_exposure,
-    row_chunks,
     track,
     window_durations,
     window_factors,

@@ -48,6 +48,7 @@ from astropy.time import Time
 from numpy.typing import NDArray
 
 from ucbplan.core.constants import C_KM_S, DAY_S, YEAR_S
+from ucbplan.core.kepler import row_chunks
 from ucbplan.errors import SchemaError, VelocityFileError, shorten
 from ucbplan.inputs import blank_comments, read_text
 
@@ -501,8 +502,6 @@ def _seconds_since(time: Time, t_ref: Time) -> F64:
     """``(time - t_ref).to_value("s")`` as float64, chunk by chunk: astropy's arithmetic is
     elementwise, so the same doubles, with its temporaries in cache instead of ~20 fresh arrays
     of the table's length."""
-    from ucbplan.reduce.design import row_chunks
-
     if time.ndim != 1:
         return np.asarray((time - t_ref).to_value("s"), dtype=np.float64)
     out = np.empty(time.shape)
