@@ -22,7 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ucbplan.core.constants import C_KM_S
-from ucbplan.core.kepler import WindowedVelocity, row_chunks, window_average
+from ucbplan.core.kepler import WindowedVelocity, row_chunks, window_average, window_rotation
 from ucbplan.core.smearing import lambda_k, lambda_kappa
 from ucbplan.reduce.regression import lambda_k_to_x
 
@@ -144,11 +144,21 @@ def track(p: PhaseParams, tau: F64) -> OrbitTrack:
     return at
 
 
+#: cos and sin of ω̇Δt/2 per window (:func:`ucbplan.core.kepler.window_rotation`).
+Rotation = tuple[F64, F64]
+
+
 def _windowed_rows(
-    p: PhaseParams, tau: F64, window_s: F64, derivatives: bool, at: tuple[F64, ...] | None
+    p: PhaseParams,
+    tau: F64,
+    window_s: F64,
+    derivatives: bool,
+    at: tuple[F64, ...] | None,
+    rotation: Rotation | None,
 ) -> tuple[WindowedVelocity, F64]:
     """The exact window average at ``tau`` and ω there (``at``: Φ_asc mod 2π, η and κ at
-    ``tau`` when the caller has them), for one chunk of rows."""
+    ``tau`` when the caller has them; ``rotation``: the windows' :data:`Rotation`), for one
+    chunk of rows."""
     from ucbplan.core.phase import ll_pair, phase_asc_mod
 
     if at is None:
@@ -158,8 +168,8 @@ def _windowed_rows(
         phi, eta, kap = at
     om = np.arctan2(eta, kap)
     nb = math.pi * (p.f_gw + p.fdot * tau + p.fddot * tau**2 / 2.0) - p.omega_dot
-    wv = window_average(phi, om, p.eccentricity, nb, p.omega_dot, window_s, derivatives)
-    return wv, om
+    e, wdot = p.eccentricity, p.omega_dot
+    return window_average(phi, om, e, nb, wdot, window_s, derivatives, rotation), om
 
 
 def _windowed(
@@ -168,17 +178,21 @@ def _windowed(
     window_s: F64,
     derivatives: bool = True,
     at: OrbitTrack | None = None,
+    rotation: Rotation | None = None,
 ) -> tuple[WindowedVelocity, F64]:
-    """The exact window average at ``tau`` and ω there (the orbit from ``at`` when given),
-    chunk by chunk (:func:`~ucbplan.core.kepler.row_chunks`: temporaries in cache)."""
+    """The exact window average at ``tau`` and ω there (the orbit from ``at``, the windows'
+    rotation from ``rotation`` when given), chunk by chunk
+    (:func:`~ucbplan.core.kepler.row_chunks`: temporaries in cache)."""
     tau = np.asarray(tau, dtype=np.float64)
     shape = np.broadcast_shapes(tau.shape, np.shape(window_s))
     t, w = (np.broadcast_to(x, shape).reshape(-1) for x in (tau, window_s))
     orbit_rows = None if at is None else [x.reshape(-1) for x in (at.phase_mod, at.eta, at.kap)]
+    turn = None if rotation is None else [np.broadcast_to(x, shape).reshape(-1) for x in rotation]
     out = np.zeros((5, t.size))  # ⟨h⟩, its three partials (zero without derivatives), ω
     for sl in row_chunks(t.size):
         rows = None if orbit_rows is None else tuple(x[sl] for x in orbit_rows)
-        wv, om = _windowed_rows(p, t[sl], w[sl], derivatives, rows)
+        rot = None if turn is None else (turn[0][sl], turn[1][sl])
+        wv, om = _windowed_rows(p, t[sl], w[sl], derivatives, rows, rot)
         out[0, sl], out[4, sl] = wv.h, om
         if derivatives:
             out[1, sl], out[2, sl], out[3, sl] = wv.d_phase, wv.d_omega, wv.d_e
@@ -187,12 +201,12 @@ def _windowed(
 
 
 def mid_exposure(
-    p: PhaseParams, tau: F64, window_s: F64, at: OrbitTrack
+    p: PhaseParams, tau: F64, window_s: F64, at: OrbitTrack, rotation: Rotation | None = None
 ) -> tuple[WindowedVelocity, F64]:
     """The window average at mid-exposure and ω there, with the partial derivatives when
     :func:`design_jacobian` uses them: one pass for the plain design (its ``h``, the same with
-    or without derivatives) and the Jacobian."""
-    return _windowed(p, tau, window_s, p.eccentricity >= _E_FIRST_ORDER, at)
+    or without derivatives) and the Jacobian (``rotation``: the windows' :data:`Rotation`)."""
+    return _windowed(p, tau, window_s, p.eccentricity >= _E_FIRST_ORDER, at, rotation)
 
 
 def design_jacobian(
@@ -293,22 +307,26 @@ def designs(
     ncomp: int,
     K: tuple[float, ...] | None,
     at: OrbitTrack | None = None,
+    rotation: Rotation | None = None,
 ) -> tuple[F64, ...]:
     """Design G per component; with K given, evaluated at the emission time τ − ΔR_j.
 
     G is the exact Keplerian velocity factor averaged over each window (module docstring).
-    ``at``: the orbit at ``tau`` (:func:`track`) if the caller has it already.
+    ``at``, ``rotation``: the orbit at ``tau`` (:func:`track`) and the windows'
+    :data:`Rotation` if the caller has them already.
     """
     if K is None:  # both stars see the same G at mid-exposure
-        return (_windowed(p, tau, window_s, derivatives=False, at=at)[0].h,) * ncomp
+        return (_windowed(p, tau, window_s, False, at, rotation)[0].h,) * ncomp
     u = orbit(p, tau)[3] if at is None else at.u
     nb = math.pi * p.f_gw - p.omega_dot
-    t, w = (np.broadcast_to(x, np.shape(tau)).reshape(-1) for x in (tau, window_s))
+    rot = rotation or window_rotation(p.omega_dot, window_s)
+    shape = np.shape(tau)
+    t, w, cc, sc = (np.broadcast_to(x, shape).reshape(-1) for x in (tau, window_s, *rot))
     out = np.empty((ncomp, t.size))
     for sl in row_chunks(t.size):  # both stars' emission times from one sin u per chunk
         sin_u = np.sin(np.reshape(u, -1)[sl])
         for j in range(ncomp):
             sign = 1.0 if j == 0 else -1.0
             emit = t[sl] - sign * K[j] / (C_KM_S * nb) * sin_u
-            out[j, sl] = _windowed_rows(p, emit, w[sl], False, None)[0].h
-    return tuple(np.asarray(h.reshape(np.shape(tau))) for h in out)
+            out[j, sl] = _windowed_rows(p, emit, w[sl], False, None, (cc[sl], sc[sl]))[0].h
+    return tuple(np.asarray(h.reshape(shape)) for h in out)

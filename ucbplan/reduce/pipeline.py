@@ -27,12 +27,13 @@ from numpy.typing import NDArray
 
 from ucbplan.core.binary import MASS_RADIUS_MODELS
 from ucbplan.core.constants import C_KM_S
-from ucbplan.core.kepler import row_chunks
+from ucbplan.core.kepler import row_chunks, window_rotation
 from ucbplan.errors import InputError, VelocityFileError, shorten
 from ucbplan.reduce import drifts as _drifts
 from ucbplan.reduce import masses as _masses
 from ucbplan.reduce.design import (
     OrbitTrack,
+    Rotation,
     design_jacobian,
     designs,
     mid_exposure,
@@ -192,21 +193,21 @@ class _IntraSession:
 def _intra_session(
     p: PhaseParams,
     table: VelocityTable,
-    at: OrbitTrack,
+    shared: tuple[OrbitTrack, Rotation],
     tau: F64,
     window_s: F64,
     mid_h: F64,
     apply_lt: bool,
 ) -> _IntraSession:
     """Fits on G at mid-exposure (``mid_h``) and at the emission time (K from two fixed-point
-    passes)."""
+    passes); ``shared``: the orbit at mid-exposure and the windows' rotation."""
     n = len(table.v)
     plain = (mid_h,) * n  # both stars see the same G at mid-exposure
     fits0 = _fit_all(table, plain)
     K0 = tuple(f.K for f in fits0)
-    lt_design = designs(p, tau, window_s, n, K0, at)
+    lt_design = designs(p, tau, window_s, n, K0, *shared)
     K_lt = tuple(f.K for f in _fit_all(table, lt_design))
-    lt_design = designs(p, tau, window_s, n, K_lt, at)
+    lt_design = designs(p, tau, window_s, n, K_lt, *shared)
     fits_lt = _fit_all(table, lt_design)
     nb = math.pi * p.f_gw - p.omega_dot
     light = {
@@ -366,8 +367,9 @@ def reduce(target: Target, table: VelocityTable, options: ReduceOptions | None =
     lam = window_factors(table, p.f_gw)
     window_s = window_durations(table, p.f_gw)
     at = track(p, tau)  # the orbit at mid-exposure, once for every design there
-    mid = mid_exposure(p, tau, window_s, at)  # the plain design and its Jacobian, one pass
-    intra = _intra_session(p, table, at, tau, window_s, mid[0].h, opts.light_time)
+    rot = window_rotation(p.omega_dot, window_s)  # the windows' turn, once for every design
+    mid = mid_exposure(p, tau, window_s, at, rot)  # the plain design and its Jacobian, one pass
+    intra = _intra_session(p, table, (at, rot), tau, window_s, mid[0].h, opts.light_time)
     phase = _phase_errors(target, table, at, tau, window_s, mid, intra)
     mc = _monte_carlo(target, intra.fits, phase, opts, seed)
     groups, drift = _inter_session(target, table, tau, at.u, intra, *lam)
