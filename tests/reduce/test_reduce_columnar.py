@@ -115,6 +115,7 @@ def test_random_number_texts_read_as_float_does(
     p = tmp_path / "v.csv"
     p.write_text(HEADER + body, encoding="utf-8")
     assert _numpy_read(p)
+    assert columnar._scan_mapped(p) is not None  # the bytes path read it
     assert_same_velocities(read_velocities(p), _strict(p, monkeypatch))
 
 
@@ -150,3 +151,52 @@ def test_a_comment_line_over_the_limit_is_one_line_error(tmp_path: Path) -> None
     with pytest.raises(VelocityFileError, match=r"line 1: a comment of 1000001 characters") as e:
         read_velocities(p)
     assert "\n" not in str(e.value) and len(str(e.value)) < 300
+
+
+def _table_or_error(read: object) -> object:
+    try:
+        return read()  # type: ignore[operator]
+    except VelocityFileError as exc:
+        return str(exc)
+
+
+@pytest.mark.parametrize(
+    ("text", "mapped"),
+    [
+        (HEADER + _rows(300), True),
+        ("\n \t\n" + HEADER + _rows(20), True),  # blank lines above the header
+        (HEADER + _rows(50).replace("\n", "\r\n"), True),  # CRLF
+        (HEADER + _rows(50).rstrip("\n"), True),  # no final newline
+        (HEADER + _rows(50, " {:+.6f} "), True),
+        ("\ufeff" + HEADER + _rows(20), False),  # a byte-order mark: the text path
+        ("# measured\n" + HEADER + _rows(20), False),  # a comment: the text path blanks it
+        (HEADER + _rows(5) + "\r\n" + _rows(5), False),  # a blank line
+        (HEADER + _rows(5) + '"1"', False),  # a quote
+        (HEADER + _rows(5).replace(",15,", ",\uff11\uff15,", 1), False),  # float() reads 15
+        (HEADER.replace("v2", "V2"), False),  # no data row
+        (" \n", False),
+        ("", False),
+    ],
+)
+def test_the_mapped_scan_reads_what_the_text_path_reads(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, text: str, mapped: bool
+) -> None:
+    """Issue 34: a plain ASCII file is scanned as bytes through a memory map, never decoded.
+    Its header, lines above the data and row count are the text path's, and every other file
+    goes to the text path; either way the table (or the one-line error) is the strict reader's.
+    """
+    p = tmp_path / "v.csv"
+    p.write_bytes(text.encode())
+    scan = columnar._scan_mapped(p)
+    assert (scan is not None) is mapped
+    if scan is not None:
+        text = p.read_bytes().decode("ascii")
+        line, skip, body = columnar._header_line(text)  # type: ignore[misc]
+        assert scan == (line, skip, text.count("\n", body) + (not text.endswith("\n")))
+        assert vel._fast_csv(p) is not None  # and numpy's reader took it
+    fast = _table_or_error(lambda: read_velocities(p))
+    strict = _table_or_error(lambda: _strict(p, monkeypatch))
+    if isinstance(fast, str) or isinstance(strict, str):
+        assert fast == strict
+    else:
+        assert_same_velocities(fast, strict)

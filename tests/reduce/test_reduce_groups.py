@@ -6,6 +6,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from ucbplan.reduce.groups import ANCHOR_U, MATCH_TOL_RAD, assign_anchors, group_spectra
 
@@ -109,3 +111,24 @@ def test_assign_anchors_nearest_only() -> None:
         1.5 * math.pi,
     ]
     assert np.isnan(assign_anchors(np.array([0.4, np.nan]))).all()
+
+
+_labels = st.lists(
+    st.sampled_from(["S1", "S10", "S2", "01", "1", "night é", "A\x00", "A", "Z", "a", "S100"]),
+    min_size=1,
+    max_size=60,
+)
+
+
+@settings(max_examples=60, deadline=None)
+@given(_labels)
+def test_session_codes_are_numpys_unique_of_every_spectrum(labels: list[str]) -> None:
+    """Issue 34: the session codes come from the distinct labels alone; they must be
+    ``np.unique(labels, return_inverse=True)`` of all spectra (its sorted order, its reading of
+    a trailing NUL), which decides the groups' order and labels."""
+    from ucbplan.reduce.groups import _session_codes
+
+    names, code = _session_codes(tuple(labels))
+    ref_names, ref_code = np.unique(np.asarray(labels), return_inverse=True)
+    assert names.tolist() == ref_names.tolist()
+    assert code.tolist() == ref_code.reshape(-1).tolist()

@@ -21,6 +21,7 @@ this is Eq. vbar_master: P₁ = 1 − O(e²) carries Λ_K cos Φ and P₂ = e + 
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -30,14 +31,22 @@ F64 = NDArray[np.float64]
 
 #: Harmonics are kept until the dropped tail is below this fraction of h (K·1e-14 ≪ 1 mm/s).
 _SERIES_TOL = 1e-14
-#: Spectra per chunk of the window-average kernel (its temporaries stay in cache).
-_CHUNK = 8192
+#: Spectra per chunk of the window-average kernel (its temporaries stay in cache), and of the
+#: callers' per-spectrum passes over the same arrays (:func:`row_chunks`): the same boundaries,
+#: since numpy's complex product of a one-element array is not the vectorised loop's double (a
+#: chunk of one row elsewhere would round differently).
+CHUNK_ROWS = 8192
 #: Half-window floor [s]: a zero window evaluates as this one (sin x/x = 1 to rounding).
 _HALF_FLOOR_S = 1e-280
 #: Series terms whose coefficient and e-derivative are both below this are skipped [1].
 _TERM_FLOOR = 1e-15
 #: Never more harmonics than this (e < 0.1, what a target may have, needs ≤ 19).
 _MAX_HARMONICS = 400
+
+
+def row_chunks(n: int) -> Iterator[slice]:
+    """Consecutive slices of at most :data:`CHUNK_ROWS` rows covering ``n`` rows."""
+    return (slice(lo, lo + CHUNK_ROWS) for lo in range(0, n, CHUNK_ROWS))
 
 
 def n_harmonics(e: float) -> int:
@@ -119,6 +128,26 @@ class WindowedVelocity:
     d_e: F64
 
 
+def window_rotation(omega_dot: float, window_s: ArrayLike) -> tuple[F64, F64]:
+    """cos and sin of ω̇Δt/2 per window (the apsidal turn over half an exposure, a zero window
+    floored as in :func:`window_average`), for its ``rotation`` [1].
+
+    Parameters
+    ----------
+    omega_dot : float
+        Apsidal rate ω̇ [rad/s].
+    window_s : array_like
+        Exposure (or co-add window) length Δt [s].
+    """
+    c = omega_dot * _half_window(window_s)
+    return np.cos(c), np.sin(c)
+
+
+def _half_window(window_s: ArrayLike) -> F64:
+    """Δt/2 [s], a zero window the limit Δt → 0 (sin x/x = 1 to rounding with Δt/2 = 1e-280 s)."""
+    return np.maximum(0.5 * np.asarray(window_s, dtype=np.float64), _HALF_FLOOR_S)
+
+
 def window_average(
     phase_asc_rad: ArrayLike,
     omega_rad: ArrayLike,
@@ -127,6 +156,7 @@ def window_average(
     omega_dot: float,
     window_s: ArrayLike,
     derivatives: bool = True,
+    rotation: tuple[ArrayLike, ArrayLike] | None = None,
 ) -> WindowedVelocity:
     """Average of h = cos(ω + ν) + e cos ω over exposures centred on the given phases.
 
@@ -148,6 +178,9 @@ def window_average(
         Also compute the partial derivatives (else they are zero arrays). ⟨h⟩ is the same
         either way, bit for bit: the terms kept for the derivatives only (coefficient below
         1e-15, its e-derivative not) do not enter it.
+    rotation : tuple of array_like, optional
+        :func:`window_rotation` of ``omega_dot`` and ``window_s``, when the caller averages the
+        same windows more than once (the same doubles as computed here).
 
     Returns
     -------
@@ -162,17 +195,17 @@ def window_average(
     """
     phi = np.asarray(phase_asc_rad, dtype=np.float64)
     om = np.asarray(omega_rad, dtype=np.float64)
-    # a zero window is the limit Δt → 0: sin x/x = 1 to rounding with Δt/2 = 1e-280 s
-    half = np.maximum(0.5 * np.asarray(window_s, dtype=np.float64), _HALF_FLOOR_S)
+    half = _half_window(window_s)
     nb = np.asarray(nb_rad_s, dtype=np.float64)
     shape = np.broadcast(phi, om, half, nb).shape
     fphi, fom, fhalf, fnb = (np.broadcast_to(x, shape).ravel() for x in (phi, om, half, nb))
+    rot = None if rotation is None else [np.broadcast_to(x, shape).ravel() for x in rotation]
     terms = _terms(e, derivatives)
     out = np.zeros((4, fphi.size))
-    for lo in range(0, fphi.size, _CHUNK):  # chunks that stay in cache
-        sl = slice(lo, lo + _CHUNK)
+    for sl in row_chunks(fphi.size):  # chunks that stay in cache
         chunk = (fphi[sl], fom[sl], fhalf[sl], fnb[sl])
-        _kernel(*chunk, omega_dot=omega_dot, terms=terms, derivatives=derivatives, out=out[:, sl])
+        turn = None if rot is None else (rot[0][sl], rot[1][sl])
+        _kernel(*chunk, omega_dot, terms, derivatives, out[:, sl], turn)
     return WindowedVelocity(*(np.asarray(o.reshape(shape)) for o in out))
 
 
@@ -212,8 +245,10 @@ def _kernel(
     terms: list[_Term],
     derivatives: bool,
     out: F64,
+    rotation: tuple[F64, F64] | None,
 ) -> None:
-    """Accumulate ⟨h⟩ (and its partials) of one chunk into ``out`` (4, n).
+    """Accumulate ⟨h⟩ (and its partials) of one chunk into ``out`` (4, n) (``rotation``: cos
+    and sin of ω̇Δt/2 if the caller has them).
 
     Term P_k: angle kM + ω = kΦ − (k−1)ω, window x = k n_bΔt/2 + ω̇Δt/2; term Q_k: kM − ω,
     x = k n_bΔt/2 − ω̇Δt/2. e^{ikM} and e^{ik n_bΔt/2} by recurrence.
@@ -222,7 +257,8 @@ def _kernel(
     c = omega_dot * half  # ω̇ Δt/2
     w1 = np.exp(1j * (phi - om))  # e^{iM}
     a1 = np.exp(1j * a)
-    co, so, cc, sc = np.cos(om), np.sin(om), np.cos(c), np.sin(c)
+    co, so = np.cos(om), np.sin(om)
+    cc, sc = (np.cos(c), np.sin(c)) if rotation is None else rotation
     wk, ak = np.ones_like(w1), np.ones_like(a1)
     done = 0  # wk = e^{i·done·M}, ak = e^{i·done·a}
     for k, h, (p, q, dp, dq) in terms:

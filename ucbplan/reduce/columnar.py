@@ -8,7 +8,10 @@ anything it cannot take whole goes back to the strict per-cell reader of
 from __future__ import annotations
 
 import csv
+import mmap
+import os
 import re
+import stat
 import warnings
 from collections.abc import Sequence
 from pathlib import Path
@@ -17,7 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ucbplan.errors import SchemaError
-from ucbplan.inputs import blank_comments, read_text
+from ucbplan.inputs import MAX_TEXT_BYTES, blank_comments, read_text
 
 F64 = NDArray[np.float64]
 
@@ -57,6 +60,12 @@ def _plain_numbers(path: Path, text: str, body: int, skip: int, width: int) -> F
     if _BLANK_LINE.search(text, body - 1):
         return None
     rows = text.count("\n", body) + (0 if text.endswith("\n") else 1)
+    return _loadtxt(path, skip, rows, width)
+
+
+def _loadtxt(path: Path, skip: int, rows: int, width: int) -> F64 | None:
+    """The numbers below the first ``skip`` lines by :func:`numpy.loadtxt`, shape (columns,
+    rows); None unless it reads ``rows`` rows of ``width`` finite numbers."""
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # an empty body: the shape check refuses it
@@ -100,6 +109,15 @@ def read_columns(
     exact; astropy's fast converter, 0.59 s, is off by an ulp at times). numpy and astropy are
     required anyway; pyarrow would be a new dependency of ~100 MB.
     """
+    scan = _scan_mapped(path)
+    if scan is not None:  # a plain ASCII file: its text is never decoded
+        line, skip, rows = scan
+        header = _known_header(line, known)
+        if header is None:
+            return None  # the strict reader names the duplicate or unknown column
+        cols = None if "session" in header else _loadtxt(path, skip, rows, len(header))
+        if cols is not None:
+            return header, dict(zip(header, cols, strict=True)), {}, range(1, rows + 1)
     try:
         text = read_text(path, "velocity table")
         if "#" in text:  # a comment needs a "#"; a 10⁶-row table without one skips the pass
@@ -110,14 +128,71 @@ def read_columns(
     if found is None:
         return None
     line, skip, body = found
-    header = [h.strip().lower() for h in next(csv.reader([line]), [])]
-    if len(set(header)) != len(header) or not set(header) <= set(known):
+    header = _known_header(line, known)
+    if header is None:
         return None  # the strict reader names the duplicate or unknown column
-    if "session" not in header:
+    if "session" not in header and scan is None:
         cols = _plain_numbers(path, text, body, skip, len(header))
         if cols is not None:
             return header, dict(zip(header, cols, strict=True)), {}, range(1, cols.shape[1] + 1)
     return _astropy_columns(text, header)
+
+
+def _known_header(line: str, known: Sequence[str]) -> list[str] | None:
+    """The header's column names (lower case), None with a duplicate or unknown one."""
+    header = [h.strip().lower() for h in next(csv.reader([line]), [])]
+    if len(set(header)) != len(header) or not set(header) <= set(known):
+        return None
+    return header
+
+
+def _scan_mapped(path: Path) -> tuple[str, int, int] | None:
+    """The header line, the number of lines up to it and the data rows of a plain ASCII CSV
+    (what :func:`_plain_numbers` checks of the text: no comment, quote or blank line below the
+    header), scanned as bytes through a read-only memory map; None leaves the file to the text
+    path (anything else: a ``#`` anywhere, a byte-order mark or other non-ASCII byte, an empty,
+    special or unreadable file).
+
+    An ASCII file's text is its bytes, so the same checks hold, without the decoded copy of
+    the file (57 MB and ~0.06 CPU s of page faults and decoding at 10⁶ spectra).
+    """
+    try:
+        with path.open("rb") as fh:
+            st = os.fstat(fh.fileno())
+            if not stat.S_ISREG(st.st_mode) or not 0 < st.st_size <= MAX_TEXT_BYTES:
+                return None
+            with mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ) as mm:
+                return _scan_bytes(mm)
+    except (OSError, ValueError):
+        return None
+
+
+#: Bytes of the mapped file checked (ASCII) and counted (newlines) at a time.
+_SCAN_BYTES = 1 << 20
+#: The first byte that is not ASCII white space.
+_NOT_BLANK = re.compile(rb"\S")
+#: :data:`_BLANK_LINE` over bytes.
+_BLANK_LINE_BYTES = re.compile(_BLANK_LINE.pattern.encode("ascii"))
+
+
+def _scan_bytes(mm: mmap.mmap) -> tuple[str, int, int] | None:
+    """:func:`_scan_mapped` of the mapped bytes."""
+    first = _NOT_BLANK.search(mm)
+    end = -1 if first is None or mm.find(b"#") >= 0 else mm.find(b"\n", first.start())
+    if end < 0 or not (head := mm[: end + 1]).isascii():
+        return None
+    found = _header_line(head.decode("ascii"))
+    if found is None or found[2] >= len(mm) or mm.find(b'"', found[2]) >= 0:
+        return None
+    if _BLANK_LINE_BYTES.search(mm, found[2] - 1):
+        return None
+    rows = 0
+    for lo in range(found[2], len(mm), _SCAN_BYTES):
+        part = mm[lo : lo + _SCAN_BYTES]
+        if not part.isascii():
+            return None
+        rows += part.count(b"\n")
+    return found[0], found[1], rows + (0 if mm[-1:] == b"\n" else 1)
 
 
 def _astropy_columns(

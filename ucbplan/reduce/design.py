@@ -14,6 +14,7 @@ biased K_j by ≈ −e²K_j (docs/method.md, "Reduction").
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -21,7 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ucbplan.core.constants import C_KM_S
-from ucbplan.core.kepler import WindowedVelocity, window_average
+from ucbplan.core.kepler import WindowedVelocity, row_chunks, window_average, window_rotation
 from ucbplan.core.smearing import lambda_k, lambda_kappa
 from ucbplan.reduce.regression import lambda_k_to_x
 
@@ -130,10 +131,45 @@ class OrbitTrack:
 
 def track(p: PhaseParams, tau: F64) -> OrbitTrack:
     """The orbit at ``tau``, bit-identical to :func:`orbit` and ``phase_asc_mod`` there."""
-    from ucbplan.core.phase import phase_asc_mod
+    from ucbplan.core.phase import orbit_state, phase_asc_mod
 
-    phi, eta, kap, u = orbit(p, tau)
-    return OrbitTrack(phi, phase_asc_mod(p, tau), eta, kap, u)
+    tau = np.asarray(tau, dtype=np.float64)
+    at = OrbitTrack(*(np.empty(tau.shape) for _ in range(5)))
+    flat = [x.reshape(-1) for x in (tau, at.phase, at.phase_mod, at.eta, at.kap, at.u)]
+    for sl in row_chunks(tau.size):  # elementwise: chunk by chunk, the same doubles
+        t = flat[0][sl]
+        phi, eta, kap, u = orbit_state(p, t)
+        for out, x in zip(flat[1:], (phi, phase_asc_mod(p, t), eta, kap, u), strict=True):
+            out[sl] = x
+    return at
+
+
+#: cos and sin of ω̇Δt/2 per window (:func:`ucbplan.core.kepler.window_rotation`).
+Rotation = tuple[F64, F64]
+
+
+def _windowed_rows(
+    p: PhaseParams,
+    tau: F64,
+    window_s: F64,
+    derivatives: bool,
+    at: tuple[F64, ...] | None,
+    rotation: Rotation | None,
+) -> tuple[WindowedVelocity, F64]:
+    """The exact window average at ``tau`` and ω there (``at``: Φ_asc mod 2π, η and κ at
+    ``tau`` when the caller has them; ``rotation``: the windows' :data:`Rotation`), for one
+    chunk of rows."""
+    from ucbplan.core.phase import ll_pair, phase_asc_mod
+
+    if at is None:
+        phi = phase_asc_mod(p, tau)
+        eta, kap = ll_pair(p, tau)
+    else:  # orbit_state's (η, κ) are ll_pair's bit for bit
+        phi, eta, kap = at
+    om = np.arctan2(eta, kap)
+    nb = math.pi * (p.f_gw + p.fdot * tau + p.fddot * tau**2 / 2.0) - p.omega_dot
+    e, wdot = p.eccentricity, p.omega_dot
+    return window_average(phi, om, e, nb, wdot, window_s, derivatives, rotation), om
 
 
 def _windowed(
@@ -142,29 +178,35 @@ def _windowed(
     window_s: F64,
     derivatives: bool = True,
     at: OrbitTrack | None = None,
-) -> tuple[WindowedVelocity, F64, F64]:
-    """The exact window average at ``tau`` and ω, Φ_asc there (from ``at`` when given)."""
-    from ucbplan.core.phase import ll_pair, phase_asc_mod
-
-    if at is None:
-        phi = phase_asc_mod(p, tau)
-        eta, kap = ll_pair(p, tau)
-    else:  # orbit_state's (η, κ) are ll_pair's bit for bit
-        phi, eta, kap = at.phase_mod, at.eta, at.kap
-    om = np.arctan2(eta, kap)
-    nb = math.pi * (p.f_gw + p.fdot * tau + p.fddot * tau**2 / 2.0) - p.omega_dot
-    wv = window_average(phi, om, p.eccentricity, nb, p.omega_dot, window_s, derivatives)
-    return wv, om, phi
+    rotation: Rotation | None = None,
+) -> tuple[WindowedVelocity, F64]:
+    """The exact window average at ``tau`` and ω there (the orbit from ``at``, the windows'
+    rotation from ``rotation`` when given), chunk by chunk
+    (:func:`~ucbplan.core.kepler.row_chunks`: temporaries in cache)."""
+    tau = np.asarray(tau, dtype=np.float64)
+    shape = np.broadcast_shapes(tau.shape, np.shape(window_s))
+    t, w = (np.broadcast_to(x, shape).reshape(-1) for x in (tau, window_s))
+    orbit_rows = None if at is None else [x.reshape(-1) for x in (at.phase_mod, at.eta, at.kap)]
+    turn = None if rotation is None else [np.broadcast_to(x, shape).reshape(-1) for x in rotation]
+    out = np.zeros((5, t.size))  # ⟨h⟩, its three partials (zero without derivatives), ω
+    for sl in row_chunks(t.size):
+        rows = None if orbit_rows is None else tuple(x[sl] for x in orbit_rows)
+        rot = None if turn is None else (turn[0][sl], turn[1][sl])
+        wv, om = _windowed_rows(p, t[sl], w[sl], derivatives, rows, rot)
+        out[0, sl], out[4, sl] = wv.h, om
+        if derivatives:
+            out[1, sl], out[2, sl], out[3, sl] = wv.d_phase, wv.d_omega, wv.d_e
+    wv = WindowedVelocity(*(np.asarray(x.reshape(shape)) for x in out[:4]))
+    return wv, out[4].reshape(shape)
 
 
 def mid_exposure(
-    p: PhaseParams, tau: F64, window_s: F64, at: OrbitTrack
+    p: PhaseParams, tau: F64, window_s: F64, at: OrbitTrack, rotation: Rotation | None = None
 ) -> tuple[WindowedVelocity, F64]:
     """The window average at mid-exposure and ω there, with the partial derivatives when
     :func:`design_jacobian` uses them: one pass for the plain design (its ``h``, the same with
-    or without derivatives) and the Jacobian."""
-    wv, om, _ = _windowed(p, tau, window_s, p.eccentricity >= _E_FIRST_ORDER, at)
-    return wv, om
+    or without derivatives) and the Jacobian (``rotation``: the windows' :data:`Rotation`)."""
+    return _windowed(p, tau, window_s, p.eccentricity >= _E_FIRST_ORDER, at, rotation)
 
 
 def design_jacobian(
@@ -186,39 +228,69 @@ def design_jacobian(
     ∂ω/∂η = cos ω/e, ∂e/∂κ = cos ω, ∂ω/∂κ = −sin ω/e. The window rates' own dependence on f
     and ω̇ (a relative 1e-5 of Λ) is not differentiated.
     """
-    e = p.eccentricity
     at = track(p, tau) if at is None else at
-    if e < _E_FIRST_ORDER:
-        return _first_order_jacobian(p, tau, window_s, at)
-    wv, om = _windowed(p, tau, window_s, at=at)[:2] if mid is None else mid
+    rows: Callable[..., None] = _first_order_rows
+    args: tuple[F64, ...] = (np.asarray(window_s, float), at.phase, at.eta, at.kap)
+    if p.eccentricity >= _E_FIRST_ORDER:
+        wv, om = _windowed(p, tau, window_s, at=at) if mid is None else mid
+        rows, args = _exact_rows, (wv.d_phase, wv.d_omega, wv.d_e, om, at.eta, at.kap)
+    t = np.reshape(tau, -1)
+    flat = [np.broadcast_to(x, np.shape(tau)).reshape(-1) for x in args]
+    jac = np.empty((t.size, 7))
+    for sl in row_chunks(t.size):  # elementwise: chunk by chunk, the same doubles
+        rows(p, t[sl], *(x[sl] for x in flat), jac[sl])
+    return jac
+
+
+def _exact_rows(
+    p: PhaseParams,
+    tau: F64,
+    d_phase: F64,
+    d_omega: F64,
+    d_e: F64,
+    om: F64,
+    eta: F64,
+    kap: F64,
+    out: F64,
+) -> None:
+    """∂G/∂θ of the exact design into ``out`` from its partials ∂⟨h⟩/∂(Φ, ω, e) at ω."""
+    e = p.eccentricity
     so, co = np.sin(om), np.cos(om)
-    dG_dphi = wv.d_phase
-    dG_deta = so * wv.d_e + co / e * wv.d_omega
-    dG_dkap = co * wv.d_e - so / e * wv.d_omega
-    return _chain(p, tau, dG_dphi, dG_deta, dG_dkap, at.eta, at.kap)
+    dG_deta = so * d_e + co / e * d_omega
+    dG_dkap = co * d_e - so / e * d_omega
+    _chain(p, tau, d_phase, dG_deta, dG_dkap, eta, kap, out)
 
 
-def _first_order_jacobian(p: PhaseParams, tau: F64, window_s: F64, at: OrbitTrack) -> F64:
-    """∂G/∂θ of Eq. vbar_master (exact at e = 0), with the window rates of the exact design:
-    n̄(τ) for the cos Φ term and 2n̄(τ) − ω̇ for the (η, κ) term."""
+def _first_order_rows(
+    p: PhaseParams, tau: F64, window_s: F64, phi: F64, eta: F64, kap: F64, out: F64
+) -> None:
+    """∂G/∂θ of Eq. vbar_master (exact at e = 0) into ``out``, with the window rates of the
+    exact design: n̄(τ) for the cos Φ term and 2n̄(τ) − ω̇ for the (η, κ) term."""
     nbar = math.pi * (p.f_gw + p.fdot * tau + p.fddot * tau**2 / 2.0)
     half = 0.5 * window_s
     lam_k = np.sinc(nbar * half / math.pi)
     lam_kap = np.sinc((2.0 * nbar - p.omega_dot) * half / math.pi)
-    phi, eta, kap = at.phase, at.eta, at.kap
     dG_dphi = -lam_k * np.sin(phi) + 2.0 * lam_kap * (
         -kap * np.sin(2 * phi) + eta * np.cos(2 * phi)
     )
-    return _chain(p, tau, dG_dphi, lam_kap * np.sin(2 * phi), lam_kap * np.cos(2 * phi), eta, kap)
+    dG_deta, dG_dkap = lam_kap * np.sin(2 * phi), lam_kap * np.cos(2 * phi)
+    _chain(p, tau, dG_dphi, dG_deta, dG_dkap, eta, kap, out)
 
 
 def _chain(
-    p: PhaseParams, tau: F64, dG_dphi: F64, dG_deta: F64, dG_dkap: F64, eta: F64, kap: F64
-) -> F64:
-    """∂G/∂θ from ∂G/∂(Φ, η(τ), κ(τ)) through the phase model and the apsidal rotation."""
+    p: PhaseParams,
+    tau: F64,
+    dG_dphi: F64,
+    dG_deta: F64,
+    dG_dkap: F64,
+    eta: F64,
+    kap: F64,
+    jac: F64,
+) -> None:
+    """∂G/∂θ (into ``jac``, rows × 7) from ∂G/∂(Φ, η(τ), κ(τ)) through the phase model and the
+    apsidal rotation."""
     w = p.omega_dot * tau
     c, s = np.cos(w), np.sin(w)
-    jac = np.empty((tau.size, 7))
     jac[:, 0] = 0.5 * dG_dphi
     jac[:, 1] = math.pi * tau * dG_dphi
     jac[:, 2] = math.pi * tau**2 / 2.0 * dG_dphi
@@ -226,7 +298,6 @@ def _chain(
     jac[:, 4] = dG_deta * c - dG_dkap * s  # ∂/∂η_ref
     jac[:, 5] = dG_deta * s + dG_dkap * c  # ∂/∂κ_ref
     jac[:, 6] = dG_deta * tau * kap - dG_dkap * tau * eta  # ∂/∂ω̇
-    return jac
 
 
 def designs(
@@ -236,19 +307,26 @@ def designs(
     ncomp: int,
     K: tuple[float, ...] | None,
     at: OrbitTrack | None = None,
+    rotation: Rotation | None = None,
 ) -> tuple[F64, ...]:
     """Design G per component; with K given, evaluated at the emission time τ − ΔR_j.
 
     G is the exact Keplerian velocity factor averaged over each window (module docstring).
-    ``at``: the orbit at ``tau`` (:func:`track`) if the caller has it already.
+    ``at``, ``rotation``: the orbit at ``tau`` (:func:`track`) and the windows'
+    :data:`Rotation` if the caller has them already.
     """
     if K is None:  # both stars see the same G at mid-exposure
-        return (_windowed(p, tau, window_s, derivatives=False, at=at)[0].h,) * ncomp
-    out = []
+        return (_windowed(p, tau, window_s, False, at, rotation)[0].h,) * ncomp
     u = orbit(p, tau)[3] if at is None else at.u
-    for j in range(ncomp):
-        nb = math.pi * p.f_gw - p.omega_dot
-        sign = 1.0 if j == 0 else -1.0
-        t = tau - sign * K[j] / (C_KM_S * nb) * np.sin(u)
-        out.append(_windowed(p, t, window_s, derivatives=False)[0].h)
-    return tuple(out)
+    nb = math.pi * p.f_gw - p.omega_dot
+    rot = rotation or window_rotation(p.omega_dot, window_s)
+    shape = np.shape(tau)
+    t, w, cc, sc = (np.broadcast_to(x, shape).reshape(-1) for x in (tau, window_s, *rot))
+    out = np.empty((ncomp, t.size))
+    for sl in row_chunks(t.size):  # both stars' emission times from one sin u per chunk
+        sin_u = np.sin(np.reshape(u, -1)[sl])
+        for j in range(ncomp):
+            sign = 1.0 if j == 0 else -1.0
+            emit = t[sl] - sign * K[j] / (C_KM_S * nb) * sin_u
+            out[j, sl] = _windowed_rows(p, emit, w[sl], False, None, (cc[sl], sc[sl]))[0].h
+    return tuple(np.asarray(h.reshape(shape)) for h in out)

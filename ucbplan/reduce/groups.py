@@ -112,7 +112,9 @@ def group_spectra(
     G = np.asarray(design, float)
     k = _group_keys(sessions, us)
     rows = k.rows
-    at = (lk[rows], u[rows], k.u_star, G[rows], k.gid)
+    # the phase-mismatch term's cos u − cos u★ of every kept row, once for all components
+    mismatch = np.cos(u[rows]) - np.cos(k.u_star)
+    at = (lk[rows], mismatch, G[rows], k.gid)
     comps = [
         _component_means(np.asarray(v, float)[rows], np.asarray(sg, float)[rows], sK, *at)
         for v, sg, sK in zip(velocities, sigmas, _signed(K), strict=True)
@@ -139,16 +141,26 @@ class _Keys:
 def _group_keys(sessions: Sequence[str], us: F64) -> _Keys:
     """Sort the spectra with a u★ (finite ``us``) by (session, u★) and number the groups."""
     keep = np.nonzero(np.isfinite(us))[0]
-    names, code = np.unique(np.asarray([str(x) for x in sessions])[keep], return_inverse=True)
-    order = np.lexsort((us[keep], code.reshape(-1)))
+    names, code = _session_codes(sessions)
+    order = np.lexsort((us[keep], code[keep]))
     rows = keep[order]
-    key_s, key_u = code.reshape(-1)[order], us[rows]
+    key_s, key_u = code[rows], us[rows]
     new = np.ones(rows.size, dtype=bool)
     new[1:] = (key_s[1:] != key_s[:-1]) | (key_u[1:] != key_u[:-1])
     starts = np.nonzero(new)[0]
     counts = np.diff(np.append(starts, rows.size))
     gid = np.cumsum(new) - 1
     return _Keys(rows, key_u, gid, names[key_s[starts]], starts, counts)
+
+
+def _session_codes(sessions: Sequence[str]) -> tuple[NDArray[np.str_], NDArray[np.intp]]:
+    """The distinct session labels as :func:`numpy.unique` sorts them, and each spectrum's
+    index into them: ``np.unique(labels, return_inverse=True)`` of all spectra, found among the
+    distinct labels alone (a dictionary of the label objects, not 10⁶ strings sorted)."""
+    first = {label: k for k, label in enumerate(dict.fromkeys(sessions))}
+    names, inverse = np.unique(np.asarray([str(label) for label in first]), return_inverse=True)
+    number = np.fromiter(map(first.__getitem__, sessions), dtype=np.intp, count=len(sessions))
+    return names, inverse.reshape(-1)[number]
 
 
 def _build_groups(
@@ -196,18 +208,18 @@ def _component_means(
     sigma: F64,
     sK: float,
     lam_k: F64,
-    u: F64,
-    u_star: F64,
+    mismatch: F64,
     G: F64,
     gid: NDArray[np.intp],
 ) -> tuple[F64, F64, F64]:
     """One component of every group: (fixed-u mean, its σ, zero-crossing γ estimate) per group.
 
-    ``sK`` is ±K_j (the star's sign); the velocities are moved to the exact u★ first and the γ
-    estimate removes the whole orbital term ±K_j G. ``gid`` numbers each row's group.
+    ``sK`` is ±K_j (the star's sign); the velocities are moved to the exact u★ first (by
+    ``mismatch`` = cos u − cos u★) and the γ estimate removes the whole orbital term ±K_j G.
+    ``gid`` numbers each row's group.
     """
     w = 1.0 / sigma**2
-    vc = v - sK * lam_k * (np.cos(u) - np.cos(u_star))
+    vc = v - sK * lam_k * mismatch
     gam = v - sK * G
     wsum = np.bincount(gid, weights=w)
     return (

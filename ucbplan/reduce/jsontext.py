@@ -33,7 +33,7 @@ def dumps_report(doc: Any) -> str:
     trailing newline)."""
     out: list[str] = []
     try:
-        _value(doc, 0, out)
+        _value(doc, 0, out, {})
     except _Unsupported:
         from ucbplan.io import dumps_json
 
@@ -41,7 +41,12 @@ def dumps_report(doc: Any) -> str:
     return "".join(out)
 
 
-def _value(obj: Any, level: int, out: list[str]) -> None:
+#: A mapping key's text before its value at one nesting level, after "{" and after ","
+#: (built once per key and level of a document: ~8,000 pairs share a dozen keys).
+_Heads = dict[tuple[str, int], tuple[str, str]]
+
+
+def _value(obj: Any, level: int, out: list[str], heads: _Heads) -> None:
     """Append the text of one value at nesting ``level`` (json.encoder's order of type tests)."""
     if isinstance(obj, str):
         out.append(encode_basestring_ascii(obj))
@@ -56,28 +61,30 @@ def _value(obj: Any, level: int, out: list[str]) -> None:
     elif isinstance(obj, float):
         out.append(float.__repr__(obj) if math.isfinite(obj) else "null")
     elif isinstance(obj, Mapping):
-        _mapping(obj, level, out)
+        _mapping(obj, level, out, heads)
     elif isinstance(obj, list | tuple):
-        _sequence(obj, level, out)
+        _sequence(obj, level, out, heads)
     elif isinstance(obj, np.generic | np.ndarray):
-        _value(obj.tolist(), level, out)
+        _value(obj.tolist(), level, out, heads)
     else:
         raise _Unsupported
 
 
-def _mapping(obj: Mapping[Any, Any], level: int, out: list[str]) -> None:
+def _mapping(obj: Mapping[Any, Any], level: int, out: list[str], heads: _Heads) -> None:
     if not obj:
         out.append("{}")
         return
-    mark = len(out)
-    inner = "\n" + _INDENT * (level + 1)
-    sep = "{" + inner
+    mark, first = len(out), 0
     for key, val in obj.items():
         if type(key) is not str:  # keys equal as text are one key (json_plain): start again
             del out[mark:]
-            _mapping({str(k): v for k, v in obj.items()}, level, out)
+            _mapping({str(k): v for k, v in obj.items()}, level, out, heads)
             return
-        head = sep + encode_basestring_ascii(key) + ": "
+        pair = heads.get((key, level))
+        if pair is None:
+            inner = "\n" + _INDENT * (level + 1) + encode_basestring_ascii(key) + ": "
+            pair = heads[key, level] = ("{" + inner, "," + inner)
+        head, first = pair[first], 1
         kind = type(val)
         if kind is float:  # the common leaves, without a call
             out.append(head + (float.__repr__(val) if math.isfinite(val) else "null"))
@@ -85,12 +92,11 @@ def _mapping(obj: Mapping[Any, Any], level: int, out: list[str]) -> None:
             out.append(head + encode_basestring_ascii(val))
         else:
             out.append(head)
-            _value(val, level + 1, out)
-        sep = "," + inner
+            _value(val, level + 1, out, heads)
     out.append("\n" + _INDENT * level + "}")
 
 
-def _sequence(obj: list[Any] | tuple[Any, ...], level: int, out: list[str]) -> None:
+def _sequence(obj: list[Any] | tuple[Any, ...], level: int, out: list[str], heads: _Heads) -> None:
     if not obj:
         out.append("[]")
         return
@@ -98,6 +104,6 @@ def _sequence(obj: list[Any] | tuple[Any, ...], level: int, out: list[str]) -> N
     sep = "[" + inner
     for val in obj:
         out.append(sep)
-        _value(val, level + 1, out)
+        _value(val, level + 1, out, heads)
         sep = "," + inner
     out.append("\n" + _INDENT * level + "]")

@@ -27,11 +27,13 @@ from numpy.typing import NDArray
 
 from ucbplan.core.binary import MASS_RADIUS_MODELS
 from ucbplan.core.constants import C_KM_S
+from ucbplan.core.kepler import row_chunks, window_rotation
 from ucbplan.errors import InputError, VelocityFileError, shorten
 from ucbplan.reduce import drifts as _drifts
 from ucbplan.reduce import masses as _masses
 from ucbplan.reduce.design import (
     OrbitTrack,
+    Rotation,
     design_jacobian,
     designs,
     mid_exposure,
@@ -191,21 +193,21 @@ class _IntraSession:
 def _intra_session(
     p: PhaseParams,
     table: VelocityTable,
-    at: OrbitTrack,
+    shared: tuple[OrbitTrack, Rotation],
     tau: F64,
     window_s: F64,
     mid_h: F64,
     apply_lt: bool,
 ) -> _IntraSession:
     """Fits on G at mid-exposure (``mid_h``) and at the emission time (K from two fixed-point
-    passes)."""
+    passes); ``shared``: the orbit at mid-exposure and the windows' rotation."""
     n = len(table.v)
     plain = (mid_h,) * n  # both stars see the same G at mid-exposure
     fits0 = _fit_all(table, plain)
     K0 = tuple(f.K for f in fits0)
-    lt_design = designs(p, tau, window_s, n, K0, at)
+    lt_design = designs(p, tau, window_s, n, K0, *shared)
     K_lt = tuple(f.K for f in _fit_all(table, lt_design))
-    lt_design = designs(p, tau, window_s, n, K_lt, at)
+    lt_design = designs(p, tau, window_s, n, K_lt, *shared)
     fits_lt = _fit_all(table, lt_design)
     nb = math.pi * p.f_gw - p.omega_dot
     light = {
@@ -241,15 +243,9 @@ def _phase_errors(
     intra: _IntraSession,
 ) -> _PhaseErrors:
     """σ_u per spectrum, ∂(K_j, γ_j)/∂θ, their σ from the covariance, and the K attenuation."""
-    from ucbplan.core.phase import jacobian_kernel
-
     p, cov7 = target.params, target.covariance
     jacG = design_jacobian(p, tau, window_s, at, mid)
-    # ∂u/∂θ (ucbplan.core.phase.u_jacobian) from the shared orbit: its Φ_asc mod 2π is
-    # π·(cycles mod 2) there, the same double as 2π·(cycles mod 2)/2
-    s, c = np.sin(at.phase_mod), np.cos(at.phase_mod)
-    ju = np.asarray(jacobian_kernel(p.eta, p.kappa, p.omega_dot, tau, s, c), float)
-    sigma_u = np.sqrt(np.clip(np.einsum("ni,ij,nj->n", ju, cov7, ju), 0.0, None))
+    sigma_u = _sigma_u(p, cov7, tau, at.phase_mod)
     dK, dg, sKp, sgp, att = [], [], [], [], []
     for j, f in enumerate(intra.fits):
         sign = 1.0 if j == 0 else -1.0
@@ -261,6 +257,20 @@ def _phase_errors(
         w = 1.0 / table.sigma[j] ** 2
         att.append(float(f.K * (w * sigma_u**2).sum() / w.sum() / 2.0))
     return _PhaseErrors(sigma_u, np.array(dK), np.array(dg), tuple(sKp), tuple(sgp), tuple(att))
+
+
+def _sigma_u(p: PhaseParams, cov7: F64, tau: F64, phase_mod: F64) -> F64:
+    """σ_u per spectrum [rad]: √(J C Jᵀ) with J = ∂u/∂θ (:func:`ucbplan.core.phase.u_jacobian`)
+    from the shared orbit (its Φ_asc mod 2π is π·(cycles mod 2) there, the same double as
+    2π·(cycles mod 2)/2), chunk by chunk (rows × 7 in cache, not a 56 MB (n, 7) array)."""
+    from ucbplan.core.phase import jacobian_kernel
+
+    out = np.empty(tau.size)
+    for sl in row_chunks(tau.size):
+        s, c = np.sin(phase_mod[sl]), np.cos(phase_mod[sl])
+        ju = np.asarray(jacobian_kernel(p.eta, p.kappa, p.omega_dot, tau[sl], s, c), float)
+        out[sl] = np.sqrt(np.clip(np.einsum("ni,ij,nj->n", ju, cov7, ju), 0.0, None))
+    return out
 
 
 def _chi2_limit(dof: int) -> float:
@@ -357,8 +367,9 @@ def reduce(target: Target, table: VelocityTable, options: ReduceOptions | None =
     lam = window_factors(table, p.f_gw)
     window_s = window_durations(table, p.f_gw)
     at = track(p, tau)  # the orbit at mid-exposure, once for every design there
-    mid = mid_exposure(p, tau, window_s, at)  # the plain design and its Jacobian, one pass
-    intra = _intra_session(p, table, at, tau, window_s, mid[0].h, opts.light_time)
+    rot = window_rotation(p.omega_dot, window_s)  # the windows' turn, once for every design
+    mid = mid_exposure(p, tau, window_s, at, rot)  # the plain design and its Jacobian, one pass
+    intra = _intra_session(p, table, (at, rot), tau, window_s, mid[0].h, opts.light_time)
     phase = _phase_errors(target, table, at, tau, window_s, mid, intra)
     mc = _monte_carlo(target, intra.fits, phase, opts, seed)
     groups, drift = _inter_session(target, table, tau, at.u, intra, *lam)

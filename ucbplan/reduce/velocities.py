@@ -48,6 +48,7 @@ from astropy.time import Time
 from numpy.typing import NDArray
 
 from ucbplan.core.constants import C_KM_S, DAY_S, YEAR_S
+from ucbplan.core.kepler import row_chunks
 from ucbplan.errors import SchemaError, VelocityFileError, shorten
 from ucbplan.inputs import blank_comments, read_text
 
@@ -497,6 +498,18 @@ def to_barycentric(table: VelocityTable, coord: SkyCoord, location: EarthLocatio
     return dataclasses.replace(table, time=Time(bary, scale="tdb"), site_utc=False)
 
 
+def _seconds_since(time: Time, t_ref: Time) -> F64:
+    """``(time - t_ref).to_value("s")`` as float64, chunk by chunk: astropy's arithmetic is
+    elementwise, so the same doubles, with its temporaries in cache instead of ~20 fresh arrays
+    of the table's length."""
+    if time.ndim != 1:
+        return np.asarray((time - t_ref).to_value("s"), dtype=np.float64)
+    out = np.empty(time.shape)
+    for sl in row_chunks(out.size):
+        out[sl] = (time[sl] - t_ref).to_value("s")
+    return out
+
+
 def check_validity(table: VelocityTable, target: Target) -> F64:
     """Seconds since ``target.t_ref`` of each spectrum, after checking the validity window.
 
@@ -512,7 +525,7 @@ def check_validity(table: VelocityTable, target: Target) -> F64:
             f"{table.source}: times are UTC at the telescope (jd_utc/mjd_utc); give the site with "
             "`site` NAME so they can be converted to barycentric TDB"
         )
-    tau = np.asarray((table.time - target.t_ref).to_value("s"), dtype=np.float64)
+    tau = _seconds_since(table.time, target.t_ref)
     timing = getattr(target, "kind", "lisa") == "timing"
     # a timing ephemeris holds on both sides of T0; a LISA posterior from the mission start on
     lo = -HORIZON_S if timing else -0.5 * target.t_obs_s
