@@ -1,0 +1,384 @@
+"""Many target files at once, validated column by column (issue 34).
+
+:func:`load_target_files` reads every file, then validates its plain LISA documents together:
+each field's values of all of them gathered into a column and each check run once over the
+column (a unit string converted once per distinct string, ranges and finiteness as array
+comparisons, the covariance σ's a column per parameter), and the targets built at the end.
+
+A document the columns do not read is validated by the one-file path
+(:func:`~ucbplan.targets.parse.targets_of_documents`) in its turn: another shape (a timing
+ephemeris, galactic coordinates, samples, a start-referenced or non-TDB epoch, a correlated or
+full covariance, magnitudes, references …) or any value a column check does not pass. So the
+first file that fails raises exactly the message it raises alone (the files before it pass
+either way), and every target is the one :func:`~ucbplan.targets.parse.load_target` builds:
+``tests/targets/test_target_columnwise.py`` compares both, field by field and bit for bit, on
+the bundled catalogs, the bad-input corpus and random mutations of them.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Hashable, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from astropy.time import Time
+from numpy.typing import NDArray
+
+from ucbplan.core.constants import E_MAX
+from ucbplan.core.params import PARAM_NAMES, PhaseParams
+from ucbplan.errors import TargetFileError
+from ucbplan.targets.covariance import batched_checks
+from ucbplan.targets.fastvalues import quantity_in
+from ucbplan.targets.fieldtypes import Field
+from ucbplan.targets.model import Spectroscopy, Target
+from ucbplan.targets.parse import (
+    many_files,
+    read_documents,
+    resolved_source,
+    targets_of_documents,
+)
+from ucbplan.targets.schema import COVARIANCE_PARAMETERS, field, section_fields
+from ucbplan.targets.sections import names
+from ucbplan.targets.values import (
+    MALFORMED,
+    MAX_VALUE_CHARS,
+    Ctx,
+    fast_angle_deg,
+    parse_epoch,
+    to_float,
+)
+
+FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+
+#: The sections and fields a plain document may have (anything else: the one-file path).
+_TOP = frozenset(("name", "sky", "lisa", "spectroscopy", "masses", "vmag", "priority", "notes"))
+_SKY = frozenset(("ra", "dec", "frame"))
+_LISA = frozenset(names("lisa")) - {"samples", "t_ref_scale"}
+_LISA_REQUIRED = tuple(f.name for f in section_fields("lisa") if f.required)
+_SPECTROSCOPY = frozenset(names("spectroscopy"))
+_MASSES = frozenset(names("masses"))
+_SIGMA_NAMES = frozenset(COVARIANCE_PARAMETERS)
+#: The quantities read as columns, by section.
+_LISA_VALUES = tuple(
+    field(f"lisa.{n}")
+    for n in ("t_obs", *PARAM_NAMES, "cos_inclination", "amplitude", "psi", "distance")
+)
+_SPECTROSCOPY_VALUES = tuple(f for f in section_fields("spectroscopy") if f.kind == "quantity")
+_MASS_VALUES = tuple(section_fields("masses"))
+_SIGMA = field("lisa.covariance.sigma")
+#: Longest plain name [characters] (:data:`~ucbplan.targets.parse.MAX_NAME_CHARS`).
+_MAX_NAME = 200
+#: A field absent from its mapping.
+_ABSENT = object()
+
+
+def load_target_files(paths: Sequence[Path | str]) -> list[Target]:
+    """Every target of several files, in order: :func:`~ucbplan.targets.load_target_documents`
+    of each, validated column by column across the files (each folder resolved once).
+
+    Raises
+    ------
+    TargetFileError
+        As :func:`~ucbplan.targets.load_target_documents`, for the first file that fails.
+    """
+    with many_files(), batched_checks():
+        files = [_read(Path(p)) for p in paths]
+        plain = [k for k, (_, docs) in enumerate(files) if _single_plain(docs)]
+        built: list[Target | None] = [None] * len(files)
+        for k, target in zip(plain, _columns([_first(files[k]) for k in plain]), strict=True):
+            built[k] = target
+        out: list[Target] = []
+        for (path, docs), target in zip(files, built, strict=True):
+            if isinstance(docs, TargetFileError):
+                raise docs
+            out.extend([target] if target is not None else targets_of_documents(docs, path))
+        return out
+
+
+def _first(file: tuple[Path, Any]) -> tuple[dict[str, Any], Path]:
+    """A plain file's document and path."""
+    path, docs = file
+    return docs[0], path
+
+
+def _read(path: Path) -> tuple[Path, list[Any] | TargetFileError]:
+    """A file's documents, or the error reading it raises (raised in the file's turn)."""
+    try:
+        return path, read_documents(path)
+    except TargetFileError as exc:
+        return path, exc
+
+
+def _single_plain(docs: list[Any] | TargetFileError) -> bool:
+    return not isinstance(docs, TargetFileError) and len(docs) == 1 and _plain(docs[0])
+
+
+# ---------------------------------------------------------------------------------------------
+# the shape of a plain document
+# ---------------------------------------------------------------------------------------------
+
+
+def _plain(doc: Any) -> bool:
+    """Whether ``doc`` has the shape the columns read: a LISA posterior with ICRS ra, dec, a
+    TDB t_ref at the midpoint, no samples, and σ's alone as its covariance."""
+    if type(doc) is not dict or not doc.keys() <= _TOP:
+        return False
+    sky, lisa = doc.get("sky"), doc.get("lisa")
+    if type(sky) is not dict or not (sky.keys() <= _SKY and "ra" in sky and "dec" in sky):
+        return False
+    if type(lisa) is not dict or not lisa.keys() <= _LISA:
+        return False
+    if not all(k in lisa for k in _LISA_REQUIRED) or not _plain_sigma(lisa.get("covariance")):
+        return False
+    spec = doc.get("spectroscopy")
+    if spec is not None and not (type(spec) is dict and spec.keys() <= _SPECTROSCOPY):
+        return False
+    masses = doc.get("masses", {})
+    return type(masses) is dict and masses.keys() <= _MASSES and _plain_name(doc.get("name"))
+
+
+def _plain_sigma(cov: Any) -> bool:
+    """No covariance, or ``sigma`` alone: a mapping of known parameter names."""
+    if cov is None:
+        return True
+    if type(cov) is not dict or cov.keys() != {"sigma"}:
+        return False
+    sig = cov["sigma"]
+    return type(sig) is dict and bool(sig) and sig.keys() <= _SIGMA_NAMES
+
+
+def _plain_name(name: Any) -> bool:
+    """A printable one-line name (so no control character) of at most 200 characters."""
+    return (
+        type(name) is str and len(name) <= _MAX_NAME and name.isprintable() and bool(name.strip())
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# the columns
+# ---------------------------------------------------------------------------------------------
+
+Column = tuple[list[Any], BoolArray]
+
+
+def _columns(items: list[tuple[dict[str, Any], Path]]) -> list[Target | None]:
+    """The targets of plain documents (with their paths), None where a check fails."""
+    if not items:
+        return []
+    docs = [doc for doc, _ in items]
+    lisa = [doc["lisa"] for doc in docs]
+    got: dict[str, list[Any]] = {}
+    ok = np.ones(len(docs), dtype=bool)
+    for name, (values, good) in _read_columns(docs, lisa).items():
+        got[name] = values
+        ok &= good
+    ok &= [_small_e(e, k) for e, k in zip(got["eta"], got["kappa"], strict=True)]
+    got["has_spectroscopy"] = [doc.get("spectroscopy") is not None for doc in docs]
+    return [_target(got, k, path) if ok[k] else None for k, (_, path) in enumerate(items)]
+
+
+def _small_e(eta: float | None, kappa: float | None) -> bool:
+    """e = |η + iκ| inside the small-e model, as ``check_eccentricity`` tests it (None: the
+    value failed its own check)."""
+    if eta is None or kappa is None or not (eta or kappa):
+        return True
+    return math.hypot(eta, kappa) < E_MAX
+
+
+def _read_columns(docs: list[dict[str, Any]], lisa: list[dict[str, Any]]) -> dict[str, Column]:
+    """Every column of the plain documents: values and which pass, by name."""
+    sky = [doc["sky"] for doc in docs]
+    spec = [doc.get("spectroscopy") or {} for doc in docs]
+    masses = [doc.get("masses", {}) for doc in docs]
+    out = {
+        "name": ([doc["name"].strip() for doc in docs], np.ones(len(docs), dtype=bool)),
+        "frame": _choices(sky, field("sky.frame")),
+        "ra": _angles(sky, field("sky.ra"), hours=True),
+        "dec": _angles(sky, field("sky.dec"), hours=False),
+        "t_ref": _epochs([s["t_ref"] for s in lisa]),
+        "t_ref_is": _choices(lisa, field("lisa.t_ref_is"), only="midpoint"),
+        "lines": _choices(spec, field("spectroscopy.lines")),
+        "priority": _numbers(docs, field("priority")),
+        "vmag": _numbers(docs, field("vmag")),
+        "covariance": _sigmas([s.get("covariance") for s in lisa]),
+    }
+    for section, fields in ((lisa, _LISA_VALUES), (spec, _SPECTROSCOPY_VALUES)):
+        out.update({f.name: _quantities(section, f) for f in fields})
+    out.update({f.name: _quantities(masses, f) for f in _MASS_VALUES})
+    return out
+
+
+def _target(got: dict[str, list[Any]], k: int, path: Path) -> Target:
+    """The target of row ``k`` of the columns, as :func:`~ucbplan.targets.target_from_dict`
+    builds it."""
+
+    def v(name: str) -> Any:
+        return got[name][k]
+
+    params = PhaseParams(**{n: v(n) for n in PARAM_NAMES})
+    spec = None
+    if v("has_spectroscopy"):
+        spec = Spectroscopy(v("lines"), v("K1"), v("K2"), v("K_eff"), v("sigma_v"))
+    cov_names, cov_matrix = v("covariance")
+    vmag = v("vmag")
+    return Target(
+        name=v("name"),
+        source=resolved_source(path),
+        ra_deg=v("ra"),
+        dec_deg=v("dec"),
+        t_ref=v("t_ref"),
+        t_obs_s=v("t_obs"),
+        params=params,
+        cov_names=cov_names,
+        cov_matrix=cov_matrix,
+        cos_inclination=v("cos_inclination"),
+        amplitude=v("amplitude"),
+        psi=v("psi"),
+        distance_kpc=v("distance"),
+        spectroscopy=spec,
+        priority=v("priority"),
+        vmag=vmag,
+        m1_msun=v("m1"),
+        m2_msun=v("m2"),
+        magnitudes={} if vmag is None else {"V": vmag},
+    )
+
+
+def _quantities(sections: list[dict[str, Any]], f: Field) -> Column:
+    """Field ``f`` of each section as ``parse_quantity`` reads it and ``check_range`` checks it
+    (absent: its default)."""
+    unit = f.unit
+    assert unit is not None, f.path
+    raws = [s.get(f.name, _ABSENT) for s in sections]
+    values = [
+        f.default if raw is _ABSENT else _quantity(raw, unit, f.unit_required) for raw in raws
+    ]
+    return values, _in_range(values, [raw is not _ABSENT for raw in raws], f)
+
+
+def _quantity(raw: Any, unit: str, unit_required: bool) -> float | None:
+    """``parse_quantity``'s value where it takes the common spellings (a number with a unit, a
+    YAML number); None: the one-file path reads it."""
+    kind = type(raw)
+    if kind is str:
+        return quantity_in(raw, unit) if len(raw) <= MAX_VALUE_CHARS else None
+    if unit_required or (kind is not float and kind is not int):
+        return None
+    try:
+        return float(raw)
+    except OverflowError:
+        return None
+
+
+def _in_range(values: list[Any], given: list[bool], f: Field) -> BoolArray:
+    """Which values pass: absent, or finite and inside ``f.bounds`` (None fails)."""
+    x = np.array([np.nan if v is None else v for v in values], dtype=np.float64)
+    ok = np.isfinite(x)
+    b = f.bounds
+    if b is not None:
+        with np.errstate(invalid="ignore"):
+            ok &= (x > b.low) if b.low_open else (x >= b.low)
+            ok &= (x < b.high) if b.high_open else (x <= b.high)
+    return ok | ~np.array(given, dtype=bool)
+
+
+def _angles(sky: list[dict[str, Any]], f: Field, hours: bool) -> Column:
+    """``sky.ra`` (``hours``) or ``sky.dec`` in degrees, as ``parse_angle`` reads them."""
+    values = [_angle(s[f.name], hours) for s in sky]
+    return values, _in_range(values, [True] * len(values), f)
+
+
+def _angle(raw: Any, hours: bool) -> float | None:
+    if type(raw) is str and len(raw) > MAX_VALUE_CHARS:
+        return None
+    try:
+        return fast_angle_deg(raw, hours)
+    except ValueError:
+        return None
+
+
+def _numbers(docs: list[dict[str, Any]], f: Field) -> Column:
+    """A plain number at the top level (absent: its default), as ``number`` reads it."""
+    raws = [doc.get(f.name, _ABSENT) for doc in docs]
+    values = [f.default if raw is _ABSENT else _number(raw) for raw in raws]
+    return values, _in_range(values, [raw is not _ABSENT for raw in raws], f)
+
+
+def _number(raw: Any) -> float | None:
+    try:
+        return to_float(raw)
+    except ValueError:
+        return None
+
+
+def _choices(sections: list[dict[str, Any]], f: Field, only: str | None = None) -> Column:
+    """A choice (absent: its default) as the schema spells it, as ``parse_choice`` reads it;
+    ``only``: the one choice the columns take."""
+    values = [_choice(s.get(f.name, f.default), f.choices) for s in sections]
+    good = [v is not None and (only is None or v == only) for v in values]
+    return values, np.array(good, dtype=bool)
+
+
+def _choice(raw: Any, choices: tuple[str, ...]) -> str | None:
+    if type(raw) is not str or len(raw) > MAX_VALUE_CHARS:
+        return None
+    text = raw.strip().lower()
+    for choice in choices:
+        if choice.lower() == text:
+            return choice
+    return None
+
+
+def _epochs(raws: list[Any]) -> Column:
+    """``lisa.t_ref`` as TDB, each its own copy (as ``parse_epoch`` hands it out), read once
+    per distinct value; None: not a TDB epoch (the one-file path reads or refuses it)."""
+    f = field("lisa.t_ref")
+    read: dict[tuple[type, Hashable], Time | None] = {}
+    values: list[Time | None] = []
+    for raw in raws:
+        if not isinstance(raw, Hashable):
+            values.append(None)
+            continue
+        key = (type(raw), raw)
+        if key not in read:
+            read[key] = _epoch(f, raw)
+        tdb = read[key]
+        values.append(None if tdb is None else tdb.copy())
+    return values, np.array([v is not None for v in values], dtype=bool)
+
+
+def _epoch(f: Field, raw: Any) -> Time | None:
+    try:
+        tdb, converted = parse_epoch(Ctx(None), f, raw, None)
+    except (TargetFileError, *MALFORMED):
+        return None
+    return tdb if converted is None else None
+
+
+def _sigmas(covs: list[Any]) -> Column:
+    """``lisa.covariance`` (absent, or σ's alone) as names and the diagonal Σ = diag(σ²), the
+    σ's read a column per parameter, as ``parse_covariance`` reads and checks them."""
+    rows: dict[str, list[int]] = {}
+    for k, cov in enumerate(covs):
+        for name in cov["sigma"] if cov is not None else ():
+            rows.setdefault(name, []).append(k)
+    squares: dict[tuple[int, str], float] = {}
+    ok = np.ones(len(covs), dtype=bool)
+    for name, idx in rows.items():
+        raws = [covs[k]["sigma"][name] for k in idx]
+        own = field(f"lisa.{name}")  # a σ is read in its parameter's unit
+        sig = [_quantity(raw, str(own.unit), own.unit_required) for raw in raws]
+        good = _in_range(sig, [True] * len(sig), _SIGMA)
+        for k, s, g in zip(idx, sig, good, strict=True):
+            squares[k, name] = s * s if g and s is not None else math.nan
+            ok[k] &= bool(g) and math.isfinite(squares[k, name])
+    values = [
+        ((), np.zeros((0, 0)))
+        if cov is None
+        else (tuple(cov["sigma"]), np.diag([squares[k, n] for n in cov["sigma"]]))
+        for k, cov in enumerate(covs)
+    ]
+    return values, ok
