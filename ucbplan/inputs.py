@@ -162,12 +162,27 @@ class _FastLoader(_CSafeLoader):
             raise _Refused("anchor or tag")
         if not event.implicit[0]:
             return value
+        found = _PLAIN_VALUES.get(value, _PLAIN_VALUES)
+        if found is not _PLAIN_VALUES:
+            return found
         tag = _implicit_tag(self.yaml_implicit_resolvers.get(value[:1], ()), value)
         if tag is None:
-            return value
-        if tag not in _SCALAR_TAGS:
+            found = value
+        elif tag not in _SCALAR_TAGS:
             raise _Refused(tag)
-        return self.yaml_constructors[tag](self, yaml.ScalarNode(tag, value))
+        else:
+            found = self.yaml_constructors[tag](self, yaml.ScalarNode(tag, value))
+        if len(value) <= _PLAIN_CHARS and len(_PLAIN_VALUES) < _PLAIN_SIZE:
+            _PLAIN_VALUES[value] = found
+        return found
+
+
+#: Plain scalars already read (keys, above all: a catalog repeats them), text → value: each
+#: value is immutable (text, None, bool, int, float, date, datetime) and depends on the text
+#: alone (the loader has no path resolvers), so a repeated text gives an equal value.
+_PLAIN_VALUES: dict[str, Any] = {}
+#: Most entries of :data:`_PLAIN_VALUES`, and the longest text it keeps [characters].
+_PLAIN_SIZE, _PLAIN_CHARS = 4096, 40
 
 
 def _implicit_tag(resolvers: list[tuple[str, re.Pattern[str]]], value: str) -> str | None:

@@ -17,6 +17,7 @@ the bundled catalogs, the bad-input corpus and random mutations of them.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Hashable, Sequence
 from pathlib import Path
@@ -177,7 +178,11 @@ def _columns(items: list[tuple[dict[str, Any], Path]]) -> list[Target | None]:
         ok &= good
     ok &= [_small_e(e, k) for e, k in zip(got["eta"], got["kappa"], strict=True)]
     got["has_spectroscopy"] = [doc.get("spectroscopy") is not None for doc in docs]
-    return [_target(got, k, path) if ok[k] else None for k, (_, path) in enumerate(items)]
+    rows = zip(*(got[name] for name in _ROW), strict=True)
+    return [
+        _target(row, path) if good else None
+        for row, good, (_, path) in zip(rows, ok, items, strict=True)
+    ]
 
 
 def _small_e(eta: float | None, kappa: float | None) -> bool:
@@ -211,38 +216,42 @@ def _read_columns(docs: list[dict[str, Any]], lisa: list[dict[str, Any]]) -> dic
     return out
 
 
-def _target(got: dict[str, list[Any]], k: int, path: Path) -> Target:
-    """The target of row ``k`` of the columns, as :func:`~ucbplan.targets.target_from_dict`
-    builds it."""
+#: The columns a target is built from, in the order :func:`_target` takes them.
+_ROW = (
+    *("name", "ra", "dec", "t_ref", "t_obs", *PARAM_NAMES),
+    *("cos_inclination", "amplitude", "psi", "distance", "covariance", "has_spectroscopy"),
+    *("lines", "K1", "K2", "K_eff", "sigma_v", "priority", "vmag", "m1", "m2"),
+)
 
-    def v(name: str) -> Any:
-        return got[name][k]
 
-    params = PhaseParams(**{n: v(n) for n in PARAM_NAMES})
-    spec = None
-    if v("has_spectroscopy"):
-        spec = Spectroscopy(v("lines"), v("K1"), v("K2"), v("K_eff"), v("sigma_v"))
-    cov_names, cov_matrix = v("covariance")
-    vmag = v("vmag")
+assert tuple(f.name for f in dataclasses.fields(PhaseParams)) == PARAM_NAMES
+
+
+def _target(row: tuple[Any, ...], path: Path) -> Target:
+    """The target of a row of the columns (:data:`_ROW`), as
+    :func:`~ucbplan.targets.target_from_dict` builds it (its epoch a copy of the one read)."""
+    name, ra, dec, t_ref, t_obs = row[:5]
+    cos_i, amplitude, psi, distance, (cov_names, cov_matrix), has_spec = row[12:18]
+    lines, k1, k2, k_eff, sigma_v, priority, vmag, m1, m2 = row[18:]
     return Target(
-        name=v("name"),
+        name=name,
         source=resolved_source(path),
-        ra_deg=v("ra"),
-        dec_deg=v("dec"),
-        t_ref=v("t_ref"),
-        t_obs_s=v("t_obs"),
-        params=params,
+        ra_deg=ra,
+        dec_deg=dec,
+        t_ref=t_ref.copy(),
+        t_obs_s=t_obs,
+        params=PhaseParams(*row[5:12]),  # PARAM_NAMES, its fields' order
         cov_names=cov_names,
         cov_matrix=cov_matrix,
-        cos_inclination=v("cos_inclination"),
-        amplitude=v("amplitude"),
-        psi=v("psi"),
-        distance_kpc=v("distance"),
-        spectroscopy=spec,
-        priority=v("priority"),
+        cos_inclination=cos_i,
+        amplitude=amplitude,
+        psi=psi,
+        distance_kpc=distance,
+        spectroscopy=Spectroscopy(lines, k1, k2, k_eff, sigma_v) if has_spec else None,
+        priority=priority,
         vmag=vmag,
-        m1_msun=v("m1"),
-        m2_msun=v("m2"),
+        m1_msun=m1,
+        m2_msun=m2,
         magnitudes={} if vmag is None else {"V": vmag},
     )
 
@@ -333,8 +342,9 @@ def _choice(raw: Any, choices: tuple[str, ...]) -> str | None:
 
 
 def _epochs(raws: list[Any]) -> Column:
-    """``lisa.t_ref`` as TDB, each its own copy (as ``parse_epoch`` hands it out), read once
-    per distinct value; None: not a TDB epoch (the one-file path reads or refuses it)."""
+    """``lisa.t_ref`` as TDB, read once per distinct value (each target takes a copy, as
+    ``parse_epoch`` hands it out); None: not a TDB epoch (the one-file path reads or refuses
+    it)."""
     f = field("lisa.t_ref")
     read: dict[tuple[type, Hashable], Time | None] = {}
     values: list[Time | None] = []
@@ -345,8 +355,7 @@ def _epochs(raws: list[Any]) -> Column:
         key = (type(raw), raw)
         if key not in read:
             read[key] = _epoch(f, raw)
-        tdb = read[key]
-        values.append(None if tdb is None else tdb.copy())
+        values.append(read[key])
     return values, np.array([v is not None for v in values], dtype=bool)
 
 
@@ -359,26 +368,33 @@ def _epoch(f: Field, raw: Any) -> Time | None:
 
 
 def _sigmas(covs: list[Any]) -> Column:
-    """``lisa.covariance`` (absent, or σ's alone) as names and the diagonal Σ = diag(σ²), the
-    σ's read a column per parameter, as ``parse_covariance`` reads and checks them."""
-    rows: dict[str, list[int]] = {}
+    """``lisa.covariance`` (absent, or σ's alone) as names and the diagonal Σ = diag(σ²), as
+    ``parse_covariance`` reads and checks it: the documents grouped by their names (in order),
+    each σ a column."""
+    groups: dict[tuple[str, ...], list[int]] = {}
     for k, cov in enumerate(covs):
-        for name in cov["sigma"] if cov is not None else ():
-            rows.setdefault(name, []).append(k)
-    squares: dict[tuple[int, str], float] = {}
+        groups.setdefault(() if cov is None else tuple(cov["sigma"]), []).append(k)
+    values: list[Any] = [None] * len(covs)
     ok = np.ones(len(covs), dtype=bool)
-    for name, idx in rows.items():
-        raws = [covs[k]["sigma"][name] for k in idx]
-        own = field(f"lisa.{name}")  # a σ is read in its parameter's unit
-        sig = [_quantity(raw, str(own.unit), own.unit_required) for raw in raws]
-        good = _in_range(sig, [True] * len(sig), _SIGMA)
-        for k, s, g in zip(idx, sig, good, strict=True):
-            squares[k, name] = s * s if g and s is not None else math.nan
-            ok[k] &= bool(g) and math.isfinite(squares[k, name])
-    values = [
-        ((), np.zeros((0, 0)))
-        if cov is None
-        else (tuple(cov["sigma"]), np.diag([squares[k, n] for n in cov["sigma"]]))
-        for k, cov in enumerate(covs)
-    ]
+    for given, idx in groups.items():
+        mats, good = _diagonals([covs[k]["sigma"] for k in idx] if given else [], given, len(idx))
+        ok[idx] = good
+        for k, mat in zip(idx, mats, strict=True):
+            values[k] = (given, mat.copy())
     return values, ok
+
+
+def _diagonals(sigmas: list[dict[str, Any]], names: tuple[str, ...], n: int) -> tuple[Any, Any]:
+    """Σ = diag(σ²) of ``n`` documents' σ's (each ``names``), stacked, and which pass: σ read in
+    its parameter's unit, > 0, finite, and σ² finite."""
+    mats = np.zeros((n, len(names), len(names)))
+    good = np.ones(n, dtype=bool)
+    for j, name in enumerate(names):
+        own = field(f"lisa.{name}")  # a σ is read in its parameter's unit
+        sig = [_quantity(s[name], str(own.unit), own.unit_required) for s in sigmas]
+        good &= _in_range(sig, [True] * n, _SIGMA)
+        x = np.array([np.nan if v is None else v for v in sig], dtype=np.float64)
+        with np.errstate(all="ignore"):
+            mats[:, j, j] = x * x
+        good &= np.isfinite(mats[:, j, j])
+    return mats, good
