@@ -1,0 +1,124 @@
+"""The line reader of target files' YAML subset (ucbplan.inputs._load_lines, issue 34): where it
+reads a text, the document is the one the strict reader (PyYAML's SafeLoader) builds, value for
+value, type for type and in order; elsewhere it declines. Texts: the bundled catalogs, the
+differential corpus, and both edited a character or a line at a time."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+import yaml
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from target_corpus import corpus
+
+from ucbplan.inputs import _load_fast, _load_lines, _StrictLoader
+
+ROOT = Path(__file__).resolve().parents[2]
+CATALOG_TEXTS = [p.read_text("utf-8") for p in sorted(ROOT.glob("catalogs/**/*.yaml"))]
+#: Block-style dumps of corpus documents (single ones), as a user's tool might write them.
+DUMPED = [
+    yaml.safe_dump(docs[0], allow_unicode=True, sort_keys=False, default_flow_style=flow)
+    for docs in corpus(60, seed=9)[0]
+    if len(docs) == 1
+    for flow in (False, None)
+]
+TEXTS = CATALOG_TEXTS + DUMPED
+#: Characters that steer YAML's grammar, and a few plain ones.
+ALPHABET = ": -[]{},#'\"!*?|>\n\t%@`=~.0123456789eEaxyz_()/+\\\u00e9\u2028\r\x00\ufeff"
+
+
+def _strict(text: str) -> object:
+    loader = _StrictLoader(text)
+    try:
+        return loader.get_single_data()
+    finally:
+        loader.dispose()
+
+
+def _same_as_strict(text: str) -> bool:
+    """Whether the line reader declines ``text`` (False) or reads it as the strict reader."""
+    got = _load_lines(text)
+    if got is None or yaml.reader.Reader.NON_PRINTABLE.search(text):
+        return False  # the readers' callers refuse non-printable text first
+    want = _strict(text)  # raises if the line reader took a text YAML refuses
+    assert repr(got) == repr(want), text  # (NaN is not equal to itself)
+    for documents, wrap in ((False, want), (True, [want])):
+        fast = _load_fast(text, documents)  # None: the strict reader reads it (a ? or > …)
+        assert fast is None or repr(fast) == repr((wrap,)), text
+    return True
+
+
+def test_the_bundled_targets_and_dumped_documents_are_read_alike() -> None:
+    taken = sum(_same_as_strict(text) for text in TEXTS)
+    assert taken >= len(TEXTS) // 4  # the subset is what target files are written in
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "a: 1\nb:\n  c: 2\n d: 3\n",  # an indentation no mapping has
+        "a: 1\n  b: 2\n",  # a plain value continued on the next line
+        "a: - 1\n",
+        "a: -\n",
+        "a:#c\n",
+        "a: b#c\n",
+        'a: "b"#c\n',
+        "a: 1\na: 2\n",
+        "a: {b: 1, b: 2}\n",
+        "a: {b: }\n",
+        "a: {b:1}\n",
+        "---\na: 1\n",
+        "a: 1\n...\n",
+        "  a: 1\n",
+        "a: 'it''s'\n",
+        'a: "x\\ty"\n',
+        "a: 1\r\nb: 2\n",
+        "a: b: c\n",
+        "? a\n: 1\n",
+    ],
+)
+def test_what_the_subset_leaves_to_yaml(text: str) -> None:
+    assert _load_lines(text) is None
+
+
+@pytest.mark.parametrize(
+    ("text", "doc"),
+    [
+        ("on: yes\nnull: Null x\nNo: 1_000\n", {True: True, None: "Null x", False: 1000}),
+        ("a:\nb: 2037-01-01\n", {"a": None, "b": __import__("datetime").date(2037, 1, 1)}),
+        ("a:   # c\n  b: 1e5\n  c: .5\n", {"a": {"b": 100000.0, "c": 0.5}}),
+        ("a: {b: x y , c: 'p: q'}  # {d: 1}\n", {"a": {"b": "x y", "c": "p: q"}}),
+        ("a: -5\nb: (x) +y/z\n", {"a": -5, "b": "(x) +y/z"}),
+    ],
+)
+def test_plain_words_resolve_as_yaml_resolves_them(text: str, doc: dict) -> None:
+    assert _load_lines(text) == doc and _strict(text) == doc
+
+
+def _edited(text: str, edits: list[tuple[int, int, str]]) -> str:
+    """``text`` with characters inserted, deleted or lines re-indented."""
+    for kind, pos, char in edits:
+        pos %= max(len(text), 1)
+        if kind == 0:
+            text = text[:pos] + char + text[pos:]
+        elif kind == 1:
+            text = text[:pos] + text[pos + 1 :]
+        else:
+            start = text.rfind("\n", 0, pos) + 1
+            text = text[:start] + char.replace("\n", " ") * 2 + text[start:]
+    return text
+
+
+@settings(max_examples=1500, deadline=None, derandomize=True)
+@given(
+    st.sampled_from(TEXTS),
+    st.lists(
+        st.tuples(st.integers(0, 2), st.integers(0, 10**6), st.sampled_from(ALPHABET)),
+        min_size=1,
+        max_size=3,
+    ),
+)
+def test_edited_texts_are_read_alike_or_declined(text: str, edits: list) -> None:
+    _same_as_strict(_edited(text, edits))
