@@ -19,20 +19,25 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Hashable, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-from astropy.time import Time
-from numpy.typing import NDArray
 
 from ucbplan.core.constants import E_MAX
 from ucbplan.core.params import PARAM_NAMES, PhaseParams
 from ucbplan.errors import TargetFileError
+from ucbplan.targets.column_covariance import covariances, plain_covariance
+from ucbplan.targets.column_values import (
+    Column,
+    angles,
+    choices,
+    epochs,
+    numbers,
+    quantities,
+)
 from ucbplan.targets.covariance import batched_checks
-from ucbplan.targets.fastvalues import quantity_in
-from ucbplan.targets.fieldtypes import Field
 from ucbplan.targets.model import Spectroscopy, Target
 from ucbplan.targets.parse import (
     many_files,
@@ -40,19 +45,8 @@ from ucbplan.targets.parse import (
     resolved_source,
     targets_of_documents,
 )
-from ucbplan.targets.schema import COVARIANCE_PARAMETERS, field, section_fields
+from ucbplan.targets.schema import field, section_fields
 from ucbplan.targets.sections import names
-from ucbplan.targets.values import (
-    MALFORMED,
-    MAX_VALUE_CHARS,
-    Ctx,
-    fast_angle_deg,
-    parse_epoch,
-    to_float,
-)
-
-FloatArray = NDArray[np.float64]
-BoolArray = NDArray[np.bool_]
 
 #: The sections and fields a plain document may have (anything else: the one-file path).
 _TOP = frozenset(("name", "sky", "lisa", "spectroscopy", "masses", "vmag", "priority", "notes"))
@@ -61,7 +55,6 @@ _LISA = frozenset(names("lisa")) - {"samples", "t_ref_scale"}
 _LISA_REQUIRED = tuple(f.name for f in section_fields("lisa") if f.required)
 _SPECTROSCOPY = frozenset(names("spectroscopy"))
 _MASSES = frozenset(names("masses"))
-_SIGMA_NAMES = frozenset(COVARIANCE_PARAMETERS)
 #: The quantities read as columns, by section.
 _LISA_VALUES = tuple(
     field(f"lisa.{n}")
@@ -69,11 +62,8 @@ _LISA_VALUES = tuple(
 )
 _SPECTROSCOPY_VALUES = tuple(f for f in section_fields("spectroscopy") if f.kind == "quantity")
 _MASS_VALUES = tuple(section_fields("masses"))
-_SIGMA = field("lisa.covariance.sigma")
 #: Longest plain name [characters] (:data:`~ucbplan.targets.parse.MAX_NAME_CHARS`).
 _MAX_NAME = 200
-#: A field absent from its mapping.
-_ABSENT = object()
 
 
 def load_target_files(paths: Sequence[Path | str]) -> list[Target]:
@@ -132,23 +122,13 @@ def _plain(doc: Any) -> bool:
         return False
     if type(lisa) is not dict or not lisa.keys() <= _LISA:
         return False
-    if not all(k in lisa for k in _LISA_REQUIRED) or not _plain_sigma(lisa.get("covariance")):
+    if not all(k in lisa for k in _LISA_REQUIRED) or not plain_covariance(lisa.get("covariance")):
         return False
     spec = doc.get("spectroscopy")
     if spec is not None and not (type(spec) is dict and spec.keys() <= _SPECTROSCOPY):
         return False
     masses = doc.get("masses", {})
     return type(masses) is dict and masses.keys() <= _MASSES and _plain_name(doc.get("name"))
-
-
-def _plain_sigma(cov: Any) -> bool:
-    """No covariance, or ``sigma`` alone: a mapping of known parameter names."""
-    if cov is None:
-        return True
-    if type(cov) is not dict or cov.keys() != {"sigma"}:
-        return False
-    sig = cov["sigma"]
-    return type(sig) is dict and bool(sig) and sig.keys() <= _SIGMA_NAMES
 
 
 def _plain_name(name: Any) -> bool:
@@ -161,8 +141,6 @@ def _plain_name(name: Any) -> bool:
 # ---------------------------------------------------------------------------------------------
 # the columns
 # ---------------------------------------------------------------------------------------------
-
-Column = tuple[list[Any], BoolArray]
 
 
 def _columns(items: list[tuple[dict[str, Any], Path]]) -> list[Target | None]:
@@ -200,19 +178,19 @@ def _read_columns(docs: list[dict[str, Any]], lisa: list[dict[str, Any]]) -> dic
     masses = [doc.get("masses", {}) for doc in docs]
     out = {
         "name": ([doc["name"].strip() for doc in docs], np.ones(len(docs), dtype=bool)),
-        "frame": _choices(sky, field("sky.frame")),
-        "ra": _angles(sky, field("sky.ra"), hours=True),
-        "dec": _angles(sky, field("sky.dec"), hours=False),
-        "t_ref": _epochs([s["t_ref"] for s in lisa]),
-        "t_ref_is": _choices(lisa, field("lisa.t_ref_is"), only="midpoint"),
-        "lines": _choices(spec, field("spectroscopy.lines")),
-        "priority": _numbers(docs, field("priority")),
-        "vmag": _numbers(docs, field("vmag")),
-        "covariance": _sigmas([s.get("covariance") for s in lisa]),
+        "frame": choices(sky, field("sky.frame")),
+        "ra": angles(sky, field("sky.ra"), hours=True),
+        "dec": angles(sky, field("sky.dec"), hours=False),
+        "t_ref": epochs([s["t_ref"] for s in lisa]),
+        "t_ref_is": choices(lisa, field("lisa.t_ref_is"), only="midpoint"),
+        "lines": choices(spec, field("spectroscopy.lines")),
+        "priority": numbers(docs, field("priority")),
+        "vmag": numbers(docs, field("vmag")),
+        "covariance": covariances([s.get("covariance") for s in lisa]),
     }
     for section, fields in ((lisa, _LISA_VALUES), (spec, _SPECTROSCOPY_VALUES)):
-        out.update({f.name: _quantities(section, f) for f in fields})
-    out.update({f.name: _quantities(masses, f) for f in _MASS_VALUES})
+        out.update({f.name: quantities(section, f) for f in fields})
+    out.update({f.name: quantities(masses, f) for f in _MASS_VALUES})
     return out
 
 
@@ -254,147 +232,3 @@ def _target(row: tuple[Any, ...], path: Path) -> Target:
         m2_msun=m2,
         magnitudes={} if vmag is None else {"V": vmag},
     )
-
-
-def _quantities(sections: list[dict[str, Any]], f: Field) -> Column:
-    """Field ``f`` of each section as ``parse_quantity`` reads it and ``check_range`` checks it
-    (absent: its default)."""
-    unit = f.unit
-    assert unit is not None, f.path
-    raws = [s.get(f.name, _ABSENT) for s in sections]
-    values = [
-        f.default if raw is _ABSENT else _quantity(raw, unit, f.unit_required) for raw in raws
-    ]
-    return values, _in_range(values, [raw is not _ABSENT for raw in raws], f)
-
-
-def _quantity(raw: Any, unit: str, unit_required: bool) -> float | None:
-    """``parse_quantity``'s value where it takes the common spellings (a number with a unit, a
-    YAML number); None: the one-file path reads it."""
-    kind = type(raw)
-    if kind is str:
-        return quantity_in(raw, unit) if len(raw) <= MAX_VALUE_CHARS else None
-    if unit_required or (kind is not float and kind is not int):
-        return None
-    try:
-        return float(raw)
-    except OverflowError:
-        return None
-
-
-def _in_range(values: list[Any], given: list[bool], f: Field) -> BoolArray:
-    """Which values pass: absent, or finite and inside ``f.bounds`` (None fails)."""
-    x = np.array([np.nan if v is None else v for v in values], dtype=np.float64)
-    ok = np.isfinite(x)
-    b = f.bounds
-    if b is not None:
-        with np.errstate(invalid="ignore"):
-            ok &= (x > b.low) if b.low_open else (x >= b.low)
-            ok &= (x < b.high) if b.high_open else (x <= b.high)
-    return ok | ~np.array(given, dtype=bool)
-
-
-def _angles(sky: list[dict[str, Any]], f: Field, hours: bool) -> Column:
-    """``sky.ra`` (``hours``) or ``sky.dec`` in degrees, as ``parse_angle`` reads them."""
-    values = [_angle(s[f.name], hours) for s in sky]
-    return values, _in_range(values, [True] * len(values), f)
-
-
-def _angle(raw: Any, hours: bool) -> float | None:
-    if type(raw) is str and len(raw) > MAX_VALUE_CHARS:
-        return None
-    try:
-        return fast_angle_deg(raw, hours)
-    except ValueError:
-        return None
-
-
-def _numbers(docs: list[dict[str, Any]], f: Field) -> Column:
-    """A plain number at the top level (absent: its default), as ``number`` reads it."""
-    raws = [doc.get(f.name, _ABSENT) for doc in docs]
-    values = [f.default if raw is _ABSENT else _number(raw) for raw in raws]
-    return values, _in_range(values, [raw is not _ABSENT for raw in raws], f)
-
-
-def _number(raw: Any) -> float | None:
-    try:
-        return to_float(raw)
-    except ValueError:
-        return None
-
-
-def _choices(sections: list[dict[str, Any]], f: Field, only: str | None = None) -> Column:
-    """A choice (absent: its default) as the schema spells it, as ``parse_choice`` reads it;
-    ``only``: the one choice the columns take."""
-    values = [_choice(s.get(f.name, f.default), f.choices) for s in sections]
-    good = [v is not None and (only is None or v == only) for v in values]
-    return values, np.array(good, dtype=bool)
-
-
-def _choice(raw: Any, choices: tuple[str, ...]) -> str | None:
-    if type(raw) is not str or len(raw) > MAX_VALUE_CHARS:
-        return None
-    text = raw.strip().lower()
-    for choice in choices:
-        if choice.lower() == text:
-            return choice
-    return None
-
-
-def _epochs(raws: list[Any]) -> Column:
-    """``lisa.t_ref`` as TDB, read once per distinct value (each target takes a copy, as
-    ``parse_epoch`` hands it out); None: not a TDB epoch (the one-file path reads or refuses
-    it)."""
-    f = field("lisa.t_ref")
-    read: dict[tuple[type, Hashable], Time | None] = {}
-    values: list[Time | None] = []
-    for raw in raws:
-        if not isinstance(raw, Hashable):
-            values.append(None)
-            continue
-        key = (type(raw), raw)
-        if key not in read:
-            read[key] = _epoch(f, raw)
-        values.append(read[key])
-    return values, np.array([v is not None for v in values], dtype=bool)
-
-
-def _epoch(f: Field, raw: Any) -> Time | None:
-    try:
-        tdb, converted = parse_epoch(Ctx(None), f, raw, None)
-    except (TargetFileError, *MALFORMED):
-        return None
-    return tdb if converted is None else None
-
-
-def _sigmas(covs: list[Any]) -> Column:
-    """``lisa.covariance`` (absent, or σ's alone) as names and the diagonal Σ = diag(σ²), as
-    ``parse_covariance`` reads and checks it: the documents grouped by their names (in order),
-    each σ a column."""
-    groups: dict[tuple[str, ...], list[int]] = {}
-    for k, cov in enumerate(covs):
-        groups.setdefault(() if cov is None else tuple(cov["sigma"]), []).append(k)
-    values: list[Any] = [None] * len(covs)
-    ok = np.ones(len(covs), dtype=bool)
-    for given, idx in groups.items():
-        mats, good = _diagonals([covs[k]["sigma"] for k in idx] if given else [], given, len(idx))
-        ok[idx] = good
-        for k, mat in zip(idx, mats, strict=True):
-            values[k] = (given, mat.copy())
-    return values, ok
-
-
-def _diagonals(sigmas: list[dict[str, Any]], names: tuple[str, ...], n: int) -> tuple[Any, Any]:
-    """Σ = diag(σ²) of ``n`` documents' σ's (each ``names``), stacked, and which pass: σ read in
-    its parameter's unit, > 0, finite, and σ² finite."""
-    mats = np.zeros((n, len(names), len(names)))
-    good = np.ones(n, dtype=bool)
-    for j, name in enumerate(names):
-        own = field(f"lisa.{name}")  # a σ is read in its parameter's unit
-        sig = [_quantity(s[name], str(own.unit), own.unit_required) for s in sigmas]
-        good &= _in_range(sig, [True] * n, _SIGMA)
-        x = np.array([np.nan if v is None else v for v in sig], dtype=np.float64)
-        with np.errstate(all="ignore"):
-            mats[:, j, j] = x * x
-        good &= np.isfinite(mats[:, j, j])
-    return mats, good
