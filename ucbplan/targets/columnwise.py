@@ -38,6 +38,7 @@ from ucbplan.targets.column_values import (
     quantities,
 )
 from ucbplan.targets.covariance import batched_checks
+from ucbplan.targets.epoch_batch import prebuilt_epochs
 from ucbplan.targets.model import Spectroscopy, Target
 from ucbplan.targets.parse import (
     many_files,
@@ -81,12 +82,31 @@ def load_target_files(paths: Sequence[Path | str]) -> list[Target]:
         built: list[Target | None] = [None] * len(files)
         for k, target in zip(plain, _columns([_first(files[k]) for k in plain]), strict=True):
             built[k] = target
-        out: list[Target] = []
-        for (path, docs), target in zip(files, built, strict=True):
-            if isinstance(docs, TargetFileError):
-                raise docs
-            out.extend([target] if target is not None else targets_of_documents(docs, path))
-        return out
+        with prebuilt_epochs(_timing_epochs(files, built)):
+            return _in_turn(files, built)
+
+
+def _in_turn(files: list[tuple[Path, Any]], built: list[Target | None]) -> list[Target]:
+    """The targets of every file in order: those the columns built, the others' from the
+    one-file path (the first file that fails raises its error)."""
+    out: list[Target] = []
+    for (path, docs), target in zip(files, built, strict=True):
+        if isinstance(docs, TargetFileError):
+            raise docs
+        out.extend([target] if target is not None else targets_of_documents(docs, path))
+    return out
+
+
+def _timing_epochs(files: list[tuple[Path, Any]], built: list[Target | None]) -> list[Any]:
+    """``timing.t0`` of the documents the one-file path reads (to read them ahead)."""
+    out = []
+    for (_, docs), target in zip(files, built, strict=True):
+        if target is None and not isinstance(docs, TargetFileError):
+            for doc in docs:
+                timing = doc.get("timing") if type(doc) is dict else None
+                if type(timing) is dict and "t0" in timing:
+                    out.append(timing["t0"])
+    return out
 
 
 def _first(file: tuple[Path, Any]) -> tuple[dict[str, Any], Path]:
