@@ -104,13 +104,14 @@ def resolved_source(path: Path) -> Path:
     """``path.resolve()``; inside a call that loads many files each folder is resolved once
     (the file itself, unless a symbolic link, adds only its name)."""
     folders = _FOLDERS.get()
-    if folders is None or path.name in ("", ".", "..") or os.path.islink(path):
+    name = path.name
+    if folders is None or name in ("", ".", "..") or os.path.islink(path):
         return path.resolve()
-    key = str(path.parent)
+    key = os.path.dirname(path)  # one key per folder as written ("" for ".")
     folder = folders.get(key)
     if folder is None:
         folder = folders[key] = path.parent.resolve()
-    return folder / path.name
+    return folder / name
 
 
 @contextmanager
