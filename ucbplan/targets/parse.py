@@ -130,12 +130,22 @@ def _file_key(path: Path | str) -> tuple[int, int] | str:
         st = os.stat(path)
     except OSError:
         return str(Path(path).absolute())
+    return file_key(st)
+
+
+def file_key(st: os.stat_result) -> tuple[int, int]:
+    """The key of :func:`check_distinct_files` of a file's ``os.stat`` result."""
     return (st.st_dev, st.st_ino)
 
 
-def check_distinct_files(paths: Sequence[Path | str]) -> None:
+def check_distinct_files(
+    paths: Sequence[Path | str], keys: Sequence[tuple[int, int] | None] = ()
+) -> None:
     """Refuse a target file given twice (also through another path to it): the first half of
     the one rule for a repeated target (:func:`load_targets`).
+
+    ``keys``: each path's :func:`file_key` where its ``os.stat`` is at hand (None, or none
+    given: the path is looked up here).
 
     Raises
     ------
@@ -144,7 +154,8 @@ def check_distinct_files(paths: Sequence[Path | str]) -> None:
     """
     files: dict[tuple[int, int] | str, int] = {}
     for k, path in enumerate(paths):  # as given: a Path is built only for the message
-        first = files.setdefault(_file_key(path), k)
+        key = keys[k] if k < len(keys) else None
+        first = files.setdefault(_file_key(path) if key is None else key, k)
         if first != k:
             raise TargetFileError(
                 f"{Path(paths[first])}, {Path(path)}: the same target file twice; give each "
