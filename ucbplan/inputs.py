@@ -10,6 +10,10 @@ through :func:`load_yaml`, which
 - reads numbers written without a decimal point, such as ``5e-14``, as numbers (plain YAML 1.1
   reads them as strings).
 
+It reads the block-mapping subset target files are written in line by line (:func:`_load_lines`),
+other text through libyaml's events, and gives anything unusual, and every error, to the strict
+reader (PyYAML's SafeLoader), whose documents all three give.
+
 Text tables go through :func:`read_text`, which accepts UTF-8 with or without a byte-order mark
 and refuses other encodings with a message saying how to convert. Option values and table cells
 are range-checked with :func:`check_range` / :func:`check_int` (one line naming the option, the
