@@ -62,7 +62,12 @@ def seeds() -> list[Any]:
         "parameters": ["phase", "f_gw"],
         "matrix": [[4e-4, 1e-14], [1e-14, 5.9e-23]],
     }
-    return [*docs, copy.deepcopy(BASE), ztf_j1539_doc(), corr, full]
+    cited = copy.deepcopy(BASE) | {
+        "vmag": 21.1,
+        "magnitudes": {"V": 21.1, "g": 20.9},
+        "references": {"lisa.f_gw": "2019Natur.571..528B", "magnitudes.g": "Gaia DR3"},
+    }
+    return [*docs, copy.deepcopy(BASE), ztf_j1539_doc(), corr, full, cited]
 
 
 def bad_corpus() -> list[Any]:

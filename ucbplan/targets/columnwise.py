@@ -48,9 +48,11 @@ from ucbplan.targets.parse import (
 )
 from ucbplan.targets.schema import field, section_fields
 from ucbplan.targets.sections import names
+from ucbplan.targets.timing_section import parse_magnitudes, parse_references
+from ucbplan.targets.values import MALFORMED, Ctx
 
 #: The sections and fields a plain document may have (anything else: the one-file path).
-_TOP = frozenset(("name", "sky", "lisa", "spectroscopy", "masses", "vmag", "priority", "notes"))
+_TOP = frozenset(names("")) - {"timing"}
 _SKY = frozenset(("ra", "dec", "frame"))
 _LISA = frozenset(names("lisa")) - {"samples", "t_ref_scale"}
 _LISA_REQUIRED = tuple(f.name for f in section_fields("lisa") if f.required)
@@ -63,6 +65,9 @@ _LISA_VALUES = tuple(
 )
 _SPECTROSCOPY_VALUES = tuple(f for f in section_fields("spectroscopy") if f.kind == "quantity")
 _MASS_VALUES = tuple(section_fields("masses"))
+#: The context of the one-file readers used here (their messages are never shown: a document
+#: they refuse goes the one-file way).
+_CTX = Ctx(None)
 #: Longest plain name [characters] (:data:`~ucbplan.targets.parse.MAX_NAME_CHARS`).
 _MAX_NAME = 200
 
@@ -206,6 +211,7 @@ def _read_columns(docs: list[dict[str, Any]], lisa: list[dict[str, Any]]) -> dic
         "lines": choices(spec, field("spectroscopy.lines")),
         "priority": numbers(docs, field("priority")),
         "vmag": numbers(docs, field("vmag")),
+        "extras": _extras(docs),
         "covariance": covariances([s.get("covariance") for s in lisa]),
     }
     for section, fields in ((lisa, _LISA_VALUES), (spec, _SPECTROSCOPY_VALUES)):
@@ -218,7 +224,7 @@ def _read_columns(docs: list[dict[str, Any]], lisa: list[dict[str, Any]]) -> dic
 _ROW = (
     *("name", "ra", "dec", "t_ref", "t_obs", *PARAM_NAMES),
     *("cos_inclination", "amplitude", "psi", "distance", "covariance", "has_spectroscopy"),
-    *("lines", "K1", "K2", "K_eff", "sigma_v", "priority", "vmag", "m1", "m2"),
+    *("lines", "K1", "K2", "K_eff", "sigma_v", "priority", "vmag", "m1", "m2", "extras"),
 )
 
 
@@ -230,7 +236,8 @@ def _target(row: tuple[Any, ...], path: Path) -> Target:
     :func:`~ucbplan.targets.target_from_dict` builds it (its epoch a copy of the one read)."""
     name, ra, dec, t_ref, t_obs = row[:5]
     cos_i, amplitude, psi, distance, (cov_names, cov_matrix), has_spec = row[12:18]
-    lines, k1, k2, k_eff, sigma_v, priority, vmag, m1, m2 = row[18:]
+    lines, k1, k2, k_eff, sigma_v, priority, vmag, m1, m2, extras = row[18:]
+    magnitudes, references = extras if extras is not None else (_magnitudes(vmag), {})
     return Target(
         name=name,
         source=resolved_source(path),
@@ -247,8 +254,30 @@ def _target(row: tuple[Any, ...], path: Path) -> Target:
         distance_kpc=distance,
         spectroscopy=Spectroscopy(lines, k1, k2, k_eff, sigma_v) if has_spec else None,
         priority=priority,
-        vmag=vmag,
+        vmag=magnitudes.get("V"),
         m1_msun=m1,
         m2_msun=m2,
-        magnitudes={} if vmag is None else {"V": vmag},
+        magnitudes=magnitudes,
+        references=references,
     )
+
+
+def _magnitudes(vmag: float | None) -> dict[str, float]:
+    """``parse_magnitudes`` of a document without ``magnitudes``: V if ``vmag`` is given."""
+    return {} if vmag is None else {"V": vmag}
+
+
+def _extras(docs: list[dict[str, Any]]) -> Column:
+    """``magnitudes`` (with ``vmag``) and ``references`` of the documents that give them, read
+    by the one-file readers themselves (None: neither given; a document they refuse fails)."""
+    values: list[Any] = []
+    ok = np.ones(len(docs), dtype=bool)
+    for k, doc in enumerate(docs):
+        value = None
+        if "magnitudes" in doc or "references" in doc:
+            try:
+                value = (parse_magnitudes(_CTX, doc), parse_references(_CTX, doc))
+            except (TargetFileError, *MALFORMED):
+                ok[k] = False
+        values.append(value)
+    return values, ok
