@@ -214,10 +214,13 @@ assert None not in _FastLoader.yaml_implicit_resolvers and not _FastLoader.yaml_
 #: brackets …) and no leading ``- ``; flow mappings of those on one line.
 _KEY = r"[A-Za-z_][A-Za-z0-9_]*"
 _PLAIN = r"(?:[A-Za-z0-9_.+/()]|-(?=[^ ]))(?:[A-Za-z0-9_.+/() -]*[A-Za-z0-9_.+/()-])?"
-_SCALAR = "\"[^\"\\\\\ufeff]*\"|'[^'\ufeff]*'|" + _PLAIN
+_QUOTED = "\"[^\"\\\\\ufeff]*\"|'[^'\ufeff]*'"
+_SCALAR = f"{_QUOTED}|{_PLAIN}"
+#: Outside flow mappings, a plain value may hold commas (not start with one).
+_BLOCK_SCALAR = f"{_QUOTED}|" + _PLAIN.replace("/() -]", "/() ,-]").replace("/()-]", "/(),-]")
 _FLOW = rf"\{{ *(?:{_KEY}: +(?:{_SCALAR}) *(?:, *{_KEY}: +(?:{_SCALAR}) *)*,? *)?\}}"
 #: A line: indentation, key, value (none: a nested mapping or null), blanks and a comment.
-_LINE = re.compile(rf"( *)({_KEY}):(?: +({_FLOW}|{_SCALAR}))?(?: +(?:#.*)?)?")
+_LINE = re.compile(rf"( *)({_KEY}):(?: +({_FLOW}|{_BLOCK_SCALAR}))?(?: +(?:#.*)?)?")
 #: A flow mapping's entries.
 _ITEM = re.compile(rf"({_KEY}): +({_SCALAR})")
 #: A blank or comment-only line.

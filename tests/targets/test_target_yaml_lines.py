@@ -77,6 +77,8 @@ def test_the_bundled_targets_and_dumped_documents_are_read_alike() -> None:
         "a: 1\r\nb: 2\n",
         "a: b: c\n",
         "? a\n: 1\n",
+        "a: ,b\n",
+        "a: {b: c, d}\n",
     ],
 )
 def test_what_the_subset_leaves_to_yaml(text: str) -> None:
@@ -91,6 +93,7 @@ def test_what_the_subset_leaves_to_yaml(text: str) -> None:
         ("a:   # c\n  b: 1e5\n  c: .5\n", {"a": {"b": 100000.0, "c": 0.5}}),
         ("a: {b: x y , c: 'p: q'}  # {d: 1}\n", {"a": {"b": "x y", "c": "p: q"}}),
         ("a: -5\nb: (x) +y/z\n", {"a": -5, "b": "(x) +y/z"}),
+        ("a: Burdge et al. 2019, Nature 571,\n", {"a": "Burdge et al. 2019, Nature 571,"}),
     ],
 )
 def test_plain_words_resolve_as_yaml_resolves_them(text: str, doc: dict) -> None:
