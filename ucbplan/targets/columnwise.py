@@ -83,41 +83,48 @@ def load_target_files(paths: Sequence[Path | str]) -> list[Target]:
     """
     with many_files(), batched_checks():
         files = [_read(Path(p)) for p in paths]
-        plain = [k for k, (_, docs) in enumerate(files) if _single_plain(docs)]
-        built: list[Target | None] = [None] * len(files)
-        for k, target in zip(plain, _columns([_first(files[k]) for k in plain]), strict=True):
-            built[k] = target
+        built = _built(files)
         with prebuilt_epochs(_timing_epochs(files, built)):
             return _in_turn(files, built)
 
 
-def _in_turn(files: list[tuple[Path, Any]], built: list[Target | None]) -> list[Target]:
+Built = list[list[Target] | None]
+
+
+def _built(files: list[tuple[Path, Any]]) -> Built:
+    """Each file's targets as the columns build them (None: a document of the file is not
+    plain, or fails a column check; the one-file path reads the file)."""
+    plain = [k for k, (_, docs) in enumerate(files) if _all_plain(docs)]
+    targets = iter(_columns([(doc, files[k][0]) for k in plain for doc in files[k][1]]))
+    built: Built = [None] * len(files)
+    for k in plain:
+        got = [next(targets) for _ in files[k][1]]
+        done = [t for t in got if t is not None]
+        built[k] = done if len(done) == len(got) else None
+    return built
+
+
+def _in_turn(files: list[tuple[Path, Any]], built: Built) -> list[Target]:
     """The targets of every file in order: those the columns built, the others' from the
     one-file path (the first file that fails raises its error)."""
     out: list[Target] = []
-    for (path, docs), target in zip(files, built, strict=True):
+    for (path, docs), targets in zip(files, built, strict=True):
         if isinstance(docs, TargetFileError):
             raise docs
-        out.extend([target] if target is not None else targets_of_documents(docs, path))
+        out.extend(targets if targets is not None else targets_of_documents(docs, path))
     return out
 
 
-def _timing_epochs(files: list[tuple[Path, Any]], built: list[Target | None]) -> list[Any]:
+def _timing_epochs(files: list[tuple[Path, Any]], built: Built) -> list[Any]:
     """``timing.t0`` of the documents the one-file path reads (to read them ahead)."""
     out = []
-    for (_, docs), target in zip(files, built, strict=True):
-        if target is None and not isinstance(docs, TargetFileError):
+    for (_, docs), targets in zip(files, built, strict=True):
+        if targets is None and not isinstance(docs, TargetFileError):
             for doc in docs:
                 timing = doc.get("timing") if type(doc) is dict else None
                 if type(timing) is dict and "t0" in timing:
                     out.append(timing["t0"])
     return out
-
-
-def _first(file: tuple[Path, Any]) -> tuple[dict[str, Any], Path]:
-    """A plain file's document and path."""
-    path, docs = file
-    return docs[0], path
 
 
 def _read(path: Path) -> tuple[Path, list[Any] | TargetFileError]:
@@ -128,8 +135,9 @@ def _read(path: Path) -> tuple[Path, list[Any] | TargetFileError]:
         return path, exc
 
 
-def _single_plain(docs: list[Any] | TargetFileError) -> bool:
-    return not isinstance(docs, TargetFileError) and len(docs) == 1 and _plain(docs[0])
+def _all_plain(docs: list[Any] | TargetFileError) -> bool:
+    """Whether every document of a file (read) is plain (:func:`_plain`)."""
+    return not isinstance(docs, TargetFileError) and all(map(_plain, docs))
 
 
 # ---------------------------------------------------------------------------------------------
