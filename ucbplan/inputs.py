@@ -275,27 +275,35 @@ class _Lines:
         return out
 
 
-def _load_lines(text: str) -> Any:
-    """The document of a text in a small subset of YAML (a block mapping of the
-    :data:`_LINE` lines, and blank or comment lines), read line by line as ``yaml.load`` reads
-    it; None for any other text (then libyaml reads it). Target files are mostly written in
-    this subset, and libyaml's event objects cost most of the time reading them takes."""
+def _load_lines(text: str) -> list[Any] | None:
+    """The documents of a text in a small subset of YAML (block mappings of the :data:`_LINE`
+    lines, blank or comment lines, and ``---`` lines between documents), read line by line as
+    ``yaml.load_all`` reads them; None for any other text (then libyaml reads it). Target files
+    are mostly written in this subset, and libyaml's event objects cost most of the time reading
+    them takes."""
     if any(c in text for c in _OTHER_BREAKS):
         return None
-    doc = _Lines()
-    match, skip, add, ctor = _LINE.fullmatch, _SKIP.fullmatch, doc.add, doc.constructor
+    docs: list[Any] = []
+    doc, marked = _Lines(), False  # marked: a "---" opened the document
+    match, skip = _LINE.fullmatch, _SKIP.fullmatch
     try:
         for line in text.split("\n"):
             m = match(line)
-            if m is None:
-                if skip(line):
-                    continue
-                return None
-            if not add(len(m[1]), _plain_value(m[2], ctor), m[3]):
+            if m is not None:
+                if not doc.add(len(m[1]), _plain_value(m[2], doc.constructor), m[3]):
+                    return None
+            elif line == "---":
+                if doc.root:
+                    docs.append(doc.root)
+                    doc = _Lines()
+                elif docs or marked:
+                    return None  # an empty document: YAML reads None
+                marked = True
+            elif not skip(line):
                 return None
     except _Refused:
         return None
-    return doc.root or None
+    return [*docs, doc.root] if doc.root else None
 
 
 def _read_bytes(path: Path, limit: int, what: str) -> bytes:
@@ -423,9 +431,9 @@ def _load_fast(text: str, documents: bool) -> tuple[Any] | None:
         or _non_printable(text)
     ):
         return None
-    doc = None if strict else _load_lines(text)
-    if doc is not None:
-        return ([doc],) if documents else (doc,)
+    lines = None if strict else _load_lines(text)
+    if lines is not None and (documents or len(lines) == 1):
+        return (lines,) if documents else (lines[0],)
     loader = _FastLoader(text)
     try:
         docs = loader.documents()

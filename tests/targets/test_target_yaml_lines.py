@@ -24,15 +24,24 @@ DUMPED = [
     if len(docs) == 1
     for flow in (False, None)
 ]
-TEXTS = CATALOG_TEXTS + DUMPED
+#: Catalogs: documents joined by "---" lines (the first with one before it, or not).
+JOINED = [
+    ("---\n" if k % 2 else "") + "---\n".join(DUMPED[k : k + 1 + k % 3])
+    for k in range(0, len(DUMPED), 7)
+]
+TEXTS = CATALOG_TEXTS + DUMPED + JOINED
 #: Characters that steer YAML's grammar, and a few plain ones.
 ALPHABET = ": -[]{},#'\"!*?|>\n\t%@`=~.0123456789eEaxyz_()/+\\\u00e9\u2028\r\x00\ufeff"
 
 
-def _strict(text: str) -> object:
+def _strict(text: str) -> list[object]:
+    """Every document of ``text`` as the strict reader builds them."""
     loader = _StrictLoader(text)
     try:
-        return loader.get_single_data()
+        docs = []
+        while loader.check_data():
+            docs.append(loader.get_data())
+        return docs
     finally:
         loader.dispose()
 
@@ -44,15 +53,17 @@ def _same_as_strict(text: str) -> bool:
         return False  # the readers' callers refuse non-printable text first
     want = _strict(text)  # raises if the line reader took a text YAML refuses
     assert repr(got) == repr(want), text  # (NaN is not equal to itself)
-    for documents, wrap in ((False, want), (True, [want])):
+    for documents, wrap in ((False, want[0]), (True, want)):
         fast = _load_fast(text, documents)  # None: the strict reader reads it (a ? or > …)
         assert fast is None or repr(fast) == repr((wrap,)), text
+        assert documents or len(want) == 1 or fast is None  # several: the strict reader's error
     return True
 
 
 def test_the_bundled_targets_and_dumped_documents_are_read_alike() -> None:
     taken = sum(_same_as_strict(text) for text in TEXTS)
     assert taken >= len(TEXTS) // 4  # the subset is what target files are written in
+    assert sum(_same_as_strict(text) for text in JOINED) >= len(JOINED) // 4
 
 
 @pytest.mark.parametrize(
@@ -69,7 +80,6 @@ def test_the_bundled_targets_and_dumped_documents_are_read_alike() -> None:
         "a: {b: 1, b: 2}\n",
         "a: {b: }\n",
         "a: {b:1}\n",
-        "---\na: 1\n",
         "a: 1\n...\n",
         "  a: 1\n",
         "a: 'it''s'\n",
@@ -78,6 +88,12 @@ def test_the_bundled_targets_and_dumped_documents_are_read_alike() -> None:
         "a: b: c\n",
         "? a\n: 1\n",
         "a: ,b\n",
+        "---\n---\na: 1\n",
+        "a: 1\n---\n",
+        "a: 1\n--- \nb: 2\n",
+        "a: 1\n---\n\n---\nb: 2\n",
+        "a: 1\n--- # c\nb: 2\n",
+        "a: 1\n...\n---\nb: 2\n",
         "a: {b: c, d}\n",
     ],
 )
@@ -97,7 +113,7 @@ def test_what_the_subset_leaves_to_yaml(text: str) -> None:
     ],
 )
 def test_plain_words_resolve_as_yaml_resolves_them(text: str, doc: dict) -> None:
-    assert _load_lines(text) == doc and _strict(text) == doc
+    assert _load_lines(text) == [doc] and _strict(text) == [doc]
 
 
 def _edited(text: str, edits: list[tuple[int, int, str]]) -> str:
@@ -135,3 +151,9 @@ def test_the_printable_check_refuses_what_yaml_refuses() -> None:
         for text in (chr(c), f"a: b\n{chr(c)}\n"):
             want = yaml.reader.Reader.NON_PRINTABLE.search(text) is not None
             assert _non_printable(text) == want, hex(c)
+
+
+def test_documents_split_at_marker_lines() -> None:
+    text = "# c\n---\na:\nb: 1\n---\nc: {d: x}\n"
+    assert _load_lines(text) == _strict(text) == [{"a": None, "b": 1}, {"c": {"d": "x"}}]
+    assert _load_fast(text, False) is None  # the strict reader says "expected a single document"
