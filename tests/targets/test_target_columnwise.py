@@ -91,3 +91,13 @@ def test_shuffled_catalog_folders(tmp_path: Path, corpus_files: list[Path], seed
     valid = [p for p in corpus_files if p.name.startswith("v")]
     paths = rng.sample(valid, 30)
     assert outcome(lambda: load_target_files(paths)) == _alone(paths)
+
+
+def test_a_path_that_is_none_fails_in_its_turn(tmp_path: Path) -> None:
+    bad = copy.deepcopy(BASE)
+    bad["lisa"]["f_gw"] = "6e-3 km"
+    first = tmp_path / "a.yaml"
+    first.write_text(yaml.safe_dump(bad), "utf-8")
+    assert outcome(lambda: load_target_files([first, None])) == _alone([first])
+    with pytest.raises(TypeError):
+        load_target_files([None, first])

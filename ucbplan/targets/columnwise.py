@@ -82,7 +82,7 @@ def load_target_files(paths: Sequence[Path | str]) -> list[Target]:
         As :func:`~ucbplan.targets.load_target_documents`, for the first file that fails.
     """
     with many_files(), batched_checks():
-        files = [_read(Path(p)) for p in paths]
+        files = [_read(p) for p in paths]
         built = _built(files)
         with prebuilt_epochs(_timing_epochs(files, built)):
             return _in_turn(files, built)
@@ -109,7 +109,7 @@ def _in_turn(files: list[tuple[Path, Any]], built: Built) -> list[Target]:
     one-file path (the first file that fails raises its error)."""
     out: list[Target] = []
     for (path, docs), targets in zip(files, built, strict=True):
-        if isinstance(docs, TargetFileError):
+        if isinstance(docs, Exception):
             raise docs
         out.extend(targets if targets is not None else targets_of_documents(docs, path))
     return out
@@ -119,7 +119,7 @@ def _timing_epochs(files: list[tuple[Path, Any]], built: Built) -> list[Any]:
     """``timing.t0`` of the documents the one-file path reads (to read them ahead)."""
     out = []
     for (_, docs), targets in zip(files, built, strict=True):
-        if targets is None and not isinstance(docs, TargetFileError):
+        if targets is None and not isinstance(docs, Exception):
             for doc in docs:
                 timing = doc.get("timing") if type(doc) is dict else None
                 if type(timing) is dict and "t0" in timing:
@@ -127,17 +127,22 @@ def _timing_epochs(files: list[tuple[Path, Any]], built: Built) -> list[Any]:
     return out
 
 
-def _read(path: Path) -> tuple[Path, list[Any] | TargetFileError]:
-    """A file's documents, or the error reading it raises (raised in the file's turn)."""
+def _read(raw: Path | str) -> tuple[Path, list[Any] | Exception]:
+    """A file's documents, or the error reading it raises (raised in the file's turn, as
+    ``load_target_documents`` raises it: also a TypeError for a path that is not one)."""
+    try:
+        path = Path(raw)
+    except TypeError as exc:
+        return raw, exc  # type: ignore[return-value]
     try:
         return path, read_documents(path)
     except TargetFileError as exc:
         return path, exc
 
 
-def _all_plain(docs: list[Any] | TargetFileError) -> bool:
+def _all_plain(docs: list[Any] | Exception) -> bool:
     """Whether every document of a file (read) is plain (:func:`_plain`)."""
-    return not isinstance(docs, TargetFileError) and all(map(_plain, docs))
+    return not isinstance(docs, Exception) and all(map(_plain, docs))
 
 
 # ---------------------------------------------------------------------------------------------
