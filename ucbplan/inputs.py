@@ -10,6 +10,10 @@ through :func:`load_yaml`, which
 - reads numbers written without a decimal point, such as ``5e-14``, as numbers (plain YAML 1.1
   reads them as strings).
 
+It reads the block-mapping subset target files are written in line by line (:func:`_load_lines`),
+other text through libyaml's events, and gives anything unusual, and every error, to the strict
+reader (PyYAML's SafeLoader), whose documents all three give.
+
 Text tables go through :func:`read_text`, which accepts UTF-8 with or without a byte-order mark
 and refuses other encodings with a message saying how to convert. Option values and table cells
 are range-checked with :func:`check_range` / :func:`check_int` (one line naming the option, the
@@ -94,6 +98,7 @@ _CSafeLoader: Any = yaml.CSafeLoader if _FAST_LOADER else yaml.SafeLoader
 #: refuses them), tags (``!`` on an empty value: "" against None), block scalars (``|#``) and
 #: complex keys (``?`` continuing a flow scalar).
 _STRICT_ONLY = re.compile("[&!|>?\t]")
+_STRICT_CHARS = "&!|>?\t"
 #: A comment: ``#`` at the start of a line or after a space, with no quote up to the line's end
 #: (inside a quoted value the text is the value's, where these characters do nothing) and no
 #: line break YAML has but ``$`` has not.
@@ -155,19 +160,39 @@ class _FastLoader(_CSafeLoader):
 
     def _plain(self, event: yaml.ScalarEvent) -> Any:
         """The value of a scalar event, as ``yaml.load`` builds it: quoted text is text, plain
-        text goes through the implicit resolvers for its first character, as ``resolve``
-        does (this loader has no path resolvers)."""
-        value = event.value
+        text goes through the implicit resolvers (:func:`_plain_value`)."""
         if event.anchor is not None or event.tag is not None:
             raise _Refused("anchor or tag")
         if not event.implicit[0]:
-            return value
-        tag = _implicit_tag(self.yaml_implicit_resolvers.get(value[:1], ()), value)
-        if tag is None:
-            return value
-        if tag not in _SCALAR_TAGS:
-            raise _Refused(tag)
-        return self.yaml_constructors[tag](self, yaml.ScalarNode(tag, value))
+            return event.value
+        return _plain_value(event.value, self)
+
+
+def _plain_value(value: str, constructor: Any) -> Any:
+    """A plain scalar's value as ``yaml.load`` builds it: its tag from the implicit resolvers
+    for its first character, as ``resolve`` does (these loaders have no path resolvers), built
+    by SafeConstructor's own method (of ``constructor``, a SafeConstructor)."""
+    found = _PLAIN_VALUES.get(value, _PLAIN_VALUES)
+    if found is not _PLAIN_VALUES:
+        return found
+    tag = _implicit_tag(_FastLoader.yaml_implicit_resolvers.get(value[:1], ()), value)
+    if tag is None:
+        found = value
+    elif tag not in _SCALAR_TAGS:
+        raise _Refused(tag)
+    else:
+        found = constructor.yaml_constructors[tag](constructor, yaml.ScalarNode(tag, value))
+    if len(value) <= _PLAIN_CHARS and len(_PLAIN_VALUES) < _PLAIN_SIZE:
+        _PLAIN_VALUES[value] = found
+    return found
+
+
+#: Plain scalars already read (keys, above all: a catalog repeats them), text → value: each
+#: value is immutable (text, None, bool, int, float, date, datetime) and depends on the text
+#: alone (the loader has no path resolvers), so a repeated text gives an equal value.
+_PLAIN_VALUES: dict[str, Any] = {}
+#: Most entries of :data:`_PLAIN_VALUES`, and the longest text it keeps [characters].
+_PLAIN_SIZE, _PLAIN_CHARS = 4096, 40
 
 
 def _implicit_tag(resolvers: list[tuple[str, re.Pattern[str]]], value: str) -> str | None:
@@ -182,6 +207,103 @@ for _loader in (_StrictLoader, _FastLoader):
     _loader.add_implicit_resolver("tag:yaml.org,2002:float", EXPONENT_FLOAT, list("-+0123456789"))
 # _FastLoader._plain resolves as Resolver.resolve does for loaders without these
 assert None not in _FastLoader.yaml_implicit_resolvers and not _FastLoader.yaml_path_resolvers
+
+
+#: The block-mapping subset :func:`_load_lines` reads: identifier keys; quoted text without
+#: escapes, or plain text of a few characters with no indicator (``:``, ``#``, ``,``,
+#: brackets …) and no leading ``- ``; flow mappings of those on one line.
+_KEY = r"[A-Za-z_][A-Za-z0-9_]*"
+_PLAIN = r"(?:[A-Za-z0-9_.+/()]|-(?=[^ ]))(?:[A-Za-z0-9_.+/() -]*[A-Za-z0-9_.+/()-])?"
+_QUOTED = "\"[^\"\\\\\ufeff]*\"|'[^'\ufeff]*'"
+_SCALAR = f"{_QUOTED}|{_PLAIN}"
+#: Outside flow mappings, a plain value may hold commas (not start with one).
+_BLOCK_SCALAR = f"{_QUOTED}|" + _PLAIN.replace("/() -]", "/() ,-]").replace("/()-]", "/(),-]")
+_FLOW = rf"\{{ *(?:{_KEY}: +(?:{_SCALAR}) *(?:, *{_KEY}: +(?:{_SCALAR}) *)*,? *)?\}}"
+#: A line: indentation, key, value (none: a nested mapping or null), blanks and a comment.
+_LINE = re.compile(rf"( *)({_KEY}):(?: +({_FLOW}|{_BLOCK_SCALAR}))?(?: +(?:#.*)?)?")
+#: A flow mapping's entries.
+_ITEM = re.compile(rf"({_KEY}): +({_SCALAR})")
+#: A blank or comment-only line.
+_SKIP = re.compile(" *(?:#.*)?")
+#: Line breaks other than ``\n`` (YAML has them; this reader does not).
+_OTHER_BREAKS = ("\r", "\x85", "\u2028", "\u2029")
+
+
+class _Lines:
+    """The state of :func:`_load_lines`: the open mappings by indentation (the innermost one
+    kept apart), and a key whose value (a nested mapping, or null) the next line decides."""
+
+    def __init__(self) -> None:
+        self.root: dict[Any, Any] = {}
+        self.indent, self.mapping = 0, self.root
+        self.outer: list[tuple[int, dict[Any, Any]]] = []
+        self.open: Any = _Lines  # the key left open (the class itself: none)
+        self.constructor = yaml.constructor.SafeConstructor()
+
+    def add(self, indent: int, key: Any, raw: str | None) -> bool:
+        """One ``key: value`` line; False where the subset ends (YAML decides)."""
+        if self.open is not _Lines:
+            if indent > self.indent:
+                child: dict[Any, Any] = {}
+                self.mapping[self.open] = child
+                self.outer.append((self.indent, self.mapping))
+                self.indent, self.mapping = indent, child
+            self.open = _Lines
+        while indent < self.indent and self.outer:
+            self.indent, self.mapping = self.outer.pop()
+        if indent != self.indent or key in self.mapping:
+            return False
+        if raw is None:
+            self.mapping[key] = None
+            self.open = key
+        else:
+            self.mapping[key] = self.value(raw)
+        return True
+
+    def value(self, raw: str) -> Any:
+        """A value as ``yaml.load`` builds it."""
+        if raw[0] in "\"'":
+            return raw[1:-1]
+        if raw[0] != "{":
+            return _plain_value(raw, self.constructor)
+        out: dict[Any, Any] = {}
+        for m in _ITEM.finditer(raw):
+            key = _plain_value(m[1], self.constructor)
+            if key in out:
+                raise _Refused("duplicate key")
+            out[key] = self.value(m[2])
+        return out
+
+
+def _load_lines(text: str) -> list[Any] | None:
+    """The documents of a text in a small subset of YAML (block mappings of the :data:`_LINE`
+    lines, blank or comment lines, and ``---`` lines between documents), read line by line as
+    ``yaml.load_all`` reads them; None for any other text (then libyaml reads it). Target files
+    are mostly written in this subset, and libyaml's event objects cost most of the time reading
+    them takes."""
+    if any(c in text for c in _OTHER_BREAKS):
+        return None
+    docs: list[Any] = []
+    doc, marked = _Lines(), False  # marked: a "---" opened the document
+    match, skip = _LINE.fullmatch, _SKIP.fullmatch
+    try:
+        for line in text.split("\n"):
+            m = match(line)
+            if m is not None:
+                if not doc.add(len(m[1]), _plain_value(m[2], doc.constructor), m[3]):
+                    return None
+            elif line == "---":
+                if doc.root:
+                    docs.append(doc.root)
+                    doc = _Lines()
+                elif docs or marked:
+                    return None  # an empty document: YAML reads None
+                marked = True
+            elif not skip(line):
+                return None
+    except _Refused:
+        return None
+    return [*docs, doc.root] if doc.root else None
 
 
 def _read_bytes(path: Path, limit: int, what: str) -> bytes:
@@ -299,15 +421,19 @@ def load_yaml(
 
 
 def _load_fast(text: str, documents: bool) -> tuple[Any] | None:
-    """``(document,)`` (or ``(documents,)``) read by libyaml, or None where the strict reader
-    must read the text: :data:`_STRICT_ONLY`, characters it refuses, or any error (its
-    messages are the ones users see)."""
+    """``(document,)`` (or ``(documents,)``) read line by line (:func:`_load_lines`) or by
+    libyaml, or None where the strict reader must read the text: :data:`_STRICT_ONLY`,
+    characters it refuses, or any error (its messages are the ones users see)."""
+    strict = any(c in text for c in _STRICT_CHARS)  # _STRICT_ONLY.search(text), faster
     if (
         not _FAST_LOADER
-        or (_STRICT_ONLY.search(text) and _STRICT_ONLY.search(_COMMENT.sub("", text)))
-        or yaml.reader.Reader.NON_PRINTABLE.search(text)
+        or (strict and _STRICT_ONLY.search(_COMMENT.sub("", text)))
+        or _non_printable(text)
     ):
         return None
+    lines = None if strict else _load_lines(text)
+    if lines is not None and (documents or len(lines) == 1):
+        return (lines,) if documents else (lines[0],)
     loader = _FastLoader(text)
     try:
         docs = loader.documents()
@@ -320,6 +446,14 @@ def _load_fast(text: str, documents: bool) -> tuple[Any] | None:
     if len(docs) > 1:
         return None  # the strict reader says "expected a single document"
     return (docs[0] if docs else None,)
+
+
+def _non_printable(text: str) -> bool:
+    """Whether ``text`` has a character the strict reader refuses (its ``NON_PRINTABLE``):
+    ``str.isprintable`` clears most texts at once (a character Python prints, YAML allows)."""
+    if text.replace("\n", "").isprintable():
+        return False
+    return yaml.reader.Reader.NON_PRINTABLE.search(text) is not None
 
 
 def is_number(value: Any) -> TypeGuard[int | float | np.integer[Any] | np.floating[Any]]:

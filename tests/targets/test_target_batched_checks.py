@@ -14,9 +14,8 @@ from hypothesis import strategies as st
 from support.targets import BASE
 
 from ucbplan.errors import TargetFileError
-from ucbplan.targets import load_target, target_from_dict
+from ucbplan.targets import load_target, load_target_documents, load_target_files, target_from_dict
 from ucbplan.targets.covariance import _check_psd, _check_symmetric, _plainly_good
-from ucbplan.targets.parse import load_target_documents, load_target_files
 from ucbplan.targets.values import Ctx
 
 #: A LISA target with correlated σ's (its covariance goes through the batched checks).

@@ -6,6 +6,7 @@
 from __future__ import annotations
 
 import os
+import stat
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -223,10 +224,11 @@ def _load_all(targets: Any) -> list[Target]:
     from ucbplan.targets import check_distinct_files, load_target_documents, load_target_files
 
     many = isinstance(targets, Sequence) and not isinstance(targets, str)
-    items = _expand(list(targets) if many else [targets])
+    items, keys = _expand(list(targets) if many else [targets])
     if not items:
         raise InputError("targets: expected at least one target, got none", "targets")
-    check_distinct_files([i for i in items if isinstance(i, str | Path)])
+    files = [k for k, i in enumerate(items) if isinstance(i, str | Path)]
+    check_distinct_files([items[k] for k in files], [keys[k] for k in files])
     if all(isinstance(i, str | Path) for i in items):
         return load_target_files(items)  # files only: each folder resolved once
     out: list[Target] = []
@@ -236,19 +238,34 @@ def _load_all(targets: Any) -> list[Target]:
     return out
 
 
-def _expand(items: list[Any]) -> list[Any]:
-    """Paths as given (text stays text, ~2 µs each); a folder gives its *.yaml, *.yml, sorted."""
+def _expand(items: list[Any]) -> tuple[list[Any], list[tuple[int, int] | None]]:
+    """Paths as given (text stays text, ~2 µs each); a folder gives its *.yaml, *.yml, sorted.
+    With each item its file key where its ``os.stat`` was taken here (None: not taken)."""
+    from ucbplan.targets.parse import file_key
+
     out: list[Any] = []
+    keys: list[tuple[int, int] | None] = []
     for item in items:
-        if isinstance(item, str | Path) and os.path.isdir(item or "."):  # "" is "." as before
+        st = _stat(item or ".") if isinstance(item, str | Path) else None  # "" is "." as before
+        if st is not None and stat.S_ISDIR(st.st_mode):
             path = Path(item)
             found = sorted([*path.glob("*.yaml"), *path.glob("*.yml")])
             if not found:
                 raise UcbplanError(f"{path}: no *.yaml target files in this directory")
             out.extend(found)
+            keys.extend([None] * len(found))
         else:
             out.append(item)
-    return out
+            keys.append(None if st is None else file_key(st))
+    return out, keys
+
+
+def _stat(path: str | Path) -> os.stat_result | None:
+    """``os.stat`` of ``path`` (None where ``os.path.isdir`` would say False: no such file)."""
+    try:
+        return os.stat(path)
+    except (OSError, ValueError):
+        return None
 
 
 def _one(

@@ -6,17 +6,18 @@ records), ``schema`` (every field of a target file declared once: unit, range, e
 of fields that share a shape: phase parameters, velocities, eccentricity, covariance),
 ``values`` (scalar readers), ``fastvalues`` (their common spellings read without astropy's
 parsers, the same floats), ``sections`` (helpers shared by the sections), ``parse``
-(:func:`load_target`), ``timing_section`` (``timing``, ``magnitudes``, ``references``),
+(:func:`load_target`), ``columnwise`` (:func:`load_target_files`: many files validated column
+by column), ``timing_section`` (``timing``, ``magnitudes``, ``references``),
 ``covariance`` (``lisa.covariance``, ``timing.covariance``), ``samples`` (posterior samples
 files), ``write`` (:func:`write_target`).
 """
 
+from ucbplan.targets.columnwise import load_target_files
 from ucbplan.targets.model import Spectroscopy, Target, TimingSection
 from ucbplan.targets.parse import (
     check_distinct_files,
     load_target,
     load_target_documents,
-    load_target_files,
     load_targets,
     target_from_dict,
 )

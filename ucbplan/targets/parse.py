@@ -94,26 +94,28 @@ def load_target(path: Path | str) -> Target:
     return target_from_dict(doc, path)
 
 
-#: Folders already resolved, inside one :func:`load_target_files` or :func:`load_targets` call
-#: (None outside one: a lone target file is resolved whole, as ``Path.resolve`` does it).
+#: Folders already resolved, inside one call loading many target files (:func:`load_targets`,
+#: :func:`~ucbplan.targets.columnwise.load_target_files`); None outside one: a lone target
+#: file is resolved whole, as ``Path.resolve`` does it.
 _FOLDERS: ContextVar[dict[str, Path] | None] = ContextVar("ucbplan_target_folders", default=None)
 
 
-def _resolved(path: Path) -> Path:
+def resolved_source(path: Path) -> Path:
     """``path.resolve()``; inside a call that loads many files each folder is resolved once
     (the file itself, unless a symbolic link, adds only its name)."""
     folders = _FOLDERS.get()
-    if folders is None or path.name in ("", ".", "..") or os.path.islink(path):
+    name = path.name
+    if folders is None or name in ("", ".", "..") or os.path.islink(path):
         return path.resolve()
-    key = str(path.parent)
+    key = os.path.dirname(path)  # one key per folder as written ("" for ".")
     folder = folders.get(key)
     if folder is None:
         folder = folders[key] = path.parent.resolve()
-    return folder / path.name
+    return folder / name
 
 
 @contextmanager
-def _many_files() -> Iterator[None]:
+def many_files() -> Iterator[None]:
     """The scope of :data:`_FOLDERS`: one call loading many target files."""
     token = _FOLDERS.set({})
     try:
@@ -122,31 +124,28 @@ def _many_files() -> Iterator[None]:
         _FOLDERS.reset(token)
 
 
-def load_target_files(paths: Sequence[Path | str]) -> list[Target]:
-    """Every target of several files, in order: :func:`load_target_documents` of each (each
-    folder resolved once).
-
-    Raises
-    ------
-    TargetFileError
-        As :func:`load_target_documents`, for the first file that fails.
-    """
-    with _many_files(), batched_checks():
-        return [t for path in paths for t in load_target_documents(path)]
-
-
 def _file_key(path: Path | str) -> tuple[int, int] | str:
     """What makes two paths the same file: device and inode (links, ``./a`` vs ``a``)."""
     try:
         st = os.stat(path)
     except OSError:
         return str(Path(path).absolute())
+    return file_key(st)
+
+
+def file_key(st: os.stat_result) -> tuple[int, int]:
+    """The key of :func:`check_distinct_files` of a file's ``os.stat`` result."""
     return (st.st_dev, st.st_ino)
 
 
-def check_distinct_files(paths: Sequence[Path | str]) -> None:
+def check_distinct_files(
+    paths: Sequence[Path | str], keys: Sequence[tuple[int, int] | None] = ()
+) -> None:
     """Refuse a target file given twice (also through another path to it): the first half of
     the one rule for a repeated target (:func:`load_targets`).
+
+    ``keys``: each path's :func:`file_key` where its ``os.stat`` is at hand (None, or none
+    given: the path is looked up here).
 
     Raises
     ------
@@ -155,7 +154,8 @@ def check_distinct_files(paths: Sequence[Path | str]) -> None:
     """
     files: dict[tuple[int, int] | str, int] = {}
     for k, path in enumerate(paths):  # as given: a Path is built only for the message
-        first = files.setdefault(_file_key(path), k)
+        key = keys[k] if k < len(keys) else None
+        first = files.setdefault(_file_key(path) if key is None else key, k)
         if first != k:
             raise TargetFileError(
                 f"{Path(paths[first])}, {Path(path)}: the same target file twice; give each "
@@ -183,7 +183,7 @@ def load_targets(
         one line naming both files.
     """
     check_distinct_files(paths)
-    with _many_files():
+    with many_files():
         return _load_each_once(paths, ident)
 
 
@@ -237,7 +237,7 @@ def target_from_dict(doc: Any, path: Path | None = None) -> Target:
         masses = _parse_masses(ctx, doc)
     target = Target(
         name=name,
-        source=_resolved(path) if path is not None else None,
+        source=resolved_source(path) if path is not None else None,
         ra_deg=ra,
         dec_deg=dec,
         t_ref=eph.t_ref,
@@ -509,6 +509,17 @@ def load_target_documents(path: Path | str) -> list[Target]:
         what was expected and how to fix it; a file with no document.
     """
     path = Path(path)
+    return targets_of_documents(read_documents(path), path)
+
+
+def read_documents(path: Path) -> list[Any]:
+    """The documents of a target file or catalog, parsed (empty ones dropped), unvalidated.
+
+    Raises
+    ------
+    TargetFileError
+        As :func:`load_target_documents` for a file that cannot be read or has no document.
+    """
     try:
         docs = load_yaml(path, "target file", documents=True)
     except SchemaError as exc:
@@ -530,6 +541,18 @@ def load_target_documents(path: Path | str) -> list[Target]:
     docs = [d for d in docs if d is not None]
     if not docs:
         raise TargetFileError(one_line(f"{Ctx(path).label}: no target in this file; add one"))
+    return docs
+
+
+def targets_of_documents(docs: list[Any], path: Path) -> list[Target]:
+    """The targets of a file's documents (:func:`read_documents`), each validated in turn as
+    :func:`load_target` does one; a catalog's errors name their document.
+
+    Raises
+    ------
+    TargetFileError
+        As :func:`load_target_documents`.
+    """
     if len(docs) == 1:
         return [target_from_dict(docs[0], path)]
     out = []

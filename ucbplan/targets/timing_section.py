@@ -28,6 +28,7 @@ from ucbplan.core.timing import (
 from ucbplan.core.timing_epochs import parse_timing_epoch
 from ucbplan.errors import shorten
 from ucbplan.targets.covariance import exact_parameters, parse_covariance
+from ucbplan.targets.epoch_batch import take_epoch
 from ucbplan.targets.model import TimingSection
 from ucbplan.targets.schema import FIELDS, field, section_fields
 from ucbplan.targets.sections import (
@@ -59,8 +60,9 @@ def parse_timing(ctx: Ctx, timing: Any) -> Ephemeris:
     """The ``timing`` section as the phase model at t_ref = T0 (:mod:`ucbplan.core.timing`)."""
     check_section(ctx, "timing", timing)
     f_t0 = field("timing.t0")
+    t0 = take_epoch(timing["t0"])  # read ahead with the other files' epochs
     try:
-        t0 = parse_timing_epoch(timing["t0"])
+        t0 = parse_timing_epoch(timing["t0"]) if t0 is None else t0
     except ValueError as exc:
         raise ctx.fail(f_t0.path, str(exc)) from None
     mark = parse_choice(ctx, field("timing.t0_marks"), timing["t0_marks"])

@@ -304,9 +304,9 @@ def parse_angle(ctx: Ctx, f: Field, value: Any, hours: bool = False) -> float:
     return deg
 
 
-def _angle_deg(value: Any, hours: bool) -> float:
-    """Degrees of an angle value: the common spellings read directly
-    (:mod:`~ucbplan.targets.fastvalues`, the same floats), the rest by astropy."""
+def fast_angle_deg(value: Any, hours: bool) -> float | None:
+    """Degrees of an angle value's common spellings (:mod:`~ucbplan.targets.fastvalues`, the
+    same floats as astropy's); None: astropy reads it (:func:`parse_angle`)."""
     if isinstance(value, int | float) and not isinstance(value, bool):
         return to_float(value)
     if not isinstance(value, str):
@@ -317,10 +317,24 @@ def _angle_deg(value: Any, hours: bool) -> float:
     fast = sexagesimal_deg(text, hours)
     if fast is not None:
         return fast
-    spaced = ":" in text or (" " in text and not re.search(r"[a-zA-Z]", text))
-    fast = None if spaced else quantity_in(text, "deg")  # a number with an angle unit
+    if _spaced(text):
+        return None
+    return quantity_in(text, "deg")  # a number with an angle unit
+
+
+def _spaced(text: str) -> bool:
+    """Sexagesimal fields separated by colons or spaces (astropy's Angle reads them)."""
+    return ":" in text or (" " in text and not re.search(r"[a-zA-Z]", text))
+
+
+def _angle_deg(value: Any, hours: bool) -> float:
+    """Degrees of an angle value: the common spellings read directly (:func:`fast_angle_deg`),
+    the rest by astropy."""
+    fast = fast_angle_deg(value, hours)
     if fast is not None:
         return fast
+    text = value.strip()
+    spaced = _spaced(text)
     from astropy.coordinates import Angle  # the other spellings (imported only for them)
 
     if spaced:
