@@ -138,3 +138,27 @@ def test_only_the_process_entry_freezes_the_collector(entry: str, frozen: bool) 
     )
     assert res.returncode == 0, res.stderr
     assert res.stdout.splitlines() == [f"ucbplan {__version__}", f"FROZEN {frozen}"]
+
+
+#: Reports whether the collector was frozen when ``run`` handed over to ``main`` (the command).
+_START_PROBE = """
+import gc, sys
+from ucbplan.cli import app
+command = app.main
+def probe():
+    print("AT-START", gc.get_freeze_count() > 0, flush=True)
+    command()
+app.main = probe
+sys.argv = ["ucbplan", "--version"]
+app.run()
+"""
+
+
+def test_the_process_entry_freezes_the_imports_before_the_command() -> None:
+    """``app.run`` freezes what the imports made before the command runs, so a full collection
+    during a long command does not trace the modules' objects again (issue 34)."""
+    import subprocess
+
+    res = subprocess.run([sys.executable, "-c", _START_PROBE], capture_output=True, text=True)
+    assert res.returncode == 0, res.stderr
+    assert res.stdout.splitlines()[0] == "AT-START True"
