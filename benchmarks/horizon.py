@@ -136,12 +136,34 @@ def _table_part(args: tuple[int, int]) -> int:
     return n
 
 
+#: A worker process's BLAS and OpenMP threads, as a careful user sets them for a process pool
+#: (one worker per core): numpy's ``eigvals`` over the stacked companion matrices otherwise
+#: wakes OpenBLAS's threads in every worker, which spin against each other (in one process
+#: they burn 0.75 CPU s of the 1 s table and save no wall time).
+ONE_THREAD = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+
+
+def _pool(workers: int) -> ProcessPoolExecutor:
+    """A started pool of ``workers`` fresh processes with :data:`ONE_THREAD` (spawned: the
+    variables must be set before numpy loads its BLAS), the modules imported."""
+    saved = {k: os.environ.get(k) for k in ONE_THREAD}
+    os.environ.update(ONE_THREAD)
+    try:
+        ex = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"))
+        list(ex.map(_table_part, [(10, 1)] * workers))  # start the workers, import
+    finally:
+        for key, value in saved.items():
+            if value is None:
+                del os.environ[key]
+            else:
+                os.environ[key] = value
+    return ex
+
+
 def measure_parallel(n: int, workers: int = 2) -> dict[str, object]:
     """Horizon tables of n targets: one process against ``workers`` processes (pool started)."""
-    ctx = multiprocessing.get_context("fork")
     parts = [(n // workers, 100 + k) for k in range(workers)]
-    with ProcessPoolExecutor(workers, mp_context=ctx) as ex:
-        list(ex.map(_table_part, [(10, 1)] * workers))  # start the workers, import
+    with _pool(workers) as ex:
         t0 = time.perf_counter()
         list(ex.map(_table_part, parts))
         par = time.perf_counter() - t0
