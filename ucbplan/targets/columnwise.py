@@ -41,6 +41,7 @@ from ucbplan.targets.covariance import batched_checks
 from ucbplan.targets.epoch_batch import prebuilt_epochs
 from ucbplan.targets.model import Spectroscopy, Target
 from ucbplan.targets.parse import (
+    MAX_NAME_CHARS,
     many_files,
     read_documents,
     resolved_source,
@@ -68,8 +69,6 @@ _MASS_VALUES = tuple(section_fields("masses"))
 #: The context of the one-file readers used here (their messages are never shown: a document
 #: they refuse goes the one-file way).
 _CTX = Ctx(None)
-#: Longest plain name [characters] (:data:`~ucbplan.targets.parse.MAX_NAME_CHARS`).
-_MAX_NAME = 200
 
 
 def load_target_files(paths: Sequence[Path | str]) -> list[Target]:
@@ -170,9 +169,13 @@ def _plain(doc: Any) -> bool:
 
 
 def _plain_name(name: Any) -> bool:
-    """A printable one-line name (so no control character) of at most 200 characters."""
+    """A printable one-line name (so no control character) of at most
+    :data:`~ucbplan.targets.parse.MAX_NAME_CHARS` characters."""
     return (
-        type(name) is str and len(name) <= _MAX_NAME and name.isprintable() and bool(name.strip())
+        type(name) is str
+        and len(name) <= MAX_NAME_CHARS
+        and name.isprintable()
+        and bool(name.strip())
     )
 
 
