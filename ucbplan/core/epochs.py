@@ -9,6 +9,7 @@ written by :mod:`ucbplan.core.timing_epochs`.
 from __future__ import annotations
 
 import math
+from typing import Any
 
 from astropy.time import Time
 
@@ -47,8 +48,14 @@ def split_scale_label(text: str) -> tuple[str, str | None]:
     return before.strip(), word
 
 
+def years_of(jd1: Any, jd2: Any) -> Any:
+    """Julian year (J2000.0 = 2000.0) of two-part Julian dates ``jd1 + jd2``: floats or arrays,
+    the same operations either way (:func:`year_of` of one Time, many at once)."""
+    return 2000.0 + (jd1 - 2451545.0 + jd2) / 365.25
+
+
 def year_of(t: Time) -> float:
-    return 2000.0 + (float(t.jd1) - 2451545.0 + float(t.jd2)) / 365.25
+    return float(years_of(float(t.jd1), float(t.jd2)))
 
 
 def epoch_in_scale(text: str, scale: str, isot_if_t: bool = False) -> Time:

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 from astropy.time import Time
 
-from ucbplan.core.epochs import YEAR_RANGE, split_scale_label
+from ucbplan.core.epochs import YEAR_RANGE, split_scale_label, years_of
 from ucbplan.core.timing_epochs import (
     MAX_TIMING_EPOCH_CHARS,
     TIMING_EPOCH_WORDS,
@@ -59,7 +59,7 @@ def read_ahead(texts: Iterable[Any]) -> dict[str, Time]:
             times = Time(whole, frac, format=fmt, scale="tdb")
         except (ValueError, TypeError, OverflowError):  # each read alone says why
             continue
-        year = 2000.0 + (times.jd1 - 2451545.0 + times.jd2) / 365.25  # year_of, per epoch
+        year = years_of(times.jd1, times.jd2)  # year_of, per epoch
         inside = (YEAR_RANGE[0] <= year) & (year <= YEAR_RANGE[1])
         out.update((rows[k][0], times[k]) for k in np.flatnonzero(inside))
     return out
