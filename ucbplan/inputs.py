@@ -97,8 +97,8 @@ _CSafeLoader: Any = yaml.CSafeLoader if _FAST_LOADER else yaml.SafeLoader
 #: budget), and what libyaml reads differently: tabs (it accepts them where the strict reader
 #: refuses them), tags (``!`` on an empty value: "" against None), block scalars (``|#``) and
 #: complex keys (``?`` continuing a flow scalar).
-_STRICT_ONLY = re.compile("[&!|>?\t]")
 _STRICT_CHARS = "&!|>?\t"
+_STRICT_ONLY = re.compile(f"[{re.escape(_STRICT_CHARS)}]")
 #: A comment: ``#`` at the start of a line or after a space, with no quote up to the line's end
 #: (inside a quoted value the text is the value's, where these characters do nothing) and no
 #: line break YAML has but ``$`` has not.
