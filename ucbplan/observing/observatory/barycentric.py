@@ -25,6 +25,7 @@ from scipy.interpolate import CubicSpline
 
 from ucbplan.core.constants import HOUR_S
 from ucbplan.errors import InputError
+from ucbplan.observing.observatory.time_axis import TimeAxis
 
 #: Number of fixed-point iterations t ← t★ − Δ(t); Δ changes by ≤ 1e-4 s/s, so each iteration
 #: shrinks the error by ≥ 1e4: 500 s → 0.05 s → 5 µs → 0.5 ns.
@@ -125,8 +126,7 @@ def _site_icrs_interpolated(
     if n + 2 >= x.size:
         return _site_icrs_m(location, origin + TimeDelta(x * u.s))
     xc = np.linspace(x[0] - step_s, x[0] + step_s * (n - 2), n)
-    tc = origin + TimeDelta(xc * u.s)
-    _ = tc.delta_tdb_tt  # computed once, kept for every conversion below (TimeAxis.tdb_grid)
+    tc = TimeAxis(origin).tdb_grid(xc)  # TDB − TT once, kept for every conversion below
     r = _site_icrs_m(location, tc)
     _, pv = erfa.epv00(tc.tdb.jd1, tc.tdb.jd2)  # the Earth's barycentric position (astropy's)
     earth = pv["p"] * au.to_value(u.m)
