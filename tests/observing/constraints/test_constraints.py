@@ -174,14 +174,43 @@ def test_plan_settings_constraints_follow_site_and_options() -> None:
         PlanSettings(twilight="dusk").constraints(paranal)
 
 
-def test_sun_direct_rotation_equals_astropys_frames() -> None:
-    """The sky model's Sun: astropy's GCRS → CIRS matrix applied directly gives the frame
-    transformation's positions bit for bit."""
-    from ucbplan.observing.observatory.sky import _sun_cirs_m, sun_cirs_frames
+@pytest.mark.parametrize("site_name", ["paranal", "la palma", "mauna kea"])
+def test_sky_nodes_from_one_matrix_equal_astropys_frames(
+    site_name: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The sky model's nodes: the targets through the astrometry context of astropy's ICRS →
+    CIRS, whose GCRS → CIRS matrix is astropy's own and then rotates the Sun and the Moon, give
+    the frame transformations' vectors bit for bit; so do the fallbacks (astropy's rotation
+    functions alone, or none) when a future astropy moves its helpers."""
+    from astropy.coordinates.builtin_frames.intermediate_rotation_transforms import (
+        gcrs_to_cirs_mat,
+    )
 
+    from ucbplan.observing.observatory import sky as sky_module
+
+    location = get_site(site_name).location
     with offline():
-        t = Time(ORIGIN, scale="tdb") + TimeDelta(np.linspace(0.0, 200.0, 300) * u.d)
-        np.testing.assert_array_equal(_sun_cirs_m(t), sun_cirs_frames(t))
+        t = Time(ORIGIN, scale="tdb", location=location) + TimeDelta(
+            np.linspace(-400.0, 400.0, 300) * u.d
+        )
+        frames = (
+            sky_module.targets_cirs_frames(COORDS, t),
+            sky_module.sun_cirs_frames(t),
+            sky_module.moon_cirs_frames(t),
+        )
+        tvec, c2i = sky_module._targets_cirs(COORDS, t)
+        assert c2i is not None
+        np.testing.assert_array_equal(c2i, gcrs_to_cirs_mat(t))
+        got = [(tvec, *sky_module._sun_moon_cirs_m(t, c2i))]
+        monkeypatch.setattr(sky_module, "astropy_astrometry", lambda: None)
+        tvec, c2i = sky_module._targets_cirs(COORDS, t)
+        assert c2i is None
+        got.append((tvec, *sky_module._sun_moon_cirs_m(t, c2i)))
+        monkeypatch.setattr(sky_module, "astropy_rotations", lambda: None)
+        got.append((sky_module._targets_cirs(COORDS, t)[0], *sky_module._sun_moon_cirs_m(t, None)))
+    for way in got:
+        for mine, theirs in zip(way, frames, strict=True):
+            np.testing.assert_array_equal(mine, theirs)
 
 
 class _Scalar(Constraint):
