@@ -291,3 +291,19 @@ def test_star2_zero_crossing_is_where_star2_velocity_is_gamma(
     # every star-2 epoch is one of star 1's (1e-6 s: the Newton floor over a 1-h window)
     near = np.min(np.abs((origin + dt)[:, None] - star1[None, :]), axis=1)
     assert np.max(near) < 1e-6
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(st.tuples(st.integers(-60, 60), st.integers(-5, 40)), min_size=1, max_size=12))
+def test_integer_union_is_numpys_unique_of_the_ranges(ranges: list[tuple[int, int]]) -> None:
+    # The orbit counts of sub-windows: every integer of [lo, lo + width] once, ascending (empty
+    # ranges too), equal to np.unique of the concatenated ranges, dtype included.
+    from ucbplan.core.ephemeris import integer_union
+
+    lo = np.array([a for a, _ in ranges], dtype=np.int64)
+    hi = lo + np.array([w for _, w in ranges], dtype=np.int64)
+    parts = [np.arange(a, b + 1) for a, b in zip(lo, hi, strict=True)]
+    expected = np.unique(np.concatenate(parts))
+    got = integer_union(lo, hi)
+    assert got.dtype == np.int64
+    np.testing.assert_array_equal(got, expected.astype(np.int64))

@@ -111,7 +111,7 @@ def _sun_moon_cirs_m(t: Time, c2i: FloatArray | None) -> tuple[FloatArray, Float
     sun = get_sun(t).cartesian.transform(c2i).xyz.to_value(u.m).T
     zero = [0.0, 0.0, 0.0]
     at_geocentre = GCRS(obstime=t, obsgeoloc=zero * u.m, obsgeovel=zero * u.m / u.s)
-    moon = get_body("moon", t).transform_to(at_geocentre).cartesian.transform(c2i)
+    moon = get_body("moon", t).frame.transform_to(at_geocentre).cartesian.transform(c2i)
     moon = moon.represent_as(SphericalRepresentation).to_cartesian().xyz.to_value(u.m).T
     return np.asarray(sun, dtype=np.float64), np.asarray(moon, dtype=np.float64)
 
