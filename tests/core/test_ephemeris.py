@@ -307,3 +307,30 @@ def test_integer_union_is_numpys_unique_of_the_ranges(ranges: list[tuple[int, in
     got = integer_union(lo, hi)
     assert got.dtype == np.int64
     np.testing.assert_array_equal(got, expected.astype(np.int64))
+
+
+class _OpaqueZero(float):
+    """0.0 that does not compare equal to 0.0: drives u_state through its eccentric branch."""
+
+    def __eq__(self, other: object) -> bool:
+        return False
+
+    __hash__ = float.__hash__
+
+
+@pytest.mark.parametrize("star", [1, 2])
+@pytest.mark.parametrize("origin", [0.0, -3.2e7, 1.3e8])
+def test_circular_u_state_is_the_eccentric_formula_at_zero(star: int, origin: float) -> None:
+    # The circular shortcut (η = κ = ω̇ = 0) gives the general formula's bits: m, g and u̇ over
+    # both signs of τ, several origins, both stars (±0 terms add nothing).
+    from ucbplan.core.phase import u_state
+
+    circ = PhaseParams(1.3466, 8.379e-3, 7.07e-16, -1.07e-26)
+    zero = _OpaqueZero(0.0)
+    general = PhaseParams(1.3466, 8.379e-3, 7.07e-16, -1.07e-26, zero, zero, zero)
+    assert not zero == 0.0
+    dt = np.random.default_rng(5).uniform(-4e7, 4e7, 20000)
+    for fast, slow in zip(
+        u_state(circ, dt, origin, star), u_state(general, dt, origin, star), strict=True
+    ):
+        np.testing.assert_array_equal(fast, slow)

@@ -146,15 +146,19 @@ def u_state(
     n, f = _gw_cycles(p, dt_s, origin_s)
     half = np.floor(n / 2.0)  # exact: n is an integer-valued float < 2**53
     frac_orbit = (n - 2.0 * half + f) / 2.0  # Φ_asc/2π − half ∈ [0, 1)
-    phi_a = TWO_PI * frac_orbit  # Φ_asc mod 2π
     tau = origin_s + np.asarray(dt_s, dtype=np.float64)
+    rate_a = math.pi * (p.f_gw + p.fdot * tau + p.fddot * tau * tau / 2.0)
+    if p.eta == 0.0 and p.kappa == 0.0 and p.omega_dot == 0.0:
+        # circular, no apsidal motion: η(τ) = κ(τ) = ±0, so δ and the rate's second term are
+        # ±0 and add nothing (the same bits as below; tests compare)
+        return half, frac_orbit + _star_offset(star) / TWO_PI, rate_a
+    phi_a = TWO_PI * frac_orbit  # Φ_asc mod 2π
     w = p.omega_dot * tau
     cw, sw = np.cos(w), np.sin(w)
     eta = p.eta * cw + p.kappa * sw
     kap = p.kappa * cw - p.eta * sw
     s, c = np.sin(phi_a), np.cos(phi_a)
     delta = 2.0 * kap * s - 2.0 * eta * c
-    rate_a = math.pi * (p.f_gw + p.fdot * tau + p.fddot * tau * tau / 2.0)
     rate = rate_a + 2.0 * (rate_a - p.omega_dot) * (kap * c + eta * s)
     return half, frac_orbit + (_star_offset(star) + delta) / TWO_PI, rate
 
