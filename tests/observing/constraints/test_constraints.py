@@ -213,6 +213,20 @@ def test_sky_nodes_from_one_matrix_equal_astropys_frames(
             np.testing.assert_array_equal(mine, theirs)
 
 
+@pytest.mark.parametrize(
+    "shape", [(3,), (1, 3), (2, 3), (7, 3), (8, 3), (9, 3), (1000, 3), (5, 9, 3), (3, 1000, 3)]
+)
+def test_sky_unit_vectors_equal_numpys_norm(shape: tuple[int, ...]) -> None:
+    """The sky model's norm over the last axis is np.linalg.norm's bit for bit (vectors of
+    every size the model normalises: metres of the Moon and Sun, unit directions)."""
+    from ucbplan.observing.observatory.sky import _unit
+
+    rng = np.random.default_rng(11)
+    for _ in range(20):
+        v = rng.standard_normal(shape) * 10.0 ** rng.uniform(-3.0, 12.0, shape)
+        np.testing.assert_array_equal(_unit(v), v / np.linalg.norm(v, axis=-1, keepdims=True))
+
+
 class _Scalar(Constraint):
     def ok(self, sky, i, x):  # type: ignore[no-untyped-def]
         return True

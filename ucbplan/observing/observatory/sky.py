@@ -54,8 +54,16 @@ def airmass_from_alt(alt_deg: FloatArray) -> FloatArray:
     return np.asarray(out, dtype=np.float64)
 
 
+def _norm3(v: FloatArray) -> FloatArray:
+    """|v| over the last axis (length 3), kept as a length-1 axis: √((x² + y²) + z²), the sum
+    ``np.linalg.norm`` forms there, in its order, without its generic reduction over a short
+    axis (~4× faster; tests compare bit for bit)."""
+    x, y, z = v[..., 0], v[..., 1], v[..., 2]
+    return np.sqrt((x * x + y * y) + z * z)[..., None]
+
+
 def _unit(v: FloatArray) -> FloatArray:
-    return np.asarray(v / np.linalg.norm(v, axis=-1, keepdims=True), dtype=np.float64)
+    return np.asarray(v / _norm3(v), dtype=np.float64)
 
 
 def sun_cirs_frames(t: Time) -> FloatArray:
