@@ -112,10 +112,11 @@ def _sun_moon_cirs_m(t: Time, c2i: FloatArray | None) -> tuple[FloatArray, Float
     The Moon's frame transformation moves it to the geocentre first (GCRS → GCRS, as astropy's
     GCRS → CIRS does) and keeps spherical data, so the rotated vector goes through spherical
     coordinates as there."""
-    rotations = astropy_rotations()
-    if c2i is None and rotations is None:
-        return sun_cirs_frames(t), moon_cirs_frames(t)
-    c2i = rotations[1](t) if c2i is None and rotations is not None else c2i
+    if c2i is None:
+        rotations = astropy_rotations()
+        if rotations is None:
+            return sun_cirs_frames(t), moon_cirs_frames(t)
+        c2i = rotations[1](t)
     sun = get_sun(t).cartesian.transform(c2i).xyz.to_value(u.m).T
     zero = [0.0, 0.0, 0.0]
     at_geocentre = GCRS(obstime=t, obsgeoloc=zero * u.m, obsgeovel=zero * u.m / u.s)
