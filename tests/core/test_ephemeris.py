@@ -334,3 +334,18 @@ def test_circular_u_state_is_the_eccentric_formula_at_zero(star: int, origin: fl
         u_state(circ, dt, origin, star), u_state(general, dt, origin, star), strict=True
     ):
         np.testing.assert_array_equal(fast, slow)
+
+
+@pytest.mark.parametrize("shape", [(5, 7), (8192, 7), (8193, 7), (30011, 7), (3, 9000, 7)])
+def test_jacobian_products_in_blocks_equal_one_product(shape: tuple[int, ...]) -> None:
+    # σ_u's J·C in blocks of ROWS_PER_PRODUCT rows (kept on the calling thread) gives the one
+    # product's bits, whatever the stack's shape, and so does σ_u itself.
+    from ucbplan.core.phase import _times, sigma_u_from_jacobian
+
+    rng = np.random.default_rng(17)
+    jac = rng.standard_normal(shape) * 10.0 ** rng.uniform(-6.0, 6.0, shape)
+    root = rng.standard_normal((7, 7))
+    cov = root @ root.T * 1e-12
+    np.testing.assert_array_equal(_times(jac, cov), jac @ cov)
+    whole = np.sqrt(np.maximum(np.sum((jac @ cov) * jac, axis=-1), 0.0))
+    np.testing.assert_array_equal(sigma_u_from_jacobian(jac, cov), whole)
