@@ -213,6 +213,31 @@ def test_sky_nodes_from_one_matrix_equal_astropys_frames(
             np.testing.assert_array_equal(mine, theirs)
 
 
+def test_sky_nodes_under_a_users_interpolated_astrometry_equal_astropys_frames() -> None:
+    """With astropy's astrometry interpolated (a user's ``erfa_astrom.set``), the targets take
+    the interpolated contexts as astropy's frames do, and the Sun and the Moon the exact
+    matrix as there (not the interpolated one): the frames' vectors bit for bit."""
+    from astropy.coordinates.erfa_astrom import ErfaAstromInterpolator, erfa_astrom
+
+    from ucbplan.observing.observatory import sky as sky_module
+
+    location = get_site("paranal").location
+    with offline(), erfa_astrom.set(ErfaAstromInterpolator(300 * u.s)):
+        t = Time(ORIGIN, scale="tdb", location=location) + TimeDelta(
+            np.linspace(0.0, 100.0, 200) * u.d
+        )
+        tvec, c2i = sky_module._targets_cirs(COORDS, t)
+        assert c2i is None
+        got = (tvec, *sky_module._sun_moon_cirs_m(t, c2i))
+        frames = (
+            sky_module.targets_cirs_frames(COORDS, t),
+            sky_module.sun_cirs_frames(t),
+            sky_module.moon_cirs_frames(t),
+        )
+    for mine, theirs in zip(got, frames, strict=True):
+        np.testing.assert_array_equal(mine, theirs)
+
+
 @pytest.mark.parametrize(
     "shape", [(3,), (1, 3), (2, 3), (7, 3), (8, 3), (9, 3), (1000, 3), (5, 9, 3), (3, 1000, 3)]
 )

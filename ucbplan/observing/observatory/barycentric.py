@@ -109,6 +109,15 @@ def astropy_astrometry() -> tuple[Direction, Direction] | None:
     return aticq, atciqz
 
 
+def exact_astrometry() -> bool:
+    """Whether astropy builds its astrometry contexts exactly (its default ``ErfaAstrom``:
+    ``apco``'s ``bpn`` is then ``c2i06a``'s matrix and ``apcs``'s ``eb`` the Earth's ``epv00``
+    position), not through an interpolator a user chose (``erfa_astrom.set``)."""
+    from astropy.coordinates.erfa_astrom import ErfaAstrom, erfa_astrom
+
+    return type(erfa_astrom.get()) is ErfaAstrom
+
+
 def _site_gcrs(location: EarthLocation, t: Time) -> CartesianRepresentation | None:
     """The site's GCRS position at ``t`` through the rotations of :func:`astropy_rotations`
     applied directly (None if astropy moved them)."""
@@ -139,17 +148,17 @@ def _site_and_earth_m(location: EarthLocation, t: Time) -> tuple[np.ndarray, np.
     """(:func:`_site_icrs_m`, the Earth's barycentric position, erfa ``epv00``) at ``t`` [m],
     from one ``epv00``: the astrometry context of astropy's GCRS → ICRS (``apcs``, public)
     holds the Earth's position as its observer's (``eb``: the geocentre's, exactly the
-    Earth's), and the transformation's two steps (:func:`astropy_astrometry`'s ``aticq``, then
-    the shift by ``eb``) are applied to the site as astropy applies them, bit for bit (tests
-    compare)."""
+    Earth's, :func:`exact_astrometry`), and the transformation's two steps
+    (:func:`astropy_astrometry`'s ``aticq``, then the shift by ``eb``) are applied to the site
+    as astropy applies them, bit for bit (tests compare)."""
     from astropy.constants import au
     from astropy.coordinates import GCRS, SphericalRepresentation
     from astropy.coordinates.erfa_astrom import erfa_astrom
 
     gcrs, astrometry = _site_gcrs(location, t), astropy_astrometry()
-    if gcrs is None or astrometry is None:
+    if gcrs is None or astrometry is None or not exact_astrometry():
         earth = erfa.epv00(t.tdb.jd1, t.tdb.jd2)[1]["p"]
-        return site_icrs_frames(location, t), earth * au.to_value(u.m)
+        return _site_icrs_m(location, t), earth * au.to_value(u.m)
     astrom = erfa_astrom.get().apcs(GCRS(obstime=t))
     sph = gcrs.represent_as(SphericalRepresentation)
     ra, dec = astrometry[0](sph.without_differentials(), astrom)

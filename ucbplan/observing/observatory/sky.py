@@ -37,7 +37,11 @@ from numpy.typing import NDArray
 from scipy.interpolate import CubicSpline
 
 from ucbplan.core.constants import HOUR_S
-from ucbplan.observing.observatory.barycentric import astropy_astrometry, astropy_rotations
+from ucbplan.observing.observatory.barycentric import (
+    astropy_astrometry,
+    astropy_rotations,
+    exact_astrometry,
+)
 from ucbplan.observing.observatory.time_axis import TimeAxis
 
 FloatArray = NDArray[np.float64]
@@ -94,7 +98,9 @@ def _targets_cirs(coords: SkyCoord, t: Time) -> tuple[FloatArray, FloatArray | N
     of ``pnm06a``'s pole, as ``c2i06a``); applying its direction function
     (:func:`~ucbplan.observing.observatory.barycentric.astropy_astrometry`) with that context
     gives the transformation's vectors, and the Sun and the Moon reuse the matrix, bit for bit
-    (tests compare). None: a future astropy moved the function; the frames then.
+    (tests compare). The matrix is None where astropy's contexts are interpolated
+    (:func:`~ucbplan.observing.observatory.barycentric.exact_astrometry`), and the frames give
+    the vectors where a future astropy moved the function.
     """
     astrometry = astropy_astrometry()
     if astrometry is None:
@@ -103,7 +109,8 @@ def _targets_cirs(coords: SkyCoord, t: Time) -> tuple[FloatArray, FloatArray | N
     sph = coords[:, None].spherical.without_differentials()
     ra, dec = astrometry[1](sph, astrom)
     cirs = UnitSphericalRepresentation(ra * u.rad, dec * u.rad, copy=False).to_cartesian()
-    return np.moveaxis(cirs.xyz.value, 0, -1), np.asarray(astrom["bpn"], dtype=np.float64)
+    c2i = np.asarray(astrom["bpn"], dtype=np.float64) if exact_astrometry() else None
+    return np.moveaxis(cirs.xyz.value, 0, -1), c2i
 
 
 def _sun_moon_cirs_m(t: Time, c2i: FloatArray | None) -> tuple[FloatArray, FloatArray]:
