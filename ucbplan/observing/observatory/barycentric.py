@@ -148,15 +148,16 @@ def _site_and_earth_m(location: EarthLocation, t: Time) -> tuple[np.ndarray, np.
     """(:func:`_site_icrs_m`, the Earth's barycentric position, erfa ``epv00``) at ``t`` [m],
     from one ``epv00``: the astrometry context of astropy's GCRS → ICRS (``apcs``, public)
     holds the Earth's position as its observer's (``eb``: the geocentre's, exactly the
-    Earth's, :func:`exact_astrometry`), and the transformation's two steps
-    (:func:`astropy_astrometry`'s ``aticq``, then the shift by ``eb``) are applied to the site
-    as astropy applies them, bit for bit (tests compare)."""
+    Earth's under :func:`exact_astrometry` and the builtin ephemeris), and the
+    transformation's two steps (:func:`astropy_astrometry`'s ``aticq``, then the shift by
+    ``eb``) are applied to the site as astropy applies them, bit for bit (tests compare)."""
     from astropy.constants import au
-    from astropy.coordinates import GCRS, SphericalRepresentation
+    from astropy.coordinates import GCRS, SphericalRepresentation, solar_system_ephemeris
     from astropy.coordinates.erfa_astrom import erfa_astrom
 
     gcrs, astrometry = _site_gcrs(location, t), astropy_astrometry()
-    if gcrs is None or astrometry is None or not exact_astrometry():
+    builtin = solar_system_ephemeris.get() == "builtin"  # eb from epv00, as the Earth here
+    if gcrs is None or astrometry is None or not (exact_astrometry() and builtin):
         earth = erfa.epv00(t.tdb.jd1, t.tdb.jd2)[1]["p"]
         return _site_icrs_m(location, t), earth * au.to_value(u.m)
     astrom = erfa_astrom.get().apcs(GCRS(obstime=t))
