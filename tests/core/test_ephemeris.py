@@ -291,3 +291,61 @@ def test_star2_zero_crossing_is_where_star2_velocity_is_gamma(
     # every star-2 epoch is one of star 1's (1e-6 s: the Newton floor over a 1-h window)
     near = np.min(np.abs((origin + dt)[:, None] - star1[None, :]), axis=1)
     assert np.max(near) < 1e-6
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(st.tuples(st.integers(-60, 60), st.integers(-5, 40)), min_size=1, max_size=12))
+def test_integer_union_is_numpys_unique_of_the_ranges(ranges: list[tuple[int, int]]) -> None:
+    # The orbit counts of sub-windows: every integer of [lo, lo + width] once, ascending (empty
+    # ranges too), equal to np.unique of the concatenated ranges, dtype included.
+    from ucbplan.core.ephemeris import integer_union
+
+    lo = np.array([a for a, _ in ranges], dtype=np.int64)
+    hi = lo + np.array([w for _, w in ranges], dtype=np.int64)
+    parts = [np.arange(a, b + 1) for a, b in zip(lo, hi, strict=True)]
+    expected = np.unique(np.concatenate(parts))
+    got = integer_union(lo, hi)
+    assert got.dtype == np.int64
+    np.testing.assert_array_equal(got, expected.astype(np.int64))
+
+
+class _OpaqueZero(float):
+    """0.0 that does not compare equal to 0.0: drives u_state through its eccentric branch."""
+
+    def __eq__(self, other: object) -> bool:
+        return False
+
+    __hash__ = float.__hash__
+
+
+@pytest.mark.parametrize("star", [1, 2])
+@pytest.mark.parametrize("origin", [0.0, -3.2e7, 1.3e8])
+def test_circular_u_state_is_the_eccentric_formula_at_zero(star: int, origin: float) -> None:
+    # The circular shortcut (η = κ = ω̇ = 0) gives the general formula's bits: m, g and u̇ over
+    # both signs of τ, several origins, both stars (±0 terms add nothing).
+    from ucbplan.core.phase import u_state
+
+    circ = PhaseParams(1.3466, 8.379e-3, 7.07e-16, -1.07e-26)
+    zero = _OpaqueZero(0.0)
+    general = PhaseParams(1.3466, 8.379e-3, 7.07e-16, -1.07e-26, zero, zero, zero)
+    assert not zero == 0.0
+    dt = np.random.default_rng(5).uniform(-4e7, 4e7, 20000)
+    for fast, slow in zip(
+        u_state(circ, dt, origin, star), u_state(general, dt, origin, star), strict=True
+    ):
+        np.testing.assert_array_equal(fast, slow)
+
+
+@pytest.mark.parametrize("shape", [(5, 7), (8192, 7), (8193, 7), (30011, 7), (3, 9000, 7)])
+def test_jacobian_products_in_blocks_equal_one_product(shape: tuple[int, ...]) -> None:
+    # σ_u's J·C in blocks of ROWS_PER_PRODUCT rows (kept on the calling thread) gives the one
+    # product's bits, whatever the stack's shape, and so does σ_u itself.
+    from ucbplan.core.phase import _times, sigma_u_from_jacobian
+
+    rng = np.random.default_rng(17)
+    jac = rng.standard_normal(shape) * 10.0 ** rng.uniform(-6.0, 6.0, shape)
+    root = rng.standard_normal((7, 7))
+    cov = root @ root.T * 1e-12
+    np.testing.assert_array_equal(_times(jac, cov), jac @ cov)
+    whole = np.sqrt(np.maximum(np.sum((jac @ cov) * jac, axis=-1), 0.0))
+    np.testing.assert_array_equal(sigma_u_from_jacobian(jac, cov), whole)

@@ -239,10 +239,20 @@ def _passages(
     hi = np.floor(c[2::2]).astype(np.int64) + 1
     if lo.size == 0:
         return np.zeros(0), c0
-    count = hi - lo + 1
-    start = np.repeat(lo - np.concatenate([[0], np.cumsum(count)[:-1]]), count)
-    ks = np.unique(start + np.arange(int(count.sum()), dtype=np.int64))
-    return ks.astype(np.float64), c0
+    return integer_union(lo, hi).astype(np.float64), c0
+
+
+def integer_union(lo: NDArray[np.int64], hi: NDArray[np.int64]) -> NDArray[np.int64]:
+    """Every integer of the ranges [lo_i, hi_i] (inclusive) once, ascending: ``np.unique`` of
+    their concatenation without its sort (the ranges sorted by ``lo`` give new values above
+    all earlier ones: each range keeps those beyond the largest end before it)."""
+    order = np.argsort(lo, kind="stable")
+    lo, hi = lo[order], hi[order]
+    top = np.maximum.accumulate(hi)
+    first = np.maximum(lo, np.concatenate([lo[:1], top[:-1] + 1]))
+    count = np.maximum(hi - first + 1, 0)
+    start = np.repeat(first - np.concatenate([[0], np.cumsum(count)[:-1]]), count)
+    return np.asarray(start + np.arange(int(count.sum()), dtype=np.int64), dtype=np.int64)
 
 
 def resolve_anchor(anchor: str | float) -> tuple[str, list[float | str]]:

@@ -13,6 +13,7 @@ u_j = Φ_asc + ε_j + 2κ sin Φ_asc − 2η cos Φ_asc with ε_1 = 0, ε_2 = π
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -146,15 +147,19 @@ def u_state(
     n, f = _gw_cycles(p, dt_s, origin_s)
     half = np.floor(n / 2.0)  # exact: n is an integer-valued float < 2**53
     frac_orbit = (n - 2.0 * half + f) / 2.0  # Φ_asc/2π − half ∈ [0, 1)
-    phi_a = TWO_PI * frac_orbit  # Φ_asc mod 2π
     tau = origin_s + np.asarray(dt_s, dtype=np.float64)
+    rate_a = math.pi * (p.f_gw + p.fdot * tau + p.fddot * tau * tau / 2.0)
+    if p.eta == 0.0 and p.kappa == 0.0 and p.omega_dot == 0.0:
+        # circular, no apsidal motion: η(τ) = κ(τ) = ±0, so δ and the rate's second term are
+        # ±0 and add nothing (the same bits as below; tests compare)
+        return half, frac_orbit + _star_offset(star) / TWO_PI, rate_a
+    phi_a = TWO_PI * frac_orbit  # Φ_asc mod 2π
     w = p.omega_dot * tau
     cw, sw = np.cos(w), np.sin(w)
     eta = p.eta * cw + p.kappa * sw
     kap = p.kappa * cw - p.eta * sw
     s, c = np.sin(phi_a), np.cos(phi_a)
     delta = 2.0 * kap * s - 2.0 * eta * c
-    rate_a = math.pi * (p.f_gw + p.fdot * tau + p.fddot * tau * tau / 2.0)
     rate = rate_a + 2.0 * (rate_a - p.omega_dot) * (kap * c + eta * s)
     return half, frac_orbit + (_star_offset(star) + delta) / TWO_PI, rate
 
@@ -265,9 +270,31 @@ def u_jacobian(p: PhaseParams, tau_s: ArrayLike, star: int = 1) -> FloatArray:
     return jacobian_kernel(p.eta, p.kappa, p.omega_dot, tau, np.sin(phi_a), np.cos(phi_a))
 
 
+#: Most Jacobians one matrix product of :func:`sigma_u_from_jacobian` takes. OpenBLAS hands a
+#: product of more than 2¹⁹ multiply-adds (> 10 699 rows of 7 × 7) to a second thread, which
+#: then spins on, ~10 ms of CPU per product on a busy machine (a semester: ~0.1 s); blocks of
+#: this many rows stay on the calling thread, each row the same dot products (same bits; tests
+#: compare).
+ROWS_PER_PRODUCT = 8192
+
+
+def _times(jac: FloatArray, cov: FloatArray) -> FloatArray:
+    """``jac @ cov`` for Jacobians (..., 7), in blocks of :data:`ROWS_PER_PRODUCT` rows."""
+    rows = np.reshape(jac, (-1, np.shape(jac)[-1]))
+    n = rows.shape[0]
+    if n <= ROWS_PER_PRODUCT:
+        return np.asarray(jac @ cov, dtype=np.float64)
+    # equal blocks: never a single row, which numpy would send to a matrix-vector product
+    edges = np.linspace(0, n, -(-n // ROWS_PER_PRODUCT) + 1).astype(np.int64)
+    out = np.empty((n, np.shape(cov)[-1]), dtype=np.float64)
+    for a, b in itertools.pairwise(edges):
+        out[a:b] = rows[a:b] @ cov
+    return out.reshape((*np.shape(jac)[:-1], out.shape[-1]))
+
+
 def sigma_u_from_jacobian(jac: FloatArray, cov: FloatArray) -> FloatArray:
     """σ_u = √(J C Jᵀ) for a stack of Jacobians ``jac`` (..., 7) [rad]."""
-    var = np.sum((jac @ cov) * jac, axis=-1)
+    var = np.sum(_times(jac, cov) * jac, axis=-1)
     out: FloatArray = np.sqrt(np.maximum(var, 0.0))
     return out
 

@@ -174,14 +174,82 @@ def test_plan_settings_constraints_follow_site_and_options() -> None:
         PlanSettings(twilight="dusk").constraints(paranal)
 
 
-def test_sun_direct_rotation_equals_astropys_frames() -> None:
-    """The sky model's Sun: astropy's GCRS → CIRS matrix applied directly gives the frame
-    transformation's positions bit for bit."""
-    from ucbplan.observing.observatory.sky import _sun_cirs_m, sun_cirs_frames
+@pytest.mark.parametrize("site_name", ["paranal", "la palma", "mauna kea"])
+def test_sky_nodes_from_one_matrix_equal_astropys_frames(
+    site_name: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The sky model's nodes: the targets through the astrometry context of astropy's ICRS →
+    CIRS, whose GCRS → CIRS matrix is astropy's own and then rotates the Sun and the Moon, give
+    the frame transformations' vectors bit for bit; so do the fallbacks (astropy's rotation
+    functions alone, or none) when a future astropy moves its helpers."""
+    from astropy.coordinates.builtin_frames.intermediate_rotation_transforms import (
+        gcrs_to_cirs_mat,
+    )
 
+    from ucbplan.observing.observatory import sky as sky_module
+
+    location = get_site(site_name).location
     with offline():
-        t = Time(ORIGIN, scale="tdb") + TimeDelta(np.linspace(0.0, 200.0, 300) * u.d)
-        np.testing.assert_array_equal(_sun_cirs_m(t), sun_cirs_frames(t))
+        t = Time(ORIGIN, scale="tdb", location=location) + TimeDelta(
+            np.linspace(-400.0, 400.0, 300) * u.d
+        )
+        frames = (
+            sky_module.targets_cirs_frames(COORDS, t),
+            sky_module.sun_cirs_frames(t),
+            sky_module.moon_cirs_frames(t),
+        )
+        tvec, c2i = sky_module._targets_cirs(COORDS, t)
+        assert c2i is not None
+        np.testing.assert_array_equal(c2i, gcrs_to_cirs_mat(t))
+        got = [(tvec, *sky_module._sun_moon_cirs_m(t, c2i))]
+        monkeypatch.setattr(sky_module, "astropy_astrometry", lambda: None)
+        tvec, c2i = sky_module._targets_cirs(COORDS, t)
+        assert c2i is None
+        got.append((tvec, *sky_module._sun_moon_cirs_m(t, c2i)))
+        monkeypatch.setattr(sky_module, "astropy_rotations", lambda: None)
+        got.append((sky_module._targets_cirs(COORDS, t)[0], *sky_module._sun_moon_cirs_m(t, None)))
+    for way in got:
+        for mine, theirs in zip(way, frames, strict=True):
+            np.testing.assert_array_equal(mine, theirs)
+
+
+def test_sky_nodes_under_a_users_interpolated_astrometry_equal_astropys_frames() -> None:
+    """With astropy's astrometry interpolated (a user's ``erfa_astrom.set``), the targets take
+    the interpolated contexts as astropy's frames do, and the Sun and the Moon the exact
+    matrix as there (not the interpolated one): the frames' vectors bit for bit."""
+    from astropy.coordinates.erfa_astrom import ErfaAstromInterpolator, erfa_astrom
+
+    from ucbplan.observing.observatory import sky as sky_module
+
+    location = get_site("paranal").location
+    with offline(), erfa_astrom.set(ErfaAstromInterpolator(300 * u.s)):
+        t = Time(ORIGIN, scale="tdb", location=location) + TimeDelta(
+            np.linspace(0.0, 100.0, 200) * u.d
+        )
+        tvec, c2i = sky_module._targets_cirs(COORDS, t)
+        assert c2i is None
+        got = (tvec, *sky_module._sun_moon_cirs_m(t, c2i))
+        frames = (
+            sky_module.targets_cirs_frames(COORDS, t),
+            sky_module.sun_cirs_frames(t),
+            sky_module.moon_cirs_frames(t),
+        )
+    for mine, theirs in zip(got, frames, strict=True):
+        np.testing.assert_array_equal(mine, theirs)
+
+
+@pytest.mark.parametrize(
+    "shape", [(3,), (1, 3), (2, 3), (7, 3), (8, 3), (9, 3), (1000, 3), (5, 9, 3), (3, 1000, 3)]
+)
+def test_sky_unit_vectors_equal_numpys_norm(shape: tuple[int, ...]) -> None:
+    """The sky model's norm over the last axis is np.linalg.norm's bit for bit (vectors of
+    every size the model normalises: metres of the Moon and Sun, unit directions)."""
+    from ucbplan.observing.observatory.sky import _unit
+
+    rng = np.random.default_rng(11)
+    for _ in range(20):
+        v = rng.standard_normal(shape) * 10.0 ** rng.uniform(-3.0, 12.0, shape)
+        np.testing.assert_array_equal(_unit(v), v / np.linalg.norm(v, axis=-1, keepdims=True))
 
 
 class _Scalar(Constraint):

@@ -110,6 +110,53 @@ def test_round_trip_property(day: float, ra: float, dec: float, site_name: str) 
     assert abs((back - t_star).to_value(u.s)) < 1e-6
 
 
+@pytest.mark.parametrize("site_name", ["paranal", "calar alto"])
+def test_site_and_earth_from_one_epv00_equal_astropys(
+    site_name: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The site track's nodes: the site through astropy's GCRS → ICRS steps applied with its
+    astrometry context, and the Earth from that context, equal astropy's frame chain and erfa's
+    ``epv00`` bit for bit; so does the fallback when a future astropy moves its helpers."""
+    import erfa
+    from astropy.constants import au
+
+    from ucbplan.observing.observatory import barycentric
+
+    location = get_site(site_name).location
+    with offline():
+        t = Time("2031-06-01", scale="tdb", location=location) + TimeDelta(
+            np.linspace(0.0, 731.0, 500) * u.d
+        )
+        chain = barycentric.site_icrs_frames(location, t)
+        earth = erfa.epv00(t.jd1, t.jd2)[1]["p"] * au.to_value(u.m)
+        got = [barycentric._site_and_earth_m(location, t)]
+        monkeypatch.setattr(barycentric, "astropy_astrometry", lambda: None)
+        got.append(barycentric._site_and_earth_m(location, t))
+    for site, geocentre in got:
+        np.testing.assert_array_equal(site, chain)
+        np.testing.assert_array_equal(geocentre, earth)
+
+
+def test_site_and_earth_under_a_users_interpolated_astrometry() -> None:
+    """With astropy's astrometry interpolated (a user's ``erfa_astrom.set``), the site follows
+    astropy's chain under it and the Earth stays erfa's ``epv00``, bit for bit."""
+    import erfa
+    from astropy.constants import au
+    from astropy.coordinates.erfa_astrom import ErfaAstromInterpolator, erfa_astrom
+
+    from ucbplan.observing.observatory import barycentric
+
+    location = get_site("paranal").location
+    with offline(), erfa_astrom.set(ErfaAstromInterpolator(300 * u.s)):
+        t = Time("2031-06-01", scale="tdb", location=location) + TimeDelta(
+            np.linspace(0.0, 30.0, 300) * u.d
+        )
+        assert not barycentric.exact_astrometry()
+        site, geocentre = barycentric._site_and_earth_m(location, t)
+        np.testing.assert_array_equal(site, barycentric.site_icrs_frames(location, t))
+    np.testing.assert_array_equal(geocentre, erfa.epv00(t.jd1, t.jd2)[1]["p"] * au.to_value(u.m))
+
+
 def test_site_track_positions_equal_astropys_frame_chain() -> None:
     """The site track's direct rotations give astropy's ITRS → GCRS → ICRS chain (the one
     ``Time.light_travel_time`` uses) bit for bit, and that chain's light time is astropy's."""

@@ -17,9 +17,10 @@ import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 
+import erfa
 import numpy as np
 from astropy import units as u
-from astropy.coordinates import EarthLocation, SkyCoord
+from astropy.coordinates import CartesianRepresentation, EarthLocation, SkyCoord
 from astropy.time import Time, TimeDelta
 from scipy.interpolate import CubicSpline
 
@@ -91,21 +92,81 @@ def astropy_rotations() -> tuple[Callable[[Time], np.ndarray], Callable[[Time], 
     return cirs_to_itrs_mat, gcrs_to_cirs_mat
 
 
-def _site_icrs_m(location: EarthLocation, t: Time) -> np.ndarray:
-    """:func:`site_icrs_frames` with the two rotations of :func:`astropy_rotations` applied
-    directly: the same matrices in the same order, bit for bit (tests compare)."""
-    from astropy.coordinates import GCRS, ICRS
+#: A direction function of astropy's: (spherical representation, astrometry context) → (RA,
+#: Dec) [rad].
+Direction = Callable[..., tuple[np.ndarray, np.ndarray]]
+
+
+def astropy_astrometry() -> tuple[Direction, Direction] | None:
+    """astropy's own (GCRS or CIRS → ICRS, ICRS → GCRS or CIRS) direction functions (its
+    ``aticq`` and ``atciqz``, the ones its frame transformations apply with an astrometry
+    context from ``erfa_astrom``), or None if a future astropy moved them (callers then take
+    the public frame chain)."""
+    try:
+        from astropy.coordinates.builtin_frames.utils import atciqz, aticq
+    except ImportError:
+        return None
+    return aticq, atciqz
+
+
+def exact_astrometry() -> bool:
+    """Whether astropy builds its astrometry contexts exactly (its default ``ErfaAstrom``:
+    ``apco``'s ``bpn`` is then ``c2i06a``'s matrix and ``apcs``'s ``eb`` the Earth's ``epv00``
+    position), not through an interpolator a user chose (``erfa_astrom.set``)."""
+    from astropy.coordinates.erfa_astrom import ErfaAstrom, erfa_astrom
+
+    return type(erfa_astrom.get()) is ErfaAstrom
+
+
+def _site_gcrs(location: EarthLocation, t: Time) -> CartesianRepresentation | None:
+    """The site's GCRS position at ``t`` through the rotations of :func:`astropy_rotations`
+    applied directly (None if astropy moved them)."""
     from astropy.coordinates.matrix_utilities import matrix_transpose
 
     rotations = astropy_rotations()
     if rotations is None:
-        return site_icrs_frames(location, t)
+        return None
     cirs_to_itrs_mat, gcrs_to_cirs_mat = rotations
     itrs = location.get_itrs(obstime=t).cartesian
     cirs = itrs.transform(matrix_transpose(cirs_to_itrs_mat(t)))
-    gcrs = cirs.transform(matrix_transpose(gcrs_to_cirs_mat(t)))
+    return cirs.transform(matrix_transpose(gcrs_to_cirs_mat(t)))
+
+
+def _site_icrs_m(location: EarthLocation, t: Time) -> np.ndarray:
+    """:func:`site_icrs_frames` with the two rotations of :func:`astropy_rotations` applied
+    directly: the same matrices in the same order, bit for bit (tests compare)."""
+    from astropy.coordinates import GCRS, ICRS
+
+    gcrs = _site_gcrs(location, t)
+    if gcrs is None:
+        return site_icrs_frames(location, t)
     bary = GCRS(gcrs, obstime=t).transform_to(ICRS())
     return np.asarray(bary.cartesian.xyz.to_value(u.m).T, dtype=np.float64)
+
+
+def _site_and_earth_m(location: EarthLocation, t: Time) -> tuple[np.ndarray, np.ndarray]:
+    """(:func:`_site_icrs_m`, the Earth's barycentric position, erfa ``epv00``) at ``t`` [m],
+    from one ``epv00``: the astrometry context of astropy's GCRS → ICRS (``apcs``, public)
+    holds the Earth's position as its observer's (``eb``: the geocentre's, exactly the
+    Earth's under :func:`exact_astrometry` and the builtin ephemeris), and the
+    transformation's two steps (:func:`astropy_astrometry`'s ``aticq``, then the shift by
+    ``eb``) are applied to the site as astropy applies them, bit for bit (tests compare)."""
+    from astropy.constants import au
+    from astropy.coordinates import GCRS, SphericalRepresentation, solar_system_ephemeris
+    from astropy.coordinates.erfa_astrom import erfa_astrom
+
+    gcrs, astrometry = _site_gcrs(location, t), astropy_astrometry()
+    builtin = solar_system_ephemeris.get() == "builtin"  # eb from epv00, as the Earth here
+    if gcrs is None or astrometry is None or not (exact_astrometry() and builtin):
+        earth = erfa.epv00(t.tdb.jd1, t.tdb.jd2)[1]["p"]
+        return _site_icrs_m(location, t), earth * au.to_value(u.m)
+    astrom = erfa_astrom.get().apcs(GCRS(obstime=t))
+    sph = gcrs.represent_as(SphericalRepresentation)
+    ra, dec = astrometry[0](sph.without_differentials(), astrom)
+    shifted = SphericalRepresentation(ra * u.rad, dec * u.rad, sph.distance, copy=False)
+    bary = shifted + CartesianRepresentation(astrom["eb"], unit=u.au, xyz_axis=-1, copy=False)
+    site = np.asarray(bary.to_cartesian().xyz.to_value(u.m).T, dtype=np.float64)
+    return site, np.asarray(astrom["eb"] * au.to_value(u.m), dtype=np.float64)
 
 
 def _turn(era: np.ndarray, v: np.ndarray, sign: float) -> np.ndarray:
@@ -119,17 +180,12 @@ def _site_icrs_interpolated(
 ) -> np.ndarray:
     """:func:`_site_icrs_m` at TDB ``origin + x`` [s] from the exact chain every ``step_s``
     (see :data:`ORIENTATION_STEP_S`); the exact chain itself where that is not fewer nodes."""
-    import erfa
-    from astropy.constants import au
-
     n = int(np.ceil((x[-1] - x[0]) / step_s)) + 3
     if n + 2 >= x.size:
         return _site_icrs_m(location, origin + TimeDelta(x * u.s))
     xc = np.linspace(x[0] - step_s, x[0] + step_s * (n - 2), n)
     tc = TimeAxis(origin).tdb_grid(xc)  # TDB − TT once, kept for every conversion below
-    r = _site_icrs_m(location, tc)
-    _, pv = erfa.epv00(tc.tdb.jd1, tc.tdb.jd2)  # the Earth's barycentric position (astropy's)
-    earth = pv["p"] * au.to_value(u.m)
+    r, earth = _site_and_earth_m(location, tc)
     ut1 = tc.ut1
     lag = (ut1.jd1 - tc.jd1) + (ut1.jd2 - tc.jd2)  # UT1 − TDB [d]: smooth (leap seconds cancel)
     spin = _turn(erfa.era00(ut1.jd1, ut1.jd2), r - earth, 1.0)  # the site in the turning frame
