@@ -162,3 +162,38 @@ def test_the_process_entry_freezes_the_imports_before_the_command() -> None:
     res = subprocess.run([sys.executable, "-c", _START_PROBE], capture_output=True, text=True)
     assert res.returncode == 0, res.stderr
     assert res.stdout.splitlines()[0] == "AT-START True"
+
+
+#: Reports, when ``run`` hands over to ``main`` (the command), OpenBLAS's thread setting and
+#: whether numpy was already loaded (OpenBLAS reads the setting once, when numpy loads it).
+_BLAS_PROBE = """
+import os, sys
+from ucbplan.cli import app
+command = app.main
+def probe():
+    print("BLAS", os.environ.get("OPENBLAS_NUM_THREADS"), "numpy" in sys.modules, flush=True)
+    command()
+app.main = probe
+sys.argv = ["ucbplan", "--version"]
+app.run()
+"""
+
+
+@pytest.mark.parametrize(("given", "seen"), [(None, "1"), ("3", "3")])
+def test_the_process_entry_runs_openblas_on_one_thread_unless_told(
+    given: str | None, seen: str
+) -> None:
+    """``app.run`` sets OpenBLAS to one thread before numpy loads (issue 34: the products are
+    ≤ 9 columns wide, where a second thread only spins, ~0.1 CPU s of a semester plan, and a
+    result never depends on the thread count); a user's own ``OPENBLAS_NUM_THREADS`` stays."""
+    import os
+    import subprocess
+
+    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}
+    if given is not None:
+        env["OPENBLAS_NUM_THREADS"] = given
+    res = subprocess.run(
+        [sys.executable, "-c", _BLAS_PROBE], capture_output=True, text=True, env=env
+    )
+    assert res.returncode == 0, res.stderr
+    assert res.stdout.splitlines()[0] == f"BLAS {seen} False"

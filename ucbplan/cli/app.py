@@ -175,7 +175,13 @@ def run() -> None:
     (~0.2 CPU s of a one-night plan) to free memory the operating system reclaims anyway. Exit
     code, output, flushing and ``atexit`` handlers are as without it. In-process callers (tests,
     notebooks) call :func:`main`, which leaves the collector alone.
+
+    It also runs OpenBLAS on one thread unless the environment says otherwise
+    (``OPENBLAS_NUM_THREADS``, read once when numpy loads, which is after this): ucbplan's
+    matrix products are a few columns wide, where a second thread only spins (~0.1 CPU s of a
+    semester plan, ~0.05 s of numpy's import), and no result then depends on the thread count.
     """
+    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     gc.freeze()
     try:
         main()
