@@ -245,11 +245,11 @@ def test_plan_run_computes_visits_once(monkeypatch: pytest.MonkeyPatch) -> None:
 
     calls = []
 
-    def counting(*args: object) -> list:
+    def counting(*args: object) -> accounting.VisitColumns:
         calls.append(args)
-        return accounting.visit_summaries(*args)  # type: ignore[arg-type]
+        return accounting.visit_columns(*args)  # type: ignore[arg-type]
 
-    monkeypatch.setattr(run_module, "visit_summaries", counting)
+    monkeypatch.setattr(run_module, "visit_columns", counting)
     settings = type("S", (), {"visit_s": None, "overhead_s": 300.0, "plans_visits": False})()
     result = type("R", (), {"blocks": _visit_blocks()})()
     run = PlanRun([], None, [], settings, result)  # type: ignore[arg-type]
