@@ -27,11 +27,7 @@ from astropy.table import Column, Table
 
 from ucbplan.errors import InputFileError
 from ucbplan.io import dump_json, dumps_json
-from ucbplan.observing.blocks.ecsv_header import (
-    ecsv_header,
-    flat_records_safe,
-    header_safe,
-)
+from ucbplan.observing.blocks.ecsv_header import ecsv_header, flat_records_safe
 from ucbplan.observing.blocks.schema import TABLE_FORMATS
 
 
@@ -165,7 +161,7 @@ def _write_ecsv(table: Table, handle: IO[str]) -> None:
     if lines is None:
         table.write(handle, format="ascii.ecsv")
         return
-    handle.write(ecsv_header(table, header_safe(table)))
+    handle.write(ecsv_header(table))
     handle.write("".join(line + os.linesep for line in lines))
 
 

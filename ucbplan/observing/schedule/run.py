@@ -258,7 +258,11 @@ class PlanRun:
 
     def table(self) -> Table:
         """The master blocks table (:mod:`ucbplan.observing.blocks.schema`) with provenance."""
-        return blocks_to_table(self.result.blocks, self.meta())
+        meta = self.meta()
+        visits, meta["visits"] = meta["visits"], []
+        table = blocks_to_table(self.result.blocks, meta)  # copies the meta it is given
+        table.meta["visits"] = visits  # made for this table alone: not copied again
+        return table
 
 
 def _collected_facts(goal: GoalPlan) -> dict[str, Any]:
