@@ -232,14 +232,17 @@ def _place_night(run: TargetRun, night: NightTask) -> str | None:
     usable = usable[np.argsort(run.score[usable], kind="stable")]
     wanted, count, n_exp = settings.sessions_per_night, 0, run.exposure.plan.n_exp
     over_budget = False
-    for j in usable:
-        idx = (int(j),) if run.partner[j] < 0 else (int(j), int(run.partner[j]))
-        s = Session(run.index, n, idx, float(c.x_start[idx[0]]), float(c.x_end[idx[-1]]))
-        wall = settings.overhead_s + s.x1 - s.x0
+    partner = run.partner[usable]
+    ends = np.where(partner < 0, usable, partner)  # a pair ends with its second block
+    firsts, lasts = c.x_start[usable].tolist(), c.x_end[ends].tolist()
+    rows = zip(usable.tolist(), partner.tolist(), firsts, lasts, strict=True)
+    for j, k, x0, x1 in rows:
+        idx = (j,) if k < 0 else (j, k)
+        wall = settings.overhead_s + x1 - x0
         if not allowance.fits(len(idx) * n_exp, wall):
             over_budget = True
             continue
-        if timeline.add(s):
+        if timeline.add(Session(run.index, n, idx, x0, x1)):
             allowance.charge(len(idx) * n_exp, wall)
             count += 1
             if count == wanted:
