@@ -320,12 +320,13 @@ def visit_columns(
     overhead = acquisition_s + readout
     idle = acquisition_s + span - shutter - overhead  # wall − shutter − overhead
     acq = start - TimeDelta(acquisition_s, format="sec")
-    firsts = first.tolist()
-    texts = [[column[k] for k in firsts] for column in cols.lists("target", "night")]
+    texts = [cols.values[k][first].tolist() for k in ("target", "night")]
     numbers = [exposures, shutter, overhead, np.where(idle > 0.0, idle, 0.0)]  # max(0.0, idle)
     columns = [[vid if not vid.startswith("#") else "" for _, vid in keys], *texts]
     columns += [*(isot(t.utc, 0) for t in (acq, start, end)), *(x.tolist() for x in numbers)]
     rank = sorted(range(len(keys)), key=columns[3].__getitem__)  # by acquisition start
+    if rank == list(range(len(keys))):  # already in time order (a plan's blocks are)
+        return VisitColumns(*columns)
     return VisitColumns(*([c[k] for k in rank] for c in columns))
 
 
