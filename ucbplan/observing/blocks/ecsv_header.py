@@ -353,7 +353,7 @@ def yaml_flow_items(items: list[dict[str, Any]], tags: Callable[[str], str]) -> 
     rows = list(zip(*columns, strict=True))
     widths = list(zip(*(list(map(len, col)) for col in columns), strict=True))
     templates = {w: _template(keys, w) for w in set(widths)}
-    if not any(_Words in map(type, col) for col in columns):
+    if not any(type(col) is _MayBreak for col in columns):  # no value breaks: templates
         return "\n".join(map(operator.mod, map(templates.__getitem__, widths), rows)).split("\n")
     lines: list[str] = []
     for item, row, width in zip(items, rows, widths, strict=True):
@@ -368,10 +368,15 @@ class _Words(str):
     """A value's text that libyaml may break at its spaces (a plain string with spaces)."""
 
 
+class _MayBreak(list[str]):
+    """The texts of a column that may hold a :class:`_Words` (the others hold none)."""
+
+
 def _column_texts(values: list[Any], tags: Callable[[str], str]) -> list[str] | None:
-    """Each value's text (a :class:`_Words` where it may break): in a column of one kind, each
-    distinct number's text (a function of its ``repr``) found once and each string's style once
-    per :func:`_shapes`; None if a value is of a kind this path does not write."""
+    """Each value's text (a :class:`_Words` where it may break, in a :class:`_MayBreak`): in a
+    column of one kind, each distinct number's text (a function of its ``repr``) found once and
+    each string's style once per :func:`_shapes`; None if a value is of a kind this path does
+    not write."""
     kinds = set(map(type, values))
     if kinds == {str}:
         return _text_column(values, _shapes(values), tags)
@@ -381,7 +386,10 @@ def _column_texts(values: list[Any], tags: Callable[[str], str]) -> list[str] | 
             _text_column([v], [v], tags) if type(v) is str else _yaml_scalar(v, tags)
             for v in values
         ]
-        return None if None in each else [got[0] for got in each if got is not None]
+        if None in each:
+            return None
+        texts = [got[0] for got in each if got is not None]
+        return _MayBreak(texts) if _Words in map(type, texts) else texts
     reprs = list(map(repr, values))
     known = {}
     for text, v in dict(zip(reprs, values, strict=True)).items():
@@ -403,10 +411,10 @@ def _text_column(
             return None
     if len(set(styles.values())) == 1 and style != "words":  # one style: the column at once
         return list(values) if style == "plain" else list(map("'{}'".format, values))
-    return [
+    return _MayBreak(
         v if s == "plain" else f"'{v}'" if s == "quoted" else _Words(v)
         for v, s in zip(values, map(styles.__getitem__, shapes), strict=True)
-    ]
+    )
 
 
 #: Every character of PyYAML's implicit ``int`` and ``float`` patterns (digits, signs, ``_.:``,
