@@ -103,6 +103,8 @@ def test_ecsv_rows_of_one_value_columns_as_astropy_writes_them(value: object) ->
     table["mixed"] = [value, -0.0, *[value] * (len(table) - 2)]
     table["text"] = [value, "x", *[value] * (len(table) - 2)]
     table["texts"] = [str(value)] * len(table)
+    table["again"] = [value] * len(table)  # one-value columns side by side: joined once
+    table["n"] = [3] * len(table)
     assert ecsv_data_lines(table) is not None
     assert _ours(table, "ecsv") == _astropy_ecsv(table)
     assert _ours(table, "json") == _reference_json(table, False)

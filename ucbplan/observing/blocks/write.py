@@ -282,14 +282,20 @@ def ecsv_data_lines(table: Table, delimiter: str = " ") -> list[str] | None:
     rest are joined as they are; a column of one value (bit for bit) is formatted once."""
     if not _plain_columns(table) or (delimiter != " " and len(table.colnames) < 2):
         return None
-    cells = []
+    cells: list[list[str]] = []
+    joined = False  # whether the last of ``cells`` holds one text (the columns before, joined)
     for col in table.itercols():
         one = _one_value(col)
         values = _cell_texts(col[:1] if one else col)
         if col.dtype.kind == "U" and _needs_csv(values, delimiter):
-            values = _csv_cells(values, delimiter)
-        cells.append(values * len(col) if one else values)  # a cell's text is its own
-    return list(map(delimiter.join, zip(*cells, strict=True)))
+            values = _csv_cells(values, delimiter)  # a cell's text is its own
+        if one and joined:  # columns of one value side by side: joined once
+            cells[-1] = [cells[-1][0] + delimiter + values[0]]
+        else:
+            cells.append(values)
+        joined = one
+    n = len(table)
+    return list(map(delimiter.join, zip(*(c * n if len(c) < n else c for c in cells), strict=True)))
 
 
 def _float_text(v: float) -> str:
