@@ -30,7 +30,7 @@ def iso_column(times: Time, has: np.ndarray | None, precision: int) -> np.ndarra
     if not len(times):
         return np.array([], dtype="U1")
     if has is None or bool(np.all(has)):
-        return isot_array(times, precision).astype(str)
+        return isot_array(times, precision)
     out = np.full(len(times), "", dtype=object)
     if np.any(has):
         out[has] = isot_array(times[has], precision)
