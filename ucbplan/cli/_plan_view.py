@@ -68,21 +68,22 @@ def _print_compact(blocks: list[Any], night: str, site: Any) -> None:
 
 def _print_summary(run: Any) -> None:
     """One row per night: visits, exposures and hours (a long plan, without --verbose)."""
-    visits = run.visits()
+    visits = run.visit_columns  # one list per field: no object per visit
     table = rich_table(
         f"Plan at {run.site.name}, per night (the full table: -o FILE or --verbose)",
         ["night", "visits", "exposures", "hours (wall)"],
     )
-    by_night: dict[str, list[Any]] = {}
-    for v in visits:
-        by_night.setdefault(v.night, []).append(v)
+    by_night: dict[str, list[int]] = {}
+    for k, night in enumerate(visits.night):
+        by_night.setdefault(night, []).append(k)
+    exposures, walls = visits.exposures, visits.wall_s()
     for night in (d.isoformat() for d in run.nights):  # nights without a visit too
-        vs = by_night.get(night, [])
+        ks = by_night.get(night, [])
         table.add_row(
             night,
-            str(len(vs)),
-            str(sum(v.exposures for v in vs)),
-            f"{sum(v.wall_s for v in vs) / 3600:.2f}",
+            str(len(ks)),
+            str(sum(exposures[k] for k in ks)),
+            f"{sum(walls[k] for k in ks) / 3600:.2f}",
         )
     err_console.print(table)
 
@@ -192,9 +193,8 @@ def _hours(seconds: float) -> str:
 def _print_accounting(run: Any, verbose: bool = False) -> None:
     """Visits (with --visit) and the time accounting, per target and in total; then the
     strategies, the anchors not planned and the goals."""
-    visits = run.visits()
-    if run.settings.visit_s is not None and (verbose or len(visits) <= SUMMARY_ROWS):
-        _print_visits(visits)
+    if run.settings.visit_s is not None and (verbose or len(run.visit_columns) <= SUMMARY_ROWS):
+        _print_visits(run.visits())
     account: PlanAccount = run.time_account
     table = rich_table(
         "Time accounting — efficiency = shutter / (shutter + overheads + idle)",

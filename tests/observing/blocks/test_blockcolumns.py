@@ -30,6 +30,7 @@ from ucbplan.observing.blocks.arrays import BlockColumns, BlockList, block_colum
 from ucbplan.observing.blocks.block import Block
 from ucbplan.observing.blocks.make import blocks_to_table
 from ucbplan.observing.blocks.write import (
+    csv_safe_table,
     ecsv_data_lines,
     json_rows_text,
     table_to_json_rows,
@@ -91,16 +92,25 @@ def test_ecsv_rows_as_astropy_writes_them(seed: int) -> None:
     assert _ours(table, "ecsv") == _astropy_ecsv(table)
 
 
-@pytest.mark.parametrize("value", [0.0, -0.0, float("nan"), 1e-5, 7, True, "", " x", 'a"b', "σ"])
+@pytest.mark.parametrize(
+    "value", [0.0, -0.0, float("nan"), 1e-5, 7, True, *TEXTS, 'a"b', "=1+2", "-3"]
+)
 def test_ecsv_rows_of_one_value_columns_as_astropy_writes_them(value: object) -> None:
     """A column of one value is formatted once: bit for bit one value (0.0 beside -0.0 is
-    two), text cells quoted as the csv writer does."""
+    two), text cells quoted as the csv writer does (ECSV and CSV)."""
     table = _random_table(7)
     table["one"] = [value] * len(table)
     table["mixed"] = [value, -0.0, *[value] * (len(table) - 2)]
+    table["text"] = [value, "x", *[value] * (len(table) - 2)]
+    table["texts"] = [str(value)] * len(table)
+    table["again"] = [value] * len(table)  # one-value columns side by side: joined once
+    table["n"] = [3] * len(table)
     assert ecsv_data_lines(table) is not None
     assert _ours(table, "ecsv") == _astropy_ecsv(table)
     assert _ours(table, "json") == _reference_json(table, False)
+    buf = io.StringIO()
+    Table(csv_safe_table(table), meta={}).write(buf, format="ascii.csv")
+    assert _ours(table, "csv") == buf.getvalue()
 
 
 @pytest.mark.parametrize("seed", range(30))

@@ -37,6 +37,24 @@ def test_required_columns_first_and_iso_precision() -> None:
     assert table.meta["site"]["name"] == "Paranal"
 
 
+def test_table_holds_its_own_arrays_not_the_blocks() -> None:
+    """The table is made without copying its columns again: each must be a new array, so that
+    editing the table never edits the plan's blocks (nor one column another)."""
+    from ucbplan.observing.blocks.arrays import BlockList, block_columns
+
+    cols = block_columns([make_block(0), make_block(1, alt=False), make_block(2)])
+    before = {k: v.copy() for k, v in cols.values.items()}
+    table = blocks_to_table(BlockList(cols), block_meta())
+    sources = [*cols.values.values(), cols.has_alt]
+    for name in table.colnames:
+        data = table[name].data
+        assert not any(np.shares_memory(data, a) for a in sources), name
+        others = [table[n].data for n in table.colnames if n != name]
+        assert not any(np.shares_memory(data, a) for a in others), name
+        data[...] = data[0] if data.dtype.kind in "U" else 0
+    assert all(repr(cols.values[k].tolist()) == repr(v.tolist()) for k, v in before.items())
+
+
 def test_ecsv_round_trip(tmp_path: Path) -> None:
     table = blocks_to_table([make_block(0), make_block(1, alt=False)], block_meta())
     path = tmp_path / "blocks.ecsv"

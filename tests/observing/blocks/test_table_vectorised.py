@@ -245,11 +245,11 @@ def test_plan_run_computes_visits_once(monkeypatch: pytest.MonkeyPatch) -> None:
 
     calls = []
 
-    def counting(*args: object) -> list:
+    def counting(*args: object) -> accounting.VisitColumns:
         calls.append(args)
-        return accounting.visit_summaries(*args)  # type: ignore[arg-type]
+        return accounting.visit_columns(*args)  # type: ignore[arg-type]
 
-    monkeypatch.setattr(run_module, "visit_summaries", counting)
+    monkeypatch.setattr(run_module, "visit_columns", counting)
     settings = type("S", (), {"visit_s": None, "overhead_s": 300.0, "plans_visits": False})()
     result = type("R", (), {"blocks": _visit_blocks()})()
     run = PlanRun([], None, [], settings, result)  # type: ignore[arg-type]
@@ -301,6 +301,34 @@ def test_ecsv_header_bytes_as_astropy_writes_them(seed: int) -> None:
     table["a"].unit = "km / s"
     table["a"].description = "a speed: the 'fast' one"
     assert ecsvheader.header_safe(table) == bool(seed % 2)
+    assert _ours(table) == _pyyaml_ecsv(table)
+
+
+def _random_visit(rng: random.Random, alphabet: str) -> dict[object, object]:
+    """A visit record: mostly a plan's keys and plain values, sometimes (one in seven) a key or
+    value of another kind or text of ``alphabet``."""
+    keys: list[object] = ["visit_id", "target", "night", "exposures", "shutter_s"]
+    plain = ["UCB03-20400101-V01", "2040-01-02", 1, 2.5, -0.0, "HM Cnc", "a_b-c.d"]
+    odd = [float("nan"), True, None, np.float64(1.5), "", "x: y", "'q'"]
+    odd.append("".join(rng.choice(alphabet) for _ in range(rng.randint(1, 12))))
+    if rng.random() < 6 / 7:
+        return {k: rng.choice(plain) for k in keys}
+    keys[rng.randrange(len(keys))] = rng.choice([1, 2.5, None, "", "a b", "é", "k"])
+    return {k: rng.choice(plain + odd) for k in keys}
+
+
+@pytest.mark.parametrize("seed", range(30))
+def test_plan_visits_and_reasons_of_any_kind_as_astropy_writes_them(seed: int) -> None:
+    """A plan's ``visits`` and ``not_planned`` are written apart only when their own paths know
+    every value; otherwise (keys that do not sort, text libyaml writes otherwise, NaN, numpy
+    scalars) the header is written as astropy writes it."""
+    rng = random.Random(seed)
+    alphabet = "abcXYZ019 _-.:'" + ("" if seed % 3 else "é\n\x85")
+    visits = [_random_visit(rng, alphabet) for _ in range(rng.randint(1, 12))]
+    why = rng.choice(["never up", "", "a: b", "é", 3, "moon"])
+    reasons = {"T": {"2040-01-01": {why: rng.choice([1, 2.5, "x", None])}}}
+    meta = {"visits": visits, "not_planned": reasons, "other": _random_meta(rng, alphabet)}
+    table = Table({"a": [1.5, 2.0]}, meta=meta)
     assert _ours(table) == _pyyaml_ecsv(table)
 
 

@@ -19,6 +19,7 @@ from ucbplan.observing.blocks.accounting import (
     ACCOUNT_KEYS,
     PlanAccount,
     TimeAccount,
+    VisitColumns,
     VisitSummary,
     time_accounting,
 )
@@ -116,3 +117,61 @@ def test_plan_account_meta_is_a_new_dict_each_time() -> None:
     first = plan.as_meta()
     first["targets"]["A"]["visits"] = 99
     assert plan.as_meta()["targets"]["A"]["visits"] == 1
+
+
+# -- the visits as columns (issue 34): records, walls and accounts read from the columns agree,
+# bit for bit, with the same figures made one VisitSummary at a time.
+
+_SECONDS = st.one_of(
+    st.sampled_from([0.0, -0.0, 0.0005, 0.0015, 2.675, 1e-300, math.nan, math.inf, 60.0]),
+    st.floats(-1e7, 1e7),
+)
+_VISITS = st.lists(
+    st.builds(
+        _visit, st.sampled_from(["A", "B Cnc", "c"]), _SECONDS, _SECONDS, _SECONDS, st.integers()
+    ),
+    max_size=30,
+)
+
+
+def _bits(value: object) -> object:
+    """A value compared bit for bit (repr tells -0.0 from 0.0 and matches NaN with NaN)."""
+    if isinstance(value, dict):
+        return [(k, type(v), repr(v)) for k, v in value.items()]
+    return (type(value), repr(value))
+
+
+@given(_VISITS)
+def test_visit_columns_give_each_summary_and_its_meta_record(visits: list[VisitSummary]) -> None:
+    cols = VisitColumns.of(visits)
+    assert len(cols) == len(visits)
+    assert cols.summaries() == visits
+    assert list(map(_bits, cols.records())) == [_bits(v.as_dict()) for v in visits]
+    assert list(map(_bits, cols.wall_s())) == [_bits(v.wall_s) for v in visits]
+
+
+def _account_one_by_one(visits: list[VisitSummary]) -> TimeAccount:
+    return TimeAccount(
+        len(visits),
+        sum(v.exposures for v in visits),
+        sum(v.shutter_s for v in visits),
+        sum(v.overhead_s for v in visits),
+        sum(v.idle_s for v in visits),
+    )
+
+
+@given(_VISITS)
+def test_accounts_from_columns_are_the_sums_visit_by_visit(visits: list[VisitSummary]) -> None:
+    plan = time_accounting(visits)
+    names = list(dict.fromkeys(v.target for v in visits))
+    assert list(plan.targets) == names
+    want = [_account_one_by_one(visits)]
+    want += [_account_one_by_one([v for v in visits if v.target == n]) for n in names]
+    got = [plan.total, *plan.targets.values()]
+    assert [list(map(_bits, vars_of(a))) for a in got] == [
+        list(map(_bits, vars_of(a))) for a in want
+    ]
+
+
+def vars_of(account: TimeAccount) -> list[object]:
+    return [getattr(account, k) for k in ACCOUNT_KEYS[:5]]

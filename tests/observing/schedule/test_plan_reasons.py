@@ -3,6 +3,7 @@ and per-target time budgets."""
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -136,3 +137,38 @@ def test_visit_refuses_fixed_u_pairs() -> None:
 
     with pytest.raises(InputError, match=r"^visit: fixed-u pairs"):
         plan_settings(visit="1h", mode="fixed-u-pairs")
+
+
+def test_why_nothing_fits_finds_the_sun_once_per_night(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Targets that never rise above the airmass limit at Paranal (dec +80): each night says
+    why for each target, and the Sun's altitude behind those reasons is found once per night
+    for all of them (issue 34): three targets cost no more Sun than one."""
+    from ucbplan.observing.observatory.sky import SkyModel
+    from ucbplan.observing.schedule import placement
+
+    calls: list[int] = []
+    real = SkyModel.sun_alt_deg
+
+    def counting(self: SkyModel, x: Any) -> Any:
+        if sys._getframe(1).f_globals["__name__"] == placement.__name__:  # for the reasons
+            calls.append(len(x))
+        return real(self, x)
+
+    files = [_variant(tmp_path, f"Polar {k}", dec="+80d00m00s") for k in range(3)]
+    monkeypatch.setattr(SkyModel, "sun_alt_deg", counting)
+    sun_calls = []
+    for some in (files[:1], files):
+        calls.clear()
+        run, _ = _reasons(some, nights=2)
+        sun_calls.append(list(calls))
+        assert [(m.target, m.night) for m in run.result.unplaced] == [
+            (f"Polar {k}", night)
+            for k in range(len(some))
+            for night in ("2040-02-15", "2040-02-16")
+        ]
+        assert {m.reason for m in run.result.unplaced} == {
+            "never at airmass <= 2 during nautical night (highest altitude -14.5 deg)"
+        }
+    assert len(sun_calls[0]) == len(sun_calls[1]) == 2  # one per night

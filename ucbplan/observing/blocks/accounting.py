@@ -35,9 +35,9 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from datetime import datetime
-from itertools import pairwise
+from itertools import pairwise, starmap
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -192,112 +192,180 @@ class VisitSummary:
         }
 
 
-def _groups(cols: BlockColumns) -> dict[tuple[str, str], list[int]]:
-    """Block indices per visit (``(target, visit_id)``; a block without one is its own visit),
-    each in time order of the block starts (the Julian dates of the times as stored)."""
-    groups: dict[tuple[str, str], list[int]] = {}
+#: The fields of a :class:`VisitSummary`, in order: the keys of :meth:`VisitSummary.as_dict`.
+VISIT_KEYS = tuple(f.name for f in fields(VisitSummary))
+
+
+@dataclass(frozen=True)
+class VisitColumns:
+    """A plan's visits as columns, one list per :class:`VisitSummary` field (in time order):
+    the summaries, their meta records and the time accounting are read from the columns, and a
+    plan of thousands of one-exposure visits makes no object per visit until asked for one."""
+
+    visit_id: list[str]
+    target: list[str]
+    night: list[str]
+    acq_start_utc: list[str]
+    start_utc: list[str]
+    end_utc: list[str]
+    exposures: list[int]
+    shutter_s: list[float]
+    overhead_s: list[float]
+    idle_s: list[float]
+
+    def __len__(self) -> int:
+        return len(self.visit_id)
+
+    @classmethod
+    def of(cls, visits: Sequence[VisitSummary]) -> VisitColumns:
+        """The columns of summaries, in their order."""
+        return cls(*([getattr(v, key) for v in visits] for key in VISIT_KEYS))
+
+    def _columns(self) -> list[list[Any]]:
+        return [getattr(self, key) for key in VISIT_KEYS]
+
+    def summaries(self) -> list[VisitSummary]:
+        """One :class:`VisitSummary` per visit."""
+        return list(starmap(VisitSummary, zip(*self._columns(), strict=True)))
+
+    def records(self) -> list[dict[str, Any]]:
+        """:meth:`VisitSummary.as_dict` of each visit (seconds to 1 ms), for the table meta."""
+        seconds = [_rounded(x, 3) for x in (self.shutter_s, self.overhead_s, self.idle_s)]
+        rows = zip(*self._columns()[:7], *seconds, strict=True)
+        return [dict(zip(VISIT_KEYS, row, strict=True)) for row in rows]
+
+    def wall_s(self) -> list[float]:
+        """:attr:`VisitSummary.wall_s` of each visit [s]."""
+        parts = [np.asarray(x, dtype=float) for x in (self.shutter_s, self.overhead_s)]
+        return (parts[0] + parts[1] + np.asarray(self.idle_s, dtype=float)).tolist()
+
+    def account(self) -> PlanAccount:
+        """The plan's :class:`PlanAccount`: the total and one account per target (in order of
+        first visit), each sum running over the visits in time order."""
+        rows: dict[str, list[int]] = {}
+        for k, name in enumerate(self.target):
+            rows.setdefault(name, []).append(k)
+        total = _account(self._columns()[6:])
+        return PlanAccount(
+            total,
+            {
+                name: total if len(ks) == len(self) else _account(self._columns()[6:], ks)
+                for name, ks in rows.items()
+            },
+        )
+
+
+def _account(columns: list[list[Any]], rows: list[int] | None = None) -> TimeAccount:
+    """The sums of the exposures, shutter, overhead and idle ``columns`` over ``rows`` (all:
+    None), in order (an empty sum is 0, as ``sum`` makes it)."""
+    picked = columns if rows is None else [[c[k] for k in rows] for c in columns]
+    exposures, shutter, overhead, idle = picked
+    n = len(exposures)
+    return TimeAccount(n, sum(exposures), sum(shutter), sum(overhead), sum(idle))
+
+
+def _rounded(values: list[float], digits: int) -> list[float]:
+    """``round(v, digits)`` of each value, found once per distinct value (bit for bit: -0.0
+    is not 0.0); a plan's visits repeat a handful of durations."""
+    if not values or set(map(type, values)) != {float}:
+        return [round(v, digits) for v in values]
+    bits = np.asarray(values, dtype=np.float64).view(np.int64)
+    distinct, inverse = np.unique(bits, return_inverse=True)
+    rounded = [round(v, digits) for v in distinct.view(np.float64).tolist()]
+    return np.asarray(rounded, dtype=np.float64)[inverse.ravel()].tolist()
+
+
+def _visit_order(cols: BlockColumns) -> tuple[list[tuple[str, str]], np.ndarray, np.ndarray]:
+    """The visits of the blocks (``(target, visit_id)``; a block without one is a visit of its
+    own, ``#k``) in order of first appearance; the block indices visit by visit, each visit's in
+    time order of the block starts (the Julian dates as stored; equal starts keep their order);
+    and the number of blocks of each visit."""
     targets, visits = cols.lists("target", "visit_id")
-    for k, (target, visit) in enumerate(zip(targets, visits, strict=True)):
-        groups.setdefault((target, visit or f"#{k}"), []).append(k)
+    ids: dict[tuple[str, str], int] = {}
+    codes = [
+        ids.setdefault((target, visit or f"#{k}"), len(ids))
+        for k, (target, visit) in enumerate(zip(targets, visits, strict=True))
+    ]
+    code = np.asarray(codes, dtype=np.int64)
     start = cols.times["t_start_utc"]
-    keys = list(zip(start.jd1.tolist(), start.jd2.tolist(), strict=True))
-    return {g: sorted(ks, key=keys.__getitem__) for g, ks in groups.items()}
+    order = np.lexsort((np.atleast_1d(start.jd2), np.atleast_1d(start.jd1), code))
+    return list(ids), order, np.bincount(code, minlength=len(ids))
+
+
+def visit_columns(
+    blocks: Sequence[Block], acquisition_s: float, trailing_readout: bool
+) -> VisitColumns:
+    """The visits of ``blocks`` (grouped by ``visit_id``; a block without one is a visit of its
+    own) as :class:`VisitColumns`, in time order of their acquisition starts.
+
+    A visit's times run from the acquisition start to the latest end (the first of equal ones,
+    in time order), all visits' converted together; its sums run over its blocks in time
+    order, those of one-block visits over whole columns at once."""
+    if not blocks:
+        return VisitColumns.of([])
+    cols = block_columns(blocks)
+    keys, order, counts = _visit_order(cols)
+    heads = np.cumsum(counts) - counts
+    first = order[heads]
+    n_exp, exptime, readout_s = (cols.values[k] for k in ("n_exp", "exptime_s", "readout_s"))
+    drop = 0 if trailing_readout else 1
+    # one-block visits: the sums of one term, as sum() makes them (0 + x: -0.0 becomes 0.0)
+    readout = (n_exp[first] - drop) * readout_s[first] + 0.0
+    shutter = n_exp[first] * exptime[first] + 0.0
+    exposures, last = n_exp[first], first.copy()
+    _longer_visits(cols, (order, heads, counts), drop, (readout, shutter, exposures, last))
+    start, end = cols.times["t_start_utc"][first], cols.times["t_end_utc"][last]
+    last_readout = readout_s[order[heads + counts - 1]] if trailing_readout else 0.0
+    span = np.atleast_1d((end - start).to_value("s")) + last_readout
+    overhead = acquisition_s + readout
+    idle = acquisition_s + span - shutter - overhead  # wall − shutter − overhead
+    acq = start - TimeDelta(acquisition_s, format="sec")
+    texts = [cols.values[k][first].tolist() for k in ("target", "night")]
+    numbers = [exposures, shutter, overhead, np.where(idle > 0.0, idle, 0.0)]  # max(0.0, idle)
+    columns = [[vid if not vid.startswith("#") else "" for _, vid in keys], *texts]
+    columns += [*(isot(t.utc, 0) for t in (acq, start, end)), *(x.tolist() for x in numbers)]
+    rank = sorted(range(len(keys)), key=columns[3].__getitem__)  # by acquisition start
+    if rank == list(range(len(keys))):  # already in time order (a plan's blocks are)
+        return VisitColumns(*columns)
+    return VisitColumns(*([c[k] for k in rank] for c in columns))
+
+
+def _longer_visits(
+    cols: BlockColumns,
+    grouping: tuple[np.ndarray, np.ndarray, np.ndarray],
+    drop: int,
+    out: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+) -> None:
+    """The readout, shutter and exposure sums and the block of the latest end (the first of
+    equal ones) of each visit of several blocks, into ``out``: sums over the blocks in time
+    order (``grouping``: the blocks visit by visit, each visit's first and count), as ``sum``
+    makes them over plain Python numbers."""
+    order, heads, counts = grouping
+    readout, shutter, exposures, last = out
+    longer = np.flatnonzero(counts > 1).tolist()
+    if not longer:
+        return
+    n_exp, exptime, readout_s = cols.lists("n_exp", "exptime_s", "readout_s")
+    end_jd = cols.times["t_end_utc"].jd
+    for g in longer:
+        ks = order[heads[g] : heads[g] + counts[g]].tolist()
+        last[g] = max(ks, key=end_jd.__getitem__)
+        readout[g] = float(sum((n_exp[k] - drop) * readout_s[k] for k in ks))
+        shutter[g] = float(sum(n_exp[k] * exptime[k] for k in ks))
+        exposures[g] = sum(n_exp[k] for k in ks)
 
 
 def visit_summaries(
     blocks: Sequence[Block], acquisition_s: float, trailing_readout: bool
 ) -> list[VisitSummary]:
     """One :class:`VisitSummary` per visit of ``blocks`` (grouped by ``visit_id``; a block
-    without one is a visit of its own), in time order.
-
-    The times of all visits are converted together (one astropy call per quantity, not per
-    visit); sums over a visit's blocks run in time order, as they always did."""
-    if not blocks:
-        return []
-    cols = block_columns(blocks)
-    groups = _groups(cols)
-    starts, ends = cols.times["t_start_utc"], cols.times["t_end_utc"]
-    end_jd = ends.jd
-    first = [ks[0] for ks in groups.values()]
-    # the latest end (the first of equal ones, in time order of the starts)
-    last = [max(ks, key=end_jd.__getitem__) for ks in groups.values()]
-    start, end = starts[first], ends[last]
-    spans = np.atleast_1d((end - start).to_value("s")).tolist()
-    acq = start - TimeDelta(acquisition_s, format="sec")
-    iso = [isot(t.utc, 0) for t in (acq, start, end)]
-    cells = _VisitCells(*cols.lists("target", "night", "n_exp", "exptime_s", "readout_s"))
-    out = [
-        _summary(cells, ks, vid, span, (a, s, e), acquisition_s, trailing_readout)
-        for ((_, vid), ks), span, a, s, e in zip(groups.items(), spans, *iso, strict=True)
-    ]
-    out.sort(key=lambda v: v.acq_start_utc)
-    return out
-
-
-class _VisitCells(NamedTuple):
-    """The block columns a visit summary reads, as lists of plain values."""
-
-    target: list[str]
-    night: list[str]
-    n_exp: list[int]
-    exptime_s: list[float]
-    readout_s: list[float]
-
-
-def _summary(
-    c: _VisitCells,
-    ks: list[int],
-    vid: str,
-    span_s: float,
-    iso: tuple[str, str, str],
-    acquisition_s: float,
-    trailing_readout: bool,
-) -> VisitSummary:
-    """One visit from its blocks ``ks`` (in time order), first start to latest end [s] and the
-    ISO times of its acquisition start, first start and latest end."""
-    drop = 0 if trailing_readout else 1
-    if len(ks) == 1:  # the sums of one block, as sum() makes them (0 + x: -0.0 becomes 0.0)
-        k = ks[0]
-        readout = float(0 + (c.n_exp[k] - drop) * c.readout_s[k])
-        shutter = float(0 + c.n_exp[k] * c.exptime_s[k])
-    else:
-        readout = float(sum((c.n_exp[k] - drop) * c.readout_s[k] for k in ks))
-        shutter = float(sum(c.n_exp[k] * c.exptime_s[k] for k in ks))
-    last_readout = c.readout_s[ks[-1]] if trailing_readout else 0.0
-    span = span_s + last_readout
-    overhead = acquisition_s + readout
-    wall = acquisition_s + span
-    return VisitSummary(
-        visit_id=vid if not vid.startswith("#") else "",
-        target=c.target[ks[0]],
-        night=c.night[ks[0]],
-        acq_start_utc=str(iso[0]),
-        start_utc=str(iso[1]),
-        end_utc=str(iso[2]),
-        exposures=sum(c.n_exp[k] for k in ks) if len(ks) > 1 else c.n_exp[ks[0]],
-        shutter_s=shutter,
-        overhead_s=overhead,
-        idle_s=max(0.0, wall - shutter - overhead),
-    )
-
-
-def _account(visits: Sequence[VisitSummary]) -> TimeAccount:
-    """The sum of ``visits`` (an empty sum is 0, as ``sum`` makes it)."""
-    return TimeAccount(
-        len(visits),
-        sum(v.exposures for v in visits),
-        sum(v.shutter_s for v in visits),
-        sum(v.overhead_s for v in visits),
-        sum(v.idle_s for v in visits),
-    )
+    without one is a visit of its own), in time order (:func:`visit_columns`)."""
+    return visit_columns(blocks, acquisition_s, trailing_readout).summaries()
 
 
 def time_accounting(visits: Sequence[VisitSummary]) -> PlanAccount:
     """The plan's :class:`PlanAccount`: the total of ``visits`` and one account per target."""
-    names = list(dict.fromkeys(v.target for v in visits))
-    return PlanAccount(
-        _account(visits), {n: _account([v for v in visits if v.target == n]) for n in names}
-    )
+    return VisitColumns.of(visits).account()
 
 
 class BlockRows(NamedTuple):

@@ -73,21 +73,22 @@ def isot_array(times: Time, precision: int) -> NDArray[np.str_]:
         )
         texts = [fmt.format(*p) for p in zip(*(a.tolist() for a in parts), strict=True)]
         return np.array(texts, dtype=str) if texts else np.array([], dtype="U1")
-    widths, seps = [4, 2, 2, 2, 2, 2, precision], b"--T::."
-    pieces = []
-    for k, values in enumerate(parts):
-        if k:
-            pieces.append(np.full((year.size, 1), seps[k - 1], dtype=np.uint8))
-        pieces.append(_digit_bytes(values, widths[k]))
-    text = np.ascontiguousarray(np.concatenate(pieces, axis=1))
+    text = _digit_text(parts, [4, 2, 2, 2, 2, 2, precision][: len(parts)], b"--T::.")
     return text.view(f"S{text.shape[1]}").ravel().astype(str)
 
 
-def _digit_bytes(values: NDArray[Any], width: int) -> NDArray[np.uint8]:
-    """The ASCII digits of non-negative integers below ``10**width``, one row each."""
-    powers = 10 ** np.arange(width - 1, -1, -1, dtype=np.int64)
-    digits = (values.astype(np.int64)[:, None] // powers) % 10
-    return (digits + ord("0")).astype(np.uint8)
+def _digit_text(parts: list[NDArray[Any]], widths: list[int], seps: bytes) -> NDArray[np.uint8]:
+    """One row of ASCII per element: each part's non-negative integers below ``10**width`` as
+    ``width`` digits, the parts apart by ``seps`` (all digits found in one array pass)."""
+    part = np.repeat(np.arange(len(widths)), widths)  # the part of each digit
+    powers = 10 ** np.concatenate([np.arange(w - 1, -1, -1, dtype=np.int64) for w in widths])
+    digits = (np.stack(parts, axis=1).astype(np.int64)[:, part] // powers) % 10
+    starts = np.cumsum([0] + [w + 1 for w in widths[:-1]])  # where each part's digits start
+    where = np.concatenate([np.arange(s, s + w) for s, w in zip(starts, widths, strict=True)])
+    text = np.empty((parts[0].size, sum(widths) + len(widths) - 1), dtype=np.uint8)
+    text[:, where] = digits + ord("0")
+    text[:, starts[1:] - 1] = np.frombuffer(seps[: len(widths) - 1], dtype=np.uint8)
+    return text
 
 
 def time_array(times: Sequence[Time], scale: str) -> Time:

@@ -30,7 +30,7 @@ def iso_column(times: Time, has: np.ndarray | None, precision: int) -> np.ndarra
     if not len(times):
         return np.array([], dtype="U1")
     if has is None or bool(np.all(has)):
-        return isot_array(times, precision).astype(str)
+        return isot_array(times, precision)
     out = np.full(len(times), "", dtype=object)
     if np.any(has):
         out[has] = isot_array(times[has], precision)
@@ -90,10 +90,10 @@ def local_iso(times: Time | Sequence[Time], zones: Sequence[str]) -> np.ndarray:
     days = months.astype("datetime64[M]").astype("datetime64[D]").astype(np.int64) + (day - 1)
     posix = days * DAY_S_INT + hmsf["h"] * HOUR_S_INT + hmsf["m"] * 60 + hmsf["s"]
     tz = {z: ZoneInfo(z) for z in dict.fromkeys(zones)}
-    offsets = [
-        datetime.fromtimestamp(t, tz[z]).utcoffset()
-        for t, z in zip(posix.tolist(), zones, strict=True)
-    ]
+    if len(zones) != len(posix):
+        raise ValueError(f"local_iso: {len(posix)} times but {len(zones)} zones")
+    instants = map(datetime.fromtimestamp, posix.tolist(), map(tz.__getitem__, zones))
+    offsets = list(map(datetime.utcoffset, instants))  # each instant's own, in its zone
     found = {off: _offset_text(off) for off in dict.fromkeys(offsets)}
     text = {off: got for off, got in found.items() if got is not None}
     if len(text) < len(found):

@@ -64,10 +64,10 @@ def flat_records_safe(records: list[Any] | tuple[Any, ...]) -> bool | None:
     return _LIBYAML_SAFE.issuperset("".join(texts))
 
 
-def header_safe(table: Table) -> bool:
+def header_safe(table: Table, meta: Mapping[str, Any] | None = None) -> bool:
     """Whether the whole ECSV header of ``table`` (meta, column names, units, descriptions,
-    formats and column meta) is :func:`_libyaml_safe`."""
-    if not _libyaml_safe(dict(table.meta)):
+    formats and column meta) is :func:`_libyaml_safe`; with ``meta`` in place of the table's."""
+    if not _libyaml_safe(dict(table.meta if meta is None else meta)):
         return False
     for col in table.itercols():
         info = col.info
@@ -200,19 +200,21 @@ def _apart(meta: Mapping[str, Any]) -> dict[str, tuple[Any, list[str]]]:
     return out
 
 
-def ecsv_header(table: Table, libyaml: bool) -> str:
+def ecsv_header(table: Table) -> str:
     """The ECSV header of ``table`` (plain columns), as astropy writes it: with libyaml's
-    emitter if ``libyaml`` (a :func:`header_safe` table), a plan's ``visits`` and
-    ``not_planned`` apart; neither ``table`` nor astropy's YAML dumper is changed."""
-    apart = _apart(table.meta) if libyaml else {}
-    if not apart:
-        return _header_text(table, table.meta, libyaml)
+    emitter when the header is :func:`header_safe`, a plan's ``visits`` and ``not_planned``
+    written apart (their paths write only strings that are, so these are not checked twice);
+    else with PyYAML's. Neither ``table`` nor astropy's YAML dumper is changed."""
+    apart = _apart(table.meta)
     stand_in = {key: empty for key, (empty, _) in apart.items()}
-    text = _header_text(table, {**table.meta, **stand_in}, libyaml)  # written apart below
+    meta = {**table.meta, **stand_in}  # written apart below
+    if not header_safe(table, meta):
+        return _header_text(table, table.meta, False)
+    text = _header_text(table, meta, True)
     for key, (empty, lines) in apart.items():
         blank = f"{os.linesep}# - {key}: {'[]' if empty == [] else '{}'}{os.linesep}"
         if text.count(blank) != 1:  # never: meta keys are unique
-            return _header_text(table, table.meta, libyaml)
+            return _header_text(table, table.meta, True)
         listed = "# " + f"{os.linesep}# ".join(lines) + os.linesep
         text = text.replace(blank, f"{os.linesep}# - {key}:{os.linesep}{listed}")
     return text
@@ -330,6 +332,8 @@ def yaml_flow_items(items: list[dict[str, Any]], tags: Callable[[str], str]) -> 
     value at a space once the column passes it; the tests compare with libyaml's own output.
     Items of the same keys are written key by key: each distinct value's text found once, and
     each mapping made from a ``%`` template of its texts' lengths (where the lines break)."""
+    if items and not all(type(key) is str for key in items[0]):
+        return None  # keys of other kinds (which need not sort): PyYAML's path
     keys = sorted(items[0]) if items else []
     if (
         not keys
@@ -349,7 +353,7 @@ def yaml_flow_items(items: list[dict[str, Any]], tags: Callable[[str], str]) -> 
     rows = list(zip(*columns, strict=True))
     widths = list(zip(*(list(map(len, col)) for col in columns), strict=True))
     templates = {w: _template(keys, w) for w in set(widths)}
-    if not any(_Words in map(type, col) for col in columns):
+    if not any(type(col) is _MayBreak for col in columns):  # no value breaks: templates
         return "\n".join(map(operator.mod, map(templates.__getitem__, widths), rows)).split("\n")
     lines: list[str] = []
     for item, row, width in zip(items, rows, widths, strict=True):
@@ -364,10 +368,15 @@ class _Words(str):
     """A value's text that libyaml may break at its spaces (a plain string with spaces)."""
 
 
+class _MayBreak(list[str]):
+    """The texts of a column that may hold a :class:`_Words` (the others hold none)."""
+
+
 def _column_texts(values: list[Any], tags: Callable[[str], str]) -> list[str] | None:
-    """Each value's text (a :class:`_Words` where it may break): in a column of one kind, each
-    distinct number's text (a function of its ``repr``) found once and each string's style once
-    per :func:`_shapes`; None if a value is of a kind this path does not write."""
+    """Each value's text (a :class:`_Words` where it may break, in a :class:`_MayBreak`): in a
+    column of one kind, each distinct number's text (a function of its ``repr``) found once and
+    each string's style once per :func:`_shapes`; None if a value is of a kind this path does
+    not write."""
     kinds = set(map(type, values))
     if kinds == {str}:
         return _text_column(values, _shapes(values), tags)
@@ -377,7 +386,10 @@ def _column_texts(values: list[Any], tags: Callable[[str], str]) -> list[str] | 
             _text_column([v], [v], tags) if type(v) is str else _yaml_scalar(v, tags)
             for v in values
         ]
-        return None if None in each else [got[0] for got in each if got is not None]
+        if None in each:
+            return None
+        texts = [got[0] for got in each if got is not None]
+        return _MayBreak(texts) if _Words in map(type, texts) else texts
     reprs = list(map(repr, values))
     known = {}
     for text, v in dict(zip(reprs, values, strict=True)).items():
@@ -399,10 +411,10 @@ def _text_column(
             return None
     if len(set(styles.values())) == 1 and style != "words":  # one style: the column at once
         return list(values) if style == "plain" else list(map("'{}'".format, values))
-    return [
+    return _MayBreak(
         v if s == "plain" else f"'{v}'" if s == "quoted" else _Words(v)
         for v, s in zip(values, map(styles.__getitem__, shapes), strict=True)
-    ]
+    )
 
 
 #: Every character of PyYAML's implicit ``int`` and ``float`` patterns (digits, signs, ``_.:``,
@@ -474,6 +486,8 @@ def _flow_items_one_by_one(
 
 def _flow_item(item: dict[str, Any], tags: Callable[[str], str]) -> list[str] | None:
     """The lines of one flow mapping (see :func:`yaml_flow_items`), or None."""
+    if not all(type(key) is str for key in item):
+        return None
     lines: list[str] = []
     line, col = "  - {", 5
     for k, key in enumerate(sorted(item)):

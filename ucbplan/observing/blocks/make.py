@@ -26,10 +26,11 @@ from ucbplan.observing.blocks.schema import COLUMNS, META_SCALARS, Column
 
 
 def _plain_values(column: Column, cols: BlockColumns) -> np.ndarray:
+    """A copy of the blocks' values (the table does not share the plan's arrays)."""
     values = cols.values[column.attribute]
     if column.dtype == "str":
         return values.astype(str) if len(values) else np.array([], dtype="U1")
-    return np.asarray(values, dtype=column.dtype)
+    return np.array(values, dtype=column.dtype)
 
 
 def _width_s(column: Column, cols: BlockColumns) -> np.ndarray:
@@ -44,7 +45,8 @@ def _time_column(column: Column, cols: BlockColumns, precision: int) -> np.ndarr
     return iso_column(cols.times[column.attribute], has, precision)
 
 
-#: How each kind of column is made from the blocks' columns (see :attr:`Column.kind`).
+#: How each kind of column is made from the blocks' columns (see :attr:`Column.kind`): each a
+#: new array, which the table then holds without copying it again.
 _MAKERS: dict[str, Callable[[Column, BlockColumns], np.ndarray]] = {
     "value": _plain_values,
     "utc": lambda c, b: _time_column(c, b, 3),
@@ -127,7 +129,7 @@ def blocks_to_table(blocks: Sequence[Block], meta: Mapping[str, Any]) -> Table:
 
 
 def _blocks_to_table(cols: BlockColumns, meta: Mapping[str, Any]) -> Table:
-    table = Table({c.name: _MAKERS[c.kind](c, cols) for c in COLUMNS})
+    table = Table({c.name: _MAKERS[c.kind](c, cols) for c in COLUMNS}, copy=False)
     table.meta = _copy_meta(dict(meta))  # as Table(meta=...) would deep-copy it, but faster
     for c in COLUMNS:
         if c.unit is not None:

@@ -27,11 +27,7 @@ from astropy.table import Column, Table
 
 from ucbplan.errors import InputFileError
 from ucbplan.io import dump_json, dumps_json
-from ucbplan.observing.blocks.ecsv_header import (
-    ecsv_header,
-    flat_records_safe,
-    header_safe,
-)
+from ucbplan.observing.blocks.ecsv_header import ecsv_header, flat_records_safe
 from ucbplan.observing.blocks.schema import TABLE_FORMATS
 
 
@@ -165,7 +161,7 @@ def _write_ecsv(table: Table, handle: IO[str]) -> None:
     if lines is None:
         table.write(handle, format="ascii.ecsv")
         return
-    handle.write(ecsv_header(table, header_safe(table)))
+    handle.write(ecsv_header(table))
     handle.write("".join(line + os.linesep for line in lines))
 
 
@@ -226,20 +222,18 @@ def _plain_columns(table: Table) -> bool:
 
 
 def _one_value(col: Column) -> bool:
-    """Whether a non-empty column of numbers holds one value, bit for bit (-0.0 is not 0.0)."""
-    if not len(col) or col.dtype.kind not in "biuf":
+    """Whether a non-empty column of numbers or text holds one value, bit for bit (-0.0 is not
+    0.0)."""
+    if not len(col) or col.dtype.kind not in "biufU":
         return False
     data = col.data
     bits = data.view(f"u{data.itemsize}") if data.dtype.kind == "f" else data
     return bool((bits == bits[0]).all())
 
 
-def _strs(col: Column) -> list[str]:
+def _cell_texts(col: Column) -> list[str]:
     """Each cell as astropy's ECSV writer formats it (``str`` of the cell), stripped of spaces
-    and tabs at both ends as its writer's splitter does; a column of one value (bit for bit)
-    formatted once."""
-    if _one_value(col):
-        return [str(col.data[:1].tolist()[0])] * len(col)
+    and tabs at both ends as its writer's splitter does."""
     values = col.tolist()
     if col.dtype.kind == "U":
         joined = "".join(values)
@@ -285,17 +279,23 @@ def ecsv_data_lines(table: Table, delimiter: str = " ") -> list[str] | None:
     writer) writes them, without line ends; None for a table with other than plain 1-d columns
     (or a CSV table of one column: the ``csv`` writer quotes a row of one empty field). Column
     by column: a text column with a cell to quote goes through the ``csv`` writer alone, the
-    rest are joined as they are."""
+    rest are joined as they are; a column of one value (bit for bit) is formatted once."""
     if not _plain_columns(table) or (delimiter != " " and len(table.colnames) < 2):
         return None
-    cells = []
+    cells: list[list[str]] = []
+    joined = False  # whether the last of ``cells`` holds one text (the columns before, joined)
     for col in table.itercols():
-        values = _strs(col)
-        text = col.dtype.kind == "U"
-        if text and _needs_csv(values, delimiter):
-            values = _csv_cells(values, delimiter)
-        cells.append(values)
-    return list(map(delimiter.join, zip(*cells, strict=True)))
+        one = _one_value(col)
+        values = _cell_texts(col[:1] if one else col)
+        if col.dtype.kind == "U" and _needs_csv(values, delimiter):
+            values = _csv_cells(values, delimiter)  # a cell's text is its own
+        if one and joined:  # columns of one value side by side: joined once
+            cells[-1] = [cells[-1][0] + delimiter + values[0]]
+        else:
+            cells.append(values)
+        joined = one
+    n = len(table)
+    return list(map(delimiter.join, zip(*(c * n if len(c) < n else c for c in cells), strict=True)))
 
 
 def _float_text(v: float) -> str:

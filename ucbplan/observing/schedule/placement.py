@@ -23,6 +23,8 @@ from ucbplan.observing.schedule.candidates import Candidates, PlanFrame, TargetR
 from ucbplan.observing.schedule.nights import NightSpan
 from ucbplan.observing.schedule.settings import PlanSettings
 
+FloatArray = NDArray[np.float64]
+
 #: Sampling step of the night when explaining why nothing fits [s].
 _REASON_STEP_S = 300.0
 
@@ -151,12 +153,29 @@ class Timeline:
         return True
 
 
-def _no_session_reason(run: TargetRun, frame: PlanFrame, window: tuple[float, float]) -> str:
+class NightSun:
+    """The Sun's altitude [deg] at the samples of each night window that explain why nothing
+    fits (every :data:`_REASON_STEP_S` [s on the axis]), found once per window: the same for
+    every target of a run."""
+
+    def __init__(self, frame: PlanFrame) -> None:
+        self.frame = frame
+        self._found: dict[tuple[float, float], tuple[FloatArray, FloatArray]] = {}
+
+    def samples(self, window: tuple[float, float]) -> tuple[FloatArray, FloatArray]:
+        """(sample times [s on the axis], the Sun's altitude there [deg]); read only."""
+        if window not in self._found:
+            xs = np.arange(window[0], window[1], _REASON_STEP_S)
+            self._found[window] = xs, self.frame.sky.sun_alt_deg(xs)
+        return self._found[window]
+
+
+def _no_session_reason(run: TargetRun, sun_at: NightSun, window: tuple[float, float]) -> str:
     """Explain why no usable session exists in a night window (inside T_valid)."""
     c: Candidates = run.cand
+    frame = sun_at.frame
     night, limit = frame.constraints.night, frame.constraints.airmass
-    xs = np.arange(window[0], window[1], _REASON_STEP_S)
-    sun = frame.sky.sun_alt_deg(xs)
+    xs, sun = sun_at.samples(window)
     if sun.min() > night.sun_alt_max_deg:
         return (
             f"no {night.twilight} night: the Sun stays above {night.sun_alt_max_deg:g} deg "
@@ -182,9 +201,15 @@ def _no_session_reason(run: TargetRun, frame: PlanFrame, window: tuple[float, fl
 
 
 def unusable_reason(
-    run: TargetRun, js: np.ndarray, span: NightSpan, frame: PlanFrame, settings: PlanSettings
+    run: TargetRun,
+    js: np.ndarray,
+    span: NightSpan,
+    frame: PlanFrame,
+    settings: PlanSettings,
+    sun: NightSun | None = None,
 ) -> str:
-    """Why none of the sessions ``js`` of a night can be used."""
+    """Why none of the sessions ``js`` of a night can be used (``sun``: the run's, shared by
+    its targets; None: this night's alone)."""
     if not run.exposure.floor_ok:
         return (
             f"smearing floor: no exposure keeps Lambda_K >= {settings.lambda_k_floor:g}; lower "
@@ -207,39 +232,47 @@ def unusable_reason(
             f"{run.until.utc.iso[:16]} UTC (alpha={settings.alpha:g}); pick an "
             "earlier night or a larger --alpha"
         )
-    return _no_session_reason(run, frame, (span.x0, span.x1))
+    return _no_session_reason(run, sun or NightSun(frame), (span.x0, span.x1))
 
 
 def night_usable(
-    run: TargetRun, span: NightSpan, frame: PlanFrame, settings: PlanSettings
+    run: TargetRun,
+    span: NightSpan,
+    frame: PlanFrame,
+    settings: PlanSettings,
+    sun: NightSun | None = None,
 ) -> NDArray[np.int64] | str:
-    """Indices of ``run``'s usable candidates in the night ``span``, or why there are none."""
+    """Indices of ``run``'s usable candidates in the night ``span``, or why there are none
+    (:func:`unusable_reason`)."""
     j0, j1 = np.searchsorted(run.cand.x_mid, [span.x0, span.x1])
     js = np.arange(j0, j1)
     usable = js[(run.ok[js] > 0) & run.valid[js]]
     if usable.size == 0:
-        return unusable_reason(run, js, span, frame, settings)
+        return unusable_reason(run, js, span, frame, settings, sun)
     return usable
 
 
 def _place_night(run: TargetRun, night: NightTask) -> str | None:
     """Place one target's best sessions in a night; the reason if fewer than asked fit."""
-    n, span, timeline, frame, settings, allowance = night
+    n, span, timeline, frame, settings, allowance, sun = night
     c = run.cand
-    usable = night_usable(run, span, frame, settings)
+    usable = night_usable(run, span, frame, settings, sun)
     if isinstance(usable, str):
         return usable
     usable = usable[np.argsort(run.score[usable], kind="stable")]
     wanted, count, n_exp = settings.sessions_per_night, 0, run.exposure.plan.n_exp
     over_budget = False
-    for j in usable:
-        idx = (int(j),) if run.partner[j] < 0 else (int(j), int(run.partner[j]))
-        s = Session(run.index, n, idx, float(c.x_start[idx[0]]), float(c.x_end[idx[-1]]))
-        wall = settings.overhead_s + s.x1 - s.x0
+    partner = run.partner[usable]
+    ends = np.where(partner < 0, usable, partner)  # a pair ends with its second block
+    firsts, lasts = c.x_start[usable].tolist(), c.x_end[ends].tolist()
+    rows = zip(usable.tolist(), partner.tolist(), firsts, lasts, strict=True)
+    for j, k, x0, x1 in rows:
+        idx = (j,) if k < 0 else (j, k)
+        wall = settings.overhead_s + x1 - x0
         if not allowance.fits(len(idx) * n_exp, wall):
             over_budget = True
             continue
-        if timeline.add(s):
+        if timeline.add(Session(run.index, n, idx, x0, x1)):
             allowance.charge(len(idx) * n_exp, wall)
             count += 1
             if count == wanted:
@@ -281,7 +314,8 @@ def place_sessions(
 
 class NightTask(NamedTuple):
     """What placing one target in one night takes: the night's index and span, the timeline
-    shared by all targets, the plan's frame and settings, and the target's allowance."""
+    shared by all targets, the plan's frame and settings, the target's allowance, and the
+    nights' Sun shared by all targets."""
 
     n: int
     span: NightSpan
@@ -289,6 +323,7 @@ class NightTask(NamedTuple):
     frame: PlanFrame
     settings: PlanSettings
     allowance: Allowance
+    sun: NightSun
 
 
 #: Places one target's sessions or visits in one night; returns why fewer than asked fit.
@@ -321,10 +356,12 @@ def place_by_priority(
     """
     timeline.block_out(busy)
     unplaced: list[Unplaced] = []
+    sun = NightSun(frame)
     for run in sorted(runs, key=lambda r: -r.target.priority):
         allowance = (allowances or {}).get(run.index) or Allowance()
         tasks = [
-            NightTask(n, sp, timeline, frame, settings, allowance) for n, sp in enumerate(spans)
+            NightTask(n, sp, timeline, frame, settings, allowance, sun)
+            for n, sp in enumerate(spans)
         ]
         mine: dict[int, Unplaced] = {}
         for n in range(len(tasks)) if order is None else order(run, tasks):

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import math
 import re
-from collections import Counter
 from dataclasses import dataclass
 from typing import Any, NamedTuple
 
@@ -37,37 +36,70 @@ def slug(name: str) -> str:
     return re.sub(r"[^A-Za-z0-9]+", "_", name).strip("_") or "target"
 
 
-class BlockLabel(NamedTuple):
-    """Night label, block, session and visit identifiers of one block."""
+class BlockLabels(NamedTuple):
+    """Night labels, block, session and visit identifiers of blocks (text arrays)."""
 
-    night: str
-    block_id: str
-    session_id: str
-    visit_id: str
+    night: NDArray[np.str_]
+    block_id: NDArray[np.str_]
+    session_id: NDArray[np.str_]
+    visit_id: NDArray[np.str_]
+
+
+def _occurrence(keys: NDArray[np.int64]) -> NDArray[np.int64]:
+    """1, 2, …: the how-many-th occurrence of its key each element is, in order."""
+    order = np.argsort(keys, kind="stable")
+    ordered = keys[order]
+    new = np.flatnonzero(np.concatenate([[True], ordered[1:] != ordered[:-1]]))
+    first = np.repeat(new, np.diff(np.append(new, keys.size)))
+    out = np.empty_like(keys)
+    out[order] = np.arange(keys.size) - first + 1
+    return out
+
+
+def _texts(prefix: NDArray[np.str_], tag: str, number: NDArray[np.int64]) -> NDArray[np.str_]:
+    """``<prefix>-<tag><number, two digits at least>`` of each element."""
+    digits = np.array([f"{k:02d}" for k in range(int(number.max()) + 1)])
+    return np.char.add(np.char.add(prefix, f"-{tag}"), digits[number])
+
+
+def _narrow(text: NDArray[np.str_]) -> NDArray[np.str_]:
+    """``text`` as ``np.array(text.tolist(), dtype=str)`` makes it: as wide as its longest."""
+    return text.astype(f"U{max(1, int(np.char.str_len(text).max()))}")
 
 
 def _labels(
     placed: list[Session], runs: list[TargetRun], spans: list[NightSpan]
-) -> dict[int, tuple[list[int], list[BlockLabel]]]:
-    """Candidate indices and labels of the placed blocks, per target (in target order)."""
-    blocks: Counter[tuple[int, int]] = Counter()
-    sessions: Counter[tuple[int, int]] = Counter()
-    out: dict[int, tuple[list[int], list[BlockLabel]]] = {}
-    prefixes: dict[tuple[int, int], str] = {}  # a dense night holds dozens of sessions
-    for s in sorted(placed, key=lambda s: (s.target_i, s.x0)):
-        key = (s.target_i, s.night_i)
-        label = spans[s.night_i].label
-        if key not in prefixes:
-            prefixes[key] = f"{slug(runs[s.target_i].target.name)}-{label.replace('-', '')}"
-        prefix = prefixes[key]
-        js, labels = out.setdefault(s.target_i, ([], []))
-        sessions[key] += 1
-        session_id = f"{prefix}-S{sessions[key]:02d}"
-        visit_id = f"{prefix}-V{sessions[key]:02d}"
-        for j in s.idx:
-            blocks[key] += 1
-            js.append(j)
-            labels.append(BlockLabel(label, f"{prefix}-{blocks[key]:02d}", session_id, visit_id))
+) -> dict[int, tuple[NDArray[np.int64], BlockLabels]]:
+    """Candidate indices and labels of the placed blocks, per target (in target order):
+    blocks and sessions numbered per target and night in the order of the session starts
+    (equal starts in placement order)."""
+    if not placed:
+        return {}
+    order = sorted(range(len(placed)), key=lambda k: (placed[k].target_i, placed[k].x0))
+    sessions = [placed[k] for k in order]
+    size = np.array([len(s.idx) for s in sessions], dtype=np.int64)
+    key = np.array([s.target_i * len(spans) + s.night_i for s in sessions], dtype=np.int64)
+    keys, inverse = np.unique(key, return_inverse=True)
+    heads = [
+        f"{slug(runs[k // len(spans)].target.name)}-{spans[k % len(spans)].label.replace('-', '')}"
+        for k in keys.tolist()
+    ]
+    which = np.repeat(inverse.ravel(), size)  # per block: its target/night, as an index of keys
+    prefix = np.array(heads)[which]
+    number = np.repeat(_occurrence(key), size)
+    nights = np.array([spans[k % len(spans)].label for k in keys.tolist()])[which]
+    labels = BlockLabels(
+        nights,
+        _texts(prefix, "", _occurrence(key[np.repeat(np.arange(key.size), size)])),
+        _texts(prefix, "S", number),
+        _texts(prefix, "V", number),
+    )
+    js = np.fromiter((j for s in sessions for j in s.idx), dtype=np.int64, count=int(size.sum()))
+    target = keys[which] // len(spans)
+    out = {}
+    for i in np.unique(target).tolist():
+        mine = np.flatnonzero(target == i)
+        out[i] = js[mine], BlockLabels(*(_narrow(text[mine]) for text in labels))
     return out
 
 
@@ -114,7 +146,7 @@ def _columns(
     run: TargetRun,
     g: _Geometry,
     js: NDArray[np.int64],
-    labels: list[BlockLabel],
+    labels: BlockLabels,
     anchor: str,
     site: Site,
 ) -> BlockColumns:
@@ -127,9 +159,7 @@ def _columns(
             return np.full(n, str(value))
         return np.full(n, value, dtype=kind)
 
-    empty = np.array([], dtype="U1")
-    texts = [np.array(v, dtype=str) for v in zip(*labels, strict=True)] if n else [empty] * 4
-    night, block_id, session_id, visit_id = texts
+    night, block_id, session_id, visit_id = labels
     values: dict[str, NDArray[Any]] = {
         "target": full(t.name, str),
         "block_id": block_id,
@@ -183,8 +213,7 @@ def block_records(
     """Block records of the placed sessions, grouped by target (in target order), as columns
     (:class:`~ucbplan.observing.blocks.arrays.BlockList`)."""
     parts: list[BlockColumns] = []
-    for i, (idx, labels) in _labels(placed, runs, spans).items():
-        js = np.asarray(idx, dtype=np.int64)
+    for i, (js, labels) in _labels(placed, runs, spans).items():
         g = _geometry(runs[i], js, frame, settings)
         untargeted = runs[i].exposure.strategy == "untargeted"
         anchor = "untargeted" if untargeted else frame.mode.label

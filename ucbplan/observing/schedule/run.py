@@ -21,9 +21,9 @@ from ucbplan.errors import InputError, shorten
 from ucbplan.inputs import check_range
 from ucbplan.observing.blocks.accounting import (
     PlanAccount,
+    VisitColumns,
     VisitSummary,
-    time_accounting,
-    visit_summaries,
+    visit_columns,
 )
 from ucbplan.observing.blocks.arrays import block_columns
 from ucbplan.observing.blocks.block import ExposurePlan
@@ -146,11 +146,15 @@ class PlanRun:
         return f"no block could be planned at {self.site.name}: {'; '.join(parts)}"
 
     @cached_property
-    def _visits(self) -> tuple[VisitSummary, ...]:
-        """The visits, computed once per run (the table meta, the accounting and the terminal
-        report all read them)."""
+    def visit_columns(self) -> VisitColumns:
+        """The visits as columns, computed once per run (the table meta, the accounting and the
+        terminal report all read them)."""
         trailing = self.settings.plans_visits
-        return tuple(visit_summaries(self.result.blocks, self.settings.overhead_s, trailing))
+        return visit_columns(self.result.blocks, self.settings.overhead_s, trailing)
+
+    @cached_property
+    def _visits(self) -> tuple[VisitSummary, ...]:
+        return tuple(self.visit_columns.summaries())
 
     def visits(self) -> list[VisitSummary]:
         """One summary per visit (acquisition + exposures), in time order."""
@@ -159,7 +163,7 @@ class PlanRun:
     @cached_property
     def time_account(self) -> PlanAccount:
         """The time accounting, summed once per run (the table meta and the report read it)."""
-        return time_accounting(self._visits)
+        return self.visit_columns.account()
 
     def accounting(self) -> dict[str, Any]:
         """Time accounting as the table meta holds it, ``{"total": {...}, "targets": {NAME:
@@ -247,14 +251,18 @@ class PlanRun:
                 "unplaced": [f"{m.target} {m.night}: {m.reason}" for m in res.unplaced],
                 "planning": self._planning(),
                 "not_planned": res.reasons,
-                "visits": [v.as_dict() for v in self.visits()],
+                "visits": self.visit_columns.records(),
                 "time_accounting": self.accounting(),
             },
         )
 
     def table(self) -> Table:
         """The master blocks table (:mod:`ucbplan.observing.blocks.schema`) with provenance."""
-        return blocks_to_table(self.result.blocks, self.meta())
+        meta = self.meta()
+        visits, meta["visits"] = meta["visits"], []
+        table = blocks_to_table(self.result.blocks, meta)  # copies the meta it is given
+        table.meta["visits"] = visits  # made for this table alone: not copied again
+        return table
 
 
 def _collected_facts(goal: GoalPlan) -> dict[str, Any]:

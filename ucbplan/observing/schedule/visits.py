@@ -156,8 +156,8 @@ def _best_visit(
 
 def _place_night(run: TargetRun, night: NightTask) -> str | None:
     """Place one target's visits in a night within its allowance; the reason if fewer."""
-    n, span, timeline, frame, settings, allowance = night
-    usable = night_usable(run, span, frame, settings)
+    n, span, timeline, frame, settings, allowance, sun = night
+    usable = night_usable(run, span, frame, settings, sun)
     if isinstance(usable, str):
         return usable
     wanted = settings.sessions_per_night
@@ -191,10 +191,10 @@ def _cheapest_first(run: TargetRun, tasks: Sequence[NightTask]) -> list[int]:
     first (a replan books the fewest hours for what is still missing; ties in night order)."""
     rate = []
     for task in tasks:
-        _, span, timeline, frame, settings, allowance = task
+        _, span, timeline, frame, settings, allowance, sun = task
         pick = None
         if allowance.info is not None and not isinstance(
-            night_usable(run, span, frame, settings), str
+            night_usable(run, span, frame, settings, sun), str
         ):
             pick = _best_visit(run, span, timeline, frame, settings, allowance)
         info = float(np.nansum(run.weight[list(pick[0])])) if pick else 0.0
