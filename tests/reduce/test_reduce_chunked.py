@@ -116,3 +116,22 @@ def test_a_shared_window_rotation_gives_the_same_averages(derivatives: bool) -> 
         strict=True,
     ):
         assert _same_bits(a, b)
+
+
+@pytest.mark.parametrize("derivatives", [False, True])
+def test_series_terms_given_once_give_the_same_averages(derivatives: bool) -> None:
+    """The series computed once for every chunk of a pass (``terms``) gives the averages that
+    each call computing its own gives, bit for bit."""
+    rng = np.random.default_rng(6)
+    phi, om = rng.uniform(0.0, 2.0 * np.pi, (2, 40))
+    window = rng.uniform(0.0, 200.0, 40)
+    nb, wdot, e = 0.0264, 1.5e-6, 0.0094
+    terms = kepler.series_terms(e, derivatives)
+    own = kepler.window_average(phi, om, e, nb, wdot, window, derivatives)
+    given = kepler.window_average(phi, om, e, nb, wdot, window, derivatives, None, terms)
+    for a, b in zip(
+        (own.h, own.d_phase, own.d_omega, own.d_e),
+        (given.h, given.d_phase, given.d_omega, given.d_e),
+        strict=True,
+    ):
+        assert _same_bits(a, b)

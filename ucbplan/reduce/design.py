@@ -22,7 +22,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ucbplan.core.constants import C_KM_S
-from ucbplan.core.kepler import WindowedVelocity, row_chunks, window_average, window_rotation
+from ucbplan.core.kepler import (
+    Term,
+    WindowedVelocity,
+    row_chunks,
+    series_terms,
+    window_average,
+    window_rotation,
+)
 from ucbplan.core.smearing import lambda_k, lambda_kappa
 from ucbplan.reduce.regression import lambda_k_to_x
 
@@ -155,10 +162,12 @@ def _windowed_rows(
     derivatives: bool,
     at: tuple[F64, ...] | None,
     rotation: Rotation | None,
+    terms: list[Term],
 ) -> tuple[WindowedVelocity, F64]:
     """The exact window average at ``tau`` and ω there (``at``: Φ_asc mod 2π, η and κ at
-    ``tau`` when the caller has them; ``rotation``: the windows' :data:`Rotation`), for one
-    chunk of rows."""
+    ``tau`` when the caller has them; ``rotation``: the windows' :data:`Rotation`; ``terms``:
+    the series of the eccentricity, :func:`~ucbplan.core.kepler.series_terms`), for one chunk
+    of rows."""
     from ucbplan.core.phase import ll_pair, phase_asc_mod
 
     if at is None:
@@ -169,7 +178,7 @@ def _windowed_rows(
     om = np.arctan2(eta, kap)
     nb = math.pi * (p.f_gw + p.fdot * tau + p.fddot * tau**2 / 2.0) - p.omega_dot
     e, wdot = p.eccentricity, p.omega_dot
-    return window_average(phi, om, e, nb, wdot, window_s, derivatives, rotation), om
+    return window_average(phi, om, e, nb, wdot, window_s, derivatives, rotation, terms), om
 
 
 def _windowed(
@@ -189,10 +198,11 @@ def _windowed(
     orbit_rows = None if at is None else [x.reshape(-1) for x in (at.phase_mod, at.eta, at.kap)]
     turn = None if rotation is None else [np.broadcast_to(x, shape).reshape(-1) for x in rotation]
     out = np.zeros((5, t.size))  # ⟨h⟩, its three partials (zero without derivatives), ω
+    terms = series_terms(p.eccentricity, derivatives)  # once for every chunk
     for sl in row_chunks(t.size):
         rows = None if orbit_rows is None else tuple(x[sl] for x in orbit_rows)
         rot = None if turn is None else (turn[0][sl], turn[1][sl])
-        wv, om = _windowed_rows(p, t[sl], w[sl], derivatives, rows, rot)
+        wv, om = _windowed_rows(p, t[sl], w[sl], derivatives, rows, rot, terms)
         out[0, sl], out[4, sl] = wv.h, om
         if derivatives:
             out[1, sl], out[2, sl], out[3, sl] = wv.d_phase, wv.d_omega, wv.d_e
@@ -323,10 +333,12 @@ def designs(
     shape = np.shape(tau)
     t, w, cc, sc = (np.broadcast_to(x, shape).reshape(-1) for x in (tau, window_s, *rot))
     out = np.empty((ncomp, t.size))
+    terms = series_terms(p.eccentricity, False)  # once for every chunk
     for sl in row_chunks(t.size):  # both stars' emission times from one sin u per chunk
         sin_u = np.sin(np.reshape(u, -1)[sl])
         for j in range(ncomp):
             sign = 1.0 if j == 0 else -1.0
             emit = t[sl] - sign * K[j] / (C_KM_S * nb) * sin_u
-            out[j, sl] = _windowed_rows(p, emit, w[sl], False, None, (cc[sl], sc[sl]))[0].h
+            turn = (cc[sl], sc[sl])
+            out[j, sl] = _windowed_rows(p, emit, w[sl], False, None, turn, terms)[0].h
     return tuple(np.asarray(h.reshape(shape)) for h in out)
