@@ -16,6 +16,8 @@ from ucbplan.reduce.regression import (
     binned_design,
     fit_component,
     lambda_k_to_x,
+    line_slope,
+    line_weights,
     paper_recipe,
     phase_sensitivity,
     two_spectrum_solution,
@@ -296,3 +298,50 @@ def test_phase_sensitivity_block_sums_are_the_whole_products(n: int) -> None:
     dK, dg = phase_sensitivity(x, s, dG, 585.3, -1.0)
     np.testing.assert_array_equal(dK, -1.0 * slope)
     np.testing.assert_array_equal(dg, intercept)
+
+
+def _line_as_written(x: np.ndarray, y: np.ndarray, sa: np.ndarray) -> list[object]:
+    """weighted_line's numbers as its formulas read, one fresh array per operation (the code
+    before its products shared a scratch array)."""
+    w = 1.0 / sa**2
+    sw = w.sum()
+    xm = float((w * x).sum() / sw)
+    ym = float((w * y).sum() / sw)
+    dx = x - xm
+    sxx = float((w * dx * dx).sum())
+    b = float((w * dx * (y - ym)).sum() / sxx)
+    a = ym - b * xm
+    res = y - (a + b * x)
+    norm = res / sa
+    cov = [1.0 / sw + xm * xm / sxx, -xm / sxx, 1.0 / sxx]
+    rms = float(np.sqrt(np.mean(res * res)))
+    return [b, a, cov, float((norm * norm).sum()), rms, res, norm, np.abs(norm) > OUTLIER_NSIGMA]
+
+
+@pytest.mark.parametrize(("n", "seed"), [(2, 0), (3, 1), (1000, 2), (100_003, 3)])
+def test_weighted_line_and_line_slope_are_the_formulas_bit_for_bit(n: int, seed: int) -> None:
+    """weighted_line (its products written into one scratch array) and line_slope (slope and
+    intercept alone, from line_weights) give the doubles of the formulas written out."""
+    rng = np.random.default_rng(seed)
+    x = rng.uniform(-1.0, 1.0, n)
+    sa = rng.uniform(5.0, 20.0, n)
+    y = 30.0 + 585.3 * x + sa * rng.standard_normal(n) * 3.0
+    fit = weighted_line(x, y, sa, scale=False)
+    c = fit.cov
+    got = [fit.slope, fit.intercept, [c[0, 0], c[0, 1], c[1, 1]], fit.chi2, fit.rms,
+           fit.residuals, fit.normalized, fit.outliers]  # fmt: skip
+    ref = _line_as_written(x, y, sa)
+    for a, b in zip(got, ref, strict=True):
+        assert np.asarray(a).tobytes() == np.asarray(b).tobytes()
+    assert line_slope(x, y, line_weights(sa)) == (fit.slope, fit.intercept)
+
+
+def test_line_slope_refuses_what_weighted_line_refuses() -> None:
+    """One point, equal abscissae and a bad σ raise the same ValueError in both."""
+    one, flat = np.ones(1), np.ones(5)
+    with pytest.raises(ValueError, match="two points"):
+        line_slope(one, one, one)
+    with pytest.raises(ValueError, match="abscissae are equal"):
+        line_slope(flat, np.arange(5.0), flat)
+    with pytest.raises(ValueError, match="positive and finite"):
+        line_weights(np.array([1.0, 0.0]))

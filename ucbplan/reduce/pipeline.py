@@ -47,6 +47,8 @@ from ucbplan.reduce.regression import (
     ComponentFit,
     WilsonFit,
     fit_component,
+    line_slope,
+    line_weights,
     phase_sensitivity,
     wilson_fit,
 )
@@ -171,14 +173,31 @@ def _fit_all(table: VelocityTable, design: tuple[F64, ...]) -> tuple[ComponentFi
     """
     fits = []
     for j, (v, s) in enumerate(zip(table.v, table.sigma, strict=True)):
-        g = design[j]
-        if not np.ptp(g) > 1e-9 * max(float(np.max(np.abs(g))), 1e-300):
-            raise VelocityFileError(
-                f"{table.source}: star {j + 1}: all {g.size} spectra sample the same orbital "
-                "phase (F̄ does not vary), so K is undetermined; add spectra at other phases"
-            )
-        fits.append(fit_component(g, v, s, star=j + 1))
+        _check_design(table, j, design[j])
+        fits.append(fit_component(design[j], v, s, star=j + 1))
     return tuple(fits)
+
+
+def _fit_lines(
+    table: VelocityTable, design: tuple[F64, ...], weights: tuple[F64, ...]
+) -> tuple[tuple[float, float], ...]:
+    """(K_j, γ_j) per star of :func:`_fit_all`'s fits, the same doubles, from the stars'
+    :func:`~ucbplan.reduce.regression.line_weights` (the light-time passes need no more)."""
+    out = []
+    for j, (v, w) in enumerate(zip(table.v, weights, strict=True)):
+        _check_design(table, j, design[j])
+        slope, intercept = line_slope(design[j], v, w)
+        out.append((slope if j == 0 else -slope, intercept))
+    return tuple(out)
+
+
+def _check_design(table: VelocityTable, j: int, g: F64) -> None:
+    """Raise VelocityFileError when star ``j``'s design F̄ does not vary (one orbital phase)."""
+    if not np.ptp(g) > 1e-9 * max(float(np.max(np.abs(g))), 1e-300):
+        raise VelocityFileError(
+            f"{table.source}: star {j + 1}: all {g.size} spectra sample the same orbital "
+            "phase (F̄ does not vary), so K is undetermined; add spectra at other phases"
+        )
 
 
 @dataclass(frozen=True)
@@ -205,18 +224,23 @@ def _intra_session(
     plain = (mid_h,) * n  # both stars see the same G at mid-exposure
     fits0 = _fit_all(table, plain)
     K0 = tuple(f.K for f in fits0)
+    weights = tuple(line_weights(s) for s in table.sigma)
     lt_design = designs(p, tau, window_s, n, K0, *shared)
-    K_lt = tuple(f.K for f in _fit_all(table, lt_design))
+    K_lt = tuple(k for k, _ in _fit_lines(table, lt_design, weights))
     lt_design = designs(p, tau, window_s, n, K_lt, *shared)
-    fits_lt = _fit_all(table, lt_design)
+    fits_lt = _fit_all(table, lt_design) if apply_lt else None
+    if fits_lt is None:  # only K and γ of the corrected fits are reported
+        lines = _fit_lines(table, lt_design, weights)
+    else:
+        lines = tuple((f.K, f.gamma) for f in fits_lt)
     nb = math.pi * p.f_gw - p.omega_dot
     light = {
         "max_delay_s": max(abs(k) for k in K0) / (C_KM_S * nb),
-        **{f"dK{j + 1}": fits_lt[j].K - fits0[j].K for j in range(n)},
-        **{f"dgamma{j + 1}": fits_lt[j].gamma - fits0[j].gamma for j in range(n)},
+        **{f"dK{j + 1}": lines[j][0] - fits0[j].K for j in range(n)},
+        **{f"dgamma{j + 1}": lines[j][1] - fits0[j].gamma for j in range(n)},
         "applied": float(apply_lt),
     }
-    if apply_lt:
+    if fits_lt is not None:
         return _IntraSession(fits_lt, lt_design, light)
     return _IntraSession(fits0, plain, light)
 

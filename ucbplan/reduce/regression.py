@@ -175,25 +175,15 @@ def weighted_line(x: ArrayLike, y: ArrayLike, sigma: ArrayLike, *, scale: bool =
     sa = np.asarray(sigma, dtype=np.float64)
     if xa.size < 2:
         raise ValueError("need at least two points for a line fit")
-    if np.any(sa <= 0) or not np.all(np.isfinite(sa)):
-        raise ValueError("sigma must be positive and finite")
-    w = 1.0 / sa**2
-    sw = w.sum()
-    xm = float((w * xa).sum() / sw)
-    ym = float((w * ya).sum() / sw)
-    dx = xa - xm
-    sxx = float((w * dx * dx).sum())
-    if sxx <= 0.0 or not math.isfinite(sxx):
-        raise ValueError("all abscissae are equal: the slope is undetermined")
-    b = float((w * dx * (ya - ym)).sum() / sxx)
-    a = ym - b * xm
+    buf = np.empty(xa.shape)  # every product summed is written here (no 8 MB temporaries)
+    sw, xm, sxx, b, a = _line(xa, ya, line_weights(sa), buf)
     var_b = 1.0 / sxx
     var_a = 1.0 / sw + xm * xm / sxx
     cov_ab = -xm / sxx
     cov = np.array([[var_a, cov_ab], [cov_ab, var_b]])
-    res = ya - (a + b * xa)
+    res = np.subtract(ya, np.add(a, np.multiply(b, xa, out=buf), out=buf))  # ya − (a + b·xa)
     norm = res / sa
-    chi2 = float((norm * norm).sum())
+    chi2 = float(np.multiply(norm, norm, out=buf).sum())
     dof = xa.size - 2
     scaled = False
     if scale and dof > 0 and chi2 / dof > 1.0:
@@ -205,12 +195,48 @@ def weighted_line(x: ArrayLike, y: ArrayLike, sigma: ArrayLike, *, scale: bool =
         cov=cov,
         chi2=chi2,
         dof=dof,
-        rms=float(np.sqrt(np.mean(res * res))),
+        rms=float(np.sqrt(np.mean(np.multiply(res, res, out=buf)))),
         residuals=res,
         normalized=norm,
-        outliers=np.abs(norm) > OUTLIER_NSIGMA,
+        outliers=np.abs(norm, out=buf) > OUTLIER_NSIGMA,
         scaled=scaled,
     )
+
+
+def line_weights(sigma: F64) -> F64:
+    """The weights 1/σ² of :func:`weighted_line` [1/σ's unit²].
+
+    Raises
+    ------
+    ValueError
+        A σ that is not positive and finite.
+    """
+    if np.any(sigma <= 0) or not np.all(np.isfinite(sigma)):
+        raise ValueError("sigma must be positive and finite")
+    return np.asarray(1.0 / sigma**2, dtype=np.float64)
+
+
+def line_slope(x: F64, y: F64, w: F64) -> tuple[float, float]:
+    """(slope, intercept) of :func:`weighted_line` from the weights (:func:`line_weights`):
+    the same doubles, without the residuals, χ² and covariance."""
+    if x.size < 2:
+        raise ValueError("need at least two points for a line fit")
+    _sw, _xm, _sxx, b, a = _line(x, y, w, np.empty(x.shape))
+    return b, a
+
+
+def _line(x: F64, y: F64, w: F64, buf: F64) -> tuple[float, float, float, float, float]:
+    """Σw, x̄, S_xx, slope and intercept of the weighted line (``buf``: scratch of x's shape)."""
+    sw = w.sum()
+    xm = float(np.multiply(w, x, out=buf).sum() / sw)
+    ym = float(np.multiply(w, y, out=buf).sum() / sw)
+    dx = x - xm
+    wdx = np.multiply(w, dx, out=buf)
+    sxx = float(np.multiply(wdx, dx, out=dx).sum())
+    if sxx <= 0.0 or not math.isfinite(sxx):
+        raise ValueError("all abscissae are equal: the slope is undetermined")
+    b = float(np.multiply(wdx, np.subtract(y, ym, out=dx), out=dx).sum() / sxx)
+    return float(sw), xm, sxx, b, ym - b * xm
 
 
 @dataclass(frozen=True, slots=True)
