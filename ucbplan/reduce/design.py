@@ -127,6 +127,8 @@ class OrbitTrack:
         (η, κ) rotated to the times [1].
     u : ndarray
         Star 1's argument of latitude [rad] (unwrapped).
+    cos_u, sin_u : ndarray
+        Its cosine and sine (the light-time designs, F and the fixed-u groups use them).
     """
 
     phase: F64
@@ -134,6 +136,8 @@ class OrbitTrack:
     eta: F64
     kap: F64
     u: F64
+    cos_u: F64
+    sin_u: F64
 
 
 def track(p: PhaseParams, tau: F64) -> OrbitTrack:
@@ -141,12 +145,14 @@ def track(p: PhaseParams, tau: F64) -> OrbitTrack:
     from ucbplan.core.phase import orbit_state, phase_asc_mod
 
     tau = np.asarray(tau, dtype=np.float64)
-    at = OrbitTrack(*(np.empty(tau.shape) for _ in range(5)))
-    flat = [x.reshape(-1) for x in (tau, at.phase, at.phase_mod, at.eta, at.kap, at.u)]
+    at = OrbitTrack(*(np.empty(tau.shape) for _ in range(7)))
+    cols = (tau, at.phase, at.phase_mod, at.eta, at.kap, at.u, at.cos_u, at.sin_u)
+    flat = [x.reshape(-1) for x in cols]
     for sl in row_chunks(tau.size):  # elementwise: chunk by chunk, the same doubles
         t = flat[0][sl]
         phi, eta, kap, u = orbit_state(p, t)
-        for out, x in zip(flat[1:], (phi, phase_asc_mod(p, t), eta, kap, u), strict=True):
+        orbit_rows = (phi, phase_asc_mod(p, t), eta, kap, u, np.cos(u), np.sin(u))
+        for out, x in zip(flat[1:], orbit_rows, strict=True):
             out[sl] = x
     return at
 
@@ -327,18 +333,18 @@ def designs(
     """
     if K is None:  # both stars see the same G at mid-exposure
         return (_windowed(p, tau, window_s, False, at, rotation)[0].h,) * ncomp
-    u = orbit(p, tau)[3] if at is None else at.u
+    sin_u = np.sin(orbit(p, tau)[3]) if at is None else at.sin_u
     nb = math.pi * p.f_gw - p.omega_dot
     rot = rotation or window_rotation(p.omega_dot, window_s)
     shape = np.shape(tau)
     t, w, cc, sc = (np.broadcast_to(x, shape).reshape(-1) for x in (tau, window_s, *rot))
     out = np.empty((ncomp, t.size))
     terms = series_terms(p.eccentricity, False)  # once for every chunk
-    for sl in row_chunks(t.size):  # both stars' emission times from one sin u per chunk
-        sin_u = np.sin(np.reshape(u, -1)[sl])
+    flat_sin_u = np.broadcast_to(sin_u, shape).reshape(-1)
+    for sl in row_chunks(t.size):  # both stars' emission times from one sin u
         for j in range(ncomp):
             sign = 1.0 if j == 0 else -1.0
-            emit = t[sl] - sign * K[j] / (C_KM_S * nb) * sin_u
+            emit = t[sl] - sign * K[j] / (C_KM_S * nb) * flat_sin_u[sl]
             turn = (cc[sl], sc[sl])
             out[j, sl] = _windowed_rows(p, emit, w[sl], False, None, turn, terms)[0].h
     return tuple(np.asarray(h.reshape(shape)) for h in out)

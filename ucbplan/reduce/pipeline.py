@@ -163,8 +163,10 @@ def reduce_options(
     )
 
 
-def _fit_all(table: VelocityTable, design: tuple[F64, ...]) -> tuple[ComponentFit, ...]:
-    """One regression per star.
+def _fit_all(
+    table: VelocityTable, design: tuple[F64, ...], weights: tuple[F64, ...]
+) -> tuple[ComponentFit, ...]:
+    """One regression per star (``weights``: the stars' 1/σ², :func:`_weights`).
 
     Raises
     ------
@@ -174,8 +176,14 @@ def _fit_all(table: VelocityTable, design: tuple[F64, ...]) -> tuple[ComponentFi
     fits = []
     for j, (v, s) in enumerate(zip(table.v, table.sigma, strict=True)):
         _check_design(table, j, design[j])
-        fits.append(fit_component(design[j], v, s, star=j + 1))
+        fits.append(fit_component(design[j], v, s, star=j + 1, weights=weights[j]))
     return tuple(fits)
+
+
+def _weights(table: VelocityTable) -> tuple[F64, ...]:
+    """Each star's 1/σ² (:func:`~ucbplan.reduce.regression.line_weights`), computed once for
+    its regressions and phase sensitivities."""
+    return tuple(line_weights(s) for s in table.sigma)
 
 
 def _fit_lines(
@@ -207,6 +215,7 @@ class _IntraSession:
     fits: tuple[ComponentFit, ...]
     design: tuple[F64, ...]
     light_time: dict[str, float]
+    weights: tuple[F64, ...]
 
 
 def _intra_session(
@@ -222,13 +231,13 @@ def _intra_session(
     passes); ``shared``: the orbit at mid-exposure and the windows' rotation."""
     n = len(table.v)
     plain = (mid_h,) * n  # both stars see the same G at mid-exposure
-    fits0 = _fit_all(table, plain)
+    weights = _weights(table)
+    fits0 = _fit_all(table, plain, weights)
     K0 = tuple(f.K for f in fits0)
-    weights = tuple(line_weights(s) for s in table.sigma)
     lt_design = designs(p, tau, window_s, n, K0, *shared)
     K_lt = tuple(k for k, _ in _fit_lines(table, lt_design, weights))
     lt_design = designs(p, tau, window_s, n, K_lt, *shared)
-    fits_lt = _fit_all(table, lt_design) if apply_lt else None
+    fits_lt = _fit_all(table, lt_design, weights) if apply_lt else None
     if fits_lt is None:  # only K and γ of the corrected fits are reported
         lines = _fit_lines(table, lt_design, weights)
     else:
@@ -241,8 +250,8 @@ def _intra_session(
         "applied": float(apply_lt),
     }
     if fits_lt is not None:
-        return _IntraSession(fits_lt, lt_design, light)
-    return _IntraSession(fits0, plain, light)
+        return _IntraSession(fits_lt, lt_design, light, weights)
+    return _IntraSession(fits0, plain, light, weights)
 
 
 @dataclass(frozen=True)
@@ -273,12 +282,12 @@ def _phase_errors(
     dK, dg, sKp, sgp, att = [], [], [], [], []
     for j, f in enumerate(intra.fits):
         sign = 1.0 if j == 0 else -1.0
-        a, b = phase_sensitivity(intra.design[j], table.sigma[j], jacG, f.K, sign)
+        w = intra.weights[j]
+        a, b = phase_sensitivity(intra.design[j], table.sigma[j], jacG, f.K, sign, w)
         dK.append(a)
         dg.append(b)
         sKp.append(math.sqrt(max(float(a @ cov7 @ a), 0.0)))
         sgp.append(math.sqrt(max(float(b @ cov7 @ b), 0.0)))
-        w = 1.0 / table.sigma[j] ** 2
         att.append(float(f.K * (w * sigma_u**2).sum() / w.sum() / 2.0))
     return _PhaseErrors(sigma_u, np.array(dK), np.array(dg), tuple(sKp), tuple(sgp), tuple(att))
 
@@ -396,7 +405,7 @@ def reduce(target: Target, table: VelocityTable, options: ReduceOptions | None =
     intra = _intra_session(p, table, (at, rot), tau, window_s, mid[0].h, opts.light_time)
     phase = _phase_errors(target, table, at, tau, window_s, mid, intra)
     mc = _monte_carlo(target, intra.fits, phase, opts, seed)
-    groups, drift = _inter_session(target, table, tau, at.u, intra, *lam)
+    groups, drift = _inter_session(target, table, tau, at, intra, *lam)
     return _reduction(target, table, opts, seed, (tau, at), lam, intra, phase, mc, (groups, drift))
 
 
@@ -451,7 +460,7 @@ def _reduction(
         seed=seed,
         tau_s=tau,
         u_rad=at.u,
-        F=np.cos(at.u) + at.kap,
+        F=at.cos_u + at.kap,
         design=intra.design,
         lam_k=lam[0],
         lam_kappa=lam[1],
@@ -476,19 +485,21 @@ def _inter_session(
     target: Target,
     table: VelocityTable,
     tau: F64,
-    u: F64,
+    at: OrbitTrack,
     intra: _IntraSession,
     lam_k: F64,
     lam_kap: F64,
 ) -> tuple[list[Group], _drifts.DriftResult]:
-    """Fixed-u groups per session, their pairs, and the combined drifts (Δκ, Δv_CM, a_los)."""
-    p, fits = target.params, intra.fits
+    """Fixed-u groups per session, their pairs, and the combined drifts (Δκ, Δv_CM, a_los),
+    from the orbit at mid-exposure (``at``)."""
+    p, fits, u = target.params, intra.fits, at.u
     K = tuple(f.K for f in fits)
     groups = group_spectra(
         sessions=table.session,
         tau_s=tau,
         u_rad=u,
         u_star=assign_anchors(u, table.u_star),
+        cos_u=at.cos_u,
         velocities=table.v,
         sigmas=table.sigma,
         K=K,

@@ -151,7 +151,9 @@ class LineFit:
         return float(math.sqrt(self.cov[0, 0]))
 
 
-def weighted_line(x: ArrayLike, y: ArrayLike, sigma: ArrayLike, *, scale: bool = True) -> LineFit:
+def weighted_line(
+    x: ArrayLike, y: ArrayLike, sigma: ArrayLike, *, scale: bool = True, weights: F64 | None = None
+) -> LineFit:
     """Weighted linear regression y = a + b x with Gaussian errors σ on y.
 
     Parameters
@@ -160,6 +162,8 @@ def weighted_line(x: ArrayLike, y: ArrayLike, sigma: ArrayLike, *, scale: bool =
         Abscissa, ordinate and 1σ ordinate errors (σ > 0), same length ≥ 2.
     scale : bool
         Inflate the covariance by χ²/dof when that exceeds 1 (honest errors under extra scatter).
+    weights : ndarray, optional
+        :func:`line_weights` of ``sigma``, when the caller has them (the same doubles).
 
     Returns
     -------
@@ -176,7 +180,8 @@ def weighted_line(x: ArrayLike, y: ArrayLike, sigma: ArrayLike, *, scale: bool =
     if xa.size < 2:
         raise ValueError("need at least two points for a line fit")
     buf = np.empty(xa.shape)  # every product summed is written here (no 8 MB temporaries)
-    sw, xm, sxx, b, a = _line(xa, ya, line_weights(sa), buf)
+    w = line_weights(sa) if weights is None else weights
+    sw, xm, sxx, b, a = _line(xa, ya, w, buf)
     var_b = 1.0 / sxx
     var_a = 1.0 / sw + xm * xm / sxx
     cov_ab = -xm / sxx
@@ -277,7 +282,9 @@ class ComponentFit:
         return float(math.sqrt(self.cov[0, 0]))
 
 
-def fit_component(design: ArrayLike, v: ArrayLike, sigma: ArrayLike, star: int) -> ComponentFit:
+def fit_component(
+    design: ArrayLike, v: ArrayLike, sigma: ArrayLike, star: int, weights: F64 | None = None
+) -> ComponentFit:
     """Fit v = γ + s K G (s = +1 for star 1, −1 for star 2) by weighted least squares.
 
     Parameters
@@ -288,6 +295,8 @@ def fit_component(design: ArrayLike, v: ArrayLike, sigma: ArrayLike, star: int) 
         Velocities and 1σ errors [km/s].
     star : int
         1 or 2.
+    weights : ndarray, optional
+        :func:`line_weights` of ``sigma``, when the caller has them.
 
     Returns
     -------
@@ -301,7 +310,7 @@ def fit_component(design: ArrayLike, v: ArrayLike, sigma: ArrayLike, star: int) 
     if star not in (1, 2):
         raise ValueError("star must be 1 or 2")
     sign = 1.0 if star == 1 else -1.0
-    line = weighted_line(design, v, sigma)
+    line = weighted_line(design, v, sigma, weights=weights)
     jac = np.diag([1.0, sign])
     return ComponentFit(
         star=star,
@@ -469,7 +478,12 @@ def _york_terms(x: F64, y: F64, wx: F64, wy: F64, b: float) -> tuple[F64, float,
 
 
 def phase_sensitivity(
-    design: ArrayLike, sigma: ArrayLike, d_design: ArrayLike, K: float, sign: float
+    design: ArrayLike,
+    sigma: ArrayLike,
+    d_design: ArrayLike,
+    K: float,
+    sign: float,
+    weights: F64 | None = None,
 ) -> tuple[F64, F64]:
     """Linear response of (K, γ) of one component to the ephemeris parameters.
 
@@ -485,6 +499,8 @@ def phase_sensitivity(
         Fitted semi-amplitude [km/s].
     sign : float
         +1 (star 1) or −1 (star 2).
+    weights : ndarray, optional
+        1/σ² (:func:`line_weights`), when the caller has them (the same doubles).
 
     Returns
     -------
@@ -499,7 +515,7 @@ def phase_sensitivity(
     (σ_u, σ_κ) contribution to σ_K and σ_γ (Appendix C1).
     """
     x = np.asarray(design, float)
-    w = 1.0 / np.asarray(sigma, float) ** 2
+    w = 1.0 / np.asarray(sigma, float) ** 2 if weights is None else weights
     dG = np.asarray(d_design, float)
     sw = w.sum()
     xm = (w * x).sum() / sw
