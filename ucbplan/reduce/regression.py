@@ -422,21 +422,23 @@ def wilson_fit(
     x, y = np.asarray(v2, float), np.asarray(v1, float)
     wx, wy = 1.0 / np.asarray(s2, float) ** 2, 1.0 / np.asarray(s1, float) ** 2
     _check_wilson_inputs(x, wx, wy)
-    b = _york_slope(x, y, wx, wy, -float(q0))
-    W, xm, _U, _V, beta = _york_terms(x, y, wx, wy, b)
-    ym = float((W * y).sum() / W.sum())
+    work = np.empty((6, x.size))  # York's arrays, rewritten at every step (no fresh 8 MB each)
+    b = _york_slope(x, y, wx, wy, -float(q0), work)
+    W, xm, _U, _V, beta = _york_terms(x, y, wx, wy, b, work)
+    tmp = work[5]
+    ym = float(np.multiply(W, y, out=tmp).sum() / W.sum())
     a = ym - b * xm
-    xa = xm + beta  # York's adjusted abscissae
-    ua = xa - float((W * xa).sum() / W.sum())
-    var_b = 1.0 / float((W * ua * ua).sum())
-    var_a = 1.0 / float(W.sum()) + float((W * xa).sum() / W.sum()) ** 2 * var_b
-    res = y - a - b * x
+    xa = np.add(xm, beta, out=beta)  # York's adjusted abscissae
+    ua = np.subtract(xa, float(np.multiply(W, xa, out=tmp).sum() / W.sum()), out=work[4])
+    var_b = 1.0 / float(np.multiply(np.multiply(W, ua, out=tmp), ua, out=tmp).sum())
+    var_a = 1.0 / float(W.sum()) + float(np.multiply(W, xa, out=tmp).sum() / W.sum()) ** 2 * var_b
+    res = np.subtract(np.subtract(y, a, out=work[4]), np.multiply(b, x, out=tmp), out=work[4])
     return WilsonFit(
         q=-b,
         sigma_q=math.sqrt(var_b),
         intercept=a,
         sigma_intercept=math.sqrt(var_a),
-        chi2=float((W * res * res).sum()),
+        chi2=float(np.multiply(np.multiply(W, res, out=tmp), res, out=tmp).sum()),
         dof=x.size - 2,
     )
 
@@ -454,12 +456,13 @@ def _check_wilson_inputs(x: F64, wx: F64, wy: F64) -> None:
         raise ValueError("all v2 are equal: the WIL41 slope is undetermined")
 
 
-def _york_slope(x: F64, y: F64, wx: F64, wy: F64, b: float) -> float:
+def _york_slope(x: F64, y: F64, wx: F64, wy: F64, b: float, work: F64) -> float:
     """York's fixed-point iteration for the slope, from ``b`` (at most 200 steps, relative
-    tolerance 1e-13)."""
+    tolerance 1e-13; ``work``: :func:`_york_terms`' arrays)."""
     for _ in range(200):
-        W, _xm, U, V, beta = _york_terms(x, y, wx, wy, b)
-        b_new = float((W * beta * V).sum() / (W * beta * U).sum())
+        W, _xm, U, V, beta = _york_terms(x, y, wx, wy, b, work)
+        wb, tmp = np.multiply(W, beta, out=work[4]), work[5]
+        b_new = float(np.multiply(wb, V, out=tmp).sum() / np.multiply(wb, U, out=tmp).sum())
         done = abs(b_new - b) <= 1e-13 * max(1.0, abs(b_new))
         b = b_new
         if done:
@@ -467,13 +470,19 @@ def _york_slope(x: F64, y: F64, wx: F64, wy: F64, b: float) -> float:
     return b
 
 
-def _york_terms(x: F64, y: F64, wx: F64, wy: F64, b: float) -> tuple[F64, float, F64, F64, F64]:
-    """York's W_i, x̄, U_i, V_i and β_i at slope ``b`` (uncorrelated errors)."""
-    W = wx * wy / (wx + b * b * wy)
-    xm = float((W * x).sum() / W.sum())
-    ym = float((W * y).sum() / W.sum())
-    U, V = x - xm, y - ym
-    beta = W * (U / wy + b * V / wx)
+def _york_terms(
+    x: F64, y: F64, wx: F64, wy: F64, b: float, work: F64
+) -> tuple[F64, float, F64, F64, F64]:
+    """York's W_i, x̄, U_i, V_i and β_i at slope ``b`` (uncorrelated errors), written into the
+    rows of ``work`` (6, n): W, U, V, β and two scratch rows."""
+    W, U, V, beta, t1, t2 = work
+    np.divide(np.multiply(wx, wy, out=t1), np.add(wx, np.multiply(b * b, wy, out=t2), out=t2), W)
+    xm = float(np.multiply(W, x, out=t1).sum() / W.sum())
+    ym = float(np.multiply(W, y, out=t1).sum() / W.sum())
+    np.subtract(x, xm, out=U)
+    np.subtract(y, ym, out=V)
+    np.add(np.divide(U, wy, out=t1), np.divide(np.multiply(b, V, out=t2), wx, out=t2), out=t1)
+    np.multiply(W, t1, out=beta)
     return W, xm, U, V, beta
 
 
