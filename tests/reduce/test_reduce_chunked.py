@@ -135,3 +135,32 @@ def test_series_terms_given_once_give_the_same_averages(derivatives: bool) -> No
         strict=True,
     ):
         assert _same_bits(a, b)
+
+
+def test_window_factors_chunk_by_chunk_are_the_whole_arrays(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Λ_K, Λ_κ and Δt of windows given as widths (zero included) or as Λ_K (NaN width), in
+    7-row chunks: the whole-array formulas' doubles, bit for bit."""
+    from types import SimpleNamespace
+
+    from ucbplan.core.smearing import lambda_k, lambda_kappa
+    from ucbplan.reduce.regression import lambda_k_to_x
+
+    rng = np.random.default_rng(8)
+    w = rng.uniform(0.0, 120.0, 50)
+    w[::9] = 0.0
+    given = rng.uniform(size=50) < 0.3
+    w[given] = np.nan
+    lam = np.where(given, rng.uniform(0.5, 1.0, 50), np.nan)
+    table = SimpleNamespace(window_s=w, lambda_k=lam, source=None, window_column="exptime_s")
+    f, nbar = 8.4e-3, np.pi * 8.4e-3
+    x = np.zeros(50)
+    x[given] = lambda_k_to_x(lam[given])
+    ref_lk = np.where(np.isfinite(w), lambda_k(np.nan_to_num(w), nbar), lam)
+    ref_lkap = np.where(given, np.sinc(2.0 * x / np.pi), lambda_kappa(np.nan_to_num(w), nbar))
+    ref_dt = np.where(given, 2.0 * x / nbar, np.nan_to_num(w))
+    monkeypatch.setattr(kepler, "CHUNK_ROWS", 7)
+    lk, lkap = design.window_factors(table, f)  # type: ignore[arg-type]
+    dt = design.window_durations(table, f)  # type: ignore[arg-type]
+    assert _same_bits(lk, ref_lk) and _same_bits(lkap, ref_lkap) and _same_bits(dt, ref_dt)

@@ -58,15 +58,17 @@ def window_factors(table: VelocityTable, f_hz: float) -> tuple[F64, F64]:
     recovered by inverting sin x/x and Λ_κ = sin 2x/2x.
     """
     nbar = math.pi * f_hz
-    w = table.window_s
+    w = np.asarray(table.window_s, dtype=np.float64)
     _check_windows(table, 2.0 * math.pi / nbar)
-    lk = np.where(np.isfinite(w), lambda_k(np.nan_to_num(w), nbar), table.lambda_k)
-    x = np.zeros_like(lk)
+    lk, lkap = np.empty(w.shape), np.empty(w.shape)
+    for sl in row_chunks(w.size):  # elementwise: chunk by chunk, the same doubles
+        width = np.nan_to_num(w[sl])
+        lk[sl], lkap[sl] = lambda_k(width, nbar), lambda_kappa(width, nbar)
     given = ~np.isfinite(w)
-    if np.any(given):
-        x[given] = lambda_k_to_x(table.lambda_k[given])
-    lkap = np.where(given, np.sinc(2.0 * x / np.pi), lambda_kappa(np.nan_to_num(w), nbar))
-    return np.asarray(lk, float), np.asarray(lkap, float)
+    if np.any(given):  # Λ_K given: x = n̄_bΔt/2 from it, Λ_κ = sin 2x/2x
+        lk[given] = table.lambda_k[given]
+        lkap[given] = np.sinc(2.0 * lambda_k_to_x(table.lambda_k[given]) / np.pi)
+    return lk, lkap
 
 
 def _check_windows(table: VelocityTable, period_s: float) -> None:
@@ -101,7 +103,7 @@ def window_durations(table: VelocityTable, f_hz: float) -> F64:
     w = table.window_s
     _check_windows(table, 2.0 * math.pi / nbar)
     given = ~np.isfinite(w)
-    out = np.where(given, 0.0, np.nan_to_num(w))
+    out = np.nan_to_num(w)  # a copy; the given rows are replaced below
     if np.any(given):
         out[given] = 2.0 * lambda_k_to_x(table.lambda_k[given]) / nbar
     return np.asarray(out, dtype=np.float64)
