@@ -164,3 +164,25 @@ def test_window_factors_chunk_by_chunk_are_the_whole_arrays(
     lk, lkap = design.window_factors(table, f)  # type: ignore[arg-type]
     dt = design.window_durations(table, f)  # type: ignore[arg-type]
     assert _same_bits(lk, ref_lk) and _same_bits(lkap, ref_lkap) and _same_bits(dt, ref_dt)
+
+
+@pytest.mark.parametrize("circular", [False, True])
+def test_sigma_u_from_the_track_is_u_jacobians(
+    circular: bool, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """σ_u from the orbit track (its Φ_asc mod 2π and cos, sin of ω̇τ, which the design
+    Jacobian shares) in 7-row chunks: √(J C Jᵀ) of core.phase.u_jacobian over the whole
+    array, bit for bit; the track's turn is cos and sin of ω̇τ."""
+    from ucbplan.core.phase import u_jacobian
+    from ucbplan.reduce.pipeline import _sigma_u
+
+    t = make_target(circular=circular)
+    p, cov7 = t.params, t.covariance
+    tau = np.sort(np.random.default_rng(12).uniform(-6e7, 6e8, 101))
+    ju = u_jacobian(p, tau)
+    ref = np.sqrt(np.clip(np.einsum("ni,ij,nj->n", ju, cov7, ju), 0.0, None))
+    monkeypatch.setattr(kepler, "CHUNK_ROWS", 7)
+    at = design.track(p, tau)
+    w = p.omega_dot * tau
+    assert _same_bits(at.cos_w, np.cos(w)) and _same_bits(at.sin_w, np.sin(w))
+    assert _same_bits(_sigma_u(p, cov7, tau, at), ref)

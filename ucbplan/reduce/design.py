@@ -131,6 +131,8 @@ class OrbitTrack:
         Star 1's argument of latitude [rad] (unwrapped).
     cos_u, sin_u : ndarray
         Its cosine and sine (the light-time designs, F and the fixed-u groups use them).
+    cos_w, sin_w : ndarray
+        Cosine and sine of the apsidal turn ω̇τ since t_ref (the Jacobians use them).
     """
 
     phase: F64
@@ -140,6 +142,8 @@ class OrbitTrack:
     u: F64
     cos_u: F64
     sin_u: F64
+    cos_w: F64
+    sin_w: F64
 
 
 def track(p: PhaseParams, tau: F64) -> OrbitTrack:
@@ -147,13 +151,15 @@ def track(p: PhaseParams, tau: F64) -> OrbitTrack:
     from ucbplan.core.phase import orbit_state, phase_asc_mod
 
     tau = np.asarray(tau, dtype=np.float64)
-    at = OrbitTrack(*(np.empty(tau.shape) for _ in range(7)))
-    cols = (tau, at.phase, at.phase_mod, at.eta, at.kap, at.u, at.cos_u, at.sin_u)
-    flat = [x.reshape(-1) for x in cols]
+    at = OrbitTrack(*(np.empty(tau.shape) for _ in range(9)))
+    cols = (tau, at.phase, at.phase_mod, at.eta, at.kap, at.u, at.cos_u, at.sin_u, at.cos_w)
+    flat = [x.reshape(-1) for x in (*cols, at.sin_w)]
     for sl in row_chunks(tau.size):  # elementwise: chunk by chunk, the same doubles
         t = flat[0][sl]
         phi, eta, kap, u = orbit_state(p, t)
-        orbit_rows = (phi, phase_asc_mod(p, t), eta, kap, u, np.cos(u), np.sin(u))
+        w = p.omega_dot * t
+        trig = (np.cos(u), np.sin(u), np.cos(w), np.sin(w))
+        orbit_rows = (phi, phase_asc_mod(p, t), eta, kap, u, *trig)
         for out, x in zip(flat[1:], orbit_rows, strict=True):
             out[sl] = x
     return at
@@ -252,6 +258,7 @@ def design_jacobian(
     if p.eccentricity >= _E_FIRST_ORDER:
         wv, om = _windowed(p, tau, window_s, at=at) if mid is None else mid
         rows, args = _exact_rows, (wv.d_phase, wv.d_omega, wv.d_e, om, at.eta, at.kap)
+    args = (*args, at.cos_w, at.sin_w)
     t = np.reshape(tau, -1)
     flat = [np.broadcast_to(x, np.shape(tau)).reshape(-1) for x in args]
     jac = np.empty((t.size, 7))
@@ -269,18 +276,29 @@ def _exact_rows(
     om: F64,
     eta: F64,
     kap: F64,
+    cos_w: F64,
+    sin_w: F64,
     out: F64,
 ) -> None:
-    """∂G/∂θ of the exact design into ``out`` from its partials ∂⟨h⟩/∂(Φ, ω, e) at ω."""
+    """∂G/∂θ of the exact design into ``out`` from its partials ∂⟨h⟩/∂(Φ, ω, e) at ω (``cos_w``,
+    ``sin_w``: of ω̇τ)."""
     e = p.eccentricity
     so, co = np.sin(om), np.cos(om)
     dG_deta = so * d_e + co / e * d_omega
     dG_dkap = co * d_e - so / e * d_omega
-    _chain(p, tau, d_phase, dG_deta, dG_dkap, eta, kap, out)
+    _chain(p, tau, d_phase, (dG_deta, dG_dkap), (eta, kap, cos_w, sin_w), out)
 
 
 def _first_order_rows(
-    p: PhaseParams, tau: F64, window_s: F64, phi: F64, eta: F64, kap: F64, out: F64
+    p: PhaseParams,
+    tau: F64,
+    window_s: F64,
+    phi: F64,
+    eta: F64,
+    kap: F64,
+    cos_w: F64,
+    sin_w: F64,
+    out: F64,
 ) -> None:
     """∂G/∂θ of Eq. vbar_master (exact at e = 0) into ``out``, with the window rates of the
     exact design: n̄(τ) for the cos Φ term and 2n̄(τ) − ω̇ for the (η, κ) term."""
@@ -292,23 +310,21 @@ def _first_order_rows(
         -kap * np.sin(2 * phi) + eta * np.cos(2 * phi)
     )
     dG_deta, dG_dkap = lam_kap * np.sin(2 * phi), lam_kap * np.cos(2 * phi)
-    _chain(p, tau, dG_dphi, dG_deta, dG_dkap, eta, kap, out)
+    _chain(p, tau, dG_dphi, (dG_deta, dG_dkap), (eta, kap, cos_w, sin_w), out)
 
 
 def _chain(
     p: PhaseParams,
     tau: F64,
     dG_dphi: F64,
-    dG_deta: F64,
-    dG_dkap: F64,
-    eta: F64,
-    kap: F64,
+    dG_dll: tuple[F64, F64],
+    orbit: tuple[F64, F64, F64, F64],
     jac: F64,
 ) -> None:
-    """∂G/∂θ (into ``jac``, rows × 7) from ∂G/∂(Φ, η(τ), κ(τ)) through the phase model and the
-    apsidal rotation."""
-    w = p.omega_dot * tau
-    c, s = np.cos(w), np.sin(w)
+    """∂G/∂θ (into ``jac``, rows × 7) from ∂G/∂(Φ, η(τ), κ(τ)) (``dG_dll``: the last two) through
+    the phase model and the apsidal rotation (``orbit``: η, κ, cos ω̇τ, sin ω̇τ)."""
+    dG_deta, dG_dkap = dG_dll
+    eta, kap, c, s = orbit
     jac[:, 0] = 0.5 * dG_dphi
     jac[:, 1] = math.pi * tau * dG_dphi
     jac[:, 2] = math.pi * tau**2 / 2.0 * dG_dphi

@@ -278,7 +278,7 @@ def _phase_errors(
     """σ_u per spectrum, ∂(K_j, γ_j)/∂θ, their σ from the covariance, and the K attenuation."""
     p, cov7 = target.params, target.covariance
     jacG = design_jacobian(p, tau, window_s, at, mid)
-    sigma_u = _sigma_u(p, cov7, tau, at.phase_mod)
+    sigma_u = _sigma_u(p, cov7, tau, at)
     dK, dg, sKp, sgp, att = [], [], [], [], []
     for j, f in enumerate(intra.fits):
         sign = 1.0 if j == 0 else -1.0
@@ -292,16 +292,18 @@ def _phase_errors(
     return _PhaseErrors(sigma_u, np.array(dK), np.array(dg), tuple(sKp), tuple(sgp), tuple(att))
 
 
-def _sigma_u(p: PhaseParams, cov7: F64, tau: F64, phase_mod: F64) -> F64:
+def _sigma_u(p: PhaseParams, cov7: F64, tau: F64, at: OrbitTrack) -> F64:
     """σ_u per spectrum [rad]: √(J C Jᵀ) with J = ∂u/∂θ (:func:`ucbplan.core.phase.u_jacobian`)
     from the shared orbit (its Φ_asc mod 2π is π·(cycles mod 2) there, the same double as
-    2π·(cycles mod 2)/2), chunk by chunk (rows × 7 in cache, not a 56 MB (n, 7) array)."""
+    2π·(cycles mod 2)/2, and its cos and sin of ω̇τ), chunk by chunk (rows × 7 in cache, not a
+    56 MB (n, 7) array)."""
     from ucbplan.core.phase import jacobian_kernel
 
     out = np.empty(tau.size)
     for sl in row_chunks(tau.size):
-        s, c = np.sin(phase_mod[sl]), np.cos(phase_mod[sl])
-        ju = np.asarray(jacobian_kernel(p.eta, p.kappa, p.omega_dot, tau[sl], s, c), float)
+        s, c = np.sin(at.phase_mod[sl]), np.cos(at.phase_mod[sl])
+        turn = (at.cos_w[sl], at.sin_w[sl])
+        ju = np.asarray(jacobian_kernel(p.eta, p.kappa, p.omega_dot, tau[sl], s, c, turn), float)
         out[sl] = np.sqrt(np.clip(np.einsum("ni,ij,nj->n", ju, cov7, ju), 0.0, None))
     return out
 
