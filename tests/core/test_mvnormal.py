@@ -8,12 +8,22 @@ sample σ is σ/√(2n) ≈ 0.16 % and of a sample correlation (1 − ρ²)/√n
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from ucbplan.core.mvnormal import correlation_split, inverse_scaled, sample_normal, sqrt_factor
+from ucbplan.core.mvnormal import (
+    _SERIAL_MNK,
+    correlation_split,
+    inverse_scaled,
+    row_blocks,
+    rows_times,
+    sample_normal,
+    sqrt_factor,
+)
 
 # σ's of (φ, f, ḟ, f̈, η, κ, ω̇, cos ι, A): realistic LISA sizes, ratio 1e25 .. 1e40 with f̈ shrunk
 SIGMAS = np.array([0.02, 7.7e-12, 4.7e-19, 3.7e-27, 1e-3, 1e-3, 1e-9, 0.05, 1e-23])
@@ -105,3 +115,25 @@ def test_inverse_scaled_round_trip(log_sig: list[float], rho: float, seed: int) 
 def test_inverse_scaled_refuses_unconstrained() -> None:
     with pytest.raises(np.linalg.LinAlgError):
         inverse_scaled(np.diag([1.0, 0.0]))
+
+
+@pytest.mark.parametrize("n", [0, 1, 5, 1023, 1024, 2047, 2048, 2049, 20_000, 20_001, 65_537])
+def test_row_blocks_cover_the_rows_in_aligned_serial_blocks(n: int) -> None:
+    """Blocks tile 0…n in order, start at multiples of 1024 (9 × 9 factors), are never a lone
+    row unless n = 1, and stay at or below OpenBLAS's one-thread size."""
+    blocks = row_blocks(n, 81)
+    assert blocks[0][0] == 0 and blocks[-1][1] == n
+    assert all(a[1] == b[0] for a, b in itertools.pairwise(blocks))
+    assert all(lo % 1024 == 0 for lo, _ in blocks)
+    assert all((hi - lo) * 81 <= _SERIAL_MNK for lo, hi in blocks)
+    assert n < 2 or all(hi - lo >= 2 for lo, hi in blocks)
+
+
+@pytest.mark.parametrize("n", [3, 1024, 3000, 20_001])
+def test_rows_times_is_each_rows_product(n: int) -> None:
+    """Every row of the blocked product is that row's product in any aligned blocking: the
+    same doubles as 64-row blocks (one thread each), bit for bit."""
+    rng = np.random.default_rng(n)
+    z, f = rng.standard_normal((n, 9)), rng.standard_normal((9, 9))
+    ref = np.concatenate([z[lo : lo + 64] @ f for lo in range(0, n, 64)])
+    assert np.array_equal(rows_times(z, f), ref)

@@ -116,3 +116,73 @@ def test_a_shared_window_rotation_gives_the_same_averages(derivatives: bool) -> 
         strict=True,
     ):
         assert _same_bits(a, b)
+
+
+@pytest.mark.parametrize("derivatives", [False, True])
+def test_series_terms_given_once_give_the_same_averages(derivatives: bool) -> None:
+    """The series computed once for every chunk of a pass (``terms``) gives the averages that
+    each call computing its own gives, bit for bit."""
+    rng = np.random.default_rng(6)
+    phi, om = rng.uniform(0.0, 2.0 * np.pi, (2, 40))
+    window = rng.uniform(0.0, 200.0, 40)
+    nb, wdot, e = 0.0264, 1.5e-6, 0.0094
+    terms = kepler.series_terms(e, derivatives)
+    own = kepler.window_average(phi, om, e, nb, wdot, window, derivatives)
+    given = kepler.window_average(phi, om, e, nb, wdot, window, derivatives, None, terms)
+    for a, b in zip(
+        (own.h, own.d_phase, own.d_omega, own.d_e),
+        (given.h, given.d_phase, given.d_omega, given.d_e),
+        strict=True,
+    ):
+        assert _same_bits(a, b)
+
+
+def test_window_factors_chunk_by_chunk_are_the_whole_arrays(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Λ_K, Λ_κ and Δt of windows given as widths (zero included) or as Λ_K (NaN width), in
+    7-row chunks: the whole-array formulas' doubles, bit for bit."""
+    from types import SimpleNamespace
+
+    from ucbplan.core.smearing import lambda_k, lambda_kappa
+    from ucbplan.reduce.regression import lambda_k_to_x
+
+    rng = np.random.default_rng(8)
+    w = rng.uniform(0.0, 120.0, 50)
+    w[::9] = 0.0
+    given = rng.uniform(size=50) < 0.3
+    w[given] = np.nan
+    lam = np.where(given, rng.uniform(0.5, 1.0, 50), np.nan)
+    table = SimpleNamespace(window_s=w, lambda_k=lam, source=None, window_column="exptime_s")
+    f, nbar = 8.4e-3, np.pi * 8.4e-3
+    x = np.zeros(50)
+    x[given] = lambda_k_to_x(lam[given])
+    ref_lk = np.where(np.isfinite(w), lambda_k(np.nan_to_num(w), nbar), lam)
+    ref_lkap = np.where(given, np.sinc(2.0 * x / np.pi), lambda_kappa(np.nan_to_num(w), nbar))
+    ref_dt = np.where(given, 2.0 * x / nbar, np.nan_to_num(w))
+    monkeypatch.setattr(kepler, "CHUNK_ROWS", 7)
+    lk, lkap = design.window_factors(table, f)  # type: ignore[arg-type]
+    dt = design.window_durations(table, f)  # type: ignore[arg-type]
+    assert _same_bits(lk, ref_lk) and _same_bits(lkap, ref_lkap) and _same_bits(dt, ref_dt)
+
+
+@pytest.mark.parametrize("circular", [False, True])
+def test_sigma_u_from_the_track_is_u_jacobians(
+    circular: bool, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """σ_u from the orbit track (its Φ_asc mod 2π and cos, sin of ω̇τ, which the design
+    Jacobian shares) in 7-row chunks: √(J C Jᵀ) of core.phase.u_jacobian over the whole
+    array, bit for bit; the track's turn is cos and sin of ω̇τ."""
+    from ucbplan.core.phase import u_jacobian
+    from ucbplan.reduce.pipeline import _sigma_u
+
+    t = make_target(circular=circular)
+    p, cov7 = t.params, t.covariance
+    tau = np.sort(np.random.default_rng(12).uniform(-6e7, 6e8, 101))
+    ju = u_jacobian(p, tau)
+    ref = np.sqrt(np.clip(np.einsum("ni,ij,nj->n", ju, cov7, ju), 0.0, None))
+    monkeypatch.setattr(kepler, "CHUNK_ROWS", 7)
+    at = design.track(p, tau)
+    w = p.omega_dot * tau
+    assert _same_bits(at.cos_w, np.cos(w)) and _same_bits(at.sin_w, np.sin(w))
+    assert _same_bits(_sigma_u(p, cov7, tau, at), ref)

@@ -200,3 +200,17 @@ def test_the_mapped_scan_reads_what_the_text_path_reads(
         assert fast == strict
     else:
         assert_same_velocities(fast, strict)
+
+
+@pytest.mark.parametrize("counted", [2, 3, 4])
+def test_the_numpy_reader_takes_exactly_the_counted_rows(tmp_path: Path, counted: int) -> None:
+    """numpy reads at most one row more than the scan counted (its array made at that size, not
+    grown): a body with more or fewer rows than counted is refused as before, three of three
+    is read whole."""
+    path = tmp_path / "v.csv"
+    path.write_text("bjd_tdb,v1\n1.5,2.5\n3.5,4.5\n5.5,6.5\n", encoding="utf-8")
+    cols = columnar._loadtxt(path, 1, counted, 2)
+    if counted == 3:
+        assert cols is not None and cols.tolist() == [[1.5, 3.5, 5.5], [2.5, 4.5, 6.5]]
+    else:
+        assert cols is None

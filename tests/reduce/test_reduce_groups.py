@@ -43,20 +43,13 @@ def test_groups_match_brute_force(seed: int) -> None:
     sigs = [rng.uniform(5, 20, n), rng.uniform(5, 20, n)]
     G, lk, lkap = rng.normal(size=n), rng.uniform(0.9, 1, n), rng.uniform(0.9, 1, n)
     K = (500.0, 600.0)
-    got = group_spectra(
-        sessions=sessions,
-        tau_s=tau,
-        u_rad=u,
-        u_star=us,
-        velocities=vels,
-        sigmas=sigs,
-        K=K,
-        design=G,
-        lam_k=lk,
-        lam_kappa=lkap,
-    )
+    args = {"sessions": sessions, "tau_s": tau, "u_rad": u, "u_star": us, "velocities": vels}
+    args |= {"sigmas": sigs, "K": K, "design": G, "lam_k": lk, "lam_kappa": lkap}
+    got = group_spectra(**args)  # type: ignore[arg-type]
     ref = _brute(sessions, tau, u, us, vels, sigs, K, G, lk, lkap)
     assert len(got) == len(ref) > 20
+    # cos u given by the caller (the orbit track's): the same groups
+    assert group_spectra(**args, cos_u=np.cos(u)) == got  # type: ignore[arg-type]
     for g, (s, a, t, k, comp, mk, mkap) in zip(got, ref, strict=True):
         assert (g.session, g.u_star, g.n) == (s, a, k)
         assert g.tau_s == pytest.approx(t, rel=1e-12)

@@ -78,3 +78,78 @@ def test_unsupported_value_is_the_reference_error() -> None:
     """A value json_default refuses: the same error as the reference, nothing written."""
     with pytest.raises(TypeError, match="not JSON serialisable: PosixPath"):
         dumps_report({"path": Path("x")})
+
+
+_leaves = st.one_of(
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.none(),
+    st.text(max_size=6),
+    st.integers(-3, 3),  # not a pair's value: the item goes to the general writer
+    st.floats(allow_nan=False).map(np.float64),
+)
+
+
+def _q(draw: st.DrawFn, keys: tuple[str, ...]) -> dict[str, object]:
+    return {k: draw(_leaves) for k in keys}
+
+
+@st.composite
+def _pair_docs(draw: st.DrawFn) -> dict[str, object]:
+    """Fixed-u pair documents of the report's shape (1 or 2 components), sometimes bent."""
+    q = ("value", "sigma", "unit")
+    doc = {
+        "alpha": draw(_leaves),
+        "beta": draw(_leaves),
+        "u_star_rad": draw(_leaves),
+        "dT": _q(draw, q),
+        "dv": [_q(draw, q) for _ in range(draw(st.integers(1, 2)))],
+        "dkappa_spec": _q(draw, q),
+        "dkappa_lisa": _q(draw, q),
+        "dkappa_significance": draw(_leaves),
+        "dv_cm": _q(draw, (*q, "upper_limit")),
+    }
+    bend = draw(st.integers(0, 5))
+    if bend == 1:
+        doc["extra"] = 1.0  # another key: not the template's shape
+    elif bend == 2:
+        doc["dT"] = {"sigma": 0.0, "value": 1.0, "unit": "d"}  # the keys in another order
+    elif bend == 3:
+        doc["dv"] = tuple(doc["dv"])  # type: ignore[arg-type]
+    return doc
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(_pair_docs(), max_size=6), st.integers(0, 3))
+def test_pairs_from_their_template_are_the_general_text(pairs: list, depth: int) -> None:
+    """Pair documents written from the report's template (report._PairText, one per nesting
+    level and component count) give dumps_json's text, whatever their values; documents of
+    another shape or with other values fall back to the general writer."""
+    from ucbplan.reduce.report import _PairText
+
+    doc: dict[str, object] = {"drifts": {"n_groups": 3, "pairs": pairs}}
+    for _ in range(depth):
+        doc = {"x": [doc]}
+    assert dumps_report(doc, {"pairs": _PairText()}) == dumps_json(doc)
+
+
+def test_a_report_with_pairs_is_the_general_text() -> None:
+    """The bundled example's report (fixed-u pairs of two components) through write_json: the
+    text of dumps_json, byte for byte."""
+    import io
+
+    from ucbplan.api.reduction import reduce
+    from ucbplan.reduce.report import write_json
+
+    root = Path(__file__).resolve().parents[2] / "catalogs"
+    rep = reduce(
+        root / "fiducial-eccentric.yaml",
+        root / "fiducial-eccentric-velocities.csv",
+        1,
+        samples=2000,
+        warn=False,
+    )
+    doc = rep._doc
+    assert doc["drifts"]["pairs"]
+    out = io.StringIO()
+    write_json(doc, out)
+    assert out.getvalue() == dumps_json(doc) + "\n"

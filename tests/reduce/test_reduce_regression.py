@@ -16,6 +16,8 @@ from ucbplan.reduce.regression import (
     binned_design,
     fit_component,
     lambda_k_to_x,
+    line_slope,
+    line_weights,
     paper_recipe,
     phase_sensitivity,
     two_spectrum_solution,
@@ -296,3 +298,94 @@ def test_phase_sensitivity_block_sums_are_the_whole_products(n: int) -> None:
     dK, dg = phase_sensitivity(x, s, dG, 585.3, -1.0)
     np.testing.assert_array_equal(dK, -1.0 * slope)
     np.testing.assert_array_equal(dg, intercept)
+
+
+def _line_as_written(x: np.ndarray, y: np.ndarray, sa: np.ndarray) -> list[object]:
+    """weighted_line's numbers as its formulas read, one fresh array per operation (the code
+    before its products shared a scratch array)."""
+    w = 1.0 / sa**2
+    sw = w.sum()
+    xm = float((w * x).sum() / sw)
+    ym = float((w * y).sum() / sw)
+    dx = x - xm
+    sxx = float((w * dx * dx).sum())
+    b = float((w * dx * (y - ym)).sum() / sxx)
+    a = ym - b * xm
+    res = y - (a + b * x)
+    norm = res / sa
+    cov = [1.0 / sw + xm * xm / sxx, -xm / sxx, 1.0 / sxx]
+    rms = float(np.sqrt(np.mean(res * res)))
+    return [b, a, cov, float((norm * norm).sum()), rms, res, norm, np.abs(norm) > OUTLIER_NSIGMA]
+
+
+@pytest.mark.parametrize(("n", "seed"), [(2, 0), (3, 1), (1000, 2), (100_003, 3)])
+def test_weighted_line_and_line_slope_are_the_formulas_bit_for_bit(n: int, seed: int) -> None:
+    """weighted_line (its products written into one scratch array) and line_slope (slope and
+    intercept alone, from line_weights) give the doubles of the formulas written out."""
+    rng = np.random.default_rng(seed)
+    x = rng.uniform(-1.0, 1.0, n)
+    sa = rng.uniform(5.0, 20.0, n)
+    y = 30.0 + 585.3 * x + sa * rng.standard_normal(n) * 3.0
+    fit = weighted_line(x, y, sa, scale=False)
+    c = fit.cov
+    got = [fit.slope, fit.intercept, [c[0, 0], c[0, 1], c[1, 1]], fit.chi2, fit.rms,
+           fit.residuals, fit.normalized, fit.outliers]  # fmt: skip
+    ref = _line_as_written(x, y, sa)
+    for a, b in zip(got, ref, strict=True):
+        assert np.asarray(a).tobytes() == np.asarray(b).tobytes()
+    assert line_slope(x, y, line_weights(sa)) == (fit.slope, fit.intercept)
+
+
+def test_line_slope_refuses_what_weighted_line_refuses() -> None:
+    """One point, equal abscissae and a bad σ raise the same ValueError in both."""
+    one, flat = np.ones(1), np.ones(5)
+    with pytest.raises(ValueError, match="two points"):
+        line_slope(one, one, one)
+    with pytest.raises(ValueError, match="abscissae are equal"):
+        line_slope(flat, np.arange(5.0), flat)
+    with pytest.raises(ValueError, match="positive and finite"):
+        line_weights(np.array([1.0, 0.0]))
+
+
+def _wilson_as_written(v1: np.ndarray, s1: np.ndarray, v2: np.ndarray, s2: np.ndarray) -> tuple:
+    """wilson_fit's York iteration as its formulas read, one fresh array per operation."""
+    x, y, wx, wy = v2, v1, 1.0 / s2**2, 1.0 / s1**2
+
+    def terms(b: float) -> tuple:
+        W = wx * wy / (wx + b * b * wy)
+        xm = float((W * x).sum() / W.sum())
+        ym = float((W * y).sum() / W.sum())
+        U, V = x - xm, y - ym
+        return W, xm, U, V, W * (U / wy + b * V / wx)
+
+    b = -1.0
+    for _ in range(200):
+        W, _xm, U, V, beta = terms(b)
+        b_new = float((W * beta * V).sum() / (W * beta * U).sum())
+        done = abs(b_new - b) <= 1e-13 * max(1.0, abs(b_new))
+        b = b_new
+        if done:
+            break
+    W, xm, _U, _V, beta = terms(b)
+    a = float((W * y).sum() / W.sum()) - b * xm
+    xa = xm + beta
+    ua = xa - float((W * xa).sum() / W.sum())
+    var_b = 1.0 / float((W * ua * ua).sum())
+    var_a = 1.0 / float(W.sum()) + float((W * xa).sum() / W.sum()) ** 2 * var_b
+    res = y - a - b * x
+    return -b, math.sqrt(var_b), a, math.sqrt(var_a), float((W * res * res).sum())
+
+
+@pytest.mark.parametrize(("n", "seed"), [(3, 0), (500, 1), (100_001, 2)])
+def test_wilson_fit_is_york_as_written_bit_for_bit(n: int, seed: int) -> None:
+    """The WIL41 fit (York's arrays rewritten in one work array per call) gives the doubles of
+    the iteration written out with fresh arrays."""
+    rng = np.random.default_rng(seed)
+    g = rng.uniform(-1.0, 1.0, n)
+    s1, s2 = rng.uniform(5.0, 20.0, n), rng.uniform(5.0, 20.0, n)
+    v1 = 30.0 + 585.3 * g + s1 * rng.standard_normal(n)
+    v2 = 10.0 - 712.6 * g + s2 * rng.standard_normal(n)
+    w = wilson_fit(v1, s1, v2, s2)
+    assert (w.q, w.sigma_q, w.intercept, w.sigma_intercept, w.chi2) == _wilson_as_written(
+        v1, s1, v2, s2
+    )

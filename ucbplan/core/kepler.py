@@ -157,6 +157,7 @@ def window_average(
     window_s: ArrayLike,
     derivatives: bool = True,
     rotation: tuple[ArrayLike, ArrayLike] | None = None,
+    terms: list[Term] | None = None,
 ) -> WindowedVelocity:
     """Average of h = cos(ω + ν) + e cos ω over exposures centred on the given phases.
 
@@ -181,6 +182,9 @@ def window_average(
     rotation : tuple of array_like, optional
         :func:`window_rotation` of ``omega_dot`` and ``window_s``, when the caller averages the
         same windows more than once (the same doubles as computed here).
+    terms : list, optional
+        :func:`series_terms` of ``e`` and ``derivatives``, when the caller averages chunk by
+        chunk (the same list as computed here).
 
     Returns
     -------
@@ -200,7 +204,7 @@ def window_average(
     shape = np.broadcast(phi, om, half, nb).shape
     fphi, fom, fhalf, fnb = (np.broadcast_to(x, shape).ravel() for x in (phi, om, half, nb))
     rot = None if rotation is None else [np.broadcast_to(x, shape).ravel() for x in rotation]
-    terms = _terms(e, derivatives)
+    terms = series_terms(e, derivatives) if terms is None else terms
     out = np.zeros((4, fphi.size))
     for sl in row_chunks(fphi.size):  # chunks that stay in cache
         chunk = (fphi[sl], fom[sl], fhalf[sl], fnb[sl])
@@ -211,11 +215,11 @@ def window_average(
 
 #: One harmonic of the kernel: k, (P_k, Q_k) of ⟨h⟩ (None: the term is not in ⟨h⟩), and
 #: (P_k, Q_k, dP_k/de, dQ_k/de) of the derivatives.
-_Term = tuple[int, tuple[float, float] | None, tuple[float, float, float, float]]
+Term = tuple[int, tuple[float, float] | None, tuple[float, float, float, float]]
 
 
-def _terms(e: float, derivatives: bool) -> list[_Term]:
-    """The harmonics that matter, in increasing k.
+def series_terms(e: float, derivatives: bool) -> list[Term]:
+    """The harmonics that matter for :func:`window_average`, in increasing k.
 
     A coefficient is zeroed when it is negligible (Q_k ~ e²P_k): for ⟨h⟩ when |P_k| is below
     _TERM_FLOOR; for the derivatives when |e·dP_k/de| is too (the same for Q_k). ⟨h⟩ takes the
@@ -226,7 +230,7 @@ def _terms(e: float, derivatives: bool) -> list[_Term]:
     h_p, h_q = np.abs(pk) > _TERM_FLOOR, np.abs(qk) > _TERM_FLOOR
     keep_p = h_p | (scale * np.abs(dpk) > _TERM_FLOOR)
     keep_q = h_q | (scale * np.abs(dqk) > _TERM_FLOOR)
-    out: list[_Term] = []
+    out: list[Term] = []
     for i in np.flatnonzero(keep_p | keep_q):
         p, q = float(pk[i]), float(qk[i])
         kp, kq = bool(keep_p[i]), bool(keep_q[i])
@@ -242,7 +246,7 @@ def _kernel(
     half: F64,
     nb: F64,
     omega_dot: float,
-    terms: list[_Term],
+    terms: list[Term],
     derivatives: bool,
     out: F64,
     rotation: tuple[F64, F64] | None,

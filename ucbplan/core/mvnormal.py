@@ -74,7 +74,37 @@ def sample_normal(mean: ArrayLike, cov: ArrayLike, n: int, rng: np.random.Genera
     """
     m = np.asarray(mean, dtype=np.float64)
     root = sqrt_factor(cov)
-    return np.asarray(m + rng.standard_normal((n, m.size)) @ root.T)
+    return np.asarray(m + rows_times(rng.standard_normal((n, m.size)), root.T))
+
+
+#: Largest m·n·k of a matrix product that OpenBLAS runs on the calling thread alone (its
+#: ``GEMM_MULTITHREAD_THRESHOLD`` 4 × 65536): a larger one wakes its worker thread, which then
+#: spins ~0.1 CPU s waiting for more work, for a product of draws that takes a millisecond.
+_SERIAL_MNK = 4 * 65536
+
+
+def rows_times(z: F64, factor: F64) -> F64:
+    """``z @ factor`` for draws ``z`` (n, d), in blocks of rows each small enough for one thread.
+
+    The blocks start at multiples of a power of two (≥ the BLAS kernel's row unroll), the last
+    one taking the remainder, so every row is the same double as in the whole product computed
+    on one thread (the remainder rows at the end through the same edge code). A product split
+    over threads can differ in the rows at the threads' boundaries.
+    """
+    n, d = z.shape
+    k = factor.shape[1]
+    out = np.empty((n, k))
+    for lo, hi in row_blocks(n, d * k):
+        np.matmul(z[lo:hi], factor, out=out[lo:hi])
+    return out
+
+
+def row_blocks(n: int, work_per_row: int) -> list[tuple[int, int]]:
+    """(start, stop) of :func:`rows_times`' blocks: starts at multiples of a power of two, the
+    last block up to twice as long, each with rows × ``work_per_row`` ≤ :data:`_SERIAL_MNK`."""
+    rows = 1 << max((_SERIAL_MNK // (2 * max(work_per_row, 1))).bit_length() - 1, 0)
+    cuts = [*range(rows, n - rows + 1, rows)]
+    return list(zip([0, *cuts], [*cuts, n], strict=True))
 
 
 def inverse_scaled(matrix: ArrayLike) -> F64:

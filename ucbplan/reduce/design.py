@@ -22,7 +22,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ucbplan.core.constants import C_KM_S
-from ucbplan.core.kepler import WindowedVelocity, row_chunks, window_average, window_rotation
+from ucbplan.core.kepler import (
+    Term,
+    WindowedVelocity,
+    row_chunks,
+    series_terms,
+    window_average,
+    window_rotation,
+)
 from ucbplan.core.smearing import lambda_k, lambda_kappa
 from ucbplan.reduce.regression import lambda_k_to_x
 
@@ -51,15 +58,17 @@ def window_factors(table: VelocityTable, f_hz: float) -> tuple[F64, F64]:
     recovered by inverting sin x/x and Λ_κ = sin 2x/2x.
     """
     nbar = math.pi * f_hz
-    w = table.window_s
+    w = np.asarray(table.window_s, dtype=np.float64)
     _check_windows(table, 2.0 * math.pi / nbar)
-    lk = np.where(np.isfinite(w), lambda_k(np.nan_to_num(w), nbar), table.lambda_k)
-    x = np.zeros_like(lk)
+    lk, lkap = np.empty(w.shape), np.empty(w.shape)
+    for sl in row_chunks(w.size):  # elementwise: chunk by chunk, the same doubles
+        width = np.nan_to_num(w[sl])
+        lk[sl], lkap[sl] = lambda_k(width, nbar), lambda_kappa(width, nbar)
     given = ~np.isfinite(w)
-    if np.any(given):
-        x[given] = lambda_k_to_x(table.lambda_k[given])
-    lkap = np.where(given, np.sinc(2.0 * x / np.pi), lambda_kappa(np.nan_to_num(w), nbar))
-    return np.asarray(lk, float), np.asarray(lkap, float)
+    if np.any(given):  # Λ_K given: x = n̄_bΔt/2 from it, Λ_κ = sin 2x/2x
+        lk[given] = table.lambda_k[given]
+        lkap[given] = np.sinc(2.0 * lambda_k_to_x(table.lambda_k[given]) / np.pi)
+    return lk, lkap
 
 
 def _check_windows(table: VelocityTable, period_s: float) -> None:
@@ -94,7 +103,7 @@ def window_durations(table: VelocityTable, f_hz: float) -> F64:
     w = table.window_s
     _check_windows(table, 2.0 * math.pi / nbar)
     given = ~np.isfinite(w)
-    out = np.where(given, 0.0, np.nan_to_num(w))
+    out = np.nan_to_num(w)  # a copy; the given rows are replaced below
     if np.any(given):
         out[given] = 2.0 * lambda_k_to_x(table.lambda_k[given]) / nbar
     return np.asarray(out, dtype=np.float64)
@@ -120,6 +129,10 @@ class OrbitTrack:
         (η, κ) rotated to the times [1].
     u : ndarray
         Star 1's argument of latitude [rad] (unwrapped).
+    cos_u, sin_u : ndarray
+        Its cosine and sine (the light-time designs, F and the fixed-u groups use them).
+    cos_w, sin_w : ndarray
+        Cosine and sine of the apsidal turn ω̇τ since t_ref (the Jacobians use them).
     """
 
     phase: F64
@@ -127,6 +140,10 @@ class OrbitTrack:
     eta: F64
     kap: F64
     u: F64
+    cos_u: F64
+    sin_u: F64
+    cos_w: F64
+    sin_w: F64
 
 
 def track(p: PhaseParams, tau: F64) -> OrbitTrack:
@@ -134,12 +151,16 @@ def track(p: PhaseParams, tau: F64) -> OrbitTrack:
     from ucbplan.core.phase import orbit_state, phase_asc_mod
 
     tau = np.asarray(tau, dtype=np.float64)
-    at = OrbitTrack(*(np.empty(tau.shape) for _ in range(5)))
-    flat = [x.reshape(-1) for x in (tau, at.phase, at.phase_mod, at.eta, at.kap, at.u)]
+    at = OrbitTrack(*(np.empty(tau.shape) for _ in range(9)))
+    cols = (tau, at.phase, at.phase_mod, at.eta, at.kap, at.u, at.cos_u, at.sin_u, at.cos_w)
+    flat = [x.reshape(-1) for x in (*cols, at.sin_w)]
     for sl in row_chunks(tau.size):  # elementwise: chunk by chunk, the same doubles
         t = flat[0][sl]
         phi, eta, kap, u = orbit_state(p, t)
-        for out, x in zip(flat[1:], (phi, phase_asc_mod(p, t), eta, kap, u), strict=True):
+        w = p.omega_dot * t
+        trig = (np.cos(u), np.sin(u), np.cos(w), np.sin(w))
+        orbit_rows = (phi, phase_asc_mod(p, t), eta, kap, u, *trig)
+        for out, x in zip(flat[1:], orbit_rows, strict=True):
             out[sl] = x
     return at
 
@@ -155,10 +176,12 @@ def _windowed_rows(
     derivatives: bool,
     at: tuple[F64, ...] | None,
     rotation: Rotation | None,
+    terms: list[Term],
 ) -> tuple[WindowedVelocity, F64]:
     """The exact window average at ``tau`` and ω there (``at``: Φ_asc mod 2π, η and κ at
-    ``tau`` when the caller has them; ``rotation``: the windows' :data:`Rotation`), for one
-    chunk of rows."""
+    ``tau`` when the caller has them; ``rotation``: the windows' :data:`Rotation`; ``terms``:
+    the series of the eccentricity, :func:`~ucbplan.core.kepler.series_terms`), for one chunk
+    of rows."""
     from ucbplan.core.phase import ll_pair, phase_asc_mod
 
     if at is None:
@@ -169,7 +192,7 @@ def _windowed_rows(
     om = np.arctan2(eta, kap)
     nb = math.pi * (p.f_gw + p.fdot * tau + p.fddot * tau**2 / 2.0) - p.omega_dot
     e, wdot = p.eccentricity, p.omega_dot
-    return window_average(phi, om, e, nb, wdot, window_s, derivatives, rotation), om
+    return window_average(phi, om, e, nb, wdot, window_s, derivatives, rotation, terms), om
 
 
 def _windowed(
@@ -189,10 +212,11 @@ def _windowed(
     orbit_rows = None if at is None else [x.reshape(-1) for x in (at.phase_mod, at.eta, at.kap)]
     turn = None if rotation is None else [np.broadcast_to(x, shape).reshape(-1) for x in rotation]
     out = np.zeros((5, t.size))  # ⟨h⟩, its three partials (zero without derivatives), ω
+    terms = series_terms(p.eccentricity, derivatives)  # once for every chunk
     for sl in row_chunks(t.size):
         rows = None if orbit_rows is None else tuple(x[sl] for x in orbit_rows)
         rot = None if turn is None else (turn[0][sl], turn[1][sl])
-        wv, om = _windowed_rows(p, t[sl], w[sl], derivatives, rows, rot)
+        wv, om = _windowed_rows(p, t[sl], w[sl], derivatives, rows, rot, terms)
         out[0, sl], out[4, sl] = wv.h, om
         if derivatives:
             out[1, sl], out[2, sl], out[3, sl] = wv.d_phase, wv.d_omega, wv.d_e
@@ -234,6 +258,7 @@ def design_jacobian(
     if p.eccentricity >= _E_FIRST_ORDER:
         wv, om = _windowed(p, tau, window_s, at=at) if mid is None else mid
         rows, args = _exact_rows, (wv.d_phase, wv.d_omega, wv.d_e, om, at.eta, at.kap)
+    args = (*args, at.cos_w, at.sin_w)
     t = np.reshape(tau, -1)
     flat = [np.broadcast_to(x, np.shape(tau)).reshape(-1) for x in args]
     jac = np.empty((t.size, 7))
@@ -251,18 +276,29 @@ def _exact_rows(
     om: F64,
     eta: F64,
     kap: F64,
+    cos_w: F64,
+    sin_w: F64,
     out: F64,
 ) -> None:
-    """∂G/∂θ of the exact design into ``out`` from its partials ∂⟨h⟩/∂(Φ, ω, e) at ω."""
+    """∂G/∂θ of the exact design into ``out`` from its partials ∂⟨h⟩/∂(Φ, ω, e) at ω (``cos_w``,
+    ``sin_w``: of ω̇τ)."""
     e = p.eccentricity
     so, co = np.sin(om), np.cos(om)
     dG_deta = so * d_e + co / e * d_omega
     dG_dkap = co * d_e - so / e * d_omega
-    _chain(p, tau, d_phase, dG_deta, dG_dkap, eta, kap, out)
+    _chain(p, tau, d_phase, (dG_deta, dG_dkap), (eta, kap, cos_w, sin_w), out)
 
 
 def _first_order_rows(
-    p: PhaseParams, tau: F64, window_s: F64, phi: F64, eta: F64, kap: F64, out: F64
+    p: PhaseParams,
+    tau: F64,
+    window_s: F64,
+    phi: F64,
+    eta: F64,
+    kap: F64,
+    cos_w: F64,
+    sin_w: F64,
+    out: F64,
 ) -> None:
     """∂G/∂θ of Eq. vbar_master (exact at e = 0) into ``out``, with the window rates of the
     exact design: n̄(τ) for the cos Φ term and 2n̄(τ) − ω̇ for the (η, κ) term."""
@@ -274,23 +310,21 @@ def _first_order_rows(
         -kap * np.sin(2 * phi) + eta * np.cos(2 * phi)
     )
     dG_deta, dG_dkap = lam_kap * np.sin(2 * phi), lam_kap * np.cos(2 * phi)
-    _chain(p, tau, dG_dphi, dG_deta, dG_dkap, eta, kap, out)
+    _chain(p, tau, dG_dphi, (dG_deta, dG_dkap), (eta, kap, cos_w, sin_w), out)
 
 
 def _chain(
     p: PhaseParams,
     tau: F64,
     dG_dphi: F64,
-    dG_deta: F64,
-    dG_dkap: F64,
-    eta: F64,
-    kap: F64,
+    dG_dll: tuple[F64, F64],
+    orbit: tuple[F64, F64, F64, F64],
     jac: F64,
 ) -> None:
-    """∂G/∂θ (into ``jac``, rows × 7) from ∂G/∂(Φ, η(τ), κ(τ)) through the phase model and the
-    apsidal rotation."""
-    w = p.omega_dot * tau
-    c, s = np.cos(w), np.sin(w)
+    """∂G/∂θ (into ``jac``, rows × 7) from ∂G/∂(Φ, η(τ), κ(τ)) (``dG_dll``: the last two) through
+    the phase model and the apsidal rotation (``orbit``: η, κ, cos ω̇τ, sin ω̇τ)."""
+    dG_deta, dG_dkap = dG_dll
+    eta, kap, c, s = orbit
     jac[:, 0] = 0.5 * dG_dphi
     jac[:, 1] = math.pi * tau * dG_dphi
     jac[:, 2] = math.pi * tau**2 / 2.0 * dG_dphi
@@ -317,16 +351,18 @@ def designs(
     """
     if K is None:  # both stars see the same G at mid-exposure
         return (_windowed(p, tau, window_s, False, at, rotation)[0].h,) * ncomp
-    u = orbit(p, tau)[3] if at is None else at.u
+    sin_u = np.sin(orbit(p, tau)[3]) if at is None else at.sin_u
     nb = math.pi * p.f_gw - p.omega_dot
     rot = rotation or window_rotation(p.omega_dot, window_s)
     shape = np.shape(tau)
     t, w, cc, sc = (np.broadcast_to(x, shape).reshape(-1) for x in (tau, window_s, *rot))
     out = np.empty((ncomp, t.size))
-    for sl in row_chunks(t.size):  # both stars' emission times from one sin u per chunk
-        sin_u = np.sin(np.reshape(u, -1)[sl])
+    terms = series_terms(p.eccentricity, False)  # once for every chunk
+    flat_sin_u = np.broadcast_to(sin_u, shape).reshape(-1)
+    for sl in row_chunks(t.size):  # both stars' emission times from one sin u
         for j in range(ncomp):
             sign = 1.0 if j == 0 else -1.0
-            emit = t[sl] - sign * K[j] / (C_KM_S * nb) * sin_u
-            out[j, sl] = _windowed_rows(p, emit, w[sl], False, None, (cc[sl], sc[sl]))[0].h
+            emit = t[sl] - sign * K[j] / (C_KM_S * nb) * flat_sin_u[sl]
+            turn = (cc[sl], sc[sl])
+            out[j, sl] = _windowed_rows(p, emit, w[sl], False, None, turn, terms)[0].h
     return tuple(np.asarray(h.reshape(shape)) for h in out)

@@ -83,6 +83,7 @@ def group_spectra(
     design: ArrayLike,
     lam_k: ArrayLike,
     lam_kappa: ArrayLike,
+    cos_u: ArrayLike | None = None,
 ) -> list[Group]:
     """Group spectra by (session, u★) and average them after the mismatch correction.
 
@@ -98,6 +99,8 @@ def group_spectra(
     design, lam_k, lam_kappa : array_like
         Window-averaged orbital factor G (for the zero-crossing γ estimates) and the window
         factors Λ_K, Λ_κ per spectrum [1].
+    cos_u : array_like, optional
+        cos u per spectrum, when the caller has it (the same doubles as computed here).
 
     Returns
     -------
@@ -113,7 +116,8 @@ def group_spectra(
     k = _group_keys(sessions, us)
     rows = k.rows
     # the phase-mismatch term's cos u − cos u★ of every kept row, once for all components
-    mismatch = np.cos(u[rows]) - np.cos(k.u_star)
+    cos_rows = np.cos(u[rows]) if cos_u is None else np.asarray(cos_u, float)[rows]
+    mismatch = cos_rows - np.cos(k.u_star)
     at = (lk[rows], mismatch, G[rows], k.gid)
     comps = [
         _component_means(np.asarray(v, float)[rows], np.asarray(sg, float)[rows], sK, *at)

@@ -10,12 +10,17 @@ infinities become ``null``; numpy scalars and arrays become numbers and lists).
 Anything else (a value that :func:`ucbplan.io.json_default` would have to convert or refuse)
 falls back to :func:`ucbplan.io.dumps_json` for the whole document, so its output or its error is
 the reference's exactly.
+
+A caller may also pass writers for the items of the lists under given keys (``items``): each
+returns an item's text at its nesting level, or None to leave the item to this writer. The
+report's ~8,000 fixed-u pairs are written that way, from one template
+(:mod:`ucbplan.reduce.report`).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from json.encoder import encode_basestring_ascii
 from typing import Any
 
@@ -28,12 +33,17 @@ class _Unsupported(Exception):
     """A value this encoder leaves to the reference one."""
 
 
-def dumps_report(doc: Any) -> str:
+#: Writers of list items by the key of their list: an item's text at a nesting level, or None.
+Items = Mapping[str, Callable[[Any, int], str | None]]
+
+
+def dumps_report(doc: Any, items: Items | None = None) -> str:
     """``doc`` as JSON text indented by 2, identical to :func:`ucbplan.io.dumps_json` (no
-    trailing newline)."""
+    trailing newline); ``items``: writers of the items of the lists under these keys (module
+    docstring), which must give the same text."""
     out: list[str] = []
     try:
-        _value(doc, 0, out, {})
+        _value(doc, 0, out, {}, items or {})
     except _Unsupported:
         from ucbplan.io import dumps_json
 
@@ -46,7 +56,7 @@ def dumps_report(doc: Any) -> str:
 _Heads = dict[tuple[str, int], tuple[str, str]]
 
 
-def _value(obj: Any, level: int, out: list[str], heads: _Heads) -> None:
+def _value(obj: Any, level: int, out: list[str], heads: _Heads, items: Items) -> None:
     """Append the text of one value at nesting ``level`` (json.encoder's order of type tests)."""
     if isinstance(obj, str):
         out.append(encode_basestring_ascii(obj))
@@ -61,16 +71,18 @@ def _value(obj: Any, level: int, out: list[str], heads: _Heads) -> None:
     elif isinstance(obj, float):
         out.append(float.__repr__(obj) if math.isfinite(obj) else "null")
     elif isinstance(obj, Mapping):
-        _mapping(obj, level, out, heads)
+        _mapping(obj, level, out, heads, items)
     elif isinstance(obj, list | tuple):
-        _sequence(obj, level, out, heads)
+        _sequence(obj, level, out, heads, items, None)
     elif isinstance(obj, np.generic | np.ndarray):
-        _value(obj.tolist(), level, out, heads)
+        _value(obj.tolist(), level, out, heads, items)
     else:
         raise _Unsupported
 
 
-def _mapping(obj: Mapping[Any, Any], level: int, out: list[str], heads: _Heads) -> None:
+def _mapping(
+    obj: Mapping[Any, Any], level: int, out: list[str], heads: _Heads, items: Items
+) -> None:
     if not obj:
         out.append("{}")
         return
@@ -78,7 +90,7 @@ def _mapping(obj: Mapping[Any, Any], level: int, out: list[str], heads: _Heads) 
     for key, val in obj.items():
         if type(key) is not str:  # keys equal as text are one key (json_plain): start again
             del out[mark:]
-            _mapping({str(k): v for k, v in obj.items()}, level, out, heads)
+            _mapping({str(k): v for k, v in obj.items()}, level, out, heads, items)
             return
         pair = heads.get((key, level))
         if pair is None:
@@ -90,20 +102,34 @@ def _mapping(obj: Mapping[Any, Any], level: int, out: list[str], heads: _Heads) 
             out.append(head + (float.__repr__(val) if math.isfinite(val) else "null"))
         elif kind is str:
             out.append(head + encode_basestring_ascii(val))
+        elif kind is list and key in items:
+            out.append(head)
+            _sequence(val, level + 1, out, heads, items, items[key])
         else:
             out.append(head)
-            _value(val, level + 1, out, heads)
+            _value(val, level + 1, out, heads, items)
     out.append("\n" + _INDENT * level + "}")
 
 
-def _sequence(obj: list[Any] | tuple[Any, ...], level: int, out: list[str], heads: _Heads) -> None:
+def _sequence(
+    obj: list[Any] | tuple[Any, ...],
+    level: int,
+    out: list[str],
+    heads: _Heads,
+    items: Items,
+    item: Callable[[Any, int], str | None] | None,
+) -> None:
     if not obj:
         out.append("[]")
         return
     inner = "\n" + _INDENT * (level + 1)
     sep = "[" + inner
     for val in obj:
-        out.append(sep)
-        _value(val, level + 1, out, heads)
+        text = None if item is None else item(val, level + 1)
+        if text is None:
+            out.append(sep)
+            _value(val, level + 1, out, heads, items)
+        else:
+            out.append(sep + text)
         sep = "," + inner
     out.append("\n" + _INDENT * level + "]")

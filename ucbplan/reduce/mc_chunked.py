@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ucbplan.core.mvnormal import sqrt_factor
+from ucbplan.core.mvnormal import rows_times, sqrt_factor
 from ucbplan.core.params import PARAM_NAMES
 from ucbplan.reduce import masses as _masses
 from ucbplan.reduce.mc_samples import (
@@ -61,7 +61,7 @@ def _theta(
     e: int,
 ) -> F64:
     """Posterior rows s:e, as :func:`~ucbplan.reduce.mc_samples.posterior_samples` makes them."""
-    theta: F64 = mean + rng.standard_normal((e - s, mean.size)) @ root.T
+    theta: F64 = mean + rows_times(rng.standard_normal((e - s, mean.size)), root.T)
     if columns is not None and idx is not None:
         for k, name in enumerate((*PARAM_NAMES, *EXTRA_NAMES)):
             if name in columns:

@@ -47,6 +47,8 @@ from ucbplan.reduce.regression import (
     ComponentFit,
     WilsonFit,
     fit_component,
+    line_slope,
+    line_weights,
     phase_sensitivity,
     wilson_fit,
 )
@@ -161,8 +163,10 @@ def reduce_options(
     )
 
 
-def _fit_all(table: VelocityTable, design: tuple[F64, ...]) -> tuple[ComponentFit, ...]:
-    """One regression per star.
+def _fit_all(
+    table: VelocityTable, design: tuple[F64, ...], weights: tuple[F64, ...]
+) -> tuple[ComponentFit, ...]:
+    """One regression per star (``weights``: the stars' 1/σ², :func:`_weights`).
 
     Raises
     ------
@@ -171,14 +175,37 @@ def _fit_all(table: VelocityTable, design: tuple[F64, ...]) -> tuple[ComponentFi
     """
     fits = []
     for j, (v, s) in enumerate(zip(table.v, table.sigma, strict=True)):
-        g = design[j]
-        if not np.ptp(g) > 1e-9 * max(float(np.max(np.abs(g))), 1e-300):
-            raise VelocityFileError(
-                f"{table.source}: star {j + 1}: all {g.size} spectra sample the same orbital "
-                "phase (F̄ does not vary), so K is undetermined; add spectra at other phases"
-            )
-        fits.append(fit_component(g, v, s, star=j + 1))
+        _check_design(table, j, design[j])
+        fits.append(fit_component(design[j], v, s, star=j + 1, weights=weights[j]))
     return tuple(fits)
+
+
+def _weights(table: VelocityTable) -> tuple[F64, ...]:
+    """Each star's 1/σ² (:func:`~ucbplan.reduce.regression.line_weights`), computed once for
+    its regressions and phase sensitivities."""
+    return tuple(line_weights(s) for s in table.sigma)
+
+
+def _fit_lines(
+    table: VelocityTable, design: tuple[F64, ...], weights: tuple[F64, ...]
+) -> tuple[tuple[float, float], ...]:
+    """(K_j, γ_j) per star of :func:`_fit_all`'s fits, the same doubles, from the stars'
+    :func:`~ucbplan.reduce.regression.line_weights` (the light-time passes need no more)."""
+    out = []
+    for j, (v, w) in enumerate(zip(table.v, weights, strict=True)):
+        _check_design(table, j, design[j])
+        slope, intercept = line_slope(design[j], v, w)
+        out.append((slope if j == 0 else -slope, intercept))
+    return tuple(out)
+
+
+def _check_design(table: VelocityTable, j: int, g: F64) -> None:
+    """Raise VelocityFileError when star ``j``'s design F̄ does not vary (one orbital phase)."""
+    if not np.ptp(g) > 1e-9 * max(float(np.max(np.abs(g))), 1e-300):
+        raise VelocityFileError(
+            f"{table.source}: star {j + 1}: all {g.size} spectra sample the same orbital "
+            "phase (F̄ does not vary), so K is undetermined; add spectra at other phases"
+        )
 
 
 @dataclass(frozen=True)
@@ -188,6 +215,7 @@ class _IntraSession:
     fits: tuple[ComponentFit, ...]
     design: tuple[F64, ...]
     light_time: dict[str, float]
+    weights: tuple[F64, ...]
 
 
 def _intra_session(
@@ -203,22 +231,27 @@ def _intra_session(
     passes); ``shared``: the orbit at mid-exposure and the windows' rotation."""
     n = len(table.v)
     plain = (mid_h,) * n  # both stars see the same G at mid-exposure
-    fits0 = _fit_all(table, plain)
+    weights = _weights(table)
+    fits0 = _fit_all(table, plain, weights)
     K0 = tuple(f.K for f in fits0)
     lt_design = designs(p, tau, window_s, n, K0, *shared)
-    K_lt = tuple(f.K for f in _fit_all(table, lt_design))
+    K_lt = tuple(k for k, _ in _fit_lines(table, lt_design, weights))
     lt_design = designs(p, tau, window_s, n, K_lt, *shared)
-    fits_lt = _fit_all(table, lt_design)
+    fits_lt = _fit_all(table, lt_design, weights) if apply_lt else None
+    if fits_lt is None:  # only K and γ of the corrected fits are reported
+        lines = _fit_lines(table, lt_design, weights)
+    else:
+        lines = tuple((f.K, f.gamma) for f in fits_lt)
     nb = math.pi * p.f_gw - p.omega_dot
     light = {
         "max_delay_s": max(abs(k) for k in K0) / (C_KM_S * nb),
-        **{f"dK{j + 1}": fits_lt[j].K - fits0[j].K for j in range(n)},
-        **{f"dgamma{j + 1}": fits_lt[j].gamma - fits0[j].gamma for j in range(n)},
+        **{f"dK{j + 1}": lines[j][0] - fits0[j].K for j in range(n)},
+        **{f"dgamma{j + 1}": lines[j][1] - fits0[j].gamma for j in range(n)},
         "applied": float(apply_lt),
     }
-    if apply_lt:
-        return _IntraSession(fits_lt, lt_design, light)
-    return _IntraSession(fits0, plain, light)
+    if fits_lt is not None:
+        return _IntraSession(fits_lt, lt_design, light, weights)
+    return _IntraSession(fits0, plain, light, weights)
 
 
 @dataclass(frozen=True)
@@ -245,30 +278,32 @@ def _phase_errors(
     """σ_u per spectrum, ∂(K_j, γ_j)/∂θ, their σ from the covariance, and the K attenuation."""
     p, cov7 = target.params, target.covariance
     jacG = design_jacobian(p, tau, window_s, at, mid)
-    sigma_u = _sigma_u(p, cov7, tau, at.phase_mod)
+    sigma_u = _sigma_u(p, cov7, tau, at)
     dK, dg, sKp, sgp, att = [], [], [], [], []
     for j, f in enumerate(intra.fits):
         sign = 1.0 if j == 0 else -1.0
-        a, b = phase_sensitivity(intra.design[j], table.sigma[j], jacG, f.K, sign)
+        w = intra.weights[j]
+        a, b = phase_sensitivity(intra.design[j], table.sigma[j], jacG, f.K, sign, w)
         dK.append(a)
         dg.append(b)
         sKp.append(math.sqrt(max(float(a @ cov7 @ a), 0.0)))
         sgp.append(math.sqrt(max(float(b @ cov7 @ b), 0.0)))
-        w = 1.0 / table.sigma[j] ** 2
         att.append(float(f.K * (w * sigma_u**2).sum() / w.sum() / 2.0))
     return _PhaseErrors(sigma_u, np.array(dK), np.array(dg), tuple(sKp), tuple(sgp), tuple(att))
 
 
-def _sigma_u(p: PhaseParams, cov7: F64, tau: F64, phase_mod: F64) -> F64:
+def _sigma_u(p: PhaseParams, cov7: F64, tau: F64, at: OrbitTrack) -> F64:
     """σ_u per spectrum [rad]: √(J C Jᵀ) with J = ∂u/∂θ (:func:`ucbplan.core.phase.u_jacobian`)
     from the shared orbit (its Φ_asc mod 2π is π·(cycles mod 2) there, the same double as
-    2π·(cycles mod 2)/2), chunk by chunk (rows × 7 in cache, not a 56 MB (n, 7) array)."""
+    2π·(cycles mod 2)/2, and its cos and sin of ω̇τ), chunk by chunk (rows × 7 in cache, not a
+    56 MB (n, 7) array)."""
     from ucbplan.core.phase import jacobian_kernel
 
     out = np.empty(tau.size)
     for sl in row_chunks(tau.size):
-        s, c = np.sin(phase_mod[sl]), np.cos(phase_mod[sl])
-        ju = np.asarray(jacobian_kernel(p.eta, p.kappa, p.omega_dot, tau[sl], s, c), float)
+        s, c = np.sin(at.phase_mod[sl]), np.cos(at.phase_mod[sl])
+        turn = (at.cos_w[sl], at.sin_w[sl])
+        ju = np.asarray(jacobian_kernel(p.eta, p.kappa, p.omega_dot, tau[sl], s, c, turn), float)
         out[sl] = np.sqrt(np.clip(np.einsum("ni,ij,nj->n", ju, cov7, ju), 0.0, None))
     return out
 
@@ -372,7 +407,7 @@ def reduce(target: Target, table: VelocityTable, options: ReduceOptions | None =
     intra = _intra_session(p, table, (at, rot), tau, window_s, mid[0].h, opts.light_time)
     phase = _phase_errors(target, table, at, tau, window_s, mid, intra)
     mc = _monte_carlo(target, intra.fits, phase, opts, seed)
-    groups, drift = _inter_session(target, table, tau, at.u, intra, *lam)
+    groups, drift = _inter_session(target, table, tau, at, intra, *lam)
     return _reduction(target, table, opts, seed, (tau, at), lam, intra, phase, mc, (groups, drift))
 
 
@@ -427,7 +462,7 @@ def _reduction(
         seed=seed,
         tau_s=tau,
         u_rad=at.u,
-        F=np.cos(at.u) + at.kap,
+        F=at.cos_u + at.kap,
         design=intra.design,
         lam_k=lam[0],
         lam_kappa=lam[1],
@@ -452,19 +487,21 @@ def _inter_session(
     target: Target,
     table: VelocityTable,
     tau: F64,
-    u: F64,
+    at: OrbitTrack,
     intra: _IntraSession,
     lam_k: F64,
     lam_kap: F64,
 ) -> tuple[list[Group], _drifts.DriftResult]:
-    """Fixed-u groups per session, their pairs, and the combined drifts (Δκ, Δv_CM, a_los)."""
-    p, fits = target.params, intra.fits
+    """Fixed-u groups per session, their pairs, and the combined drifts (Δκ, Δv_CM, a_los),
+    from the orbit at mid-exposure (``at``)."""
+    p, fits, u = target.params, intra.fits, at.u
     K = tuple(f.K for f in fits)
     groups = group_spectra(
         sessions=table.session,
         tau_s=tau,
         u_rad=u,
         u_star=assign_anchors(u, table.u_star),
+        cos_u=at.cos_u,
         velocities=table.v,
         sigmas=table.sigma,
         K=K,

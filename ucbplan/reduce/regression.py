@@ -151,7 +151,9 @@ class LineFit:
         return float(math.sqrt(self.cov[0, 0]))
 
 
-def weighted_line(x: ArrayLike, y: ArrayLike, sigma: ArrayLike, *, scale: bool = True) -> LineFit:
+def weighted_line(
+    x: ArrayLike, y: ArrayLike, sigma: ArrayLike, *, scale: bool = True, weights: F64 | None = None
+) -> LineFit:
     """Weighted linear regression y = a + b x with Gaussian errors σ on y.
 
     Parameters
@@ -160,6 +162,8 @@ def weighted_line(x: ArrayLike, y: ArrayLike, sigma: ArrayLike, *, scale: bool =
         Abscissa, ordinate and 1σ ordinate errors (σ > 0), same length ≥ 2.
     scale : bool
         Inflate the covariance by χ²/dof when that exceeds 1 (honest errors under extra scatter).
+    weights : ndarray, optional
+        :func:`line_weights` of ``sigma``, when the caller has them (the same doubles).
 
     Returns
     -------
@@ -175,25 +179,16 @@ def weighted_line(x: ArrayLike, y: ArrayLike, sigma: ArrayLike, *, scale: bool =
     sa = np.asarray(sigma, dtype=np.float64)
     if xa.size < 2:
         raise ValueError("need at least two points for a line fit")
-    if np.any(sa <= 0) or not np.all(np.isfinite(sa)):
-        raise ValueError("sigma must be positive and finite")
-    w = 1.0 / sa**2
-    sw = w.sum()
-    xm = float((w * xa).sum() / sw)
-    ym = float((w * ya).sum() / sw)
-    dx = xa - xm
-    sxx = float((w * dx * dx).sum())
-    if sxx <= 0.0 or not math.isfinite(sxx):
-        raise ValueError("all abscissae are equal: the slope is undetermined")
-    b = float((w * dx * (ya - ym)).sum() / sxx)
-    a = ym - b * xm
+    buf = np.empty(xa.shape)  # every product summed is written here (no 8 MB temporaries)
+    w = line_weights(sa) if weights is None else weights
+    sw, xm, sxx, b, a = _line(xa, ya, w, buf)
     var_b = 1.0 / sxx
     var_a = 1.0 / sw + xm * xm / sxx
     cov_ab = -xm / sxx
     cov = np.array([[var_a, cov_ab], [cov_ab, var_b]])
-    res = ya - (a + b * xa)
+    res = np.subtract(ya, np.add(a, np.multiply(b, xa, out=buf), out=buf))  # ya − (a + b·xa)
     norm = res / sa
-    chi2 = float((norm * norm).sum())
+    chi2 = float(np.multiply(norm, norm, out=buf).sum())
     dof = xa.size - 2
     scaled = False
     if scale and dof > 0 and chi2 / dof > 1.0:
@@ -205,12 +200,48 @@ def weighted_line(x: ArrayLike, y: ArrayLike, sigma: ArrayLike, *, scale: bool =
         cov=cov,
         chi2=chi2,
         dof=dof,
-        rms=float(np.sqrt(np.mean(res * res))),
+        rms=float(np.sqrt(np.mean(np.multiply(res, res, out=buf)))),
         residuals=res,
         normalized=norm,
-        outliers=np.abs(norm) > OUTLIER_NSIGMA,
+        outliers=np.abs(norm, out=buf) > OUTLIER_NSIGMA,
         scaled=scaled,
     )
+
+
+def line_weights(sigma: F64) -> F64:
+    """The weights 1/σ² of :func:`weighted_line` [1/σ's unit²].
+
+    Raises
+    ------
+    ValueError
+        A σ that is not positive and finite.
+    """
+    if np.any(sigma <= 0) or not np.all(np.isfinite(sigma)):
+        raise ValueError("sigma must be positive and finite")
+    return np.asarray(1.0 / sigma**2, dtype=np.float64)
+
+
+def line_slope(x: F64, y: F64, w: F64) -> tuple[float, float]:
+    """(slope, intercept) of :func:`weighted_line` from the weights (:func:`line_weights`):
+    the same doubles, without the residuals, χ² and covariance."""
+    if x.size < 2:
+        raise ValueError("need at least two points for a line fit")
+    _sw, _xm, _sxx, b, a = _line(x, y, w, np.empty(x.shape))
+    return b, a
+
+
+def _line(x: F64, y: F64, w: F64, buf: F64) -> tuple[float, float, float, float, float]:
+    """Σw, x̄, S_xx, slope and intercept of the weighted line (``buf``: scratch of x's shape)."""
+    sw = w.sum()
+    xm = float(np.multiply(w, x, out=buf).sum() / sw)
+    ym = float(np.multiply(w, y, out=buf).sum() / sw)
+    dx = x - xm
+    wdx = np.multiply(w, dx, out=buf)
+    sxx = float(np.multiply(wdx, dx, out=dx).sum())
+    if sxx <= 0.0 or not math.isfinite(sxx):
+        raise ValueError("all abscissae are equal: the slope is undetermined")
+    b = float(np.multiply(wdx, np.subtract(y, ym, out=dx), out=dx).sum() / sxx)
+    return float(sw), xm, sxx, b, ym - b * xm
 
 
 @dataclass(frozen=True, slots=True)
@@ -251,7 +282,9 @@ class ComponentFit:
         return float(math.sqrt(self.cov[0, 0]))
 
 
-def fit_component(design: ArrayLike, v: ArrayLike, sigma: ArrayLike, star: int) -> ComponentFit:
+def fit_component(
+    design: ArrayLike, v: ArrayLike, sigma: ArrayLike, star: int, weights: F64 | None = None
+) -> ComponentFit:
     """Fit v = γ + s K G (s = +1 for star 1, −1 for star 2) by weighted least squares.
 
     Parameters
@@ -262,6 +295,8 @@ def fit_component(design: ArrayLike, v: ArrayLike, sigma: ArrayLike, star: int) 
         Velocities and 1σ errors [km/s].
     star : int
         1 or 2.
+    weights : ndarray, optional
+        :func:`line_weights` of ``sigma``, when the caller has them.
 
     Returns
     -------
@@ -275,7 +310,7 @@ def fit_component(design: ArrayLike, v: ArrayLike, sigma: ArrayLike, star: int) 
     if star not in (1, 2):
         raise ValueError("star must be 1 or 2")
     sign = 1.0 if star == 1 else -1.0
-    line = weighted_line(design, v, sigma)
+    line = weighted_line(design, v, sigma, weights=weights)
     jac = np.diag([1.0, sign])
     return ComponentFit(
         star=star,
@@ -387,21 +422,23 @@ def wilson_fit(
     x, y = np.asarray(v2, float), np.asarray(v1, float)
     wx, wy = 1.0 / np.asarray(s2, float) ** 2, 1.0 / np.asarray(s1, float) ** 2
     _check_wilson_inputs(x, wx, wy)
-    b = _york_slope(x, y, wx, wy, -float(q0))
-    W, xm, _U, _V, beta = _york_terms(x, y, wx, wy, b)
-    ym = float((W * y).sum() / W.sum())
+    work = np.empty((6, x.size))  # York's arrays, rewritten at every step (no fresh 8 MB each)
+    b = _york_slope(x, y, wx, wy, -float(q0), work)
+    W, xm, _U, _V, beta = _york_terms(x, y, wx, wy, b, work)
+    tmp = work[5]
+    ym = float(np.multiply(W, y, out=tmp).sum() / W.sum())
     a = ym - b * xm
-    xa = xm + beta  # York's adjusted abscissae
-    ua = xa - float((W * xa).sum() / W.sum())
-    var_b = 1.0 / float((W * ua * ua).sum())
-    var_a = 1.0 / float(W.sum()) + float((W * xa).sum() / W.sum()) ** 2 * var_b
-    res = y - a - b * x
+    xa = np.add(xm, beta, out=beta)  # York's adjusted abscissae
+    ua = np.subtract(xa, float(np.multiply(W, xa, out=tmp).sum() / W.sum()), out=work[4])
+    var_b = 1.0 / float(np.multiply(np.multiply(W, ua, out=tmp), ua, out=tmp).sum())
+    var_a = 1.0 / float(W.sum()) + float(np.multiply(W, xa, out=tmp).sum() / W.sum()) ** 2 * var_b
+    res = np.subtract(np.subtract(y, a, out=work[4]), np.multiply(b, x, out=tmp), out=work[4])
     return WilsonFit(
         q=-b,
         sigma_q=math.sqrt(var_b),
         intercept=a,
         sigma_intercept=math.sqrt(var_a),
-        chi2=float((W * res * res).sum()),
+        chi2=float(np.multiply(np.multiply(W, res, out=tmp), res, out=tmp).sum()),
         dof=x.size - 2,
     )
 
@@ -419,12 +456,13 @@ def _check_wilson_inputs(x: F64, wx: F64, wy: F64) -> None:
         raise ValueError("all v2 are equal: the WIL41 slope is undetermined")
 
 
-def _york_slope(x: F64, y: F64, wx: F64, wy: F64, b: float) -> float:
+def _york_slope(x: F64, y: F64, wx: F64, wy: F64, b: float, work: F64) -> float:
     """York's fixed-point iteration for the slope, from ``b`` (at most 200 steps, relative
-    tolerance 1e-13)."""
+    tolerance 1e-13; ``work``: :func:`_york_terms`' arrays)."""
     for _ in range(200):
-        W, _xm, U, V, beta = _york_terms(x, y, wx, wy, b)
-        b_new = float((W * beta * V).sum() / (W * beta * U).sum())
+        W, _xm, U, V, beta = _york_terms(x, y, wx, wy, b, work)
+        wb, tmp = np.multiply(W, beta, out=work[4]), work[5]
+        b_new = float(np.multiply(wb, V, out=tmp).sum() / np.multiply(wb, U, out=tmp).sum())
         done = abs(b_new - b) <= 1e-13 * max(1.0, abs(b_new))
         b = b_new
         if done:
@@ -432,18 +470,29 @@ def _york_slope(x: F64, y: F64, wx: F64, wy: F64, b: float) -> float:
     return b
 
 
-def _york_terms(x: F64, y: F64, wx: F64, wy: F64, b: float) -> tuple[F64, float, F64, F64, F64]:
-    """York's W_i, x̄, U_i, V_i and β_i at slope ``b`` (uncorrelated errors)."""
-    W = wx * wy / (wx + b * b * wy)
-    xm = float((W * x).sum() / W.sum())
-    ym = float((W * y).sum() / W.sum())
-    U, V = x - xm, y - ym
-    beta = W * (U / wy + b * V / wx)
+def _york_terms(
+    x: F64, y: F64, wx: F64, wy: F64, b: float, work: F64
+) -> tuple[F64, float, F64, F64, F64]:
+    """York's W_i, x̄, U_i, V_i and β_i at slope ``b`` (uncorrelated errors), written into the
+    rows of ``work`` (6, n): W, U, V, β and two scratch rows."""
+    W, U, V, beta, t1, t2 = work
+    np.divide(np.multiply(wx, wy, out=t1), np.add(wx, np.multiply(b * b, wy, out=t2), out=t2), W)
+    xm = float(np.multiply(W, x, out=t1).sum() / W.sum())
+    ym = float(np.multiply(W, y, out=t1).sum() / W.sum())
+    np.subtract(x, xm, out=U)
+    np.subtract(y, ym, out=V)
+    np.add(np.divide(U, wy, out=t1), np.divide(np.multiply(b, V, out=t2), wx, out=t2), out=t1)
+    np.multiply(W, t1, out=beta)
     return W, xm, U, V, beta
 
 
 def phase_sensitivity(
-    design: ArrayLike, sigma: ArrayLike, d_design: ArrayLike, K: float, sign: float
+    design: ArrayLike,
+    sigma: ArrayLike,
+    d_design: ArrayLike,
+    K: float,
+    sign: float,
+    weights: F64 | None = None,
 ) -> tuple[F64, F64]:
     """Linear response of (K, γ) of one component to the ephemeris parameters.
 
@@ -459,6 +508,8 @@ def phase_sensitivity(
         Fitted semi-amplitude [km/s].
     sign : float
         +1 (star 1) or −1 (star 2).
+    weights : ndarray, optional
+        1/σ² (:func:`line_weights`), when the caller has them (the same doubles).
 
     Returns
     -------
@@ -473,7 +524,7 @@ def phase_sensitivity(
     (σ_u, σ_κ) contribution to σ_K and σ_γ (Appendix C1).
     """
     x = np.asarray(design, float)
-    w = 1.0 / np.asarray(sigma, float) ** 2
+    w = 1.0 / np.asarray(sigma, float) ** 2 if weights is None else weights
     dG = np.asarray(d_design, float)
     sw = w.sum()
     xm = (w * x).sum() / sw

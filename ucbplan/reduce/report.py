@@ -8,6 +8,7 @@ The keys are documented in docs/commands.md ("ucbplan reduce" → "Report keys")
 from __future__ import annotations
 
 import math
+from json.encoder import encode_basestring_ascii
 from typing import IO, TYPE_CHECKING, Any
 
 import numpy as np
@@ -276,11 +277,91 @@ def em_prior(red: Reduction) -> dict[str, Any]:
 
 
 def write_json(doc: dict[str, Any], handle: IO[str]) -> None:
-    """Write ``doc`` as indented JSON (NaN-free), the text of :func:`ucbplan.io.dump_json`."""
+    """Write ``doc`` as indented JSON (NaN-free), the text of :func:`ucbplan.io.dump_json`
+    (the fixed-u pairs through :class:`_PairText`)."""
     from ucbplan.reduce.jsontext import dumps_report
 
-    handle.write(dumps_report(doc))
+    handle.write(dumps_report(doc, {"pairs": _PairText()}))
     handle.write("\n")
+
+
+#: Keys of a fixed-u pair's document (:func:`_pair_doc`), of its quantities and of Δv_CM.
+_PAIR_KEYS = tuple(
+    "alpha beta u_star_rad dT dv dkappa_spec dkappa_lisa dkappa_significance dv_cm".split()
+)
+_Q_KEYS = ("value", "sigma", "unit")
+_LIMIT_KEYS = (*_Q_KEYS, "upper_limit")
+
+
+class _PairText:
+    """The JSON text of fixed-u pair documents, from one template per nesting level and number
+    of components: the bytes :func:`~ucbplan.reduce.jsontext.dumps_report` writes for them
+    (~8,000 pairs at 10⁶ spectra), without its walk through every key. A document of another
+    shape, or with a value other than a float, None or text where those stand, is left to it."""
+
+    def __init__(self) -> None:
+        self._formats: dict[tuple[int, int], str] = {}
+
+    def __call__(self, doc: Any, level: int) -> str | None:
+        try:
+            leaves = _pair_leaves(doc)
+        except _NotPlain:
+            return None
+        key = (level, len(doc["dv"]))
+        if key not in self._formats:
+            self._formats[key] = _pair_format(doc, level)
+        return self._formats[key] % leaves
+
+
+class _NotPlain(Exception):
+    """A pair document that :class:`_PairText` leaves to the general writer."""
+
+
+def _pair_leaves(d: Any) -> tuple[str, ...]:
+    """The text of a pair document's values, in its keys' order (raises _NotPlain)."""
+    if type(d) is not dict or tuple(d) != _PAIR_KEYS or type(d["dv"]) is not list:
+        raise _NotPlain
+    out = [_text(d["alpha"]), _text(d["beta"]), _text(d["u_star_rad"])]
+    for q in (d["dT"], *d["dv"], d["dkappa_spec"], d["dkappa_lisa"]):
+        if type(q) is not dict or tuple(q) != _Q_KEYS:
+            raise _NotPlain
+        out += (_text(q["value"]), _text(q["sigma"]), _text(q["unit"]))
+    out.append(_text(d["dkappa_significance"]))
+    q = d["dv_cm"]
+    if type(q) is not dict or tuple(q) != _LIMIT_KEYS:
+        raise _NotPlain
+    out += (_text(q["value"]), _text(q["sigma"]), _text(q["unit"]), _text(q["upper_limit"]))
+    return tuple(out)
+
+
+def _text(x: Any) -> str:
+    """JSON text of a float (null when not finite), None or str, as the general writer's."""
+    if type(x) is float:
+        return float.__repr__(x) if math.isfinite(x) else "null"
+    if x is None:
+        return "null"
+    if type(x) is str:
+        return encode_basestring_ascii(x)
+    raise _NotPlain
+
+
+def _pair_format(doc: dict[str, Any], level: int) -> str:
+    """A %-format of the text of documents shaped as ``doc`` at nesting ``level``: the general
+    writer's text of ``doc`` with each value replaced by a marker, the markers made ``%s``."""
+    import itertools
+    import re
+
+    from ucbplan.reduce.jsontext import dumps_report
+
+    count = itertools.count()
+
+    def mark(x: Any) -> Any:
+        if type(x) is dict:
+            return {k: mark(v) for k, v in x.items()}
+        return [mark(v) for v in x] if type(x) is list else f"@{next(count)}@"
+
+    text = dumps_report(mark(doc)).replace("\n", "\n" + "  " * level)
+    return "%s".join(part.replace("%", "%%") for part in re.split(r'"@\d+@"', text))
 
 
 def write_yaml(doc: dict[str, Any], handle: IO[str]) -> None:

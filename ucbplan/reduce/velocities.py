@@ -364,9 +364,10 @@ def _assemble(
     jd = num[tcol] + _TIME_COLS[tcol]
     scale = "utc" if tcol.endswith("_utc") else "tdb"
     nan = np.full(jd.shape, np.nan)
+    day = np.floor(jd)
     return VelocityTable(
         source=path,
-        time=Time(np.floor(jd), jd - np.floor(jd), format="jd", scale=scale),
+        time=Time(day, jd - day, format="jd", scale=scale),
         window_s=num.get("exptime_s", num.get("window_s", nan)),
         lambda_k=num.get("lambda_k", nan),
         v=tuple(num[c] for c in comps),
