@@ -338,7 +338,7 @@ def test_circular_u_state_is_the_eccentric_formula_at_zero(star: int, origin: fl
 
 @pytest.mark.parametrize("shape", [(5, 7), (8192, 7), (8193, 7), (30011, 7), (3, 9000, 7)])
 def test_jacobian_products_in_blocks_equal_one_product(shape: tuple[int, ...]) -> None:
-    # σ_u's J·C in blocks of ROWS_PER_PRODUCT rows (kept on the calling thread) gives the one
+    # σ_u's J·C in row blocks (mvnormal.rows_times, kept on the calling thread) gives the one
     # product's bits, whatever the stack's shape, and so does σ_u itself.
     from ucbplan.core.phase import _times, sigma_u_from_jacobian
 

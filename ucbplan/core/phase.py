@@ -13,13 +13,13 @@ u_j = Φ_asc + ε_j + 2κ sin Φ_asc − 2η cos Φ_asc with ε_1 = 0, ε_2 = π
 
 from __future__ import annotations
 
-import itertools
 import math
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ucbplan.core.constants import TWO_PI
+from ucbplan.core.mvnormal import rows_times
 from ucbplan.core.params import PARAM_NAMES, PhaseParams
 from ucbplan.errors import UcbplanError
 
@@ -270,25 +270,13 @@ def u_jacobian(p: PhaseParams, tau_s: ArrayLike, star: int = 1) -> FloatArray:
     return jacobian_kernel(p.eta, p.kappa, p.omega_dot, tau, np.sin(phi_a), np.cos(phi_a))
 
 
-#: Most Jacobians one matrix product of :func:`sigma_u_from_jacobian` takes. OpenBLAS hands a
-#: product of more than 2¹⁹ multiply-adds (> 10 699 rows of 7 × 7) to a second thread, which
-#: then spins on, ~10 ms of CPU per product on a busy machine (a semester: ~0.1 s); blocks of
-#: this many rows stay on the calling thread, each row the same dot products (same bits; tests
-#: compare).
-ROWS_PER_PRODUCT = 8192
-
-
 def _times(jac: FloatArray, cov: FloatArray) -> FloatArray:
-    """``jac @ cov`` for Jacobians (..., 7), in blocks of :data:`ROWS_PER_PRODUCT` rows."""
+    """``jac @ cov`` for Jacobians (..., 7) through :func:`~ucbplan.core.mvnormal.rows_times`:
+    in row blocks each small enough for OpenBLAS's calling thread (a product of more than 2¹⁹
+    multiply-adds goes to a second thread, which then spins on, ~10 ms of CPU per product on a
+    busy machine; a semester: ~0.1 s), each row the same double as in one product."""
     rows = np.reshape(jac, (-1, np.shape(jac)[-1]))
-    n = rows.shape[0]
-    if n <= ROWS_PER_PRODUCT:
-        return np.asarray(jac @ cov, dtype=np.float64)
-    # equal blocks: never a single row, which numpy would send to a matrix-vector product
-    edges = np.linspace(0, n, -(-n // ROWS_PER_PRODUCT) + 1).astype(np.int64)
-    out = np.empty((n, np.shape(cov)[-1]), dtype=np.float64)
-    for a, b in itertools.pairwise(edges):
-        out[a:b] = rows[a:b] @ cov
+    out = rows_times(rows, np.asarray(cov, dtype=np.float64))
     return out.reshape((*np.shape(jac)[:-1], out.shape[-1]))
 
 
