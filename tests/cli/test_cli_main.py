@@ -197,3 +197,33 @@ def test_the_process_entry_runs_openblas_on_one_thread_unless_told(
     )
     assert res.returncode == 0, res.stderr
     assert res.stdout.splitlines()[0] == f"BLAS {seen} False"
+
+
+#: Reports the collector's state when ``run`` hands over to ``main`` (the command).
+_GC_PROBE = """
+import gc, json, sys
+from ucbplan.cli import app
+before = gc.get_threshold()
+command = app.main
+def probe():
+    print(json.dumps([gc.isenabled(), gc.get_threshold(), before]), flush=True)
+    command()
+app.main = probe
+sys.argv = ["ucbplan", "--version"]
+app.run()
+"""
+
+
+def test_the_process_entry_keeps_the_collector_on_with_rare_full_collections() -> None:
+    """``app.run`` leaves the collector on and its young generations as they were, but makes a
+    full collection 100× rarer (issue 34: one of a command's few full collections re-traces
+    every long-lived object its imports made, ~0.1 CPU s of a reduce of 10⁶ spectra)."""
+    import json
+    import subprocess
+
+    res = subprocess.run([sys.executable, "-c", _GC_PROBE], capture_output=True, text=True)
+    assert res.returncode == 0, res.stderr
+    enabled, during, before = json.loads(res.stdout.splitlines()[0])
+    assert enabled
+    assert during[:2] == before[:2]
+    assert during[2] == 100 * before[2]
