@@ -42,6 +42,7 @@ from ucbplan.observing.observatory.barycentric import (
     astropy_rotations,
     exact_astrometry,
 )
+from ucbplan.observing.observatory.sun_moon import sun_moon_cirs_m
 from ucbplan.observing.observatory.time_axis import TimeAxis
 
 FloatArray = NDArray[np.float64]
@@ -119,6 +120,10 @@ def _sun_moon_cirs_m(t: Time, c2i: FloatArray | None) -> tuple[FloatArray, Float
     The Moon's frame transformation moves it to the geocentre first (GCRS → GCRS, as astropy's
     GCRS → CIRS does) and keeps spherical data, so the rotated vector goes through spherical
     coordinates as there."""
+    if c2i is not None:
+        shared = sun_moon_cirs_m(t, c2i)  # one Earth ephemeris per distinct time
+        if shared is not None:
+            return shared
     if c2i is None:
         rotations = astropy_rotations()
         if rotations is None:
