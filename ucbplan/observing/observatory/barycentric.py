@@ -22,9 +22,9 @@ import numpy as np
 from astropy import units as u
 from astropy.coordinates import CartesianRepresentation, EarthLocation, SkyCoord
 from astropy.time import Time, TimeDelta
-from scipy.interpolate import CubicSpline
 
 from ucbplan.core.constants import HOUR_S
+from ucbplan.core.spline import CubicSpline, splines
 from ucbplan.errors import InputError
 from ucbplan.observing.observatory.time_axis import TimeAxis
 
@@ -190,11 +190,9 @@ def _site_icrs_interpolated(
     lag = (ut1.jd1 - tc.jd1) + (ut1.jd2 - tc.jd2)  # UT1 − TDB [d]: smooth (leap seconds cancel)
     spin = _turn(erfa.era00(ut1.jd1, ut1.jd2), r - earth, 1.0)  # the site in the turning frame
     td = origin + TimeDelta(x * u.s)
-    era = erfa.era00(td.jd1, td.jd2 + CubicSpline(xc, lag)(x))
-    return np.asarray(
-        CubicSpline(xc, earth, axis=0)(x) + _turn(era, CubicSpline(xc, spin, axis=0)(x), -1.0),
-        dtype=np.float64,
-    )
+    lag_s, earth_s, spin_s = splines(xc, [lag, earth, spin])  # one elimination for the three
+    era = erfa.era00(td.jd1, td.jd2 + lag_s(x))
+    return np.asarray(earth_s(x) + _turn(era, spin_s(x), -1.0), dtype=np.float64)
 
 
 @dataclass(frozen=True)

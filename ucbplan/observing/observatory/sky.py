@@ -34,9 +34,9 @@ from astropy.coordinates import (
 from astropy.coordinates.erfa_astrom import erfa_astrom
 from astropy.time import Time
 from numpy.typing import NDArray
-from scipy.interpolate import CubicSpline
 
 from ucbplan.core.constants import HOUR_S
+from ucbplan.core.spline import CubicSpline, splines
 from ucbplan.observing.observatory.barycentric import (
     astropy_astrometry,
     astropy_rotations,
@@ -196,14 +196,15 @@ class SkyModel:
         lon, lat = float(geo.lon.to_value(u.rad)), float(geo.lat.to_value(u.rad))
         up = np.array([math.cos(lat) * math.cos(lon), math.cos(lat) * math.sin(lon), math.sin(lat)])
         site = np.array([c.to_value(u.m) for c in location.to_geocentric()], dtype=np.float64)
+        era_s, sun_s, moon_s, *targets = splines(x, [era, sun, moon, *tvec])
         return cls(
             origin=origin,
             location=location,
             coords=coords,
-            era=CubicSpline(x, era),
-            sun=CubicSpline(x, sun, axis=0),
-            moon=CubicSpline(x, moon, axis=0),
-            targets=tuple(CubicSpline(x, v, axis=0) for v in tvec),
+            era=era_s,
+            sun=sun_s,
+            moon=moon_s,
+            targets=tuple(targets),
             site_itrs_m=site,
             up_itrs=up,
         )

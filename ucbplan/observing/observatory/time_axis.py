@@ -18,9 +18,9 @@ from astropy import units as u
 from astropy.coordinates import EarthLocation
 from astropy.time import Time, TimeDelta
 from numpy.typing import ArrayLike, NDArray
-from scipy.interpolate import CubicSpline
 
 from ucbplan.core.constants import HOUR_S
+from ucbplan.core.spline import CubicSpline
 
 FloatArray = NDArray[np.float64]
 
