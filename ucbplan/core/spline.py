@@ -36,6 +36,10 @@ FloatArray = NDArray[np.float64]
 #: cases (a line, a parabola), left to scipy itself.
 MIN_NODES = 4
 
+#: From this many points in ascending order, evaluation counts them per interval instead of
+#: searching for each (a binary search per point costs more from here on).
+SORTED_MIN = 2048
+
 
 def _checked_nodes(x: ArrayLike) -> FloatArray:
     xs = np.asarray(x, dtype=np.float64)
@@ -72,65 +76,86 @@ def _system(
     return lower[:-1].tolist(), diag.tolist(), upper[1:].tolist(), b
 
 
-def _eliminate(dl: list[float], d: list[float], du: list[float]) -> list[tuple[bool, float]]:
-    """``dgtsv``'s forward elimination of the matrix, in place: per row, (rows interchanged,
-    multiplier)."""
-    steps = []
-    for i in range(len(d) - 1):
-        if abs(d[i]) >= abs(dl[i]):
-            if d[i] == 0.0:
+Steps = tuple[list[float], list[int]]
+
+
+def _eliminate(dl: list[float], d: list[float], du: list[float]) -> Steps:
+    """``dgtsv``'s forward elimination of the matrix, in place: (each row's multiplier, the
+    rows interchanged with the next; the spline's matrix rarely needs any)."""
+    n = len(d)
+    facts, swapped = [0.0] * (n - 1), []
+    di = d[0]
+    for i in range(n - 1):
+        li = dl[i]
+        if abs(di) >= abs(li):
+            if di == 0.0:
                 raise ValueError("spline system is singular (repeated nodes?)")
-            fact = dl[i] / d[i]
-            d[i + 1] = d[i + 1] - fact * du[i]
+            f = li / di
+            di = d[i + 1] - f * du[i]
             dl[i] = 0.0
-            steps.append((False, fact))
         else:
-            fact = d[i] / dl[i]
-            d[i] = dl[i]
+            f = di / li
+            d[i] = li
             temp = d[i + 1]
-            d[i + 1] = du[i] - fact * temp
-            if i < len(d) - 2:
+            di = du[i] - f * temp
+            if i < n - 2:
                 dl[i] = du[i + 1]
-                du[i + 1] = -fact * dl[i]
+                du[i + 1] = -f * dl[i]
             du[i] = temp
-            steps.append((True, fact))
+            swapped.append(i)
+        d[i + 1] = di
+        facts[i] = f
     if d[-1] == 0.0:
         raise ValueError("spline system is singular (repeated nodes?)")
-    return steps
+    return facts, swapped
+
+
+def _forward_column(steps: Steps, b: list[float]) -> list[float]:
+    """One right-hand side through the elimination's row operations."""
+    facts, swapped = steps
+    if not swapped:
+        prev = b[0]
+        out = [prev]
+        for f, bi in zip(facts, b[1:], strict=True):
+            prev = bi - f * prev
+            out.append(prev)
+        return out
+    swaps = set(swapped)
+    for i, f in enumerate(facts):
+        if i in swaps:
+            b[i], b[i + 1] = b[i + 1], b[i] - f * b[i + 1]
+        else:
+            b[i + 1] = b[i + 1] - f * b[i]
+    return b
 
 
 def _solve_column(
-    steps: list[tuple[bool, float]],
-    dl: list[float],
-    d: list[float],
-    du: list[float],
-    b: list[float],
+    steps: Steps, dl: list[float], d: list[float], du: list[float], b: list[float]
 ) -> list[float]:
     """One right-hand side through ``dgtsv``'s elimination and back substitution."""
-    for i, (swap, fact) in enumerate(steps):
-        if swap:
-            b[i], b[i + 1] = b[i + 1], b[i] - fact * b[i + 1]
-        else:
-            b[i + 1] = b[i + 1] - fact * b[i]
+    b = _forward_column(steps, b)
     n = len(d)
-    b[n - 1] = b[n - 1] / d[n - 1]
-    if n > 1:
-        b[n - 2] = (b[n - 2] - du[n - 2] * b[n - 1]) / d[n - 2]
+    b1 = b[n - 1] / d[n - 1]
+    b0 = (b[n - 2] - du[n - 2] * b1) / d[n - 2]
+    b[n - 1], b[n - 2] = b1, b0
     for i in range(n - 3, -1, -1):
-        b[i] = (b[i] - du[i] * b[i + 1] - dl[i] * b[i + 2]) / d[i]
+        b0, b1 = (b[i] - du[i] * b0 - dl[i] * b1) / d[i], b0
+        b[i] = b0
     return b
 
 
 def _solve_rows(
-    steps: list[tuple[bool, float]], dl: list[float], d: list[float], du: list[float], b: FloatArray
+    steps: Steps, dl: list[float], d: list[float], du: list[float], b: FloatArray
 ) -> FloatArray:
     """:func:`_solve_column` on all columns of ``b`` (n, k) at once, row by row (the same
     operations on each column)."""
-    for i, (swap, fact) in enumerate(steps):
-        if swap:
-            b[i], b[i + 1] = b[i + 1].copy(), b[i] - fact * b[i + 1]
+    facts, swapped = steps
+    swaps = set(swapped)
+    for i, f in enumerate(facts):
+        if i in swaps:
+            b[i], b[i + 1] = b[i + 1].copy(), b[i] - f * b[i + 1]
         else:
-            b[i + 1] = b[i + 1] - fact * b[i]
+            b[i + 1] = b[i + 1] - f * b[i]
     n = len(d)
     b[n - 1] = b[n - 1] / d[n - 1]
     b[n - 2] = (b[n - 2] - du[n - 2] * b[n - 1]) / d[n - 2]
@@ -199,27 +224,45 @@ class CubicSpline:
             return np.asarray(self._scipy(x), dtype=np.float64)
         xs = np.asarray(x, dtype=np.float64)
         flat = xs.reshape(-1)
-        # the interval: x[i] <= x < x[i + 1], the end intervals extended (NaN: the last)
-        row = self._c[np.searchsorted(self._inner, flat, side="right")]
-        s = flat - row[:, 0]
-        if self._k == 1:
-            s2 = s * s
-            out = ((row[:, 1] + row[:, 2] * s) + row[:, 3] * s2) + row[:, 4] * (s2 * s)
-        else:
-            c = row[:, 1:].reshape(-1, 4, self._k)
+        i = self._intervals(flat)
+        s = flat - self._left.take(i)
+        if self._k > 1:
             s = s[:, None]
-            s2 = s * s
-            out = ((c[:, 0] + c[:, 1] * s) + c[:, 2] * s2) + c[:, 3] * (s2 * s)
-        return np.asarray(out.reshape(xs.shape + self._shape), dtype=np.float64)
+        c0, c1, c2, c3 = (c.take(i, axis=0) for c in self._c)
+        # ((c0 + c1 s) + c2 s²) + c3 s³, with s³ = s² s: each sum and product as in scipy's
+        # evaluation (a sum of two terms is the same either way round)
+        c1 *= s
+        c0 += c1
+        s2 = s * s
+        c2 *= s2
+        c0 += c2
+        s2 *= s
+        c3 *= s2
+        c0 += c3
+        return np.asarray(c0.reshape(xs.shape + self._shape), dtype=np.float64)
+
+    def _intervals(self, flat: FloatArray) -> NDArray[np.intp]:
+        """Each point's interval i: x[i] <= x < x[i + 1], the end intervals extended (NaN: the
+        last). Many points in order are counted per interval instead of each searched for."""
+        if flat.size < SORTED_MIN or not np.all(flat[1:] >= flat[:-1]):  # NaN: not in order
+            return self._inner.searchsorted(flat, side="right")
+        before = flat.searchsorted(self._inner, side="left")  # points before each inner node
+        counts = np.empty(self.x.size - 1, dtype=np.intp)
+        counts[0], counts[-1] = before[0], flat.size - before[-1]
+        np.subtract(before[1:], before[:-1], out=counts[1:-1])
+        return np.repeat(self._interval_numbers, counts)
 
     def _set(self, y: FloatArray, slopes: FloatArray) -> None:
-        """Keep, per interval, its left node and its cubic's coefficients, lowest power first
-        (the constant as ``0.0 + y``, the sum the evaluation starts from)."""
+        """Keep each interval's left node and its cubic's coefficients, lowest power first (the
+        constant as ``0.0 + y``: the sum the evaluation starts from), each (n − 1,) or
+        (n − 1, k)."""
         c = _coefficients(self.x, y, slopes)  # (n - 1, 4, k), highest power first
         self._k = c.shape[2]
-        table = np.concatenate([self.x[:-1, None], (0.0 + c[:, 3]), c[:, 2], c[:, 1], c[:, 0]], 1)
-        self._c = np.ascontiguousarray(table)
+        lowest_first = (0.0 + c[:, 3], c[:, 2], c[:, 1], c[:, 0])
+        self._c = tuple(np.ascontiguousarray(a[:, 0] if self._k == 1 else a) for a in lowest_first)
+        self._left = self.x[:-1]
         self._inner = self.x[1:-1]
+        self._interval_numbers = np.arange(self.x.size - 1)
 
 
 def _coefficients(x: FloatArray, y: FloatArray, slopes: FloatArray) -> FloatArray:

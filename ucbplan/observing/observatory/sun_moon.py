@@ -11,10 +11,12 @@ pass of the loop only where the emitted time moved (it stops moving, to the bit,
 converges). The site's GCRS position reuses the GCRS → CIRS matrix the caller already holds.
 The result is astropy's, bit for bit (tests compare with its frames at several sites).
 
-It uses three of astropy's helpers that are not public API (its ``aticq``/``atciqz``, its
-CIRS → ITRS matrix function and ``EarthLocation._get_gcrs_posvel``), each the one astropy's own
-transformations apply; :func:`sun_moon_cirs_m` returns None when any of them moved, or when a
-user chose another ephemeris or astrometry provider, and the caller then takes the frames.
+It uses two of astropy's helpers that are not public API (its ``aticq``/``atciqz`` and its
+CIRS → ITRS matrix function), each the one astropy's own transformations apply, as the site
+track does; :func:`sun_moon_cirs_m` returns None when either moved, or when a user chose another
+ephemeris or astrometry provider, and the caller then takes the frames. Every other step is
+written here from public pieces (erfa, representations, ``Time``), so a later astropy that
+changes its own steps changes no plan silently: the tests, comparing with its frames, say so.
 """
 
 from __future__ import annotations
@@ -29,9 +31,11 @@ from astropy.constants import c as speed_of_light
 from astropy.coordinates import (
     GCRS,
     CartesianRepresentation,
+    EarthLocation,
     SphericalRepresentation,
     solar_system_ephemeris,
 )
+from astropy.coordinates.matrix_utilities import matrix_transpose
 from astropy.time import Time
 from numpy.typing import NDArray
 
@@ -163,11 +167,28 @@ def _to_icrs(srepr: SphericalRepresentation, astrom: Any, aticq: Direction) -> A
     return intermediate + CartesianRepresentation(astrom["eb"], unit=u.au, xyz_axis=-1, copy=None)
 
 
+#: The Earth's rotation rate [rad/s] as astropy's ``EarthLocation`` states it.
+OMEGA_EARTH = (1.002_737_811_911_354_48 * u.cycle / u.day).to(1 / u.s, u.dimensionless_angles())
+
+
+def _site_gcrs_posvel(
+    location: EarthLocation, cirs_to_itrs: FloatArray, c2i: FloatArray
+) -> tuple[CartesianRepresentation, CartesianRepresentation]:
+    """The site's GCRS position and velocity as ``location.get_gcrs_posvel(t)`` forms them
+    (one rotation ITRS → GCRS through CIRS, the velocity the Earth's spin crossed with the
+    position), from the two matrices at ``t``."""
+    cirs_to_gcrs = matrix_transpose(c2i)
+    itrs_to_gcrs = cirs_to_gcrs @ matrix_transpose(cirs_to_itrs)
+    spin = CartesianRepresentation(cirs_to_gcrs[..., 2] * OMEGA_EARTH, xyz_axis=-1, copy=False)
+    itrs = CartesianRepresentation(location.x, location.y, location.z, copy=False)
+    position = itrs.transform(itrs_to_gcrs)
+    return position, spin.cross(position)
+
+
 def _usable(t: Time) -> bool:
     return (
         t.scale == "tdb"
         and t.location is not None
-        and hasattr(t.location, "_get_gcrs_posvel")
         and exact_astrometry()
         and solar_system_ephemeris.get() == "builtin"
     )
@@ -186,7 +207,7 @@ def sun_moon_cirs_m(t: Time, c2i: FloatArray) -> tuple[FloatArray, FloatArray] |
     epv00 = _Ephemeris(erfa.epv00)
     earth = epv00(*_tdb_jd(t))
     sun = _sun_gcrs(*earth).to_cartesian().transform(c2i).xyz.to_value(u.m).T
-    obsgeoloc, obsgeovel = t.location._get_gcrs_posvel(t, rotations[0](t), c2i)
+    obsgeoloc, obsgeovel = _site_gcrs_posvel(t.location, rotations[0](t), c2i)
     at_site = GCRS(obstime=t, obsgeoloc=obsgeoloc, obsgeovel=obsgeovel)
     zero = [0.0, 0.0, 0.0]
     at_geocentre = GCRS(obstime=t, obsgeoloc=zero * u.m, obsgeovel=zero * u.m / u.s)
