@@ -164,9 +164,10 @@ def _solve_rows(
     return b
 
 
-#: Right-hand sides above this many are solved row by row over numpy rows, below it column by
-#: column over Python floats (faster for few columns).
-ROWWISE_COLUMNS = 4
+#: From this many right-hand sides on, they are solved row by row over numpy rows; below it,
+#: column by column over Python floats (measured: 7 columns of 2,201 rows 2.2 ms by column,
+#: 7.5 ms by row; 37 columns of 738 rows 3.7 ms by column, 2.9 ms by row).
+ROWWISE_COLUMNS = 24
 
 
 def _node_slopes(x: FloatArray, y: FloatArray) -> FloatArray:
