@@ -163,8 +163,13 @@ class NightSun:
     def __init__(self, frame: PlanFrame, windows: Sequence[tuple[float, float]] = ()) -> None:
         self.frame = frame
         self.windows = list(windows)
+        self._known = set(self.windows)
         self._found: dict[tuple[float, float], tuple[FloatArray, FloatArray]] = {}
         self._usable: dict[int, tuple[TargetRun, dict[tuple[float, float], Usable]]] = {}
+
+    def knows(self, span: NightSpan, frame: PlanFrame | None) -> bool:
+        """Whether ``span`` is one of ``windows`` (on ``frame``'s axis)."""
+        return frame is self.frame and (span.x0, span.x1) in self._known
 
     def samples(self, window: tuple[float, float]) -> tuple[FloatArray, FloatArray]:
         """(sample times [s on the axis], the Sun's altitude there [deg]); read only."""
@@ -315,9 +320,8 @@ def night_usable(
     """Indices of ``run``'s usable candidates in the night ``span`` (read only), or why there
     are none (:func:`unusable_reason`); ``sun``: the run's, which finds every night of its
     windows at once."""
-    window = (span.x0, span.x1)
-    if sun is not None and window in sun.windows and sun.frame is frame:
-        return sun.usable(run, settings)[window]
+    if sun is not None and sun.knows(span, frame):
+        return sun.usable(run, settings)[(span.x0, span.x1)]
     j0, j1 = np.searchsorted(run.cand.x_mid, [span.x0, span.x1])
     js = np.arange(j0, j1)
     usable = js[(run.ok[js] > 0) & run.valid[js]]
