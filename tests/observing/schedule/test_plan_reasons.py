@@ -173,3 +173,30 @@ def test_why_nothing_fits_finds_the_sun_once_per_night(
         }
     assert sun_calls[0] == sun_calls[1]  # one call for both nights, whatever the targets
     assert sun_calls[0] == [2 * 288]  # both noon-to-noon windows, every 300 s
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_counts_per_night_are_the_counts_one_by_one(seed: int) -> None:
+    """(night, reason) counts, one count per cell for nights in order and apart (issue 34) or
+    by running sums for nights that overlap, against counting candidate by candidate: nights
+    that touch, lie apart, hold nothing or start before every candidate."""
+    import numpy as np
+
+    from ucbplan.observing.schedule.nights import NightSpan
+    from ucbplan.observing.schedule.reasons import _counts_per_night
+
+    rng = np.random.default_rng(seed)
+    x = np.sort(rng.uniform(0.0, 100.0, 400).round(1))  # repeats: ties at night edges
+    counted = rng.random(x.size) < 0.7
+    codes = rng.integers(-1, len(REASONS), x.size)
+    edges = np.sort(rng.choice(np.arange(-10.0, 111.0, 0.5), 12, replace=False))
+    apart = [NightSpan(str(k), edges[k], edges[k + 1 + (k % 3 == 0)]) for k in range(0, 10, 2)]
+    touching = [NightSpan(str(k), edges[k], edges[k + 1]) for k in range(11)]
+    overlapping = [NightSpan("a", 10.0, 60.0), NightSpan("b", 40.0, 90.0), NightSpan("c", 0, 5)]
+    for spans in (apart, touching, overlapping, [NightSpan("x", 200.0, 300.0)]):
+        want = np.zeros((len(spans), len(REASONS) + 1), dtype=np.int64)
+        for k, sp in enumerate(spans):
+            for j in np.flatnonzero(counted & (x >= sp.x0) & (x < sp.x1)):
+                want[k, codes[j] if codes[j] >= 0 else len(REASONS)] += 1
+        got = _counts_per_night(x, counted, codes, spans)
+        assert got.dtype == np.int64 and got.tolist() == want.tolist()
