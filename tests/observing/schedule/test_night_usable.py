@@ -74,3 +74,33 @@ def test_sky_at_once_is_bit_for_bit_each_window(planned: tuple) -> None:
         assert len(got) == len(parts)
         for part, value in zip(parts, got, strict=True):
             assert value.tobytes() == np.asarray(f(part)).tobytes()
+
+
+def test_session_partners_same_anchor_is_numpys_isclose() -> None:
+    """The next block at the same anchor is skipped where u★ differs by 0 mod 2π within
+    1e-6 rad: |·| <= 1e-6 is np.isclose(·, 0, atol=1e-6) (issue 34), at and around the edge,
+    for NaN and the full turn."""
+    from types import SimpleNamespace
+
+    from ucbplan.core.constants import TWO_PI
+    from ucbplan.observing.schedule.candidates import session_partners
+
+    rng = np.random.default_rng(7)
+    n = 4000
+    x_start = np.sort(rng.uniform(0.0, 1e6, n))
+    edge = [0.0, -0.0, 1e-6, -1e-6, np.nextafter(1e-6, 1.0), TWO_PI, np.nan, np.pi]
+    u = np.concatenate([rng.choice(edge, n // 2), rng.normal(0.0, 2e-6, n - n // 2)])
+    c = SimpleNamespace(
+        x_start=x_start,
+        x_mid=x_start,
+        x_end=x_start + rng.uniform(0.0, 400.0, n),
+        u_star=u,
+        ok=rng.random(n) < 0.8,
+        airmass_mid=rng.uniform(1.0, 2.0, n),
+    )
+    nxt, _, _ = session_partners(c, paired=True)  # type: ignore[arg-type]
+    ref = np.minimum(np.searchsorted(c.x_start, c.x_end, side="left"), n - 1)
+    with np.errstate(invalid="ignore"):
+        same = np.isclose(np.mod(u[ref] - u, TWO_PI), 0.0, atol=1e-6)
+    ref = np.minimum(np.where(same, ref + 1, ref), n - 1)
+    assert 0 < same.sum() < n and np.array_equal(nxt, ref)

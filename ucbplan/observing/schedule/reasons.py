@@ -137,12 +137,15 @@ def not_planned(
     night = frame.constraints.night
     order = [r.index for r in sorted(runs, key=lambda r: -r.target.priority)]
     taken_code, last = REASONS.index("taken by a higher-priority target"), len(REASONS)
+    by_target: dict[int, list[Session]] = {}
+    for s in placed:
+        by_target.setdefault(s.target_i, []).append(s)
     for run in runs:
-        c, per_night = run.cand, {}
+        c, per_night, mine = run.cand, {}, by_target.get(run.index, [])
         free = np.ones(c.x_mid.size, dtype=bool)
-        free[[j for s in placed if s.target_i == run.index for j in s.idx]] = False
-        before = set(order[: order.index(run.index)])  # placed before this target
-        taken = [(s.x0 - gap_s, s.x1) for s in placed if s.target_i in before]
+        free[[j for s in mine for j in s.idx]] = False
+        before = order[: order.index(run.index)]  # placed before this target
+        taken = [(s.x0 - gap_s, s.x1) for t in before for s in by_target.get(t, [])]
         dark = (
             free & evaluate_window([night], frame.sky, run.index, c.x_mid, c.x_mid, frame.night)[0]
         )
@@ -155,10 +158,8 @@ def not_planned(
         table = table[:, :last]
         table[spent, REASONS.index("time budget spent")] += usable[spent]
         table[~spent, REASONS.index("not needed")] += usable[~spent]
-        for k in np.flatnonzero(table.sum(axis=1)):
-            row = table[k]
-            per_night[spans[int(k)].label] = {
-                r: int(row[m]) for m, r in enumerate(REASONS) if row[m]
-            }
+        for span, row in zip(spans, table.tolist(), strict=True):
+            if any(row):
+                per_night[span.label] = {r: k for r, k in zip(REASONS, row, strict=True) if k}
         out[run.target.name] = per_night
     return out
