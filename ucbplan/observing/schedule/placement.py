@@ -246,9 +246,10 @@ def _no_session_reasons(
         else:
             dark[k] = xs[sun <= night.sun_alt_max_deg]
     alts = at_once(lambda x: frame.sky.target_alt_deg(run.index, x), list(dark.values()))
+    low = at_once(lambda alt: airmass_from_alt(alt) > limit.max_airmass, alts)
     inside: dict[int, NDArray[np.int64]] = {}
-    for k, alt in zip(dark, alts, strict=True):
-        if np.all(airmass_from_alt(alt) > limit.max_airmass):
+    for k, alt, too_low in zip(dark, alts, low, strict=True):
+        if too_low.all():
             why[k] = (
                 f"never at airmass <= {limit.max_airmass:g} during {night.twilight} night "
                 f"(highest altitude {alt.max():.1f} deg)"
@@ -268,7 +269,8 @@ def _failed_reason(run: TargetRun, frame: PlanFrame, in_win: NDArray[np.int64]) 
     """Why none of the night-time blocks ``in_win`` of a window is usable."""
     if not in_win.size:
         return "no anchor epoch in the night window"
-    fails = Counter(int(f) for f in run.cand.first_failed[in_win] if f >= 0)
+    first = run.cand.first_failed[in_win]
+    fails = Counter(first[first >= 0].tolist())  # in order of first appearance
     if not fails:
         return "no session fits: the second block of each pair fails the constraints"
     worst = fails.most_common(1)[0][0]
