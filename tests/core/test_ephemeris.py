@@ -349,3 +349,31 @@ def test_jacobian_products_in_blocks_equal_one_product(shape: tuple[int, ...]) -
     np.testing.assert_array_equal(_times(jac, cov), jac @ cov)
     whole = np.sqrt(np.maximum(np.sum((jac @ cov) * jac, axis=-1), 0.0))
     np.testing.assert_array_equal(sigma_u_from_jacobian(jac, cov), whole)
+
+
+def _mean_seeds_all_steps(p: PhaseParams, origin_s: float, target_cycles: np.ndarray) -> np.ndarray:
+    """The mean-phase seeds with all eight Newton steps on every offset (as before issue 34)."""
+    nu0 = 0.5 * (p.f_gw + p.fdot * origin_s + p.fddot * origin_s**2 / 2)
+    nu1 = 0.5 * (p.fdot + p.fddot * origin_s)
+    nu2 = 0.5 * p.fddot
+    dt = target_cycles / nu0
+    for _ in range(8):
+        val = nu0 * dt + nu1 * dt**2 / 2 + nu2 * dt**3 / 6 - target_cycles
+        der = nu0 + nu1 * dt + nu2 * dt**2 / 2
+        dt = dt - val / der
+    return dt
+
+
+@settings(max_examples=40, deadline=None)
+@given(p=params_st, origin_yr=st.floats(-10.0, 30.0), n=st.integers(0, 3000), frac=st.floats(0, 1))
+def test_mean_seeds_stepping_only_offsets_that_move_are_every_step(
+    p: PhaseParams, origin_yr: float, n: int, frac: float
+) -> None:
+    """Seeds stepped only while a step still changes them (issue 34) are, bit for bit, those of
+    all eight steps everywhere: a step that leaves an offset unchanged leaves it so forever."""
+    from ucbplan.core.ephemeris import _mean_seeds
+
+    cycles = np.arange(n) * (1.0 + 1e-3 * frac) - 2.0 + frac
+    got = _mean_seeds(p, origin_yr * YEAR, cycles)
+    want = _mean_seeds_all_steps(p, origin_yr * YEAR, cycles)
+    assert got.dtype == np.float64 and got.tobytes() == want.tobytes()

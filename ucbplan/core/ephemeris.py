@@ -130,12 +130,21 @@ def _mean_seeds(p: PhaseParams, origin_s: float, target_cycles: FloatArray) -> F
     nu0 = 0.5 * (p.f_gw + p.fdot * origin_s + p.fddot * origin_s**2 / 2)
     nu1 = 0.5 * (p.fdot + p.fddot * origin_s)
     nu2 = 0.5 * p.fddot
-    dt = target_cycles / nu0
-    for _ in range(8):
-        val = nu0 * dt + nu1 * dt**2 / 2 + nu2 * dt**3 / 6 - target_cycles
-        der = nu0 + nu1 * dt + nu2 * dt**2 / 2
-        dt = dt - val / der
-    return dt
+    cycles = np.asarray(target_cycles, dtype=np.float64).ravel()
+    dt = cycles / nu0
+    live = None  # every offset; then those a step still moved
+    for _ in range(8):  # elementwise: an offset that a step leaves unchanged, bit for bit, ...
+        d, c = (dt, cycles) if live is None else (dt[live], cycles[live])
+        val = nu0 * d + nu1 * d**2 / 2 + nu2 * d**3 / 6 - c
+        der = nu0 + nu1 * d + nu2 * d**2 / 2
+        step = d - val / der
+        moved = step.view(np.int64) != d.view(np.int64)  # ... every later step leaves so
+        if live is None:
+            dt, live = step, np.flatnonzero(moved)
+        else:
+            dt[live] = step
+            live = live[moved]
+    return dt.reshape(np.shape(target_cycles))
 
 
 def solve_u(

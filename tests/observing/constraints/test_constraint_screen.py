@@ -106,7 +106,7 @@ def _near_limits(sky: SkyModel, i: int, rng: np.random.Generator, n: int) -> np.
     return np.concatenate([rng.uniform(0.0, YEAR_S, n - n // 2), near])
 
 
-@pytest.mark.parametrize("width_s", [60.0, 900.0, 3600.0])
+@pytest.mark.parametrize("width_s", [0.0, 60.0, 900.0, 3600.0])  # 0: instants, one sample
 def test_screened_equals_exact(sky: SkyModel, width_s: float) -> None:
     rng = np.random.default_rng(int(width_s))
     cs = _all_six()

@@ -143,8 +143,8 @@ def test_why_nothing_fits_finds_the_sun_once_per_night(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """Targets that never rise above the airmass limit at Paranal (dec +80): each night says
-    why for each target, and the Sun's altitude behind those reasons is found once per night
-    for all of them (issue 34): three targets cost no more Sun than one."""
+    why for each target, and the Sun's altitude behind those reasons is found once for all the
+    nights and all of them (issue 34): three targets cost no more Sun than one."""
     from ucbplan.observing.observatory.sky import SkyModel
     from ucbplan.observing.schedule import placement
 
@@ -171,4 +171,32 @@ def test_why_nothing_fits_finds_the_sun_once_per_night(
         assert {m.reason for m in run.result.unplaced} == {
             "never at airmass <= 2 during nautical night (highest altitude -14.5 deg)"
         }
-    assert len(sun_calls[0]) == len(sun_calls[1]) == 2  # one per night
+    assert sun_calls[0] == sun_calls[1]  # one call for both nights, whatever the targets
+    assert sun_calls[0] == [2 * 288]  # both noon-to-noon windows, every 300 s
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_counts_per_night_are_the_counts_one_by_one(seed: int) -> None:
+    """(night, reason) counts, one count per cell for nights in order and apart (issue 34) or
+    by running sums for nights that overlap, against counting candidate by candidate: nights
+    that touch, lie apart, hold nothing or start before every candidate."""
+    import numpy as np
+
+    from ucbplan.observing.schedule.nights import NightSpan
+    from ucbplan.observing.schedule.reasons import _counts_per_night
+
+    rng = np.random.default_rng(seed)
+    x = np.sort(rng.uniform(0.0, 100.0, 400).round(1))  # repeats: ties at night edges
+    counted = rng.random(x.size) < 0.7
+    codes = rng.integers(-1, len(REASONS), x.size)
+    edges = np.sort(rng.choice(np.arange(-10.0, 111.0, 0.5), 12, replace=False))
+    apart = [NightSpan(str(k), edges[k], edges[k + 1 + (k % 3 == 0)]) for k in range(0, 10, 2)]
+    touching = [NightSpan(str(k), edges[k], edges[k + 1]) for k in range(11)]
+    overlapping = [NightSpan("a", 10.0, 60.0), NightSpan("b", 40.0, 90.0), NightSpan("c", 0, 5)]
+    for spans in (apart, touching, overlapping, [NightSpan("x", 200.0, 300.0)]):
+        want = np.zeros((len(spans), len(REASONS) + 1), dtype=np.int64)
+        for k, sp in enumerate(spans):
+            for j in np.flatnonzero(counted & (x >= sp.x0) & (x < sp.x1)):
+                want[k, codes[j] if codes[j] >= 0 else len(REASONS)] += 1
+        got = _counts_per_night(x, counted, codes, spans)
+        assert got.dtype == np.int64 and got.tolist() == want.tolist()

@@ -98,19 +98,23 @@ class LatticeScreen:
     k0: int = 0
     codes: Int8Array = field(default_factory=lambda: np.zeros(0, dtype=np.int8))
 
-    def at(self, k: NDArray[np.int64]) -> Int8Array:
-        """The screen at nodes ``k`` (any shape)."""
+    def at(self, k: NDArray[np.int64], offset: int = 0) -> Int8Array:
+        """The screen at nodes ``k + offset`` (any shape). Nodes already screened (every one
+        for a run's later targets) are only looked up."""
         if k.size == 0:
             return np.zeros(k.shape, dtype=np.int8)
-        self._cover(int(np.min(k)), int(np.max(k)))
-        todo = np.zeros(self.codes.size, dtype=bool)
-        todo[(k - self.k0).ravel()] = True
-        todo &= self.codes == 2
-        if todo.any():
+        self._cover(int(np.min(k)) + offset, int(np.max(k)) + offset)
+        idx = k + (offset - self.k0)
+        got = self.codes[idx]
+        missing = got == 2
+        if missing.any():
+            todo = np.zeros(self.codes.size, dtype=bool)
+            todo[idx[missing]] = True
             at = np.flatnonzero(todo)
             x = np.asarray(self.step_s * (at + self.k0), dtype=np.float64)
             self.codes[at] = self.constraint.screen(self.sky, 0, x, self.slack_s)
-        return self.codes[k - self.k0]
+            got = self.codes[idx]
+        return got
 
     def _cover(self, lo: int, hi: int) -> None:
         """Extend ``codes`` (not computed) to hold nodes ``lo`` … ``hi``."""
@@ -169,6 +173,8 @@ def _evaluate_screened(
     n_nodes = math.ceil((hi - lo) / SCREEN_STEP_S) + 1
     if n_nodes > 4 * xs.size * frac.size:  # a few blocks over a long span: check them all
         return evaluate_window_exact(active, sky, i, xs, xe)
+    if np.array_equal(xs, xe):  # instants: every sample is the same, x = xs + 0·frac
+        frac = frac[:1]
     ok = np.ones(xs.shape, dtype=bool)
     first = np.full(xs.shape, -1, dtype=np.int64)
     grid = _ScreenGrid(lo, n_nodes, [None] * len(active), shared)
@@ -196,7 +202,7 @@ class _ScreenGrid:
         """Constraint ``j``'s screen at grid nodes ``node`` (any shape)."""
         if j == 0 and self.shared is not None:
             k0 = round(self.lo / SCREEN_STEP_S)  # lo is a node of the plan's axis here
-            return self.shared.at(node + k0)
+            return self.shared.at(node, k0)
         codes = self.codes[j]
         if codes is None:
             codes = self.codes[j] = np.full(self.n_nodes, 2, dtype=np.int8)
@@ -240,7 +246,7 @@ def _screened(
     first = np.full(xs.shape, -1, dtype=np.int64)
     pend = np.arange(xs.size)
     for j, c in enumerate(active):
-        at = grid.code(j, c, sky, i, node[pend])
+        at = grid.code(j, c, sky, i, node if pend.size == xs.size else node[pend])
         least = at[:, 0].copy()
         for k in range(1, at.shape[1]):
             np.minimum(least, at[:, k], out=least)

@@ -309,7 +309,8 @@ def session_partners(
     if not paired or n == 0:
         return np.full(n, -1, dtype=np.int64), c.ok.astype(np.float64), c.airmass_mid
     nxt = np.minimum(np.searchsorted(c.x_start, c.x_end, side="left"), n - 1)
-    same = np.isclose(np.mod(c.u_star[nxt] - c.u_star, TWO_PI), 0.0, atol=1e-6)
+    # np.isclose(·, 0.0, atol=1e-6), which is exactly |·| <= 1e-6 + 1e-5·0, without its checks
+    same = np.abs(np.mod(c.u_star[nxt] - c.u_star, TWO_PI)) <= 1e-6
     nxt = np.where(same, nxt + 1, nxt)
     valid = (nxt < n) & (nxt > np.arange(n))
     nxt = np.minimum(nxt, n - 1).astype(np.int64)

@@ -13,7 +13,7 @@ import math
 from collections import Counter
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -154,46 +154,123 @@ class Timeline:
 
 
 class NightSun:
-    """The Sun's altitude [deg] at the samples of each night window that explain why nothing
-    fits (every :data:`_REASON_STEP_S` [s on the axis]), found once per window: the same for
-    every target of a run."""
+    """What the targets of a run share about its nights: the Sun's altitude [deg] at the
+    samples of each night window that explain why nothing fits (every :data:`_REASON_STEP_S`
+    [s on the axis]), found for every window of ``windows`` at once when one is first asked
+    for (any other window on its own); and each target's usable candidates of every night, or
+    why it has none (:func:`night_usable`), found for all of them at once."""
 
-    def __init__(self, frame: PlanFrame) -> None:
+    def __init__(self, frame: PlanFrame, windows: Sequence[tuple[float, float]] = ()) -> None:
         self.frame = frame
+        self.windows = list(windows)
+        self._known = set(self.windows)
         self._found: dict[tuple[float, float], tuple[FloatArray, FloatArray]] = {}
+        self._usable: dict[int, tuple[TargetRun, dict[tuple[float, float], Usable]]] = {}
+
+    def knows(self, span: NightSpan, frame: PlanFrame | None) -> bool:
+        """Whether ``span`` is one of ``windows`` (on ``frame``'s axis)."""
+        return frame is self.frame and (span.x0, span.x1) in self._known
 
     def samples(self, window: tuple[float, float]) -> tuple[FloatArray, FloatArray]:
         """(sample times [s on the axis], the Sun's altitude there [deg]); read only."""
         if window not in self._found:
-            xs = np.arange(window[0], window[1], _REASON_STEP_S)
-            self._found[window] = xs, self.frame.sky.sun_alt_deg(xs)
+            ask = [w for w in self.windows if w not in self._found]
+            ask = ask if window in ask else [window]
+            xs = [np.arange(w[0], w[1], _REASON_STEP_S) for w in ask]
+            suns = at_once(self.frame.sky.sun_alt_deg, xs)
+            self._found.update(zip(ask, zip(xs, suns, strict=True), strict=True))
         return self._found[window]
 
+    def usable(self, run: TargetRun, settings: PlanSettings) -> dict[tuple[float, float], Usable]:
+        """{window: :func:`night_usable`} of ``run`` for every one of ``windows``; read only."""
+        kept = self._usable.get(run.index)
+        if kept is None or kept[0] is not run:
+            kept = self._usable[run.index] = run, _usable_by_night(run, self, settings)
+        return kept[1]
 
-def _no_session_reason(run: TargetRun, sun_at: NightSun, window: tuple[float, float]) -> str:
-    """Explain why no usable session exists in a night window (inside T_valid)."""
+
+#: A night's usable candidates (indices, read only) or why there are none.
+Usable = NDArray[np.int64] | str
+
+
+def at_once(f: Callable[[FloatArray], NDArray[Any]], parts: list[FloatArray]) -> list[NDArray[Any]]:
+    """``[f(p) for p in parts]`` for an elementwise ``f`` (the sky model's evaluations: bit for
+    bit the same whatever the points around, tests compare), from one call on all the points."""
+    if not parts:
+        return []
+    return np.split(f(np.concatenate(parts)), np.cumsum([p.size for p in parts])[:-1])
+
+
+def _usable_by_night(
+    run: TargetRun, sun: NightSun, settings: PlanSettings
+) -> dict[tuple[float, float], Usable]:
+    """:func:`night_usable` of ``run`` in each of ``sun.windows``: its candidates found by one
+    search, the reasons of the nights without one by :func:`_no_session_reasons`."""
+    frame, wins = sun.frame, sun.windows
+    bounds = np.searchsorted(run.cand.x_mid, np.array(wins, dtype=np.float64).reshape(-1, 2))
+    good = (run.ok > 0) & run.valid
+    out: dict[tuple[float, float], Usable] = {}
+    empty: list[tuple[float, float]] = []
+    for w, (j0, j1) in zip(wins, bounds.tolist(), strict=True):
+        usable = np.flatnonzero(good[j0:j1]) + j0
+        if usable.size:
+            usable.flags.writeable = False  # shared by every caller
+            out[w] = usable
+        elif not run.exposure.floor_ok or (j1 > j0 and not run.valid[j0:j1].any()):
+            span = NightSpan("", w[0], w[1])
+            out[w] = unusable_reason(run, np.arange(j0, j1), span, frame, settings, sun)
+        else:
+            empty.append(w)
+    if empty:  # (a frame's sky and constraints are read only here)
+        out.update(zip(empty, _no_session_reasons(run, sun, empty), strict=True))
+    return out
+
+
+def _no_session_reasons(
+    run: TargetRun, sun_at: NightSun, windows: list[tuple[float, float]]
+) -> list[str]:
+    """Why no usable session exists in each night window (inside T_valid), the sky evaluated
+    once for all of them."""
     c: Candidates = run.cand
     frame = sun_at.frame
     night, limit = frame.constraints.night, frame.constraints.airmass
-    xs, sun = sun_at.samples(window)
-    if sun.min() > night.sun_alt_max_deg:
-        return (
-            f"no {night.twilight} night: the Sun stays above {night.sun_alt_max_deg:g} deg "
-            f"(lowest {sun.min():.1f} deg; polar day or summer at high latitude)"
-        )
-    dark = xs[sun <= night.sun_alt_max_deg]
-    alt = frame.sky.target_alt_deg(run.index, dark)
-    if np.all(airmass_from_alt(alt) > limit.max_airmass):
-        return (
-            f"never at airmass <= {limit.max_airmass:g} during {night.twilight} night "
-            f"(highest altitude {alt.max():.1f} deg)"
-        )
+    why: dict[int, str] = {}
+    dark: dict[int, FloatArray] = {}
+    for k, w in enumerate(windows):
+        xs, sun = sun_at.samples(w)
+        if sun.min() > night.sun_alt_max_deg:
+            why[k] = (
+                f"no {night.twilight} night: the Sun stays above {night.sun_alt_max_deg:g} deg "
+                f"(lowest {sun.min():.1f} deg; polar day or summer at high latitude)"
+            )
+        else:
+            dark[k] = xs[sun <= night.sun_alt_max_deg]
+    alts = at_once(lambda x: frame.sky.target_alt_deg(run.index, x), list(dark.values()))
+    low = at_once(lambda alt: airmass_from_alt(alt) > limit.max_airmass, alts)
+    inside: dict[int, NDArray[np.int64]] = {}
+    for k, alt, too_low in zip(dark, alts, low, strict=True):
+        if too_low.all():
+            why[k] = (
+                f"never at airmass <= {limit.max_airmass:g} during {night.twilight} night "
+                f"(highest altitude {alt.max():.1f} deg)"
+            )
+        else:  # blocks centred in the window (x_mid in order)
+            inside[k] = np.arange(*np.searchsorted(c.x_mid, windows[k]))
     # blocks centred at night: the same whether epochs were searched at night or all day
-    in_win = np.flatnonzero((c.x_mid >= window[0]) & (c.x_mid < window[1]))
-    in_win = in_win[night.ok(frame.sky, run.index, c.x_mid[in_win])]
+    dark_ok = at_once(
+        lambda x: night.ok(frame.sky, run.index, x), [c.x_mid[j] for j in inside.values()]
+    )
+    for k, in_win, ok in zip(inside, inside.values(), dark_ok, strict=True):
+        why[k] = _failed_reason(run, frame, in_win[ok])
+    return [why[k] for k in range(len(windows))]
+
+
+def _failed_reason(run: TargetRun, frame: PlanFrame, in_win: NDArray[np.int64]) -> str:
+    """Why none of the night-time blocks ``in_win`` of a window is usable."""
     if not in_win.size:
         return "no anchor epoch in the night window"
-    fails = Counter(int(f) for f in c.first_failed[in_win] if f >= 0)
+    first = run.cand.first_failed[in_win]
+    fails = Counter(first[first >= 0].tolist())  # in order of first appearance
     if not fails:
         return "no session fits: the second block of each pair fails the constraints"
     worst = fails.most_common(1)[0][0]
@@ -232,7 +309,7 @@ def unusable_reason(
             f"{run.until.utc.iso[:16]} UTC (alpha={settings.alpha:g}); pick an "
             "earlier night or a larger --alpha"
         )
-    return _no_session_reason(run, sun or NightSun(frame), (span.x0, span.x1))
+    return _no_session_reasons(run, sun or NightSun(frame), [(span.x0, span.x1)])[0]
 
 
 def night_usable(
@@ -242,8 +319,11 @@ def night_usable(
     settings: PlanSettings,
     sun: NightSun | None = None,
 ) -> NDArray[np.int64] | str:
-    """Indices of ``run``'s usable candidates in the night ``span``, or why there are none
-    (:func:`unusable_reason`)."""
+    """Indices of ``run``'s usable candidates in the night ``span`` (read only), or why there
+    are none (:func:`unusable_reason`); ``sun``: the run's, which finds every night of its
+    windows at once."""
+    if sun is not None and sun.knows(span, frame):
+        return sun.usable(run, settings)[(span.x0, span.x1)]
     j0, j1 = np.searchsorted(run.cand.x_mid, [span.x0, span.x1])
     js = np.arange(j0, j1)
     usable = js[(run.ok[js] > 0) & run.valid[js]]
@@ -356,7 +436,7 @@ def place_by_priority(
     """
     timeline.block_out(busy)
     unplaced: list[Unplaced] = []
-    sun = NightSun(frame)
+    sun = NightSun(frame, [(sp.x0, sp.x1) for sp in spans])
     for run in sorted(runs, key=lambda r: -r.target.priority):
         allowance = (allowances or {}).get(run.index) or Allowance()
         tasks = [

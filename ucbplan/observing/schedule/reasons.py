@@ -88,15 +88,34 @@ def _counts_per_night(
     codes: NDArray[np.int64],
     spans: Sequence[NightSpan],
 ) -> NDArray[np.int64]:
-    """(night, reason) counts of the ``counted`` candidates, from running sums over the
-    time-sorted candidates: column ``len(REASONS)`` counts the usable ones (code −1)."""
+    """(night, reason) counts of the ``counted`` candidates (time-sorted): column
+    ``len(REASONS)`` counts the usable ones (code −1). Nights in order and apart hold each
+    candidate at most once: one count per (night, reason) cell; others by running sums."""
     klass = np.where(codes < 0, len(REASONS), codes)
-    onehot = np.zeros((x_mid.size + 1, len(REASONS) + 1), dtype=np.int64)
+    j0 = np.searchsorted(x_mid, [sp.x0 for sp in spans])
+    j1 = np.searchsorted(x_mid, [sp.x1 for sp in spans])
+    if not np.all(j0[1:] >= j1[:-1]):
+        return _counts_by_sums(counted, klass, j0, j1)
+    at = np.flatnonzero(counted)
+    night = np.searchsorted(j0, at, side="right") - 1  # the last night starting at or before
+    keep = (night >= 0) & (at < j1[np.maximum(night, 0)])
+    cells = night[keep] * (len(REASONS) + 1) + klass[at[keep]]
+    table = np.bincount(cells, minlength=len(spans) * (len(REASONS) + 1))
+    return np.asarray(table.reshape(len(spans), len(REASONS) + 1), dtype=np.int64)
+
+
+def _counts_by_sums(
+    counted: NDArray[np.bool_],
+    klass: NDArray[np.int64],
+    j0: NDArray[np.intp],
+    j1: NDArray[np.intp],
+) -> NDArray[np.int64]:
+    """:func:`_counts_per_night` of the candidates ``j0[k]`` … ``j1[k] − 1`` of each night k,
+    from running sums over the candidates (nights that overlap)."""
+    onehot = np.zeros((klass.size + 1, len(REASONS) + 1), dtype=np.int64)
     at = np.flatnonzero(counted)
     onehot[at + 1, klass[at]] = 1
     prefix = np.cumsum(onehot, axis=0)
-    j0 = np.searchsorted(x_mid, [sp.x0 for sp in spans])
-    j1 = np.searchsorted(x_mid, [sp.x1 for sp in spans])
     return np.asarray(prefix[j1] - prefix[j0], dtype=np.int64)
 
 
@@ -118,12 +137,15 @@ def not_planned(
     night = frame.constraints.night
     order = [r.index for r in sorted(runs, key=lambda r: -r.target.priority)]
     taken_code, last = REASONS.index("taken by a higher-priority target"), len(REASONS)
+    by_target: dict[int, list[Session]] = {}
+    for s in placed:
+        by_target.setdefault(s.target_i, []).append(s)
     for run in runs:
-        c, per_night = run.cand, {}
+        c, per_night, mine = run.cand, {}, by_target.get(run.index, [])
         free = np.ones(c.x_mid.size, dtype=bool)
-        free[[j for s in placed if s.target_i == run.index for j in s.idx]] = False
-        before = set(order[: order.index(run.index)])  # placed before this target
-        taken = [(s.x0 - gap_s, s.x1) for s in placed if s.target_i in before]
+        free[[j for s in mine for j in s.idx]] = False
+        before = order[: order.index(run.index)]  # placed before this target
+        taken = [(s.x0 - gap_s, s.x1) for t in before for s in by_target.get(t, [])]
         dark = (
             free & evaluate_window([night], frame.sky, run.index, c.x_mid, c.x_mid, frame.night)[0]
         )
@@ -136,10 +158,8 @@ def not_planned(
         table = table[:, :last]
         table[spent, REASONS.index("time budget spent")] += usable[spent]
         table[~spent, REASONS.index("not needed")] += usable[~spent]
-        for k in np.flatnonzero(table.sum(axis=1)):
-            row = table[k]
-            per_night[spans[int(k)].label] = {
-                r: int(row[m]) for m, r in enumerate(REASONS) if row[m]
-            }
+        for span, row in zip(spans, table.tolist(), strict=True):
+            if any(row):
+                per_night[span.label] = {r: k for r, k in zip(REASONS, row, strict=True) if k}
         out[run.target.name] = per_night
     return out
