@@ -2,13 +2,17 @@
 
 from __future__ import annotations
 
+import itertools
 import os
 import re
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import IO, Any
 
+from rich.cells import cell_len
 from rich.console import Console
 from rich.markup import escape
+from rich.measure import Measurement
 from rich.table import Table as RichTable
 from rich.text import Text
 
@@ -53,9 +57,46 @@ class _Console(Console):
                 objects = (self._hanging(objects[0], kwargs.pop("markup", None)),)
         super().print(*objects, **kwargs)
 
+    def print_messages(self, messages: Sequence[str], markup: bool | None = None) -> None:
+        """Each of ``messages`` (one logical line each: a warning, a note) as
+        ``print(message, soft_wrap=True, markup=markup)`` prints it, all in one print: a long
+        plan's hundreds of "not placed" lines cost one render and one write, not one each."""
+        shown = [m for m in messages if not self.quiet_info or _is_alert((m,))]
+        if not shown:
+            return
+        if self.fold:
+            texts = [self._hanging(m, markup) for m in shown]
+        else:
+            texts = [self.render_str(m, markup=markup, emoji=False, highlight=False) for m in shown]
+        super().print(Text("\n").join(texts), soft_wrap=True)
+
+    def print_table(self, make: Callable[[], RichTable], rows: Sequence[Sequence[str]]) -> None:
+        """Print the table ``make()`` (of :func:`rich_table`, without rows) with ``rows`` of
+        text cells (markup, as ``add_row`` takes them), as rich prints it.
+
+        Where that prints the same bytes, the rows are printed as one row whose cells hold
+        each column's lines: rich measures and renders a cell at a time, so a 183-night summary
+        costs 4 cells, not 732. That is so when the rows only stack (:func:`_stacks`) and no
+        line wraps: when the table's natural width fits the console (:func:`_fits`). Else the
+        rows are added one by one."""
+        if self.quiet_info:
+            return  # --quiet prints no tables
+        table = make()
+        if rows and _stacks(table, rows):
+            table.add_row(*(_stacked(self, cells) for cells in zip(*rows, strict=True)))
+            if _fits(self, table):
+                self.print(table)
+                return
+            table = make()
+        for row in rows:
+            table.add_row(*row)
+        self.print(table)
+
     def _hanging(self, message: str, markup: bool | None) -> Text:
         """``message`` as text wrapped to the console width, with a hanging indent."""
         text = self.render_str(message, markup=markup, emoji=False, highlight=False)
+        if "\n" not in text.plain and cell_len(text.plain) <= self.width:
+            return text  # one line as it is (what the wrap below would leave it)
         first = text.wrap(self, self.width)
         if len(first) <= 1:
             return text
@@ -67,6 +108,39 @@ class _Console(Console):
             out.append_text(line)
         out.rstrip()
         return out
+
+
+def _stacks(table: RichTable, rows: Sequence[Sequence[str]]) -> bool:
+    """Whether ``rows`` printed as one row of stacked cells look as rows in ``table`` would
+    (when no cell wraps): text cells of one line, no rule, space or style between rows."""
+    plain = not (table.show_lines or table.leading or table.row_styles or table.expand)
+    if not plain or table.width is not None or table.min_width is not None:
+        return False
+    width = len(table.columns)
+    return all(len(row) == width and all(type(c) is str for c in row) for row in rows) and (
+        "\n" not in "".join(itertools.chain.from_iterable(rows))
+    )
+
+
+def _stacked(console: Console, cells: Sequence[str]) -> str | Text:
+    """A column's cells as one cell of lines: their text joined when they hold no markup, else
+    each rendered as rich renders a table's text cell and the texts joined (so that no tag can
+    span two cells)."""
+    if not any("[" in cell for cell in cells):
+        return "\n".join(cells)
+    return Text("\n").join(console.render_str(cell, highlight=False) for cell in cells)
+
+
+#: A width [columns] no table reaches: its natural width is measured within it.
+_UNBOUNDED = 1_000_000
+
+
+def _fits(console: Console, table: RichTable) -> bool:
+    """Whether ``table`` at its natural width (each column as wide as its widest line) fits
+    ``console``, so that rich neither shrinks a column nor wraps a line."""
+    options = console.options
+    natural = Measurement.get(console, options.update_width(_UNBOUNDED), table).maximum
+    return natural <= options.max_width
 
 
 def _is_alert(objects: tuple[Any, ...]) -> bool:
