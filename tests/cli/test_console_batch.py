@@ -94,7 +94,7 @@ def test_a_folded_message_fits_the_width(text: str, words: str, width: int) -> N
     rich wraps it to."""
     console = _console(width, True, False)
     message = _message("warning", text + " " + words * 3)
-    hanging = console._hanging(message, None)
+    hanging = console._hanging(message, None, width)
     assert max(map(cell_len, hanging.plain.split("\n"))) <= width
     rendered = console.render_str(message, emoji=False, highlight=False)
     if cell_len(rendered.plain) <= width:

@@ -54,7 +54,7 @@ class _Console(Console):
             return
         if self.fold and kwargs.get("soft_wrap") and len(objects) == 1:
             if isinstance(objects[0], str):
-                objects = (self._hanging(objects[0], kwargs.pop("markup", None)),)
+                objects = (self._hanging(objects[0], kwargs.pop("markup", None), self.width),)
         super().print(*objects, **kwargs)
 
     def print_messages(self, messages: Sequence[str], markup: bool | None = None) -> None:
@@ -65,7 +65,8 @@ class _Console(Console):
         if not shown:
             return
         if self.fold:
-            texts = [self._hanging(m, markup) for m in shown]
+            width = self.width  # read once: rich finds it anew at each call
+            texts = [self._hanging(m, markup, width) for m in shown]
         else:
             texts = [self.render_str(m, markup=markup, emoji=False, highlight=False) for m in shown]
         super().print(Text("\n").join(texts), soft_wrap=True)
@@ -92,17 +93,17 @@ class _Console(Console):
             table.add_row(*row)
         self.print(table)
 
-    def _hanging(self, message: str, markup: bool | None) -> Text:
-        """``message`` as text wrapped to the console width, with a hanging indent."""
+    def _hanging(self, message: str, markup: bool | None, width: int) -> Text:
+        """``message`` as text wrapped to ``width`` (the console's), with a hanging indent."""
         text = self.render_str(message, markup=markup, emoji=False, highlight=False)
-        if "\n" not in text.plain and cell_len(text.plain) <= self.width:
+        if "\n" not in text.plain and cell_len(text.plain) <= width:
             return text  # one line as it is (what the wrap below would leave it)
-        first = text.wrap(self, self.width)
+        first = text.wrap(self, width)
         if len(first) <= 1:
             return text
         rest = text.divide([len(first[0].plain)])[1]
         out = first[0]
-        for line in rest.wrap(self, max(self.width - HANGING_INDENT, 20)):
+        for line in rest.wrap(self, max(width - HANGING_INDENT, 20)):
             out.rstrip()
             out.append("\n" + " " * HANGING_INDENT)
             out.append_text(line)
@@ -127,8 +128,10 @@ def _stacked(console: Console, cells: Sequence[str]) -> str | Text:
     each rendered as rich renders a table's text cell and the texts joined (so that no tag can
     span two cells)."""
     if not any("[" in cell for cell in cells):
-        return "\n".join(cells)
-    return Text("\n").join(console.render_str(cell, highlight=False) for cell in cells)
+        return Text("\n".join(cells), no_wrap=True)
+    text = Text("\n").join(console.render_str(cell, highlight=False) for cell in cells)
+    text.no_wrap = True
+    return text
 
 
 #: A width [columns] no table reaches: its natural width is measured within it.
