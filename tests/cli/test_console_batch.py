@@ -20,8 +20,8 @@ from rich.text import Text
 from ucbplan.cli._console import _Console, rich_table
 
 #: Characters of cells and messages: markup brackets and backslashes, spaces, accents, wide
-#: (two-cell) characters, dashes; no newline (one logical line each).
-_CHARS = st.sampled_from([*"ab Z09[]\\/:._-é★漢—", "  ", "[yellow]", "[/]"])
+#: (two-cell) characters, dashes, tabs; no newline (one logical line each).
+_CHARS = st.sampled_from([*"ab Z09[]\\/:._-é★漢—\t", "  ", "[yellow]", "[/]"])
 _TEXT = st.lists(_CHARS, max_size=30).map("".join)
 
 
@@ -87,19 +87,34 @@ def test_messages_fold_with_a_hanging_indent() -> None:
     assert _printed(piped).splitlines() == [Text.from_markup(long).plain, "warning: short"]
 
 
-@given(text=_TEXT, words=_TEXT, width=st.integers(22, 120))
-def test_a_folded_message_fits_the_width(text: str, words: str, width: int) -> None:
-    """Every line of a folded message is at most the console's width (a word too long is cut
-    by rich); one of a single line no wider than the console is printed as it is, the one line
-    rich wraps it to."""
+def _fold_as_first_written(console: _Console, message: str, width: int) -> Text:
+    """The hanging fold without shortcuts: rich wraps the message, then the rest narrower."""
+    text = console.render_str(message, emoji=False, highlight=False)
+    first = text.wrap(console, width)
+    if len(first) <= 1:
+        return text
+    out, rest = first[0], text.divide([len(first[0].plain)])[1]
+    for line in rest.wrap(console, max(width - 2, 20)):
+        out.rstrip()
+        out.append("\n  ")
+        out.append_text(line)
+    out.rstrip()
+    return out
+
+
+@given(text=_TEXT, words=_TEXT, width=st.integers(20, 120))
+def test_the_fold_is_rich_wrap_with_a_hanging_indent(text: str, words: str, width: int) -> None:
+    """The fold skips rich's wrap of a text that fits (no newline or tab, no wider): the same
+    lines and styles as wrapping everything; no line is wider than the console."""
     console = _console(width, True, False)
     message = _message("warning", text + " " + words * 3)
-    hanging = console._hanging(message, None, width)
-    assert max(map(cell_len, hanging.plain.split("\n"))) <= width
-    rendered = console.render_str(message, emoji=False, highlight=False)
-    if cell_len(rendered.plain) <= width:
-        assert len(rendered.wrap(console, width)) == 1
-        assert (hanging.plain, hanging.spans) == (rendered.plain, rendered.spans)
+    ours, reference = (
+        console._hanging(message, None, width),
+        _fold_as_first_written(console, message, width),
+    )
+    assert (ours.plain, ours.spans) == (reference.plain, reference.spans)
+    if width >= 22 and "\t" not in ours.plain:
+        assert max(map(cell_len, ours.plain.split("\n"))) <= width
 
 
 def _cells(raw: str, styled: bool) -> str:

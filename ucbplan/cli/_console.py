@@ -96,14 +96,15 @@ class _Console(Console):
     def _hanging(self, message: str, markup: bool | None, width: int) -> Text:
         """``message`` as text wrapped to ``width`` (the console's), with a hanging indent."""
         text = self.render_str(message, markup=markup, emoji=False, highlight=False)
-        if "\n" not in text.plain and cell_len(text.plain) <= width:
-            return text  # one line as it is (what the wrap below would leave it)
+        if _one_line(text, width):
+            return text
         first = text.wrap(self, width)
         if len(first) <= 1:
             return text
         rest = text.divide([len(first[0].plain)])[1]
+        narrower = max(width - HANGING_INDENT, 20)
         out = first[0]
-        for line in rest.wrap(self, max(width - HANGING_INDENT, 20)):
+        for line in [rest] if _one_line(rest, narrower) else rest.wrap(self, narrower):
             out.rstrip()
             out.append("\n" + " " * HANGING_INDENT)
             out.append_text(line)
@@ -111,15 +112,23 @@ class _Console(Console):
         return out
 
 
+def _one_line(text: Text, width: int) -> bool:
+    """Whether rich's wrap at ``width`` leaves ``text`` as it is, one line (no newline, no
+    tab to expand, no wider): then the fold need not run it."""
+    plain = text.plain
+    return "\n" not in plain and "\t" not in plain and cell_len(plain) <= width
+
+
 def _stacks(table: RichTable, rows: Sequence[Sequence[str]]) -> bool:
     """Whether ``rows`` printed as one row of stacked cells look as rows in ``table`` would
-    (when no cell wraps): text cells of one line, no rule, space or style between rows."""
+    (when no cell wraps): text cells of one line without tabs (rich measures a tab before
+    expanding it), no rule, space or style between rows."""
     plain = not (table.show_lines or table.leading or table.row_styles or table.expand)
     if not plain or table.width is not None or table.min_width is not None:
         return False
     width = len(table.columns)
     return all(len(row) == width and all(type(c) is str for c in row) for row in rows) and (
-        "\n" not in "".join(itertools.chain.from_iterable(rows))
+        not {"\n", "\t"} & set("".join(itertools.chain.from_iterable(rows)))
     )
 
 
