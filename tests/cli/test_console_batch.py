@@ -17,7 +17,7 @@ from rich.markup import escape
 from rich.table import Table as RichTable
 from rich.text import Text
 
-from ucbplan.cli._console import _Console, rich_table
+from ucbplan.cli._console import _Console, alert, rich_table
 
 #: Characters of cells and messages: markup brackets and backslashes, spaces, accents, wide
 #: (two-cell) characters, dashes, tabs; no newline (one logical line each).
@@ -50,7 +50,7 @@ def _message(kind: str, text: str) -> str:
 
 _MESSAGES = st.lists(
     st.tuples(st.sampled_from(["warning", "not placed", "note"]), _TEXT, _TEXT).map(
-        lambda m: _message(m[0], m[1] + " " + m[2] * 4)
+        lambda m: (m[0], m[1] + " " + m[2] * 4)
     ),
     max_size=8,
 )
@@ -62,15 +62,34 @@ _MESSAGES = st.lists(
     fold=st.booleans(),
     colour=st.booleans(),
     quiet=st.booleans(),
+    as_text=st.booleans(),
 )
 def test_messages_print_as_one_print_each(
-    messages: list[str], width: int, fold: bool, colour: bool, quiet: bool
+    messages: list[tuple[str, str]],
+    width: int,
+    fold: bool,
+    colour: bool,
+    quiet: bool,
+    as_text: bool,
 ) -> None:
+    """Markup messages, or :func:`alert`'s (a Text where the text is plain), print as each
+    markup message printed on its own."""
     batched, each = (_console(width, fold, colour, quiet) for _ in range(2))
-    batched.print_messages(messages)
-    for message in messages:
+    markup = [_message(kind, text) for kind, text in messages]
+    batched.print_messages([alert(*m) for m in messages] if as_text else markup)
+    for message in markup:
         each.print(message, soft_wrap=True)
     assert _printed(batched) == _printed(each)
+
+
+@given(kind=st.sampled_from(["warning", "not placed"]), text=_TEXT)
+def test_an_alert_is_the_text_its_markup_renders_to(kind: str, text: str) -> None:
+    console = _console(80, False, False)
+    got = alert(kind, text)
+    want = console.render_str(_message(kind, text), emoji=False, highlight=False)
+    assert isinstance(got, Text) == ("[" not in text and "\\" not in text)
+    got = console.render_str(got) if isinstance(got, str) else got
+    assert (got.plain, got.spans) == (want.plain, want.spans)
 
 
 def test_messages_fold_with_a_hanging_indent() -> None:

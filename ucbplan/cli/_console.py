@@ -57,10 +57,11 @@ class _Console(Console):
                 objects = (self._hanging(objects[0], kwargs.pop("markup", None), self.width),)
         super().print(*objects, **kwargs)
 
-    def print_messages(self, messages: Sequence[str], markup: bool | None = None) -> None:
-        """Each of ``messages`` (one logical line each: a warning, a note) as
-        ``print(message, soft_wrap=True, markup=markup)`` prints it, all in one print: a long
-        plan's hundreds of "not placed" lines cost one render and one write, not one each."""
+    def print_messages(self, messages: Sequence[str | Text], markup: bool | None = None) -> None:
+        """Each of ``messages`` (one logical line each: a warning, a note; markup, or a Text
+        as :func:`alert` makes it) as ``print(message, soft_wrap=True, markup=markup)``
+        prints it, all in one print: a long plan's hundreds of "not placed" lines cost one
+        render and one write, not one each."""
         shown = [m for m in messages if not self.quiet_info or _is_alert((m,))]
         if not shown:
             return
@@ -68,8 +69,14 @@ class _Console(Console):
             width = self.width  # read once: rich finds it anew at each call
             texts = [self._hanging(m, markup, width) for m in shown]
         else:
-            texts = [self.render_str(m, markup=markup, emoji=False, highlight=False) for m in shown]
+            texts = [self._text(m, markup) for m in shown]
         super().print(Text("\n").join(texts), soft_wrap=True)
+
+    def _text(self, message: str | Text, markup: bool | None) -> Text:
+        """A message as rich renders it (a Text as it is)."""
+        if isinstance(message, Text):
+            return message
+        return self.render_str(message, markup=markup, emoji=False, highlight=False)
 
     def print_table(self, make: Callable[[], RichTable], rows: Sequence[Sequence[str]]) -> None:
         """Print the table ``make()`` (of :func:`rich_table`, without rows) with ``rows`` of
@@ -93,9 +100,9 @@ class _Console(Console):
             table.add_row(*row)
         self.print(table)
 
-    def _hanging(self, message: str, markup: bool | None, width: int) -> Text:
+    def _hanging(self, message: str | Text, markup: bool | None, width: int) -> Text:
         """``message`` as text wrapped to ``width`` (the console's), with a hanging indent."""
-        text = self.render_str(message, markup=markup, emoji=False, highlight=False)
+        text = self._text(message, markup)
         if _one_line(text, width):
             return text
         first = text.wrap(self, width)
@@ -170,6 +177,17 @@ def _make_console() -> _Console:
         console = _Console(stderr=True, highlight=False, emoji=False, width=180)
         console.fold = False
     return console
+
+
+def alert(kind: str, text: str, markup: str | None = None) -> str | Text:
+    """The message ``[yellow]{kind}:[/] {markup}`` for :meth:`_Console.print_messages`, where
+    ``markup`` is ``text`` as markup (default ``escape(text)``; a caller that escapes its parts
+    one by one gives its own). Where ``text`` holds no ``[`` nor ``\\`` the markup is ``text``
+    itself and the message is the Text rich makes of it, so that hundreds of them are not
+    parsed one by one."""
+    if "[" in text or "\\" in text:
+        return f"[yellow]{kind}:[/] {escape(text) if markup is None else markup}"
+    return Text.assemble((f"{kind}:", "yellow"), f" {text}")
 
 
 def literal(text: object) -> str:

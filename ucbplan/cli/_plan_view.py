@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Any
 from rich.markup import escape
 
 from ucbplan.api import terminal
-from ucbplan.cli._console import err_console, rich_table
+from ucbplan.cli._console import alert, err_console, rich_table
 from ucbplan.cli._flags import cli_text
 from ucbplan.errors import UcbplanError
 
@@ -153,9 +153,7 @@ def report(run: Any, wide: bool = False, verbose: bool = False) -> None:
     for t in run.targets:
         if t.covariance_source.startswith("samples"):
             err_console.print(f"{t.name}: covariance from the {t.covariance_source}", markup=False)
-    err_console.print_messages(
-        [f"[yellow]warning:[/] {escape(cli_text(w))}" for w in run.result.warnings]
-    )
+    err_console.print_messages([alert("warning", cli_text(w)) for w in run.result.warnings])
     failure = run.failure()
     if failure is not None:  # the error line says what was not placed, once
         raise UcbplanError(failure)
@@ -165,7 +163,8 @@ def report(run: Any, wide: bool = False, verbose: bool = False) -> None:
     lines = []
     for (name, reason), when in grouped.items():
         span = when[0] if len(when) == 1 else f"{len(when)} nights {when[0]}..{when[-1]}"
-        lines.append(f"[yellow]not placed:[/] {escape(name)} ({span}): {escape(reason)}")
+        text, markup = f"{name} ({span}): {reason}", f"{escape(name)} ({span}): {escape(reason)}"
+        lines.append(alert("not placed", text, markup))
     err_console.print_messages(lines)
     blocks = run.result.blocks
     labels = terminal.block_columns(blocks).values["night"]
