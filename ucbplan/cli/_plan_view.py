@@ -9,11 +9,13 @@ from typing import TYPE_CHECKING, Any
 from rich.markup import escape
 
 from ucbplan.api import terminal
-from ucbplan.cli._console import err_console, rich_table
+from ucbplan.cli._console import alert, err_console, rich_table
 from ucbplan.cli._flags import cli_text
 from ucbplan.errors import UcbplanError
 
 if TYPE_CHECKING:
+    from rich.table import Table as RichTable
+
     from ucbplan.api.plan_result import PlanAccount, VisitSummary
 
 
@@ -39,22 +41,26 @@ def _print_compact(blocks: list[Any], night: str, site: Any) -> None:
     """The essential columns of a night, fitting 100 terminal columns (``--wide``: all)."""
     names = list(dict.fromkeys(b.target for b in blocks))
     who = f"{names[0]}, " if len(names) == 1 else ""
-    table = rich_table(
-        f"{who}night of {night} at {site.name} — UTC at the site (light time removed)",
-        [
-            *(["target"] if len(names) > 1 else []),
-            "visit/exp",
-            "UTC start–end",
-            "u★ [rad]",
-            "airmass",
-            "Λ_K",
-            "σ_t [s]",
-        ],
-    )
-    for column in table.columns:
-        column.no_wrap = True
-    for b, label in zip(blocks, _exposure_labels(blocks), strict=True):
-        table.add_row(
+
+    def make() -> RichTable:
+        table = rich_table(
+            f"{who}night of {night} at {site.name} — UTC at the site (light time removed)",
+            [
+                *(["target"] if len(names) > 1 else []),
+                "visit/exp",
+                "UTC start–end",
+                "u★ [rad]",
+                "airmass",
+                "Λ_K",
+                "σ_t [s]",
+            ],
+        )
+        for column in table.columns:
+            column.no_wrap = True
+        return table
+
+    rows = [
+        (
             *([escape(b.target[:12])] if len(names) > 1 else []),
             label,
             f"{b.t_start_utc.iso[:19]}–{b.t_end_utc.iso[11:19]}",
@@ -63,29 +69,33 @@ def _print_compact(blocks: list[Any], night: str, site: Any) -> None:
             f"{b.lambda_k:.3f}",
             f"{b.sigma_t_s:.2f}",
         )
-    err_console.print(table)
+        for b, label in zip(blocks, _exposure_labels(blocks), strict=True)
+    ]
+    err_console.print_table(make, rows)
 
 
 def _print_summary(run: Any) -> None:
     """One row per night: visits, exposures and hours (a long plan, without --verbose)."""
     visits = run.visit_columns  # one list per field: no object per visit
-    table = rich_table(
-        f"Plan at {run.site.name}, per night (the full table: -o FILE or --verbose)",
-        ["night", "visits", "exposures", "hours (wall)"],
-    )
     by_night: dict[str, list[int]] = {}
     for k, night in enumerate(visits.night):
         by_night.setdefault(night, []).append(k)
     exposures, walls = visits.exposures, visits.wall_s()
+    rows = []
     for night in (d.isoformat() for d in run.nights):  # nights without a visit too
         ks = by_night.get(night, [])
-        table.add_row(
-            night,
-            str(len(ks)),
-            str(sum(exposures[k] for k in ks)),
-            f"{sum(walls[k] for k in ks) / 3600:.2f}",
+        rows.append(
+            (
+                night,
+                str(len(ks)),
+                str(sum(exposures[k] for k in ks)),
+                f"{sum(walls[k] for k in ks) / 3600:.2f}",
+            )
         )
-    err_console.print(table)
+    title = f"Plan at {run.site.name}, per night (the full table: -o FILE or --verbose)"
+    err_console.print_table(
+        lambda: rich_table(title, ["night", "visits", "exposures", "hours (wall)"]), rows
+    )
 
 
 #: A plan longer than this many nights or rows prints the per-night summary (issue 15).
@@ -96,28 +106,28 @@ def _print_night(blocks: list[Any], night: str, site: Any) -> None:
     paired = any(b.pair_id for b in blocks)
     # the φ_ref π-mode exists only for LISA posteriors; a night of timing targets has none
     pi_mode = any(b.t_alt_utc is not None for b in blocks)
-    table = rich_table(
+    title = (
         f"Night of {night} at {site.name} — times are UTC at the site (light time removed); "
-        "±σ is the 1σ timing uncertainty",
-        [
-            "target",
-            "block",
-            "visit/exp",
-            "anchor",
-            "u★ [rad]",
-            "UTC mid ± σ",
-            "local mid",
-            "UTC start–end",
-            "airmass s/m/e",
-            "Moon [deg]",
-            "Λ_K",
-            "σ_v [km/s]",
-            *(["π-mode alt. UTC"] if pi_mode else []),
-            *(["pair: Δκ_LISA"] if paired else []),
-        ],
+        "±σ is the 1σ timing uncertainty"
     )
-    for b, label, local in zip(blocks, _exposure_labels(blocks), _local(blocks), strict=True):
-        table.add_row(
+    columns = [
+        "target",
+        "block",
+        "visit/exp",
+        "anchor",
+        "u★ [rad]",
+        "UTC mid ± σ",
+        "local mid",
+        "UTC start–end",
+        "airmass s/m/e",
+        "Moon [deg]",
+        "Λ_K",
+        "σ_v [km/s]",
+        *(["π-mode alt. UTC"] if pi_mode else []),
+        *(["pair: Δκ_LISA"] if paired else []),
+    ]
+    rows = [
+        (
             escape(b.target),
             escape(b.block_id.rsplit("-", 1)[-1]),
             label,
@@ -133,7 +143,9 @@ def _print_night(blocks: list[Any], night: str, site: Any) -> None:
             *([b.t_alt_utc.iso[11:21] if b.t_alt_utc is not None else "—"] if pi_mode else []),
             *([f"{escape(b.pair_id)}: {b.delta_kappa:+.2e}"] if paired else []),
         )
-    err_console.print(table)
+        for b, label, local in zip(blocks, _exposure_labels(blocks), _local(blocks), strict=True)
+    ]
+    err_console.print_table(lambda: rich_table(title, columns), rows)
 
 
 def report(run: Any, wide: bool = False, verbose: bool = False) -> None:
@@ -141,19 +153,19 @@ def report(run: Any, wide: bool = False, verbose: bool = False) -> None:
     for t in run.targets:
         if t.covariance_source.startswith("samples"):
             err_console.print(f"{t.name}: covariance from the {t.covariance_source}", markup=False)
-    for w in run.result.warnings:
-        err_console.print(f"[yellow]warning:[/] {escape(cli_text(w))}", soft_wrap=True)
+    err_console.print_messages([alert("warning", cli_text(w)) for w in run.result.warnings])
     failure = run.failure()
     if failure is not None:  # the error line says what was not placed, once
         raise UcbplanError(failure)
     grouped: dict[tuple[str, str], list[str]] = {}
     for miss in run.result.unplaced:
         grouped.setdefault((miss.target, miss.reason), []).append(miss.night)
+    lines = []
     for (name, reason), when in grouped.items():
         span = when[0] if len(when) == 1 else f"{len(when)} nights {when[0]}..{when[-1]}"
-        err_console.print(
-            f"[yellow]not placed:[/] {escape(name)} ({span}): {escape(reason)}", soft_wrap=True
-        )
+        text, markup = f"{name} ({span}): {reason}", f"{escape(name)} ({span}): {escape(reason)}"
+        lines.append(alert("not placed", text, markup))
+    err_console.print_messages(lines)
     blocks = run.result.blocks
     labels = terminal.block_columns(blocks).values["night"]
     if not verbose and (len(set(labels.tolist())) > SUMMARY_NIGHTS or len(blocks) > SUMMARY_ROWS):
@@ -171,6 +183,7 @@ def report(run: Any, wide: bool = False, verbose: bool = False) -> None:
 def _print_reasons(run: Any) -> None:
     """Night-time anchor epochs not planned, by reason, summed over the nights (one line per
     target; per night in the table meta ``not_planned``)."""
+    lines = []
     for name, nights in run.result.reasons.items():
         total: dict[str, int] = {}
         for counts in nights.values():
@@ -180,10 +193,8 @@ def _print_reasons(run: Any) -> None:
             continue
         span = f"{len(nights)} night{'s' if len(nights) > 1 else ''}"
         parts = ", ".join(f"{k} {why}" for why, k in total.items())
-        err_console.print(
-            f"night-time anchors not planned: {escape(name)} ({span}): {escape(parts)}",
-            soft_wrap=True,
-        )
+        lines.append(f"night-time anchors not planned: {escape(name)} ({span}): {escape(parts)}")
+    err_console.print_messages(lines)
 
 
 def _hours(seconds: float) -> str:
@@ -196,26 +207,27 @@ def _print_accounting(run: Any, verbose: bool = False) -> None:
     if run.settings.visit_s is not None and (verbose or len(run.visit_columns) <= SUMMARY_ROWS):
         _print_visits(run.visits())
     account: PlanAccount = run.time_account
-    table = rich_table(
-        "Time accounting — efficiency = shutter / (shutter + overheads + idle)",
-        ["target", "visits", "exposures", "shutter", "overheads", "idle", "efficiency"],
-    )
-    rows = [
+    accounts = [
         *account.targets.items(),
         *([("total", account.total)] if len(account.targets) > 1 else []),
     ]
-    for name, a in rows:
+    rows = []
+    for name, a in accounts:
         e = a.as_meta()  # the figures as the table meta records them (1 ms; efficiency 1e-6)
-        table.add_row(
-            escape(name),
-            str(a.visits),
-            str(a.exposures),
-            _hours(e["shutter_s"]),
-            _hours(e["overhead_s"]),
-            _hours(e["idle_s"]),
-            f"{e['efficiency']:.1%}",
+        rows.append(
+            (
+                escape(name),
+                str(a.visits),
+                str(a.exposures),
+                _hours(e["shutter_s"]),
+                _hours(e["overhead_s"]),
+                _hours(e["idle_s"]),
+                f"{e['efficiency']:.1%}",
+            )
         )
-    err_console.print(table)
+    title = "Time accounting — efficiency = shutter / (shutter + overheads + idle)"
+    columns = ["target", "visits", "exposures", "shutter", "overheads", "idle", "efficiency"]
+    err_console.print_table(lambda: rich_table(title, columns), rows)
     _print_strategies(run)
     _print_reasons(run)
     _print_goals(run, account)
@@ -223,12 +235,18 @@ def _print_accounting(run: Any, verbose: bool = False) -> None:
 
 def _print_visits(visits: list[VisitSummary]) -> None:
     """One row per visit: its acquisition start and last end (UTC at the site), exposures, idle."""
-    table_v = rich_table(
-        "Visits — one acquisition, then exposures centred on anchors (UTC at the site)",
-        ["visit", "target", "acq. start UTC", "last end UTC", "exp.", "idle [s]"],
-    )
-    for v in visits:
-        table_v.add_row(
+
+    def make() -> RichTable:
+        table = rich_table(
+            "Visits — one acquisition, then exposures centred on anchors (UTC at the site)",
+            ["visit", "target", "acq. start UTC", "last end UTC", "exp.", "idle [s]"],
+        )
+        for i, column in enumerate(table.columns):
+            column.no_wrap = i != 1  # a long target name wraps; times are never cut
+        return table
+
+    rows = [
+        (
             escape("-".join(v.visit_id.rsplit("-", 2)[-2:])),
             escape(v.target),
             v.acq_start_utc[:19].replace("T", " "),  # its UTC date: the night label is local
@@ -236,9 +254,9 @@ def _print_visits(visits: list[VisitSummary]) -> None:
             str(v.exposures),
             f"{v.idle_s:.0f}",
         )
-    for i, column in enumerate(table_v.columns):
-        column.no_wrap = i != 1  # a long target name wraps; times are never cut
-    err_console.print(table_v)
+        for v in visits
+    ]
+    err_console.print_table(make, rows)
 
 
 def _print_goals(run: Any, account: PlanAccount) -> None:
@@ -312,26 +330,27 @@ def _print_strategies(run: Any) -> None:
         return
     goal = any(te.goal_hours for te in chosen.values())
     last = "hours to goal" if goal else "of best"
-    table = rich_table(
-        "Exposure strategy — information on K per full visit, * = planned",
-        ["target", "strategy", "exp. [s]", "Λ_K", "exp./visit", "info [km⁻²s²]", last],
-    )
+    rows = []
     for name, te in chosen.items():
         top = max((r.info_per_visit for r in te.results), default=0.0)
         hours = te.goal_hours or (math.nan,) * len(te.results)
         for r, h in zip(te.results, hours, strict=True):
             mark = "*" if r.name == te.strategy else ""
             share = f"{r.info_per_visit / top:.0%}" if top > 0 and r.possible else "-"
-            table.add_row(
-                escape(name),
-                f"{r.name}{mark}",
-                f"{r.exptime_s:.0f}" if r.possible else "-",
-                f"{r.lambda_k:.3f}" if r.possible else "-",
-                str(r.n_exposures) if r.possible else "-",
-                f"{r.info_per_visit:.4g}" if r.possible else "-",
-                (f"{h:.2f} h" if math.isfinite(h) else "-") if goal else share,
+            rows.append(
+                (
+                    escape(name),
+                    f"{r.name}{mark}",
+                    f"{r.exptime_s:.0f}" if r.possible else "-",
+                    f"{r.lambda_k:.3f}" if r.possible else "-",
+                    str(r.n_exposures) if r.possible else "-",
+                    f"{r.info_per_visit:.4g}" if r.possible else "-",
+                    (f"{h:.2f} h" if math.isfinite(h) else "-") if goal else share,
+                )
             )
-    err_console.print(table)
+    title = "Exposure strategy — information on K per full visit, * = planned"
+    columns = ["target", "strategy", "exp. [s]", "Λ_K", "exp./visit", "info [km⁻²s²]", last]
+    err_console.print_table(lambda: rich_table(title, columns), rows)
     for name, te in chosen.items():
         for r in te.results:
             if not r.possible and r.note:

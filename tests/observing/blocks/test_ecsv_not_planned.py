@@ -103,3 +103,12 @@ def test_a_plans_not_planned_is_written_apart() -> None:
     )
     table = Table({"a": [1.5]}, meta={"not_planned": mapping})
     assert _ours(table) == _pyyaml_ecsv(table)
+
+
+def test_true_is_not_written_as_one() -> None:
+    """Each scalar's text is found once per exact type and value: a count of 1 met first does
+    not stand for a later ``True`` (equal to 1 in Python, ``true`` in YAML)."""
+    mapping = {"UCB00": {"2040-01-30": {"a": 1, "b": True}, "2040-01-31": {"a": 0, "b": False}}}
+    assert ecsv_header.yaml_nested_flow(mapping, ecsv_header._yaml_tag) is None  # PyYAML's
+    table = Table({"a": [1.5]}, meta={"not_planned": mapping})
+    assert _ours(table) == _pyyaml_ecsv(table)

@@ -364,9 +364,11 @@ def test_meta_copied_as_deepcopy_copies_it() -> None:
         "visits": [record, {"a": 2, "b": None}, record],
         "other": (np.float64(1.5), [shared]),
         "nested": [[1.0, float("nan")], {"k": -0.0}],
+        "flat": record,  # a flat mapping (a night's reasons) met again: one copy
     }
     ours, reference = tablemake._copy_meta(meta), copy.deepcopy(meta)
     assert repr(ours) == repr(reference)
+    assert ours["flat"] is ours["visits"][0] and ours["flat"] is not record
     assert ours["one"] is ours["two"] is ours["other"][1][0] and ours["one"] is not shared
     assert ours["visits"][0] is ours["visits"][2] and ours["visits"][0] is not record
     table = Table({"a": [1.5]})

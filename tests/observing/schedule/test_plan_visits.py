@@ -346,12 +346,13 @@ def test_sigma_v_per_exposure_scales_with_instrument(tmp_path: Path) -> None:
 def _printed(run: Any, monkeypatch: pytest.MonkeyPatch, width: int = 100, **kw: bool) -> str:
     import io
 
-    from rich.console import Console
-
     from ucbplan.cli import _plan_view as plan_cli
+    from ucbplan.cli._console import _Console
 
     buf = io.StringIO()
-    monkeypatch.setattr(plan_cli, "err_console", Console(width=width, file=buf, no_color=True))
+    console = _Console(width=width, file=buf, no_color=True)
+    console.fold = False  # messages one line each, as a log has them
+    monkeypatch.setattr(plan_cli, "err_console", console)
     plan_cli.report(run, **kw)
     return buf.getvalue()
 

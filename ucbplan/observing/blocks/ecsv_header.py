@@ -227,27 +227,53 @@ def yaml_nested_flow(
     flow mappings of scalars (a plan's ``not_planned``: target → night → reason → count), as
     astropy's ECSV header writer emits it through libyaml, keys sorted; None where this path
     does not know (a key or value of another kind, a line that libyaml might break)."""
+    return _nested_flow(mapping, _ScalarTexts(tags), indent)
+
+
+def _nested_flow(mapping: dict[Any, Any], texts: _ScalarTexts, indent: int) -> list[str] | None:
+    """:func:`yaml_nested_flow`, each scalar's text found once in ``texts``."""
     if not all(type(k) is str for k in mapping):
         return None
     lines: list[str] = []
+    pad = " " * indent
     for key in sorted(mapping):
-        head = _flow_scalar(key, tags)
+        head = texts.text(key)
         value = mapping[key]
         if head is None or not isinstance(value, dict):
             return None
-        pad = " " * indent
         flat = all(not isinstance(v, dict | list | tuple) for v in value.values())
         if flat:
-            inner = _flow_mapping(value, tags, len(pad) + len(head) + 2)
+            inner = _flow_mapping(value, texts, len(pad) + len(head) + 2)
             if inner is None:
                 return None
             lines.append(f"{pad}{head}: {inner}")
             continue
-        nested = yaml_nested_flow(value, tags, indent + 2)
+        nested = _nested_flow(value, texts, indent + 2)
         if nested is None:
             return None
         lines += [f"{pad}{head}:", *nested]
     return lines
+
+
+class _ScalarTexts(dict[tuple[type, Any], str | None]):
+    """:func:`_flow_scalar` of each string and integer met, found once: a plan's
+    ``not_planned`` repeats its nights, reasons and counts over targets and nights. Keyed by
+    exact type and value (``True`` is not ``1``); other kinds are not kept (``-0.0 == 0.0``)."""
+
+    def __init__(self, tags: Callable[[str], str]) -> None:
+        super().__init__()
+        self.tags = tags
+
+    def __missing__(self, key: tuple[type, Any]) -> str | None:
+        got = self[key] = _flow_scalar(key[1], self.tags)
+        return got
+
+    def text(self, value: Any) -> str | None:
+        """:func:`_flow_scalar` of ``value``."""
+        kind = type(value)
+        if kind is str or kind is int:
+            return self[kind, value]
+        return _flow_scalar(value, self.tags)
 
 
 def _flow_scalar(value: Any, tags: Callable[[str], str]) -> str | None:
@@ -259,7 +285,7 @@ def _flow_scalar(value: Any, tags: Callable[[str], str]) -> str | None:
     return None if got is None else got[0]
 
 
-def _flow_mapping(mapping: dict[Any, Any], tags: Callable[[str], str], col: int) -> str | None:
+def _flow_mapping(mapping: dict[Any, Any], texts: _ScalarTexts, col: int) -> str | None:
     """``{k: v, …}`` (keys sorted) starting at column ``col``, on one line: None where libyaml
     would break it (a key starting past the width, a value with a space) or for other kinds."""
     if not all(type(k) is str for k in mapping):
@@ -267,12 +293,13 @@ def _flow_mapping(mapping: dict[Any, Any], tags: Callable[[str], str], col: int)
     parts: list[str] = []
     col += 1  # "{"
     for key in sorted(mapping):
-        k, v = _flow_scalar(key, tags), _flow_scalar(mapping[key], tags)
+        k, v = texts.text(key), texts.text(mapping[key])
         col += 1 if parts else 0  # the "," before it: libyaml breaks there past the width
         if k is None or v is None or " " in v or col > _YAML_WIDTH:
             return None
-        col += len(f"{k}: {v}") + (1 if parts else 0)  # and the " " after the ","
-        parts.append(f"{k}: {v}")
+        part = f"{k}: {v}"
+        col += len(part) + (1 if parts else 0)  # and the " " after the ","
+        parts.append(part)
     return "{" + ", ".join(parts) + "}"
 
 

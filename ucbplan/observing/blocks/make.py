@@ -151,7 +151,9 @@ def _copy_meta(value: Any, memo: dict[int, Any] | None = None) -> Any:
     if id(value) in memo:
         return memo[id(value)]
     out: Any
-    if kind is dict:
+    if kind is dict and META_SCALARS.issuperset(map(type, value.values())):
+        out = memo[id(value)] = value.copy()  # flat (a night's reasons): copied at once
+    elif kind is dict:
         out = memo[id(value)] = {}
         out.update((k, _copy_meta(v, memo)) for k, v in value.items())
     elif kind is list:
