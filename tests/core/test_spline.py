@@ -55,14 +55,13 @@ def test_row_interchanges_are_exercised_and_give_scipys_numbers() -> None:
 
 @pytest.mark.parametrize("n", [4, 5, 37, 2201])
 def test_splines_on_shared_nodes_equal_each_alone(n: int) -> None:
-    """:func:`splines` eliminates once for several value arrays (row-wise numpy path for many
-    columns, per-column floats for few): each equals its own spline and scipy's."""
-    assert spline_module.ROWWISE_COLUMNS < 1 + 3 + 3 + 3 * (spline_module.ROWWISE_COLUMNS // 3)
+    """:func:`splines` eliminates once for several value arrays (up to 31 columns, as the
+    sky model's): each equals its own spline and scipy's."""
     rng = np.random.default_rng(n)
     x = np.sort(rng.uniform(0.0, 1e6, n))
     ys = [rng.normal(size=n), rng.normal(size=(n, 3)), rng.normal(size=(n, 3)) * 1e11]
-    if n < 100:  # many columns: the row-wise solve
-        ys += [rng.normal(size=(n, 3)) for _ in range(spline_module.ROWWISE_COLUMNS // 3)]
+    if n < 100:  # many columns, as the sky model's (ten targets)
+        ys += [rng.normal(size=(n, 3)) for _ in range(8)]
     at = _evaluation_points(x, rng)
     for shared, y in zip(splines(x, ys), ys, strict=True):
         np.testing.assert_array_equal(shared(at), CubicSpline(x, y)(at))
