@@ -16,6 +16,7 @@ from __future__ import annotations
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import erfa
 import numpy as np
@@ -109,6 +110,22 @@ def astropy_astrometry() -> tuple[Direction, Direction] | None:
     return aticq, atciqz
 
 
+def gcrs_to_icrs(srepr: Any, astrom: Any, aticq: Direction) -> Any:
+    """astropy's GCRS → ICRS of a position with a distance (its ``gcrs_to_icrs``), with the
+    astrometry context ``astrom`` and :func:`astropy_astrometry`'s ``aticq``: the direction
+    moved, then the observer's barycentric position ``eb`` added."""
+    from astropy.coordinates import SphericalRepresentation
+
+    ra, dec = aticq(srepr.without_differentials(), astrom)
+    intermediate = SphericalRepresentation(
+        lat=u.Quantity(dec, u.radian, copy=None),
+        lon=u.Quantity(ra, u.radian, copy=None),
+        distance=srepr.distance,
+        copy=False,
+    )
+    return intermediate + CartesianRepresentation(astrom["eb"], unit=u.au, xyz_axis=-1, copy=None)
+
+
 def exact_astrometry() -> bool:
     """Whether astropy builds its astrometry contexts exactly (its default ``ErfaAstrom``:
     ``apco``'s ``bpn`` is then ``c2i06a``'s matrix and ``apcs``'s ``eb`` the Earth's ``epv00``
@@ -162,9 +179,7 @@ def _site_and_earth_m(location: EarthLocation, t: Time) -> tuple[np.ndarray, np.
         return _site_icrs_m(location, t), earth * au.to_value(u.m)
     astrom = erfa_astrom.get().apcs(GCRS(obstime=t))
     sph = gcrs.represent_as(SphericalRepresentation)
-    ra, dec = astrometry[0](sph.without_differentials(), astrom)
-    shifted = SphericalRepresentation(ra * u.rad, dec * u.rad, sph.distance, copy=False)
-    bary = shifted + CartesianRepresentation(astrom["eb"], unit=u.au, xyz_axis=-1, copy=False)
+    bary = gcrs_to_icrs(sph, astrom, astrometry[0])
     site = np.asarray(bary.to_cartesian().xyz.to_value(u.m).T, dtype=np.float64)
     return site, np.asarray(astrom["eb"] * au.to_value(u.m), dtype=np.float64)
 

@@ -44,6 +44,7 @@ from ucbplan.observing.observatory.barycentric import (
     astropy_astrometry,
     astropy_rotations,
     exact_astrometry,
+    gcrs_to_icrs,
 )
 
 FloatArray = NDArray[np.float64]
@@ -155,18 +156,6 @@ def _to_gcrs(cart: CartesianRepresentation, astrom: Any, atciqz: Direction) -> A
     )
 
 
-def _to_icrs(srepr: SphericalRepresentation, astrom: Any, aticq: Direction) -> Any:
-    """astropy's GCRS → ICRS of a position with a distance (its ``gcrs_to_icrs``)."""
-    ra, dec = aticq(srepr.without_differentials(), astrom)
-    intermediate = SphericalRepresentation(
-        lat=u.Quantity(dec, u.radian, copy=None),
-        lon=u.Quantity(ra, u.radian, copy=None),
-        distance=srepr.distance,
-        copy=False,
-    )
-    return intermediate + CartesianRepresentation(astrom["eb"], unit=u.au, xyz_axis=-1, copy=None)
-
-
 #: The Earth's rotation rate [rad/s] as astropy's ``EarthLocation`` states it.
 OMEGA_EARTH = (1.002_737_811_911_354_48 * u.cycle / u.day).to(1 / u.s, u.dimensionless_angles())
 
@@ -213,7 +202,7 @@ def sun_moon_cirs_m(t: Time, c2i: FloatArray) -> tuple[FloatArray, FloatArray] |
     at_geocentre = GCRS(obstime=t, obsgeoloc=zero * u.m, obsgeovel=zero * u.m / u.s)
     site_astrom = _apcs(at_site, earth)
     moon = _to_gcrs(_moon_icrs(t, earth[1], obsgeoloc, epv00), site_astrom, atciqz)
-    moon = _to_gcrs(_to_icrs(moon, site_astrom, aticq), _apcs(at_geocentre, earth), atciqz)
+    moon = _to_gcrs(gcrs_to_icrs(moon, site_astrom, aticq), _apcs(at_geocentre, earth), atciqz)
     moon = moon.to_cartesian().transform(c2i)
     moon = moon.represent_as(SphericalRepresentation).to_cartesian().xyz.to_value(u.m).T
     return np.asarray(sun, dtype=np.float64), np.asarray(moon, dtype=np.float64)
